@@ -1,0 +1,39 @@
+# shipgym: every target creates/reuses .venv in the repository and installs what it needs.
+PYTHON ?= python3.11
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed-core
+
+.PHONY: demo test bench lint venv rl clean
+
+$(PY):
+	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; install Python 3.11 or run 'make PYTHON=python3 ...'"; exit 1; }
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+
+$(STAMP): $(PY) pyproject.toml
+	$(PY) -m pip install --quiet -e ".[test,dev]"
+	@touch $(STAMP)
+
+venv: $(STAMP)
+
+# Optional RL extra: torch's CPU build first (pinned), then stable-baselines3.
+rl: $(STAMP)
+	$(PY) -m pip install --quiet "torch==2.13.0"
+	$(PY) -m pip install --quiet -e ".[rl]"
+
+demo: $(STAMP)
+	$(PY) -m shipgym.cli demo
+
+test: $(STAMP)
+	$(PY) -m pytest -q
+
+bench: $(STAMP)
+	$(PY) benchmarks/bench_physics.py
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check shipgym tests benchmarks
+	$(VENV)/bin/ruff format --check shipgym tests benchmarks
+
+clean:
+	rm -rf $(VENV) .pytest_cache .ruff_cache .mypy_cache build *.egg-info

@@ -1,0 +1,67 @@
+"""Physics step rate of the full Blue Lady plant vs bare ``mujoco.mj_step`` on the same MJCF.
+
+Run with ``make bench``. Reports ratios, which compare across machines; absolute rates vary
+by +-30 % from run to run on a shared 2-core VM, so each figure is the best of several repeats.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from shipgym.assets import asset_path
+from shipgym.disturbances import WindConfig
+from shipgym.envs.physics import DEFAULT_SCENE, VesselPhysics
+
+
+def _best_rate(fn, steps: int, repeats: int) -> float:
+    best = math.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn(steps)
+        best = min(best, time.perf_counter() - t0)
+    return steps / best
+
+
+def main(argv: list[str] | None = None) -> dict[str, float]:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--steps", type=int, default=50_000, help="physics steps per repeat")
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args(argv)
+
+    m = mujoco.MjModel.from_xml_path(str(asset_path(*DEFAULT_SCENE)))
+    d = mujoco.MjData(m)
+    d.ctrl[:] = [300.0, 0.5, -0.5]
+
+    def bare_loop(n: int) -> None:
+        for _ in range(n):
+            mujoco.mj_step(m, d)
+
+    def bare_c(n: int) -> None:
+        mujoco.mj_step(m, d, nstep=n)
+
+    wind = WindConfig(speed=3.0, direction_from=math.radians(300.0))
+    phys = VesselPhysics("default", wind=wind)
+    phys.reset(rng=np.random.default_rng(0))
+    phys.set_command([300.0, 0.5, -0.5])
+
+    r_bare = _best_rate(bare_loop, args.steps, args.repeats)
+    r_c = _best_rate(bare_c, args.steps, args.repeats)
+    r_full = _best_rate(phys.step, args.steps, args.repeats)
+    sim_rt = r_full * phys.timestep
+    print(f"physics timestep                          : {phys.timestep:.3f} s")
+    print(f"bare mujoco.mj_step, Python loop          : {r_bare:12,.0f} steps/s")
+    print(f"bare mujoco.mj_step(nstep=N), C loop      : {r_c:12,.0f} steps/s")
+    print(f"full plant (thrusters, gusty wind, hydro) : {r_full:12,.0f} steps/s")
+    print(f"ratio full / bare Python-loop mj_step     : {r_full / r_bare:12.3f}   (target >= 0.2)")
+    print(f"ratio full / bare C-loop mj_step          : {r_full / r_c:12.3f}")
+    print(f"simulated seconds per wall second         : {sim_rt:12,.0f} x real time")
+    return {"bare": r_bare, "bare_c": r_c, "full": r_full, "ratio": r_full / r_bare}
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,63 @@
+"""Small helpers for frozen configuration dataclasses: documented fields and strict loading."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any, TypeVar
+
+T = TypeVar("T")
+
+__all__ = ["param", "from_mapping", "describe", "require_finite", "require_positive"]
+
+
+def param(default: Any, unit: str, source: str) -> Any:
+    """A dataclass field carrying its physical unit and its source in ``metadata``."""
+    return dataclasses.field(default=default, metadata={"unit": unit, "source": source})
+
+
+def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, where: str = "") -> T:
+    """Build a dataclass from a mapping; unknown keys raise ``ValueError`` naming the valid ones."""
+    names = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
+    unknown = sorted(set(mapping) - set(names))
+    if unknown:
+        ctx = f" in {where}" if where else ""
+        raise ValueError(
+            f"unknown key(s) {unknown}{ctx} for {cls.__name__}; valid keys are: {', '.join(names)}"
+        )
+    return cls(**dict(mapping))
+
+
+def describe(obj: Any) -> list[tuple[str, Any, str, str]]:
+    """Rows ``(name, value, unit, source)`` for every field of a parameter dataclass."""
+    return [
+        (f.name, getattr(obj, f.name), f.metadata.get("unit", ""), f.metadata.get("source", ""))
+        for f in dataclasses.fields(obj)
+    ]
+
+
+def require_finite(obj: Any) -> None:
+    """Raise ``ValueError`` for any non-finite float field of a dataclass."""
+    for f in dataclasses.fields(obj):
+        val = getattr(obj, f.name)
+        if isinstance(val, float | int) and not isinstance(val, bool) and not math.isfinite(val):
+            raise ValueError(f"{type(obj).__name__}.{f.name} must be finite, got {val!r}")
+
+
+def require_positive(obj: Any, *names: str) -> None:
+    """Raise ``ValueError`` if any named field is not strictly positive."""
+    for name in names:
+        val = getattr(obj, name)
+        if not val > 0:
+            raise ValueError(
+                f"{type(obj).__name__}.{name} must be > 0, got {val!r} "
+                f"(unit: {_unit(obj, name)}); masses, inertias and time constants are positive"
+            )
+
+
+def _unit(obj: Any, name: str) -> str:
+    for f in dataclasses.fields(obj):
+        if f.name == name:
+            return f.metadata.get("unit", "?")
+    return "?"

@@ -1,0 +1,386 @@
+r"""Thrust allocation for the Blue Lady DP system (seed001 eqs. 24-27; SPEC section 9).
+
+The three actuators (main propeller, bow and stern tunnel thrusters, in this order) act on the
+hull through the configuration matrix of seed001 eq. 12,
+
+.. math::
+
+    \tau = T F, \qquad
+    T = \begin{bmatrix} 1 & 0 & 0 \\ 0 & 1 & 1 \\ 0 & L_2 & -L_3 \end{bmatrix},
+
+with ``F = [F1, F2, F3]`` (N) and ``tau = [X, Y, N]`` (N, N, N m). ``T`` is square and
+invertible (``det T = -(L2 + L3)``), so an unsaturated request has exactly one solution. Two
+allocators are provided:
+
+- :func:`allocate_inverse` is the seed's method: ``F = T^-1 tau`` (eq. 25), the inverse thruster
+  characteristics (eqs. 26-27) and a clip of each command to its range. When a tunnel thruster
+  saturates, the clip throws away whatever that thruster owed to *both* sway and yaw.
+- :func:`allocate` is a constrained least-squares allocation. Surge is decoupled (only F1
+  acts in X), so ``F1 = clip(X)``. Sway and yaw share the tunnels; it solves exactly
+
+  .. math::
+
+      \min_{F_2, F_3} \; w_Y (F_2 + F_3 - Y)^2 + w_N (L_2 F_2 - L_3 F_3 - N)^2
+      \quad \text{s.t.} \quad F_{i,\min} \le F_i \le F_{i,\max}
+
+  The objective is strictly convex, so: if the unconstrained minimiser (``T^-1 tau``) lies in
+  the box it is the answer; otherwise the optimum lies on the box boundary, and on each of
+  the four edges the one-dimensional minimiser is the clipped closed-form stationary point.
+  The best of the four is the exact optimum. The default weights keep the yaw moment in
+  preference to the sway force (heading keeps the tunnels effective; domain notes section 7).
+
+Both return an :class:`Allocation`. :func:`command_to_action` and :func:`action_to_command`
+map physical commands to the normalised ``[-1, 1]^3`` actions of the environments.
+
+Everything here runs on plain Python floats (no per-call array algebra); a call of
+:func:`allocate` takes a few microseconds.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym.dynamics.thrusters import BLUE_LADY_THRUSTERS, ThrusterParameters
+
+__all__ = [
+    "Allocation",
+    "allocate",
+    "allocate_inverse",
+    "default_weights",
+    "force_capacity",
+    "command_to_action",
+    "action_to_command",
+]
+
+#: relative tolerance used to decide that a force sits on a limit of its range
+_AT_LIMIT_RTOL = 1e-9
+
+
+class Allocation(NamedTuple):
+    """The result of a thrust allocation (all arrays have shape (3,)).
+
+    Attributes:
+        command: actuator commands ``[n1 (rpm), p2 (-), p3 (-)]`` within their ranges.
+        force: thrusts ``[F1, F2, F3]`` (N) the commands deliver (after saturation).
+        tau: delivered generalised force ``T force`` = ``[X, Y, N]`` (N, N, N m).
+        tau_error: requested minus delivered ``tau`` (N, N, N m); zero when nothing saturates.
+            Its sign tells in which direction each DOF was cut, which is what the anti-windup
+            of :class:`~shipgym.controllers.pid.MultivariablePID` needs.
+        saturated: per actuator, ``True`` where the request could not be met because that
+            actuator was held at a limit of its range.
+    """
+
+    command: NDArray[np.float64]
+    force: NDArray[np.float64]
+    tau: NDArray[np.float64]
+    tau_error: NDArray[np.float64]
+    saturated: NDArray[np.bool_]
+
+
+# ---- helpers ---------------------------------------------------------------------------------
+def _tau3(tau: ArrayLike) -> tuple[float, float, float]:
+    """``tau`` as three finite floats, or a ``ValueError`` that says what is wrong."""
+    if isinstance(tau, np.ndarray):
+        if tau.shape != (3,):
+            raise ValueError(
+                f"tau must have shape (3,) ([X N, Y N, N N m]), got an array of shape {tau.shape}"
+            )
+        vals = tau.tolist()
+    else:
+        try:
+            vals = list(tau)  # type: ignore[arg-type]
+        except TypeError:
+            raise ValueError(
+                f"tau must be a sequence of 3 numbers [X, Y, N], got {tau!r}"
+            ) from None
+        if len(vals) != 3:
+            raise ValueError(f"tau must have 3 entries [X, Y, N], got {len(vals)}: {tau!r}")
+    try:
+        X, Y, N = (float(v) for v in vals)
+    except (TypeError, ValueError):
+        raise ValueError(f"tau must contain 3 real numbers [X, Y, N], got {tau!r}") from None
+    if not (math.isfinite(X) and math.isfinite(Y) and math.isfinite(N)):
+        raise ValueError(f"tau contains NaN or infinite values: {tau!r} (check the controller)")
+    return X, Y, N
+
+
+def _check_thrusters(thrusters: ThrusterParameters) -> None:
+    if not isinstance(thrusters, ThrusterParameters):
+        raise ValueError(
+            f"thrusters must be a ThrusterParameters instance, got {type(thrusters).__name__}"
+        )
+
+
+def _force_box(p: ThrusterParameters) -> tuple[float, float, float, float, float, float]:
+    """Force ranges ``(F1_lo, F1_hi, F2_lo, F2_hi, F3_lo, F3_hi)`` (N) of the three actuators."""
+    return (
+        -p.k1 * p.n_min * p.n_min,
+        p.k1 * p.n_max * p.n_max,
+        p.k2 * p.p_min,
+        p.k2 * p.p_max,
+        p.k3 * p.p_min,
+        p.k3 * p.p_max,
+    )
+
+
+def _clip(x: float, lo: float, hi: float) -> float:
+    return lo if x < lo else hi if x > hi else x
+
+
+def _at_limit(x: float, lo: float, hi: float) -> bool:
+    tol = _AT_LIMIT_RTOL * (hi - lo)
+    return x <= lo + tol or x >= hi - tol
+
+
+def _command(F1: float, F2: float, F3: float, p: ThrusterParameters) -> list[float]:
+    """Inverse thruster characteristics, eqs. 26-27 (with ``|F1|``), clipped for round-off."""
+    n1 = math.copysign(math.sqrt(abs(F1) / p.k1), F1) if F1 != 0.0 else 0.0
+    return [
+        _clip(n1, p.n_min, p.n_max),
+        _clip(F2 / p.k2, p.p_min, p.p_max),
+        _clip(F3 / p.k3, p.p_min, p.p_max),
+    ]
+
+
+def _result(
+    req: tuple[float, float, float],
+    F: tuple[float, float, float],
+    sat: tuple[bool, bool, bool],
+    p: ThrusterParameters,
+) -> Allocation:
+    F1, F2, F3 = F
+    X = F1
+    if sat[1] or sat[2]:
+        Y = F2 + F3
+        N = p.L2 * F2 - p.L3 * F3
+    else:  # F2, F3 = T^-1 (Y, N) exactly: report the request, so tau_error is exactly zero
+        Y, N = req[1], req[2]
+    return Allocation(
+        np.array(_command(F1, F2, F3, p)),
+        np.array(F),
+        np.array((X, Y, N)),
+        np.array((req[0] - X, req[1] - Y, req[2] - N)),
+        np.array(sat),
+    )
+
+
+def force_capacity(thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS) -> NDArray[np.float64]:
+    """Largest ``|X|, |Y|, |N|`` (N, N, N m) the thrusters can produce, each DOF alone.
+
+    For the Blue Lady: ``k1 n_max^2 = 451.3 N`` ahead (astern only 78.4 N),
+    ``k2 + k3 = 88.3 N`` of sway and ``k2 L2 + k3 L3 = 247.9 N m`` of yaw moment.
+    """
+    _check_thrusters(thrusters)
+    f1lo, f1hi, f2lo, f2hi, f3lo, f3hi = _force_box(thrusters)
+    L2, L3 = thrusters.L2, thrusters.L3
+    return np.array(
+        [
+            max(f1hi, -f1lo),
+            max(f2hi + f3hi, -(f2lo + f3lo)),
+            max(L2 * f2hi - L3 * f3lo, -(L2 * f2lo - L3 * f3hi)),
+        ]
+    )
+
+
+def default_weights(thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS) -> tuple[float, ...]:
+    """Default ``(w_X, w_Y, w_N)`` of :func:`allocate`: ``(1, 1, 10 / (L2 + L3)^2)``.
+
+    The moment error is normalised by the lever arm ``L2 + L3`` (a moment error of
+    ``(L2 + L3) * 1 N`` costs as much as a 1 N force error) and then weighted 10 times more, so
+    that when the tunnels saturate the yaw moment is kept in preference to the sway force. The
+    units are 1/N^2 for ``w_X, w_Y`` and 1/(N m)^2 for ``w_N``.
+    """
+    _check_thrusters(thrusters)
+    lever = thrusters.L2 + thrusters.L3
+    return (1.0, 1.0, 10.0 / (lever * lever))
+
+
+# ---- the allocators --------------------------------------------------------------------------
+def allocate_inverse(
+    tau: ArrayLike, thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS
+) -> Allocation:
+    """The seed's allocation: ``F = T^-1 tau`` (eq. 25), inverse characteristics, saturation.
+
+    ``n1 = sgn(F1) sqrt(|F1| / k1)`` (eq. 26; the seed prints ``sqrt(F1 / k1)``, which is
+    undefined for astern thrust) and ``p_i = F_i / k_i`` (eq. 27), each then clipped to
+    ``[n_min, n_max]`` rpm and ``[p_min, p_max]``.
+
+    Args:
+        tau: requested generalised force ``[X, Y, N]`` (N, N, N m), shape (3,).
+        thrusters: thruster constants, lever arms and ranges.
+
+    Returns:
+        The :class:`Allocation`; ``saturated[i]`` is ``True`` where command ``i`` was clipped.
+
+    Raises:
+        ValueError: ``tau`` is not three finite numbers, or ``thrusters`` has the wrong type.
+    """
+    X, Y, N = _tau3(tau)
+    _check_thrusters(thrusters)
+    p = thrusters
+    f1lo, f1hi, f2lo, f2hi, f3lo, f3hi = _force_box(p)
+    lever = p.L2 + p.L3
+    F2 = (p.L3 * Y + N) / lever
+    F3 = (p.L2 * Y - N) / lever
+    F = (_clip(X, f1lo, f1hi), _clip(F2, f2lo, f2hi), _clip(F3, f3lo, f3hi))
+    sat = (F[0] != X, F[1] != F2, F[2] != F3)
+    return _result((X, Y, N), F, sat, p)
+
+
+def allocate(
+    tau: ArrayLike,
+    thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
+    weights: tuple[float, float, float] | None = None,
+) -> Allocation:
+    r"""Constrained weighted allocation: exact box-constrained least squares for sway/yaw.
+
+    Surge: ``F1 = clip(X, F1_min, F1_max)``. Sway and yaw: the exact minimiser of
+    ``w_Y (F2 + F3 - Y)^2 + w_N (L2 F2 - L3 F3 - N)^2`` over ``F2 in [k2 p_min, k2 p_max]``,
+    ``F3 in [k3 p_min, k3 p_max]`` (see the module docstring). When ``tau`` is feasible the
+    result equals :func:`allocate_inverse` (``F = T^-1 tau``, eq. 25).
+
+    Args:
+        tau: requested generalised force ``[X, Y, N]`` (N, N, N m), shape (3,).
+        thrusters: thruster constants, lever arms and ranges.
+        weights: ``(w_X, w_Y, w_N)`` > 0 (1/N^2, 1/N^2, 1/(N m)^2); ``w_X`` has no effect
+            (surge is decoupled). ``None``: :func:`default_weights`.
+
+    Returns:
+        The :class:`Allocation`; ``saturated[i]`` is ``True`` where actuator ``i`` sits on a
+        limit and the request was not met.
+
+    Raises:
+        ValueError: ``tau`` is not three finite numbers, non-positive or non-finite weights,
+            or ``thrusters`` of the wrong type.
+    """
+    X, Y, N = _tau3(tau)
+    _check_thrusters(thrusters)
+    p = thrusters
+    if weights is None:
+        lever = p.L2 + p.L3
+        wY, wN = 1.0, 10.0 / (lever * lever)
+    else:
+        try:
+            wX, wY, wN = (float(w) for w in weights)
+        except (TypeError, ValueError):
+            raise ValueError(f"weights must be three numbers (w_X, w_Y, w_N), got {weights!r}")
+        if not all(math.isfinite(w) and w > 0 for w in (wX, wY, wN)):
+            raise ValueError(f"weights must be finite and > 0, got {weights!r}")
+    f1lo, f1hi, f2lo, f2hi, f3lo, f3hi = _force_box(p)
+    L2, L3 = p.L2, p.L3
+    F1 = _clip(X, f1lo, f1hi)
+    sat1 = F1 != X
+    lever = L2 + L3
+    F2 = (L3 * Y + N) / lever
+    F3 = (L2 * Y - N) / lever
+    if f2lo <= F2 <= f2hi and f3lo <= F3 <= f3hi:
+        return _result((X, Y, N), (F1, F2, F3), (sat1, False, False), p)
+
+    # the optimum is on the boundary: best of the four edges, each solved in closed form
+    d3 = wY + wN * L3 * L3  # curvature along F3 (F2 fixed)
+    d2 = wY + wN * L2 * L2  # curvature along F2 (F3 fixed)
+    best = math.inf
+    b2 = b3 = 0.0
+    for edge in (f2lo, f2hi):  # F2 = edge, minimise over F3
+        f3 = _clip((wY * (Y - edge) + wN * L3 * (L2 * edge - N)) / d3, f3lo, f3hi)
+        eY = edge + f3 - Y
+        eN = L2 * edge - L3 * f3 - N
+        J = wY * eY * eY + wN * eN * eN
+        if J < best:
+            best, b2, b3 = J, edge, f3
+    for edge in (f3lo, f3hi):  # F3 = edge, minimise over F2
+        f2 = _clip((wY * (Y - edge) + wN * L2 * (N + L3 * edge)) / d2, f2lo, f2hi)
+        eY = f2 + edge - Y
+        eN = L2 * f2 - L3 * edge - N
+        J = wY * eY * eY + wN * eN * eN
+        if J < best:
+            best, b2, b3 = J, f2, edge
+    sat = (sat1, _at_limit(b2, f2lo, f2hi), _at_limit(b3, f3lo, f3hi))
+    return _result((X, Y, N), (F1, b2, b3), sat, p)
+
+
+# ---- normalised actions ----------------------------------------------------------------------
+def _range_check(
+    a: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64], what: str
+) -> None:
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{what} contains NaN or infinite values: {a}")
+    bad = (a < lo) | (a > hi)
+    if np.any(bad):
+        raise ValueError(
+            f"{what} outside its range [{lo.tolist()}, {hi.tolist()}]: {a} "
+            "(pass clip=True to clip it on purpose)"
+        )
+
+
+def _as_batch3(x: ArrayLike, what: str) -> NDArray[np.float64]:
+    a = np.asarray(x, dtype=float)
+    if a.ndim == 0 or a.shape[-1] != 3:
+        raise ValueError(f"{what} must have shape (..., 3) ([n1 rpm, p2, p3]), got {a.shape}")
+    return a
+
+
+def command_to_action(
+    command: ArrayLike,
+    thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
+    *,
+    clip: bool = False,
+) -> NDArray[np.float64]:
+    """Physical command ``[n1 (rpm), p2, p3]`` -> normalised action in ``[-1, 1]^3``.
+
+    Each axis is scaled separately on each side of zero, so 0 maps to 0 and both range ends
+    to +-1: ``n1 >= 0 -> n1 / n_max``, ``n1 < 0 -> n1 / |n_min|`` (480 rpm -> 1,
+    -200 rpm -> -1); ``p`` likewise with ``p_max``, ``|p_min|`` (the identity for +-1).
+
+    Args:
+        command: commands, shape (..., 3).
+        thrusters: the ranges.
+        clip: clip out-of-range commands instead of raising.
+
+    Raises:
+        ValueError: wrong shape, NaN/inf, or (with ``clip=False``) a command out of range.
+    """
+    _check_thrusters(thrusters)
+    c = _as_batch3(command, "command")
+    lo, hi = thrusters.lower, thrusters.upper
+    if clip:
+        if not np.all(np.isfinite(c)):
+            raise ValueError(f"command contains NaN or infinite values: {c}")
+        c = np.clip(c, lo, hi)
+    else:
+        _range_check(c, lo, hi, "command")
+    return np.where(c >= 0.0, c / hi, c / -lo)
+
+
+def action_to_command(
+    action: ArrayLike,
+    thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
+    *,
+    clip: bool = False,
+) -> NDArray[np.float64]:
+    """Normalised action in ``[-1, 1]^3`` -> physical command ``[n1 (rpm), p2, p3]``.
+
+    The inverse of :func:`command_to_action`: ``a >= 0 -> a * upper``, ``a < 0 -> a * |lower|``.
+
+    Args:
+        action: actions, shape (..., 3).
+        thrusters: the ranges.
+        clip: clip actions outside ``[-1, 1]`` instead of raising.
+
+    Raises:
+        ValueError: wrong shape, NaN/inf, or (with ``clip=False``) an action outside [-1, 1].
+    """
+    _check_thrusters(thrusters)
+    a = _as_batch3(action, "action")
+    one = np.ones(3)
+    if clip:
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action contains NaN or infinite values: {a}")
+        a = np.clip(a, -one, one)
+    else:
+        _range_check(a, -one, one, "action")
+    return np.where(a >= 0.0, a * thrusters.upper, a * -thrusters.lower)

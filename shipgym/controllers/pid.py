@@ -1,0 +1,509 @@
+r"""The multivariable PID-type DP controller of seed001 (eqs. 13-23; SPEC section 9).
+
+Reading of the seed
+-------------------
+The seed states the control law as (eq. 23)
+
+.. math::
+
+    \tau_c = M R^{-1}(\psi)\,[\ddot\eta_d^b - K_D\dot\eta_e^b - K_P\eta_e^r - K_I\xi_e^r
+             - r R(\psi) S \nu] + D_L \nu ,
+
+built from the error dynamics ``e_ddot + K_D e_dot + K_P e + K_I xi = 0`` (eq. 18), the
+kinematics ``eta_dot = R(psi) nu`` differentiated with ``R_dot = r R S`` (eqs. 21-22) and the
+model ``M nu_dot + D_L nu = tau`` (eq. 4/20). Eqs. 13-15 mix frames: the position error is
+taken in the r-frame, the velocity and acceleration errors "in the b-frame" as
+``eta_dot - R^T(psi_e) eta_dot_d^r`` (an n/r-frame velocity minus a reference velocity rotated
+by the *heading error*, which is neither a body- nor an r-frame quantity), and eq. 15 contains
+a transposed scalar ``psi_e_dot^T``. Eq. 23 then multiplies all of them, including the
+r-frame terms ``K_P eta_e^r`` and ``K_I xi_e^r``, by the same ``R^{-1}(psi)``, and eq. 21
+uses ``eta_ddot`` of eq. 3 (an earth-fixed acceleration). The only reading under which eqs.
+18-23 are one consistent derivation is that every error lives in one stationary frame, the
+r-frame of the current leg, and ``psi`` in eqs. 21-23 is the heading *in that frame*:
+
+.. math::
+
+    e &= \eta^r - \eta^r_d \quad(\text{heading component wrapped to } (-\pi, \pi]),\\
+    \dot e &= R(\psi^r)\nu - \dot\eta^r_d, \qquad \xi_{k+1} = \xi_k + h\,e_k
+        \quad(\text{eq. 17, forward Euler}),\\
+    a &= \ddot\eta^r_d - K_D\dot e - K_P e - K_I\xi \quad(\text{eq. 19}),\\
+    \dot\nu &= R^T(\psi^r)\,[a - r R(\psi^r) S\nu] = R^T(\psi^r) a + [r v,\; -r u,\; 0]^T
+        \quad(\text{eqs. 21-22}),\\
+    \tau &= M\dot\nu + D_L\nu \quad(\text{eqs. 20, 23}).
+
+This *is* eq. 23 with every superscript read as ``r`` and ``psi = psi^r``. With an exact model
+it gives ``e_ddot + K_D e_dot + K_P e + K_I xi = 0`` per DOF, i.e. the characteristic
+polynomial ``s^3 + K_D s^2 + K_P s + K_I`` (eq. 18), which is what the gain design
+(:func:`pid_pole_placement`) places. Since the r-frame differs from NED only by a constant
+rotation and offset, the same controller works in NED coordinates (pass NED ``eta``).
+
+Sampled implementation and anti-windup
+--------------------------------------
+The controller runs at the control period ``dt`` (seed001: 1 s) and its output is held
+between samples. The integral is the forward-Euler sum ``xi_k = h sum_{j<k} e_j``; the
+increment ``h e_{k-1}`` is added at call ``k``, once the allocation of ``tau_{k-1}`` is known
+(the ``saturated`` argument). *Conditional integration*: the increment is mapped to the body
+force it would add, ``-M R^T(psi) K_I h e``; every body component that would push a DOF further
+into the direction in which the allocation has just cut it is removed, and the rest is mapped
+back. Then the integral force ``M R^T(psi) K_I xi`` is clamped to ``integral_limit`` per body
+DOF (default: the thruster capacity, :func:`~shipgym.controllers.allocation.force_capacity`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym.controllers.allocation import force_capacity
+from shipgym.dynamics.model import seed_linear_matrices
+from shipgym.dynamics.thrusters import BLUE_LADY_THRUSTERS
+
+__all__ = [
+    "PIDGains",
+    "GAIN_PRESETS",
+    "pid_gains",
+    "pid_pole_placement",
+    "error_loop",
+    "MultivariablePID",
+]
+
+Vec3 = tuple[float, float, float]
+
+#: |tau_error| (N or N m) above which a DOF counts as saturated in the anti-windup
+SATURATION_TOL = 1e-6
+
+
+def _gain3(value: Any, name: str) -> Vec3:
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        arr = np.full(3, float(arr))
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise ValueError(
+            f"{name} must be a scalar or 3 finite values >= 0 (surge, sway, yaw), got {value!r}"
+        )
+    return (float(arr[0]), float(arr[1]), float(arr[2]))
+
+
+@dataclass(frozen=True)
+class PIDGains:
+    """Diagonal gains of the PID-type DP controller (seed001 eqs. 18-19).
+
+    The gains act on accelerations (``a = -K_D e_dot - K_P e - K_I xi``), so the per-DOF
+    closed-loop error polynomial is ``s^3 + K_D s^2 + K_P s + K_I``. Each gain is a scalar
+    (same for all DOFs) or three values (surge/x, sway/y, yaw), all >= 0.
+
+    Attributes:
+        K_P: proportional gain (1/s^2).
+        K_I: integral gain (1/s^3).
+        K_D: derivative gain (1/s).
+    """
+
+    K_P: Vec3 = field(metadata={"unit": "1/s^2", "source": "seed001 eq. 46 (seed preset)"})
+    K_I: Vec3 = field(metadata={"unit": "1/s^3", "source": "seed001 eq. 47 (seed preset)"})
+    K_D: Vec3 = field(metadata={"unit": "1/s", "source": "seed001 eq. 48 (seed preset)"})
+
+    def __post_init__(self) -> None:
+        for name in ("K_P", "K_I", "K_D"):
+            object.__setattr__(self, name, _gain3(getattr(self, name), name))
+
+    @classmethod
+    def from_pole_placement(cls, omega: ArrayLike, zeta: float = 1.0) -> PIDGains:
+        """Gains from :func:`pid_pole_placement` (``omega`` in rad/s, scalar or per DOF)."""
+        K_P, K_I, K_D = pid_pole_placement(np.broadcast_to(np.asarray(omega, float), (3,)), zeta)
+        return cls(tuple(K_P), tuple(K_I), tuple(K_D))  # type: ignore[arg-type]
+
+    def error_poles(self, dt: float | None = None) -> NDArray[np.complex128]:
+        """Error-loop poles per DOF, shape (3, 3): continuous, or the sampled loop's eigenvalues.
+
+        See :func:`error_loop`.
+        """
+        return np.array(
+            [error_loop(p, i, d, dt)[1] for p, i, d in zip(self.K_P, self.K_I, self.K_D)]
+        )
+
+
+def pid_pole_placement(
+    omega: ArrayLike, zeta: float = 1.0
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    r"""``K_P, K_I, K_D = pid_pole_placement(omega, zeta)``: place the error poles of eq. 18.
+
+    The per-DOF error dynamics ``e_ddot + K_D e_dot + K_P e + K_I xi = 0``, ``xi_dot = e``, have
+    the characteristic polynomial ``s^3 + K_D s^2 + K_P s + K_I``. Matching it to
+
+    .. math::
+
+        (s + \omega)(s^2 + 2\zeta\omega s + \omega^2)
+        = s^3 + (2\zeta + 1)\omega s^2 + (2\zeta + 1)\omega^2 s + \omega^3
+
+    gives ``K_D = (2 zeta + 1) omega``, ``K_P = (2 zeta + 1) omega^2``, ``K_I = omega^3``
+    (``zeta = 1``: a triple pole at ``-omega``).
+
+    Args:
+        omega: natural frequency (rad/s) > 0, scalar or array (one per DOF).
+        zeta: relative damping of the complex pair (-) > 0.
+
+    Returns:
+        ``(K_P, K_I, K_D)`` in 1/s^2, 1/s^3, 1/s, each with the shape of ``omega``.
+
+    Raises:
+        ValueError: non-positive or non-finite ``omega`` or ``zeta``.
+    """
+    w = np.asarray(omega, dtype=float)
+    if not (np.all(np.isfinite(w)) and np.all(w > 0)):
+        raise ValueError(f"omega must be finite and > 0 (rad/s), got {omega!r}")
+    if not (math.isfinite(zeta) and zeta > 0):
+        raise ValueError(f"zeta must be finite and > 0, got {zeta!r}")
+    c = 2.0 * zeta + 1.0
+    return c * w * w, w * w * w, c * w
+
+
+def error_loop(
+    k_p: float, k_i: float, k_d: float, dt: float | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
+    """``A, E = error_loop(k_p, k_i, k_d, dt)``: one DOF's error loop and its poles.
+
+    State ``x = [e, e_dot, xi]``. Continuous (``dt=None``): ``x_dot = A x`` with
+    ``A = [[0, 1, 0], [-k_p, -k_d, -k_i], [1, 0, 0]]`` (eqs. 17-18). Sampled (``dt`` given): the
+    controller of :class:`MultivariablePID` run every ``dt`` seconds on an exact model, i.e. the
+    double integrator ``e_ddot = a`` with ``a_k = -k_p e_k - k_d e_dot_k - k_i xi_k`` held
+    over the period (zero-order hold) and ``xi_{k+1} = xi_k + dt e_k``:
+    ``x_{k+1} = A x_k``. The loop is stable when ``max |E| < 1`` (sampled) or
+    ``max Re E < 0`` (continuous).
+
+    Args:
+        k_p: proportional gain (1/s^2).
+        k_i: integral gain (1/s^3).
+        k_d: derivative gain (1/s).
+        dt: sampling period (s), or ``None`` for the continuous loop.
+
+    Returns:
+        ``(A, E)``: the 3x3 loop matrix and its eigenvalues.
+    """
+    if dt is None:
+        A = np.array([[0.0, 1.0, 0.0], [-k_p, -k_d, -k_i], [1.0, 0.0, 0.0]])
+    else:
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be finite and > 0 (s), got {dt!r}")
+        h = 0.5 * dt * dt
+        A = np.array(
+            [
+                [1.0 - h * k_p, dt - h * k_d, -h * k_i],
+                [-dt * k_p, 1.0 - dt * k_d, -dt * k_i],
+                [dt, 0.0, 1.0],
+            ]
+        )
+    return A, np.linalg.eigvals(A)
+
+
+#: natural frequencies (rad/s) of the tuned preset, surge, sway, yaw (see :data:`GAIN_PRESETS`)
+TUNED_OMEGA: Vec3 = (0.1, 0.05, 0.1)
+
+GAIN_PRESETS: Mapping[str, PIDGains] = MappingProxyType(
+    {
+        "seed": PIDGains(K_P=(1.0, 1.0, 1.0), K_I=(0.01, 0.01, 0.01), K_D=(100.0, 100.0, 100.0)),
+        "tuned": PIDGains.from_pole_placement(TUNED_OMEGA, zeta=1.0),
+    }
+)
+
+
+def pid_gains(name: str) -> PIDGains:
+    """A gain preset by name (``"seed"`` or ``"tuned"``; see :data:`GAIN_PRESETS`).
+
+    Raises:
+        ValueError: unknown name (the message lists the valid ones).
+    """
+    try:
+        return GAIN_PRESETS[name]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"unknown PID gain preset {name!r}; choose one of: {', '.join(GAIN_PRESETS)}"
+        ) from None
+
+
+# ---- the online controller -------------------------------------------------------------------
+def _vec3(x: ArrayLike, name: str) -> Vec3:
+    """Three finite floats from a shape-(3,) input, or a clear ``ValueError``."""
+    if isinstance(x, np.ndarray):
+        if x.shape != (3,):
+            raise ValueError(f"{name} must have shape (3,), got an array of shape {x.shape}")
+        vals = x.tolist()
+    else:
+        try:
+            vals = list(x)  # type: ignore[arg-type]
+        except TypeError:
+            raise ValueError(f"{name} must be a sequence of 3 numbers, got {x!r}") from None
+        if len(vals) != 3:
+            raise ValueError(f"{name} must have 3 entries, got {len(vals)}: {x!r}")
+    try:
+        a, b, c = (float(v) for v in vals)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must contain 3 real numbers, got {x!r}") from None
+    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
+        raise ValueError(f"{name} contains NaN or infinite values: {x!r}")
+    return a, b, c
+
+
+def _mat3(x: ArrayLike | None, default: NDArray[np.float64], name: str) -> NDArray[np.float64]:
+    a = default if x is None else np.asarray(x, dtype=float)
+    if a.shape != (3, 3) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be a finite 3x3 matrix, got shape {a.shape}: {a!r}")
+    return a
+
+
+def _tup(a: NDArray[np.float64]) -> tuple[Vec3, Vec3, Vec3]:
+    return tuple(tuple(float(v) for v in row) for row in a)  # type: ignore[return-value]
+
+
+def _mv(A: tuple[Vec3, Vec3, Vec3], x0: float, x1: float, x2: float) -> Vec3:
+    a, b, c = A
+    return (
+        a[0] * x0 + a[1] * x1 + a[2] * x2,
+        b[0] * x0 + b[1] * x1 + b[2] * x2,
+        c[0] * x0 + c[1] * x1 + c[2] * x2,
+    )
+
+
+class MultivariablePID:
+    """The PID-type DP controller of seed001 eq. 23 in the r-frame of the current leg.
+
+    Args:
+        gains: a :class:`PIDGains` or a preset name (``"tuned"``, ``"seed"``).
+        M: inertia matrix (kg, kg m^2) of the control model; default seed001 eq. 49.
+        D_L: linear damping (N s/m, N s, N m s) of the control model; default seed001 eq. 50.
+        dt: control period (s): the integral is advanced by ``dt * e`` per call.
+        integral_limit: bound on the integral action ``|M R^T K_I xi|`` per body DOF
+            (N, N, N m); default the thruster capacity ``(451.3, 88.3, 247.9)``;
+            ``inf`` disables the clamp.
+
+    Call it once per control period with the state and the reference expressed in the
+    r-frame (see the module docstring); it returns the body-frame ``tau = [X, Y, N]``
+    (N, N, N m) for the thrust allocation. Call :meth:`change_frame` when the guidance
+    switches to the next leg and :meth:`reset` at the start of an episode.
+
+    Example:
+        >>> ctrl = MultivariablePID("tuned", dt=1.0)
+        >>> alloc = None
+        >>> tau = ctrl([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])  # doctest: +SKIP
+        >>> alloc = allocate(tau)                                          # doctest: +SKIP
+        >>> tau = ctrl(eta_r, nu, eta_d, saturated=alloc.tau_error)        # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        gains: PIDGains | str = "tuned",
+        M: ArrayLike | None = None,
+        D_L: ArrayLike | None = None,
+        dt: float = 1.0,
+        *,
+        integral_limit: ArrayLike | None = None,
+    ) -> None:
+        if isinstance(gains, str):
+            gains = pid_gains(gains)
+        if not isinstance(gains, PIDGains):
+            raise ValueError(f"gains must be PIDGains or a preset name, got {type(gains).__name__}")
+        M0, D0 = seed_linear_matrices()
+        Ma = _mat3(M, M0, "M")
+        Da = _mat3(D_L, D0, "D_L")
+        if not np.linalg.cond(Ma) < 1e12:
+            raise ValueError(f"M must be invertible, got {Ma!r}")
+        if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a finite control period > 0 (s), got {dt!r}")
+        lim = (
+            force_capacity(BLUE_LADY_THRUSTERS)
+            if integral_limit is None
+            else np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
+        )
+        if np.any(np.isnan(lim)) or np.any(lim <= 0):
+            raise ValueError(f"integral_limit must be > 0 (N, N, N m; inf allowed), got {lim!r}")
+        self.gains = gains
+        self.M = Ma.copy()
+        self.D_L = Da.copy()
+        self.dt = float(dt)
+        self.integral_limit = lim.copy()
+        self._M = _tup(Ma)
+        self._Mi = _tup(np.linalg.inv(Ma))
+        self._D = _tup(Da)
+        self._lim = tuple(float(v) for v in lim)
+        self._xi = [0.0, 0.0, 0.0]
+        self._pending: tuple[float, float, float, float] | None = None
+
+    # ---- state -------------------------------------------------------------------------------
+    def reset(self) -> None:
+        """Clear the integral state (start of an episode)."""
+        self._xi = [0.0, 0.0, 0.0]
+        self._pending = None
+
+    @property
+    def integral(self) -> NDArray[np.float64]:
+        """The integral state ``xi`` (m s, m s, rad s) in the current r-frame (eq. 17).
+
+        It is the sum used by the most recent call; that call's own error is added at the next
+        call (when its allocation is known, see the module docstring).
+        """
+        return np.array(self._xi)
+
+    def change_frame(self, dpsi: float) -> None:
+        """Re-express the integral state in the next leg's r-frame, rotated by ``dpsi`` (rad).
+
+        The new frame's x axis is the old one turned by ``dpsi`` (clockwise positive, like the
+        heading); its origin may move anywhere (the integral holds no position). The integral
+        acts like a slowly varying force (wind, current), so its x-y *acceleration*
+        ``K_I xi`` is rotated: ``K_I xi_new = R^T(dpsi) K_I xi_old``; the yaw part is unchanged.
+        """
+        dpsi = float(dpsi)
+        if not math.isfinite(dpsi):
+            raise ValueError(f"dpsi must be finite (rad), got {dpsi!r}")
+        c, s = math.cos(dpsi), math.sin(dpsi)
+        kx, ky = self.gains.K_I[0], self.gains.K_I[1]
+        sx, sy = (kx, ky) if kx > 0 and ky > 0 else (1.0, 1.0)
+
+        def rotate(x: float, y: float) -> tuple[float, float]:
+            ax, ay = sx * x, sy * y
+            return (c * ax + s * ay) / sx, (-s * ax + c * ay) / sy
+
+        self._xi[0], self._xi[1] = rotate(self._xi[0], self._xi[1])
+        if self._pending is not None:
+            ex, ey, epsi, psi = self._pending
+            ex, ey = rotate(ex, ey)
+            self._pending = (ex, ey, epsi, psi - dpsi)
+
+    # ---- integral update with anti-windup ------------------------------------------------------
+    def _integrate(self, saturated: ArrayLike | None) -> None:
+        if self._pending is None:
+            return
+        ex, ey, epsi, psi = self._pending
+        h = self.dt
+        dx, dy, dz = h * ex, h * ey, h * epsi
+        if saturated is not None:
+            dirs = _saturation_directions(saturated)
+            if any(dirs):
+                kI = self.gains.K_I
+                qx, qy, qz = kI[0] * dx, kI[1] * dy, kI[2] * dz  # r-frame acceleration
+                c, s = math.cos(psi), math.sin(psi)
+                f = list(_mv(self._M, c * qx + s * qy, -s * qx + c * qy, qz))  # body force
+                changed = False
+                for j in range(3):
+                    d = dirs[j]
+                    # tau changes by -f[j]; drop it if it pushes further into the cut direction
+                    if (d == 2 and f[j] != 0.0) or (d != 2 and d * -f[j] > 0.0):
+                        f[j] = 0.0
+                        changed = True
+                if changed:
+                    bx, by, bz = _mv(self._Mi, *f)
+                    q = (c * bx - s * by, s * bx + c * by, bz)
+                    dx, dy, dz = (q[i] / kI[i] if kI[i] > 0 else d0 for i, d0 in
+                                  enumerate((dx, dy, dz)))
+        xi = self._xi
+        xi[0] += dx
+        xi[1] += dy
+        xi[2] += dz
+        self._pending = None
+
+    def _clamp(self, psi: float) -> None:
+        lim = self._lim
+        kI = self.gains.K_I
+        xi = self._xi
+        qx, qy, qz = kI[0] * xi[0], kI[1] * xi[1], kI[2] * xi[2]
+        c, s = math.cos(psi), math.sin(psi)
+        f = _mv(self._M, c * qx + s * qy, -s * qx + c * qy, qz)
+        if abs(f[0]) <= lim[0] and abs(f[1]) <= lim[1] and abs(f[2]) <= lim[2]:
+            return
+        fc = [max(-lim[j], min(lim[j], f[j])) for j in range(3)]
+        bx, by, bz = _mv(self._Mi, *fc)
+        q = (c * bx - s * by, s * bx + c * by, bz)
+        for i in range(3):
+            if kI[i] > 0:
+                xi[i] = q[i] / kI[i]
+
+    # ---- control law ---------------------------------------------------------------------------
+    def __call__(
+        self,
+        eta_r: ArrayLike,
+        nu: ArrayLike,
+        eta_d_r: ArrayLike,
+        eta_dot_d_r: ArrayLike | None = None,
+        eta_ddot_d_r: ArrayLike | None = None,
+        *,
+        saturated: ArrayLike | None = None,
+    ) -> NDArray[np.float64]:
+        """Body-frame control force ``tau = [X, Y, N]`` (N, N, N m), seed001 eq. 23.
+
+        Args:
+            eta_r: ship pose ``[x, y, psi]`` (m, m, rad) in the r-frame.
+            nu: body velocity ``[u, v, r]`` (m/s, m/s, rad/s).
+            eta_d_r: reference pose (m, m, rad) in the r-frame.
+            eta_dot_d_r: reference velocity (m/s, m/s, rad/s) in the r-frame; default zero.
+            eta_ddot_d_r: reference acceleration (m/s^2, m/s^2, rad/s^2); default zero.
+            saturated: what the allocation did with the *previous* ``tau``: its ``tau_error``
+                (requested - delivered, N, N, N m; a component above ``SATURATION_TOL`` in
+                magnitude marks a DOF cut in that direction) or 3 booleans (a flagged DOF
+                blocks integration in both directions). ``None``: integrate unconditionally.
+
+        Returns:
+            ``tau`` (3,), to be allocated to the thrusters.
+
+        Raises:
+            ValueError: an input is not 3 finite numbers.
+        """
+        x, y, psi = _vec3(eta_r, "eta_r")
+        u, v, r = _vec3(nu, "nu")
+        xd, yd, psid = _vec3(eta_d_r, "eta_d_r")
+        vxd, vyd, rd = (0.0, 0.0, 0.0) if eta_dot_d_r is None else _vec3(eta_dot_d_r, "eta_dot_d_r")
+        axd, ayd, ad = (
+            (0.0, 0.0, 0.0) if eta_ddot_d_r is None else _vec3(eta_ddot_d_r, "eta_ddot_d_r")
+        )
+        self._integrate(saturated)
+        self._clamp(psi)
+        ex, ey = x - xd, y - yd
+        epsi = math.pi - (math.pi - (psi - psid)) % (2.0 * math.pi)  # wrap to (-pi, pi]
+        c, s = math.cos(psi), math.sin(psi)
+        g = self.gains
+        kP, kI, kD = g.K_P, g.K_I, g.K_D
+        xi = self._xi
+        # eq. 19 in the r-frame; r-frame velocity R(psi) nu (eq. 3)
+        a0 = axd - kD[0] * (c * u - s * v - vxd) - kP[0] * ex - kI[0] * xi[0]
+        a1 = ayd - kD[1] * (s * u + c * v - vyd) - kP[1] * ey - kI[1] * xi[1]
+        a2 = ad - kD[2] * (r - rd) - kP[2] * epsi - kI[2] * xi[2]
+        # eqs. 21-22: nu_dot = R^T a - r S nu
+        n0 = c * a0 + s * a1 + r * v
+        n1 = -s * a0 + c * a1 - r * u
+        Mn = _mv(self._M, n0, n1, a2)
+        Dn = _mv(self._D, u, v, r)
+        self._pending = (ex, ey, epsi, psi)
+        return np.array((Mn[0] + Dn[0], Mn[1] + Dn[1], Mn[2] + Dn[2]))
+
+    def __repr__(self) -> str:
+        g = self.gains
+        return (
+            f"MultivariablePID(K_P={g.K_P}, K_I={g.K_I}, K_D={g.K_D}, dt={self.dt}, "
+            f"integral={tuple(round(v, 6) for v in self._xi)})"
+        )
+
+
+def _saturation_directions(saturated: ArrayLike) -> list[int]:
+    """Per DOF: +1 / -1 (cut while pushing +/-), 2 (flagged, direction unknown), 0 (free)."""
+    if isinstance(saturated, np.ndarray):
+        if saturated.shape != (3,):
+            raise ValueError(f"saturated must have shape (3,), got {saturated.shape}")
+        is_bool = saturated.dtype == np.bool_
+        vals = saturated.tolist()
+    else:
+        vals = list(saturated)  # type: ignore[arg-type]
+        if len(vals) != 3:
+            raise ValueError(f"saturated must have 3 entries, got {saturated!r}")
+        is_bool = all(isinstance(b, bool | np.bool_) for b in vals)
+    if is_bool:
+        return [2 if b else 0 for b in vals]
+    out = []
+    for v in vals:
+        f = float(v)
+        if math.isnan(f):
+            raise ValueError(f"saturated contains NaN: {saturated!r}")
+        out.append(1 if f > SATURATION_TOL else -1 if f < -SATURATION_TOL else 0)
+    return out

@@ -1,0 +1,49 @@
+"""Reference frames and angles (Fossen 2011, ch. 2; SPEC section 3).
+
+NED earth frame (x north, y east, psi clockwise from north) and body frame (x forward,
+y starboard). Every function accepts a leading batch axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["rot", "wrap_angle", "body_to_ned", "ned_to_body"]
+
+
+def wrap_angle(angle: ArrayLike) -> NDArray[np.float64] | float:
+    """Wrap an angle (rad) to the interval (-pi, pi].
+
+    Used for every differenced angle (errors, innovations, residuals) so that a heading
+    crossing 0/360 deg never produces a jump.
+    """
+    a = np.asarray(angle, dtype=float)
+    w = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+    return float(w) if w.ndim == 0 else w
+
+
+def rot(psi: ArrayLike) -> NDArray[np.float64]:
+    """Rotation matrix R(psi) from body to NED, shape (..., 3, 3) (Fossen 2011, eq. 2.62).
+
+    ``R(psi) = [[c, -s, 0], [s, c, 0], [0, 0, 1]]``; ``eta_dot = R(psi) nu``.
+    """
+    psi = np.asarray(psi, dtype=float)
+    c, s = np.cos(psi), np.sin(psi)
+    out = np.zeros(psi.shape + (3, 3))
+    out[..., 0, 0] = c
+    out[..., 0, 1] = -s
+    out[..., 1, 0] = s
+    out[..., 1, 1] = c
+    out[..., 2, 2] = 1.0
+    return out
+
+
+def body_to_ned(psi: ArrayLike, vec_b: ArrayLike) -> NDArray[np.float64]:
+    """Rotate body-frame 3-vectors ``[u, v, r]`` (..., 3) to NED: ``R(psi) vec_b``."""
+    return np.einsum("...ij,...j->...i", rot(psi), np.asarray(vec_b, dtype=float))
+
+
+def ned_to_body(psi: ArrayLike, vec_n: ArrayLike) -> NDArray[np.float64]:
+    """Rotate NED 3-vectors (..., 3) to the body frame: ``R(psi)^T vec_n``."""
+    return np.einsum("...ji,...j->...i", rot(psi), np.asarray(vec_n, dtype=float))

@@ -1,0 +1,287 @@
+r"""The 3-DOF manoeuvring model (Fossen 2011, ch. 6-7; seed001 eqs. 3-7).
+
+.. math::
+
+    \dot\eta = R(\psi)\,\nu, \qquad
+    M_{RB}\dot\nu + C_{RB}(\nu)\nu + M_A\dot\nu_r + C_A(\nu_r)\nu_r + D(\nu_r)\nu_r = \tau
+
+with ``nu_r = nu - nu_c`` (body-frame velocity relative to a current that is constant in
+NED, so ``nu_c_dot = [r v_c, -r u_c, 0]``), ``D(nu_r) = D_L + diag(-X_uu|u_r|, -Y_vv|v_r|,
+-N_rr|r|)``. A :class:`PlantModel` is immutable; its variants are chosen by name with
+:func:`plant_model` (``"default"`` and ``"seed-linear"``).
+
+Two formulations of the same equations live here on purpose:
+
+- the matrix form (:meth:`PlantModel.mass_matrix`, :meth:`~PlantModel.coriolis_rb`,
+  :meth:`~PlantModel.coriolis_a`, :meth:`~PlantModel.damping`, :meth:`~PlantModel.nu_dot`),
+  batched over a leading axis and used by the reference integrator, observers and tests;
+- the expanded scalar kernel :meth:`PlantModel.accel` used on the physics hot path (plain
+  Python floats or NumPy arrays; no per-call array overhead). Tests check one against the other.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .params import BLUE_LADY_HULL, HullParameters
+
+__all__ = ["PlantModel", "plant_model", "PLANT_VARIANTS", "seed_linear_matrices"]
+
+Mat3 = tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]
+
+
+def _mat(a: ArrayLike) -> Mat3:
+    arr = np.asarray(a, dtype=float)
+    if arr.shape != (3, 3) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"expected a finite 3x3 matrix, got shape {arr.shape}: {arr!r}")
+    return tuple(tuple(float(x) for x in row) for row in arr)  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class PlantModel:
+    """A 3-DOF hull model: inertia, Coriolis-centripetal and damping terms.
+
+    Attributes:
+        name: variant name.
+        M_RB: rigid-body inertia (kg, kg m, kg m^2), 3x3.
+        M_A: added mass (kg, kg m, kg m^2), 3x3,
+            ``-[[X_udot,0,0],[0,Y_vdot,Y_rdot],[0,N_vdot,N_rdot]]``.
+        D_L: linear damping (N s/m, N s, N m s), 3x3.
+        d_quad: quadratic damping magnitudes ``(-X_uu, -Y_vv, -N_rr)`` (N s^2/m^2, N s^2/m^2,
+            N m s^2), all >= 0.
+        coriolis: include C_RB(nu) and C_A(nu_r) (Fossen 2011 eqs. 6.43, 6.54).
+        m, x_g: rigid-body mass (kg) and longitudinal CG (m), used by C_RB.
+    """
+
+    name: str
+    M_RB: Mat3
+    M_A: Mat3
+    D_L: Mat3
+    d_quad: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    coriolis: bool = True
+    m: float = 0.0
+    x_g: float = 0.0
+    _k: Any = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        for nm in ("M_RB", "M_A", "D_L"):
+            object.__setattr__(self, nm, _mat(getattr(self, nm)))
+        dq = tuple(float(x) for x in self.d_quad)
+        if len(dq) != 3 or not all(np.isfinite(dq)) or min(dq) < 0:
+            raise ValueError(f"d_quad must be three finite values >= 0, got {self.d_quad!r}")
+        object.__setattr__(self, "d_quad", dq)
+        M = np.add(self.M_RB, self.M_A)
+        if not np.all(np.diag(M) > 0):
+            raise ValueError(
+                f"plant {self.name!r}: the diagonal of M = M_RB + M_A must be > 0: {M}"
+            )
+        if not np.linalg.cond(M) < 1e12:
+            raise ValueError(f"plant {self.name!r}: M = M_RB + M_A is singular: {M}")
+        if self.coriolis and not self.m > 0:
+            raise ValueError(f"plant {self.name!r}: m must be > 0 when coriolis=True")
+        Mi = np.linalg.inv(M)
+        object.__setattr__(self, "_k", _Kernel(self, Mi))
+
+    # ---- matrix form (batched) -------------------------------------------------------------
+    def mass_matrix(self) -> NDArray[np.float64]:
+        """``M = M_RB + M_A`` (3, 3)."""
+        return np.add(self.M_RB, self.M_A)
+
+    def coriolis_rb(self, nu: ArrayLike) -> NDArray[np.float64]:
+        """``C_RB(nu)`` (..., 3, 3), Fossen 2011 eq. 6.43 (planar, x_g on the centre line)."""
+        nu = np.asarray(nu, dtype=float)
+        out = np.zeros(nu.shape[:-1] + (3, 3))
+        if self.coriolis:
+            u, v, r = nu[..., 0], nu[..., 1], nu[..., 2]
+            out[..., 0, 2] = -self.m * (self.x_g * r + v)
+            out[..., 1, 2] = self.m * u
+            out[..., 2, 0] = self.m * (self.x_g * r + v)
+            out[..., 2, 1] = -self.m * u
+        return out
+
+    def coriolis_a(self, nu_r: ArrayLike) -> NDArray[np.float64]:
+        """``C_A(nu_r)`` (..., 3, 3), Fossen 2011 eq. 6.54 with the symmetric part of M_A."""
+        nu_r = np.asarray(nu_r, dtype=float)
+        out = np.zeros(nu_r.shape[:-1] + (3, 3))
+        if self.coriolis:
+            A = np.asarray(self.M_A)
+            a23 = 0.5 * (A[1, 2] + A[2, 1])
+            u, v, r = nu_r[..., 0], nu_r[..., 1], nu_r[..., 2]
+            out[..., 0, 2] = -(A[1, 1] * v + a23 * r)
+            out[..., 1, 2] = A[0, 0] * u
+            out[..., 2, 0] = A[1, 1] * v + a23 * r
+            out[..., 2, 1] = -A[0, 0] * u
+        return out
+
+    def damping(self, nu_r: ArrayLike) -> NDArray[np.float64]:
+        """``D(nu_r) = D_L + diag(d_quad * |nu_r|)`` (..., 3, 3)."""
+        nu_r = np.asarray(nu_r, dtype=float)
+        out = np.broadcast_to(np.asarray(self.D_L), nu_r.shape[:-1] + (3, 3)).copy()
+        idx = np.arange(3)
+        out[..., idx, idx] += np.asarray(self.d_quad) * np.abs(nu_r)
+        return out
+
+    def nu_dot(
+        self, nu: ArrayLike, tau: ArrayLike, nu_c: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        """Body-frame acceleration (..., 3) from the matrix form, by a linear solve.
+
+        Args:
+            nu: body velocity ``[u, v, r]`` (m/s, m/s, rad/s), shape (..., 3).
+            tau: total external generalised force ``[X, Y, N]`` (N, N, N m), shape (..., 3).
+            nu_c: body-frame current velocity ``[u_c, v_c, 0]`` (m/s), constant in NED.
+        """
+        nu = np.asarray(nu, dtype=float)
+        tau = np.asarray(tau, dtype=float)
+        nu_c = np.zeros(3) if nu_c is None else np.asarray(nu_c, dtype=float)
+        nu_r = nu - nu_c
+        r = nu[..., 2]
+        nu_c_dot = np.stack([r * nu_c[..., 1], -r * nu_c[..., 0], np.zeros_like(r)], axis=-1)
+        mv = lambda A, x: np.einsum("...ij,...j->...i", A, x)  # noqa: E731
+        rhs = (
+            tau
+            - mv(self.coriolis_rb(nu), nu)
+            - mv(self.coriolis_a(nu_r), nu_r)
+            - mv(self.damping(nu_r), nu_r)
+            + mv(np.asarray(self.M_A), nu_c_dot)
+        )
+        M = self.mass_matrix()
+        return np.linalg.solve(M, rhs[..., None])[..., 0]
+
+    # ---- expanded kernel (hot path) --------------------------------------------------------
+    @property
+    def accel(self) -> Callable[..., tuple[Any, Any, Any]]:
+        """``accel(u, v, r, X, Y, N, u_c=0, v_c=0) -> (u_dot, v_dot, r_dot)``.
+
+        The same equations as :meth:`nu_dot`, written out component by component so that it
+        runs on plain floats (one physics step) or on NumPy arrays of any shape (a batch)
+        without per-call array overhead.
+        """
+        return self._k
+
+    def with_(self, **changes: Any) -> PlantModel:
+        """A copy with some fields changed (frozen-dataclass ``replace``)."""
+        return replace(self, **changes)
+
+
+class _Kernel:
+    """Expanded component form of :meth:`PlantModel.nu_dot` with constants bound once."""
+
+    __slots__ = (
+        "a11", "a22", "a23", "a32", "a33", "a23s", "d", "q1", "q2", "q3", "mi", "m", "xg", "cor",
+    )  # fmt: skip
+
+    def __init__(self, p: PlantModel, Mi: NDArray[np.float64]) -> None:
+        A = p.M_A
+        self.a11, self.a22, self.a23 = A[0][0], A[1][1], A[1][2]
+        self.a32, self.a33 = A[2][1], A[2][2]
+        self.a23s = 0.5 * (A[1][2] + A[2][1])
+        self.d = tuple(tuple(row) for row in p.D_L)
+        self.q1, self.q2, self.q3 = p.d_quad
+        self.mi = tuple(tuple(float(x) for x in row) for row in Mi)
+        self.m, self.xg, self.cor = p.m, p.x_g, 1.0 if p.coriolis else 0.0
+
+    def __call__(self, u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
+        ur = u - u_c
+        vr = v - v_c
+        d = self.d
+        # damping D(nu_r) nu_r
+        fx = X - (d[0][0] * ur + d[0][1] * vr + d[0][2] * r + self.q1 * abs(ur) * ur)
+        fy = Y - (d[1][0] * ur + d[1][1] * vr + d[1][2] * r + self.q2 * abs(vr) * vr)
+        fn = N - (d[2][0] * ur + d[2][1] * vr + d[2][2] * r + self.q3 * abs(r) * r)
+        # Coriolis-centripetal C_RB(nu) nu + C_A(nu_r) nu_r
+        c = self.cor
+        m = self.m * c
+        mxr = m * (self.xg * r + v)
+        w = (self.a22 * vr + self.a23s * r) * c
+        a11u = self.a11 * ur * c
+        fx += mxr * r + w * r
+        fy -= m * u * r + a11u * r
+        fn -= m * self.xg * r * u + w * ur - a11u * vr
+        # + M_A nu_c_dot, nu_c_dot = [r v_c, -r u_c, 0]
+        ax, ay = r * v_c, -r * u_c
+        fx += self.a11 * ax
+        fy += self.a22 * ay
+        fn += self.a32 * ay
+        mi = self.mi
+        return (
+            mi[0][0] * fx + mi[0][1] * fy + mi[0][2] * fn,
+            mi[1][0] * fx + mi[1][1] * fy + mi[1][2] * fn,
+            mi[2][0] * fx + mi[2][1] * fy + mi[2][2] * fn,
+        )
+
+
+def seed_linear_matrices() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(M, D_L)`` exactly as printed in seed001 eqs. 49-50 (the model of its controllers)."""
+    M = np.diag([23664.9, 24830.6, 455182.1])
+    D_L = np.array([[21.10, 0.0, 0.0], [0.0, 259.8, -855.4], [0.0, -855.4, 6130.5]])
+    return M, D_L
+
+
+def _from_hull(
+    hull: HullParameters,
+    name: str,
+    *,
+    coriolis: bool = True,
+    quadratic_damping: bool = True,
+    sway_yaw_coupling: bool = True,
+) -> PlantModel:
+    h = hull
+    M_RB = [[h.m, 0, 0], [0, h.m, h.m * h.x_g], [0, h.m * h.x_g, h.I_z]]
+    c = 1.0 if sway_yaw_coupling else 0.0
+    M_A = [[-h.X_udot, 0, 0], [0, -h.Y_vdot, -c * h.Y_rdot], [0, -c * h.N_vdot, -h.N_rdot]]
+    D_L = [[-h.X_u, 0, 0], [0, -h.Y_v, -h.Y_r], [0, -h.N_v, -h.N_r]]  # seed001 eq. 7
+    dq = (-h.X_uu, -h.Y_vv, -h.N_rr) if quadratic_damping else (0.0, 0.0, 0.0)
+    return PlantModel(name, M_RB, M_A, D_L, dq, coriolis, h.m, h.x_g)
+
+
+def _default(hull: HullParameters = BLUE_LADY_HULL) -> PlantModel:
+    """The richer plant: Table 2 M and D_L, Coriolis, quadratic damping, sway-yaw coupling."""
+    return _from_hull(hull, "default")
+
+
+def _seed_linear(hull: HullParameters = BLUE_LADY_HULL) -> PlantModel:
+    """Exactly ``M nu_dot + D_L nu = tau`` with M, D_L of seed001 eqs. 49-50, nothing else."""
+    M, D_L = seed_linear_matrices()
+    M_RB = np.diag([hull.m, hull.m, M[2, 2]])
+    return PlantModel("seed-linear", M_RB, M - M_RB, D_L, (0.0, 0.0, 0.0), False, hull.m, 0.0)
+
+
+PLANT_VARIANTS: dict[str, Callable[..., PlantModel]] = {
+    "default": _default,
+    "seed-linear": _seed_linear,
+}
+
+
+def plant_model(
+    name: str = "default", hull: HullParameters = BLUE_LADY_HULL, **options: bool
+) -> PlantModel:
+    """A plant variant by name.
+
+    Args:
+        name: ``"default"`` (richer plant) or ``"seed-linear"`` (seed001 eqs. 49-50 only).
+        hull: hull parameters (the Blue Lady by default).
+        **options: for ``"default"`` only: ``coriolis``, ``quadratic_damping``,
+            ``sway_yaw_coupling`` (bools) to switch the richer terms off one by one.
+
+    Raises:
+        ValueError: unknown name or option.
+    """
+    if name not in PLANT_VARIANTS:
+        raise ValueError(
+            f"unknown plant variant {name!r}; choose one of: {', '.join(PLANT_VARIANTS)}"
+        )
+    if name == "default":
+        valid = {"coriolis", "quadratic_damping", "sway_yaw_coupling"}
+        bad = sorted(set(options) - valid)
+        if bad:
+            raise ValueError(f"unknown plant option(s) {bad}; valid: {sorted(valid)}")
+        return _from_hull(hull, "default", **options)
+    if options:
+        raise ValueError(f"plant {name!r} takes no options, got {sorted(options)}")
+    return PLANT_VARIANTS[name](hull)

@@ -1,0 +1,32 @@
+"""Guidance for harbour manoeuvres (seed001 Figs. 2-3 and 7; SPEC section 8). Pure NumPy.
+
+- :mod:`~shipgym.guidance.rframe`: the leg's r-frame (seed001 eqs. 1-2), ``to_r_frame`` and
+  ``from_r_frame``;
+- :mod:`~shipgym.guidance.reference`: :class:`Limits` and the smooth reference of a leg
+  (raised-cosine-acceleration trapezoid, DOFs synchronised on a straight r-frame line);
+- :mod:`~shipgym.guidance.plan`: :class:`Leg`, :class:`ManoeuvrePlan`, the seed's 5-leg plan
+  and the plan registry;
+- :mod:`~shipgym.guidance.runtime`: :class:`Guidance` (current leg, reference, switching).
+"""
+
+from .plan import PLANS, Leg, ManoeuvrePlan, plan, tomera2014_plan
+from .reference import LegProfile, Limits, leg_duration, leg_profile, leg_reference
+from .rframe import from_r_frame, to_r_frame
+from .runtime import Guidance, Reference
+
+__all__ = [
+    "PLANS",
+    "Guidance",
+    "Leg",
+    "LegProfile",
+    "Limits",
+    "ManoeuvrePlan",
+    "Reference",
+    "from_r_frame",
+    "leg_duration",
+    "leg_profile",
+    "leg_reference",
+    "plan",
+    "to_r_frame",
+    "tomera2014_plan",
+]

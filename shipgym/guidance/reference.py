@@ -1,0 +1,288 @@
+"""Smooth reference trajectories of a manoeuvre leg (seed001 Fig. 3; SPEC section 8).
+
+The reference generator of seed001 (Fig. 3) gives the position ``eta_d^r(t)``, velocity
+``eta_dot_d^r(t)`` and acceleration ``eta_ddot_d^r(t)`` of a virtual ship moving from the
+leg's start point P to its end point K in the leg's r-frame. The seed does not print the
+generator; this module uses a smooth velocity profile (notes section 6, "trapezoidal velocity
+profile") with a raised-cosine acceleration so that the acceleration is continuous:
+
+* The virtual ship moves along the straight r-frame line from P to K:
+  ``eta_d^r(t) = s(t) * Delta`` where ``Delta = [surge, sway, yaw]`` is the leg's
+  displacement and ``s`` a normalised path parameter from 0 to 1. All DOFs therefore start
+  and finish together (the DOFs that could go faster are scaled down), and a combined leg
+  follows a straight line in the r-frame.
+* ``s`` has three phases: acceleration for ``T_a`` with
+  ``s_ddot = A sin^2(pi t / T_a)`` (peak ``A``, zero at both ends), cruise at ``V`` for
+  ``T_c``, and the mirror-image deceleration. ``V = A T_a / 2``. When the distance is too
+  short to reach the speed limit the cruise vanishes (triangular profile) and
+  ``V = sqrt(A / 2)``.
+* ``V = min_i v_max,i / |Delta_i|`` and ``A = min_i a_max,i / |Delta_i|`` over the moving
+  DOFs, so ``|eta_dot_d,i| <= v_max,i`` and ``|eta_ddot_d,i| <= a_max,i`` for every DOF.
+  Duration (trapezoid): ``T = 1/V + 2 V/A``; (triangle): ``T = 2 sqrt(2/A)``.
+* Position, velocity and acceleration are the exact analytic integrals of each other: the
+  acceleration is continuous, the jerk is bounded (``pi A / T_a``) and continuous, and the
+  profile starts at rest at 0 and ends at rest exactly at ``Delta``.
+
+The per-DOF limits :class:`Limits` apply to the r-frame coordinates (along and across the
+ship's heading at P, and the heading); for the single-DOF legs of the seed's manoeuvre they
+are body-frame limits.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym._config import from_mapping, param, require_finite, require_positive
+
+if TYPE_CHECKING:  # pragma: no cover - typing only (plan.py imports this module)
+    from .plan import Leg
+
+__all__ = ["Limits", "LegProfile", "leg_profile", "leg_reference", "leg_duration"]
+
+_CAP = (
+    "notes 6 / SPEC 4: thrust capacity 451 N ahead, 78 N astern (main propeller), 2 x 44.1 N "
+    "sway and ~248 N m yaw (tunnel thrusters) against M = diag(23 665 kg, 24 831 kg, "
+    "4.55e5 kg m^2) (seed001 eq. 49; notes 6 quotes up to 42 t in sway with Clarke added mass)"
+)
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Speed and acceleration limits of the reference per DOF (r-frame of the leg).
+
+    Defaults follow the thruster capacity of the Blue Lady with a margin for a 3 m/s lake wind
+    (notes 1.6: ~9 N head, ~25 N and ~27 N m beam) and for the feedback controller; each
+    field's ``metadata`` holds its unit and source. Astern surge has its own, lower limits
+    because the main propeller gives only 78 N astern.
+    """
+
+    surge_speed: float = param(0.2, "m/s", "notes 6: v_max 0.2-0.3 m/s (max speed 3.1 kn)")
+    surge_accel: float = param(
+        0.005,
+        "m/s^2",
+        _CAP + ": (451 - 9) N / 23 665 kg = 0.019 m/s^2; about 1/4 of it is used",
+    )
+    surge_astern_speed: float = param(0.1, "m/s", "half of surge_speed (78 N astern thrust)")
+    surge_astern_accel: float = param(
+        0.002,
+        "m/s^2",
+        _CAP + ": (78 - 9) N / 23 665 kg = 0.0029 m/s^2 peak; the raised-cosine profile "
+        "averages half the peak over the acceleration phase",
+    )
+    sway_speed: float = param(0.05, "m/s", "notes 6: v_max 0.05-0.1 m/s")
+    sway_accel: float = param(
+        0.001, "m/s^2", _CAP + ": (88 - 25) N / 24 831 kg = 0.0025 m/s^2; notes 6: use 0.001"
+    )
+    yaw_rate: float = param(math.radians(1.0), "rad/s", "notes 6: r_max 1 deg/s")
+    yaw_accel: float = param(
+        2.5e-4,
+        "rad/s^2",
+        _CAP + ": (248 - 27) N m / 4.55e5 kg m^2 = 4.9e-4 rad/s^2; notes 6: use 2.5e-4",
+    )
+
+    def __post_init__(self) -> None:
+        require_finite(self)
+        require_positive(self, *(f.name for f in fields(self)))
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Limits:
+        """Build from a mapping of field names (SI units); unknown keys raise ``ValueError``."""
+        return from_mapping(cls, {k: float(v) for k, v in d.items()}, where="limits")
+
+    def to_dict(self) -> dict[str, float]:
+        """The fields as a plain dict (SI units)."""
+        return {f.name: float(getattr(self, f.name)) for f in fields(self)}
+
+    def for_displacement(self, displacement: ArrayLike) -> tuple[NDArray, NDArray]:
+        """Speed and acceleration limits ``(v_max, a_max)``, each (3,), for a displacement.
+
+        Args:
+            displacement: ``[surge, sway, yaw]`` (m, m, rad); a negative surge selects the
+                astern limits.
+
+        Returns:
+            ``v_max`` (m/s, m/s, rad/s) and ``a_max`` (m/s^2, m/s^2, rad/s^2).
+        """
+        astern = float(np.asarray(displacement, dtype=float)[0]) < 0.0
+        vx = self.surge_astern_speed if astern else self.surge_speed
+        ax = self.surge_astern_accel if astern else self.surge_accel
+        return (
+            np.array([vx, self.sway_speed, self.yaw_rate]),
+            np.array([ax, self.sway_accel, self.yaw_accel]),
+        )
+
+
+DEFAULT_LIMITS = Limits()
+
+
+@dataclass(frozen=True)
+class LegProfile:
+    """The smooth straight-line profile of one leg: ``eta_d^r(t) = s(t) * displacement``.
+
+    Build with :func:`leg_profile`. Attributes are the normalised path parameters.
+
+    Attributes:
+        displacement: ``[surge, sway, yaw]`` (m, m, rad) in the r-frame, shape (3,).
+        speed: cruise (peak) rate ``V`` of ``s`` (1/s).
+        accel: peak acceleration ``A`` of ``s`` (1/s^2).
+        t_accel: duration ``T_a`` of the acceleration (and of the deceleration) phase (s).
+        t_cruise: duration ``T_c`` of the constant-speed phase (s); 0 for a triangle.
+        duration: total duration ``T = 2 T_a + T_c`` (s); 0 for a zero displacement.
+    """
+
+    displacement: NDArray[np.float64]
+    speed: float
+    accel: float
+    t_accel: float
+    t_cruise: float
+    duration: float
+
+    def path(self, t: ArrayLike) -> tuple[Any, Any, Any]:
+        """Normalised path parameter ``(s, s_dot, s_ddot)`` at time ``t`` (s) since the start.
+
+        Scalar ``t`` gives Python floats, array ``t`` arrays of its shape. ``s = 0`` before
+        the start and ``s = 1`` (exactly) from ``t = duration`` on.
+        """
+        if np.ndim(t) == 0:
+            return self._path_scalar(float(t))
+        return self._path_array(np.asarray(t, dtype=float))
+
+    def _path_scalar(self, t: float) -> tuple[float, float, float]:
+        if not math.isfinite(t):
+            raise ValueError(f"time must be finite, got {t!r}")
+        T = self.duration
+        if t <= 0.0 or T == 0.0:
+            return (1.0, 0.0, 0.0) if (T == 0.0 and t >= 0.0) else (0.0, 0.0, 0.0)
+        if t >= T:
+            return 1.0, 0.0, 0.0
+        Ta, V = self.t_accel, self.speed
+        if t < Ta:
+            return self._ramp(t)
+        if t <= Ta + self.t_cruise:
+            return 0.5 * V * Ta + V * (t - Ta), V, 0.0
+        p, v, a = self._ramp(T - t)
+        return 1.0 - p, v, -a
+
+    def _ramp(self, t: float) -> tuple[float, float, float]:
+        # acceleration phase: s_ddot = (A/2)(1 - cos(w t)), w = 2 pi / T_a
+        h = 0.5 * self.accel
+        w = 2.0 * math.pi / self.t_accel
+        wt = w * t
+        sh = math.sin(0.5 * wt)
+        return (
+            h * (0.5 * t * t - 2.0 * sh * sh / (w * w)),
+            h * (t - math.sin(wt) / w),
+            h * 2.0 * sh * sh,
+        )
+
+    def _path_array(self, t: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        if not np.all(np.isfinite(t)):
+            raise ValueError("times must be finite")
+        T = self.duration
+        s = np.zeros_like(t)
+        sd = np.zeros_like(t)
+        sdd = np.zeros_like(t)
+        if T == 0.0:
+            s[t >= 0.0] = 1.0
+            return s, sd, sdd
+        Ta, Tc, V = self.t_accel, self.t_cruise, self.speed
+        h = 0.5 * self.accel
+        w = 2.0 * math.pi / Ta
+
+        def ramp(tt: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+            sh = np.sin(0.5 * w * tt)
+            return (
+                h * (0.5 * tt * tt - 2.0 * sh * sh / (w * w)),
+                h * (tt - np.sin(w * tt) / w),
+                h * 2.0 * sh * sh,
+            )
+
+        m1 = (t > 0.0) & (t < Ta)
+        m2 = (t >= Ta) & (t <= Ta + Tc) & (t < T)
+        m3 = (t > Ta + Tc) & (t < T)
+        m4 = t >= T
+        p, v, a = ramp(t[m1])
+        s[m1], sd[m1], sdd[m1] = p, v, a
+        s[m2] = 0.5 * V * Ta + V * (t[m2] - Ta)
+        sd[m2] = V
+        p, v, a = ramp(T - t[m3])
+        s[m3], sd[m3], sdd[m3] = 1.0 - p, v, -a
+        s[m4] = 1.0
+        return s, sd, sdd
+
+    def evaluate(self, t: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
+        """Reference ``(eta_d^r, eta_dot_d^r, eta_ddot_d^r)`` at ``t`` (s) since the leg start.
+
+        Each output has shape ``np.shape(t) + (3,)`` with units (m, m, rad), per second, per
+        second squared.
+        """
+        s, sd, sdd = self.path(t)
+        d = self.displacement
+        if np.ndim(s) == 0:
+            return s * d, sd * d, sdd * d
+        return s[..., None] * d, sd[..., None] * d, sdd[..., None] * d
+
+
+def _effective_limits(leg: Leg, limits: Limits | None) -> Limits:
+    own = getattr(leg, "limits", None)
+    if own is not None:
+        return own
+    return DEFAULT_LIMITS if limits is None else limits
+
+
+def leg_profile(leg: Leg, limits: Limits | None = None) -> LegProfile:
+    """The smooth profile of a leg under the given limits (the leg's own limits win).
+
+    Args:
+        leg: a :class:`~shipgym.guidance.plan.Leg` (its ``displacement`` and ``limits``).
+        limits: plan-wide limits; ``None`` uses :class:`Limits` defaults.
+
+    Returns:
+        The :class:`LegProfile` (see the module docstring for the profile).
+    """
+    lim = _effective_limits(leg, limits)
+    disp = np.asarray(leg.displacement, dtype=float).copy()
+    disp.setflags(write=False)
+    mag = np.abs(disp)
+    moving = mag > 0.0
+    if not np.any(moving):
+        return LegProfile(disp, 0.0, 0.0, 0.0, 0.0, 0.0)
+    v_max, a_max = lim.for_displacement(disp)
+    V = float(np.min(v_max[moving] / mag[moving]))
+    A = float(np.min(a_max[moving] / mag[moving]))
+    if 2.0 * V * V <= A:  # trapezoid: the distance 1 covers acceleration + deceleration
+        Ta = 2.0 * V / A
+        Tc = max(1.0 / V - Ta, 0.0)
+    else:  # triangle: the speed limit is never reached
+        V = math.sqrt(0.5 * A)
+        Ta = 2.0 * V / A
+        Tc = 0.0
+    return LegProfile(disp, V, A, Ta, Tc, 2.0 * Ta + Tc)
+
+
+def leg_duration(leg: Leg, limits: Limits | None = None) -> float:
+    """Duration (s) of the leg's reference under the limits (the leg's own limits win)."""
+    return leg_profile(leg, limits).duration
+
+
+def leg_reference(
+    leg: Leg, limits: Limits | None, t: ArrayLike
+) -> tuple[NDArray, NDArray, NDArray]:
+    """Desired r-frame pose, velocity and acceleration of the virtual ship (seed001 Fig. 3).
+
+    Args:
+        leg: the leg (displacement ``[surge, sway, yaw]`` in its r-frame).
+        limits: plan-wide :class:`Limits` (``None``: defaults); ``leg.limits`` overrides.
+        t: time since the leg started (s), scalar or array.
+
+    Returns:
+        ``(eta_d^r, eta_dot_d^r, eta_ddot_d^r)``, each of shape ``np.shape(t) + (3,)``, in
+        (m, m, rad), (m/s, m/s, rad/s) and (m/s^2, m/s^2, rad/s^2). At rest at 0 for
+        ``t <= 0`` and at rest exactly at the displacement for ``t >= leg_duration``.
+    """
+    return leg_profile(leg, limits).evaluate(t)

@@ -1,0 +1,101 @@
+"""The reference frame r of a manoeuvre leg (seed001 eqs. 1-2, Fig. 2; SPEC sections 3, 8).
+
+The r-frame of a leg has its origin at the leg's start point P and its x axis along the
+ship's heading at P (y to starboard of that heading, heading measured clockwise from the
+x^r axis). It is the n-frame (NED) translated to P and rotated by ``psi_P``:
+
+``p^r = R(psi_P)^T (p^n - p_P^n)``,  ``psi^r = psi^n - psi_P`` (differenced, hence wrapped).
+
+Seed001 writes this as ``eta^r_k = (eta^n_k - eta^n_P) . R(psi^n_{k-1})`` (eq. 1) with the
+matrix of eq. 2, ``[[c, s, 0], [-s, c, 0], [0, 0, 1]]``, which is ``R(psi)^T``; read as a
+matrix times a column vector that is exactly the map above. The seed's angle argument
+``psi_{k-1}`` is read as the heading that defines the r-frame, i.e. the heading at P (the
+text: "the direction of the x^r axis changes ... shifted to the initial point P of the
+current trajectory segment"); a frame that rotated with the ship would make the r-frame
+coordinates body-frame errors instead.
+
+Both functions accept a leading batch axis on either argument.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym.dynamics.frames import wrap_angle
+
+__all__ = ["to_r_frame", "from_r_frame"]
+
+
+def to_r_frame(
+    eta_n: ArrayLike, eta_P: ArrayLike, psi_ref_r: ArrayLike | None = None
+) -> NDArray[np.float64]:
+    """Express NED poses in the r-frame of a leg that starts at ``eta_P`` (seed001 eq. 1).
+
+    Args:
+        eta_n: NED poses ``[x, y, psi]`` (m, m, rad), shape (3,) or (..., 3).
+        eta_P: NED pose of the leg's start point P (m, m, rad), shape (3,) or (..., 3).
+        psi_ref_r: optional r-frame heading (rad), scalar or shape (...), that the result's
+            heading is unwrapped against: ``psi^r = psi_ref_r + wrap(psi - psi_P - psi_ref_r)``,
+            i.e. the branch within pi of ``psi_ref_r``. Pass the desired r-frame heading
+            ``psi_d^r`` so that legs turning by pi or more give continuous r-frame headings.
+            Without it the heading is ``wrap(psi - psi_P)`` in (-pi, pi].
+
+    Returns:
+        r-frame poses ``[x^r, y^r, psi^r]`` (m, m, rad), shape broadcast of the inputs.
+    """
+    eta_n = np.asarray(eta_n, dtype=float)
+    eta_P = np.asarray(eta_P, dtype=float)
+    if eta_n.shape[-1:] != (3,) or eta_P.shape[-1:] != (3,):
+        raise ValueError(
+            f"eta_n and eta_P must have a last axis of length 3 ([x, y, psi]), got shapes "
+            f"{eta_n.shape} and {eta_P.shape}"
+        )
+    dx = eta_n[..., 0] - eta_P[..., 0]
+    dy = eta_n[..., 1] - eta_P[..., 1]
+    c = np.cos(eta_P[..., 2])
+    s = np.sin(eta_P[..., 2])
+    dpsi = eta_n[..., 2] - eta_P[..., 2]
+    if psi_ref_r is None:
+        psi_r = wrap_angle(dpsi)
+    else:
+        ref = np.asarray(psi_ref_r, dtype=float)
+        psi_r = ref + wrap_angle(dpsi - ref)
+    out = np.empty(np.broadcast_shapes(eta_n.shape, eta_P.shape))
+    out[..., 0] = c * dx + s * dy
+    out[..., 1] = -s * dx + c * dy
+    out[..., 2] = psi_r
+    return out
+
+
+def from_r_frame(eta_r: ArrayLike, eta_P: ArrayLike) -> NDArray[np.float64]:
+    """Map r-frame poses back to NED: ``p^n = p_P + R(psi_P) p^r``, ``psi^n = psi_P + psi^r``.
+
+    The NED heading is *not* wrapped: it is continuous in ``psi^r`` and keeps the branch of
+    ``psi_P`` (a leg starting at 350 deg and turning 90 deg clockwise ends at 440 deg, not
+    at 80 deg), so desired headings never jump across 0/360 deg. Compare headings with
+    :func:`shipgym.dynamics.wrap_angle`.
+
+    Args:
+        eta_r: r-frame poses ``[x^r, y^r, psi^r]`` (m, m, rad), shape (3,) or (..., 3).
+        eta_P: NED pose of the leg's start point P (m, m, rad), shape (3,) or (..., 3).
+
+    Returns:
+        NED poses ``[x, y, psi]`` (m, m, rad), shape broadcast of the inputs.
+    """
+    eta_r = np.asarray(eta_r, dtype=float)
+    eta_P = np.asarray(eta_P, dtype=float)
+    if eta_r.shape[-1:] != (3,) or eta_P.shape[-1:] != (3,):
+        raise ValueError(
+            f"eta_r and eta_P must have a last axis of length 3 ([x, y, psi]), got shapes "
+            f"{eta_r.shape} and {eta_P.shape}"
+        )
+    c = np.cos(eta_P[..., 2])
+    s = np.sin(eta_P[..., 2])
+    xr = eta_r[..., 0]
+    yr = eta_r[..., 1]
+    out = np.empty(np.broadcast_shapes(eta_r.shape, eta_P.shape))
+    out[..., 0] = eta_P[..., 0] + c * xr - s * yr
+    out[..., 1] = eta_P[..., 1] + s * xr + c * yr
+    out[..., 2] = eta_P[..., 2] + eta_r[..., 2]
+    return out

@@ -1,0 +1,375 @@
+"""Accuracy indices and run statistics (seed001 eqs. 54-57; SPEC section 11). Pure NumPy.
+
+Seed001 assesses the accuracy of the position control of the harbour manoeuvre with
+
+``x_E = (1/N) sum_k |x_d^r(k) - x^r(k)|`` (eq. 54), ``y_E`` likewise (eq. 55),
+``psi_E = (1/N) sum_k |psi_d^r(k) - psi^r(k)|`` (eq. 56, in degrees) and
+``J_c = l1 x_E + l2 y_E + l3 psi_E`` with ``(l1, l2, l3) = (1, 1, 0.01)`` (eq. 57),
+
+sampled every 1 s in the r-frame of the leg being performed, from the *measured* pose (DGPS
+and gyro-compass). Here heading differences are wrapped to (-pi, pi] before the absolute
+value, and the indices are computed both from the truth and from the measurements.
+
+Note on the seed's numbers: Table 6 satisfies eq. 57 exactly (e.g. Kalman-Bucy:
+0.2376 + 0.2984 + 0.01 * 402.5533 = 4.5615), but its psi_E values of 377-403 "deg" cannot be
+mean absolute heading errors of a manoeuvre that completed; they are reproduced as published
+(eq. 57 only), not as a target for psi_E.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from shipgym.dynamics.frames import wrap_angle
+
+__all__ = [
+    "SEED_WEIGHTS",
+    "accuracy_indices",
+    "ManoeuvreMetrics",
+    "rmse",
+]
+
+SEED_WEIGHTS: tuple[float, float, float] = (1.0, 1.0, 0.01)
+"""``(lambda_1, lambda_2, lambda_3)`` of seed001 eq. 57 (1/m, 1/m, 1/deg)."""
+
+_TWO_PI = 2.0 * math.pi
+_DEG = 180.0 / math.pi
+
+
+def _wrap(a: float) -> float:
+    """Scalar wrap to (-pi, pi] (same convention as :func:`shipgym.dynamics.wrap_angle`)."""
+    return math.pi - (math.pi - a) % _TWO_PI
+
+
+def _weights(weights: Sequence[float]) -> tuple[float, float, float]:
+    w = tuple(float(x) for x in weights)
+    if len(w) != 3 or not all(math.isfinite(x) for x in w):
+        raise ValueError(f"weights must be three finite numbers (l1, l2, l3), got {weights!r}")
+    return w  # type: ignore[return-value]
+
+
+def _indices(sx: float, sy: float, sp: float, n: int, w: tuple[float, float, float]) -> dict:
+    x_e, y_e, psi_e = sx / n, sy / n, sp / n * _DEG
+    return {
+        "x_E": x_e,
+        "y_E": y_e,
+        "psi_E": psi_e,
+        "J_c": w[0] * x_e + w[1] * y_e + w[2] * psi_e,
+    }
+
+
+def accuracy_indices(
+    eta_r: ArrayLike, eta_d_r: ArrayLike, weights: Sequence[float] = SEED_WEIGHTS
+) -> dict[str, float]:
+    """The accuracy indices of seed001 eqs. 54-57 from sampled r-frame poses.
+
+    Args:
+        eta_r: ship poses ``[x^r, y^r, psi^r]`` (m, m, rad), shape (N, 3), one per sample
+            (seed001: measured, every 1 s).
+        eta_d_r: desired poses at the same samples (m, m, rad), shape (N, 3).
+        weights: ``(l1, l2, l3)`` of eq. 57 (default the seed's ``(1, 1, 0.01)``).
+
+    Returns:
+        ``{"x_E": m, "y_E": m, "psi_E": deg, "J_c": -}``: mean absolute errors (eqs. 54-56;
+        heading error wrapped to (-pi, pi], then converted to degrees) and eq. 57.
+
+    Raises:
+        ValueError: mismatched shapes, no samples or non-finite values.
+    """
+    w = _weights(weights)
+    a = np.asarray(eta_r, dtype=float)
+    b = np.asarray(eta_d_r, dtype=float)
+    if a.ndim != 2 or a.shape[1] != 3 or a.shape != b.shape:
+        raise ValueError(
+            f"eta_r and eta_d_r must both have shape (N, 3), got {a.shape} and {b.shape}"
+        )
+    if a.shape[0] == 0:
+        raise ValueError("no samples: accuracy indices need at least one sample")
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        raise ValueError("eta_r and eta_d_r must be finite")
+    e = np.abs(b - a)
+    e[:, 2] = np.abs(wrap_angle(b[:, 2] - a[:, 2]))
+    s = e.sum(axis=0)
+    return _indices(float(s[0]), float(s[1]), float(s[2]), a.shape[0], w)
+
+
+def rmse(a: ArrayLike, b: ArrayLike, angle: bool = False, axis: int | None = 0) -> Any:
+    """Root-mean-square error ``sqrt(mean((a - b)^2))`` along ``axis``.
+
+    Args:
+        a: estimates, e.g. shape (N,) or (N, k).
+        b: true values, same shape.
+        angle: wrap the differences to (-pi, pi] first (for headings, rad).
+        axis: axis of the mean (default 0, the samples); ``None`` for all elements.
+
+    Returns:
+        A float for a scalar result, else an array (e.g. (k,) for (N, k) inputs).
+    """
+    d = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
+    if d.size == 0:
+        raise ValueError("rmse of empty arrays")
+    if angle:
+        d = np.asarray(wrap_angle(d))
+    out = np.sqrt(np.mean(d * d, axis=axis))
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def _floats3(v: Any, what: str) -> tuple[float, float, float]:
+    if isinstance(v, np.ndarray):
+        x = v.tolist()
+    else:
+        x = [float(e) for e in v]
+    if len(x) != 3:
+        raise ValueError(f"{what} must have 3 elements, got {len(x)}")
+    a, b, c = x
+    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
+        raise ValueError(f"{what} must be finite, got {x}")
+    return a, b, c
+
+
+class _Acc:
+    """Running sums of |errors| of eqs. 54-56 (Python floats; cheap)."""
+
+    __slots__ = ("sx", "sy", "sp", "n")
+
+    def __init__(self) -> None:
+        self.sx = self.sy = self.sp = 0.0
+        self.n = 0
+
+    def add(self, a: tuple[float, float, float], d: tuple[float, float, float]) -> None:
+        self.sx += abs(d[0] - a[0])
+        self.sy += abs(d[1] - a[1])
+        self.sp += abs(_wrap(d[2] - a[2]))
+        self.n += 1
+
+    def result(self, w: tuple[float, float, float]) -> dict[str, float] | None:
+        if self.n == 0:
+            return None
+        return _indices(self.sx, self.sy, self.sp, self.n, w)
+
+
+class ManoeuvreMetrics:
+    """Online accumulator of the seed001 accuracy indices and thruster usage over a run.
+
+    Call :meth:`record` once per control step. The accuracy indices (eqs. 54-57) are sampled
+    at ``t = k * sample_period`` (the first call at or after each multiple; the tolerance
+    ``1e-6 * sample_period`` absorbs accumulated float error in ``t``), both from the true pose
+    (``eta_r``) and, when given, from the measured pose (``eta_meas_r``; the seed's choice).
+    Thruster statistics use every call (every control step).
+
+    Args:
+        sample_period: sampling time of the indices (s; seed001: 1 s).
+        weights: ``(l1, l2, l3)`` of eq. 57.
+        n_actuators: number of thrust channels (3 for the Blue Lady: main, bow, stern).
+    """
+
+    def __init__(
+        self,
+        sample_period: float = 1.0,
+        weights: Sequence[float] = SEED_WEIGHTS,
+        n_actuators: int = 3,
+    ) -> None:
+        sample_period = float(sample_period)
+        if not (math.isfinite(sample_period) and sample_period > 0.0):
+            raise ValueError(f"sample_period must be a positive number of s, got {sample_period}")
+        if int(n_actuators) < 1:
+            raise ValueError(f"n_actuators must be >= 1, got {n_actuators}")
+        self.sample_period = sample_period
+        self.weights = _weights(weights)
+        self.n_actuators = int(n_actuators)
+        self._tol = 1e-6 * sample_period
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget everything recorded."""
+        n = self.n_actuators
+        self._next_k = 0
+        self._t_last: float | None = None
+        self._truth = _Acc()
+        self._meas = _Acc()
+        self._per_leg: dict[int, _Acc] = {}
+        self._n_steps = 0
+        self._f_abs = [0.0] * n
+        self._f_tv = [0.0] * n
+        self._f_prev: list[float] | None = None
+        self._n_thrust = 0
+        self._sat_count = [0] * n
+        self._sat_time = [0.0] * n
+        self._sat_prev: list[bool] | None = None
+        self._n_sat = 0
+        self._leg: int | None = None
+        self._leg_start: float | None = None
+        self._leg_times: list[float] = []
+        self._leg_completion: list[float] = []
+        self._t_first: float | None = None
+
+    # -- recording ---------------------------------------------------------------------------
+    def record(
+        self,
+        t: float,
+        eta_r: ArrayLike,
+        eta_d_r: ArrayLike,
+        eta_meas_r: ArrayLike | None = None,
+        thrust: ArrayLike | None = None,
+        saturated: ArrayLike | None = None,
+        leg: int | None = None,
+    ) -> bool:
+        """Record one control step.
+
+        Args:
+            t: time (s), non-decreasing between calls.
+            eta_r: true pose in the current leg's r-frame (m, m, rad), (3,).
+            eta_d_r: desired pose in the same r-frame (m, m, rad), (3,).
+            eta_meas_r: measured pose in the same r-frame (m, m, rad), (3,), or None.
+            thrust: actuator forces (N), (n_actuators,), or None.
+            saturated: per-actuator saturation flags, (n_actuators,), or None.
+            leg: index of the leg being performed; a change of index marks the previous leg
+                complete at ``t`` (see also :meth:`complete_leg`).
+
+        Returns:
+            True when this call was taken as an accuracy sample.
+        """
+        t = float(t)
+        if not math.isfinite(t):
+            raise ValueError(f"t must be finite, got {t!r}")
+        if self._t_last is not None and t < self._t_last:
+            raise ValueError(
+                f"time went backwards ({t} s < {self._t_last} s); call reset() for a new run"
+            )
+        dt = 0.0 if self._t_last is None else t - self._t_last
+        if self._t_first is None:
+            self._t_first = t
+            self._next_k = max(0, math.ceil((t - self._tol) / self.sample_period))
+        self._t_last = t
+        self._n_steps += 1
+
+        if leg is not None:
+            leg = int(leg)
+            if self._leg is None:
+                self._leg, self._leg_start = leg, t
+            elif leg != self._leg:
+                self.complete_leg(t, next_leg=leg)
+
+        if thrust is not None:
+            self._record_thrust(thrust)
+        if saturated is not None:
+            self._record_saturation(saturated, dt)
+
+        sampled = t >= self._next_k * self.sample_period - self._tol
+        if sampled:
+            a = _floats3(eta_r, "eta_r")
+            d = _floats3(eta_d_r, "eta_d_r")
+            self._truth.add(a, d)
+            if eta_meas_r is not None:
+                self._meas.add(_floats3(eta_meas_r, "eta_meas_r"), d)
+            if self._leg is not None:
+                acc = self._per_leg.get(self._leg)
+                if acc is None:
+                    acc = self._per_leg[self._leg] = _Acc()
+                acc.add(a, d)
+            self._next_k = math.floor((t + self._tol) / self.sample_period) + 1
+        return sampled
+
+    def _record_thrust(self, thrust: ArrayLike) -> None:
+        f = thrust.tolist() if isinstance(thrust, np.ndarray) else [float(x) for x in thrust]
+        n = self.n_actuators
+        if len(f) != n:
+            raise ValueError(f"thrust must have {n} elements, got {len(f)}")
+        prev = self._f_prev
+        fa, tv = self._f_abs, self._f_tv
+        for i in range(n):
+            fi = f[i]
+            if not math.isfinite(fi):
+                raise ValueError(f"thrust must be finite, got {f}")
+            fa[i] += abs(fi)
+            if prev is not None:
+                tv[i] += abs(fi - prev[i])
+        self._f_prev = f
+        self._n_thrust += 1
+
+    def _record_saturation(self, saturated: ArrayLike, dt: float) -> None:
+        s = saturated.tolist() if isinstance(saturated, np.ndarray) else list(saturated)
+        n = self.n_actuators
+        if len(s) != n:
+            raise ValueError(f"saturated must have {n} flags, got {len(s)}")
+        prev = self._sat_prev
+        for i in range(n):
+            if s[i]:
+                self._sat_count[i] += 1
+            if prev is not None and prev[i]:
+                self._sat_time[i] += dt  # zero-order hold of the previous step's flag
+        self._sat_prev = [bool(x) for x in s]
+        self._n_sat += 1
+
+    def complete_leg(self, t: float, next_leg: int | None = None) -> None:
+        """Mark the current leg complete at ``t`` (s); ``next_leg`` (if any) starts at ``t``.
+
+        :meth:`record` calls this when its ``leg`` argument changes; call it yourself for the
+        last leg (e.g. when ``Guidance.finished`` becomes True).
+        """
+        t = float(t)
+        if self._leg_start is not None:
+            self._leg_times.append(t - self._leg_start)
+            self._leg_completion.append(t)
+        self._leg = next_leg
+        self._leg_start = t if next_leg is not None else None
+
+    # -- results -----------------------------------------------------------------------------
+    @property
+    def n_samples(self) -> int:
+        """Number of accuracy samples taken (truth)."""
+        return self._truth.n
+
+    def summary(self) -> dict[str, Any]:
+        """The run's statistics.
+
+        Returns:
+            A dict with:
+
+            - ``x_E``, ``y_E`` (m), ``psi_E`` (deg), ``J_c``: seed001 eqs. 54-57 from the
+              true pose (NaN if no sample was taken);
+            - ``measured``: the same four from the measured pose, or None if none recorded;
+            - ``n_samples``, ``n_measured_samples``, ``n_steps`` (calls of :meth:`record`);
+            - ``thrust_mean_abs`` (N), ``thrust_total_variation`` (N, sum of |F_k - F_{k-1}|
+              over consecutive steps), ``saturated_fraction`` (fraction of steps with the flag
+              set), ``saturated_time`` (s): lists per actuator (NaN / 0 if not recorded);
+            - ``legs_completed``, ``leg_times`` (duration of each completed leg, s),
+              ``leg_completion_times`` (s);
+            - ``per_leg``: ``{leg index: indices dict (with n_samples)}`` from the truth.
+        """
+        w = self.weights
+        nan = float("nan")
+        truth = self._truth.result(w) or {"x_E": nan, "y_E": nan, "psi_E": nan, "J_c": nan}
+        n = self.n_actuators
+        if self._n_thrust:
+            mean_abs = [x / self._n_thrust for x in self._f_abs]
+            tv = list(self._f_tv)
+        else:
+            mean_abs, tv = [nan] * n, [nan] * n
+        sat = [c / self._n_sat for c in self._sat_count] if self._n_sat else [nan] * n
+        per_leg = {}
+        for k in sorted(self._per_leg):
+            acc = self._per_leg[k]
+            res = acc.result(w)
+            if res is not None:
+                per_leg[k] = {**res, "n_samples": acc.n}
+        return {
+            **truth,
+            "measured": self._meas.result(w),
+            "n_samples": self._truth.n,
+            "n_measured_samples": self._meas.n,
+            "n_steps": self._n_steps,
+            "thrust_mean_abs": mean_abs,
+            "thrust_total_variation": tv,
+            "saturated_fraction": sat,
+            "saturated_time": list(self._sat_time),
+            "legs_completed": len(self._leg_times),
+            "leg_times": list(self._leg_times),
+            "leg_completion_times": list(self._leg_completion),
+            "per_leg": per_leg,
+        }
