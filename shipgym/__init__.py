@@ -1,7 +1,30 @@
 """shipgym: a MuJoCo simulator of ships in the horizontal plane (surge, sway, yaw).
 
-Subpackages: ``dynamics`` (pure NumPy model), ``disturbances`` (wind), ``envs`` (MuJoCo
-physics). See the README for the quick start.
+Importing ``shipgym`` registers the Gymnasium ids ``shipgym/BlueLadyHarbour-v0``,
+``shipgym/BlueLadyStationKeeping-v0`` and ``shipgym/BlueLadyTracking-v0``. Subpackages:
+``dynamics`` (pure NumPy model), ``disturbances`` (wind), ``guidance``, ``controllers``,
+``envs`` (MuJoCo physics and tasks), ``metrics``. See the README for the quick start.
 """
 
+from shipgym.envs.registration import ENV_IDS, register_envs
+
 __version__ = "0.1.0"
+
+register_envs()
+
+__all__ = ["ENV_IDS", "__version__", "make"]
+
+
+def make(env_id: str, *, controller: str | None = None, **kwargs):  # type: ignore[no-untyped-def]
+    """``gym.make(env_id, **kwargs)``, wrapped with a controller when one is named.
+
+    Args:
+        env_id: a registered id (see ``shipgym.ENV_IDS``) or a short name
+            (``harbour``, ``station-keeping``, ``tracking``).
+        controller: ``None`` (raw thruster actions) or a controller name
+            (see ``shipgym.controllers.CONTROLLERS``).
+        **kwargs: environment arguments.
+    """
+    from shipgym.envs.make import make as _make
+
+    return _make(env_id, controller=controller, **kwargs)

@@ -30,6 +30,7 @@ from shipgym.dynamics.frames import wrap_angle
 __all__ = [
     "SEED_WEIGHTS",
     "accuracy_indices",
+    "j_c",
     "ManoeuvreMetrics",
     "rmse",
 ]
@@ -51,6 +52,19 @@ def _weights(weights: Sequence[float]) -> tuple[float, float, float]:
     if len(w) != 3 or not all(math.isfinite(x) for x in w):
         raise ValueError(f"weights must be three finite numbers (l1, l2, l3), got {weights!r}")
     return w  # type: ignore[return-value]
+
+
+def j_c(x_E: float, y_E: float, psi_E: float, weights: Sequence[float] = SEED_WEIGHTS) -> float:
+    """The functional of seed001 eq. 57: ``J_c = l1 x_E + l2 y_E + l3 psi_E``.
+
+    Args:
+        x_E: mean absolute surge-direction error (m), eq. 54.
+        y_E: mean absolute sway-direction error (m), eq. 55.
+        psi_E: mean absolute heading error (deg), eq. 56.
+        weights: ``(l1, l2, l3)`` (default the seed's ``(1, 1, 0.01)``).
+    """
+    w = _weights(weights)
+    return w[0] * x_E + w[1] * y_E + w[2] * psi_E
 
 
 def _indices(sx: float, sy: float, sp: float, n: int, w: tuple[float, float, float]) -> dict:
@@ -275,7 +289,7 @@ class ManoeuvreMetrics:
             self._next_k = math.floor((t + self._tol) / self.sample_period) + 1
         return sampled
 
-    def _record_thrust(self, thrust: ArrayLike) -> None:
+    def _record_thrust(self, thrust: Any) -> None:
         f = thrust.tolist() if isinstance(thrust, np.ndarray) else [float(x) for x in thrust]
         n = self.n_actuators
         if len(f) != n:
@@ -292,7 +306,7 @@ class ManoeuvreMetrics:
         self._f_prev = f
         self._n_thrust += 1
 
-    def _record_saturation(self, saturated: ArrayLike, dt: float) -> None:
+    def _record_saturation(self, saturated: Any, dt: float) -> None:
         s = saturated.tolist() if isinstance(saturated, np.ndarray) else list(saturated)
         n = self.n_actuators
         if len(s) != n:

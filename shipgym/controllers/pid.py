@@ -37,6 +37,46 @@ polynomial ``s^3 + K_D s^2 + K_P s + K_I`` (eq. 18), which is what the gain desi
 (:func:`pid_pole_placement`) places. Since the r-frame differs from NED only by a constant
 rotation and offset, the same controller works in NED coordinates (pass NED ``eta``).
 
+Gains: why the seed's do not work here
+-------------------------------------
+The seed's gains (eqs. 46-48: ``K_P = 1``, ``K_I = 0.01``, ``K_D = 100`` for every DOF) give
+the per-DOF error polynomial ``s^3 + 100 s^2 + s + 0.01`` with poles at -99.99 rad/s and
+``-0.005 +- 0.0087j`` rad/s. Even in continuous time the dominant pair has a 200 s time
+constant, and the fast pole at -100 rad/s cannot be realised at all by a controller sampled
+every ``T = 1`` s: the velocity feedback alone updates the velocity error by a factor
+``1 - K_D T = -99`` per sample, so the sampled loop (:func:`error_loop`) has a spectral radius
+of about 99 (``K_D T = 100 >> 2``): unstable. On the ship the thrusters then saturate and
+chatter between their limits at every sample instead of converging. Perhaps the seed's
+Simulink model ran the controller much faster or scaled the gains differently; that is not
+recoverable from the paper, so the preset keeps the printed numbers and :data:`GAIN_PRESETS`
+adds ``"tuned"`` defaults.
+
+The ``"tuned"`` gains place a triple pole per DOF (:func:`pid_pole_placement`, ``zeta = 1``:
+``K_D = 3 w``, ``K_P = 3 w^2``, ``K_I = w^3``) with ``w = (0.06, 0.06, 0.1)`` rad/s for
+x, y and yaw: ``K_P = (0.0108, 0.0108, 0.03)``, ``K_I = (2.16e-4, 2.16e-4, 1e-3)``,
+``K_D = (0.18, 0.18, 0.3)``. The reasoning:
+
+- Force capacity. The thrusters give at most ``451 N / 23.7 t = 0.019 m/s^2`` ahead but only
+  ``78 N -> 0.0033 m/s^2`` astern, ``88 N / 24.8 t = 0.0036 m/s^2`` of sway and
+  ``248 N m / 4.55e5 kg m^2 = 5.4e-4 rad/s^2`` of yaw. The worst-case translational
+  acceleration is thus about the same, ~0.0035 m/s^2, in surge (astern) and sway, so x and y
+  get the same bandwidth. The P term ``M K_P e`` reaches the capacity at an error of 0.31 m
+  (astern; 1.8 m ahead) and 0.33 m (sway), and in yaw at 1.0 deg. For errors of ~1 m / 5 deg
+  the thrusters saturate only during the first seconds of the transient (4-8 % of the time
+  from a 2 m / 5 deg offset against a 20 N, 20 N m disturbance) and then settle linearly
+  within ~7 / w, 115 s (x, y) and 70 s (yaw): a few times the time-optimal bang-bang
+  manoeuvre (~33 s for 1 m, ~25 s for 5 deg), i.e. not permanently saturated.
+- Equal x and y gains make the r-frame law invariant to the orientation of the r-frame, so
+  turning the ship within a leg (leg 3 rotates it by 90 deg, after which r-frame x is body
+  sway) or switching frames (:meth:`MultivariablePID.change_frame`) never changes the loop.
+  With unequal gains (e.g. ``w = (0.1, 0.05, 0.1)``, which also works) the surge gain would end
+  up acting on the weak sway axis.
+- Sampling at ``T = 1`` s: ``w T <= 0.1`` keeps the sampled loop close to its continuous
+  design (spectral radius 0.93 yaw, 0.95 x/y; the zero-order hold costs ~0.5 s of delay,
+  3 deg of phase at 0.1 rad/s), with margin left for the thruster lags (2 s, 1 s).
+- Noise: ``M K_P`` times a 0.1 m DGPS error is 26-27 N of x/y command noise; more bandwidth
+  would mostly turn sensor noise into thruster activity.
+
 Sampled implementation and anti-windup
 --------------------------------------
 The controller runs at the control period ``dt`` (seed001: 1 s) and its output is held
@@ -201,13 +241,18 @@ def error_loop(
     return A, np.linalg.eigvals(A)
 
 
-#: natural frequencies (rad/s) of the tuned preset, surge, sway, yaw (see :data:`GAIN_PRESETS`)
-TUNED_OMEGA: Vec3 = (0.1, 0.05, 0.1)
+#: natural frequencies (rad/s) of the ``"tuned"`` preset: surge, sway, yaw
+TUNED_OMEGA: Vec3 = (0.06, 0.06, 0.1)
 
+#: Gain presets by name. ``"seed"``: seed001 eqs. 46-48 as printed. ``"tuned"``:
+#: :func:`pid_pole_placement` with ``omega = TUNED_OMEGA``, ``zeta = 1`` (module docstring).
 GAIN_PRESETS: Mapping[str, PIDGains] = MappingProxyType(
     {
         "seed": PIDGains(K_P=(1.0, 1.0, 1.0), K_I=(0.01, 0.01, 0.01), K_D=(100.0, 100.0, 100.0)),
-        "tuned": PIDGains.from_pole_placement(TUNED_OMEGA, zeta=1.0),
+        # = pid_pole_placement(TUNED_OMEGA): K_P = 3 w^2, K_I = w^3, K_D = 3 w (a test checks it)
+        "tuned": PIDGains(
+            K_P=(0.0108, 0.0108, 0.03), K_I=(2.16e-4, 2.16e-4, 1e-3), K_D=(0.18, 0.18, 0.3)
+        ),
     }
 )
 

@@ -156,6 +156,14 @@ class VesselPhysics:
             raise ValueError(f"unexpected joint-space inertia (need diag(m, m, Izz)): {Mq}")
         self._m_q, self._i_q = float(Mq[0, 0]), float(Mq[2, 2])
 
+    def set_wind(self, wind: WindConfig | None) -> None:
+        """Replace the wind model (takes effect at the next :meth:`reset`)."""
+        self.aerodynamics = wind is not None
+        self.wind_config = wind if wind is not None else WindConfig()
+        self.wind = Wind(self.wind_config, self.windage)
+        self._wind_load = WindLoad(blendermann(self.wind_config.coefficients), self.windage)
+        self._prepare = self._make_prepare()
+
     # ---- state -----------------------------------------------------------------------------
     def reset(
         self,
@@ -241,16 +249,37 @@ class VesselPhysics:
         self.data.ctrl[:] = clipped
         return self.saturated.copy()
 
-    def step(self, n: int = 1) -> None:
+    def step(self, n: int = 1, *, stop_on_contact: bool = False) -> int:
         """Advance ``n`` physics steps with hydrodynamics, wind and current refreshed every step.
+
+        Args:
+            n: number of physics steps.
+            stop_on_contact: return early, after the step in which MuJoCo detects a contact.
+
+        Returns:
+            The number of steps taken.
 
         Raises:
             SimulationDiverged: a non-finite or absurd state (the state before the step is kept).
         """
         prepare, mj_step, m, d = self._prepare, mujoco.mj_step, self.model, self.data
-        for _ in range(n):
+        for i in range(n):
             prepare()
             mj_step(m, d)
+            if stop_on_contact and d.ncon:
+                return i + 1
+        return n
+
+    def contacts(self) -> list[tuple[str, str]]:
+        """Pairs of geom names in contact now (the hull's geom first when it is involved)."""
+        m, d = self.model, self.data
+        out = []
+        for c in d.contact[: d.ncon]:
+            a, b = m.geom(c.geom1), m.geom(c.geom2)
+            if b.bodyid[0] == self.hull_body:
+                a, b = b, a
+            out.append((a.name, b.name))
+        return out
 
     def _make_prepare(self):  # type: ignore[no-untyped-def]
         """Build the per-step force computation as a closure (locals bound once: hot path)."""

@@ -149,7 +149,7 @@ class LegProfile:
         the start and ``s = 1`` (exactly) from ``t = duration`` on.
         """
         if np.ndim(t) == 0:
-            return self._path_scalar(float(t))
+            return self._path_scalar(float(np.asarray(t)))
         return self._path_array(np.asarray(t, dtype=float))
 
     def _path_scalar(self, t: float) -> tuple[float, float, float]:

@@ -34,7 +34,7 @@ from shipgym.dynamics.frames import wrap_angle
 
 from .plan import ManoeuvrePlan
 from .reference import LegProfile, leg_profile
-from .rframe import from_r_frame, to_r_frame
+from .rframe import to_r_frame
 
 __all__ = ["Guidance", "Reference"]
 
@@ -123,6 +123,8 @@ class Guidance:
             leg_profile(leg, plan.limits) for leg in plan.legs
         )
         self._waypoints: NDArray[np.float64] | None = None
+        self._wp_list: list[list[float]] = []
+        self._cs: list[tuple[float, float]] = []
         self._leg = 0
         self._finished = False
         self._starts: list[float] = []
@@ -138,6 +140,9 @@ class Guidance:
         wp = self.plan.waypoints(eta_start)
         wp.setflags(write=False)
         self._waypoints = wp
+        # scalar copies for the per-step fast path (same arithmetic as from_r_frame)
+        self._wp_list = wp.tolist()
+        self._cs = [(math.cos(p[2]), math.sin(p[2])) for p in self._wp_list]
         self._leg = 0
         self._finished = False
         self._starts = [t0]
@@ -200,13 +205,17 @@ class Guidance:
         t_leg = float(t) - self._starts[i]
         eta_d, eta_dot, eta_ddot = self._profiles[i].evaluate(t_leg)
         eta_P = wp[i]
+        xP, yP, psiP = self._wp_list[i]
+        c, s = self._cs[i]
+        xr, yr, pr = eta_d.tolist()
+        eta_d_n = np.array([xP + c * xr - s * yr, yP + s * xr + c * yr, psiP + pr])
         return Reference(
             eta_d_r=eta_d,
             eta_dot_d_r=eta_dot,
             eta_ddot_d_r=eta_ddot,
             eta_P=eta_P,
             leg=i,
-            eta_d_n=from_r_frame(eta_d, eta_P),
+            eta_d_n=eta_d_n,
             eta_K=wp[i + 1],
             t_leg=t_leg,
             finished=self._finished,
@@ -227,7 +236,7 @@ class Guidance:
         i = self._leg
         K = wp[i + 1]
         dist = math.hypot(eta[0] - K[0], eta[1] - K[1])
-        head = abs(wrap_angle(eta[2] - K[2]))
+        head = abs(float(wrap_angle(eta[2] - K[2])))
         t_leg = float(t) - self._starts[i]
         need = self.plan.switch_min_progress * self._profiles[i].duration
         return (

@@ -1,0 +1,163 @@
+"""Controllers as Gymnasium wrappers (SPEC 9; style: gymnasium.wrappers).
+
+Stack order: env -> observer wrapper (optional) -> controller wrapper. The controller reads
+the navigation data (``info["nav_eta"]``, ``info["nav_nu"]``: the truth, or an observer's
+estimate when an observer wrapper sits below) and the guidance reference from the ``info`` of
+the previous step, so it uses only what a real DP system would know.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from shipgym.dynamics import wrap_angle
+from shipgym.guidance import to_r_frame
+
+from .allocation import Allocation, allocate, allocate_inverse, command_to_action
+from .pid import MultivariablePID
+
+__all__ = ["CONTROLLERS", "ControllerSpec", "DPControllerWrapper", "controller_spec"]
+
+
+@dataclass(frozen=True)
+class ControllerSpec:
+    """A named controller configuration: PID gain preset and allocation method."""
+
+    gains: str
+    allocation: str
+    description: str
+
+
+#: Controllers selectable by name (``shipgym run --controller NAME``).
+CONTROLLERS: Mapping[str, ControllerSpec] = {
+    "pid": ControllerSpec(
+        "tuned", "constrained", "seed001 eq. 23 PID, tuned gains, constrained allocation"
+    ),
+    "pid-seed": ControllerSpec(
+        "seed", "inverse", "seed001 eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1"
+    ),
+}
+
+_ALLOCATORS: dict[str, Callable[..., Allocation]] = {
+    "constrained": allocate,
+    "inverse": allocate_inverse,
+}
+
+
+def controller_spec(name: str) -> ControllerSpec:
+    """The :class:`ControllerSpec` of a controller name; unknown names list the valid ones."""
+    try:
+        return CONTROLLERS[name]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"unknown controller {name!r}; choose one of: {', '.join(CONTROLLERS)}"
+        ) from None
+
+
+class DPControllerWrapper(
+    gym.Wrapper[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]],
+    gym.utils.RecordConstructorArgs,
+):
+    """Runs the DP controller (seed001 eq. 23) and the thrust allocation inside ``step``.
+
+    The wrapper's action is a *residual* added to the controller's normalised command
+    (``Box(-1, 1, (3,))``, zero: the pure controller), so ``env.step(np.zeros(3))`` runs the
+    classical DP system and a learned policy can act on top of it. The sum is clipped to
+    [-1, 1] and the clipping flagged in ``info["residual_clipped"]``.
+
+    Info gains ``tau_c`` (controller output, N, N, N m, body), ``tau_delivered`` and
+    ``tau_error`` (what the allocation could not deliver), ``controller_action`` (normalised)
+    and ``allocation_saturated`` (per actuator).
+
+    Args:
+        env: an environment whose ``info`` carries ``nav_eta``, ``nav_nu`` and the reference
+            (any ``shipgym/BlueLady*`` env, possibly under an observer wrapper).
+        controller: a name in :data:`CONTROLLERS` (``"pid"``, ``"pid-seed"``).
+        residual_scale: factor on the residual action (0 disables it).
+
+    Note:
+        Records its constructor arguments, so ``gym.make(env.spec)`` rebuilds the stack.
+    """
+
+    def __init__(
+        self, env: gym.Env[Any, Any], controller: str = "pid", residual_scale: float = 1.0
+    ) -> None:
+        gym.utils.RecordConstructorArgs.__init__(
+            self, controller=controller, residual_scale=residual_scale
+        )
+        gym.Wrapper.__init__(self, env)
+        spec = controller_spec(controller)
+        if not (isinstance(residual_scale, int | float) and np.isfinite(residual_scale)):
+            raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
+        self.controller_name = controller
+        self.residual_scale = float(residual_scale)
+        base = env.unwrapped
+        self.thrusters = base.thrusters  # type: ignore[attr-defined]
+        self.controller = MultivariablePID(spec.gains, dt=base.control_period)  # type: ignore[attr-defined]
+        self._allocate = _ALLOCATORS[spec.allocation]
+        self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        self._info: dict[str, Any] = {}
+        self._leg = 0
+        self._psi_P = 0.0
+        self._tau_error: NDArray[np.float64] | None = None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        obs, info = self.env.reset(seed=seed, options=options)
+        self.controller.reset()
+        self._info = info
+        self._leg = int(info["leg"])
+        self._psi_P = float(info["eta_P"][2])
+        self._tau_error = None
+        return obs, info
+
+    def step(
+        self, action: NDArray[np.float32]
+    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        residual = np.asarray(action, dtype=np.float64)
+        if residual.shape != (3,) or not np.all(np.isfinite(residual)):
+            raise ValueError(
+                f"residual action must be 3 finite numbers in [-1, 1], got {action!r}"
+            )
+        if not self._info:
+            raise gym.error.ResetNeeded("call reset() before step()")
+        tau_c, alloc = self._control(self._info)
+        a_ctrl = command_to_action(alloc.command, self.thrusters)
+        total = a_ctrl + self.residual_scale * residual
+        applied = np.clip(total, -1.0, 1.0)
+        obs, reward, terminated, truncated, info = self.env.step(applied.astype(np.float32))
+        info["tau_c"] = tau_c
+        info["tau_delivered"] = alloc.tau
+        info["tau_error"] = alloc.tau_error
+        info["controller_action"] = a_ctrl
+        info["allocation_saturated"] = alloc.saturated
+        info["residual_clipped"] = applied != total
+        self._tau_error = alloc.tau_error
+        if int(info["leg"]) != self._leg:
+            psi_P = float(info["eta_P"][2])
+            self.controller.change_frame(float(wrap_angle(psi_P - self._psi_P)))
+            self._leg, self._psi_P = int(info["leg"]), psi_P
+        self._info = info
+        return obs, reward, terminated, truncated, info
+
+    def _control(self, info: Mapping[str, Any]) -> tuple[NDArray[np.float64], Allocation]:
+        """Controller and allocation from the navigation data and reference in ``info``."""
+        eta_d_r = info["eta_d_r"]
+        eta_r = to_r_frame(info["nav_eta"], info["eta_P"], psi_ref_r=float(eta_d_r[2]))
+        tau_c = self.controller(
+            eta_r,
+            info["nav_nu"],
+            eta_d_r,
+            info["eta_dot_d_r"],
+            info["eta_ddot_d_r"],
+            saturated=self._tau_error,
+        )
+        return tau_c, self._allocate(tau_c, self.thrusters)

@@ -1,0 +1,472 @@
+"""The Blue Lady Gymnasium environment: physics + guidance task (dm_control's Physics/Task split).
+
+:class:`BlueLadyEnv` composes a :class:`~shipgym.envs.physics.VesselPhysics` (MuJoCo and the
+3-DOF model) with a task: a manoeuvre plan followed through
+:class:`~shipgym.guidance.Guidance`, a reward made of named terms, metrics and termination.
+The three registered tasks (:mod:`shipgym.envs.tasks`) differ only in their plan, start,
+disturbances and time limit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from shipgym._config import param
+from shipgym.assets import asset_path
+from shipgym.controllers.allocation import action_to_command, command_to_action
+from shipgym.disturbances import WindConfig
+from shipgym.dynamics import BLUE_LADY_THRUSTERS, wrap_angle
+from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
+from shipgym.guidance import plan as named_plan
+from shipgym.metrics import ManoeuvreMetrics
+
+from .physics import VesselPhysics
+
+__all__ = ["BlueLadyEnv", "RewardWeights", "SCENES", "parse_wind_arg"]
+
+SCENES: dict[str, tuple[str, ...]] = {
+    "harbour": ("mjcf", "harbour", "scene.xml"),
+    "open-water": ("mjcf", "blue_lady", "scene.xml"),
+}
+
+OBS_LAYOUT = (
+    ("pos_error_body", 3),
+    ("nu", 3),
+    ("nu_ref", 3),
+    ("nu_dot_ref", 3),
+    ("prev_action", 3),
+)
+_OBS_DIM = sum(n for _, n in OBS_LAYOUT)
+
+
+@dataclass(frozen=True)
+class RewardWeights:
+    """Weights of the named reward terms (each term is ``-weight * quantity``)."""
+
+    position: float = param(0.1, "1/m^2", "squared horizontal tracking error")
+    heading: float = param(1.0, "1/rad^2", "squared heading error")
+    velocity: float = param(10.0, "s^2/m^2", "squared body-velocity error vs the reference")
+    effort: float = param(0.01, "1", "squared normalised command")
+    rate: float = param(0.01, "1", "squared change of the normalised command")
+    contact: float = param(100.0, "1", "penalty once, when the hull touches a quay")
+    leg_bonus: float = param(10.0, "1", "bonus per completed leg (a positive term)")
+
+
+def parse_wind_arg(wind: Any) -> WindConfig | None:
+    """Accept ``None``, a :class:`WindConfig`, a mapping, ``(speed, from_deg)`` or ``"3@300"``."""
+    if wind is None or isinstance(wind, WindConfig):
+        return wind
+    if isinstance(wind, str):
+        from shipgym.cli import parse_wind
+
+        speed, beta = parse_wind(wind)
+        return WindConfig(speed=speed, direction_from=beta)
+    if isinstance(wind, Mapping):
+        return WindConfig.from_dict(wind)
+    if isinstance(wind, tuple | list) and len(wind) == 2:
+        return WindConfig.from_speed_dir(float(wind[0]), float(wind[1]))
+    raise ValueError(
+        f"wind must be None, a WindConfig, a mapping, (speed m/s, from deg) or 'SPEED@FROM_DEG', "
+        f"got {wind!r}"
+    )
+
+
+@dataclass(frozen=True)
+class _Sample:
+    """What a step produced, before it is turned into observation and info."""
+
+    eta: NDArray[np.float64]
+    nu: NDArray[np.float64]
+    ref: Reference
+    eta_r: NDArray[np.float64]
+
+
+class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+    r"""Blue Lady on a manoeuvre plan: the common spec of the ``shipgym/BlueLady*`` envs.
+
+    ## Description
+    The 1:24 VLCC model "Blue Lady" (L 13.78 m, 22.9 t) in the horizontal plane, simulated
+    in MuJoCo with exact 3-DOF hydrodynamics, thruster lags and gusty wind. A guidance system
+    moves a virtual ship along a manoeuvre plan (legs in the r-frame of seed001); the agent
+    drives the three thrusters to follow it.
+
+    ## Action Space
+    ``Box(-1, 1, (3,), float32)``, normalised actuator commands:
+
+    | Num | Action | Physical command | Unit |
+    |-----|--------|------------------|------|
+    | 0 | main propeller | ``a * 480`` if ``a >= 0`` else ``a * 200`` | rpm |
+    | 1 | bow tunnel thruster | ``p2 = a`` (thrust 44.1 p2, to starboard) | 1 |
+    | 2 | stern tunnel thruster | ``p3 = a`` | 1 |
+
+    Actions outside [-1, 1] are clipped and flagged in ``info["action_clipped"]``; NaN or
+    infinite actions raise ``ValueError``.
+
+    ## Observation Space
+    ``Box(-inf, inf, (15,), float32)``; what a controller may know (navigation data, i.e. the
+    truth here and an observer's estimate once an observer wrapper is stacked):
+
+    | Num | Observation | Unit |
+    |-----|-------------|------|
+    | 0-1 | position error ship - reference, body frame (forward, starboard) | m |
+    | 2 | heading error ship - reference, wrapped | rad |
+    | 3-5 | body velocity u, v, r | m/s, m/s, rad/s |
+    | 6-8 | reference body velocity | m/s, m/s, rad/s |
+    | 9-11 | reference body acceleration | m/s^2, m/s^2, rad/s^2 |
+    | 12-14 | previous (applied) normalised action | 1 |
+
+    ``observation_structure`` maps these names to slices.
+
+    ## Rewards
+    ``reward = reward_position + reward_heading + reward_velocity + reward_effort +
+    reward_rate + reward_contact + reward_leg`` (each term in ``info``):
+    ``-w_p |e_xy|^2``, ``-w_psi e_psi^2``, ``-w_v |nu - nu_d|^2``, ``-w_u |a|^2``,
+    ``-w_du |a - a_prev|^2``, ``-w_c`` on quay contact, ``+w_leg`` per completed leg
+    (weights: :class:`RewardWeights`, argument ``reward_weights``).
+
+    ## Starting State
+    At the plan's start pose (default: origin, heading north) at rest, plus uniform noise of
+    ``start_noise`` (m, m, rad) when given; wind gusts from the seeded generator.
+
+    ## Episode End
+    Terminated when the hull touches a quay (``info["quay_contact"]``) or, if
+    ``terminate_on_finish``, when the last leg is complete (``info["finished"]``).
+    Truncated by the registered time limit (``max_episode_steps`` control steps).
+
+    ## Info
+    Truth ``eta`` (m, m, rad; NED), ``nu``; navigation data ``nav_eta``, ``nav_nu`` (what
+    controllers use); reference ``eta_d`` (NED), ``eta_d_r``, ``eta_dot_d_r``,
+    ``eta_ddot_d_r``, ``eta_P`` (leg start) and ``eta_r`` (ship in the r-frame); ``leg``,
+    ``legs_completed``, ``finished``, ``t`` (s); ``command`` (rpm, 1, 1), ``thrust`` (N),
+    ``saturated``, ``action_clipped``; ``tau_wind`` (N, N, N m, body); ``quay_contact``,
+    ``contacts``; the ``reward_*`` terms; and at the end of an episode ``episode_metrics``
+    (seed001 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
+
+    ## Arguments
+    | Argument | Default | Description |
+    |---|---|---|
+    | ``plan`` | ``"tomera2014"`` | plan name or :class:`ManoeuvrePlan` |
+    | ``plant`` | ``"default"`` | plant variant (``"default"``, ``"seed-linear"``) |
+    | ``wind`` | ``"3@300"`` | ``None``, ``WindConfig``, ``(speed, from_deg)`` or ``"SPEED@FROM"`` |
+    | ``scene`` | ``"harbour"`` | ``"harbour"`` or ``"open-water"`` |
+    | ``start_pose`` | ``(0, 0, 0)`` | NED start pose (m, m, rad); the harbour turns with it |
+    | ``start_noise`` | ``(0, 0, 0)`` | uniform start perturbation half-widths (m, m, rad) |
+    | ``timestep`` | ``0.05`` | physics step (s) |
+    | ``control_period`` | ``1.0`` | control step (s); a whole multiple of ``timestep`` |
+    | ``terminate_on_finish`` | ``True`` | end the episode when the plan is complete |
+    | ``reward_weights`` | ``RewardWeights()`` | weights of the reward terms |
+    | ``render_mode`` | ``None`` | ``"rgb_array"`` (needs an EGL/OSMesa/GLFW backend) |
+
+    ## Version History
+    * v0: initial version.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
+
+    def __init__(
+        self,
+        plan: str | ManoeuvrePlan = "tomera2014",
+        plant: str = "default",
+        wind: Any = "3@300",
+        scene: str = "harbour",
+        start_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        start_noise: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        timestep: float = 0.05,
+        control_period: float = 1.0,
+        terminate_on_finish: bool = True,
+        reward_weights: RewardWeights | Mapping[str, float] | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        self.plan = named_plan(plan) if isinstance(plan, str) else plan
+        if not isinstance(self.plan, ManoeuvrePlan):
+            raise ValueError(f"plan must be a plan name or a ManoeuvrePlan, got {plan!r}")
+        if scene not in SCENES:
+            raise ValueError(f"unknown scene {scene!r}; choose one of: {', '.join(SCENES)}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}, "
+                f"got {render_mode!r}"
+            )
+        self.n_substeps = _whole_multiple(control_period, timestep)
+        self.control_period = float(control_period)
+        self.start_pose = _vec3(start_pose, "start_pose")
+        self.start_noise = _vec3(start_noise, "start_noise")
+        if np.any(self.start_noise < 0):
+            raise ValueError(f"start_noise must be >= 0, got {start_noise!r}")
+        if reward_weights is None:
+            reward_weights = RewardWeights()
+        elif isinstance(reward_weights, Mapping):
+            from shipgym._config import from_mapping
+
+            reward_weights = from_mapping(RewardWeights, reward_weights, where="reward_weights")
+        self.reward_weights = reward_weights
+        self.terminate_on_finish = bool(terminate_on_finish)
+        self.scene = scene
+        self.wind_config = parse_wind_arg(wind)
+        self.physics = VesselPhysics(
+            plant, wind=self.wind_config, xml_path=asset_path(*SCENES[scene]), timestep=timestep
+        )
+        self.thrusters = BLUE_LADY_THRUSTERS
+        self.guidance = Guidance(self.plan)
+        self.metrics = ManoeuvreMetrics(sample_period=1.0)
+        self.render_mode = render_mode
+        self._renderer: Any = None
+        self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (_OBS_DIM,), np.float32)
+        self.observation_structure: dict[str, slice] = {}
+        i = 0
+        for name, n in OBS_LAYOUT:
+            self.observation_structure[name] = slice(i, i + n)
+            i += n
+        self._harbour_body = self._find_body("harbour")
+        self._prev_action = np.zeros(3)
+        self._contact = False
+        self._sample: _Sample | None = None
+
+    # ---- task hooks (overridden by the registered tasks) ------------------------------------
+    def _episode_plan(self) -> ManoeuvrePlan:
+        """The plan of the next episode (randomised tasks draw it from ``self.np_random``)."""
+        return self.plan
+
+    def _episode_wind(self) -> WindConfig | None:
+        """The wind of the next episode."""
+        return self.wind_config
+
+    # ---- gym API ---------------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        """Start an episode; ``options`` may hold ``start_pose`` (m, m, rad)."""
+        super().reset(seed=seed)
+        rng = self.np_random
+        start = self.start_pose
+        if options and "start_pose" in options:
+            start = _vec3(options["start_pose"], "options['start_pose']")
+        plan = self._episode_plan()
+        if plan is not self.guidance.plan:
+            self.guidance = Guidance(plan)
+        wind = self._episode_wind()
+        if wind is not self.physics.wind_config and wind is not None:
+            self.physics.set_wind(wind)
+        self._place_harbour(start)
+        noise = rng.uniform(-1.0, 1.0, 3) * self.start_noise
+        self.physics.reset(eta=start + noise, rng=rng)
+        self.guidance.reset(start, t0=0.0)
+        self.metrics.reset()
+        self._prev_action = np.zeros(3)
+        self._contact = False
+        sample = self._observe()
+        self._record_metrics(sample)
+        info = self._info(sample, np.zeros(3), np.zeros(3, bool), False, {}, [])
+        return self._obs(sample), info
+
+    def step(
+        self, action: NDArray[np.float32]
+    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        """Apply normalised thruster commands for one control period."""
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != (3,):
+            raise ValueError(f"action must have shape (3,), got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action contains NaN or infinite values: {a}")
+        clipped = np.clip(a, -1.0, 1.0)
+        action_clipped = clipped != a
+        command = action_to_command(clipped, self.thrusters)
+        saturated = self.physics.set_command(command)
+        phys = self.physics
+        phys.step(self.n_substeps, stop_on_contact=self.scene == "harbour")
+        contacts = phys.contacts() if phys.data.ncon else []
+        new_contact = bool(contacts) and not self._contact
+        self._contact = self._contact or bool(contacts)
+        t = phys.time
+        switched = self.guidance.update(t, phys.eta)
+        sample = self._observe()
+        self._record_metrics(sample)
+        rewards = self._reward_terms(sample, clipped, new_contact, switched)
+        reward = float(sum(rewards.values()))
+        self._prev_action = clipped
+        finished = self.guidance.finished
+        terminated = self._contact or (finished and self.terminate_on_finish)
+        info = self._info(sample, command, saturated | action_clipped, finished, rewards, contacts)
+        info["action_clipped"] = action_clipped
+        if terminated:
+            info["episode_metrics"] = self.episode_metrics()
+        return self._obs(sample), reward, terminated, False, info
+
+    def render(self) -> NDArray[np.uint8] | None:
+        """An RGB frame (H, W, 3) of the map camera; needs ``render_mode="rgb_array"``."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without render_mode; pass render_mode='rgb_array'")
+            return None
+        if self._renderer is None:
+            self._renderer = _make_renderer(self.physics.model)
+        cam = "map" if self.scene == "harbour" else "top"
+        self._renderer.update_scene(self.physics.data, camera=cam)
+        return self._renderer.render()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    # ---- helpers ---------------------------------------------------------------------------
+    def episode_metrics(self) -> dict[str, Any]:
+        """Accuracy indices (seed001 eqs. 54-57), thruster usage, legs and contact so far."""
+        out = dict(self.metrics.summary())
+        out["completed"] = bool(self.guidance.finished)
+        out["legs_completed"] = len(self.guidance.leg_completion_times)
+        out["leg_times"] = list(self.guidance.leg_completion_times)
+        out["quay_contact"] = bool(self._contact)
+        out["duration_s"] = float(self.physics.time)
+        return out
+
+    def _observe(self) -> _Sample:
+        phys = self.physics
+        eta, nu = phys.eta, phys.nu
+        ref = self.guidance.reference(phys.time)
+        return _Sample(eta, nu, ref, ref.to_r(eta))
+
+    def _record_metrics(self, s: _Sample) -> None:
+        self.metrics.record(
+            self.physics.time,
+            s.eta_r,
+            s.ref.eta_d_r,
+            thrust=self.physics.thrust,
+            saturated=self.physics.saturated,
+            leg=s.ref.leg,
+        )
+
+    def _obs(self, s: _Sample) -> NDArray[np.float32]:
+        return self.navigation_observation(s.eta, s.nu, s.ref, self._prev_action)
+
+    @staticmethod
+    def navigation_observation(
+        eta: NDArray[np.float64],
+        nu: NDArray[np.float64],
+        ref: Reference,
+        prev_action: NDArray[np.float64],
+    ) -> NDArray[np.float32]:
+        """The observation vector (layout in the class docstring) from navigation data."""
+        psi = eta[2]
+        c, s = math.cos(psi), math.sin(psi)
+        dx, dy = eta[0] - ref.eta_d_n[0], eta[1] - ref.eta_d_n[1]
+        e = [c * dx + s * dy, -s * dx + c * dy, wrap_angle(psi - ref.eta_d_n[2])]
+        out = np.concatenate([e, nu, ref.nu_d, ref.nu_dot_d, prev_action])
+        return out.astype(np.float32)
+
+    def _reward_terms(
+        self, s: _Sample, action: NDArray[np.float64], new_contact: bool, switched: bool
+    ) -> dict[str, float]:
+        w = self.reward_weights
+        e = s.eta_r - s.ref.eta_d_r
+        dv = s.nu - s.ref.nu_d
+        da = action - self._prev_action
+        return {
+            "reward_position": -w.position * float(e[0] ** 2 + e[1] ** 2),
+            "reward_heading": -w.heading * float(wrap_angle(e[2]) ** 2),
+            "reward_velocity": -w.velocity * float(dv @ dv),
+            "reward_effort": -w.effort * float(action @ action),
+            "reward_rate": -w.rate * float(da @ da),
+            "reward_contact": -w.contact if new_contact else 0.0,
+            "reward_leg": w.leg_bonus if switched else 0.0,
+        }
+
+    def _info(
+        self,
+        s: _Sample,
+        command: NDArray[np.float64],
+        saturated: NDArray[np.bool_],
+        finished: bool,
+        rewards: Mapping[str, float],
+        contacts: list[tuple[str, str]],
+    ) -> dict[str, Any]:
+        phys = self.physics
+        ref = s.ref
+        info: dict[str, Any] = {
+            "t": phys.time,
+            "eta": s.eta,
+            "nu": s.nu,
+            "nav_eta": s.eta,
+            "nav_nu": s.nu,
+            "eta_d": np.array(ref.eta_d_n),
+            "eta_d_r": np.array(ref.eta_d_r),
+            "eta_dot_d_r": np.array(ref.eta_dot_d_r),
+            "eta_ddot_d_r": np.array(ref.eta_ddot_d_r),
+            "eta_P": np.array(ref.eta_P),
+            "eta_r": s.eta_r,
+            "leg": ref.leg,
+            "legs_completed": len(self.guidance.leg_completion_times),
+            "finished": finished,
+            "command": np.asarray(command, dtype=float),
+            "thrust": phys.thrust,
+            "saturated": np.asarray(saturated, dtype=bool),
+            "action_clipped": np.zeros(3, dtype=bool),
+            "tau_wind": np.array(phys.tau_wind),
+            "quay_contact": self._contact,
+            "contacts": contacts,
+        }
+        info.update(rewards)
+        return info
+
+    def _find_body(self, name: str) -> int | None:
+        try:
+            return int(self.physics.model.body(name).id)
+        except KeyError:
+            return None
+
+    def _place_harbour(self, start: NDArray[np.float64]) -> None:
+        """Put the static harbour body at the start pose (the layout turns with the start)."""
+        if self._harbour_body is None:
+            return
+        m = self.physics.model
+        m.body_pos[self._harbour_body] = (start[0], start[1], 0.0)
+        h = 0.5 * start[2]
+        m.body_quat[self._harbour_body] = (math.cos(h), 0.0, 0.0, math.sin(h))
+
+    def command_to_action(self, command: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Physical command ``[n1 rpm, p2, p3]`` to the normalised action."""
+        return command_to_action(command, self.thrusters)
+
+
+def _vec3(x: Any, name: str) -> NDArray[np.float64]:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be three finite numbers (m, m, rad), got {x!r}")
+    return a
+
+
+def _whole_multiple(control_period: float, timestep: float) -> int:
+    """Physics steps per control step; raises unless the ratio is a whole number (dm_control)."""
+    if not (timestep > 0 and control_period > 0):
+        raise ValueError(
+            f"timestep and control_period must be > 0 s, got {timestep!r}, {control_period!r}"
+        )
+    n = round(control_period / timestep)
+    if n < 1 or abs(n * timestep - control_period) > 1e-9 * control_period:
+        raise ValueError(
+            f"control_period {control_period} s must be a whole multiple of the physics "
+            f"timestep {timestep} s"
+        )
+    return n
+
+
+def _make_renderer(model: Any) -> Any:
+    import mujoco
+
+    try:
+        return mujoco.Renderer(model, 480, 640)
+    except Exception as exc:  # noqa: BLE001 - any GL failure gets the same advice
+        raise RuntimeError(
+            f"rendering needs an OpenGL backend and none works here ({exc}); on a headless "
+            "machine set MUJOCO_GL=egl (or MUJOCO_GL=osmesa with PYOPENGL_PLATFORM=osmesa and "
+            "libosmesa installed) before importing mujoco"
+        ) from exc
+

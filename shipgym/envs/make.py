@@ -1,0 +1,40 @@
+"""``shipgym.make``: build an environment with its observer/controller wrapper stack."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+
+from .registration import ENV_IDS
+
+__all__ = ["SCENARIOS", "make", "resolve_env_id"]
+
+#: short scenario names accepted by ``shipgym run`` and ``shipgym.make``.
+SCENARIOS: dict[str, str] = {
+    "harbour": "shipgym/BlueLadyHarbour-v0",
+    "station-keeping": "shipgym/BlueLadyStationKeeping-v0",
+    "tracking": "shipgym/BlueLadyTracking-v0",
+}
+
+
+def resolve_env_id(name: str) -> str:
+    """A registered env id from an id or a scenario name; unknown names list the valid ones."""
+    if name in ENV_IDS:
+        return name
+    if name in SCENARIOS:
+        return SCENARIOS[name]
+    raise ValueError(
+        f"unknown scenario or env id {name!r}; choose a scenario ({', '.join(SCENARIOS)}) "
+        f"or an id ({', '.join(ENV_IDS)})"
+    )
+
+
+def make(env_id: str, *, controller: str | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
+    """``gym.make`` plus the wrapper stack: env -> controller wrapper (if named)."""
+    env = gym.make(resolve_env_id(env_id), **kwargs)
+    if controller is not None:
+        from shipgym.controllers.wrappers import DPControllerWrapper
+
+        env = DPControllerWrapper(env, controller=controller)
+    return env

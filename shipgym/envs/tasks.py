@@ -1,0 +1,96 @@
+"""The registered Blue Lady tasks: harbour manoeuvre, station keeping, tracking (SPEC 12)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from shipgym.disturbances import WindConfig
+from shipgym.guidance import Leg, ManoeuvrePlan
+
+from .base import BlueLadyEnv
+
+__all__ = ["BlueLadyHarbourEnv", "BlueLadyStationKeepingEnv", "BlueLadyTrackingEnv"]
+
+
+class BlueLadyHarbourEnv(BlueLadyEnv):
+    r"""The 5-leg harbour manoeuvre of seed001 (Tomera 2014, Fig. 7): ``shipgym/BlueLadyHarbour-v0``.
+
+    The ship starts at rest alongside berth A and moves to berth B: 7 m to port, 38 m
+    forward, a 90 deg turn to starboard, 15 m astern, 3 m to port. Legs switch when the ship
+    is within 1 m of the leg's end point with a heading error below 5 deg (and the leg's
+    reference has arrived). Default wind: 3 m/s from 300 deg with gusts (the lake trial).
+    The episode terminates when the last leg completes or on quay contact; time limit
+    2000 control steps (2000 s). Spaces, reward and info: see :class:`BlueLadyEnv`.
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        kwargs.setdefault("plan", "tomera2014")
+        kwargs.setdefault("scene", "harbour")
+        super().__init__(**kwargs)
+
+
+class BlueLadyStationKeepingEnv(BlueLadyEnv):
+    r"""Hold the start pose against wind from a perturbed start: ``shipgym/BlueLadyStationKeeping-v0``.
+
+    One zero-displacement leg on open water; the ship starts up to 2 m and 5 deg off the pose
+    (uniform, seeded). Default wind 3 m/s from 300 deg with gusts. Never terminates on
+    reaching the pose; time limit 600 control steps (600 s). Spaces, reward and info: see
+    :class:`BlueLadyEnv`.
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        kwargs.setdefault("plan", ManoeuvrePlan(legs=(Leg(name="hold"),), name="station-keeping"))
+        kwargs.setdefault("scene", "open-water")
+        kwargs.setdefault("start_noise", (2.0, 2.0, math.radians(5.0)))
+        kwargs.setdefault("terminate_on_finish", False)
+        super().__init__(**kwargs)
+
+
+class BlueLadyTrackingEnv(BlueLadyEnv):
+    r"""Randomised legs and wind on open water (the training task): ``shipgym/BlueLadyTracking-v0``.
+
+    Each episode draws 1-3 legs from the seeded generator: lateral (2-8 m either side),
+    longitudinal (5-30 m ahead or 3-15 m astern), rotation (30-120 deg either way) or combined
+    (surge and sway together), and a wind of 0-4 m/s from any direction with gusts. The episode
+    terminates when the last leg completes; time limit 800 control steps. Spaces, reward and
+    info: see :class:`BlueLadyEnv`.
+    """
+
+    def __init__(self, max_legs: int = 3, max_wind_speed: float = 4.0, **kwargs: Any) -> None:
+        if not (isinstance(max_legs, int) and max_legs >= 1):
+            raise ValueError(f"max_legs must be an int >= 1, got {max_legs!r}")
+        if not (math.isfinite(max_wind_speed) and max_wind_speed >= 0):
+            raise ValueError(f"max_wind_speed must be >= 0 m/s, got {max_wind_speed!r}")
+        self.max_legs = max_legs
+        self.max_wind_speed = float(max_wind_speed)
+        kwargs.setdefault("scene", "open-water")
+        kwargs.setdefault("plan", ManoeuvrePlan(legs=(Leg(surge=10.0),), name="tracking"))
+        super().__init__(**kwargs)
+
+    def _episode_plan(self) -> ManoeuvrePlan:
+        rng = self.np_random
+        legs = []
+        for i in range(int(rng.integers(1, self.max_legs + 1))):
+            kind = int(rng.integers(4))
+            side = 1.0 if rng.random() < 0.5 else -1.0
+            if kind == 0:
+                leg = Leg(sway=side * rng.uniform(2.0, 8.0), name=f"{i + 1}: lateral")
+            elif kind == 1:
+                dist = rng.uniform(5.0, 30.0) if side > 0 else -rng.uniform(3.0, 15.0)
+                leg = Leg(surge=dist, name=f"{i + 1}: longitudinal")
+            elif kind == 2:
+                yaw = side * math.radians(rng.uniform(30.0, 120.0))
+                leg = Leg(yaw=yaw, name=f"{i + 1}: rotation")
+            else:
+                leg = Leg(
+                    surge=rng.uniform(3.0, 15.0), sway=side * rng.uniform(2.0, 5.0),
+                    name=f"{i + 1}: combined",
+                )  # fmt: skip
+            legs.append(leg)
+        return ManoeuvrePlan(legs=tuple(legs), name="tracking")
+
+    def _episode_wind(self) -> WindConfig | None:
+        rng = self.np_random
+        speed = rng.uniform(0.0, self.max_wind_speed)
+        return WindConfig(speed=speed, direction_from=rng.uniform(0.0, 2.0 * math.pi))
