@@ -15,17 +15,23 @@ $(STAMP): $(PY) pyproject.toml
 	$(PY) -m pip install --quiet -e ".[test,dev]"
 	@touch $(STAMP)
 
+RL_STAMP := $(VENV)/.installed-rl
+
 venv: $(STAMP)
 
-# Optional RL extra: torch's CPU build first (pinned), then stable-baselines3.
-rl: $(STAMP)
+# Optional RL extra: torch's CPU build first (pinned, so pip never pulls CUDA), then SB3.
+$(RL_STAMP): $(STAMP)
 	$(PY) -m pip install --quiet "torch==2.13.0"
 	$(PY) -m pip install --quiet -e ".[rl]"
+	@touch $(RL_STAMP)
+
+rl: $(RL_STAMP)
 
 demo: $(STAMP)
 	$(PY) -m shipgym.cli demo
 
-test: $(STAMP)
+# The tests include stable-baselines3's check_env, so they need the RL extra.
+test: $(RL_STAMP)
 	$(PY) -m pytest -q
 
 bench: $(STAMP)

@@ -1,7 +1,9 @@
 """The ``shipgym`` command.
 
-``shipgym demo``  open-loop turn of the Blue Lady in gusty wind, with a short summary;
-``shipgym list``  plant variants, wind coefficient sets and actuators.
+``shipgym run SCENARIO``  closed-loop run (harbour manoeuvre, station keeping, tracking) with a
+                          progress bar, a metrics table and an optional JSON file;
+``shipgym demo``          open-loop turn of the Blue Lady in gusty wind, with a short summary;
+``shipgym list``          env ids, scenarios, controllers, plant variants, wind models.
 
 User mistakes end with a one-line error and exit status 2, never with a traceback.
 """
@@ -9,10 +11,13 @@ User mistakes end with a one-line error and exit status 2, never with a tracebac
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import re
 import sys
 import time
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -30,13 +35,148 @@ def parse_wind(text: str) -> tuple[float, float]:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
+    from shipgym import ENV_IDS
+    from shipgym.controllers.wrappers import CONTROLLERS
     from shipgym.disturbances import BLENDERMANN
     from shipgym.dynamics import ACTUATOR_NAMES, PLANT_VARIANTS
+    from shipgym.envs.make import SCENARIOS
 
+    print("env ids        :", ", ".join(ENV_IDS))
+    print("scenarios      :", ", ".join(f"{k} ({v})" for k, v in SCENARIOS.items()))
+    print("controllers    :")
+    for name, spec in CONTROLLERS.items():
+        print(f"  {name:12s} {spec.description}")
     print("plant variants :", ", ".join(PLANT_VARIANTS))
     print("wind models    :", ", ".join(f"blendermann:{k}" for k in BLENDERMANN))
     print("actuators      :", ", ".join(ACTUATOR_NAMES))
     return 0
+
+
+def run_episode(
+    scenario: str,
+    *,
+    controller: str = "pid",
+    seed: int = 0,
+    wind: tuple[float, float] | None = (3.0, math.radians(300.0)),
+    plant: str = "default",
+    progress: bool = False,
+    env_kwargs: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Run one closed-loop episode and return its results (the ``--json`` content)."""
+    import numpy as np
+
+    import shipgym
+    from shipgym.disturbances import WindConfig
+
+    wind_cfg = None if wind is None else WindConfig(speed=wind[0], direction_from=wind[1])
+    env = shipgym.make(
+        scenario, controller=controller, wind=wind_cfg, plant=plant, **(env_kwargs or {})
+    )
+    limit = env.spec.max_episode_steps if env.spec is not None else None
+    bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
+    t0 = time.perf_counter()
+    try:
+        env.reset(seed=seed)
+        zero = np.zeros(3, dtype=np.float32)
+        terminated = truncated = False
+        info: dict[str, Any] = {}
+        while not (terminated or truncated):
+            _, _, terminated, truncated, info = env.step(zero)
+            bar.update(1)
+            bar.set_postfix(leg=info["leg"] + 1, t=f"{info['t']:.0f}s", refresh=False)
+        metrics = env.unwrapped.episode_metrics()  # type: ignore[attr-defined]
+    finally:
+        bar.close()
+        env.close()
+    wall = time.perf_counter() - t0
+    measured = metrics.get("measured")
+    return {
+        "scenario": scenario,
+        "env_id": env.spec.id if env.spec is not None else None,
+        "controller": controller,
+        "seed": seed,
+        "plant": plant,
+        "wind": None if wind is None else {"speed": wind[0], "from_deg": math.degrees(wind[1])},
+        "completed": metrics["completed"],
+        "legs_completed": metrics["legs_completed"],
+        "duration_s": metrics["duration_s"],
+        "quay_contact": metrics["quay_contact"],
+        "terminated": bool(terminated),
+        "truncated": bool(truncated),
+        "x_E": metrics["x_E"],
+        "y_E": metrics["y_E"],
+        "psi_E": metrics["psi_E"],
+        "J_c": metrics["J_c"],
+        "measured": measured,
+        "leg_times": metrics["leg_times"],
+        "thrust_mean_abs": metrics["thrust_mean_abs"],
+        "thrust_total_variation": metrics["thrust_total_variation"],
+        "saturated_fraction": metrics["saturated_fraction"],
+        "wall_time_s": wall,
+    }
+
+
+def _progress(total: int | None, enabled: bool, desc: str) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, disable=not enabled, desc=desc, unit="step", leave=False)
+
+
+def _fmt(x: Any) -> str:
+    return f"{x:.4f}" if isinstance(x, float) else str(x)
+
+
+def _print_table(res: dict[str, Any]) -> None:
+    meas = res.get("measured") or {}
+    print(
+        f"{res['scenario']} | controller {res['controller']} | seed {res['seed']} | "
+        f"plant {res['plant']} | wind {res['wind']}"
+    )
+    rows = [
+        ("completed", res["completed"], ""),
+        ("legs completed", res["legs_completed"], ""),
+        ("duration", round(res["duration_s"], 1), "s"),
+        ("quay contact", res["quay_contact"], ""),
+    ]
+    for name, val, unit in rows:
+        print(f"  {name:16s} {_fmt(val):>10s} {unit}")
+    print(f"  {'index':16s} {'truth':>10s} {'measured':>10s}")
+    for key, unit in (("x_E", "m"), ("y_E", "m"), ("psi_E", "deg"), ("J_c", "")):
+        print(f"  {key:16s} {_fmt(res[key]):>10s} {_fmt(meas.get(key, 'n/a')):>10s} {unit}")
+    print(f"  leg times (s)    {[round(t, 1) for t in res['leg_times']]}")
+    print(f"  mean |thrust| (N) {[round(t, 1) for t in res['thrust_mean_abs']]}")
+    print(f"  wall time        {res['wall_time_s']:.2f} s")
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from shipgym.controllers.wrappers import controller_spec
+    from shipgym.dynamics import plant_model
+    from shipgym.envs.make import resolve_env_id
+
+    resolve_env_id(args.scenario)  # validate names before any work
+    controller_spec(args.controller)
+    plant_model(args.plant)
+    if args.json is not None:
+        _check_writable(args.json)
+    res = run_episode(
+        args.scenario,
+        controller=args.controller,
+        seed=args.seed,
+        wind=args.wind,
+        plant=args.plant,
+        progress=not args.no_progress,
+    )
+    _print_table(res)
+    if args.json is not None:
+        args.json.write_text(json.dumps(res, indent=2))
+        print(f"results written to {args.json}")
+    return 0
+
+
+def _check_writable(path: Path) -> None:
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise ValueError(f"cannot write {path}: folder {parent} does not exist")
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -94,6 +234,16 @@ def _parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="command", required=True)
     p = sub.add_parser("list", help="list plant variants, wind models and actuators")
     p.set_defaults(func=_cmd_list)
+    p = sub.add_parser("run", help="run a closed-loop scenario; prints the metrics table")
+    p.add_argument("scenario", help="harbour, station-keeping, tracking, or an env id")
+    p.add_argument("--controller", default="pid", help="pid (default) or pid-seed")
+    p.add_argument("--seed", type=int, default=0, help="episode seed (0)")
+    p.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
+                   metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip
+    p.add_argument("--plant", default="default", help="plant variant (see 'shipgym list')")
+    p.add_argument("--json", type=Path, default=None, metavar="PATH", help="write results")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_run)
     p = sub.add_parser("demo", help="open-loop turn in gusty wind; prints a summary")
     p.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
                    metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip

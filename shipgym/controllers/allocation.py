@@ -56,8 +56,10 @@ __all__ = [
     "action_to_command",
 ]
 
-#: relative tolerance used to decide that a force sits on a limit of its range
+#: relative tolerance (of a force range) used to decide that a force sits on a limit
 _AT_LIMIT_RTOL = 1e-9
+#: requests outside a range by less than this fraction of it are round-off, not saturation
+_ROUND_OFF_RTOL = 1e-12
 
 
 class Allocation(NamedTuple):
@@ -129,6 +131,11 @@ def _force_box(p: ThrusterParameters) -> tuple[float, float, float, float, float
 
 def _clip(x: float, lo: float, hi: float) -> float:
     return lo if x < lo else hi if x > hi else x
+
+
+def _inside(x: float, lo: float, hi: float) -> bool:
+    tol = _ROUND_OFF_RTOL * (hi - lo)
+    return lo - tol <= x <= hi + tol
 
 
 def _at_limit(x: float, lo: float, hi: float) -> bool:
@@ -227,7 +234,7 @@ def allocate_inverse(
     F2 = (p.L3 * Y + N) / lever
     F3 = (p.L2 * Y - N) / lever
     F = (_clip(X, f1lo, f1hi), _clip(F2, f2lo, f2hi), _clip(F3, f3lo, f3hi))
-    sat = (F[0] != X, F[1] != F2, F[2] != F3)
+    sat = (F[0] != X, not _inside(F2, f2lo, f2hi), not _inside(F3, f3lo, f3hi))
     return _result((X, Y, N), F, sat, p)
 
 
@@ -267,7 +274,9 @@ def allocate(
         try:
             wX, wY, wN = (float(w) for w in weights)
         except (TypeError, ValueError):
-            raise ValueError(f"weights must be three numbers (w_X, w_Y, w_N), got {weights!r}")
+            raise ValueError(
+                f"weights must be three numbers (w_X, w_Y, w_N), got {weights!r}"
+            ) from None
         if not all(math.isfinite(w) and w > 0 for w in (wX, wY, wN)):
             raise ValueError(f"weights must be finite and > 0, got {weights!r}")
     f1lo, f1hi, f2lo, f2hi, f3lo, f3hi = _force_box(p)
@@ -277,8 +286,9 @@ def allocate(
     lever = L2 + L3
     F2 = (L3 * Y + N) / lever
     F3 = (L2 * Y - N) / lever
-    if f2lo <= F2 <= f2hi and f3lo <= F3 <= f3hi:
-        return _result((X, Y, N), (F1, F2, F3), (sat1, False, False), p)
+    if _inside(F2, f2lo, f2hi) and _inside(F3, f3lo, f3hi):
+        F = (F1, _clip(F2, f2lo, f2hi), _clip(F3, f3lo, f3hi))
+        return _result((X, Y, N), F, (sat1, False, False), p)
 
     # the optimum is on the boundary: best of the four edges, each solved in closed form
     d3 = wY + wN * L3 * L3  # curvature along F3 (F2 fixed)

@@ -164,14 +164,17 @@ class PIDGains:
         See :func:`error_loop`.
         """
         return np.array(
-            [error_loop(p, i, d, dt)[1] for p, i, d in zip(self.K_P, self.K_I, self.K_D)]
+            [
+                error_loop(p, i, d, dt)[1]
+                for p, i, d in zip(self.K_P, self.K_I, self.K_D, strict=True)
+            ]
         )
 
 
 def pid_pole_placement(
     omega: ArrayLike, zeta: float = 1.0
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    r"""``K_P, K_I, K_D = pid_pole_placement(omega, zeta)``: place the error poles of eq. 18.
+    r"""Place the per-DOF error poles of eq. 18: returns ``K_P, K_I, K_D``.
 
     The per-DOF error dynamics ``e_ddot + K_D e_dot + K_P e + K_I xi = 0``, ``xi_dot = e``, have
     the characteristic polynomial ``s^3 + K_D s^2 + K_P s + K_I``. Matching it to
@@ -206,7 +209,7 @@ def pid_pole_placement(
 def error_loop(
     k_p: float, k_i: float, k_d: float, dt: float | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.complex128]]:
-    """``A, E = error_loop(k_p, k_i, k_d, dt)``: one DOF's error loop and its poles.
+    """One DOF's closed error loop and its poles: returns ``A, E``.
 
     State ``x = [e, e_dot, xi]``. Continuous (``dt=None``): ``x_dot = A x`` with
     ``A = [[0, 1, 0], [-k_p, -k_d, -k_i], [1, 0, 0]]`` (eqs. 17-18). Sampled (``dt`` given): the
@@ -418,15 +421,15 @@ class MultivariablePID:
             ex, ey = rotate(ex, ey)
             self._pending = (ex, ey, epsi, psi - dpsi)
 
-    # ---- integral update with anti-windup ------------------------------------------------------
+    # ---- integral update with anti-windup ----------------------------------------------------
     def _integrate(self, saturated: ArrayLike | None) -> None:
+        dirs = None if saturated is None else _saturation_directions(saturated)
         if self._pending is None:
             return
         ex, ey, epsi, psi = self._pending
         h = self.dt
         dx, dy, dz = h * ex, h * ey, h * epsi
-        if saturated is not None:
-            dirs = _saturation_directions(saturated)
+        if dirs is not None:
             if any(dirs):
                 kI = self.gains.K_I
                 qx, qy, qz = kI[0] * dx, kI[1] * dy, kI[2] * dz  # r-frame acceleration
@@ -442,8 +445,9 @@ class MultivariablePID:
                 if changed:
                     bx, by, bz = _mv(self._Mi, *f)
                     q = (c * bx - s * by, s * bx + c * by, bz)
-                    dx, dy, dz = (q[i] / kI[i] if kI[i] > 0 else d0 for i, d0 in
-                                  enumerate((dx, dy, dz)))
+                    dx, dy, dz = (
+                        q[i] / kI[i] if kI[i] > 0 else d0 for i, d0 in enumerate((dx, dy, dz))
+                    )
         xi = self._xi
         xi[0] += dx
         xi[1] += dy
@@ -466,7 +470,7 @@ class MultivariablePID:
             if kI[i] > 0:
                 xi[i] = q[i] / kI[i]
 
-    # ---- control law ---------------------------------------------------------------------------
+    # ---- control law -------------------------------------------------------------------------
     def __call__(
         self,
         eta_r: ArrayLike,

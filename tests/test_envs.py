@@ -1,0 +1,202 @@
+"""Gymnasium environments, the controller wrapper and the closed-loop harbour manoeuvre."""
+
+import json
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import shipgym
+from shipgym.cli import main
+from shipgym.controllers.wrappers import DPControllerWrapper
+
+IDS = list(shipgym.ENV_IDS)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_gymnasium_check_env(env_id):
+    env = gym.make(env_id)
+    check_env(env.unwrapped, skip_render_check=True)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_sb3_check_env(env_id):
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # SB3 must not warn about the spaces
+        sb3_check_env(gym.make(env_id).unwrapped, warn=True)
+
+
+def test_controller_wrapped_env_passes_check_env():
+    env = shipgym.make("harbour", controller="pid")
+    check_env(env, skip_render_check=True)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_same_seed_same_episode(env_id):
+    def rollout():
+        env = gym.make(env_id)
+        env.action_space.seed(3)
+        obs, info = env.reset(seed=11)
+        out = [obs]
+        for _ in range(40):
+            obs, r, term, trunc, info = env.step(env.action_space.sample())
+            out += [obs, np.array([r]), info["eta"], info["tau_wind"]]
+            if term or trunc:
+                break
+        return out
+
+    a, b = rollout(), rollout()
+    assert len(a) == len(b)
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x, y)
+
+
+def test_different_seeds_differ_and_tracking_plans_are_seeded():
+    env = gym.make("shipgym/BlueLadyTracking-v0")
+    env.reset(seed=1)
+    p1 = env.unwrapped.guidance.plan
+    env.reset(seed=2)
+    p2 = env.unwrapped.guidance.plan
+    env.reset(seed=1)
+    assert env.unwrapped.guidance.plan == p1
+    assert p1 != p2
+
+
+def test_reward_is_the_sum_of_its_info_terms():
+    env = gym.make("shipgym/BlueLadyHarbour-v0")
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    for _ in range(30):
+        _, reward, _, _, info = env.step(env.action_space.sample())
+        terms = [v for k, v in info.items() if k.startswith("reward_")]
+        assert len(terms) == 7
+        assert reward == sum(terms)
+
+
+def test_spec_round_trip_rebuilds_the_wrapper_stack():
+    env = shipgym.make("harbour", controller="pid-seed", wind="2@0")
+    env2 = gym.make(env.spec)
+    assert isinstance(env2, DPControllerWrapper)
+    assert env2.controller_name == "pid-seed"
+    o1, _ = env.reset(seed=5)
+    o2, _ = env2.reset(seed=5)
+    np.testing.assert_array_equal(o1, o2)
+    for _ in range(20):
+        o1, r1, *_ = env.step(np.zeros(3, np.float32))
+        o2, r2, *_ = env2.step(np.zeros(3, np.float32))
+    np.testing.assert_array_equal(o1, o2)
+    assert r1 == r2
+
+
+def test_bad_actions_and_config_raise_clear_errors():
+    env = gym.make("shipgym/BlueLadyHarbour-v0").unwrapped
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        env.step(np.array([np.nan, 0, 0], np.float32))
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros(2, np.float32))
+    _, _, _, _, info = env.step(np.array([2.0, 0.0, -3.0], np.float32))
+    np.testing.assert_array_equal(info["action_clipped"], [True, False, True])
+    with pytest.raises(ValueError, match="whole multiple"):
+        gym.make("shipgym/BlueLadyHarbour-v0", timestep=0.03, control_period=1.0)
+    with pytest.raises(ValueError, match="unknown manoeuvre plan"):
+        gym.make("shipgym/BlueLadyHarbour-v0", plan="nope")
+    with pytest.raises(ValueError, match="unknown controller 'lqr'; choose one of: pid, pid-seed"):
+        shipgym.make("harbour", controller="lqr")
+    with pytest.raises(ValueError, match="unknown scenario"):
+        shipgym.make("harbor")
+    wrapped = shipgym.make("harbour", controller="pid")
+    wrapped.reset(seed=0)
+    with pytest.raises(ValueError, match="finite"):
+        wrapped.step(np.array([0, np.inf, 0], np.float32))
+
+
+def test_observation_layout_is_consistent_with_info():
+    env = gym.make("shipgym/BlueLadyHarbour-v0", start_noise=(1.0, 1.0, 0.1)).unwrapped
+    env.reset(seed=0)
+    s = env.observation_structure
+    prev = np.zeros(3)
+    for k in range(5):
+        a = np.array([0.5, -0.3, 0.2], np.float32) * k / 4
+        obs, _, _, _, info = env.step(a)
+        psi = info["eta"][2]
+        R = np.array([[np.cos(psi), -np.sin(psi)], [np.sin(psi), np.cos(psi)]])
+        e_body = R.T @ (info["eta"][:2] - info["eta_d"][:2])
+        np.testing.assert_allclose(obs[s["pos_error_body"]][:2], e_body, rtol=1e-5, atol=1e-6)
+        np.testing.assert_allclose(obs[s["nu"]], info["nu"], rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(obs[s["prev_action"]], a, rtol=1e-6)
+        prev = a
+    assert obs.shape == env.observation_space.shape and prev is not None
+
+
+def _run(seed, **kw):
+    env = shipgym.make("harbour", controller="pid", **kw)
+    env.reset(seed=seed)
+    tau, eta_d = [], []
+    while True:
+        _, _, term, trunc, info = env.step(np.zeros(3, np.float32))
+        tau.append(info["tau_c"])
+        eta_d.append(info["eta_d"])
+        if term or trunc:
+            return env.unwrapped.episode_metrics(), np.array(tau), np.array(eta_d)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_harbour_manoeuvre_completes_with_tuned_pid(seed):
+    """Acceptance: wind 3 m/s from 300 deg, seeds 0-9, truth feedback."""
+    m, _, _ = _run(seed)
+    assert m["completed"] and m["legs_completed"] == 5
+    assert not m["quay_contact"]
+    assert m["duration_s"] <= 1500.0
+    assert m["x_E"] <= 0.5 and m["y_E"] <= 0.5 and m["psi_E"] <= 3.0
+
+
+def test_heading_across_north_gives_the_same_manoeuvre():
+    """Started at psi = 350 deg (legs cross north), calm air: the whole episode is the
+    rotated copy of the psi = 0 one: no jump in reference, error or thrust."""
+    m0, tau0, ref0 = _run(0, wind=None)
+    m1, tau1, ref1 = _run(0, wind=None, start_pose=(0.0, 0.0, math.radians(350.0)))
+    assert m1["completed"] and not m1["quay_contact"]
+    assert len(tau0) == len(tau1)
+    np.testing.assert_allclose(tau1, tau0, atol=1e-6 * np.abs(tau0).max())
+    dpsi = np.diff(ref1[:, 2])
+    assert np.all(np.abs(dpsi) < math.radians(2.0)), "the desired heading never jumps"
+    assert ref1[-1, 2] == pytest.approx(math.radians(440.0))
+    assert m1["J_c"] == pytest.approx(m0["J_c"], rel=1e-6)
+
+
+def test_station_keeping_holds_position_in_wind():
+    env = shipgym.make("station-keeping", controller="pid")
+    env.reset(seed=4)
+    errs = []
+    for _ in range(600):
+        _, _, term, trunc, info = env.step(np.zeros(3, np.float32))
+        errs.append(np.hypot(*(info["eta"][:2] - info["eta_d"][:2])))
+        assert not term
+    assert trunc
+    assert max(errs[300:]) < 0.5
+
+
+def test_cli_run_writes_json_and_rejects_mistakes(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    assert main(["run", "harbour", "--seed", "1", "--json", str(out), "--no-progress"]) == 0
+    res = json.loads(out.read_text())
+    for key in ("completed", "legs_completed", "duration_s", "quay_contact", "x_E", "y_E",
+                "psi_E", "J_c", "measured"):  # fmt: skip
+        assert key in res
+    assert res["completed"] is True
+    assert main(["run", "harbor"]) == 2
+    assert "choose a scenario (harbour" in capsys.readouterr().err
+    assert main(["run", "harbour", "--controller", "x"]) == 2
+    assert "choose one of: pid, pid-seed" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["run", "harbour", "--wind", "3 from 300"])
+    assert exc.value.code == 2
+    assert "SPEED@FROM_DEG" in capsys.readouterr().err
+    assert main(["run", "harbour", "--json", str(tmp_path / "no" / "r.json")]) == 2
