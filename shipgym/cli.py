@@ -145,6 +145,7 @@ def _print_table(res: dict[str, Any]) -> None:
         print(f"  {key:16s} {_fmt(res[key]):>10s} {_fmt(meas.get(key, 'n/a')):>10s} {unit}")
     print(f"  leg times (s)    {[round(t, 1) for t in res['leg_times']]}")
     print(f"  mean |thrust| (N) {[round(t, 1) for t in res['thrust_mean_abs']]}")
+    print(f"  time saturated   {[round(t, 3) for t in res['saturated_fraction']]} (fraction)")
     print(f"  wall time        {res['wall_time_s']:.2f} s")
 
 

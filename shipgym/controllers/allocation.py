@@ -327,6 +327,25 @@ def _range_check(
         )
 
 
+def _scale_one(
+    x: list[float], p: ThrusterParameters, *, to_action: bool
+) -> NDArray[np.float64] | None:
+    """Plain-float mapping of one in-range vector; ``None`` sends it to the checked path."""
+    lo = (p.n_min, p.p_min, p.p_min)
+    hi = (p.n_max, p.p_max, p.p_max)
+    out = []
+    for v, a, b in zip(x, lo, hi, strict=True):
+        if to_action:
+            if not a <= v <= b:  # also False for NaN
+                return None
+            out.append(v / b if v >= 0.0 else v / -a)
+        else:
+            if not -1.0 <= v <= 1.0:
+                return None
+            out.append(v * b if v >= 0.0 else v * -a)
+    return np.array(out)
+
+
 def _as_batch3(x: ArrayLike, what: str) -> NDArray[np.float64]:
     a = np.asarray(x, dtype=float)
     if a.ndim == 0 or a.shape[-1] != 3:
@@ -356,6 +375,10 @@ def command_to_action(
     """
     _check_thrusters(thrusters)
     c = _as_batch3(command, "command")
+    if c.shape == (3,) and not clip:  # fast path: one command per control step
+        out = _scale_one(c.tolist(), thrusters, to_action=True)
+        if out is not None:
+            return out
     lo, hi = thrusters.lower, thrusters.upper
     if clip:
         if not np.all(np.isfinite(c)):
@@ -386,6 +409,10 @@ def action_to_command(
     """
     _check_thrusters(thrusters)
     a = _as_batch3(action, "action")
+    if a.shape == (3,) and not clip:  # fast path: one action per control step
+        out = _scale_one(a.tolist(), thrusters, to_action=False)
+        if out is not None:
+            return out
     one = np.ones(3)
     if clip:
         if not np.all(np.isfinite(a)):

@@ -37,6 +37,12 @@ polynomial ``s^3 + K_D s^2 + K_P s + K_I`` (eq. 18), which is what the gain desi
 (:func:`pid_pole_placement`) places. Since the r-frame differs from NED only by a constant
 rotation and offset, the same controller works in NED coordinates (pass NED ``eta``).
 
+The control model defaults to ``M`` and ``D_L`` as printed in eqs. 49-50. Two details there
+disagree with eqs. 6-7 and Table 2: eq. 49 is diagonal although ``-Y_rdot = 18 351.9 kg m``
+would put ``M_23 != 0``, and eq. 50's off-diagonal damping is ``-855.4`` whereas
+``-Y_r = -N_v = +855.4`` by eq. 7 (the default plant, built from Table 2, uses ``+855.4``).
+Pass ``M=plant.mass_matrix(), D_L=plant.D_L`` to control with a plant's own matrices.
+
 Gains: why the seed's do not work here
 -------------------------------------
 The seed's gains (eqs. 46-48: ``K_P = 1``, ``K_I = 0.01``, ``K_D = 100`` for every DOF) give
@@ -45,11 +51,12 @@ the per-DOF error polynomial ``s^3 + 100 s^2 + s + 0.01`` with poles at -99.99 r
 constant, and the fast pole at -100 rad/s cannot be realised at all by a controller sampled
 every ``T = 1`` s: the velocity feedback alone updates the velocity error by a factor
 ``1 - K_D T = -99`` per sample, so the sampled loop (:func:`error_loop`) has a spectral radius
-of about 99 (``K_D T = 100 >> 2``): unstable. On the ship the thrusters then saturate and
-chatter between their limits at every sample instead of converging. Perhaps the seed's
-Simulink model ran the controller much faster or scaled the gains differently; that is not
-recoverable from the paper, so the preset keeps the printed numbers and :data:`GAIN_PRESETS`
-adds ``"tuned"`` defaults.
+of about 99 (``K_D T = 100 >> 2``): unstable. Without thrust limits the error grows ~99-fold
+per sample; with them the thrusters sit at their limits at almost every sample, jumping
+between full ahead and full astern, and the ship never settles. The sampled loop would need
+``T < 2 / K_D = 0.02`` s. The paper does not say how the printed gains were used at its 1 s
+sampling, so the ``"seed"`` preset keeps the printed numbers and :data:`GAIN_PRESETS` adds
+``"tuned"`` defaults.
 
 The ``"tuned"`` gains place a triple pole per DOF (:func:`pid_pole_placement`, ``zeta = 1``:
 ``K_D = 3 w``, ``K_P = 3 w^2``, ``K_I = w^3``) with ``w = (0.06, 0.06, 0.1)`` rad/s for
@@ -111,6 +118,8 @@ __all__ = [
     "pid_pole_placement",
     "error_loop",
     "MultivariablePID",
+    "TUNED_OMEGA",
+    "SATURATION_TOL",
 ]
 
 Vec3 = tuple[float, float, float]
@@ -244,7 +253,7 @@ def error_loop(
     return A, np.linalg.eigvals(A)
 
 
-#: natural frequencies (rad/s) of the ``"tuned"`` preset: surge, sway, yaw
+#: natural frequencies (rad/s) of the ``"tuned"`` preset: r-frame x, y and yaw
 TUNED_OMEGA: Vec3 = (0.06, 0.06, 0.1)
 
 #: Gain presets by name. ``"seed"``: seed001 eqs. 46-48 as printed. ``"tuned"``:
@@ -304,7 +313,7 @@ def _mat3(x: ArrayLike | None, default: NDArray[np.float64], name: str) -> NDArr
     return a
 
 
-def _tup(a: NDArray[np.float64]) -> tuple[Vec3, Vec3, Vec3]:
+def _tup(a: NDArray[Any]) -> tuple[Vec3, Vec3, Vec3]:
     return tuple(tuple(float(v) for v in row) for row in a)  # type: ignore[return-value]
 
 
@@ -335,11 +344,11 @@ class MultivariablePID:
     switches to the next leg and :meth:`reset` at the start of an episode.
 
     Example:
+        >>> from shipgym.controllers import MultivariablePID, allocate
         >>> ctrl = MultivariablePID("tuned", dt=1.0)
-        >>> alloc = None
-        >>> tau = ctrl([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])  # doctest: +SKIP
-        >>> alloc = allocate(tau)                                          # doctest: +SKIP
-        >>> tau = ctrl(eta_r, nu, eta_d, saturated=alloc.tau_error)        # doctest: +SKIP
+        >>> tau = ctrl([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])  # 1 m too far ahead
+        >>> alloc = allocate(tau)  # -> alloc.command for the thrusters
+        >>> tau = ctrl([0.9, 0, 0], [-0.05, 0, 0], [0, 0, 0], saturated=alloc.tau_error)
     """
 
     def __init__(
@@ -360,7 +369,11 @@ class MultivariablePID:
         Da = _mat3(D_L, D0, "D_L")
         if not np.linalg.cond(Ma) < 1e12:
             raise ValueError(f"M must be invertible, got {Ma!r}")
-        if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
+        try:
+            dt = float(dt)
+        except (TypeError, ValueError):
+            raise ValueError(f"dt must be a control period in seconds, got {dt!r}") from None
+        if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a finite control period > 0 (s), got {dt!r}")
         lim = (
             force_capacity(BLUE_LADY_THRUSTERS)
@@ -372,8 +385,10 @@ class MultivariablePID:
         self.gains = gains
         self.M = Ma.copy()
         self.D_L = Da.copy()
-        self.dt = float(dt)
+        self.dt = dt
         self.integral_limit = lim.copy()
+        for arr in (self.M, self.D_L, self.integral_limit):
+            arr.setflags(write=False)  # the controller works on private copies
         self._M = _tup(Ma)
         self._Mi = _tup(np.linalg.inv(Ma))
         self._D = _tup(Da)

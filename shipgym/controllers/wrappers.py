@@ -124,9 +124,7 @@ class DPControllerWrapper(
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         residual = np.asarray(action, dtype=np.float64)
         if residual.shape != (3,) or not np.all(np.isfinite(residual)):
-            raise ValueError(
-                f"residual action must be 3 finite numbers in [-1, 1], got {action!r}"
-            )
+            raise ValueError(f"residual action must be 3 finite numbers in [-1, 1], got {action!r}")
         if not self._info:
             raise gym.error.ResetNeeded("call reset() before step()")
         tau_c, alloc = self._control(self._info)

@@ -6,10 +6,15 @@ y starboard). Every function accepts a leading batch axis.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["rot", "wrap_angle", "body_to_ned", "ned_to_body"]
+
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
 
 
 def wrap_angle(angle: ArrayLike) -> NDArray[np.float64] | float:
@@ -18,6 +23,8 @@ def wrap_angle(angle: ArrayLike) -> NDArray[np.float64] | float:
     Used for every differenced angle (errors, innovations, residuals) so that a heading
     crossing 0/360 deg never produces a jump.
     """
+    if type(angle) is float or type(angle) is int:  # fast path for plain numbers
+        return _PI - math.fmod(math.fmod(_PI - angle, _TWO_PI) + _TWO_PI, _TWO_PI)
     a = np.asarray(angle, dtype=float)
     w = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
     return float(w) if w.ndim == 0 else w

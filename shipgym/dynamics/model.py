@@ -85,7 +85,7 @@ class PlantModel:
         if self.coriolis and not self.m > 0:
             raise ValueError(f"plant {self.name!r}: m must be > 0 when coriolis=True")
         Mi = np.linalg.inv(M)
-        object.__setattr__(self, "_k", _Kernel(self, Mi))
+        object.__setattr__(self, "_k", _make_kernel(self, Mi))
 
     # ---- matrix form (batched) -------------------------------------------------------------
     def mass_matrix(self) -> NDArray[np.float64]:
@@ -169,51 +169,45 @@ class PlantModel:
         return replace(self, **changes)
 
 
-class _Kernel:
-    """Expanded component form of :meth:`PlantModel.nu_dot` with constants bound once."""
+def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any]]:
+    """Expanded component form of :meth:`PlantModel.nu_dot`, constants bound in a closure."""
+    A = p.M_A
+    a11, a22, a32 = A[0][0], A[1][1], A[2][1]
+    a23s = 0.5 * (A[1][2] + A[2][1])
+    (d11, d12, d13), (d21, d22, d23), (d31, d32, d33) = p.D_L
+    q1, q2, q3 = p.d_quad
+    (i11, i12, i13), (i21, i22, i23), (i31, i32, i33) = (tuple(map(float, r)) for r in Mi)
+    cor = 1.0 if p.coriolis else 0.0
+    m = p.m * cor
+    mxg = m * p.x_g
+    xg = p.x_g
 
-    __slots__ = (
-        "a11", "a22", "a23", "a32", "a33", "a23s", "d", "q1", "q2", "q3", "mi", "m", "xg", "cor",
-    )  # fmt: skip
-
-    def __init__(self, p: PlantModel, Mi: NDArray[np.float64]) -> None:
-        A = p.M_A
-        self.a11, self.a22, self.a23 = A[0][0], A[1][1], A[1][2]
-        self.a32, self.a33 = A[2][1], A[2][2]
-        self.a23s = 0.5 * (A[1][2] + A[2][1])
-        self.d = tuple(tuple(row) for row in p.D_L)
-        self.q1, self.q2, self.q3 = p.d_quad
-        self.mi = tuple(tuple(float(x) for x in row) for row in Mi)
-        self.m, self.xg, self.cor = p.m, p.x_g, 1.0 if p.coriolis else 0.0
-
-    def __call__(self, u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
+    def accel(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
         ur = u - u_c
         vr = v - v_c
-        d = self.d
         # damping D(nu_r) nu_r
-        fx = X - (d[0][0] * ur + d[0][1] * vr + d[0][2] * r + self.q1 * abs(ur) * ur)
-        fy = Y - (d[1][0] * ur + d[1][1] * vr + d[1][2] * r + self.q2 * abs(vr) * vr)
-        fn = N - (d[2][0] * ur + d[2][1] * vr + d[2][2] * r + self.q3 * abs(r) * r)
+        fx = X - (d11 * ur + d12 * vr + d13 * r + q1 * abs(ur) * ur)
+        fy = Y - (d21 * ur + d22 * vr + d23 * r + q2 * abs(vr) * vr)
+        fn = N - (d31 * ur + d32 * vr + d33 * r + q3 * abs(r) * r)
         # Coriolis-centripetal C_RB(nu) nu + C_A(nu_r) nu_r
-        c = self.cor
-        m = self.m * c
-        mxr = m * (self.xg * r + v)
-        w = (self.a22 * vr + self.a23s * r) * c
-        a11u = self.a11 * ur * c
-        fx += mxr * r + w * r
+        w = (a22 * vr + a23s * r) * cor
+        a11u = a11 * ur * cor
+        fx += m * (xg * r + v) * r + w * r
         fy -= m * u * r + a11u * r
-        fn -= m * self.xg * r * u + w * ur - a11u * vr
+        fn -= mxg * r * u + w * ur - a11u * vr
         # + M_A nu_c_dot, nu_c_dot = [r v_c, -r u_c, 0]
-        ax, ay = r * v_c, -r * u_c
-        fx += self.a11 * ax
-        fy += self.a22 * ay
-        fn += self.a32 * ay
-        mi = self.mi
+        ax = r * v_c
+        ay = -r * u_c
+        fx += a11 * ax
+        fy += a22 * ay
+        fn += a32 * ay
         return (
-            mi[0][0] * fx + mi[0][1] * fy + mi[0][2] * fn,
-            mi[1][0] * fx + mi[1][1] * fy + mi[1][2] * fn,
-            mi[2][0] * fx + mi[2][1] * fy + mi[2][2] * fn,
+            i11 * fx + i12 * fy + i13 * fn,
+            i21 * fx + i22 * fy + i23 * fn,
+            i31 * fx + i32 * fy + i33 * fn,
         )
+
+    return accel
 
 
 def seed_linear_matrices() -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -13,6 +13,7 @@ All functions accept a leading batch axis.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -136,6 +137,12 @@ def validate_command(cmd: ArrayLike, shape: tuple[int, ...] = (3,)) -> NDArray[n
         ValueError: wrong shape, NaN or infinite entries (message names the entries).
     """
     a = np.asarray(cmd, dtype=float)
+    if a.shape == (3,) and shape == (3,):  # fast path (every control step)
+        x0, x1, x2 = a.tolist()
+        if math.isfinite(x0 + x1 + x2) or (
+            math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2)
+        ):
+            return a
     if a.shape[-len(shape) :] != shape:
         raise ValueError(
             f"thruster command must have shape {shape} ([n1 rpm, p2, p3]), got {a.shape}"

@@ -275,12 +275,17 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         a = np.asarray(action, dtype=np.float64)
         if a.shape != (3,):
             raise ValueError(f"action must have shape (3,), got {a.shape}")
-        if not np.all(np.isfinite(a)):
+        a0, a1, a2 = a.tolist()
+        if not (math.isfinite(a0) and math.isfinite(a1) and math.isfinite(a2)):
             raise ValueError(f"action contains NaN or infinite values: {a}")
         clipped = np.clip(a, -1.0, 1.0)
         action_clipped = clipped != a
         command = action_to_command(clipped, self.thrusters)
-        saturated = self.physics.set_command(command)
+        clipped_cmd = self.physics.set_command(command)
+        # an actuator is saturated when its command sits at a limit of its range
+        lo, hi = self.thrusters.lower, self.thrusters.upper
+        tol = 1e-9 * (hi - lo)
+        saturated = clipped_cmd | (command <= lo + tol) | (command >= hi - tol)
         phys = self.physics
         phys.step(self.n_substeps, stop_on_contact=self.scene == "harbour")
         contacts = phys.contacts() if phys.data.ncon else []
@@ -289,7 +294,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         t = phys.time
         switched = self.guidance.update(t, phys.eta)
         sample = self._observe()
-        self._record_metrics(sample)
+        self._record_metrics(sample, saturated)
         rewards = self._reward_terms(sample, clipped, new_contact, switched)
         reward = float(sum(rewards.values()))
         self._prev_action = clipped
@@ -334,13 +339,13 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         ref = self.guidance.reference(phys.time)
         return _Sample(eta, nu, ref, ref.to_r(eta))
 
-    def _record_metrics(self, s: _Sample) -> None:
+    def _record_metrics(self, s: _Sample, saturated: NDArray[np.bool_] | None = None) -> None:
         self.metrics.record(
             self.physics.time,
             s.eta_r,
             s.ref.eta_d_r,
             thrust=self.physics.thrust,
-            saturated=self.physics.saturated,
+            saturated=saturated,
             leg=s.ref.leg,
         )
 
@@ -469,4 +474,3 @@ def _make_renderer(model: Any) -> Any:
             "machine set MUJOCO_GL=egl (or MUJOCO_GL=osmesa with PYOPENGL_PLATFORM=osmesa and "
             "libosmesa installed) before importing mujoco"
         ) from exc
-

@@ -93,6 +93,8 @@ class VesselPhysics:
         if not isinstance(self.plant, PlantModel):
             raise TypeError(f"plant must be a PlantModel or a variant name, got {plant!r}")
         self.thrusters = thrusters
+        self._lower = thrusters.lower.tolist()
+        self._upper = thrusters.upper.tolist()
         self.aerodynamics = wind is not None
         self.wind_config = wind if wind is not None else WindConfig()
         self.windage = windage
@@ -243,9 +245,10 @@ class VesselPhysics:
         Raises:
             ValueError: wrong shape, NaN or infinite values.
         """
-        cmd = validate_command(command)
-        clipped = np.clip(cmd, self.thrusters.lower, self.thrusters.upper)
-        self.saturated = clipped != cmd
+        cmd = validate_command(command).tolist()
+        lo, hi = self._lower, self._upper
+        clipped = [min(max(c, a), b) for c, a, b in zip(cmd, lo, hi, strict=True)]
+        self.saturated = np.array([c != x for c, x in zip(clipped, cmd, strict=True)])
         self.data.ctrl[:] = clipped
         return self.saturated.copy()
 

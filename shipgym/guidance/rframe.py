@@ -19,6 +19,8 @@ Both functions accept a leading batch axis on either argument.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -46,6 +48,8 @@ def to_r_frame(
     """
     eta_n = np.asarray(eta_n, dtype=float)
     eta_P = np.asarray(eta_P, dtype=float)
+    if eta_n.shape == (3,) and eta_P.shape == (3,) and np.ndim(psi_ref_r) == 0:
+        return _to_r_frame_one(eta_n, eta_P, psi_ref_r)  # fast path: one pose
     if eta_n.shape[-1:] != (3,) or eta_P.shape[-1:] != (3,):
         raise ValueError(
             f"eta_n and eta_P must have a last axis of length 3 ([x, y, psi]), got shapes "
@@ -66,6 +70,22 @@ def to_r_frame(
     out[..., 1] = -s * dx + c * dy
     out[..., 2] = psi_r
     return out
+
+
+def _to_r_frame_one(
+    eta_n: NDArray[np.float64], eta_P: NDArray[np.float64], psi_ref_r: ArrayLike | None
+) -> NDArray[np.float64]:
+    """:func:`to_r_frame` for a single pose, in plain floats (called every control step)."""
+    x, y, psi = eta_n.tolist()
+    xp, yp, psip = eta_P.tolist()
+    c, s = math.cos(psip), math.sin(psip)
+    dx, dy, dpsi = x - xp, y - yp, psi - psip
+    if psi_ref_r is None:
+        psi_r = wrap_angle(dpsi)
+    else:
+        ref = float(psi_ref_r)  # type: ignore[arg-type]
+        psi_r = ref + wrap_angle(dpsi - ref)
+    return np.array([c * dx + s * dy, -s * dx + c * dy, psi_r])
 
 
 def from_r_frame(eta_r: ArrayLike, eta_P: ArrayLike) -> NDArray[np.float64]:
