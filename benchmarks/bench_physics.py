@@ -77,17 +77,12 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         sim_t = info["t"]
         n_phys = round(sim_t / env.unwrapped.physics.timestep)
     bare_same = n_phys / r_bare
-    print(
-        f"closed-loop harbour episode               : {sim_t:.0f} s simulated, {n_phys} physics steps"
-    )
+    print(f"closed-loop harbour episode               : {sim_t:.0f} s, {n_phys} physics steps")
     print(f"  wall time                               : {best_wall:12.3f} s")
     print(f"  bare mj_step, same number of steps      : {bare_same:12.3f} s")
-    print(
-        f"  ratio episode / bare mj_step            : {best_wall / bare_same:12.2f}   (target <= 8)"
-    )
-    print(
-        f"  faster than real time                   : {sim_t / best_wall:12,.0f} x   (target >= 500)"
-    )
+    ratio, rt = best_wall / bare_same, sim_t / best_wall
+    print(f"  ratio episode / bare mj_step            : {ratio:12.2f}   (target <= 8)")
+    print(f"  faster than real time                   : {rt:12,.0f} x   (target >= 500)")
     return {
         "bare": r_bare,
         "bare_c": r_c,

@@ -23,9 +23,9 @@ def test_gymnasium_check_env(env_id):
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_sb3_check_env(env_id):
-    from stable_baselines3.common.env_checker import check_env as sb3_check_env
-
     import warnings
+
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # SB3 must not warn about the spaces

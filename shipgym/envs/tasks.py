@@ -14,7 +14,9 @@ __all__ = ["BlueLadyHarbourEnv", "BlueLadyStationKeepingEnv", "BlueLadyTrackingE
 
 
 class BlueLadyHarbourEnv(BlueLadyEnv):
-    r"""The 5-leg harbour manoeuvre of seed001 (Tomera 2014, Fig. 7): ``shipgym/BlueLadyHarbour-v0``.
+    r"""The 5-leg harbour manoeuvre of seed001 (Tomera 2014, Fig. 7).
+
+    Registered as ``shipgym/BlueLadyHarbour-v0``.
 
     The ship starts at rest alongside berth A and moves to berth B: 7 m to port, 38 m
     forward, a 90 deg turn to starboard, 15 m astern, 3 m to port. Legs switch when the ship
@@ -31,7 +33,9 @@ class BlueLadyHarbourEnv(BlueLadyEnv):
 
 
 class BlueLadyStationKeepingEnv(BlueLadyEnv):
-    r"""Hold the start pose against wind from a perturbed start: ``shipgym/BlueLadyStationKeeping-v0``.
+    r"""Hold the start pose against wind from a perturbed start.
+
+    Registered as ``shipgym/BlueLadyStationKeeping-v0``.
 
     One zero-displacement leg on open water; the ship starts up to 2 m and 5 deg off the pose
     (uniform, seeded). Default wind 3 m/s from 300 deg with gusts. Never terminates on
