@@ -15,16 +15,17 @@ register_envs()
 __all__ = ["ENV_IDS", "__version__", "make"]
 
 
-def make(env_id: str, *, controller: str | None = None, **kwargs):  # type: ignore[no-untyped-def]
-    """``gym.make(env_id, **kwargs)``, wrapped with a controller when one is named.
+def make(env_id: str, *, observer=None, controller=None, **kwargs):  # type: ignore[no-untyped-def]
+    """``gym.make(env_id, **kwargs)`` with the wrapper stack env -> observer -> controller.
 
     Args:
         env_id: a registered id (see ``shipgym.ENV_IDS``) or a short name
             (``harbour``, ``station-keeping``, ``tracking``).
-        controller: ``None`` (raw thruster actions) or a controller name
-            (see ``shipgym.controllers.CONTROLLERS``).
+        observer: ``None``/``"truth"`` or an observer name (``dkf``, ``kbf``, ``ekf``, ...).
+        controller: ``None`` (raw thruster actions) or a controller name (``pid``,
+            ``pid-seed``).
         **kwargs: environment arguments.
     """
     from shipgym.envs.make import make as _make
 
-    return _make(env_id, controller=controller, **kwargs)
+    return _make(env_id, observer=observer, controller=controller, **kwargs)

@@ -23,10 +23,11 @@ from shipgym._config import param
 from shipgym.assets import asset_path
 from shipgym.controllers.allocation import action_to_command, command_to_action
 from shipgym.disturbances import WindConfig
-from shipgym.dynamics import BLUE_LADY_THRUSTERS, wrap_angle
+from shipgym.dynamics import BLUE_LADY_THRUSTERS, command_to_tau, wrap_angle
 from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
 from shipgym.guidance import plan as named_plan
 from shipgym.metrics import ManoeuvreMetrics
+from shipgym.observers.sensors import Sensors, SensorConfig, sensor_config
 
 from .physics import VesselPhysics
 
@@ -146,7 +147,9 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     controllers use); reference ``eta_d`` (NED), ``eta_d_r``, ``eta_dot_d_r``,
     ``eta_ddot_d_r``, ``eta_P`` (leg start) and ``eta_r`` (ship in the r-frame); ``leg``,
     ``legs_completed``, ``finished``, ``t`` (s); ``command`` (rpm, 1, 1), ``thrust`` (N),
-    ``saturated``, ``action_clipped``; ``tau_wind`` (N, N, N m, body); ``quay_contact``,
+    ``saturated``, ``action_clipped``; ``tau_wind`` (N, N, N m, body); ``measurements`` (the
+    sensor samples taken during the step: ``t``, measured NED pose ``z`` or ``None`` in a
+    dropout, ``valid``, ``outlier`` (a truth flag), applied body thrust ``tau``); ``quay_contact``,
     ``contacts``; the ``reward_*`` terms; and at the end of an episode ``episode_metrics``
     (seed001 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
 
@@ -156,6 +159,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | ``plan`` | ``"tomera2014"`` | plan name or :class:`ManoeuvrePlan` |
     | ``plant`` | ``"default"`` | plant variant (``"default"``, ``"seed-linear"``) |
     | ``wind`` | ``"3@300"`` | ``None``, ``WindConfig``, ``(speed, from_deg)`` or ``"SPEED@FROM"`` |
+    | ``sensors`` | ``"default"`` | sensor preset (``default``, ``dgps``, ``rtk``), ``SensorConfig`` or ``None`` |
     | ``scene`` | ``"harbour"`` | ``"harbour"`` or ``"open-water"`` |
     | ``start_pose`` | ``(0, 0, 0)`` | NED start pose (m, m, rad); the harbour turns with it |
     | ``start_noise`` | ``(0, 0, 0)`` | uniform start perturbation half-widths (m, m, rad) |
@@ -176,6 +180,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         plan: str | ManoeuvrePlan = "tomera2014",
         plant: str = "default",
         wind: Any = "3@300",
+        sensors: Any = "default",
         scene: str = "harbour",
         start_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
         start_noise: tuple[float, float, float] = (0.0, 0.0, 0.0),
@@ -211,6 +216,15 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.terminate_on_finish = bool(terminate_on_finish)
         self.scene = scene
         self.wind_config = parse_wind_arg(wind)
+        self.sensor_config = parse_sensors_arg(sensors)
+        self.sensors = None if self.sensor_config is None else Sensors(self.sensor_config)
+        self._sensor_steps = (
+            None
+            if self.sensor_config is None
+            else _whole_multiple(self.sensor_config.period, timestep)
+        )
+        self._steps = 0
+        self._last_measurement: NDArray[np.float64] | None = None
         self.physics = VesselPhysics(
             plant, wind=self.wind_config, xml_path=asset_path(*SCENES[scene]), timestep=timestep
         )
@@ -259,13 +273,19 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._place_harbour(start)
         noise = rng.uniform(-1.0, 1.0, 3) * self.start_noise
         self.physics.reset(eta=start + noise, rng=rng)
+        if self.sensors is not None:
+            self.sensors.reset(rng)
+        self._steps = 0
+        self._last_measurement = None
         self.guidance.reset(start, t0=0.0)
         self.metrics.reset()
         self._prev_action = np.zeros(3)
         self._contact = False
+        measurements = [self._measure()] if self.sensors is not None else []
         sample = self._observe()
         self._record_metrics(sample)
         info = self._info(sample, np.zeros(3), np.zeros(3, bool), False, {}, [])
+        info["measurements"] = measurements
         return self._obs(sample), info
 
     def step(
@@ -287,7 +307,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         tol = 1e-9 * (hi - lo)
         saturated = clipped_cmd | (command <= lo + tol) | (command >= hi - tol)
         phys = self.physics
-        phys.step(self.n_substeps, stop_on_contact=self.scene == "harbour")
+        measurements = self._advance(self.n_substeps)
         contacts = phys.contacts() if phys.data.ncon else []
         new_contact = bool(contacts) and not self._contact
         self._contact = self._contact or bool(contacts)
@@ -302,6 +322,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         terminated = self._contact or (finished and self.terminate_on_finish)
         info = self._info(sample, command, saturated | action_clipped, finished, rewards, contacts)
         info["action_clipped"] = action_clipped
+        info["measurements"] = measurements
         if terminated:
             info["episode_metrics"] = self.episode_metrics()
         return self._obs(sample), reward, terminated, False, info
@@ -323,6 +344,39 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             self._renderer = None
 
     # ---- helpers ---------------------------------------------------------------------------
+    def _advance(self, n: int) -> list[dict[str, Any]]:
+        """Step the physics ``n`` times, sampling the sensors on their grid; stop on contact."""
+        phys = self.physics
+        stop = self.scene == "harbour"
+        out: list[dict[str, Any]] = []
+        every = self._sensor_steps
+        while n > 0:
+            k = n if every is None else min(n, every - self._steps % every)
+            taken = phys.step(k, stop_on_contact=stop)
+            self._steps += taken
+            n -= taken
+            if every is not None and self._steps % every == 0:
+                out.append(self._measure())
+            if taken < k:  # contact
+                break
+        return out
+
+    def _measure(self) -> dict[str, Any]:
+        """One sensor sample now: measured NED pose (or None in a dropout) and applied thrust."""
+        assert self.sensors is not None
+        phys = self.physics
+        m = self.sensors.measure(phys.time, phys.eta)
+        rec = {
+            "t": phys.time,
+            "z": None if m.z is None else np.array(m.z),
+            "valid": bool(m.valid),
+            "outlier": bool(m.outlier),
+            "tau": command_to_tau(phys.actuator_state, self.thrusters),
+        }
+        if rec["z"] is not None:
+            self._last_measurement = rec["z"]
+        return rec
+
     def episode_metrics(self) -> dict[str, Any]:
         """Accuracy indices (seed001 eqs. 54-57), thruster usage, legs and contact so far."""
         out = dict(self.metrics.summary())
@@ -337,17 +391,25 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         phys = self.physics
         eta, nu = phys.eta, phys.nu
         ref = self.guidance.reference(phys.time)
+        self.reference = ref
         return _Sample(eta, nu, ref, ref.to_r(eta))
 
     def _record_metrics(self, s: _Sample, saturated: NDArray[np.bool_] | None = None) -> None:
+        z = self._last_measurement
         self.metrics.record(
             self.physics.time,
             s.eta_r,
             s.ref.eta_d_r,
+            eta_meas_r=None if z is None else s.ref.to_r(z),
             thrust=self.physics.thrust,
             saturated=saturated,
             leg=s.ref.leg,
         )
+
+    @property
+    def prev_action(self) -> NDArray[np.float64]:
+        """The normalised action applied in the last step (zeros after a reset)."""
+        return self._prev_action.copy()
 
     def _obs(self, s: _Sample) -> NDArray[np.float32]:
         return self.navigation_observation(s.eta, s.nu, s.ref, self._prev_action)
@@ -439,6 +501,19 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def command_to_action(self, command: NDArray[np.float64]) -> NDArray[np.float64]:
         """Physical command ``[n1 rpm, p2, p3]`` to the normalised action."""
         return command_to_action(command, self.thrusters)
+
+
+def parse_sensors_arg(sensors: Any) -> SensorConfig | None:
+    """Accept ``None`` (no sensors), a preset name, a :class:`SensorConfig` or a mapping."""
+    if sensors is None or isinstance(sensors, SensorConfig):
+        return sensors
+    if isinstance(sensors, str):
+        return sensor_config(sensors)
+    if isinstance(sensors, Mapping):
+        return SensorConfig.from_dict(sensors)
+    raise ValueError(
+        f"sensors must be None, a preset name, a SensorConfig or a mapping, got {sensors!r}"
+    )
 
 
 def _vec3(x: Any, name: str) -> NDArray[np.float64]:

@@ -30,9 +30,23 @@ def resolve_env_id(name: str) -> str:
     )
 
 
-def make(env_id: str, *, controller: str | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
-    """``gym.make`` plus the wrapper stack: env -> controller wrapper (if named)."""
+def make(
+    env_id: str, *, observer: str | None = None, controller: str | None = None, **kwargs: Any
+) -> gym.Env[Any, Any]:
+    """``gym.make`` plus the wrapper stack: env -> observer wrapper -> controller wrapper.
+
+    Args:
+        env_id: a registered id or a scenario name (:data:`SCENARIOS`).
+        observer: ``None`` or ``"truth"`` (controllers see the true state), or an observer
+            name (``shipgym.observers.OBSERVERS``).
+        controller: ``None`` (raw thruster actions) or a controller name.
+        **kwargs: environment arguments.
+    """
     env = gym.make(resolve_env_id(env_id), **kwargs)
+    if observer not in (None, "truth"):
+        from shipgym.observers.wrapper import ObserverWrapper
+
+        env = ObserverWrapper(env, observer=observer)
     if controller is not None:
         from shipgym.controllers.wrappers import DPControllerWrapper
 

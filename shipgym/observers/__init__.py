@@ -1,0 +1,43 @@
+"""Sensors, state observers (Kalman filters) and the observer wrapper (SPEC sections 7, 10).
+
+- :mod:`~shipgym.observers.sensors`: DGPS position and gyrocompass heading samples;
+- :mod:`~shipgym.observers.design`: ``lqe``/``dlqe`` gain design (python-control style);
+- :mod:`~shipgym.observers.kalman`: discrete KF and Kalman-Bucy filters per DOF;
+- :mod:`~shipgym.observers.ekf`: the 9-state extended Kalman filter of seed001;
+- :mod:`~shipgym.observers.wrapper`: :class:`ObserverWrapper` (env -> observer -> controller).
+
+``make_observer(name)`` builds any registered observer (``observer_names()`` lists them).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .sensors import Measurement, SensorConfig, Sensors, sensor_config
+
+__all__ = [
+    "Measurement",
+    "SensorConfig",
+    "Sensors",
+    "make_observer",
+    "observer_names",
+    "sensor_config",
+]
+
+
+def observer_names() -> list[str]:
+    """Names accepted by :func:`make_observer`."""
+    from .registry import OBSERVERS
+
+    return list(OBSERVERS)
+
+
+def make_observer(name: str, **overrides: Any) -> Any:
+    """An observer by name (``dkf``, ``kbf``, ``ekf``, ``tomera-dkf``, ...).
+
+    Raises:
+        ValueError: unknown name (the message lists the valid ones).
+    """
+    from .registry import make_observer as _make
+
+    return _make(name, **overrides)

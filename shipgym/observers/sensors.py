@@ -1,0 +1,330 @@
+r"""Position and heading sensors: DGPS + gyrocompass (SPEC section 7; seeds 000, 001, 004).
+
+The navigation sensors of the Blue Lady trials (seed001, "Case of study"): the position
+``(x, y)`` is measured by a DGPS receiver, the heading ``psi`` by a gyrocompass, both sampled
+"with sampling time equal 1 (s)" (seed001, text before Table 6). The measurement is
+
+.. math::
+
+    z_k = \begin{bmatrix} p_k + R_2(\psi_k)\,[x_a, y_a]^T \\ \psi_k \end{bmatrix} + v_k,
+    \qquad v_k \sim N(0, \mathrm{diag}(\sigma_p^2, \sigma_p^2, \sigma_\psi^2)),
+
+where ``p = [x, y]`` is the NED position of the centre of gravity, ``R_2(psi)`` the planar
+rotation (body -> NED) and ``[x_a, y_a]`` the antenna position in the body frame (x forward,
+y starboard). The heading is returned wrapped to ``(-pi, pi]`` as a gyrocompass gives it
+(observers must unwrap, i.e. wrap their heading innovations).
+
+Noise defaults
+--------------
+- Position: seed000 eq. 61, ``R_x = R_y = 0.01`` (m^2, sigma 0.1 m), "determined based on the
+  experimental tests done on the training ship Blue Lady" (seed000, text after eq. 62).
+- Heading: seed000 eq. 62, ``R_psi = 0.1`` -- printed without a unit. Read in rad^2 it would
+  be a gyrocompass sigma of 18 deg, which no gyrocompass has (typical 0.1-0.3 deg,
+  ``notes/domain-models.md`` section 5.4) and which would swamp every heading plot of the
+  seed. Tomera states and plots headings in degrees (seed001 Table 6, eq. 57: ``psi_E`` in
+  deg), so the project reads it as ``0.1 deg^2`` (sigma 0.316 deg):
+  :data:`SEED000_HEADING_VARIANCE` ``= 0.1 (pi/180)^2 = 3.046e-5 rad^2``. Pass
+  ``heading_variance=0.1`` for the literal rad^2 reading.
+- ``dgps`` preset: sigma 2 m per axis, the plain DGPS of seed004 ("standard deviation (equal in
+  north and east directions) of order 2 [m]").
+- ``rtk`` preset: sigma 0.02 m, heading sigma 0.2 deg (``notes/domain-models.md`` sections 5.4
+  and 9).
+
+Faults (all off by default): an *outlier* adds a position error of exactly
+``outlier_magnitude`` metres in a uniformly random NED direction (heading untouched), with
+probability ``outlier_probability`` per sample; a *dropout* starts with probability
+``dropout_probability`` at a sample and removes every sample in ``[t_start, t_start +
+dropout_duration)``. Gaussian noise, outliers and dropouts draw from three independent child
+streams of the generator given to :meth:`Sensors.reset`, and every stream draws the same numbers
+at every sample whether or not a fault happens, so switching one fault on never changes the
+noise of the other samples (common random numbers across experiments).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym._config import from_mapping, param
+from shipgym.dynamics import wrap_angle
+
+__all__ = [
+    "SEED000_HEADING_VARIANCE",
+    "SENSOR_PRESETS",
+    "Measurement",
+    "SensorConfig",
+    "Sensors",
+    "sensor_config",
+]
+
+#: seed000 eq. 62 ``R_psi = 0.1`` read as deg^2, in rad^2 (sigma 0.316 deg)
+SEED000_HEADING_VARIANCE = 0.1 * (math.pi / 180.0) ** 2
+
+_EPS_T = 1e-9  # relative tolerance on sample instants (s / period)
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """DGPS + gyrocompass sensor parameters (SPEC section 7).
+
+    Attributes:
+        period: sampling period (s), seed001 "sampling time equal 1 (s)".
+        position_variance: DGPS noise variance per NED axis (m^2), seed000 eq. 61.
+        heading_variance: gyrocompass noise variance (rad^2), seed000 eq. 62 (read as deg^2).
+        antenna_offset: DGPS antenna position ``(x_a, y_a)`` in the body frame (m), x forward,
+            y starboard; the GPS reads ``p + R(psi) [x_a, y_a]``; the heading is unaffected.
+        outlier_probability: probability per sample of a position outlier (-).
+        outlier_magnitude: size of an outlier, a position jump in a random direction (m).
+        dropout_probability: probability per sample that a dropout starts (-).
+        dropout_duration: length of a dropout (s); samples in ``[t_start, t_start + d)`` are
+            missing.
+    """
+
+    period: float = param(1.0, "s", "seed001: 'sampling time equal 1 (s)'")
+    position_variance: float = param(
+        0.01, "m^2", "seed000 eq. 61: R_x = R_y = 0.01 (Blue Lady DGPS, experimental)"
+    )
+    heading_variance: float = param(
+        SEED000_HEADING_VARIANCE,
+        "rad^2",
+        "seed000 eq. 62: R_psi = 0.1, read as deg^2 (sigma 0.316 deg; see module docstring)",
+    )
+    antenna_offset: tuple[float, float] = param(
+        (0.0, 0.0), "m", "assumption: antenna at the CG; body frame (x forward, y starboard)"
+    )
+    outlier_probability: float = param(0.0, "-", "assumption: no outliers by default")
+    outlier_magnitude: float = param(20.0, "m", "assumption: a gross DGPS error of 20 m")
+    dropout_probability: float = param(0.0, "-", "assumption: no dropouts by default")
+    dropout_duration: float = param(10.0, "s", "assumption: a 10 s loss of the DGPS fix")
+
+    def __post_init__(self) -> None:
+        cls = type(self).__name__
+        try:
+            off = tuple(float(x) for x in np.asarray(self.antenna_offset, dtype=float).ravel())
+        except (TypeError, ValueError) as exc:
+            raise ValueError(
+                f"{cls}.antenna_offset must be two numbers (x_a, y_a) in m, "
+                f"got {self.antenna_offset!r}"
+            ) from exc
+        if len(off) != 2:
+            raise ValueError(
+                f"{cls}.antenna_offset must be two numbers (x_a, y_a) in m (body frame), "
+                f"got {self.antenna_offset!r}"
+            )
+        object.__setattr__(self, "antenna_offset", off)
+        for f in dataclasses.fields(self):
+            if f.name == "antenna_offset":
+                vals: tuple[Any, ...] = off
+            else:
+                val = getattr(self, f.name)
+                if isinstance(val, bool) or not isinstance(val, int | float | np.number):
+                    raise ValueError(
+                        f"{cls}.{f.name} must be a number ({f.metadata['unit']}), got {val!r}"
+                    )
+                object.__setattr__(self, f.name, float(val))
+                vals = (float(val),)
+            if not all(math.isfinite(v) for v in vals):
+                raise ValueError(f"{cls}.{f.name} must be finite, got {getattr(self, f.name)!r}")
+        for name in ("period", "dropout_duration"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{cls}.{name} must be > 0 s, got {getattr(self, name)!r}")
+        for name in ("position_variance", "heading_variance", "outlier_magnitude"):
+            if getattr(self, name) < 0:
+                raise ValueError(
+                    f"{cls}.{name} must be >= 0 ({_unit(name)}), got {getattr(self, name)!r}; "
+                    "variances are squared standard deviations"
+                )
+        for name in ("outlier_probability", "dropout_probability"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(
+                    f"{cls}.{name} is a probability per sample and must lie in [0, 1], "
+                    f"got {getattr(self, name)!r}"
+                )
+
+    @classmethod
+    def from_dict(cls, mapping: Mapping[str, Any]) -> SensorConfig:
+        """Build from a mapping; unknown keys raise ``ValueError`` naming the valid ones."""
+        return from_mapping(cls, mapping, where="sensor configuration")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (round-trips through :meth:`from_dict`)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    def replace(self, **changes: Any) -> SensorConfig:
+        """A validated copy with some fields changed (unknown names raise ``ValueError``)."""
+        return from_mapping(type(self), {**self.to_dict(), **changes}, where="sensor overrides")
+
+    @property
+    def covariance(self) -> NDArray[np.float64]:
+        """Measurement noise covariance ``diag(s_p^2, s_p^2, s_psi^2)`` (m^2, m^2, rad^2)."""
+        return np.diag([self.position_variance, self.position_variance, self.heading_variance])
+
+    @property
+    def position_sigma(self) -> float:
+        """Standard deviation of the position noise per axis (m)."""
+        return math.sqrt(self.position_variance)
+
+    @property
+    def heading_sigma(self) -> float:
+        """Standard deviation of the heading noise (rad)."""
+        return math.sqrt(self.heading_variance)
+
+
+def _unit(name: str) -> str:
+    for f in dataclasses.fields(SensorConfig):
+        if f.name == name:
+            return str(f.metadata.get("unit", "?"))
+    return "?"  # pragma: no cover
+
+
+_RTK_HEADING_SIGMA = math.radians(0.2)
+
+#: named sensor presets (overrides of the :class:`SensorConfig` defaults)
+SENSOR_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
+    {
+        # seed000 eqs. 61-62 / seed001 sampling time: the project default
+        "default": MappingProxyType({}),
+        # plain DGPS, seed004: sigma 2 m per axis; gyrocompass as default
+        "dgps": MappingProxyType({"position_variance": 2.0**2}),
+        # RTK GNSS: sigma 0.02 m, heading sigma 0.2 deg (notes/domain-models.md 5.4, 9)
+        "rtk": MappingProxyType(
+            {"position_variance": 0.02**2, "heading_variance": _RTK_HEADING_SIGMA**2}
+        ),
+        # the Blue Lady trials of Tomera (seed000 2014 / seed001): same as default
+        "tomera2014": MappingProxyType({}),
+    }
+)
+
+
+def sensor_config(name: str = "default", **overrides: Any) -> SensorConfig:
+    """A named sensor preset with optional field overrides.
+
+    Args:
+        name: one of :data:`SENSOR_PRESETS` (``default``, ``dgps``, ``rtk``, ``tomera2014``).
+        **overrides: :class:`SensorConfig` fields to change.
+
+    Raises:
+        ValueError: unknown preset name (the message lists the valid ones), unknown field or
+            invalid value.
+    """
+    if name not in SENSOR_PRESETS:
+        raise ValueError(
+            f"unknown sensor preset {name!r}; valid names are: {', '.join(SENSOR_PRESETS)}"
+        )
+    return SensorConfig.from_dict({**SENSOR_PRESETS[name], **overrides})
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """One sensor sample.
+
+    Attributes:
+        t: sample time (s).
+        z: measured NED pose ``[x, y, psi]`` (m, m, rad; heading in ``(-pi, pi]``), or ``None``
+            during a dropout.
+        valid: ``z`` is available.
+        outlier: truth flag: this sample carries an outlier (for tests and diagnostics only;
+            an observer must not use it).
+    """
+
+    t: float
+    z: NDArray[np.float64] | None
+    valid: bool
+    outlier: bool = False
+
+
+class Sensors:
+    """Runtime DGPS + gyrocompass model drawing its noise from a seeded generator.
+
+    Usage::
+
+        sensors = Sensors(sensor_config("dgps"))
+        sensors.reset(np.random.default_rng(7))
+        for t in sensors.sample_times(t_prev, t_now):
+            meas = sensors.measure(t, eta_true_at_t)
+
+    Args:
+        config: the sensor parameters (default: :func:`sensor_config` ``("default")``).
+    """
+
+    def __init__(self, config: SensorConfig | None = None) -> None:
+        if config is None:
+            config = SensorConfig()
+        if not isinstance(config, SensorConfig):
+            raise TypeError(f"config must be a SensorConfig, got {type(config).__name__}")
+        self.config = config
+        self._sig = np.array([config.position_sigma, config.position_sigma, config.heading_sigma])
+        self._rng_noise: np.random.Generator | None = None
+        self._rng_outlier: np.random.Generator | None = None
+        self._rng_dropout: np.random.Generator | None = None
+        self._dropout_until = -math.inf
+
+    def reset(self, rng: np.random.Generator | int) -> None:
+        """Restart the random streams from a generator (or an integer seed).
+
+        A child seed is drawn from ``rng`` (one draw), so the same generator state gives the
+        same measurements; the noise, outlier and dropout streams are spawned from it.
+        """
+        if isinstance(rng, int | np.integer) and not isinstance(rng, bool):
+            rng = np.random.default_rng(int(rng))
+        if not isinstance(rng, np.random.Generator):
+            raise TypeError(
+                f"rng must be a numpy.random.Generator or an int seed, got {type(rng).__name__}"
+            )
+        seq = np.random.SeedSequence(int(rng.integers(2**63)))
+        self._rng_noise, self._rng_outlier, self._rng_dropout = (
+            np.random.default_rng(s) for s in seq.spawn(3)
+        )
+        self._dropout_until = -math.inf
+
+    def sample_times(self, t0: float, t1: float) -> NDArray[np.float64]:
+        """Sample instants ``k * period`` in ``(t0, t1]`` (s), ascending (may be empty)."""
+        p = self.config.period
+        k0 = math.floor(t0 / p + _EPS_T) + 1
+        k1 = math.floor(t1 / p + _EPS_T)
+        return np.arange(k0, k1 + 1, dtype=float) * p if k1 >= k0 else np.empty(0)
+
+    def measure(self, t: float, eta_true: ArrayLike) -> Measurement:
+        """Sample the sensors at time ``t`` (s) for the true pose ``eta_true`` ``[x, y, psi]``.
+
+        Returns:
+            The :class:`Measurement` (``z=None`` during a dropout).
+
+        Raises:
+            RuntimeError: :meth:`reset` was not called.
+            ValueError: ``eta_true`` is not 3 finite values.
+        """
+        if self._rng_noise is None or self._rng_outlier is None or self._rng_dropout is None:
+            raise RuntimeError("Sensors.reset(rng) must be called before measure()")
+        eta = np.asarray(eta_true, dtype=float)
+        if eta.shape != (3,) or not np.all(np.isfinite(eta)):
+            raise ValueError(f"eta_true must be 3 finite values [x, y, psi], got {eta_true!r}")
+        cfg = self.config
+        # every stream draws the same amount at every sample (common random numbers)
+        noise = self._rng_noise.standard_normal(3) * self._sig
+        u_out, ang = self._rng_outlier.random(2)
+        u_drop = self._rng_dropout.random()
+        t = float(t)
+        if t < self._dropout_until - _EPS_T * cfg.period:
+            return Measurement(t, None, False, False)
+        if u_drop < cfg.dropout_probability:
+            self._dropout_until = t + cfg.dropout_duration
+            return Measurement(t, None, False, False)
+        psi = float(eta[2])
+        c, s = math.cos(psi), math.sin(psi)
+        xa, ya = cfg.antenna_offset
+        z = np.array([eta[0] + c * xa - s * ya, eta[1] + s * xa + c * ya, psi]) + noise
+        outlier = bool(u_out < cfg.outlier_probability)
+        if outlier:
+            a = 2.0 * math.pi * ang
+            z[0] += cfg.outlier_magnitude * math.cos(a)
+            z[1] += cfg.outlier_magnitude * math.sin(a)
+        z[2] = wrap_angle(float(z[2]))
+        return Measurement(t, z, True, outlier)

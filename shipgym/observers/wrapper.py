@@ -1,0 +1,112 @@
+"""Observers as a Gymnasium wrapper (SPEC 10): env -> ObserverWrapper -> controller wrapper.
+
+Not an ``ObservationWrapper``: the model-based observers need the applied thrust, which the
+environment reports with every sensor sample (``info["measurements"][i]["tau"]``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from shipgym.dynamics import wrap_angle
+
+__all__ = ["ObserverWrapper"]
+
+
+class ObserverWrapper(
+    gym.Wrapper[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]],
+    gym.utils.RecordConstructorArgs,
+):
+    """Feeds the sensor samples and applied thrust to an observer; exposes its estimate.
+
+    After every ``reset``/``step`` the observation is rebuilt from the estimate (same layout
+    as the environment's), ``info["nav_eta"]``/``info["nav_nu"]`` become the estimate (what a
+    controller wrapper stacked above uses) and the info gains the estimation errors against
+    the truth: ``est_error_eta`` (m, m, rad; heading wrapped), ``est_error_nu`` (m/s, m/s,
+    rad/s), ``observer_nis`` and ``observer_rejected`` (outlier gate) of the last update, and
+    at the end of an episode ``estimation_rmse`` (x, y, psi, u, v, r; psi and r in degrees
+    and deg/s).
+
+    Args:
+        env: a ``shipgym/BlueLady*`` environment with sensors.
+        observer: an observer name (``shipgym.observers.OBSERVERS``: ``dkf``, ``kbf``, ``ekf``,
+            ``tomera-dkf``, ...).
+
+    Note:
+        Records its constructor arguments, so ``gym.make(env.spec)`` rebuilds the stack.
+    """
+
+    def __init__(self, env: gym.Env[Any, Any], observer: str = "kbf") -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, observer=observer)
+        gym.Wrapper.__init__(self, env)
+        from shipgym.observers import make_observer
+
+        self.observer_name = observer
+        self.observer = make_observer(observer)
+        base = env.unwrapped
+        if getattr(base, "sensors", None) is None:
+            raise ValueError(
+                "an observer needs sensors: create the environment with sensors='default' "
+                "(or another preset), not sensors=None"
+            )
+        self._sq = np.zeros(6)
+        self._n = 0
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        obs, info = self.env.reset(seed=seed, options=options)
+        meas = [m for m in info["measurements"] if m["z"] is not None]
+        if not meas:
+            raise RuntimeError("no valid sensor sample at reset: cannot initialise the observer")
+        first = meas[0]
+        self.observer.reset(first["t"], first["z"])
+        self._sq[:] = 0.0
+        self._n = 0
+        return self._apply(obs, info, None)
+
+    def step(
+        self, action: NDArray[np.float32]
+    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        last = None
+        for m in info["measurements"]:
+            last = self.observer.step(m["t"], m["z"], m["tau"])
+        if not info["measurements"] or info["measurements"][-1]["t"] < info["t"]:
+            tau = info["measurements"][-1]["tau"] if info["measurements"] else None
+            self.observer.step(info["t"], None, tau)  # coast to now
+        obs, info = self._apply(obs, info, last)
+        if terminated or truncated:
+            info["estimation_rmse"] = self.estimation_rmse()
+        return obs, reward, terminated, truncated, info
+
+    def estimation_rmse(self) -> dict[str, float]:
+        """RMSE of the estimate over the control steps so far (m, m, deg, m/s, m/s, deg/s)."""
+        r = np.sqrt(self._sq / max(self._n, 1))
+        r[2] = math.degrees(r[2])
+        r[5] = math.degrees(r[5])
+        return dict(zip(("x", "y", "psi", "u", "v", "r"), r.tolist(), strict=True))
+
+    def _apply(
+        self, obs: NDArray[np.float32], info: dict[str, Any], step_info: Any
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        est = self.observer.estimate()
+        eta, nu = info["eta"], info["nu"]
+        e_eta = np.array([est.eta[0] - eta[0], est.eta[1] - eta[1], wrap_angle(est.eta[2] - eta[2])])
+        e_nu = est.nu - nu
+        self._sq += np.concatenate([e_eta, e_nu]) ** 2
+        self._n += 1
+        info["nav_eta"] = np.array(est.eta)
+        info["nav_nu"] = np.array(est.nu)
+        info["est_error_eta"] = e_eta
+        info["est_error_nu"] = e_nu
+        info["observer_nis"] = None if step_info is None else step_info.nis
+        info["observer_rejected"] = False if step_info is None else bool(step_info.rejected)
+        base = self.env.unwrapped
+        obs = base.navigation_observation(est.eta, est.nu, base.reference, base.prev_action)  # type: ignore[attr-defined]
+        return obs, info
