@@ -27,8 +27,9 @@ $(RL_STAMP): $(STAMP)
 
 rl: $(RL_STAMP)
 
+# The harbour manoeuvre of Tomera (2014) in the lake-trial wind, PID + Kalman-Bucy filter.
 demo: $(STAMP)
-	$(PY) -m shipgym.cli demo
+	$(PY) -m shipgym.cli run harbour --wind 3@300 --observer kbf --json runs/demo/harbour.json
 
 # The tests include stable-baselines3's check_env, so they need the RL extra.
 test: $(RL_STAMP)

@@ -56,6 +56,7 @@ def run_episode(
     scenario: str,
     *,
     controller: str = "pid",
+    observer: str | None = None,
     seed: int = 0,
     wind: tuple[float, float] | None = (3.0, math.radians(300.0)),
     plant: str = "default",
@@ -70,7 +71,12 @@ def run_episode(
 
     wind_cfg = None if wind is None else WindConfig(speed=wind[0], direction_from=wind[1])
     env = shipgym.make(
-        scenario, controller=controller, wind=wind_cfg, plant=plant, **(env_kwargs or {})
+        scenario,
+        observer=observer,
+        controller=controller,
+        wind=wind_cfg,
+        plant=plant,
+        **(env_kwargs or {}),
     )
     limit = env.spec.max_episode_steps if env.spec is not None else None
     bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
@@ -94,6 +100,7 @@ def run_episode(
         "scenario": scenario,
         "env_id": env.spec.id if env.spec is not None else None,
         "controller": controller,
+        "observer": observer or "truth",
         "seed": seed,
         "plant": plant,
         "wind": None if wind is None else {"speed": wind[0], "from_deg": math.degrees(wind[1])},
@@ -112,6 +119,7 @@ def run_episode(
         "thrust_mean_abs": metrics["thrust_mean_abs"],
         "thrust_total_variation": metrics["thrust_total_variation"],
         "saturated_fraction": metrics["saturated_fraction"],
+        "rmse": info.get("estimation_rmse"),
         "wall_time_s": wall,
     }
 
@@ -129,8 +137,8 @@ def _fmt(x: Any) -> str:
 def _print_table(res: dict[str, Any]) -> None:
     meas = res.get("measured") or {}
     print(
-        f"{res['scenario']} | controller {res['controller']} | seed {res['seed']} | "
-        f"plant {res['plant']} | wind {res['wind']}"
+        f"{res['scenario']} | controller {res['controller']} | observer {res['observer']} | "
+        f"seed {res['seed']} | plant {res['plant']} | wind {res['wind']}"
     )
     rows = [
         ("completed", res["completed"], ""),
@@ -146,6 +154,13 @@ def _print_table(res: dict[str, Any]) -> None:
     print(f"  leg times (s)    {[round(t, 1) for t in res['leg_times']]}")
     print(f"  mean |thrust| (N) {[round(t, 1) for t in res['thrust_mean_abs']]}")
     print(f"  time saturated   {[round(t, 3) for t in res['saturated_fraction']]} (fraction)")
+    if res.get("rmse"):
+        r = res["rmse"]
+        print(
+            "  estimation RMSE  "
+            f"x {r['x']:.3f} m, y {r['y']:.3f} m, psi {r['psi']:.3f} deg, "
+            f"u {r['u']:.4f} m/s, v {r['v']:.4f} m/s, r {r['r']:.4f} deg/s"
+        )
     print(f"  wall time        {res['wall_time_s']:.2f} s")
 
 
@@ -157,11 +172,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
     resolve_env_id(args.scenario)  # validate names before any work
     controller_spec(args.controller)
     plant_model(args.plant)
+    observer = None if args.observer == "truth" else args.observer
+    if observer is not None:
+        from shipgym.observers import make_observer
+
+        make_observer(observer)
     if args.json is not None:
         _check_writable(args.json)
     res = run_episode(
         args.scenario,
         controller=args.controller,
+        observer=observer,
         seed=args.seed,
         wind=args.wind,
         plant=args.plant,
@@ -174,10 +195,51 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from shipgym.bench import bench_observers, observer_table
+    from shipgym.observers import make_observer
+
+    for name in args.observers:
+        make_observer(name)  # unknown names fail before any work
+    for path in (args.json, args.markdown):
+        if path is not None:
+            _check_writable(path)
+    t0 = time.perf_counter()
+    rows = bench_observers(
+        args.observers, seeds=args.seeds, wind=args.wind, workers=args.workers,
+        progress=not args.no_progress,
+    )  # fmt: skip
+    wall = time.perf_counter() - t0
+    table = observer_table(rows)
+    speed, beta = args.wind
+    title = (
+        f"Observers on the harbour manoeuvre (pid controller, wind {speed:g} m/s from "
+        f"{math.degrees(beta):g} deg, seeds 0-{args.seeds - 1}); indices from the measured "
+        "pose as in seed001 Table 6, J_c truth from the true pose"
+    )
+    print(title)
+    print(table)
+    print(f"{len(rows)} runs in {wall:.1f} s")
+    if args.json is not None:
+        args.json.write_text(json.dumps({"title": title, "rows": rows}, indent=2))
+        print(f"rows written to {args.json}")
+    if args.markdown is not None:
+        args.markdown.write_text(f"{title}\n\n{table}\n")
+        print(f"table written to {args.markdown}")
+    return 0
+
+
 def _check_writable(path: Path) -> None:
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise ValueError(f"cannot write {path}: folder {parent} does not exist")
+    """Create the parent folder and check that ``path`` can be written, before any work."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        existed = path.exists()
+        with path.open("a"):
+            pass
+        if not existed:
+            path.unlink()
+    except OSError as exc:
+        raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from exc
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -238,6 +300,9 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser("run", help="run a closed-loop scenario; prints the metrics table")
     p.add_argument("scenario", help="harbour, station-keeping, tracking, or an env id")
     p.add_argument("--controller", default="pid", help="pid (default) or pid-seed")
+    p.add_argument(
+        "--observer", default="truth", help="truth (default), dkf, kbf, ekf, tomera-dkf/kbf/ekf"
+    )
     p.add_argument("--seed", type=int, default=0, help="episode seed (0)")
     p.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
                    metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip
@@ -245,6 +310,18 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--json", type=Path, default=None, metavar="PATH", help="write results")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_run)
+    p = sub.add_parser("bench", help="benchmarks: 'bench observers'")
+    bsub = p.add_subparsers(dest="what", required=True)
+    b = bsub.add_parser("observers", help="seed001 Table-6-style comparison of observers")
+    b.add_argument("--observers", nargs="+", default=["dkf", "kbf", "ekf"], metavar="NAME")
+    b.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per observer (10)")
+    b.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
+                   metavar="SPEED@FROM_DEG", help="mean wind (3@300)")  # fmt: skip
+    b.add_argument("--workers", type=int, default=None, help="processes (default: CPUs)")
+    b.add_argument("--json", type=Path, default=None, metavar="PATH")
+    b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    b.add_argument("--no-progress", action="store_true")
+    b.set_defaults(func=_cmd_bench)
     p = sub.add_parser("demo", help="open-loop turn in gusty wind; prints a summary")
     p.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
                    metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip

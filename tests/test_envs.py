@@ -199,4 +199,6 @@ def test_cli_run_writes_json_and_rejects_mistakes(tmp_path, capsys):
         main(["run", "harbour", "--wind", "3 from 300"])
     assert exc.value.code == 2
     assert "SPEED@FROM_DEG" in capsys.readouterr().err
-    assert main(["run", "harbour", "--json", str(tmp_path / "no" / "r.json")]) == 2
+    (tmp_path / "afile").write_text("")
+    assert main(["run", "harbour", "--json", str(tmp_path / "afile" / "r.json")]) == 2
+    assert "cannot write" in capsys.readouterr().err

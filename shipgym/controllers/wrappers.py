@@ -10,12 +10,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from shipgym.dynamics import wrap_angle
 from shipgym.guidance import to_r_frame
@@ -23,27 +23,68 @@ from shipgym.guidance import to_r_frame
 from .allocation import Allocation, allocate, allocate_inverse, command_to_action
 from .pid import MultivariablePID
 
-__all__ = ["CONTROLLERS", "ControllerSpec", "DPControllerWrapper", "controller_spec"]
+__all__ = [
+    "CONTROLLERS",
+    "ControllerSpec",
+    "DPController",
+    "DPControllerWrapper",
+    "controller_spec",
+    "register_controller",
+]
+
+
+class DPController(Protocol):
+    """What the wrapper needs of a DP control law (r-frame errors in, body tau out)."""
+
+    def __call__(
+        self,
+        eta_r: ArrayLike,
+        nu: ArrayLike,
+        eta_d_r: ArrayLike,
+        eta_dot_d_r: ArrayLike | None = None,
+        eta_ddot_d_r: ArrayLike | None = None,
+        *,
+        saturated: ArrayLike | None = None,
+    ) -> NDArray[np.float64]: ...
+
+    def reset(self) -> None: ...
+
+    def change_frame(self, dpsi: float) -> None: ...
 
 
 @dataclass(frozen=True)
 class ControllerSpec:
-    """A named controller configuration: PID gain preset and allocation method."""
+    """A named controller: a factory ``f(dt) -> DPController`` and an allocation method."""
 
-    gains: str
+    factory: Callable[[float], DPController]
     allocation: str
     description: str
 
 
-#: Controllers selectable by name (``shipgym run --controller NAME``).
-CONTROLLERS: Mapping[str, ControllerSpec] = {
+#: Controllers selectable by name (``shipgym run --controller NAME``); extend with
+#: :func:`register_controller`.
+CONTROLLERS: dict[str, ControllerSpec] = {
     "pid": ControllerSpec(
-        "tuned", "constrained", "seed001 eq. 23 PID, tuned gains, constrained allocation"
+        lambda dt: MultivariablePID("tuned", dt=dt),
+        "constrained",
+        "seed001 eq. 23 PID, tuned gains, constrained allocation",
     ),
     "pid-seed": ControllerSpec(
-        "seed", "inverse", "seed001 eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1"
+        lambda dt: MultivariablePID("seed", dt=dt),
+        "inverse",
+        "seed001 eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1",
     ),
 }
+
+
+def register_controller(name: str, spec: ControllerSpec) -> None:
+    """Add a named controller (e.g. ``"lq"``); names are unique."""
+    if name in CONTROLLERS:
+        raise ValueError(f"controller {name!r} is already registered")
+    if spec.allocation not in _ALLOCATORS:
+        raise ValueError(f"unknown allocation {spec.allocation!r}; choose {list(_ALLOCATORS)}")
+    CONTROLLERS[name] = spec
+
 
 _ALLOCATORS: dict[str, Callable[..., Allocation]] = {
     "constrained": allocate,
@@ -100,7 +141,7 @@ class DPControllerWrapper(
         self.residual_scale = float(residual_scale)
         base = env.unwrapped
         self.thrusters = base.thrusters  # type: ignore[attr-defined]
-        self.controller = MultivariablePID(spec.gains, dt=base.control_period)  # type: ignore[attr-defined]
+        self.controller = spec.factory(base.control_period)  # type: ignore[attr-defined]
         self._allocate = _ALLOCATORS[spec.allocation]
         self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
         self._info: dict[str, Any] = {}

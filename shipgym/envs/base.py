@@ -27,7 +27,7 @@ from shipgym.dynamics import BLUE_LADY_THRUSTERS, command_to_tau, wrap_angle
 from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
 from shipgym.guidance import plan as named_plan
 from shipgym.metrics import ManoeuvreMetrics
-from shipgym.observers.sensors import Sensors, SensorConfig, sensor_config
+from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
 
 from .physics import VesselPhysics
 
@@ -159,7 +159,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | ``plan`` | ``"tomera2014"`` | plan name or :class:`ManoeuvrePlan` |
     | ``plant`` | ``"default"`` | plant variant (``"default"``, ``"seed-linear"``) |
     | ``wind`` | ``"3@300"`` | ``None``, ``WindConfig``, ``(speed, from_deg)`` or ``"SPEED@FROM"`` |
-    | ``sensors`` | ``"default"`` | sensor preset (``default``, ``dgps``, ``rtk``), ``SensorConfig`` or ``None`` |
+    | ``sensors`` | ``"default"`` | preset (``default``, ``dgps``, ``rtk``), ``SensorConfig``, ``None`` |
     | ``scene`` | ``"harbour"`` | ``"harbour"`` or ``"open-water"`` |
     | ``start_pose`` | ``(0, 0, 0)`` | NED start pose (m, m, rad); the harbour turns with it |
     | ``start_noise`` | ``(0, 0, 0)`` | uniform start perturbation half-widths (m, m, rad) |

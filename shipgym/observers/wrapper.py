@@ -97,7 +97,9 @@ class ObserverWrapper(
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         est = self.observer.estimate()
         eta, nu = info["eta"], info["nu"]
-        e_eta = np.array([est.eta[0] - eta[0], est.eta[1] - eta[1], wrap_angle(est.eta[2] - eta[2])])
+        e_eta = np.array(
+            [est.eta[0] - eta[0], est.eta[1] - eta[1], wrap_angle(est.eta[2] - eta[2])]
+        )
         e_nu = est.nu - nu
         self._sq += np.concatenate([e_eta, e_nu]) ** 2
         self._n += 1
