@@ -159,7 +159,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | ``plan`` | ``"tomera2014"`` | plan name or :class:`ManoeuvrePlan` |
     | ``plant`` | ``"default"`` | plant variant (``"default"``, ``"seed-linear"``) |
     | ``wind`` | ``"3@300"`` | ``None``, ``WindConfig``, ``(speed, from_deg)`` or ``"SPEED@FROM"`` |
-    | ``sensors`` | ``"default"`` | preset (``default``, ``dgps``, ``rtk``), ``SensorConfig``, ``None`` |
+    | ``sensors`` | ``"default"`` | preset (``default``, ``dgps``, ``rtk``), config or ``None`` |
     | ``scene`` | ``"harbour"`` | ``"harbour"`` or ``"open-water"`` |
     | ``start_pose`` | ``(0, 0, 0)`` | NED start pose (m, m, rad); the harbour turns with it |
     | ``start_noise`` | ``(0, 0, 0)`` | uniform start perturbation half-widths (m, m, rad) |
