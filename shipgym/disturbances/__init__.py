@@ -1,11 +1,29 @@
-"""Environmental disturbances: wind (and later waves and current), pure NumPy (SPEC section 6).
+"""Environmental disturbances: wind, waves and current, pure NumPy/SciPy (SPEC section 6).
 
-Every stochastic part draws from a generator handed in by the environment, so the same seed
-gives the same run.
+Every stochastic part draws from a generator handed in by the environment at ``reset(rng)``,
+so the same seed gives the same run.
 """
 
+from .current import Current, CurrentConfig, current_body_velocity
+from .spectra import (
+    dnv_gamma,
+    fit_shaping_filter_lambda,
+    froude_factor,
+    froude_scale,
+    gauss_markov_psd,
+    harris_wind_spectrum,
+    jonswap,
+    norsok_peak_period,
+    npd_wind_spectrum,
+    pierson_moskowitz,
+    significant_wave_height,
+    wave_spectrum,
+    wind_gust_spectrum,
+)
+from .waves import WaveConfig, Waves, al_takie_hf_polynomial, drift_coefficients
 from .wind import (
     BLENDERMANN,
+    GUST_SPECTRA,
     BlendermannCoefficients,
     Wind,
     WindConfig,
@@ -18,12 +36,33 @@ from .wind import (
 
 __all__ = [
     "BLENDERMANN",
+    "GUST_SPECTRA",
     "BlendermannCoefficients",
+    "Current",
+    "CurrentConfig",
+    "WaveConfig",
+    "Waves",
     "Wind",
     "WindConfig",
     "WindLoad",
+    "al_takie_hf_polynomial",
     "blendermann",
     "blendermann_coefficients",
+    "current_body_velocity",
+    "dnv_gamma",
+    "drift_coefficients",
+    "fit_shaping_filter_lambda",
+    "froude_factor",
+    "froude_scale",
+    "gauss_markov_psd",
+    "harris_wind_spectrum",
+    "jonswap",
+    "norsok_peak_period",
+    "npd_wind_spectrum",
+    "pierson_moskowitz",
     "relative_wind",
+    "significant_wave_height",
+    "wave_spectrum",
+    "wind_gust_spectrum",
     "wind_load",
 ]

@@ -37,11 +37,15 @@ evaluated either with the :mod:`math` module on plain floats (the physics hot pa
 
 Gusts (notes 1.7, default "lake" model, an assumption of the notes): the speed and the
 direction are each a mean plus a first-order Gauss-Markov (Ornstein-Uhlenbeck) process, see
-:class:`WindConfig` and :class:`Wind`.
+:class:`WindConfig` and :class:`Wind`. Options (SPEC section 6): a speed gust synthesised from
+the NPD / ISO 19901-1 or Harris spectrum (:mod:`shipgym.disturbances.spectra`) by harmonic
+superposition, optionally Froude-scaled from full scale (``spectrum_scale``); the direction gust
+stays Gauss-Markov.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from collections.abc import Mapping
@@ -54,6 +58,8 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import from_mapping, param, require_finite, require_positive
 from shipgym.dynamics.params import BLUE_LADY_WINDAGE, WindageParameters
 
+from .spectra import harmonic_components, harmonic_sums, wind_gust_spectrum
+
 __all__ = [
     "BlendermannCoefficients",
     "BLENDERMANN",
@@ -64,7 +70,11 @@ __all__ = [
     "WindLoad",
     "WindConfig",
     "Wind",
+    "GUST_SPECTRA",
 ]
+
+#: Valid ``WindConfig.gust_spectrum`` values.
+GUST_SPECTRA = ("gauss-markov", "npd", "harris")
 
 _PI = math.pi
 _HALF_PI = 0.5 * math.pi
@@ -412,12 +422,19 @@ _NOTES17 = "notes 1.7 default lake gust model [assumption]"
 
 @dataclass(frozen=True)
 class WindConfig:
-    """Mean wind plus first-order Gauss-Markov gusts in speed and direction (notes 1.7).
+    """Mean wind plus gusts in speed and direction (notes 1.7).
 
     ``V_w(t) = speed + g_V(t)``, ``beta_w(t) = direction_from + g_beta(t)``, with ``g_V`` and
     ``g_beta`` independent stationary Ornstein-Uhlenbeck processes of standard deviations
     ``gust_std``, ``direction_std`` and time constants ``gust_time_constant``,
     ``direction_time_constant``. Degrees only at the edges: use :meth:`from_speed_dir`.
+
+    With ``gust_spectrum = "npd"`` or ``"harris"`` the speed gust ``g_V`` is instead a sum of
+    ``gust_components`` harmonics on logarithmic bins over ``[gust_f_min, gust_f_max]`` with
+    random phases and random frequencies within the bins (notes 1.7 (a)); the spectrum is
+    evaluated at full scale for ``U10 = speed sqrt(spectrum_scale)`` and mapped to the simulated
+    scale (:func:`~shipgym.disturbances.spectra.wind_gust_spectrum`). ``gust_time_constant`` is
+    then unused and ``gust_std`` (when given) rescales the spectrum to that standard deviation.
 
     Attributes:
         speed: Mean wind speed (m/s, >= 0), real wind at the model (lake: 0-5 m/s).
@@ -430,6 +447,15 @@ class WindConfig:
         sample_period: Grid on which gust samples are drawn (s); values in between are
             linearly interpolated in time.
         coefficients: Name of the Blendermann row in :data:`BLENDERMANN`.
+        gust_spectrum: ``"gauss-markov"`` (default), ``"npd"`` or ``"harris"``.
+        spectrum_scale: Froude scale ``lambda`` between the spectrum (full scale, 10 m) and the
+            simulation (1: real wind; 24: a full-scale offshore wind on the 1:24 model).
+        gust_components: Number of harmonics of a spectral gust (1-5000).
+        gust_f_min: Lowest gust frequency (Hz, simulated time); ``None``: 1/3600 Hz full
+            scale (the 1-hour mean of the NPD spectrum) for ``"npd"``, 0.01 Hz full scale (the
+            validity limit of Harris, notes 1.7) for ``"harris"``, times ``sqrt(lambda)``.
+        gust_f_max: Highest gust frequency (Hz, simulated time); ``None``: the smaller of
+            1 Hz full scale (times ``sqrt(lambda)``) and ``0.25 / sample_period``.
     """
 
     speed: float = param(
@@ -444,6 +470,11 @@ class WindConfig:
     direction_time_constant: float = param(20.0, "s", _NOTES17)
     sample_period: float = param(0.1, "s", "gust sample grid, linear interpolation [assumption]")
     coefficients: str = param("tanker-loaded", "-", "notes 1.3 recommended row (SPEC section 6)")
+    gust_spectrum: str = param("gauss-markov", "-", "notes 1.7 / SPEC 6: GM default; npd, harris")
+    spectrum_scale: float = param(1.0, "1", "Froude scale of the gust spectrum (notes 1.7)")
+    gust_components: int = param(200, "-", "harmonics of a spectral gust [assumption]")
+    gust_f_min: float | None = param(None, "Hz", "None: 1/3600 Hz (npd), 0.01 Hz (harris) FS")
+    gust_f_max: float | None = param(None, "Hz", "None: min(1 Hz FS, 0.25/sample_period)")
 
     def __post_init__(self) -> None:
         _require_real(
@@ -473,11 +504,93 @@ class WindConfig:
                 f"WindConfig.coefficients: unknown Blendermann vessel type "
                 f"{self.coefficients!r}; valid names are: {', '.join(sorted(BLENDERMANN))}"
             )
+        if self.gust_spectrum not in GUST_SPECTRA:
+            raise ValueError(
+                f"WindConfig.gust_spectrum must be one of {', '.join(GUST_SPECTRA)}, "
+                f"got {self.gust_spectrum!r}"
+            )
+        _require_real(self, "spectrum_scale")
+        require_positive(self, "spectrum_scale")
+        n = self.gust_components
+        if not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= 5000:
+            raise ValueError(f"WindConfig.gust_components must be an int in [1, 5000], got {n!r}")
+        for name in ("gust_f_min", "gust_f_max"):
+            if getattr(self, name) is not None:
+                _require_real(self, name)
+                if not getattr(self, name) > 0:
+                    raise ValueError(
+                        f"WindConfig.{name} must be > 0 Hz or None, got {getattr(self, name)!r}"
+                    )
+        lo, hi = self.gust_band
+        if not lo < hi:
+            raise ValueError(
+                f"WindConfig: gust_f_min must be < gust_f_max, got [{lo!r}, {hi!r}] Hz"
+            )
+        nyquist = 0.5 / self.sample_period
+        if self.gust_f_max is not None and self.gust_f_max > nyquist:
+            raise ValueError(
+                f"WindConfig.gust_f_max ({self.gust_f_max!r} Hz) must be <= the Nyquist "
+                f"frequency 0.5 / sample_period = {nyquist:.4g} Hz"
+            )
+
+    @property
+    def is_spectral(self) -> bool:
+        """True for an NPD or Harris speed gust (harmonic superposition)."""
+        return self.gust_spectrum != "gauss-markov"
+
+    @property
+    def gust_band(self) -> tuple[float, float]:
+        """``(f_min, f_max)`` of a spectral gust in Hz of simulated time (see the attributes)."""
+        sq = math.sqrt(float(self.spectrum_scale))
+        if self.gust_f_min is not None:
+            lo = float(self.gust_f_min)
+        else:
+            lo = (0.01 if self.gust_spectrum == "harris" else 1.0 / 3600.0) * sq
+        if self.gust_f_max is not None:
+            hi = float(self.gust_f_max)
+        else:
+            hi = min(1.0 * sq, 0.25 / float(self.sample_period))
+        return lo, hi
+
+    def gust_psd(self, f: ArrayLike) -> NDArray[np.float64]:
+        """One-sided PSD of the speed gust at frequencies ``f`` (Hz), (m/s)^2/Hz.
+
+        For ``"gauss-markov"`` the Ornstein-Uhlenbeck PSD ``4 sigma^2 T / (1 + (2 pi f T)^2)``;
+        for a spectral gust the (scaled) target spectrum inside ``gust_band`` and 0 outside.
+        """
+        ff = np.asarray(f, dtype=float)
+        if not self.is_spectral:
+            sig, T = self.gust_sigma, float(self.gust_time_constant)
+            return 4.0 * sig * sig * T / (1.0 + (2.0 * math.pi * ff * T) ** 2)
+        lo, hi = self.gust_band
+        s = wind_gust_spectrum(
+            self.gust_spectrum, ff, float(self.speed), float(self.spectrum_scale)
+        )
+        if self.gust_std is not None:
+            var = self._band_variance
+            s = s * (float(self.gust_std) ** 2 / var if var > 0 else 0.0)
+        return np.where((ff >= lo) & (ff <= hi), s, 0.0)
+
+    @functools.cached_property
+    def _band_variance(self) -> float:
+        """Variance of the unscaled spectral gust over ``gust_band`` ((m/s)^2, quadrature)."""
+        lo, hi = self.gust_band
+        f = np.geomspace(lo, hi, 4001)
+        s = wind_gust_spectrum(self.gust_spectrum, f, float(self.speed), float(self.spectrum_scale))
+        return float(np.trapezoid(s * f, np.log(f)))
 
     @property
     def gust_sigma(self) -> float:
-        """Effective speed-gust standard deviation (m/s): ``gust_std`` or ``0.15 * speed``."""
-        return 0.15 * float(self.speed) if self.gust_std is None else float(self.gust_std)
+        """Effective speed-gust standard deviation (m/s).
+
+        ``gust_std`` when given; otherwise ``0.15 * speed`` for Gauss-Markov gusts and the
+        spectrum's standard deviation over ``gust_band`` for NPD / Harris gusts.
+        """
+        if self.gust_std is not None:
+            return float(self.gust_std)
+        if self.is_spectral:
+            return math.sqrt(self._band_variance)
+        return 0.15 * float(self.speed)
 
     @property
     def is_constant(self) -> bool:
@@ -538,6 +651,11 @@ class Wind:
     bias the statistics in practice. The direction is *not* wrapped: it stays continuous around
     ``direction_from`` so that it never jumps.
 
+    A spectral speed gust (``gust_spectrum`` ``"npd"`` / ``"harris"``) is evaluated on the same
+    grid as ``sum_j a_j cos(2 pi f_j t_k + phi_j)`` (components drawn at :meth:`reset`, chunks
+    computed with :func:`~shipgym.disturbances.spectra.harmonic_sums`), so :meth:`at` costs the
+    same; the direction gust stays Gauss-Markov.
+
     Args:
         config: Mean wind and gust parameters (default: calm, constant).
         windage: Projected areas and air density of the vessel.
@@ -573,6 +691,8 @@ class Wind:
         self._const: tuple[float, float] | None = (
             (self._mean_v, self._mean_b) if cfg.is_constant else None
         )
+        self._spectral = cfg.is_spectral and cfg.gust_sigma > 0.0
+        self._gw = self._ga = self._gph = np.zeros(0)
         self._clear()
         self._rng: np.random.Generator | None = None
 
@@ -622,12 +742,22 @@ class Wind:
         if self._const is None:
             z = child.standard_normal(2)
             self._state = (self._sigma[0] * float(z[0]), self._sigma[1] * float(z[1]))
+            if self._spectral:
+                cfg = self.config
+                lo, hi = cfg.gust_band
+                f, a, ph = harmonic_components(
+                    cfg.gust_psd, lo, hi, int(cfg.gust_components), child, log=True
+                )
+                self._gw, self._ga, self._gph = 2.0 * math.pi * f, a, ph
 
     def _extend_to(self, j: int) -> None:
         """Generate chunks in time order until chunk ``j`` exists."""
         if self._rng is None:
             raise RuntimeError("call Wind.reset(rng) before querying a gusty wind")
         rng = self._rng
+        if self._spectral:
+            self._extend_spectral(j, rng)
+            return
         while len(self._chunks) <= j:
             w = rng.standard_normal((2, _CHUNK)).tolist()
             rows = []
@@ -644,6 +774,21 @@ class Wind:
                 new_state.append(x)
             self._state = (new_state[0], new_state[1])
             self._chunks.append(np.array(rows, dtype=float))
+
+    def _extend_spectral(self, j: int, rng: np.random.Generator) -> None:
+        """Chunks of a spectral speed gust (harmonic sum) and a Gauss-Markov direction gust."""
+        a, b, m = self._a[1], self._b[1], self._mean_b
+        while len(self._chunks) <= j:
+            x = self._state[1]
+            out = [m + x]
+            app = out.append
+            for e in rng.standard_normal(_CHUNK).tolist():
+                x = a * x + b * e
+                app(m + x)
+            self._state = (0.0, x)
+            t0 = len(self._chunks) * _CHUNK * self._dt
+            gust = harmonic_sums(t0, self._dt, _CHUNK + 1, self._gw, self._gph, self._ga).real
+            self._chunks.append(np.array([self._mean_v + gust, out], dtype=float))
 
     def _select(self, j: int) -> None:
         lists = self._cache.get(j)

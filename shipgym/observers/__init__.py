@@ -27,9 +27,10 @@ __all__ = [
 
 def observer_names() -> list[str]:
     """Names accepted by :func:`make_observer`."""
-    from .registry import OBSERVERS
+    from .base import OBSERVERS, _load_builtins
 
-    return list(OBSERVERS)
+    _load_builtins()
+    return sorted(OBSERVERS)
 
 
 def make_observer(name: str, **overrides: Any) -> Any:
@@ -38,6 +39,6 @@ def make_observer(name: str, **overrides: Any) -> Any:
     Raises:
         ValueError: unknown name (the message lists the valid ones).
     """
-    from .registry import make_observer as _make
+    from .base import make_observer as _make
 
     return _make(name, **overrides)

@@ -1,0 +1,648 @@
+"""Learned controllers: stable-baselines3 policies saved as shipgym models (SPEC section 9).
+
+A *shipgym model* is the zip archive that stable-baselines3's ``model.save`` writes, with one
+extra member, ``shipgym.json``: the metadata needed to use the policy as a controller without
+guessing (:class:`ModelMetadata`): algorithm, shipgym version, training env id and kwargs,
+observer, residual flag, controller and residual scale, the observation-normalisation
+statistics of ``VecNormalize`` (as plain numbers), the policy architecture as plain data, and
+the training command and seed.
+
+Loading (:func:`read_metadata`, :func:`load_policy`) first checks ``shipgym.json`` and refuses
+anything else with a clear error, *before* stable-baselines3 or torch touch the file.
+:func:`load_policy` never unpickles: it rebuilds the policy network from the metadata and loads
+``policy.pth`` with ``torch.load(weights_only=True)``. Resuming training
+(:func:`shipgym.rl.train.train` with ``resume=``) does use ``stable_baselines3`` ``load``, which
+unpickles parts of the archive.
+
+.. warning::
+    stable-baselines3 zips contain pickled Python objects. Only load model files you made or
+    trust: a crafted file can execute code when it is unpickled (resuming training from it).
+
+Using a model as a controller:
+
+- :class:`LearnedControllerWrapper` puts the policy on top of an environment stack that
+  matches the model (observer wrapper; for residual models the
+  :class:`~shipgym.controllers.wrappers.DPControllerWrapper` it was trained on). Like
+  ``DPControllerWrapper`` its own action is a residual, zero by default, so
+  ``env.step(np.zeros(3))`` runs the learned controller alone.
+- :func:`make_learned_env` builds that whole stack from the metadata.
+- :func:`parse_learned_controller` reads the controller names of the command line:
+  ``ppo`` (the shipped baseline), ``ppo:PATH``, ``sac:PATH``.
+
+Torch and stable-baselines3 are imported only when a policy is loaded (``pip install
+shipgym[rl]``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import json
+import math
+import zipfile
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "ALGORITHMS",
+    "BASELINE_MODELS",
+    "METADATA_NAME",
+    "MODEL_FORMAT",
+    "LearnedControllerWrapper",
+    "LearnedPolicy",
+    "ModelMetadata",
+    "ObsNormalization",
+    "baseline_model_path",
+    "is_learned_controller",
+    "load_policy",
+    "make_learned_env",
+    "parse_learned_controller",
+    "read_metadata",
+    "write_metadata",
+]
+
+#: value of ``format`` in ``shipgym.json``
+MODEL_FORMAT = "shipgym-model"
+#: version of the metadata layout (bumped on incompatible changes)
+MODEL_FORMAT_VERSION = 1
+#: name of the metadata member inside the model zip
+METADATA_NAME = "shipgym.json"
+#: algorithms a shipgym model may hold (lower case, as on the command line)
+ALGORITHMS = ("ppo", "sac")
+#: shipped baseline per algorithm (file names in ``shipgym/assets/models``)
+BASELINE_MODELS: dict[str, str] = {"ppo": "ppo_residual_pid_kbf.zip"}
+
+#: activation functions allowed in ``policy_kwargs`` (plain names, no eval)
+ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu", "silu", "gelu")
+
+_USE_MODEL = "model"  # sentinel: take the observer from the metadata
+
+
+# ---- metadata ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ObsNormalization:
+    """Observation normalisation of ``VecNormalize``, as plain numbers.
+
+    ``obs_n = clip((obs - mean) / sqrt(var + epsilon), -clip_obs, clip_obs)`` (float32), which
+    is exactly ``VecNormalize.normalize_obs``.
+
+    Attributes:
+        mean: running mean of each observation entry (units of the observation).
+        var: running variance of each entry (units squared).
+        count: number of samples behind the statistics.
+        epsilon: added to the variance (units squared).
+        clip_obs: clip of the normalised observation (-).
+        norm_obs: whether observations are normalised at all.
+        norm_reward: whether training normalised rewards (not used by the controller).
+        clip_reward: reward clip in training (-).
+        gamma: discount of the return statistics (-).
+        ret_mean, ret_var, ret_count: return statistics (for resuming training).
+    """
+
+    mean: tuple[float, ...]
+    var: tuple[float, ...]
+    count: float
+    epsilon: float = 1e-8
+    clip_obs: float = 10.0
+    norm_obs: bool = True
+    norm_reward: bool = True
+    clip_reward: float = 10.0
+    gamma: float = 0.99
+    ret_mean: float = 0.0
+    ret_var: float = 1.0
+    ret_count: float = 1e-4
+
+    def __post_init__(self) -> None:
+        mean = tuple(float(x) for x in self.mean)
+        var = tuple(float(x) for x in self.var)
+        if len(mean) != len(var) or not all(math.isfinite(x) for x in mean + var):
+            raise ValueError("normalisation mean and var must be finite and of equal length")
+        if min(var, default=0.0) < 0:
+            raise ValueError("normalisation var must be >= 0")
+        object.__setattr__(self, "mean", mean)
+        object.__setattr__(self, "var", var)
+
+    def normalize(self, obs: ArrayLike) -> NDArray[np.float32]:
+        """Normalise one observation or a batch (last axis = observation entries)."""
+        o = np.asarray(obs)
+        if not self.norm_obs:
+            return o.astype(np.float32)
+        mean = np.asarray(self.mean)
+        var = np.asarray(self.var)
+        out = np.clip((o - mean) / np.sqrt(var + self.epsilon), -self.clip_obs, self.clip_obs)
+        return out.astype(np.float32)
+
+    @classmethod
+    def from_vec_normalize(cls, vn: Any) -> ObsNormalization:
+        """The statistics of a ``stable_baselines3`` ``VecNormalize``."""
+        return cls(
+            mean=tuple(np.asarray(vn.obs_rms.mean, float).tolist()),
+            var=tuple(np.asarray(vn.obs_rms.var, float).tolist()),
+            count=float(vn.obs_rms.count),
+            epsilon=float(vn.epsilon),
+            clip_obs=float(vn.clip_obs),
+            norm_obs=bool(vn.norm_obs),
+            norm_reward=bool(vn.norm_reward),
+            clip_reward=float(vn.clip_reward),
+            gamma=float(vn.gamma),
+            ret_mean=float(np.asarray(vn.ret_rms.mean)),
+            ret_var=float(np.asarray(vn.ret_rms.var)),
+            ret_count=float(vn.ret_rms.count),
+        )
+
+    def apply_to(self, vn: Any) -> None:
+        """Write the statistics into a ``VecNormalize`` (resuming training)."""
+        vn.obs_rms.mean = np.array(self.mean)
+        vn.obs_rms.var = np.array(self.var)
+        vn.obs_rms.count = self.count
+        vn.ret_rms.mean = np.float64(self.ret_mean)
+        vn.ret_rms.var = np.float64(self.ret_var)
+        vn.ret_rms.count = self.ret_count
+
+
+@dataclass(frozen=True)
+class ModelMetadata:
+    """What ``shipgym.json`` inside a model zip says (JSON object, plain data only).
+
+    Attributes:
+        algorithm: ``"ppo"`` or ``"sac"``.
+        env_id: training environment id.
+        env_kwargs: its constructor arguments (plain data).
+        observer: observer name the policy saw (``None``: the truth).
+        residual: ``True`` if the policy's action was added to a DP controller's command.
+        controller: that controller's name (``"pid"``) when ``residual``.
+        residual_scale: factor on the policy action in the residual sum (-).
+        normalization: observation statistics, or ``None`` without ``VecNormalize``.
+        policy: SB3 policy alias (``"MlpPolicy"``).
+        policy_kwargs: SB3 policy arguments as plain data (activation as a name).
+        use_sde: state-dependent exploration flag of the algorithm (needed to rebuild PPO).
+        observation_shape: observation shape the policy takes.
+        action_shape: action shape it returns (Box(-1, 1)).
+        seed: training seed.
+        command: the command that trains this model (reproducible form).
+        num_timesteps: environment steps trained.
+        hyperparams: the hyperparameters used (plain data, as in the YAML file).
+        shipgym_version, sb3_version, torch_version: versions at training time.
+        format, format_version: :data:`MODEL_FORMAT`, :data:`MODEL_FORMAT_VERSION`.
+        extra: anything else (wall time, evaluation results, ...).
+    """
+
+    algorithm: str
+    env_id: str
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    observer: str | None = None
+    residual: bool = False
+    controller: str | None = None
+    residual_scale: float = 1.0
+    normalization: ObsNormalization | None = None
+    policy: str = "MlpPolicy"
+    policy_kwargs: dict[str, Any] = field(default_factory=dict)
+    use_sde: bool = False
+    observation_shape: tuple[int, ...] = (15,)
+    action_shape: tuple[int, ...] = (3,)
+    seed: int | None = None
+    command: str = ""
+    num_timesteps: int = 0
+    hyperparams: dict[str, Any] = field(default_factory=dict)
+    shipgym_version: str = ""
+    sb3_version: str = ""
+    torch_version: str = ""
+    format: str = MODEL_FORMAT
+    format_version: int = MODEL_FORMAT_VERSION
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.algorithm not in ALGORITHMS:
+            raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {self.algorithm!r}")
+        if self.residual and not self.controller:
+            raise ValueError("a residual model needs the name of its controller (e.g. 'pid')")
+        if not (math.isfinite(self.residual_scale) and self.residual_scale >= 0):
+            raise ValueError(f"residual_scale must be finite and >= 0, got {self.residual_scale}")
+        if isinstance(self.normalization, Mapping):
+            object.__setattr__(self, "normalization", ObsNormalization(**self.normalization))
+        object.__setattr__(self, "observation_shape", tuple(int(n) for n in self.observation_shape))
+        object.__setattr__(self, "action_shape", tuple(int(n) for n in self.action_shape))
+
+    def to_json(self) -> str:
+        """The ``shipgym.json`` text."""
+        return json.dumps(dataclasses.asdict(self), indent=2, sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str, *, where: str = "shipgym.json") -> ModelMetadata:
+        """Parse ``shipgym.json``; raises ``ValueError`` naming what is wrong."""
+        try:
+            d = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"{where} is not valid JSON: {exc}") from None
+        if not isinstance(d, dict) or d.get("format") != MODEL_FORMAT:
+            raise ValueError(f"{where} does not describe a shipgym model (format != {MODEL_FORMAT})")
+        version = d.get("format_version")
+        if not isinstance(version, int) or version > MODEL_FORMAT_VERSION:
+            raise ValueError(
+                f"{where} has format_version {version!r}; this shipgym reads up to "
+                f"{MODEL_FORMAT_VERSION}: upgrade shipgym"
+            )
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(d) - names)
+        if unknown:
+            raise ValueError(f"{where} has unknown keys {unknown}")
+        try:
+            return cls(**d)
+        except TypeError as exc:
+            raise ValueError(f"{where} is incomplete or malformed: {exc}") from None
+
+
+def read_metadata(path: str | Path) -> ModelMetadata:
+    """The metadata of a shipgym model file, checked before anything else reads the file.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ValueError: not a zip, or a zip without valid ``shipgym.json`` (not a shipgym model).
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"model file {str(p)!r} does not exist")
+    try:
+        with zipfile.ZipFile(p) as zf:
+            names = zf.namelist()
+            if METADATA_NAME not in names:
+                hint = (
+                    " (a plain stable-baselines3 zip; shipgym only loads models saved by "
+                    "'shipgym train', which carry shipgym.json)"
+                    if "data" in names
+                    else ""
+                )
+                raise ValueError(f"{p} is not a shipgym model: it has no {METADATA_NAME}{hint}")
+            text = zf.read(METADATA_NAME).decode("utf-8")
+    except zipfile.BadZipFile:
+        raise ValueError(
+            f"{p} is not a shipgym model: not a zip archive (expected a file written by "
+            "'shipgym train')"
+        ) from None
+    return ModelMetadata.from_json(text, where=f"{p}:{METADATA_NAME}")
+
+
+def write_metadata(path: str | Path, meta: ModelMetadata) -> None:
+    """Add (or replace) ``shipgym.json`` in the zip that SB3's ``model.save`` wrote."""
+    p = Path(path)
+    with zipfile.ZipFile(p) as zf:
+        names = zf.namelist()
+        if "data" not in names or "policy.pth" not in names:
+            raise ValueError(f"{p} is not a stable-baselines3 model zip")
+        if METADATA_NAME in names:
+            members = {n: zf.read(n) for n in names if n != METADATA_NAME}
+        else:
+            members = None
+    if members is not None:  # rewrite without the old metadata
+        with zipfile.ZipFile(p, "w", zipfile.ZIP_DEFLATED) as zf:
+            for n, b in members.items():
+                zf.writestr(n, b)
+    with zipfile.ZipFile(p, "a", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr(METADATA_NAME, meta.to_json())
+
+
+# ---- policies -------------------------------------------------------------------------------
+def activation_class(name: str) -> Any:
+    """The torch activation class of a plain name (``"tanh"``, ``"relu"``, ...)."""
+    import torch.nn as nn
+
+    table = {
+        "tanh": nn.Tanh,
+        "relu": nn.ReLU,
+        "elu": nn.ELU,
+        "leaky_relu": nn.LeakyReLU,
+        "silu": nn.SiLU,
+        "gelu": nn.GELU,
+    }
+    try:
+        return table[str(name).lower()]
+    except KeyError:
+        raise ValueError(
+            f"unknown activation_fn {name!r}; choose one of: {', '.join(ACTIVATIONS)}"
+        ) from None
+
+
+def sb3_policy_kwargs(plain: Mapping[str, Any]) -> dict[str, Any]:
+    """SB3 ``policy_kwargs`` from plain data (the activation given by name)."""
+    out = dict(plain)
+    if "activation_fn" in out:
+        out["activation_fn"] = activation_class(out["activation_fn"])
+    return out
+
+
+def algorithm_class(algorithm: str) -> Any:
+    """The stable-baselines3 class of ``"ppo"`` / ``"sac"`` (needs ``shipgym[rl]``)."""
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"unknown algorithm {algorithm!r}; choose one of: {', '.join(ALGORITHMS)}")
+    try:
+        import stable_baselines3 as sb3
+    except ImportError:
+        raise ImportError(
+            "learned controllers need stable-baselines3 and torch: pip install 'shipgym[rl]'"
+        ) from None
+    return {"ppo": sb3.PPO, "sac": sb3.SAC}[algorithm]
+
+
+class LearnedPolicy:
+    """A trained policy with its observation normalisation: observation in, action out.
+
+    Built by :func:`load_policy`. ``policy(obs)`` normalises the raw environment observation
+    with the training statistics (:class:`ObsNormalization`) and returns the deterministic
+    action of the network (``Box(-1, 1)``), the same numbers as SB3's
+    ``model.predict(vec_normalize.normalize_obs(obs), deterministic=True)``.
+
+    Args:
+        policy: an SB3 policy module (``ActorCriticPolicy``, ``SACPolicy``) in eval mode.
+        metadata: the model's :class:`ModelMetadata`.
+    """
+
+    def __init__(self, policy: Any, metadata: ModelMetadata) -> None:
+        self.policy = policy
+        self.metadata = metadata
+        self.normalization = metadata.normalization
+
+    def normalize(self, obs: ArrayLike) -> NDArray[np.float32]:
+        """The observation as the network sees it."""
+        if self.normalization is None:
+            return np.asarray(obs, dtype=np.float32)
+        return self.normalization.normalize(obs)
+
+    def __call__(self, obs: ArrayLike, *, deterministic: bool = True) -> NDArray[np.float32]:
+        """Action(s) for one observation (shape (15,)) or a batch (shape (n, 15))."""
+        o = np.asarray(obs)
+        if o.shape[-len(self.metadata.observation_shape) :] != self.metadata.observation_shape:
+            raise ValueError(
+                f"observation must have shape {self.metadata.observation_shape} (or a batch of "
+                f"them), got {o.shape}"
+            )
+        if not np.all(np.isfinite(o)):
+            raise ValueError(f"observation contains NaN or infinite values: {o}")
+        action, _ = self.policy.predict(self.normalize(o), deterministic=deterministic)
+        return np.asarray(action, dtype=np.float32)
+
+
+def load_policy(path: str | Path, *, device: str = "cpu") -> LearnedPolicy:
+    """Load a shipgym model as a :class:`LearnedPolicy` without unpickling anything.
+
+    The metadata is checked first (:func:`read_metadata`); the network is rebuilt from
+    ``policy`` and ``policy_kwargs`` and its weights are read from ``policy.pth`` with
+    ``torch.load(weights_only=True)``.
+
+    Raises:
+        FileNotFoundError, ValueError: see :func:`read_metadata`; weights that do not fit the
+            architecture in the metadata.
+        ImportError: stable-baselines3 / torch missing.
+    """
+    meta = read_metadata(path)
+    algo = algorithm_class(meta.algorithm)
+    import torch as th
+    from gymnasium import spaces
+
+    try:
+        policy_cls = algo.policy_aliases[meta.policy]
+    except KeyError:
+        raise ValueError(
+            f"{path}: unknown policy {meta.policy!r} for {meta.algorithm}; choose one of: "
+            f"{', '.join(algo.policy_aliases)}"
+        ) from None
+    obs_space = spaces.Box(-np.inf, np.inf, meta.observation_shape, np.float32)
+    act_space = spaces.Box(-1.0, 1.0, meta.action_shape, np.float32)
+    kwargs = sb3_policy_kwargs(meta.policy_kwargs)
+    if meta.algorithm == "ppo":
+        kwargs["use_sde"] = meta.use_sde
+    policy = policy_cls(obs_space, act_space, lambda _: 0.0, **kwargs)
+    with zipfile.ZipFile(path) as zf:
+        state = th.load(io.BytesIO(zf.read("policy.pth")), map_location=device, weights_only=True)
+    try:
+        policy.load_state_dict(state)
+    except RuntimeError as exc:
+        raise ValueError(f"{path}: weights do not match the policy in {METADATA_NAME}: {exc}")
+    policy.to(device)
+    policy.set_training_mode(False)
+    return LearnedPolicy(policy, meta)
+
+
+# ---- controller names ----------------------------------------------------------------------
+def baseline_model_path(algorithm: str = "ppo") -> Path:
+    """Path of the shipped baseline model of an algorithm (``shipgym/assets/models``).
+
+    Raises:
+        ValueError: no baseline is shipped for ``algorithm``.
+        FileNotFoundError: the package was installed without its model files.
+    """
+    if algorithm not in BASELINE_MODELS:
+        raise ValueError(
+            f"no shipped baseline for {algorithm!r}; shipped: {', '.join(BASELINE_MODELS)}; "
+            f"pass {algorithm}:PATH to a model trained with 'shipgym train {algorithm}'"
+        )
+    p = Path(str(resources.files("shipgym") / "assets" / "models" / BASELINE_MODELS[algorithm]))
+    if not p.is_file():
+        raise FileNotFoundError(
+            f"the shipped baseline {p} is missing (package data not installed?); "
+            "reinstall shipgym or pass ppo:PATH"
+        )
+    return p
+
+
+def is_learned_controller(name: str) -> bool:
+    """``True`` for ``ppo``, ``sac``, ``ppo:PATH``, ``sac:PATH`` (learned-controller names)."""
+    algo = str(name).split(":", 1)[0]
+    return algo in ALGORITHMS
+
+
+def parse_learned_controller(name: str) -> tuple[str, Path]:
+    """``"ppo"`` -> the shipped baseline; ``"ppo:PATH"`` / ``"sac:PATH"`` -> that file.
+
+    Returns:
+        ``(algorithm, model_path)``; the path is checked to be a shipgym model of that
+        algorithm.
+
+    Raises:
+        ValueError: not a learned-controller name, or the file's algorithm differs.
+        FileNotFoundError: no such file.
+    """
+    algo, sep, rest = str(name).partition(":")
+    if algo not in ALGORITHMS:
+        raise ValueError(
+            f"not a learned controller: {name!r}; use ppo (shipped baseline), ppo:PATH or "
+            "sac:PATH"
+        )
+    path = Path(rest).expanduser() if sep and rest else baseline_model_path(algo)
+    meta = read_metadata(path)
+    if meta.algorithm != algo:
+        raise ValueError(f"{path} holds a {meta.algorithm} model, not {algo}: use {meta.algorithm}:")
+    return algo, path
+
+
+# ---- the wrapper -----------------------------------------------------------------------------
+def _stack(env: gym.Env[Any, Any]) -> list[gym.Env[Any, Any]]:
+    out = []
+    e: Any = env
+    while isinstance(e, gym.Wrapper):
+        out.append(e)
+        e = e.env
+    out.append(e)
+    return out
+
+
+class LearnedControllerWrapper(
+    gym.Wrapper[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]],
+    gym.utils.RecordConstructorArgs,
+):
+    """Runs a trained policy inside ``step``: the learned controller as a Gymnasium wrapper.
+
+    Each step the policy maps the latest observation (the environment's layout: navigation
+    data from the observer below, reference, previous action) to a normalised action; the
+    wrapper's own action, a *residual* (``Box(-1, 1, (3,))``, zero: the policy alone) is added
+    and the sum clipped to [-1, 1] (flagged in ``info["learned_clipped"]``). For a residual
+    model the environment below must contain the ``DPControllerWrapper`` it was trained on
+    (same controller and residual scale), whose residual input the policy drives.
+
+    Info gains ``policy_action`` (the network's action, before the residual).
+
+    Args:
+        env: the environment stack the model expects (see :func:`make_learned_env`).
+        model_path: a shipgym model file (``shipgym train``).
+        deterministic: use the policy's mean action (default) or sample it.
+
+    Raises:
+        ValueError: not a shipgym model, or a residual model on a stack without the matching
+            ``DPControllerWrapper``.
+
+    Note:
+        Records its constructor arguments, so ``gym.make(env.spec)`` rebuilds the stack.
+    """
+
+    def __init__(
+        self, env: gym.Env[Any, Any], model_path: str | Path, deterministic: bool = True
+    ) -> None:
+        gym.utils.RecordConstructorArgs.__init__(
+            self, model_path=str(model_path), deterministic=deterministic
+        )
+        gym.Wrapper.__init__(self, env)
+        self.model_path = Path(model_path)
+        self.policy = load_policy(self.model_path)
+        self.metadata = self.policy.metadata
+        self.deterministic = bool(deterministic)
+        _check_stack(env, self.metadata)
+        if env.observation_space.shape != self.metadata.observation_shape:
+            raise ValueError(
+                f"the model takes observations of shape {self.metadata.observation_shape}, the "
+                f"environment gives {env.observation_space.shape}"
+            )
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
+        self._obs: NDArray[np.float32] | None = None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        obs, info = self.env.reset(seed=seed, options=options)
+        self._obs = obs
+        return obs, info
+
+    def step(
+        self, action: NDArray[np.float32]
+    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        residual = np.asarray(action, dtype=np.float64)
+        if residual.shape != (3,) or not np.all(np.isfinite(residual)):
+            raise ValueError(f"residual action must be 3 finite numbers in [-1, 1], got {action!r}")
+        if self._obs is None:
+            raise gym.error.ResetNeeded("call reset() before step()")
+        a_pol = self.policy(self._obs, deterministic=self.deterministic).astype(np.float64)
+        total = a_pol + residual
+        applied = np.clip(total, -1.0, 1.0)
+        obs, reward, terminated, truncated, info = self.env.step(applied.astype(np.float32))
+        info["policy_action"] = a_pol
+        info["learned_clipped"] = applied != total
+        self._obs = obs
+        return obs, reward, terminated, truncated, info
+
+
+def _check_stack(env: gym.Env[Any, Any], meta: ModelMetadata) -> None:
+    """Check that ``env`` contains what the model was trained on (controller, observer)."""
+    from shipgym.controllers.wrappers import DPControllerWrapper
+
+    layers = _stack(env)
+    dp = [w for w in layers if isinstance(w, DPControllerWrapper)]
+    if meta.residual:
+        if not dp:
+            raise ValueError(
+                f"this model is a residual policy on the {meta.controller!r} controller: wrap the "
+                f"environment in DPControllerWrapper(env, controller={meta.controller!r}, "
+                f"residual_scale={meta.residual_scale}) first, or use make_learned_env()"
+            )
+        w = dp[0]
+        if w.controller_name != meta.controller or not math.isclose(
+            w.residual_scale, meta.residual_scale
+        ):
+            raise ValueError(
+                f"the model was trained on controller {meta.controller!r} with residual_scale "
+                f"{meta.residual_scale}, the environment has {w.controller_name!r} with "
+                f"{w.residual_scale}"
+            )
+    elif dp:
+        raise ValueError(
+            "this model drives the thrusters directly (not residual) but the environment has a "
+            "DPControllerWrapper: build the stack with make_learned_env()"
+        )
+    observers = [w for w in layers if type(w).__name__ == "ObserverWrapper"]
+    name = getattr(observers[0], "observer_name", None) if observers else None
+    if name != meta.observer:
+        gym.logger.warn(
+            f"the model was trained with observer {meta.observer or 'truth'!r}; the environment "
+            f"uses {name or 'truth'!r}"
+        )
+
+
+def make_learned_env(
+    env_id: str,
+    model_path: str | Path,
+    *,
+    observer: str | None = _USE_MODEL,
+    deterministic: bool = True,
+    **env_kwargs: Any,
+) -> gym.Env[Any, Any]:
+    """An environment driven by a learned controller: env -> observer -> [DP controller] -> policy.
+
+    The observer, the residual controller and its scale come from the model's metadata;
+    ``env_kwargs`` are passed to the environment (e.g. ``wind=``, ``plant=``).
+
+    Args:
+        env_id: a registered id or a scenario name (``harbour``, ``tracking``, ...).
+        model_path: a shipgym model, or a controller name ``ppo`` / ``ppo:PATH`` /
+            ``sac:PATH``.
+        observer: ``"model"`` (default: the model's own observer), ``None``/``"truth"`` or
+            an observer name (an experiment with another observer; warns).
+        deterministic: mean action (default) or sampled.
+        **env_kwargs: environment arguments.
+
+    Returns:
+        The wrapped environment; ``env.step(np.zeros(3))`` runs the learned controller.
+    """
+    from shipgym.controllers.wrappers import DPControllerWrapper
+    from shipgym.envs.make import resolve_env_id
+
+    path = Path(model_path)
+    if not path.is_file() and is_learned_controller(str(model_path)):
+        _, path = parse_learned_controller(str(model_path))
+    meta = read_metadata(path)
+    obs_name = meta.observer if observer == _USE_MODEL else observer
+    if obs_name == "truth":
+        obs_name = None
+    env = gym.make(resolve_env_id(env_id), **env_kwargs)
+    if obs_name is not None:
+        from shipgym.observers.wrapper import ObserverWrapper
+
+        env = ObserverWrapper(env, observer=obs_name)
+    if meta.residual:
+        env = DPControllerWrapper(
+            env, controller=str(meta.controller), residual_scale=meta.residual_scale
+        )
+    return LearnedControllerWrapper(env, path, deterministic=deterministic)

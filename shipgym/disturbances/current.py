@@ -1,0 +1,365 @@
+r"""Ocean / lake current: constant or slowly varying (Gauss-Markov) speed and direction.
+
+SPEC section 6; ``notes`` = ``shared/notes/domain-models.md`` section 3 (Fossen 2011 ch. 8.3).
+
+Conventions (SPEC section 3): the current direction ``beta_c`` is where the water goes *to*
+(oceanographic), clockwise from north (rad); this differs from wind and waves. The current acts
+through the relative velocity ``nu_r = nu - nu_c`` with the body-frame current velocity::
+
+    u_c = V_c cos(beta_c - psi),   v_c = V_c sin(beta_c - psi)      (notes 3)
+
+(:func:`current_body_velocity`). The current is irrotational and, on the time scale of a step,
+constant in NED, so ``nu_c_dot = [r v_c, -r u_c, 0]`` (notes 3).
+
+Slowly varying current (notes 3): a first-order Gauss-Markov process about the mean speed,
+saturated to ``[V_min, V_max]``::
+
+    V_c_dot = -mu (V_c - speed) + w,   E[w(t) w(s)] = sigma^2 delta(t - s)
+
+(``mu = 0``: a random walk, kept inside the bounds by the saturation). Its stationary standard
+deviation is ``sigma / sqrt(2 mu)``: the notes' lake default ``std(V_c) ~ 0.01 m/s`` with
+``mu = 1/300 s^-1`` is ``sigma = 0.01 sqrt(2/300) = 8.2e-4 m/s^1.5``
+(:meth:`CurrentConfig.from_std`). The direction can vary the same way (``direction_mu``,
+``direction_sigma``; the notes' "random walk on beta_c" is ``direction_mu = 0``).
+
+Sampled exactly (``a = exp(-mu h)``, noise std ``sigma sqrt((1 - a^2) / (2 mu))``, ``sigma
+sqrt(h)`` for ``mu = 0``) on a grid ``t_k = k * sample_period``, saturated after every step,
+started from the stationary distribution (clipped) when ``mu > 0`` and from the mean otherwise,
+generated lazily in chunks and linearly interpolated by :meth:`Current.at`, like the wind gusts.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym._config import from_mapping, param, require_finite
+
+__all__ = ["CurrentConfig", "Current", "current_body_velocity"]
+
+_CHUNK = 4096
+_N3 = "notes 3 [assumption]"
+
+
+def current_body_velocity(V_c: float, beta_c: float, psi: float) -> tuple[float, float]:
+    """Current velocity on the body axes (notes 3).
+
+    Args:
+        V_c: Current speed (m/s).
+        beta_c: Direction the current goes to (rad, clockwise from north).
+        psi: Heading (rad).
+
+    Returns:
+        ``(u_c, v_c)`` in m/s (surge, sway); ``nu_r = nu - [u_c, v_c, 0]``.
+    """
+    a = beta_c - psi
+    return V_c * math.cos(a), V_c * math.sin(a)
+
+
+@dataclass(frozen=True)
+class CurrentConfig:
+    """Mean current plus optional Gauss-Markov variation (SI units, radians; notes 3).
+
+    Attributes:
+        speed: Mean current speed (m/s, >= 0). Lake/harbour: 0 nominal or ~0.01 U_wind;
+            offshore DP 0.5-1 m/s full scale = 0.10-0.20 m/s at 1:24 (notes 3).
+        direction_to: Mean direction the current goes TO (rad, clockwise from north).
+        mu: Mean-reversion rate of the speed (1/s, >= 0); notes 3: 1/300.
+        sigma: Intensity of the white noise driving the speed (m/s^1.5, >= 0); 0 = constant.
+        v_min: Lower saturation of the speed (m/s, >= 0).
+        v_max: Upper saturation of the speed (m/s) or ``None`` (no upper bound).
+        direction_mu: Mean-reversion rate of the direction (1/s, >= 0; 0 = random walk).
+        direction_sigma: Intensity of the noise on the direction (rad/s^0.5, >= 0).
+        sample_period: Grid of the samples (s); linear interpolation in between.
+    """
+
+    speed: float = param(0.0, "m/s", "notes 3: lake nominal 0")
+    direction_to: float = param(0.0, "rad", "oceanographic, clockwise from north (SPEC 3)")
+    mu: float = param(1.0 / 300.0, "1/s", _N3)
+    sigma: float = param(0.0, "m/s^1.5", _N3 + ": 0 = constant current")
+    v_min: float = param(0.0, "m/s", "notes 3: saturation")
+    v_max: float | None = param(None, "m/s", "notes 3: saturation (None: unbounded)")
+    direction_mu: float = param(1.0 / 300.0, "1/s", _N3)
+    direction_sigma: float = param(0.0, "rad/s^0.5", _N3 + ": 0 = constant direction")
+    sample_period: float = param(1.0, "s", "slowly varying: 1 s grid [assumption]")
+
+    def __post_init__(self) -> None:
+        name = type(self).__name__
+        for key in (
+            "speed",
+            "direction_to",
+            "mu",
+            "sigma",
+            "v_min",
+            "direction_mu",
+            "direction_sigma",
+            "sample_period",
+        ):
+            val = getattr(self, key)
+            if isinstance(val, bool) or not isinstance(val, numbers.Real):
+                raise ValueError(f"{name}.{key} must be a real number, got {val!r}")
+        if self.v_max is not None and (
+            isinstance(self.v_max, bool) or not isinstance(self.v_max, numbers.Real)
+        ):
+            raise ValueError(f"{name}.v_max must be a real number or None, got {self.v_max!r}")
+        require_finite(self)
+        for key in ("speed", "mu", "sigma", "v_min", "direction_mu", "direction_sigma"):
+            if getattr(self, key) < 0:
+                raise ValueError(f"{name}.{key} must be >= 0, got {getattr(self, key)!r}")
+        if not self.sample_period > 0:
+            raise ValueError(f"{name}.sample_period must be > 0 s, got {self.sample_period!r}")
+        hi = math.inf if self.v_max is None else self.v_max
+        if not self.v_min <= self.speed <= hi:
+            raise ValueError(
+                f"{name}: the mean speed {self.speed!r} m/s must lie in [v_min, v_max] = "
+                f"[{self.v_min!r}, {self.v_max!r}]"
+            )
+
+    @property
+    def is_constant(self) -> bool:
+        """True when speed and direction never change (both noise intensities 0)."""
+        return self.sigma == 0.0 and self.direction_sigma == 0.0
+
+    @property
+    def speed_std(self) -> float:
+        """Stationary std of the speed before saturation, ``sigma / sqrt(2 mu)`` (m/s)."""
+        if self.sigma == 0.0:
+            return 0.0
+        return math.inf if self.mu == 0.0 else self.sigma / math.sqrt(2.0 * self.mu)
+
+    @property
+    def direction_std(self) -> float:
+        """Stationary std of the direction, ``direction_sigma / sqrt(2 direction_mu)`` (rad)."""
+        if self.direction_sigma == 0.0:
+            return 0.0
+        if self.direction_mu == 0.0:
+            return math.inf
+        return self.direction_sigma / math.sqrt(2.0 * self.direction_mu)
+
+    @classmethod
+    def from_std(
+        cls,
+        speed: float,
+        direction_to: float,
+        std: float = 0.0,
+        time_constant: float = 300.0,
+        *,
+        direction_std: float = 0.0,
+        direction_time_constant: float = 300.0,
+        **kw: Any,
+    ) -> CurrentConfig:
+        """Build from stationary standard deviations and time constants (``mu = 1/T``).
+
+        Args:
+            speed: Mean speed (m/s).
+            direction_to: Mean direction the current goes to (rad).
+            std: Stationary speed std (m/s), e.g. 0.01 (notes 3 lake default).
+            time_constant: ``1 / mu`` of the speed (s), e.g. 300.
+            direction_std: Stationary direction std (rad).
+            direction_time_constant: ``1 / direction_mu`` (s).
+            **kw: Other fields (``v_min``, ``v_max``, ``sample_period``).
+
+        Returns:
+            The config with ``sigma = std sqrt(2 / T)``.
+        """
+        for key, val in (
+            ("time_constant", time_constant),
+            ("direction_time_constant", direction_time_constant),
+        ):
+            if not (isinstance(val, numbers.Real) and val > 0 and math.isfinite(val)):
+                raise ValueError(f"CurrentConfig.from_std: {key} must be > 0 s, got {val!r}")
+        return cls(
+            speed=speed,
+            direction_to=direction_to,
+            mu=1.0 / time_constant,
+            sigma=std * math.sqrt(2.0 / time_constant),
+            direction_mu=1.0 / direction_time_constant,
+            direction_sigma=direction_std * math.sqrt(2.0 / direction_time_constant),
+            **kw,
+        )
+
+    @classmethod
+    def from_dict(cls, mapping: Mapping[str, Any]) -> CurrentConfig:
+        """Build from a mapping of field names (SI units, radians); unknown keys raise."""
+        return from_mapping(cls, mapping, where="current config")
+
+
+class Current:
+    """Runtime current: ``at(t) -> (V_c, beta_c)`` from a lazily generated sample grid.
+
+    Args:
+        config: Current parameters (default: no current).
+
+    Example:
+        >>> c = Current(CurrentConfig.from_std(0.05, 1.0, std=0.01))
+        >>> c.reset(np.random.default_rng(1))
+        >>> V_c, beta_c = c.at(12.3)
+        >>> u_c, v_c = c.body_velocity(12.3, psi=0.2)
+    """
+
+    def __init__(self, config: CurrentConfig | None = None) -> None:
+        self.config = cfg = CurrentConfig() if config is None else config
+        self._dt = float(cfg.sample_period)
+        self._inv_dt = 1.0 / self._dt
+        self._mean = (float(cfg.speed), float(cfg.direction_to))
+        self._const: tuple[float, float] | None = self._mean if cfg.is_constant else None
+        mus = (float(cfg.mu), float(cfg.direction_mu))
+        sigs = (float(cfg.sigma), float(cfg.direction_sigma))
+        self._a = tuple(math.exp(-m * self._dt) for m in mus)
+        self._b = tuple(
+            s
+            * (
+                math.sqrt(-math.expm1(-2.0 * m * self._dt) / (2.0 * m))
+                if m > 0
+                else math.sqrt(self._dt)
+            )
+            for s, m in zip(sigs, mus, strict=True)
+        )
+        self._std0 = tuple(
+            s / math.sqrt(2.0 * m) if m > 0 else 0.0 for s, m in zip(sigs, mus, strict=True)
+        )
+        self._lo = float(cfg.v_min)
+        self._hi = math.inf if cfg.v_max is None else float(cfg.v_max)
+        self._rng: np.random.Generator | None = None
+        self._clear()
+
+    def _clear(self) -> None:
+        self._chunks: list[NDArray[np.float64]] = []
+        self._state = self._mean
+        self._j = -1
+        self._k0 = 0
+        self._sp: list[float] = []
+        self._dr: list[float] = []
+        self._cache: dict[int, tuple[list[float], list[float]]] = {}
+
+    @property
+    def is_constant(self) -> bool:
+        """True when the current never changes (no generator needed)."""
+        return self._const is not None
+
+    def reset(self, rng: np.random.Generator | int | None = None) -> None:
+        """Start a new realisation from a child of ``rng`` (one ``integers(2**63)`` draw).
+
+        Args:
+            rng: Parent generator or seed; ``None`` only for a constant current.
+
+        Raises:
+            ValueError: ``rng`` is ``None`` for a varying current.
+        """
+        self._clear()
+        if rng is None:
+            if self._const is None:
+                raise ValueError(
+                    "Current.reset needs a numpy Generator (or a seed) for a varying current"
+                )
+            self._rng = None
+            return
+        if not isinstance(rng, np.random.Generator):
+            rng = np.random.default_rng(rng)
+        child = np.random.default_rng(int(rng.integers(2**63)))
+        self._rng = child
+        if self._const is None:
+            z = child.standard_normal(2)
+            v = min(max(self._mean[0] + self._std0[0] * float(z[0]), self._lo), self._hi)
+            self._state = (v, self._mean[1] + self._std0[1] * float(z[1]))
+
+    def _extend_to(self, j: int) -> None:
+        if self._rng is None:
+            raise RuntimeError("call Current.reset(rng) before querying a varying current")
+        rng = self._rng
+        (av, ab), (bv, bb) = self._a, self._b
+        mv, mb = self._mean
+        lo, hi = self._lo, self._hi
+        while len(self._chunks) <= j:
+            w = rng.standard_normal((2, _CHUNK)).tolist()
+            v, d = self._state
+            sp = [v]
+            dr = [d]
+            for e in w[0]:
+                v = mv + av * (v - mv) + bv * e
+                v = lo if v < lo else (hi if v > hi else v)
+                sp.append(v)
+            for e in w[1]:
+                d = mb + ab * (d - mb) + bb * e
+                dr.append(d)
+            self._state = (v, d)
+            self._chunks.append(np.array([sp, dr], dtype=float))
+
+    def _select(self, j: int) -> None:
+        lists = self._cache.get(j)
+        if lists is None:
+            self._extend_to(j)
+            arr = self._chunks[j]
+            lists = (arr[0].tolist(), arr[1].tolist())
+            if len(self._cache) >= 2:
+                del self._cache[next(iter(self._cache))]
+            self._cache[j] = lists
+        self._sp, self._dr = lists
+        self._j = j
+        self._k0 = j * _CHUNK
+
+    def at(self, t: float) -> tuple[float, float]:
+        """Current at time ``t`` (cheap; call it every physics step).
+
+        Args:
+            t: Time (s), ``>= 0``.
+
+        Returns:
+            ``(V_c, beta_c)``: speed (m/s) and direction it goes to (rad, continuous).
+        """
+        if self._const is not None:
+            return self._const
+        x = float(t) * self._inv_dt
+        if not x >= 0.0:
+            raise ValueError(f"Current.at: time must be >= 0 s, got {t!r}")
+        k = int(x)
+        if k // _CHUNK != self._j:
+            self._select(k // _CHUNK)
+        f = x - k
+        i = k - self._k0
+        sp = self._sp
+        s0 = sp[i]
+        dr = self._dr
+        d0 = dr[i]
+        return s0 + f * (sp[i + 1] - s0), d0 + f * (dr[i + 1] - d0)
+
+    def body_velocity(self, t: float, psi: float) -> tuple[float, float]:
+        """Body-frame current velocity ``(u_c, v_c)`` (m/s) at time ``t`` and heading ``psi``."""
+        V, b = self.at(t)
+        return current_body_velocity(V, b, psi)
+
+    def velocity_ned(self, t: float) -> tuple[float, float]:
+        """NED current velocity ``(V_c cos beta_c, V_c sin beta_c)`` (m/s, north, east)."""
+        V, b = self.at(t)
+        return V * math.cos(b), V * math.sin(b)
+
+    def series(self, t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`at` for arrays (same values): ``(V_c, beta_c)`` of the shape of ``t``."""
+        tt = np.asarray(t, dtype=float)
+        if self._const is not None:
+            return np.full(tt.shape, self._const[0]), np.full(tt.shape, self._const[1])
+        x = tt * self._inv_dt
+        if not np.all(x >= 0.0):
+            raise ValueError("Current.series: all times must be >= 0 s (and not NaN)")
+        if x.size == 0:
+            return np.empty(tt.shape), np.empty(tt.shape)
+        k = np.floor(x).astype(np.int64)
+        jmax = int(k.max()) // _CHUNK
+        self._extend_to(jmax)
+        grid = np.concatenate(
+            [c[:, :_CHUNK] for c in self._chunks[: jmax + 1]] + [self._chunks[jmax][:, _CHUNK:]],
+            axis=1,
+        )
+        f = x - k
+        s0, s1 = grid[0, k], grid[0, k + 1]
+        d0, d1 = grid[1, k], grid[1, k + 1]
+        return s0 + f * (s1 - s0), d0 + f * (d1 - d0)
+
+    def __repr__(self) -> str:
+        return f"Current(config={self.config!r})"

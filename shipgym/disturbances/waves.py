@@ -1,0 +1,768 @@
+r"""Irregular long-crested waves: elevation, first-order (WF) motion and second-order drift.
+
+SPEC section 6; ``notes`` = ``shared/notes/domain-models.md`` sections 2.1-2.5;
+``thesis`` = ``shared/notes/seed002-thesis.md`` (Al-Takie's high-frequency model, ch. 2-3).
+
+Conventions (SPEC section 3): NED earth frame, heading ``psi`` clockwise from north (rad),
+body x forward, y starboard. ``direction_from`` is where the waves come *from* (like wind);
+they propagate towards ``beta_p = direction_from + pi``. The angle of the propagation direction
+relative to the bow is ``beta = beta_p - psi`` (``beta = 0``: following sea, ``pi``: head sea,
+``pi/2``: waves from port pushing to starboard).
+
+**Realisation** (notes 2.1). ``N`` components on equal bins of width ``dw`` over
+``[w_min, w_max]`` (default ``[0.5, 3.5] w_p``), each at a random frequency inside its bin
+(so the record never repeats within an episode, unlike bin centres, which repeat after
+``2 pi / dw``) with a random phase::
+
+    zeta(t) = sum_j A_j cos(w_j t + eps_j),   A_j = sqrt(2 S(w_j) dw),   eps_j ~ U[0, 2 pi)
+
+at the ship (no spatial phase; at DP speeds the encounter frequency equals ``w``).
+
+**Second-order drift on the hull** (notes 2.5). Newman's approximation with the geometric mean
+``T_jk = sqrt(T_jj T_kk)`` collapses the double sum exactly to (Standing / OrcaFlex)::
+
+    F_sv(t) = T(beta) E(t),   E(t) = | sum_j A_j sqrt(R_j) exp(i (w_j t + eps_j)) |^2
+
+whose time mean is ``T(beta) sum_j A_j^2 R_j`` (mean drift, :meth:`Waves.mean_drift_load`).
+Blue Lady's simple wall-sided coefficients (Faltinsen 1990 ch. 5 asymptote; notes 2.5
+[assumption]), with ``rho g / 2`` per unit amplitude squared::
+
+    T_x(beta) = (rho g / 2) (2/3) B cos^2(beta) sign(cos beta)   (bow/stern half-cylinders R=B/2)
+    T_y(beta) = (rho g / 2) L_s sin^2(beta) sign(sin beta)       (flat side, L_s = 0.8 L_pp)
+    T_n(beta) = -l_N cos(beta) T_y(beta)                          (yaw lever, default 0.05 L_pp)
+
+The yaw lever moves the lateral drift force towards the end the waves hit first (``l_N > 0``
+turns the ship beam-on to the waves, as drifting ships do); notes 2.5 only ask for "a small
+lever ~0.05 L". ``R_j`` is the reflection factor: ``min(1, k_j T / 2)^2`` (``"kT"``, default,
+``k_j = w_j^2 / g``, ``T`` the draught), 1 (``"full"``) or a constant.
+
+The envelope ``E(t)`` does not depend on the heading, so it is precomputed on a fixed time grid
+``t_k = k * sample_period`` in chunks of 4096 samples (vectorised NumPy over time x components)
+and :meth:`Waves.drift_load` only interpolates it linearly and multiplies by ``T(beta(psi))``
+in plain Python floats (about 1 us per call).
+
+**First-order wave-frequency (WF) motion** (notes 2.4), added to the *measured* position and
+heading only, never to the hull: along the propagation direction (the horizontal orbit of a
+long-crested sea) with std ``wf_position_std`` and in heading with std ``wf_heading_std``::
+
+    (dx, dy) = d(t) (cos beta_p, sin beta_p),   dpsi = h(t)
+
+Models (``wf_model``):
+
+* ``"fossen"`` (default): Fossen's linear shaping filter ``h(s) = K s / (s^2 + 2 lambda w0 s +
+  w0^2)``, ``w0 = w_p``, ``lambda`` least-squares fitted to the spectrum (0.257 PM, 0.102
+  JONSWAP gamma 3.3; :func:`~shipgym.disturbances.spectra.fit_shaping_filter_lambda`), driven
+  by white noise, one independent filter per DOF, gain set from the stationary Lyapunov
+  variance so the std is exactly the target. It is the model a DP observer assumes.
+* ``"al-takie"``: the 4th-order filter ``K s^2 / (s^4 + c1 s^3 + c2 s^2 + c3 s + c4)`` of the
+  thesis (Appendix 2, Wimpey Sealab Table 1 divided by ``Tb = 3.104 s``; the same polynomial
+  for both thesis ships) for ``wf_beaufort`` 5-9, with frequencies rescaled so that its peak
+  ``|G(jw)|`` falls on ``w_p`` (the thesis poles are full scale for a 95 m ship).
+* ``"rao"``: RAO-like constant gains on the wave components (coherent with the elevation):
+  ``d = g_d sum A_j sin(w_j t + eps_j)`` (surface particle displacement) and
+  ``h = g_h sum k_j A_j sin(w_j t + eps_j)`` (wave slope), gains set to the target stds.
+
+The filters are simulated exactly (zero-order-hold transition ``expm(A h)`` and noise
+covariance ``P - Phi P Phi^T`` from the stationary Lyapunov solution ``P``), started in the
+stationary distribution, on the same grid as the envelope. All three are zero-mean and purely
+wave-frequency: the filters' PSD vanishes like ``w^2`` (fossen) or ``w^4`` (al-takie) at
+``w = 0``, the component sums have no energy below ``w_min``.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym._config import from_mapping, param, require_finite
+from shipgym.dynamics.params import BLUE_LADY_HULL, HullParameters
+
+from .spectra import (
+    RHO_WATER,
+    G,
+    fit_shaping_filter_lambda,
+    harmonic_components,
+    harmonic_sums,
+    wave_spectrum,
+)
+
+__all__ = [
+    "WAVE_SPECTRA",
+    "WF_MODELS",
+    "AL_TAKIE_HF_POLYNOMIALS",
+    "al_takie_hf_polynomial",
+    "WaveConfig",
+    "Waves",
+    "drift_coefficients",
+]
+
+#: Valid ``WaveConfig.spectrum`` values.
+WAVE_SPECTRA = ("jonswap", "pm", None)
+#: Valid ``WaveConfig.wf_model`` values.
+WF_MODELS = ("fossen", "al-takie", "rao")
+
+#: Thesis Appendix 2 Table 1 (Wimpey Sealab, per-unit alpha_1..alpha_4) by Beaufort number; the
+#: real-time polynomial is ``alpha_i / Tb`` with ``Tb = 3.104 s`` (thesis note section 2.2).
+_AL_TAKIE_ALPHA: dict[int, tuple[float, float, float, float]] = {
+    5: (4.594, 4.384, 2.988, 1.470),
+    6: (3.663, 2.698, 1.452, 0.556),
+    7: (3.166, 2.119, 0.974, 0.341),
+    8: (2.794, 1.789, 0.754, 0.251),
+    9: (2.545, 1.353, 0.486, 0.131),
+}
+_AL_TAKIE_TB = 3.104
+
+#: Real-time (full-scale, s^-i) coefficients ``(c1, c2, c3, c4)`` of Al-Takie's HF
+#: denominator ``s^4 + c1 s^3 + c2 s^2 + c3 s + c4`` by Beaufort number (thesis App. 2).
+AL_TAKIE_HF_POLYNOMIALS: dict[int, tuple[float, float, float, float]] = {
+    bf: tuple(a / _AL_TAKIE_TB for a in alpha)  # type: ignore[misc]
+    for bf, alpha in _AL_TAKIE_ALPHA.items()
+}
+
+_CHUNK = 4096
+_ZERO3 = (0.0, 0.0, 0.0)
+_TWO_PI = 2.0 * math.pi
+
+
+def al_takie_hf_polynomial(beaufort: int, peak_frequency: float | None = None) -> NDArray:
+    """Denominator of Al-Takie's 4th-order HF wave filter ``K s^2 / den(s)`` (thesis App. 2).
+
+    Args:
+        beaufort: Beaufort number 5-9.
+        peak_frequency: If given (rad/s), the frequency axis is rescaled (``c_i -> c_i r^i``)
+            so that the peak of ``|s^2 / den(s)|`` falls on it; ``None`` keeps the thesis's
+            full-scale real-time values (peak 0.806 rad/s at BF5 ... 0.436 rad/s at BF9).
+
+    Returns:
+        ``[1, c1, c2, c3, c4]`` (s^-i).
+    """
+    if isinstance(beaufort, bool) or beaufort not in AL_TAKIE_HF_POLYNOMIALS:
+        raise ValueError(f"Al-Takie's HF filter exists for Beaufort 5-9 only, got {beaufort!r}")
+    den = np.array([1.0, *AL_TAKIE_HF_POLYNOMIALS[beaufort]])
+    if peak_frequency is None:
+        return den
+    w = np.linspace(0.05, 3.0, 60001)
+    s = 1j * w
+    peak = float(w[int(np.argmax(np.abs(s * s / np.polyval(den, s))))])
+    r = float(peak_frequency) / peak
+    return den * r ** np.arange(5)
+
+
+def drift_coefficients(
+    hull: HullParameters = BLUE_LADY_HULL,
+    rho: float = RHO_WATER,
+    g: float = G,
+    side_fraction: float = 0.8,
+) -> tuple[float, float]:
+    """Maximum wall-sided drift coefficients ``(T_x0, T_y0)`` of notes 2.5, N/m^2.
+
+    ``T_x0 = (rho g / 2) (2/3) B`` (bow/stern as half-cylinders of radius ``B/2``),
+    ``T_y0 = (rho g / 2) side_fraction L_pp`` (flat side). Multiply by ``zeta_a^2`` for regular
+    waves or by ``sum A_j^2 = Hs^2 / 8`` for irregular ones: Blue Lady in beam seas,
+    ``Hs = 0.05 m``: ``F_y = 16.6 N``; head seas 2.4 N (notes 2.5, full reflection).
+
+    Args:
+        hull: Hull dimensions (``B``, ``L_pp`` in m).
+        rho: Water density (kg/m^3).
+        g: Gravity (m/s^2).
+        side_fraction: Length of the parallel side over ``L_pp`` (1).
+
+    Returns:
+        ``(T_x0, T_y0)`` in N/m^2.
+    """
+    half = 0.5 * rho * g
+    return half * (2.0 / 3.0) * hull.B, half * side_fraction * hull.L_pp
+
+
+def _is_real(v: Any) -> bool:
+    return isinstance(v, numbers.Real) and not isinstance(v, bool)
+
+
+@dataclass(frozen=True)
+class WaveConfig:
+    """Sea state and wave-effect switches (SI units, radians; notes 2.1-2.5).
+
+    The default is the lake / harbour sea of notes 2.3 (JONSWAP ``Hs = 0.05 m``, ``Tp = 1 s``,
+    gamma 3.3, drift on, no first-order motion). Use ``Hs = 0`` or ``spectrum=None`` for calm
+    water (every output exactly zero).
+
+    Attributes:
+        spectrum: ``"jonswap"``, ``"pm"`` (Pierson-Moskowitz) or ``None`` (no waves).
+        Hs: Significant wave height (m), ``>= 0``.
+        Tp: Peak period (s), ``> 0``.
+        gamma: JONSWAP peak factor in [1, 10] (ignored for ``"pm"``).
+        direction_from: Direction the waves come from (rad, clockwise from north).
+        n_components: Number of harmonic components (1-5000).
+        w_min: Lowest frequency (rad/s); ``None``: ``0.5 w_p``.
+        w_max: Highest frequency (rad/s); ``None``: ``3.5 w_p``.
+        drift: Apply the mean + slowly varying second-order drift loads.
+        reflection: ``"kT"`` (``R = min(1, kT/2)^2`` per component), ``"full"`` (``R = 1``) or a
+            constant factor in [0, 1].
+        drift_gain: Extra factor on the drift loads (1; for calibration).
+        drift_yaw_lever: Yaw lever ``l_N`` of the lateral drift force (m).
+        first_order: Add first-order WF motion to the measured pose.
+        wf_model: ``"fossen"``, ``"al-takie"`` or ``"rao"`` (see the module docstring).
+        wf_position_std: Target std of the WF motion along the wave direction (m); ``None``:
+            ``Hs / 16`` (notes 2.4: 0.1-0.4 Hs/4 offshore).
+        wf_heading_std: Target std of the WF heading motion (rad); ``None``:
+            ``radians(2) Hs w_p^2 / g`` (2 deg times the steepness; 0.2 deg at BF5, 0.35 deg at
+            BF9, inside the 0.2-0.5 deg of notes 2.4).
+        wf_lambda: Damping of Fossen's filter (0 < lambda < 1); ``None``: fitted to the spectrum.
+        wf_beaufort: Row of Al-Takie's HF table (5-9), needed for ``wf_model="al-takie"``.
+        sample_period: Grid of the precomputed envelope and WF motion (s), ``<= Tp / 10``.
+    """
+
+    spectrum: str | None = param("jonswap", "-", "notes 2.3 lake default")
+    Hs: float = param(0.05, "m", "notes 2.3: lake, fetch-limited, U10 ~ 3-5 m/s")
+    Tp: float = param(1.0, "s", "notes 2.3: lake")
+    gamma: float = param(3.3, "1", "notes 2.1/2.3: JONSWAP mean")
+    direction_from: float = param(0.0, "rad", "clockwise from north, coming from (SPEC 3)")
+    n_components: int = param(100, "-", "harmonic components [assumption]")
+    w_min: float | None = param(None, "rad/s", "None: 0.5 w_p [assumption]")
+    w_max: float | None = param(None, "rad/s", "None: 3.5 w_p (>99 % of m0) [assumption]")
+    drift: bool = param(True, "-", "notes 2.3: lake drift not negligible")
+    reflection: str | float = param("kT", "-", "notes 2.5: R(kT) = min(1, kT/2)^2")
+    drift_gain: float = param(1.0, "1", "calibration factor [assumption]")
+    drift_yaw_lever: float = param(0.675, "m", "notes 2.5: ~0.05 L_pp")
+    first_order: bool = param(False, "-", "notes 2.3: negligible on the lake")
+    wf_model: str = param("fossen", "-", "notes 2.4 (a)")
+    wf_position_std: float | None = param(None, "m", "None: Hs/16 (notes 2.4 [assumption])")
+    wf_heading_std: float | None = param(None, "rad", "None: rad(2) Hs w_p^2/g [assumption]")
+    wf_lambda: float | None = param(None, "1", "None: LS fit (notes 2.4: 0.102 / 0.257)")
+    wf_beaufort: int | None = param(None, "-", "thesis App. 2 (al-takie model only)")
+    sample_period: float = param(0.05, "s", "grid of the precomputed signals [assumption]")
+
+    def __post_init__(self) -> None:
+        name = type(self).__name__
+        if self.spectrum not in WAVE_SPECTRA:
+            raise ValueError(
+                f"{name}.spectrum must be one of 'jonswap', 'pm' or None, got {self.spectrum!r}"
+            )
+        for key in ("Hs", "Tp", "gamma", "direction_from", "drift_gain", "drift_yaw_lever"):
+            if not _is_real(getattr(self, key)):
+                raise ValueError(f"{name}.{key} must be a real number, got {getattr(self, key)!r}")
+        for key in ("w_min", "w_max", "wf_position_std", "wf_heading_std", "wf_lambda"):
+            val = getattr(self, key)
+            if val is not None and not _is_real(val):
+                raise ValueError(f"{name}.{key} must be a real number or None, got {val!r}")
+        if not _is_real(self.sample_period):
+            raise ValueError(f"{name}.sample_period must be a real number")
+        require_finite(self)
+        if self.Hs < 0:
+            raise ValueError(f"{name}.Hs must be >= 0 (m), got {self.Hs!r}")
+        if not self.Tp > 0:
+            raise ValueError(f"{name}.Tp must be > 0 (s), got {self.Tp!r}")
+        if not 1.0 <= self.gamma <= 10.0:
+            raise ValueError(f"{name}.gamma must be in [1, 10], got {self.gamma!r}")
+        n = self.n_components
+        if not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= 5000:
+            raise ValueError(f"{name}.n_components must be an int in [1, 5000], got {n!r}")
+        for key in ("w_min", "w_max"):
+            val = getattr(self, key)
+            if val is not None and not val > 0:
+                raise ValueError(f"{name}.{key} must be > 0 rad/s or None, got {val!r}")
+        lo, hi = self.frequency_range
+        if not lo < hi:
+            raise ValueError(
+                f"{name}: w_min must be < w_max, got the range [{lo!r}, {hi!r}] rad/s "
+                f"(w_p = {self.peak_frequency:.4g} rad/s)"
+            )
+        for key in ("drift", "first_order"):
+            if not isinstance(getattr(self, key), bool):
+                raise ValueError(f"{name}.{key} must be true or false, got {getattr(self, key)!r}")
+        r = self.reflection
+        if isinstance(r, str):
+            if r not in ("kT", "full"):
+                raise ValueError(
+                    f"{name}.reflection must be 'kT', 'full' or a number in [0, 1], got {r!r}"
+                )
+        elif not (_is_real(r) and 0.0 <= r <= 1.0):
+            raise ValueError(
+                f"{name}.reflection must be 'kT', 'full' or a number in [0, 1], got {r!r}"
+            )
+        if self.drift_gain < 0:
+            raise ValueError(f"{name}.drift_gain must be >= 0, got {self.drift_gain!r}")
+        if self.wf_model not in WF_MODELS:
+            raise ValueError(
+                f"{name}.wf_model must be one of {', '.join(WF_MODELS)}, got {self.wf_model!r}"
+            )
+        for key in ("wf_position_std", "wf_heading_std"):
+            val = getattr(self, key)
+            if val is not None and val < 0:
+                raise ValueError(f"{name}.{key} must be >= 0 or None, got {val!r}")
+        if self.wf_lambda is not None and not 0.0 < self.wf_lambda < 1.0:
+            raise ValueError(f"{name}.wf_lambda must be in (0, 1) or None, got {self.wf_lambda!r}")
+        bf = self.wf_beaufort
+        if bf is not None and (isinstance(bf, bool) or bf not in AL_TAKIE_HF_POLYNOMIALS):
+            raise ValueError(f"{name}.wf_beaufort must be None or an int 5-9, got {bf!r}")
+        if self.wf_model == "al-takie" and bf is None:
+            raise ValueError(
+                f"{name}: wf_model 'al-takie' needs wf_beaufort (5-9), the row of the thesis table"
+            )
+        if not self.sample_period > 0:
+            raise ValueError(f"{name}.sample_period must be > 0 s, got {self.sample_period!r}")
+        if self.sample_period > self.Tp / 10.0:
+            raise ValueError(
+                f"{name}.sample_period ({self.sample_period!r} s) must be <= Tp / 10 "
+                f"({self.Tp / 10.0:.4g} s) to resolve the wave-frequency signals"
+            )
+
+    # -- derived ----------------------------------------------------------------------------
+
+    @property
+    def peak_frequency(self) -> float:
+        """``w_p = 2 pi / Tp`` (rad/s)."""
+        return _TWO_PI / float(self.Tp)
+
+    @property
+    def frequency_range(self) -> tuple[float, float]:
+        """``(w_min, w_max)`` actually used (rad/s)."""
+        wp = self.peak_frequency
+        lo = 0.5 * wp if self.w_min is None else float(self.w_min)
+        hi = 3.5 * wp if self.w_max is None else float(self.w_max)
+        return lo, hi
+
+    @property
+    def is_calm(self) -> bool:
+        """True when there are no waves (``spectrum is None`` or ``Hs == 0``)."""
+        return self.spectrum is None or self.Hs == 0.0
+
+    @property
+    def position_std(self) -> float:
+        """Effective WF position std along the wave direction (m)."""
+        if self.wf_position_std is not None:
+            return float(self.wf_position_std)
+        return float(self.Hs) / 16.0
+
+    @property
+    def heading_std(self) -> float:
+        """Effective WF heading std (rad)."""
+        if self.wf_heading_std is not None:
+            return float(self.wf_heading_std)
+        return math.radians(2.0) * float(self.Hs) * self.peak_frequency**2 / G
+
+    @property
+    def shaping_lambda(self) -> float:
+        """Damping of Fossen's WF filter: ``wf_lambda`` or the fit to the spectrum (1)."""
+        if self.wf_lambda is not None:
+            return float(self.wf_lambda)
+        kind = "pm" if self.spectrum is None else self.spectrum
+        return fit_shaping_filter_lambda(kind, round(float(self.gamma), 6))
+
+    def spectral_density(self, w: ArrayLike) -> NDArray[np.float64]:
+        """The target spectrum ``S(w)`` (m^2 s/rad) at angular frequencies ``w`` (rad/s)."""
+        return wave_spectrum(self.spectrum, w, float(self.Hs), float(self.Tp), float(self.gamma))
+
+    @classmethod
+    def from_dict(cls, mapping: Mapping[str, Any]) -> WaveConfig:
+        """Build from a mapping of field names (SI units, radians); unknown keys raise."""
+        return from_mapping(cls, mapping, where="wave config")
+
+
+class Waves:
+    """Runtime wave model for one vessel: elevation, WF motion and drift loads.
+
+    Args:
+        config: Sea state (default: the lake sea of :class:`WaveConfig`).
+        hull: Hull dimensions (``B``, ``L_pp``, draught ``T``), the Blue Lady by default.
+        rho: Water density (kg/m^3).
+
+    Example:
+        >>> waves = Waves(WaveConfig(Hs=0.083, Tp=1.79, first_order=True))
+        >>> waves.reset(np.random.default_rng(1))
+        >>> X, Y, N = waves.drift_load(12.3, psi=0.2)   # every physics step, body frame
+        >>> dx, dy, dpsi = waves.wf_motion(12.3)        # add to the measured pose (NED)
+    """
+
+    def __init__(
+        self,
+        config: WaveConfig | None = None,
+        hull: HullParameters = BLUE_LADY_HULL,
+        rho: float = RHO_WATER,
+    ) -> None:
+        self.config = cfg = WaveConfig() if config is None else config
+        self.hull = hull
+        self.rho = float(rho)
+        self._dt = float(cfg.sample_period)
+        self._inv_dt = 1.0 / self._dt
+        self._beta_p = float(cfg.direction_from) + math.pi
+        self._cb = math.cos(self._beta_p)
+        self._sb = math.sin(self._beta_p)
+        tx0, ty0 = drift_coefficients(hull, self.rho)
+        gain = float(cfg.drift_gain)
+        self._kx = tx0 * gain
+        self._ky = ty0 * gain
+        self._kn = -float(cfg.drift_yaw_lever)
+        self.calm = cfg.is_calm
+        self._drift_on = cfg.drift and not self.calm and gain > 0.0
+        self._wf_on = cfg.first_order and not self.calm
+        self._sig_d = cfg.position_std
+        self._sig_h = cfg.heading_std
+        self._filter: tuple[Any, ...] | None = None
+        if self._wf_on and cfg.wf_model != "rao":
+            self._filter = self._build_filter()
+        self._rng_wf: np.random.Generator | None = None
+        self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
+        self._mean_E = 0.0
+        self._reset_grid()
+        self._ready = self.calm
+
+    # -- setup ------------------------------------------------------------------------------
+
+    def _build_filter(self) -> tuple[Any, ...]:
+        """Exact discrete form of the unit-std WF filter (Phi modal, noise map, initial cov)."""
+        from scipy.linalg import expm, solve_continuous_lyapunov
+
+        cfg = self.config
+        wp = cfg.peak_frequency
+        if cfg.wf_model == "fossen":
+            lam = cfg.shaping_lambda
+            den = np.array([1.0, 2.0 * lam * wp, wp * wp])
+            out = 1  # y = xi_2 = s xi_1
+        else:  # al-takie
+            den = al_takie_hf_polynomial(int(cfg.wf_beaufort), wp)  # type: ignore[arg-type]
+            out = 2  # y = x_3 = s^2 x_1
+        n = den.size - 1
+        A = np.zeros((n, n))
+        A[np.arange(n - 1), np.arange(1, n)] = 1.0
+        A[-1, :] = -den[:0:-1]
+        B = np.zeros((n, 1))
+        B[-1, 0] = 1.0
+        P = solve_continuous_lyapunov(A, -B @ B.T)
+        P = 0.5 * (P + P.T) / P[out, out]  # unit output variance (gain folded in)
+        Phi = expm(A * self._dt)
+        Q = P - Phi @ P @ Phi.T
+        Q = 0.5 * (Q + Q.T)
+        Gq = _psd_sqrt(Q)
+        G0 = _psd_sqrt(P)
+        lam_i, V = np.linalg.eig(Phi)
+        Vinv = np.linalg.inv(V)
+        return lam_i, Vinv @ Gq, Vinv @ G0, V[out, :], n
+
+    def _reset_grid(self) -> None:
+        self._chunks: list[NDArray[np.float64]] = []
+        self._cache: dict[int, tuple[list[float], list[float], list[float]]] = {}
+        self._j = -1
+        self._k0 = 0
+        self._E: list[float] = []
+        self._D: list[float] = []
+        self._H: list[float] = []
+        self._q: NDArray[np.complex128] | None = None
+
+    def reset(self, rng: np.random.Generator | int | None = None) -> None:
+        """Draw a new realisation (component frequencies and phases, WF noise).
+
+        A child generator is seeded with one ``integers(2**63)`` draw from ``rng`` (made even
+        for calm water, so the parent's stream does not depend on the wave settings); from it
+        come the component draws and, independently, the WF-filter noise.
+
+        Args:
+            rng: Parent generator or integer seed; ``None`` only for calm water.
+
+        Raises:
+            ValueError: ``rng`` is ``None`` for a non-calm sea.
+        """
+        self._reset_grid()
+        if rng is None:
+            if not self.calm:
+                raise ValueError("Waves.reset needs a numpy Generator (or a seed) unless Hs = 0")
+            self._ready = True
+            return
+        if not isinstance(rng, np.random.Generator):
+            rng = np.random.default_rng(rng)
+        child = np.random.default_rng(int(rng.integers(2**63)))
+        s_comp, s_wf = child.integers(2**63, size=2)
+        self._ready = True
+        if self.calm:
+            return
+        cfg = self.config
+        crng = np.random.default_rng(int(s_comp))
+        n = int(cfg.n_components)
+        lo, hi = cfg.frequency_range
+        w, A, eps = harmonic_components(cfg.spectral_density, lo, hi, n, crng)
+        r = cfg.reflection
+        if r == "kT":
+            kT = w * w / G * float(self.hull.T)
+            sqrtR = np.minimum(1.0, 0.5 * kT)
+        elif r == "full":
+            sqrtR = np.ones(n)
+        else:
+            sqrtR = np.full(n, math.sqrt(float(r)))
+        self._w, self._A, self._eps, self._sqrtR = w, A, eps, sqrtR
+        self._cdrift = A * sqrtR
+        self._mean_E = float(np.sum(self._cdrift**2))
+        k = w * w / G
+        a2 = float(np.sum(A * A))
+        ka2 = float(np.sum((k * A) ** 2))
+        self._g_rao = (
+            self._sig_d / math.sqrt(0.5 * a2) if a2 > 0 else 0.0,
+            self._sig_h / math.sqrt(0.5 * ka2) if ka2 > 0 else 0.0,
+        )
+        self._kA = k * A
+        if self._filter is not None:
+            self._rng_wf = np.random.default_rng(int(s_wf))
+            lam_i, _, G0, _, nf = self._filter
+            z0 = self._rng_wf.standard_normal((nf, 2))
+            self._q = G0 @ z0  # modal state, (n, 2 DOFs)
+
+    # -- grid generation --------------------------------------------------------------------
+
+    def _make_chunk(self, j: int) -> NDArray[np.float64]:
+        """Rows ``[E, d, h]`` on grid points ``j*CHUNK .. (j+1)*CHUNK`` (inclusive)."""
+        rows = np.zeros((3, _CHUNK + 1))
+        need_rao = self._wf_on and self.config.wf_model == "rao"
+        if self._drift_on or need_rao:
+            weights = []
+            if self._drift_on:
+                weights.append(self._cdrift)
+            if need_rao:
+                weights += [self._A, self._kA]
+            t0 = j * _CHUNK * self._dt
+            sums = harmonic_sums(t0, self._dt, _CHUNK + 1, self._w, self._eps, np.array(weights))
+            r = 0
+            if self._drift_on:
+                rows[0] = sums[0].real ** 2 + sums[0].imag ** 2
+                r = 1
+            if need_rao:
+                rows[1] = self._g_rao[0] * sums[r].imag
+                rows[2] = self._g_rao[1] * sums[r + 1].imag
+        if self._filter is not None:
+            rows[1:] = self._filter_chunk()
+        return rows
+
+    def _filter_chunk(self) -> NDArray[np.float64]:
+        """Advance the WF filters by one chunk (exact discrete recursion, modal lfilter)."""
+        from scipy.signal import lfilter
+
+        assert self._filter is not None and self._rng_wf is not None and self._q is not None
+        lam_i, Gm, _, c_out, nf = self._filter
+        z = self._rng_wf.standard_normal((nf, 2 * _CHUNK)).reshape(nf, 2, _CHUNK)
+        u = np.einsum("ij,jdk->idk", Gm, z)  # modal noise, (n, 2, CHUNK)
+        y = np.zeros((2, _CHUNK + 1), dtype=complex)
+        q_end = np.empty_like(self._q)
+        for i in range(nf):
+            q0 = self._q[i]  # (2,)
+            s = lfilter([1.0], [1.0, -lam_i[i]], u[i], axis=-1, zi=(lam_i[i] * q0)[:, None])[0]
+            y[:, 0] += c_out[i] * q0
+            y[:, 1:] += c_out[i] * s
+            q_end[i] = s[:, -1]
+        self._q = q_end
+        out = y.real
+        out[0] *= self._sig_d
+        out[1] *= self._sig_h
+        return out
+
+    def _extend_to(self, j: int) -> None:
+        if not self._ready:
+            raise RuntimeError("call Waves.reset(rng) before querying the waves")
+        while len(self._chunks) <= j:
+            self._chunks.append(self._make_chunk(len(self._chunks)))
+
+    def _select(self, j: int) -> None:
+        lists = self._cache.get(j)
+        if lists is None:
+            self._extend_to(j)
+            arr = self._chunks[j]
+            lists = (arr[0].tolist(), arr[1].tolist(), arr[2].tolist())
+            if len(self._cache) >= 2:
+                del self._cache[next(iter(self._cache))]
+            self._cache[j] = lists
+        self._E, self._D, self._H = lists
+        self._j = j
+        self._k0 = j * _CHUNK
+
+    def _grid(self, rows: slice, t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Linearly interpolated grid rows at times ``t`` (vectorised); returns (rows, shape)."""
+        tt = np.asarray(t, dtype=float)
+        x = tt.ravel() * self._inv_dt
+        if not np.all(x >= 0.0):
+            raise ValueError("Waves: all times must be >= 0 s (and not NaN)")
+        if x.size == 0:
+            return np.zeros((3, 0))[rows], tt
+        k = np.floor(x).astype(np.int64)
+        jmax = int(k.max()) // _CHUNK
+        self._extend_to(jmax)
+        grid = np.concatenate([c[:, :_CHUNK] for c in self._chunks[: jmax + 1]], axis=1)
+        grid = np.concatenate([grid, self._chunks[jmax][:, _CHUNK:]], axis=1)[rows]
+        f = x - k
+        return grid[:, k] + f * (grid[:, k + 1] - grid[:, k]), tt
+
+    # -- per-step queries (plain floats) -----------------------------------------------------
+
+    def drift_load(self, t: float, psi: float) -> tuple[float, float, float]:
+        """Mean + slowly varying second-order drift loads on the hull at time ``t``.
+
+        Call it every physics step (about 1 us). Exactly zero for calm water or ``drift``
+        off.
+
+        Args:
+            t: Simulation time (s), ``>= 0``.
+            psi: Heading (rad).
+
+        Returns:
+            ``(X, Y, N)`` in N, N, N m on the body axes (Python floats).
+        """
+        if not self._drift_on:
+            return _ZERO3
+        x = t * self._inv_dt
+        if not x >= 0.0:
+            raise ValueError(f"Waves.drift_load: time must be >= 0 s, got {t!r}")
+        k = int(x)
+        if k // _CHUNK != self._j:
+            self._select(k // _CHUNK)
+        i = k - self._k0
+        E = self._E
+        e0 = E[i]
+        e = e0 + (x - k) * (E[i + 1] - e0)
+        b = self._beta_p - psi
+        c = math.cos(b)
+        s = math.sin(b)
+        Y = self._ky * s * abs(s) * e
+        return self._kx * c * abs(c) * e, Y, self._kn * c * Y
+
+    def wf_motion(self, t: float) -> tuple[float, float, float]:
+        """First-order wave-frequency motion to add to the *measured* pose at time ``t``.
+
+        Zero-mean and purely wave-frequency; never apply it to the hull. Exactly zero for calm
+        water or ``first_order`` off.
+
+        Args:
+            t: Simulation time (s), ``>= 0``.
+
+        Returns:
+            ``(dx, dy, dpsi)``: NED offsets (m, m) and heading offset (rad), Python floats.
+        """
+        if not self._wf_on:
+            return _ZERO3
+        x = t * self._inv_dt
+        if not x >= 0.0:
+            raise ValueError(f"Waves.wf_motion: time must be >= 0 s, got {t!r}")
+        k = int(x)
+        if k // _CHUNK != self._j:
+            self._select(k // _CHUNK)
+        i = k - self._k0
+        f = x - k
+        D = self._D
+        d0 = D[i]
+        d = d0 + f * (D[i + 1] - d0)
+        H = self._H
+        h0 = H[i]
+        return d * self._cb, d * self._sb, h0 + f * (H[i + 1] - h0)
+
+    def mean_drift_load(self, psi: float) -> tuple[float, float, float]:
+        """Analytic mean drift loads ``T(beta) sum_j A_j^2 R_j`` of this realisation.
+
+        Args:
+            psi: Heading (rad).
+
+        Returns:
+            ``(X, Y, N)`` in N, N, N m (body axes); zeros for calm water or ``drift`` off.
+        """
+        if not self._drift_on:
+            return _ZERO3
+        if not self._ready:
+            raise RuntimeError("call Waves.reset(rng) before querying the waves")
+        b = self._beta_p - float(psi)
+        c = math.cos(b)
+        s = math.sin(b)
+        Y = self._ky * s * abs(s) * self._mean_E
+        return self._kx * c * abs(c) * self._mean_E, Y, self._kn * c * Y
+
+    # -- vectorised queries (tests, plots) ---------------------------------------------------
+
+    @property
+    def components(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(w, A, eps)`` of the current realisation (rad/s, m, rad); empty when calm."""
+        return self._w.copy(), self._A.copy(), self._eps.copy()
+
+    def elevation(self, t: ArrayLike) -> NDArray[np.float64]:
+        """Wave elevation at the ship ``zeta(t) = sum_j A_j cos(w_j t + eps_j)`` (m).
+
+        Args:
+            t: Times (s), any shape.
+
+        Returns:
+            Elevation (m), the shape of ``t`` (computed exactly, not from the grid).
+        """
+        tt = np.asarray(t, dtype=float)
+        if not self._ready:
+            raise RuntimeError("call Waves.reset(rng) before querying the waves")
+        flat = tt.ravel()
+        out = np.zeros(flat.size)
+        if self.calm:
+            return out.reshape(tt.shape)
+        blk = 4096
+        for s in range(0, flat.size, blk):
+            ph = np.multiply.outer(flat[s : s + blk], self._w) + self._eps
+            out[s : s + blk] = np.einsum("kj,j->k", np.cos(ph), self._A)
+        return out.reshape(tt.shape)
+
+    @property
+    def component_hs(self) -> float:
+        """Significant wave height of the realisation, ``4 sqrt(sum A_j^2 / 2)`` (m)."""
+        return 4.0 * math.sqrt(0.5 * float(np.sum(self._A**2)))
+
+    def hs_check(self, t: ArrayLike | None = None) -> float:
+        """Ratio of the realised to the nominal ``Hs`` (1; 1.0 for calm water).
+
+        Args:
+            t: ``None``: from the component amplitudes (``4 sqrt(m0)``); else from the
+                elevation record at these times (``4 std(zeta)``).
+
+        Returns:
+            ``Hs_realised / Hs``; within a few percent of 1 for the default range and 100
+            components (the band ``[0.5, 3.5] w_p`` holds > 99 % of ``m0``).
+        """
+        if self.calm:
+            return 1.0
+        if t is None:
+            hs = self.component_hs
+        else:
+            hs = 4.0 * float(np.std(self.elevation(t)))
+        return hs / float(self.config.Hs)
+
+    def envelope(self, t: ArrayLike) -> NDArray[np.float64]:
+        """Drift envelope ``E(t)`` (m^2) from the grid (zeros when the drift is off)."""
+        tt = np.asarray(t, dtype=float)
+        if not self._drift_on:
+            return np.zeros(tt.shape)
+        vals, _ = self._grid(slice(0, 1), tt)
+        return vals[0].reshape(tt.shape)
+
+    def drift_series(
+        self, t: ArrayLike, psi: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`drift_load` for arrays (same values); returns ``(X, Y, N)`` arrays."""
+        e = self.envelope(t)
+        b = self._beta_p - np.asarray(psi, dtype=float)
+        c = np.cos(b)
+        s = np.sin(b)
+        Y = self._ky * s * np.abs(s) * e
+        return self._kx * c * np.abs(c) * e, Y, self._kn * c * Y
+
+    def wf_series(
+        self, t: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`wf_motion` for arrays: ``(dx, dy, dpsi)`` of the shape of ``t``."""
+        tt = np.asarray(t, dtype=float)
+        if not self._wf_on:
+            z = np.zeros(tt.shape)
+            return z, z.copy(), z.copy()
+        vals, _ = self._grid(slice(1, 3), tt)
+        d = vals[0].reshape(tt.shape)
+        return d * self._cb, d * self._sb, vals[1].reshape(tt.shape)
+
+    def __repr__(self) -> str:
+        return f"Waves(config={self.config!r})"
+
+
+def _psd_sqrt(Q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A square root ``L`` with ``L L^T = Q`` of a symmetric PSD matrix (eigen, clipped)."""
+    d, V = np.linalg.eigh(Q)
+    return V * np.sqrt(np.clip(d, 0.0, None))

@@ -1,0 +1,279 @@
+"""The observer interface shared by every state observer (SPEC section 10), and its registry.
+
+An observer turns sampled measurements of the NED pose ``z = [x, y, psi]`` (DGPS position,
+gyrocompass heading; seed001 "Case of study") and, where its model needs it, the applied body
+thrust ``tau = [X, Y, N]`` into estimates of the pose ``eta = [x, y, psi]`` and of the body
+velocity ``nu = [u, v, r]`` (seed000 eq. 60: ``nu = R^T(psi) eta_dot``)::
+
+    obs = make_observer("kbf")
+    obs.reset(t0, z0)                      # z0: first measured pose
+    info = obs.step(t1, z1, tau)           # propagate to t1, then update with z1 (or None)
+    est = obs.estimate()                   # est.eta, est.nu, est.P_eta, est.P_nu, ...
+
+Conventions: SI units, NED earth frame (x north, y east, psi clockwise from north, rad), body
+frame x forward, y starboard. Heading innovations are wrapped to ``(-pi, pi]``, and the
+estimated heading is continuous (unwrapped), so a ship turning through north never makes an
+estimate jump. Measured headings may come in any branch (e.g. wrapped to ``(-pi, pi]``).
+
+Outlier gate (:class:`OutlierGate`): a measurement whose normalised innovation squared
+``NIS = nu^T S^-1 nu`` (3 dof) exceeds the chi-square quantile of ``gate_probability``
+(default 99.99 %: 21.11) is rejected and the observer coasts, but never more than
+``max_rejections`` times in a row: the next one is then accepted ("forced") and the gate stays
+open until a measurement passes it again, so that the filter follows a real jump of the
+position (e.g. a DGPS reference change) instead of rejecting it for ever.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.special import chdtri
+
+__all__ = [
+    "OBSERVERS",
+    "Estimate",
+    "Observer",
+    "OutlierGate",
+    "StepInfo",
+    "as_pose",
+    "as_tau",
+    "make_observer",
+    "register_observer",
+]
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """An observer's estimate at one instant (copies; never aliases the observer's state).
+
+    Attributes:
+        t: time of the estimate (s).
+        eta: NED pose ``[x, y, psi]`` (m, m, rad), (3,); heading continuous (not wrapped).
+        nu: body velocity ``[u, v, r]`` (m/s, m/s, rad/s), (3,): ``R^T(psi) eta_dot``
+            (seed000 eq. 60).
+        P: error covariance of the observer's full state (layout documented by each observer;
+            the double-integrator filters use ``[x, y, psi, x_dot, y_dot, psi_dot]``).
+        P_eta: covariance of ``eta`` (m^2, rad^2), (3, 3).
+        P_nu: covariance of ``nu`` ((m/s)^2, (rad/s)^2), (3, 3), ``None`` where not meaningful.
+        bias: estimated slowly varying bias force ``[b_X, b_Y, b_N]`` (N, N, N m) for observers
+            that have one (EKF), else ``None``.
+    """
+
+    t: float
+    eta: NDArray[np.float64]
+    nu: NDArray[np.float64]
+    P: NDArray[np.float64]
+    P_eta: NDArray[np.float64]
+    P_nu: NDArray[np.float64] | None
+    bias: NDArray[np.float64] | None = None
+
+
+@dataclass(frozen=True)
+class StepInfo:
+    """What one observer step did with its measurement.
+
+    Attributes:
+        innovation: ``z - H x_pred`` (m, m, rad; heading wrapped to ``(-pi, pi]``), (3,);
+            NaN when no measurement was given.
+        nis: normalised innovation squared ``innovation^T S^-1 innovation`` (-; chi-square
+            with 3 dof for a consistent filter), ``None`` without a measurement.
+        rejected: the measurement failed the NIS gate and was not used (the observer coasted).
+        forced: the measurement failed the gate but was accepted because ``max_rejections``
+            measurements in a row had been rejected already.
+    """
+
+    innovation: NDArray[np.float64]
+    nis: float | None
+    rejected: bool
+    forced: bool = False
+
+
+_NO_MEASUREMENT_INNOVATION = np.full(3, np.nan)
+_NO_MEASUREMENT_INNOVATION.setflags(write=False)
+
+
+def no_measurement() -> StepInfo:
+    """The :class:`StepInfo` of a step without measurement (NaN innovation, no NIS)."""
+    return StepInfo(_NO_MEASUREMENT_INNOVATION, None, False)
+
+
+class Observer(ABC):
+    """The interface of every observer: ``reset``, ``step``, ``estimate`` and a ``name``.
+
+    ``step`` is called once per sample (1 s by default) and must be cheap.
+    """
+
+    name: str = "observer"
+
+    @abstractmethod
+    def reset(
+        self,
+        t0: float,
+        eta0: ArrayLike,
+        *,
+        nu0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+    ) -> None:
+        """Start a new estimate at time ``t0``.
+
+        Args:
+            t0: initial time (s).
+            eta0: initial pose ``[x, y, psi]`` (m, m, rad), usually the first measurement.
+            nu0: initial body velocity ``[u, v, r]`` (m/s, m/s, rad/s); ``None`` = at rest,
+                with the observer's default initial velocity uncertainty.
+            P0: initial covariance of the observer's full state (its documented layout);
+                ``None`` = the observer's default.
+        """
+
+    @abstractmethod
+    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
+        """Propagate from the previous call's time to ``t``, then update with ``z``.
+
+        Args:
+            t: time now (s), not earlier than the previous call.
+            z: measured NED pose ``[x, y, psi]`` (m, m, rad; heading in any branch), or
+                ``None`` when there is no measurement (dropout: coast).
+            tau: body thrust ``[X, Y, N]`` (N, N, N m) held since the previous call, for
+                model-based observers; ``None`` = unknown/zero.
+
+        Returns:
+            :class:`StepInfo`: innovation, NIS and the outlier gate's decision.
+        """
+
+    @abstractmethod
+    def estimate(self) -> Estimate:
+        """The current :class:`Estimate`."""
+
+
+# --------------------------------------------------------------------------------------------
+# Shared helpers
+# --------------------------------------------------------------------------------------------
+
+
+def as_pose(z: ArrayLike, name: str = "z") -> NDArray[np.float64]:
+    """``z`` as 3 finite floats ``[x, y, psi]`` (m, m, rad), else ``ValueError``."""
+    a = np.asarray(z, dtype=float)
+    if a.shape != (3,) or not np.isfinite(a).all():
+        raise ValueError(
+            f"{name} must be 3 finite values [x, y, psi] (m, m, rad)"
+            + (" or None for a missing sample" if name == "z" else "")
+            + f", got {z!r}"
+        )
+    return a
+
+
+def as_tau(tau: ArrayLike | None) -> NDArray[np.float64] | None:
+    """``tau`` as 3 finite floats ``[X, Y, N]`` (N, N, N m) or ``None``, else ``ValueError``."""
+    if tau is None:
+        return None
+    a = np.asarray(tau, dtype=float)
+    if a.shape != (3,) or not np.isfinite(a).all():
+        raise ValueError(f"tau must be 3 finite values [X, Y, N] (N, N, N m), got {tau!r}")
+    return a
+
+
+class OutlierGate:
+    """Chi-square NIS gate that never rejects more than ``max_rejections`` in a row.
+
+    Args:
+        probability: gate probability (-), e.g. 0.9999; measurements with
+            ``NIS > chi2.ppf(probability, dof)`` are rejected. ``None`` disables the gate.
+        dof: number of measured components (3: x, y, psi).
+        max_rejections: most measurements rejected in a row (>= 1); the next one is accepted
+            ("forced") and the gate stays open until a measurement passes it.
+
+    Attributes:
+        threshold: the NIS threshold (-), ``inf`` when disabled.
+    """
+
+    def __init__(
+        self, probability: float | None = 0.9999, *, dof: int = 3, max_rejections: int = 5
+    ) -> None:
+        if probability is None:
+            self.threshold = math.inf
+        else:
+            p = float(probability)
+            if not 0.0 < p < 1.0:
+                raise ValueError(f"gate_probability must be in (0, 1) or None, got {probability!r}")
+            self.threshold = float(chdtri(dof, 1.0 - p))
+        if isinstance(max_rejections, bool) or int(max_rejections) != max_rejections:
+            raise ValueError(f"max_rejections must be an integer >= 1, got {max_rejections!r}")
+        if max_rejections < 1:
+            raise ValueError(f"max_rejections must be >= 1, got {max_rejections!r}")
+        self.probability = probability
+        self.max_rejections = int(max_rejections)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the rejection history."""
+        self._count = 0
+        self._open = False
+
+    def check(self, nis: float) -> Literal["accept", "reject", "force"]:
+        """Decide on one measurement from its NIS."""
+        if nis <= self.threshold:
+            self._count = 0
+            self._open = False
+            return "accept"
+        if self._open:
+            return "force"
+        if self._count >= self.max_rejections:
+            self._count = 0
+            self._open = True
+            return "force"
+        self._count += 1
+        return "reject"
+
+
+# --------------------------------------------------------------------------------------------
+# Registry
+# --------------------------------------------------------------------------------------------
+
+OBSERVERS: dict[str, Callable[..., Observer]] = {}
+"""Observer factories by name; ``factory(**overrides)`` returns a new observer."""
+
+_BUILTIN_MODULES = ("shipgym.observers.kalman", "shipgym.observers.ekf")
+
+
+def register_observer(name: str, factory: Callable[..., Observer]) -> None:
+    """Add (or replace) a named observer factory in :data:`OBSERVERS`."""
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"an observer name must be a non-empty string, got {name!r}")
+    OBSERVERS[name] = factory
+
+
+def _load_builtins() -> None:
+    for mod in _BUILTIN_MODULES:
+        try:
+            importlib.import_module(mod)
+        except ModuleNotFoundError as exc:  # only a missing optional module, not its imports
+            if exc.name != mod:
+                raise
+
+
+def make_observer(name: str, **overrides: Any) -> Observer:
+    """A new observer by registered name (``dkf``, ``kbf``, ``tomera-dkf``, ...).
+
+    Args:
+        name: a key of :data:`OBSERVERS`.
+        **overrides: passed to the factory (e.g. design fields, ``gate_probability``).
+
+    Raises:
+        ValueError: unknown name (the message lists the valid names) or bad overrides.
+    """
+    if name not in OBSERVERS:
+        _load_builtins()
+    try:
+        factory = OBSERVERS[name]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"unknown observer {name!r}; valid names are: {', '.join(sorted(OBSERVERS))}"
+        ) from None
+    return factory(**overrides)

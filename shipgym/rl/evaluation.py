@@ -1,0 +1,165 @@
+"""Closed-loop episodes of any controller (classical or learned) and their result rows.
+
+One runner for everything that compares controllers: the periodic harbour evaluation during
+training (:class:`shipgym.rl.train.HarbourEvalCallback`) and ``shipgym bench controllers``
+(:mod:`shipgym.rl.bench`). A result row carries the same keys as
+:func:`shipgym.cli.run_episode` (``completed``, ``quay_contact``, ``x_E``, ``y_E``,
+``psi_E``, ``J_c``, ``measured``, ``duration_s``, ``thrust_mean_abs``, ...).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "DEFAULT_WIND",
+    "available_observers",
+    "default_observer",
+    "make_controlled_env",
+    "run_controlled_episode",
+    "run_env_episode",
+]
+
+#: the lake-trial wind of seed001: 3 m/s from 300 deg (speed m/s, direction-from rad)
+DEFAULT_WIND: tuple[float, float] = (3.0, math.radians(300.0))
+
+PolicyFn = Callable[[NDArray[np.float32]], NDArray[np.float32]]
+
+
+def available_observers() -> list[str]:
+    """Observer names this installation provides (empty while none is registered)."""
+    try:
+        from shipgym.observers import observer_names
+
+        return list(observer_names())
+    except ImportError:
+        return []
+
+
+def default_observer() -> str | None:
+    """``"kbf"`` (the continuous Kalman-Bucy filter) when available, else ``None`` (truth)."""
+    return "kbf" if "kbf" in available_observers() else None
+
+
+def check_observer(observer: str | None) -> str | None:
+    """Validate an observer name (``None``/``"truth"``: the truth); returns ``None`` or it."""
+    if observer in (None, "truth"):
+        return None
+    names = available_observers()
+    if observer not in names:
+        have = ", ".join(names) if names else "none yet"
+        raise ValueError(
+            f"observer {observer!r} is not available (registered observers: {have}); "
+            "use 'truth' to let the controller see the true state"
+        )
+    return observer
+
+
+def make_controlled_env(
+    scenario: str,
+    controller: str,
+    *,
+    observer: str | None = None,
+    wind: tuple[float, float] | None = DEFAULT_WIND,
+    **env_kwargs: Any,
+) -> gym.Env[Any, Any]:
+    """The wrapper stack of a named controller: classical (``pid``, ``lq``) or learned.
+
+    Args:
+        scenario: scenario name or env id (``harbour``, ``tracking``, ...).
+        controller: a name in ``shipgym.controllers.wrappers.CONTROLLERS`` or a learned
+            controller (``ppo``: the shipped baseline, ``ppo:PATH``, ``sac:PATH``).
+        observer: ``None``/``"truth"`` or an observer name. Learned controllers always get
+            the observer given here (pass the model's own to reproduce its training setup).
+        wind: ``(speed m/s, direction-from rad)`` or ``None`` (calm).
+        **env_kwargs: further environment arguments.
+    """
+    import shipgym
+    from shipgym.controllers.learned import is_learned_controller, make_learned_env
+    from shipgym.disturbances import WindConfig
+
+    wind_cfg = None if wind is None else WindConfig(speed=wind[0], direction_from=wind[1])
+    observer = check_observer(observer)
+    if is_learned_controller(controller):
+        return make_learned_env(scenario, controller, observer=observer, wind=wind_cfg, **env_kwargs)
+    return shipgym.make(scenario, observer=observer, controller=controller, wind=wind_cfg, **env_kwargs)
+
+
+def run_env_episode(
+    env: gym.Env[Any, Any], seed: int, policy: PolicyFn | None = None
+) -> dict[str, Any]:
+    """Run one episode to its end; ``policy(obs) -> action`` or zeros. Returns the result row.
+
+    The row has the keys of :func:`shipgym.cli.run_episode` that describe the run
+    (``completed``, ``legs_completed``, ``duration_s``, ``quay_contact``, ``terminated``,
+    ``truncated``, ``x_E``, ``y_E``, ``psi_E`` (deg), ``J_c``, ``measured``, ``leg_times``,
+    ``thrust_mean_abs`` (N), ``thrust_total_variation`` (N), ``saturated_fraction``,
+    ``rmse``, ``wall_time_s``) plus ``seed`` and ``return`` (sum of rewards).
+    """
+    t0 = time.perf_counter()
+    obs, info = env.reset(seed=seed)
+    zero = np.zeros(env.action_space.shape, dtype=np.float32)
+    terminated = truncated = False
+    ret = 0.0
+    while not (terminated or truncated):
+        action = zero if policy is None else policy(obs)
+        obs, reward, terminated, truncated, info = env.step(action)
+        ret += float(reward)
+    metrics = env.unwrapped.episode_metrics()  # type: ignore[attr-defined]
+    wall = time.perf_counter() - t0
+    return {
+        "seed": int(seed),
+        "completed": bool(metrics["completed"]),
+        "legs_completed": int(metrics["legs_completed"]),
+        "duration_s": float(metrics["duration_s"]),
+        "quay_contact": bool(metrics["quay_contact"]),
+        "terminated": bool(terminated),
+        "truncated": bool(truncated),
+        "x_E": metrics["x_E"],
+        "y_E": metrics["y_E"],
+        "psi_E": metrics["psi_E"],
+        "J_c": metrics["J_c"],
+        "measured": metrics.get("measured"),
+        "leg_times": list(metrics["leg_times"]),
+        "thrust_mean_abs": list(metrics["thrust_mean_abs"]),
+        "thrust_total_variation": list(metrics["thrust_total_variation"]),
+        "saturated_fraction": list(metrics["saturated_fraction"]),
+        "rmse": info.get("estimation_rmse"),
+        "return": ret,
+        "wall_time_s": wall,
+    }
+
+
+def run_controlled_episode(
+    scenario: str,
+    controller: str,
+    *,
+    seed: int = 0,
+    observer: str | None = None,
+    wind: tuple[float, float] | None = DEFAULT_WIND,
+    **env_kwargs: Any,
+) -> dict[str, Any]:
+    """One closed-loop episode of a named controller (see :func:`make_controlled_env`).
+
+    Returns the row of :func:`run_env_episode` plus ``scenario``, ``controller`` (the name as
+    given), ``observer`` and ``wind``.
+    """
+    env = make_controlled_env(scenario, controller, observer=observer, wind=wind, **env_kwargs)
+    try:
+        row = run_env_episode(env, seed)
+    finally:
+        env.close()
+    return {
+        "scenario": scenario,
+        "controller": controller,
+        "observer": observer or "truth",
+        "wind": None if wind is None else {"speed": wind[0], "from_deg": math.degrees(wind[1])},
+        **row,
+    }

@@ -1,0 +1,762 @@
+"""Training of learned controllers: ``shipgym train ppo|sac`` (rl-baselines3-zoo style).
+
+The training task is ``shipgym/BlueLadyTracking-v0`` (randomised leg plans and wind, open
+water) seen through an observer (the Kalman-Bucy filter by default), so the policy gets what
+a real DP controller would get. With ``residual=True`` the policy's action is added to the
+normalised command of a classical controller (the tuned PID) through
+:class:`~shipgym.controllers.wrappers.DPControllerWrapper`: the policy starts as the PID and
+learns corrections.
+
+Hyperparameters live in plain YAML files shipped with the package
+(``shipgym/rl/hyperparams/{ppo,sac}.yml``, read with ``yaml.safe_load``; nothing is
+evaluated). A run writes into its output folder:
+
+- ``model.zip``: the final model, a shipgym model (SB3 zip + ``shipgym.json`` metadata with
+  the ``VecNormalize`` statistics; :mod:`shipgym.controllers.learned`);
+- ``best_model.zip``: the model with the best periodic harbour evaluation;
+- ``checkpoints/{algo}_{steps}_steps.zip``: periodic checkpoints (``resume=`` continues one);
+- ``evaluations.json``: the harbour evaluations (completion, J_c per seed, over time);
+- ``progress.csv``: SB3's training log; ``config.yml`` (resolved hyperparameters),
+  ``args.yml`` and ``command.txt`` (the exact command), as the zoo does.
+
+Determinism: with ``deterministic=True`` (default) torch runs single-threaded with
+``torch.use_deterministic_algorithms(True)``, every random generator is seeded
+(``set_random_seed``, env ``i`` gets ``seed + i``, sensor randomisation its own stream), so
+the same seed gives the same training curve on the same CPU and software versions.
+"""
+
+from __future__ import annotations
+
+import copy
+import inspect
+import json
+import math
+import shlex
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import yaml
+
+from shipgym.controllers.learned import (
+    ALGORITHMS,
+    LearnedPolicy,
+    ModelMetadata,
+    ObsNormalization,
+    algorithm_class,
+    read_metadata,
+    sb3_policy_kwargs,
+    write_metadata,
+)
+
+from .evaluation import check_observer, run_env_episode
+
+__all__ = [
+    "DEFAULT_ENV_ID",
+    "EVAL_ENV_ID",
+    "TrainResult",
+    "build_env",
+    "build_vec_env",
+    "hyperparams_path",
+    "load_hyperparams",
+    "set_deterministic",
+    "train",
+    "train_command",
+]
+
+#: the training task
+DEFAULT_ENV_ID = "shipgym/BlueLadyTracking-v0"
+#: the periodic evaluation: the 5-leg harbour manoeuvre in its default lake-trial wind
+EVAL_ENV_ID = "shipgym/BlueLadyHarbour-v0"
+
+#: keys of a hyperparameter block that shipgym uses (everything else goes to the algorithm)
+SHIPGYM_KEYS = (
+    "n_timesteps",
+    "policy",
+    "n_envs",
+    "vec_env",
+    "observer",
+    "env_kwargs",
+    "randomize",
+    "normalize",
+    "eval_freq",
+    "eval_seeds",
+    "checkpoint_freq",
+    "residual",
+    "controller",
+    "residual_scale",
+)
+_INT_KEYS = (
+    "n_timesteps",
+    "n_envs",
+    "n_steps",
+    "batch_size",
+    "n_epochs",
+    "buffer_size",
+    "learning_starts",
+    "train_freq",
+    "gradient_steps",
+    "eval_freq",
+    "checkpoint_freq",
+)
+_NOT_ALGO_ARGS = ("policy", "env", "seed", "device", "verbose", "_init_setup_model")
+
+
+# ---- hyperparameters -------------------------------------------------------------------------
+def hyperparams_path(algo: str) -> Path:
+    """The shipped YAML file of an algorithm (``shipgym/rl/hyperparams/<algo>.yml``)."""
+    if algo not in ALGORITHMS:
+        raise ValueError(f"unknown algorithm {algo!r}; choose one of: {', '.join(ALGORITHMS)}")
+    return Path(str(resources.files("shipgym.rl") / "hyperparams" / f"{algo}.yml"))
+
+
+def _merge(base: dict[str, Any], over: Mapping[str, Any]) -> dict[str, Any]:
+    """``base`` updated with ``over``, recursing into mappings except ``policy_kwargs``."""
+    out = copy.deepcopy(base)
+    for k, v in over.items():
+        if isinstance(v, Mapping) and isinstance(out.get(k), dict) and k != "policy_kwargs":
+            out[k] = _merge(out[k], v)
+        else:
+            out[k] = copy.deepcopy(v)
+    return out
+
+
+def load_hyperparams(
+    algo: str,
+    env_id: str = DEFAULT_ENV_ID,
+    *,
+    residual: bool = False,
+    path: str | Path | None = None,
+    overrides: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Resolved hyperparameters of ``algo`` for ``env_id`` (plain data).
+
+    Reads the YAML file (``path`` or the shipped one) with ``yaml.safe_load``, takes the
+    block of ``env_id``, applies the ``residual`` overrides when ``residual`` and then
+    ``overrides``. The result has ``residual`` (bool), ``controller`` and ``residual_scale``
+    resolved.
+
+    Raises:
+        ValueError: missing env block, malformed values, unknown algorithm arguments.
+    """
+    p = Path(path) if path is not None else hyperparams_path(algo)
+    try:
+        data = yaml.safe_load(p.read_text())
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{p}: not valid YAML: {exc}") from None
+    if not isinstance(data, dict) or env_id not in data:
+        have = ", ".join(data) if isinstance(data, dict) else "nothing"
+        raise ValueError(f"{p} has no hyperparameters for {env_id!r} (it has: {have})")
+    block = data[env_id]
+    if not isinstance(block, dict):
+        raise ValueError(f"{p}: the block of {env_id!r} must be a mapping")
+    hp = copy.deepcopy(block)
+    res_block = hp.pop("residual", None) or {}
+    if not isinstance(res_block, dict):
+        raise ValueError(f"{p}: 'residual' must be a mapping of overrides")
+    if residual:
+        hp = _merge(hp, res_block)
+        hp.setdefault("controller", "pid")
+        hp.setdefault("residual_scale", 1.0)
+    else:
+        hp.pop("controller", None)
+        hp.pop("residual_scale", None)
+    hp["residual"] = bool(residual)
+    if overrides:
+        hp = _merge(hp, overrides)
+    for k in _INT_KEYS:
+        if k in hp and hp[k] is not None:
+            v = hp[k]
+            if isinstance(v, str):
+                v = float(v)
+            if isinstance(v, float) and v.is_integer():
+                v = int(v)
+            if not isinstance(v, int) or isinstance(v, bool):
+                raise ValueError(f"{p}: {k} must be a whole number, got {hp[k]!r}")
+            hp[k] = v
+    _check_algo_args(algo, hp, where=str(p))
+    return hp
+
+
+def _check_algo_args(algo: str, hp: Mapping[str, Any], where: str) -> None:
+    cls = algorithm_class(algo)
+    params = set(inspect.signature(cls.__init__).parameters) - set(_NOT_ALGO_ARGS)
+    unknown = sorted(k for k in hp if k not in SHIPGYM_KEYS and k not in params)
+    if unknown:
+        raise ValueError(
+            f"{where}: unknown hyperparameter(s) {unknown} for {algo}; shipgym keys: "
+            f"{', '.join(SHIPGYM_KEYS)}; {algo} arguments: {', '.join(sorted(params))}"
+        )
+
+
+def _schedule(value: Any, name: str) -> Any:
+    """A number, or ``"lin_<x>"``: linear decay from ``x`` to 0 over training."""
+    if isinstance(value, str):
+        if value.startswith("lin_"):
+            try:
+                x0 = float(value[4:])
+            except ValueError:
+                raise ValueError(f"{name}: malformed schedule {value!r} (use lin_3e-4)") from None
+            return lambda progress_remaining: progress_remaining * x0
+        try:
+            return float(value)
+        except ValueError:
+            raise ValueError(f"{name} must be a number or 'lin_<number>', got {value!r}") from None
+    return value
+
+
+def _algo_kwargs(algo: str, hp: Mapping[str, Any]) -> dict[str, Any]:
+    kw = {k: v for k, v in hp.items() if k not in SHIPGYM_KEYS}
+    for key in ("learning_rate", "clip_range", "clip_range_vf"):
+        if key in kw:
+            kw[key] = _schedule(kw[key], key)
+    if "policy_kwargs" in kw:
+        kw["policy_kwargs"] = sb3_policy_kwargs(kw["policy_kwargs"])
+    if algo == "sac" and isinstance(kw.get("train_freq"), list):
+        kw["train_freq"] = tuple(kw["train_freq"])
+    return kw
+
+
+# ---- environments ----------------------------------------------------------------------------
+def _draw_sensors(spec: Mapping[str, Any], seed: int, rank: int) -> Any:
+    """A SensorConfig with noise sigmas drawn uniformly from ``spec`` (own seeded stream)."""
+    from shipgym.observers.sensors import SensorConfig
+
+    known = {"position_sigma", "heading_sigma_deg"}
+    unknown = sorted(set(spec) - known)
+    if unknown:
+        raise ValueError(f"randomize.sensors: unknown keys {unknown}; valid: {sorted(known)}")
+    rng = np.random.default_rng([int(seed), int(rank), 7919])
+    kw: dict[str, float] = {}
+    if "position_sigma" in spec:
+        lo, hi = (float(x) for x in spec["position_sigma"])
+        kw["position_variance"] = float(rng.uniform(lo, hi)) ** 2
+    if "heading_sigma_deg" in spec:
+        lo, hi = (float(x) for x in spec["heading_sigma_deg"])
+        kw["heading_variance"] = math.radians(float(rng.uniform(lo, hi))) ** 2
+    return SensorConfig(**kw)
+
+
+def build_env(
+    env_id: str,
+    hp: Mapping[str, Any],
+    *,
+    seed: int = 0,
+    rank: int = 0,
+    env_kwargs: Mapping[str, Any] | None = None,
+    randomize: bool = True,
+) -> gym.Env[Any, Any]:
+    """One environment of the training stack: env -> observer -> [DP controller (residual)].
+
+    Args:
+        env_id: env id.
+        hp: resolved hyperparameters (:func:`load_hyperparams`).
+        seed: training seed (only used by the sensor randomisation).
+        rank: index of this env in the vector env.
+        env_kwargs: environment arguments (default: ``hp["env_kwargs"]``).
+        randomize: apply ``hp["randomize"]``.
+    """
+    import shipgym  # noqa: F401  (registers the ids in worker processes)
+    from shipgym.controllers.wrappers import DPControllerWrapper
+
+    kwargs = dict(hp.get("env_kwargs") or {}) if env_kwargs is None else dict(env_kwargs)
+    rnd = hp.get("randomize") or {}
+    unknown = sorted(set(rnd) - {"sensors"})
+    if unknown:
+        raise ValueError(f"randomize: unknown keys {unknown}; valid: ['sensors']")
+    if randomize and "sensors" in rnd:
+        kwargs["sensors"] = _draw_sensors(rnd["sensors"], seed, rank)
+    env = gym.make(env_id, **kwargs)
+    observer = check_observer(hp.get("observer"))
+    if observer is not None:
+        from shipgym.observers.wrapper import ObserverWrapper
+
+        env = ObserverWrapper(env, observer=observer)
+    if hp.get("residual"):
+        env = DPControllerWrapper(
+            env, controller=hp["controller"], residual_scale=float(hp["residual_scale"])
+        )
+    return env
+
+
+def build_vec_env(
+    env_id: str, hp: Mapping[str, Any], n_envs: int, seed: int, vec_env: str = "dummy"
+) -> Any:
+    """``VecMonitor(DummyVecEnv | SubprocVecEnv)`` of ``n_envs`` training envs (not normalised)."""
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor
+
+    if not (isinstance(n_envs, int) and n_envs >= 1):
+        raise ValueError(f"n_envs must be an int >= 1, got {n_envs!r}")
+    hp = dict(hp)
+    fns = [_EnvFactory(env_id, hp, seed, i) for i in range(n_envs)]
+    if vec_env == "dummy":
+        venv = DummyVecEnv(fns)  # type: ignore[arg-type]
+    elif vec_env == "subproc":
+        venv = SubprocVecEnv(fns, start_method="forkserver")  # type: ignore[arg-type]
+    else:
+        raise ValueError(f"vec_env must be 'dummy' or 'subproc', got {vec_env!r}")
+    return VecMonitor(venv)
+
+
+@dataclass
+class _EnvFactory:
+    """A picklable ``() -> env`` for the vector envs."""
+
+    env_id: str
+    hp: dict[str, Any]
+    seed: int
+    rank: int
+
+    def __call__(self) -> gym.Env[Any, Any]:
+        return build_env(self.env_id, self.hp, seed=self.seed, rank=self.rank)
+
+
+def set_deterministic(seed: int, threads: int = 1) -> None:
+    """Seed python, numpy and torch; single-threaded, deterministic torch algorithms."""
+    import torch
+    from stable_baselines3.common.utils import set_random_seed
+
+    torch.set_num_threads(threads)
+    torch.use_deterministic_algorithms(True)
+    set_random_seed(seed)
+
+
+# ---- metadata --------------------------------------------------------------------------------
+def train_command(
+    algo: str,
+    *,
+    timesteps: int,
+    seed: int,
+    n_envs: int,
+    out: str | Path,
+    residual: bool,
+    observer: str | None,
+    resume: str | Path | None = None,
+) -> str:
+    """The ``shipgym train`` command line that reproduces a run (stored in the metadata)."""
+    parts = ["shipgym", "train", algo, "--timesteps", str(timesteps), "--seed", str(seed)]
+    parts += ["--n-envs", str(n_envs), "--out", str(out)]
+    if residual:
+        parts.append("--residual")
+    parts += ["--observer", observer or "truth"]
+    if resume is not None:
+        parts += ["--resume", str(resume)]
+    return shlex.join(parts)
+
+
+def _versions() -> dict[str, str]:
+    import stable_baselines3
+    import torch
+
+    import shipgym
+
+    return {
+        "shipgym_version": shipgym.__version__,
+        "sb3_version": stable_baselines3.__version__,
+        "torch_version": torch.__version__,
+    }
+
+
+def _metadata(
+    algo: str,
+    env_id: str,
+    hp: Mapping[str, Any],
+    model: Any,
+    venv: Any,
+    *,
+    seed: int,
+    command: str,
+    extra: Mapping[str, Any] | None = None,
+) -> ModelMetadata:
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    norm = ObsNormalization.from_vec_normalize(venv) if isinstance(venv, VecNormalize) else None
+    return ModelMetadata(
+        algorithm=algo,
+        env_id=env_id,
+        env_kwargs=copy.deepcopy(dict(hp.get("env_kwargs") or {})),
+        observer=check_observer(hp.get("observer")),
+        residual=bool(hp.get("residual")),
+        controller=hp.get("controller") if hp.get("residual") else None,
+        residual_scale=float(hp.get("residual_scale", 1.0)) if hp.get("residual") else 1.0,
+        normalization=norm,
+        policy=str(hp.get("policy", "MlpPolicy")),
+        policy_kwargs=copy.deepcopy(dict(hp.get("policy_kwargs") or {})),
+        use_sde=bool(hp.get("use_sde", False)),
+        observation_shape=tuple(model.observation_space.shape),
+        action_shape=tuple(model.action_space.shape),
+        seed=seed,
+        command=command,
+        num_timesteps=int(model.num_timesteps),
+        hyperparams=copy.deepcopy(dict(hp)),
+        extra=dict(extra or {}),
+        **_versions(),
+    )
+
+
+def save_model(model: Any, path: str | Path, meta: ModelMetadata) -> Path:
+    """``model.save(path)`` plus ``shipgym.json``; returns the path of the zip."""
+    p = Path(path)
+    if p.suffix != ".zip":
+        p = p.with_name(p.name + ".zip")
+    p.parent.mkdir(parents=True, exist_ok=True)
+    model.save(p)
+    write_metadata(p, meta)
+    return p
+
+
+# ---- callbacks -------------------------------------------------------------------------------
+def _callbacks() -> Any:
+    from stable_baselines3.common import callbacks
+
+    return callbacks
+
+
+def _score(rows: Sequence[Mapping[str, Any]]) -> tuple[int, float]:
+    """(runs completed without quay contact, -mean J_c): larger is better."""
+    ok = sum(bool(r["completed"]) and not r["quay_contact"] for r in rows)
+    jc = [float(r["J_c"]) for r in rows if math.isfinite(float(r["J_c"]))]
+    return ok, -(float(np.mean(jc)) if jc else math.inf)
+
+
+def _make_eval_callback(**kw: Any) -> Any:
+    cb = _callbacks()
+
+    class HarbourEvalCallback(cb.BaseCallback):  # type: ignore[misc, name-defined]
+        """Every ``eval_freq`` steps: the harbour manoeuvre with the current policy.
+
+        Runs the deterministic policy (current ``VecNormalize`` statistics) on
+        ``shipgym/BlueLadyHarbour-v0`` for each seed, logs ``eval/completed`` (fraction
+        completed without quay contact), ``eval/J_c``, ``eval/J_c_measured``,
+        ``eval/quay_contact``, ``eval/duration_s``, appends to ``evaluations.json`` and saves
+        ``best_model.zip`` on improvement (more runs completed, then lower mean J_c).
+        """
+
+        def __init__(
+            self,
+            env: gym.Env[Any, Any],
+            metadata_fn: Callable[[], ModelMetadata],
+            save_fn: Callable[[Path], Path],
+            eval_freq: int,
+            seeds: Sequence[int],
+            out_dir: Path,
+        ) -> None:
+            super().__init__()
+            self.env = env
+            self.metadata_fn = metadata_fn
+            self.save_fn = save_fn
+            self.eval_freq = int(eval_freq)
+            self.seeds = [int(s) for s in seeds]
+            self.out_dir = out_dir
+            self.evaluations: list[dict[str, Any]] = []
+            self.best: tuple[int, float] | None = None
+            self._last = 0
+
+        def _on_step(self) -> bool:
+            if self.eval_freq > 0 and self.num_timesteps - self._last >= self.eval_freq:
+                self._last = self.num_timesteps
+                self.evaluate()
+            return True
+
+        def evaluate(self) -> dict[str, Any]:
+            policy = LearnedPolicy(self.model.policy, self.metadata_fn())
+            rows = [run_env_episode(self.env, s, policy) for s in self.seeds]
+            ok, neg_jc = _score(rows)
+            meas = [r["measured"]["J_c"] for r in rows if r.get("measured")]
+            summary = {
+                "timesteps": int(self.num_timesteps),
+                "completed": ok,
+                "runs": len(rows),
+                "J_c": -neg_jc,
+                "J_c_measured": float(np.mean(meas)) if meas else None,
+                "rows": [
+                    {k: r[k] for k in ("seed", "completed", "quay_contact", "J_c", "duration_s")}
+                    for r in rows
+                ],
+            }
+            self.evaluations.append(summary)
+            self.logger.record("eval/completed", ok / max(len(rows), 1))
+            self.logger.record("eval/J_c", summary["J_c"])
+            if meas:
+                self.logger.record("eval/J_c_measured", summary["J_c_measured"])
+            self.logger.record("eval/quay_contact", sum(r["quay_contact"] for r in rows))
+            self.logger.record("eval/duration_s", float(np.mean([r["duration_s"] for r in rows])))
+            (self.out_dir / "evaluations.json").write_text(json.dumps(self.evaluations, indent=1))
+            score = (ok, neg_jc)
+            if self.best is None or score > self.best:
+                self.best = score
+                self.save_fn(self.out_dir / "best_model.zip")
+            return summary
+
+    return HarbourEvalCallback(**kw)
+
+
+def _make_checkpoint_callback(
+    save_fn: Callable[[Path], Path], freq: int, folder: Path, algo: str
+) -> Any:
+    cb = _callbacks()
+
+    class ShipgymCheckpoint(cb.BaseCallback):  # type: ignore[misc, name-defined]
+        """Saves a shipgym model (with normalisation statistics) every ``freq`` steps."""
+
+        def __init__(self) -> None:
+            super().__init__()
+            self._last = 0
+
+        def _on_step(self) -> bool:
+            if freq > 0 and self.num_timesteps - self._last >= freq:
+                self._last = self.num_timesteps
+                save_fn(folder / f"{algo}_{self.num_timesteps}_steps.zip")
+            return True
+
+    return ShipgymCheckpoint()
+
+
+def _make_time_limit_callback(max_seconds: float) -> Any:
+    cb = _callbacks()
+
+    class WallTimeLimit(cb.BaseCallback):  # type: ignore[misc, name-defined]
+        """Stops training after ``max_seconds`` of wall-clock time."""
+
+        def _on_training_start(self) -> None:
+            self._t0 = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            return time.perf_counter() - self._t0 < max_seconds
+
+    return WallTimeLimit()
+
+
+def _make_progress_callback() -> Any:
+    """SB3's rich progress bar when ``rich`` is installed, else a plain tqdm bar."""
+    cb = _callbacks()
+    try:
+        import rich  # noqa: F401
+
+        return cb.ProgressBarCallback()
+    except ImportError:
+        pass
+
+    class TqdmProgress(cb.BaseCallback):  # type: ignore[misc, name-defined]
+        """A tqdm progress bar over the environment steps of this run."""
+
+        def _on_training_start(self) -> None:
+            from tqdm import tqdm
+
+            total = self.locals["total_timesteps"] - self.model.num_timesteps
+            self.pbar = tqdm(total=total, unit="step", desc="training", smoothing=0.05)
+
+        def _on_step(self) -> bool:
+            self.pbar.update(self.training_env.num_envs)
+            return True
+
+        def _on_training_end(self) -> None:
+            self.pbar.close()
+
+    return TqdmProgress()
+
+
+# ---- training --------------------------------------------------------------------------------
+@dataclass
+class TrainResult:
+    """What :func:`train` produced.
+
+    Attributes:
+        model_path: the final model (``OUT/model.zip``).
+        best_model_path: the best harbour evaluation's model, if evaluation ran.
+        out_dir: the output folder.
+        metadata: the final model's metadata.
+        num_timesteps: environment steps trained in total (including a resumed run's).
+        wall_time_s: wall-clock time of the training (s).
+        evaluations: the harbour evaluations (see ``evaluations.json``).
+    """
+
+    model_path: Path
+    best_model_path: Path | None
+    out_dir: Path
+    metadata: ModelMetadata
+    num_timesteps: int
+    wall_time_s: float
+    evaluations: list[dict[str, Any]] = field(default_factory=list)
+
+
+def train(
+    algo: str,
+    *,
+    timesteps: int | None = None,
+    seed: int = 0,
+    n_envs: int | None = None,
+    out: str | Path | None = None,
+    resume: str | Path | None = None,
+    residual: bool = False,
+    observer: str | None = None,
+    env_id: str = DEFAULT_ENV_ID,
+    hyperparams: str | Path | None = None,
+    overrides: Mapping[str, Any] | None = None,
+    eval_freq: int | None = None,
+    eval_seeds: Sequence[int] | None = None,
+    checkpoint_freq: int | None = None,
+    vec_env: str | None = None,
+    max_minutes: float | None = None,
+    progress: bool = True,
+    deterministic: bool = True,
+    verbose: int = 0,
+) -> TrainResult:
+    """Train a PPO or SAC controller; the function behind ``shipgym train``.
+
+    Args:
+        algo: ``"ppo"`` or ``"sac"``.
+        timesteps: environment steps of this run (all envs together); default the YAML's
+            ``n_timesteps``. With ``resume`` the steps are added to the checkpoint's.
+        seed: seed of everything (envs ``seed + i``, torch, numpy, sensor randomisation).
+        n_envs: parallel environments (default: YAML).
+        out: output folder (default ``runs/train/<algo>[-residual]-seed<seed>``).
+        resume: a checkpoint or model (shipgym model zip) to continue; its metadata decides
+            the task, observer and residual setup. Loads with stable-baselines3, which
+            unpickles: only resume from your own files.
+        residual: learn a residual on top of the YAML's ``controller`` (the tuned PID).
+        observer: ``"truth"``, ``"kbf"``, ... (default: YAML, ``kbf``).
+        env_id: training env id (a block of that name must exist in the YAML).
+        hyperparams: another YAML file in the same layout.
+        overrides: hyperparameters replacing the YAML's (plain data, merged).
+        eval_freq: steps between harbour evaluations (default YAML; 0 disables).
+        eval_seeds: harbour seeds of each evaluation (default YAML, ``[100, 101]``).
+        checkpoint_freq: steps between checkpoints (default YAML; 0 disables).
+        vec_env: ``"dummy"`` or ``"subproc"`` (default YAML).
+        max_minutes: stop after this wall-clock time (the model so far is saved).
+        progress: show a progress bar.
+        deterministic: single thread, deterministic torch algorithms (see module docstring).
+        verbose: SB3 verbosity (1 prints the training log).
+
+    Returns:
+        A :class:`TrainResult`.
+    """
+    from stable_baselines3.common.logger import configure
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    cls = algorithm_class(algo)
+    resume_meta = read_metadata(resume) if resume is not None else None
+    if resume_meta is not None:
+        if resume_meta.algorithm != algo:
+            raise ValueError(f"{resume} holds a {resume_meta.algorithm} model, not {algo}")
+        hp = copy.deepcopy(resume_meta.hyperparams)
+        env_id = resume_meta.env_id
+        residual = bool(hp.get("residual"))
+        if overrides:
+            hp = _merge(hp, overrides)
+    else:
+        hp = load_hyperparams(
+            algo, env_id, residual=residual, path=hyperparams, overrides=overrides
+        )
+    if observer is not None:
+        hp["observer"] = None if observer == "truth" else observer
+    hp["observer"] = check_observer(hp.get("observer"))
+    if n_envs is not None:
+        hp["n_envs"] = int(n_envs)
+    if vec_env is not None:
+        hp["vec_env"] = vec_env
+    for key, val in (("eval_freq", eval_freq), ("checkpoint_freq", checkpoint_freq)):
+        if val is not None:
+            hp[key] = int(val)
+    if eval_seeds is not None:
+        hp["eval_seeds"] = [int(s) for s in eval_seeds]
+    n_steps = int(timesteps if timesteps is not None else hp.get("n_timesteps", 100_000))
+    if n_steps < 1:
+        raise ValueError(f"timesteps must be >= 1, got {n_steps}")
+    hp["n_timesteps"] = n_steps
+    n = int(hp.get("n_envs", 1))
+    out_dir = Path(
+        out if out is not None else Path("runs", "train", f"{algo}{'-residual' * residual}-seed{seed}")
+    )
+    out_dir.mkdir(parents=True, exist_ok=True)
+    command = train_command(
+        algo, timesteps=n_steps, seed=seed, n_envs=n, out=out_dir, residual=residual,
+        observer=hp["observer"], resume=resume,
+    )  # fmt: skip
+    if deterministic:
+        set_deterministic(seed)
+
+    venv = build_vec_env(env_id, hp, n, seed, str(hp.get("vec_env", "dummy")))
+    norm = hp.get("normalize")
+    if norm:
+        norm_kw = dict(norm) if isinstance(norm, Mapping) else {}
+        norm_kw.setdefault("gamma", float(hp.get("gamma", 0.99)))
+        venv = VecNormalize(venv, **norm_kw)
+        if resume_meta is not None and resume_meta.normalization is not None:
+            resume_meta.normalization.apply_to(venv)
+    if resume is not None:
+        model = cls.load(resume, env=venv, device="cpu", print_system_info=False)
+        model.set_random_seed(seed)
+    else:
+        model = cls(
+            hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=verbose,
+            **_algo_kwargs(algo, hp),
+        )  # fmt: skip
+    fmt = ["csv"] + (["stdout"] if verbose else [])
+    model.set_logger(configure(str(out_dir), fmt))
+
+    t_start = time.perf_counter()
+
+    def metadata_fn(extra: Mapping[str, Any] | None = None) -> ModelMetadata:
+        return _metadata(algo, env_id, hp, model, venv, seed=seed, command=command, extra=extra)
+
+    def save_fn(path: Path) -> Path:
+        extra = {"wall_time_s": time.perf_counter() - t_start}
+        return save_model(model, path, metadata_fn(extra))
+
+    cbs: list[Any] = []
+    eval_cb = None
+    if int(hp.get("eval_freq", 0) or 0) > 0:
+        eval_env = build_env(EVAL_ENV_ID, hp, env_kwargs={}, randomize=False)
+        eval_cb = _make_eval_callback(
+            env=eval_env, metadata_fn=metadata_fn, save_fn=save_fn,
+            eval_freq=int(hp["eval_freq"]), seeds=hp.get("eval_seeds", [100, 101]),
+            out_dir=out_dir,
+        )  # fmt: skip
+        cbs.append(eval_cb)
+    if int(hp.get("checkpoint_freq", 0) or 0) > 0:
+        cbs.append(
+            _make_checkpoint_callback(save_fn, int(hp["checkpoint_freq"]), out_dir / "checkpoints", algo)
+        )
+    if max_minutes is not None:
+        cbs.append(_make_time_limit_callback(60.0 * float(max_minutes)))
+    if progress:
+        cbs.append(_make_progress_callback())
+    _write_config(out_dir, hp, command, algo=algo, seed=seed, env_id=env_id, resume=resume)
+
+    model.learn(
+        total_timesteps=n_steps,
+        callback=cbs or None,
+        reset_num_timesteps=resume is None,
+        progress_bar=False,
+    )
+    wall = time.perf_counter() - t_start
+    if eval_cb is not None and eval_cb._last != model.num_timesteps:
+        eval_cb.evaluate()
+    final = save_model(model, out_dir / "model.zip", metadata_fn({"wall_time_s": wall}))
+    best = out_dir / "best_model.zip"
+    venv.close()
+    return TrainResult(
+        model_path=final,
+        best_model_path=best if best.is_file() else None,
+        out_dir=out_dir,
+        metadata=read_metadata(final),
+        num_timesteps=int(model.num_timesteps),
+        wall_time_s=wall,
+        evaluations=list(eval_cb.evaluations) if eval_cb is not None else [],
+    )
+
+
+def _write_config(
+    out_dir: Path, hp: Mapping[str, Any], command: str, **args: Any
+) -> None:
+    """``config.yml``, ``args.yml`` and ``command.txt`` next to the model (as the zoo does)."""
+    (out_dir / "config.yml").write_text(yaml.safe_dump(dict(hp), sort_keys=True))
+    plain = {k: (str(v) if isinstance(v, Path) else v) for k, v in args.items()}
+    (out_dir / "args.yml").write_text(yaml.safe_dump(plain, sort_keys=True))
+    (out_dir / "command.txt").write_text(command + "\n")

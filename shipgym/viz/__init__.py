@@ -1,0 +1,31 @@
+"""Visualisation: headless rerun recordings and matplotlib reports (SPEC 13).
+
+The only subpackage that imports ``rerun`` and ``matplotlib``; both are imported lazily, inside
+the functions that need them, so ``import shipgym`` and ``import shipgym.viz`` stay light.
+
+- :class:`RecordEpisode`: a Gymnasium wrapper recording every episode to a ``.rrd`` file
+  (and optionally a JSON run file);
+- :func:`load_run`: read a run back from a ``.rrd`` or JSON file into NumPy arrays
+  (:class:`Run`); :func:`save_run_json` writes the JSON form;
+- :func:`write_report`: PNG figures (trajectory, positions, velocities, thrusters) and
+  ``metrics.md`` of a run;
+"""
+
+from __future__ import annotations
+
+from .recorder import RecordEpisode, episode_path
+from .report import DPI, FIGURE_SIZES, pixel_size, report_paths, write_report
+from .run import Run, load_run, save_run_json
+
+__all__ = [
+    "DPI",
+    "FIGURE_SIZES",
+    "RecordEpisode",
+    "Run",
+    "episode_path",
+    "load_run",
+    "pixel_size",
+    "report_paths",
+    "save_run_json",
+    "write_report",
+]

@@ -1,0 +1,995 @@
+"""Headless rerun recording of shipgym episodes (SPEC 13): the :class:`RecordEpisode` wrapper.
+
+Each episode goes to its own ``.rrd`` file, with no viewer and no display needed (a viewer is
+spawned alongside only on request). Per-step values are buffered in Python lists and written
+in columns (``send_columns``) every ``flush_every`` steps, at the end of the episode, on
+``close()`` and when the wrapper is garbage collected, so recording is cheap and an
+interrupted episode still leaves a readable file. What is logged and where:
+:mod:`shipgym.viz.run`.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import os
+import shutil
+import sys
+import uuid
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from .geometry import hull_outline, hull_polygon, quay_polygons, thruster_positions
+from .run import DATA_VECTORS, P, Run, desired_body_velocity, save_run_json
+
+__all__ = ["RecordEpisode", "episode_path"]
+
+_NAN3 = np.full(3, np.nan)
+_DEG = 180.0 / math.pi
+_TWO_PI = 2.0 * math.pi
+#: info keys buffered every step (each a 3-vector).
+_VEC_KEYS = (
+    "eta",
+    "nu",
+    "nav_eta",
+    "nav_nu",
+    "eta_d",
+    "eta_d_r",
+    "eta_dot_d_r",
+    "eta_r",
+    "eta_P",
+    "command",
+    "thrust",
+    "saturated",
+    "tau_wind",
+)
+#: arrow length of a thruster at full thrust (m) and of the wind arrow per m/s (m).
+THRUST_ARROW_LENGTH = 4.0
+WIND_ARROW_SCALE = 2.0
+
+# colours (RGBA)
+_C_TRUTH = (235, 235, 235, 255)
+_C_REF = (255, 160, 40, 255)
+_C_EST = (220, 80, 220, 255)
+_C_MEAS = (80, 200, 120, 255)
+_C_OUTLIER = (255, 60, 60, 255)
+_C_HULL = (255, 215, 0, 255)
+_C_TRACE = (255, 215, 0, 110)
+_C_QUAY = (150, 150, 140, 255)
+_C_PLAN = (255, 160, 40, 160)
+_C_WIND = (120, 190, 255, 255)
+_C_THRUST = ((255, 80, 80, 255), (80, 220, 255, 255), (80, 255, 160, 255))
+_SERIES_COLORS = [_C_REF, _C_TRUTH, _C_EST]
+
+
+def episode_path(path: str | os.PathLike[str], episode: int) -> Path:
+    """The file of episode ``episode`` (0-based) for a recording path.
+
+    ``{episode}`` in the path is replaced by the number; otherwise episode 0 uses the path
+    itself and episode k >= 1 ``<stem>-<k><suffix>``.
+    """
+    text = os.fspath(path)
+    if "{episode}" in text:
+        return Path(text.replace("{episode}", str(episode)))
+    p = Path(text)
+    return p if episode == 0 else p.with_name(f"{p.stem}-{episode}{p.suffix}")
+
+
+def _check_writable(path: Path, suffix: str, what: str) -> None:
+    """Create the parent folders and make sure ``path`` can be written (ValueError if not)."""
+    if path.suffix.lower() != suffix:
+        raise ValueError(f"{what} {path} must end with {suffix}")
+    if path.is_dir():
+        raise ValueError(f"cannot record to {path}: it is a directory; give a {suffix} file")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(
+            f"cannot record to {path}: cannot create the folder {path.parent} "
+            f"({exc.strerror or exc}); choose a writable {what}"
+        ) from None
+    existed = path.exists()
+    try:
+        with open(path, "ab"):
+            pass
+    except OSError as exc:
+        raise ValueError(
+            f"cannot record to {path}: the file is not writable ({exc.strerror or exc}); "
+            f"choose a writable {what}"
+        ) from None
+    if not existed:
+        path.unlink(missing_ok=True)
+
+
+def _wrap(a: float) -> float:
+    return math.pi - (math.pi - a) % _TWO_PI
+
+
+def _stack(items: list[Any], n: int, width: int = 3) -> NDArray[np.float64]:
+    if not items:
+        return np.zeros((0, width))
+    return np.asarray(items, dtype=float).reshape(n, width)
+
+
+def _find_attr(env: gym.Env[Any, Any], name: str) -> Any:
+    """The first ``name`` attribute found walking down a wrapper stack (None if none)."""
+    e: Any = env
+    while e is not None:
+        if name in vars(e):
+            return vars(e)[name]
+        e = getattr(e, "env", None)
+    return None
+
+
+def _viewer_executable() -> str | None:
+    exe = shutil.which("rerun")
+    if exe:
+        return exe
+    cand = Path(sys.executable).parent / "rerun"
+    return str(cand) if cand.exists() else None
+
+
+class _Episode:
+    """Buffers, derived quantities and the rerun stream of one episode."""
+
+    def __init__(self, rec: Any, path: Path, json_path: Path | None, ctx: dict[str, Any]):
+        self.rec = rec
+        self.path = path
+        self.json_path = json_path
+        self.ctx = ctx
+        self.t: list[float] = []
+        self.vec: dict[str, list[Any]] = {k: [] for k in _VEC_KEYS}
+        self.legs: list[tuple[int, int]] = []
+        self.meas: list[tuple[float, int, Any, bool]] = []
+        # derived, per flushed block
+        self.blocks: dict[str, list[NDArray[Any]]] = {
+            k: [] for k in ("wind", "acc", "acc_meas", "meas_r")
+        }
+        self.rows_done = 0
+        self.meas_done = 0
+        # running accuracy (seed001 eqs. 54-57), same sampling rule as ManoeuvreMetrics
+        self.sample_period = float(ctx["sample_period"])
+        self.next_k = 0
+        self.first = True
+        self.acc = [0.0, 0.0, 0.0, 0]
+        self.acc_m = [0.0, 0.0, 0.0, 0]
+        self.last_z: tuple[float, float, float] | None = None
+        self.next_trace = 0.0
+        self.prev_leg: int | None = None
+        self.finished = False
+
+    # -- hot path ------------------------------------------------------------------------------
+    def capture(self, info: dict[str, Any]) -> None:
+        """Buffer one control step's ``info`` (cheap: references only)."""
+        i = len(self.t)
+        self.t.append(float(info["t"]))
+        get = info.get
+        for k, lst in self.vec.items():
+            lst.append(get(k, _NAN3))
+        self.legs.append((int(get("leg", 0)), int(get("legs_completed", 0))))
+        for m in get("measurements", ()):
+            z = m.get("z")
+            if z is not None:
+                self.meas.append((float(m["t"]), i, z, bool(m.get("outlier", False))))
+
+    @property
+    def pending(self) -> int:
+        return len(self.t) - self.rows_done
+
+    # -- columns -------------------------------------------------------------------------------
+    def flush(self) -> None:
+        """Send the buffered rows to the recording as columns."""
+        import rerun as rr
+
+        i0, i1 = self.rows_done, len(self.t)
+        j0, j1 = self.meas_done, len(self.meas)
+        if i1 == i0 and j1 == j0:
+            return
+        n = i1 - i0
+        rec = self.rec
+        t = np.asarray(self.t[i0:i1], dtype=float)
+        steps = np.arange(i0, i1)
+        idx = [rr.TimeColumn("sim_time", duration=t), rr.TimeColumn("step", sequence=steps)]
+        v = {k: _stack(self.vec[k][i0:i1], n) for k in _VEC_KEYS}
+        legs = np.asarray(self.legs[i0:i1], dtype=float).reshape(n, 2)
+        eta, eta_d_r = v["eta"], v["eta_d_r"]
+        nu_d = desired_body_velocity(eta_d_r, v["eta_dot_d_r"])
+        nav_r = _to_r(v["nav_eta"], v["eta_P"], eta_d_r[:, 2])
+        wind = self._wind(t)
+
+        # measurements of these rows: r-frame of the row they arrived in
+        ms = self.meas[j0:j1]
+        m_t = np.array([m[0] for m in ms], dtype=float)
+        m_step = np.array([m[1] for m in ms], dtype=np.int64)
+        m_z = _stack([m[2] for m in ms], len(ms))
+        m_out = np.array([m[3] for m in ms], dtype=bool)
+        rows = m_step - i0
+        m_zr = _to_r(m_z, v["eta_P"][rows], eta_d_r[rows, 2]) if len(ms) else np.zeros((0, 3))
+        acc, acc_m = self._accuracy(t, v["eta_r"], eta_d_r, v["eta_P"], m_step, m_z)
+
+        # ---- map -----------------------------------------------------------------------------
+        zeros = np.zeros((n, 1))
+        half = 0.5 * eta[:, 2]
+        quat = np.column_stack([zeros, zeros, np.sin(half), np.cos(half)])
+        rec.send_columns(
+            P.SHIP,
+            idx,
+            rr.Transform3D.columns(translation=np.column_stack([eta[:, :2], zeros]), quaternion=quat),
+        )
+        scale = THRUST_ARROW_LENGTH * v["thrust"] / self.ctx["f_max"]
+        vectors = np.zeros((n, 3, 2))
+        vectors[:, 0, 0] = scale[:, 0]
+        vectors[:, 1, 1] = scale[:, 1]
+        vectors[:, 2, 1] = scale[:, 2]
+        origins = np.broadcast_to(self.ctx["thrusters"], (n, 3, 2)).reshape(-1, 2)
+        rec.send_columns(
+            P.THRUST,
+            idx,
+            rr.Arrows2D.columns(vectors=vectors.reshape(-1, 2), origins=origins).partition(
+                [3] * n
+            ),
+        )
+        rec.send_columns(P.TRACK_TRUTH, idx, rr.Points2D.columns(positions=eta[:, :2]))
+        rec.send_columns(P.TRACK_REF, idx, rr.Points2D.columns(positions=v["eta_d"][:, :2]))
+        differs = np.any(v["nav_eta"] != eta, axis=1)
+        if np.any(differs):
+            sel = np.flatnonzero(differs)
+            rec.send_columns(
+                P.TRACK_EST,
+                [
+                    rr.TimeColumn("sim_time", duration=t[sel]),
+                    rr.TimeColumn("step", sequence=steps[sel]),
+                ],
+                rr.Points2D.columns(positions=v["nav_eta"][sel, :2]),
+            )
+        if len(ms):
+            for ent, sel in ((P.DGPS, ~m_out), (P.DGPS_OUTLIERS, m_out)):
+                if np.any(sel):
+                    rec.send_columns(
+                        ent,
+                        [
+                            rr.TimeColumn("sim_time", duration=m_t[sel]),
+                            rr.TimeColumn("step", sequence=m_step[sel]),
+                        ],
+                        rr.Points2D.columns(positions=m_z[sel, :2]),
+                    )
+        self._log_target(legs, t, steps)
+        self._log_hull_trace(t, steps, eta)
+        if wind is not None:
+            to = wind[:, 1] + math.pi
+            vec = WIND_ARROW_SCALE * wind[:, :1] * np.column_stack([np.cos(to), np.sin(to)])
+            anchor = self.ctx["wind_anchor"]
+            labels = [
+                f"wind {s:.1f} m/s from {math.degrees(b) % 360.0:.0f}°" for s, b in wind.tolist()
+            ]
+            rec.send_columns(
+                P.WIND,
+                idx,
+                rr.Arrows2D.columns(vectors=vec, origins=anchor - 0.5 * vec, labels=labels),
+            )
+
+        # ---- time series ---------------------------------------------------------------------
+        def scal(entity: str, arr: NDArray[np.float64], index: Any = idx) -> None:
+            rec.send_columns(entity, index, rr.Scalars.columns(scalars=arr))
+
+        deg = np.array([1.0, 1.0, _DEG])
+        pos = np.stack([eta_d_r, v["eta_r"], nav_r], axis=2) * deg[None, :, None]
+        vel = np.stack([nu_d, v["nu"], v["nav_nu"]], axis=2) * deg[None, :, None]
+        for k, dof in enumerate(("x", "y", "psi")):
+            scal(f"{P.POSITION}/{dof}", pos[:, k, :])
+        for k, dof in enumerate(("u", "v", "r")):
+            scal(f"{P.VELOCITY}/{dof}", vel[:, k, :])
+        if len(ms):
+            m_idx = [
+                rr.TimeColumn("sim_time", duration=m_t),
+                rr.TimeColumn("step", sequence=m_step),
+            ]
+            for k, dof in enumerate(("x", "y", "psi")):
+                scal(f"{P.POSITION}/{dof}/measured", m_zr[:, k] * deg[k], m_idx)
+            scal(
+                f"{P.DATA}/measurements",
+                np.column_stack([m_z, m_zr, m_out.astype(float)]),
+                m_idx,
+            )
+        scal(P.PLOT_THRUST, v["thrust"])
+        scal(P.COMMAND_MAIN, v["command"][:, 0])
+        scal(P.COMMAND_TUNNELS, v["command"][:, 1:])
+        scal(P.ACCURACY, acc)
+        scal(P.ACCURACY_MEAS, acc_m)
+        data = dict(v)
+        data["leg"] = legs
+        data["wind"] = wind if wind is not None else np.full((n, 2), np.nan)
+        for name in DATA_VECTORS:
+            scal(f"{P.DATA}/{name}", np.asarray(data[name], dtype=float))
+
+        self.blocks["wind"].append(data["wind"])
+        self.blocks["acc"].append(acc)
+        self.blocks["acc_meas"].append(acc_m)
+        self.blocks["meas_r"].append(m_zr)
+        self.rows_done, self.meas_done = i1, j1
+
+    def _wind(self, t: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """``[speed (m/s), from (rad)]`` at the times ``t``, or None without aerodynamics."""
+        phys = self.ctx["physics"]
+        if phys is None or not getattr(phys, "aerodynamics", True):
+            return None
+        try:
+            speed, beta = phys.wind.series(t)
+        except Exception:  # noqa: BLE001 - the wind model is optional for the recording
+            cfg = getattr(phys, "wind_config", None)
+            if cfg is None:
+                return None
+            speed = np.full(len(t), float(cfg.speed))
+            beta = np.full(len(t), float(cfg.direction_from))
+        return np.column_stack([speed, beta])
+
+    def _accuracy(
+        self,
+        t: NDArray[np.float64],
+        eta_r: NDArray[np.float64],
+        eta_d_r: NDArray[np.float64],
+        eta_P: NDArray[np.float64],
+        m_step: NDArray[np.int64],
+        m_z: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Running seed001 indices ``[x_E, y_E, psi_E (deg), J_c]`` (truth, measured)."""
+        w1, w2, w3 = self.ctx["weights"]
+        tp = self.sample_period
+        tol = 1e-6 * tp
+        n = len(t)
+        out = np.full((n, 4), np.nan)
+        out_m = np.full((n, 4), np.nan)
+        i0 = self.rows_done
+        j = 0
+        steps = m_step.tolist()
+        zs = m_z.tolist()
+        a_tr, d_tr, p_tr, tt = eta_r.tolist(), eta_d_r.tolist(), eta_P.tolist(), t.tolist()
+        acc, acc_m = self.acc, self.acc_m
+        for i in range(n):
+            while j < len(steps) and steps[j] <= i0 + i:
+                self.last_z = tuple(zs[j])  # type: ignore[assignment]
+                j += 1
+            ti = tt[i]
+            if self.first:
+                self.first = False
+                self.next_k = max(0, math.ceil((ti - tol) / tp))
+            d = d_tr[i]
+            if ti >= self.next_k * tp - tol:
+                a = a_tr[i]
+                acc[0] += abs(d[0] - a[0])
+                acc[1] += abs(d[1] - a[1])
+                acc[2] += abs(_wrap(d[2] - a[2]))
+                acc[3] += 1
+                if self.last_z is not None:
+                    zr = _to_r_one(self.last_z, p_tr[i], d[2])
+                    acc_m[0] += abs(d[0] - zr[0])
+                    acc_m[1] += abs(d[1] - zr[1])
+                    acc_m[2] += abs(_wrap(d[2] - zr[2]))
+                    acc_m[3] += 1
+                self.next_k = math.floor((ti + tol) / tp) + 1
+            for s, o in ((acc, out), (acc_m, out_m)):
+                if s[3]:
+                    x_e, y_e, p_e = s[0] / s[3], s[1] / s[3], s[2] / s[3] * _DEG
+                    o[i] = (x_e, y_e, p_e, w1 * x_e + w2 * y_e + w3 * p_e)
+        return out, out_m
+
+    def _log_target(
+        self, legs: NDArray[np.float64], t: NDArray[np.float64], steps: NDArray[np.int64]
+    ) -> None:
+        import rerun as rr
+
+        wp = self.ctx["waypoints"]
+        if len(wp) < 2:
+            return
+        leg = legs[:, 0].astype(int)
+        prev = np.concatenate([[-1 if self.prev_leg is None else self.prev_leg], leg[:-1]])
+        sel = np.flatnonzero(leg != prev)
+        self.prev_leg = int(leg[-1])
+        if not len(sel):
+            return
+        k = np.clip(leg[sel] + 1, 1, len(wp) - 1)
+        self.rec.send_columns(
+            P.TARGET,
+            [rr.TimeColumn("sim_time", duration=t[sel]), rr.TimeColumn("step", sequence=steps[sel])],
+            rr.Points2D.columns(positions=wp[k, :2], labels=[f"K{int(x)}" for x in k]),
+        )
+
+    def _log_hull_trace(
+        self, t: NDArray[np.float64], steps: NDArray[np.int64], eta: NDArray[np.float64]
+    ) -> None:
+        import rerun as rr
+
+        every = self.ctx["hull_every"]
+        if not every or every <= 0:
+            return
+        sel = []
+        for i, ti in enumerate(t.tolist()):
+            if ti >= self.next_trace - 1e-9:
+                sel.append(i)
+                self.next_trace = (math.floor(ti / every + 1e-9) + 1) * every
+        if not sel:
+            return
+        strips = [hull_polygon(self.ctx["hull"], eta[i]) for i in sel]
+        self.rec.send_columns(
+            P.HULL_TRACE,
+            [
+                rr.TimeColumn("sim_time", duration=t[sel]),
+                rr.TimeColumn("step", sequence=steps[sel]),
+            ],
+            rr.LineStrips2D.columns(strips=strips),
+        )
+
+    # -- end -----------------------------------------------------------------------------------
+    def to_run(self, metrics: dict[str, Any]) -> Run:
+        """The flushed rows as a :class:`Run` (float64, exactly the ``info`` values)."""
+        n = self.rows_done
+        v = {k: _stack(self.vec[k][:n], n) for k in _VEC_KEYS}
+        legs = np.asarray(self.legs[:n], dtype=np.int64).reshape(n, 2)
+        ms = self.meas[: self.meas_done]
+
+        def cat(name: str, width: int) -> NDArray[np.float64]:
+            b = self.blocks[name]
+            return np.concatenate(b) if b else np.zeros((0, width))
+
+        ctx = self.ctx
+        return Run(
+            t=np.asarray(self.t[:n], dtype=float),
+            step=np.arange(n, dtype=np.int64),
+            **{k: v[k] for k in _VEC_KEYS if k != "saturated"},
+            saturated=v["saturated"] > 0.5,
+            leg=legs[:, 0],
+            legs_completed=legs[:, 1],
+            wind=cat("wind", 2),
+            meas_t=np.array([m[0] for m in ms], dtype=float),
+            meas_step=np.array([m[1] for m in ms], dtype=np.int64),
+            meas_z=_stack([m[2] for m in ms], len(ms)),
+            meas_z_r=cat("meas_r", 3),
+            meas_outlier=np.array([m[3] for m in ms], dtype=bool),
+            accuracy=cat("acc", 4),
+            accuracy_measured=cat("acc_meas", 4),
+            waypoints=np.asarray(ctx["waypoints"], dtype=float),
+            quays=np.asarray(ctx["quays"], dtype=float),
+            quay_names=list(ctx["quay_names"]),
+            hull=np.asarray(ctx["hull"], dtype=float),
+            thrusters=np.asarray(ctx["thrusters"], dtype=float),
+            metadata=dict(ctx["metadata"]),
+            metrics=metrics,
+        )
+
+
+def _to_r(eta: NDArray[np.float64], eta_P: NDArray[np.float64], psi_ref: Any) -> Any:
+    from shipgym.guidance import to_r_frame
+
+    if len(eta) == 0:
+        return np.zeros((0, 3))
+    return to_r_frame(eta, eta_P, psi_ref_r=psi_ref)
+
+
+def _to_r_one(z: Any, p: Any, psi_ref: float) -> tuple[float, float, float]:
+    c, s = math.cos(p[2]), math.sin(p[2])
+    dx, dy = z[0] - p[0], z[1] - p[1]
+    return c * dx + s * dy, -s * dx + c * dy, psi_ref + _wrap(z[2] - p[2] - psi_ref)
+
+
+class RecordEpisode(
+    gym.Wrapper[Any, Any, Any, Any],
+    gym.utils.RecordConstructorArgs,
+):
+    """Records every episode to a rerun ``.rrd`` file, headless (stack it outermost).
+
+    Logs a top-down harbour map in NED metres with north up (quays, planned path and current
+    leg end point, the hull outline at every control step, true, desired, estimated and
+    measured positions, thrust arrows at the thrusters, a wind arrow), time series of the
+    r-frame pose and body velocity (desired, true, estimate, measured), thruster commands and
+    forces, the running accuracy indices of seed001 eqs. 54-57, and the run's metadata;
+    entity paths in :mod:`shipgym.viz.run`. The file opens in the rerun viewer with the map on
+    the left and the time series on the right (``rerun PATH.rrd``).
+
+    Values are buffered per step and written in columns every ``flush_every`` steps, at the
+    end of an episode, in :meth:`close` and when the wrapper is garbage collected: an episode
+    interrupted (e.g. by ``KeyboardInterrupt`` in the caller's loop) leaves a readable file
+    with every step taken so far once ``env.close()`` runs.
+
+    Args:
+        env: a ``shipgym/BlueLady*`` environment, possibly under observer and controller
+            wrappers (``shipgym.make(..., observer=..., controller=...)``).
+        path: the ``.rrd`` file of the first episode; later episodes go to
+            ``<stem>-<k>.rrd`` (or replace ``{episode}`` in the path). Parent folders are
+            created; a path that cannot be written raises ``ValueError`` here, before any
+            episode starts.
+        spawn: also stream to a rerun viewer (spawned once). Without a display or a viewer
+            executable a message says so and the recording goes to the file only.
+        flush_every: control steps buffered between two writes (>= 1).
+        json_path: also write each episode as a JSON run file (:func:`save_run_json`), named
+            like the ``.rrd`` files.
+        hull_every: period (s) of the hull outlines kept on the map as a trace (0: none).
+
+    Attributes:
+        paths: the ``.rrd`` files written so far (one per episode).
+        json_paths: the JSON run files written so far.
+        last_run: the :class:`~shipgym.viz.Run` of the last finished episode (float64).
+
+    Note:
+        Records its constructor arguments, so ``gym.make(env.spec)`` rebuilds the stack.
+    """
+
+    def __init__(
+        self,
+        env: gym.Env[Any, Any],
+        path: str | os.PathLike[str],
+        *,
+        spawn: bool = False,
+        flush_every: int = 100,
+        json_path: str | os.PathLike[str] | None = None,
+        hull_every: float = 60.0,
+    ) -> None:
+        gym.utils.RecordConstructorArgs.__init__(
+            self,
+            path=os.fspath(path),
+            spawn=spawn,
+            flush_every=flush_every,
+            json_path=None if json_path is None else os.fspath(json_path),
+            hull_every=hull_every,
+        )
+        gym.Wrapper.__init__(self, env)
+        self._episode: _Episode | None = None
+        if isinstance(flush_every, bool) or not isinstance(flush_every, int) or flush_every < 1:
+            raise ValueError(f"flush_every must be an int >= 1 (control steps), got {flush_every!r}")
+        if not (isinstance(hull_every, int | float) and math.isfinite(hull_every)):
+            raise ValueError(f"hull_every must be a finite number of seconds, got {hull_every!r}")
+        self.path = Path(os.fspath(path)).expanduser()
+        self.json_path = None if json_path is None else Path(os.fspath(json_path)).expanduser()
+        _check_writable(episode_path(self.path, 0), ".rrd", "recording path")
+        if self.json_path is not None:
+            _check_writable(episode_path(self.json_path, 0), ".json", "JSON run path")
+        self.spawn = bool(spawn)
+        self.flush_every = flush_every
+        self.hull_every = float(hull_every)
+        self.paths: list[Path] = []
+        self.json_paths: list[Path] = []
+        self.last_run: Run | None = None
+        self._n_episodes = 0
+        self._viewer: bool | None = None  # None: not tried yet
+
+    # ---- gym API -----------------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        """Finish the previous episode's file, reset the env and start a new recording."""
+        ep = self._episode
+        if ep is not None:
+            if len(ep.t) > 1:
+                self._finish()
+            else:  # reset twice in a row: the new episode replaces the empty one
+                self._discard()
+        obs, info = self.env.reset(seed=seed, options=options)
+        self._start(seed, options)
+        ep = self._episode
+        if ep is not None:
+            ep.capture(info)
+        return obs, info
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """Step the env and buffer the step (written every ``flush_every`` steps)."""
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        ep = self._episode
+        if ep is not None:
+            ep.capture(info)
+            if terminated or truncated:
+                self._finish()
+            elif ep.pending >= self.flush_every:
+                ep.flush()
+        return obs, reward, terminated, truncated, info
+
+    def close(self) -> None:
+        """Write what is buffered, finish the file, then close the env."""
+        try:
+            self._finish()
+        finally:
+            super().close()
+
+    def __del__(self) -> None:
+        try:
+            self._finish()
+        except Exception:  # noqa: BLE001, S110 - nothing can be reported from a finaliser
+            pass
+
+    # ---- episodes ----------------------------------------------------------------------------
+    def _start(self, seed: int | None, options: dict[str, Any] | None) -> None:
+        import rerun as rr
+
+        k = self._n_episodes
+        path = episode_path(self.path, k)
+        json_path = None if self.json_path is None else episode_path(self.json_path, k)
+        if k:
+            _check_writable(path, ".rrd", "recording path")
+        ctx = self._context(seed)
+        rec = rr.RecordingStream(
+            "shipgym", recording_id=f"{ctx['metadata']['run_id']}", send_properties=True
+        )
+        blueprint = _blueprint(ctx)
+        self._open_sinks(rec, path, blueprint)
+        self._episode = _Episode(rec, path, json_path, ctx)
+        _log_static(rec, ctx)
+
+    def _open_sinks(self, rec: Any, path: Path, blueprint: Any) -> None:
+        import rerun as rr
+
+        if self.spawn and self._viewer is None:
+            reason = None
+            exe = _viewer_executable()
+            if sys.platform.startswith("linux") and not (
+                os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+            ):
+                reason = "no display (DISPLAY and WAYLAND_DISPLAY are unset)"
+            elif exe is None:
+                reason = "the rerun viewer executable was not found (pip install rerun-sdk)"
+            else:
+                try:
+                    rr.spawn(connect=False, executable_path=exe, recording=rec)
+                except Exception as exc:  # noqa: BLE001 - any failure: keep recording
+                    reason = f"spawning the viewer failed: {exc}"
+            self._viewer = reason is None
+            if reason is not None:
+                print(
+                    f"shipgym: no rerun viewer available ({reason}); recording to {path} only. "
+                    f"Open it later with: rerun {path}",
+                    file=sys.stderr,
+                )
+        if self.spawn and self._viewer:
+            rec.set_sinks(rr.FileSink(path), rr.GrpcSink(), default_blueprint=blueprint)
+        else:
+            rec.save(path, default_blueprint=blueprint)
+
+    def _context(self, seed: int | None) -> dict[str, Any]:
+        """Static facts of the episode: geometry, metadata, constants for the hot path."""
+        base: Any = self.env.unwrapped
+        phys = getattr(base, "physics", None)
+        model = getattr(phys, "model", None)
+        data = getattr(phys, "data", None)
+        guidance = getattr(base, "guidance", None)
+        try:
+            waypoints = np.asarray(guidance.waypoints, dtype=float).reshape(-1, 3)
+        except Exception:  # noqa: BLE001 - a task without guidance has no plan to draw
+            waypoints = np.zeros((0, 3))
+        if model is not None and data is not None:
+            quay_names, quays = quay_polygons(model, data)
+        else:
+            quay_names, quays = [], np.zeros((0, 4, 2))
+        try:
+            f_max = np.abs(np.asarray(model.actuator_forcerange, dtype=float)).max(axis=1)[:3]
+        except Exception:  # noqa: BLE001
+            f_max = np.ones(3)
+        f_max = np.where(f_max > 0, f_max, 1.0)
+        # map extent: quays, else the plan, with margins (m)
+        pts = quays.reshape(-1, 2) if len(quays) else waypoints[:, :2]
+        if len(pts) == 0:
+            pts = np.zeros((1, 2))
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        if not len(quays):
+            lo, hi = lo - 15.0, hi + 15.0
+        wind_anchor = np.array([hi[0] + 6.0, lo[1] + 6.0])
+        metrics_obj = getattr(base, "metrics", None)
+        from shipgym.metrics import SEED_WEIGHTS
+
+        ctx: dict[str, Any] = {
+            "physics": phys,
+            "waypoints": waypoints,
+            "quays": quays,
+            "quay_names": quay_names,
+            "hull": hull_outline(model),
+            "thrusters": thruster_positions(model),
+            "f_max": f_max,
+            "extent": (lo, hi),
+            "wind_anchor": wind_anchor,
+            "sample_period": float(getattr(metrics_obj, "sample_period", 1.0)),
+            "weights": tuple(getattr(metrics_obj, "weights", SEED_WEIGHTS)),
+            "hull_every": self.hull_every,
+        }
+        ctx["metadata"] = self._describe(seed, base, phys, guidance)
+        return ctx
+
+    def _describe(self, seed: int | None, base: Any, phys: Any, guidance: Any) -> dict[str, Any]:
+        import rerun as rr
+
+        import shipgym
+        from shipgym.envs.make import SCENARIOS
+
+        spec = self.env.spec
+        env_id = spec.id if spec is not None else type(base).__name__
+        scenario = next((k for k, v in SCENARIOS.items() if v == env_id), env_id)
+        if seed is None:
+            seed = getattr(base, "np_random_seed", None)
+        observer = _find_attr(self.env, "observer_name") or "truth"
+        controller = _find_attr(self.env, "controller_name") or "none"
+        wind: dict[str, Any] | None = None
+        cfg = getattr(phys, "wind_config", None)
+        if cfg is not None and getattr(phys, "aerodynamics", True):
+            wind = {
+                "speed": float(cfg.speed),
+                "from_deg": math.degrees(float(cfg.direction_from)) % 360.0,
+                "gust_std": None if cfg.gust_std is None else float(cfg.gust_std),
+                "coefficients": str(getattr(cfg, "coefficients", "")),
+            }
+        plan = getattr(guidance, "plan", None)
+        legs = [str(getattr(leg, "name", "")) for leg in getattr(plan, "legs", ())]
+        thr = getattr(base, "thrusters", None)
+        limits = None
+        if thr is not None and hasattr(thr, "lower"):
+            limits = [np.asarray(thr.lower, float).tolist(), np.asarray(thr.upper, float).tolist()]
+        now = _dt.datetime.now(_dt.timezone.utc)
+        run_id = f"{scenario}-seed{seed}-{now:%Y%m%dT%H%M%S}-{uuid.uuid4().hex[:6]}"
+        return {
+            "run_id": run_id,
+            "env_id": env_id,
+            "scenario": scenario,
+            "seed": None if seed is None else int(seed),
+            "observer": str(observer),
+            "controller": str(controller),
+            "wind": wind,
+            "plan": getattr(plan, "name", None),
+            "legs": legs,
+            "scene": getattr(base, "scene", None),
+            "control_period_s": float(getattr(base, "control_period", float("nan"))),
+            "timestep_s": float(getattr(phys, "timestep", float("nan"))),
+            "sensors": repr(getattr(base, "sensor_config", None)),
+            "command_limits": limits,
+            "episode": self._n_episodes,
+            "recorded_at": now.isoformat(timespec="seconds"),
+            "shipgym_version": shipgym.__version__,
+            "rerun_version": rr.__version__,
+        }
+
+    def _episode_metrics(self) -> dict[str, Any]:
+        fn = getattr(self.env.unwrapped, "episode_metrics", None)
+        if fn is None:
+            return {}
+        try:
+            return dict(fn())
+        except Exception:  # noqa: BLE001 - metrics are a bonus in the file
+            return {}
+
+    def _finish(self) -> None:
+        """Flush, log the metrics, write the JSON file and close the recording."""
+        ep = self._episode
+        if ep is None:
+            return
+        self._episode = None
+        try:
+            ep.flush()
+            metrics = self._episode_metrics()
+            run = ep.to_run(metrics)
+            _log_summary(ep.rec, ep.ctx, metrics, len(ep.t) - 1)
+            if ep.json_path is not None:
+                save_run_json(run, ep.json_path)
+                self.json_paths.append(ep.json_path)
+            self.last_run = run
+        finally:
+            ep.rec.flush()
+            ep.rec.disconnect()
+            self.paths.append(ep.path)
+            self._n_episodes += 1
+
+    def _discard(self) -> None:
+        ep = self._episode
+        self._episode = None
+        if ep is not None:
+            ep.rec.disconnect()
+
+
+# ---- static content and blueprint ------------------------------------------------------------
+def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
+    import rerun as rr
+
+    # north up, east right: NED x -> screen up, NED y -> screen right
+    rec.log(
+        P.NED, rr.Transform3D(rotation=rr.RotationAxisAngle(axis=[0, 0, 1], degrees=-90.0)),
+        static=True,
+    )  # fmt: skip
+    quays = ctx["quays"]
+    if len(quays):
+        strips = [np.vstack([q, q[:1]]) for q in quays]
+        rec.log(
+            P.QUAYS,
+            rr.LineStrips2D(strips, radii=0.12, colors=[_C_QUAY], labels=ctx["quay_names"],
+                            show_labels=False),
+            static=True,
+        )  # fmt: skip
+    wp = ctx["waypoints"]
+    if len(wp):
+        labels = ["P (start)"] + [str(i) for i in range(1, len(wp))]
+        rec.log(P.PLAN, rr.LineStrips2D([wp[:, :2]], radii=0.05, colors=[_C_PLAN]), static=True)
+        rec.log(
+            P.WAYPOINTS,
+            rr.Points2D(wp[:, :2], radii=0.25, colors=[_C_PLAN], labels=labels),
+            static=True,
+        )
+    hull = ctx["hull"]
+    rec.log(
+        P.HULL,
+        rr.LineStrips2D([np.vstack([hull, hull[:1]])], radii=0.06, colors=[_C_HULL],
+                        labels=["Blue Lady"], show_labels=False),
+        static=True,
+    )  # fmt: skip
+    rec.log(
+        P.THRUST,
+        rr.Arrows2D.from_fields(colors=list(_C_THRUST), radii=0.1,
+                                labels=["main", "bow", "stern"], show_labels=False),
+        static=True,
+    )  # fmt: skip
+    styles = (
+        (P.TRACK_TRUTH, _C_TRUTH, 0.08),
+        (P.TRACK_REF, _C_REF, 0.06),
+        (P.TRACK_EST, _C_EST, 0.07),
+        (P.DGPS, _C_MEAS, 0.09),
+        (P.DGPS_OUTLIERS, _C_OUTLIER, 0.2),
+        (P.TARGET, _C_REF, 0.4),
+    )
+    for ent, color, radius in styles:
+        rec.log(ent, rr.Points2D.from_fields(colors=[color], radii=radius), static=True)
+    rec.log(P.HULL_TRACE, rr.LineStrips2D.from_fields(colors=[_C_TRACE], radii=0.04), static=True)
+    rec.log(P.WIND, rr.Arrows2D.from_fields(colors=[_C_WIND], radii=0.12), static=True)
+    names = ["desired", "true", "estimate"]
+    for dof, unit in (("x", "m"), ("y", "m"), ("psi", "deg")):
+        rec.log(
+            f"{P.POSITION}/{dof}",
+            rr.SeriesLines(names=[f"{dof}_d^r ({unit})", f"{dof}^r true", f"{dof}^r estimate"],
+                           colors=_SERIES_COLORS, widths=[2.0, 1.5, 1.0]),
+            static=True,
+        )  # fmt: skip
+        rec.log(
+            f"{P.POSITION}/{dof}/measured",
+            rr.SeriesPoints(names=[f"{dof}^r measured"], colors=[_C_MEAS], marker_sizes=[1.5]),
+            static=True,
+        )
+    for dof, unit in (("u", "m/s"), ("v", "m/s"), ("r", "deg/s")):
+        rec.log(
+            f"{P.VELOCITY}/{dof}",
+            rr.SeriesLines(names=[f"{dof}_d ({unit})", f"{dof} true", f"{dof} estimate"],
+                           colors=_SERIES_COLORS, widths=[2.0, 1.5, 1.0]),
+            static=True,
+        )  # fmt: skip
+    rec.log(
+        P.PLOT_THRUST,
+        rr.SeriesLines(names=["F1 main (N)", "F2 bow (N)", "F3 stern (N)"], colors=list(_C_THRUST)),
+        static=True,
+    )
+    rec.log(P.COMMAND_MAIN, rr.SeriesLines(names=["n1 (rpm)"], colors=[_C_THRUST[0]]), static=True)
+    rec.log(
+        P.COMMAND_TUNNELS,
+        rr.SeriesLines(names=["p2 bow", "p3 stern"], colors=list(_C_THRUST[1:])),
+        static=True,
+    )
+    acc_names = ["x_E (m)", "y_E (m)", "psi_E (deg)", "J_c"]
+    for ent, tag in ((P.ACCURACY, "true"), (P.ACCURACY_MEAS, "measured")):
+        rec.log(ent, rr.SeriesLines(names=[f"{a} {tag}" for a in acc_names]), static=True)
+    geo = {
+        "waypoints": ctx["waypoints"],
+        "quays": ctx["quays"],
+        "quay_names": ctx["quay_names"],
+        "hull": ctx["hull"],
+        "thrusters": ctx["thrusters"],
+    }
+    from .run import _clean
+
+    rec.log(
+        f"{P.DATA}/static",
+        rr.TextDocument(json.dumps(_clean(geo)), media_type="text/plain"),
+        static=True,
+    )
+    _log_summary(rec, ctx, None, 0)
+
+
+def _summary_markdown(meta: dict[str, Any], metrics: dict[str, Any] | None, steps: int) -> str:
+    wind = meta.get("wind")
+    wind_txt = "none" if not wind else f"{wind['speed']:.1f} m/s from {wind['from_deg']:.0f}°"
+    lines = [
+        f"# {meta.get('scenario')} — seed {meta.get('seed')}",
+        "",
+        "| | |",
+        "|---|---|",
+        f"| env | `{meta.get('env_id')}` |",
+        f"| observer | {meta.get('observer')} |",
+        f"| controller | {meta.get('controller')} |",
+        f"| wind | {wind_txt} |",
+        f"| plan | {meta.get('plan')} ({len(meta.get('legs') or [])} legs) |",
+        f"| control period | {meta.get('control_period_s')} s |",
+        f"| recorded | {meta.get('recorded_at')} (shipgym {meta.get('shipgym_version')}) |",
+    ]
+    if metrics:
+        lines.append(f"| steps | {steps} ({metrics.get('duration_s', float('nan')):.0f} s) |")
+        lines.append(
+            f"| completed | {metrics.get('completed')} ({metrics.get('legs_completed')} legs), "
+            f"quay contact: {metrics.get('quay_contact')} |"
+        )
+        lines += ["", "| indices (eqs. 54-57) | x_E (m) | y_E (m) | psi_E (deg) | J_c |"]
+        lines.append("|---|---|---|---|---|")
+        rows = [("truth", metrics), ("measured", metrics.get("measured") or {})]
+        for name, m in rows:
+            if m:
+                vals = " | ".join(f"{float(m.get(k, float('nan'))):.4f}" for k in
+                                  ("x_E", "y_E", "psi_E", "J_c"))  # fmt: skip
+                lines.append(f"| {name} | {vals} |")
+    else:
+        lines.append("| status | recording |")
+    return "\n".join(lines) + "\n"
+
+
+def _log_summary(rec: Any, ctx: dict[str, Any], metrics: dict[str, Any] | None, n: int) -> None:
+    import rerun as rr
+
+    from .run import _clean
+
+    meta = ctx["metadata"]
+    rec.log(
+        P.SUMMARY,
+        rr.TextDocument(_summary_markdown(meta, metrics, n), media_type=rr.MediaType.MARKDOWN),
+        static=True,
+    )
+    doc = {"metadata": meta, "metrics": metrics or {}}
+    rec.log(
+        P.META_JSON, rr.TextDocument(json.dumps(_clean(doc)), media_type="text/plain"), static=True
+    )
+
+
+def _blueprint(ctx: dict[str, Any]) -> Any:
+    """Map (left, with the run summary) and time series (right, like seed001 Figs. 9-11)."""
+    import rerun.blueprint as rrb
+
+    lo, hi = ctx["extent"]
+    m = 4.0
+    # screen coordinates of the map view: x = east, y = -north (rerun 2-D y points down)
+    bounds = rrb.VisualBounds2D(
+        x_range=[float(lo[1] - m), float(hi[1] + m)],
+        y_range=[float(-(hi[0] + 12.0)), float(-(lo[0] - m))],
+    )
+    trail = rrb.VisibleTimeRanges(
+        timeline="sim_time",
+        start=rrb.TimeRangeBoundary.infinite(),
+        end=rrb.TimeRangeBoundary.cursor_relative(),
+    )
+    trails = {
+        f"/{p}": trail
+        for p in (P.TRACK_TRUTH, P.TRACK_REF, P.TRACK_EST, P.DGPS, P.DGPS_OUTLIERS, P.HULL_TRACE)
+    }
+    map_view = rrb.Spatial2DView(
+        origin=P.MAP,
+        name="Harbour map (north up, m)",
+        visual_bounds=bounds,
+        background=[12, 40, 64],
+        overrides=trails,
+    )
+
+    def ts(origin: str, name: str) -> Any:
+        return rrb.TimeSeriesView(origin=origin, name=name, plot_legend=rrb.PlotLegend(visible=True))
+
+    dofs = rrb.Grid(
+        ts(f"{P.POSITION}/x", "x^r (m)"),
+        ts(f"{P.VELOCITY}/u", "u (m/s)"),
+        ts(f"{P.POSITION}/y", "y^r (m)"),
+        ts(f"{P.VELOCITY}/v", "v (m/s)"),
+        ts(f"{P.POSITION}/psi", "psi^r (deg)"),
+        ts(f"{P.VELOCITY}/r", "r (deg/s)"),
+        grid_columns=2,
+        name="r-frame pose and body velocity",
+    )
+    thr = rrb.Tabs(
+        ts(P.PLOT_THRUST, "thrust (N)"),
+        ts(P.COMMAND_MAIN, "main propeller n1 (rpm)"),
+        ts(P.COMMAND_TUNNELS, "tunnel thrusters p2, p3"),
+        ts("plots/accuracy", "accuracy indices"),
+    )
+    left = rrb.Vertical(
+        map_view, rrb.TextDocumentView(origin=P.SUMMARY, name="Run"), row_shares=[4, 1]
+    )
+    right = rrb.Vertical(dofs, thr, row_shares=[3, 1])
+    return rrb.Blueprint(
+        rrb.Horizontal(left, right, column_shares=[1, 1.3]),
+        rrb.TimePanel(timeline="sim_time", state="collapsed"),
+        collapse_panels=False,
+    )

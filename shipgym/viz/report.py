@@ -1,0 +1,427 @@
+"""PNG and Markdown reports of a recorded run (SPEC 13; seed001 Figs. 8-11), headless.
+
+:func:`write_report` draws with matplotlib's Agg canvas (no display, no pyplot state) at fixed
+figure sizes and resolution (:data:`FIGURE_SIZES`, :data:`DPI`):
+
+- ``trajectory.png``: harbour map, north up, east right, in metres: quays, desired and true
+  path, hull outlines every ``hull_every`` seconds, start and end berths, wind arrow (Fig. 8);
+- ``positions.png``: x^r, y^r, psi^r in the leg's r-frame, desired (dashed) vs measured
+  (solid) and true (Figs. 9-11, left columns);
+- ``velocities.png``: u, v, r, desired (dashed) vs estimated (solid) and true (right columns);
+- ``thrusters.png``: commands and forces of the three thrusters, saturation shaded;
+- ``metrics.md``: accuracy indices (eqs. 54-57) from the truth and the measurements, leg
+  times, thruster usage.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .geometry import hull_polygon
+from .run import Run, load_run
+
+os.environ.setdefault("MPLBACKEND", "Agg")  # headless by default, whatever imports pyplot later
+
+__all__ = ["DPI", "FIGURE_SIZES", "pixel_size", "report_paths", "write_report"]
+
+#: Resolution of the PNG files (dots per inch).
+DPI = 100
+#: Figure sizes (inches, width x height); pixels = inches * DPI.
+FIGURE_SIZES: dict[str, tuple[float, float]] = {
+    "trajectory": (8.0, 10.0),
+    "positions": (10.0, 8.0),
+    "velocities": (10.0, 8.0),
+    "thrusters": (12.0, 8.0),
+}
+_FILES = ("trajectory.png", "positions.png", "velocities.png", "thrusters.png", "metrics.md")
+_DEG = 180.0 / math.pi
+
+_C_DES = "#222222"
+_C_MEAS = "#1f77b4"
+_C_TRUE = "#2ca02c"
+_C_EST = "#d62728"
+_C_HULL = "#1a3d6d"
+_C_QUAY = "#8c8c84"
+_C_WATER = "#e3eef7"
+_C_SAT = "#ff7f0e"
+
+
+def pixel_size(name: str) -> tuple[int, int]:
+    """``(width, height)`` in pixels of the report figure ``name`` (e.g. ``"trajectory"``)."""
+    w, h = FIGURE_SIZES[name]
+    return round(w * DPI), round(h * DPI)
+
+
+def report_paths(out_dir: str | os.PathLike[str]) -> list[Path]:
+    """The files :func:`write_report` writes into ``out_dir``, in order."""
+    return [Path(out_dir) / f for f in _FILES]
+
+
+def _figure(name: str) -> Any:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=FIGURE_SIZES[name], dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _save(fig: Any, path: Path) -> Path:
+    fig.savefig(path, dpi=DPI, format="png")  # no bbox_inches: the pixel size stays fixed
+    return path
+
+
+def _title(run: Run) -> str:
+    m = run.metadata
+    parts = [str(m.get("scenario") or m.get("env_id") or "run")]
+    if m.get("seed") is not None:
+        parts.append(f"seed {m['seed']}")
+    parts.append(f"observer {m.get('observer', '?')}, controller {m.get('controller', '?')}")
+    return "Blue Lady: " + ", ".join(parts)
+
+
+def _wind_text(run: Run) -> str | None:
+    w = run.metadata.get("wind")
+    if not w:
+        return None
+    return f"$V_w$ = {w['speed']:.1f} m/s, $\\gamma_{{wa}}$ = {w['from_deg']:.0f}°"
+
+
+def _leg_marks(ax: Any, run: Run, top: bool) -> None:
+    """Dotted lines at the leg switches, leg numbers on the top axis."""
+    if len(run.leg) == 0:
+        return
+    change = np.flatnonzero(np.diff(run.leg) != 0) + 1
+    for i in change:
+        ax.axvline(run.t[i], color="0.6", lw=0.8, ls=":", zorder=0)
+    if top:
+        starts = np.concatenate([[0], change])
+        ends = np.concatenate([change, [len(run.t) - 1]])
+        for s, e in zip(starts, ends, strict=True):
+            mid = 0.5 * (run.t[s] + run.t[e])
+            ax.text(
+                mid, 1.02, f"leg {int(run.leg[s]) + 1}", transform=ax.get_xaxis_transform(),
+                ha="center", va="bottom", fontsize=8, color="0.35",
+            )  # fmt: skip
+
+
+# ---- trajectory -------------------------------------------------------------------------------
+def _plot_trajectory(run: Run, path: Path, hull_every: float) -> Path:
+    from matplotlib.patches import Polygon
+
+    fig = _figure("trajectory")
+    ax = fig.add_subplot()
+    ax.set_facecolor(_C_WATER)
+    for q in run.quays:
+        ax.add_patch(
+            Polygon(q[:, ::-1], closed=True, fc=_C_QUAY, ec="0.3", lw=0.8, zorder=2)
+        )  # (east, north)
+    eta = run.eta
+    if len(run.waypoints):
+        wp = run.waypoints
+        ax.plot(wp[:, 1], wp[:, 0], ls="none", marker="o", ms=4, color="#ff7f0e", zorder=9,
+                label="leg end points")  # fmt: skip
+        seen: set[tuple[float, float]] = set()
+        for i, (x, y) in enumerate(wp[:, :2]):
+            key = (round(x, 2), round(y, 2))
+            label = "P" if i == 0 else str(i)
+            if key in seen:
+                label = f"  {label}"
+            seen.add(key)
+            ax.annotate(
+                label, (y, x), xytext=(5, 4), textcoords="offset points", fontsize=8,
+                color="#b35900", fontweight="bold", zorder=10,
+            )  # fmt: skip
+    if len(run.eta_d):
+        ax.plot(run.eta_d[:, 1], run.eta_d[:, 0], "--", color="#ff7f0e", lw=1.2, zorder=8,
+                label="desired path")  # fmt: skip
+    if len(eta):
+        ax.plot(eta[:, 1], eta[:, 0], "-", color=_C_TRUE, lw=1.3, zorder=5, label="true path")
+    differs = len(eta) and np.any(np.abs(run.nav_eta[:, :2] - eta[:, :2]) > 1e-9)
+    if differs:
+        ax.plot(run.nav_eta[:, 1], run.nav_eta[:, 0], ":", color=_C_EST, lw=1.2, zorder=5,
+                label="estimated path")  # fmt: skip
+    hull = run.hull if len(run.hull) else None
+    if hull is not None and len(eta):
+        idx = _hull_indices(run.t, hull_every)
+        for n, i in enumerate(idx):
+            poly = hull_polygon(hull, eta[i])
+            ax.add_patch(
+                Polygon(poly[:, ::-1], closed=True, fc="none", ec=_C_HULL, lw=0.7, alpha=0.8,
+                        zorder=6, label="hull every %.0f s" % hull_every if n == 0 else None)
+            )  # fmt: skip
+        for i, name, fc in ((0, "A start", "#9ecae1"), (len(eta) - 1, "B end", "#fdd0a2")):
+            poly = hull_polygon(hull, eta[i])
+            ax.add_patch(Polygon(poly[:, ::-1], closed=True, fc=fc, ec=_C_HULL, lw=1.4, zorder=7))
+            # label on the aft half of the hull, clear of the leg end point at the centre
+            psi = float(eta[i, 2])
+            cx = eta[i, 0] - 3.2 * math.cos(psi)
+            cy = eta[i, 1] - 3.2 * math.sin(psi)
+            ax.text(cy, cx, name, ha="center", va="center", fontsize=7.5, zorder=8,
+                    rotation=_text_angle(psi), rotation_mode="anchor")  # fmt: skip
+    # limits: quays, else the paths
+    pts = [run.quays.reshape(-1, 2)] if len(run.quays) else []
+    pts += [eta[:, :2], run.eta_d[:, :2], run.waypoints[:, :2]]
+    allp = np.vstack([p for p in pts if len(p)]) if any(len(p) for p in pts) else np.zeros((1, 2))
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    margin = 3.0 if len(run.quays) else 10.0
+    ax.set_xlim(lo[1] - margin, hi[1] + margin)
+    ax.set_ylim(lo[0] - margin, hi[0] + margin + 6.0)
+    ax.set_aspect("equal", adjustable="box")
+    wind = _wind_text(run)
+    w = run.metadata.get("wind")
+    if wind and w:
+        to = math.radians(w["from_deg"]) + math.pi
+        # arrow where the wind blows to, drawn in axes coordinates (north up, east right)
+        start = np.array([0.12, 0.94])
+        vec = 0.07 * np.array([math.sin(to), math.cos(to)])
+        ax.annotate(
+            "", xy=start + vec, xytext=start - vec, xycoords="axes fraction",
+            arrowprops={"arrowstyle": "-|>", "lw": 2.0, "color": "#3182bd"}, zorder=9,
+        )  # fmt: skip
+        ax.text(0.22, 0.94, "wind\n" + wind, transform=ax.transAxes, va="center", fontsize=9,
+                bbox={"fc": "white", "ec": "0.7", "alpha": 0.85}, zorder=9)  # fmt: skip
+    ax.text(0.97, 0.97, "N ↑", transform=ax.transAxes, ha="right", va="top", fontsize=11,
+            fontweight="bold", zorder=9)  # fmt: skip
+    ax.set_xlabel("y, east (m)")
+    ax.set_ylabel("x, north (m)")
+    ax.grid(True, color="white", lw=0.6, zorder=1)
+    ax.set_axisbelow(True)
+    ax.legend(loc="lower left", fontsize=8, framealpha=0.9)
+    ax.set_title(_title(run), fontsize=10)
+    return _save(fig, path)
+
+
+def _text_angle(psi: float) -> float:
+    """Text rotation (deg, counter-clockwise on screen) along a hull of heading psi (rad)."""
+    a = 90.0 - math.degrees(psi)
+    a = (a + 90.0) % 180.0 - 90.0
+    return a
+
+
+def _hull_indices(t: NDArray[np.float64], every: float) -> list[int]:
+    """Rows at t = 0, every, 2 every, ... (first row at or after each multiple)."""
+    if not every or every <= 0 or len(t) == 0:
+        return []
+    out: list[int] = []
+    nxt = t[0]
+    for i, ti in enumerate(t.tolist()):
+        if ti >= nxt - 1e-9:
+            out.append(i)
+            nxt = (math.floor(ti / every + 1e-9) + 1) * every
+    return out
+
+
+# ---- time series ------------------------------------------------------------------------------
+def _plot_positions(run: Run, path: Path) -> Path:
+    fig = _figure("positions")
+    axes = fig.subplots(3, 1, sharex=True)
+    labels = (r"$x^r$ (m)", r"$y^r$ (m)", r"$\psi^r$ (deg)")
+    scale = (1.0, 1.0, _DEG)
+    for k, ax in enumerate(axes):
+        s = scale[k]
+        ax.plot(run.t, run.eta_r[:, k] * s, color=_C_TRUE, lw=0.9, alpha=0.8, label="true")
+        if len(run.meas_t):
+            ax.plot(run.meas_t, run.meas_z_r[:, k] * s, "-", color=_C_MEAS, lw=1.0,
+                    label="measured")  # fmt: skip
+        ax.plot(run.t, run.eta_d_r[:, k] * s, "--", color=_C_DES, lw=1.4, label="desired")
+        ax.set_ylabel(labels[k])
+        ax.grid(True, alpha=0.3)
+        _leg_marks(ax, run, top=k == 0)
+    axes[0].legend(loc="upper right", fontsize=8, ncols=3)
+    axes[-1].set_xlabel("t (s)")
+    fig.suptitle(_title(run) + "\nposition in the r-frame: desired (dashed), measured (solid)",
+                 fontsize=10)  # fmt: skip
+    return _save(fig, path)
+
+
+def _plot_velocities(run: Run, path: Path) -> Path:
+    fig = _figure("velocities")
+    axes = fig.subplots(3, 1, sharex=True)
+    labels = ("u (m/s)", "v (m/s)", "r (deg/s)")
+    scale = (1.0, 1.0, _DEG)
+    nu_d = run.nu_d
+    differs = bool(len(run.nu)) and bool(np.any(np.abs(run.nav_nu - run.nu) > 1e-12))
+    for k, ax in enumerate(axes):
+        s = scale[k]
+        ax.plot(run.t, run.nu[:, k] * s, color=_C_TRUE, lw=0.9, alpha=0.8, label="true")
+        if differs:
+            ax.plot(run.t, run.nav_nu[:, k] * s, "-", color=_C_EST, lw=1.0, label="estimated")
+        ax.plot(run.t, nu_d[:, k] * s, "--", color=_C_DES, lw=1.4, label="desired")
+        ax.set_ylabel(labels[k])
+        ax.grid(True, alpha=0.3)
+        _leg_marks(ax, run, top=k == 0)
+    axes[0].legend(loc="upper right", fontsize=8, ncols=3)
+    axes[-1].set_xlabel("t (s)")
+    est = "estimated (solid)" if differs else "true (solid; controller used the truth)"
+    fig.suptitle(_title(run) + f"\nbody velocity: desired (dashed), {est}", fontsize=10)
+    return _save(fig, path)
+
+
+def _spans(flags: NDArray[np.bool_]) -> list[tuple[int, int]]:
+    """Index ranges ``[start, end)`` of consecutive True flags."""
+    f = np.concatenate([[False], np.asarray(flags, dtype=bool), [False]])
+    d = np.diff(f.astype(np.int8))
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True))
+
+
+def _plot_thrusters(run: Run, path: Path) -> Path:
+    fig = _figure("thrusters")
+    axes = fig.subplots(3, 2, sharex=True)
+    names = ("main propeller", "bow tunnel", "stern tunnel")
+    cmd_labels = ("$n_1$ (rpm)", "$p_2$ (1)", "$p_3$ (1)")
+    t = run.t
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    limits = run.metadata.get("command_limits")
+    for k in range(3):
+        ax_c, ax_f = axes[k]
+        ax_c.step(t, run.command[:, k], where="pre", color="#444444", lw=1.0)
+        ax_f.plot(t, run.thrust[:, k], color=("#d62728", "#1f77b4", "#2ca02c")[k], lw=1.0)
+        for a, b in _spans(run.saturated[:, k]):
+            t0 = t[a] - dt
+            t1 = t[b - 1]
+            for ax in (ax_c, ax_f):
+                ax.axvspan(t0, t1, color=_C_SAT, alpha=0.25, lw=0, zorder=0)
+        if limits:
+            for lim in (limits[0][k], limits[1][k]):
+                ax_c.axhline(lim, color="#d62728", lw=0.8, ls=":")
+        ax_c.set_ylabel(cmd_labels[k])
+        ax_f.set_ylabel(f"$F_{k + 1}$ (N)")
+        ax_c.set_title(f"{names[k]}: command", fontsize=9, loc="left")
+        ax_f.set_title(f"{names[k]}: force", fontsize=9, loc="left")
+        for ax in (ax_c, ax_f):
+            ax.grid(True, alpha=0.3)
+            ax.axhline(0.0, color="0.5", lw=0.6)
+    for ax in axes[-1]:
+        ax.set_xlabel("t (s)")
+    fig.suptitle(
+        _title(run) + "\nthrusters (dotted: command limits; shaded: saturated)", fontsize=10
+    )
+    return _save(fig, path)
+
+
+# ---- metrics ----------------------------------------------------------------------------------
+def _fmt(x: Any, nd: int = 4) -> str:
+    try:
+        f = float(x)
+    except (TypeError, ValueError):
+        return "n/a"
+    return f"{f:.{nd}f}" if math.isfinite(f) else "n/a"
+
+
+def _metrics_markdown(run: Run, files: list[Path]) -> str:
+    m = run.metrics or {}
+    meta = run.metadata or {}
+    acc = run.accuracy[-1] if len(run.accuracy) else np.full(4, np.nan)
+    acc_m = run.accuracy_measured[-1] if len(run.accuracy_measured) else np.full(4, np.nan)
+    keys = ("x_E", "y_E", "psi_E", "J_c")
+    truth = {k: m.get(k, acc[i]) for i, k in enumerate(keys)}
+    meas_src = m.get("measured") or {k: acc_m[i] for i, k in enumerate(keys)}
+    wind = meta.get("wind")
+    wind_txt = "none" if not wind else f"{wind['speed']:.1f} m/s from {wind['from_deg']:.0f} deg"
+    duration = m.get("duration_s", float(run.t[-1]) if len(run.t) else float("nan"))
+    lines = [
+        f"# Run report: {meta.get('scenario', 'run')}",
+        "",
+        "| | |",
+        "|---|---|",
+        f"| env id | `{meta.get('env_id')}` |",
+        f"| seed | {meta.get('seed')} |",
+        f"| observer | {meta.get('observer')} |",
+        f"| controller | {meta.get('controller')} |",
+        f"| wind | {wind_txt} |",
+        f"| plan | {meta.get('plan')} |",
+        f"| control steps | {run.n_steps} |",
+        f"| duration | {_fmt(duration, 1)} s |",
+        f"| completed | {m.get('completed', 'n/a')} "
+        f"({m.get('legs_completed', int(run.legs_completed[-1]) if len(run.t) else 0)} legs) |",
+        f"| quay contact | {m.get('quay_contact', 'n/a')} |",
+        "",
+        "## Accuracy indices (seed001 eqs. 54-57, r-frame, sampled at 1 s)",
+        "",
+        "| from | x_E (m) | y_E (m) | psi_E (deg) | J_c |",
+        "|---|---|---|---|---|",
+        "| truth | " + " | ".join(_fmt(truth[k]) for k in keys) + " |",
+        "| measurements | " + " | ".join(_fmt(meas_src.get(k)) for k in keys) + " |",
+        "",
+        "J_c = x_E + y_E + 0.01 psi_E.",
+        "",
+        "## Legs",
+        "",
+        "| leg | name | duration (s) | completed at (s) |",
+        "|---|---|---|---|",
+    ]
+    names = meta.get("legs") or []
+    times = list(m.get("leg_times") or [])
+    done = list(m.get("leg_completion_times") or [])
+    n_legs = max(len(names), len(times))
+    for i in range(n_legs):
+        name = names[i] if i < len(names) else ""
+        dur = _fmt(times[i], 1) if i < len(times) else "not completed"
+        at = _fmt(done[i], 1) if i < len(done) else ("end" if i < len(times) else "")
+        lines.append(f"| {i + 1} | {name} | {dur} | {at} |")
+    lines += [
+        "",
+        "## Thrusters",
+        "",
+        "| thruster | mean abs F (N) | total variation (N) | saturated fraction | "
+        "saturated time (s) |",
+        "|---|---|---|---|---|",
+    ]
+    mean_abs = m.get("thrust_mean_abs") or np.mean(np.abs(run.thrust), axis=0).tolist()
+    tv = m.get("thrust_total_variation") or np.abs(np.diff(run.thrust, axis=0)).sum(0).tolist()
+    sat_f = m.get("saturated_fraction") or run.saturated.mean(axis=0).tolist()
+    sat_t = m.get("saturated_time") or [float("nan")] * 3
+    for i, name in enumerate(("main propeller", "bow tunnel", "stern tunnel")):
+        lines.append(
+            f"| {name} | {_fmt(mean_abs[i], 2)} | {_fmt(tv[i], 1)} | {_fmt(sat_f[i], 3)} | "
+            f"{_fmt(sat_t[i], 1)} |"
+        )
+    lines += ["", "## Figures", ""]
+    lines += [f"- [{p.name}]({p.name})" for p in files]
+    return "\n".join(lines) + "\n"
+
+
+def write_report(
+    run_or_path: Run | str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    hull_every: float = 60.0,
+) -> list[Path]:
+    """Write the PNG figures and ``metrics.md`` of a run (no display needed).
+
+    Args:
+        run_or_path: a :class:`Run`, or a ``.rrd`` / ``.json`` run file (:func:`load_run`).
+        out_dir: output folder (created).
+        hull_every: period of the hull outlines on the trajectory map (s).
+
+    Returns:
+        The files written: ``trajectory.png``, ``positions.png``, ``velocities.png``,
+        ``thrusters.png`` (sizes :func:`pixel_size`) and ``metrics.md``.
+
+    Raises:
+        ValueError: an unreadable run file, a run without any step, or an unusable folder.
+    """
+    run = run_or_path if isinstance(run_or_path, Run) else load_run(run_or_path)
+    if len(run.t) == 0:
+        raise ValueError("the run holds no control step: nothing to report")
+    if not (isinstance(hull_every, int | float) and math.isfinite(hull_every)):
+        raise ValueError(f"hull_every must be a finite number of seconds, got {hull_every!r}")
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"cannot create the report folder {out}: {exc.strerror or exc}") from None
+    files = report_paths(out)
+    _plot_trajectory(run, files[0], float(hull_every))
+    _plot_positions(run, files[1])
+    _plot_velocities(run, files[2])
+    _plot_thrusters(run, files[3])
+    files[4].write_text(_metrics_markdown(run, files[:4]))
+    return files

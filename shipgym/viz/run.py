@@ -1,0 +1,445 @@
+"""A recorded run as NumPy arrays, and its file formats: rerun ``.rrd`` and JSON.
+
+:class:`Run` is what :class:`~shipgym.viz.RecordEpisode` records and what
+:func:`~shipgym.viz.write_report` plots. :func:`load_run` reads it back from a ``.rrd`` file
+(with ``rerun.chunk.RrdReader``; no viewer) or from a JSON run file written by
+:func:`save_run_json`.
+
+Entity paths of the ``.rrd`` files (the map is drawn in NED metres under ``map/ned``, which
+carries a static rotation so that north is up and east is right in rerun's 2-D view):
+
+=========================== ======================================================
+``map/ned/quays``           quay and pier outlines (static line strips)
+``map/ned/plan``            planned path through the leg end points (static)
+``map/ned/waypoints``       leg end points ``P, 1, ..., n`` (static points)
+``map/ned/ship``            true pose every control step (Transform3D, float32)
+``map/ned/ship/hull``       hull outline in the body frame (static)
+``map/ned/ship/thrust``     thrust arrows at the thrusters (body frame)
+``map/ned/target``          end point of the current leg
+``map/ned/track/truth``     true position (x, y) every step (float32)
+``map/ned/track/reference`` desired position every step
+``map/ned/track/estimate``  navigation (observer) position, when it differs from the truth
+``map/ned/dgps``            measured positions (DGPS), ``map/ned/dgps_outliers``
+``map/ned/hull_trace``      hull outlines every ``hull_every`` s (NED)
+``map/ned/wind``            wind arrow (where the wind goes; 2 m per m/s)
+``plots/position/{x,y,psi}`` r-frame pose: desired, true, estimate (m, m, deg) and
+                            ``.../measured`` (DGPS and gyro-compass)
+``plots/velocity/{u,v,r}``  body velocity: desired, true, estimate (m/s, m/s, deg/s)
+``plots/thrust``            thruster forces F1, F2, F3 (N)
+``plots/command/main``      main propeller command n1 (rpm)
+``plots/command/tunnels``   tunnel thruster commands p2, p3 (1)
+``plots/accuracy/truth``    running x_E, y_E (m), psi_E (deg), J_c (seed001 eqs. 54-57)
+``plots/accuracy/measured`` the same from the measured pose
+``data/*``                  raw float64 vectors for tools that read the file back
+``metadata/summary``        run description (markdown), ``metadata/json`` (machine-readable)
+=========================== ======================================================
+
+Timelines: ``sim_time`` (simulation time, s) and ``step`` (control step; 0 is the state after
+``reset``, ``k`` the state after the k-th ``step``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["Run", "load_run", "save_run_json", "P"]
+
+JSON_FORMAT = "shipgym-run"
+JSON_VERSION = 1
+
+
+class P:
+    """Entity paths of the ``.rrd`` files (see the module docstring)."""
+
+    MAP = "map"
+    NED = "map/ned"
+    QUAYS = "map/ned/quays"
+    PLAN = "map/ned/plan"
+    WAYPOINTS = "map/ned/waypoints"
+    SHIP = "map/ned/ship"
+    HULL = "map/ned/ship/hull"
+    THRUST = "map/ned/ship/thrust"
+    TARGET = "map/ned/target"
+    TRACK_TRUTH = "map/ned/track/truth"
+    TRACK_REF = "map/ned/track/reference"
+    TRACK_EST = "map/ned/track/estimate"
+    DGPS = "map/ned/dgps"
+    DGPS_OUTLIERS = "map/ned/dgps_outliers"
+    HULL_TRACE = "map/ned/hull_trace"
+    WIND = "map/ned/wind"
+    POSITION = "plots/position"  # /x, /y, /psi and /<dof>/measured
+    VELOCITY = "plots/velocity"  # /u, /v, /r
+    PLOT_THRUST = "plots/thrust"
+    COMMAND_MAIN = "plots/command/main"
+    COMMAND_TUNNELS = "plots/command/tunnels"
+    ACCURACY = "plots/accuracy/truth"
+    ACCURACY_MEAS = "plots/accuracy/measured"
+    DATA = "data"  # /<name> for the names in DATA_VECTORS
+    SUMMARY = "metadata/summary"
+    META_JSON = "metadata/json"
+
+
+#: Per-step float64 vectors logged under ``data/<name>`` (name -> width).
+DATA_VECTORS: dict[str, int] = {
+    "eta": 3,
+    "nu": 3,
+    "nav_eta": 3,
+    "nav_nu": 3,
+    "eta_d": 3,
+    "eta_d_r": 3,
+    "eta_dot_d_r": 3,
+    "eta_r": 3,
+    "eta_P": 3,
+    "command": 3,
+    "thrust": 3,
+    "saturated": 3,
+    "tau_wind": 3,
+    "wind": 2,
+    "leg": 2,
+}
+
+_N3 = ("eta", "nu", "nav_eta", "nav_nu", "eta_d", "eta_d_r", "eta_dot_d_r", "eta_r", "eta_P")
+
+
+@dataclass
+class Run:
+    """One recorded episode as arrays (``N`` control steps including the reset state).
+
+    Attributes:
+        t: time (s), (N,); ``step``: control step index (0 = after reset), (N,).
+        eta, nu: true NED pose (m, m, rad) and body velocity (m/s, m/s, rad/s), (N, 3).
+        nav_eta, nav_nu: what the controller used (truth or the observer's estimate), (N, 3).
+        eta_d: desired NED pose; eta_d_r, eta_dot_d_r: desired pose and its rate in the leg's
+            r-frame; eta_r: true pose in the r-frame; eta_P: NED pose of the leg start, (N, 3).
+        leg: index of the leg being performed, legs_completed, (N,) int.
+        command: ``[n1 (rpm), p2, p3]``; thrust: ``[F1, F2, F3]`` (N); saturated: flags, (N, 3).
+        tau_wind: wind load ``[X (N), Y (N), N (N m)]`` in the body frame, (N, 3).
+        wind: ``[speed (m/s), direction from (rad)]`` at each step, (N, 2).
+        meas_t, meas_step: times (s) and control steps of the valid measurements, (M,).
+        meas_z: measured NED pose (m, m, rad), (M, 3); meas_z_r: in the leg's r-frame, (M, 3).
+        meas_outlier: truth flag of outliers, (M,).
+        accuracy, accuracy_measured: running ``[x_E (m), y_E (m), psi_E (deg), J_c]`` from the
+            truth and from the measurements (NaN before the first sample), (N, 4).
+        waypoints: planned NED leg end points (m, m, rad), (legs + 1, 3).
+        quays: NED corner polygons (m), (K, 4, 2); quay_names: their geom names.
+        hull: body-frame hull outline ``(x forward, y starboard)`` (m), (H, 2).
+        thrusters: body-frame thruster positions (m), (3, 2).
+        metadata: env id, scenario, seed, observer, controller, wind, plan, ...
+        metrics: the environment's episode metrics (accuracy indices, leg times, thrusters).
+    """
+
+    t: NDArray[np.float64]
+    step: NDArray[np.int64]
+    eta: NDArray[np.float64]
+    nu: NDArray[np.float64]
+    nav_eta: NDArray[np.float64]
+    nav_nu: NDArray[np.float64]
+    eta_d: NDArray[np.float64]
+    eta_d_r: NDArray[np.float64]
+    eta_dot_d_r: NDArray[np.float64]
+    eta_r: NDArray[np.float64]
+    eta_P: NDArray[np.float64]
+    leg: NDArray[np.int64]
+    legs_completed: NDArray[np.int64]
+    command: NDArray[np.float64]
+    thrust: NDArray[np.float64]
+    saturated: NDArray[np.bool_]
+    tau_wind: NDArray[np.float64]
+    wind: NDArray[np.float64]
+    meas_t: NDArray[np.float64]
+    meas_step: NDArray[np.int64]
+    meas_z: NDArray[np.float64]
+    meas_z_r: NDArray[np.float64]
+    meas_outlier: NDArray[np.bool_]
+    accuracy: NDArray[np.float64]
+    accuracy_measured: NDArray[np.float64]
+    waypoints: NDArray[np.float64]
+    quays: NDArray[np.float64]
+    quay_names: list[str] = field(default_factory=list)
+    hull: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
+    thrusters: NDArray[np.float64] = field(default_factory=lambda: np.zeros((3, 2)))
+    metadata: dict[str, Any] = field(default_factory=dict)
+    metrics: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def n_steps(self) -> int:
+        """Number of ``env.step`` calls recorded (rows minus the reset state)."""
+        return max(len(self.t) - 1, 0)
+
+    @property
+    def nu_d(self) -> NDArray[np.float64]:
+        """Desired body velocity ``R(psi_d^r)^T eta_dot_d^r`` (m/s, m/s, rad/s), (N, 3)."""
+        return desired_body_velocity(self.eta_d_r, self.eta_dot_d_r)
+
+    @property
+    def nav_eta_r(self) -> NDArray[np.float64]:
+        """Navigation pose in the leg's r-frame (heading near psi_d^r), (N, 3)."""
+        from shipgym.guidance import to_r_frame
+
+        if len(self.t) == 0:
+            return np.zeros((0, 3))
+        return to_r_frame(self.nav_eta, self.eta_P, psi_ref_r=self.eta_d_r[:, 2])
+
+
+def desired_body_velocity(eta_d_r: Any, eta_dot_d_r: Any) -> NDArray[np.float64]:
+    """``nu_d = R(psi_d^r)^T eta_dot_d^r`` row by row (m/s, m/s, rad/s)."""
+    e = np.asarray(eta_d_r, dtype=float).reshape(-1, 3)
+    v = np.asarray(eta_dot_d_r, dtype=float).reshape(-1, 3)
+    c, s = np.cos(e[:, 2]), np.sin(e[:, 2])
+    return np.column_stack([c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1], v[:, 2]])
+
+
+# ---- JSON ------------------------------------------------------------------------------------
+def _clean(obj: Any) -> Any:
+    """JSON-safe copy: arrays to lists, NaN/inf to None, numpy scalars to Python."""
+    if isinstance(obj, np.ndarray):
+        if obj.dtype.kind == "f":
+            bad = ~np.isfinite(obj)
+            if not bad.any():
+                return obj.tolist()
+            out = obj.astype(object)
+            out[bad] = None
+            return out.tolist()
+        if obj.dtype.kind in "biu":
+            return obj.tolist()
+        return _clean(obj.tolist())
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, np.bool_ | bool):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, float | np.floating):
+        f = float(obj)
+        return f if math.isfinite(f) else None
+    return obj
+
+
+def save_run_json(run: Run, path: str | Path) -> Path:
+    """Write a run to a JSON file (arrays as nested lists, NaN as ``null``).
+
+    Args:
+        run: the run (from the recorder or :func:`load_run`).
+        path: destination file (parent folders are created).
+
+    Returns:
+        The path written.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    arrays = {}
+    for f in fields(run):
+        if f.name in ("metadata", "metrics", "quay_names"):
+            continue
+        arrays[f.name] = getattr(run, f.name)
+    doc = {
+        "format": JSON_FORMAT,
+        "version": JSON_VERSION,
+        "metadata": run.metadata,
+        "metrics": run.metrics,
+        "quay_names": list(run.quay_names),
+        "arrays": arrays,
+    }
+    path.write_text(json.dumps(_clean(doc), separators=(",", ":")))
+    return path
+
+
+_INT_FIELDS = ("step", "leg", "legs_completed", "meas_step")
+_BOOL_FIELDS = ("saturated", "meas_outlier")
+_SHAPES = {
+    "meas_z": (0, 3),
+    "meas_z_r": (0, 3),
+    "accuracy": (0, 4),
+    "accuracy_measured": (0, 4),
+    "waypoints": (0, 3),
+    "quays": (0, 4, 2),
+    "hull": (0, 2),
+    "thrusters": (0, 2),
+    "wind": (0, 2),
+    **{k: (0, 3) for k in (*_N3, "command", "thrust", "saturated", "tau_wind")},
+}
+
+
+def _as_array(name: str, value: Any) -> NDArray[Any]:
+    if name in _BOOL_FIELDS:
+        a = np.asarray(value, dtype=bool)
+    elif name in _INT_FIELDS:
+        a = np.asarray(value, dtype=np.int64)
+    else:
+        a = np.array(value, dtype=float)  # None -> nan
+    if a.size == 0 and name in _SHAPES:
+        a = a.reshape(_SHAPES[name])
+    return a
+
+
+def _load_json(path: Path) -> Run:
+    try:
+        doc = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"cannot read the run file {path}: {exc}") from exc
+    if not isinstance(doc, dict) or doc.get("format") != JSON_FORMAT:
+        raise ValueError(
+            f"{path} is not a shipgym run file (expected a JSON object with "
+            f'"format": "{JSON_FORMAT}", as written by shipgym.viz.save_run_json)'
+        )
+    arrays = doc.get("arrays", {})
+    kwargs: dict[str, Any] = {}
+    for f in fields(Run):
+        if f.name in ("metadata", "metrics", "quay_names"):
+            continue
+        if f.name not in arrays:
+            raise ValueError(f"{path}: the run file lacks the array {f.name!r}")
+        kwargs[f.name] = _as_array(f.name, arrays[f.name])
+    return Run(
+        **kwargs,
+        quay_names=list(doc.get("quay_names", [])),
+        metadata=dict(doc.get("metadata") or {}),
+        metrics=dict(doc.get("metrics") or {}),
+    )
+
+
+# ---- rrd -------------------------------------------------------------------------------------
+def _chunks_by_entity(path: Path) -> dict[str, dict[str, Any]]:
+    """Per entity path: ``{"static": {component: value}, "rows": {column: list}}``."""
+    from rerun.chunk import RrdReader
+
+    out: dict[str, dict[str, Any]] = {}
+    for ch in RrdReader(path).stream():
+        ent = ch.entity_path.lstrip("/")
+        rb = ch.to_record_batch()
+        slot = out.setdefault(ent, {"static": {}, "rows": {}})
+        cols = {name: rb.column(i) for i, name in enumerate(rb.schema.names)}
+        if ch.is_static:
+            for name, col in cols.items():
+                if name.startswith("rerun.controls"):
+                    continue
+                val = col.to_pylist()[-1]
+                if isinstance(val, list) and len(val) == 1:
+                    val = val[0]
+                slot["static"][name] = val
+            continue
+        n = rb.num_rows
+        for name, col in cols.items():
+            if name.startswith("rerun.controls"):
+                continue
+            if name == "sim_time":
+                vals = col.cast("int64").to_pylist()
+            else:
+                vals = col.to_pylist()
+            slot["rows"].setdefault(name, []).extend(vals)
+        for name in list(slot["rows"]):
+            if name not in cols:  # component absent from this chunk
+                slot["rows"][name].extend([None] * n)
+    return out
+
+
+def _rows(ents: dict[str, dict[str, Any]], entity: str) -> dict[str, list[Any]]:
+    if entity not in ents:
+        raise ValueError(f"the recording lacks the entity {entity!r}: not a shipgym recording?")
+    return ents[entity]["rows"]
+
+
+def _sorted_by_step(rows: dict[str, list[Any]], column: str) -> tuple[NDArray[Any], Any]:
+    step = np.asarray(rows["step"], dtype=np.int64)
+    order = np.argsort(step, kind="stable")
+    vals = rows[column]
+    return step[order], [vals[i] for i in order]
+
+
+def _vectors(ents: dict[str, dict[str, Any]], name: str, width: int) -> NDArray[np.float64]:
+    rows = _rows(ents, f"{P.DATA}/{name}")
+    _, vals = _sorted_by_step(rows, "Scalars:scalars")
+    if not vals:
+        return np.zeros((0, width))
+    return np.array(vals, dtype=float).reshape(-1, width)
+
+
+def _load_rrd(path: Path) -> Run:
+    try:
+        ents = _chunks_by_entity(path)
+    except Exception as exc:  # noqa: BLE001 - any reader failure means the same to the user
+        raise ValueError(f"cannot read the rerun recording {path}: {exc}") from exc
+    meta_doc = ents.get(P.META_JSON, {}).get("static", {}).get("TextDocument:text")
+    doc: dict[str, Any] = json.loads(meta_doc) if meta_doc else {}
+    rows = _rows(ents, f"{P.DATA}/eta")
+    step, _ = _sorted_by_step(rows, "Scalars:scalars")
+    t_ns = np.asarray(rows["sim_time"], dtype=np.int64)[np.argsort(rows["step"], kind="stable")]
+    vec = {name: _vectors(ents, name, w) for name, w in DATA_VECTORS.items()}
+    legs = vec.pop("leg").astype(np.int64)
+    wind = vec.pop("wind")
+    sat = vec.pop("saturated") > 0.5
+
+    def acc(entity: str) -> NDArray[np.float64]:
+        r = _rows(ents, entity)
+        _, vals = _sorted_by_step(r, "Scalars:scalars")
+        return np.array(vals, dtype=float).reshape(-1, 4)
+
+    # measurements: the x panel holds the r-frame values, data/measurements the NED ones
+    mrows = ents.get(f"{P.DATA}/measurements", {}).get("rows", {})
+    if mrows.get("Scalars:scalars"):
+        mt = np.asarray(mrows["sim_time"], dtype=np.int64) * 1e-9
+        mstep = np.asarray(mrows["step"], dtype=np.int64)
+        m = np.array(mrows["Scalars:scalars"], dtype=float).reshape(-1, 7)
+        order = np.lexsort((mt, mstep))
+        mt, mstep, m = mt[order], mstep[order], m[order]
+    else:
+        mt, mstep, m = np.zeros(0), np.zeros(0, np.int64), np.zeros((0, 7))
+    static = ents.get(f"{P.DATA}/static", {}).get("static", {})
+    geo = json.loads(static["TextDocument:text"]) if static else {}
+    return Run(
+        t=t_ns * 1e-9,
+        step=step,
+        leg=legs[:, 0],
+        legs_completed=legs[:, 1],
+        saturated=sat,
+        wind=wind,
+        **vec,
+        meas_t=mt,
+        meas_step=mstep,
+        meas_z=m[:, 0:3],
+        meas_z_r=m[:, 3:6],
+        meas_outlier=m[:, 6] > 0.5,
+        accuracy=acc(P.ACCURACY),
+        accuracy_measured=acc(P.ACCURACY_MEAS),
+        waypoints=_as_array("waypoints", geo.get("waypoints", [])),
+        quays=_as_array("quays", geo.get("quays", [])),
+        quay_names=list(geo.get("quay_names", [])),
+        hull=_as_array("hull", geo.get("hull", [])),
+        thrusters=_as_array("thrusters", geo.get("thrusters", [])),
+        metadata=dict(doc.get("metadata") or {}),
+        metrics=dict(doc.get("metrics") or {}),
+    )
+
+
+def load_run(path: str | Path) -> Run:
+    """Read a run from a rerun ``.rrd`` recording or a JSON run file.
+
+    Args:
+        path: a ``.rrd`` file written by :class:`~shipgym.viz.RecordEpisode`, or a ``.json``
+            file written by :func:`save_run_json` (or the recorder's ``json_path``).
+
+    Returns:
+        The :class:`Run`. Positions read from a ``.rrd`` are the float64 values of the
+        ``data/*`` entities (the map entities hold the same values as float32).
+
+    Raises:
+        ValueError: unknown suffix, missing file, or a file that is not a shipgym run.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"run file {path} does not exist (expected a .rrd or .json file)")
+    suffix = path.suffix.lower()
+    if suffix == ".json":
+        return _load_json(path)
+    if suffix == ".rrd":
+        return _load_rrd(path)
+    raise ValueError(f"unsupported run file {path}: expected a .rrd or .json file")
