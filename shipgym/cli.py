@@ -62,21 +62,44 @@ def run_episode(
     plant: str = "default",
     progress: bool = False,
     env_kwargs: dict[str, Any] | None = None,
+    record: Path | None = None,
+    spawn: bool = False,
+    report: Path | None = None,
 ) -> dict[str, Any]:
-    """Run one closed-loop episode and return its results (the ``--json`` content)."""
+    """Run one closed-loop episode and return its results (the ``--json`` content).
+
+    Args:
+        scenario: env scenario (``harbour``, ``station-keeping``, ``tracking``) or env id.
+        controller, observer: names (see ``shipgym list``); observer ``None`` = truth.
+        seed: episode seed.
+        wind: ``(speed m/s, from rad)`` or ``None`` (no aerodynamic loads).
+        plant: plant variant.
+        progress: show a progress bar.
+        env_kwargs: further environment arguments (they win over ``wind`` and ``plant``).
+        record: write a rerun recording (``.rrd``) of the episode here.
+        spawn: also try to open the rerun viewer.
+        report: write PNG figures and ``metrics.md`` into this folder.
+    """
     import numpy as np
 
     import shipgym
     from shipgym.disturbances import WindConfig
 
-    wind_cfg = None if wind is None else WindConfig(speed=wind[0], direction_from=wind[1])
-    env = shipgym.make(
-        scenario,
-        observer=observer,
-        controller=controller,
-        wind=wind_cfg,
-        plant=plant,
-        **(env_kwargs or {}),
+    kwargs: dict[str, Any] = {
+        "wind": None if wind is None else WindConfig(speed=wind[0], direction_from=wind[1]),
+        "plant": plant,
+    }
+    kwargs.update(env_kwargs or {})
+    env = shipgym.make(scenario, observer=observer, controller=controller, **kwargs)
+    if report is not None and record is None:
+        record = report / "run.rrd"
+    if record is not None:
+        from shipgym.viz import RecordEpisode
+
+        env = RecordEpisode(env, record, spawn=spawn)
+    wc = env.unwrapped.wind_config  # type: ignore[attr-defined]
+    wind_out = (
+        None if wc is None else {"speed": wc.speed, "from_deg": math.degrees(wc.direction_from)}
     )
     limit = env.spec.max_episode_steps if env.spec is not None else None
     bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
@@ -95,6 +118,14 @@ def run_episode(
         bar.close()
         env.close()
     wall = time.perf_counter() - t0
+    files: list[str] = []
+    if record is not None:
+        files.append(str(record))
+    if report is not None:
+        from shipgym.viz import write_report
+
+        run = getattr(env, "last_run", None)
+        files += [str(p) for p in write_report(run if run is not None else record, report)]
     measured = metrics.get("measured")
     return {
         "scenario": scenario,
@@ -103,7 +134,7 @@ def run_episode(
         "observer": observer or "truth",
         "seed": seed,
         "plant": plant,
-        "wind": None if wind is None else {"speed": wind[0], "from_deg": math.degrees(wind[1])},
+        "wind": wind_out,
         "completed": metrics["completed"],
         "legs_completed": metrics["legs_completed"],
         "duration_s": metrics["duration_s"],
@@ -121,6 +152,7 @@ def run_episode(
         "saturated_fraction": metrics["saturated_fraction"],
         "rmse": info.get("estimation_rmse"),
         "wall_time_s": wall,
+        "files": files,
     }
 
 
@@ -169,26 +201,51 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from shipgym.dynamics import plant_model
     from shipgym.envs.make import resolve_env_id
 
+    env_kwargs: dict[str, Any] = {}
+    scenario_name = args.scenario
+    if args.scenario_file is not None:
+        from shipgym.scenarios import load_scenario
+
+        sc = load_scenario(args.scenario_file)
+        env_kwargs = sc.env_kwargs()
+        scenario_name = args.scenario or sc.env
+    scenario_name = scenario_name or "harbour"
+    if args.wind is not None:
+        env_kwargs["wind"] = WindConfigFromArg(args.wind)
+    if args.plant is not None:
+        env_kwargs["plant"] = args.plant
+    args.scenario = scenario_name
     resolve_env_id(args.scenario)  # validate names before any work
     controller_spec(args.controller)
-    plant_model(args.plant)
+    plant_model(env_kwargs.get("plant", "default"))
     observer = None if args.observer == "truth" else args.observer
     if observer is not None:
         from shipgym.observers import make_observer
 
         make_observer(observer)
-    if args.json is not None:
-        _check_writable(args.json)
+    for path in (args.json, args.record):
+        if path is not None:
+            _check_writable(path)
+    if args.record is not None and args.record.suffix != ".rrd":
+        raise ValueError(f"--record needs a .rrd path, got {args.record}")
     res = run_episode(
         args.scenario,
         controller=args.controller,
         observer=observer,
         seed=args.seed,
-        wind=args.wind,
-        plant=args.plant,
+        wind=(3.0, math.radians(300.0)),
+        plant="default",
+        env_kwargs=env_kwargs,
         progress=not args.no_progress,
+        record=args.record,
+        spawn=args.spawn,
+        report=args.report,
     )
     _print_table(res)
+    for f in res["files"]:
+        print(f"wrote {f}")
+    if res["files"] and args.record is not None:
+        print(f"open the recording with: rerun {args.record}")
     if args.json is not None:
         args.json.write_text(json.dumps(res, indent=2))
         print(f"results written to {args.json}")
@@ -226,6 +283,23 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.markdown is not None:
         args.markdown.write_text(f"{title}\n\n{table}\n")
         print(f"table written to {args.markdown}")
+    return 0
+
+
+def WindConfigFromArg(wind: tuple[float, float]) -> Any:  # noqa: N802 - reads as a type
+    """A :class:`WindConfig` from ``parse_wind``'s ``(speed, from_rad)``."""
+    from shipgym.disturbances import WindConfig
+
+    return WindConfig(speed=wind[0], direction_from=wind[1])
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from shipgym.viz import write_report
+
+    if not args.run.exists():
+        raise ValueError(f"no such run file: {args.run}")
+    for f in write_report(args.run, args.out):
+        print(f"wrote {f}")
     return 0
 
 
@@ -298,18 +372,34 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser("list", help="list plant variants, wind models and actuators")
     p.set_defaults(func=_cmd_list)
     p = sub.add_parser("run", help="run a closed-loop scenario; prints the metrics table")
-    p.add_argument("scenario", help="harbour, station-keeping, tracking, or an env id")
+    p.add_argument(
+        "scenario", nargs="?", default=None,
+        help="harbour (default), station-keeping, tracking, or an env id",
+    )  # fmt: skip
+    p.add_argument(
+        "--scenario", dest="scenario_file", default=None, metavar="NAME|FILE",
+        help="scenario preset or YAML/TOML file (see 'shipgym list'): plant, wind, waves, ...",
+    )  # fmt: skip
     p.add_argument("--controller", default="pid", help="pid (default) or pid-seed")
     p.add_argument(
         "--observer", default="truth", help="truth (default), dkf, kbf, ekf, tomera-dkf/kbf/ekf"
     )
     p.add_argument("--seed", type=int, default=0, help="episode seed (0)")
-    p.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
-                   metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip
-    p.add_argument("--plant", default="default", help="plant variant (see 'shipgym list')")
+    p.add_argument("--wind", type=parse_wind, default=None, metavar="SPEED@FROM_DEG",
+                   help="mean wind, e.g. 3@300 (default 3@300 or the scenario's)")  # fmt: skip
+    p.add_argument("--plant", default=None, help="plant variant (default: 'default')")
     p.add_argument("--json", type=Path, default=None, metavar="PATH", help="write results")
+    p.add_argument("--record", type=Path, default=None, metavar="PATH.rrd",
+                   help="record the episode to a rerun file (no viewer needed)")  # fmt: skip
+    p.add_argument("--spawn", action="store_true", help="also open the rerun viewer if possible")
+    p.add_argument("--report", type=Path, default=None, metavar="DIR",
+                   help="write PNG figures and metrics.md into DIR")  # fmt: skip
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_run)
+    p = sub.add_parser("report", help="PNG figures and metrics.md from a recorded run")
+    p.add_argument("run", type=Path, help="RUN.rrd or RUN.json")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR")
+    p.set_defaults(func=_cmd_report)
     p = sub.add_parser("bench", help="benchmarks: 'bench observers'")
     bsub = p.add_subparsers(dest="what", required=True)
     b = bsub.add_parser("observers", help="seed001 Table-6-style comparison of observers")

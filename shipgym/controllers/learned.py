@@ -242,7 +242,9 @@ class ModelMetadata:
         except json.JSONDecodeError as exc:
             raise ValueError(f"{where} is not valid JSON: {exc}") from None
         if not isinstance(d, dict) or d.get("format") != MODEL_FORMAT:
-            raise ValueError(f"{where} does not describe a shipgym model (format != {MODEL_FORMAT})")
+            raise ValueError(
+                f"{where} does not describe a shipgym model (format != {MODEL_FORMAT})"
+            )
         version = d.get("format_version")
         if not isinstance(version, int) or version > MODEL_FORMAT_VERSION:
             raise ValueError(
@@ -423,7 +425,9 @@ def load_policy(path: str | Path, *, device: str = "cpu") -> LearnedPolicy:
     try:
         policy.load_state_dict(state)
     except RuntimeError as exc:
-        raise ValueError(f"{path}: weights do not match the policy in {METADATA_NAME}: {exc}")
+        raise ValueError(
+            f"{path}: weights do not match the policy in {METADATA_NAME}: {exc}"
+        ) from None
     policy.to(device)
     policy.set_training_mode(False)
     return LearnedPolicy(policy, meta)
@@ -471,13 +475,14 @@ def parse_learned_controller(name: str) -> tuple[str, Path]:
     algo, sep, rest = str(name).partition(":")
     if algo not in ALGORITHMS:
         raise ValueError(
-            f"not a learned controller: {name!r}; use ppo (shipped baseline), ppo:PATH or "
-            "sac:PATH"
+            f"not a learned controller: {name!r}; use ppo (shipped baseline), ppo:PATH or sac:PATH"
         )
     path = Path(rest).expanduser() if sep and rest else baseline_model_path(algo)
     meta = read_metadata(path)
     if meta.algorithm != algo:
-        raise ValueError(f"{path} holds a {meta.algorithm} model, not {algo}: use {meta.algorithm}:")
+        raise ValueError(
+            f"{path} holds a {meta.algorithm} model, not {algo}: use {meta.algorithm}:"
+        )
     return algo, path
 
 

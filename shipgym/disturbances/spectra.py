@@ -387,8 +387,11 @@ def harmonic_components(
 
     The band ``[lo, hi]`` is cut into ``n`` bins (equal widths, or equal ratios with
     ``log=True``); each component sits at a uniformly random frequency inside its bin (so the
-    sum never repeats, notes 1.7 (a) and 2.1), with amplitude ``sqrt(2 S(f_j) df_j)`` and a
-    uniform random phase. Draws: ``n`` uniforms for the frequencies, then ``n`` phases.
+    sum never repeats, notes 1.7 (a) and 2.1) with a uniform random phase. Its amplitude is
+    ``sqrt(2 int_bin S df)`` (the bin's energy, 16-interval Simpson rule) rather than
+    ``sqrt(2 S(f_j) df)``: the same to first order, but the energy of every bin, hence of
+    every band of whole bins and the variance of the sum, is exact whatever frequency was
+    drawn. Draws: ``n`` uniforms for the frequencies, then ``n`` phases.
 
     Args:
         spectrum: Callable ``S(f)`` on arrays (any one-sided density).
@@ -406,8 +409,14 @@ def harmonic_components(
     df = np.diff(edges)
     f = edges[:-1] + rng.random(n) * df
     phase = rng.uniform(0.0, 2.0 * math.pi, n)
-    a = np.sqrt(2.0 * np.maximum(np.asarray(spectrum(f), dtype=float), 0.0) * df)
-    return f, a, phase
+    m = 16  # Simpson sub-intervals per bin
+    sub = edges[:-1, None] + df[:, None] * (np.arange(m + 1) / m)
+    wts = np.ones(m + 1)
+    wts[1:-1:2] = 4.0
+    wts[2:-1:2] = 2.0
+    dens = np.maximum(np.asarray(spectrum(sub), dtype=float), 0.0)
+    energy = np.einsum("jk,k->j", dens, wts) * df / (3.0 * m)
+    return f, np.sqrt(2.0 * energy), phase
 
 
 def harmonic_sums(

@@ -569,7 +569,7 @@ class WindConfig:
         if self.gust_std is not None:
             var = self._band_variance
             s = s * (float(self.gust_std) ** 2 / var if var > 0 else 0.0)
-        return np.where((ff >= lo) & (ff <= hi), s, 0.0)
+        return np.where((ff >= lo * (1 - 1e-12)) & (ff <= hi * (1 + 1e-12)), s, 0.0)
 
     @functools.cached_property
     def _band_variance(self) -> float:

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from shipgym._config import param
 from shipgym.assets import asset_path
 from shipgym.controllers.allocation import action_to_command, command_to_action
-from shipgym.disturbances import WindConfig
+from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
 from shipgym.dynamics import BLUE_LADY_THRUSTERS, command_to_tau, wrap_angle
 from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
 from shipgym.guidance import plan as named_plan
@@ -147,7 +147,8 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     controllers use); reference ``eta_d`` (NED), ``eta_d_r``, ``eta_dot_d_r``,
     ``eta_ddot_d_r``, ``eta_P`` (leg start) and ``eta_r`` (ship in the r-frame); ``leg``,
     ``legs_completed``, ``finished``, ``t`` (s); ``command`` (rpm, 1, 1), ``thrust`` (N),
-    ``saturated``, ``action_clipped``; ``tau_wind`` (N, N, N m, body); ``measurements`` (the
+    ``saturated``, ``action_clipped``; ``tau_wind``, ``tau_waves`` (N, N, N m, body);
+    ``current_body`` (u_c, v_c in m/s); ``measurements`` (the
     sensor samples taken during the step: ``t``, measured NED pose ``z`` or ``None`` in a
     dropout, ``valid``, ``outlier`` (a truth flag), applied body thrust ``tau``); ``quay_contact``,
     ``contacts``; the ``reward_*`` terms; and at the end of an episode ``episode_metrics``
@@ -160,6 +161,9 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | ``plant`` | ``"default"`` | plant variant (``"default"``, ``"seed-linear"``) |
     | ``wind`` | ``"3@300"`` | ``None``, ``WindConfig``, ``(speed, from_deg)`` or ``"SPEED@FROM"`` |
     | ``sensors`` | ``"default"`` | preset (``default``, ``dgps``, ``rtk``), config or ``None`` |
+    | ``waves`` | ``None`` | ``WaveConfig``, preset name or mapping: drift load on the hull, |
+    |  |  | first-order motion added to the measurements |
+    | ``current`` | ``None`` | ``CurrentConfig``, mapping or ``(speed m/s, to_deg)`` |
     | ``scene`` | ``"harbour"`` | ``"harbour"`` or ``"open-water"`` |
     | ``start_pose`` | ``(0, 0, 0)`` | NED start pose (m, m, rad); the harbour turns with it |
     | ``start_noise`` | ``(0, 0, 0)`` | uniform start perturbation half-widths (m, m, rad) |
@@ -181,6 +185,8 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         plant: str = "default",
         wind: Any = "3@300",
         sensors: Any = "default",
+        waves: Any = None,
+        current: Any = None,
         scene: str = "harbour",
         start_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
         start_noise: tuple[float, float, float] = (0.0, 0.0, 0.0),
@@ -225,8 +231,15 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         )
         self._steps = 0
         self._last_measurement: NDArray[np.float64] | None = None
+        self.wave_config = parse_waves_arg(waves)
+        self.current_config = parse_current_arg(current)
         self.physics = VesselPhysics(
-            plant, wind=self.wind_config, xml_path=asset_path(*SCENES[scene]), timestep=timestep
+            plant,
+            wind=self.wind_config,
+            waves=self.wave_config,
+            current=self.current_config,
+            xml_path=asset_path(*SCENES[scene]),
+            timestep=timestep,
         )
         self.thrusters = BLUE_LADY_THRUSTERS
         self.guidance = Guidance(self.plan)
@@ -365,7 +378,9 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         """One sensor sample now: measured NED pose (or None in a dropout) and applied thrust."""
         assert self.sensors is not None
         phys = self.physics
-        m = self.sensors.measure(phys.time, phys.eta)
+        eta = phys.eta
+        dx, dy, dpsi = phys.wave_motion()  # first-order wave motion is seen, not lived
+        m = self.sensors.measure(phys.time, eta + (dx, dy, dpsi))
         rec = {
             "t": phys.time,
             "z": None if m.z is None else np.array(m.z),
@@ -477,6 +492,8 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "saturated": np.asarray(saturated, dtype=bool),
             "action_clipped": np.zeros(3, dtype=bool),
             "tau_wind": np.array(phys.tau_wind),
+            "tau_waves": np.array(phys.tau_waves),
+            "current_body": np.array(phys.nu_c),
             "quay_contact": self._contact,
             "contacts": contacts,
         }
@@ -513,6 +530,37 @@ def parse_sensors_arg(sensors: Any) -> SensorConfig | None:
         return SensorConfig.from_dict(sensors)
     raise ValueError(
         f"sensors must be None, a preset name, a SensorConfig or a mapping, got {sensors!r}"
+    )
+
+
+def parse_waves_arg(waves: Any) -> WaveConfig | None:
+    """Accept ``None``, a :class:`WaveConfig`, a preset name (``WAVE_PRESETS``) or a mapping."""
+    if waves is None or isinstance(waves, WaveConfig):
+        return waves
+    if isinstance(waves, str):
+        from shipgym.scenarios import WAVE_PRESETS
+
+        if waves not in WAVE_PRESETS:
+            raise ValueError(
+                f"unknown wave preset {waves!r}; choose one of: {', '.join(WAVE_PRESETS)}"
+            )
+        preset = WAVE_PRESETS[waves]
+        return preset() if callable(preset) else preset
+    if isinstance(waves, Mapping):
+        return WaveConfig.from_dict(waves)
+    raise ValueError(f"waves must be None, a WaveConfig, a preset name or a mapping: {waves!r}")
+
+
+def parse_current_arg(current: Any) -> CurrentConfig | None:
+    """Accept ``None``, a :class:`CurrentConfig`, a mapping or ``(speed m/s, to_deg)``."""
+    if current is None or isinstance(current, CurrentConfig):
+        return current
+    if isinstance(current, Mapping):
+        return CurrentConfig.from_dict(current)
+    if isinstance(current, tuple | list) and len(current) == 2:
+        return CurrentConfig(speed=float(current[0]), direction_to=math.radians(current[1]))
+    raise ValueError(
+        f"current must be None, a CurrentConfig, a mapping or (speed m/s, to_deg): {current!r}"
     )
 
 

@@ -34,7 +34,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym.assets import asset_path
-from shipgym.disturbances import Wind, WindConfig, WindLoad, blendermann
+from shipgym.disturbances import (
+    Current,
+    CurrentConfig,
+    WaveConfig,
+    Waves,
+    Wind,
+    WindConfig,
+    WindLoad,
+    blendermann,
+)
 from shipgym.dynamics import (
     ACTUATOR_NAMES,
     BLUE_LADY_HULL,
@@ -57,6 +66,23 @@ _MAX_SPEED = 50.0
 _MAX_YAW_RATE = 10.0
 
 
+def _current_config(current: CurrentConfig | tuple[float, float] | None) -> CurrentConfig:
+    if current is None:
+        return CurrentConfig(speed=0.0)
+    if isinstance(current, CurrentConfig):
+        return current
+    try:
+        vc, bc = (float(c) for c in current)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"current must be a CurrentConfig, (speed m/s, direction to rad) or None, "
+            f"got {current!r}"
+        ) from None
+    if not (math.isfinite(vc) and math.isfinite(bc) and vc >= 0):
+        raise ValueError(f"current must be (speed >= 0 m/s, direction rad), got {current!r}")
+    return CurrentConfig(speed=vc, direction_to=bc)
+
+
 class SimulationDiverged(RuntimeError):
     """The simulation produced a non-finite or physically absurd state; it was stopped."""
 
@@ -70,7 +96,13 @@ class VesselPhysics:
         wind: wind configuration. ``None`` switches aerodynamic loads off altogether; a
             ``WindConfig(speed=0)`` is still air, in which a moving hull feels air drag.
         windage: projected areas for the wind load.
-        current: constant current ``(speed m/s, direction it goes to, rad)`` in NED.
+        current: current in NED: a :class:`~shipgym.disturbances.CurrentConfig` (constant or
+            Gauss-Markov), a constant ``(speed m/s, direction it goes to, rad)`` or ``None``.
+            It acts through the relative velocity ``nu_r = nu - nu_c`` only.
+        waves: a :class:`~shipgym.disturbances.WaveConfig` for the second-order (mean and
+            slowly varying) drift load on the hull, or ``None``. First-order wave motion is
+            not a hull motion: the environment adds it to the measurements
+            (:meth:`wave_motion`).
         xml_path: MJCF scene with a body ``hull`` on joints ``x``, ``y``, ``psi`` and actuators
             ``main_propeller``, ``bow_tunnel``, ``stern_tunnel`` (default: the Blue Lady scene).
         timestep: physics step (s); ``None`` keeps the MJCF value (0.05 s).
@@ -85,7 +117,8 @@ class VesselPhysics:
         wind: WindConfig | None = None,
         windage: WindageParameters = BLUE_LADY_WINDAGE,
         *,
-        current: tuple[float, float] = (0.0, 0.0),
+        current: CurrentConfig | tuple[float, float] | None = None,
+        waves: WaveConfig | None = None,
         xml_path: str | Path | None = None,
         timestep: float | None = None,
     ) -> None:
@@ -98,10 +131,12 @@ class VesselPhysics:
         self.aerodynamics = wind is not None
         self.wind_config = wind if wind is not None else WindConfig()
         self.windage = windage
-        vc, bc = (float(c) for c in current)
-        if not (math.isfinite(vc) and math.isfinite(bc) and vc >= 0):
-            raise ValueError(f"current must be (speed >= 0 m/s, direction rad), got {current!r}")
-        self.current = (vc, bc)
+        self.current_config = _current_config(current)
+        self.current = Current(self.current_config)
+        if waves is not None and not isinstance(waves, WaveConfig):
+            raise ValueError(f"waves must be a WaveConfig or None, got {waves!r}")
+        self.wave_config = waves
+        self.waves = Waves(waves, BLUE_LADY_HULL) if waves is not None else None
         path = Path(xml_path) if xml_path is not None else asset_path(*DEFAULT_SCENE)
         if not path.exists():
             raise FileNotFoundError(f"MJCF file not found: {path}")
@@ -116,6 +151,8 @@ class VesselPhysics:
         self._wind_load = WindLoad(blendermann(self.wind_config.coefficients), windage)
         self._accel = self.plant.accel
         self.tau_wind = (0.0, 0.0, 0.0)
+        self.tau_waves = (0.0, 0.0, 0.0)
+        self.nu_c = (0.0, 0.0)
         self.saturated = np.zeros(3, dtype=bool)
         self._prepare = self._make_prepare()
         self.reset()
@@ -189,12 +226,23 @@ class VesselPhysics:
         d.act[:] = np.clip(act, self.thrusters.lower, self.thrusters.upper)
         d.ctrl[:] = d.act
         self.saturated[:] = False
-        self.wind.reset(rng if rng is not None else np.random.default_rng(0))
+        rng = rng if rng is not None else np.random.default_rng(0)
+        # fixed order, one draw each: the same seed gives the same disturbances
+        self.wind.reset(rng)
+        self.current.reset(rng)
+        if self.waves is not None:
+            self.waves.reset(rng)
         # leapfrog start: qacc = a_0 = f(q_0, v_0), qvel = v_{-1/2} = v_0 - h/2 a_0
         self._prepare()
         mujoco.mj_forward(self.model, d)
         d.qvel[:] -= 0.5 * self.model.opt.timestep * d.qacc
         mujoco.mj_forward(self.model, d)
+
+    def wave_motion(self) -> tuple[float, float, float]:
+        """First-order wave-frequency motion ``(dx m, dy m, dpsi rad)`` (NED) now, for sensors."""
+        if self.waves is None or not self.wave_config.first_order:
+            return (0.0, 0.0, 0.0)
+        return self.waves.wf_motion(self.time)
 
     @property
     def time(self) -> float:
@@ -293,7 +341,9 @@ class VesselPhysics:
         k1, k2, k3, L2, L3 = p.k1, p.k2, p.k3, p.L2, p.L3
         mq, iq = self._m_q, self._i_q
         accel, wind_at, wind_load = self._accel, self.wind.at, self._wind_load
-        vc, bc = self.current
+        cc = self.current_config
+        current_at = None if (cc.is_constant and cc.speed == 0.0) else self.current.at
+        drift = None if self.waves is None or not self.wave_config.drift else self.waves.drift_load
         aero = self.aerodynamics
         cos, sin, isfinite = math.cos, math.sin, math.isfinite
         this = self
@@ -320,8 +370,19 @@ class VesselPhysics:
                 wx, wy, wn = wind_load(psi, u, v, vw, bw)
             else:
                 wx = wy = wn = 0.0
-            uc = vc * cos(bc - psi)
-            vcb = vc * sin(bc - psi)
+            if current_at is not None:
+                vc, bc = current_at(d.time)
+                uc = vc * cos(bc - psi)
+                vcb = vc * sin(bc - psi)
+            else:
+                uc = vcb = 0.0
+            if drift is not None:
+                dx_, dy_, dn_ = drift(d.time, psi)
+                wx += dx_
+                wy += dy_
+                wn += dn_
+            else:
+                dx_ = dy_ = dn_ = 0.0
             ud, vd, rd = accel(u, v, r, tx + wx, ty + wy, tn + wn, uc, vcb)
             if not (
                 isfinite(ud + vd + rd) and abs(u) + abs(v) < _MAX_SPEED and abs(r) < _MAX_YAW_RATE
@@ -339,6 +400,8 @@ class VesselPhysics:
             qfrc[1] = mq * (s * bx + c * by) - (s * tx + c * ty)
             qfrc[2] = iq * rd - tn
             gain[0, 0] = k1 * abs(n1)
-            this.tau_wind = (wx, wy, wn)
+            this.tau_wind = (wx - dx_, wy - dy_, wn - dn_)
+            this.tau_waves = (dx_, dy_, dn_)
+            this.nu_c = (uc, vcb)
 
         return prepare

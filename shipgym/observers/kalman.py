@@ -47,8 +47,10 @@ Why first-order hold: a ship at constant speed ``V`` produces a ramp; holding ``
 0.2 m/s, as large as the DGPS noise), whereas the continuous filter, a type-2 loop, tracks the
 ramp of the first-order hold without error. The measurement intensity is ``R_c = R T`` (seed000
 eq. 35), ``R`` the sample variance. Without a previous accepted sample (after a reset, a
-dropout or a rejection) the hold starts from the filter's own position estimate; after a
-forced acceptance (see below) from the new sample itself (a jump has no ramp). ``P`` is the
+dropout or a rejection) and after a forced acceptance (see below; a jump has no ramp) the new
+sample is held over the whole interval instead, the averaged-measurement reading of seed000
+eq. 32 (starting the line from the filter's own estimate would feed the filter its own
+output as if it were a measurement and make ``P`` optimistic). ``P`` is the
 continuous filter's covariance: for the sampled data at ``T = 1 s`` and the designs here
 (bandwidth ~0.3 rad/s) it is 5-10 % conservative; it is exact as ``T -> 0``. A measurement at
 the same time as the previous call (``dt = 0``) only becomes the next hold's start.
@@ -118,6 +120,9 @@ __all__ = [
 _A, _C = double_integrator()
 _EYE2 = np.eye(2)
 _CACHE_SIZE = 16
+_SHARED_CACHE_SIZE = 512
+_SHARED: dict[tuple[Any, ...], Any] = {}
+"""Design- and interval-dependent matrices shared by all filters (designs are frozen)."""
 DEFAULT_INITIAL_VELOCITY_STD = (0.3, 0.3, math.radians(2.0))
 """Default initial std of ``[x_dot, y_dot, psi_dot]`` (m/s, m/s, rad/s) when ``P0`` is None:
 the speeds of the harbour manoeuvre (up to 0.2 m/s, 1 deg/s) with a margin."""
@@ -350,12 +355,22 @@ class _DoubleIntegratorFilter(Observer):
         return np.stack([discretise(_A, W, dt, method="exact")[1] for W in self._W])
 
     def _cached(self, kind: str, dt: float, make: Callable[[], Any]) -> Any:
+        """Matrices for ``(kind, dt)``: per instance, then shared by filters of one design."""
         key = (kind, _dt_key(dt))
         val = self._cache.get(key)
         if val is None:
+            shared_key = (type(self).__name__, self.design, *key)
+            val = _SHARED.get(shared_key)
+            if val is None:
+                val = make()
+                for a in val if isinstance(val, tuple) else (val,):
+                    a.setflags(write=False)
+                if len(_SHARED) >= _SHARED_CACHE_SIZE:
+                    _SHARED.clear()
+                _SHARED[shared_key] = val
             if len(self._cache) >= _CACHE_SIZE:
                 self._cache.clear()
-            val = self._cache[key] = make()
+            self._cache[key] = val
         return val
 
     def _correct(
@@ -403,6 +418,8 @@ class DiscreteKalmanFilter(_DoubleIntegratorFilter):
             initial_velocity_std=initial_velocity_std,
         )
         self.constant_gain = bool(constant_gain)
+        self.last_gain: NDArray[np.float64] | None = None
+        """Gain of the last update, (3, 2), seed order ``[velocity, position]`` per DOF."""
 
     @property
     def steady_state_gain(self) -> NDArray[np.float64]:
@@ -429,6 +446,7 @@ class DiscreteKalmanFilter(_DoubleIntegratorFilter):
             K = self._cached("K", dt, lambda: self.design.dkf_gains(form="filter", dt=dt)[0])
         else:
             K = P_bar[:, :, 1] / (P_bar[:, 1, 1] + R)[:, None]  # seed000 eq. 23
+        self.last_gain = K
         self._s = s_bar + K * innov[:, None]  # seed000 eq. 14
         IKH = np.broadcast_to(_EYE2, (3, 2, 2)).copy()
         IKH[:, :, 1] -= K
@@ -470,9 +488,7 @@ class KalmanBucyFilter(_DoubleIntegratorFilter):
         )
         self.steady_state = bool(steady_state)
         self._Rc = self._R * self.design.T
-        L, P_inf, _ = self.design.kbf_gains()
-        self._L = L
-        self._P_inf = P_inf
+        self._L = self._cached("L", 0.0, lambda: self.design.kbf_gains()[0])
         self._y_prev: NDArray[np.float64] | None = None
 
     @property
@@ -503,9 +519,7 @@ class KalmanBucyFilter(_DoubleIntegratorFilter):
         if forced:
             P0 = P0.copy()
             P0[:, 1, 1] += innov * innov
-            y0 = y1
-        else:
-            y0 = self._y_prev if self._y_prev is not None else s0[:, 1]
+        y0 = y1 if (forced or self._y_prev is None) else self._y_prev
         slope = (y1 - y0) / dt
         if self.steady_state:
             Phi, B1, B2, Qcl = self._cached("ss", dt, lambda: self._steady_blocks(dt))

@@ -88,8 +88,12 @@ def make_controlled_env(
     wind_cfg = None if wind is None else WindConfig(speed=wind[0], direction_from=wind[1])
     observer = check_observer(observer)
     if is_learned_controller(controller):
-        return make_learned_env(scenario, controller, observer=observer, wind=wind_cfg, **env_kwargs)
-    return shipgym.make(scenario, observer=observer, controller=controller, wind=wind_cfg, **env_kwargs)
+        return make_learned_env(
+            scenario, controller, observer=observer, wind=wind_cfg, **env_kwargs
+        )
+    return shipgym.make(
+        scenario, observer=observer, controller=controller, wind=wind_cfg, **env_kwargs
+    )
 
 
 def run_env_episode(

@@ -574,6 +574,8 @@ class TrainResult:
         num_timesteps: environment steps trained in total (including a resumed run's).
         wall_time_s: wall-clock time of the training (s).
         evaluations: the harbour evaluations (see ``evaluations.json``).
+        model: the trained SB3 model (in memory).
+        vec_normalize: its ``VecNormalize`` (closed; statistics still readable), or ``None``.
     """
 
     model_path: Path
@@ -583,6 +585,8 @@ class TrainResult:
     num_timesteps: int
     wall_time_s: float
     evaluations: list[dict[str, Any]] = field(default_factory=list)
+    model: Any = field(default=None, repr=False)
+    vec_normalize: Any = field(default=None, repr=False)
 
 
 def train(
@@ -671,7 +675,9 @@ def train(
     hp["n_timesteps"] = n_steps
     n = int(hp.get("n_envs", 1))
     out_dir = Path(
-        out if out is not None else Path("runs", "train", f"{algo}{'-residual' * residual}-seed{seed}")
+        out
+        if out is not None
+        else Path("runs", "train", f"{algo}{'-residual' * residual}-seed{seed}")
     )
     out_dir.mkdir(parents=True, exist_ok=True)
     command = train_command(
@@ -721,7 +727,9 @@ def train(
         cbs.append(eval_cb)
     if int(hp.get("checkpoint_freq", 0) or 0) > 0:
         cbs.append(
-            _make_checkpoint_callback(save_fn, int(hp["checkpoint_freq"]), out_dir / "checkpoints", algo)
+            _make_checkpoint_callback(
+                save_fn, int(hp["checkpoint_freq"]), out_dir / "checkpoints", algo
+            )
         )
     if max_minutes is not None:
         cbs.append(_make_time_limit_callback(60.0 * float(max_minutes)))
@@ -749,12 +757,12 @@ def train(
         num_timesteps=int(model.num_timesteps),
         wall_time_s=wall,
         evaluations=list(eval_cb.evaluations) if eval_cb is not None else [],
+        model=model,
+        vec_normalize=venv if isinstance(venv, VecNormalize) else None,
     )
 
 
-def _write_config(
-    out_dir: Path, hp: Mapping[str, Any], command: str, **args: Any
-) -> None:
+def _write_config(out_dir: Path, hp: Mapping[str, Any], command: str, **args: Any) -> None:
     """``config.yml``, ``args.yml`` and ``command.txt`` next to the model (as the zoo does)."""
     (out_dir / "config.yml").write_text(yaml.safe_dump(dict(hp), sort_keys=True))
     plain = {k: (str(v) if isinstance(v, Path) else v) for k, v in args.items()}

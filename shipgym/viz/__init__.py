@@ -8,7 +8,15 @@ the functions that need them, so ``import shipgym`` and ``import shipgym.viz`` s
 - :func:`load_run`: read a run back from a ``.rrd`` or JSON file into NumPy arrays
   (:class:`Run`); :func:`save_run_json` writes the JSON form;
 - :func:`write_report`: PNG figures (trajectory, positions, velocities, thrusters) and
-  ``metrics.md`` of a run;
+  ``metrics.md`` of a run.
+
+Example (what ``shipgym run ... --record RUN.rrd --report DIR`` does)::
+
+    env = shipgym.viz.RecordEpisode(shipgym.make("harbour", controller="pid"), "RUN.rrd")
+    env.reset(seed=0)
+    ...  # step until terminated or truncated (or interrupted)
+    env.close()  # the file is complete; env.last_run holds the arrays
+    shipgym.viz.write_report("RUN.rrd", "DIR")  # or write_report(env.last_run, "DIR")
 """
 
 from __future__ import annotations

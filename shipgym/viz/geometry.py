@@ -78,7 +78,7 @@ def convex_outline(points: ArrayLike) -> NDArray[np.float64]:
 
 def _quat_to_mat(q: ArrayLike) -> NDArray[np.float64]:
     """Rotation matrix of a unit quaternion ``[w, x, y, z]`` (MuJoCo order)."""
-    w, x, y, z = (float(v) for v in q)
+    w, x, y, z = np.asarray(q, dtype=float).reshape(4).tolist()
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
@@ -108,11 +108,11 @@ def hull_outline(model: Any = None, mesh: str = "hull_outline") -> NDArray[np.fl
         mesh_id = int(model.mesh(mesh).id)
     except (KeyError, AttributeError):
         return HULL_OUTLINE.copy()
-    geoms = np.flatnonzero(np.asarray(model.geom_dataid) == mesh_id)
-    geoms = [g for g in geoms if int(model.geom_type[g]) == 7]  # mjGEOM_MESH
+    users = np.flatnonzero(np.asarray(model.geom_dataid) == mesh_id)
+    geoms = [int(g) for g in users if int(model.geom_type[g]) == 7]  # mjGEOM_MESH
     if not geoms:
         return HULL_OUTLINE.copy()
-    g = int(geoms[0])
+    g = geoms[0]
     adr, num = int(model.mesh_vertadr[mesh_id]), int(model.mesh_vertnum[mesh_id])
     vert = np.asarray(model.mesh_vert[adr : adr + num], dtype=float)
     body = vert @ _quat_to_mat(model.geom_quat[g]).T + np.asarray(model.geom_pos[g], dtype=float)

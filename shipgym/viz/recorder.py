@@ -10,15 +10,18 @@ interrupted episode still leaves a readable file. What is logged and where:
 
 from __future__ import annotations
 
+import atexit
 import datetime as _dt
 import json
 import math
 import os
 import shutil
+import socket
 import sys
 import uuid
+import weakref
 from pathlib import Path
-from typing import Any
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -48,6 +51,9 @@ _VEC_KEYS = (
     "saturated",
     "tau_wind",
 )
+#: port of a spawned rerun viewer, and the longest wait for the sinks at the end (s).
+VIEWER_PORT = 9876
+FLUSH_TIMEOUT = 60.0
 #: arrow length of a thruster at full thrust (m) and of the wind arrow per m/s (m).
 THRUST_ARROW_LENGTH = 4.0
 WIND_ARROW_SCALE = 2.0
@@ -65,6 +71,19 @@ _C_PLAN = (255, 160, 40, 160)
 _C_WIND = (120, 190, 255, 255)
 _C_THRUST = ((255, 80, 80, 255), (80, 220, 255, 255), (80, 255, 160, 255))
 _SERIES_COLORS = [_C_REF, _C_TRUTH, _C_EST]
+
+
+_LIVE: weakref.WeakSet[RecordEpisode] = weakref.WeakSet()
+_ATEXIT = False
+
+
+def _finish_all() -> None:
+    """At interpreter exit: finish the files of recorders nobody closed."""
+    for recorder in list(_LIVE):
+        try:
+            recorder._finish()
+        except Exception:  # noqa: BLE001, S110 - best effort at exit
+            pass
 
 
 def episode_path(path: str | os.PathLike[str], episode: int) -> Path:
@@ -161,7 +180,6 @@ class _Episode:
         self.last_z: tuple[float, float, float] | None = None
         self.next_trace = 0.0
         self.prev_leg: int | None = None
-        self.finished = False
 
     # -- hot path ------------------------------------------------------------------------------
     def capture(self, info: dict[str, Any]) -> None:
@@ -219,7 +237,9 @@ class _Episode:
         rec.send_columns(
             P.SHIP,
             idx,
-            rr.Transform3D.columns(translation=np.column_stack([eta[:, :2], zeros]), quaternion=quat),
+            rr.Transform3D.columns(
+                translation=np.column_stack([eta[:, :2], zeros]), quaternion=quat
+            ),
         )
         scale = THRUST_ARROW_LENGTH * v["thrust"] / self.ctx["f_max"]
         vectors = np.zeros((n, 3, 2))
@@ -230,9 +250,7 @@ class _Episode:
         rec.send_columns(
             P.THRUST,
             idx,
-            rr.Arrows2D.columns(vectors=vectors.reshape(-1, 2), origins=origins).partition(
-                [3] * n
-            ),
+            rr.Arrows2D.columns(vectors=vectors.reshape(-1, 2), origins=origins).partition([3] * n),
         )
         rec.send_columns(P.TRACK_TRUTH, idx, rr.Points2D.columns(positions=eta[:, :2]))
         rec.send_columns(P.TRACK_REF, idx, rr.Points2D.columns(positions=v["eta_d"][:, :2]))
@@ -395,7 +413,10 @@ class _Episode:
         k = np.clip(leg[sel] + 1, 1, len(wp) - 1)
         self.rec.send_columns(
             P.TARGET,
-            [rr.TimeColumn("sim_time", duration=t[sel]), rr.TimeColumn("step", sequence=steps[sel])],
+            [
+                rr.TimeColumn("sim_time", duration=t[sel]),
+                rr.TimeColumn("step", sequence=steps[sel]),
+            ],
             rr.Points2D.columns(positions=wp[k, :2], labels=[f"K{int(x)}" for x in k]),
         )
 
@@ -539,7 +560,9 @@ class RecordEpisode(
         gym.Wrapper.__init__(self, env)
         self._episode: _Episode | None = None
         if isinstance(flush_every, bool) or not isinstance(flush_every, int) or flush_every < 1:
-            raise ValueError(f"flush_every must be an int >= 1 (control steps), got {flush_every!r}")
+            raise ValueError(
+                f"flush_every must be an int >= 1 (control steps), got {flush_every!r}"
+            )
         if not (isinstance(hull_every, int | float) and math.isfinite(hull_every)):
             raise ValueError(f"hull_every must be a finite number of seconds, got {hull_every!r}")
         self.path = Path(os.fspath(path)).expanduser()
@@ -574,7 +597,7 @@ class RecordEpisode(
             ep.capture(info)
         return obs, info
 
-    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+    def step(self, action: Any) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
         """Step the env and buffer the step (written every ``flush_every`` steps)."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         ep = self._episode
@@ -602,6 +625,12 @@ class RecordEpisode(
     # ---- episodes ----------------------------------------------------------------------------
     def _start(self, seed: int | None, options: dict[str, Any] | None) -> None:
         import rerun as rr
+
+        global _ATEXIT
+        if not _ATEXIT:  # registered after rerun's own handler, so it runs before it
+            atexit.register(_finish_all)
+            _ATEXIT = True
+        _LIVE.add(self)
 
         k = self._n_episodes
         path = episode_path(self.path, k)
@@ -631,9 +660,11 @@ class RecordEpisode(
                 reason = "the rerun viewer executable was not found (pip install rerun-sdk)"
             else:
                 try:
-                    rr.spawn(connect=False, executable_path=exe, recording=rec)
+                    rr.spawn(port=VIEWER_PORT, connect=False, executable_path=exe, recording=rec)
+                    with socket.create_connection(("127.0.0.1", VIEWER_PORT), timeout=2.0):
+                        pass
                 except Exception as exc:  # noqa: BLE001 - any failure: keep recording
-                    reason = f"spawning the viewer failed: {exc}"
+                    reason = f"the viewer did not start: {exc}"
             self._viewer = reason is None
             if reason is not None:
                 print(
@@ -642,17 +673,19 @@ class RecordEpisode(
                     file=sys.stderr,
                 )
         if self.spawn and self._viewer:
-            rec.set_sinks(rr.FileSink(path), rr.GrpcSink(), default_blueprint=blueprint)
+            url = f"rerun+http://127.0.0.1:{VIEWER_PORT}/proxy"
+            rec.set_sinks(rr.FileSink(path), rr.GrpcSink(url))
         else:
-            rec.save(path, default_blueprint=blueprint)
+            rec.save(path)
+        rec.send_blueprint(blueprint, make_active=True, make_default=True)
 
     def _context(self, seed: int | None) -> dict[str, Any]:
         """Static facts of the episode: geometry, metadata, constants for the hot path."""
         base: Any = self.env.unwrapped
-        phys = getattr(base, "physics", None)
-        model = getattr(phys, "model", None)
-        data = getattr(phys, "data", None)
-        guidance = getattr(base, "guidance", None)
+        phys: Any = getattr(base, "physics", None)
+        model: Any = getattr(phys, "model", None)
+        data: Any = getattr(phys, "data", None)
+        guidance: Any = getattr(base, "guidance", None)
         try:
             waypoints = np.asarray(guidance.waypoints, dtype=float).reshape(-1, 3)
         except Exception:  # noqa: BLE001 - a task without guidance has no plan to draw
@@ -722,7 +755,7 @@ class RecordEpisode(
         limits = None
         if thr is not None and hasattr(thr, "lower"):
             limits = [np.asarray(thr.lower, float).tolist(), np.asarray(thr.upper, float).tolist()]
-        now = _dt.datetime.now(_dt.timezone.utc)
+        now = _dt.datetime.now(_dt.UTC)
         run_id = f"{scenario}-seed{seed}-{now:%Y%m%dT%H%M%S}-{uuid.uuid4().hex[:6]}"
         return {
             "run_id": run_id,
@@ -770,7 +803,10 @@ class RecordEpisode(
                 self.json_paths.append(ep.json_path)
             self.last_run = run
         finally:
-            ep.rec.flush()
+            try:
+                ep.rec.flush(timeout_sec=FLUSH_TIMEOUT)
+            except RuntimeError as exc:  # a viewer that went away; the file is complete
+                print(f"shipgym: rerun flush: {exc}", file=sys.stderr)
             ep.rec.disconnect()
             self.paths.append(ep.path)
             self._n_episodes += 1
@@ -788,18 +824,20 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
 
     # north up, east right: NED x -> screen up, NED y -> screen right
     rec.log(
-        P.NED, rr.Transform3D(rotation=rr.RotationAxisAngle(axis=[0, 0, 1], degrees=-90.0)),
+        P.NED,
+        rr.Transform3D(rotation=rr.RotationAxisAngle(axis=[0, 0, 1], degrees=-90.0)),
         static=True,
-    )  # fmt: skip
+    )
     quays = ctx["quays"]
     if len(quays):
         strips = [np.vstack([q, q[:1]]) for q in quays]
         rec.log(
             P.QUAYS,
-            rr.LineStrips2D(strips, radii=0.12, colors=[_C_QUAY], labels=ctx["quay_names"],
-                            show_labels=False),
+            rr.LineStrips2D(
+                strips, radii=0.12, colors=[_C_QUAY], labels=ctx["quay_names"], show_labels=False
+            ),
             static=True,
-        )  # fmt: skip
+        )
     wp = ctx["waypoints"]
     if len(wp):
         labels = ["P (start)"] + [str(i) for i in range(1, len(wp))]
@@ -812,16 +850,22 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
     hull = ctx["hull"]
     rec.log(
         P.HULL,
-        rr.LineStrips2D([np.vstack([hull, hull[:1]])], radii=0.06, colors=[_C_HULL],
-                        labels=["Blue Lady"], show_labels=False),
+        rr.LineStrips2D(
+            [np.vstack([hull, hull[:1]])],
+            radii=0.06,
+            colors=[_C_HULL],
+            labels=["Blue Lady"],
+            show_labels=False,
+        ),
         static=True,
-    )  # fmt: skip
+    )
     rec.log(
         P.THRUST,
-        rr.Arrows2D.from_fields(colors=list(_C_THRUST), radii=0.1,
-                                labels=["main", "bow", "stern"], show_labels=False),
+        rr.Arrows2D.from_fields(
+            colors=list(_C_THRUST), radii=0.1, labels=["main", "bow", "stern"], show_labels=False
+        ),
         static=True,
-    )  # fmt: skip
+    )
     styles = (
         (P.TRACK_TRUTH, _C_TRUTH, 0.08),
         (P.TRACK_REF, _C_REF, 0.06),
@@ -834,14 +878,16 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
         rec.log(ent, rr.Points2D.from_fields(colors=[color], radii=radius), static=True)
     rec.log(P.HULL_TRACE, rr.LineStrips2D.from_fields(colors=[_C_TRACE], radii=0.04), static=True)
     rec.log(P.WIND, rr.Arrows2D.from_fields(colors=[_C_WIND], radii=0.12), static=True)
-    names = ["desired", "true", "estimate"]
     for dof, unit in (("x", "m"), ("y", "m"), ("psi", "deg")):
         rec.log(
             f"{P.POSITION}/{dof}",
-            rr.SeriesLines(names=[f"{dof}_d^r ({unit})", f"{dof}^r true", f"{dof}^r estimate"],
-                           colors=_SERIES_COLORS, widths=[2.0, 1.5, 1.0]),
+            rr.SeriesLines(
+                names=[f"{dof}_d^r ({unit})", f"{dof}^r true", f"{dof}^r estimate"],
+                colors=_SERIES_COLORS,
+                widths=[2.0, 1.5, 1.0],
+            ),
             static=True,
-        )  # fmt: skip
+        )
         rec.log(
             f"{P.POSITION}/{dof}/measured",
             rr.SeriesPoints(names=[f"{dof}^r measured"], colors=[_C_MEAS], marker_sizes=[1.5]),
@@ -850,10 +896,13 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
     for dof, unit in (("u", "m/s"), ("v", "m/s"), ("r", "deg/s")):
         rec.log(
             f"{P.VELOCITY}/{dof}",
-            rr.SeriesLines(names=[f"{dof}_d ({unit})", f"{dof} true", f"{dof} estimate"],
-                           colors=_SERIES_COLORS, widths=[2.0, 1.5, 1.0]),
+            rr.SeriesLines(
+                names=[f"{dof}_d ({unit})", f"{dof} true", f"{dof} estimate"],
+                colors=_SERIES_COLORS,
+                widths=[2.0, 1.5, 1.0],
+            ),
             static=True,
-        )  # fmt: skip
+        )
     rec.log(
         P.PLOT_THRUST,
         rr.SeriesLines(names=["F1 main (N)", "F2 bow (N)", "F3 stern (N)"], colors=list(_C_THRUST)),
@@ -912,8 +961,9 @@ def _summary_markdown(meta: dict[str, Any], metrics: dict[str, Any] | None, step
         rows = [("truth", metrics), ("measured", metrics.get("measured") or {})]
         for name, m in rows:
             if m:
-                vals = " | ".join(f"{float(m.get(k, float('nan'))):.4f}" for k in
-                                  ("x_E", "y_E", "psi_E", "J_c"))  # fmt: skip
+                vals = " | ".join(
+                    f"{float(m.get(k, float('nan'))):.4f}" for k in ("x_E", "y_E", "psi_E", "J_c")
+                )
                 lines.append(f"| {name} | {vals} |")
     else:
         lines.append("| status | recording |")
@@ -953,7 +1003,7 @@ def _blueprint(ctx: dict[str, Any]) -> Any:
         start=rrb.TimeRangeBoundary.infinite(),
         end=rrb.TimeRangeBoundary.cursor_relative(),
     )
-    trails = {
+    trails: dict[Any, Any] = {
         f"/{p}": trail
         for p in (P.TRACK_TRUTH, P.TRACK_REF, P.TRACK_EST, P.DGPS, P.DGPS_OUTLIERS, P.HULL_TRACE)
     }
@@ -966,7 +1016,9 @@ def _blueprint(ctx: dict[str, Any]) -> Any:
     )
 
     def ts(origin: str, name: str) -> Any:
-        return rrb.TimeSeriesView(origin=origin, name=name, plot_legend=rrb.PlotLegend(visible=True))
+        return rrb.TimeSeriesView(
+            origin=origin, name=name, plot_legend=rrb.PlotLegend(visible=True)
+        )
 
     dofs = rrb.Grid(
         ts(f"{P.POSITION}/x", "x^r (m)"),

@@ -106,89 +106,159 @@ def _leg_marks(ax: Any, run: Run, top: bool) -> None:
         for s, e in zip(starts, ends, strict=True):
             mid = 0.5 * (run.t[s] + run.t[e])
             ax.text(
-                mid, 1.02, f"leg {int(run.leg[s]) + 1}", transform=ax.get_xaxis_transform(),
-                ha="center", va="bottom", fontsize=8, color="0.35",
-            )  # fmt: skip
+                mid,
+                1.02,
+                f"leg {int(run.leg[s]) + 1}",
+                transform=ax.get_xaxis_transform(),
+                ha="center",
+                va="bottom",
+                fontsize=8,
+                color="0.35",
+            )
 
 
 # ---- trajectory -------------------------------------------------------------------------------
 def _plot_trajectory(run: Run, path: Path, hull_every: float) -> Path:
+    """Map in (east, north) axes: x (north) up, y (east) right, equal scale."""
     from matplotlib.patches import Polygon
 
     fig = _figure("trajectory")
     ax = fig.add_subplot()
     ax.set_facecolor(_C_WATER)
-    for q in run.quays:
-        ax.add_patch(
-            Polygon(q[:, ::-1], closed=True, fc=_C_QUAY, ec="0.3", lw=0.8, zorder=2)
-        )  # (east, north)
+    harbour = len(run.quays) > 0
+    for q in run.quays:  # corners (north, east) -> drawn as (east, north)
+        ax.add_patch(Polygon(q[:, ::-1], closed=True, fc=_C_QUAY, ec="0.3", lw=0.8, zorder=2))
     eta = run.eta
+    extent = [p for p in (run.quays.reshape(-1, 2), eta[:, :2], run.eta_d[:, :2]) if len(p)]
     if len(run.waypoints):
         wp = run.waypoints
-        ax.plot(wp[:, 1], wp[:, 0], ls="none", marker="o", ms=4, color="#ff7f0e", zorder=9,
-                label="leg end points")  # fmt: skip
-        seen: set[tuple[float, float]] = set()
-        for i, (x, y) in enumerate(wp[:, :2]):
-            key = (round(x, 2), round(y, 2))
-            label = "P" if i == 0 else str(i)
-            if key in seen:
-                label = f"  {label}"
-            seen.add(key)
+        ax.plot(
+            wp[:, 1],
+            wp[:, 0],
+            ls="none",
+            marker="o",
+            ms=4,
+            color="#ff7f0e",
+            zorder=9,
+            label="leg end points",
+        )
+        groups: dict[tuple[float, float], list[str]] = {}
+        for i, (x, y) in enumerate(wp[:, :2].tolist()):
+            groups.setdefault((round(x, 2), round(y, 2)), []).append("P" if i == 0 else str(i))
+        for (x, y), names in groups.items():
             ax.annotate(
-                label, (y, x), xytext=(5, 4), textcoords="offset points", fontsize=8,
-                color="#b35900", fontweight="bold", zorder=10,
-            )  # fmt: skip
+                ", ".join(names),
+                (y, x),
+                xytext=(5, 4),
+                textcoords="offset points",
+                fontsize=8,
+                color="#b35900",
+                fontweight="bold",
+                zorder=10,
+            )
     if len(run.eta_d):
-        ax.plot(run.eta_d[:, 1], run.eta_d[:, 0], "--", color="#ff7f0e", lw=1.2, zorder=8,
-                label="desired path")  # fmt: skip
-    if len(eta):
-        ax.plot(eta[:, 1], eta[:, 0], "-", color=_C_TRUE, lw=1.3, zorder=5, label="true path")
-    differs = len(eta) and np.any(np.abs(run.nav_eta[:, :2] - eta[:, :2]) > 1e-9)
-    if differs:
-        ax.plot(run.nav_eta[:, 1], run.nav_eta[:, 0], ":", color=_C_EST, lw=1.2, zorder=5,
-                label="estimated path")  # fmt: skip
-    hull = run.hull if len(run.hull) else None
-    if hull is not None and len(eta):
-        idx = _hull_indices(run.t, hull_every)
-        for n, i in enumerate(idx):
-            poly = hull_polygon(hull, eta[i])
+        ax.plot(
+            run.eta_d[:, 1],
+            run.eta_d[:, 0],
+            "--",
+            color="#ff7f0e",
+            lw=1.2,
+            zorder=8,
+            label="desired path",
+        )
+    ax.plot(eta[:, 1], eta[:, 0], "-", color=_C_TRUE, lw=1.3, zorder=5, label="true path")
+    if np.any(np.abs(run.nav_eta[:, :2] - eta[:, :2]) > 1e-9):
+        ax.plot(
+            run.nav_eta[:, 1],
+            run.nav_eta[:, 0],
+            ":",
+            color=_C_EST,
+            lw=1.2,
+            zorder=5,
+            label="estimated path",
+        )
+    if len(run.hull):
+        for n, i in enumerate(_hull_indices(run.t, hull_every)):
+            poly = hull_polygon(run.hull, eta[i])
+            extent.append(poly)
+            label = f"hull every {hull_every:g} s" if n == 0 else None
             ax.add_patch(
-                Polygon(poly[:, ::-1], closed=True, fc="none", ec=_C_HULL, lw=0.7, alpha=0.8,
-                        zorder=6, label="hull every %.0f s" % hull_every if n == 0 else None)
-            )  # fmt: skip
-        for i, name, fc in ((0, "A start", "#9ecae1"), (len(eta) - 1, "B end", "#fdd0a2")):
-            poly = hull_polygon(hull, eta[i])
-            ax.add_patch(Polygon(poly[:, ::-1], closed=True, fc=fc, ec=_C_HULL, lw=1.4, zorder=7))
+                Polygon(
+                    poly[:, ::-1],
+                    closed=True,
+                    fc="none",
+                    ec=_C_HULL,
+                    lw=0.7,
+                    alpha=0.8,
+                    zorder=6,
+                    label=label,
+                )
+            )
+        ends = (
+            (0, "A start" if harbour else "start", "#9ecae1"),
+            (len(eta) - 1, "B end" if harbour else "end", "#fdd0a2"),
+        )
+        for i, name, fc in ends:
+            poly = hull_polygon(run.hull, eta[i])
+            extent.append(poly)
+            ax.add_patch(
+                Polygon(poly[:, ::-1], closed=True, fc=fc, ec=_C_HULL, lw=1.4, alpha=0.85, zorder=3)
+            )
             # label on the aft half of the hull, clear of the leg end point at the centre
             psi = float(eta[i, 2])
-            cx = eta[i, 0] - 3.2 * math.cos(psi)
-            cy = eta[i, 1] - 3.2 * math.sin(psi)
-            ax.text(cy, cx, name, ha="center", va="center", fontsize=7.5, zorder=8,
-                    rotation=_text_angle(psi), rotation_mode="anchor")  # fmt: skip
-    # limits: quays, else the paths
-    pts = [run.quays.reshape(-1, 2)] if len(run.quays) else []
-    pts += [eta[:, :2], run.eta_d[:, :2], run.waypoints[:, :2]]
-    allp = np.vstack([p for p in pts if len(p)]) if any(len(p) for p in pts) else np.zeros((1, 2))
+            cx, cy = eta[i, 0] - 3.2 * math.cos(psi), eta[i, 1] - 3.2 * math.sin(psi)
+            ax.text(
+                cy,
+                cx,
+                name,
+                ha="center",
+                va="center",
+                fontsize=7.5,
+                zorder=8,
+                rotation=_text_angle(psi),
+                rotation_mode="anchor",
+            )
+    allp = np.vstack(extent)
     lo, hi = allp.min(axis=0), allp.max(axis=0)
-    margin = 3.0 if len(run.quays) else 10.0
+    margin = 3.0 if harbour else 5.0
     ax.set_xlim(lo[1] - margin, hi[1] + margin)
-    ax.set_ylim(lo[0] - margin, hi[0] + margin + 6.0)
+    ax.set_ylim(lo[0] - margin, hi[0] + margin + 6.0)  # room for the wind arrow
     ax.set_aspect("equal", adjustable="box")
     wind = _wind_text(run)
     w = run.metadata.get("wind")
     if wind and w:
-        to = math.radians(w["from_deg"]) + math.pi
-        # arrow where the wind blows to, drawn in axes coordinates (north up, east right)
+        to = math.radians(w["from_deg"]) + math.pi  # where the wind blows to
         start = np.array([0.12, 0.94])
-        vec = 0.07 * np.array([math.sin(to), math.cos(to)])
+        vec = 0.07 * np.array([math.sin(to), math.cos(to)])  # (east, north) in axes fractions
         ax.annotate(
-            "", xy=start + vec, xytext=start - vec, xycoords="axes fraction",
-            arrowprops={"arrowstyle": "-|>", "lw": 2.0, "color": "#3182bd"}, zorder=9,
-        )  # fmt: skip
-        ax.text(0.22, 0.94, "wind\n" + wind, transform=ax.transAxes, va="center", fontsize=9,
-                bbox={"fc": "white", "ec": "0.7", "alpha": 0.85}, zorder=9)  # fmt: skip
-    ax.text(0.97, 0.97, "N ↑", transform=ax.transAxes, ha="right", va="top", fontsize=11,
-            fontweight="bold", zorder=9)  # fmt: skip
+            "",
+            xy=start + vec,
+            xytext=start - vec,
+            xycoords="axes fraction",
+            zorder=9,
+            arrowprops={"arrowstyle": "-|>", "lw": 2.0, "color": "#3182bd"},
+        )
+        ax.text(
+            0.22,
+            0.94,
+            "wind\n" + wind,
+            transform=ax.transAxes,
+            va="center",
+            fontsize=9,
+            bbox={"fc": "white", "ec": "0.7", "alpha": 0.85},
+            zorder=9,
+        )
+    ax.text(
+        0.97,
+        0.97,
+        "N ↑",
+        transform=ax.transAxes,
+        ha="right",
+        va="top",
+        fontsize=11,
+        fontweight="bold",
+        zorder=9,
+    )
     ax.set_xlabel("y, east (m)")
     ax.set_ylabel("x, north (m)")
     ax.grid(True, color="white", lw=0.6, zorder=1)
@@ -228,16 +298,18 @@ def _plot_positions(run: Run, path: Path) -> Path:
         s = scale[k]
         ax.plot(run.t, run.eta_r[:, k] * s, color=_C_TRUE, lw=0.9, alpha=0.8, label="true")
         if len(run.meas_t):
-            ax.plot(run.meas_t, run.meas_z_r[:, k] * s, "-", color=_C_MEAS, lw=1.0,
-                    label="measured")  # fmt: skip
+            ax.plot(
+                run.meas_t, run.meas_z_r[:, k] * s, "-", color=_C_MEAS, lw=1.0, label="measured"
+            )
         ax.plot(run.t, run.eta_d_r[:, k] * s, "--", color=_C_DES, lw=1.4, label="desired")
         ax.set_ylabel(labels[k])
         ax.grid(True, alpha=0.3)
         _leg_marks(ax, run, top=k == 0)
     axes[0].legend(loc="upper right", fontsize=8, ncols=3)
     axes[-1].set_xlabel("t (s)")
-    fig.suptitle(_title(run) + "\nposition in the r-frame: desired (dashed), measured (solid)",
-                 fontsize=10)  # fmt: skip
+    fig.suptitle(
+        _title(run) + "\nposition in the r-frame: desired (dashed), measured (solid)", fontsize=10
+    )
     return _save(fig, path)
 
 
@@ -354,18 +426,24 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
         "",
         "## Legs",
         "",
-        "| leg | name | duration (s) | completed at (s) |",
-        "|---|---|---|---|",
+        "| leg | name | started at (s) | completed at (s) | duration (s) |",
+        "|---|---|---|---|---|",
     ]
     names = meta.get("legs") or []
-    times = list(m.get("leg_times") or [])
-    done = list(m.get("leg_completion_times") or [])
-    n_legs = max(len(names), len(times))
+    completed = _leg_completions(run)
+    n_legs = max(len(names), len(completed), int(run.leg.max()) + 1 if len(run.leg) else 0)
+    start = float(run.t[0]) if len(run.t) else 0.0
     for i in range(n_legs):
         name = names[i] if i < len(names) else ""
-        dur = _fmt(times[i], 1) if i < len(times) else "not completed"
-        at = _fmt(done[i], 1) if i < len(done) else ("end" if i < len(times) else "")
-        lines.append(f"| {i + 1} | {name} | {dur} | {at} |")
+        if i < len(completed):
+            end = completed[i]
+            row = f"{_fmt(start, 1)} | {_fmt(end, 1)} | {_fmt(end - start, 1)}"
+            start = end
+        elif len(run.leg) and i == int(run.leg[-1]):
+            row = f"{_fmt(start, 1)} | not completed | > {_fmt(float(run.t[-1]) - start, 1)}"
+        else:
+            row = "not started | | "
+        lines.append(f"| {i + 1} | {name} | {row} |")
     lines += [
         "",
         "## Thrusters",
@@ -386,6 +464,17 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
     lines += ["", "## Figures", ""]
     lines += [f"- [{p.name}]({p.name})" for p in files]
     return "\n".join(lines) + "\n"
+
+
+def _leg_completions(run: Run) -> list[float]:
+    """Times (s) at which ``legs_completed`` reached 1, 2, ... (from the recorded steps)."""
+    out: list[float] = []
+    done = run.legs_completed
+    for k in range(1, int(done.max()) + 1 if len(done) else 1):
+        i = np.flatnonzero(done >= k)
+        if len(i):
+            out.append(float(run.t[i[0]]))
+    return out
 
 
 def write_report(

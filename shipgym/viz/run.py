@@ -14,7 +14,7 @@ carries a static rotation so that north is up and east is right in rerun's 2-D v
 ``map/ned/waypoints``       leg end points ``P, 1, ..., n`` (static points)
 ``map/ned/ship``            true pose every control step (Transform3D, float32)
 ``map/ned/ship/hull``       hull outline in the body frame (static)
-``map/ned/ship/thrust``     thrust arrows at the thrusters (body frame)
+``map/ned/ship/thrust``     thrust arrows at the thrusters (body frame; 4 m = full thrust)
 ``map/ned/target``          end point of the current leg
 ``map/ned/track/truth``     true position (x, y) every step (float32)
 ``map/ned/track/reference`` desired position every step
@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -224,7 +225,7 @@ def _clean(obj: Any) -> Any:
     return obj
 
 
-def save_run_json(run: Run, path: str | Path) -> Path:
+def save_run_json(run: Run, path: str | os.PathLike[str]) -> Path:
     """Write a run to a JSON file (arrays as nested lists, NaN as ``null``).
 
     Args:
@@ -386,7 +387,7 @@ def _load_rrd(path: Path) -> Run:
     # measurements: the x panel holds the r-frame values, data/measurements the NED ones
     mrows = ents.get(f"{P.DATA}/measurements", {}).get("rows", {})
     if mrows.get("Scalars:scalars"):
-        mt = np.asarray(mrows["sim_time"], dtype=np.int64) * 1e-9
+        mt = np.asarray(np.asarray(mrows["sim_time"], dtype=np.int64) * 1e-9, dtype=float)
         mstep = np.asarray(mrows["step"], dtype=np.int64)
         m = np.array(mrows["Scalars:scalars"], dtype=float).reshape(-1, 7)
         order = np.lexsort((mt, mstep))
@@ -396,7 +397,7 @@ def _load_rrd(path: Path) -> Run:
     static = ents.get(f"{P.DATA}/static", {}).get("static", {})
     geo = json.loads(static["TextDocument:text"]) if static else {}
     return Run(
-        t=t_ns * 1e-9,
+        t=np.asarray(t_ns * 1e-9, dtype=float),
         step=step,
         leg=legs[:, 0],
         legs_completed=legs[:, 1],
@@ -420,7 +421,7 @@ def _load_rrd(path: Path) -> Run:
     )
 
 
-def load_run(path: str | Path) -> Run:
+def load_run(path: str | os.PathLike[str]) -> Run:
     """Read a run from a rerun ``.rrd`` recording or a JSON run file.
 
     Args:

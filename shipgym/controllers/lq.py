@@ -1,0 +1,543 @@
+r"""LQ optimal DP control with integral action (seed002 ch. 4; SPEC section 9).
+
+Design model
+------------
+The control model of seed001 (eqs. 49-50), ``M nu_dot + D_L nu = tau``, written for the
+tracking errors of the current leg. With the pose and the reference in the r-frame of the leg
+(``psi`` the r-frame heading):
+
+- position error in the body frame ``e = [R^T(psi)(p - p_d), wrap(psi - psi_d)]`` (m, m, rad);
+- body velocity error ``e_nu = nu - nu_d``, ``nu_d = R^T(psi) eta_dot_d^r`` (m/s, m/s, rad/s);
+- integral of the error ``xi`` (m s, m s, rad s), accumulated in the (stationary) r-frame and
+  used in the body frame as ``xi_b = [R^T(psi) xi_xy, xi_psi]``.
+
+For small heading errors ``e_dot = e_nu``, and the model gives
+``M e_nu_dot = -D_L e_nu + u`` with ``u = tau - tau_ff`` and the reference feedforward
+``tau_ff = M nu_dot_d + D_L nu_d``, ``nu_dot_d = R^T(psi) eta_ddot_d^r + r [v_d, -u_d, 0]``.
+The design model is thus linear and time invariant with the 9-state ``x = [e, e_nu, xi_b]``:
+
+.. math::
+
+    \dot x = A x + B u, \quad
+    A = \begin{bmatrix} 0 & I & 0 \\ 0 & -M^{-1} D_L & 0 \\ I & 0 & 0 \end{bmatrix}, \quad
+    B = \begin{bmatrix} 0 \\ M^{-1} \\ 0 \end{bmatrix},
+
+and the law is ``tau = tau_ff - K x`` with ``K`` minimising
+``J = int (x^T Q x + u^T R u) dt`` (seed002 eqs. 4.3, 4.7-4.8: ``K = R^-1 B^T S`` from the
+algebraic Riccati equation). As in seed002 the gain acts on estimates when an observer is
+stacked below (separation principle). Unlike seed002 (no integral action; wind feedforward),
+the integral states remove steady wind and current offsets.
+
+The controller runs sampled at the control period ``h`` with a zero-order hold, so the default
+design is *discrete* (:func:`dlqr`) on the exact ZOH discretisation of the ``[e, e_nu]`` part
+and the forward-Euler integral ``xi_{k+1} = xi_k + h e_k`` that the implementation uses, with
+the continuous weights scaled by ``h`` (``Q_d = h Q``, ``R_d = h R``). ``method="continuous"``
+uses :func:`lqr` on ``(A, B)`` instead; at ``h = 1`` s the two gains differ by a few percent.
+
+Weights (Bryson's rule; :class:`LQWeights`)
+-----------------------------------------
+``Q = diag(1/e_max^2, 1/v_max^2, 1/xi_max^2)``, ``R = diag(1/tau_max^2)``. The ``"tuned"``
+preset: ``e_max = (0.5 m, 0.5 m, 2 deg)``, ``v_max = (0.05 m/s, 0.05 m/s, 0.5 deg/s)``,
+``xi_max = (15 m s, 15 m s, 60 deg s)``, ``tau_max = (80 N, 80 N, 250 N m)``. Why:
+
+- ``tau_max`` is the worst-case capacity of each DOF: 78 N astern (the main propeller's
+  weak side; 451 N ahead), 88 N of sway, 248 N m of yaw (``force_capacity``). Surge and sway
+  get the same force weight *and* the same error weights, so the x/y gains are almost equal
+  (the models differ only in ``M`` by 5 % and ``D_L``), which keeps the body-frame law nearly
+  invariant to how the stored r-frame integral is rotated into the body frame while the ship
+  turns (leg 3 turns it by 90 deg), as for the PID (``pid.py`` docstring).
+- The resulting closed-loop poles (discrete design mapped to ``log(z)/h``) lie between 0.03
+  and 0.2 rad/s, the PID's bandwidth range (``w = 0.06`` x/y, ``0.1`` yaw): faster would turn
+  DGPS noise (0.1 m) into thruster chatter and saturate the 78 N astern thrust.
+- The integral weight sets the integral time constant of roughly 50-100 s: the wind of the
+  lake trial (3 m/s, ~10-20 N) is taken out within a leg.
+
+The harbour manoeuvre (seed001, 5 legs, wind 3 m/s from 300 deg) completes without quay
+contact for seeds 0-9 (``tests/test_lq.py`` runs one seed).
+
+Anti-windup
+-----------
+As in :class:`~shipgym.controllers.pid.MultivariablePID`: the integral increment ``h e`` of
+the previous call is added once the allocation of the previous ``tau`` is known; if it would
+push a body DOF further into the direction in which the allocation cut it, the increment is
+dropped; the integral force ``|K_xi xi_b|`` is clamped to ``integral_limit`` per DOF.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym._config import param
+from shipgym.controllers.allocation import force_capacity
+from shipgym.dynamics.model import seed_linear_matrices
+from shipgym.dynamics.thrusters import BLUE_LADY_THRUSTERS
+
+from .pid import _saturation_directions, _vec3
+
+__all__ = [
+    "LQ_PRESETS",
+    "LQController",
+    "LQDesign",
+    "LQWeights",
+    "dlqr",
+    "lq_design",
+    "lq_model",
+    "lqr",
+    "register_lq",
+]
+
+Array = NDArray[np.float64]
+
+
+# ---- pure design functions (python-control conventions) -------------------------------------
+def _check_lq(
+    A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, N: ArrayLike | None
+) -> tuple[Array, Array, Array, Array, Array]:
+    A_ = np.atleast_2d(np.asarray(A, dtype=float))
+    B_ = np.atleast_2d(np.asarray(B, dtype=float))
+    Q_ = np.atleast_2d(np.asarray(Q, dtype=float))
+    R_ = np.atleast_2d(np.asarray(R, dtype=float))
+    n = A_.shape[0]
+    if A_.shape != (n, n):
+        raise ValueError(f"A must be square, got shape {A_.shape}")
+    if B_.shape[0] != n:
+        raise ValueError(f"B must have {n} rows (like A), got shape {B_.shape}")
+    m = B_.shape[1]
+    if Q_.shape != (n, n):
+        raise ValueError(f"Q must be {n}x{n}, got shape {Q_.shape}")
+    if R_.shape != (m, m):
+        raise ValueError(f"R must be {m}x{m}, got shape {R_.shape}")
+    N_ = np.zeros((n, m)) if N is None else np.atleast_2d(np.asarray(N, dtype=float))
+    if N_.shape != (n, m):
+        raise ValueError(f"N must be {n}x{m}, got shape {N_.shape}")
+    for name, X in (("A", A_), ("B", B_), ("Q", Q_), ("R", R_), ("N", N_)):
+        if not np.all(np.isfinite(X)):
+            raise ValueError(f"{name} contains NaN or infinite values")
+    if not np.allclose(Q_, Q_.T) or not np.allclose(R_, R_.T):
+        raise ValueError("Q and R must be symmetric")
+    if np.min(np.linalg.eigvalsh(R_)) <= 0:
+        raise ValueError("R must be positive definite")
+    return A_, B_, Q_, R_, N_
+
+
+def lqr(
+    A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, N: ArrayLike | None = None
+) -> tuple[Array, Array, NDArray[np.complex128]]:
+    r"""lqr(A, B, Q, R[, N]): continuous-time linear quadratic regulator.
+
+    Minimises :math:`J = \int_0^\infty (x^T Q x + u^T R u + 2 x^T N u)\,dt` for
+    :math:`\dot x = A x + B u` with the state feedback :math:`u = -K x`, where ``S`` solves the
+    continuous algebraic Riccati equation
+
+    .. math:: A^T S + S A - (S B + N) R^{-1} (B^T S + N^T) + Q = 0
+
+    and :math:`K = R^{-1} (B^T S + N^T)`. Same conventions and return tuple as
+    ``control.lqr`` (python-control).
+
+    Args:
+        A: state matrix, shape (n, n).
+        B: input matrix, shape (n, m).
+        Q: state weight, symmetric positive semidefinite, shape (n, n).
+        R: input weight, symmetric positive definite, shape (m, m).
+        N: cross weight, shape (n, m); default zero.
+
+    Returns:
+        ``(K, S, E)``: gain (m, n), Riccati solution (n, n), closed-loop eigenvalues
+        ``eig(A - B K)`` (n,).
+
+    Raises:
+        ValueError: inconsistent shapes, non-finite entries, ``R`` not positive definite, or
+            no stabilising solution (e.g. ``(A, B)`` not stabilisable).
+    """
+    A_, B_, Q_, R_, N_ = _check_lq(A, B, Q, R, N)
+    try:
+        S = scipy.linalg.solve_continuous_are(A_, B_, Q_, R_, s=N_)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"no stabilising solution of the CARE: {exc}") from None
+    K = np.linalg.solve(R_, B_.T @ S + N_.T)
+    E = np.linalg.eigvals(A_ - B_ @ K)
+    return K, S, E
+
+
+def dlqr(
+    A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, N: ArrayLike | None = None
+) -> tuple[Array, Array, NDArray[np.complex128]]:
+    r"""dlqr(A, B, Q, R[, N]): discrete-time linear quadratic regulator.
+
+    Minimises :math:`J = \sum_k (x_k^T Q x_k + u_k^T R u_k + 2 x_k^T N u_k)` for
+    :math:`x_{k+1} = A x_k + B u_k` with :math:`u_k = -K x_k`, where ``S`` solves the discrete
+    algebraic Riccati equation
+
+    .. math:: S = A^T S A - (A^T S B + N)(R + B^T S B)^{-1}(B^T S A + N^T) + Q
+
+    and :math:`K = (R + B^T S B)^{-1}(B^T S A + N^T)`. Same conventions and return tuple as
+    ``control.dlqr``.
+
+    Args:
+        A, B, Q, R, N: as in :func:`lqr`, for the discrete model.
+
+    Returns:
+        ``(K, S, E)``: gain, Riccati solution, closed-loop eigenvalues ``eig(A - B K)``
+        (inside the unit circle).
+
+    Raises:
+        ValueError: as in :func:`lqr`.
+    """
+    A_, B_, Q_, R_, N_ = _check_lq(A, B, Q, R, N)
+    try:
+        S = scipy.linalg.solve_discrete_are(A_, B_, Q_, R_, s=N_)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"no stabilising solution of the DARE: {exc}") from None
+    K = np.linalg.solve(R_ + B_.T @ S @ B_, B_.T @ S @ A_ + N_.T)
+    E = np.linalg.eigvals(A_ - B_ @ K)
+    return K, S, E
+
+
+# ---- the Blue Lady design ---------------------------------------------------------------------
+Vec3 = tuple[float, float, float]
+
+
+def _pos3(value: Any, name: str) -> Vec3:
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0:
+        a = np.full(3, float(a))
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or np.any(a <= 0):
+        raise ValueError(f"{name} must be a scalar or 3 finite values > 0, got {value!r}")
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+@dataclass(frozen=True)
+class LQWeights:
+    """Bryson-rule weights: the largest acceptable value of each state and input.
+
+    ``Q = diag(1/e_max^2, 1/v_max^2, 1/xi_max^2)``, ``R = diag(1/tau_max^2)``. Angles are in
+    degrees here (converted to rad inside :meth:`matrices`).
+
+    Attributes:
+        e_max: position error (m, m, deg): x, y (body frame) and heading.
+        v_max: velocity error (m/s, m/s, deg/s): u, v, r.
+        xi_max: integral of the error (m s, m s, deg s).
+        tau_max: control force (N, N, N m): X, Y, N.
+    """
+
+    e_max: Vec3 = param((0.5, 0.5, 2.0), "m, m, deg", "design choice (module docstring)")
+    v_max: Vec3 = param((0.05, 0.05, 0.5), "m/s, m/s, deg/s", "design choice")
+    xi_max: Vec3 = param((15.0, 15.0, 60.0), "m s, m s, deg s", "design choice")
+    tau_max: Vec3 = param((80.0, 80.0, 250.0), "N, N, N m", "thruster capacity (astern, sway)")
+
+    def __post_init__(self) -> None:
+        for name in ("e_max", "v_max", "xi_max", "tau_max"):
+            object.__setattr__(self, name, _pos3(getattr(self, name), name))
+
+    def matrices(self) -> tuple[Array, Array]:
+        """``(Q, R)`` of the continuous cost (SI units, radians)."""
+        d = math.radians
+        e = np.array([self.e_max[0], self.e_max[1], d(self.e_max[2])])
+        v = np.array([self.v_max[0], self.v_max[1], d(self.v_max[2])])
+        xi = np.array([self.xi_max[0], self.xi_max[1], d(self.xi_max[2])])
+        Q = np.diag(1.0 / np.concatenate([e, v, xi]) ** 2)
+        R = np.diag(1.0 / np.asarray(self.tau_max) ** 2)
+        return Q, R
+
+
+#: weight presets by name (``"tuned"``: see the module docstring)
+LQ_PRESETS: Mapping[str, LQWeights] = MappingProxyType({"tuned": LQWeights()})
+
+
+def lq_model(M: ArrayLike | None = None, D_L: ArrayLike | None = None) -> tuple[Array, Array]:
+    """The continuous design model ``(A, B)`` (9 states, 3 inputs) of the module docstring.
+
+    Args:
+        M: inertia (kg, kg m^2), default seed001 eq. 49.
+        D_L: linear damping (N s/m, N s, N m s), default seed001 eq. 50.
+    """
+    M0, D0 = seed_linear_matrices()
+    M_ = M0 if M is None else np.asarray(M, dtype=float)
+    D_ = D0 if D_L is None else np.asarray(D_L, dtype=float)
+    if M_.shape != (3, 3) or D_.shape != (3, 3):
+        raise ValueError(f"M and D_L must be 3x3, got {M_.shape} and {D_.shape}")
+    Mi = np.linalg.inv(M_)
+    Z, I3 = np.zeros((3, 3)), np.eye(3)
+    A = np.block([[Z, I3, Z], [Z, -Mi @ D_, Z], [I3, Z, Z]])
+    B = np.vstack([Z, Mi, Z])
+    return A, B
+
+
+def _discretise(A: Array, B: Array, h: float) -> tuple[Array, Array]:
+    """ZOH for the ``[e, e_nu]`` part, forward Euler ``xi += h e`` for the integral."""
+    n = 6
+    big = np.zeros((n + 3, n + 3))
+    big[:n, :n] = A[:n, :n]
+    big[:n, n:] = B[:n]
+    Phi = scipy.linalg.expm(big * h)
+    Ad = np.zeros((9, 9))
+    Ad[:n, :n] = Phi[:n, :n]
+    Ad[n:, :3] = h * np.eye(3)
+    Ad[n:, n:] = np.eye(3)
+    Bd = np.zeros((9, 3))
+    Bd[:n] = Phi[:n, n:]
+    return Ad, Bd
+
+
+@dataclass(frozen=True)
+class LQDesign:
+    """Result of :func:`lq_design`.
+
+    Attributes:
+        K: gain (3, 9) on ``[e, e_nu, xi_b]`` (N/m, N s/m, N/(m s), ...; rad for yaw).
+        S: Riccati solution (9, 9).
+        E: closed-loop eigenvalues (continuous: rad/s; discrete: z-plane).
+        A, B: the design model used (continuous or discretised).
+        Q, R: the weights used (continuous; the discrete design uses ``h Q``, ``h R``).
+        method: ``"discrete"`` or ``"continuous"``; dt: control period (s).
+    """
+
+    K: Array
+    S: Array
+    E: NDArray[np.complex128]
+    A: Array
+    B: Array
+    Q: Array
+    R: Array
+    method: str
+    dt: float
+
+    @property
+    def continuous_poles(self) -> NDArray[np.complex128]:
+        """Closed-loop poles in rad/s (``log(z) / dt`` for a discrete design)."""
+        if self.method == "continuous":
+            return self.E
+        return np.log(self.E.astype(complex)) / self.dt
+
+
+def lq_design(
+    weights: LQWeights | str = "tuned",
+    *,
+    dt: float = 1.0,
+    method: str = "discrete",
+    M: ArrayLike | None = None,
+    D_L: ArrayLike | None = None,
+) -> LQDesign:
+    """Gains of the LQ controller with integral action (module docstring).
+
+    Args:
+        weights: :class:`LQWeights` or a preset name (``"tuned"``).
+        dt: control period (s), used by the discrete design.
+        method: ``"discrete"`` (:func:`dlqr` on the sampled model; default) or
+            ``"continuous"`` (:func:`lqr`).
+        M, D_L: control model (default seed001 eqs. 49-50).
+    """
+    if isinstance(weights, str):
+        try:
+            weights = LQ_PRESETS[weights]
+        except KeyError:
+            raise ValueError(
+                f"unknown LQ weight preset {weights!r}; choose one of: {', '.join(LQ_PRESETS)}"
+            ) from None
+    if not isinstance(weights, LQWeights):
+        raise ValueError(f"weights must be LQWeights or a preset name, got {weights!r}")
+    if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a finite control period > 0 (s), got {dt!r}")
+    A, B = lq_model(M, D_L)
+    Q, R = weights.matrices()
+    if method == "continuous":
+        K, S, E = lqr(A, B, Q, R)
+    elif method == "discrete":
+        A, B = _discretise(A, B, float(dt))
+        K, S, E = dlqr(A, B, dt * Q, dt * R)
+    else:
+        raise ValueError(f"method must be 'discrete' or 'continuous', got {method!r}")
+    return LQDesign(K, S, E, A, B, Q, R, method, float(dt))
+
+
+# ---- the online controller -------------------------------------------------------------------
+class LQController:
+    """LQ DP controller with integral action in the r-frame of the current leg.
+
+    Implements the controller protocol of
+    :class:`~shipgym.controllers.wrappers.DPControllerWrapper`: call it once per control period
+    with the pose and reference in the r-frame; it returns the body-frame
+    ``tau = [X, Y, N]`` (N, N, N m) for the allocation.
+
+    Args:
+        weights: :class:`LQWeights` or a preset name (``"tuned"``).
+        M: inertia (kg, kg m^2) of the control model; default seed001 eq. 49.
+        D_L: linear damping (N s/m, N s, N m s); default seed001 eq. 50.
+        dt: control period (s).
+        method: ``"discrete"`` (default) or ``"continuous"`` gain design.
+        integral_limit: bound on the integral force ``|K_xi xi_b|`` per body DOF (N, N, N m);
+            default the thruster capacity; ``inf`` disables it.
+
+    Example:
+        >>> from shipgym.controllers.lq import LQController
+        >>> ctrl = LQController(dt=1.0)
+        >>> tau = ctrl([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])  # 1 m too far ahead
+        >>> bool(tau[0] < 0)
+        True
+    """
+
+    def __init__(
+        self,
+        weights: LQWeights | str = "tuned",
+        M: ArrayLike | None = None,
+        D_L: ArrayLike | None = None,
+        dt: float = 1.0,
+        *,
+        method: str = "discrete",
+        integral_limit: ArrayLike | None = None,
+    ) -> None:
+        M0, D0 = seed_linear_matrices()
+        self.M = M0 if M is None else np.array(M, dtype=float)
+        self.D_L = D0 if D_L is None else np.array(D_L, dtype=float)
+        self.design = lq_design(weights, dt=dt, method=method, M=self.M, D_L=self.D_L)
+        self.dt = float(dt)
+        lim = (
+            force_capacity(BLUE_LADY_THRUSTERS)
+            if integral_limit is None
+            else np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
+        )
+        if np.any(np.isnan(lim)) or np.any(lim <= 0):
+            raise ValueError(f"integral_limit must be > 0 (N, N, N m; inf allowed), got {lim!r}")
+        self.integral_limit = np.array(lim)
+        K = self.design.K
+        self.K = K.copy()
+        self._Ke = K[:, 0:3].copy()
+        self._Kv = K[:, 3:6].copy()
+        self._Ki = K[:, 6:9].copy()
+        self._xi = np.zeros(3)
+        self._pending: tuple[float, float, float, float] | None = None
+
+    def reset(self) -> None:
+        """Clear the integral state (start of an episode)."""
+        self._xi = np.zeros(3)
+        self._pending = None
+
+    @property
+    def integral(self) -> Array:
+        """The integral state ``xi`` (m s, m s, rad s) in the current r-frame."""
+        return self._xi.copy()
+
+    def change_frame(self, dpsi: float) -> None:
+        """Re-express the integral (and the pending error) in the next leg's r-frame.
+
+        The new frame's x axis is the old one turned by ``dpsi`` (rad, clockwise positive):
+        ``xi_new = R^T(dpsi) xi_old`` in x-y; the yaw part is unchanged. The body-frame
+        integral ``xi_b`` and hence the integral force are unchanged by the switch.
+        """
+        dpsi = float(dpsi)
+        if not math.isfinite(dpsi):
+            raise ValueError(f"dpsi must be finite (rad), got {dpsi!r}")
+        c, s = math.cos(dpsi), math.sin(dpsi)
+        x, y = self._xi[0], self._xi[1]
+        self._xi[0], self._xi[1] = c * x + s * y, -s * x + c * y
+        if self._pending is not None:
+            ex, ey, epsi, psi = self._pending
+            self._pending = (c * ex + s * ey, -s * ex + c * ey, epsi, psi - dpsi)
+
+    @staticmethod
+    def _to_body(v: Array, psi: float) -> Array:
+        c, s = math.cos(psi), math.sin(psi)
+        return np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1], v[2]])
+
+    def _integrate(self, saturated: ArrayLike | None) -> None:
+        dirs = None if saturated is None else _saturation_directions(saturated)
+        if self._pending is None:
+            return
+        ex, ey, epsi, psi = self._pending
+        self._pending = None
+        d = self.dt * np.array([ex, ey, epsi])
+        if dirs is not None and any(dirs):
+            df = -self._Ki @ self._to_body(d, psi)  # change of the body force
+            for j, dj in enumerate(dirs):
+                if (dj == 2 and df[j] != 0.0) or (dj in (1, -1) and dj * df[j] > 0.0):
+                    return  # would push a cut DOF further: drop the increment
+        self._xi += d
+
+    def _clamp(self, psi: float) -> None:
+        f = self._Ki @ self._to_body(self._xi, psi)
+        lim = self.integral_limit
+        if np.all(np.abs(f) <= lim):
+            return
+        fc = np.clip(f, -lim, lim)
+        xb = np.linalg.solve(self._Ki, fc)
+        c, s = math.cos(psi), math.sin(psi)
+        self._xi = np.array([c * xb[0] - s * xb[1], s * xb[0] + c * xb[1], xb[2]])
+
+    def __call__(
+        self,
+        eta_r: ArrayLike,
+        nu: ArrayLike,
+        eta_d_r: ArrayLike,
+        eta_dot_d_r: ArrayLike | None = None,
+        eta_ddot_d_r: ArrayLike | None = None,
+        *,
+        saturated: ArrayLike | None = None,
+    ) -> Array:
+        """Body-frame control force ``tau = tau_ff - K x`` (N, N, N m).
+
+        Args:
+            eta_r: ship pose ``[x, y, psi]`` (m, m, rad) in the r-frame.
+            nu: body velocity ``[u, v, r]`` (m/s, m/s, rad/s).
+            eta_d_r: reference pose (m, m, rad) in the r-frame.
+            eta_dot_d_r: reference velocity (m/s, m/s, rad/s), r-frame; default zero.
+            eta_ddot_d_r: reference acceleration (m/s^2, m/s^2, rad/s^2); default zero.
+            saturated: the allocation's ``tau_error`` of the previous ``tau`` (N, N, N m) or
+                3 booleans, for the anti-windup; ``None``: integrate unconditionally.
+
+        Returns:
+            ``tau`` (3,).
+
+        Raises:
+            ValueError: an input is not 3 finite numbers.
+        """
+        x, y, psi = _vec3(eta_r, "eta_r")
+        nu_ = np.array(_vec3(nu, "nu"))
+        xd, yd, psid = _vec3(eta_d_r, "eta_d_r")
+        vd = np.zeros(3) if eta_dot_d_r is None else np.array(_vec3(eta_dot_d_r, "eta_dot_d_r"))
+        ad = np.zeros(3) if eta_ddot_d_r is None else np.array(_vec3(eta_ddot_d_r, "eta_ddot_d_r"))
+        self._integrate(saturated)
+        self._clamp(psi)
+        ex, ey = x - xd, y - yd
+        epsi = math.pi - (math.pi - (psi - psid)) % (2.0 * math.pi)  # wrap to (-pi, pi]
+        e_b = self._to_body(np.array([ex, ey, epsi]), psi)
+        nu_d = self._to_body(vd, psi)
+        r = nu_[2]
+        nu_dot_d = self._to_body(ad, psi) + np.array([r * nu_d[1], -r * nu_d[0], 0.0])
+        tau_ff = self.M @ nu_dot_d + self.D_L @ nu_d
+        xi_b = self._to_body(self._xi, psi)
+        tau = tau_ff - self._Ke @ e_b - self._Kv @ (nu_ - nu_d) - self._Ki @ xi_b
+        self._pending = (ex, ey, epsi, psi)
+        return tau
+
+    def __repr__(self) -> str:
+        return (
+            f"LQController(method={self.design.method!r}, dt={self.dt}, "
+            f"integral={tuple(round(float(v), 6) for v in self._xi)})"
+        )
+
+
+def register_lq() -> None:
+    """Register ``"lq"`` in the controller registry (idempotent); constrained allocation."""
+    from .wrappers import CONTROLLERS, ControllerSpec, register_controller
+
+    if "lq" not in CONTROLLERS:
+        register_controller(
+            "lq",
+            ControllerSpec(
+                lambda dt: LQController("tuned", dt=dt),
+                "constrained",
+                "LQ optimal control with integral action (seed002 ch. 4 on seed001 eqs. 49-50), "
+                "constrained allocation",
+            ),
+        )
+
+
+register_lq()

@@ -1,0 +1,182 @@
+"""Command-line hooks of the RL subcommands, for ``shipgym.cli`` to mount.
+
+- ``shipgym train ppo|sac [--timesteps N] [--seed S] [--n-envs K] [--out DIR] [--resume CKPT]
+  [--residual] [--observer NAME] [--max-minutes M] ...``: :func:`add_train_parser`,
+  :func:`cmd_train`;
+- ``shipgym bench controllers [--controllers ...] [--seeds 10] [--json PATH]
+  [--markdown PATH]``: :func:`add_bench_controllers_parser`, :func:`cmd_bench_controllers`.
+
+Both commands return an exit status; user mistakes raise ``ValueError`` /
+``FileNotFoundError`` (and ``ImportError`` without the ``rl`` extra) with a one-line message,
+which ``shipgym.cli.main`` turns into ``shipgym: error: ...``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "add_bench_controllers_parser",
+    "add_train_parser",
+    "cmd_bench_controllers",
+    "cmd_train",
+]
+
+
+def _wind(text: str) -> tuple[float, float]:
+    from shipgym.cli import parse_wind
+
+    return parse_wind(text)
+
+
+def add_train_parser(sub: Any) -> argparse.ArgumentParser:
+    """Add ``train`` to the ``shipgym`` subparsers (``sub = ap.add_subparsers(...)``)."""
+    p = sub.add_parser(
+        "train",
+        help="train a learned controller (PPO or SAC) on the tracking task",
+        description="Train PPO or SAC on shipgym/BlueLadyTracking-v0 (hyperparameters: "
+        "shipgym/rl/hyperparams/<algo>.yml). Writes model.zip, best_model.zip, checkpoints, "
+        "evaluations.json, progress.csv, config.yml and command.txt into --out.",
+    )
+    p.add_argument("algo", choices=["ppo", "sac"], help="algorithm")
+    p.add_argument("--timesteps", type=int, default=None, help="environment steps (YAML default)")
+    p.add_argument("--seed", type=int, default=0, help="seed of everything (0)")
+    p.add_argument("--n-envs", type=int, default=None, help="parallel environments (YAML)")
+    p.add_argument("--out", type=Path, default=None, help="output folder")
+    p.add_argument(
+        "--resume",
+        type=Path,
+        default=None,
+        metavar="CKPT",
+        help="continue a checkpoint/model (only your own files: SB3 unpickles)",
+    )
+    p.add_argument(
+        "--residual",
+        action="store_true",
+        help="learn a residual on top of the tuned PID (YAML 'residual' block)",
+    )
+    p.add_argument(
+        "--observer",
+        default=None,
+        help="what the policy sees: kbf (YAML default), dkf, ekf or truth",
+    )
+    p.add_argument("--hyperparams", type=Path, default=None, help="another YAML file")
+    p.add_argument("--eval-freq", type=int, default=None, help="steps between harbour evals")
+    p.add_argument("--checkpoint-freq", type=int, default=None, help="steps between checkpoints")
+    p.add_argument("--vec-env", choices=["dummy", "subproc"], default=None)
+    p.add_argument("--max-minutes", type=float, default=None, help="wall-clock limit")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--verbose", type=int, default=0, help="SB3 verbosity (0)")
+    p.set_defaults(func=cmd_train)
+    return p
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    """Run :func:`shipgym.rl.train.train` from parsed arguments; prints a summary."""
+    from shipgym.rl.train import train
+
+    res = train(
+        args.algo,
+        timesteps=args.timesteps,
+        seed=args.seed,
+        n_envs=args.n_envs,
+        out=args.out,
+        resume=args.resume,
+        residual=args.residual,
+        observer=args.observer,
+        hyperparams=args.hyperparams,
+        eval_freq=args.eval_freq,
+        checkpoint_freq=args.checkpoint_freq,
+        vec_env=args.vec_env,
+        max_minutes=args.max_minutes,
+        progress=not args.no_progress,
+        verbose=args.verbose,
+    )
+    print(f"trained {res.num_timesteps} steps in {res.wall_time_s / 60:.1f} min")
+    print(f"  model       {res.model_path}")
+    if res.best_model_path is not None:
+        print(f"  best model  {res.best_model_path}")
+    if res.evaluations:
+        e = res.evaluations[-1]
+        print(
+            f"  last harbour evaluation: {e['completed']}/{e['runs']} completed, J_c {e['J_c']:.4f}"
+        )
+    print(f"  command     {res.metadata.command}")
+    return 0
+
+
+def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
+    """Add ``controllers`` to the ``shipgym bench`` subparsers."""
+    b = bsub.add_parser("controllers", help="pid vs lq vs learned on the harbour manoeuvre")
+    b.add_argument(
+        "--controllers",
+        nargs="+",
+        default=["pid", "lq", "ppo"],
+        metavar="NAME",
+        help="pid, pid-seed, lq, ppo (shipped baseline), ppo:PATH, sac:PATH",
+    )
+    b.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per controller (10)")
+    b.add_argument(
+        "--observer", default="default", help="kbf when available (default), truth, dkf, ekf, ..."
+    )
+    b.add_argument(
+        "--wind",
+        type=_wind,
+        default=(3.0, math.radians(300.0)),
+        metavar="SPEED@FROM_DEG",
+        help="mean wind (3@300)",
+    )
+    b.add_argument("--workers", type=int, default=None, help="processes (default: CPUs)")
+    b.add_argument("--json", type=Path, default=None, metavar="PATH")
+    b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    b.add_argument("--no-progress", action="store_true")
+    b.set_defaults(func=cmd_bench_controllers)
+    return b
+
+
+def _check_writable(path: Path) -> None:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        existed = path.exists()
+        with path.open("a"):
+            pass
+        if not existed:
+            path.unlink()
+    except OSError as exc:
+        raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from exc
+
+
+def cmd_bench_controllers(args: argparse.Namespace) -> int:
+    """Run :func:`shipgym.rl.bench.bench_controllers`; print and write the table / rows."""
+    from shipgym.rl.bench import bench_controllers, bench_title, controller_table
+
+    for path in (args.json, args.markdown):
+        if path is not None:
+            _check_writable(path)
+    t0 = time.perf_counter()
+    rows = bench_controllers(
+        args.controllers,
+        seeds=args.seeds,
+        wind=args.wind,
+        observer=args.observer,
+        workers=args.workers,
+        progress=not args.no_progress,
+    )
+    wall = time.perf_counter() - t0
+    title = bench_title(rows, args.wind)
+    table = controller_table(rows)
+    print(title)
+    print(table)
+    print(f"{len(rows)} runs in {wall:.1f} s")
+    if args.json is not None:
+        args.json.write_text(json.dumps({"title": title, "rows": rows}, indent=2))
+        print(f"rows written to {args.json}")
+    if args.markdown is not None:
+        args.markdown.write_text(f"{title}\n\n{table}\n")
+        print(f"table written to {args.markdown}")
+    return 0

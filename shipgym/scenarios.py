@@ -1,0 +1,830 @@
+r"""Named scenarios and sea-state presets: Beaufort 0-9, the lake, the seed trials.
+
+SPEC section 6; ``notes`` = ``shared/notes/domain-models.md`` sections 1.7, 2.2, 2.3 and 3.
+
+**Beaufort table** (notes 2.2; WMO): mean wind ``U10`` = middle of the WMO band (0 for BF0),
+``Hs`` = WMO "probable wave height" (also Fossen 2011 ch. 8 and Price & Bishop 1974), ``Tp``
+from the NORSOK relation ``4.883 + 2.68 Hs^0.54`` (MSS ``Wave_init.m``), all at full scale.
+:func:`beaufort` Froude-scales them to a model at ``1:scale`` (``Hs / scale``,
+``Tp / sqrt(scale)``, ``U / sqrt(scale)``: BF5 at 1:24 is ``Hs = 0.083 m``, ``Tp = 1.79 s``,
+``U = 1.91 m/s``), with an NPD gust spectrum evaluated at full scale (notes 1.7, "Offshore DP
+(scaled)") and a JONSWAP gamma 3.3 sea (notes 2.2: "Offshore DP range (BF 5-9): use JONSWAP
+gamma 3.3") with first-order motion and drift.
+
+**Lake** (notes 2.3): :func:`lake_waves`, the fetch-limited sea of Lake Silm (JONSWAP
+``Hs = 0.05 m``, ``Tp = 1 s``, gamma 3.3, drift force on, no first-order motion).
+
+**Scenarios**: a :class:`Scenario` bundles what an episode needs besides the agent: the
+environment (``harbour``, ``station-keeping``, ``tracking``), the plant variant, wind, waves,
+current, sensors, manoeuvre plan and start pose. :data:`SCENARIOS` holds the named presets
+(``calm``, ``tomera2014-lake``, ``tomera2011-sim``, ``beaufort0`` ... ``beaufort9``);
+:func:`load_scenario` also reads YAML or TOML files (the examples are packaged in
+``shipgym/assets/scenarios/`` and load by their stem, e.g. ``"beaufort5-offshore"``).
+
+File format (every key optional; unknown keys raise, listing the valid ones)::
+
+    name: my-scenario            # default: the file stem
+    description: free text
+    base: tomera2014-lake        # start from a named scenario, then override
+    env: harbour                 # harbour | station-keeping | tracking
+    plant: default               # a key of shipgym.dynamics.model.PLANT_VARIANTS
+    beaufort: 5                  # or {number: 5, scale: 24, direction_from_deg: 30, ...}
+    wind: {speed: 3.0, direction_from_deg: 300}    # WindConfig fields; null/false: no wind
+    waves: lake                  # a wave preset, or WaveConfig fields; null/false: none
+    current: {speed: 0.05, direction_to_deg: 90, std: 0.01, time_constant: 300}
+    sensors: tomera2014          # a preset, SensorConfig fields, {preset: rtk, ...}; null: none
+    plan: tomera2014             # a plan name or a ManoeuvrePlan.from_dict mapping
+    start_pose: [0.0, 0.0, 0.0]  # (x m, y m, psi rad), or {x: 0, y: 0, psi_deg: 0}
+
+Angles are radians; every angle field also accepts a ``*_deg`` twin (``direction_from_deg``,
+``direction_std_deg``, ``direction_to_deg``, ``wf_heading_std_deg``, ``psi_deg``). A
+``wind``/``waves``/``current`` mapping is applied on top of what ``base`` or ``beaufort``
+already set (or on top of the config defaults). Files are parsed with ``yaml.safe_load`` or
+``tomllib`` only (TOML has no null: use ``false`` to switch a disturbance off).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, NamedTuple
+
+from shipgym.disturbances.current import CurrentConfig
+from shipgym.disturbances.spectra import norsok_peak_period
+from shipgym.disturbances.waves import AL_TAKIE_HF_POLYNOMIALS, WaveConfig
+from shipgym.disturbances.wind import WindConfig
+
+__all__ = [
+    "ENV_SCENARIOS",
+    "BeaufortRow",
+    "BEAUFORT_TABLE",
+    "beaufort_row",
+    "SeaState",
+    "beaufort",
+    "lake_waves",
+    "WAVE_PRESETS",
+    "Scenario",
+    "SCENARIOS",
+    "scenario_from_dict",
+    "load_scenario",
+    "scenario_files",
+]
+
+#: Environment scenario names accepted by ``shipgym.make`` (``shipgym.envs.make.SCENARIOS``).
+ENV_SCENARIOS: dict[str, str] = {
+    "harbour": "shipgym/BlueLadyHarbour-v0",
+    "station-keeping": "shipgym/BlueLadyStationKeeping-v0",
+    "tracking": "shipgym/BlueLadyTracking-v0",
+}
+
+# ---------------------------------------------------------------------------------------------
+# Beaufort table
+# ---------------------------------------------------------------------------------------------
+
+
+class BeaufortRow(NamedTuple):
+    """One Beaufort number at full scale (notes 2.2; WMO).
+
+    Attributes:
+        number: Beaufort number 0-9.
+        name: WMO description.
+        U10_min: Lower bound of the WMO wind band at 10 m (m/s).
+        U10_max: Upper bound of the band (m/s).
+        U10: Representative mean wind (m/s): the middle of the band (0 for BF0).
+        Hs: WMO probable significant wave height (m).
+        Tp: Peak period from NORSOK ``4.883 + 2.68 Hs^0.54`` (s); not a wind-sea value for
+            BF1-2 (see the notes of :func:`beaufort`).
+    """
+
+    number: int
+    name: str
+    U10_min: float
+    U10_max: float
+    U10: float
+    Hs: float
+    Tp: float
+
+
+_WMO: tuple[tuple[str, float, float, float], ...] = (
+    ("calm", 0.0, 0.2, 0.0),
+    ("light air", 0.3, 1.5, 0.1),
+    ("light breeze", 1.6, 3.3, 0.2),
+    ("gentle breeze", 3.4, 5.4, 0.6),
+    ("moderate breeze", 5.5, 7.9, 1.0),
+    ("fresh breeze", 8.0, 10.7, 2.0),
+    ("strong breeze", 10.8, 13.8, 3.0),
+    ("near gale", 13.9, 17.1, 4.0),
+    ("gale", 17.2, 20.7, 5.5),
+    ("strong gale", 20.8, 24.4, 7.0),
+)
+
+#: Beaufort 0-9 at full scale (notes 2.2): WMO wind bands and probable wave heights, NORSOK Tp.
+BEAUFORT_TABLE: tuple[BeaufortRow, ...] = tuple(
+    BeaufortRow(
+        n,
+        name,
+        lo,
+        hi,
+        0.0 if n == 0 else 0.5 * (lo + hi),
+        hs,
+        norsok_peak_period(hs),
+    )
+    for n, (name, lo, hi, hs) in enumerate(_WMO)
+)
+
+
+def beaufort_row(n: int) -> BeaufortRow:
+    """The full-scale :class:`BeaufortRow` of Beaufort number ``n`` (0-9)."""
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or not 0 <= n <= 9:
+        raise ValueError(f"Beaufort number must be an int 0-9, got {n!r}")
+    return BEAUFORT_TABLE[int(n)]
+
+
+class SeaState(NamedTuple):
+    """Wind and waves of one sea state (unpacks as ``wind, waves = beaufort(5)``)."""
+
+    wind: WindConfig
+    waves: WaveConfig
+
+
+def beaufort(
+    n: int,
+    scale: float = 24.0,
+    *,
+    direction_from: float = 0.0,
+    gamma: float = 3.3,
+    gust_spectrum: str = "npd",
+    first_order: bool = True,
+    drift: bool = True,
+    wf_model: str = "fossen",
+) -> SeaState:
+    """Beaufort ``n`` sea state, Froude-scaled to a model at ``1:scale`` (notes 2.2).
+
+    Model values: ``U = U10 / sqrt(scale)``, ``Hs / scale``, ``Tp / sqrt(scale)``. The wind gust
+    follows ``gust_spectrum`` evaluated at full scale (``spectrum_scale = scale``); wind and
+    waves come from the same direction. The WF-motion stds are the :class:`WaveConfig`
+    defaults (``Hs/16`` along the waves, ``radians(2) Hs w_p^2 / g`` in heading); for BF5-9
+    ``wf_beaufort`` is set so that ``wf_model="al-takie"`` works.
+
+    Args:
+        n: Beaufort number 0-9 (0: calm, no wind, ``Hs = 0``).
+        scale: Froude scale ``lambda`` (24 = Blue Lady; 1 = full scale).
+        direction_from: Direction wind and waves come from (rad).
+        gamma: JONSWAP peak factor.
+        gust_spectrum: ``"npd"`` (default), ``"harris"`` or ``"gauss-markov"``.
+        first_order: WF motion on the measured pose.
+        drift: Second-order drift loads.
+        wf_model: ``"fossen"``, ``"al-takie"`` or ``"rao"``.
+
+    Returns:
+        ``SeaState(wind, waves)``.
+    """
+    row = beaufort_row(n)
+    if isinstance(scale, bool) or not isinstance(scale, numbers.Real) or not scale >= 1.0:
+        raise ValueError(f"beaufort: scale must be a number >= 1, got {scale!r}")
+    sq = math.sqrt(float(scale))
+    tp = row.Tp / sq
+    wind = WindConfig(
+        speed=row.U10 / sq,
+        direction_from=float(direction_from),
+        gust_spectrum=gust_spectrum,
+        spectrum_scale=float(scale),
+    )
+    waves = WaveConfig(
+        spectrum="jonswap",
+        Hs=row.Hs / float(scale),
+        Tp=tp,
+        gamma=gamma,
+        direction_from=float(direction_from),
+        drift=drift,
+        first_order=first_order,
+        wf_model=wf_model,
+        wf_beaufort=row.number if row.number in AL_TAKIE_HF_POLYNOMIALS else None,
+        sample_period=min(0.05, tp / 20.0),
+    )
+    return SeaState(wind, waves)
+
+
+def lake_waves(direction_from: float = 0.0, **overrides: Any) -> WaveConfig:
+    """The Lake Silm sea of Blue Lady's trials (notes 2.3).
+
+    Fetch-limited JONSWAP ``Hs = 0.05 m``, ``Tp = 1.0 s``, gamma 3.3, drift on, no first-order
+    motion (mm-level for a 13.5 m hull in 1.56 m waves).
+
+    Args:
+        direction_from: Direction the waves come from (rad); notes 2.3: aligned with the wind.
+        **overrides: Any other :class:`WaveConfig` field.
+    """
+    kw: dict[str, Any] = {
+        "spectrum": "jonswap",
+        "Hs": 0.05,
+        "Tp": 1.0,
+        "gamma": 3.3,
+        "direction_from": float(direction_from),
+        "drift": True,
+        "first_order": False,
+    }
+    kw.update(overrides)
+    return WaveConfig(**kw)
+
+
+def _calm_waves(direction_from: float = 0.0, **overrides: Any) -> WaveConfig:
+    return WaveConfig(**{"Hs": 0.0, "direction_from": float(direction_from), **overrides})
+
+
+#: Named wave presets: ``name -> factory(direction_from=0.0, **overrides)``.
+WAVE_PRESETS: dict[str, Callable[..., WaveConfig]] = {"lake": lake_waves, "calm": _calm_waves}
+
+# ---------------------------------------------------------------------------------------------
+# Scenario
+# ---------------------------------------------------------------------------------------------
+
+
+def _plant_names() -> tuple[str, ...]:
+    from shipgym.dynamics.model import PLANT_VARIANTS
+
+    return tuple(PLANT_VARIANTS)
+
+
+def _sensor_presets() -> tuple[str, ...]:
+    from shipgym.observers.sensors import SENSOR_PRESETS
+
+    return tuple(SENSOR_PRESETS)
+
+
+def _plan_names() -> tuple[str, ...]:
+    from shipgym.guidance.plan import PLANS
+
+    return tuple(PLANS)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything an episode needs besides the agent (validated on construction).
+
+    Attributes:
+        name: Scenario name.
+        env: Environment scenario: ``harbour``, ``station-keeping`` or ``tracking``.
+        plant: Plant variant (``shipgym.dynamics.model.PLANT_VARIANTS``).
+        wind: Wind, or ``None`` for no wind.
+        waves: Waves, or ``None`` for none.
+        current: Current, or ``None`` for none.
+        sensors: Sensor preset name, a ``SensorConfig``, or ``None`` (no sensors).
+        plan: Plan name, a ``ManoeuvrePlan``, or ``None`` (the environment's default plan).
+        start_pose: NED start pose ``(x m, y m, psi rad)``.
+        description: Free text.
+    """
+
+    name: str
+    env: str = "harbour"
+    plant: str = "default"
+    wind: WindConfig | None = None
+    waves: WaveConfig | None = None
+    current: CurrentConfig | None = None
+    sensors: Any = "default"
+    plan: Any = None
+    start_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        from shipgym.guidance.plan import ManoeuvrePlan
+        from shipgym.observers.sensors import SensorConfig
+
+        where = f"scenario {self.name!r}"
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"scenario name must be a non-empty string, got {self.name!r}")
+        if self.env not in ENV_SCENARIOS:
+            raise ValueError(
+                f"{where}: unknown env {self.env!r}; valid names are: {', '.join(ENV_SCENARIOS)}"
+            )
+        if self.plant not in _plant_names():
+            raise ValueError(
+                f"{where}: unknown plant variant {self.plant!r}; valid names are: "
+                f"{', '.join(_plant_names())}"
+            )
+        for key, cls in (("wind", WindConfig), ("waves", WaveConfig), ("current", CurrentConfig)):
+            val = getattr(self, key)
+            if val is not None and not isinstance(val, cls):
+                raise ValueError(f"{where}: {key} must be a {cls.__name__} or None, got {val!r}")
+        s = self.sensors
+        if isinstance(s, str):
+            if s not in _sensor_presets():
+                raise ValueError(
+                    f"{where}: unknown sensor preset {s!r}; valid names are: "
+                    f"{', '.join(_sensor_presets())}"
+                )
+        elif s is not None and not isinstance(s, SensorConfig):
+            raise ValueError(
+                f"{where}: sensors must be a preset name, a SensorConfig or None, got {s!r}"
+            )
+        p = self.plan
+        if isinstance(p, str):
+            if p not in _plan_names():
+                raise ValueError(
+                    f"{where}: unknown plan {p!r}; valid names are: {', '.join(_plan_names())}"
+                )
+        elif p is not None and not isinstance(p, ManoeuvrePlan):
+            raise ValueError(
+                f"{where}: plan must be a plan name, a ManoeuvrePlan or None, got {p!r}"
+            )
+        object.__setattr__(self, "start_pose", _pose(self.start_pose, f"{where}: start_pose"))
+        if not isinstance(self.description, str):
+            raise ValueError(f"{where}: description must be a string, got {self.description!r}")
+
+    @property
+    def env_id(self) -> str:
+        """The registered Gymnasium id of :attr:`env`."""
+        return ENV_SCENARIOS[self.env]
+
+    def env_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments for the environment (``shipgym.make(self.env, **kwargs)``).
+
+        Returns:
+            ``plant``, ``wind`` (``WindConfig`` or ``None``), ``waves`` (``WaveConfig`` or
+            ``None``), ``current`` (``CurrentConfig`` or ``None``), ``sensors``,
+            ``start_pose`` and, unless it is ``None`` (the environment's default), ``plan``.
+        """
+        kw: dict[str, Any] = {
+            "plant": self.plant,
+            "wind": self.wind,
+            "waves": self.waves,
+            "current": self.current,
+            "sensors": self.sensors,
+            "start_pose": self.start_pose,
+        }
+        if self.plan is not None:
+            kw["plan"] = self.plan
+        return kw
+
+    def make(self, **overrides: Any) -> Any:
+        """``shipgym.make(self.env, **self.env_kwargs(), **overrides)`` (imports MuJoCo)."""
+        import shipgym
+
+        kw = self.env_kwargs()
+        kw.update(overrides)
+        return shipgym.make(self.env, **kw)
+
+    def replace(self, **changes: Any) -> Scenario:
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data that :func:`scenario_from_dict` reads back (SI units, radians)."""
+        from shipgym.observers.sensors import SensorConfig
+
+        def cfg(c: Any) -> Any:
+            return (
+                None if c is None else {f.name: getattr(c, f.name) for f in dataclasses.fields(c)}
+            )
+
+        s = self.sensors
+        sensors = s.to_dict() if isinstance(s, SensorConfig) else s
+        if isinstance(sensors, dict) and "antenna_offset" in sensors:
+            sensors["antenna_offset"] = list(sensors["antenna_offset"])
+        p = self.plan
+        return {
+            "name": self.name,
+            "description": self.description,
+            "env": self.env,
+            "plant": self.plant,
+            "wind": cfg(self.wind),
+            "waves": cfg(self.waves),
+            "current": cfg(self.current),
+            "sensors": sensors,
+            "plan": p if p is None or isinstance(p, str) else p.to_dict(),
+            "start_pose": list(self.start_pose),
+        }
+
+
+def _pose(value: Any, where: str) -> tuple[float, float, float]:
+    if isinstance(value, Mapping):
+        _reject(value, ("x", "y", "psi", "psi_deg"), where)
+        d = _angles(value, ("psi",), where)
+        vals = [d.get("x", 0.0), d.get("y", 0.0), d.get("psi", 0.0)]
+    elif isinstance(value, list | tuple):
+        vals = list(value)
+    else:
+        try:
+            vals = list(value)
+        except TypeError:
+            vals = [value]
+    if len(vals) != 3 or not all(_real(v) and math.isfinite(v) for v in vals):
+        raise ValueError(
+            f"{where} must be three finite numbers (x m, y m, psi rad) or a mapping "
+            f"{{x, y, psi | psi_deg}}, got {value!r}"
+        )
+    return (float(vals[0]), float(vals[1]), float(vals[2]))
+
+
+def _real(v: Any) -> bool:
+    return isinstance(v, numbers.Real) and not isinstance(v, bool)
+
+
+def _reject(d: Mapping[str, Any], valid: tuple[str, ...] | list[str], where: str) -> None:
+    unknown = sorted(str(k) for k in set(d) - set(valid))
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {unknown}; valid keys are: {', '.join(valid)}")
+
+
+def _angles(d: Mapping[str, Any], names: tuple[str, ...], where: str) -> dict[str, Any]:
+    """Copy of ``d`` with every ``<name>_deg`` key turned into ``<name>`` in radians."""
+    out = dict(d)
+    for name in names:
+        dk = f"{name}_deg"
+        if dk in out:
+            if name in out:
+                raise ValueError(f"{where}: give either '{name}' (rad) or '{dk}' (deg), not both")
+            val = out.pop(dk)
+            if not _real(val) or not math.isfinite(val):
+                raise ValueError(f"{where}: {dk} must be a finite number of degrees, got {val!r}")
+            out[name] = math.radians(val)
+    return out
+
+
+def _fields(cls: type) -> list[str]:
+    return [f.name for f in dataclasses.fields(cls)]
+
+
+def _config(
+    cls: type,
+    value: Mapping[str, Any],
+    current: Any,
+    where: str,
+    angle_names: tuple[str, ...],
+    extra: tuple[str, ...] = (),
+) -> Any:
+    """A config from a mapping applied over ``current`` (or the defaults), with clear errors."""
+    valid = _fields(cls)
+    _reject(value, valid + [f"{a}_deg" for a in angle_names] + list(extra), where)
+    d = _angles(value, angle_names, where)
+    base = {} if current is None else {f: getattr(current, f) for f in valid}
+    base.update(d)
+    try:
+        return cls(**base)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def _wind(value: Any, current: WindConfig | None, where: str) -> WindConfig | None:
+    if value is None or value is False:
+        return None
+    if not isinstance(value, Mapping):
+        raise ValueError(
+            f"{where} must be a mapping of WindConfig fields, null or false, got {value!r}"
+        )
+    return _config(WindConfig, value, current, where, ("direction_from", "direction_std"))
+
+
+def _waves(value: Any, current: WaveConfig | None, where: str) -> WaveConfig | None:
+    if value is None or value is False:
+        return None
+    if isinstance(value, str):
+        value = {"preset": value}
+    if not isinstance(value, Mapping):
+        raise ValueError(
+            f"{where} must be a preset name ({', '.join(WAVE_PRESETS)}), a mapping of "
+            f"WaveConfig fields, null or false, got {value!r}"
+        )
+    value = dict(value)
+    if "preset" in value:
+        name = value.pop("preset")
+        if name not in WAVE_PRESETS:
+            raise ValueError(
+                f"{where}: unknown wave preset {name!r}; valid names are: {', '.join(WAVE_PRESETS)}"
+            )
+        d = current.direction_from if current is not None else 0.0
+        current = WAVE_PRESETS[name](direction_from=d)
+    return _config(
+        WaveConfig, value, current, where, ("direction_from", "wf_heading_std"), ("preset",)
+    )
+
+
+def _current(value: Any, current: CurrentConfig | None, where: str) -> CurrentConfig | None:
+    if value is None or value is False:
+        return None
+    if not isinstance(value, Mapping):
+        raise ValueError(
+            f"{where} must be a mapping of CurrentConfig fields, null or false, got {value!r}"
+        )
+    d = dict(value)
+    # convenience: stationary std and time constant instead of (mu, sigma)
+    if "time_constant" in d:
+        if "mu" in d:
+            raise ValueError(f"{where}: give either 'mu' (1/s) or 'time_constant' (s), not both")
+        tc = d.pop("time_constant")
+        if not _real(tc) or not tc > 0 or not math.isfinite(tc):
+            raise ValueError(f"{where}: time_constant must be a number > 0 s, got {tc!r}")
+        d["mu"] = 1.0 / tc
+    if "std" in d:
+        if "sigma" in d:
+            raise ValueError(f"{where}: give either 'sigma' (m/s^1.5) or 'std' (m/s), not both")
+        std = d.pop("std")
+        if not _real(std) or not std >= 0 or not math.isfinite(std):
+            raise ValueError(f"{where}: std must be a number >= 0 m/s, got {std!r}")
+        mu = d.get("mu", current.mu if current is not None else CurrentConfig().mu)
+        if not (_real(mu) and mu > 0):
+            raise ValueError(f"{where}: 'std' needs mu > 0 (or time_constant), got mu = {mu!r}")
+        d["sigma"] = std * math.sqrt(2.0 * mu)
+    valid = _fields(CurrentConfig)
+    _reject(value, valid + ["direction_to_deg", "std", "time_constant"], where)
+    return _config(CurrentConfig, d, current, where, ("direction_to",))
+
+
+def _sensors(value: Any, where: str) -> Any:
+    from shipgym.observers.sensors import SensorConfig, sensor_config
+
+    if value is None or value is False:
+        return None
+    if isinstance(value, str):
+        if value not in _sensor_presets():
+            raise ValueError(
+                f"{where}: unknown sensor preset {value!r}; valid names are: "
+                f"{', '.join(_sensor_presets())}"
+            )
+        return value
+    if isinstance(value, SensorConfig):
+        return value
+    if not isinstance(value, Mapping):
+        raise ValueError(
+            f"{where} must be a preset name, a mapping of SensorConfig fields, null or false, "
+            f"got {value!r}"
+        )
+    d = dict(value)
+    name = d.pop("preset", "default")
+    if name not in _sensor_presets():
+        raise ValueError(
+            f"{where}: unknown sensor preset {name!r}; valid names are: "
+            f"{', '.join(_sensor_presets())}"
+        )
+    _reject(d, _fields(SensorConfig), where)
+    try:
+        return sensor_config(name, **d)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def _plan(value: Any, where: str) -> Any:
+    from shipgym.guidance.plan import ManoeuvrePlan
+
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if value not in _plan_names():
+            raise ValueError(
+                f"{where}: unknown plan {value!r}; valid names are: {', '.join(_plan_names())}"
+            )
+        return value
+    if isinstance(value, ManoeuvrePlan):
+        return value
+    if not isinstance(value, Mapping):
+        raise ValueError(
+            f"{where} must be a plan name or a mapping for ManoeuvrePlan.from_dict, got {value!r}"
+        )
+    try:
+        return ManoeuvrePlan.from_dict(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+_BF_KEYS = (
+    "number",
+    "scale",
+    "direction_from",
+    "direction_from_deg",
+    "gamma",
+    "gust_spectrum",
+    "first_order",
+    "drift",
+    "wf_model",
+)
+
+
+def _beaufort(value: Any, where: str) -> SeaState:
+    if isinstance(value, Mapping):
+        _reject(value, _BF_KEYS, where)
+        d = _angles(value, ("direction_from",), where)
+        if "number" not in d:
+            raise ValueError(f"{where}: missing 'number' (the Beaufort number 0-9)")
+        n = d.pop("number")
+    else:
+        n, d = value, {}
+    try:
+        return beaufort(n, **d)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+#: Top-level keys of a scenario file or mapping.
+SCENARIO_KEYS = (
+    "name",
+    "description",
+    "base",
+    "env",
+    "plant",
+    "beaufort",
+    "wind",
+    "waves",
+    "current",
+    "sensors",
+    "plan",
+    "start_pose",
+)
+
+
+def scenario_from_dict(data: Mapping[str, Any], *, name: str | None = None) -> Scenario:
+    """Build and validate a :class:`Scenario` from plain data (parsed YAML/TOML).
+
+    Args:
+        data: The mapping (keys: :data:`SCENARIO_KEYS`, see the module docstring).
+        name: Default name when ``data`` has none (e.g. the file stem).
+
+    Returns:
+        The scenario.
+
+    Raises:
+        ValueError: For any unknown key (listing the valid ones) or bad value; the message
+            names the offending key.
+    """
+    if not isinstance(data, Mapping):
+        raise ValueError(f"a scenario must be a mapping of keys, got {type(data).__name__}")
+    label = data.get("name", name) or "scenario"
+    where = f"scenario {label!r}"
+    _reject(data, SCENARIO_KEYS, where)
+    for key in ("name", "description", "base", "env", "plant"):
+        if key in data and not isinstance(data[key], str):
+            raise ValueError(f"{where}: {key} must be a string, got {data[key]!r}")
+    if "base" in data:
+        if data["base"] not in SCENARIOS:
+            raise ValueError(
+                f"{where}: unknown base scenario {data['base']!r}; valid names are: "
+                f"{', '.join(SCENARIOS)}"
+            )
+        base = SCENARIOS[data["base"]]
+    else:
+        base = Scenario(name=str(label))
+    wind, waves, current = base.wind, base.waves, base.current
+    if "beaufort" in data:
+        wind, waves = _beaufort(data["beaufort"], f"{where}: beaufort")
+    if "wind" in data:
+        wind = _wind(data["wind"], wind, f"{where}: wind")
+    if "waves" in data:
+        waves = _waves(data["waves"], waves, f"{where}: waves")
+    if "current" in data:
+        current = _current(data["current"], current, f"{where}: current")
+    kw: dict[str, Any] = {
+        "name": str(label),
+        "wind": wind,
+        "waves": waves,
+        "current": current,
+        "description": data.get("description", base.description),
+        "env": data.get("env", base.env),
+        "plant": data.get("plant", base.plant),
+        "sensors": _sensors(data["sensors"], f"{where}: sensors")
+        if "sensors" in data
+        else base.sensors,
+        "plan": _plan(data["plan"], f"{where}: plan") if "plan" in data else base.plan,
+        "start_pose": _pose(data["start_pose"], f"{where}: start_pose")
+        if "start_pose" in data
+        else base.start_pose,
+    }
+    return Scenario(**kw)
+
+
+def scenario_files() -> dict[str, Path]:
+    """The packaged example scenario files, ``stem -> path`` (``shipgym/assets/scenarios``)."""
+    from importlib import resources
+
+    folder = Path(str(resources.files("shipgym.assets").joinpath("scenarios")))
+    if not folder.is_dir():
+        return {}
+    return {p.stem: p for p in sorted(folder.iterdir()) if p.suffix in (".yaml", ".yml", ".toml")}
+
+
+def _read_file(path: Path) -> Any:
+    if path.suffix == ".toml":
+        import tomllib
+
+        with path.open("rb") as fh:
+            try:
+                return tomllib.load(fh)
+            except tomllib.TOMLDecodeError as exc:
+                raise ValueError(f"scenario file {str(path)!r} is not valid TOML: {exc}") from None
+    if path.suffix in (".yaml", ".yml"):
+        import yaml
+
+        with path.open("r", encoding="utf-8") as fh:
+            try:
+                return yaml.safe_load(fh)
+            except yaml.YAMLError as exc:
+                raise ValueError(f"scenario file {str(path)!r} is not valid YAML: {exc}") from None
+    raise ValueError(f"scenario file {str(path)!r}: unknown format; use .yaml, .yml or .toml")
+
+
+def load_scenario(name_or_path: str | Path) -> Scenario:
+    """A named scenario, a packaged example file by stem, or a YAML / TOML file.
+
+    Args:
+        name_or_path: A key of :data:`SCENARIOS`, the stem of a packaged file
+            (:func:`scenario_files`), or a path ending in ``.yaml``, ``.yml`` or ``.toml``.
+
+    Returns:
+        The validated scenario.
+
+    Raises:
+        ValueError: Unknown name (the message lists the valid ones), unreadable or invalid
+            file (the message names the bad key / value).
+        FileNotFoundError: A path that does not exist.
+    """
+    if isinstance(name_or_path, str) and name_or_path in SCENARIOS:
+        return SCENARIOS[name_or_path]
+    files = scenario_files()
+    if isinstance(name_or_path, str) and name_or_path in files:
+        path = files[name_or_path]
+    else:
+        path = Path(name_or_path)
+        if path.suffix not in (".yaml", ".yml", ".toml"):
+            raise ValueError(
+                f"unknown scenario {str(name_or_path)!r}; valid names are: "
+                f"{', '.join(list(SCENARIOS) + [f for f in files if f not in SCENARIOS])}; "
+                "or give a .yaml / .toml file"
+            )
+        if not path.is_file():
+            raise FileNotFoundError(f"scenario file {str(path)!r} does not exist")
+    data = _read_file(path)
+    if data is None:
+        data = {}
+    if not isinstance(data, Mapping):
+        raise ValueError(
+            f"scenario file {str(path)!r} must hold a mapping of keys, got {type(data).__name__}"
+        )
+    try:
+        return scenario_from_dict(data, name=path.stem)
+    except ValueError as exc:
+        raise ValueError(f"{path.name}: {exc}") from None
+
+
+# ---------------------------------------------------------------------------------------------
+# Named presets
+# ---------------------------------------------------------------------------------------------
+
+
+def _presets() -> dict[str, Scenario]:
+    out: dict[str, Scenario] = {}
+    out["calm"] = Scenario(
+        name="calm",
+        env="harbour",
+        wind=None,
+        plan="tomera2014",
+        description="The harbour manoeuvre in calm water: no wind, waves or current.",
+    )
+    d300 = math.radians(300.0)
+    out["tomera2014-lake"] = Scenario(
+        name="tomera2014-lake",
+        env="harbour",
+        wind=WindConfig(speed=3.0, direction_from=d300),
+        waves=lake_waves(direction_from=d300),
+        sensors="tomera2014",
+        plan="tomera2014",
+        description=(
+            "Blue Lady's lake trial (seed 001, Tomera 2014): the 5-leg harbour manoeuvre on "
+            "Lake Silm, wind 3 m/s from 300 deg with Gauss-Markov gusts, small fetch-limited "
+            "JONSWAP waves from the same direction (Hs 0.05 m, Tp 1 s, drift only; notes 2.3)."
+        ),
+    )
+    out["tomera2011-sim"] = Scenario(
+        name="tomera2011-sim",
+        env="harbour",
+        wind=WindConfig(speed=2.0, direction_from=0.0),
+        waves=None,
+        sensors="default",
+        plan="tomera2014",
+        description=(
+            "The simulation study of seed 000 (Tomera 2011): wind 2 m/s from 0 deg with "
+            "Gauss-Markov gusts, no waves, seed 000's sensor noise; the manoeuvre of the study "
+            "is not given in the seed, the seed 001 harbour plan is used."
+        ),
+    )
+    for n in range(10):
+        row = BEAUFORT_TABLE[n]
+        wind, waves = beaufort(n, 24.0)
+        out[f"beaufort{n}"] = Scenario(
+            name=f"beaufort{n}",
+            env="station-keeping",
+            wind=wind,
+            waves=waves,
+            sensors="default",
+            description=(
+                f"Station keeping in Beaufort {n} ({row.name}) Froude-scaled to 1:24: wind "
+                f"{wind.speed:.2f} m/s (NPD gusts), JONSWAP Hs {waves.Hs:.3f} m, Tp "
+                f"{waves.Tp:.2f} s, first-order motion and drift (notes 2.2)."
+            ),
+        )
+    return out
+
+
+#: Named scenario presets (:func:`load_scenario` also finds the packaged example files).
+SCENARIOS: dict[str, Scenario] = _presets()

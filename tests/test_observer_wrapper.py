@@ -1,0 +1,62 @@
+"""Observer wrapper in the closed loop: estimates feed the controller, errors in info."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import shipgym
+from shipgym.cli import run_episode
+from shipgym.disturbances import WindConfig
+from shipgym.observers.wrapper import ObserverWrapper
+
+
+@pytest.mark.parametrize("observer", ["dkf", "kbf", "ekf"])
+@pytest.mark.parametrize("seed", range(10))
+def test_manoeuvre_completes_with_each_observer(observer, seed):
+    """Acceptance: wind 3 m/s from 300 deg, seeds 0-9, no quay contact."""
+    res = run_episode("harbour", controller="pid", observer=observer, seed=seed)
+    assert res["completed"] and not res["quay_contact"]
+    assert res["rmse"]["u"] < 0.05 and res["rmse"]["x"] < 0.2
+
+
+def test_controller_uses_the_estimate_not_the_truth():
+    env = shipgym.make("harbour", observer="kbf", controller="pid")
+    _, info = env.reset(seed=0)
+    for _ in range(5):
+        _, _, _, _, info = env.step(np.zeros(3, np.float32))
+    assert not np.allclose(info["nav_eta"], info["eta"])
+    np.testing.assert_allclose(info["est_error_eta"][:2], info["nav_eta"][:2] - info["eta"][:2])
+
+
+def test_spec_round_trip_with_observer_and_controller():
+    env = shipgym.make("harbour", observer="ekf", controller="pid")
+    env2 = gym.make(env.spec)
+    assert isinstance(env2.env, ObserverWrapper) and env2.env.observer_name == "ekf"
+    o1, _ = env.reset(seed=2)
+    o2, _ = env2.reset(seed=2)
+    for _ in range(10):
+        o1, *_ = env.step(np.zeros(3, np.float32))
+        o2, *_ = env2.step(np.zeros(3, np.float32))
+    np.testing.assert_array_equal(o1, o2)
+
+
+def test_ekf_bias_converges_to_the_wind_load_when_holding_position():
+    steady = WindConfig(speed=3.0, direction_from=np.radians(300.0), gust_std=0.0,
+                        direction_std=0.0)  # fmt: skip
+    env = shipgym.make("station-keeping", observer="ekf", controller="pid", wind=steady,
+                       start_noise=(0.0, 0.0, 0.0))  # fmt: skip
+    env.reset(seed=0)
+    for _ in range(600):
+        _, _, _, trunc, info = env.step(np.zeros(3, np.float32))
+    obs_wrapper = env.env
+    bias = obs_wrapper.observer.estimate().bias
+    load = info["tau_wind"]
+    assert np.hypot(*info["est_error_eta"][:2]) < 0.3
+    np.testing.assert_allclose(bias, load, rtol=0.2, atol=0.05 * np.abs(load).max())
+
+
+def test_observer_needs_sensors_and_known_names():
+    with pytest.raises(ValueError, match="needs sensors"):
+        shipgym.make("harbour", observer="kbf", sensors=None)
+    with pytest.raises(ValueError, match="unknown observer 'kalman'"):
+        shipgym.make("harbour", observer="kalman")
