@@ -128,7 +128,7 @@ def test_kbf_nees_nis_consistent(make, design):
 
 def test_kbf_at_one_second_is_conservative_not_optimistic():
     """At the design period T = 1 s the continuous P over-bounds the sampled-data error by
-    5-10 % (bandwidth ~0.27 rad/s): one long run, NEES averaged over 2000 s."""
+    5-15 % (bandwidths 0.35-0.43 rad/s): one long run, NEES averaged over 2000 s."""
     make = lambda: KalmanBucyFilter(KBF_DESIGN, gate_probability=None)  # noqa: E731
     nees, _ = _monte_carlo(make, KBF_DESIGN, T=1.0, steps=2000, runs=1)
     assert 0.75 * 6 < nees[0, 50:].mean() < 6.0
@@ -251,7 +251,8 @@ def test_heading_through_north_no_jump(name):
     nu_hat = np.array([e.nu for e in ests])
     # the crossing is at t = 20 s; no jump anywhere once the start-up transient is over
     assert np.all(np.abs(np.diff(psi_hat)) < math.radians(3.0))  # continuous, ~1 deg/s
-    assert np.all(np.abs(np.diff(nu_hat[10:], axis=0)) < [0.03, 0.03, math.radians(0.3)])
+    # (an unwrapped 2 pi innovation would move r by ~0.08 * 2 pi rad/s)
+    assert np.all(np.abs(np.diff(nu_hat[10:], axis=0)) < [0.05, 0.05, math.radians(0.3)])
     assert np.all(np.abs(wrap_angle(psi_hat - eta[1:, 2])) < math.radians(1.0))
     assert np.all(np.abs(nu_hat[30:] - nu_true) < [0.05, 0.05, math.radians(0.2)])
     assert psi_hat[-1] - psi_hat[0] == pytest.approx(math.radians(78.0), abs=math.radians(1.0))
@@ -276,6 +277,24 @@ def test_dropout_then_recovery(name):
     err = obs.estimate().eta - eta[-1]
     err[2] = wrap_angle(err[2])
     assert np.all(np.abs(err) < [0.3, 0.3, math.radians(1.0)])
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_irregular_and_zero_intervals(name):
+    """Any interval works (fractions, 1e-4 s, repeated times); the estimate stays on track."""
+    rng = np.random.default_rng(3)
+    times = np.cumsum(rng.choice([1.0, 0.37, 1e-4, 0.0, 2.5], size=150))
+    v = np.array([0.2, -0.05, math.radians(0.5)])
+    obs = make_observer(name)
+    obs.reset(0.0, [0.0, 0.0, 0.0], nu0=v)
+    for t in times:
+        z = v * t + SIGMA * rng.standard_normal(3)
+        info = obs.step(t, None if rng.random() < 0.1 else z)
+        assert not info.rejected
+    est = obs.estimate()
+    assert est.t == times[-1]
+    np.testing.assert_allclose(est.eta, v * times[-1], atol=0.3)
+    assert np.all(np.abs(obs.x[3:] - v) < [0.05, 0.05, 0.005])  # NED rates
 
 
 @pytest.mark.parametrize("name", PRESETS)

@@ -79,7 +79,7 @@ def _same_poles(E1, E2):
     np.testing.assert_allclose(np.poly(E1), np.poly(E2), rtol=1e-6, atol=1e-8)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=30, deadline=None)
 @given(systems(discrete=False))
 def test_lqe_matches_python_control_and_scipy(sys):
     A, G, C, Q, R = sys
@@ -99,7 +99,7 @@ def test_lqe_matches_python_control_and_scipy(sys):
     _same_poles(E, np.linalg.eigvals(A - L @ C))
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=30, deadline=None)
 @given(systems(discrete=True))
 def test_dlqe_both_forms_match_python_control_and_scipy(sys):
     F, G, H, Q, R = sys
@@ -231,10 +231,10 @@ def test_default_variances_match_the_sensors():
 
 
 def test_tuned_design_bandwidth():
-    """The tuned filters have a ~0.27 rad/s bandwidth (w = (q / (R T))^(1/4))."""
+    """The tuned filters have 0.35 and 0.43 rad/s bandwidths (w = (q / (R T))^(1/4))."""
     _, _, E = KBF_DESIGN.kbf_gains()
     w = np.abs(E).max(axis=1)
-    np.testing.assert_allclose(w, [0.266, 0.266, 0.285], atol=0.005)
+    np.testing.assert_allclose(w, [0.350, 0.350, 0.426], atol=0.002)
     assert np.all(np.abs(DKF_DESIGN.dkf_gains()[2]) < 1.0)
 
 

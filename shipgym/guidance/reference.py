@@ -63,9 +63,10 @@ class Limits:
 
     surge_speed: float = param(0.2, "m/s", "notes 6: v_max 0.2-0.3 m/s (max speed 3.1 kn)")
     surge_accel: float = param(
-        0.005,
+        0.0025,
         "m/s^2",
-        _CAP + ": (451 - 9) N / 23 665 kg = 0.019 m/s^2; about 1/4 of it is used",
+        _CAP + ": a forward leg is braked by the 78 N astern thrust, (78 - 9) N / 23 665 kg "
+        "= 0.0029 m/s^2 (ahead, 451 N, would allow 0.019 m/s^2)",
     )
     surge_astern_speed: float = param(0.1, "m/s", "half of surge_speed (78 N astern thrust)")
     surge_astern_accel: float = param(

@@ -45,6 +45,7 @@ __all__ = [
     "as_pose",
     "as_tau",
     "make_observer",
+    "no_measurement",
     "register_observer",
 ]
 
@@ -157,12 +158,17 @@ class Observer(ABC):
 # --------------------------------------------------------------------------------------------
 
 
-def as_pose(z: ArrayLike, name: str = "z") -> NDArray[np.float64]:
-    """``z`` as 3 finite floats ``[x, y, psi]`` (m, m, rad), else ``ValueError``."""
-    a = np.asarray(z, dtype=float)
+def as_pose(
+    z: ArrayLike, name: str = "z", what: str = "[x, y, psi] (m, m, rad)"
+) -> NDArray[np.float64]:
+    """``z`` as 3 finite floats (a pose ``[x, y, psi]`` by default), else ``ValueError``."""
+    try:
+        a = np.asarray(z, dtype=float)
+    except (TypeError, ValueError):
+        a = np.empty(0)
     if a.shape != (3,) or not np.isfinite(a).all():
         raise ValueError(
-            f"{name} must be 3 finite values [x, y, psi] (m, m, rad)"
+            f"{name} must be 3 finite values {what}"
             + (" or None for a missing sample" if name == "z" else "")
             + f", got {z!r}"
         )
@@ -173,10 +179,7 @@ def as_tau(tau: ArrayLike | None) -> NDArray[np.float64] | None:
     """``tau`` as 3 finite floats ``[X, Y, N]`` (N, N, N m) or ``None``, else ``ValueError``."""
     if tau is None:
         return None
-    a = np.asarray(tau, dtype=float)
-    if a.shape != (3,) or not np.isfinite(a).all():
-        raise ValueError(f"tau must be 3 finite values [X, Y, N] (N, N, N m), got {tau!r}")
-    return a
+    return as_pose(tau, "tau", "[X, Y, N] (N, N, N m)")
 
 
 class OutlierGate:

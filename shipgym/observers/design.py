@@ -57,12 +57,14 @@ matters for the gains; using the sensors' real variances for ``R`` keeps the cov
 What does *not* reproduce them: the design values printed in seed000 eqs. 61-62 themselves.
 ``G_x Q_x G_x^T = diag(0.1, 2e-5)`` with ``R_x = 0.01`` gives ``L = [3.162, 2.515]`` and
 ``G_psi Q_psi G_psi^T = diag(0.04, 1e-4)`` with ``R_psi = 0.1`` gives ``[0.632, 1.125]``;
-seed001 moreover uses one gain for all DOFs. Neither the predictor-form gain (python-control
-and MATLAB ``dlqr`` on the dual, which seed001 says it used) nor a continuous white-noise
-acceleration model (exact ``Q_k``) fits eq. 30 with a diagonal ``Q``: the predictor form of the
-design above is ``[0.07946, 0.44814]``; the best predictor-form fit misses by 9 % / 13 %. Seed001's
-gains are the filter (innovation) form, which is what MATLAB's ``dlqe`` returns (``M``), so
-"dlqr"/"lqr" in seed001 are read as ``dlqe``/``lqe``.
+seed001 moreover uses one gain for all DOFs. The predictor-form gain (python-control's
+``dlqe``; MATLAB ``dlqr`` on the dual system, which seed001 says it used) of the design above
+is ``[0.07946, 0.44814]``, and no diagonal ``Q`` brings the predictor form closer to eq. 30
+than 9 % / 13 %. The exact discretisation of the same continuous design gives
+``[0.07953, 0.36755]`` (0.3 % off in the position gain); eq. 30 needs the first-order
+``Q_k = G Q G^T T`` of seed000 eq. 31. Seed001's gains are the filter (innovation) form,
+which is what MATLAB's ``dlqe`` returns (``M``), so "dlqr"/"lqr" in seed001 are read as
+``dlqe``/``lqe``.
 
 Conventions for :func:`dlqe`
 ----------------------------
@@ -176,17 +178,23 @@ def _sqrtm_psd(M: NDArray[np.float64]) -> NDArray[np.float64]:
     return (V * np.sqrt(np.clip(w, 0.0, None))) @ V.T
 
 
+def _eig(M: NDArray[np.float64]) -> NDArray[np.complex128]:
+    return np.asarray(np.linalg.eigvals(M), dtype=np.complex128)
+
+
 def _unstable_modes(A: NDArray[np.float64], discrete: bool) -> NDArray[np.complex128]:
     """Eigenvalues of A on or outside the stability boundary (imaginary axis / unit circle)."""
-    lam = np.linalg.eigvals(A)
+    lam = _eig(A)
     if discrete:
         return lam[np.abs(lam) >= 1.0 - _RANK_TOL]
     return lam[lam.real >= -_RANK_TOL * max(1.0, float(np.max(np.abs(lam))))]
 
 
-def _pbh_rank_deficient(M_of_lam: Any, modes: NDArray[np.complex128], scale: float) -> list:
+def _pbh_rank_deficient(
+    M_of_lam: Any, modes: NDArray[np.complex128], scale: float
+) -> list[complex]:
     """Modes at which the PBH matrix loses rank (smallest singular value ~ 0)."""
-    bad = []
+    bad: list[complex] = []
     for lam in modes:
         s = np.linalg.svd(M_of_lam(lam), compute_uv=False)
         if s[-1] <= _RANK_TOL * scale:
@@ -214,7 +222,7 @@ def _check_stabilisable_detectable(
     scale = max(1.0, float(np.linalg.norm(A, 2)))
     kind = "|lambda| >= 1" if discrete else "Re(lambda) >= 0"
     bad = _pbh_rank_deficient(
-        lambda lam: np.vstack([A - lam * eye, C]), modes, max(scale, np.linalg.norm(C, 2))
+        lambda lam: np.vstack([A - lam * eye, C]), modes, max(scale, float(np.linalg.norm(C, 2)))
     )
     if bad:
         raise ValueError(
@@ -222,7 +230,9 @@ def _check_stabilisable_detectable(
             "measurements (PBH test); measure a state that observes them"
         )
     bad = _pbh_rank_deficient(
-        lambda lam: np.hstack([A - lam * eye, GQh]), modes, max(scale, np.linalg.norm(GQh, 2))
+        lambda lam: np.hstack([A - lam * eye, GQh]),
+        modes,
+        max(scale, float(np.linalg.norm(GQh, 2))),
     )
     if bad:
         raise ValueError(
@@ -310,7 +320,7 @@ def lqe(
         ) from exc
     P = 0.5 * (P + P.T)
     L = np.linalg.solve(R_, C_ @ P).T
-    E = np.linalg.eigvals(A_ - L @ C_)
+    E = _eig(A_ - L @ C_)
     return L, P, E
 
 
@@ -366,7 +376,7 @@ def dlqe(
     S = H_ @ P @ H_.T + R_
     K = np.linalg.solve(S, H_ @ P).T  # P H^T S^-1 (S symmetric)
     L_pred = F_ @ K
-    E = np.linalg.eigvals(F_ - L_pred @ H_)
+    E = _eig(F_ - L_pred @ H_)
     return (L_pred if form == "predictor" else K), P, E
 
 
@@ -536,7 +546,8 @@ class KalmanDesign:
         """``(F, Q_k)`` for an interval ``dt`` (default ``T``): (2, 2) and (3, 2, 2)."""
         dt = self.T if dt is None else float(dt)
         A, _ = double_integrator()
-        out = [discretise(A, W, dt, method=self.discretisation) for W in self.intensity()]  # type: ignore[arg-type]
+        method: Literal["exact", "euler"] = "euler" if self.discretisation == "euler" else "exact"
+        out = [discretise(A, W, dt, method=method) for W in self.intensity()]
         return out[0][0], np.stack([q for _, q in out])
 
     def dkf_gains(
@@ -582,21 +593,22 @@ class KalmanDesign:
 def _tomera(discretisation: str) -> KalmanDesign:
     R = (POSITION_VARIANCE_SEED000, POSITION_VARIANCE_SEED000, HEADING_VARIANCE_SEED000)
     Q = tuple(_as_tuple(0.01 * r * np.eye(2)) for r in R)
-    return KalmanDesign(G=np.eye(2).tolist(), Q=Q, R=R, T=1.0, discretisation=discretisation)
+    return KalmanDesign(G=_as_tuple(np.eye(2)), Q=Q, R=R, T=1.0, discretisation=discretisation)
 
 
 TOMERA_DKF = _tomera("euler")
-"""Seed001's discrete KF design: ``G = I``, ``Q = 0.01 R I`` (1/s^2 times R), ``T = 1 s``,
-``Q_k = G Q G^T T`` (seed000 eq. 31); filter-form gain ``[0.07945, 0.36868]`` (eq. 30)."""
+"""Seed001's discrete KF design: ``G = I``, ``Q = 0.01 R I`` numerically per DOF (``R`` the
+sensor variance in m^2 or rad^2), ``T = 1 s``, ``Q_k = G Q G^T T`` (seed000 eq. 31);
+filter-form gain ``[0.07945, 0.36868]`` (eq. 30)."""
 
 TOMERA_KBF = _tomera("euler")
-"""Seed001's Kalman-Bucy design (same matrices, ``R_c = R T``): ``L = [0.1, 0.45826]``
-(eq. 35)."""
+"""Seed001's Kalman-Bucy design (the same matrices as :data:`TOMERA_DKF`, measurement
+intensity ``R_c = R T``): ``L = [0.1, 0.45826]`` (eq. 35)."""
 
-ACCEL_PSD_XY = 5e-5
+ACCEL_PSD_XY = 1.5e-4
 """Tuned white-noise acceleration intensity in x, y, m^2/s^3 (see :data:`DKF_DESIGN`)."""
 
-ACCEL_PSD_PSI = 2e-7
+ACCEL_PSD_PSI = 1e-6
 """Tuned white-noise yaw acceleration intensity, rad^2/s^3 (see :data:`DKF_DESIGN`)."""
 
 
@@ -617,19 +629,21 @@ DKF_DESIGN = _tuned()
 velocity, no position random walk), ``Q = q``, exact discretisation (Van Loan), the default
 sensor variances as ``R`` (0.01 m^2, 0.1 deg^2) and ``T = 1 s``.
 
-Choice of ``q``: for a constant acceleration ``a`` the steady-state velocity error of this
-filter is ``sqrt(2) a / w`` and its velocity noise variance ``sqrt(2) w^3 R T``, with the
-bandwidth ``w = (q / (R T))^(1/4)``; their sum is smallest at ``w^5 ~ 0.94 a^2 / (R T)``,
-``w ~ 0.3 rad/s`` for the reference accelerations of the harbour manoeuvre (surge
-0.005 m/s^2 with ``R = 0.01 m^2``, yaw 2.5e-4 rad/s^2 with ``R_psi = 3e-5 rad^2``), i.e.
-``q = w^4 R T ~ 8e-5 m^2/s^3`` and ``3e-7 rad^2/s^3``. Accelerations of the manoeuvre are
-short phases between long constant-speed ones, and a Monte Carlo over seed001's 5-leg
-reference (with and without Gauss-Markov gust accelerations of 0.002 m/s^2 and 1e-4 rad/s^2)
-gave the lowest ``u, v, r`` errors a little lower: ``q = 5e-5 m^2/s^3`` (``w = 0.27 rad/s``)
-and ``2e-7 rad^2/s^3`` (``w = 0.28 rad/s``). The seed's gains (:data:`TOMERA_DKF`,
-``w = 0.32 rad/s``) are close to this optimum; the tuned presets gain 5-15 % in velocity
-RMSE, and more from the time-varying covariance (fast start, dropouts), the exact
-discretisation, the first-order-hold KBF and the outlier gate.
+Choice of ``q`` (white-noise acceleration intensity): for a constant acceleration ``a`` the
+steady-state velocity error of this filter is ``sqrt(2) a / w`` and its velocity noise
+variance ``sqrt(2) w^3 R T``, with the bandwidth ``w = (q / (R T))^(1/4)``; their sum is
+smallest at ``w^5 ~ 0.94 a^2 / (R T)``: ``w ~ 0.3 rad/s`` for the reference accelerations of
+the harbour manoeuvre (surge 0.005 m/s^2 with ``R = 0.01 m^2``; yaw 2.5e-4 rad/s^2 with
+``R_psi = 3e-5 rad^2``), i.e. ``q = w^4 R T ~ 8e-5 m^2/s^3`` and ``3e-7 rad^2/s^3``. In the
+closed loop (PID-type DP controller, 5-leg manoeuvre, 3 m/s wind with gusts, seeds 0-9) the
+real motion has more high-frequency content than the smooth reference and estimation lag
+feeds back into the control: velocity errors were lowest for ``q_xy = 1e-4 ... 2e-4`` and
+``q_psi ~ 1e-6`` (with ``q_xy = 5e-5`` the Kalman-Bucy filter's extra lag let the ship
+overshoot into the quay in 1 of 10 runs). Chosen: ``q_xy = 1.5e-4 m^2/s^3``
+(``w = 0.35 rad/s``) and ``q_psi = 1e-6 rad^2/s^3`` (``w = 0.43 rad/s``). The seed's design
+(:data:`TOMERA_DKF`, ``w = 0.32 rad/s`` in every DOF) is close in x, y; the tuned presets
+differ mainly in the heading channel, the time-varying covariance (fast start, dropouts),
+the exact discretisation, the first-order-hold KBF and the outlier gate.
 """
 
 KBF_DESIGN = DKF_DESIGN
