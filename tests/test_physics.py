@@ -235,3 +235,11 @@ def test_still_air_drags_a_moving_hull_and_none_switches_aerodynamics_off():
     off.reset(nu=[1.0, 0.0, 0.0])
     off.step()
     assert off.tau_wind == (0.0, 0.0, 0.0)
+
+
+def test_tau_thrusters_equals_the_configuration_matrix_times_thrust():
+    from shipgym.dynamics import command_to_tau
+
+    phys = VesselPhysics()
+    phys.reset(actuators=[-150.0, 0.3, -0.7])
+    np.testing.assert_allclose(phys.tau_thrusters, command_to_tau(phys.actuator_state), rtol=1e-12)

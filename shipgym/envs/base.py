@@ -23,7 +23,7 @@ from shipgym._config import param
 from shipgym.assets import asset_path
 from shipgym.controllers.allocation import action_to_command, command_to_action
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
-from shipgym.dynamics import BLUE_LADY_THRUSTERS, command_to_tau, wrap_angle
+from shipgym.dynamics import BLUE_LADY_THRUSTERS, wrap_angle
 from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
 from shipgym.guidance import plan as named_plan
 from shipgym.metrics import ManoeuvreMetrics
@@ -386,7 +386,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "z": None if m.z is None else np.array(m.z),
             "valid": bool(m.valid),
             "outlier": bool(m.outlier),
-            "tau": command_to_tau(phys.actuator_state, self.thrusters),
+            "tau": phys.tau_thrusters,
         }
         if rec["z"] is not None:
             self._last_measurement = rec["z"]

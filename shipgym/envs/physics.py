@@ -283,6 +283,14 @@ class VesselPhysics:
         p = self.thrusters
         return np.array([p.k1 * abs(a[0]) * a[0], p.k2 * a[1], p.k3 * a[2]])
 
+    @property
+    def tau_thrusters(self) -> NDArray[np.float64]:
+        """Body-frame thrust ``tau = T F`` (N, N, N m) at the current actuator states."""
+        p = self.thrusters
+        n1, p2, p3 = self.data.act.tolist()
+        f2, f3 = p.k2 * p2, p.k3 * p3
+        return np.array([p.k1 * abs(n1) * n1, f2 + f3, p.L2 * f2 - p.L3 * f3])
+
     # ---- stepping --------------------------------------------------------------------------
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
         """Set thruster commands ``[n1 (rpm), p2, p3]``, clipped to the physical ranges.
