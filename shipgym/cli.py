@@ -46,6 +46,13 @@ def _cmd_list(args: argparse.Namespace) -> int:
     print("controllers    :")
     for name, spec in CONTROLLERS.items():
         print(f"  {name:12s} {spec.description}")
+    from shipgym.observers import observer_names
+    from shipgym.observers.sensors import SENSOR_PRESETS
+    from shipgym.scenarios import SCENARIOS as SCENARIO_PRESETS
+
+    print("observers      :", ", ".join(["truth", *observer_names()]))
+    print("sensor presets :", ", ".join(SENSOR_PRESETS))
+    print("scenario files :", ", ".join(SCENARIO_PRESETS), "(or a .yaml/.toml path)")
     print("plant variants :", ", ".join(PLANT_VARIANTS))
     print("wind models    :", ", ".join(f"blendermann:{k}" for k in BLENDERMANN))
     print("actuators      :", ", ".join(ACTUATOR_NAMES))
