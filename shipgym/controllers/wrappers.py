@@ -69,6 +69,11 @@ CONTROLLERS: dict[str, ControllerSpec] = {
         "constrained",
         "seed001 eq. 23 PID, tuned gains, constrained allocation",
     ),
+    "pid-smooth": ControllerSpec(
+        lambda dt: MultivariablePID("smooth", dt=dt),
+        "constrained",
+        "seed001 eq. 23 PID, lower bandwidth for observer feedback, constrained allocation",
+    ),
     "pid-seed": ControllerSpec(
         lambda dt: MultivariablePID("seed", dt=dt),
         "inverse",
