@@ -148,7 +148,8 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ``eta_ddot_d_r``, ``eta_P`` (leg start) and ``eta_r`` (ship in the r-frame); ``leg``,
     ``legs_completed``, ``finished``, ``t`` (s); ``command`` (rpm, 1, 1), ``thrust`` (N),
     ``saturated``, ``action_clipped``; ``tau_wind``, ``tau_waves`` (N, N, N m, body);
-    ``current_body`` (u_c, v_c in m/s); ``measurements`` (the
+    ``current_body`` (``nu_c = [u_c, v_c, 0]``, m/s), ``wave_elevation`` (m, wave reference point);
+    ``measurements`` (the
     sensor samples taken during the step: ``t``, measured NED pose ``z`` or ``None`` in a
     dropout, ``valid``, ``outlier`` (a truth flag), applied body thrust ``tau``); ``quay_contact``,
     ``contacts``; the ``reward_*`` terms; and at the end of an episode ``episode_metrics``
@@ -493,7 +494,8 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "action_clipped": np.zeros(3, dtype=bool),
             "tau_wind": np.array(phys.tau_wind),
             "tau_waves": np.array(phys.tau_waves),
-            "current_body": np.array(phys.nu_c),
+            "current_body": np.array([*phys.nu_c, 0.0]),
+            "wave_elevation": phys.wave_elevation(),
             "quay_contact": self._contact,
             "contacts": contacts,
         }
@@ -587,7 +589,7 @@ def _whole_multiple(control_period: float, timestep: float) -> int:
 
 
 def _make_renderer(model: Any) -> Any:
-    import mujoco
+    from shipgym.envs._mujoco import mujoco
 
     try:
         return mujoco.Renderer(model, 480, 640)

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import mujoco
+from shipgym.envs._mujoco import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -243,6 +243,16 @@ class VesselPhysics:
         if self.waves is None or not self.wave_config.first_order:
             return (0.0, 0.0, 0.0)
         return self.waves.wf_motion(self.time)
+
+    def wave_elevation(self) -> float:
+        """Wave elevation (m) now at the wave field's reference point (0 without waves).
+
+        The drift load and the first-order motion use the same reference point: the spatial
+        phase change of the hull's slow displacement is neglected (long-crested sea).
+        """
+        if self.waves is None:
+            return 0.0
+        return float(np.asarray(self.waves.elevation(self.time)))
 
     @property
     def time(self) -> float:

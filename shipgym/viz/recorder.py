@@ -50,6 +50,8 @@ _VEC_KEYS = (
     "thrust",
     "saturated",
     "tau_wind",
+    "tau_waves",
+    "current_body",
 )
 #: port of a spawned rerun viewer, and the longest wait for the sinks at the end (s).
 VIEWER_PORT = 9876
@@ -319,6 +321,9 @@ class _Episode:
         scal(P.COMMAND_TUNNELS, v["command"][:, 1:])
         scal(P.ACCURACY, acc)
         scal(P.ACCURACY_MEAS, acc_m)
+        scal("plots/disturbances/wind_load", v["tau_wind"])
+        scal("plots/disturbances/wave_drift", v["tau_waves"])
+        scal("plots/disturbances/current_body", v["current_body"][:, :2])
         data = dict(v)
         data["leg"] = legs
         data["wind"] = wind if wind is not None else np.full((n, 2), np.nan)
@@ -1035,6 +1040,7 @@ def _blueprint(ctx: dict[str, Any]) -> Any:
         ts(P.COMMAND_MAIN, "main propeller n1 (rpm)"),
         ts(P.COMMAND_TUNNELS, "tunnel thrusters p2, p3"),
         ts("plots/accuracy", "accuracy indices"),
+        ts("plots/disturbances", "disturbances (wind, wave drift: N, N, N m; current m/s)"),
     )
     left = rrb.Vertical(
         map_view, rrb.TextDocumentView(origin=P.SUMMARY, name="Run"), row_shares=[4, 1]

@@ -102,6 +102,8 @@ DATA_VECTORS: dict[str, int] = {
     "thrust": 3,
     "saturated": 3,
     "tau_wind": 3,
+    "tau_waves": 3,
+    "current_body": 3,
     "wind": 2,
     "leg": 2,
 }
@@ -122,6 +124,8 @@ class Run:
         leg: index of the leg being performed, legs_completed, (N,) int.
         command: ``[n1 (rpm), p2, p3]``; thrust: ``[F1, F2, F3]`` (N); saturated: flags, (N, 3).
         tau_wind: wind load ``[X (N), Y (N), N (N m)]`` in the body frame, (N, 3).
+        tau_waves: second-order wave drift load, body frame (N, N, N m), (N, 3).
+        current_body: current velocity on the body axes ``[u_c, v_c, 0]`` (m/s), (N, 3).
         wind: ``[speed (m/s), direction from (rad)]`` at each step, (N, 2).
         meas_t, meas_step: times (s) and control steps of the valid measurements, (M,).
         meas_z: measured NED pose (m, m, rad), (M, 3); meas_z_r: in the leg's r-frame, (M, 3).
@@ -168,6 +172,8 @@ class Run:
     thrusters: NDArray[np.float64] = field(default_factory=lambda: np.zeros((3, 2)))
     metadata: dict[str, Any] = field(default_factory=dict)
     metrics: dict[str, Any] = field(default_factory=dict)
+    tau_waves: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    current_body: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
     def n_steps(self) -> int:
@@ -266,7 +272,10 @@ _SHAPES = {
     "hull": (0, 2),
     "thrusters": (0, 2),
     "wind": (0, 2),
-    **{k: (0, 3) for k in (*_N3, "command", "thrust", "saturated", "tau_wind")},
+    **{
+        k: (0, 3)
+        for k in (*_N3, "command", "thrust", "saturated", "tau_wind", "tau_waves", "current_body")
+    },
 }
 
 
