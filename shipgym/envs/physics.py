@@ -29,7 +29,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from shipgym.envs._mujoco import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -55,6 +54,7 @@ from shipgym.dynamics import (
     plant_model,
     validate_command,
 )
+from shipgym.envs._mujoco import mujoco
 
 __all__ = ["VesselPhysics", "SimulationDiverged", "DEFAULT_SCENE"]
 
