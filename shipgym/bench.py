@@ -13,7 +13,13 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["DEFAULT_OBSERVERS", "bench_observers", "observer_table"]
+__all__ = [
+    "DEFAULT_OBSERVERS",
+    "bench_observers",
+    "observer_table",
+    "observer_traces",
+    "velocity_error_trace",
+]
 
 DEFAULT_OBSERVERS = ("dkf", "kbf", "ekf")
 _INDICES = ("x_E", "y_E", "psi_E", "J_c")
@@ -35,6 +41,45 @@ def _one(job: tuple[str, int, tuple[float, float], str]) -> dict[str, Any]:
         "measured": res["measured"],
         "rmse": res["rmse"],
     }
+
+
+def velocity_error_trace(
+    observer: str, seed: int = 0, wind: tuple[float, float] = (3.0, math.radians(300.0))
+) -> dict[str, Any]:
+    """Velocity estimation errors ``[u, v, r]`` over one harbour episode (for plots)."""
+    import shipgym
+    from shipgym.disturbances import WindConfig
+
+    env = shipgym.make(
+        "harbour", observer=observer, controller="pid",
+        wind=WindConfig(speed=wind[0], direction_from=wind[1]),
+    )  # fmt: skip
+    env.reset(seed=seed)
+    t, err = [], []
+    done = False
+    while not done:
+        _, _, term, trunc, info = env.step(np.zeros(3, np.float32))
+        t.append(info["t"])
+        err.append(info["est_error_nu"])
+        done = term or trunc
+    env.close()
+    return {"t": np.array(t), "err_nu": np.array(err)}
+
+
+def _trace_job(job: tuple[str, tuple[float, float]]) -> tuple[str, dict[str, Any]]:
+    return job[0], velocity_error_trace(job[0], 0, job[1])
+
+
+def observer_traces(
+    observers: Sequence[str], wind: tuple[float, float], workers: int | None = None
+) -> dict[str, dict[str, Any]]:
+    """:func:`velocity_error_trace` of seed 0 for each observer, in parallel."""
+    jobs = [(o, wind) for o in observers]
+    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    if workers <= 1:
+        return dict(map(_trace_job, jobs))
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        return dict(pool.map(_trace_job, jobs))
 
 
 def bench_observers(

@@ -290,6 +290,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.markdown is not None:
         args.markdown.write_text(f"{title}\n\n{table}\n")
         print(f"table written to {args.markdown}")
+    if args.report is not None:
+        from shipgym.bench import observer_traces
+        from shipgym.viz import write_observer_report
+
+        traces = observer_traces(args.observers, args.wind, workers=args.workers)
+        for f in write_observer_report(rows, traces, args.report):
+            print(f"wrote {f}")
+        (args.report / "observers.md").write_text(f"{title}\n\n{table}\n")
+        print(f"wrote {args.report / 'observers.md'}")
     return 0
 
 
@@ -417,6 +426,8 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--workers", type=int, default=None, help="processes (default: CPUs)")
     b.add_argument("--json", type=Path, default=None, metavar="PATH")
     b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    b.add_argument("--report", type=Path, default=None, metavar="DIR",
+                   help="bar chart of the indices and velocity-error plots (PNG)")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=_cmd_bench)
     p = sub.add_parser("demo", help="open-loop turn in gusty wind; prints a summary")

@@ -60,3 +60,26 @@ def test_observer_needs_sensors_and_known_names():
         shipgym.make("harbour", observer="kbf", sensors=None)
     with pytest.raises(ValueError, match="unknown observer 'kalman'"):
         shipgym.make("harbour", observer="kalman")
+
+
+def test_bench_observers_cli_writes_table_json_and_figures(tmp_path, capsys):
+    import json
+
+    from matplotlib.image import imread
+
+    from shipgym.cli import main
+    from shipgym.viz import COMPARE_SIZES, DPI
+
+    out = tmp_path / "rep"
+    args = ["bench", "observers", "--observers", "dkf", "ekf", "--seeds", "2", "--no-progress"]
+    assert main([*args, "--json", str(tmp_path / "b.json"), "--report", str(out)]) == 0
+    table = capsys.readouterr().out
+    assert "| dkf | 2 | 2/2 |" in table and "| ekf | 2 | 2/2 |" in table
+    rows = json.loads((tmp_path / "b.json").read_text())["rows"]
+    assert [(r["observer"], r["seed"]) for r in rows] == [
+        ("dkf", 0), ("dkf", 1), ("ekf", 0), ("ekf", 1)
+    ]  # fmt: skip
+    for name, (w, h) in COMPARE_SIZES.items():
+        img = imread(out / f"{name}.png")
+        assert img.shape[:2] == (round(h * DPI), round(w * DPI))
+    assert main(["bench", "observers", "--observers", "nope"]) == 2

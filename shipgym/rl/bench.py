@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import multiprocessing
 import os
+import sys
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -147,7 +148,10 @@ def bench_controllers(
                 rows.append(_job(job))
                 bar.update(1)
         else:
-            ctx = multiprocessing.get_context("forkserver")
+            # fork (like bench observers) unless torch is loaded here: forking a process
+            # with torch's thread pools can hang; forkserver needs an import-safe __main__
+            method = "forkserver" if "torch" in sys.modules else None
+            ctx = multiprocessing.get_context(method)
             with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
                 for row in pool.map(_job, jobs):
                     rows.append(row)

@@ -21,11 +21,13 @@ Example (what ``shipgym run ... --record RUN.rrd --report DIR`` does)::
 
 from __future__ import annotations
 
+from .compare import COMPARE_SIZES, write_observer_report
 from .recorder import RecordEpisode, episode_path
 from .report import DPI, FIGURE_SIZES, pixel_size, report_paths, write_report
 from .run import Run, load_run, save_run_json
 
 __all__ = [
+    "COMPARE_SIZES",
     "DPI",
     "FIGURE_SIZES",
     "RecordEpisode",
@@ -35,5 +37,6 @@ __all__ = [
     "pixel_size",
     "report_paths",
     "save_run_json",
+    "write_observer_report",
     "write_report",
 ]
