@@ -30,7 +30,8 @@ rl: $(RL_STAMP)
 # The harbour manoeuvre of Tomera (2014) in the lake-trial wind, PID + Kalman-Bucy filter:
 # a rerun recording, PNG figures and metrics.md in runs/demo/.
 demo: $(STAMP)
-	$(PY) -m shipgym.cli run harbour --wind 3@300 --observer kbf --no-progress \
+	$(PY) -m shipgym.cli run harbour --wind 3@300 --observer kbf --controller pid-smooth \
+		--no-progress \
 		--json runs/demo/harbour.json --record runs/demo/harbour.rrd --report runs/demo
 
 # The tests include stable-baselines3's check_env, so they need the RL extra.

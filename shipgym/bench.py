@@ -44,14 +44,17 @@ def _one(job: tuple[str, int, tuple[float, float], str]) -> dict[str, Any]:
 
 
 def velocity_error_trace(
-    observer: str, seed: int = 0, wind: tuple[float, float] = (3.0, math.radians(300.0))
+    observer: str,
+    seed: int = 0,
+    wind: tuple[float, float] = (3.0, math.radians(300.0)),
+    controller: str = "pid-smooth",
 ) -> dict[str, Any]:
     """Velocity estimation errors ``[u, v, r]`` over one harbour episode (for plots)."""
     import shipgym
     from shipgym.disturbances import WindConfig
 
     env = shipgym.make(
-        "harbour", observer=observer, controller="pid",
+        "harbour", observer=observer, controller=controller,
         wind=WindConfig(speed=wind[0], direction_from=wind[1]),
     )  # fmt: skip
     env.reset(seed=seed)
@@ -66,15 +69,18 @@ def velocity_error_trace(
     return {"t": np.array(t), "err_nu": np.array(err)}
 
 
-def _trace_job(job: tuple[str, tuple[float, float]]) -> tuple[str, dict[str, Any]]:
-    return job[0], velocity_error_trace(job[0], 0, job[1])
+def _trace_job(job: tuple[str, tuple[float, float], str]) -> tuple[str, dict[str, Any]]:
+    return job[0], velocity_error_trace(job[0], 0, job[1], job[2])
 
 
 def observer_traces(
-    observers: Sequence[str], wind: tuple[float, float], workers: int | None = None
+    observers: Sequence[str],
+    wind: tuple[float, float],
+    workers: int | None = None,
+    controller: str = "pid-smooth",
 ) -> dict[str, dict[str, Any]]:
     """:func:`velocity_error_trace` of seed 0 for each observer, in parallel."""
-    jobs = [(o, wind) for o in observers]
+    jobs = [(o, wind, controller) for o in observers]
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     if workers <= 1:
         return dict(map(_trace_job, jobs))
@@ -86,7 +92,7 @@ def bench_observers(
     observers: Sequence[str] = DEFAULT_OBSERVERS,
     seeds: int = 10,
     wind: tuple[float, float] = (3.0, math.radians(300.0)),
-    controller: str = "pid",
+    controller: str = "pid-smooth",
     workers: int | None = None,
     progress: bool = True,
 ) -> list[dict[str, Any]]:

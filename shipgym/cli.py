@@ -271,14 +271,14 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     rows = bench_observers(
         args.observers, seeds=args.seeds, wind=args.wind, workers=args.workers,
-        progress=not args.no_progress,
+        progress=not args.no_progress, controller=args.controller,
     )  # fmt: skip
     wall = time.perf_counter() - t0
     table = observer_table(rows)
     speed, beta = args.wind
     title = (
-        f"Observers on the harbour manoeuvre (pid controller, wind {speed:g} m/s from "
-        f"{math.degrees(beta):g} deg, seeds 0-{args.seeds - 1}); indices from the measured "
+        f"Observers on the harbour manoeuvre ({args.controller} controller, wind {speed:g} m/s "
+        f"from {math.degrees(beta):g} deg, seeds 0-{args.seeds - 1}); indices from the measured "
         "pose as in seed001 Table 6, J_c truth from the true pose"
     )
     print(title)
@@ -294,7 +294,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         from shipgym.bench import observer_traces
         from shipgym.viz import write_observer_report
 
-        traces = observer_traces(args.observers, args.wind, workers=args.workers)
+        traces = observer_traces(
+            args.observers, args.wind, workers=args.workers, controller=args.controller
+        )
         for f in write_observer_report(rows, traces, args.report):
             print(f"wrote {f}")
         (args.report / "observers.md").write_text(f"{title}\n\n{table}\n")
@@ -421,6 +423,9 @@ def _parser() -> argparse.ArgumentParser:
     b = bsub.add_parser("observers", help="seed001 Table-6-style comparison of observers")
     b.add_argument("--observers", nargs="+", default=["dkf", "kbf", "ekf"], metavar="NAME")
     b.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per observer (10)")
+    b.add_argument(
+        "--controller", default="pid-smooth", help="controller of every run (pid-smooth)"
+    )
     b.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
                    metavar="SPEED@FROM_DEG", help="mean wind (3@300)")  # fmt: skip
     b.add_argument("--workers", type=int, default=None, help="processes (default: CPUs)")

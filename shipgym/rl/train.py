@@ -337,6 +337,7 @@ def train_command(
     residual: bool,
     observer: str | None,
     resume: str | Path | None = None,
+    max_minutes: float | None = None,
 ) -> str:
     """The ``shipgym train`` command line that reproduces a run (stored in the metadata)."""
     parts = ["shipgym", "train", algo, "--timesteps", str(timesteps), "--seed", str(seed)]
@@ -346,6 +347,8 @@ def train_command(
     parts += ["--observer", observer or "truth"]
     if resume is not None:
         parts += ["--resume", str(resume)]
+    if max_minutes is not None:
+        parts += ["--max-minutes", f"{max_minutes:g}"]
     return shlex.join(parts)
 
 
@@ -682,7 +685,7 @@ def train(
     out_dir.mkdir(parents=True, exist_ok=True)
     command = train_command(
         algo, timesteps=n_steps, seed=seed, n_envs=n, out=out_dir, residual=residual,
-        observer=hp["observer"], resume=resume,
+        observer=hp["observer"], resume=resume, max_minutes=max_minutes,
     )  # fmt: skip
     if deterministic:
         set_deterministic(seed)
