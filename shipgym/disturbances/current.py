@@ -41,9 +41,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, param, require_finite
 
+from ._grid import CHUNK, GridPair
+
 __all__ = ["CurrentConfig", "Current", "current_body_velocity"]
 
-_CHUNK = 4096
 _N3 = "notes 3 [assumption]"
 
 
@@ -190,7 +191,7 @@ class CurrentConfig:
         return from_mapping(cls, mapping, where="current config")
 
 
-class Current:
+class Current(GridPair):
     """Runtime current: ``at(t) -> (V_c, beta_c)`` from a lazily generated sample grid.
 
     Args:
@@ -230,13 +231,8 @@ class Current:
         self._clear()
 
     def _clear(self) -> None:
-        self._chunks: list[NDArray[np.float64]] = []
+        super()._clear()
         self._state = self._mean
-        self._j = -1
-        self._k0 = 0
-        self._sp: list[float] = []
-        self._dr: list[float] = []
-        self._cache: dict[int, tuple[list[float], list[float]]] = {}
 
     @property
     def is_constant(self) -> bool:
@@ -277,7 +273,7 @@ class Current:
         mv, mb = self._mean
         lo, hi = self._lo, self._hi
         while len(self._chunks) <= j:
-            w = rng.standard_normal((2, _CHUNK)).tolist()
+            w = rng.standard_normal((2, CHUNK)).tolist()
             v, d = self._state
             sp = [v]
             dr = [d]
@@ -291,19 +287,6 @@ class Current:
             self._state = (v, d)
             self._chunks.append(np.array([sp, dr], dtype=float))
 
-    def _select(self, j: int) -> None:
-        lists = self._cache.get(j)
-        if lists is None:
-            self._extend_to(j)
-            arr = self._chunks[j]
-            lists = (arr[0].tolist(), arr[1].tolist())
-            if len(self._cache) >= 2:
-                del self._cache[next(iter(self._cache))]
-            self._cache[j] = lists
-        self._sp, self._dr = lists
-        self._j = j
-        self._k0 = j * _CHUNK
-
     def at(self, t: float) -> tuple[float, float]:
         """Current at time ``t`` (cheap; call it every physics step).
 
@@ -315,19 +298,7 @@ class Current:
         """
         if self._const is not None:
             return self._const
-        x = float(t) * self._inv_dt
-        if not x >= 0.0:
-            raise ValueError(f"Current.at: time must be >= 0 s, got {t!r}")
-        k = int(x)
-        if k // _CHUNK != self._j:
-            self._select(k // _CHUNK)
-        f = x - k
-        i = k - self._k0
-        sp = self._sp
-        s0 = sp[i]
-        dr = self._dr
-        d0 = dr[i]
-        return s0 + f * (sp[i + 1] - s0), d0 + f * (dr[i + 1] - d0)
+        return self._interp(t)
 
     def body_velocity(self, t: float, psi: float) -> tuple[float, float]:
         """Body-frame current velocity ``(u_c, v_c)`` (m/s) at time ``t`` and heading ``psi``."""
@@ -344,22 +315,7 @@ class Current:
         tt = np.asarray(t, dtype=float)
         if self._const is not None:
             return np.full(tt.shape, self._const[0]), np.full(tt.shape, self._const[1])
-        x = tt * self._inv_dt
-        if not np.all(x >= 0.0):
-            raise ValueError("Current.series: all times must be >= 0 s (and not NaN)")
-        if x.size == 0:
-            return np.empty(tt.shape), np.empty(tt.shape)
-        k = np.floor(x).astype(np.int64)
-        jmax = int(k.max()) // _CHUNK
-        self._extend_to(jmax)
-        grid = np.concatenate(
-            [c[:, :_CHUNK] for c in self._chunks[: jmax + 1]] + [self._chunks[jmax][:, _CHUNK:]],
-            axis=1,
-        )
-        f = x - k
-        s0, s1 = grid[0, k], grid[0, k + 1]
-        d0, d1 = grid[1, k], grid[1, k + 1]
-        return s0 + f * (s1 - s0), d0 + f * (d1 - d0)
+        return self._interp_series(tt)
 
     def __repr__(self) -> str:
         return f"Current(config={self.config!r})"

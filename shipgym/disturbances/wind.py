@@ -58,6 +58,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import from_mapping, param, require_finite, require_positive
 from shipgym.dynamics.params import BLUE_LADY_WINDAGE, WindageParameters
 
+from ._grid import CHUNK, GridPair
 from .spectra import harmonic_components, harmonic_sums, wind_gust_spectrum
 
 __all__ = [
@@ -631,10 +632,9 @@ class WindConfig:
 
 #: Gust samples per chunk. Fixed (not a parameter) so that a realisation depends on the seed
 #: and the config only.
-_CHUNK = 4096
 
 
-class Wind:
+class Wind(GridPair):
     """Time-varying wind and its loads on one vessel (notes 1.7, Fossen 2011 ch. 8.1).
 
     Speed and direction gusts are first-order Gauss-Markov (Ornstein-Uhlenbeck) processes
@@ -699,13 +699,8 @@ class Wind:
     # -- state ------------------------------------------------------------------------------
 
     def _clear(self) -> None:
-        self._chunks: list[NDArray[np.float64]] = []  # each (2, _CHUNK + 1): [V, beta] rows
+        super()._clear()  # chunks of shape (2, CHUNK + 1): [V, beta] rows
         self._state = (0.0, 0.0)  # gust state at the end of the last chunk
-        self._cache: dict[int, tuple[list[float], list[float]]] = {}
-        self._j = -1  # chunk currently held as Python lists
-        self._k0 = 0
-        self._sp: list[float] = []
-        self._dr: list[float] = []
 
     @property
     def is_constant(self) -> bool:
@@ -759,7 +754,7 @@ class Wind:
             self._extend_spectral(j, rng)
             return
         while len(self._chunks) <= j:
-            w = rng.standard_normal((2, _CHUNK)).tolist()
+            w = rng.standard_normal((2, CHUNK)).tolist()
             rows = []
             new_state = []
             for x, a, b, m, wk in zip(
@@ -782,26 +777,13 @@ class Wind:
             x = self._state[1]
             out = [m + x]
             app = out.append
-            for e in rng.standard_normal(_CHUNK).tolist():
+            for e in rng.standard_normal(CHUNK).tolist():
                 x = a * x + b * e
                 app(m + x)
             self._state = (0.0, x)
-            t0 = len(self._chunks) * _CHUNK * self._dt
-            gust = harmonic_sums(t0, self._dt, _CHUNK + 1, self._gw, self._gph, self._ga).real
+            t0 = len(self._chunks) * CHUNK * self._dt
+            gust = harmonic_sums(t0, self._dt, CHUNK + 1, self._gw, self._gph, self._ga).real
             self._chunks.append(np.array([self._mean_v + gust, out], dtype=float))
-
-    def _select(self, j: int) -> None:
-        lists = self._cache.get(j)
-        if lists is None:
-            self._extend_to(j)
-            arr = self._chunks[j]
-            lists = (arr[0].tolist(), arr[1].tolist())
-            if len(self._cache) >= 2:  # keep the two most recent chunks as lists
-                del self._cache[next(iter(self._cache))]
-            self._cache[j] = lists
-        self._sp, self._dr = lists
-        self._j = j
-        self._k0 = j * _CHUNK
 
     # -- queries ----------------------------------------------------------------------------
 
@@ -821,20 +803,8 @@ class Wind:
         """
         if self._const is not None:
             return self._const
-        x = float(t) * self._inv_dt
-        if not x >= 0.0:
-            raise ValueError(f"Wind.at: time must be >= 0 s, got {t!r}")
-        k = int(x)
-        if k // _CHUNK != self._j:
-            self._select(k // _CHUNK)
-        f = x - k
-        i = k - self._k0
-        sp = self._sp
-        s0 = sp[i]
-        speed = s0 + f * (sp[i + 1] - s0)
-        dr = self._dr
-        d0 = dr[i]
-        return (speed if speed > 0.0 else 0.0), d0 + f * (dr[i + 1] - d0)
+        speed, beta = self._interp(t)
+        return (speed if speed > 0.0 else 0.0), beta
 
     def load(self, t: float, psi: float, u: float, v: float) -> tuple[float, float, float]:
         """Wind loads on the body axes at time ``t`` (Blendermann, relative wind).
@@ -863,22 +833,8 @@ class Wind:
         tt = np.asarray(t, dtype=float)
         if self._const is not None:
             return np.full(tt.shape, self._const[0]), np.full(tt.shape, self._const[1])
-        x = tt * self._inv_dt
-        if not np.all(x >= 0.0):
-            raise ValueError("Wind.series: all times must be >= 0 s (and not NaN)")
-        if x.size == 0:
-            return np.empty(tt.shape), np.empty(tt.shape)
-        k = np.floor(x).astype(np.int64)
-        jmax = int(k.max()) // _CHUNK
-        self._extend_to(jmax)
-        grid = np.concatenate(
-            [c[:, :_CHUNK] for c in self._chunks[: jmax + 1]] + [self._chunks[jmax][:, _CHUNK:]],
-            axis=1,
-        )
-        f = x - k
-        s0, s1 = grid[0, k], grid[0, k + 1]
-        d0, d1 = grid[1, k], grid[1, k + 1]
-        return np.maximum(s0 + f * (s1 - s0), 0.0), d0 + f * (d1 - d0)
+        speed, beta = self._interp_series(tt)
+        return np.maximum(speed, 0.0), beta
 
     def __repr__(self) -> str:
         return f"Wind(config={self.config!r}, windage={self.windage!r})"

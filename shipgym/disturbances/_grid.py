@@ -1,0 +1,86 @@
+"""Two-channel random processes sampled lazily on a fixed time grid (wind gusts, current).
+
+The samples ``t_k = k * dt`` are generated in chunks of :data:`CHUNK` samples, always in time
+order from ``t = 0``, so a realisation does not depend on the order of the queries. The chunk
+being read is kept as Python lists, so a scalar query (every physics step) costs a few
+hundred nanoseconds; values between samples are interpolated linearly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["CHUNK", "GridPair"]
+
+#: samples per chunk (each chunk also stores the first sample of the next one)
+CHUNK = 4096
+
+
+class GridPair:
+    """Base of a two-channel process on a grid; subclasses implement :meth:`_extend_to`.
+
+    Subclasses set ``self._inv_dt`` (1/s) and append chunks of shape ``(2, CHUNK + 1)`` to
+    ``self._chunks`` in :meth:`_extend_to`.
+    """
+
+    _inv_dt: float
+    _what = "the process"
+
+    def _clear(self) -> None:
+        self._chunks: list[NDArray[np.float64]] = []
+        self._cache: dict[int, tuple[list[float], list[float]]] = {}
+        self._j = -1  # chunk currently held as Python lists
+        self._k0 = 0
+        self._c0: list[float] = []
+        self._c1: list[float] = []
+
+    def _extend_to(self, j: int) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _select(self, j: int) -> None:
+        lists = self._cache.get(j)
+        if lists is None:
+            self._extend_to(j)
+            arr = self._chunks[j]
+            lists = (arr[0].tolist(), arr[1].tolist())
+            if len(self._cache) >= 2:  # keep the two most recent chunks as lists
+                del self._cache[next(iter(self._cache))]
+            self._cache[j] = lists
+        self._c0, self._c1 = lists
+        self._j = j
+        self._k0 = j * CHUNK
+
+    def _interp(self, t: float) -> tuple[float, float]:
+        """Both channels at time ``t`` (s, >= 0), linearly interpolated (scalar, fast)."""
+        x = float(t) * self._inv_dt
+        if not x >= 0.0:
+            raise ValueError(f"{type(self).__name__}: time must be >= 0 s, got {t!r}")
+        k = int(x)
+        if k // CHUNK != self._j:
+            self._select(k // CHUNK)
+        f = x - k
+        i = k - self._k0
+        c0, c1 = self._c0, self._c1
+        a0, b0 = c0[i], c1[i]
+        return a0 + f * (c0[i + 1] - a0), b0 + f * (c1[i + 1] - b0)
+
+    def _interp_series(self, t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`_interp` for an array of times (same values)."""
+        tt = np.asarray(t, dtype=float)
+        x = tt * self._inv_dt
+        if not np.all(x >= 0.0):
+            raise ValueError(f"{type(self).__name__}: all times must be >= 0 s (and not NaN)")
+        if x.size == 0:
+            return np.empty(tt.shape), np.empty(tt.shape)
+        k = np.floor(x).astype(np.int64)
+        jmax = int(k.max()) // CHUNK
+        self._extend_to(jmax)
+        grid = np.concatenate(
+            [c[:, :CHUNK] for c in self._chunks[: jmax + 1]] + [self._chunks[jmax][:, CHUNK:]],
+            axis=1,
+        )
+        f = x - k
+        s0, s1 = grid[0, k], grid[0, k + 1]
+        d0, d1 = grid[1, k], grid[1, k + 1]
+        return s0 + f * (s1 - s0), d0 + f * (d1 - d0)
