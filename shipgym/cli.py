@@ -97,7 +97,16 @@ def run_episode(
         "plant": plant,
     }
     kwargs.update(env_kwargs or {})
-    env = shipgym.make(scenario, observer=observer, controller=controller, **kwargs)
+    from shipgym.controllers.learned import is_learned_controller
+
+    if is_learned_controller(controller):
+        from shipgym.controllers.learned import make_learned_env
+
+        # the learned policy runs with the observer it was trained with unless one is named
+        obs_kw = {} if observer is None else {"observer": observer}
+        env = make_learned_env(scenario, controller, **obs_kw, **kwargs)
+    else:
+        env = shipgym.make(scenario, observer=observer, controller=controller, **kwargs)
     if report is not None and record is None:
         record = report / "run.rrd"
     if record is not None:
@@ -138,7 +147,7 @@ def run_episode(
         "scenario": scenario,
         "env_id": env.spec.id if env.spec is not None else None,
         "controller": controller,
-        "observer": observer or "truth",
+        "observer": _observer_of(env) or "truth",
         "seed": seed,
         "plant": plant,
         "wind": wind_out,
@@ -161,6 +170,16 @@ def run_episode(
         "wall_time_s": wall,
         "files": files,
     }
+
+
+def _observer_of(env: Any) -> str | None:
+    """Name of the observer in a wrapper stack (``None``: the controller sees the truth)."""
+    while hasattr(env, "env"):
+        name = getattr(env, "observer_name", None)
+        if name is not None:
+            return str(name)
+        env = env.env
+    return None
 
 
 def _progress(total: int | None, enabled: bool, desc: str) -> Any:
@@ -223,9 +242,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
         env_kwargs["plant"] = args.plant
     args.scenario = scenario_name
     resolve_env_id(args.scenario)  # validate names before any work
-    controller_spec(args.controller)
+    from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
+
+    if is_learned_controller(args.controller):
+        parse_learned_controller(args.controller)  # the file exists and is a shipgym model
+    else:
+        controller_spec(args.controller)
     plant_model(env_kwargs.get("plant", "default"))
-    observer = None if args.observer == "truth" else args.observer
+    observer = None if args.observer in (None, "truth") else args.observer
     if observer is not None:
         from shipgym.observers import make_observer
 
@@ -398,10 +422,14 @@ def _parser() -> argparse.ArgumentParser:
         "--scenario", dest="scenario_file", default=None, metavar="NAME|FILE",
         help="scenario preset or YAML/TOML file (see 'shipgym list'): plant, wind, waves, ...",
     )  # fmt: skip
-    p.add_argument("--controller", default="pid", help="pid (default) or pid-seed")
     p.add_argument(
-        "--observer", default="truth", help="truth (default), dkf, kbf, ekf, tomera-dkf/kbf/ekf"
-    )
+        "--controller", default="pid",
+        help="pid (default), pid-smooth, pid-seed, lq, ppo (shipped baseline), ppo:PATH, sac:PATH",
+    )  # fmt: skip
+    p.add_argument(
+        "--observer", default=None,
+        help="truth, dkf, kbf, ekf, tomera-dkf/kbf/ekf (default: truth; a learned controller's own)",
+    )  # fmt: skip
     p.add_argument("--seed", type=int, default=0, help="episode seed (0)")
     p.add_argument("--wind", type=parse_wind, default=None, metavar="SPEED@FROM_DEG",
                    help="mean wind, e.g. 3@300 (default 3@300 or the scenario's)")  # fmt: skip
@@ -418,7 +446,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("run", type=Path, help="RUN.rrd or RUN.json")
     p.add_argument("--out", type=Path, required=True, metavar="DIR")
     p.set_defaults(func=_cmd_report)
-    p = sub.add_parser("bench", help="benchmarks: 'bench observers'")
+    p = sub.add_parser("bench", help="benchmarks: 'bench observers', 'bench controllers'")
     bsub = p.add_subparsers(dest="what", required=True)
     b = bsub.add_parser("observers", help="seed001 Table-6-style comparison of observers")
     b.add_argument("--observers", nargs="+", default=["dkf", "kbf", "ekf"], metavar="NAME")
@@ -435,6 +463,10 @@ def _parser() -> argparse.ArgumentParser:
                    help="bar chart of the indices and velocity-error plots (PNG)")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=_cmd_bench)
+    from shipgym.rl.cli import add_bench_controllers_parser, add_train_parser
+
+    add_bench_controllers_parser(bsub)
+    add_train_parser(sub)
     p = sub.add_parser("demo", help="open-loop turn in gusty wind; prints a summary")
     p.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
                    metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip
@@ -450,7 +482,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         return int(args.func(args))
-    except (ValueError, FileNotFoundError) as exc:
+    except (ValueError, FileNotFoundError, ImportError) as exc:
         print(f"shipgym: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -25,6 +25,7 @@ from .pid import (
     pid_gains,
     pid_pole_placement,
 )
+from . import lq as _lq  # noqa: E402,F401,I001 - registers the "lq" controller
 
 __all__ = [
     "GAIN_PRESETS",

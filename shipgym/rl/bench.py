@@ -48,17 +48,22 @@ _KEEP = (
 
 
 def controller_labels(controllers: Sequence[str]) -> list[str]:
-    """Short row labels: ``pid``, ``lq``, ``ppo`` (``ppo:PATH`` -> ``ppo``, or ``ppo:<stem>``
-    when several models of one algorithm are compared)."""
+    """Short row labels: ``pid``, ``lq``, ``ppo`` (``ppo:PATH`` -> ``ppo``; when several models
+    of one algorithm are compared, ``ppo:<stem>`` or ``ppo:<folder>/<stem>``, whichever is
+    unique)."""
     from shipgym.controllers.learned import is_learned_controller
 
     heads = [c.split(":", 1)[0] if is_learned_controller(c) else c for c in controllers]
-    out = []
-    for c, h in zip(controllers, heads, strict=True):
-        if heads.count(h) > 1 and ":" in c:
-            out.append(f"{h}:{Path(c.split(':', 1)[1]).stem}")
-        else:
-            out.append(h)
+    out = list(heads)
+    for depth in (1, 2, None):
+        dup = {h for h in out if out.count(h) > 1}
+        if not dup:
+            break
+        for i, c in enumerate(controllers):
+            if out[i] in dup and ":" in c:
+                parts = Path(c.split(":", 1)[1]).with_suffix("").parts
+                tail = parts if depth is None else parts[-depth:]
+                out[i] = f"{heads[i]}:{'/'.join(tail)}"
     if len(set(out)) != len(out):
         raise ValueError(f"controllers must be distinct, got {list(controllers)}")
     return out
