@@ -202,3 +202,20 @@ def test_cli_run_writes_json_and_rejects_mistakes(tmp_path, capsys):
     (tmp_path / "afile").write_text("")
     assert main(["run", "harbour", "--json", str(tmp_path / "afile" / "r.json")]) == 2
     assert "cannot write" in capsys.readouterr().err
+
+
+def test_tracking_env_randomises_current_and_sensor_noise_per_episode():
+    env = gym.make("shipgym/BlueLadyTracking-v0").unwrapped
+    seen = set()
+    for seed in range(4):
+        env.reset(seed=seed)
+        cur = env.physics.current_config
+        sens = env.sensors.config
+        assert 0.0 <= cur.speed <= 0.03
+        assert 0.07**2 <= sens.position_variance <= 0.15**2
+        seen.add((round(cur.speed, 6), round(sens.position_variance, 8)))
+    assert len(seen) == 4
+    env.reset(seed=1)
+    a = (env.physics.current_config, env.sensors.config)
+    env.reset(seed=1)
+    assert (env.physics.current_config, env.sensors.config) == a

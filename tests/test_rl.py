@@ -239,4 +239,6 @@ def test_bench_rows(trained):
     for r in rows:
         assert {"seed", "completed", "quay_contact", "J_c"} <= set(r)
     table = controller_table(rows)
-    assert table.count("\n") == 3 and "| pid |" in table and "| ppo |" in table
+    assert (
+        table.count("\n") == 3 and "| legs |" in table and "| pid |" in table and "| ppo |" in table
+    )

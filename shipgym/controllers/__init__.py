@@ -8,6 +8,7 @@
 Pure NumPy; never imports mujoco.
 """
 
+from . import lq as _lq  # noqa: E402,F401,I001 - registers the "lq" controller
 from .allocation import (
     Allocation,
     action_to_command,
@@ -25,7 +26,6 @@ from .pid import (
     pid_gains,
     pid_pole_placement,
 )
-from . import lq as _lq  # noqa: E402,F401,I001 - registers the "lq" controller
 
 __all__ = [
     "GAIN_PRESETS",

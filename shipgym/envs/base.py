@@ -52,8 +52,8 @@ _OBS_DIM = sum(n for _, n in OBS_LAYOUT)
 class RewardWeights:
     """Weights of the named reward terms (each term is ``-weight * quantity``)."""
 
-    position: float = param(0.1, "1/m^2", "squared horizontal tracking error")
-    heading: float = param(1.0, "1/rad^2", "squared heading error")
+    position: float = param(1.0, "1/m^2", "squared horizontal tracking error")
+    heading: float = param(3.0, "1/rad^2", "squared heading error")
     velocity: float = param(10.0, "s^2/m^2", "squared body-velocity error vs the reference")
     effort: float = param(0.01, "1", "squared normalised command")
     rate: float = param(0.01, "1", "squared change of the normalised command")
@@ -268,6 +268,14 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         """The wind of the next episode."""
         return self.wind_config
 
+    def _episode_current(self) -> CurrentConfig | None:
+        """The current of the next episode."""
+        return self.current_config
+
+    def _episode_sensors(self) -> SensorConfig | None:
+        """The sensor configuration of the next episode (``None``: keep the constructor's)."""
+        return self.sensor_config
+
     # ---- gym API ---------------------------------------------------------------------------
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -284,6 +292,12 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         wind = self._episode_wind()
         if wind is not self.physics.wind_config and wind is not None:
             self.physics.set_wind(wind)
+        current = self._episode_current()
+        if current is not None and current is not self.physics.current_config:
+            self.physics.set_current(current)
+        sensors = self._episode_sensors()
+        if sensors is not None and self.sensors is not None and sensors is not self.sensors.config:
+            self.sensors = Sensors(sensors)
         self._place_harbour(start)
         noise = rng.uniform(-1.0, 1.0, 3) * self.start_noise
         self.physics.reset(eta=start + noise, rng=rng)

@@ -195,6 +195,12 @@ class VesselPhysics:
             raise ValueError(f"unexpected joint-space inertia (need diag(m, m, Izz)): {Mq}")
         self._m_q, self._i_q = float(Mq[0, 0]), float(Mq[2, 2])
 
+    def set_current(self, current: CurrentConfig | tuple[float, float] | None) -> None:
+        """Replace the current model (takes effect at the next :meth:`reset`)."""
+        self.current_config = _current_config(current)
+        self.current = Current(self.current_config)
+        self._prepare = self._make_prepare()
+
     def set_wind(self, wind: WindConfig | None) -> None:
         """Replace the wind model (takes effect at the next :meth:`reset`)."""
         self.aerodynamics = wind is not None

@@ -5,8 +5,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from shipgym.disturbances import WindConfig
+from shipgym.disturbances import CurrentConfig, WindConfig
 from shipgym.guidance import Leg, ManoeuvrePlan
+from shipgym.observers.sensors import SensorConfig
 
 from .base import BlueLadyEnv
 
@@ -54,20 +55,33 @@ class BlueLadyStationKeepingEnv(BlueLadyEnv):
 class BlueLadyTrackingEnv(BlueLadyEnv):
     r"""Randomised legs and wind on open water (the training task): ``shipgym/BlueLadyTracking-v0``.
 
-    Each episode draws 1-3 legs from the seeded generator: lateral (2-8 m either side),
+    Each episode draws from the seeded generator 1-3 legs: lateral (2-8 m either side),
     longitudinal (5-30 m ahead or 3-15 m astern), rotation (30-120 deg either way) or combined
-    (surge and sway together), and a wind of 0-4 m/s from any direction with gusts. The episode
-    terminates when the last leg completes; time limit 800 control steps. Spaces, reward and
-    info: see :class:`BlueLadyEnv`.
+    (surge and sway together); a wind of 0-3.5 m/s from any direction with gusts (4 m/s on the
+    beam exceeds the 248 N m yaw capacity); a lake current of 0-0.03 m/s in any direction
+    (notes 3: ~1 % of the wind); and sensor noise within the lake presets (DGPS sigma
+    0.07-0.15 m per axis, gyrocompass 0.2-0.45 deg). The episode terminates when the last leg
+    completes; time limit 800 control steps. Spaces, reward and info: see :class:`BlueLadyEnv`.
     """
 
-    def __init__(self, max_legs: int = 3, max_wind_speed: float = 4.0, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        max_legs: int = 3,
+        max_wind_speed: float = 3.5,
+        max_current_speed: float = 0.03,
+        randomize_sensors: bool = True,
+        **kwargs: Any,
+    ) -> None:
         if not (isinstance(max_legs, int) and max_legs >= 1):
             raise ValueError(f"max_legs must be an int >= 1, got {max_legs!r}")
         if not (math.isfinite(max_wind_speed) and max_wind_speed >= 0):
             raise ValueError(f"max_wind_speed must be >= 0 m/s, got {max_wind_speed!r}")
+        if not (math.isfinite(max_current_speed) and max_current_speed >= 0):
+            raise ValueError(f"max_current_speed must be >= 0 m/s, got {max_current_speed!r}")
         self.max_legs = max_legs
         self.max_wind_speed = float(max_wind_speed)
+        self.max_current_speed = float(max_current_speed)
+        self.randomize_sensors = bool(randomize_sensors)
         kwargs.setdefault("scene", "open-water")
         kwargs.setdefault("plan", ManoeuvrePlan(legs=(Leg(surge=10.0),), name="tracking"))
         super().__init__(**kwargs)
@@ -98,3 +112,16 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
         rng = self.np_random
         speed = rng.uniform(0.0, self.max_wind_speed)
         return WindConfig(speed=speed, direction_from=rng.uniform(0.0, 2.0 * math.pi))
+
+    def _episode_current(self) -> CurrentConfig | None:
+        rng = self.np_random
+        speed = rng.uniform(0.0, self.max_current_speed)
+        return CurrentConfig(speed=speed, direction_to=rng.uniform(0.0, 2.0 * math.pi))
+
+    def _episode_sensors(self) -> SensorConfig | None:
+        if not self.randomize_sensors or self.sensor_config is None:
+            return self.sensor_config
+        rng = self.np_random
+        pos = rng.uniform(0.07, 0.15)
+        psi = math.radians(rng.uniform(0.2, 0.45))
+        return self.sensor_config.replace(position_variance=pos * pos, heading_variance=psi * psi)

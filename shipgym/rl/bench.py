@@ -177,18 +177,19 @@ def _ms(a: Sequence[float], fmt: str = ".3f") -> str:
 def controller_table(rows: Sequence[dict[str, Any]]) -> str:
     """A markdown table, one line per controller (mean +- std over seeds).
 
-    Columns: completed without quay contact, quay contacts, J_c from the truth and from the
-    measured pose (seed001 eq. 57), mean J_c relative to ``pid`` (when present), time to
-    complete (s; completed runs), mean |thrust| per actuator (N), wall time per run (s).
+    Columns: completed without quay contact, mean legs completed (of 5), quay contacts, J_c
+    from the truth and from the measured pose (seed001 eq. 57), mean J_c relative to ``pid``
+    (when present), time to complete (s; completed runs), mean |thrust| per actuator (N),
+    wall time per run (s).
     """
     names = list(dict.fromkeys(r["controller"] for r in rows))
     pid = [r for r in rows if r["controller"] == "pid"]
     pid_jc = float(np.mean([r["J_c"] for r in pid])) if pid else math.nan
     head = (
-        "| controller | runs | completed | quay contact | J_c | J_c measured | J_c / pid "
+        "| controller | runs | completed | legs | quay contact | J_c | J_c measured | J_c / pid "
         "| time (s) | mean abs thrust main/bow/stern (N) | wall (s) |"
     )
-    lines = [head, "|" + "---|" * 10]
+    lines = [head, "|" + "---|" * 11]
     for name in names:
         rs = [r for r in rows if r["controller"] == name]
         done = sum(bool(r["completed"]) and not r["quay_contact"] for r in rs)
@@ -199,7 +200,8 @@ def controller_table(rows: Sequence[dict[str, Any]]) -> str:
         times = [r["duration_s"] for r in rs if r["completed"]]
         thrust = np.mean([r["thrust_mean_abs"] for r in rs], axis=0)
         lines.append(
-            f"| {name} | {len(rs)} | {done}/{len(rs)} | {contact} | {_ms(jc, '.4f')} "
+            f"| {name} | {len(rs)} | {done}/{len(rs)} "
+            f"| {np.mean([r['legs_completed'] for r in rs]):.1f} | {contact} | {_ms(jc, '.4f')} "
             f"| {_ms(meas, '.4f')} | {ratio:.2f} | {_ms(times, '.0f')} "
             f"| {' / '.join(f'{t:.1f}' for t in thrust)} "
             f"| {np.mean([r['wall_time_s'] for r in rs]):.1f} |"

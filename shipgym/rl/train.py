@@ -751,6 +751,7 @@ def train(
         eval_cb.evaluate()
     final = save_model(model, out_dir / "model.zip", metadata_fn({"wall_time_s": wall}))
     best = out_dir / "best_model.zip"
+    model.logger.close()  # flushes and closes progress.csv
     venv.close()
     return TrainResult(
         model_path=final,
