@@ -428,7 +428,7 @@ def _parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument(
         "--observer", default=None,
-        help="truth, dkf, kbf, ekf, tomera-dkf/kbf/ekf (default: truth; a learned controller's own)",
+        help="truth, dkf, kbf, ekf, tomera-dkf/kbf/ekf (default: truth; a learned model's own)",
     )  # fmt: skip
     p.add_argument("--seed", type=int, default=0, help="episode seed (0)")
     p.add_argument("--wind", type=parse_wind, default=None, metavar="SPEED@FROM_DEG",
