@@ -61,7 +61,9 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
     beam exceeds the 248 N m yaw capacity); a lake current of 0-0.03 m/s in any direction
     (notes 3: ~1 % of the wind); and sensor noise within the lake presets (DGPS sigma
     0.07-0.15 m per axis, gyrocompass 0.2-0.45 deg). The episode terminates when the last leg
-    completes; time limit 800 control steps. Spaces, reward and info: see :class:`BlueLadyEnv`.
+    completes; time limit 800 control steps. ``max_current_speed=0`` and
+    ``randomize_sensors=False`` switch those draws off (the shipped PPO baseline was trained
+    so). Spaces, reward and info: see :class:`BlueLadyEnv`.
     """
 
     def __init__(
@@ -114,6 +116,8 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
         return WindConfig(speed=speed, direction_from=rng.uniform(0.0, 2.0 * math.pi))
 
     def _episode_current(self) -> CurrentConfig | None:
+        if self.max_current_speed == 0.0:  # no draw: the random stream stays as without current
+            return self.current_config
         rng = self.np_random
         speed = rng.uniform(0.0, self.max_current_speed)
         return CurrentConfig(speed=speed, direction_to=rng.uniform(0.0, 2.0 * math.pi))
