@@ -46,6 +46,8 @@ def _cmd_list(args: argparse.Namespace) -> int:
     print("controllers    :")
     for name, spec in CONTROLLERS.items():
         print(f"  {name:12s} {spec.description}")
+    print(f"  {'ppo':12s} the shipped PPO baseline (residual on pid, through the kbf observer)")
+    print(f"  {'ppo:PATH':12s} a PPO model trained with 'shipgym train ppo' (sac:PATH likewise)")
     from shipgym.observers import observer_names
     from shipgym.observers.sensors import SENSOR_PRESETS
     from shipgym.scenarios import SCENARIOS as SCENARIO_PRESETS
