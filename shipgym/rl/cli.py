@@ -140,15 +140,9 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
 
 
 def _check_writable(path: Path) -> None:
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        existed = path.exists()
-        with path.open("a"):
-            pass
-        if not existed:
-            path.unlink()
-    except OSError as exc:
-        raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from exc
+    from shipgym.cli import _check_writable as check
+
+    check(path)
 
 
 def cmd_bench_controllers(args: argparse.Namespace) -> int:
