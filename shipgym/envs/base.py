@@ -452,26 +452,28 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         prev_action: NDArray[np.float64],
     ) -> NDArray[np.float32]:
         """The observation vector (layout in the class docstring) from navigation data."""
-        psi = eta[2]
+        x, y, psi = eta.tolist()
+        xd, yd, psid = ref.eta_d_n.tolist()
         c, s = math.cos(psi), math.sin(psi)
-        dx, dy = eta[0] - ref.eta_d_n[0], eta[1] - ref.eta_d_n[1]
-        e = [c * dx + s * dy, -s * dx + c * dy, wrap_angle(psi - ref.eta_d_n[2])]
-        out = np.concatenate([e, nu, ref.nu_d, ref.nu_dot_d, prev_action])
-        return out.astype(np.float32)
+        dx, dy = x - xd, y - yd
+        e = [c * dx + s * dy, -s * dx + c * dy, wrap_angle(psi - psid)]
+        parts = (nu, ref.nu_d, ref.nu_dot_d, prev_action)
+        return np.array(e + [v for p in parts for v in p.tolist()], dtype=np.float32)
 
     def _reward_terms(
         self, s: _Sample, action: NDArray[np.float64], new_contact: bool, switched: bool
     ) -> dict[str, float]:
         w = self.reward_weights
-        e = s.eta_r - s.ref.eta_d_r
-        dv = s.nu - s.ref.nu_d
-        da = action - self._prev_action
+        ex, ey, epsi = (s.eta_r - s.ref.eta_d_r).tolist()
+        du, dv, dr = (s.nu - s.ref.nu_d).tolist()
+        a0, a1, a2 = action.tolist()
+        p0, p1, p2 = self._prev_action.tolist()
         return {
-            "reward_position": -w.position * float(e[0] ** 2 + e[1] ** 2),
-            "reward_heading": -w.heading * float(wrap_angle(e[2]) ** 2),
-            "reward_velocity": -w.velocity * float(dv @ dv),
-            "reward_effort": -w.effort * float(action @ action),
-            "reward_rate": -w.rate * float(da @ da),
+            "reward_position": -w.position * (ex * ex + ey * ey),
+            "reward_heading": -w.heading * wrap_angle(epsi) ** 2,
+            "reward_velocity": -w.velocity * (du * du + dv * dv + dr * dr),
+            "reward_effort": -w.effort * (a0 * a0 + a1 * a1 + a2 * a2),
+            "reward_rate": -w.rate * ((a0 - p0) ** 2 + (a1 - p1) ** 2 + (a2 - p2) ** 2),
             "reward_contact": -w.contact if new_contact else 0.0,
             "reward_leg": w.leg_bonus if switched else 0.0,
         }

@@ -374,7 +374,8 @@ class VesselPhysics:
 
         def prepare() -> None:
             hh = 0.5 * m.opt.timestep
-            psi = qpos[2]
+            psi = qpos.tolist()[2]
+            t = d.time
             # velocity at the whole step from the half-step qvel (leapfrog, see module doc)
             w0, w1, w2 = qvel.tolist()
             a0, a1, a2 = qacc.tolist()
@@ -390,18 +391,18 @@ class VesselPhysics:
             tx, ty, tn = f1, f2 + f3, L2 * f2 - L3 * f3
             # wind (relative to the ground velocity) and current (NED, constant)
             if aero:
-                vw, bw = wind_at(d.time)
+                vw, bw = wind_at(t)
                 wx, wy, wn = wind_load(psi, u, v, vw, bw)
             else:
                 wx = wy = wn = 0.0
             if current_at is not None:
-                vc, bc = current_at(d.time)
+                vc, bc = current_at(t)
                 uc = vc * cos(bc - psi)
                 vcb = vc * sin(bc - psi)
             else:
                 uc = vcb = 0.0
             if drift is not None:
-                dx_, dy_, dn_ = drift(d.time, psi)
+                dx_, dy_, dn_ = drift(t, psi)
                 wx += dx_
                 wy += dy_
                 wn += dn_
