@@ -347,7 +347,8 @@ def algorithm_class(algorithm: str) -> Any:
         import stable_baselines3 as sb3
     except ImportError:
         raise ImportError(
-            "learned controllers need stable-baselines3 and torch: pip install 'shipgym[rl]'"
+            "learned controllers need stable-baselines3 and torch: run 'make rl' (it installs "
+            "the CPU build torch==2.13.0 first, then stable-baselines3)"
         ) from None
     return {"ppo": sb3.PPO, "sac": sb3.SAC}[algorithm]
 
