@@ -78,7 +78,10 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
 
 def cmd_train(args: argparse.Namespace) -> int:
     """Run :func:`shipgym.rl.train.train` from parsed arguments; prints a summary."""
+    from shipgym.controllers.learned import algorithm_class
     from shipgym.rl.train import train
+
+    algorithm_class(args.algo)  # a missing RL extra fails here, with what to run
 
     res = train(
         args.algo,
