@@ -83,3 +83,16 @@ def test_bench_observers_cli_writes_table_json_and_figures(tmp_path, capsys):
         img = imread(out / f"{name}.png")
         assert img.shape[:2] == (round(h * DPI), round(w * DPI))
     assert main(["bench", "observers", "--observers", "nope"]) == 2
+
+
+def test_dropout_at_reset_starts_the_observer_from_the_planned_pose():
+    from shipgym.observers.sensors import sensor_config
+
+    cfg = sensor_config("default", dropout_probability=1.0, dropout_duration=5.0)
+    env = shipgym.make("harbour", observer="kbf", controller="pid", sensors=cfg)
+    _, info = env.reset(seed=0)
+    assert info["measurements"][0]["z"] is None
+    np.testing.assert_allclose(info["nav_eta"], info["eta_P"])
+    for _ in range(3):
+        _, _, _, _, info = env.step(np.zeros(3, np.float32))
+    assert np.all(np.isfinite(info["nav_eta"]))

@@ -62,10 +62,10 @@ class ObserverWrapper(
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         meas = [m for m in info["measurements"] if m["z"] is not None]
-        if not meas:
-            raise RuntimeError("no valid sensor sample at reset: cannot initialise the observer")
-        first = meas[0]
-        self.observer.reset(first["t"], first["z"])
+        if meas:
+            self.observer.reset(meas[0]["t"], meas[0]["z"])
+        else:  # a dropout at the start: begin from the planned start pose (the berth)
+            self.observer.reset(info["t"], info["eta_P"])
         self._sq[:] = 0.0
         self._n = 0
         return self._apply(obs, info, None)
