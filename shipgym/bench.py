@@ -6,8 +6,10 @@ Each run is one closed-loop harbour manoeuvre; runs go to worker processes in pa
 from __future__ import annotations
 
 import math
+import multiprocessing
 import os
-from collections.abc import Sequence
+import sys
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
@@ -18,6 +20,7 @@ __all__ = [
     "bench_observers",
     "observer_table",
     "observer_traces",
+    "run_jobs",
     "velocity_error_trace",
 ]
 
@@ -41,6 +44,41 @@ def _one(job: tuple[str, int, tuple[float, float], str]) -> dict[str, Any]:
         "measured": res["measured"],
         "rmse": res["rmse"],
     }
+
+
+def run_jobs(
+    fn: Callable[[Any], Any],
+    jobs: Sequence[Any],
+    *,
+    workers: int | None = None,
+    progress: bool = True,
+    desc: str = "runs",
+) -> list[Any]:
+    """``[fn(job) for job in jobs]`` in worker processes, in order, with a progress bar.
+
+    ``fn`` must be a module-level function (picklable). Forks unless torch is loaded in this
+    process (forking a process with torch's thread pools can hang): then ``forkserver``.
+    """
+    from tqdm import tqdm
+
+    n = workers or min(len(jobs), os.cpu_count() or 1)
+    bar = tqdm(total=len(jobs), disable=not progress, desc=desc, unit="run")
+    out: list[Any] = []
+    try:
+        if n <= 1:
+            for job in jobs:
+                out.append(fn(job))
+                bar.update(1)
+        else:
+            method = "forkserver" if "torch" in sys.modules else None
+            ctx = multiprocessing.get_context(method)
+            with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
+                for res in pool.map(fn, jobs):
+                    out.append(res)
+                    bar.update(1)
+    finally:
+        bar.close()
+    return out
 
 
 def velocity_error_trace(
@@ -81,11 +119,7 @@ def observer_traces(
 ) -> dict[str, dict[str, Any]]:
     """:func:`velocity_error_trace` of seed 0 for each observer, in parallel."""
     jobs = [(o, wind, controller) for o in observers]
-    workers = workers or min(len(jobs), os.cpu_count() or 1)
-    if workers <= 1:
-        return dict(map(_trace_job, jobs))
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        return dict(pool.map(_trace_job, jobs))
+    return dict(run_jobs(_trace_job, jobs, workers=workers, progress=False))
 
 
 def bench_observers(
@@ -97,25 +131,8 @@ def bench_observers(
     progress: bool = True,
 ) -> list[dict[str, Any]]:
     """Run the manoeuvre for every observer and seed; one row per run, in a fixed order."""
-    from tqdm import tqdm
-
     jobs = [(obs, s, wind, controller) for obs in observers for s in range(seeds)]
-    workers = workers or min(len(jobs), os.cpu_count() or 1)
-    bar = tqdm(total=len(jobs), disable=not progress, desc="observers x seeds", unit="run")
-    rows: list[dict[str, Any]] = []
-    try:
-        if workers <= 1:
-            for job in jobs:
-                rows.append(_one(job))
-                bar.update(1)
-        else:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
-                for row in pool.map(_one, jobs):
-                    rows.append(row)
-                    bar.update(1)
-    finally:
-        bar.close()
-    return rows
+    return run_jobs(_one, jobs, workers=workers, progress=progress, desc="observers x seeds")
 
 
 def observer_table(rows: Sequence[dict[str, Any]]) -> str:

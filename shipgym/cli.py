@@ -285,6 +285,27 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def write_bench_outputs(
+    title: str,
+    table: str,
+    rows: list[dict[str, Any]],
+    wall: float,
+    *,
+    json_path: Path | None = None,
+    markdown: Path | None = None,
+) -> None:
+    """Print a benchmark's title and table; write its rows (JSON) and table (markdown)."""
+    print(title)
+    print(table)
+    print(f"{len(rows)} runs in {wall:.1f} s")
+    if json_path is not None:
+        json_path.write_text(json.dumps({"title": title, "rows": rows}, indent=2))
+        print(f"rows written to {json_path}")
+    if markdown is not None:
+        markdown.write_text(f"{title}\n\n{table}\n")
+        print(f"table written to {markdown}")
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from shipgym.bench import bench_observers, observer_table
     from shipgym.observers import make_observer
@@ -307,15 +328,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         f"from {math.degrees(beta):g} deg, seeds 0-{args.seeds - 1}); indices from the measured "
         "pose as in seed001 Table 6, J_c truth from the true pose"
     )
-    print(title)
-    print(table)
-    print(f"{len(rows)} runs in {wall:.1f} s")
-    if args.json is not None:
-        args.json.write_text(json.dumps({"title": title, "rows": rows}, indent=2))
-        print(f"rows written to {args.json}")
-    if args.markdown is not None:
-        args.markdown.write_text(f"{title}\n\n{table}\n")
-        print(f"table written to {args.markdown}")
+    write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
     if args.report is not None:
         from shipgym.bench import observer_traces
         from shipgym.viz import write_observer_report

@@ -10,15 +10,13 @@ the PID), time, thruster usage.
 from __future__ import annotations
 
 import math
-import multiprocessing
-import os
-import sys
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from shipgym.bench import run_jobs
 
 from .evaluation import DEFAULT_WIND, check_observer, default_observer
 
@@ -120,7 +118,6 @@ def bench_controllers(
         ValueError: unknown controller or observer names, a model file that is not a shipgym
             model (checked before any run).
     """
-    from tqdm import tqdm
 
     from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
     from shipgym.controllers.lq import register_lq
@@ -144,26 +141,7 @@ def bench_controllers(
         for label, c in zip(labels, resolved, strict=True)
         for s in range(seeds)
     ]
-    n = workers or min(len(jobs), os.cpu_count() or 1)
-    bar = tqdm(total=len(jobs), disable=not progress, desc="controllers x seeds", unit="run")
-    rows: list[dict[str, Any]] = []
-    try:
-        if n <= 1:
-            for job in jobs:
-                rows.append(_job(job))
-                bar.update(1)
-        else:
-            # fork (like bench observers) unless torch is loaded here: forking a process
-            # with torch's thread pools can hang; forkserver needs an import-safe __main__
-            method = "forkserver" if "torch" in sys.modules else None
-            ctx = multiprocessing.get_context(method)
-            with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
-                for row in pool.map(_job, jobs):
-                    rows.append(row)
-                    bar.update(1)
-    finally:
-        bar.close()
-    return rows
+    return run_jobs(_job, jobs, workers=workers, progress=progress, desc="controllers x seeds")
 
 
 def _ms(a: Sequence[float], fmt: str = ".3f") -> str:

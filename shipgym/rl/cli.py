@@ -14,7 +14,6 @@ which ``shipgym.cli.main`` turns into ``shipgym: error: ...``.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 from pathlib import Path
@@ -167,13 +166,7 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
     wall = time.perf_counter() - t0
     title = bench_title(rows, args.wind)
     table = controller_table(rows)
-    print(title)
-    print(table)
-    print(f"{len(rows)} runs in {wall:.1f} s")
-    if args.json is not None:
-        args.json.write_text(json.dumps({"title": title, "rows": rows}, indent=2))
-        print(f"rows written to {args.json}")
-    if args.markdown is not None:
-        args.markdown.write_text(f"{title}\n\n{table}\n")
-        print(f"table written to {args.markdown}")
+    from shipgym.cli import write_bench_outputs
+
+    write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
     return 0
