@@ -25,7 +25,29 @@ class GridPair:
     """
 
     _inv_dt: float
-    _what = "the process"
+    _const: tuple[float, float] | None
+    _rng: np.random.Generator | None
+
+    def _start(
+        self, rng: np.random.Generator | int | None, what: str
+    ) -> np.random.Generator | None:
+        """Clear, then take one child generator from ``rng`` (one ``integers(2**63)`` draw).
+
+        ``rng`` may be ``None`` only for a constant process (``_const`` set); ``what`` names
+        the varying process in the error message.
+        """
+        self._clear()
+        if rng is None:
+            if self._const is None:
+                raise ValueError(
+                    f"{type(self).__name__}.reset needs a numpy Generator (or a seed) for {what}"
+                )
+            self._rng = None
+            return None
+        if not isinstance(rng, np.random.Generator):
+            rng = np.random.default_rng(rng)
+        self._rng = np.random.default_rng(int(rng.integers(2**63)))
+        return self._rng
 
     def _clear(self) -> None:
         self._chunks: list[NDArray[np.float64]] = []

@@ -248,19 +248,8 @@ class Current(GridPair):
         Raises:
             ValueError: ``rng`` is ``None`` for a varying current.
         """
-        self._clear()
-        if rng is None:
-            if self._const is None:
-                raise ValueError(
-                    "Current.reset needs a numpy Generator (or a seed) for a varying current"
-                )
-            self._rng = None
-            return
-        if not isinstance(rng, np.random.Generator):
-            rng = np.random.default_rng(rng)
-        child = np.random.default_rng(int(rng.integers(2**63)))
-        self._rng = child
-        if self._const is None:
+        child = self._start(rng, "a varying current")
+        if child is not None and self._const is None:
             z = child.standard_normal(2)
             v = min(max(self._mean[0] + self._std0[0] * float(z[0]), self._lo), self._hi)
             self._state = (v, self._mean[1] + self._std0[1] * float(z[1]))

@@ -721,20 +721,8 @@ class Wind(GridPair):
         Raises:
             ValueError: If ``rng`` is ``None`` for a gusty wind.
         """
-        self._clear()
-        if rng is None:
-            if self._const is None:
-                raise ValueError(
-                    "Wind.reset needs a numpy Generator (or a seed) for a gusty wind "
-                    "(gust_std or direction_std > 0)"
-                )
-            self._rng = None
-            return
-        if not isinstance(rng, np.random.Generator):
-            rng = np.random.default_rng(rng)
-        child = np.random.default_rng(int(rng.integers(2**63)))
-        self._rng = child
-        if self._const is None:
+        child = self._start(rng, "a gusty wind (gust_std or direction_std > 0)")
+        if child is not None and self._const is None:
             z = child.standard_normal(2)
             self._state = (self._sigma[0] * float(z[0]), self._sigma[1] * float(z[1]))
             if self._spectral:
