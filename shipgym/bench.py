@@ -5,7 +5,6 @@ Each run is one closed-loop harbour manoeuvre; runs go to worker processes in pa
 
 from __future__ import annotations
 
-import math
 import multiprocessing
 import os
 import sys
@@ -29,7 +28,7 @@ _INDICES = ("x_E", "y_E", "psi_E", "J_c")
 _RMSE = ("u", "v", "r", "x", "y", "psi")
 
 
-def _one(job: tuple[str, int, tuple[float, float], str]) -> dict[str, Any]:
+def _one(job: tuple[str, int, Any, str]) -> dict[str, Any]:
     from shipgym.cli import run_episode
 
     observer, seed, wind, controller = job
@@ -84,16 +83,19 @@ def run_jobs(
 def velocity_error_trace(
     observer: str,
     seed: int = 0,
-    wind: tuple[float, float] = (3.0, math.radians(300.0)),
+    wind: Any = "3@300",
     controller: str = "pid-smooth",
 ) -> dict[str, Any]:
-    """Velocity estimation errors ``[u, v, r]`` over one harbour episode (for plots)."""
+    """Velocity estimation errors ``[u, v, r]`` over one harbour episode (for plots).
+
+    ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`.
+    """
     import shipgym
     from shipgym.disturbances import WindConfig
 
     env = shipgym.make(
         "harbour", observer=observer, controller=controller,
-        wind=WindConfig(speed=wind[0], direction_from=wind[1]),
+        wind=WindConfig.coerce(wind, name="wind"),
     )  # fmt: skip
     env.reset(seed=seed)
     t, err = [], []
@@ -107,13 +109,13 @@ def velocity_error_trace(
     return {"t": np.array(t), "err_nu": np.array(err)}
 
 
-def _trace_job(job: tuple[str, tuple[float, float], str]) -> tuple[str, dict[str, Any]]:
+def _trace_job(job: tuple[str, Any, str]) -> tuple[str, dict[str, Any]]:
     return job[0], velocity_error_trace(job[0], 0, job[1], job[2])
 
 
 def observer_traces(
     observers: Sequence[str],
-    wind: tuple[float, float],
+    wind: Any,
     workers: int | None = None,
     controller: str = "pid-smooth",
 ) -> dict[str, dict[str, Any]]:
@@ -125,12 +127,19 @@ def observer_traces(
 def bench_observers(
     observers: Sequence[str] = DEFAULT_OBSERVERS,
     seeds: int = 10,
-    wind: tuple[float, float] = (3.0, math.radians(300.0)),
+    wind: Any = "3@300",
     controller: str = "pid-smooth",
     workers: int | None = None,
     progress: bool = True,
 ) -> list[dict[str, Any]]:
-    """Run the manoeuvre for every observer and seed; one row per run, in a fixed order."""
+    """Run the manoeuvre for every observer and seed; one row per run, in a fixed order.
+
+    ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
+    (``"3@300"``: 3 m/s from 300 deg, the default), checked before any run.
+    """
+    from shipgym.disturbances import WindConfig
+
+    wind = WindConfig.coerce(wind, name="wind")
     jobs = [(obs, s, wind, controller) for obs in observers for s in range(seeds)]
     return run_jobs(_one, jobs, workers=workers, progress=progress, desc="observers x seeds")
 

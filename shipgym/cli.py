@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
 import sys
 import time
 from pathlib import Path
@@ -24,14 +23,18 @@ import numpy as np
 __all__ = ["main", "parse_wind"]
 
 
-def parse_wind(text: str) -> tuple[float, float]:
-    """Parse ``SPEED@FROM_DEG`` (m/s, degrees the wind comes from) into ``(speed, from_rad)``."""
-    m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*@\s*(-?[0-9]*\.?[0-9]+)\s*", text)
-    if not m:
-        raise argparse.ArgumentTypeError(
-            f"malformed wind {text!r}: expected SPEED@FROM_DEG, e.g. 3@300 (3 m/s from 300 deg)"
-        )
-    return float(m.group(1)), math.radians(float(m.group(2)))
+def parse_wind(text: str) -> Any:
+    """The ``--wind`` argparse type: :meth:`WindConfig.parse` (``"3@300"``: 3 m/s from 300 deg).
+
+    Returns a :class:`~shipgym.disturbances.WindConfig`; a malformed or out-of-range value
+    becomes an ``argparse`` error (one line, exit status 2).
+    """
+    from shipgym.disturbances import WindConfig
+
+    try:
+        return WindConfig.parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
@@ -61,13 +64,24 @@ def _cmd_list(args: argparse.Namespace) -> int:
     return 0
 
 
+class _EnvDefault:
+    """The type of :data:`ENV_DEFAULT`."""
+
+    def __repr__(self) -> str:
+        return "ENV_DEFAULT"
+
+
+#: ``run_episode(wind=...)`` default: pass no wind, so the env uses its own default
+ENV_DEFAULT: Any = _EnvDefault()
+
+
 def run_episode(
     scenario: str,
     *,
     controller: str = "pid",
     observer: str | None = None,
     seed: int = 0,
-    wind: tuple[float, float] | None = (3.0, math.radians(300.0)),
+    wind: Any = ENV_DEFAULT,
     plant: str = "default",
     progress: bool = False,
     env_kwargs: dict[str, Any] | None = None,
@@ -81,7 +95,11 @@ def run_episode(
         scenario: env scenario (``harbour``, ``station-keeping``, ``tracking``) or env id.
         controller, observer: names (see ``shipgym list``); observer ``None`` = truth.
         seed: episode seed.
-        wind: ``(speed m/s, from rad)`` or ``None`` (no aerodynamic loads).
+        wind: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
+            (``"3@300"``, ``(speed m/s, from deg)``, a ``WindConfig``, ...) or ``None`` (no
+            aerodynamic loads); by default the env's own (3 m/s from 300 deg for the harbour
+            and station keeping, a drawn wind for tracking). The result's ``wind`` is the wind
+            the physics used.
         plant: plant variant.
         progress: show a progress bar.
         env_kwargs: further environment arguments (they win over ``wind`` and ``plant``).
@@ -94,10 +112,9 @@ def run_episode(
     import shipgym
     from shipgym.disturbances import WindConfig
 
-    kwargs: dict[str, Any] = {
-        "wind": None if wind is None else WindConfig(speed=wind[0], direction_from=wind[1]),
-        "plant": plant,
-    }
+    kwargs: dict[str, Any] = {"plant": plant}
+    if wind is not ENV_DEFAULT:
+        kwargs["wind"] = WindConfig.coerce(wind, name="wind")
     kwargs.update(env_kwargs or {})
     from shipgym.controllers.learned import is_learned_controller
 
@@ -115,15 +132,17 @@ def run_episode(
         from shipgym.viz import RecordEpisode
 
         env = RecordEpisode(env, record, spawn=spawn)
-    wc = env.unwrapped.wind_config  # type: ignore[attr-defined]
-    wind_out = (
-        None if wc is None else {"speed": wc.speed, "from_deg": math.degrees(wc.direction_from)}
-    )
     limit = env.spec.max_episode_steps if env.spec is not None else None
     bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
     t0 = time.perf_counter()
     try:
         env.reset(seed=seed)
+        wc = env.unwrapped.wind_config  # type: ignore[attr-defined]  (the episode's, after reset)
+        wind_out = (
+            None
+            if wc is None
+            else {"speed": wc.speed, "from_deg": math.degrees(wc.direction_from) % 360.0}
+        )
         zero = np.zeros(3, dtype=np.float32)
         terminated = truncated = False
         info: dict[str, Any] = {}
@@ -239,7 +258,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         scenario_name = args.scenario or sc.env
     scenario_name = scenario_name or "harbour"
     if args.wind is not None:
-        env_kwargs["wind"] = WindConfigFromArg(args.wind)
+        env_kwargs["wind"] = args.wind
     if args.plant is not None:
         env_kwargs["plant"] = args.plant
     args.scenario = scenario_name
@@ -266,7 +285,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
         controller=args.controller,
         observer=observer,
         seed=args.seed,
-        wind=(3.0, math.radians(300.0)),
         plant="default",
         env_kwargs=env_kwargs,
         progress=not args.no_progress,
@@ -322,10 +340,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     )  # fmt: skip
     wall = time.perf_counter() - t0
     table = observer_table(rows)
-    speed, beta = args.wind
     title = (
-        f"Observers on the harbour manoeuvre ({args.controller} controller, wind {speed:g} m/s "
-        f"from {math.degrees(beta):g} deg, seeds 0-{args.seeds - 1}); indices from the measured "
+        f"Observers on the harbour manoeuvre ({args.controller} controller, wind "
+        f"{args.wind.label()}, seeds 0-{args.seeds - 1}); indices from the measured "
         "pose as in seed001 Table 6, J_c truth from the true pose"
     )
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
@@ -341,13 +358,6 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         (args.report / "observers.md").write_text(f"{title}\n\n{table}\n")
         print(f"wrote {args.report / 'observers.md'}")
     return 0
-
-
-def WindConfigFromArg(wind: tuple[float, float]) -> Any:  # noqa: N802 - reads as a type
-    """A :class:`WindConfig` from ``parse_wind``'s ``(speed, from_rad)``."""
-    from shipgym.disturbances import WindConfig
-
-    return WindConfig(speed=wind[0], direction_from=wind[1])
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
@@ -374,11 +384,9 @@ def _check_writable(path: Path) -> None:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from shipgym.disturbances import WindConfig
     from shipgym.envs.physics import VesselPhysics
 
-    speed, beta = args.wind
-    phys = VesselPhysics(args.plant, wind=WindConfig(speed=speed, direction_from=beta))
+    phys = VesselPhysics(args.plant, wind=args.wind)
     phys.reset(rng=np.random.default_rng(args.seed))
     # open loop: half ahead, bow thruster to starboard and stern thruster to port (turn right)
     phys.set_command([300.0, 0.8, -0.8])
@@ -404,7 +412,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     wall = time.perf_counter() - t0
     eta, nu = phys.eta, phys.nu
     print("shipgym demo: Blue Lady open-loop turn (main propeller 300 rpm, bow +0.8, stern -0.8)")
-    print(f"  plant {phys.plant.name!r}, wind {speed:.1f} m/s from {math.degrees(beta):.0f} deg")
+    print(f"  plant {phys.plant.name!r}, wind {phys.wind_config.label()}")
     print(
         f"  simulated {phys.time:.0f} s in {wall:.2f} s wall ({phys.time / wall:,.0f}x real time)"
     )
@@ -447,7 +455,8 @@ def _parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument("--seed", type=int, default=0, help="episode seed (0)")
     p.add_argument("--wind", type=parse_wind, default=None, metavar="SPEED@FROM_DEG",
-                   help="mean wind, e.g. 3@300 (default 3@300 or the scenario's)")  # fmt: skip
+                   help="mean wind, e.g. 3@300 (m/s, deg it comes from; default: the "
+                   "scenario's, 3@300 for harbour, drawn per episode for tracking)")  # fmt: skip
     p.add_argument("--plant", default=None, help="plant variant (default: 'default')")
     p.add_argument("--json", type=Path, default=None, metavar="PATH", help="write results")
     p.add_argument("--record", type=Path, default=None, metavar="PATH.rrd",
@@ -469,7 +478,7 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument(
         "--controller", default="pid-smooth", help="controller of every run (pid-smooth)"
     )
-    b.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
+    b.add_argument("--wind", type=parse_wind, default="3@300",
                    metavar="SPEED@FROM_DEG", help="mean wind (3@300)")  # fmt: skip
     b.add_argument("--workers", type=int, default=None, help="processes (default: CPUs)")
     b.add_argument("--json", type=Path, default=None, metavar="PATH")
@@ -483,7 +492,7 @@ def _parser() -> argparse.ArgumentParser:
     add_bench_controllers_parser(bsub)
     add_train_parser(sub)
     p = sub.add_parser("demo", help="open-loop turn in gusty wind; prints a summary")
-    p.add_argument("--wind", type=parse_wind, default=(3.0, math.radians(300.0)),
+    p.add_argument("--wind", type=parse_wind, default="3@300",
                    metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip
     p.add_argument("--plant", default="default", help="plant variant (see 'shipgym list')")
     p.add_argument("--duration", type=float, default=300.0, help="simulated seconds (300)")

@@ -29,9 +29,9 @@ File format (every key optional; unknown keys raise, listing the valid ones)::
     env: harbour                 # harbour | station-keeping | tracking
     plant: default               # a key of shipgym.dynamics.model.PLANT_VARIANTS
     beaufort: 5                  # or {number: 5, scale: 24, direction_from_deg: 30, ...}
-    wind: {speed: 3.0, direction_from_deg: 300}    # WindConfig fields; null/false: no wind
+    wind: {speed: 3.0, direction_from_deg: 300}    # WindConfig fields, or "3@300"; null: none
     waves: lake                  # a wave preset, or WaveConfig fields; null/false: none
-    current: {speed: 0.05, direction_to_deg: 90, std: 0.01, time_constant: 300}
+    current: {speed: 0.05, direction_to_deg: 90, std: 0.01, time_constant: 300}  # or "0.05@90"
     sensors: tomera2014          # a preset, SensorConfig fields, {preset: rtk, ...}; null: none
     plan: tomera2014             # a plan name or a ManoeuvrePlan.from_dict mapping
     start_pose: [0.0, 0.0, 0.0]  # (x m, y m, psi rad), or {x: 0, y: 0, psi_deg: 0}
@@ -39,7 +39,9 @@ File format (every key optional; unknown keys raise, listing the valid ones)::
 Angles are radians; every angle field also accepts a ``*_deg`` twin (``direction_from_deg``,
 ``direction_std_deg``, ``direction_to_deg``, ``wf_heading_std_deg``, ``psi_deg``). A
 ``wind``/``waves``/``current`` mapping is applied on top of what ``base`` or ``beaufort``
-already set (or on top of the config defaults). Files are parsed with ``yaml.safe_load`` or
+already set (or on top of the config defaults); a ``"SPEED@DEG"`` string (wind: m/s and
+degrees it comes from, ``WindConfig.parse``, default gusts; current: m/s and degrees it goes
+to, ``CurrentConfig.parse``, constant) replaces it. Files are parsed with ``yaml.safe_load`` or
 ``tomllib`` only (TOML has no null: use ``false`` to switch a disturbance off).
 """
 
@@ -472,9 +474,12 @@ def _config(
 def _wind(value: Any, current: WindConfig | None, where: str) -> WindConfig | None:
     if value is None or value is False:
         return None
+    if isinstance(value, str):
+        return WindConfig.parse(value, name=where)
     if not isinstance(value, Mapping):
         raise ValueError(
-            f"{where} must be a mapping of WindConfig fields, null or false, got {value!r}"
+            f"{where} must be a mapping of WindConfig fields, 'SPEED@FROM_DEG' (e.g. '3@300'), "
+            f"null or false, got {value!r}"
         )
     return _config(WindConfig, value, current, where, ("direction_from", "direction_std"))
 
@@ -506,9 +511,12 @@ def _waves(value: Any, current: WaveConfig | None, where: str) -> WaveConfig | N
 def _current(value: Any, current: CurrentConfig | None, where: str) -> CurrentConfig | None:
     if value is None or value is False:
         return None
+    if isinstance(value, str):
+        return CurrentConfig.parse(value, name=where)
     if not isinstance(value, Mapping):
         raise ValueError(
-            f"{where} must be a mapping of CurrentConfig fields, null or false, got {value!r}"
+            f"{where} must be a mapping of CurrentConfig fields, 'SPEED@TO_DEG' (e.g. '0.1@90'), "
+            f"null or false, got {value!r}"
         )
     d = dict(value)
     # convenience: stationary std and time constant instead of (mu, sigma)
@@ -785,7 +793,7 @@ def _presets() -> dict[str, Scenario]:
     out["tomera2014-lake"] = Scenario(
         name="tomera2014-lake",
         env="harbour",
-        wind=WindConfig(speed=3.0, direction_from=d300),
+        wind=WindConfig.from_speed_dir(3.0, 300.0),
         waves=lake_waves(direction_from=d300),
         sensors="tomera2014",
         plan="tomera2014",
@@ -798,7 +806,7 @@ def _presets() -> dict[str, Scenario]:
     out["tomera2011-sim"] = Scenario(
         name="tomera2011-sim",
         env="harbour",
-        wind=WindConfig(speed=2.0, direction_from=0.0),
+        wind=WindConfig.from_speed_dir(2.0, 0.0),
         waves=None,
         sensors="default",
         plan="tomera2014",

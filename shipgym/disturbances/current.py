@@ -41,9 +41,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, param, require_finite
 
+from ._boundary import coerce_config, parse_speed_at
 from ._grid import CHUNK, GridPair
 
-__all__ = ["CurrentConfig", "Current", "current_body_velocity"]
+__all__ = ["CurrentConfig", "Current", "current_body_velocity", "MAX_CURRENT_SPEED"]
+
+#: Largest accepted mean current speed (m/s). Basis: the fastest tidal currents known are
+#: about 20 kn (~10 m/s) in narrow straits such as Saltstraumen (Norway); the strongest ocean
+#: currents (the Gulf Stream) stay below about 2.5 m/s, and a 1:24 model sees about a fifth of
+#: the full-scale speed. A larger number is a unit mistake or a typo, so it is refused.
+MAX_CURRENT_SPEED = 10.0
 
 _N3 = "notes 3 [assumption]"
 
@@ -67,8 +74,13 @@ def current_body_velocity(V_c: float, beta_c: float, psi: float) -> tuple[float,
 class CurrentConfig:
     """Mean current plus optional Gauss-Markov variation (SI units, radians; notes 3).
 
+    At the public boundary directions are degrees: :meth:`parse` (``"0.1@90"``: 0.1 m/s going
+    to 90 deg, i.e. east), :meth:`from_speed_dir` and :meth:`coerce` (the one conversion every
+    entry point uses).
+
     Attributes:
-        speed: Mean current speed (m/s, >= 0). Lake/harbour: 0 nominal or ~0.01 U_wind;
+        speed: Mean current speed (m/s, 0 to :data:`MAX_CURRENT_SPEED`). Lake/harbour: 0
+            nominal or ~0.01 U_wind;
             offshore DP 0.5-1 m/s full scale = 0.10-0.20 m/s at 1:24 (notes 3).
         direction_to: Mean direction the current goes TO (rad, clockwise from north).
         mu: Mean-reversion rate of the speed (1/s, >= 0); notes 3: 1/300.
@@ -115,6 +127,11 @@ class CurrentConfig:
                 raise ValueError(f"{name}.{key} must be >= 0, got {getattr(self, key)!r}")
         if not self.sample_period > 0:
             raise ValueError(f"{name}.sample_period must be > 0 s, got {self.sample_period!r}")
+        if self.speed > MAX_CURRENT_SPEED:
+            raise ValueError(
+                f"{name}.speed must be <= {MAX_CURRENT_SPEED:g} m/s (about the fastest tidal "
+                f"currents), got {self.speed!r}"
+            )
         hi = math.inf if self.v_max is None else self.v_max
         if not self.v_min <= self.speed <= hi:
             raise ValueError(
@@ -189,6 +206,66 @@ class CurrentConfig:
     def from_dict(cls, mapping: Mapping[str, Any]) -> CurrentConfig:
         """Build from a mapping of field names (SI units, radians); unknown keys raise."""
         return from_mapping(cls, mapping, where="current config")
+
+    @classmethod
+    def from_speed_dir(cls, speed: float, to_deg: float, **kw: Any) -> CurrentConfig:
+        """A constant current from a speed (m/s) and the direction it goes TO (deg).
+
+        Args:
+            speed: Mean speed (m/s).
+            to_deg: Direction the water goes to (deg, clockwise from north), e.g. 90 = east.
+            **kw: Any other :class:`CurrentConfig` field (SI units, radians).
+        """
+        return cls(speed=speed, direction_to=math.radians(to_deg), **kw)
+
+    @classmethod
+    def parse(cls, text: str, *, name: str = "current") -> CurrentConfig:
+        """Parse ``"SPEED@TO_DEG"``: speed in m/s, direction the water goes TO in degrees.
+
+        ``"0.1@90"`` is a constant 0.1 m/s current setting to the east.
+
+        Raises:
+            ValueError: Malformed text, or a value :class:`CurrentConfig` refuses (the message
+                names ``name`` and the field).
+        """
+        speed, deg = parse_speed_at(
+            text, name=name, form="SPEED@TO_DEG", example="0.1@90 (0.1 m/s going to 90 deg)"
+        )
+        try:
+            return cls.from_speed_dir(speed, deg)
+        except ValueError as exc:
+            raise ValueError(f"{name} {text!r}: {exc}") from None
+
+    @classmethod
+    def coerce(cls, value: Any, *, name: str = "current") -> CurrentConfig | None:
+        """The one conversion of a user's current setting, used by every public entry point.
+
+        Accepted: ``None`` (no current), a :class:`CurrentConfig`, ``"SPEED@TO_DEG"``
+        (:meth:`parse`), ``(speed m/s, to deg)`` (:meth:`from_speed_dir`) or a mapping of
+        :class:`CurrentConfig` fields (SI units, radians; ``direction_to_deg`` is accepted as
+        the degree twin).
+
+        Raises:
+            ValueError: Any other form or an invalid value; the message names ``name`` and
+                the accepted forms.
+        """
+        return coerce_config(
+            cls,
+            value,
+            name=name,
+            parse=lambda text: cls.parse(text, name=name),
+            from_deg=cls.from_speed_dir,
+            deg_fields={"direction_to_deg": "direction_to"},
+            accepted=(
+                "None, a CurrentConfig, 'SPEED@TO_DEG' (e.g. '0.1@90': 0.1 m/s going to 90 "
+                "deg), (speed m/s, to deg) or a mapping of CurrentConfig fields"
+            ),
+        )
+
+    def label(self) -> str:
+        """Short human-readable form, e.g. ``"0.1 m/s to 90 deg"``."""
+        deg = math.degrees(float(self.direction_to)) % 360.0
+        return f"{float(self.speed):g} m/s to {deg:.4g} deg"
 
 
 class Current(GridPair):

@@ -58,6 +58,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import from_mapping, param, require_finite, require_positive
 from shipgym.dynamics.params import BLUE_LADY_WINDAGE, WindageParameters
 
+from ._boundary import coerce_config, parse_speed_at
 from ._grid import CHUNK, GridPair
 from .spectra import harmonic_components, harmonic_sums, wind_gust_spectrum
 
@@ -72,7 +73,15 @@ __all__ = [
     "WindConfig",
     "Wind",
     "GUST_SPECTRA",
+    "MAX_WIND_SPEED",
 ]
+
+#: Largest accepted mean wind speed and gust standard deviation (m/s). Basis: 70 m/s
+#: (137 kn) is where category 5, the top of the Saffir-Simpson hurricane wind scale (NOAA
+#: National Hurricane Center), begins; a mean wind above it is far outside ship handling and
+#: dynamic positioning, and outside the range of Blendermann's (1994) wind-tunnel data. A
+#: larger number is a unit mistake (km/h, kn) or a typo, so it is refused, not simulated.
+MAX_WIND_SPEED = 70.0
 
 #: Valid ``WindConfig.gust_spectrum`` values.
 GUST_SPECTRA = ("gauss-markov", "npd", "harris")
@@ -428,7 +437,9 @@ class WindConfig:
     ``V_w(t) = speed + g_V(t)``, ``beta_w(t) = direction_from + g_beta(t)``, with ``g_V`` and
     ``g_beta`` independent stationary Ornstein-Uhlenbeck processes of standard deviations
     ``gust_std``, ``direction_std`` and time constants ``gust_time_constant``,
-    ``direction_time_constant``. Degrees only at the edges: use :meth:`from_speed_dir`.
+    ``direction_time_constant``. The fields are SI units and radians; at the public boundary
+    directions are degrees: :meth:`parse` (``"3@300"``: 3 m/s from 300 deg),
+    :meth:`from_speed_dir` and :meth:`coerce` (the one conversion every entry point uses).
 
     With ``gust_spectrum = "npd"`` or ``"harris"`` the speed gust ``g_V`` is instead a sum of
     ``gust_components`` harmonics on logarithmic bins over ``[gust_f_min, gust_f_max]`` with
@@ -438,7 +449,8 @@ class WindConfig:
     then unused and ``gust_std`` (when given) rescales the spectrum to that standard deviation.
 
     Attributes:
-        speed: Mean wind speed (m/s, >= 0), real wind at the model (lake: 0-5 m/s).
+        speed: Mean wind speed (m/s, 0 to :data:`MAX_WIND_SPEED`), real wind at the model
+            (lake: 0-5 m/s).
         direction_from: Mean direction the wind comes FROM (rad, clockwise from north).
         gust_std: Standard deviation of the speed gust (m/s); ``None`` means
             ``0.15 * speed`` (notes 1.7).
@@ -495,6 +507,13 @@ class WindConfig:
                 f"WindConfig.speed must be >= 0 (m/s), got {self.speed!r}; give the direction "
                 "with direction_from instead of a negative speed"
             )
+        for name in ("speed", "gust_std"):
+            val = getattr(self, name)
+            if val is not None and val > MAX_WIND_SPEED:
+                raise ValueError(
+                    f"WindConfig.{name} must be <= {MAX_WIND_SPEED:g} m/s (the start of "
+                    f"category 5 of the Saffir-Simpson hurricane scale), got {val!r}"
+                )
         for name in ("gust_std", "direction_std"):
             val = getattr(self, name)
             if val is not None and val < 0:
@@ -628,6 +647,63 @@ class WindConfig:
     def from_dict(cls, mapping: Mapping[str, Any]) -> WindConfig:
         """Build from a mapping of field names (SI units, radians); unknown keys raise."""
         return from_mapping(cls, mapping, where="wind config")
+
+    @classmethod
+    def parse(cls, text: str, *, name: str = "wind") -> WindConfig:
+        """Parse ``"SPEED@FROM_DEG"``: speed in m/s, direction the wind comes FROM in degrees.
+
+        ``"3@300"`` is 3 m/s from 300 deg (a north-westerly) with the default gusts, the same
+        as ``WindConfig.from_speed_dir(3, 300)``.
+
+        Args:
+            text: The string.
+            name: The argument's name in error messages.
+
+        Raises:
+            ValueError: Malformed text, or a value :class:`WindConfig` refuses (the message
+                names ``name`` and the field).
+        """
+        speed, deg = parse_speed_at(
+            text, name=name, form="SPEED@FROM_DEG", example="3@300 (3 m/s from 300 deg)"
+        )
+        try:
+            return cls.from_speed_dir(speed, deg)
+        except ValueError as exc:
+            raise ValueError(f"{name} {text!r}: {exc}") from None
+
+    @classmethod
+    def coerce(cls, value: Any, *, name: str = "wind") -> WindConfig | None:
+        """The one conversion of a user's wind setting, used by every public entry point.
+
+        Accepted: ``None`` (no aerodynamic loads), a :class:`WindConfig`, ``"SPEED@FROM_DEG"``
+        (:meth:`parse`), ``(speed m/s, from deg)`` (:meth:`from_speed_dir`) or a mapping of
+        :class:`WindConfig` fields (SI units, radians; ``direction_from_deg`` and
+        ``direction_std_deg`` are accepted as degree twins).
+
+        Raises:
+            ValueError: Any other form or an invalid value; the message names ``name`` and
+                the accepted forms.
+        """
+        return coerce_config(
+            cls,
+            value,
+            name=name,
+            parse=lambda text: cls.parse(text, name=name),
+            from_deg=cls.from_speed_dir,
+            deg_fields={
+                "direction_from_deg": "direction_from",
+                "direction_std_deg": "direction_std",
+            },
+            accepted=(
+                "None, a WindConfig, 'SPEED@FROM_DEG' (e.g. '3@300': 3 m/s from 300 deg), "
+                "(speed m/s, from deg) or a mapping of WindConfig fields"
+            ),
+        )
+
+    def label(self) -> str:
+        """Short human-readable form, e.g. ``"3 m/s from 300 deg"``."""
+        deg = math.degrees(float(self.direction_from)) % 360.0
+        return f"{float(self.speed):g} m/s from {deg:.4g} deg"
 
 
 #: Gust samples per chunk. Fixed (not a parameter) so that a realisation depends on the seed

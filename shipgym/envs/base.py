@@ -29,9 +29,9 @@ from shipgym.guidance import plan as named_plan
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
 
-from .physics import VesselPhysics
+from .physics import NO_CURRENT, VesselPhysics
 
-__all__ = ["BlueLadyEnv", "RewardWeights", "SCENES", "parse_wind_arg"]
+__all__ = ["BlueLadyEnv", "RewardWeights", "SCENES"]
 
 SCENES: dict[str, tuple[str, ...]] = {
     "harbour": ("mjcf", "harbour", "scene.xml"),
@@ -59,25 +59,6 @@ class RewardWeights:
     rate: float = param(0.01, "1", "squared change of the normalised command")
     contact: float = param(100.0, "1", "penalty once, when the hull touches a quay")
     leg_bonus: float = param(10.0, "1", "bonus per completed leg (a positive term)")
-
-
-def parse_wind_arg(wind: Any) -> WindConfig | None:
-    """Accept ``None``, a :class:`WindConfig`, a mapping, ``(speed, from_deg)`` or ``"3@300"``."""
-    if wind is None or isinstance(wind, WindConfig):
-        return wind
-    if isinstance(wind, str):
-        from shipgym.cli import parse_wind
-
-        speed, beta = parse_wind(wind)
-        return WindConfig(speed=speed, direction_from=beta)
-    if isinstance(wind, Mapping):
-        return WindConfig.from_dict(wind)
-    if isinstance(wind, tuple | list) and len(wind) == 2:
-        return WindConfig.from_speed_dir(float(wind[0]), float(wind[1]))
-    raise ValueError(
-        f"wind must be None, a WindConfig, a mapping, (speed m/s, from deg) or 'SPEED@FROM_DEG', "
-        f"got {wind!r}"
-    )
 
 
 @dataclass(frozen=True)
@@ -140,7 +121,9 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ## Episode End
     Terminated when the hull touches a quay (``info["quay_contact"]``) or, if
     ``terminate_on_finish``, when the last leg is complete (``info["finished"]``).
-    Truncated by the registered time limit (``max_episode_steps`` control steps).
+    Truncated by the registered time limit (``max_episode_steps`` control steps; ``gym.make``
+    sets it, and the env itself ends the episode there too). After the end, :meth:`step`
+    raises ``gymnasium.error.ResetNeeded`` until :meth:`reset` is called.
 
     ## Info
     Truth ``eta`` (m, m, rad; NED), ``nu``; navigation data ``nav_eta``, ``nav_nu`` (what
@@ -152,7 +135,8 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ``measurements`` (the
     sensor samples taken during the step: ``t``, measured NED pose ``z`` or ``None`` in a
     dropout, ``valid``, ``outlier`` (a truth flag), applied body thrust ``tau``); ``quay_contact``,
-    ``contacts``; the ``reward_*`` terms; and at the end of an episode ``episode_metrics``
+    ``contacts``; the ``reward_*`` terms; and at the end of every episode (terminated or
+    truncated) ``episode_metrics``
     (seed001 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
 
     ## Arguments
@@ -160,11 +144,13 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     |---|---|---|
     | ``plan`` | ``"tomera2014"`` | plan name or :class:`ManoeuvrePlan` |
     | ``plant`` | ``"default"`` | plant variant (``"default"``, ``"seed-linear"``) |
-    | ``wind`` | ``"3@300"`` | ``None``, ``WindConfig``, ``(speed, from_deg)`` or ``"SPEED@FROM"`` |
+    | ``wind`` | ``"3@300"`` | ``"SPEED@FROM_DEG"`` (m/s, deg the wind comes from), |
+    |  |  | ``(speed m/s, from deg)``, ``WindConfig``, mapping, or ``None`` (no wind) |
     | ``sensors`` | ``"default"`` | preset (``default``, ``dgps``, ``rtk``), config or ``None`` |
     | ``waves`` | ``None`` | ``WaveConfig``, preset name or mapping: drift load on the hull, |
     |  |  | first-order motion added to the measurements |
-    | ``current`` | ``None`` | ``CurrentConfig``, mapping or ``(speed m/s, to_deg)`` |
+    | ``current`` | ``None`` | ``"SPEED@TO_DEG"`` (m/s, deg the water goes to), |
+    |  |  | ``(speed m/s, to deg)``, ``CurrentConfig``, mapping, or ``None`` (none) |
     | ``scene`` | ``"harbour"`` | ``"harbour"`` or ``"open-water"`` |
     | ``start_pose`` | ``(0, 0, 0)`` | NED start pose (m, m, rad); the harbour turns with it |
     | ``start_noise`` | ``(0, 0, 0)`` | uniform start perturbation half-widths (m, m, rad) |
@@ -173,6 +159,13 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | ``terminate_on_finish`` | ``True`` | end the episode when the plan is complete |
     | ``reward_weights`` | ``RewardWeights()`` | weights of the reward terms |
     | ``render_mode`` | ``None`` | ``"rgb_array"`` (needs an EGL/OSMesa/GLFW backend) |
+
+    ``wind`` and ``current`` accept exactly the forms of :meth:`WindConfig.coerce
+    <shipgym.disturbances.WindConfig.coerce>` and :meth:`CurrentConfig.coerce
+    <shipgym.disturbances.CurrentConfig.coerce>`: plain-number directions are degrees,
+    everywhere. ``wind_config``, ``current_config`` and ``sensor_config`` report what the
+    physics and the sensors use in the current episode (they are read from them, so a task
+    that draws its disturbances per episode reports the draw after :meth:`reset`).
 
     ## Version History
     * v0: initial version.
@@ -222,23 +215,27 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.reward_weights = reward_weights
         self.terminate_on_finish = bool(terminate_on_finish)
         self.scene = scene
-        self.wind_config = parse_wind_arg(wind)
-        self.sensor_config = parse_sensors_arg(sensors)
-        self.sensors = None if self.sensor_config is None else Sensors(self.sensor_config)
+        # the settings given (the tasks' defaults when not given); what an episode uses is
+        # reported by wind_config / current_config / sensor_config (read from the physics)
+        self._wind = WindConfig.coerce(wind, name="wind")
+        self._current = CurrentConfig.coerce(current, name="current")
+        self._sensor_setting = parse_sensors_arg(sensors)
+        self.sensors = None if self._sensor_setting is None else Sensors(self._sensor_setting)
         self._sensor_steps = (
             None
-            if self.sensor_config is None
-            else _whole_multiple(self.sensor_config.period, timestep)
+            if self._sensor_setting is None
+            else _whole_multiple(self._sensor_setting.period, timestep)
         )
         self._steps = 0
+        self._control_steps = 0
+        self._episode_over = True  # until the first reset
         self._last_measurement: NDArray[np.float64] | None = None
         self.wave_config = parse_waves_arg(waves)
-        self.current_config = parse_current_arg(current)
         self.physics = VesselPhysics(
             plant,
-            wind=self.wind_config,
+            wind=self._wind,
             waves=self.wave_config,
-            current=self.current_config,
+            current=self._current,
             xml_path=asset_path(*SCENES[scene]),
             timestep=timestep,
         )
@@ -259,22 +256,38 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._contact = False
         self._sample: _Sample | None = None
 
+    # ---- what the episode uses (read from the physics and sensors: always honest) ----------
+    @property
+    def wind_config(self) -> WindConfig | None:
+        """The wind the physics uses now (``None``: no aerodynamic loads); set at reset."""
+        return self.physics.wind_config if self.physics.aerodynamics else None
+
+    @property
+    def current_config(self) -> CurrentConfig:
+        """The current the physics uses now (``speed == 0``: none); set at reset."""
+        return self.physics.current_config
+
+    @property
+    def sensor_config(self) -> SensorConfig | None:
+        """The sensor configuration the sensors use now (``None``: no sensors); set at reset."""
+        return None if self.sensors is None else self.sensors.config
+
     # ---- task hooks (overridden by the registered tasks) ------------------------------------
     def _episode_plan(self) -> ManoeuvrePlan:
         """The plan of the next episode (randomised tasks draw it from ``self.np_random``)."""
         return self.plan
 
     def _episode_wind(self) -> WindConfig | None:
-        """The wind of the next episode."""
-        return self.wind_config
+        """The wind of the next episode (``None``: no aerodynamic loads)."""
+        return self._wind
 
     def _episode_current(self) -> CurrentConfig | None:
-        """The current of the next episode."""
-        return self.current_config
+        """The current of the next episode (``None``: no current)."""
+        return self._current
 
     def _episode_sensors(self) -> SensorConfig | None:
-        """The sensor configuration of the next episode (``None``: keep the constructor's)."""
-        return self.sensor_config
+        """The sensor configuration of the next episode (ignored without sensors)."""
+        return self._sensor_setting
 
     # ---- gym API ---------------------------------------------------------------------------
     def reset(
@@ -290,10 +303,10 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         if plan is not self.guidance.plan:
             self.guidance = Guidance(plan)
         wind = self._episode_wind()
-        if wind is not self.physics.wind_config and wind is not None:
+        if wind is not self.wind_config:
             self.physics.set_wind(wind)
         current = self._episode_current()
-        if current is not None and current is not self.physics.current_config:
+        if (NO_CURRENT if current is None else current) is not self.physics.current_config:
             self.physics.set_current(current)
         sensors = self._episode_sensors()
         if sensors is not None and self.sensors is not None and sensors is not self.sensors.config:
@@ -304,6 +317,8 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         if self.sensors is not None:
             self.sensors.reset(rng)
         self._steps = 0
+        self._control_steps = 0
+        self._episode_over = False
         self._last_measurement = None
         self.guidance.reset(start, t0=0.0)
         self.metrics.reset()
@@ -319,7 +334,18 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        """Apply normalised thruster commands for one control period."""
+        """Apply normalised thruster commands for one control period.
+
+        Raises:
+            gymnasium.error.ResetNeeded: before the first :meth:`reset` or after the episode
+                ended (terminated, or truncated at the registered time limit).
+            ValueError: an action of the wrong shape or with NaN / infinite values.
+        """
+        if self._episode_over:
+            raise gym.error.ResetNeeded(
+                "the episode has ended (terminated or truncated) or was never started: call "
+                "reset() before step()"
+            )
         a = np.asarray(action, dtype=np.float64)
         if a.shape != (3,):
             raise ValueError(f"action must have shape (3,), got {a.shape}")
@@ -348,12 +374,17 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._prev_action = clipped
         finished = self.guidance.finished
         terminated = self._contact or (finished and self.terminate_on_finish)
+        self._control_steps += 1
+        # the time limit gym.make registers (TimeLimit truncates there; we end the episode too)
+        limit = None if self.spec is None else self.spec.max_episode_steps
+        truncated = limit is not None and self._control_steps >= limit
         info = self._info(sample, command, saturated | action_clipped, finished, rewards, contacts)
         info["action_clipped"] = action_clipped
         info["measurements"] = measurements
-        if terminated:
+        if terminated or truncated:
+            self._episode_over = True
             info["episode_metrics"] = self.episode_metrics()
-        return self._obs(sample), reward, terminated, False, info
+        return self._obs(sample), reward, terminated, truncated, info
 
     def render(self) -> NDArray[np.uint8] | None:
         """An RGB frame (H, W, 3) of the map camera; needs ``render_mode="rgb_array"``."""
@@ -567,19 +598,6 @@ def parse_waves_arg(waves: Any) -> WaveConfig | None:
     if isinstance(waves, Mapping):
         return WaveConfig.from_dict(waves)
     raise ValueError(f"waves must be None, a WaveConfig, a preset name or a mapping: {waves!r}")
-
-
-def parse_current_arg(current: Any) -> CurrentConfig | None:
-    """Accept ``None``, a :class:`CurrentConfig`, a mapping or ``(speed m/s, to_deg)``."""
-    if current is None or isinstance(current, CurrentConfig):
-        return current
-    if isinstance(current, Mapping):
-        return CurrentConfig.from_dict(current)
-    if isinstance(current, tuple | list) and len(current) == 2:
-        return CurrentConfig(speed=float(current[0]), direction_to=math.radians(current[1]))
-    raise ValueError(
-        f"current must be None, a CurrentConfig, a mapping or (speed m/s, to_deg): {current!r}"
-    )
 
 
 def _vec3(x: Any, name: str) -> NDArray[np.float64]:

@@ -27,7 +27,9 @@ against ``qacc*`` and the trajectory against :func:`shipgym.dynamics.simulate_re
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -66,21 +68,13 @@ _MAX_SPEED = 50.0
 _MAX_YAW_RATE = 10.0
 
 
-def _current_config(current: CurrentConfig | tuple[float, float] | None) -> CurrentConfig:
-    if current is None:
-        return CurrentConfig(speed=0.0)
-    if isinstance(current, CurrentConfig):
-        return current
-    try:
-        vc, bc = (float(c) for c in current)
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"current must be a CurrentConfig, (speed m/s, direction to rad) or None, "
-            f"got {current!r}"
-        ) from None
-    if not (math.isfinite(vc) and math.isfinite(bc) and vc >= 0):
-        raise ValueError(f"current must be (speed >= 0 m/s, direction rad), got {current!r}")
-    return CurrentConfig(speed=vc, direction_to=bc)
+#: the current of a physics without one (one shared object, so that "no change" is cheap to see)
+NO_CURRENT = CurrentConfig()
+
+
+def _current_config(current: object) -> CurrentConfig:
+    cfg = CurrentConfig.coerce(current, name="current")
+    return NO_CURRENT if cfg is None else cfg
 
 
 class SimulationDiverged(RuntimeError):
@@ -93,12 +87,17 @@ class VesselPhysics:
     Args:
         plant: a :class:`PlantModel` or a plant variant name (``"default"``, ``"seed-linear"``).
         thrusters: thruster parameters; written into the MJCF actuators at load time.
-        wind: wind configuration. ``None`` switches aerodynamic loads off altogether; a
-            ``WindConfig(speed=0)`` is still air, in which a moving hull feels air drag.
+        wind: wind: a :class:`~shipgym.disturbances.WindConfig`, ``"SPEED@FROM_DEG"``,
+            ``(speed m/s, from deg)`` or a mapping (any form of
+            :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`). ``None``
+            switches aerodynamic loads off altogether; ``WindConfig(speed=0)`` is still air, in
+            which a moving hull feels air drag.
         windage: projected areas for the wind load.
         current: current in NED: a :class:`~shipgym.disturbances.CurrentConfig` (constant or
-            Gauss-Markov), a constant ``(speed m/s, direction it goes to, rad)`` or ``None``.
-            It acts through the relative velocity ``nu_r = nu - nu_c`` only.
+            Gauss-Markov), ``"SPEED@TO_DEG"``, a constant ``(speed m/s, direction it goes to,
+            deg)``, a mapping (:meth:`CurrentConfig.coerce
+            <shipgym.disturbances.CurrentConfig.coerce>`) or ``None`` (no current). It acts
+            through the relative velocity ``nu_r = nu - nu_c`` only.
         waves: a :class:`~shipgym.disturbances.WaveConfig` for the second-order (mean and
             slowly varying) drift load on the hull, or ``None``. First-order wave motion is
             not a hull motion: the environment adds it to the measurements
@@ -114,10 +113,10 @@ class VesselPhysics:
         self,
         plant: PlantModel | str = "default",
         thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
-        wind: WindConfig | None = None,
+        wind: WindConfig | str | tuple[float, float] | Mapping[str, Any] | None = None,
         windage: WindageParameters = BLUE_LADY_WINDAGE,
         *,
-        current: CurrentConfig | tuple[float, float] | None = None,
+        current: CurrentConfig | str | tuple[float, float] | Mapping[str, Any] | None = None,
         waves: WaveConfig | None = None,
         xml_path: str | Path | None = None,
         timestep: float | None = None,
@@ -128,8 +127,9 @@ class VesselPhysics:
         self.thrusters = thrusters
         self._lower = thrusters.lower.tolist()
         self._upper = thrusters.upper.tolist()
-        self.aerodynamics = wind is not None
-        self.wind_config = wind if wind is not None else WindConfig()
+        wind_cfg = WindConfig.coerce(wind, name="wind")
+        self.aerodynamics = wind_cfg is not None
+        self.wind_config = wind_cfg if wind_cfg is not None else WindConfig()
         self.windage = windage
         self.current_config = _current_config(current)
         self.current = Current(self.current_config)
@@ -195,16 +195,21 @@ class VesselPhysics:
             raise ValueError(f"unexpected joint-space inertia (need diag(m, m, Izz)): {Mq}")
         self._m_q, self._i_q = float(Mq[0, 0]), float(Mq[2, 2])
 
-    def set_current(self, current: CurrentConfig | tuple[float, float] | None) -> None:
-        """Replace the current model (takes effect at the next :meth:`reset`)."""
+    def set_current(
+        self, current: CurrentConfig | str | tuple[float, float] | Mapping[str, Any] | None
+    ) -> None:
+        """Replace the current model (any form of ``current=``; effective at :meth:`reset`)."""
         self.current_config = _current_config(current)
         self.current = Current(self.current_config)
         self._prepare = self._make_prepare()
 
-    def set_wind(self, wind: WindConfig | None) -> None:
-        """Replace the wind model (takes effect at the next :meth:`reset`)."""
-        self.aerodynamics = wind is not None
-        self.wind_config = wind if wind is not None else WindConfig()
+    def set_wind(
+        self, wind: WindConfig | str | tuple[float, float] | Mapping[str, Any] | None
+    ) -> None:
+        """Replace the wind model (any form of ``wind=``; takes effect at :meth:`reset`)."""
+        wind_cfg = WindConfig.coerce(wind, name="wind")
+        self.aerodynamics = wind_cfg is not None
+        self.wind_config = wind_cfg if wind_cfg is not None else WindConfig()
         self.wind = Wind(self.wind_config, self.windage)
         self._wind_load = WindLoad(blendermann(self.wind_config.coefficients), self.windage)
         self._prepare = self._make_prepare()

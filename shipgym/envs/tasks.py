@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Any
 
 from shipgym.disturbances import CurrentConfig, WindConfig
+from shipgym.disturbances.current import MAX_CURRENT_SPEED
+from shipgym.disturbances.wind import MAX_WIND_SPEED
 from shipgym.guidance import Leg, ManoeuvrePlan
 from shipgym.observers.sensors import SensorConfig
 
@@ -55,15 +58,35 @@ class BlueLadyStationKeepingEnv(BlueLadyEnv):
 class BlueLadyTrackingEnv(BlueLadyEnv):
     r"""Randomised legs and wind on open water (the training task): ``shipgym/BlueLadyTracking-v0``.
 
-    Each episode draws from the seeded generator 1-3 legs: lateral (2-8 m either side),
-    longitudinal (5-30 m ahead or 3-15 m astern), rotation (30-120 deg either way) or combined
-    (surge and sway together); a wind of 0-3.5 m/s from any direction with gusts (4 m/s on the
-    beam exceeds the 248 N m yaw capacity); a lake current of 0-0.03 m/s in any direction
-    (notes 3: ~1 % of the wind); and sensor noise within the lake presets (DGPS sigma
-    0.07-0.15 m per axis, gyrocompass 0.2-0.45 deg). The episode terminates when the last leg
-    completes; time limit 800 control steps. ``max_current_speed=0`` and
-    ``randomize_sensors=False`` switch those draws off (the shipped PPO baseline was trained
-    so). Spaces, reward and info: see :class:`BlueLadyEnv`.
+    Each episode draws from the seeded generator 1-``max_legs`` legs: lateral (2-8 m either
+    side), longitudinal (5-30 m ahead or 3-15 m astern), rotation (30-120 deg either way) or
+    combined (surge and sway together); and, by default, a wind of 0-``max_wind_speed`` m/s
+    from any direction with the default gusts (4 m/s on the beam exceeds the 248 N m yaw
+    capacity), a constant lake current of 0-``max_current_speed`` m/s in any direction
+    (notes 3: ~1 % of the wind) and sensor noise within the lake presets (DGPS sigma
+    0.07-0.15 m per axis, gyrocompass 0.2-0.45 deg) on top of the ``"default"`` sensors.
+    The episode terminates when the last leg completes; time limit 800 control steps.
+
+    Arguments (besides those of :class:`BlueLadyEnv`):
+
+    | Argument | Default | Description |
+    |---|---|---|
+    | ``max_legs`` | ``3`` | most legs per episode (int >= 1) |
+    | ``max_wind_speed`` | ``3.5`` | upper end of the drawn mean wind speed (m/s) |
+    | ``max_current_speed`` | ``0.03`` | upper end of the drawn current speed (m/s); 0: none |
+    | ``randomize_sensors`` | ``None`` | draw the sensor noise per episode; ``None``: unless |
+    |  |  | ``sensors=`` is given |
+
+    ``wind=``, ``current=`` and ``sensors=`` given explicitly (in any accepted form, ``None``
+    included) FIX that quantity for every episode; the draw is only the default, when the
+    argument is not passed. ``randomize_sensors=True`` together with ``sensors=`` draws the
+    noise variances per episode on top of the given sensors. The draws are made in a fixed
+    order (plan, wind, current when ``max_current_speed > 0``, sensors when randomised) even
+    for a fixed quantity, and then discarded, so fixing one quantity leaves every other draw of
+    the seed unchanged. ``max_current_speed=0`` and ``randomize_sensors=False`` switch those
+    draws off (the shipped PPO baseline was trained so). ``wind_config``, ``current_config``
+    and ``sensor_config`` report the episode's values after :meth:`reset`. Spaces, reward and
+    info: see :class:`BlueLadyEnv`.
     """
 
     def __init__(
@@ -71,19 +94,35 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
         max_legs: int = 3,
         max_wind_speed: float = 3.5,
         max_current_speed: float = 0.03,
-        randomize_sensors: bool = True,
+        randomize_sensors: bool | None = None,
         **kwargs: Any,
     ) -> None:
         if not (isinstance(max_legs, int) and max_legs >= 1):
             raise ValueError(f"max_legs must be an int >= 1, got {max_legs!r}")
-        if not (math.isfinite(max_wind_speed) and max_wind_speed >= 0):
-            raise ValueError(f"max_wind_speed must be >= 0 m/s, got {max_wind_speed!r}")
-        if not (math.isfinite(max_current_speed) and max_current_speed >= 0):
-            raise ValueError(f"max_current_speed must be >= 0 m/s, got {max_current_speed!r}")
+        if not (_real(max_wind_speed) and 0 <= max_wind_speed <= MAX_WIND_SPEED):
+            raise ValueError(
+                f"max_wind_speed must be in [0, {MAX_WIND_SPEED:g}] m/s, got {max_wind_speed!r}"
+            )
+        if not (_real(max_current_speed) and 0 <= max_current_speed <= MAX_CURRENT_SPEED):
+            raise ValueError(
+                f"max_current_speed must be in [0, {MAX_CURRENT_SPEED:g}] m/s, "
+                f"got {max_current_speed!r}"
+            )
+        if randomize_sensors is not None and not isinstance(randomize_sensors, bool):
+            raise ValueError(
+                f"randomize_sensors must be True, False or None, got {randomize_sensors!r}"
+            )
         self.max_legs = max_legs
         self.max_wind_speed = float(max_wind_speed)
         self.max_current_speed = float(max_current_speed)
-        self.randomize_sensors = bool(randomize_sensors)
+        # an argument that is passed fixes its quantity; the draw is the default only
+        self._draw_wind = "wind" not in kwargs
+        self._draw_current = "current" not in kwargs
+        # the sensor draw is made unless switched off explicitly, and used unless fixed
+        self._sensor_draw = randomize_sensors is not False
+        self.randomize_sensors = (
+            "sensors" not in kwargs if randomize_sensors is None else randomize_sensors
+        )
         kwargs.setdefault("scene", "open-water")
         kwargs.setdefault("plan", ManoeuvrePlan(legs=(Leg(surge=10.0),), name="tracking"))
         super().__init__(**kwargs)
@@ -112,20 +151,33 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
 
     def _episode_wind(self) -> WindConfig | None:
         rng = self.np_random
-        speed = rng.uniform(0.0, self.max_wind_speed)
-        return WindConfig(speed=speed, direction_from=rng.uniform(0.0, 2.0 * math.pi))
+        speed = rng.uniform(0.0, self.max_wind_speed)  # drawn even when fixed (same stream)
+        direction = rng.uniform(0.0, 2.0 * math.pi)
+        if not self._draw_wind:
+            return super()._episode_wind()
+        return WindConfig(speed=speed, direction_from=direction)
 
     def _episode_current(self) -> CurrentConfig | None:
         if self.max_current_speed == 0.0:  # no draw: the random stream stays as without current
-            return self.current_config
+            return super()._episode_current()
         rng = self.np_random
         speed = rng.uniform(0.0, self.max_current_speed)
-        return CurrentConfig(speed=speed, direction_to=rng.uniform(0.0, 2.0 * math.pi))
+        direction = rng.uniform(0.0, 2.0 * math.pi)
+        if not self._draw_current:
+            return super()._episode_current()
+        return CurrentConfig(speed=speed, direction_to=direction)
 
     def _episode_sensors(self) -> SensorConfig | None:
-        if not self.randomize_sensors or self.sensor_config is None:
-            return self.sensor_config
+        given = super()._episode_sensors()
+        if given is None or not self._sensor_draw:  # no sensors, or no draw: as given
+            return given
         rng = self.np_random
-        pos = rng.uniform(0.07, 0.15)
+        pos = rng.uniform(0.07, 0.15)  # drawn even when fixed (same stream)
         psi = math.radians(rng.uniform(0.2, 0.45))
-        return self.sensor_config.replace(position_variance=pos * pos, heading_variance=psi * psi)
+        if not self.randomize_sensors:
+            return given
+        return given.replace(position_variance=pos * pos, heading_variance=psi * psi)
+
+
+def _real(x: Any) -> bool:
+    return isinstance(x, numbers.Real) and not isinstance(x, bool) and math.isfinite(x)

@@ -67,7 +67,7 @@ def controller_labels(controllers: Sequence[str]) -> list[str]:
     return out
 
 
-def _job(job: tuple[str, str, int, tuple[float, float] | None, str | None]) -> dict[str, Any]:
+def _job(job: tuple[str, str, int, Any, str | None]) -> dict[str, Any]:
     """One harbour run in a worker process."""
     label, controller, seed, wind, observer = job
     import shipgym.controllers.lq  # noqa: F401  (registers "lq")
@@ -89,7 +89,7 @@ def bench_controllers(
     controllers: Sequence[str] = DEFAULT_CONTROLLERS,
     seeds: int = 10,
     *,
-    wind: tuple[float, float] | None = DEFAULT_WIND,
+    wind: Any = DEFAULT_WIND,
     observer: str | None = "default",
     workers: int | None = None,
     progress: bool = True,
@@ -100,7 +100,9 @@ def bench_controllers(
         controllers: names: ``pid``, ``pid-seed``, ``lq``, ``ppo`` (the shipped baseline),
             ``ppo:PATH``, ``sac:PATH``.
         seeds: number of seeds per controller.
-        wind: ``(speed m/s, direction-from rad)``, default 3 m/s from 300 deg; ``None``: calm.
+        wind: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
+            (``"3@300"``: 3 m/s from 300 deg, the default; ``(speed m/s, from deg)``; a
+            ``WindConfig``) or ``None`` (calm).
         observer: ``"default"`` (the Kalman-Bucy filter ``kbf`` when available, else the
             truth), ``"truth"``/``None`` or an observer name; the same for every controller.
         workers: processes (default: CPUs, at most the number of runs); 1 runs in-process.
@@ -122,8 +124,10 @@ def bench_controllers(
     from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
     from shipgym.controllers.lq import register_lq
     from shipgym.controllers.wrappers import controller_spec
+    from shipgym.disturbances import WindConfig
 
     register_lq()
+    wind = WindConfig.coerce(wind, name="wind")
     if not (isinstance(seeds, int) and seeds >= 1):
         raise ValueError(f"seeds must be an int >= 1, got {seeds!r}")
     obs = default_observer() if observer == "default" else check_observer(observer)
@@ -187,11 +191,14 @@ def controller_table(rows: Sequence[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def bench_title(rows: Sequence[dict[str, Any]], wind: tuple[float, float] | None) -> str:
-    """The one-line caption of :func:`controller_table`."""
+def bench_title(rows: Sequence[dict[str, Any]], wind: Any) -> str:
+    """The one-line caption of :func:`controller_table` (``wind`` as for the bench)."""
+    from shipgym.disturbances import WindConfig
+
     seeds = sorted({r["seed"] for r in rows})
     obs = rows[0]["observer"] if rows else "truth"
-    w = "calm" if wind is None else f"wind {wind[0]:g} m/s from {math.degrees(wind[1]):g} deg"
+    wc = WindConfig.coerce(wind, name="wind")
+    w = "calm" if wc is None else f"wind {wc.label()}"
     return (
         f"Controllers on the harbour manoeuvre (observer {obs}, {w}, seeds "
         f"{seeds[0]}-{seeds[-1]}); J_c from the true pose, 'J_c measured' from the DGPS/gyro "

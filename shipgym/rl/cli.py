@@ -14,7 +14,6 @@ which ``shipgym.cli.main`` turns into ``shipgym: error: ...``.
 from __future__ import annotations
 
 import argparse
-import math
 import time
 from pathlib import Path
 from typing import Any
@@ -27,10 +26,10 @@ __all__ = [
 ]
 
 
-def _wind(text: str) -> tuple[float, float]:
+def _wind(text: str) -> Any:
     from shipgym.cli import parse_wind
 
-    return parse_wind(text)
+    return parse_wind(text)  # a WindConfig (WindConfig.parse), errors as argparse errors
 
 
 def add_train_parser(sub: Any) -> argparse.ArgumentParser:
@@ -129,7 +128,7 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
     b.add_argument(
         "--wind",
         type=_wind,
-        default=(3.0, math.radians(300.0)),
+        default="3@300",
         metavar="SPEED@FROM_DEG",
         help="mean wind (3@300)",
     )

@@ -27,8 +27,8 @@ __all__ = [
     "run_env_episode",
 ]
 
-#: the lake-trial wind of seed001: 3 m/s from 300 deg (speed m/s, direction-from rad)
-DEFAULT_WIND: tuple[float, float] = (3.0, math.radians(300.0))
+#: the lake-trial wind of Tomera (2014): 3 m/s from 300 deg ("SPEED@FROM_DEG")
+DEFAULT_WIND = "3@300"
 
 PolicyFn = Callable[[NDArray[np.float32]], NDArray[np.float32]]
 
@@ -67,7 +67,7 @@ def make_controlled_env(
     controller: str,
     *,
     observer: str | None = None,
-    wind: tuple[float, float] | None = DEFAULT_WIND,
+    wind: Any = DEFAULT_WIND,
     **env_kwargs: Any,
 ) -> gym.Env[Any, Any]:
     """The wrapper stack of a named controller: classical (``pid``, ``lq``) or learned.
@@ -78,14 +78,15 @@ def make_controlled_env(
             controller (``ppo``: the shipped baseline, ``ppo:PATH``, ``sac:PATH``).
         observer: ``None``/``"truth"`` or an observer name. Learned controllers always get
             the observer given here (pass the model's own to reproduce its training setup).
-        wind: ``(speed m/s, direction-from rad)`` or ``None`` (calm).
+        wind: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
+            (``"3@300"``, ``(speed m/s, from deg)``, a ``WindConfig``) or ``None`` (calm).
         **env_kwargs: further environment arguments.
     """
     import shipgym
     from shipgym.controllers.learned import is_learned_controller, make_learned_env
     from shipgym.disturbances import WindConfig
 
-    wind_cfg = None if wind is None else WindConfig(speed=wind[0], direction_from=wind[1])
+    wind_cfg = WindConfig.coerce(wind, name="wind")
     observer = check_observer(observer)
     if is_learned_controller(controller):
         return make_learned_env(
@@ -147,23 +148,26 @@ def run_controlled_episode(
     *,
     seed: int = 0,
     observer: str | None = None,
-    wind: tuple[float, float] | None = DEFAULT_WIND,
+    wind: Any = DEFAULT_WIND,
     **env_kwargs: Any,
 ) -> dict[str, Any]:
     """One closed-loop episode of a named controller (see :func:`make_controlled_env`).
 
     Returns the row of :func:`run_env_episode` plus ``scenario``, ``controller`` (the name as
-    given), ``observer`` and ``wind``.
+    given), ``observer`` and ``wind`` (the wind the physics used: speed m/s, from deg).
     """
     env = make_controlled_env(scenario, controller, observer=observer, wind=wind, **env_kwargs)
     try:
         row = run_env_episode(env, seed)
+        wc = env.unwrapped.wind_config  # type: ignore[attr-defined]  (the episode's)
     finally:
         env.close()
     return {
         "scenario": scenario,
         "controller": controller,
         "observer": observer or "truth",
-        "wind": None if wind is None else {"speed": wind[0], "from_deg": math.degrees(wind[1])},
+        "wind": None
+        if wc is None
+        else {"speed": wc.speed, "from_deg": math.degrees(wc.direction_from) % 360.0},
         **row,
     }

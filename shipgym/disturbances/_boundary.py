@@ -1,0 +1,111 @@
+"""Wind and current settings at the public boundary: the forms a user may give, one coercion.
+
+Inside the code every direction is in radians (:class:`~shipgym.disturbances.WindConfig`,
+:class:`~shipgym.disturbances.CurrentConfig` fields). Where a user gives a direction as a
+plain number it is in DEGREES, everywhere (env arguments, :class:`VesselPhysics`,
+``shipgym.make``, the CLI, benchmarks, scenario files):
+
+* a config object (used as is);
+* the string ``"SPEED@DEG"``, e.g. ``"3@300"``: speed in m/s, direction in degrees clockwise
+  from north (wind: where it comes FROM; current: where it goes TO);
+* a pair ``(speed m/s, direction deg)`` with the same meaning;
+* a mapping of config fields (SI units, radians, as in the dataclass), where every angle field
+  also accepts a ``*_deg`` twin (``direction_from_deg``, ``direction_to_deg``, ...);
+* ``None`` (no wind / no current).
+
+Each config class owns its parser (``WindConfig.parse``) and its one coercion function
+(``WindConfig.coerce``), both thin wrappers of the helpers here, so that every entry point
+accepts exactly the same forms with the same meaning.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Callable, Mapping
+from typing import Any, TypeVar
+
+import numpy as np
+
+__all__ = ["coerce_config", "parse_speed_at"]
+
+C = TypeVar("C")
+
+
+def _is_real(x: Any) -> bool:
+    return isinstance(x, numbers.Real) and not isinstance(x, bool)
+
+
+def parse_speed_at(text: Any, *, name: str, form: str, example: str) -> tuple[float, float]:
+    """Split ``"SPEED@DEG"`` into ``(speed, degrees)`` as written (no range checks here).
+
+    Args:
+        text: The string.
+        name: The argument's name for the message (``"wind"``).
+        form: The accepted form for the message (``"SPEED@FROM_DEG"``).
+        example: An example with its meaning (``"3@300 (3 m/s from 300 deg)"``).
+
+    Raises:
+        ValueError: Not a string of two numbers separated by ``@``.
+    """
+    parts = text.split("@") if isinstance(text, str) else []
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        speed, deg = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise ValueError(f"malformed {name} {text!r}: expected {form}, e.g. {example}") from None
+    return speed, deg
+
+
+def coerce_config(
+    cls: type[C],
+    value: Any,
+    *,
+    name: str,
+    parse: Callable[[str], C],
+    from_deg: Callable[[float, float], C],
+    deg_fields: Mapping[str, str],
+    accepted: str,
+) -> C | None:
+    """The one coercion of a wind or current setting (see the module docstring).
+
+    Args:
+        cls: The config class.
+        value: What the user gave.
+        name: The argument's name, used in every message.
+        parse: ``cls.parse`` (``"SPEED@DEG"``).
+        from_deg: ``(speed m/s, direction deg) -> config``.
+        deg_fields: ``{"direction_from_deg": "direction_from", ...}`` accepted in a mapping.
+        accepted: The accepted forms, for the message.
+
+    Returns:
+        The config, or ``None`` for ``None``.
+
+    Raises:
+        ValueError: An unaccepted form (naming ``name`` and the accepted forms) or an invalid
+            value (naming ``name`` and the field).
+    """
+    if value is None or isinstance(value, cls):
+        return value
+    if isinstance(value, str):
+        return parse(value)
+    try:
+        if isinstance(value, Mapping):
+            d = dict(value)
+            for deg_key, key in deg_fields.items():
+                if deg_key in d:
+                    if key in d:
+                        raise ValueError(f"give '{key}' (rad) or '{deg_key}' (deg), not both")
+                    deg = d.pop(deg_key)
+                    if not _is_real(deg):
+                        raise ValueError(f"{deg_key} must be a number of degrees, got {deg!r}")
+                    d[key] = math.radians(deg)
+            return cls.from_dict(d)  # type: ignore[attr-defined, no-any-return]
+        if isinstance(value, tuple | list | np.ndarray) and len(value) == 2:
+            speed, deg = (x.item() if isinstance(x, np.generic) else x for x in value)
+            if _is_real(speed) and _is_real(deg):
+                return from_deg(float(speed), float(deg))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} {value!r}: {exc}") from None
+    raise ValueError(f"{name} must be {accepted}; got {value!r}")
