@@ -121,9 +121,12 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ## Episode End
     Terminated when the hull touches a quay (``info["quay_contact"]``) or, if
     ``terminate_on_finish``, when the last leg is complete (``info["finished"]``).
-    Truncated by the registered time limit (``max_episode_steps`` control steps; ``gym.make``
-    sets it, and the env itself ends the episode there too). After the end, :meth:`step`
-    raises ``gymnasium.error.ResetNeeded`` until :meth:`reset` is called.
+    Truncated by the registered time limit (``max_episode_steps`` control steps, ``gym.make``'s
+    ``TimeLimit``). At the end of every episode ``info`` holds ``episode_metrics``, and
+    :meth:`step` raises ``gymnasium.error.ResetNeeded`` until :meth:`reset` is called (the env
+    itself on termination; on truncation the
+    :class:`~shipgym.envs.episode.EpisodeEnd` wrapper that ``gym.make`` applies to every
+    shipgym id, outside the ``TimeLimit``).
 
     ## Info
     Truth ``eta`` (m, m, rad; NED), ``nu``; navigation data ``nav_eta``, ``nav_nu`` (what
@@ -227,7 +230,6 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             else _whole_multiple(self._sensor_setting.period, timestep)
         )
         self._steps = 0
-        self._control_steps = 0
         self._episode_over = True  # until the first reset
         self._last_measurement: NDArray[np.float64] | None = None
         self.wave_config = parse_waves_arg(waves)
@@ -317,7 +319,6 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         if self.sensors is not None:
             self.sensors.reset(rng)
         self._steps = 0
-        self._control_steps = 0
         self._episode_over = False
         self._last_measurement = None
         self.guidance.reset(start, t0=0.0)
@@ -338,13 +339,13 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
         Raises:
             gymnasium.error.ResetNeeded: before the first :meth:`reset` or after the episode
-                ended (terminated, or truncated at the registered time limit).
+                terminated (after a time-limit truncation the ``EpisodeEnd`` wrapper raises).
             ValueError: an action of the wrong shape or with NaN / infinite values.
         """
         if self._episode_over:
             raise gym.error.ResetNeeded(
-                "the episode has ended (terminated or truncated) or was never started: call "
-                "reset() before step()"
+                "the episode has ended (terminated) or was never started: call reset() before "
+                "step()"
             )
         a = np.asarray(action, dtype=np.float64)
         if a.shape != (3,):
@@ -374,17 +375,13 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._prev_action = clipped
         finished = self.guidance.finished
         terminated = self._contact or (finished and self.terminate_on_finish)
-        self._control_steps += 1
-        # the time limit gym.make registers (TimeLimit truncates there; we end the episode too)
-        limit = None if self.spec is None else self.spec.max_episode_steps
-        truncated = limit is not None and self._control_steps >= limit
         info = self._info(sample, command, saturated | action_clipped, finished, rewards, contacts)
         info["action_clipped"] = action_clipped
         info["measurements"] = measurements
-        if terminated or truncated:
+        if terminated:  # a time-limit truncation is seen by the EpisodeEnd wrapper
             self._episode_over = True
             info["episode_metrics"] = self.episode_metrics()
-        return self._obs(sample), reward, terminated, truncated, info
+        return self._obs(sample), reward, terminated, False, info
 
     def render(self) -> NDArray[np.uint8] | None:
         """An RGB frame (H, W, 3) of the map camera; needs ``render_mode="rgb_array"``."""

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import gymnasium as gym
+from gymnasium.envs.registration import WrapperSpec
+
+from .episode import EPISODE_END_ENTRY_POINT
 
 __all__ = ["ENV_IDS", "register_envs"]
 
@@ -15,7 +18,18 @@ ENV_IDS: dict[str, tuple[str, int]] = {
 
 
 def register_envs() -> None:
-    """Register every id in :data:`ENV_IDS` with Gymnasium (idempotent)."""
+    """Register every id in :data:`ENV_IDS` with Gymnasium (idempotent).
+
+    Each id carries :class:`~shipgym.envs.episode.EpisodeEnd` as an additional wrapper, so
+    ``gym.make`` applies it outside the ``TimeLimit``: ``info["episode_metrics"]`` at the end
+    of every episode and no ``step()`` after it.
+    """
+    end = WrapperSpec(name="EpisodeEnd", entry_point=EPISODE_END_ENTRY_POINT, kwargs={})
     for env_id, (entry_point, steps) in ENV_IDS.items():
         if env_id not in gym.registry:
-            gym.register(id=env_id, entry_point=entry_point, max_episode_steps=steps)
+            gym.register(
+                id=env_id,
+                entry_point=entry_point,
+                max_episode_steps=steps,
+                additional_wrappers=(end,),
+            )

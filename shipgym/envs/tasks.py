@@ -77,15 +77,16 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
     | ``randomize_sensors`` | ``None`` | draw the sensor noise per episode; ``None``: unless |
     |  |  | ``sensors=`` is given |
 
-    ``wind=``, ``current=`` and ``sensors=`` given explicitly (in any accepted form, ``None``
-    included) FIX that quantity for every episode; the draw is only the default, when the
-    argument is not passed. ``randomize_sensors=True`` together with ``sensors=`` draws the
-    noise variances per episode on top of the given sensors. The draws are made in a fixed
-    order (plan, wind, current when ``max_current_speed > 0``, sensors when randomised) even
-    for a fixed quantity, and then discarded, so fixing one quantity leaves every other draw of
-    the seed unchanged. ``max_current_speed=0`` and ``randomize_sensors=False`` switch those
-    draws off (the shipped PPO baseline was trained so). ``wind_config``, ``current_config``
-    and ``sensor_config`` report the episode's values after :meth:`reset`. Spaces, reward and
+    ``plan=``, ``wind=``, ``current=`` and ``sensors=`` given explicitly (in any accepted
+    form; ``None`` for no wind, no current, no sensors) FIX that quantity for every episode:
+    the draw is only the default, when the argument is not passed. ``randomize_sensors=True``
+    together with ``sensors=`` draws the noise variances per episode on top of the given
+    sensors. The draws are made in a fixed order (plan, wind, current when
+    ``max_current_speed > 0``, sensors unless ``randomize_sensors=False``) even for a fixed
+    quantity, and then discarded, so fixing one quantity leaves every other draw of the seed
+    unchanged. ``max_current_speed=0`` and ``randomize_sensors=False`` switch those draws off
+    (the shipped PPO baseline was trained so). ``wind_config``, ``current_config`` and
+    ``sensor_config`` report the episode's values after :meth:`reset`. Spaces, reward and
     info: see :class:`BlueLadyEnv`.
     """
 
@@ -116,6 +117,7 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
         self.max_wind_speed = float(max_wind_speed)
         self.max_current_speed = float(max_current_speed)
         # an argument that is passed fixes its quantity; the draw is the default only
+        self._draw_plan = "plan" not in kwargs
         self._draw_wind = "wind" not in kwargs
         self._draw_current = "current" not in kwargs
         # the sensor draw is made unless switched off explicitly, and used unless fixed
@@ -147,6 +149,8 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
                     name=f"{i + 1}: combined",
                 )  # fmt: skip
             legs.append(leg)
+        if not self._draw_plan:  # drawn all the same (same stream), then discarded
+            return super()._episode_plan()
         return ManoeuvrePlan(legs=tuple(legs), name="tracking")
 
     def _episode_wind(self) -> WindConfig | None:
