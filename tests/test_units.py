@@ -183,14 +183,15 @@ def test_cli_wind_argument_is_a_wind_config(argv):
     ],
 )
 def test_cli_bad_wind_is_a_one_line_error(text, match, capsys):
-    with pytest.raises(SystemExit) as exc:
-        cli.main(["run", "harbour", f"--wind={text}"])
-    assert exc.value.code == 2
+    try:
+        rc = cli.main(["run", "harbour", f"--wind={text}"])
+    except SystemExit as exc:  # plain argparse exits; a one-line parser may return instead
+        rc = exc.code
+    assert rc == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err
     last = err.strip().splitlines()[-1]
-    assert last.startswith("shipgym run: error: argument --wind:")
-    assert match in last
+    assert "error: argument --wind:" in last and match in last
 
 
 def test_cli_demo_prints_the_wind_it_used(capsys):

@@ -40,7 +40,10 @@ def make(
         observer: ``None`` or ``"truth"`` (controllers see the true state), or an observer
             name (``shipgym.observers.OBSERVERS``).
         controller: ``None`` (raw thruster actions) or a controller name.
-        **kwargs: environment arguments.
+        **kwargs: environment arguments (``wind="3@300"``, ``current=(0.1, 90)``, ...: any
+            form of ``WindConfig.coerce`` / ``CurrentConfig.coerce``, directions in degrees;
+            see :class:`~shipgym.envs.base.BlueLadyEnv`) and ``gym.make``'s own
+            (``max_episode_steps``).
     """
     env = gym.make(resolve_env_id(env_id), **kwargs)
     if observer not in (None, "truth"):
