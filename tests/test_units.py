@@ -180,6 +180,8 @@ def test_cli_wind_argument_is_a_wind_config(argv):
         ("-3@0", ">= 0"),
         ("3 from 300", "expected SPEED@FROM_DEG"),
         ("3@", "expected SPEED@FROM_DEG"),
+        ("3_0@300", "expected SPEED@FROM_DEG"),
+        ("3@300deg", "expected SPEED@FROM_DEG"),
     ],
 )
 def test_cli_bad_wind_is_a_one_line_error(text, match, capsys):

@@ -1,10 +1,12 @@
 """Environmental disturbances: wind, waves and current, pure NumPy/SciPy (SPEC section 6).
 
 Every stochastic part draws from a generator handed in by the environment at ``reset(rng)``,
-so the same seed gives the same run.
+so the same seed gives the same run. Users give a wind or a current in any form of
+:meth:`WindConfig.coerce` / :meth:`CurrentConfig.coerce` (``"3@300"``, ``(3, 300)``, a config
+or a mapping); plain-number directions are degrees, fields are radians.
 """
 
-from .current import Current, CurrentConfig, current_body_velocity
+from .current import MAX_CURRENT_SPEED, Current, CurrentConfig, current_body_velocity
 from .spectra import (
     dnv_gamma,
     fit_shaping_filter_lambda,
@@ -24,6 +26,7 @@ from .waves import WaveConfig, Waves, al_takie_hf_polynomial, drift_coefficients
 from .wind import (
     BLENDERMANN,
     GUST_SPECTRA,
+    MAX_WIND_SPEED,
     BlendermannCoefficients,
     Wind,
     WindConfig,
@@ -37,6 +40,8 @@ from .wind import (
 __all__ = [
     "BLENDERMANN",
     "GUST_SPECTRA",
+    "MAX_CURRENT_SPEED",
+    "MAX_WIND_SPEED",
     "BlendermannCoefficients",
     "Current",
     "CurrentConfig",

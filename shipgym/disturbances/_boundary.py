@@ -50,7 +50,7 @@ def parse_speed_at(text: Any, *, name: str, form: str, example: str) -> tuple[fl
     """
     parts = text.split("@") if isinstance(text, str) else []
     try:
-        if len(parts) != 2:
+        if len(parts) != 2 or "_" in text:  # float() would read "3_0" as 30
             raise ValueError
         speed, deg = float(parts[0]), float(parts[1])
     except ValueError:
