@@ -304,7 +304,7 @@ class ModelMetadata:
         for name in ("env_kwargs", "policy_kwargs", "hyperparams", "extra"):
             if not isinstance(getattr(self, name), Mapping):
                 raise ValueError(f"{name} must be a mapping, got {getattr(self, name)!r}")
-        object.__setattr__(self, "observation_shape", _shape(self.observation_shape, "obs"))
+        object.__setattr__(self, "observation_shape", _shape(self.observation_shape, "observation"))
         object.__setattr__(self, "action_shape", _shape(self.action_shape, "action"))
         check_policy_spec(
             self.algorithm, self.policy, self.policy_kwargs,
