@@ -12,20 +12,39 @@ Scenario files (:func:`shipgym.scenarios.load_scenario`) and hyperparameter file
   self-referencing structure is refused, not walked).
 
 Every failure is one ``ValueError`` line naming the file (``FileNotFoundError`` for a
-missing one).
+missing one). :func:`jsonable` is the other direction: results as strict JSON (NaN -> null).
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
-__all__ = ["MAX_CONFIG_BYTES", "MAX_NODES", "load_config_file", "read_bounded", "yaml_loader"]
+__all__ = [
+    "MAX_CONFIG_BYTES",
+    "MAX_NODES",
+    "jsonable",
+    "load_config_file",
+    "read_bounded",
+    "yaml_loader",
+]
 
 #: largest configuration file read (bytes)
 MAX_CONFIG_BYTES = 1 << 20
 #: most values (mappings, lists and scalars, aliases expanded) in one configuration file
 MAX_NODES = 100_000
+
+
+def jsonable(x: Any) -> Any:
+    """``x`` with NaN and infinite floats replaced by ``None`` (strict JSON has no NaN)."""
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: jsonable(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [jsonable(v) for v in x]
+    return x
 
 
 def yaml_loader() -> Any:

@@ -16,10 +16,13 @@ import math
 import re
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from shipgym._safeload import jsonable
 
 __all__ = ["main", "parse_wind"]
 
@@ -172,9 +175,12 @@ def run_episode(
     if is_learned_controller(controller):
         from shipgym.controllers.learned import make_learned_env
 
-        # the learned policy runs with the observer it was trained with unless one is named
+        # the learned policy runs with the observer it was trained with unless one is named;
+        # an explicit one is honoured and recorded below ("observer", "model")
         obs_kw = {} if observer is None else {"observer": observer}
-        env = make_learned_env(scenario, controller, **obs_kw, **kwargs)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*was trained with observer")
+            env = make_learned_env(scenario, controller, **obs_kw, **kwargs)
         meta = env.policy.metadata  # type: ignore[attr-defined]
         model_info: dict[str, Any] | None = {
             "path": str(env.model_path),  # type: ignore[attr-defined]
@@ -306,17 +312,6 @@ def _fmt(x: Any) -> str:
     if isinstance(x, float):
         return "n/a" if math.isnan(x) else f"{x:.4f}"
     return str(x)
-
-
-def jsonable(x: Any) -> Any:
-    """``x`` with NaN and infinite floats replaced by ``None`` (strict JSON has no NaN)."""
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: jsonable(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [jsonable(v) for v in x]
-    return x
 
 
 def _header(res: dict[str, Any]) -> str:

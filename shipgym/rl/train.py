@@ -48,6 +48,7 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
+from shipgym._safeload import jsonable
 from shipgym.controllers.learned import (
     ALGORITHMS,
     METADATA_NAME,
@@ -534,7 +535,11 @@ def _make_eval_callback(**kw: Any) -> Any:
             policy = LearnedPolicy(self.model.policy, self.metadata_fn())
             rows = [run_env_episode(self.env, s, policy) for s in self.seeds]
             ok, neg_jc = _score(rows)
-            meas = [r["measured"]["J_c"] for r in rows if r.get("measured")]
+            meas = [
+                r["measured"]["J_c"]
+                for r in rows
+                if r.get("measured") and math.isfinite(r["measured"]["J_c"])
+            ]
             summary = {
                 "timesteps": int(self.num_timesteps),
                 "completed": ok,
@@ -553,7 +558,8 @@ def _make_eval_callback(**kw: Any) -> Any:
                 self.logger.record("eval/J_c_measured", summary["J_c_measured"])
             self.logger.record("eval/quay_contact", sum(r["quay_contact"] for r in rows))
             self.logger.record("eval/duration_s", float(np.mean([r["duration_s"] for r in rows])))
-            (self.out_dir / "evaluations.json").write_text(json.dumps(self.evaluations, indent=1))
+            text = json.dumps(jsonable(self.evaluations), indent=1)
+            (self.out_dir / "evaluations.json").write_text(text)
             score = (ok, neg_jc)
             if self.best is None or score > self.best:
                 self.best = score
