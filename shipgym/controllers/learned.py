@@ -529,8 +529,10 @@ def _archive(zf: zipfile.ZipFile, p: Path) -> dict[str, zipfile.ZipInfo]:
 
 def _open_model(path: str | Path) -> tuple[Path, zipfile.ZipFile, dict[str, zipfile.ZipInfo]]:
     p = Path(path)
-    if not p.is_file():
+    if not p.exists():
         raise FileNotFoundError(f"model file {str(p)!r} does not exist")
+    if not p.is_file():
+        raise ValueError(f"model file {str(p)!r} is not a file")
     size = p.stat().st_size
     if size > MAX_MODEL_FILE_BYTES:
         raise ValueError(f"{p}: {size:,} bytes, more than a model file may have")
