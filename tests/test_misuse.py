@@ -9,6 +9,7 @@ without running code, quickly and in little memory (measured in a subprocess).
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import os
@@ -29,9 +30,7 @@ from shipgym.cli import main, run_episode
 
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = ROOT / "shipgym" / "assets" / "models" / "ppo_residual_pid_kbf.zip"
-HAS_RL = all(
-    __import__("importlib").util.find_spec(m) is not None for m in ("torch", "stable_baselines3")
-)
+HAS_RL = all(importlib.util.find_spec(m) is not None for m in ("torch", "stable_baselines3"))
 needs_rl = pytest.mark.skipif(not HAS_RL, reason="needs the rl extra (torch, stable-baselines3)")
 
 
@@ -96,6 +95,29 @@ def _bomb(tmp: Path, name: str, member: str, size: int) -> Path:
     return path
 
 
+def _lying_size(tmp: Path) -> Path:
+    """A zip whose directory says ``data`` unpacks to 1 kB while it holds 64 MiB of zeros."""
+    path = _bomb(tmp, "lying", "data", 64 << 20)
+    raw = bytearray(path.read_bytes())
+    cd = raw.find(b"PK\x01\x02")
+    while cd >= 0:  # the central directory entry of 'data'
+        n = int.from_bytes(raw[cd + 28 : cd + 30], "little")
+        if raw[cd + 46 : cd + 46 + n] == b"data":
+            break
+        cd = raw.find(b"PK\x01\x02", cd + 4)
+    assert cd >= 0
+    if raw[cd + 24 : cd + 28] == b"\xff\xff\xff\xff":  # zip64: sizes in the extra field
+        m = int.from_bytes(raw[cd + 28 : cd + 30], "little")
+        extra = cd + 46 + m
+        raw[extra + 4 : extra + 12] = (1000).to_bytes(8, "little")
+    else:
+        raw[cd + 24 : cd + 28] = (1000).to_bytes(4, "little")
+    path.write_bytes(bytes(raw))
+    with zipfile.ZipFile(path) as zf:
+        assert zf.getinfo("data").file_size == 1000
+    return path
+
+
 def _raw(path: Path, data: bytes) -> Path:
     path.write_bytes(data)
     return path
@@ -140,6 +162,11 @@ CRAFTED = {
     "zip-bomb-metadata": (lambda tmp: _bomb(tmp, "bomb1", "shipgym.json", 64 << 20), "limit"),
     "zip-bomb-weights": (lambda tmp: _bomb(tmp, "bomb2", "policy.pth", 256 << 20), "limit"),
     "zip-bomb-ratio": (lambda tmp: _bomb(tmp, "bomb3", "data", 16 << 20), "compressed"),
+    "zip-bomb-lying-directory": (_lying_size, "data"),
+    "many-members": (
+        lambda tmp: _write_zip(tmp / "many.zip", {f"m{i}": b"" for i in range(5000)}),
+        "announces 5000 members",
+    ),
     "extra-member": (
         lambda tmp: _write_zip(tmp / "extra.zip", {**_members(), "evil.pkl": b"x"}),
         "unexpected member",

@@ -527,6 +527,25 @@ def _archive(zf: zipfile.ZipFile, p: Path) -> dict[str, zipfile.ZipInfo]:
     return out
 
 
+def _check_directory_size(p: Path, size: int) -> None:
+    """Refuse a zip whose end record announces too many members, before ``zipfile`` parses its
+    directory (a directory of millions of entries would fill memory with ``ZipInfo``s)."""
+    with p.open("rb") as fh:
+        n = min(size, 22 + 0xFFFF)  # end record plus the longest comment
+        fh.seek(size - n)
+        tail = fh.read(n)
+    i = tail.rfind(b"PK\x05\x06")
+    if i < 0 or len(tail) - i < 22:
+        return  # not a zip: zipfile says so below
+    entries = int.from_bytes(tail[i + 10 : i + 12], "little")
+    dir_bytes = int.from_bytes(tail[i + 12 : i + 16], "little")
+    if entries > MAX_MEMBERS or dir_bytes > MAX_MEMBERS * 1024:
+        raise ValueError(
+            f"{p}: its directory announces {entries} members ({dir_bytes:,} bytes), more than a "
+            f"model has ({MAX_MEMBERS})"
+        )
+
+
 def _open_model(path: str | Path) -> tuple[Path, zipfile.ZipFile, dict[str, zipfile.ZipInfo]]:
     p = Path(path)
     if not p.exists():
@@ -536,6 +555,7 @@ def _open_model(path: str | Path) -> tuple[Path, zipfile.ZipFile, dict[str, zipf
     size = p.stat().st_size
     if size > MAX_MODEL_FILE_BYTES:
         raise ValueError(f"{p}: {size:,} bytes, more than a model file may have")
+    _check_directory_size(p, size)
     try:
         zf = zipfile.ZipFile(p)
     except (zipfile.BadZipFile, OSError) as exc:
