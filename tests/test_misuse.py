@@ -505,6 +505,12 @@ def test_api_misuse_names_the_argument(call, exc, name):
         ({"overrides": {"n_steps": 10**9}}, "n_steps"),
         ({"overrides": {"policy_kwargs": {"net_arch": [20000, 20000]}}}, "net_arch"),
         ({"overrides": {"learning_rate": math.nan}}, "learning_rate"),
+        ({"overrides": {"gamma": "0.99"}}, "gamma must be a finite number"),
+        ({"overrides": {"normalize_advantage": 1}}, "normalize_advantage must be true or false"),
+        ({"overrides": {"normalize": {"foo": 1}}}, "normalize has unknown keys"),
+        ({"overrides": {"rollout_buffer_class": "DictRolloutBuffer"}}, "rollout_buffer_class"),
+        ({"eval_seeds": [-1]}, "eval_seeds"),
+        ({"eval_freq": -5}, "eval_freq"),
     ],
 )
 def test_train_api_misuse(kwargs, name, tmp_path):

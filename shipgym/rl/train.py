@@ -135,6 +135,19 @@ HP_INT_BOUNDS: dict[str, tuple[int, int]] = {
 }
 #: most transitions in PPO's rollout buffer (``n_steps * n_envs``)
 MAX_ROLLOUT = 1 << 22
+#: algorithm arguments that take Python objects (classes, noise processes): not settable from
+#: a plain-data file
+_OBJECT_ARGS = (
+    "rollout_buffer_class",
+    "rollout_buffer_kwargs",
+    "replay_buffer_class",
+    "replay_buffer_kwargs",
+    "action_noise",
+)
+#: arguments that are a number or a schedule string (``"lin_3e-4"``), or ``"auto"`` (SAC)
+_NUMBER_OR_STRING = ("learning_rate", "clip_range", "clip_range_vf", "ent_coef", "target_entropy")
+#: keys of ``normalize`` (``VecNormalize`` arguments)
+_NORMALIZE_KEYS = ("norm_obs", "norm_reward", "clip_obs", "clip_reward", "gamma", "epsilon")
 
 
 # ---- hyperparameters -------------------------------------------------------------------------
@@ -242,10 +255,63 @@ def check_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
     for k, v in hp.items():
         if isinstance(v, float) and not math.isfinite(v):
             raise ValueError(f"{where}: {k} must be finite, got {v!r}")
+    _check_hp_types(algo, hp, where)
     try:
         check_policy_spec(algo, hp.get("policy", "MlpPolicy"), hp.get("policy_kwargs") or {})
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}") from None
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _check_hp_types(algo: str, hp: Mapping[str, Any], where: str) -> None:
+    """Types of the hyperparameters: as the algorithm's defaults, plain data only."""
+    from shipgym.controllers.learned import _plain
+
+    sig = inspect.signature(algorithm_class(algo).__init__).parameters
+    for k, v in hp.items():
+        _plain(v, f"{where}: {k}")
+        if k in _OBJECT_ARGS and v is not None:
+            raise ValueError(f"{where}: {k} takes Python objects; not settable from a file")
+        if k in SHIPGYM_KEYS or k not in sig or k in ("policy_kwargs", "train_freq"):
+            continue
+        default = sig[k].default
+        if k in _NUMBER_OR_STRING:
+            ok = v is None or _is_number(v) or isinstance(v, str)
+        elif isinstance(default, bool):
+            ok = isinstance(v, bool)
+        elif isinstance(default, int | float):
+            ok = _is_number(v)
+        else:
+            ok = True
+        if not ok:
+            kind = "true or false" if isinstance(default, bool) else "a finite number"
+            raise ValueError(f"{where}: {k} must be {kind}, got {v!r}")
+    norm = hp.get("normalize")
+    if norm is not None and not isinstance(norm, bool):
+        if not isinstance(norm, Mapping):
+            raise ValueError(f"{where}: normalize must be true/false or a mapping, got {norm!r}")
+        unknown = sorted(set(norm) - set(_NORMALIZE_KEYS))
+        if unknown:
+            raise ValueError(
+                f"{where}: normalize has unknown keys {unknown}; valid: "
+                f"{', '.join(_NORMALIZE_KEYS)}"
+            )
+    seeds = hp.get("eval_seeds")
+    if seeds is not None and not (
+        isinstance(seeds, list | tuple)
+        and len(seeds) <= 1000
+        and all(isinstance(x, int) and not isinstance(x, bool) and x >= 0 for x in seeds)
+    ):
+        raise ValueError(f"{where}: eval_seeds must be a list of at most 1000 ints >= 0")
+    for key in ("env_kwargs", "randomize"):
+        if hp.get(key) is not None and not isinstance(hp[key], Mapping):
+            raise ValueError(f"{where}: {key} must be a mapping, got {hp[key]!r}")
+    scale = hp.get("residual_scale")
+    if scale is not None and not (_is_number(scale) and scale >= 0):
+        raise ValueError(f"{where}: residual_scale must be a finite number >= 0, got {scale!r}")
 
 
 def _check_algo_args(algo: str, hp: Mapping[str, Any], where: str) -> None:
@@ -745,11 +811,12 @@ def train(
         if val is not None:
             hp[key] = int(val)
     if eval_seeds is not None:
-        hp["eval_seeds"] = [int(s) for s in eval_seeds]
+        hp["eval_seeds"] = list(eval_seeds)
     n_steps = int(timesteps if timesteps is not None else hp.get("n_timesteps", 100_000))
     if n_steps < 1:
         raise ValueError(f"timesteps must be >= 1, got {n_steps}")
     hp["n_timesteps"] = n_steps
+    check_hyperparams(algo, hp, where="train")  # again, with the arguments applied
     n = int(hp.get("n_envs", 1))
     out_dir = Path(
         out
