@@ -80,10 +80,13 @@ def controller_catalogue(classical: Any = None) -> dict[str, str]:
     """Controller names and descriptions: the classical registry plus the learned names."""
     if classical is None:
         from shipgym.controllers.wrappers import CONTROLLERS as classical
+    from shipgym.controllers.learned import ALGORITHMS, BASELINE_MODELS
+
     out = {name: spec.description for name, spec in classical.items()}
-    out["ppo"] = "the shipped PPO baseline (residual on pid, through the kbf observer)"
-    out["ppo:PATH"] = "a PPO model trained with 'shipgym train ppo'"
-    out["sac:PATH"] = "a SAC model trained with 'shipgym train sac'"
+    for algo, fname in BASELINE_MODELS.items():
+        out[algo] = f"the shipped {algo.upper()} baseline (shipgym/assets/models/{fname})"
+    for algo in ALGORITHMS:
+        out[f"{algo}:PATH"] = f"a {algo.upper()} model trained with 'shipgym train {algo}'"
     return out
 
 
