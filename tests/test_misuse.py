@@ -232,7 +232,7 @@ def test_crafted_models_refused_fast_and_small(tmp_path):
     for path, r in res.items():
         assert r["err"] is not None, path
         assert r["mb"] < 200, (path, r)
-        assert r["s"] < 5.0, (path, r)
+        assert r["s"] < 1.0, (path, r)
     assert not (tmp_path / "PWNED").exists()
 
 
