@@ -6,9 +6,14 @@ Importing ``shipgym`` registers the Gymnasium ids ``shipgym/BlueLadyHarbour-v0``
 ``envs`` (MuJoCo physics and tasks), ``metrics``. See the README for the quick start.
 """
 
+from importlib import metadata as _metadata
+
 from shipgym.envs.registration import ENV_IDS, register_envs
 
-__version__ = "0.1.0"
+try:  # the installed distribution's version (pyproject.toml), one source of truth
+    __version__ = _metadata.version("shipgym")
+except _metadata.PackageNotFoundError:  # run from a source tree that was never installed
+    __version__ = "0+unknown"
 
 register_envs()
 

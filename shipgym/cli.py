@@ -15,10 +15,13 @@ import json
 import math
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from shipgym._safeload import jsonable
 
 __all__ = ["main", "parse_wind"]
 
@@ -37,30 +40,93 @@ def parse_wind(text: str) -> Any:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def _cmd_list(args: argparse.Namespace) -> int:
+def catalogue() -> dict[str, Any]:
+    """Every name ``shipgym`` accepts, read from the registries (``shipgym list`` prints it).
+
+    Returns:
+        A mapping of plain data: ``env_ids``, ``env_scenarios`` (name -> id),
+        ``scenario_presets`` (name -> description, the named presets and the packaged files),
+        ``controllers`` (name -> description, including ``ppo``, ``ppo:PATH``, ``sac:PATH``),
+        ``observers``, ``sensor_presets``, ``wave_presets``, ``plans``, ``plant_variants``,
+        ``wind_models`` and ``actuators``.
+    """
     from shipgym import ENV_IDS
     from shipgym.controllers.wrappers import CONTROLLERS
     from shipgym.disturbances import BLENDERMANN
     from shipgym.dynamics import ACTUATOR_NAMES, PLANT_VARIANTS
     from shipgym.envs.make import SCENARIOS
-
-    print("env ids        :", ", ".join(ENV_IDS))
-    print("scenarios      :", ", ".join(f"{k} ({v})" for k, v in SCENARIOS.items()))
-    print("controllers    :")
-    for name, spec in CONTROLLERS.items():
-        print(f"  {name:12s} {spec.description}")
-    print(f"  {'ppo':12s} the shipped PPO baseline (residual on pid, through the kbf observer)")
-    print(f"  {'ppo:PATH':12s} a PPO model trained with 'shipgym train ppo' (sac:PATH likewise)")
+    from shipgym.guidance.plan import PLANS
     from shipgym.observers import observer_names
     from shipgym.observers.sensors import SENSOR_PRESETS
     from shipgym.scenarios import SCENARIOS as SCENARIO_PRESETS
+    from shipgym.scenarios import WAVE_PRESETS, scenario_files
 
-    print("observers      :", ", ".join(["truth", *observer_names()]))
-    print("sensor presets :", ", ".join(SENSOR_PRESETS))
-    print("scenario files :", ", ".join(SCENARIO_PRESETS), "(or a .yaml/.toml path)")
-    print("plant variants :", ", ".join(PLANT_VARIANTS))
-    print("wind models    :", ", ".join(f"blendermann:{k}" for k in BLENDERMANN))
-    print("actuators      :", ", ".join(ACTUATOR_NAMES))
+    presets = {k: v.description for k, v in SCENARIO_PRESETS.items()}
+    for stem, path in scenario_files().items():
+        presets.setdefault(stem, f"packaged scenario file {path.name}")
+    return {
+        "env_ids": list(ENV_IDS),
+        "env_scenarios": dict(SCENARIOS),
+        "scenario_presets": presets,
+        "controllers": controller_catalogue(CONTROLLERS),
+        "observers": ["truth", *observer_names()],
+        "sensor_presets": list(SENSOR_PRESETS),
+        "wave_presets": list(WAVE_PRESETS),
+        "plans": list(PLANS),
+        "plant_variants": list(PLANT_VARIANTS),
+        "wind_models": [f"blendermann:{k}" for k in BLENDERMANN],
+        "actuators": list(ACTUATOR_NAMES),
+    }
+
+
+def controller_catalogue(classical: Any = None) -> dict[str, str]:
+    """Controller names and descriptions: the classical registry plus the learned names."""
+    if classical is None:
+        from shipgym.controllers.wrappers import CONTROLLERS as classical
+    from shipgym.controllers.learned import ALGORITHMS, BASELINE_MODELS
+
+    out = {name: spec.description for name, spec in classical.items()}
+    for algo, fname in BASELINE_MODELS.items():
+        out[algo] = f"the shipped {algo.upper()} baseline (shipgym/assets/models/{fname})"
+    for algo in ALGORITHMS:
+        out[f"{algo}:PATH"] = f"a {algo.upper()} model trained with 'shipgym train {algo}'"
+    return out
+
+
+def check_controller(name: str) -> None:
+    """Raise ``ValueError`` (listing every valid name) unless ``name`` is a controller name."""
+    from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
+
+    if is_learned_controller(name):
+        parse_learned_controller(name)  # the file exists and is a shipgym model
+        return
+    names = controller_catalogue()
+    if name not in names:
+        raise ValueError(f"unknown controller {name!r}; choose one of: {', '.join(names)}")
+
+
+def _cmd_list(args: argparse.Namespace) -> int:
+    cat = catalogue()
+    if args.json:
+        print(json.dumps(cat, indent=2))
+        return 0
+
+    def names(key: str) -> str:
+        return ", ".join(cat[key])
+
+    print("env ids         :", names("env_ids"))
+    print("env scenarios   :", ", ".join(f"{k} ({v})" for k, v in cat["env_scenarios"].items()))
+    print("controllers     :")
+    for name, desc in cat["controllers"].items():
+        print(f"  {name:16s} {desc}")
+    print("observers       :", names("observers"))
+    print("sensor presets  :", names("sensor_presets"))
+    print("scenario presets:", names("scenario_presets"), "(or a .yaml/.toml path)")
+    print("wave presets    :", names("wave_presets"))
+    print("plans           :", names("plans"))
+    print("plant variants  :", names("plant_variants"))
+    print("wind models     :", names("wind_models"))
+    print("actuators       :", names("actuators"))
     return 0
 
 
@@ -93,8 +159,12 @@ def run_episode(
 
     Args:
         scenario: env scenario (``harbour``, ``station-keeping``, ``tracking``) or env id.
-        controller, observer: names (see ``shipgym list``); observer ``None`` = truth.
-        seed: episode seed.
+        controller, observer: names (see ``shipgym list``). Observer ``None``: the truth
+            for a classical controller, the model's own observer for a learned one;
+            ``"truth"`` always means the truth (a learned policy trained on an observer's
+            estimate then runs on the true state: an experiment, warned about and recorded
+            in ``observer`` and ``model``).
+        seed: episode seed (an int >= 0).
         wind: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
             (``"3@300"``, ``(speed m/s, from deg)``, a ``WindConfig``, ...) or ``None`` (no
             aerodynamic loads); by default the env's own (3 m/s from 300 deg for the harbour
@@ -111,6 +181,10 @@ def run_episode(
 
     import shipgym
     from shipgym.disturbances import WindConfig
+    from shipgym.metrics import honest_indices
+
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be an int >= 0, got {seed!r}")
 
     kwargs: dict[str, Any] = {"plant": plant}
     if wind is not ENV_DEFAULT:
@@ -121,11 +195,22 @@ def run_episode(
     if is_learned_controller(controller):
         from shipgym.controllers.learned import make_learned_env
 
-        # the learned policy runs with the observer it was trained with unless one is named
+        # the learned policy runs with the observer it was trained with unless one is named;
+        # an explicit one is honoured and recorded below ("observer", "model")
         obs_kw = {} if observer is None else {"observer": observer}
-        env = make_learned_env(scenario, controller, **obs_kw, **kwargs)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*was trained with observer")
+            env = make_learned_env(scenario, controller, **obs_kw, **kwargs)
+        meta = env.policy.metadata  # type: ignore[attr-defined]
+        model_info: dict[str, Any] | None = {
+            "path": str(env.model_path),  # type: ignore[attr-defined]
+            "algorithm": meta.algorithm,
+            "trained_on": meta.env_id,
+            "trained_observer": meta.observer or "truth",
+        }
     else:
         env = shipgym.make(scenario, observer=observer, controller=controller, **kwargs)
+        model_info = None
     if report is not None and record is None:
         record = report / "run.rrd"
     if record is not None:
@@ -133,6 +218,7 @@ def run_episode(
 
         env = RecordEpisode(env, record, spawn=spawn)
     limit = env.spec.max_episode_steps if env.spec is not None else None
+    plan_finite = bool(env.unwrapped.terminate_on_finish)  # type: ignore[attr-defined]
     bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
     t0 = time.perf_counter()
     try:
@@ -151,6 +237,8 @@ def run_episode(
             bar.update(1)
             bar.set_postfix(leg=info["leg"] + 1, t=f"{info['t']:.0f}s", refresh=False)
         metrics = env.unwrapped.episode_metrics()  # type: ignore[attr-defined]
+        waves_out = _describe_waves(env.unwrapped.physics.wave_config)  # type: ignore[attr-defined]
+        current_out = _describe_current(env.unwrapped.physics.current_config)  # type: ignore[attr-defined]
     finally:
         bar.close()
         env.close()
@@ -163,7 +251,7 @@ def run_episode(
 
         run = getattr(env, "last_run", None)
         files += [str(p) for p in write_report(run if run is not None else record, report)]
-    measured = metrics.get("measured")
+    idx = honest_indices(metrics, plan_finite=plan_finite)
     return {
         "scenario": scenario,
         "env_id": env.spec.id if env.spec is not None else None,
@@ -172,17 +260,23 @@ def run_episode(
         "seed": seed,
         "plant": plant,
         "wind": wind_out,
+        "waves": waves_out,
+        "current": current_out,
+        "model": model_info,
         "completed": metrics["completed"],
         "legs_completed": metrics["legs_completed"],
         "duration_s": metrics["duration_s"],
         "quay_contact": metrics["quay_contact"],
         "terminated": bool(terminated),
         "truncated": bool(truncated),
-        "x_E": metrics["x_E"],
-        "y_E": metrics["y_E"],
-        "psi_E": metrics["psi_E"],
-        "J_c": metrics["J_c"],
-        "measured": measured,
+        "x_E": idx["x_E"],
+        "y_E": idx["y_E"],
+        "psi_E": idx["psi_E"],
+        "J_c": idx["J_c"],
+        "measured": idx["measured"],
+        "indices_note": idx["indices_note"],
+        "partial_indices": idx["partial_indices"],
+        "n_samples": metrics["n_samples"],
         "leg_times": metrics["leg_times"],
         "thrust_mean_abs": metrics["thrust_mean_abs"],
         "thrust_total_variation": metrics["thrust_total_variation"],
@@ -204,21 +298,86 @@ def _observer_of(env: Any) -> str | None:
 
 
 def _progress(total: int | None, enabled: bool, desc: str) -> Any:
+    """A tqdm bar on stderr, drawn only when ``enabled`` and stderr is a terminal."""
     from tqdm import tqdm
 
-    return tqdm(total=total, disable=not enabled, desc=desc, unit="step", leave=False)
+    from shipgym._argtypes import progress_enabled
+
+    on = enabled and progress_enabled()
+    return tqdm(total=total, disable=not on, desc=desc, unit="step", leave=False)
+
+
+def _describe_waves(w: Any) -> dict[str, Any] | None:
+    """The waves of a run as plain data (``None``: no waves)."""
+    if w is None:
+        return None
+    return {
+        "spectrum": w.spectrum,
+        "Hs": float(w.Hs),
+        "Tp": float(w.Tp),
+        "from_deg": math.degrees(float(w.direction_from)),
+    }
+
+
+def _describe_current(c: Any) -> dict[str, Any] | None:
+    """The current of a run as plain data (``None``: no current)."""
+    if c is None:
+        return None
+    return {
+        "speed": float(c.speed),
+        "to_deg": math.degrees(float(c.direction_to)),
+        "varying": bool(c.sigma > 0 or c.direction_sigma > 0),
+    }
 
 
 def _fmt(x: Any) -> str:
-    return f"{x:.4f}" if isinstance(x, float) else str(x)
+    if isinstance(x, float):
+        return "n/a" if math.isnan(x) else f"{x:.4f}"
+    return str(x)
+
+
+def _header(res: dict[str, Any]) -> str:
+    """The first line of the run table: what was run, in which sea."""
+    waves = res.get("waves")
+    cur = res.get("current")
+    waves_s = (
+        "none"
+        if not waves or not waves["Hs"]
+        else f"{waves['spectrum']} Hs {waves['Hs']:g} m Tp {waves['Tp']:g} s "
+        f"from {waves['from_deg']:.0f} deg"
+    )
+    cur_s = (
+        "none"
+        if not cur or (not cur["speed"] and not cur["varying"])
+        else f"{cur['speed']:g} m/s to {cur['to_deg']:.0f} deg"
+        + (" (varying)" if cur["varying"] else "")
+    )
+    name = res["scenario"]
+    preset = res.get("scenario_preset")
+    if preset:
+        name = f"{name} (scenario {preset})"
+    parts = [
+        name,
+        f"controller {res['controller']}",
+        f"observer {res['observer']}",
+        f"seed {res['seed']}",
+        f"plant {res['plant']}",
+        f"wind {res['wind']}",
+        f"waves {waves_s}",
+        f"current {cur_s}",
+    ]
+    return " | ".join(parts)
 
 
 def _print_table(res: dict[str, Any]) -> None:
     meas = res.get("measured") or {}
-    print(
-        f"{res['scenario']} | controller {res['controller']} | observer {res['observer']} | "
-        f"seed {res['seed']} | plant {res['plant']} | wind {res['wind']}"
-    )
+    print(_header(res))
+    model = res.get("model")
+    if model:
+        print(
+            f"  model {model['path']} ({model['algorithm']}, trained on {model['trained_on']} "
+            f"through observer {model['trained_observer']})"
+        )
     rows = [
         ("completed", res["completed"], ""),
         ("legs completed", res["legs_completed"], ""),
@@ -230,6 +389,8 @@ def _print_table(res: dict[str, Any]) -> None:
     print(f"  {'index':16s} {'truth':>10s} {'measured':>10s}")
     for key, unit in (("x_E", "m"), ("y_E", "m"), ("psi_E", "deg"), ("J_c", "")):
         print(f"  {key:16s} {_fmt(res[key]):>10s} {_fmt(meas.get(key, 'n/a')):>10s} {unit}")
+    if res.get("indices_note"):
+        print(f"  indices n/a: {res['indices_note']}")
     print(f"  leg times (s)    {[round(t, 1) for t in res['leg_times']]}")
     print(f"  mean |thrust| (N) {[round(t, 1) for t in res['thrust_mean_abs']]}")
     print(f"  time saturated   {[round(t, 3) for t in res['saturated_fraction']]} (fraction)")
@@ -244,7 +405,6 @@ def _print_table(res: dict[str, Any]) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from shipgym.controllers.wrappers import controller_spec
     from shipgym.dynamics import plant_model
     from shipgym.envs.make import resolve_env_id
 
@@ -263,18 +423,25 @@ def _cmd_run(args: argparse.Namespace) -> int:
         env_kwargs["plant"] = args.plant
     args.scenario = scenario_name
     resolve_env_id(args.scenario)  # validate names before any work
-    from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
-
-    if is_learned_controller(args.controller):
-        parse_learned_controller(args.controller)  # the file exists and is a shipgym model
-    else:
-        controller_spec(args.controller)
+    check_controller(args.controller)
     plant_model(env_kwargs.get("plant", "default"))
-    observer = None if args.observer in (None, "truth") else args.observer
-    if observer is not None:
+    observer = args.observer  # None: truth, or a learned model's own observer
+    if observer not in (None, "truth"):
         from shipgym.observers import make_observer
 
         make_observer(observer)
+    from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
+
+    if observer is not None and is_learned_controller(args.controller):
+        from shipgym.controllers.learned import read_metadata
+
+        trained = read_metadata(parse_learned_controller(args.controller)[1]).observer
+        if (trained or "truth") != observer:
+            print(
+                f"shipgym: warning: the model was trained on observer {trained or 'truth'!r}; "
+                f"running it with {observer!r} as asked (--observer); the results say so",
+                file=sys.stderr,
+            )
     for path in (args.json, args.record):
         if path is not None:
             _check_writable(path)
@@ -283,7 +450,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     res = run_episode(
         args.scenario,
         controller=args.controller,
-        observer=observer,
+        observer=observer if is_learned_controller(args.controller) else _truth_none(observer),
         seed=args.seed,
         plant="default",
         env_kwargs=env_kwargs,
@@ -292,15 +459,20 @@ def _cmd_run(args: argparse.Namespace) -> int:
         spawn=args.spawn,
         report=args.report,
     )
+    res["scenario_preset"] = None if args.scenario_file is None else str(args.scenario_file)
     _print_table(res)
     for f in res["files"]:
         print(f"wrote {f}")
     if res["files"] and args.record is not None:
         print(f"open the recording with: rerun {args.record}")
     if args.json is not None:
-        args.json.write_text(json.dumps(res, indent=2))
+        args.json.write_text(json.dumps(jsonable(res), indent=2))
         print(f"results written to {args.json}")
     return 0
+
+
+def _truth_none(observer: str | None) -> str | None:
+    return None if observer == "truth" else observer
 
 
 def write_bench_outputs(
@@ -334,9 +506,12 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         if path is not None:
             _check_writable(path)
     t0 = time.perf_counter()
+    check_controller(args.controller)
+    from shipgym._argtypes import progress_enabled
+
     rows = bench_observers(
         args.observers, seeds=args.seeds, wind=args.wind, workers=args.workers,
-        progress=not args.no_progress, controller=args.controller,
+        progress=progress_enabled(args.no_progress), controller=args.controller,
     )  # fmt: skip
     wall = time.perf_counter() - t0
     table = observer_table(rows)
@@ -390,7 +565,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     phys.reset(rng=np.random.default_rng(args.seed))
     # open loop: half ahead, bow thruster to starboard and stern thruster to port (turn right)
     phys.set_command([300.0, 0.8, -0.8])
-    steps = round(args.duration / phys.timestep)
+    steps = max(1, round(args.duration / phys.timestep))
     chunk = max(1, round(10.0 / phys.timestep))
     x0 = phys.eta
     path = 0.0
@@ -431,10 +606,33 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+#: longest simulated time of ``shipgym demo`` (s): one day
+MAX_DEMO_DURATION = 86_400.0
+
+
+def _version() -> str:
+    import shipgym
+
+    return f"shipgym {shipgym.__version__}"
+
+
 def _parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="shipgym", description="Ship manoeuvring simulator (MuJoCo).")
+    from shipgym._argtypes import (
+        MAX_COUNT,
+        MAX_WORKERS,
+        OneLineParser,
+        bounded_float,
+        bounded_int,
+        seed_int,
+    )
+
+    ap = OneLineParser(prog="shipgym", description="Ship manoeuvring simulator (MuJoCo).")
+    ap.add_argument("--version", action="version", version=_version())
     sub = ap.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("list", help="list plant variants, wind models and actuators")
+    p = sub.add_parser(
+        "list", help="list env ids, scenarios, controllers, observers, plants, wind models"
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable (JSON) output")
     p.set_defaults(func=_cmd_list)
     p = sub.add_parser("run", help="run a closed-loop scenario; prints the metrics table")
     p.add_argument(
@@ -451,9 +649,11 @@ def _parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument(
         "--observer", default=None,
-        help="truth, dkf, kbf, ekf, tomera-dkf/kbf/ekf (default: truth; a learned model's own)",
+        help="truth, dkf, kbf, ekf, tomera-dkf/kbf/ekf (default: truth, or a learned model's "
+        "own; an explicit observer, truth included, is honoured with a warning for a model "
+        "trained on another)",
     )  # fmt: skip
-    p.add_argument("--seed", type=int, default=0, help="episode seed (0)")
+    p.add_argument("--seed", type=seed_int, default=0, help="episode seed, an int >= 0 (0)")
     p.add_argument("--wind", type=parse_wind, default=None, metavar="SPEED@FROM_DEG",
                    help="mean wind, e.g. 3@300 (m/s, deg it comes from; default: the "
                    "scenario's, 3@300 for harbour, drawn per episode for tracking)")  # fmt: skip
@@ -474,13 +674,19 @@ def _parser() -> argparse.ArgumentParser:
     bsub = p.add_subparsers(dest="what", required=True)
     b = bsub.add_parser("observers", help="seed001 Table-6-style comparison of observers")
     b.add_argument("--observers", nargs="+", default=["dkf", "kbf", "ekf"], metavar="NAME")
-    b.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per observer (10)")
+    b.add_argument(
+        "--seeds", type=bounded_int(1, MAX_COUNT), default=10,
+        help=f"seeds 0..N-1 per observer, 1 <= N <= {MAX_COUNT} (10)",
+    )  # fmt: skip
     b.add_argument(
         "--controller", default="pid-smooth", help="controller of every run (pid-smooth)"
     )
     b.add_argument("--wind", type=parse_wind, default="3@300",
                    metavar="SPEED@FROM_DEG", help="mean wind (3@300)")  # fmt: skip
-    b.add_argument("--workers", type=int, default=None, help="processes (default: CPUs)")
+    b.add_argument(
+        "--workers", type=bounded_int(1, MAX_WORKERS), default=None,
+        help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
+    )  # fmt: skip
     b.add_argument("--json", type=Path, default=None, metavar="PATH")
     b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
     b.add_argument("--report", type=Path, default=None, metavar="DIR",
@@ -495,15 +701,21 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--wind", type=parse_wind, default="3@300",
                    metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip
     p.add_argument("--plant", default="default", help="plant variant (see 'shipgym list')")
-    p.add_argument("--duration", type=float, default=300.0, help="simulated seconds (300)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the wind gusts (0)")
+    p.add_argument(
+        "--duration", type=bounded_float(0.0, MAX_DEMO_DURATION, lo_open=True, unit="s"),
+        default=300.0, help=f"simulated seconds, > 0 and <= {MAX_DEMO_DURATION:g} (300)",
+    )  # fmt: skip
+    p.add_argument("--seed", type=seed_int, default=0, help="seed of the wind gusts (0)")
     p.set_defaults(func=_cmd_demo)
     return ap
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``shipgym`` console script."""
-    args = _parser().parse_args(argv)
+    try:
+        args = _parser().parse_args(argv)
+    except SystemExit as exc:  # argparse: 2 after a usage error, 0 after --help / --version
+        return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
     try:
         return int(args.func(args))
     except (ValueError, FileNotFoundError, ImportError) as exc:

@@ -28,12 +28,23 @@ from numpy.typing import ArrayLike
 from shipgym.dynamics.frames import wrap_angle
 
 __all__ = [
+    "INDEX_KEYS",
+    "MIN_SAMPLES",
     "SEED_WEIGHTS",
     "accuracy_indices",
+    "honest_indices",
+    "indices_note",
     "j_c",
     "ManoeuvreMetrics",
     "rmse",
 ]
+
+#: the accuracy indices of eqs. 54-57
+INDEX_KEYS = ("x_E", "y_E", "psi_E", "J_c")
+
+#: fewest accuracy samples (1 s apart) behind indices that describe a run: below this the
+#: mean of a few near-zero errors at the start would look like a perfect run
+MIN_SAMPLES = 10
 
 SEED_WEIGHTS: tuple[float, float, float] = (1.0, 1.0, 0.01)
 """``(lambda_1, lambda_2, lambda_3)`` of seed001 eq. 57 (1/m, 1/m, 1/deg)."""
@@ -110,6 +121,58 @@ def accuracy_indices(
     e[:, 2] = np.abs(wrap_angle(b[:, 2] - a[:, 2]))
     s = e.sum(axis=0)
     return _indices(float(s[0]), float(s[1]), float(s[2]), a.shape[0], w)
+
+
+def indices_note(metrics: Any, *, plan_finite: bool = True) -> str | None:
+    """Why a run's accuracy indices do not describe a whole run, or ``None`` when they do.
+
+    The indices (eqs. 54-57) are means over the manoeuvre that was flown; a run that hit a
+    quay, stopped before its plan was finished or took fewer than :data:`MIN_SAMPLES`
+    samples has means over a part only (a contact after 0.6 s leaves one sample at the
+    start, with zero error: ``J_c = 0``), so they must not be compared with complete runs.
+
+    Args:
+        metrics: an ``episode_metrics`` mapping (``quay_contact``, ``completed``,
+            ``n_samples``, ``duration_s``, ``legs_completed``).
+        plan_finite: whether the task's plan ends (harbour, tracking); station keeping holds
+            until the time limit, so not finishing is its normal end.
+    """
+    t = float(metrics.get("duration_s", float("nan")))
+    n = int(metrics.get("n_samples", 0))
+    if metrics.get("quay_contact"):
+        return f"quay contact at {t:.1f} s: the manoeuvre failed, the indices cover only its start"
+    if n < MIN_SAMPLES:
+        return f"too short: {n} accuracy samples (at least {MIN_SAMPLES} needed)"
+    if plan_finite and not metrics.get("completed", True):
+        legs = int(metrics.get("legs_completed", 0))
+        return (
+            f"manoeuvre not finished ({legs} legs completed in {t:.0f} s): the indices cover "
+            "only the part that was flown"
+        )
+    return None
+
+
+def honest_indices(metrics: Any, *, plan_finite: bool = True) -> dict[str, Any]:
+    """The indices of a run, NaN (with the reason) when they do not describe a whole run.
+
+    Returns:
+        ``{x_E, y_E, psi_E, J_c, measured, indices_note, partial_indices}``: the values of
+        ``metrics`` when :func:`indices_note` finds nothing; otherwise NaN (the ``measured``
+        indices too), ``indices_note`` the reason and ``partial_indices`` the raw means over
+        the part that was flown (``{"truth": ..., "measured": ...}``).
+    """
+    note = indices_note(metrics, plan_finite=plan_finite)
+    truth = {k: float(metrics[k]) for k in INDEX_KEYS}
+    measured = metrics.get("measured")
+    if note is None:
+        return {**truth, "measured": measured, "indices_note": None, "partial_indices": None}
+    nan = float("nan")
+    return {
+        **{k: nan for k in INDEX_KEYS},
+        "measured": None if measured is None else {k: nan for k in INDEX_KEYS},
+        "indices_note": note,
+        "partial_indices": {"truth": truth, "measured": measured},
+    }
 
 
 def rmse(a: ArrayLike, b: ArrayLike, angle: bool = False, axis: int | None = 0) -> Any:

@@ -41,8 +41,9 @@ Angles are radians; every angle field also accepts a ``*_deg`` twin (``direction
 ``wind``/``waves``/``current`` mapping is applied on top of what ``base`` or ``beaufort``
 already set (or on top of the config defaults); a ``"SPEED@DEG"`` string (wind: m/s and
 degrees it comes from, ``WindConfig.parse``, default gusts; current: m/s and degrees it goes
-to, ``CurrentConfig.parse``, constant) replaces it. Files are parsed with ``yaml.safe_load`` or
-``tomllib`` only (TOML has no null: use ``false`` to switch a disturbance off).
+to, ``CurrentConfig.parse``, constant) replaces it. Files are parsed as plain data only, with
+PyYAML's safe loader (libyaml's ``CSafeLoader`` when present) or ``tomllib``, and are at most
+1 MiB (:mod:`shipgym._safeload`; TOML has no null: use ``false`` to switch a disturbance off).
 """
 
 from __future__ import annotations
@@ -713,23 +714,11 @@ def scenario_files() -> dict[str, Path]:
 
 
 def _read_file(path: Path) -> Any:
-    if path.suffix == ".toml":
-        import tomllib
+    """Plain data of a scenario file, bounded (:mod:`shipgym._safeload`: at most 1 MiB, YAML
+    through libyaml's safe loader when present, no Python objects)."""
+    from shipgym._safeload import load_config_file
 
-        with path.open("rb") as fh:
-            try:
-                return tomllib.load(fh)
-            except tomllib.TOMLDecodeError as exc:
-                raise ValueError(f"scenario file {str(path)!r} is not valid TOML: {exc}") from None
-    if path.suffix in (".yaml", ".yml"):
-        import yaml
-
-        with path.open("r", encoding="utf-8") as fh:
-            try:
-                return yaml.safe_load(fh)
-            except yaml.YAMLError as exc:
-                raise ValueError(f"scenario file {str(path)!r} is not valid YAML: {exc}") from None
-    raise ValueError(f"scenario file {str(path)!r}: unknown format; use .yaml, .yml or .toml")
+    return load_config_file(path, "scenario file")
 
 
 def load_scenario(name_or_path: str | Path) -> Scenario:
@@ -760,7 +749,7 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
                 f"{', '.join(list(SCENARIOS) + [f for f in files if f not in SCENARIOS])}; "
                 "or give a .yaml / .toml file"
             )
-        if not path.is_file():
+        if not path.exists():
             raise FileNotFoundError(f"scenario file {str(path)!r} does not exist")
     data = _read_file(path)
     if data is None:

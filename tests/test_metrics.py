@@ -193,3 +193,30 @@ def test_rmse():
     assert rmse([math.pi - 0.1], [-math.pi + 0.1]) == pytest.approx(2 * math.pi - 0.2)
     with pytest.raises(ValueError, match="empty"):
         rmse([], [])
+
+
+# ---- indices of runs that do not describe a whole manoeuvre (issue 10) ---------------------------
+def _run_metrics(n, **extra):
+    m = ManoeuvreMetrics()
+    for k in range(n):
+        m.record(float(k), [0.1, 0.2, 0.0], [0.0, 0.0, 0.0])
+    return {**m.summary(), "completed": True, "quay_contact": False, "duration_s": n - 1.0, **extra}
+
+
+def test_indices_note_and_honest_indices():
+    from shipgym.metrics import MIN_SAMPLES, honest_indices, indices_note
+
+    ok = _run_metrics(MIN_SAMPLES)
+    assert indices_note(ok) is None
+    idx = honest_indices(ok)
+    assert idx["J_c"] == pytest.approx(0.3) and idx["indices_note"] is None  # 0.1 + 0.2
+    short = _run_metrics(MIN_SAMPLES - 1)
+    assert "too short: 9 accuracy samples" in indices_note(short)
+    contact = _run_metrics(50, quay_contact=True, completed=False, duration_s=49.0)
+    assert indices_note(contact).startswith("quay contact at 49.0 s")
+    unfinished = _run_metrics(50, completed=False, legs_completed=2)
+    assert "not finished (2 legs" in indices_note(unfinished)
+    assert indices_note(unfinished, plan_finite=False) is None  # station keeping: holds
+    idx = honest_indices(contact)
+    assert all(math.isnan(idx[k]) for k in ("x_E", "y_E", "psi_E", "J_c"))
+    assert idx["measured"] is None and idx["partial_indices"]["truth"]["J_c"] == pytest.approx(0.3)

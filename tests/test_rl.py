@@ -242,3 +242,32 @@ def test_bench_rows(trained):
     assert (
         table.count("\n") == 3 and "| legs |" in table and "| pid |" in table and "| ppo |" in table
     )
+
+
+def test_sac_resume_restores_what_sb3_load_does(tmp_path):
+    """SAC through the safe resume path: actor, critics, their optimizers and the entropy
+    coefficient equal stable-baselines3's own (unpickling) load of the same trusted file."""
+    from stable_baselines3 import SAC
+
+    from shipgym.rl.train import _algo_kwargs, build_vec_env, restore_model_state
+
+    res = train(
+        "sac", timesteps=150, seed=0, n_envs=1, out=tmp_path, observer="truth",
+        overrides={"learning_starts": 100, "batch_size": 32}, eval_freq=0, checkpoint_freq=0,
+        progress=False,
+    )  # fmt: skip
+    meta = read_metadata(res.model_path)
+    venv = build_vec_env(meta.env_id, meta.hyperparams, 1, 0)
+    fresh = SAC("MlpPolicy", venv, device="cpu", **_algo_kwargs("sac", meta.hyperparams))
+    restore_model_state(fresh, res.model_path, meta)
+    ref = SAC.load(res.model_path, device="cpu")  # our own file: trusted reference
+    a, b = fresh.policy.state_dict(), ref.policy.state_dict()
+    assert a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
+    assert torch.equal(fresh.log_ent_coef, ref.log_ent_coef)
+    assert fresh.num_timesteps == ref.num_timesteps == 150
+    again = train(
+        "sac", timesteps=20, seed=0, out=tmp_path / "r", resume=res.model_path, eval_freq=0,
+        checkpoint_freq=0, progress=False,
+    )  # fmt: skip
+    assert again.num_timesteps == 170
+    venv.close()

@@ -304,3 +304,46 @@ def test_scenario_constructor_validation() -> None:
     assert s.env == "station-keeping"
     with pytest.raises(ValueError, match="unknown env"):
         SCENARIOS["calm"].replace(env="x")
+
+
+# ---- bounded, code-free loading (issue 10 item 8) -----------------------------------------------
+def test_yaml_uses_the_c_safe_loader_when_present():
+    import yaml
+
+    from shipgym._safeload import yaml_loader
+
+    expected = yaml.CSafeLoader if yaml.__with_libyaml__ else yaml.SafeLoader
+    assert yaml_loader() is expected
+    assert issubclass(yaml_loader(), yaml.SafeLoader) or yaml_loader() is yaml.CSafeLoader
+
+
+@pytest.mark.parametrize("suffix", [".yaml", ".toml"])
+def test_oversize_scenario_file_is_refused_before_parsing(tmp_path, suffix):
+    from shipgym._safeload import MAX_CONFIG_BYTES
+
+    p = tmp_path / f"big{suffix}"
+    p.write_text('name = "x"\n' + "#" * (MAX_CONFIG_BYTES + 10) + "\n")
+    with pytest.raises(ValueError, match=r"big\..*more than the limit of 1,048,576"):
+        load_scenario(p)
+
+
+def test_yaml_alias_bomb_and_python_tags_are_refused(tmp_path):
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
+    for i in range(1, 9):
+        lines.append(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 10) + "]")
+    bomb = tmp_path / "bomb.yaml"
+    bomb.write_text("\n".join(lines) + "\n")  # 10**9 values once expanded
+    with pytest.raises(ValueError, match="more than 100,000 values"):
+        load_scenario(bomb)
+    marker = tmp_path / "ran"
+    evil = tmp_path / "evil.yaml"
+    evil.write_text(f"name: !!python/object/apply:os.system ['touch {marker}']\n")
+    with pytest.raises(ValueError, match="not valid YAML"):
+        load_scenario(evil)
+    assert not marker.exists()
+
+
+def test_scenario_path_that_is_a_folder(tmp_path):
+    (tmp_path / "d.yaml").mkdir()
+    with pytest.raises(ValueError, match="not a file"):
+        load_scenario(tmp_path / "d.yaml")

@@ -152,7 +152,11 @@ def test_run_episode_takes_every_form(wind, current):
         "harbour", env_kwargs={"current": REF_CURRENT, "max_episode_steps": 3}
     )  # the default wind of the harbour task is 3@300
     assert res["wind"] == {"speed": 3.0, "from_deg": pytest.approx(300.0)}
-    for key in ("x_E", "y_E", "psi_E", "J_c", "thrust_mean_abs", "duration_s"):
+    # a 3-step run is too short for the accuracy indices (NaN with a note): compare the
+    # partial ones, which are computed from the same trajectory
+    for key in ("x_E", "y_E", "psi_E", "J_c"):
+        assert res["partial_indices"]["truth"][key] == ref["partial_indices"]["truth"][key]
+    for key in ("thrust_mean_abs", "duration_s"):
         assert res[key] == ref[key]
 
 

@@ -7,16 +7,27 @@ observer, residual flag, controller and residual scale, the observation-normalis
 statistics of ``VecNormalize`` (as plain numbers), the policy architecture as plain data, and
 the training command and seed.
 
-Loading (:func:`read_metadata`, :func:`load_policy`) first checks ``shipgym.json`` and refuses
-anything else with a clear error, *before* stable-baselines3 or torch touch the file.
-:func:`load_policy` never unpickles: it rebuilds the policy network from the metadata and loads
-``policy.pth`` with ``torch.load(weights_only=True)``. Resuming training
-(:func:`shipgym.rl.train.train` with ``resume=``) does use ``stable_baselines3`` ``load``, which
-unpickles parts of the archive.
+Loading never unpickles and is bounded (:func:`read_metadata`, :func:`load_policy`,
+:func:`read_state_dicts`):
 
-.. warning::
-    stable-baselines3 zips contain pickled Python objects. Only load model files you made or
-    trust: a crafted file can execute code when it is unpickled (resuming training from it).
+- the zip's directory is checked first, before any member is read: at most
+  :data:`MAX_MEMBERS` members, only the names stable-baselines3 and shipgym write, each member's
+  uncompressed size (from its ``ZipInfo``) at most :data:`MAX_MEMBER_BYTES`
+  (:data:`MAX_METADATA_BYTES` for ``shipgym.json``), all together at most
+  :data:`MAX_TOTAL_BYTES`, and no member above 1 MiB compressed more than
+  :data:`MAX_COMPRESSION_RATIO` times (a zip bomb is refused from its directory);
+- ``shipgym.json`` is plain JSON; its policy must be ``MlpPolicy`` with plain-data
+  ``policy_kwargs`` (:data:`POLICY_KWARGS`: no classes, no ``optimizer_class``), layers at most
+  :data:`MAX_LAYER_WIDTH` wide and :data:`MAX_LAYERS` deep and at most
+  :data:`MAX_PARAMETERS` parameters in all (:func:`policy_parameter_count`), all checked
+  before torch allocates anything;
+- ``data`` must be a JSON object (its pickled ``:serialized:`` entries are never decoded);
+- every ``.pth`` member is read with ``torch.load(weights_only=True)`` (tensors and plain
+  containers only); anything else ends in one ``ValueError`` line.
+
+The policy network is rebuilt from the metadata; resuming training
+(:func:`shipgym.rl.train.train` with ``resume=``) rebuilds the whole algorithm from the
+hyperparameters in the metadata and loads the weights and optimizer states the same way.
 
 Using a model as a controller:
 
@@ -60,11 +71,14 @@ __all__ = [
     "ModelMetadata",
     "ObsNormalization",
     "baseline_model_path",
+    "check_policy_spec",
     "is_learned_controller",
     "load_policy",
     "make_learned_env",
     "parse_learned_controller",
+    "policy_parameter_count",
     "read_metadata",
+    "read_state_dicts",
     "write_metadata",
 ]
 
@@ -83,6 +97,60 @@ BASELINE_MODELS: dict[str, str] = {"ppo": "ppo_residual_pid_kbf.zip"}
 ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu", "silu", "gelu")
 
 _USE_MODEL = "model"  # sentinel: take the observer from the metadata
+
+# ---- limits of a model file (refused from the zip directory / metadata, before allocation) --
+_MIB = 1 << 20
+#: largest model file on disk; the shipped baseline is 0.2 MB
+MAX_MODEL_FILE_BYTES = 256 * _MIB
+#: most members in a model zip (stable-baselines3 writes 6-9, shipgym adds one)
+MAX_MEMBERS = 32
+#: largest uncompressed ``shipgym.json`` (the baseline's is 4 kB)
+MAX_METADATA_BYTES = 1 * _MIB
+#: largest uncompressed member (``MAX_PARAMETERS`` float32 weights and Adam's two moments
+#: are 48 MB)
+MAX_MEMBER_BYTES = 128 * _MIB
+#: largest uncompressed archive, all members together
+MAX_TOTAL_BYTES = 256 * _MIB
+#: highest uncompressed / compressed size of a member above 1 MiB (float weights compress
+#: about 1.1 times; deflate reaches ~1000 only on repetitive filler, i.e. zip bombs)
+MAX_COMPRESSION_RATIO = 100.0
+#: widest hidden layer of a policy or value network
+MAX_LAYER_WIDTH = 4096
+#: most hidden layers per network
+MAX_LAYERS = 16
+#: most parameters of the whole policy (all networks; SAC's target critics included):
+#: 4 million float32 are 16 MB, hundreds of times the baseline's 10 000
+MAX_PARAMETERS = 4_000_000
+#: largest observation / action vectors a model may declare
+MAX_OBS_SIZE = 10_000
+#: policies a shipgym model may use (observations are vectors)
+POLICIES = ("MlpPolicy",)
+#: ``policy_kwargs`` keys allowed in metadata and hyperparameters (plain data only)
+POLICY_KWARGS = (
+    "net_arch",
+    "activation_fn",
+    "log_std_init",
+    "ortho_init",
+    "full_std",
+    "use_expln",
+    "squash_output",
+    "share_features_extractor",
+    "n_critics",
+    "optimizer_kwargs",
+)
+#: members a model zip may hold (stable-baselines3's PPO and SAC files plus shipgym.json)
+_MEMBERS = (
+    "data",
+    "policy.pth",
+    "policy.optimizer.pth",
+    "actor.optimizer.pth",
+    "critic.optimizer.pth",
+    "ent_coef_optimizer.pth",
+    "pytorch_variables.pth",
+    "_stable_baselines3_version",
+    "system_info.txt",
+    "shipgym.json",
+)
 
 
 # ---- metadata ---------------------------------------------------------------------------------
@@ -219,6 +287,12 @@ class ModelMetadata:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        for name in ("algorithm", "env_id", "policy", "command"):
+            if not isinstance(getattr(self, name), str):
+                raise TypeError(f"{name} must be a string, got {getattr(self, name)!r}")
+        for name in ("observer", "controller"):
+            if getattr(self, name) is not None and not isinstance(getattr(self, name), str):
+                raise TypeError(f"{name} must be a string or null, got {getattr(self, name)!r}")
         if self.algorithm not in ALGORITHMS:
             raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {self.algorithm!r}")
         if self.residual and not self.controller:
@@ -227,8 +301,19 @@ class ModelMetadata:
             raise ValueError(f"residual_scale must be finite and >= 0, got {self.residual_scale}")
         if isinstance(self.normalization, Mapping):
             object.__setattr__(self, "normalization", ObsNormalization(**self.normalization))
-        object.__setattr__(self, "observation_shape", tuple(int(n) for n in self.observation_shape))
-        object.__setattr__(self, "action_shape", tuple(int(n) for n in self.action_shape))
+        for name in ("env_kwargs", "policy_kwargs", "hyperparams", "extra"):
+            if not isinstance(getattr(self, name), Mapping):
+                raise ValueError(f"{name} must be a mapping, got {getattr(self, name)!r}")
+        object.__setattr__(self, "observation_shape", _shape(self.observation_shape, "observation"))
+        object.__setattr__(self, "action_shape", _shape(self.action_shape, "action"))
+        check_policy_spec(
+            self.algorithm, self.policy, self.policy_kwargs,
+            self.observation_shape, self.action_shape,
+        )  # fmt: skip
+        norm = self.normalization
+        n_obs = math.prod(self.observation_shape)
+        if norm is not None and len(norm.mean) != n_obs:
+            raise ValueError(f"normalisation has {len(norm.mean)} entries, the observation {n_obs}")
 
     def to_json(self) -> str:
         """The ``shipgym.json`` text."""
@@ -257,38 +342,333 @@ class ModelMetadata:
             raise ValueError(f"{where} has unknown keys {unknown}")
         try:
             return cls(**d)
-        except TypeError as exc:
-            raise ValueError(f"{where} is incomplete or malformed: {exc}") from None
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{where}: {exc}") from None
+
+
+def _shape(value: Any, what: str) -> tuple[int, ...]:
+    """A declared observation / action shape: 1-4 whole numbers >= 1, small in total."""
+    try:
+        dims = tuple(value)
+    except TypeError:
+        raise ValueError(f"{what}_shape must be a list of whole numbers, got {value!r}") from None
+    if not 1 <= len(dims) <= 4 or not all(
+        isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in dims
+    ):
+        raise ValueError(f"{what}_shape must be 1-4 whole numbers >= 1, got {value!r}")
+    if math.prod(dims) > MAX_OBS_SIZE:
+        raise ValueError(f"{what}_shape {dims} has more than {MAX_OBS_SIZE} entries")
+    return dims
+
+
+def _layers(arch: Any, where: str) -> list[int]:
+    if not isinstance(arch, list | tuple) or len(arch) > MAX_LAYERS:
+        raise ValueError(
+            f"{where} must be a list of at most {MAX_LAYERS} layer widths, got {arch!r}"
+        )
+    for w in arch:
+        if isinstance(w, bool) or not isinstance(w, int) or not 1 <= w <= MAX_LAYER_WIDTH:
+            raise ValueError(
+                f"{where}: layer widths must be whole numbers from 1 to {MAX_LAYER_WIDTH}, "
+                f"got {w!r}"
+            )
+    return list(arch)
+
+
+def _mlp_count(n_in: int, layers: list[int], n_out: int) -> int:
+    count, prev = 0, n_in
+    for w in layers:
+        count += (prev + 1) * w
+        prev = w
+    return count + (prev + 1) * n_out
+
+
+def policy_parameter_count(
+    algorithm: str,
+    policy_kwargs: Mapping[str, Any],
+    observation_shape: tuple[int, ...] = (15,),
+    action_shape: tuple[int, ...] = (3,),
+) -> int:
+    """Number of parameters the policy of these settings has (no torch needed).
+
+    PPO: policy MLP + action head + log-std and value MLP + value head; SAC: actor MLP + mean
+    and log-std heads, ``n_critics`` Q networks on (observation, action) and their target
+    copies. stable-baselines3's defaults (PPO 64x64, SAC 256x256) apply without ``net_arch``.
+
+    Raises:
+        ValueError: a malformed ``net_arch`` (see :func:`check_policy_spec` for the limits).
+    """
+    n_obs, n_act = math.prod(observation_shape), math.prod(action_shape)
+    arch = policy_kwargs.get("net_arch")
+    default = [64, 64] if algorithm == "ppo" else [256, 256]
+    second = "vf" if algorithm == "ppo" else "qf"
+    if arch is None:
+        pi = vf = default
+    elif isinstance(arch, Mapping):
+        unknown = sorted(set(arch) - {"pi", second})
+        if unknown:
+            raise ValueError(f"net_arch has unknown keys {unknown}; valid: ['pi', '{second}']")
+        pi = _layers(arch.get("pi", []), "net_arch['pi']")
+        vf = _layers(arch.get(second, []), f"net_arch['{second}']")
+    else:
+        pi = vf = _layers(arch, "net_arch")
+    if algorithm == "ppo":
+        return _mlp_count(n_obs, pi, n_act) + n_act + _mlp_count(n_obs, vf, 1)
+    n_critics = policy_kwargs.get("n_critics", 2)
+    if isinstance(n_critics, bool) or not isinstance(n_critics, int) or not 1 <= n_critics <= 10:
+        raise ValueError(f"n_critics must be a whole number from 1 to 10, got {n_critics!r}")
+    actor = _mlp_count(n_obs, pi, 2 * n_act)
+    return actor + 2 * n_critics * _mlp_count(n_obs + n_act, vf, 1)
+
+
+def _plain(value: Any, where: str, depth: int = 0) -> None:
+    """Plain data only: numbers, strings, bools, None, lists and string-keyed mappings."""
+    if depth > 8:
+        raise ValueError(f"{where} is nested too deeply")
+    if value is None or isinstance(value, bool | int | str):
+        return
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"{where} must be finite, got {value!r}")
+        return
+    if isinstance(value, list | tuple):
+        for v in value:
+            _plain(v, where, depth + 1)
+        return
+    if isinstance(value, Mapping) and all(isinstance(k, str) for k in value):
+        for k, v in value.items():
+            _plain(v, f"{where}[{k!r}]", depth + 1)
+        return
+    raise ValueError(f"{where} must be plain data (numbers, strings, lists), got {value!r}")
+
+
+def check_policy_spec(
+    algorithm: str,
+    policy: Any,
+    policy_kwargs: Any,
+    observation_shape: tuple[int, ...] = (15,),
+    action_shape: tuple[int, ...] = (3,),
+) -> int:
+    """Check a policy description before anything is built; returns its parameter count.
+
+    The policy must be one of :data:`POLICIES`; ``policy_kwargs`` plain data with keys from
+    :data:`POLICY_KWARGS` (``activation_fn`` by name, see :data:`ACTIVATIONS`); the networks
+    at most :data:`MAX_LAYERS` layers of at most :data:`MAX_LAYER_WIDTH` units and
+    :data:`MAX_PARAMETERS` parameters in all.
+
+    Raises:
+        ValueError: naming the offending key and what is valid.
+    """
+    if policy not in POLICIES:
+        raise ValueError(
+            f"policy must be one of {', '.join(POLICIES)} (shipgym observations are vectors), "
+            f"got {policy!r}"
+        )
+    if not isinstance(policy_kwargs, Mapping):
+        raise ValueError(f"policy_kwargs must be a mapping, got {policy_kwargs!r}")
+    unknown = sorted(str(k) for k in set(policy_kwargs) - set(POLICY_KWARGS))
+    if unknown:
+        raise ValueError(
+            f"policy_kwargs has unknown or unsupported keys {unknown}; valid: "
+            f"{', '.join(POLICY_KWARGS)}"
+        )
+    _plain(dict(policy_kwargs), "policy_kwargs")
+    if "activation_fn" in policy_kwargs and str(policy_kwargs["activation_fn"]) not in ACTIVATIONS:
+        raise ValueError(
+            f"unknown activation_fn {policy_kwargs['activation_fn']!r}; choose one of: "
+            f"{', '.join(ACTIVATIONS)}"
+        )
+    opt = policy_kwargs.get("optimizer_kwargs")
+    if opt is not None and not isinstance(opt, Mapping):
+        raise ValueError(f"policy_kwargs['optimizer_kwargs'] must be a mapping, got {opt!r}")
+    for key in ("ortho_init", "full_std", "use_expln", "squash_output", "share_features_extractor"):
+        if key in policy_kwargs and not isinstance(policy_kwargs[key], bool):
+            raise ValueError(f"policy_kwargs['{key}'] must be true or false")
+    n = policy_parameter_count(algorithm, policy_kwargs, observation_shape, action_shape)
+    if n > MAX_PARAMETERS:
+        raise ValueError(
+            f"the policy would have {n:,} parameters, more than the limit of "
+            f"{MAX_PARAMETERS:,}: use a smaller net_arch"
+        )
+    return n
+
+
+def _archive(zf: zipfile.ZipFile, p: Path) -> dict[str, zipfile.ZipInfo]:
+    """The members of a model zip, checked from its directory (nothing is decompressed)."""
+    infos = zf.infolist()
+    if len(infos) > MAX_MEMBERS:
+        raise ValueError(f"{p}: {len(infos)} members, more than a model has ({MAX_MEMBERS})")
+    out: dict[str, zipfile.ZipInfo] = {}
+    total = 0
+    for info in infos:
+        name = info.filename
+        if name not in _MEMBERS:
+            raise ValueError(
+                f"{p}: unexpected member {name!r}; a model zip holds only {', '.join(_MEMBERS)}"
+            )
+        if name in out:
+            raise ValueError(f"{p}: member {name!r} appears twice")
+        limit = MAX_METADATA_BYTES if name == METADATA_NAME else MAX_MEMBER_BYTES
+        if info.file_size > limit:
+            raise ValueError(
+                f"{p}: member {name!r} unpacks to {info.file_size:,} bytes, more than the "
+                f"limit of {limit:,}"
+            )
+        ratio = info.file_size / max(info.compress_size, 1)
+        if info.file_size > _MIB and ratio > MAX_COMPRESSION_RATIO:
+            raise ValueError(
+                f"{p}: member {name!r} is compressed {ratio:.0f} times (limit "
+                f"{MAX_COMPRESSION_RATIO:g}): not a model, a zip bomb?"
+            )
+        total += info.file_size
+        out[name] = info
+    if total > MAX_TOTAL_BYTES:
+        raise ValueError(f"{p}: unpacks to {total:,} bytes, more than {MAX_TOTAL_BYTES:,}")
+    return out
+
+
+def _check_directory_size(p: Path, size: int) -> None:
+    """Refuse a zip whose end record announces too many members, before ``zipfile`` parses its
+    directory (a directory of millions of entries would fill memory with ``ZipInfo``s)."""
+    with p.open("rb") as fh:
+        n = min(size, 22 + 0xFFFF)  # end record plus the longest comment
+        fh.seek(size - n)
+        tail = fh.read(n)
+    i = tail.rfind(b"PK\x05\x06")
+    if i < 0 or len(tail) - i < 22:
+        return  # not a zip: zipfile says so below
+    entries = int.from_bytes(tail[i + 10 : i + 12], "little")
+    dir_bytes = int.from_bytes(tail[i + 12 : i + 16], "little")
+    if entries > MAX_MEMBERS or dir_bytes > MAX_MEMBERS * 1024:
+        raise ValueError(
+            f"{p}: its directory announces {entries} members ({dir_bytes:,} bytes), more than a "
+            f"model has ({MAX_MEMBERS})"
+        )
+
+
+def _open_model(path: str | Path) -> tuple[Path, zipfile.ZipFile, dict[str, zipfile.ZipInfo]]:
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"model file {str(p)!r} does not exist")
+    if not p.is_file():
+        raise ValueError(f"model file {str(p)!r} is not a file")
+    size = p.stat().st_size
+    if size > MAX_MODEL_FILE_BYTES:
+        raise ValueError(f"{p}: {size:,} bytes, more than a model file may have")
+    _check_directory_size(p, size)
+    try:
+        zf = zipfile.ZipFile(p)
+    except (zipfile.BadZipFile, OSError) as exc:
+        raise ValueError(
+            f"{p} is not a shipgym model: not a zip archive ({exc}); expected a file "
+            "written by 'shipgym train'"
+        ) from None
+    try:
+        return p, zf, _archive(zf, p)
+    except BaseException:
+        zf.close()
+        raise
+
+
+def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, p: Path) -> bytes:
+    """A member's bytes; the read stops at the size of the directory (already bounded)."""
+    try:
+        with zf.open(info) as fh:
+            data = fh.read(info.file_size + 1)
+    except (zipfile.BadZipFile, OSError, EOFError, RuntimeError, NotImplementedError) as exc:
+        raise ValueError(f"{p}: member {info.filename!r} is corrupt: {exc}") from None
+    if len(data) != info.file_size:
+        raise ValueError(f"{p}: member {info.filename!r} is not the size its directory says")
+    return data
 
 
 def read_metadata(path: str | Path) -> ModelMetadata:
     """The metadata of a shipgym model file, checked before anything else reads the file.
 
+    The zip's directory is checked first (member names and sizes, see the module
+    docstring); only ``shipgym.json`` is read.
+
     Raises:
         FileNotFoundError: no such file.
-        ValueError: not a zip, or a zip without valid ``shipgym.json`` (not a shipgym model).
+        ValueError: not a zip, a zip beyond the limits, or one without valid
+            ``shipgym.json`` (not a shipgym model).
     """
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"model file {str(p)!r} does not exist")
+    p, zf, members = _open_model(path)
+    with zf:
+        if METADATA_NAME not in members:
+            hint = (
+                " (a plain stable-baselines3 zip; shipgym only loads models saved by "
+                "'shipgym train', which carry shipgym.json)"
+                if "data" in members
+                else ""
+            )
+            raise ValueError(f"{p} is not a shipgym model: it has no {METADATA_NAME}{hint}")
+        raw = _read_member(zf, members[METADATA_NAME], p)
     try:
-        with zipfile.ZipFile(p) as zf:
-            names = zf.namelist()
-            if METADATA_NAME not in names:
-                hint = (
-                    " (a plain stable-baselines3 zip; shipgym only loads models saved by "
-                    "'shipgym train', which carry shipgym.json)"
-                    if "data" in names
-                    else ""
-                )
-                raise ValueError(f"{p} is not a shipgym model: it has no {METADATA_NAME}{hint}")
-            text = zf.read(METADATA_NAME).decode("utf-8")
-    except zipfile.BadZipFile:
-        raise ValueError(
-            f"{p} is not a shipgym model: not a zip archive (expected a file written by "
-            "'shipgym train')"
-        ) from None
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"{p}:{METADATA_NAME} is not UTF-8 text (not a shipgym model)") from None
     return ModelMetadata.from_json(text, where=f"{p}:{METADATA_NAME}")
+
+
+def _torch_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, p: Path, device: str) -> Any:
+    """A ``.pth`` member through ``torch.load(weights_only=True)``: tensors and containers only."""
+    import torch as th
+
+    raw = _read_member(zf, info, p)
+    try:
+        return th.load(io.BytesIO(raw), map_location=device, weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - torch raises many kinds; all mean "refused"
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ValueError(
+            f"{p}: member {info.filename!r} is not a plain tensor file; "
+            f"torch.load(weights_only=True) refused it ({type(exc).__name__}: {first[:200]})"
+        ) from None
+
+
+def _check_sb3_members(zf: zipfile.ZipFile, members: dict[str, zipfile.ZipInfo], p: Path) -> None:
+    """``data`` is a JSON object, the text members are UTF-8 (nothing here is unpickled)."""
+    for name in ("data", "policy.pth"):
+        if name not in members:
+            raise ValueError(f"{p} is not a complete model: it has no {name!r}")
+    try:
+        data = json.loads(_read_member(zf, members["data"], p).decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        raise ValueError(f"{p}: member 'data' is not the JSON stable-baselines3 writes") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{p}: member 'data' is not a JSON object")
+    for name in ("_stable_baselines3_version", "system_info.txt"):
+        if name in members:
+            try:
+                _read_member(zf, members[name], p).decode("utf-8")
+            except UnicodeDecodeError:
+                raise ValueError(f"{p}: member {name!r} is not text") from None
+
+
+def read_state_dicts(path: str | Path, *, device: str = "cpu") -> dict[str, Any]:
+    """Every ``.pth`` member of a model, safely: ``{"policy": ..., "policy.optimizer": ...}``.
+
+    The archive and its metadata are checked first (:func:`read_metadata`), ``data`` must be
+    JSON, and each ``.pth`` member goes through ``torch.load(weights_only=True)``. Keys are
+    the member names without ``.pth`` (what ``set_parameters`` of stable-baselines3 takes;
+    ``pytorch_variables`` holds SAC's entropy coefficient).
+
+    Raises:
+        FileNotFoundError, ValueError: see :func:`read_metadata`; a member torch refuses.
+        ImportError: torch missing.
+    """
+    read_metadata(path)
+    p, zf, members = _open_model(path)
+    with zf:
+        _check_sb3_members(zf, members, p)
+        out = {}
+        for name, info in members.items():
+            if name.endswith(".pth"):
+                out[name[: -len(".pth")]] = _torch_member(zf, info, p, device)
+    for name, val in out.items():
+        if not isinstance(val, dict):
+            raise ValueError(f"{p}: member '{name}.pth' does not hold a state dict")
+    return out
 
 
 def write_metadata(path: str | Path, meta: ModelMetadata) -> None:
@@ -394,9 +774,10 @@ class LearnedPolicy:
 def load_policy(path: str | Path, *, device: str = "cpu") -> LearnedPolicy:
     """Load a shipgym model as a :class:`LearnedPolicy` without unpickling anything.
 
-    The metadata is checked first (:func:`read_metadata`); the network is rebuilt from
-    ``policy`` and ``policy_kwargs`` and its weights are read from ``policy.pth`` with
-    ``torch.load(weights_only=True)``.
+    The archive and metadata are checked first (:func:`read_metadata`: sizes, architecture
+    limits); the network is rebuilt from ``policy`` and ``policy_kwargs`` and its weights are
+    read from ``policy.pth`` with ``torch.load(weights_only=True)`` (every other ``.pth``
+    member too, so a file with a crafted member is refused: :func:`read_state_dicts`).
 
     Raises:
         FileNotFoundError, ValueError: see :func:`read_metadata`; weights that do not fit the
@@ -405,7 +786,6 @@ def load_policy(path: str | Path, *, device: str = "cpu") -> LearnedPolicy:
     """
     meta = read_metadata(path)
     algo = algorithm_class(meta.algorithm)
-    import torch as th
     from gymnasium import spaces
 
     try:
@@ -420,14 +800,18 @@ def load_policy(path: str | Path, *, device: str = "cpu") -> LearnedPolicy:
     kwargs = sb3_policy_kwargs(meta.policy_kwargs)
     if meta.algorithm == "ppo":
         kwargs["use_sde"] = meta.use_sde
-    policy = policy_cls(obs_space, act_space, lambda _: 0.0, **kwargs)
-    with zipfile.ZipFile(path) as zf:
-        state = th.load(io.BytesIO(zf.read("policy.pth")), map_location=device, weights_only=True)
+    states = read_state_dicts(path, device=device)
     try:
-        policy.load_state_dict(state)
-    except RuntimeError as exc:
+        policy = policy_cls(obs_space, act_space, lambda _: 0.0, **kwargs)
+    except (TypeError, ValueError) as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"{path}: cannot build the policy of {METADATA_NAME}: {first}") from None
+    try:
+        policy.load_state_dict(states["policy"])
+    except (RuntimeError, TypeError, KeyError) as exc:
+        first = " ".join(str(exc).split())[:300]
         raise ValueError(
-            f"{path}: weights do not match the policy in {METADATA_NAME}: {exc}"
+            f"{path}: weights do not match the policy in {METADATA_NAME}: {first}"
         ) from None
     policy.to(device)
     policy.set_training_mode(False)
@@ -478,13 +862,35 @@ def parse_learned_controller(name: str) -> tuple[str, Path]:
         raise ValueError(
             f"not a learned controller: {name!r}; use ppo (shipped baseline), ppo:PATH or sac:PATH"
         )
-    path = Path(rest).expanduser() if sep and rest else baseline_model_path(algo)
+    if sep and not rest.strip():
+        raise ValueError(
+            f"empty model path in {name!r}: use {algo}:PATH (a model trained with 'shipgym train "
+            f"{algo}')" + (" or ppo for the shipped baseline" if algo in BASELINE_MODELS else "")
+        )
+    path = Path(rest).expanduser() if sep else baseline_model_path(algo)
     meta = read_metadata(path)
     if meta.algorithm != algo:
         raise ValueError(
             f"{path} holds a {meta.algorithm} model, not {algo}: use {meta.algorithm}:"
         )
+    check_trained_env(meta, path)
     return algo, path
+
+
+def check_trained_env(meta: ModelMetadata, path: str | Path) -> None:
+    """Refuse a model trained outside shipgym's environments.
+
+    The three shipgym tasks share one observation and action layout, so a policy trained on
+    one of them (the baseline: tracking) runs on any (the harbour manoeuvre is its
+    evaluation); its ``env_id`` must be one of them. Results record it (``trained_on``).
+    """
+    from shipgym.envs.registration import ENV_IDS
+
+    if meta.env_id not in ENV_IDS:
+        raise ValueError(
+            f"{path} was trained on {meta.env_id!r}, not a shipgym environment; shipgym runs "
+            f"models trained on: {', '.join(ENV_IDS)}"
+        )
 
 
 # ---- the wrapper -----------------------------------------------------------------------------
@@ -639,6 +1045,7 @@ def make_learned_env(
     if not path.is_file() and is_learned_controller(str(model_path)):
         _, path = parse_learned_controller(str(model_path))
     meta = read_metadata(path)
+    check_trained_env(meta, path)
     obs_name = meta.observer if observer == _USE_MODEL else observer
     if obs_name == "truth":
         obs_name = None

@@ -9,6 +9,7 @@ disturbances and time limit.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -31,7 +32,34 @@ from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
 
 from .physics import NO_CURRENT, VesselPhysics
 
-__all__ = ["BlueLadyEnv", "RewardWeights", "SCENES"]
+__all__ = [
+    "MAX_CONTROL_PERIOD",
+    "MAX_START_OFFSET",
+    "MAX_SUBSTEPS",
+    "MAX_TIMESTEP",
+    "MIN_TIMESTEP",
+    "BlueLadyEnv",
+    "RewardWeights",
+    "SCENES",
+]
+
+#: smallest physics timestep (s). The default 0.05 s resolves the fastest dynamics (thruster
+#: lags of 1-2 s, the hull's surge/sway/yaw time constants of tens of seconds) many times
+#: over; below 1e-4 s each simulated second costs more than 10 000 MuJoCo steps for nothing.
+MIN_TIMESTEP = 1e-4
+#: largest physics timestep (s): half the shortest thruster time constant (1 s, the tunnel
+#: thrusters), where MuJoCo's semi-implicit Euler still tracks the first-order lags.
+MAX_TIMESTEP = 0.5
+#: most physics steps per control step (``control_period / timestep``); bounds the work of
+#: one ``env.step`` (10 000 steps are about half a second).
+MAX_SUBSTEPS = 10_000
+#: longest control period (s): a DP controller acts every second or so (Tomera 2014: 1 s)
+MAX_CONTROL_PERIOD = 10.0
+#: largest |x|, |y| of a start pose (m) and of its noise, and largest |psi| (rad): 1000 km,
+#: far beyond any harbour or trial area and far below the 1e10 at which MuJoCo declares a
+#: position invalid and silently resets the state to the origin; float64 positions there
+#: still resolve 1e-10 m.
+MAX_START_OFFSET = 1e6
 
 SCENES: dict[str, tuple[str, ...]] = {
     "harbour": ("mjcf", "harbour", "scene.xml"),
@@ -59,6 +87,20 @@ class RewardWeights:
     rate: float = param(0.01, "1", "squared change of the normalised command")
     contact: float = param(100.0, "1", "penalty once, when the hull touches a quay")
     leg_bonus: float = param(10.0, "1", "bonus per completed leg (a positive term)")
+
+    def __post_init__(self) -> None:
+        # each term is -weight * quantity (+leg_bonus): weights are magnitudes, so a negative
+        # or non-finite one would reward errors or make every reward NaN
+        for f in dataclasses.fields(self):
+            val = getattr(self, f.name)
+            if isinstance(val, bool) or not isinstance(val, int | float | np.floating):
+                raise TypeError(f"reward_weights.{f.name} must be a number, got {val!r}")
+            if not (math.isfinite(val) and val >= 0):
+                raise ValueError(
+                    f"reward_weights.{f.name} must be finite and >= 0 (the sign is in the "
+                    f"reward term), got {val!r}"
+                )
+            object.__setattr__(self, f.name, float(val))
 
 
 @dataclass(frozen=True)
@@ -203,6 +245,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 f"render_mode must be None or one of {self.metadata['render_modes']}, "
                 f"got {render_mode!r}"
             )
+        _check_timing(timestep, control_period)
         self.n_substeps = _whole_multiple(control_period, timestep)
         self.control_period = float(control_period)
         self.start_pose = _vec3(start_pose, "start_pose")
@@ -215,6 +258,10 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             from shipgym._config import from_mapping
 
             reward_weights = from_mapping(RewardWeights, reward_weights, where="reward_weights")
+        elif not isinstance(reward_weights, RewardWeights):
+            raise TypeError(
+                f"reward_weights must be None, a RewardWeights or a mapping, got {reward_weights!r}"
+            )
         self.reward_weights = reward_weights
         self.terminate_on_finish = bool(terminate_on_finish)
         self.scene = scene
@@ -598,10 +645,41 @@ def parse_waves_arg(waves: Any) -> WaveConfig | None:
 
 
 def _vec3(x: Any, name: str) -> NDArray[np.float64]:
-    a = np.asarray(x, dtype=float)
+    """A pose-like triple (m, m, rad): finite, each |component| <= :data:`MAX_START_OFFSET`."""
+    try:
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be three finite numbers (m, m, rad), got {x!r}") from None
     if a.shape != (3,) or not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be three finite numbers (m, m, rad), got {x!r}")
+    if np.any(np.abs(a) > MAX_START_OFFSET):
+        raise ValueError(
+            f"{name} must be within +-{MAX_START_OFFSET:g} (m, m, rad), got {x!r}: MuJoCo resets "
+            "positions beyond 1e10 to the origin, and nothing shipgym models is that far out"
+        )
     return a
+
+
+def _check_timing(timestep: Any, control_period: Any) -> None:
+    """Bounds of the physics timestep and control period (see :data:`MIN_TIMESTEP` etc.)."""
+    for name, val in (("timestep", timestep), ("control_period", control_period)):
+        if isinstance(val, bool) or not isinstance(val, int | float | np.floating):
+            raise TypeError(f"{name} must be a number of seconds, got {val!r}")
+        if not math.isfinite(val):
+            raise ValueError(f"{name} must be finite, got {val!r}")
+    if not MIN_TIMESTEP <= timestep <= MAX_TIMESTEP:
+        raise ValueError(
+            f"timestep must be from {MIN_TIMESTEP:g} to {MAX_TIMESTEP:g} s, got {timestep!r}"
+        )
+    if not 0 < control_period <= MAX_CONTROL_PERIOD:
+        raise ValueError(
+            f"control_period must be > 0 and <= {MAX_CONTROL_PERIOD:g} s, got {control_period!r}"
+        )
+    if control_period / timestep > MAX_SUBSTEPS + 0.5:
+        raise ValueError(
+            f"control_period / timestep = {control_period / timestep:.0f} physics steps per "
+            f"control step, more than {MAX_SUBSTEPS}: use a larger timestep"
+        )
 
 
 def _whole_multiple(control_period: float, timestep: float) -> int:

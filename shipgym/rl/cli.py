@@ -18,6 +18,16 @@ import time
 from pathlib import Path
 from typing import Any
 
+from shipgym._argtypes import (
+    MAX_COUNT,
+    MAX_WORKERS,
+    bounded_float,
+    bounded_int,
+    nonneg_int,
+    progress_enabled,
+    seed_int,
+)
+
 __all__ = [
     "add_bench_controllers_parser",
     "add_train_parser",
@@ -42,16 +52,27 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
         "evaluations.json, progress.csv, config.yml and command.txt into --out.",
     )
     p.add_argument("algo", choices=["ppo", "sac"], help="algorithm")
-    p.add_argument("--timesteps", type=int, default=None, help="environment steps (YAML default)")
-    p.add_argument("--seed", type=int, default=0, help="seed of everything (0)")
-    p.add_argument("--n-envs", type=int, default=None, help="parallel environments (YAML)")
+    p.add_argument(
+        "--timesteps",
+        type=bounded_int(1, 10**10),
+        default=None,
+        help="environment steps, 1 to 10**10 (YAML default)",
+    )
+    p.add_argument("--seed", type=seed_int, default=0, help="seed of everything, >= 0 (0)")
+    p.add_argument(
+        "--n-envs",
+        type=bounded_int(1, 256),
+        default=None,
+        help="parallel environments, 1-256 (YAML)",
+    )
     p.add_argument("--out", type=Path, default=None, help="output folder")
     p.add_argument(
         "--resume",
         type=Path,
         default=None,
         metavar="CKPT",
-        help="continue a checkpoint/model (only your own files: SB3 unpickles)",
+        help="continue a checkpoint/model written by 'shipgym train' (nothing is unpickled: "
+        "the model is rebuilt from its metadata, weights read with weights_only=True)",
     )
     p.add_argument(
         "--residual",
@@ -64,12 +85,24 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
         help="what the policy sees: kbf (YAML default), dkf, ekf or truth",
     )
     p.add_argument("--hyperparams", type=Path, default=None, help="another YAML file")
-    p.add_argument("--eval-freq", type=int, default=None, help="steps between harbour evals")
-    p.add_argument("--checkpoint-freq", type=int, default=None, help="steps between checkpoints")
+    p.add_argument(
+        "--eval-freq", type=nonneg_int, default=None, help="steps between harbour evals (0: none)"
+    )
+    p.add_argument(
+        "--checkpoint-freq",
+        type=nonneg_int,
+        default=None,
+        help="steps between checkpoints (0: none)",
+    )
     p.add_argument("--vec-env", choices=["dummy", "subproc"], default=None)
-    p.add_argument("--max-minutes", type=float, default=None, help="wall-clock limit")
+    p.add_argument(
+        "--max-minutes",
+        type=bounded_float(0.0, 525_600.0, lo_open=True, unit="min"),
+        default=None,
+        help="wall-clock limit (> 0, at most a year)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--verbose", type=int, default=0, help="SB3 verbosity (0)")
+    p.add_argument("--verbose", type=bounded_int(0, 2), default=0, help="SB3 verbosity, 0-2 (0)")
     p.set_defaults(func=cmd_train)
     return p
 
@@ -80,6 +113,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     from shipgym.rl.train import train
 
     algorithm_class(args.algo)  # a missing RL extra fails here, with what to run
+    if args.hyperparams is not None and not args.hyperparams.exists():
+        raise FileNotFoundError(f"hyperparameter file {str(args.hyperparams)!r} does not exist")
 
     res = train(
         args.algo,
@@ -95,7 +130,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         checkpoint_freq=args.checkpoint_freq,
         vec_env=args.vec_env,
         max_minutes=args.max_minutes,
-        progress=not args.no_progress,
+        progress=progress_enabled(args.no_progress),
         verbose=args.verbose,
     )
     print(f"trained {res.num_timesteps} steps in {res.wall_time_s / 60:.1f} min")
@@ -121,7 +156,12 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
         metavar="NAME",
         help="pid, pid-seed, lq, ppo (shipped baseline), ppo:PATH, sac:PATH",
     )
-    b.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per controller (10)")
+    b.add_argument(
+        "--seeds",
+        type=bounded_int(1, MAX_COUNT),
+        default=10,
+        help=f"seeds 0..N-1 per controller, 1 <= N <= {MAX_COUNT} (10)",
+    )
     b.add_argument(
         "--observer", default="default", help="kbf when available (default), truth, dkf, ekf, ..."
     )
@@ -132,7 +172,12 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
         metavar="SPEED@FROM_DEG",
         help="mean wind (3@300)",
     )
-    b.add_argument("--workers", type=int, default=None, help="processes (default: CPUs)")
+    b.add_argument(
+        "--workers",
+        type=bounded_int(1, MAX_WORKERS),
+        default=None,
+        help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
+    )
     b.add_argument("--json", type=Path, default=None, metavar="PATH")
     b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
     b.add_argument("--no-progress", action="store_true")
@@ -148,8 +193,15 @@ def _check_writable(path: Path) -> None:
 
 def cmd_bench_controllers(args: argparse.Namespace) -> int:
     """Run :func:`shipgym.rl.bench.bench_controllers`; print and write the table / rows."""
+    from shipgym.cli import check_controller
     from shipgym.rl.bench import bench_controllers, bench_title, controller_table
 
+    for name in args.controllers:
+        check_controller(name)  # unknown names and missing model files fail before any work
+    if args.observer not in ("default", "truth"):
+        from shipgym.observers import make_observer
+
+        make_observer(args.observer)
     for path in (args.json, args.markdown):
         if path is not None:
             _check_writable(path)
@@ -160,7 +212,7 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
         wind=args.wind,
         observer=args.observer,
         workers=args.workers,
-        progress=not args.no_progress,
+        progress=progress_enabled(args.no_progress),
     )
     wall = time.perf_counter() - t0
     title = bench_title(rows, args.wind)

@@ -106,8 +106,13 @@ def run_env_episode(
     (``completed``, ``legs_completed``, ``duration_s``, ``quay_contact``, ``terminated``,
     ``truncated``, ``x_E``, ``y_E``, ``psi_E`` (deg), ``J_c``, ``measured``, ``leg_times``,
     ``thrust_mean_abs`` (N), ``thrust_total_variation`` (N), ``saturated_fraction``,
-    ``rmse``, ``wall_time_s``) plus ``seed`` and ``return`` (sum of rewards).
+    ``rmse``, ``wall_time_s``, ``indices_note``, ``partial_indices``) plus ``seed`` and
+    ``return`` (sum of rewards). The accuracy indices of a run that hit a quay, did not finish
+    its plan or was too short are NaN, with the reason in ``indices_note``
+    (:func:`shipgym.metrics.honest_indices`).
     """
+    from shipgym.metrics import honest_indices
+
     t0 = time.perf_counter()
     obs, info = env.reset(seed=seed)
     zero = np.zeros(env.action_space.shape, dtype=np.float32)
@@ -118,6 +123,7 @@ def run_env_episode(
         obs, reward, terminated, truncated, info = env.step(action)
         ret += float(reward)
     metrics = env.unwrapped.episode_metrics()  # type: ignore[attr-defined]
+    idx = honest_indices(metrics, plan_finite=bool(env.unwrapped.terminate_on_finish))  # type: ignore[attr-defined]
     wall = time.perf_counter() - t0
     return {
         "seed": int(seed),
@@ -127,11 +133,13 @@ def run_env_episode(
         "quay_contact": bool(metrics["quay_contact"]),
         "terminated": bool(terminated),
         "truncated": bool(truncated),
-        "x_E": metrics["x_E"],
-        "y_E": metrics["y_E"],
-        "psi_E": metrics["psi_E"],
-        "J_c": metrics["J_c"],
-        "measured": metrics.get("measured"),
+        "x_E": idx["x_E"],
+        "y_E": idx["y_E"],
+        "psi_E": idx["psi_E"],
+        "J_c": idx["J_c"],
+        "measured": idx["measured"],
+        "indices_note": idx["indices_note"],
+        "partial_indices": idx["partial_indices"],
         "leg_times": list(metrics["leg_times"]),
         "thrust_mean_abs": list(metrics["thrust_mean_abs"]),
         "thrust_total_variation": list(metrics["thrust_total_variation"]),

@@ -8,13 +8,18 @@ normalised command of a classical controller (the tuned PID) through
 learns corrections.
 
 Hyperparameters live in plain YAML files shipped with the package
-(``shipgym/rl/hyperparams/{ppo,sac}.yml``, read with ``yaml.safe_load``; nothing is
-evaluated). A run writes into its output folder:
+(``shipgym/rl/hyperparams/{ppo,sac}.yml``, read as plain data with PyYAML's safe loader,
+libyaml's when present, at most 1 MiB; nothing is evaluated) and are checked against
+limits before anything is allocated (:func:`check_hyperparams`). A run writes into its
+output folder:
 
 - ``model.zip``: the final model, a shipgym model (SB3 zip + ``shipgym.json`` metadata with
   the ``VecNormalize`` statistics; :mod:`shipgym.controllers.learned`);
 - ``best_model.zip``: the model with the best periodic harbour evaluation;
-- ``checkpoints/{algo}_{steps}_steps.zip``: periodic checkpoints (``resume=`` continues one);
+- ``checkpoints/{algo}_{steps}_steps.zip``: periodic checkpoints (``resume=`` continues one,
+  without unpickling anything: the algorithm is rebuilt from the hyperparameters in its
+  metadata and the weights and optimizer states are read with
+  ``torch.load(weights_only=True)``, :func:`restore_model_state`);
 - ``evaluations.json``: the harbour evaluations (completion, J_c per seed, over time);
 - ``progress.csv``: SB3's training log; ``config.yml`` (resolved hyperparameters),
   ``args.yml`` and ``command.txt`` (the exact command), as the zoo does.
@@ -43,13 +48,17 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
+from shipgym._safeload import jsonable
 from shipgym.controllers.learned import (
     ALGORITHMS,
+    METADATA_NAME,
     LearnedPolicy,
     ModelMetadata,
     ObsNormalization,
     algorithm_class,
+    check_policy_spec,
     read_metadata,
+    read_state_dicts,
     sb3_policy_kwargs,
     write_metadata,
 )
@@ -62,8 +71,10 @@ __all__ = [
     "TrainResult",
     "build_env",
     "build_vec_env",
+    "check_hyperparams",
     "hyperparams_path",
     "load_hyperparams",
+    "restore_model_state",
     "set_deterministic",
     "train",
     "train_command",
@@ -106,6 +117,38 @@ _INT_KEYS = (
 )
 _NOT_ALGO_ARGS = ("policy", "env", "seed", "device", "verbose", "_init_setup_model")
 
+#: bounds of the integer hyperparameters (inclusive); they keep buffers and run lengths
+#: within what a workstation holds: the rollout buffer is ``n_steps * n_envs`` transitions,
+#: SAC's replay buffer ``buffer_size`` (10 million transitions of 15 + 3 floats: ~1.5 GB)
+HP_INT_BOUNDS: dict[str, tuple[int, int]] = {
+    "n_timesteps": (1, 10**10),
+    "n_envs": (1, 256),
+    "n_steps": (1, 1 << 20),
+    "batch_size": (1, 1 << 20),
+    "n_epochs": (1, 1000),
+    "buffer_size": (1, 10_000_000),
+    "learning_starts": (0, 10**10),
+    "train_freq": (1, 1 << 20),
+    "gradient_steps": (-1, 1 << 20),
+    "eval_freq": (0, 10**10),
+    "checkpoint_freq": (0, 10**10),
+}
+#: most transitions in PPO's rollout buffer (``n_steps * n_envs``)
+MAX_ROLLOUT = 1 << 22
+#: algorithm arguments that take Python objects (classes, noise processes): not settable from
+#: a plain-data file
+_OBJECT_ARGS = (
+    "rollout_buffer_class",
+    "rollout_buffer_kwargs",
+    "replay_buffer_class",
+    "replay_buffer_kwargs",
+    "action_noise",
+)
+#: arguments that are a number or a schedule string (``"lin_3e-4"``), or ``"auto"`` (SAC)
+_NUMBER_OR_STRING = ("learning_rate", "clip_range", "clip_range_vf", "ent_coef", "target_entropy")
+#: keys of ``normalize`` (``VecNormalize`` arguments)
+_NORMALIZE_KEYS = ("norm_obs", "norm_reward", "clip_obs", "clip_reward", "gamma", "epsilon")
+
 
 # ---- hyperparameters -------------------------------------------------------------------------
 def hyperparams_path(algo: str) -> Path:
@@ -144,11 +187,12 @@ def load_hyperparams(
     Raises:
         ValueError: missing env block, malformed values, unknown algorithm arguments.
     """
+    from shipgym._safeload import load_config_file
+
     p = Path(path) if path is not None else hyperparams_path(algo)
-    try:
-        data = yaml.safe_load(p.read_text())
-    except yaml.YAMLError as exc:
-        raise ValueError(f"{p}: not valid YAML: {exc}") from None
+    if p.suffix.lower() not in (".yml", ".yaml"):
+        raise ValueError(f"hyperparameter file {str(p)!r} must be a .yml / .yaml file")
+    data = load_config_file(p, "hyperparameter file")
     if not isinstance(data, dict) or env_id not in data:
         have = ", ".join(data) if isinstance(data, dict) else "nothing"
         raise ValueError(f"{p} has no hyperparameters for {env_id!r} (it has: {have})")
@@ -180,7 +224,94 @@ def load_hyperparams(
                 raise ValueError(f"{p}: {k} must be a whole number, got {hp[k]!r}")
             hp[k] = v
     _check_algo_args(algo, hp, where=str(p))
+    check_hyperparams(algo, hp, where=str(p))
     return hp
+
+
+def check_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparameters") -> None:
+    """Refuse hyperparameters beyond the limits, before anything is allocated.
+
+    Integers within :data:`HP_INT_BOUNDS`, ``n_steps * n_envs`` at most :data:`MAX_ROLLOUT`,
+    numbers finite, the policy within the architecture limits of
+    :func:`shipgym.controllers.learned.check_policy_spec` (``MlpPolicy``, plain
+    ``policy_kwargs``, layer width, parameter count).
+
+    Raises:
+        ValueError: naming the hyperparameter and its valid range.
+    """
+    for k, (lo, hi) in HP_INT_BOUNDS.items():
+        v = hp.get(k)
+        if v is None:
+            continue
+        if algo == "sac" and k == "train_freq" and isinstance(v, list | tuple):
+            v = v[0] if v else None
+        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+            raise ValueError(f"{where}: {k} must be a whole number from {lo} to {hi}, got {v!r}")
+    rollout = int(hp.get("n_steps", 1) or 1) * int(hp.get("n_envs", 1) or 1)
+    if algo == "ppo" and rollout > MAX_ROLLOUT:
+        raise ValueError(
+            f"{where}: n_steps * n_envs = {rollout:,} transitions, more than {MAX_ROLLOUT:,}"
+        )
+    for k, v in hp.items():
+        if isinstance(v, float) and not math.isfinite(v):
+            raise ValueError(f"{where}: {k} must be finite, got {v!r}")
+    _check_hp_types(algo, hp, where)
+    try:
+        check_policy_spec(algo, hp.get("policy", "MlpPolicy"), hp.get("policy_kwargs") or {})
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _check_hp_types(algo: str, hp: Mapping[str, Any], where: str) -> None:
+    """Types of the hyperparameters: as the algorithm's defaults, plain data only."""
+    from shipgym.controllers.learned import _plain
+
+    sig = inspect.signature(algorithm_class(algo).__init__).parameters
+    for k, v in hp.items():
+        _plain(v, f"{where}: {k}")
+        if k in _OBJECT_ARGS and v is not None:
+            raise ValueError(f"{where}: {k} takes Python objects; not settable from a file")
+        if k in SHIPGYM_KEYS or k not in sig or k in ("policy_kwargs", "train_freq"):
+            continue
+        default = sig[k].default
+        if k in _NUMBER_OR_STRING:
+            ok = v is None or _is_number(v) or isinstance(v, str)
+        elif isinstance(default, bool):
+            ok = isinstance(v, bool)
+        elif isinstance(default, int | float):
+            ok = _is_number(v)
+        else:
+            ok = True
+        if not ok:
+            kind = "true or false" if isinstance(default, bool) else "a finite number"
+            raise ValueError(f"{where}: {k} must be {kind}, got {v!r}")
+    norm = hp.get("normalize")
+    if norm is not None and not isinstance(norm, bool):
+        if not isinstance(norm, Mapping):
+            raise ValueError(f"{where}: normalize must be true/false or a mapping, got {norm!r}")
+        unknown = sorted(set(norm) - set(_NORMALIZE_KEYS))
+        if unknown:
+            raise ValueError(
+                f"{where}: normalize has unknown keys {unknown}; valid: "
+                f"{', '.join(_NORMALIZE_KEYS)}"
+            )
+    seeds = hp.get("eval_seeds")
+    if seeds is not None and not (
+        isinstance(seeds, list | tuple)
+        and len(seeds) <= 1000
+        and all(isinstance(x, int) and not isinstance(x, bool) and x >= 0 for x in seeds)
+    ):
+        raise ValueError(f"{where}: eval_seeds must be a list of at most 1000 ints >= 0")
+    for key in ("env_kwargs", "randomize"):
+        if hp.get(key) is not None and not isinstance(hp[key], Mapping):
+            raise ValueError(f"{where}: {key} must be a mapping, got {hp[key]!r}")
+    scale = hp.get("residual_scale")
+    if scale is not None and not (_is_number(scale) and scale >= 0):
+        raise ValueError(f"{where}: residual_scale must be a finite number >= 0, got {scale!r}")
 
 
 def _check_algo_args(algo: str, hp: Mapping[str, Any], where: str) -> None:
@@ -470,7 +601,11 @@ def _make_eval_callback(**kw: Any) -> Any:
             policy = LearnedPolicy(self.model.policy, self.metadata_fn())
             rows = [run_env_episode(self.env, s, policy) for s in self.seeds]
             ok, neg_jc = _score(rows)
-            meas = [r["measured"]["J_c"] for r in rows if r.get("measured")]
+            meas = [
+                r["measured"]["J_c"]
+                for r in rows
+                if r.get("measured") and math.isfinite(r["measured"]["J_c"])
+            ]
             summary = {
                 "timesteps": int(self.num_timesteps),
                 "completed": ok,
@@ -489,7 +624,8 @@ def _make_eval_callback(**kw: Any) -> Any:
                 self.logger.record("eval/J_c_measured", summary["J_c_measured"])
             self.logger.record("eval/quay_contact", sum(r["quay_contact"] for r in rows))
             self.logger.record("eval/duration_s", float(np.mean([r["duration_s"] for r in rows])))
-            (self.out_dir / "evaluations.json").write_text(json.dumps(self.evaluations, indent=1))
+            text = json.dumps(jsonable(self.evaluations), indent=1)
+            (self.out_dir / "evaluations.json").write_text(text)
             score = (ok, neg_jc)
             if self.best is None or score > self.best:
                 self.best = score
@@ -624,8 +760,8 @@ def train(
         n_envs: parallel environments (default: YAML).
         out: output folder (default ``runs/train/<algo>[-residual]-seed<seed>``).
         resume: a checkpoint or model (shipgym model zip) to continue; its metadata decides
-            the task, observer and residual setup. Loads with stable-baselines3, which
-            unpickles: only resume from your own files.
+            the task, observer and residual setup. Nothing is unpickled
+            (:func:`restore_model_state`).
         residual: learn a residual on top of the YAML's ``controller`` (the tuned PID).
         observer: ``"truth"``, ``"kbf"``, ... (default: YAML, ``kbf``).
         env_id: training env id (a block of that name must exist in the YAML).
@@ -651,11 +787,14 @@ def train(
     if resume_meta is not None:
         if resume_meta.algorithm != algo:
             raise ValueError(f"{resume} holds a {resume_meta.algorithm} model, not {algo}")
-        hp = copy.deepcopy(resume_meta.hyperparams)
+        hp = copy.deepcopy(dict(resume_meta.hyperparams))
         env_id = resume_meta.env_id
         residual = bool(hp.get("residual"))
         if overrides:
             hp = _merge(hp, overrides)
+        where = f"{resume}: {METADATA_NAME} hyperparams"
+        _check_algo_args(algo, hp, where=where)
+        check_hyperparams(algo, hp, where=where)
     else:
         hp = load_hyperparams(
             algo, env_id, residual=residual, path=hyperparams, overrides=overrides
@@ -663,6 +802,7 @@ def train(
     if observer is not None:
         hp["observer"] = None if observer == "truth" else observer
     hp["observer"] = check_observer(hp.get("observer"))
+    _check_train_args(seed=seed, n_envs=n_envs, max_minutes=max_minutes, timesteps=timesteps)
     if n_envs is not None:
         hp["n_envs"] = int(n_envs)
     if vec_env is not None:
@@ -671,11 +811,12 @@ def train(
         if val is not None:
             hp[key] = int(val)
     if eval_seeds is not None:
-        hp["eval_seeds"] = [int(s) for s in eval_seeds]
+        hp["eval_seeds"] = list(eval_seeds)
     n_steps = int(timesteps if timesteps is not None else hp.get("n_timesteps", 100_000))
     if n_steps < 1:
         raise ValueError(f"timesteps must be >= 1, got {n_steps}")
     hp["n_timesteps"] = n_steps
+    check_hyperparams(algo, hp, where="train")  # again, with the arguments applied
     n = int(hp.get("n_envs", 1))
     out_dir = Path(
         out
@@ -698,14 +839,13 @@ def train(
         venv = VecNormalize(venv, **norm_kw)
         if resume_meta is not None and resume_meta.normalization is not None:
             resume_meta.normalization.apply_to(venv)
+    model = cls(
+        hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=verbose,
+        **_algo_kwargs(algo, hp),
+    )  # fmt: skip
     if resume is not None:
-        model = cls.load(resume, env=venv, device="cpu", print_system_info=False)
-        model.set_random_seed(seed)
-    else:
-        model = cls(
-            hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=verbose,
-            **_algo_kwargs(algo, hp),
-        )  # fmt: skip
+        assert resume_meta is not None
+        restore_model_state(model, resume, resume_meta)
     fmt = ["csv"] + (["stdout"] if verbose else [])
     model.set_logger(configure(str(out_dir), fmt))
 
@@ -764,6 +904,71 @@ def train(
         model=model,
         vec_normalize=venv if isinstance(venv, VecNormalize) else None,
     )
+
+
+def _check_train_args(*, seed: Any, n_envs: Any, max_minutes: Any, timesteps: Any) -> None:
+    """The arguments of :func:`train` that the CLI validates too (API users get the same)."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed must be an int >= 0, got {seed!r}")
+    lo, hi = HP_INT_BOUNDS["n_envs"]
+    if n_envs is not None and (
+        isinstance(n_envs, bool) or not isinstance(n_envs, int) or not lo <= n_envs <= hi
+    ):
+        raise ValueError(f"n_envs must be an int from {lo} to {hi}, got {n_envs!r}")
+    if max_minutes is not None and not (
+        isinstance(max_minutes, int | float) and math.isfinite(max_minutes) and max_minutes > 0
+    ):
+        raise ValueError(f"max_minutes must be a finite number > 0, got {max_minutes!r}")
+    lo, hi = HP_INT_BOUNDS["n_timesteps"]
+    if timesteps is not None and (
+        isinstance(timesteps, bool) or not isinstance(timesteps, int) or not lo <= timesteps <= hi
+    ):
+        raise ValueError(f"timesteps must be an int from {lo} to {hi}, got {timesteps!r}")
+
+
+def restore_model_state(model: Any, path: str | Path, meta: ModelMetadata) -> None:
+    """Put a saved model's weights, optimizer states and step count into a fresh ``model``.
+
+    ``model`` is built from the hyperparameters in ``meta`` (same algorithm, policy and
+    spaces); the states come from :func:`shipgym.controllers.learned.read_state_dicts`
+    (``torch.load(weights_only=True)``: no unpickling), so resuming from a file is as safe as
+    running it as a controller. SAC's entropy coefficient comes from ``pytorch_variables``.
+
+    Raises:
+        ValueError: the file's states do not fit the model (one line).
+    """
+    import torch as th
+    from stable_baselines3.common.save_util import recursive_setattr
+
+    states = read_state_dicts(path)
+    variables = states.pop("pytorch_variables", {})
+    needed, var_names = model._get_torch_save_params()
+    missing = sorted(set(needed) - set(states))
+    extra = sorted(set(states) - set(needed))
+    if missing or extra:
+        raise ValueError(
+            f"{path}: its states do not fit a {meta.algorithm} model of its metadata "
+            f"(missing {missing}, unexpected {extra})"
+        )
+    try:
+        model.set_parameters(states, exact_match=True, device="cpu")
+    except (RuntimeError, ValueError, KeyError, TypeError) as exc:
+        first = " ".join(str(exc).split())[:300]
+        raise ValueError(f"{path}: its weights do not fit its metadata: {first}") from None
+    unknown = sorted(set(variables) - set(var_names))
+    if unknown:
+        raise ValueError(f"{path}: unexpected pytorch variables {unknown}")
+    for name in var_names:
+        val = variables.get(name)
+        if val is None:
+            continue
+        target = getattr(model, name, None)
+        if not isinstance(val, th.Tensor) or not isinstance(target, th.Tensor):
+            raise ValueError(f"{path}: pytorch variable {name!r} is not a tensor")
+        if val.shape != target.shape:
+            raise ValueError(f"{path}: pytorch variable {name!r} has shape {tuple(val.shape)}")
+        recursive_setattr(model, f"{name}.data", val.data)
+    model.num_timesteps = int(meta.num_timesteps)
 
 
 def _write_config(out_dir: Path, hp: Mapping[str, Any], command: str, **args: Any) -> None:

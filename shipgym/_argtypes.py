@@ -1,0 +1,133 @@
+"""Validated command-line values, in one place: argparse types and the one-line error parser.
+
+Every number the ``shipgym`` command takes goes through one of these types, so a bad value
+ends as ``shipgym: error: argument --seed: must be a whole number >= 0, got '-1'`` (exit
+status 2) before any work starts. The bounds are part of each option's definition (its
+``help`` names them); :data:`MAX_SEED` etc. document the shared ones.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Callable
+from typing import Any, NoReturn, TextIO
+
+__all__ = [
+    "MAX_COUNT",
+    "MAX_SEED",
+    "MAX_WORKERS",
+    "OneLineParser",
+    "bounded_float",
+    "bounded_int",
+    "nonneg_int",
+    "positive_int",
+    "progress_enabled",
+    "seed_int",
+]
+
+#: largest seed accepted (numpy's SeedSequence takes any int >= 0; 2**63 - 1 keeps seeds int64)
+MAX_SEED = 2**63 - 1
+#: largest count of seeds / runs in one benchmark (a bigger job list is a typo, not a plan)
+MAX_COUNT = 100_000
+#: largest number of worker processes (each holds a MuJoCo model, ~100 MB)
+MAX_WORKERS = 256
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def bounded_int(
+    lo: int, hi: int | None = None, what: str = "a whole number", rng: str | None = None
+) -> Callable[[str], int]:
+    """An argparse type: an int ``lo <= n <= hi`` (``hi`` ``None``: no upper bound).
+
+    ``rng`` replaces the range's wording in the message (default ``">= lo"`` or
+    ``"from lo to hi"``).
+    """
+    if rng is None:
+        rng = f">= {lo}" if hi is None else f"from {lo} to {hi}"
+
+    def parse(text: str) -> int:
+        try:
+            n = int(str(text).strip(), 10)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {what} {rng}, got {text!r}") from None
+        if n < lo or (hi is not None and n > hi):
+            raise argparse.ArgumentTypeError(f"must be {what} {rng}, got {text!r}")
+        return n
+
+    parse.__name__ = f"int {rng}"
+    return parse
+
+
+def bounded_float(
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_open: bool = False,
+    unit: str = "",
+) -> Callable[[str], float]:
+    """An argparse type: a finite float in ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``)."""
+    u = f" {unit}" if unit else ""
+    parts = []
+    if lo is not None:
+        parts.append(f"{'>' if lo_open else '>='} {_fmt(lo)}{u}")
+    if hi is not None:
+        parts.append(f"<= {_fmt(hi)}{u}")
+    rng = "a finite number" + (" " + " and ".join(parts) if parts else "")
+
+    def parse(text: str) -> float:
+        try:
+            x = float(str(text).strip())
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {rng}, got {text!r}") from None
+        ok = math.isfinite(x)
+        if ok and lo is not None:
+            ok = x > lo if lo_open else x >= lo
+        if ok and hi is not None:
+            ok = x <= hi
+        if not ok:
+            raise argparse.ArgumentTypeError(f"must be {rng}, got {text!r}")
+        return x
+
+    parse.__name__ = rng
+    return parse
+
+
+#: a seed: a whole number from 0 to :data:`MAX_SEED`
+seed_int = bounded_int(0, MAX_SEED, rng=">= 0 (at most 2**63 - 1)")
+#: a whole number >= 0 (e.g. a frequency where 0 disables)
+nonneg_int = bounded_int(0)
+#: a whole number >= 1
+positive_int = bounded_int(1)
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """``argparse.ArgumentParser`` whose errors are one line: ``shipgym: error: ...``.
+
+    argparse prints the usage block and then ``prog: error: message``; here the message
+    alone (with a pointer to ``--help``) goes to stderr, and the exit status stays 2.
+    Subparsers inherit the class.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        root = self.prog.split()[0] if self.prog else "shipgym"
+        msg = " ".join(str(message).split())
+        self.exit(2, f"{root}: error: {msg} (see '{self.prog} --help')\n")
+
+
+def progress_enabled(no_progress: bool = False, stream: TextIO | None = None) -> bool:
+    """Whether to draw a progress bar: not switched off and ``stream`` (stderr) is a terminal.
+
+    Pipes and log files get no bar (a bar's ``\\r`` frames would litter them).
+    """
+    if no_progress:
+        return False
+    s: Any = sys.stderr if stream is None else stream
+    try:
+        return bool(s.isatty())
+    except (AttributeError, ValueError):  # closed or unusual streams
+        return False
