@@ -11,17 +11,20 @@ moment therefore leaves the earlier file intact, plus at most a file whose name 
 - :func:`atomic_path`: a context manager yielding a temporary path (``run.partial-<pid>.json``)
   renamed onto the destination when the block ends without an exception, removed otherwise;
 - :func:`atomic_write_text`: write a text file that way;
-- :func:`replace_together`: rename several complete files onto their final names at once, with
-  SIGINT and SIGTERM held back, removing the old destinations first so that a new file never
-  ends up next to a stale partner of an earlier run.
+- :func:`write_partial_text` and :func:`replace_together`: write files under their partial
+  names, then rename them onto their final names at once, with SIGINT and SIGTERM held back,
+  removing the old destinations first so that a new file never ends up next to a stale
+  partner of an earlier run (``shipgym run --record X.rrd --json X.json``);
+- :class:`WriteFailed`: a result file that could not be written, carrying the results so that
+  the command line can print them instead of losing them.
 
 A destination that exists but is not a regular file (``/dev/stdout``, ``/dev/full``, a FIFO) is
 written directly: a device cannot be replaced by a rename.
 
 Interrupts: :func:`handle_signals` makes SIGTERM raise :class:`Interrupted` (a
-``KeyboardInterrupt``) like SIGINT does, so the same clean-up runs for both; code that keeps
-something on its way out records it with :func:`note_kept`, and the command line reports it in
-one line (:func:`interrupt_message`) and exits with ``128 + signal number`` (130, 143).
+``KeyboardInterrupt``) like SIGINT does, so the same clean-up runs for both; a command says
+beforehand what an interrupt would keep with :func:`on_interrupt`, and the command line reports
+it in one line (:func:`interrupt_message`) and exits with ``128 + signal number`` (130, 143).
 """
 
 from __future__ import annotations
@@ -30,20 +33,23 @@ import contextlib
 import os
 import signal
 import threading
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
 __all__ = [
     "Interrupted",
+    "WriteFailed",
     "atomic_path",
     "atomic_write_text",
     "handle_signals",
     "interrupt_message",
     "interrupt_status",
-    "note_kept",
+    "on_interrupt",
+    "os_reason",
     "partial_path",
     "replace_together",
+    "write_partial_text",
 ]
 
 #: the word marking a file that is not (yet) complete
@@ -150,13 +156,20 @@ class Interrupted(KeyboardInterrupt):
         self.signum = int(signum)
 
 
-def note_kept(exc: BaseException, what: str) -> None:
-    """Record on an interrupt ``exc`` what was kept (``"partial recording at X"``)."""
-    kept = getattr(exc, "kept", None)
-    if not isinstance(kept, list):
-        kept = []
-        exc.kept = kept  # type: ignore[attr-defined]
-    kept.append(what)
+#: what an interrupt of the running command keeps: (text or a function giving it, file or None)
+_NOTES: list[tuple[str | Callable[[], str | None], Path | None]] = []
+
+
+def on_interrupt(
+    what: str | Callable[[], str | None], *, path: str | os.PathLike[str] | None = None
+) -> None:
+    """Say what an interrupt of the running command keeps (``"partial recording kept at X"``).
+
+    ``what`` may be a function, called when the message is made (``None``: nothing to say).
+    With ``path``, the note is reported only if that file exists then (after every clean-up
+    has run). The notes are cleared when :func:`handle_signals` begins and ends.
+    """
+    _NOTES.append((what, None if path is None else Path(path)))
 
 
 def interrupt_status(exc: BaseException) -> int:
@@ -167,7 +180,11 @@ def interrupt_status(exc: BaseException) -> int:
 def interrupt_message(exc: BaseException, prog: str = "shipgym") -> str:
     """One line: which signal, and what was kept (see :func:`note_kept`)."""
     name = signal.Signals(getattr(exc, "signum", signal.SIGINT)).name
-    kept: list[str] = list(getattr(exc, "kept", None) or [])
+    kept = []
+    for what, path in _NOTES:
+        text = what() if callable(what) else what
+        if text and (path is None or path.exists()):
+            kept.append(text)
     tail = "; ".join(kept) if kept else "nothing was written"
     return f"{prog}: interrupted ({name}); {tail}"
 
@@ -183,6 +200,7 @@ def handle_signals() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    _NOTES.clear()
     sigs = [signal.SIGINT, signal.SIGTERM]
     old: dict[int, Any] = {s: signal.getsignal(s) for s in sigs}
 
@@ -197,6 +215,53 @@ def handle_signals() -> Iterator[None]:
     try:
         yield
     finally:
+        _NOTES.clear()
         for s, h in old.items():
             with contextlib.suppress(TypeError, ValueError):
                 signal.signal(s, h if h is not None else signal.SIG_DFL)
+
+
+# ---- result files ----------------------------------------------------------------------------
+class WriteFailed(OSError):
+    """A result file could not be written; ``results`` holds what should have gone there.
+
+    The command line prints ``results`` (JSON) on stdout, says where they went in one line on
+    stderr and exits with status 2: results are never lost to a full disk or a removed folder.
+    """
+
+    def __init__(self, message: str, results: Any) -> None:
+        super().__init__(message)
+        self.message = message
+        self.results = results
+
+    def __str__(self) -> str:
+        return self.message
+
+
+def write_partial_text(path: str | os.PathLike[str], text: str) -> Path | None:
+    """Write ``text`` to ``partial_path(path)`` for a later :func:`replace_together`.
+
+    Returns the partial file, or ``None`` when ``path`` is a device or FIFO and was written
+    directly. On an error the partial file is removed and the ``OSError`` raised.
+    """
+    dest = _destination(Path(path))
+    if _direct(dest):
+        with open(dest, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        return None
+    tmp = partial_path(dest)
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+    return tmp
+
+
+def os_reason(exc: OSError) -> str:
+    """``No space left on device``: the short reason of an ``OSError``."""
+    return exc.strerror or str(exc)

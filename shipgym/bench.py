@@ -1,22 +1,35 @@
 """Benchmarks run from the command line: ``shipgym bench observers`` (seed001 Table 6 style).
 
-Each run is one closed-loop harbour manoeuvre; runs go to worker processes in parallel.
+Each run is one closed-loop harbour manoeuvre; runs go to worker processes in parallel
+(:func:`run_jobs`). Finished rows are handed out as they come (``on_result``, e.g. a
+:class:`RowLog` appending them to ``PATH.partial.jsonl``), so an interrupted benchmark keeps
+them. Workers die with their parent: they ignore SIGINT (the parent handles it and stops
+them), take SIGTERM's default action, and on Linux get SIGKILL when the parent dies
+(``PR_SET_PDEATHSIG``; elsewhere a watchdog thread polls ``os.getppid()``).
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import json
 import math
 import multiprocessing
 import os
+import signal
 import sys
+import threading
+import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 __all__ = [
     "DEFAULT_OBSERVERS",
+    "RowLog",
     "bench_observers",
     "observer_table",
     "observer_traces",
@@ -46,6 +59,46 @@ def _one(job: tuple[str, int, tuple[float, float], str]) -> dict[str, Any]:
     }
 
 
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def _watch_parent(parent: int) -> None:
+    while True:
+        time.sleep(1.0)
+        if os.getppid() != parent:
+            os._exit(1)
+
+
+def _worker_init(parent: int) -> None:
+    """Initializer of the pool's workers: die with the parent, leave SIGINT to it."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the parent stops the pool
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the parent's handler, if inherited
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        if os.getppid() != parent:  # the parent died before prctl took effect
+            os._exit(1)
+    else:
+        threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and end the workers now (interrupt or failure)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.terminate()
+    deadline = time.monotonic() + 5.0
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.join(max(0.0, deadline - time.monotonic()))
+            if p.is_alive():
+                p.kill()
+                p.join(1.0)
+
+
 def run_jobs(
     fn: Callable[[Any], Any],
     jobs: Sequence[Any],
@@ -53,32 +106,102 @@ def run_jobs(
     workers: int | None = None,
     progress: bool = True,
     desc: str = "runs",
+    on_result: Callable[[int, Any], None] | None = None,
 ) -> list[Any]:
     """``[fn(job) for job in jobs]`` in worker processes, in order, with a progress bar.
 
     ``fn`` must be a module-level function (picklable). Forks unless torch is loaded in this
     process (forking a process with torch's thread pools can hang): then ``forkserver``.
+    ``on_result(index, result)`` is called in this process as each job finishes (in the order
+    they finish). On an exception or an interrupt (``KeyboardInterrupt``, also SIGTERM under
+    ``shipgym.cli.main``) the jobs not started are cancelled and the workers ended before it
+    propagates; workers also die if this process is killed.
     """
     from tqdm import tqdm
 
     n = workers or min(len(jobs), os.cpu_count() or 1)
     bar = tqdm(total=len(jobs), disable=not progress, desc=desc, unit="run")
-    out: list[Any] = []
+    out: list[Any] = [None] * len(jobs)
+
+    def done(i: int, res: Any) -> None:
+        out[i] = res
+        if on_result is not None:
+            on_result(i, res)
+        bar.update(1)
+
     try:
         if n <= 1:
-            for job in jobs:
-                out.append(fn(job))
-                bar.update(1)
+            for i, job in enumerate(jobs):
+                done(i, fn(job))
         else:
             method = "forkserver" if "torch" in sys.modules else None
             ctx = multiprocessing.get_context(method)
-            with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
-                for res in pool.map(fn, jobs):
-                    out.append(res)
-                    bar.update(1)
+            pool = ProcessPoolExecutor(
+                max_workers=n, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
+            )
+            try:
+                pending = {pool.submit(fn, job): i for i, job in enumerate(jobs)}
+                while pending:
+                    finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                    for fut in sorted(finished, key=pending.__getitem__):
+                        done(pending.pop(fut), fut.result())
+            except BaseException:
+                _stop_pool(pool)
+                raise
+            pool.shutdown(wait=True)
     finally:
         bar.close()
     return out
+
+
+class RowLog:
+    """The finished rows of a benchmark, appended as JSON lines (``{"index": i, "row": ...}``)
+    to ``path`` as they come (``path`` ``None``: counted only).
+
+    Pass :meth:`add` as ``on_result``; :meth:`discard` the file once the complete result is
+    written. A file that cannot be written is reported once on stderr and then only counted.
+    """
+
+    def __init__(self, path: str | os.PathLike[str] | None, total: int) -> None:
+        self.path = None if path is None else Path(path)
+        self.total = int(total)
+        self.count = 0
+        if self.path is not None:
+            self.path.unlink(missing_ok=True)  # rows of an earlier, interrupted bench
+
+    def add(self, index: int, row: Any) -> None:
+        """Append one finished row."""
+        self.count += 1
+        if self.path is None:
+            return
+        try:
+            with open(self.path, "a", encoding="utf-8") as fh:
+                fh.write(json.dumps({"index": index, "row": row}) + "\n")
+        except OSError as exc:
+            print(
+                f"shipgym: warning: cannot keep the finished rows in {self.path} "
+                f"({exc.strerror or exc}); they are kept in memory only",
+                file=sys.stderr,
+            )
+            self.path = None
+
+    def summary(self) -> str:
+        """One phrase for an interrupt message."""
+        if self.path is None or not self.path.exists():
+            return f"{self.count} of {self.total} runs had finished (not kept: no --json)"
+        return f"{self.count} of {self.total} finished rows kept at {self.path}"
+
+    def discard(self) -> None:
+        """Remove the file (the complete result is written)."""
+        if self.path is not None:
+            self.path.unlink(missing_ok=True)
+
+    @staticmethod
+    def read(path: str | os.PathLike[str]) -> list[Any]:
+        """The rows of a row log, in job order."""
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+        items = [json.loads(line) for line in lines if line.strip()]
+        return [d["row"] for d in sorted(items, key=lambda d: d["index"])]
 
 
 def velocity_error_trace(
@@ -129,10 +252,16 @@ def bench_observers(
     controller: str = "pid-smooth",
     workers: int | None = None,
     progress: bool = True,
+    on_row: Callable[[int, dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
-    """Run the manoeuvre for every observer and seed; one row per run, in a fixed order."""
+    """Run the manoeuvre for every observer and seed; one row per run, in a fixed order.
+
+    ``on_row(index, row)`` gets each row as its run finishes (e.g. :meth:`RowLog.add`).
+    """
     jobs = [(obs, s, wind, controller) for obs in observers for s in range(seeds)]
-    return run_jobs(_one, jobs, workers=workers, progress=progress, desc="observers x seeds")
+    return run_jobs(
+        _one, jobs, workers=workers, progress=progress, desc="observers x seeds", on_result=on_row
+    )
 
 
 def observer_table(rows: Sequence[dict[str, Any]]) -> str:

@@ -416,6 +416,11 @@ def _load_rrd(path: Path) -> Run:
     status = dict(status) if isinstance(status, dict) else {"complete": True, "ended": None}
     status["footer"] = footer
     metadata["recording"] = status
+    if f"{P.DATA}/eta" not in ents and _status_problem(status) is not None:
+        raise ValueError(
+            f"{path} is an incomplete recording ({_status_problem(status)}) that holds no "
+            "control step yet: nothing to read"
+        )
     rows = _rows(ents, f"{P.DATA}/eta")
     step, _ = _sorted_by_step(rows, "Scalars:scalars")
     t_ns = np.asarray(rows["sim_time"], dtype=np.int64)[np.argsort(rows["step"], kind="stable")]
@@ -474,7 +479,10 @@ def recording_problem(run: Run) -> str | None:
     was killed before the file was finalised). Runs without the marker (built in memory, or
     recorded by an older version) count as complete.
     """
-    status = run.metadata.get("recording")
+    return _status_problem(run.metadata.get("recording"))
+
+
+def _status_problem(status: Any) -> str | None:
     if not isinstance(status, dict):
         return None
     if status.get("footer") is False:
