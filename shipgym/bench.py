@@ -4,8 +4,9 @@ Each run is one closed-loop harbour manoeuvre; runs go to worker processes in pa
 (:func:`run_jobs`). Finished rows are handed out as they come (``on_result``, e.g. a
 :class:`RowLog` appending them to ``PATH.partial.jsonl``), so an interrupted benchmark keeps
 them. Workers die with their parent: they ignore SIGINT (the parent handles it and stops
-them), take SIGTERM's default action, and on Linux get SIGKILL when the parent dies
-(``PR_SET_PDEATHSIG``; elsewhere a watchdog thread polls ``os.getppid()``).
+them), take SIGTERM's default action, and get SIGKILL when the parent dies (Linux, forked
+workers: ``PR_SET_PDEATHSIG``) or see it gone (a watchdog thread, for forkserver or spawned
+workers).
 """
 
 from __future__ import annotations
@@ -62,25 +63,46 @@ def _one(job: tuple[str, int, tuple[float, float], str]) -> dict[str, Any]:
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
-def _watch_parent(parent: int) -> None:
-    while True:
-        time.sleep(1.0)
-        if os.getppid() != parent:
-            os._exit(1)
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie, killed but not yet reaped, does not)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return True
+    return state not in ("Z", "X")
 
 
-def _worker_init(parent: int) -> None:
-    """Initializer of the pool's workers: die with the parent, leave SIGINT to it."""
+def _watch_owner(owner: int) -> None:
+    while _alive(owner):
+        time.sleep(0.5)
+    os._exit(1)
+
+
+def _worker_init(owner: int, forked: bool) -> None:
+    """Initializer of the pool's workers: die with the pool's owner, leave SIGINT to it.
+
+    ``owner``: the pid of the process that owns the pool; ``forked``: whether it is also the
+    worker's parent (start method ``fork``). On Linux a forked worker gets SIGKILL when its
+    parent dies (``PR_SET_PDEATHSIG``). A worker started by a forkserver (or spawned, on other
+    systems) polls the owner instead: the forkserver outlives a killed owner as long as
+    workers hold its "alive" pipe, so its death would never come.
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the parent stops the pool
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the parent's handler, if inherited
-    if sys.platform.startswith("linux"):
+    if forked and sys.platform.startswith("linux"):
         with contextlib.suppress(OSError, AttributeError):
             libc = ctypes.CDLL(None, use_errno=True)
             libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-        if os.getppid() != parent:  # the parent died before prctl took effect
-            os._exit(1)
-    else:
-        threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
+        if os.getppid() != owner:
+            os._exit(1)  # the parent died before prctl took effect
+        return
+    threading.Thread(target=_watch_owner, args=(owner,), daemon=True).start()
 
 
 def _stop_pool(pool: ProcessPoolExecutor) -> None:
@@ -107,15 +129,17 @@ def run_jobs(
     progress: bool = True,
     desc: str = "runs",
     on_result: Callable[[int, Any], None] | None = None,
+    start_method: str | None = None,
 ) -> list[Any]:
     """``[fn(job) for job in jobs]`` in worker processes, in order, with a progress bar.
 
     ``fn`` must be a module-level function (picklable). Forks unless torch is loaded in this
-    process (forking a process with torch's thread pools can hang): then ``forkserver``.
-    ``on_result(index, result)`` is called in this process as each job finishes (in the order
-    they finish). On an exception or an interrupt (``KeyboardInterrupt``, also SIGTERM under
-    ``shipgym.cli.main``) the jobs not started are cancelled and the workers ended before it
-    propagates; workers also die if this process is killed.
+    process (forking a process with torch's thread pools can hang): then ``forkserver``
+    (``start_method`` chooses another). ``on_result(index, result)`` is called in this process
+    as each job finishes (in the order they finish). On an exception or an interrupt
+    (``KeyboardInterrupt``, also SIGTERM under ``shipgym.cli.main``) the jobs not started are
+    cancelled and the workers ended before it propagates; workers also die if this process is
+    killed.
     """
     from tqdm import tqdm
 
@@ -134,11 +158,13 @@ def run_jobs(
             for i, job in enumerate(jobs):
                 done(i, fn(job))
         else:
-            method = "forkserver" if "torch" in sys.modules else None
+            method = start_method or ("forkserver" if "torch" in sys.modules else None)
             ctx = multiprocessing.get_context(method)
+            forked = ctx.get_start_method() == "fork"
             pool = ProcessPoolExecutor(
-                max_workers=n, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
-            )
+                max_workers=n, mp_context=ctx, initializer=_worker_init,
+                initargs=(os.getpid(), forked),
+            )  # fmt: skip
             try:
                 pending = {pool.submit(fn, job): i for i, job in enumerate(jobs)}
                 while pending:
@@ -159,15 +185,14 @@ class RowLog:
     to ``path`` as they come (``path`` ``None``: counted only).
 
     Pass :meth:`add` as ``on_result``; :meth:`discard` the file once the complete result is
-    written. A file that cannot be written is reported once on stderr and then only counted.
+    written. The file of an earlier, interrupted bench is replaced when the first row comes. A
+    file that cannot be written is reported once on stderr and then only counted.
     """
 
     def __init__(self, path: str | os.PathLike[str] | None, total: int) -> None:
         self.path = None if path is None else Path(path)
         self.total = int(total)
         self.count = 0
-        if self.path is not None:
-            self.path.unlink(missing_ok=True)  # rows of an earlier, interrupted bench
 
     def add(self, index: int, row: Any) -> None:
         """Append one finished row."""
@@ -175,7 +200,7 @@ class RowLog:
         if self.path is None:
             return
         try:
-            with open(self.path, "a", encoding="utf-8") as fh:
+            with open(self.path, "w" if self.count == 1 else "a", encoding="utf-8") as fh:
                 fh.write(json.dumps({"index": index, "row": row}) + "\n")
         except OSError as exc:
             print(
@@ -187,6 +212,8 @@ class RowLog:
 
     def summary(self) -> str:
         """One phrase for an interrupt message."""
+        if self.count == 0:
+            return f"none of the {self.total} runs had finished"
         if self.path is None or not self.path.exists():
             return f"{self.count} of {self.total} runs had finished (not kept: no --json)"
         return f"{self.count} of {self.total} finished rows kept at {self.path}"

@@ -419,7 +419,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         )
         for f in write_observer_report(rows, traces, args.report):
             print(f"wrote {f}")
-        (args.report / "observers.md").write_text(f"{title}\n\n{table}\n")
+        from shipgym._io import atomic_write_text
+
+        atomic_write_text(args.report / "observers.md", f"{title}\n\n{table}\n")
         print(f"wrote {args.report / 'observers.md'}")
     return 0
 

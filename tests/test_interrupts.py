@@ -288,3 +288,61 @@ def test_finished_bench_assembles_the_rows(tmp_path):
     doc = json.loads((tmp_path / "b.json").read_text())
     assert [(r["observer"], r["seed"]) for r in doc["rows"]] == [("kbf", 0), ("kbf", 1)]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["b.json", "b.md"]
+
+
+@pytest.mark.parametrize("method", ["fork", "forkserver"])
+def test_run_jobs_hands_out_results_and_stops_its_workers_on_a_failure(method):
+    import math
+    import multiprocessing
+
+    from shipgym.bench import run_jobs
+
+    got = []
+    out = run_jobs(
+        math.sqrt, [9.0, 1.0, 4.0], workers=2, progress=False, start_method=method,
+        on_result=lambda i, r: got.append((i, r)),
+    )  # fmt: skip
+    assert out == [3.0, 1.0, 2.0]
+    assert sorted(got) == [(0, 3.0), (1, 1.0), (2, 2.0)]
+    with pytest.raises(ValueError, match="math domain error"):
+        run_jobs(math.sqrt, [0.0, -1.0, *[2.0] * 50], workers=2, progress=False)
+    assert not multiprocessing.active_children()
+
+
+def test_row_log_keeps_rows_in_job_order(tmp_path):
+    from shipgym.bench import RowLog
+
+    log = RowLog(tmp_path / "x.partial.jsonl", total=3)
+    assert log.summary() == "none of the 3 runs had finished"
+    log.add(2, {"seed": 2})
+    log.add(0, {"seed": 0})
+    assert RowLog.read(log.path) == [{"seed": 0}, {"seed": 2}]
+    assert log.summary() == f"2 of 3 finished rows kept at {log.path}"
+    log.discard()
+    assert not log.path.exists()
+
+
+@pytest.mark.parametrize("method", ["fork", "forkserver"])
+def test_killed_pool_owner_takes_its_workers_along(tmp_path, method):
+    """SIGKILL of the process owning a run_jobs pool: workers, forkserver, resource tracker go.
+
+    (A forkserver outlives a killed owner while workers hold its "alive" pipe, so forkserver
+    workers need the watchdog, forked ones PR_SET_PDEATHSIG.)
+    """
+    code = (
+        "import sys, time\n"
+        "from shipgym.bench import run_jobs\n"
+        "print('started', flush=True)\n"
+        f"run_jobs(time.sleep, [60.0] * 4, workers=2, progress=False, start_method={method!r})\n"
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code], cwd=tmp_path, env=ENV, stdout=subprocess.PIPE,
+        text=True, start_new_session=True,
+    )  # fmt: skip
+    assert proc.stdout.readline().strip() == "started"
+    n = 3 if method == "fork" else 5  # owner, 2 workers (, forkserver, resource tracker)
+    _wait_for(lambda: len(_group(proc.pid)) >= n, proc, "the workers")
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=WAIT)
+    proc.stdout.close()
+    _assert_group_gone(proc.pid)
