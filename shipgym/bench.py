@@ -193,6 +193,7 @@ class RowLog:
         self.path = None if path is None else Path(path)
         self.total = int(total)
         self.count = 0
+        self.written_to: Path | None = None
 
     def add(self, index: int, row: Any) -> None:
         """Append one finished row."""
@@ -212,16 +213,20 @@ class RowLog:
 
     def summary(self) -> str:
         """One phrase for an interrupt message."""
+        if self.written_to is not None:
+            return f"the rows were written to {self.written_to}"
         if self.count == 0:
             return f"none of the {self.total} runs had finished"
         if self.path is None or not self.path.exists():
             return f"{self.count} of {self.total} runs had finished (not kept: no --json)"
         return f"{self.count} of {self.total} finished rows kept at {self.path}"
 
-    def discard(self) -> None:
-        """Remove the file (the complete result is written)."""
+    def discard(self, written_to: str | os.PathLike[str] | None = None) -> None:
+        """Remove the file: the complete result is written (to ``written_to``)."""
         if self.path is not None:
             self.path.unlink(missing_ok=True)
+        if written_to is not None:
+            self.written_to = Path(written_to)
 
     @staticmethod
     def read(path: str | os.PathLike[str]) -> list[Any]:

@@ -96,7 +96,8 @@ def run_episode(
     Raises:
         shipgym._io.WriteFailed: the results (``.results``) or the recording could not be
             written (a full disk, a removed folder).
-        KeyboardInterrupt: interrupted; what was kept is listed in its ``kept`` attribute.
+        KeyboardInterrupt: interrupted: the recording stays at its partial name
+            (``NAME.partial.rrd``), the JSON is not written and an earlier pair is untouched.
     """
     import numpy as np
 
@@ -211,7 +212,8 @@ def _commit_results(res: dict[str, Any], recorder: Any, json_path: Path | None) 
         if recorder is not None:
             recorder.ended.clear()
     except OSError as exc:
-        failed.append(f"cannot write the recording {res['files'][:1]} ({os_reason(exc)})")
+        where = ", ".join(str(dst) for _, dst in moves)
+        failed.append(f"cannot rename the finished files onto {where} ({os_reason(exc)})")
     if failed:
         raise WriteFailed("; ".join(failed), res)
 
@@ -409,7 +411,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         "pose as in seed001 Table 6, J_c truth from the true pose"
     )
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
-    log.discard()
+    log.discard(args.json or args.markdown)
     if args.report is not None:
         from shipgym.bench import observer_traces
         from shipgym.viz import write_observer_report

@@ -182,5 +182,5 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
     title = bench_title(rows, args.wind)
     table = controller_table(rows)
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
-    log.discard()
+    log.discard(args.json or args.markdown)
     return 0
