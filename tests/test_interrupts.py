@@ -152,7 +152,7 @@ def test_signalled_rerun_keeps_the_earlier_pair(tmp_path, earlier, name):
         shutil.copyfile(earlier / f, tmp_path / f)
     before = {f: (tmp_path / f).read_bytes() for f in ("h.rrd", "h.json")}
     partial = tmp_path / "h.partial.rrd"
-    args = ["run", "harbour", "--seed", 1, "--record", "h.rrd", "--json", "h.json"]
+    args = ["run", "harbour", "--seed", 1, "--record", "h.rrd", "--json", "h.json", "--no-progress"]
     proc = _start(args, tmp_path, slow=0.003)  # about 4 s of episode
     _wait_for(lambda: partial.is_file() and partial.stat().st_size > 0, proc, "the recording")
     time.sleep(0.6)  # some steps into the episode (a first block of rows written, mostly)
@@ -252,7 +252,7 @@ def _rows(path):
 @pytest.mark.parametrize("name", list(SIGNALS))
 def test_signalled_bench_keeps_finished_rows_and_no_worker(tmp_path, name):
     rows = tmp_path / "b.partial.jsonl"
-    args = ["bench", "observers", "--seeds", 2, "--workers", 2, "--json", "b.json"]
+    args = ["bench", "observers", "--seeds", 2, "--workers", 2, "--json", "b.json", "--no-progress"]
     proc = _start(args, tmp_path)
     _wait_for(lambda: len(_rows(rows)) >= 1, proc, "the first finished row")
     workers = [p for p in _group(proc.pid) if p != proc.pid]
