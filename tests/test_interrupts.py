@@ -347,3 +347,29 @@ def test_killed_pool_owner_takes_its_workers_along(tmp_path, method):
     proc.wait(timeout=WAIT)
     proc.stdout.close()
     _assert_group_gone(proc.pid)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["SIGTERM", "SIGKILL"])
+def test_signalled_training_leaves_no_process(tmp_path, name, request):
+    """``shipgym train`` with subprocess envs: SIGTERM stops it like Ctrl-C (exit 143, one
+    line), SIGKILL leaves no env worker behind. About 15 s each (torch start-up)."""
+    if not (os.environ.get("SHIPGYM_SLOW") or "slow" in (request.config.getoption("-m") or "")):
+        pytest.skip("slow: run with -m slow or SHIPGYM_SLOW=1")
+    pytest.importorskip("stable_baselines3")
+    out = tmp_path / "train"
+    args = ["train", "ppo", "--timesteps", 100000, "--n-envs", 2, "--vec-env", "subproc"]
+    proc = _start([*args, "--out", out, "--no-progress"], tmp_path)
+    _wait_for(lambda: (out / "command.txt").is_file(), proc, "the training set-up")
+    _wait_for(lambda: len(_group(proc.pid)) >= 3, proc, "the env workers")
+    time.sleep(1.0)  # into model.learn
+    proc.send_signal(SIGNALS[name])
+    _, err = proc.communicate(timeout=WAIT)
+    _assert_group_gone(proc.pid)
+    assert not (out / "model.zip").exists()
+    if name == "SIGKILL":
+        assert proc.returncode == -signal.SIGKILL
+        return
+    assert proc.returncode == 143, err
+    assert err.strip().splitlines()[-1].startswith("shipgym: interrupted (SIGTERM); ")
+    assert "no final model.zip written" in err and "Traceback" not in err
