@@ -1,21 +1,37 @@
 """Benchmarks run from the command line: ``shipgym bench observers`` (seed001 Table 6 style).
 
-Each run is one closed-loop harbour manoeuvre; runs go to worker processes in parallel.
+Each run is one closed-loop harbour manoeuvre; runs go to worker processes in parallel
+(:func:`run_jobs`). Finished rows are handed out as they come (``on_result``, e.g. a
+:class:`RowLog` appending them to ``PATH.partial.jsonl``), so an interrupted benchmark keeps
+them. Workers die with their parent: they ignore SIGINT (the parent handles it and stops
+them), take SIGTERM's default action, and get SIGKILL when the parent dies (Linux, forked
+workers: ``PR_SET_PDEATHSIG``) or see it gone (a watchdog thread, for forkserver or spawned
+workers).
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import json
 import multiprocessing
 import os
+import signal
 import sys
+import threading
+import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from shipgym._safeload import jsonable
+
 __all__ = [
     "DEFAULT_OBSERVERS",
+    "RowLog",
     "bench_observers",
     "observer_table",
     "observer_traces",
@@ -45,6 +61,67 @@ def _one(job: tuple[str, int, Any, str]) -> dict[str, Any]:
     }
 
 
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie, killed but not yet reaped, does not)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return True
+    return state not in ("Z", "X")
+
+
+def _watch_owner(owner: int) -> None:
+    while _alive(owner):
+        time.sleep(0.5)
+    os._exit(1)
+
+
+def _worker_init(owner: int, forked: bool) -> None:
+    """Initializer of the pool's workers: die with the pool's owner, leave SIGINT to it.
+
+    ``owner``: the pid of the process that owns the pool; ``forked``: whether it is also the
+    worker's parent (start method ``fork``). On Linux a forked worker gets SIGKILL when its
+    parent dies (``PR_SET_PDEATHSIG``). A worker started by a forkserver (or spawned, on other
+    systems) polls the owner instead: the forkserver outlives a killed owner as long as
+    workers hold its "alive" pipe, so its death would never come.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the parent stops the pool
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the parent's handler, if inherited
+    if forked and sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        if os.getppid() != owner:
+            os._exit(1)  # the parent died before prctl took effect
+        return
+    threading.Thread(target=_watch_owner, args=(owner,), daemon=True).start()
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and end the workers now (interrupt or failure)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.terminate()
+    deadline = time.monotonic() + 5.0
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.join(max(0.0, deadline - time.monotonic()))
+            if p.is_alive():
+                p.kill()
+                p.join(1.0)
+
+
 def run_jobs(
     fn: Callable[[Any], Any],
     jobs: Sequence[Any],
@@ -52,32 +129,112 @@ def run_jobs(
     workers: int | None = None,
     progress: bool = True,
     desc: str = "runs",
+    on_result: Callable[[int, Any], None] | None = None,
+    start_method: str | None = None,
 ) -> list[Any]:
     """``[fn(job) for job in jobs]`` in worker processes, in order, with a progress bar.
 
     ``fn`` must be a module-level function (picklable). Forks unless torch is loaded in this
-    process (forking a process with torch's thread pools can hang): then ``forkserver``.
+    process (forking a process with torch's thread pools can hang): then ``forkserver``
+    (``start_method`` chooses another). ``on_result(index, result)`` is called in this process
+    as each job finishes (in the order they finish). On an exception or an interrupt
+    (``KeyboardInterrupt``, also SIGTERM under ``shipgym.cli.main``) the jobs not started are
+    cancelled and the workers ended before it propagates; workers also die if this process is
+    killed.
     """
     from tqdm import tqdm
 
     n = workers or min(len(jobs), os.cpu_count() or 1)
     bar = tqdm(total=len(jobs), disable=not progress, desc=desc, unit="run")
-    out: list[Any] = []
+    out: list[Any] = [None] * len(jobs)
+
+    def done(i: int, res: Any) -> None:
+        out[i] = res
+        if on_result is not None:
+            on_result(i, res)
+        bar.update(1)
+
     try:
         if n <= 1:
-            for job in jobs:
-                out.append(fn(job))
-                bar.update(1)
+            for i, job in enumerate(jobs):
+                done(i, fn(job))
         else:
-            method = "forkserver" if "torch" in sys.modules else None
+            method = start_method or ("forkserver" if "torch" in sys.modules else None)
             ctx = multiprocessing.get_context(method)
-            with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
-                for res in pool.map(fn, jobs):
-                    out.append(res)
-                    bar.update(1)
+            forked = ctx.get_start_method() == "fork"
+            pool = ProcessPoolExecutor(
+                max_workers=n, mp_context=ctx, initializer=_worker_init,
+                initargs=(os.getpid(), forked),
+            )  # fmt: skip
+            try:
+                pending = {pool.submit(fn, job): i for i, job in enumerate(jobs)}
+                while pending:
+                    finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                    for fut in sorted(finished, key=pending.__getitem__):
+                        done(pending.pop(fut), fut.result())
+            except BaseException:
+                _stop_pool(pool)
+                raise
+            pool.shutdown(wait=True)
     finally:
         bar.close()
     return out
+
+
+class RowLog:
+    """The finished rows of a benchmark, appended as JSON lines (``{"index": i, "row": ...}``)
+    to ``path`` as they come (``path`` ``None``: counted only).
+
+    Pass :meth:`add` as ``on_result``; :meth:`discard` the file once the complete result is
+    written. The file of an earlier, interrupted bench is replaced when the first row comes. A
+    file that cannot be written is reported once on stderr and then only counted.
+    """
+
+    def __init__(self, path: str | os.PathLike[str] | None, total: int) -> None:
+        self.path = None if path is None else Path(path)
+        self.total = int(total)
+        self.count = 0
+        self.written_to: Path | None = None
+
+    def add(self, index: int, row: Any) -> None:
+        """Append one finished row."""
+        self.count += 1
+        if self.path is None:
+            return
+        try:
+            with open(self.path, "w" if self.count == 1 else "a", encoding="utf-8") as fh:
+                fh.write(json.dumps(jsonable({"index": index, "row": row})) + "\n")
+        except OSError as exc:
+            print(
+                f"shipgym: warning: cannot keep the finished rows in {self.path} "
+                f"({exc.strerror or exc}); they are kept in memory only",
+                file=sys.stderr,
+            )
+            self.path = None
+
+    def summary(self) -> str:
+        """One phrase for an interrupt message."""
+        if self.written_to is not None:
+            return f"the rows were written to {self.written_to}"
+        if self.count == 0:
+            return f"none of the {self.total} runs had finished"
+        if self.path is None or not self.path.exists():
+            return f"{self.count} of {self.total} runs had finished (not kept: no --json)"
+        return f"{self.count} of {self.total} finished rows kept at {self.path}"
+
+    def discard(self, written_to: str | os.PathLike[str] | None = None) -> None:
+        """Remove the file: the complete result is written (to ``written_to``)."""
+        if self.path is not None:
+            self.path.unlink(missing_ok=True)
+        if written_to is not None:
+            self.written_to = Path(written_to)
+
+    @staticmethod
+    def read(path: str | os.PathLike[str]) -> list[Any]:
+        """The rows of a row log, in job order."""
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+        items = [json.loads(line) for line in lines if line.strip()]
+        return [d["row"] for d in sorted(items, key=lambda d: d["index"])]
 
 
 def velocity_error_trace(
@@ -131,17 +288,21 @@ def bench_observers(
     controller: str = "pid-smooth",
     workers: int | None = None,
     progress: bool = True,
+    on_row: Callable[[int, dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Run the manoeuvre for every observer and seed; one row per run, in a fixed order.
 
     ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
     (``"3@300"``: 3 m/s from 300 deg, the default), checked before any run.
+    ``on_row(index, row)`` gets each row as its run finishes (e.g. :meth:`RowLog.add`).
     """
     from shipgym.disturbances import WindConfig
 
     wind = WindConfig.coerce(wind, name="wind")
     jobs = [(obs, s, wind, controller) for obs in observers for s in range(seeds)]
-    return run_jobs(_one, jobs, workers=workers, progress=progress, desc="observers x seeds")
+    return run_jobs(
+        _one, jobs, workers=workers, progress=progress, desc="observers x seeds", on_result=on_row
+    )
 
 
 def observer_table(rows: Sequence[dict[str, Any]]) -> str:

@@ -154,6 +154,8 @@ def run_episode(
     record: Path | None = None,
     spawn: bool = False,
     report: Path | None = None,
+    json_path: Path | None = None,
+    scenario_preset: str | None = None,
 ) -> dict[str, Any]:
     """Run one closed-loop episode and return its results (the ``--json`` content).
 
@@ -176,6 +178,17 @@ def run_episode(
         record: write a rerun recording (``.rrd``) of the episode here.
         spawn: also try to open the rerun viewer.
         report: write PNG figures and ``metrics.md`` into this folder.
+        json_path: also write the results there (JSON). The recording and this file are
+            written under partial names and renamed together when both are complete, so an
+            earlier pair is replaced by a complete new pair or left as it was.
+        scenario_preset: the scenario preset or file the env arguments came from (recorded
+            in the results).
+
+    Raises:
+        shipgym._io.WriteFailed: the results (``.results``) or the recording could not be
+            written (a full disk, a removed folder).
+        KeyboardInterrupt: interrupted: the recording stays at its partial name
+            (``NAME.partial.rrd``), the JSON is not written and an earlier pair is untouched.
     """
     import numpy as np
 
@@ -216,7 +229,7 @@ def run_episode(
     if record is not None:
         from shipgym.viz import RecordEpisode
 
-        env = RecordEpisode(env, record, spawn=spawn)
+        env = RecordEpisode(env, record, spawn=spawn, rename=False)
     limit = env.spec.max_episode_steps if env.spec is not None else None
     plan_finite = bool(env.unwrapped.terminate_on_finish)  # type: ignore[attr-defined]
     bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
@@ -252,8 +265,9 @@ def run_episode(
         run = getattr(env, "last_run", None)
         files += [str(p) for p in write_report(run if run is not None else record, report)]
     idx = honest_indices(metrics, plan_finite=plan_finite)
-    return {
+    res = {
         "scenario": scenario,
+        "scenario_preset": scenario_preset,
         "env_id": env.spec.id if env.spec is not None else None,
         "controller": controller,
         "observer": _observer_of(env) or "truth",
@@ -285,6 +299,40 @@ def run_episode(
         "wall_time_s": wall,
         "files": files,
     }
+    if record is not None or json_path is not None:
+        _commit_results(res, env if record is not None else None, json_path)
+    return res
+
+
+def _commit_results(res: dict[str, Any], recorder: Any, json_path: Path | None) -> None:
+    """Rename the recording (``recorder.ended``) and the JSON results onto their names together.
+
+    A JSON file that cannot be written leaves no stale JSON of an earlier run next to the new
+    recording; the failure is raised as :class:`shipgym._io.WriteFailed` with the results.
+    """
+    from shipgym._io import WriteFailed, os_reason, replace_together, write_partial_text
+
+    moves = list(recorder.ended) if recorder is not None else []
+    stale: list[Path] = []
+    failed: list[str] = []
+    if json_path is not None:
+        try:
+            tmp = write_partial_text(json_path, json.dumps(jsonable(res), indent=2))
+        except OSError as exc:
+            failed.append(f"cannot write the results to {json_path} ({os_reason(exc)})")
+            stale.append(json_path)
+        else:
+            if tmp is not None:
+                moves.append((tmp, json_path))
+    try:
+        replace_together(moves, remove=stale)
+        if recorder is not None:
+            recorder.ended.clear()
+    except OSError as exc:
+        where = ", ".join(str(dst) for _, dst in moves)
+        failed.append(f"cannot rename the finished files onto {where} ({os_reason(exc)})")
+    if failed:
+        raise WriteFailed("; ".join(failed), res)
 
 
 def _observer_of(env: Any) -> str | None:
@@ -447,6 +495,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
             _check_writable(path)
     if args.record is not None and args.record.suffix != ".rrd":
         raise ValueError(f"--record needs a .rrd path, got {args.record}")
+    from shipgym._io import on_interrupt, partial_path
+
+    if args.record is not None:  # what an interrupt keeps (said if the file is there)
+        on_interrupt(f"partial recording kept at {partial_path(args.record)}",
+                     path=partial_path(args.record))  # fmt: skip
+    for path in (args.record, args.json):
+        if path is not None and path.is_file():
+            on_interrupt(f"{path} left as it was", path=path)
     res = run_episode(
         args.scenario,
         controller=args.controller,
@@ -458,21 +514,34 @@ def _cmd_run(args: argparse.Namespace) -> int:
         record=args.record,
         spawn=args.spawn,
         report=args.report,
+        json_path=args.json,
+        scenario_preset=None if args.scenario_file is None else str(args.scenario_file),
     )
-    res["scenario_preset"] = None if args.scenario_file is None else str(args.scenario_file)
     _print_table(res)
     for f in res["files"]:
         print(f"wrote {f}")
     if res["files"] and args.record is not None:
         print(f"open the recording with: rerun {args.record}")
     if args.json is not None:
-        args.json.write_text(json.dumps(jsonable(res), indent=2))
         print(f"results written to {args.json}")
     return 0
 
 
 def _truth_none(observer: str | None) -> str | None:
     return None if observer == "truth" else observer
+
+
+def _row_log(json_path: Path | None, markdown: Path | None, total: int) -> Any:
+    """A :class:`shipgym.bench.RowLog` next to the bench's output (``PATH.partial.jsonl``),
+    named in the message of an interrupt."""
+    from shipgym._io import on_interrupt, partial_path
+    from shipgym.bench import RowLog
+
+    out = json_path or markdown
+    usable = out is not None and (not out.exists() or out.is_file())  # not /dev/stdout
+    log = RowLog(partial_path(out, ".jsonl") if usable else None, total)
+    on_interrupt(log.summary)
+    return log
 
 
 def write_bench_outputs(
@@ -484,16 +553,32 @@ def write_bench_outputs(
     json_path: Path | None = None,
     markdown: Path | None = None,
 ) -> None:
-    """Print a benchmark's title and table; write its rows (JSON) and table (markdown)."""
+    """Print a benchmark's title and table; write its rows (JSON) and table (markdown).
+
+    Each file is written atomically (a complete file or the earlier one).
+
+    Raises:
+        shipgym._io.WriteFailed: a file could not be written; its content is in ``results``
+            (``shipgym.cli.main`` prints it on stdout and exits with status 2).
+    """
+    from shipgym._io import WriteFailed, atomic_write_text, os_reason
+
     print(title)
     print(table)
     print(f"{len(rows)} runs in {wall:.1f} s")
-    if json_path is not None:
-        json_path.write_text(json.dumps({"title": title, "rows": rows}, indent=2))
-        print(f"rows written to {json_path}")
-    if markdown is not None:
-        markdown.write_text(f"{title}\n\n{table}\n")
-        print(f"table written to {markdown}")
+    outputs = (
+        (json_path, json.dumps(jsonable({"title": title, "rows": rows}), indent=2), "rows"),
+        (markdown, f"{title}\n\n{table}\n", "table"),
+    )
+    for path, text, what in outputs:
+        if path is None:
+            continue
+        try:
+            atomic_write_text(path, text)
+        except OSError as exc:
+            why = f"cannot write the {what} to {path} ({os_reason(exc)})"
+            raise WriteFailed(why, text) from None
+        print(f"{what} written to {path}")
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -505,6 +590,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     for path in (args.json, args.markdown):
         if path is not None:
             _check_writable(path)
+    log = _row_log(args.json, args.markdown, len(args.observers) * args.seeds)
     t0 = time.perf_counter()
     check_controller(args.controller)
     from shipgym._argtypes import progress_enabled
@@ -512,6 +598,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     rows = bench_observers(
         args.observers, seeds=args.seeds, wind=args.wind, workers=args.workers,
         progress=progress_enabled(args.no_progress), controller=args.controller,
+        on_row=log.add,
     )  # fmt: skip
     wall = time.perf_counter() - t0
     table = observer_table(rows)
@@ -521,6 +608,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         "pose as in seed001 Table 6, J_c truth from the true pose"
     )
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
+    log.discard(args.json or args.markdown)
     if args.report is not None:
         from shipgym.bench import observer_traces
         from shipgym.viz import write_observer_report
@@ -530,17 +618,27 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         )
         for f in write_observer_report(rows, traces, args.report):
             print(f"wrote {f}")
-        (args.report / "observers.md").write_text(f"{title}\n\n{table}\n")
+        from shipgym._io import atomic_write_text
+
+        atomic_write_text(args.report / "observers.md", f"{title}\n\n{table}\n")
         print(f"wrote {args.report / 'observers.md'}")
     return 0
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from shipgym.viz import write_report
+    from shipgym.viz import load_run, recording_problem, write_report
 
     if not args.run.exists():
         raise ValueError(f"no such run file: {args.run}")
-    for f in write_report(args.run, args.out):
+    run = load_run(args.run)  # a file rerun cannot read: one-line ValueError
+    problem = recording_problem(run)
+    if problem is not None:
+        print(
+            f"shipgym: warning: {args.run} is an incomplete recording ({problem}); the report "
+            f"covers the {run.n_steps} steps recorded and metrics.md says INCOMPLETE",
+            file=sys.stderr,
+        )
+    for f in write_report(run, args.out):
         print(f"wrote {f}")
     return 0
 
@@ -711,19 +809,33 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``shipgym`` console script."""
+    """Entry point of the ``shipgym`` console script.
+
+    SIGTERM is handled like SIGINT (Ctrl-C): the command stops, keeps what it can (a partial
+    recording, a bench's finished rows), says so in one line on stderr and exits with status
+    130 (SIGINT) or 143 (SIGTERM). A second signal stops the clean-up itself.
+    """
+    from shipgym._io import WriteFailed, handle_signals, interrupt_message, interrupt_status
+
     try:
         args = _parser().parse_args(argv)
     except SystemExit as exc:  # argparse: 2 after a usage error, 0 after --help / --version
         return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
-    try:
-        return int(args.func(args))
-    except (ValueError, FileNotFoundError, ImportError) as exc:
-        print(f"shipgym: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("shipgym: interrupted", file=sys.stderr)
-        return 130
+    with handle_signals():
+        try:
+            return int(args.func(args))
+        except WriteFailed as exc:  # the results go to stdout instead of being lost
+            res = exc.results
+            out = res if isinstance(res, str) else json.dumps(jsonable(res), indent=2)
+            print(out, flush=True)
+            print(f"shipgym: error: {exc}; the results are printed on stdout", file=sys.stderr)
+            return 2
+        except (ValueError, FileNotFoundError, ImportError) as exc:
+            print(f"shipgym: error: {exc}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt as exc:
+            print(interrupt_message(exc), file=sys.stderr, flush=True)
+            return interrupt_status(exc)
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 
 import gc
 import os
+import shutil
 import subprocess
 import sys
 from collections import defaultdict
@@ -16,6 +17,7 @@ from shipgym.viz import (
     RecordEpisode,
     load_run,
     pixel_size,
+    recording_problem,
     report_paths,
     save_run_json,
     write_report,
@@ -23,6 +25,17 @@ from shipgym.viz import (
 from shipgym.viz.run import DATA_VECTORS, P
 
 STEPS = 200  # a shortened harbour episode (truncated by the time limit)
+
+
+def _rerun_verify(path):
+    """``rerun rrd verify PATH`` (footer checked) -> (ok, output); None without the CLI."""
+    exe = shutil.which("rerun") or str(Path(sys.executable).parent / "rerun")
+    if not Path(exe).exists():
+        return None
+    out = subprocess.run(
+        [exe, "rrd", "verify", str(path)], capture_output=True, text=True, timeout=120
+    )
+    return out.returncode == 0, out.stdout + out.stderr
 
 
 def _make(max_steps=STEPS):
@@ -188,10 +201,90 @@ def _interrupted(path, how):
 def test_interrupted_episode_leaves_a_readable_file(tmp_path, how):
     path = tmp_path / "interrupted.rrd"
     _interrupted(path, how)
-    _, rows = _read(path)
+    partial = tmp_path / "interrupted.partial.rrd"
+    assert not path.exists(), "an incomplete episode never takes the final name"
+    _, rows = _read(partial)
     np.testing.assert_array_equal(np.sort(rows[P.SHIP]["step"]), np.arange(51))
-    run = load_run(path)
+    run = load_run(partial)
     assert run.n_steps == 50
+    assert run.metadata["recording"]["complete"] is False
+    assert run.metadata["recording"]["footer"] is True  # finalised by close() / the finaliser
+    assert "stopped before its end after 50 steps" in recording_problem(run)
+
+
+def test_complete_recording_is_marked_and_verifies(recorded):
+    run = load_run(recorded["rrd"])
+    assert run.metadata["recording"] == {
+        "complete": True,
+        "ended": "truncated",
+        "steps": STEPS,
+        "footer": True,
+    }
+    assert recording_problem(run) is None
+    assert load_run(recorded["json"]).metadata["recording"]["complete"] is True
+    assert not list(recorded["rrd"].parent.glob("*partial*"))
+    verified = _rerun_verify(recorded["rrd"])
+    if verified is not None:
+        assert verified[0], verified[1]
+
+
+def test_interrupted_rerecording_keeps_the_earlier_file(tmp_path, recorded):
+    path = tmp_path / "again.rrd"
+    shutil.copyfile(recorded["rrd"], path)
+    before = path.read_bytes()
+    _interrupted(path, "close")
+    assert path.read_bytes() == before
+    assert (tmp_path / "again.partial.rrd").is_file()
+    # a complete re-recording replaces it, and takes the partial file's place
+    env = RecordEpisode(_make(max_steps=5), path)
+    env.reset(seed=3)
+    for _ in range(5):
+        env.step(np.zeros(3, np.float32))
+    env.close()
+    assert env.paths == [path]
+    assert load_run(path).n_steps == 5
+    assert not (tmp_path / "again.partial.rrd").exists()
+
+
+@pytest.mark.parametrize("fraction", [0.0, 0.01, 0.3, 0.7, 0.999])
+def test_truncated_recording_is_refused_or_marked(tmp_path, recorded, fraction):
+    """A file cut short (a killed process): one-line ValueError, or a run marked incomplete."""
+    data = recorded["rrd"].read_bytes()
+    cut = tmp_path / "cut.rrd"
+    cut.write_bytes(data[: int(len(data) * fraction)])
+    try:
+        run = load_run(cut)
+    except ValueError as exc:
+        assert "\n" not in str(exc) and "truncated" in str(exc)
+        return
+    assert recording_problem(run) is not None
+
+
+def test_recording_without_footer_counts_as_incomplete(tmp_path, monkeypatch):
+    """The footer check on its own: a finished episode whose file was not finalised."""
+
+    def open_sinks(self, rec, path, blueprint):
+        rec.save(path, write_footer=False)
+
+    monkeypatch.setattr(RecordEpisode, "_open_sinks", open_sinks)
+    path = tmp_path / "nofooter.rrd"
+    env = RecordEpisode(_make(max_steps=4), path)
+    env.reset(seed=0)
+    for _ in range(4):
+        env.step(np.zeros(3, np.float32))
+    env.close()
+    run = load_run(path)
+    assert run.metadata["recording"]["complete"] is True  # the marker alone says complete
+    assert "no rerun footer" in recording_problem(run)
+
+
+def test_report_of_an_incomplete_recording_says_so(tmp_path):
+    path = tmp_path / "int.rrd"
+    _interrupted(path, "close")
+    files = write_report(tmp_path / "int.partial.rrd", tmp_path / "rep")
+    text = files[4].read_text()
+    assert "**INCOMPLETE RECORDING**" in text and "50 control steps" in text
+    assert not list((tmp_path / "rep").glob("*partial*"))
 
 
 def test_unwritable_path_fails_before_the_episode(tmp_path):
@@ -221,7 +314,8 @@ def test_spawn_without_display_records_to_the_file(tmp_path, monkeypatch, capsys
         env.step(np.zeros(3, np.float32))
     env.close()
     assert "no rerun viewer available" in capsys.readouterr().err
-    assert load_run(path).n_steps == 5
+    assert env.paths == [tmp_path / "spawn.partial.rrd"]  # closed before the episode's end
+    assert load_run(env.paths[0]).n_steps == 5
 
 
 def test_episodes_go_to_numbered_files_and_spec_round_trips(tmp_path):
@@ -235,8 +329,10 @@ def test_episodes_go_to_numbered_files_and_spec_round_trips(tmp_path):
         assert truncated
         env.reset(seed=1)
     env.close()
-    assert env.paths == [path, tmp_path / "ep-1.rrd", tmp_path / "ep-2.rrd"]
-    assert [load_run(p).n_steps for p in env.paths] == [3, 3, 0]
+    # the third episode, closed right after its reset, is discarded with its partial file
+    assert env.paths == [path, tmp_path / "ep-1.rrd"]
+    assert [load_run(p).n_steps for p in env.paths] == [3, 3]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ep-1.rrd", "ep.rrd"]
     rebuilt = gym.make(env.spec)
     assert isinstance(rebuilt, RecordEpisode) and rebuilt.flush_every == 1
     rebuilt.close()
@@ -265,6 +361,7 @@ def test_estimate_track_is_logged_when_it_differs(tmp_path):
     for _ in range(10):
         env.step(np.zeros(3, np.float32))
     env.close()
+    path = env.paths[0]
     _, rows = _read(path)
     assert len(rows[P.TRACK_EST]["step"]) == 11
     run = load_run(path)
@@ -350,4 +447,6 @@ def test_uncaught_interrupt_at_exit_still_leaves_the_file(tmp_path):
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False
     )
     assert "KeyboardInterrupt" in out.stderr
-    assert load_run(path).n_steps == 30
+    assert not path.exists()
+    run = load_run(tmp_path / "exit.partial.rrd")
+    assert run.n_steps == 30 and recording_problem(run) is not None

@@ -10,7 +10,7 @@ the PID), time, thruster usage.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -93,6 +93,7 @@ def bench_controllers(
     observer: str | None = "default",
     workers: int | None = None,
     progress: bool = True,
+    on_row: Callable[[int, dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Run the harbour manoeuvre for every controller and seed ``0..seeds-1``.
 
@@ -107,6 +108,8 @@ def bench_controllers(
             truth), ``"truth"``/``None`` or an observer name; the same for every controller.
         workers: processes (default: CPUs, at most the number of runs); 1 runs in-process.
         progress: show a progress bar.
+        on_row: called with ``(index, row)`` as each run finishes (e.g.
+            :meth:`shipgym.bench.RowLog.add`, which keeps finished rows on an interrupt).
 
     Returns:
         One row per controller and seed, in the order of ``controllers`` then seeds. Each row:
@@ -145,7 +148,9 @@ def bench_controllers(
         for label, c in zip(labels, resolved, strict=True)
         for s in range(seeds)
     ]
-    return run_jobs(_job, jobs, workers=workers, progress=progress, desc="controllers x seeds")
+    return run_jobs(
+        _job, jobs, workers=workers, progress=progress, desc="controllers x seeds", on_result=on_row
+    )
 
 
 def _ms(a: Sequence[float], fmt: str = ".3f") -> str:

@@ -115,7 +115,10 @@ def cmd_train(args: argparse.Namespace) -> int:
     algorithm_class(args.algo)  # a missing RL extra fails here, with what to run
     if args.hyperparams is not None and not args.hyperparams.exists():
         raise FileNotFoundError(f"hyperparameter file {str(args.hyperparams)!r} does not exist")
+    from shipgym._io import on_interrupt
 
+    # SIGINT and SIGTERM stop training through shipgym.cli.main (exit 130 / 143); say what stays
+    on_interrupt(lambda: _kept_by_train(args.out))
     res = train(
         args.algo,
         timesteps=args.timesteps,
@@ -144,6 +147,14 @@ def cmd_train(args: argparse.Namespace) -> int:
         )
     print(f"  command     {res.metadata.command}")
     return 0
+
+
+def _kept_by_train(out: Path | None) -> str:
+    """What an interrupted ``train`` leaves: the checkpoints so far (the model.zip comes last)."""
+    if out is not None and (out / "checkpoints").is_dir():
+        n = len(list((out / "checkpoints").glob("*.zip")))
+        return f"{n} checkpoint(s) kept in {out / 'checkpoints'}; no final model.zip written"
+    return "no final model.zip written (checkpoints, if any, are in the output folder)"
 
 
 def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
@@ -205,6 +216,9 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
     for path in (args.json, args.markdown):
         if path is not None:
             _check_writable(path)
+    from shipgym.cli import _row_log, write_bench_outputs
+
+    log = _row_log(args.json, args.markdown, len(args.controllers) * max(args.seeds, 0))
     t0 = time.perf_counter()
     rows = bench_controllers(
         args.controllers,
@@ -213,11 +227,11 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
         observer=args.observer,
         workers=args.workers,
         progress=progress_enabled(args.no_progress),
+        on_row=log.add,
     )
     wall = time.perf_counter() - t0
     title = bench_title(rows, args.wind)
     table = controller_table(rows)
-    from shipgym.cli import write_bench_outputs
-
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
+    log.discard(args.json or args.markdown)
     return 0

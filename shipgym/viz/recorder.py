@@ -6,6 +6,16 @@ in columns (``send_columns``) every ``flush_every`` steps, at the end of the epi
 ``close()`` and when the wrapper is garbage collected, so recording is cheap and an
 interrupted episode still leaves a readable file. What is logged and where:
 :mod:`shipgym.viz.run`.
+
+Files are never half-replaced: an episode records to ``<stem>.partial.rrd`` next to the
+destination (:func:`shipgym._io.partial_path`) and the file is renamed onto ``<stem>.rrd``
+(with its JSON run file) only when the episode has ended (terminated or truncated) and the
+file is finalised. An episode stopped before its end (``close()``, a ``reset`` in mid-episode,
+an interrupt, the end of the interpreter) keeps its finalised, readable file under the
+``.partial.rrd`` name; a killed process leaves at most that file, truncated, and the earlier
+recording under the final name untouched. The last metadata document of every file says
+whether the episode was recorded to its end (``metadata["recording"]``, read back by
+:func:`~shipgym.viz.run.recording_problem`).
 """
 
 from __future__ import annotations
@@ -26,6 +36,8 @@ from typing import Any, SupportsFloat
 import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
+
+from shipgym._io import partial_path, replace_together
 
 from .geometry import hull_outline, hull_polygon, quay_polygons, thruster_positions
 from .run import DATA_VECTORS, P, Run, desired_body_velocity, save_run_json
@@ -83,7 +95,7 @@ def _finish_all() -> None:
     """At interpreter exit: finish the files of recorders nobody closed."""
     for recorder in list(_LIVE):
         try:
-            recorder._finish()
+            recorder._finish(None)
         except Exception:  # noqa: BLE001, S110 - best effort at exit
             pass
 
@@ -160,7 +172,8 @@ class _Episode:
 
     def __init__(self, rec: Any, path: Path, json_path: Path | None, ctx: dict[str, Any]):
         self.rec = rec
-        self.path = path
+        self.path = path  # the final name; the episode records to self.tmp
+        self.tmp = partial_path(path)
         self.json_path = json_path
         self.ctx = ctx
         self.t: list[float] = []
@@ -519,7 +532,10 @@ class RecordEpisode(
     Values are buffered per step and written in columns every ``flush_every`` steps, at the
     end of an episode, in :meth:`close` and when the wrapper is garbage collected: an episode
     interrupted (e.g. by ``KeyboardInterrupt`` in the caller's loop) leaves a readable file
-    with every step taken so far once ``env.close()`` runs.
+    with every step taken so far once ``env.close()`` runs, named ``<stem>.partial.rrd``. An
+    episode records to that partial name and is renamed onto the final one only when it ends
+    (terminated or truncated), so an earlier recording at the final name is replaced only by a
+    complete one (see the module docstring). An episode closed before any step is discarded.
 
     Args:
         env: a ``shipgym/BlueLady*`` environment, possibly under observer and controller
@@ -532,12 +548,18 @@ class RecordEpisode(
             executable a message says so and the recording goes to the file only.
         flush_every: control steps buffered between two writes (>= 1).
         json_path: also write each episode as a JSON run file (:func:`save_run_json`), named
-            like the ``.rrd`` files.
+            like the ``.rrd`` files (and renamed with them).
         hull_every: period (s) of the hull outlines kept on the map as a trace (0: none).
+        rename: rename an ended episode's files onto their final names (``False``: leave them
+            at the partial names and list them in :attr:`ended`, for a caller that renames
+            them together with files of its own, e.g. ``shipgym run --json``).
 
     Attributes:
-        paths: the ``.rrd`` files written so far (one per episode).
-        json_paths: the JSON run files written so far.
+        paths: where the ``.rrd`` files written so far are (one per episode; a partial name
+            for an episode stopped before its end, or not renamed with ``rename=False``).
+        json_paths: the JSON run files written so far, likewise.
+        ended: ``(partial, final)`` name pairs of the ended episodes' files not renamed yet
+            (``rename=False`` only).
         last_run: the :class:`~shipgym.viz.Run` of the last finished episode (float64).
 
     Note:
@@ -553,6 +575,7 @@ class RecordEpisode(
         flush_every: int = 100,
         json_path: str | os.PathLike[str] | None = None,
         hull_every: float = 60.0,
+        rename: bool = True,
     ) -> None:
         gym.utils.RecordConstructorArgs.__init__(
             self,
@@ -561,6 +584,7 @@ class RecordEpisode(
             flush_every=flush_every,
             json_path=None if json_path is None else os.fspath(json_path),
             hull_every=hull_every,
+            rename=rename,
         )
         gym.Wrapper.__init__(self, env)
         self._episode: _Episode | None = None
@@ -578,8 +602,10 @@ class RecordEpisode(
         self.spawn = bool(spawn)
         self.flush_every = flush_every
         self.hull_every = float(hull_every)
+        self.rename = bool(rename)
         self.paths: list[Path] = []
         self.json_paths: list[Path] = []
+        self.ended: list[tuple[Path, Path]] = []
         self.last_run: Run | None = None
         self._n_episodes = 0
         self._viewer: bool | None = None  # None: not tried yet
@@ -592,7 +618,7 @@ class RecordEpisode(
         ep = self._episode
         if ep is not None:
             if len(ep.t) > 1:
-                self._finish()
+                self._finish(None)
             else:  # reset twice in a row: the new episode replaces the empty one
                 self._discard()
         obs, info = self.env.reset(seed=seed, options=options)
@@ -609,7 +635,7 @@ class RecordEpisode(
         if ep is not None:
             ep.capture(info)
             if terminated or truncated:
-                self._finish()
+                self._finish("terminated" if terminated else "truncated")
             elif ep.pending >= self.flush_every:
                 ep.flush()
         return obs, reward, terminated, truncated, info
@@ -617,13 +643,13 @@ class RecordEpisode(
     def close(self) -> None:
         """Write what is buffered, finish the file, then close the env."""
         try:
-            self._finish()
+            self._finish(None)
         finally:
             super().close()
 
     def __del__(self) -> None:
         try:
-            self._finish()
+            self._finish(None)
         except Exception:  # noqa: BLE001, S110 - nothing can be reported from a finaliser
             pass
 
@@ -647,8 +673,9 @@ class RecordEpisode(
             "shipgym", recording_id=f"{ctx['metadata']['run_id']}", send_properties=True
         )
         blueprint = _blueprint(ctx)
-        self._open_sinks(rec, path, blueprint)
-        self._episode = _Episode(rec, path, json_path, ctx)
+        episode = _Episode(rec, path, json_path, ctx)
+        self._open_sinks(rec, episode.tmp, blueprint)
+        self._episode = episode
         _log_static(rec, ctx)
 
     def _open_sinks(self, rec: Any, path: Path, blueprint: Any) -> None:
@@ -681,7 +708,7 @@ class RecordEpisode(
             url = f"rerun+http://127.0.0.1:{VIEWER_PORT}/proxy"
             rec.set_sinks(rr.FileSink(path), rr.GrpcSink(url))
         else:
-            rec.save(path)
+            rec.save(path)  # the footer (manifest) is written when the sink is finalised
         rec.send_blueprint(blueprint, make_active=True, make_default=True)
 
     def _context(self, seed: int | None) -> dict[str, Any]:
@@ -792,35 +819,58 @@ class RecordEpisode(
         except Exception:  # noqa: BLE001 - metrics are a bonus in the file
             return {}
 
-    def _finish(self) -> None:
-        """Flush, log the metrics, write the JSON file and close the recording."""
+    def _finish(self, ended: str | None) -> None:
+        """Flush, log the metrics and the end marker, write the JSON file, close the recording.
+
+        ``ended``: ``"terminated"`` or ``"truncated"`` when the episode reached its end (the
+        files are then renamed onto their final names), ``None`` when it was stopped before.
+        An episode stopped before its first step is discarded.
+        """
         ep = self._episode
         if ep is None:
             return
+        if ended is None and len(ep.t) <= 1:
+            self._discard()
+            return
         self._episode = None
+        status = {"complete": ended is not None, "ended": ended, "steps": len(ep.t) - 1}
+        json_tmp = None if ep.json_path is None else partial_path(ep.json_path)
         try:
             ep.flush()
             metrics = self._episode_metrics()
             run = ep.to_run(metrics)
-            _log_summary(ep.rec, ep.ctx, metrics, len(ep.t) - 1)
-            if ep.json_path is not None:
-                save_run_json(run, ep.json_path)
-                self.json_paths.append(ep.json_path)
+            run.metadata["recording"] = dict(status)
+            _log_summary(ep.rec, ep.ctx, metrics, len(ep.t) - 1, status)
+            if json_tmp is not None:
+                save_run_json(run, json_tmp)
             self.last_run = run
         finally:
             try:
                 ep.rec.flush(timeout_sec=FLUSH_TIMEOUT)
             except RuntimeError as exc:  # a viewer that went away; the file is complete
                 print(f"shipgym: rerun flush: {exc}", file=sys.stderr)
-            ep.rec.disconnect()
-            self.paths.append(ep.path)
+            ep.rec.disconnect()  # finalises the file (footer)
             self._n_episodes += 1
+        moves = [(ep.tmp, ep.path)]
+        if json_tmp is not None and ep.json_path is not None and json_tmp.is_file():
+            moves.append((json_tmp, ep.json_path))
+        if ended is not None and self.rename:
+            replace_together(moves)
+            done = [dst for _, dst in moves]
+        else:
+            if ended is not None:
+                self.ended += moves
+            done = [src for src, _ in moves]
+        self.paths.append(done[0])
+        self.json_paths += done[1:]
 
     def _discard(self) -> None:
+        """Drop the current episode and its partial file."""
         ep = self._episode
         self._episode = None
         if ep is not None:
             ep.rec.disconnect()
+            ep.tmp.unlink(missing_ok=True)
 
 
 # ---- static content and blueprint ------------------------------------------------------------
@@ -936,10 +986,12 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
         rr.TextDocument(json.dumps(_clean(geo)), media_type="text/plain"),
         static=True,
     )
-    _log_summary(rec, ctx, None, 0)
+    _log_summary(rec, ctx, None, 0, {"complete": False, "ended": None, "steps": 0})
 
 
-def _summary_markdown(meta: dict[str, Any], metrics: dict[str, Any] | None, steps: int) -> str:
+def _summary_markdown(
+    meta: dict[str, Any], metrics: dict[str, Any] | None, steps: int, status: dict[str, Any]
+) -> str:
     wind = meta.get("wind")
     wind_txt = "none" if not wind else f"{wind['speed']:.1f} m/s from {wind['from_deg']:.0f}°"
     lines = [
@@ -955,6 +1007,12 @@ def _summary_markdown(meta: dict[str, Any], metrics: dict[str, Any] | None, step
         f"| control period | {meta.get('control_period_s')} s |",
         f"| recorded | {meta.get('recorded_at')} (shipgym {meta.get('shipgym_version')}) |",
     ]
+    if status["complete"]:
+        lines.append(f"| recording | complete (episode {status['ended']}) |")
+    elif metrics:
+        lines.append(f"| recording | INCOMPLETE: stopped after {steps} steps |")
+    else:
+        lines.append("| recording | in progress (incomplete if nothing follows) |")
     if metrics:
         lines.append(f"| steps | {steps} ({metrics.get('duration_s', float('nan')):.0f} s) |")
         lines.append(
@@ -970,20 +1028,28 @@ def _summary_markdown(meta: dict[str, Any], metrics: dict[str, Any] | None, step
                     f"{float(m.get(k, float('nan'))):.4f}" for k in ("x_E", "y_E", "psi_E", "J_c")
                 )
                 lines.append(f"| {name} | {vals} |")
-    else:
-        lines.append("| status | recording |")
     return "\n".join(lines) + "\n"
 
 
-def _log_summary(rec: Any, ctx: dict[str, Any], metrics: dict[str, Any] | None, n: int) -> None:
+def _log_summary(
+    rec: Any,
+    ctx: dict[str, Any],
+    metrics: dict[str, Any] | None,
+    n: int,
+    status: dict[str, Any],
+) -> None:
+    """The run summary and the machine-readable metadata; ``status`` is the end marker
+    (``metadata["recording"]``: ``complete``, ``ended``, ``steps``), logged last."""
     import rerun as rr
 
     from .run import _clean
 
-    meta = ctx["metadata"]
+    meta = {**ctx["metadata"], "recording": dict(status)}
     rec.log(
         P.SUMMARY,
-        rr.TextDocument(_summary_markdown(meta, metrics, n), media_type=rr.MediaType.MARKDOWN),
+        rr.TextDocument(
+            _summary_markdown(meta, metrics, n, status), media_type=rr.MediaType.MARKDOWN
+        ),
         static=True,
     )
     doc = {"metadata": meta, "metrics": metrics or {}}

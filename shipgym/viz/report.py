@@ -10,7 +10,11 @@ figure sizes and resolution (:data:`FIGURE_SIZES`, :data:`DPI`):
 - ``velocities.png``: u, v, r, desired (dashed) vs estimated (solid) and true (right columns);
 - ``thrusters.png``: commands and forces of the three thrusters, saturation shaded;
 - ``metrics.md``: accuracy indices (eqs. 54-57) from the truth and the measurements, leg
-  times, thruster usage.
+  times, thruster usage; a run whose recording is incomplete
+  (:func:`~shipgym.viz.run.recording_problem`) says so in a line starting with
+  ``**INCOMPLETE RECORDING**`` under the title.
+
+Every file is written under a temporary name and renamed when complete.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .geometry import hull_polygon
-from .run import Run, load_run
+from .run import Run, load_run, recording_problem
 
 os.environ.setdefault("MPLBACKEND", "Agg")  # headless by default, whatever imports pyplot later
 
@@ -73,7 +77,10 @@ def _figure(name: str) -> Any:
 
 
 def _save(fig: Any, path: Path) -> Path:
-    fig.savefig(path, dpi=DPI, format="png")  # no bbox_inches: the pixel size stays fixed
+    from shipgym._io import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=DPI, format="png")  # no bbox_inches: the pixel size stays fixed
     return path
 
 
@@ -83,6 +90,8 @@ def _title(run: Run) -> str:
     if m.get("seed") is not None:
         parts.append(f"seed {m['seed']}")
     parts.append(f"observer {m.get('observer', '?')}, controller {m.get('controller', '?')}")
+    if recording_problem(run) is not None:
+        parts.append("INCOMPLETE recording")
     return "Blue Lady: " + ", ".join(parts)
 
 
@@ -398,9 +407,15 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
     wind = meta.get("wind")
     wind_txt = "none" if not wind else f"{wind['speed']:.1f} m/s from {wind['from_deg']:.0f} deg"
     duration = m.get("duration_s", float(run.t[-1]) if len(run.t) else float("nan"))
-    lines = [
-        f"# Run report: {meta.get('scenario', 'run')}",
-        "",
+    problem = recording_problem(run)
+    lines = [f"# Run report: {meta.get('scenario', 'run')}", ""]
+    if problem is not None:
+        lines += [
+            f"**INCOMPLETE RECORDING**: {problem}; the figures and indices cover the "
+            f"{run.n_steps} control steps recorded, not a whole episode.",
+            "",
+        ]
+    lines += [
         "| | |",
         "|---|---|",
         f"| env id | `{meta.get('env_id')}` |",
@@ -512,5 +527,7 @@ def write_report(
     _plot_positions(run, files[1])
     _plot_velocities(run, files[2])
     _plot_thrusters(run, files[3])
-    files[4].write_text(_metrics_markdown(run, files[:4]))
+    from shipgym._io import atomic_write_text
+
+    atomic_write_text(files[4], _metrics_markdown(run, files[:4]))
     return files

@@ -36,6 +36,14 @@ carries a static rotation so that north is up and east is right in rerun's 2-D v
 
 Timelines: ``sim_time`` (simulation time, s) and ``step`` (control step; 0 is the state after
 ``reset``, ``k`` the state after the k-th ``step``).
+
+Completeness: the recorder logs ``metadata["recording"] = {"complete": false, ...}`` when an
+episode starts and ``{"complete": true, "ended": "terminated" | "truncated", "steps": n}`` as
+the last document once the episode has ended; rerun writes the file's footer (manifest) when the
+file is finalised. :func:`load_run` puts what it found into ``Run.metadata["recording"]``
+(``footer``: whether the footer is there) and :func:`recording_problem` says, in words, why a
+run is incomplete (``None`` when it is complete). A file cut short (a killed process) has no
+footer and usually an undecodable last frame, which :func:`load_run` reports as a ValueError.
 """
 
 from __future__ import annotations
@@ -50,7 +58,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Run", "load_run", "save_run_json", "P"]
+__all__ = ["Run", "load_run", "recording_problem", "save_run_json", "P"]
 
 JSON_FORMAT = "shipgym-run"
 JSON_VERSION = 1
@@ -239,8 +247,10 @@ def save_run_json(run: Run, path: str | os.PathLike[str]) -> Path:
         path: destination file (parent folders are created).
 
     Returns:
-        The path written.
+        The path written (atomically: a complete file or the earlier one, never half a file).
     """
+    from shipgym._io import atomic_write_text
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     arrays = {}
@@ -256,7 +266,7 @@ def save_run_json(run: Run, path: str | os.PathLike[str]) -> Path:
         "quay_names": list(run.quay_names),
         "arrays": arrays,
     }
-    path.write_text(json.dumps(_clean(doc), separators=(",", ":")))
+    atomic_write_text(path, json.dumps(_clean(doc), separators=(",", ":")))
     return path
 
 
@@ -318,12 +328,28 @@ def _load_json(path: Path) -> Run:
 
 
 # ---- rrd -------------------------------------------------------------------------------------
-def _chunks_by_entity(path: Path) -> dict[str, dict[str, Any]]:
-    """Per entity path: ``{"static": {component: value}, "rows": {column: list}}``."""
+def _has_footer(reader: Any) -> bool:
+    """Whether a rerun file has its footer (manifest), written when the file was finalised."""
+    try:
+        reader.store()  # needs the manifest; a file without footer cannot be opened this way
+    except Exception:  # noqa: BLE001 - any failure means the same: no usable footer
+        return False
+    return True
+
+
+def _chunks_by_entity(path: Path) -> tuple[dict[str, dict[str, Any]], bool]:
+    """Per entity path: ``{"static": {component: value}, "rows": {column: list}}``, and
+    whether the file has its footer."""
+    import warnings
+
     from rerun.chunk import RrdReader
 
+    with warnings.catch_warnings():  # "no footer" is reported by recording_problem instead
+        warnings.simplefilter("ignore")
+        reader = RrdReader(path)
+        footer = _has_footer(reader)
     out: dict[str, dict[str, Any]] = {}
-    for ch in RrdReader(path).stream():
+    for ch in reader.stream():
         ent = ch.entity_path.lstrip("/")
         rb = ch.to_record_batch()
         slot = out.setdefault(ent, {"static": {}, "rows": {}})
@@ -349,7 +375,7 @@ def _chunks_by_entity(path: Path) -> dict[str, dict[str, Any]]:
         for name in list(slot["rows"]):
             if name not in cols:  # component absent from this chunk
                 slot["rows"][name].extend([None] * n)
-    return out
+    return out, footer
 
 
 def _rows(ents: dict[str, dict[str, Any]], entity: str) -> dict[str, list[Any]]:
@@ -375,11 +401,26 @@ def _vectors(ents: dict[str, dict[str, Any]], name: str, width: int) -> NDArray[
 
 def _load_rrd(path: Path) -> Run:
     try:
-        ents = _chunks_by_entity(path)
+        ents, footer = _chunks_by_entity(path)
     except Exception as exc:  # noqa: BLE001 - any reader failure means the same to the user
-        raise ValueError(f"cannot read the rerun recording {path}: {exc}") from exc
+        why = " ".join(str(exc).split())  # one line
+        raise ValueError(
+            f"cannot read the rerun recording {path}: it is truncated (an interrupted or killed "
+            f"recording?) or not a rerun file ({why})"
+        ) from None
     meta_doc = ents.get(P.META_JSON, {}).get("static", {}).get("TextDocument:text")
     doc: dict[str, Any] = json.loads(meta_doc) if meta_doc else {}
+    metadata = dict(doc.get("metadata") or {})
+    status = metadata.get("recording")
+    # files recorded before the end marker existed: complete if finalised (footer)
+    status = dict(status) if isinstance(status, dict) else {"complete": True, "ended": None}
+    status["footer"] = footer
+    metadata["recording"] = status
+    if f"{P.DATA}/eta" not in ents and _status_problem(status) is not None:
+        raise ValueError(
+            f"{path} is an incomplete recording ({_status_problem(status)}) that holds no "
+            "control step yet: nothing to read"
+        )
     rows = _rows(ents, f"{P.DATA}/eta")
     step, _ = _sorted_by_step(rows, "Scalars:scalars")
     t_ns = np.asarray(rows["sim_time"], dtype=np.int64)[np.argsort(rows["step"], kind="stable")]
@@ -425,9 +466,32 @@ def _load_rrd(path: Path) -> Run:
         quay_names=list(geo.get("quay_names", [])),
         hull=_as_array("hull", geo.get("hull", [])),
         thrusters=_as_array("thrusters", geo.get("thrusters", [])),
-        metadata=dict(doc.get("metadata") or {}),
+        metadata=metadata,
         metrics=dict(doc.get("metrics") or {}),
     )
+
+
+def recording_problem(run: Run) -> str | None:
+    """Why ``run`` is an incomplete recording, in words; ``None`` for a complete one.
+
+    Incomplete: the episode was stopped before its end (``metadata["recording"]["complete"]``
+    false: interrupted, closed early), or the ``.rrd`` file lacks rerun's footer (the process
+    was killed before the file was finalised). Runs without the marker (built in memory, or
+    recorded by an older version) count as complete.
+    """
+    return _status_problem(run.metadata.get("recording"))
+
+
+def _status_problem(status: Any) -> str | None:
+    if not isinstance(status, dict):
+        return None
+    if status.get("footer") is False:
+        return "the file has no rerun footer: the recording process was killed or crashed"
+    if status.get("complete") is False:
+        steps = status.get("steps")
+        n = f" after {steps} steps" if isinstance(steps, int) and steps > 0 else ""
+        return f"the episode was stopped before its end{n} (interrupted or closed early)"
+    return None
 
 
 def load_run(path: str | os.PathLike[str]) -> Run:
@@ -441,8 +505,12 @@ def load_run(path: str | os.PathLike[str]) -> Run:
         The :class:`Run`. Positions read from a ``.rrd`` are the float64 values of the
         ``data/*`` entities (the map entities hold the same values as float32).
 
+        ``metadata["recording"]`` says whether the recording is complete (see
+        :func:`recording_problem`).
+
     Raises:
-        ValueError: unknown suffix, missing file, or a file that is not a shipgym run.
+        ValueError: unknown suffix, missing file, a file that is not a shipgym run, or a
+            ``.rrd`` file rerun cannot read (one line; e.g. cut short by a killed process).
     """
     path = Path(path)
     if not path.is_file():

@@ -1,0 +1,267 @@
+"""Result files that are never half-written, and interrupts that say what they kept.
+
+Files: every result file (recordings, run and bench JSON, reports) is written under a name
+that says it is partial, in the folder of the final file, and renamed onto the final name
+(``os.replace``, atomic on one file system) only when it is complete. A process killed at any
+moment therefore leaves the earlier file intact, plus at most a file whose name contains
+``.partial``:
+
+- :func:`partial_path`: the user-facing partial name of a file, ``run.rrd`` ->
+  ``run.partial.rrd`` (the suffix is kept, so ``rerun run.partial.rrd`` still opens it);
+- :func:`atomic_path`: a context manager yielding a temporary path (``run.partial-<pid>.json``)
+  renamed onto the destination when the block ends without an exception, removed otherwise;
+- :func:`atomic_write_text`: write a text file that way;
+- :func:`write_partial_text` and :func:`replace_together`: write files under their partial
+  names, then rename them onto their final names at once, with SIGINT and SIGTERM held back,
+  removing the old destinations first so that a new file never ends up next to a stale
+  partner of an earlier run (``shipgym run --record X.rrd --json X.json``);
+- :class:`WriteFailed`: a result file that could not be written, carrying the results so that
+  the command line can print them instead of losing them.
+
+A destination that exists but is not a regular file (``/dev/stdout``, ``/dev/full``, a FIFO) is
+written directly: a device cannot be replaced by a rename.
+
+Interrupts: :func:`handle_signals` makes SIGTERM raise :class:`Interrupted` (a
+``KeyboardInterrupt``) like SIGINT does, so the same clean-up runs for both; a command says
+beforehand what an interrupt would keep with :func:`on_interrupt`, and the command line reports
+it in one line (:func:`interrupt_message`) and exits with ``128 + signal number`` (130, 143).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import threading
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "Interrupted",
+    "WriteFailed",
+    "atomic_path",
+    "atomic_write_text",
+    "handle_signals",
+    "interrupt_message",
+    "interrupt_status",
+    "on_interrupt",
+    "os_reason",
+    "partial_path",
+    "replace_together",
+    "write_partial_text",
+]
+
+#: the word marking a file that is not (yet) complete
+PARTIAL = "partial"
+
+
+def partial_path(path: str | os.PathLike[str], suffix: str | None = None) -> Path:
+    """``run.rrd`` -> ``run.partial.rrd`` (``suffix``: another suffix, e.g. ``".jsonl"``)."""
+    p = Path(path)
+    return p.with_name(f"{p.stem}.{PARTIAL}{p.suffix if suffix is None else suffix}")
+
+
+def _direct(path: Path) -> bool:
+    """True for an existing destination that is not a regular file (a device, a FIFO)."""
+    return path.exists() and not path.is_file()
+
+
+def _destination(path: Path) -> Path:
+    """The file a rename must replace: the target of a symbolic link, else ``path``."""
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path next to ``path``; rename it onto ``path`` when the block succeeds.
+
+    On an exception (``KeyboardInterrupt`` included) the temporary file is removed and
+    ``path`` is left as it was. A ``path`` that is a device or a FIFO is yielded itself.
+    """
+    dest = _destination(Path(path))
+    if _direct(dest):
+        yield dest
+        return
+    tmp = dest.with_name(f"{dest.stem}.{PARTIAL}-{os.getpid()}{dest.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, dest)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str, *, encoding: str = "utf-8") -> Path:
+    """Write ``text`` to ``path`` through :func:`atomic_path` (flushed to disk first).
+
+    Raises:
+        OSError: the file could not be written (``path`` is then unchanged).
+    """
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", encoding=encoding) as fh:
+            fh.write(text)
+            fh.flush()
+            if tmp.is_file():
+                os.fsync(fh.fileno())
+    return Path(path)
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM back (delivered when the block ends); main thread, POSIX only."""
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not (
+        threading.main_thread()
+    ):
+        yield
+        return
+    held = {signal.SIGINT, signal.SIGTERM}
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def replace_together(
+    moves: Sequence[tuple[Path, Path]], *, remove: Iterable[Path] = ()
+) -> list[Path]:
+    """Rename each complete ``(source, destination)`` pair; returns the destinations.
+
+    The old destinations (and the stale files in ``remove``, e.g. the JSON of an earlier run
+    whose new JSON could not be written) are removed first, then the sources renamed, with
+    SIGINT and SIGTERM held back: a process killed in between leaves no new file next to an
+    old partner. Devices and FIFOs are never removed.
+
+    Raises:
+        OSError: a rename failed (e.g. the folder was removed during the run).
+    """
+    dests = [(Path(src), _destination(Path(dst))) for src, dst in moves]
+    with _signals_held():
+        for p in [*(d for _, d in dests), *(_destination(Path(r)) for r in remove)]:
+            if p.is_file():
+                p.unlink()
+        for src, dst in dests:
+            os.replace(src, dst)
+    return [d for _, d in dests]
+
+
+# ---- interrupts ------------------------------------------------------------------------------
+class Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived (``signum``); a ``KeyboardInterrupt``, so clean-up is shared."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = int(signum)
+
+
+#: what an interrupt of the running command keeps: (text or a function giving it, file or None)
+_NOTES: list[tuple[str | Callable[[], str | None], Path | None]] = []
+
+
+def on_interrupt(
+    what: str | Callable[[], str | None], *, path: str | os.PathLike[str] | None = None
+) -> None:
+    """Say what an interrupt of the running command keeps (``"partial recording kept at X"``).
+
+    ``what`` may be a function, called when the message is made (``None``: nothing to say).
+    With ``path``, the note is reported only if that file exists then (after every clean-up
+    has run). The notes are cleared when :func:`handle_signals` begins and ends.
+    """
+    _NOTES.append((what, None if path is None else Path(path)))
+
+
+def interrupt_status(exc: BaseException) -> int:
+    """The exit status of an interrupt: 128 + the signal number (130 SIGINT, 143 SIGTERM)."""
+    return 128 + int(getattr(exc, "signum", signal.SIGINT))
+
+
+def interrupt_message(exc: BaseException, prog: str = "shipgym") -> str:
+    """One line: which signal, and what was kept (see :func:`note_kept`)."""
+    name = signal.Signals(getattr(exc, "signum", signal.SIGINT)).name
+    kept = []
+    for what, path in _NOTES:
+        text = what() if callable(what) else what
+        if text and (path is None or path.exists()):
+            kept.append(text)
+    tail = "; ".join(kept) if kept else "nothing was written"
+    return f"{prog}: interrupted ({name}); {tail}"
+
+
+@contextlib.contextmanager
+def handle_signals() -> Iterator[None]:
+    """Within the block, SIGINT and SIGTERM raise :class:`Interrupted` (main thread only).
+
+    The first signal raises; the handlers then go back to the defaults, so a second Ctrl-C
+    (``KeyboardInterrupt`` again) or SIGTERM (immediate exit) stops a clean-up that hangs.
+    The previous handlers are restored when the block ends.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _NOTES.clear()
+    sigs = [signal.SIGINT, signal.SIGTERM]
+    old: dict[int, Any] = {s: signal.getsignal(s) for s in sigs}
+
+    def handler(signum: int, frame: Any) -> None:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        raise Interrupted(signum)
+
+    for s in sigs:
+        if old[s] is not signal.SIG_IGN:  # e.g. SIGINT of a background job stays ignored
+            signal.signal(s, handler)
+    try:
+        yield
+    finally:
+        _NOTES.clear()
+        for s, h in old.items():
+            with contextlib.suppress(TypeError, ValueError):
+                signal.signal(s, h if h is not None else signal.SIG_DFL)
+
+
+# ---- result files ----------------------------------------------------------------------------
+class WriteFailed(OSError):
+    """A result file could not be written; ``results`` holds what should have gone there.
+
+    The command line prints ``results`` (JSON) on stdout, says where they went in one line on
+    stderr and exits with status 2: results are never lost to a full disk or a removed folder.
+    """
+
+    def __init__(self, message: str, results: Any) -> None:
+        super().__init__(message)
+        self.message = message
+        self.results = results
+
+    def __str__(self) -> str:
+        return self.message
+
+
+def write_partial_text(path: str | os.PathLike[str], text: str) -> Path | None:
+    """Write ``text`` to ``partial_path(path)`` for a later :func:`replace_together`.
+
+    Returns the partial file, or ``None`` when ``path`` is a device or FIFO and was written
+    directly. On an error the partial file is removed and the ``OSError`` raised.
+    """
+    dest = _destination(Path(path))
+    if _direct(dest):
+        with open(dest, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        return None
+    tmp = partial_path(dest)
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+    return tmp
+
+
+def os_reason(exc: OSError) -> str:
+    """``No space left on device``: the short reason of an ``OSError``."""
+    return exc.strerror or str(exc)
