@@ -326,7 +326,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     title = (
         f"Observers on the harbour manoeuvre ({args.controller} controller, wind {speed:g} m/s "
         f"from {math.degrees(beta):g} deg, seeds 0-{args.seeds - 1}); indices from the measured "
-        "pose as in seed001 Table 6, J_c truth from the true pose"
+        "pose as in Tomera (2014) Table 6, J_c truth from the true pose"
     )
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
     if args.report is not None:
@@ -463,7 +463,7 @@ def _parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_report)
     p = sub.add_parser("bench", help="benchmarks: 'bench observers', 'bench controllers'")
     bsub = p.add_subparsers(dest="what", required=True)
-    b = bsub.add_parser("observers", help="seed001 Table-6-style comparison of observers")
+    b = bsub.add_parser("observers", help="Tomera (2014) Table-6-style comparison of observers")
     b.add_argument("--observers", nargs="+", default=["dkf", "kbf", "ekf"], metavar="NAME")
     b.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per observer (10)")
     b.add_argument(

@@ -1,4 +1,4 @@
-"""The registered Blue Lady tasks: harbour manoeuvre, station keeping, tracking (SPEC 12)."""
+"""The registered Blue Lady tasks: harbour manoeuvre, station keeping, tracking."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ __all__ = ["BlueLadyHarbourEnv", "BlueLadyStationKeepingEnv", "BlueLadyTrackingE
 
 
 class BlueLadyHarbourEnv(BlueLadyEnv):
-    r"""The 5-leg harbour manoeuvre of seed001 (Tomera 2014, Fig. 7).
+    r"""The 5-leg harbour manoeuvre of Tomera (2014) Fig. 7.
 
     Registered as ``shipgym/BlueLadyHarbour-v0``.
 
@@ -59,7 +59,7 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
     longitudinal (5-30 m ahead or 3-15 m astern), rotation (30-120 deg either way) or combined
     (surge and sway together); a wind of 0-3.5 m/s from any direction with gusts (4 m/s on the
     beam exceeds the 248 N m yaw capacity); a lake current of 0-0.03 m/s in any direction
-    (notes 3: ~1 % of the wind); and sensor noise within the lake presets (DGPS sigma
+    (~1 % of the wind, after DNV-RP-C205's wind-driven drift); and sensor noise within the lake presets (DGPS sigma
     0.07-0.15 m per axis, gyrocompass 0.2-0.45 deg). The episode terminates when the last leg
     completes; time limit 800 control steps. ``max_current_speed=0`` and
     ``randomize_sensors=False`` switch those draws off (the shipped PPO baseline was trained

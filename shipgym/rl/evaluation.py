@@ -27,7 +27,7 @@ __all__ = [
     "run_env_episode",
 ]
 
-#: the lake-trial wind of seed001: 3 m/s from 300 deg (speed m/s, direction-from rad)
+#: the lake-trial wind of Tomera (2014): 3 m/s from 300 deg (speed m/s, direction-from rad)
 DEFAULT_WIND: tuple[float, float] = (3.0, math.radians(300.0))
 
 PolicyFn = Callable[[NDArray[np.float32]], NDArray[np.float32]]
