@@ -1,4 +1,4 @@
-"""Guidance: r-frame (Tomera 2014 eqs. 1-2), smooth leg references, the 5-leg plan, leg switching."""
+"""Guidance: r-frame (Tomera 2014 eqs. 1-2), smooth leg references, 5-leg plan, leg switching."""
 
 import math
 

@@ -209,7 +209,8 @@ def test_tomera_dkf_applies_eq30_gain():
 
 
 def test_time_varying_gain_settles_within_twelve_seconds():
-    """Tomera (2014): the recursive gains of Table 3 'are steady-state within the first twelve s'."""
+    """Tomera (2014): the recursive gains of Table 3 'are steady-state within the first twelve
+    s'."""
     obs = DiscreteKalmanFilter(TOMERA_DKF, gate_probability=None)
     obs.reset(0.0, [0.0, 0.0, 0.0])
     for k in range(1, 13):

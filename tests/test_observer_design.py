@@ -1,4 +1,4 @@
-"""Gain design: lqe/dlqe against python-control and scipy, closed forms, errors, Tomera (2014) gains."""
+"""Gain design: lqe/dlqe against python-control and scipy, closed forms, errors, Tomera's gains."""
 
 import math
 

@@ -144,7 +144,7 @@ def test_drift_directions_and_notes_magnitudes() -> None:
     w = _waves(seed=1, **kw)
     X, Y, N = w.mean_drift_load(0.0)
     assert abs(X) < 1e-9 and abs(N) < 1e-9
-    # wall-sided drift (Faltinsen 1990): rho g Hs^2 (0.8 L) / 16 = 16.6 N (the band holds ~99 % of m0)
+    # wall-sided drift (Faltinsen 1990): rho g Hs^2 (0.8 L) / 16 = 16.6 N (band holds ~99 % of m0)
     assert Y == pytest.approx(RHO_WATER * G * 0.05**2 * 0.8 * 13.5 / 16, rel=0.03)
     assert Y == pytest.approx(16.6, rel=0.03)
     # head sea: pushed aft, rho g Hs^2 B / 24 = 2.4 N

@@ -58,7 +58,7 @@ def test_pierson_moskowitz_m0_peak_and_itttc_form() -> None:
     wp = 2 * math.pi / Tp
     # peak of S_PM at w_p (5/4 w_p^4 w^-4 = 5/4 -> dS/dw = 0 at w = w_p)
     assert W[np.argmax(S)] == pytest.approx(wp, abs=1e-3)
-    # ITTC modal form of the modified Pierson-Moskowitz spectrum: A = 487 Hs^2 / T0^4, B = 1949 / T0^4
+    # ITTC modal form of the modified PM spectrum: A = 487 Hs^2 / T0^4, B = 1949 / T0^4
     w = np.array([2.0, 3.5, 6.0])
     itt = 487.0 * Hs**2 / Tp**4 * w**-5 * np.exp(-1949.0 / Tp**4 * w**-4)
     assert pierson_moskowitz(w, Hs, Tp) == pytest.approx(itt, rel=0.01)  # rounded constants

@@ -537,7 +537,8 @@ def register_lq() -> None:
             ControllerSpec(
                 lambda dt: LQController("tuned", dt=dt),
                 "constrained",
-                "LQ optimal control with integral action (Al-Takie 1982 ch. 4 on Tomera (2014) eqs. 49-50), "
+                "LQ optimal control with integral action (Al-Takie 1982 ch. 4 on Tomera 2014 "
+                "eqs. 49-50), "
                 "constrained allocation",
             ),
         )

@@ -1,7 +1,7 @@
 r"""The multivariable PID-type DP controller of Tomera (2014) (eqs. 13-23).
 
 Reading of the paper
--------------------
+--------------------
 The paper states the control law as (eq. 23)
 
 .. math::
@@ -44,7 +44,7 @@ would put ``M_23 != 0``, and eq. 50's off-diagonal damping is ``-855.4`` whereas
 Pass ``M=plant.mass_matrix(), D_L=plant.D_L`` to control with a plant's own matrices.
 
 Gains: why the paper's do not work here
--------------------------------------
+---------------------------------------
 The paper's gains (eqs. 46-48: ``K_P = 1``, ``K_I = 0.01``, ``K_D = 100`` for every DOF) give
 the per-DOF error polynomial ``s^3 + 100 s^2 + s + 0.01`` with poles at -99.99 rad/s and
 ``-0.005 +- 0.0087j`` rad/s. Even in continuous time the dominant pair has a 200 s time

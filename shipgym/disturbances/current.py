@@ -12,8 +12,8 @@ through the relative velocity ``nu_r = nu - nu_c`` with the body-frame current v
 (:func:`current_body_velocity`). The current is irrotational and, on the time scale of a step,
 constant in NED, so ``nu_c_dot = [r v_c, -r u_c, 0]`` (Fossen 2011 ch. 8.3).
 
-Slowly varying current (Fossen 2011 ch. 8.3): a first-order Gauss-Markov process about the mean speed,
-saturated to ``[V_min, V_max]``::
+Slowly varying current (Fossen 2011 ch. 8.3): a first-order Gauss-Markov process about the mean
+speed, saturated to ``[V_min, V_max]``::
 
     V_c_dot = -mu (V_c - speed) + w,   E[w(t) w(s)] = sigma^2 delta(t - s)
 

@@ -118,7 +118,8 @@ def _check_pos(name: str, value: float) -> float:
 def pierson_moskowitz(w: ArrayLike, Hs: float, Tp: float) -> NDArray[np.float64]:
     """Modified Pierson-Moskowitz (ITTC / Bretschneider) wave spectrum.
 
-    Source: Pierson & Moskowitz (1964); MSS ``waveSpectrum.m`` case "modified PM"; DNV-RP-C205 eq. 3.5.5.
+    Source: Pierson & Moskowitz (1964); MSS ``waveSpectrum.m`` case "modified PM"; DNV-RP-C205
+    eq. 3.5.5.
 
     Args:
         w: Angular frequencies (rad/s), any shape; values ``<= 0`` give 0.
@@ -142,7 +143,8 @@ def pierson_moskowitz(w: ArrayLike, Hs: float, Tp: float) -> NDArray[np.float64]
 def jonswap(w: ArrayLike, Hs: float, Tp: float, gamma: float = 3.3) -> NDArray[np.float64]:
     """JONSWAP wave spectrum in the DNV-RP-C205 form.
 
-    Source: Hasselmann et al. (1973); DNV-RP-C205 (2010) sec. 3.5.5.2; MSS ``waveSpectrum.m`` case 7.
+    Source: Hasselmann et al. (1973); DNV-RP-C205 (2010) sec. 3.5.5.2; MSS ``waveSpectrum.m``
+    case 7.
 
     Args:
         w: Angular frequencies (rad/s), any shape; values ``<= 0`` give 0.
@@ -263,7 +265,8 @@ def significant_wave_height(elevation: ArrayLike) -> float:
 def npd_wind_spectrum(f: ArrayLike, U10: float, z: float = 10.0) -> NDArray[np.float64]:
     """NPD / ISO 19901-1 (Andersen & Lovseth) wind-gust spectrum, one-sided.
 
-    Source: Andersen & Lovseth (2006); ISO 19901-1 (2015) sec. 7.3; DNV-RP-C205 eq. 2.3.2.10 (same formula).
+    Source: Andersen & Lovseth (2006); ISO 19901-1 (2015) sec. 7.3; DNV-RP-C205 eq. 2.3.2.10
+    (same formula).
 
     Args:
         f: Frequencies (Hz, full scale), any shape; values ``<= 0`` give ``S(0+)``.
@@ -342,8 +345,8 @@ def wind_gust_spectrum(
     ``U10 sqrt(lambda)``, frequency ``f / sqrt(lambda)``) and mapped back to the model:
     ``S_m(f) = S_s(f / sqrt(lambda)) / lambda^1.5``: from ``S_m df_m = S_s df_s / lambda``
     (velocity^2 scales with ``1/lambda``) and ``df_s = df_m / sqrt(lambda)``, so the model
-    variance is the full-scale variance over ``lambda`` (the project's offshore assumption: "synthesised then
-    time-compressed by 1/sqrt(24) and speed-scaled by 1/sqrt(24)").
+    variance is the full-scale variance over ``lambda`` (the project's offshore assumption:
+    "synthesised then time-compressed by 1/sqrt(24) and speed-scaled by 1/sqrt(24)").
 
     Args:
         kind: ``"npd"`` or ``"harris"``.

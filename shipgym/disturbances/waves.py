@@ -33,8 +33,8 @@ modelling assumption), with ``rho g / 2`` per unit amplitude squared::
     T_n(beta) = -l_N cos(beta) T_y(beta)                          (yaw lever, default 0.05 L_pp)
 
 The yaw lever moves the lateral drift force towards the end the waves hit first (``l_N > 0``
-turns the ship beam-on to the waves, as drifting ships do); the project's assumption is only
-"a small lever ~0.05 L". ``R_j`` is the reflection factor: ``min(1, k_j T / 2)^2`` (``"kT"``, default,
+turns the ship beam-on to the waves, as drifting ships do); the project only assumes "a small
+lever ~0.05 L". ``R_j`` is the reflection factor: ``min(1, k_j T / 2)^2`` (``"kT"``, default,
 ``k_j = w_j^2 / g``, ``T`` the draught), 1 (``"full"``) or a constant.
 
 The envelope ``E(t)`` does not depend on the heading, so it is precomputed on a fixed time grid
@@ -42,8 +42,8 @@ The envelope ``E(t)`` does not depend on the heading, so it is precomputed on a 
 and :meth:`Waves.drift_load` only interpolates it linearly and multiplies by ``T(beta(psi))``
 in plain Python floats (about 1 us per call).
 
-**First-order wave-frequency (WF) motion** (Fossen 2011 ch. 8.2), added to the *measured* position and
-heading only, never to the hull: along the propagation direction (the horizontal orbit of a
+**First-order wave-frequency (WF) motion** (Fossen 2011 ch. 8.2), added to the *measured* position
+and heading only, never to the hull: along the propagation direction (the horizontal orbit of a
 long-crested sea) with std ``wf_position_std`` and in heading with std ``wf_heading_std``::
 
     (dx, dy) = d(t) (cos beta_p, sin beta_p),   dpsi = h(t)
@@ -189,9 +189,9 @@ def _is_real(v: Any) -> bool:
 class WaveConfig:
     """Sea state and wave-effect switches (SI units, radians).
 
-    The default is the project's estimate of the lake / harbour sea (JONSWAP ``Hs = 0.05 m``, ``Tp = 1 s``,
-    gamma 3.3, drift on, no first-order motion). Use ``Hs = 0`` or ``spectrum=None`` for calm
-    water (every output exactly zero).
+    The default is the project's estimate of the lake / harbour sea (JONSWAP ``Hs = 0.05 m``,
+    ``Tp = 1 s``, gamma 3.3, drift on, no first-order motion). Use ``Hs = 0`` or
+    ``spectrum=None`` for calm water (every output exactly zero).
 
     Attributes:
         spectrum: ``"jonswap"``, ``"pm"`` (Pierson-Moskowitz) or ``None`` (no waves).
@@ -304,7 +304,8 @@ class WaveConfig:
             raise ValueError(f"{name}.wf_beaufort must be None or an int 5-9, got {bf!r}")
         if self.wf_model == "al-takie" and bf is None:
             raise ValueError(
-                f"{name}: wf_model 'al-takie' needs wf_beaufort (5-9), the row of Al-Takie's (1982) table"
+                f"{name}: wf_model 'al-takie' needs wf_beaufort (5-9), the row of Al-Takie's "
+                "(1982) table"
             )
         if not self.sample_period > 0:
             raise ValueError(f"{name}.sample_period must be > 0 s, got {self.sample_period!r}")

@@ -463,9 +463,7 @@ class WindConfig:
     speed: float = param(
         0.0, "m/s", "assumption: 0 nominal, 3 'moderate' (Tomera 2014 trial: 3 m/s from 300 deg)"
     )
-    direction_from: float = param(
-        0.0, "rad", "meteorological, clockwise from north"
-    )
+    direction_from: float = param(0.0, "rad", "meteorological, clockwise from north")
     gust_std: float | None = param(None, "m/s", "assumption: None -> 0.15 * speed")
     gust_time_constant: float = param(5.0, "s", _NOTES17)
     direction_std: float = param(math.radians(10.0), "rad", _NOTES17 + ": 10 deg")

@@ -211,7 +211,7 @@ def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[
 
 
 def seed_linear_matrices() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(M, D_L)`` exactly as printed in Tomera (2014) eqs. 49-50 (the model of its controllers)."""
+    """``(M, D_L)`` exactly as printed in Tomera (2014) eqs. 49-50 (its controllers' model)."""
     M = np.diag([23664.9, 24830.6, 455182.1])
     D_L = np.array([[21.10, 0.0, 0.0], [0.0, 259.8, -855.4], [0.0, -855.4, 6130.5]])
     return M, D_L

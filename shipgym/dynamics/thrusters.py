@@ -37,8 +37,8 @@ __all__ = [
 ACTUATOR_NAMES = ("main_propeller", "bow_tunnel", "stern_tunnel")
 
 _K_NOTE = (
-    "Tomera (2014) eq. 8 prints k1 = 1.9589 with n in rpm, i.e. 451 kN at 480 rpm: impossible for a "
-    "23 t model; read as 1.9589e-3 N/rpm^2 (451 N ahead, 78 N astern; a modelling choice)"
+    "Tomera (2014) eq. 8 prints k1 = 1.9589 with n in rpm, i.e. 451 kN at 480 rpm: impossible for "
+    "a 23 t model; read as 1.9589e-3 N/rpm^2 (451 N ahead, 78 N astern; a modelling choice)"
 )
 
 

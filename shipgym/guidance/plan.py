@@ -154,7 +154,9 @@ class ManoeuvrePlan:
 
     legs: tuple[Leg, ...]
     switch_distance: float = param(1.0, "m", "Tomera (2014) (manoeuvre description): 1 m")
-    switch_heading: float = param(math.radians(5.0), "rad", "Tomera (2014): course difference < 5 deg")
+    switch_heading: float = param(
+        math.radians(5.0), "rad", "Tomera (2014): course difference < 5 deg"
+    )
     limits: Limits = field(default_factory=Limits)
     switch_min_progress: float = param(1.0, "1", "guard against premature switching (ours)")
     settle_time: float = param(0.0, "s", "optional dwell before switching (project addition)")

@@ -47,7 +47,8 @@ __all__ = ["Limits", "LegProfile", "leg_profile", "leg_reference", "leg_duration
 _CAP = (
     "thrust capacity 451 N ahead, 78 N astern (main propeller), 2 x 44.1 N "
     "sway and ~248 N m yaw (tunnel thrusters) against M = diag(23 665 kg, 24 831 kg, "
-    "4.55e5 kg m^2) (Tomera 2014 eq. 49; up to 42 t in sway with the added mass of Clarke et al. 1983)"
+    "4.55e5 kg m^2) (Tomera 2014 eq. 49; up to 42 t in sway with the added mass of "
+    "Clarke et al. 1983)"
 )
 
 

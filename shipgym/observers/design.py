@@ -10,10 +10,11 @@ Pure functions with textbook names and fixed return tuples, built on
   ``"filter"`` the measurement-update gain in which Tomera (2014) prints its gains (eq. 30);
 - :class:`KalmanDesign`: per-DOF design matrices ``(G, Q, R, T)`` of the double-integrator
   model of Tomera (2011) eqs. 56-59, with the presets :data:`TOMERA_DKF`, :data:`TOMERA_KBF`
-  (they reproduce Tomera (2014) eqs. 30 and 35) and the tuned :data:`DKF_DESIGN`, :data:`KBF_DESIGN`.
+  (they reproduce Tomera (2014) eqs. 30 and 35) and the tuned :data:`DKF_DESIGN`,
+  :data:`KBF_DESIGN`.
 
 The per-DOF model (Tomera 2011 eqs. 56-59, in the paper's state order)
-----------------------------------------------------------------
+----------------------------------------------------------------------
 Each DOF ``p`` in ``{x, y, psi}`` (NED) is a double integrator with state
 ``s = [p_dot, p]`` (velocity first, Tomera (2011) eq. 59) driven by white noise::
 
@@ -21,14 +22,14 @@ Each DOF ``p`` in ``{x, y, psi}`` (NED) is a double integrator with state
     y     = C s + v,     C = [0, 1]                                       (Tomera 2011 eqs. 26, 58)
 
 Sampled with period ``T``, ``F = exp(A T) = I + A T`` (Tomera 2011 eq. 5, exact here since
-``A^2 = 0``) and either ``Q_k = G Q G^T T`` (``discretisation="euler"``, Tomera (2011) eq. 31) or the
-exact ``Q_k = int_0^T exp(A s) G Q G^T exp(A^T s) ds`` (``"exact"``, Van Loan). ``R`` of a
+``A^2 = 0``) and either ``Q_k = G Q G^T T`` (``discretisation="euler"``, Tomera 2011 eq. 31) or
+the exact ``Q_k = int_0^T exp(A s) G Q G^T exp(A^T s) ds`` (``"exact"``, Van Loan). ``R`` of a
 :class:`KalmanDesign` is the variance of one sampled measurement (``R_k`` of Table 3); the
 continuous filter uses the equivalent intensity ``R_c = R T`` (Tomera 2011 eq. 35,
 ``R_k = R / Delta t``). Gains are printed in the paper's order ``[velocity, position]``.
 
 Reproducing Tomera (2014) eqs. 30 and 35 from design matrices
-------------------------------------------------------
+-------------------------------------------------------------
 Tomera (2014) uses one gain for all three DOFs: ``L = [0.07945, 0.36868]`` (discrete, eq. 30) and
 ``L = [0.1, 0.45826]`` (continuous, eq. 35). For the continuous double integrator with
 ``G Q G^T = diag(q_v, q_p)`` and measurement intensity ``r`` the algebraic Riccati equation
@@ -418,7 +419,7 @@ def discretise(
 
 
 def double_integrator() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(A, C)`` of one DOF in Tomera's (2011) state order ``[velocity, position]`` (eqs. 56-59)."""
+    """``(A, C)`` of one DOF in Tomera's (2011) state order ``[velocity, position]``, eqs. 56-59."""
     return np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([[0.0, 1.0]])
 
 

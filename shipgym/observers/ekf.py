@@ -23,8 +23,9 @@ Reading of eq. 38 and the bias frame
 The printed vector field (eq. 38) is garbled: its second row reads
 ``-M^-1 D_L v(t) + M^-1 R^T(eta(t))`` -- a rotation matrix of the whole pose with nothing to
 rotate and no thrust -- and its third row ``-T_b^-1`` lacks the ``b`` it multiplies. The
-structure is that of Fossen's DP observer model (Fossen 2011 ch. 11), ``M nu_dot = -D nu + R^T(psi) b + tau``, ``b_dot = -T_b^-1 b + w_b``, where the
-bias ``b`` is an *NED* force rotated into the body frame by ``R^T(psi)``; the lost symbols are
+structure is that of Fossen's DP observer model (Fossen 2011 ch. 11),
+``M nu_dot = -D nu + R^T(psi) b + tau``, ``b_dot = -T_b^-1 b + w_b``, where the bias ``b`` is an
+*NED* force rotated into the body frame by ``R^T(psi)``; the lost symbols are
 ``b`` (after ``R^T(psi)``, whose argument was misprinted as ``eta``), the thrust ``tau``
 (which a DP observer needs: the controller's thrust is known, and without it the slow bias
 would have to absorb every thrust change) and the ``b`` of the third row.
@@ -205,8 +206,8 @@ class EKFConfig:
         "m^2, m^2, rad^2, (m/s)^2, (m/s)^2, (rad/s)^2, N^2, N^2, (N m)^2",
         "assumption: pose ~ R, ship near rest (0.1 m/s, 0.6 deg/s), bias ~ wind load scale",
     )
-    bias_frame: str = param("body", "-", "body frame (modelling choice); Fossen 2011 ch. 11: ned")
-    antenna_offset: tuple[float, float] = param((0.0, 0.0), "m", "Tomera (2014) eq. 40: H = [I 0 0]")
+    bias_frame: str = param("body", "-", "body: a modelling choice; Fossen 2011 ch. 11: ned")
+    antenna_offset: tuple[float, float] = param((0.0, 0.0), "m", "Tomera 2014 eq. 40: H = [I 0 0]")
     gate_probability: float | None = param(0.9999, "-", "assumption: 99.99 % chi-square gate")
     max_rejections: int = param(
         5, "-", "assumption: follow a real jump after 5 samples (observers.base.OutlierGate)"

@@ -1,7 +1,8 @@
-r"""Discrete Kalman filter and Kalman-Bucy filter per DOF on a double integrator (Tomera 2011, 2014).
+r"""Discrete Kalman filter and Kalman-Bucy filter per DOF on a double integrator (Tomera 2011,
+2014).
 
 Model (Tomera 2011 eqs. 53-59)
---------------------------
+------------------------------
 Each NED DOF ``p`` in ``{x, y, psi}`` is an independent double integrator with state
 ``[p_dot, p]`` (Tomera's order: velocity first), ``A = [[0, 0], [1, 0]]``, ``C = [0, 1]``, driven by
 white noise of intensity ``G Q G^T`` (:class:`~shipgym.observers.design.KalmanDesign`). The

@@ -19,13 +19,14 @@ Noise defaults
 - Position: Tomera (2011) eq. 61, ``R_x = R_y = 0.01`` (m^2, sigma 0.1 m), "determined based on the
   experimental tests done on the training ship Blue Lady" (Tomera 2011, text after eq. 62).
 - Heading: Tomera (2011) eq. 62, ``R_psi = 0.1`` -- printed without a unit. Read in rad^2 it would
-  be a gyrocompass sigma of 18 deg, which no gyrocompass has (typical 0.1-0.3 deg) and which would swamp every heading plot of the
-  paper. Tomera states and plots headings in degrees (Tomera 2014 Table 6, eq. 57: ``psi_E`` in
-  deg), so the project reads it as ``0.1 deg^2`` (sigma 0.316 deg):
+  be a gyrocompass sigma of 18 deg, which no gyrocompass has (typical 0.1-0.3 deg) and which
+  would swamp every heading plot of the paper. Tomera states and plots headings in degrees
+  (Tomera 2014 Table 6, eq. 57: ``psi_E`` in deg), so the project reads it as ``0.1 deg^2``
+  (sigma 0.316 deg):
   :data:`SEED000_HEADING_VARIANCE` ``= 0.1 (pi/180)^2 = 3.046e-5 rad^2``. Pass
   ``heading_variance=0.1`` for the literal rad^2 reading.
-- ``dgps`` preset: sigma 2 m per axis, the plain DGPS of Artyszuk (2003) ("standard deviation (equal in
-  north and east directions) of order 2 [m]").
+- ``dgps`` preset: sigma 2 m per axis, the plain DGPS of Artyszuk (2003) ("standard deviation
+  (equal in north and east directions) of order 2 [m]").
 - ``rtk`` preset: sigma 0.02 m, heading sigma 0.2 deg (typical RTK and gyrocompass
   figures, an assumption).
 
@@ -192,7 +193,7 @@ SENSOR_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
         "default": MappingProxyType({}),
         # plain DGPS of Artyszuk (2003): sigma 2 m per axis; gyrocompass as default
         "dgps": MappingProxyType({"position_variance": 2.0**2}),
-        # RTK GNSS: sigma 0.02 m, heading sigma 0.2 deg (typical RTK and gyrocompass figures, an assumption)
+        # RTK GNSS: sigma 0.02 m, heading sigma 0.2 deg (typical figures, an assumption)
         "rtk": MappingProxyType(
             {"position_variance": 0.02**2, "heading_variance": _RTK_HEADING_SIGMA**2}
         ),

@@ -1,4 +1,4 @@
-"""Figures comparing observers (``shipgym bench observers --report DIR``), like Tomera (2014) Table 6."""
+"""Figures comparing observers (``shipgym bench observers --report DIR``) like Tomera's Table 6."""
 
 from __future__ import annotations
 
