@@ -3,7 +3,7 @@ r"""Ocean / lake current: constant or slowly varying (Gauss-Markov) speed and di
 Sources: Fossen (2011) ch. 8.3; DNV-RP-C205 (2010) for the wind-driven current; the
 defaults are the project's assumptions. Full entries: ``docs/references.md``.
 
-Conventions (Fossen 2011 ch. 2): the current direction ``beta_c`` is where the water goes *to*
+Conventions (as in Fossen 2011): the current direction ``beta_c`` is where the water goes *to*
 (oceanographic), clockwise from north (rad); this differs from wind and waves. The current acts
 through the relative velocity ``nu_r = nu - nu_c`` with the body-frame current velocity::
 

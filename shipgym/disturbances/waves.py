@@ -4,7 +4,7 @@ Sources: Pierson & Moskowitz (1964), Hasselmann et al. (1973), Fossen (2011) ch.
 Faltinsen (1990) ch. 5, Newman (1974); ``thesis`` = Al-Takie (1982), its high-frequency
 model (ch. 2-3, App. 2). Full entries: ``docs/references.md``.
 
-Conventions (Fossen 2011 ch. 2): NED earth frame, heading ``psi`` clockwise from north (rad),
+Conventions (as in Fossen 2011): NED earth frame, heading ``psi`` clockwise from north (rad),
 body x forward, y starboard. ``direction_from`` is where the waves come *from* (like wind);
 they propagate towards ``beta_p = direction_from + pi``. The angle of the propagation direction
 relative to the bow is ``beta = beta_p - psi`` (``beta = 0``: following sea, ``pi``: head sea,

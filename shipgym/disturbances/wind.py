@@ -3,7 +3,7 @@ r"""Wind: relative wind, Blendermann (1994) loads and Gauss-Markov gusts.
 Sources: Fossen (2011) ch. 8.1 (relative wind), Blendermann (1994) (loads), Harris (1971)
 and ISO 19901-1 (2015) (gust spectra). Full entries: ``docs/references.md``.
 
-Conventions (Fossen 2011 ch. 2): NED earth frame, heading ``psi`` clockwise from north (rad), body
+Conventions (as in Fossen 2011): NED earth frame, heading ``psi`` clockwise from north (rad), body
 x forward, y starboard. The wind direction ``beta_w`` is where the wind comes *from*
 (meteorological), in radians.
 

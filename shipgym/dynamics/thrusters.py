@@ -47,8 +47,8 @@ class ThrusterParameters:
     """Thruster constants, lever arms, ranges and lags."""
 
     k1: float = param(1.9589e-3, "N/rpm^2", _K_NOTE)
-    k2: float = param(44.145, "N", "Tomera (2014) eq. 9 prints 44145 (read: decimal comma lost)")
-    k3: float = param(44.145, "N", "Tomera (2014) eq. 9 prints 44145 (read: decimal comma lost)")
+    k2: float = param(44.145, "N", "Tomera (2014) eq. 9 prints 44145: decimal comma lost")
+    k3: float = param(44.145, "N", "Tomera (2014) eq. 9 prints 44145: decimal comma lost")
     L2: float = param(3.24, "m", "Tomera (2014) eq. 12: bow tunnel forward of CG")
     L3: float = param(2.376, "m", "Tomera (2014) eq. 12: stern tunnel aft of CG")
     x_main: float = param(-6.5, "m", "propeller position, near the stern (drawing only; no moment)")

@@ -59,11 +59,11 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
     longitudinal (5-30 m ahead or 3-15 m astern), rotation (30-120 deg either way) or combined
     (surge and sway together); a wind of 0-3.5 m/s from any direction with gusts (4 m/s on the
     beam exceeds the 248 N m yaw capacity); a lake current of 0-0.03 m/s in any direction
-    (~1 % of the wind, after the wind-driven drift of DNV-RP-C205); and sensor noise within the
-    lake presets (DGPS sigma 0.07-0.15 m per axis, gyrocompass 0.2-0.45 deg). The episode
-    terminates when the last leg completes; time limit 800 control steps.
-    ``max_current_speed=0`` and ``randomize_sensors=False`` switch those draws off (the shipped
-    PPO baseline was trained so). Spaces, reward and info: see :class:`BlueLadyEnv`.
+    (~1 % of the wind, assumed); and sensor noise within the lake presets (DGPS sigma
+    0.07-0.15 m per axis, gyrocompass 0.2-0.45 deg). The episode terminates when the last leg
+    completes; time limit 800 control steps. ``max_current_speed=0`` and
+    ``randomize_sensors=False`` switch those draws off (the shipped PPO baseline was trained
+    so). Spaces, reward and info: see :class:`BlueLadyEnv`.
     """
 
     def __init__(
