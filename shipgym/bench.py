@@ -1,4 +1,4 @@
-"""Benchmarks run from the command line: ``shipgym bench observers`` (seed001 Table 6 style).
+"""Benchmarks run from the command line: ``shipgym bench observers`` (Tomera 2014 Table 6 style).
 
 Each run is one closed-loop harbour manoeuvre; runs go to worker processes in parallel
 (:func:`run_jobs`). Finished rows are handed out as they come (``on_result``, e.g. a
@@ -306,7 +306,7 @@ def bench_observers(
 
 
 def observer_table(rows: Sequence[dict[str, Any]]) -> str:
-    """A markdown table in the form of seed001 Table 6 (mean +- std over seeds)."""
+    """A markdown table in the form of Tomera (2014) Table 6 (mean +- std over seeds)."""
     names = list(dict.fromkeys(r["observer"] for r in rows))
     head = (
         "| observer | runs | completed | x_E (m) | y_E (m) | psi_E (deg) | J_c "

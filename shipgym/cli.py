@@ -770,7 +770,7 @@ def _parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_report)
     p = sub.add_parser("bench", help="benchmarks: 'bench observers', 'bench controllers'")
     bsub = p.add_subparsers(dest="what", required=True)
-    b = bsub.add_parser("observers", help="seed001 Table-6-style comparison of observers")
+    b = bsub.add_parser("observers", help="Tomera (2014) Table-6-style comparison of observers")
     b.add_argument("--observers", nargs="+", default=["dkf", "kbf", "ekf"], metavar="NAME")
     b.add_argument(
         "--seeds", type=bounded_int(1, MAX_COUNT), default=10,

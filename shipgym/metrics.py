@@ -1,6 +1,6 @@
-"""Accuracy indices and run statistics (seed001 eqs. 54-57; SPEC section 11). Pure NumPy.
+"""Accuracy indices and run statistics (Tomera 2014 eqs. 54-57). Pure NumPy.
 
-Seed001 assesses the accuracy of the position control of the harbour manoeuvre with
+Tomera (2014) assesses the accuracy of the position control of the harbour manoeuvre with
 
 ``x_E = (1/N) sum_k |x_d^r(k) - x^r(k)|`` (eq. 54), ``y_E`` likewise (eq. 55),
 ``psi_E = (1/N) sum_k |psi_d^r(k) - psi^r(k)|`` (eq. 56, in degrees) and
@@ -47,7 +47,7 @@ INDEX_KEYS = ("x_E", "y_E", "psi_E", "J_c")
 MIN_SAMPLES = 10
 
 SEED_WEIGHTS: tuple[float, float, float] = (1.0, 1.0, 0.01)
-"""``(lambda_1, lambda_2, lambda_3)`` of seed001 eq. 57 (1/m, 1/m, 1/deg)."""
+"""``(lambda_1, lambda_2, lambda_3)`` of Tomera (2014) eq. 57 (1/m, 1/m, 1/deg)."""
 
 _TWO_PI = 2.0 * math.pi
 _DEG = 180.0 / math.pi
@@ -66,13 +66,13 @@ def _weights(weights: Sequence[float]) -> tuple[float, float, float]:
 
 
 def j_c(x_E: float, y_E: float, psi_E: float, weights: Sequence[float] = SEED_WEIGHTS) -> float:
-    """The functional of seed001 eq. 57: ``J_c = l1 x_E + l2 y_E + l3 psi_E``.
+    """The functional of Tomera (2014) eq. 57: ``J_c = l1 x_E + l2 y_E + l3 psi_E``.
 
     Args:
         x_E: mean absolute surge-direction error (m), eq. 54.
         y_E: mean absolute sway-direction error (m), eq. 55.
         psi_E: mean absolute heading error (deg), eq. 56.
-        weights: ``(l1, l2, l3)`` (default the seed's ``(1, 1, 0.01)``).
+        weights: ``(l1, l2, l3)`` (default the paper's ``(1, 1, 0.01)``).
     """
     w = _weights(weights)
     return w[0] * x_E + w[1] * y_E + w[2] * psi_E
@@ -91,13 +91,13 @@ def _indices(sx: float, sy: float, sp: float, n: int, w: tuple[float, float, flo
 def accuracy_indices(
     eta_r: ArrayLike, eta_d_r: ArrayLike, weights: Sequence[float] = SEED_WEIGHTS
 ) -> dict[str, float]:
-    """The accuracy indices of seed001 eqs. 54-57 from sampled r-frame poses.
+    """The accuracy indices of Tomera (2014) eqs. 54-57 from sampled r-frame poses.
 
     Args:
         eta_r: ship poses ``[x^r, y^r, psi^r]`` (m, m, rad), shape (N, 3), one per sample
-            (seed001: measured, every 1 s).
+            (Tomera 2014: measured, every 1 s).
         eta_d_r: desired poses at the same samples (m, m, rad), shape (N, 3).
-        weights: ``(l1, l2, l3)`` of eq. 57 (default the seed's ``(1, 1, 0.01)``).
+        weights: ``(l1, l2, l3)`` of eq. 57 (default the paper's ``(1, 1, 0.01)``).
 
     Returns:
         ``{"x_E": m, "y_E": m, "psi_E": deg, "J_c": -}``: mean absolute errors (eqs. 54-56;
@@ -231,16 +231,16 @@ class _Acc:
 
 
 class ManoeuvreMetrics:
-    """Online accumulator of the seed001 accuracy indices and thruster usage over a run.
+    """Online accumulator of the Tomera (2014) accuracy indices and thruster usage over a run.
 
     Call :meth:`record` once per control step. The accuracy indices (eqs. 54-57) are sampled
     at ``t = k * sample_period`` (the first call at or after each multiple; the tolerance
     ``1e-6 * sample_period`` absorbs accumulated float error in ``t``), both from the true pose
-    (``eta_r``) and, when given, from the measured pose (``eta_meas_r``; the seed's choice).
+    (``eta_r``) and, when given, from the measured pose (``eta_meas_r``; the paper's choice).
     Thruster statistics use every call (every control step).
 
     Args:
-        sample_period: sampling time of the indices (s; seed001: 1 s).
+        sample_period: sampling time of the indices (s; Tomera 2014: 1 s).
         weights: ``(l1, l2, l3)`` of eq. 57.
         n_actuators: number of thrust channels (3 for the Blue Lady: main, bow, stern).
     """
@@ -408,7 +408,7 @@ class ManoeuvreMetrics:
         Returns:
             A dict with:
 
-            - ``x_E``, ``y_E`` (m), ``psi_E`` (deg), ``J_c``: seed001 eqs. 54-57 from the
+            - ``x_E``, ``y_E`` (m), ``psi_E`` (deg), ``J_c``: Tomera (2014) eqs. 54-57 from the
               true pose (NaN if no sample was taken);
             - ``measured``: the same four from the measured pose, or None if none recorded;
             - ``n_samples``, ``n_measured_samples``, ``n_steps`` (calls of :meth:`record`);

@@ -1,17 +1,19 @@
-r"""Named scenarios and sea-state presets: Beaufort 0-9, the lake, the seed trials.
+r"""Named scenarios and sea-state presets: Beaufort 0-9, the lake, Tomera's trials.
 
-SPEC section 6; ``notes`` = ``shared/notes/domain-models.md`` sections 1.7, 2.2, 2.3 and 3.
+Sources: WMO (1998), Price & Bishop (1974) and NORSOK N-003 (Beaufort table), Hasselmann
+et al. (1973) (JONSWAP), ISO 19901-1 (2015) (NPD gusts), DNV-RP-C205 (2010) (current);
+the lake values are the project's own estimates. Full entries: ``docs/references.md``.
 
-**Beaufort table** (notes 2.2; WMO): mean wind ``U10`` = middle of the WMO band (0 for BF0),
+**Beaufort table** (WMO 1998): mean wind ``U10`` = middle of the WMO band (0 for BF0),
 ``Hs`` = WMO "probable wave height" (also Fossen 2011 ch. 8 and Price & Bishop 1974), ``Tp``
 from the NORSOK relation ``4.883 + 2.68 Hs^0.54`` (MSS ``Wave_init.m``), all at full scale.
 :func:`beaufort` Froude-scales them to a model at ``1:scale`` (``Hs / scale``,
 ``Tp / sqrt(scale)``, ``U / sqrt(scale)``: BF5 at 1:24 is ``Hs = 0.083 m``, ``Tp = 1.79 s``,
-``U = 1.91 m/s``), with an NPD gust spectrum evaluated at full scale (notes 1.7, "Offshore DP
-(scaled)") and a JONSWAP gamma 3.3 sea (notes 2.2: "Offshore DP range (BF 5-9): use JONSWAP
-gamma 3.3") with first-order motion and drift.
+``U = 1.91 m/s``), with an NPD gust spectrum evaluated at full scale (the project's offshore
+assumption) and a JONSWAP gamma 3.3 sea (the JONSWAP mean of
+Hasselmann et al. 1973) with first-order motion and drift.
 
-**Lake** (notes 2.3): :func:`lake_waves`, the fetch-limited sea of Lake Silm (JONSWAP
+**Lake** (the project's estimate): :func:`lake_waves`, the fetch-limited sea of Lake Silm (JONSWAP
 ``Hs = 0.05 m``, ``Tp = 1 s``, gamma 3.3, drift force on, no first-order motion).
 
 **Scenarios**: a :class:`Scenario` bundles what an episode needs besides the agent: the
@@ -90,7 +92,7 @@ ENV_SCENARIOS: dict[str, str] = {
 
 
 class BeaufortRow(NamedTuple):
-    """One Beaufort number at full scale (notes 2.2; WMO).
+    """One Beaufort number at full scale (WMO 1998).
 
     Attributes:
         number: Beaufort number 0-9.
@@ -125,7 +127,7 @@ _WMO: tuple[tuple[str, float, float, float], ...] = (
     ("strong gale", 20.8, 24.4, 7.0),
 )
 
-#: Beaufort 0-9 at full scale (notes 2.2): WMO wind bands and probable wave heights, NORSOK Tp.
+#: Beaufort 0-9 at full scale: WMO wind bands and probable wave heights, NORSOK Tp.
 BEAUFORT_TABLE: tuple[BeaufortRow, ...] = tuple(
     BeaufortRow(
         n,
@@ -165,7 +167,7 @@ def beaufort(
     drift: bool = True,
     wf_model: str = "fossen",
 ) -> SeaState:
-    """Beaufort ``n`` sea state, Froude-scaled to a model at ``1:scale`` (notes 2.2).
+    """Beaufort ``n`` sea state, Froude-scaled to a model at ``1:scale``.
 
     Model values: ``U = U10 / sqrt(scale)``, ``Hs / scale``, ``Tp / sqrt(scale)``. The wind gust
     follows ``gust_spectrum`` evaluated at full scale (``spectrum_scale = scale``); wind and
@@ -213,13 +215,13 @@ def beaufort(
 
 
 def lake_waves(direction_from: float = 0.0, **overrides: Any) -> WaveConfig:
-    """The Lake Silm sea of Blue Lady's trials (notes 2.3).
+    """The Lake Silm sea of Blue Lady's trials (an estimate of the project).
 
     Fetch-limited JONSWAP ``Hs = 0.05 m``, ``Tp = 1.0 s``, gamma 3.3, drift on, no first-order
     motion (mm-level for a 13.5 m hull in 1.56 m waves).
 
     Args:
-        direction_from: Direction the waves come from (rad); notes 2.3: aligned with the wind.
+        direction_from: Direction the waves come from (rad); aligned with the wind (an assumption).
         **overrides: Any other :class:`WaveConfig` field.
     """
     kw: dict[str, Any] = {
@@ -787,9 +789,9 @@ def _presets() -> dict[str, Scenario]:
         sensors="tomera2014",
         plan="tomera2014",
         description=(
-            "Blue Lady's lake trial (seed 001, Tomera 2014): the 5-leg harbour manoeuvre on "
+            "Blue Lady's lake trial (Tomera 2014): the 5-leg harbour manoeuvre on "
             "Lake Silm, wind 3 m/s from 300 deg with Gauss-Markov gusts, small fetch-limited "
-            "JONSWAP waves from the same direction (Hs 0.05 m, Tp 1 s, drift only; notes 2.3)."
+            "JONSWAP waves from the same direction (Hs 0.05 m, Tp 1 s, drift only; estimated)."
         ),
     )
     out["tomera2011-sim"] = Scenario(
@@ -800,9 +802,9 @@ def _presets() -> dict[str, Scenario]:
         sensors="default",
         plan="tomera2014",
         description=(
-            "The simulation study of seed 000 (Tomera 2011): wind 2 m/s from 0 deg with "
-            "Gauss-Markov gusts, no waves, seed 000's sensor noise; the manoeuvre of the study "
-            "is not given in the seed, the seed 001 harbour plan is used."
+            "The simulation study of Tomera (2011): wind 2 m/s from 0 deg with "
+            "Gauss-Markov gusts, no waves, its sensor noise; the manoeuvre of the study "
+            "is not given there, the harbour plan of Tomera (2014) is used."
         ),
     )
     for n in range(10):
@@ -817,7 +819,7 @@ def _presets() -> dict[str, Scenario]:
             description=(
                 f"Station keeping in Beaufort {n} ({row.name}) Froude-scaled to 1:24: wind "
                 f"{wind.speed:.2f} m/s (NPD gusts), JONSWAP Hs {waves.Hs:.3f} m, Tp "
-                f"{waves.Tp:.2f} s, first-order motion and drift (notes 2.2)."
+                f"{waves.Tp:.2f} s, first-order motion and drift."
             ),
         )
     return out

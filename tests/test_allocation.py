@@ -1,4 +1,4 @@
-"""Thrust allocation (seed001 eqs. 24-27) and the normalised action mapping."""
+"""Thrust allocation (Tomera 2014 eqs. 24-27) and the normalised action mapping."""
 
 import itertools
 

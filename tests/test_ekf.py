@@ -1,4 +1,4 @@
-"""The 9-state extended Kalman filter of seed001 (eqs. 36-53, Table 5)."""
+"""The 9-state extended Kalman filter of Tomera (2014) (eqs. 36-53, Table 5)."""
 
 import dataclasses
 import math

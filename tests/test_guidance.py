@@ -1,4 +1,4 @@
-"""Guidance: r-frame (seed001 eqs. 1-2), smooth leg references, the 5-leg plan, leg switching."""
+"""Guidance: r-frame (Tomera 2014 eqs. 1-2), smooth leg references, 5-leg plan, leg switching."""
 
 import math
 
@@ -29,7 +29,7 @@ angle = st.floats(-10.0, 10.0, allow_nan=False)
 
 
 def seed_eq1(eta_n, eta_P):
-    """Seed001 eq. 1 with the matrix of eq. 2, applied to a column vector."""
+    """Tomera (2014) eq. 1 with the matrix of eq. 2, applied to a column vector."""
     c, s = math.cos(eta_P[2]), math.sin(eta_P[2])
     R2 = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
     return R2 @ (np.asarray(eta_n, float) - np.asarray(eta_P, float))

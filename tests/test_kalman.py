@@ -141,7 +141,7 @@ def test_kbf_at_one_second_is_conservative_not_optimistic():
 
 @pytest.mark.parametrize("steady_state", [False, True])
 def test_kbf_interval_matches_ode_integration(steady_state):
-    """One interval equals a tight solve_ivp of seed001 Table 4 with the first-order hold."""
+    """One interval equals a tight solve_ivp of Tomera (2014) Table 4 with the first-order hold."""
     f = KalmanBucyFilter(TOMERA_KBF, steady_state=steady_state, gate_probability=None)
     f.reset(0.0, [1.0, 2.0, 0.5], nu0=[0.1, 0.02, 0.01])
     f.step(0.5, [1.03, 2.0, 0.503])  # gives a previous sample for the hold
@@ -209,7 +209,8 @@ def test_tomera_dkf_applies_eq30_gain():
 
 
 def test_time_varying_gain_settles_within_twelve_seconds():
-    """Seed001: the recursive gains of Table 3 'are steady-state within the first twelve s'."""
+    """Tomera (2014): the recursive gains of Table 3 'are steady-state within the first twelve
+    s'."""
     obs = DiscreteKalmanFilter(TOMERA_DKF, gate_probability=None)
     obs.reset(0.0, [0.0, 0.0, 0.0])
     for k in range(1, 13):

@@ -1,4 +1,4 @@
-"""LQ optimal control with integral action (shipgym.controllers.lq; seed002 ch. 4)."""
+"""LQ optimal control with integral action (shipgym.controllers.lq; Al-Takie 1982 ch. 4)."""
 
 import math
 
@@ -171,4 +171,4 @@ def test_harbour_manoeuvre_closed_loop():
     res = run_episode("harbour", controller="lq", seed=0)
     assert res["completed"] and not res["quay_contact"]
     assert res["legs_completed"] == 5
-    assert res["J_c"] < 0.2  # truth J_c (seed001 eq. 57); the tuned PID gets ~0.08 here
+    assert res["J_c"] < 0.2  # truth J_c (Tomera 2014 eq. 57); the tuned PID gets ~0.08 here

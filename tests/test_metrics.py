@@ -1,4 +1,4 @@
-"""Accuracy indices of seed001 eqs. 54-57, the online accumulator and RMSE."""
+"""Accuracy indices of Tomera (2014) eqs. 54-57, the online accumulator and RMSE."""
 
 import math
 

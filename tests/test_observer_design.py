@@ -1,4 +1,4 @@
-"""Gain design: lqe/dlqe against python-control and scipy, closed forms, errors, seed001 gains."""
+"""Gain design: lqe/dlqe against python-control and scipy, closed forms, errors, Tomera's gains."""
 
 import math
 
@@ -25,8 +25,8 @@ from shipgym.observers.design import (
 )
 from shipgym.observers.sensors import SensorConfig
 
-EQ30 = np.array([0.07945, 0.36868])  # seed001 eq. 30, discrete, [velocity, position]
-EQ35 = np.array([0.1, 0.45826])  # seed001 eq. 35, continuous
+EQ30 = np.array([0.07945, 0.36868])  # Tomera (2014) eq. 30, discrete, [velocity, position]
+EQ35 = np.array([0.1, 0.45826])  # Tomera (2014) eq. 35, continuous
 
 
 # --------------------------------------------------------------------------------------------
@@ -89,7 +89,7 @@ def test_lqe_matches_python_control_and_scipy(sys):
     np.testing.assert_allclose(P, Pc, rtol=1e-6, atol=1e-8 * scale)
     np.testing.assert_allclose(L, Lc, rtol=1e-6, atol=1e-8 * (1 + np.abs(Lc).max()))
     _same_poles(E, Ec)
-    # scipy directly, and the Riccati equation itself (seed001 eq. 34)
+    # scipy directly, and the Riccati equation itself (Tomera 2014 eq. 34)
     Ps = scipy.linalg.solve_continuous_are(A.T, C.T, G @ Q @ G.T, R)
     np.testing.assert_allclose(P, Ps, rtol=1e-6, atol=1e-8 * scale)
     res = A @ P + P @ A.T + G @ Q @ G.T - P @ C.T @ np.linalg.solve(R, C @ P)
@@ -120,7 +120,7 @@ def test_dlqe_both_forms_match_python_control_and_scipy(sys):
     np.testing.assert_allclose(F @ Lf, Lp, rtol=1e-8, atol=1e-10 * scale)
     assert np.all(np.abs(E) < 1.0)
     _same_poles(E, np.linalg.eigvals((np.eye(len(F)) - Lf @ H) @ F))
-    # P is the a priori covariance: it is a fixed point of update + propagation (seed000 eq. 40)
+    # P is the a priori covariance: it is a fixed point of update + propagation (Tomera 2011 eq. 40)
     P_post = (np.eye(len(F)) - Lf @ H) @ P
     np.testing.assert_allclose(F @ P_post @ F.T + G @ Q @ G.T, P, rtol=1e-6, atol=1e-8 * scale)
 
@@ -140,7 +140,7 @@ def test_lqe_scalar_integrator_closed_form(q, r):
 
 @pytest.mark.parametrize(("qv", "qp", "r"), [(1e-4, 0.0, 0.01), (0.01, 0.01, 1.0), (2.0, 0.5, 0.3)])
 def test_lqe_double_integrator_closed_form(qv, qp, r):
-    """L = [sqrt(qv/r), sqrt(2 sqrt(qv/r) + qp/r)] in seed000's order [velocity, position]."""
+    """L = [sqrt(qv/r), sqrt(2 sqrt(qv/r) + qp/r)] in Tomera's (2011) order [velocity, position]."""
     A, C = double_integrator()
     L, _, _ = lqe(A, np.eye(2), C, np.diag([qv, qp]), r)
     w = math.sqrt(qv / r)
@@ -171,11 +171,11 @@ def test_discretise_exact_and_euler_double_integrator():
     np.testing.assert_allclose(Q, Q_exp, rtol=1e-12)
     Fe, Qe = discretise(A, W, T, method="euler")
     np.testing.assert_allclose(Fe, F)
-    np.testing.assert_allclose(Qe, W * T)  # seed000 eq. 31
+    np.testing.assert_allclose(Qe, W * T)  # Tomera (2011) eq. 31
 
 
 # --------------------------------------------------------------------------------------------
-# Seed001 eqs. 30 and 35 from design matrices
+# Tomera (2014) eqs. 30 and 35 from design matrices
 # --------------------------------------------------------------------------------------------
 
 
@@ -194,7 +194,7 @@ def test_seed001_eq30_from_design_matrices():
 
 
 def test_seed001_eq35_from_design_matrices():
-    """Continuous, G Q G^T = 0.01 R I, intensity R_c = R T with T = 1 s (seed000 eq. 35)."""
+    """Continuous, G Q G^T = 0.01 R I, intensity R_c = R T with T = 1 s (Tomera 2011 eq. 35)."""
     A, C = double_integrator()
     for R in (POSITION_VARIANCE_SEED000, HEADING_VARIANCE_SEED000):
         L, _, _ = lqe(A, np.eye(2), C, 0.01 * R * np.eye(2), R * 1.0)
@@ -212,7 +212,7 @@ def test_tomera_presets_reproduce_seed001_gains():
 
 
 def test_seed000_eqs61_62_do_not_give_seed001_gains():
-    """The printed seed000 design values give other gains (documented in design.py)."""
+    """The printed Tomera (2011) design values give other gains (documented in design.py)."""
     A, C = double_integrator()
     Gx, Qx = np.diag([1.0, 0.01]), np.diag([0.1, 0.2])
     Gp, Qp = np.diag([0.2, 0.01]), np.eye(2)

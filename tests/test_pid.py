@@ -1,4 +1,4 @@
-"""The multivariable PID-type DP controller (seed001 eqs. 13-23) and its gain design."""
+"""The multivariable PID-type DP controller (Tomera 2014 eqs. 13-23) and its gain design."""
 
 import math
 
@@ -56,7 +56,7 @@ def test_pole_placement_vector_and_errors():
 
 
 def test_presets():
-    seed = pid_gains("seed")  # seed001 eqs. 46-48, as printed
+    seed = pid_gains("seed")  # Tomera (2014) eqs. 46-48, as printed
     assert seed.K_P == (1.0,) * 3 and seed.K_I == (0.01,) * 3 and seed.K_D == (100.0,) * 3
     tuned = pid_gains("tuned")
     ref = pid_pole_placement(np.array(TUNED_OMEGA))
@@ -97,10 +97,10 @@ def test_seed_gains_unstable_at_1s_sampling_and_tuned_stable():
                 assert rho < 1.0
             else:
                 assert rho > 90.0  # ~ |1 - K_D T| = 99
-            # both designs are stable in continuous time; the seed's only very slowly
+            # both designs are stable in continuous time; the paper's only very slowly
             assert max(error_loop(*k)[1].real) < 0
     assert max(pid_gains("seed").error_poles()[0].real) > -0.006  # 200 s time constant
-    # the seed gains only work if sampled much faster than K_D allows: T < 2 / K_D
+    # the printed gains only work if sampled much faster than K_D allows: T < 2 / K_D
     assert max(abs(error_loop(1.0, 0.01, 100.0, 0.015)[1])) < 1.0
 
 

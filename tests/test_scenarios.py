@@ -25,7 +25,7 @@ from shipgym.scenarios import (
     scenario_from_dict,
 )
 
-# notes 2.2: BF -> (U10 band, Hs, Tp full scale; model U, Hs, Tp, w_p at 1:24)
+# Beaufort table: BF -> (U10 band, Hs, Tp full scale; model U, Hs, Tp, w_p at 1:24)
 NOTES_22 = {
     3: ((3.4, 5.4), 0.6, 6.9, 0.9, 0.025, 1.41, 4.45),
     4: ((5.5, 7.9), 1.0, 7.6, 1.4, 0.042, 1.54, 4.07),

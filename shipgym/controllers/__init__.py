@@ -1,8 +1,8 @@
-"""Controllers and thrust allocation (SPEC section 9).
+"""Controllers and thrust allocation.
 
-- :mod:`~shipgym.controllers.pid`: the multivariable PID-type DP controller of seed001
+- :mod:`~shipgym.controllers.pid`: the multivariable PID-type DP controller of Tomera (2014)
   (eqs. 13-23), its gain presets and the pole-placement design function.
-- :mod:`~shipgym.controllers.allocation`: thrust allocation (seed001 eqs. 24-27 and a
+- :mod:`~shipgym.controllers.allocation`: thrust allocation (Tomera 2014 eqs. 24-27 and a
   box-constrained weighted least-squares allocation) and the normalised action mapping.
 
 Pure NumPy; never imports mujoco.

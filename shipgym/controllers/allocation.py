@@ -1,7 +1,7 @@
-r"""Thrust allocation for the Blue Lady DP system (seed001 eqs. 24-27; SPEC section 9).
+r"""Thrust allocation for the Blue Lady DP system (Tomera 2014 eqs. 24-27).
 
 The three actuators (main propeller, bow and stern tunnel thrusters, in this order) act on the
-hull through the configuration matrix of seed001 eq. 12,
+hull through the configuration matrix of Tomera (2014) eq. 12,
 
 .. math::
 
@@ -12,7 +12,7 @@ with ``F = [F1, F2, F3]`` (N) and ``tau = [X, Y, N]`` (N, N, N m). ``T`` is squa
 invertible (``det T = -(L2 + L3)``), so an unsaturated request has exactly one solution. Two
 allocators are provided:
 
-- :func:`allocate_inverse` is the seed's method: ``F = T^-1 tau`` (eq. 25), the inverse thruster
+- :func:`allocate_inverse` is the paper's method: ``F = T^-1 tau`` (eq. 25), the inverse thruster
   characteristics (eqs. 26-27) and a clip of each command to its range. When a tunnel thruster
   saturates, the clip throws away whatever that thruster owed to *both* sway and yaw.
 - :func:`allocate` is a constrained least-squares allocation. Surge is decoupled (only F1
@@ -210,9 +210,9 @@ def default_weights(thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS) -> tupl
 def allocate_inverse(
     tau: ArrayLike, thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS
 ) -> Allocation:
-    """The seed's allocation: ``F = T^-1 tau`` (eq. 25), inverse characteristics, saturation.
+    """The paper's allocation: ``F = T^-1 tau`` (eq. 25), inverse characteristics, saturation.
 
-    ``n1 = sgn(F1) sqrt(|F1| / k1)`` (eq. 26; the seed prints ``sqrt(F1 / k1)``, which is
+    ``n1 = sgn(F1) sqrt(|F1| / k1)`` (eq. 26; the paper prints ``sqrt(F1 / k1)``, which is
     undefined for astern thrust) and ``p_i = F_i / k_i`` (eq. 27), each then clipped to
     ``[n_min, n_max]`` rpm and ``[p_min, p_max]``.
 

@@ -1,4 +1,4 @@
-"""Learned controllers: stable-baselines3 policies saved as shipgym models (SPEC section 9).
+"""Learned controllers: stable-baselines3 policies saved as shipgym models.
 
 A *shipgym model* is the zip archive that stable-baselines3's ``model.save`` writes, with one
 extra member, ``shipgym.json``: the metadata needed to use the policy as a controller without

@@ -1,8 +1,8 @@
-r"""LQ optimal DP control with integral action (seed002 ch. 4; SPEC section 9).
+r"""LQ optimal DP control with integral action (Al-Takie 1982 ch. 4).
 
 Design model
 ------------
-The control model of seed001 (eqs. 49-50), ``M nu_dot + D_L nu = tau``, written for the
+The control model of Tomera (2014) (eqs. 49-50), ``M nu_dot + D_L nu = tau``, written for the
 tracking errors of the current leg. With the pose and the reference in the r-frame of the leg
 (``psi`` the r-frame heading):
 
@@ -23,9 +23,9 @@ The design model is thus linear and time invariant with the 9-state ``x = [e, e_
     B = \begin{bmatrix} 0 \\ M^{-1} \\ 0 \end{bmatrix},
 
 and the law is ``tau = tau_ff - K x`` with ``K`` minimising
-``J = int (x^T Q x + u^T R u) dt`` (seed002 eqs. 4.3, 4.7-4.8: ``K = R^-1 B^T S`` from the
-algebraic Riccati equation). As in seed002 the gain acts on estimates when an observer is
-stacked below (separation principle). Unlike seed002 (no integral action; wind feedforward),
+``J = int (x^T Q x + u^T R u) dt`` (Al-Takie 1982 eqs. 4.3, 4.7-4.8: ``K = R^-1 B^T S`` from the
+algebraic Riccati equation). As in Al-Takie (1982) the gain acts on estimates when an observer is
+stacked below (separation principle). Unlike Al-Takie (1982) (no integral action; wind feedforward),
 the integral states remove steady wind and current offsets.
 
 The controller runs sampled at the control period ``h`` with a zero-order hold, so the default
@@ -53,7 +53,7 @@ preset: ``e_max = (0.5 m, 0.5 m, 2 deg)``, ``v_max = (0.05 m/s, 0.05 m/s, 0.5 de
   constant of ~30 s: the wind of the lake trial (3 m/s, ~10-40 N) is taken out well within a
   leg. The other poles are pairs at 0.08 rad/s (x, y; damping ~0.8) and 0.125 rad/s (yaw).
 
-The harbour manoeuvre (seed001, 5 legs, wind 3 m/s from 300 deg) completes without quay
+The harbour manoeuvre (Tomera 2014, 5 legs, wind 3 m/s from 300 deg) completes without quay
 contact for seeds 0-9, with the true state (J_c 0.035 +- 0.004; the tuned PID 0.032) and
 through the Kalman-Bucy filter (J_c 0.188 +- 0.015; PID 0.261), see ``shipgym bench
 controllers``; ``tests/test_lq.py`` runs one seed.
@@ -259,8 +259,8 @@ def lq_model(M: ArrayLike | None = None, D_L: ArrayLike | None = None) -> tuple[
     """The continuous design model ``(A, B)`` (9 states, 3 inputs) of the module docstring.
 
     Args:
-        M: inertia (kg, kg m^2), default seed001 eq. 49.
-        D_L: linear damping (N s/m, N s, N m s), default seed001 eq. 50.
+        M: inertia (kg, kg m^2), default Tomera (2014) eq. 49.
+        D_L: linear damping (N s/m, N s, N m s), default Tomera (2014) eq. 50.
     """
     M0, D0 = seed_linear_matrices()
     M_ = M0 if M is None else np.asarray(M, dtype=float)
@@ -336,7 +336,7 @@ def lq_design(
         dt: control period (s), used by the discrete design.
         method: ``"discrete"`` (:func:`dlqr` on the sampled model; default) or
             ``"continuous"`` (:func:`lqr`).
-        M, D_L: control model (default seed001 eqs. 49-50).
+        M, D_L: control model (default Tomera (2014) eqs. 49-50).
     """
     if isinstance(weights, str):
         try:
@@ -372,8 +372,8 @@ class LQController:
 
     Args:
         weights: :class:`LQWeights` or a preset name (``"tuned"``).
-        M: inertia (kg, kg m^2) of the control model; default seed001 eq. 49.
-        D_L: linear damping (N s/m, N s, N m s); default seed001 eq. 50.
+        M: inertia (kg, kg m^2) of the control model; default Tomera (2014) eq. 49.
+        D_L: linear damping (N s/m, N s, N m s); default Tomera (2014) eq. 50.
         dt: control period (s).
         method: ``"discrete"`` (default) or ``"continuous"`` gain design.
         integral_limit: bound on the integral force ``|K_xi xi_b|`` per body DOF (N, N, N m);
@@ -537,7 +537,8 @@ def register_lq() -> None:
             ControllerSpec(
                 lambda dt: LQController("tuned", dt=dt),
                 "constrained",
-                "LQ optimal control with integral action (seed002 ch. 4 on seed001 eqs. 49-50), "
+                "LQ optimal control with integral action (Al-Takie 1982 ch. 4 on Tomera 2014 "
+                "eqs. 49-50), "
                 "constrained allocation",
             ),
         )

@@ -1,8 +1,8 @@
-r"""The multivariable PID-type DP controller of seed001 (eqs. 13-23; SPEC section 9).
+r"""The multivariable PID-type DP controller of Tomera (2014) (eqs. 13-23).
 
-Reading of the seed
--------------------
-The seed states the control law as (eq. 23)
+Reading of the paper
+--------------------
+The paper states the control law as (eq. 23)
 
 .. math::
 
@@ -43,9 +43,9 @@ would put ``M_23 != 0``, and eq. 50's off-diagonal damping is ``-855.4`` whereas
 ``-Y_r = -N_v = +855.4`` by eq. 7 (the default plant, built from Table 2, uses ``+855.4``).
 Pass ``M=plant.mass_matrix(), D_L=plant.D_L`` to control with a plant's own matrices.
 
-Gains: why the seed's do not work here
--------------------------------------
-The seed's gains (eqs. 46-48: ``K_P = 1``, ``K_I = 0.01``, ``K_D = 100`` for every DOF) give
+Gains: why the paper's do not work here
+---------------------------------------
+The paper's gains (eqs. 46-48: ``K_P = 1``, ``K_I = 0.01``, ``K_D = 100`` for every DOF) give
 the per-DOF error polynomial ``s^3 + 100 s^2 + s + 0.01`` with poles at -99.99 rad/s and
 ``-0.005 +- 0.0087j`` rad/s. Even in continuous time the dominant pair has a 200 s time
 constant, and the fast pole at -100 rad/s cannot be realised at all by a controller sampled
@@ -86,7 +86,7 @@ x, y and yaw: ``K_P = (0.0108, 0.0108, 0.03)``, ``K_I = (2.16e-4, 2.16e-4, 1e-3)
 
 Sampled implementation and anti-windup
 --------------------------------------
-The controller runs at the control period ``dt`` (seed001: 1 s) and its output is held
+The controller runs at the control period ``dt`` (Tomera 2014: 1 s) and its output is held
 between samples. The integral is the forward-Euler sum ``xi_k = h sum_{j<k} e_j``; the
 increment ``h e_{k-1}`` is added at call ``k``, once the allocation of ``tau_{k-1}`` is known
 (the ``saturated`` argument). *Conditional integration*: the increment is mapped to the body
@@ -142,7 +142,7 @@ def _gain3(value: Any, name: str) -> Vec3:
 
 @dataclass(frozen=True)
 class PIDGains:
-    """Diagonal gains of the PID-type DP controller (seed001 eqs. 18-19).
+    """Diagonal gains of the PID-type DP controller (Tomera 2014 eqs. 18-19).
 
     The gains act on accelerations (``a = -K_D e_dot - K_P e - K_I xi``), so the per-DOF
     closed-loop error polynomial is ``s^3 + K_D s^2 + K_P s + K_I``. Each gain is a scalar
@@ -154,9 +154,9 @@ class PIDGains:
         K_D: derivative gain (1/s).
     """
 
-    K_P: Vec3 = field(metadata={"unit": "1/s^2", "source": "seed001 eq. 46 (seed preset)"})
-    K_I: Vec3 = field(metadata={"unit": "1/s^3", "source": "seed001 eq. 47 (seed preset)"})
-    K_D: Vec3 = field(metadata={"unit": "1/s", "source": "seed001 eq. 48 (seed preset)"})
+    K_P: Vec3 = field(metadata={"unit": "1/s^2", "source": "Tomera (2014) eq. 46 (seed preset)"})
+    K_I: Vec3 = field(metadata={"unit": "1/s^3", "source": "Tomera (2014) eq. 47 (seed preset)"})
+    K_D: Vec3 = field(metadata={"unit": "1/s", "source": "Tomera (2014) eq. 48 (seed preset)"})
 
     def __post_init__(self) -> None:
         for name in ("K_P", "K_I", "K_D"):
@@ -264,7 +264,7 @@ TUNED_OMEGA: Vec3 = (0.06, 0.06, 0.1)
 #: (harbour manoeuvre, seeds 0-3, wind 3 m/s from 300 deg).
 SMOOTH_OMEGA: Vec3 = (0.05, 0.05, 0.06)
 
-#: Gain presets by name. ``"seed"``: seed001 eqs. 46-48 as printed. ``"tuned"``:
+#: Gain presets by name. ``"seed"``: Tomera (2014) eqs. 46-48 as printed. ``"tuned"``:
 #: :func:`pid_pole_placement` with ``omega = TUNED_OMEGA``, ``zeta = 1`` (module docstring).
 GAIN_PRESETS: Mapping[str, PIDGains] = MappingProxyType(
     {
@@ -336,12 +336,12 @@ def _mv(A: tuple[Vec3, Vec3, Vec3], x0: float, x1: float, x2: float) -> Vec3:
 
 
 class MultivariablePID:
-    """The PID-type DP controller of seed001 eq. 23 in the r-frame of the current leg.
+    """The PID-type DP controller of Tomera (2014) eq. 23 in the r-frame of the current leg.
 
     Args:
         gains: a :class:`PIDGains` or a preset name (``"tuned"``, ``"seed"``).
-        M: inertia matrix (kg, kg m^2) of the control model; default seed001 eq. 49.
-        D_L: linear damping (N s/m, N s, N m s) of the control model; default seed001 eq. 50.
+        M: inertia matrix (kg, kg m^2) of the control model; default Tomera (2014) eq. 49.
+        D_L: linear damping (N s/m, N s, N m s) of the control model; default Tomera (2014) eq. 50.
         dt: control period (s): the integral is advanced by ``dt * e`` per call.
         integral_limit: bound on the integral action ``|M R^T K_I xi|`` per body DOF
             (N, N, N m); default the thruster capacity ``(451.3, 88.3, 247.9)``;
@@ -505,7 +505,7 @@ class MultivariablePID:
         *,
         saturated: ArrayLike | None = None,
     ) -> NDArray[np.float64]:
-        """Body-frame control force ``tau = [X, Y, N]`` (N, N, N m), seed001 eq. 23.
+        """Body-frame control force ``tau = [X, Y, N]`` (N, N, N m), Tomera (2014) eq. 23.
 
         Args:
             eta_r: ship pose ``[x, y, psi]`` (m, m, rad) in the r-frame.

@@ -1,4 +1,4 @@
-"""Controllers as Gymnasium wrappers (SPEC 9; style: gymnasium.wrappers).
+"""Controllers as Gymnasium wrappers (style: gymnasium.wrappers).
 
 Stack order: env -> observer wrapper (optional) -> controller wrapper. The controller reads
 the navigation data (``info["nav_eta"]``, ``info["nav_nu"]``: the truth, or an observer's
@@ -67,17 +67,17 @@ CONTROLLERS: dict[str, ControllerSpec] = {
     "pid": ControllerSpec(
         lambda dt: MultivariablePID("tuned", dt=dt),
         "constrained",
-        "seed001 eq. 23 PID, tuned gains, constrained allocation",
+        "Tomera (2014) eq. 23 PID, tuned gains, constrained allocation",
     ),
     "pid-smooth": ControllerSpec(
         lambda dt: MultivariablePID("smooth", dt=dt),
         "constrained",
-        "seed001 eq. 23 PID, lower bandwidth for observer feedback, constrained allocation",
+        "Tomera (2014) eq. 23 PID, lower bandwidth for observer feedback, constrained allocation",
     ),
     "pid-seed": ControllerSpec(
         lambda dt: MultivariablePID("seed", dt=dt),
         "inverse",
-        "seed001 eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1",
+        "Tomera (2014) eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1",
     ),
 }
 
@@ -111,7 +111,7 @@ class DPControllerWrapper(
     gym.Wrapper[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]],
     gym.utils.RecordConstructorArgs,
 ):
-    """Runs the DP controller (seed001 eq. 23) and the thrust allocation inside ``step``.
+    """Runs the DP controller (Tomera 2014 eq. 23) and the thrust allocation inside ``step``.
 
     The wrapper's action is a *residual* added to the controller's normalised command
     (``Box(-1, 1, (3,))``, zero: the pure controller), so ``env.step(np.zeros(3))`` runs the

@@ -1,4 +1,4 @@
-"""Environmental disturbances: wind, waves and current, pure NumPy/SciPy (SPEC section 6).
+"""Environmental disturbances: wind, waves and current, pure NumPy/SciPy.
 
 Every stochastic part draws from a generator handed in by the environment at ``reset(rng)``,
 so the same seed gives the same run. Users give a wind or a current in any form of

@@ -1,26 +1,27 @@
 r"""Ocean / lake current: constant or slowly varying (Gauss-Markov) speed and direction.
 
-SPEC section 6; ``notes`` = ``shared/notes/domain-models.md`` section 3 (Fossen 2011 ch. 8.3).
+Sources: Fossen (2011) ch. 8.3; DNV-RP-C205 (2010) for the wind-driven current; the
+defaults are the project's assumptions. Full entries: ``docs/references.md``.
 
-Conventions (SPEC section 3): the current direction ``beta_c`` is where the water goes *to*
+Conventions (as in Fossen 2011): the current direction ``beta_c`` is where the water goes *to*
 (oceanographic), clockwise from north (rad); this differs from wind and waves. The current acts
 through the relative velocity ``nu_r = nu - nu_c`` with the body-frame current velocity::
 
-    u_c = V_c cos(beta_c - psi),   v_c = V_c sin(beta_c - psi)      (notes 3)
+    u_c = V_c cos(beta_c - psi),   v_c = V_c sin(beta_c - psi)      (Fossen 2011 ch. 8.3)
 
 (:func:`current_body_velocity`). The current is irrotational and, on the time scale of a step,
-constant in NED, so ``nu_c_dot = [r v_c, -r u_c, 0]`` (notes 3).
+constant in NED, so ``nu_c_dot = [r v_c, -r u_c, 0]`` (Fossen 2011 ch. 8.3).
 
-Slowly varying current (notes 3): a first-order Gauss-Markov process about the mean speed,
-saturated to ``[V_min, V_max]``::
+Slowly varying current (Fossen 2011 ch. 8.3): a first-order Gauss-Markov process about the mean
+speed, saturated to ``[V_min, V_max]``::
 
     V_c_dot = -mu (V_c - speed) + w,   E[w(t) w(s)] = sigma^2 delta(t - s)
 
 (``mu = 0``: a random walk, kept inside the bounds by the saturation). Its stationary standard
-deviation is ``sigma / sqrt(2 mu)``: the notes' lake default ``std(V_c) ~ 0.01 m/s`` with
+deviation is ``sigma / sqrt(2 mu)``: the assumed lake default ``std(V_c) ~ 0.01 m/s`` with
 ``mu = 1/300 s^-1`` is ``sigma = 0.01 sqrt(2/300) = 8.2e-4 m/s^1.5``
 (:meth:`CurrentConfig.from_std`). The direction can vary the same way (``direction_mu``,
-``direction_sigma``; the notes' "random walk on beta_c" is ``direction_mu = 0``).
+``direction_sigma``; a "random walk on beta_c" is ``direction_mu = 0``).
 
 Sampled exactly (``a = exp(-mu h)``, noise std ``sigma sqrt((1 - a^2) / (2 mu))``, ``sigma
 sqrt(h)`` for ``mu = 0``) on a grid ``t_k = k * sample_period``, saturated after every step,
@@ -52,11 +53,11 @@ __all__ = ["CurrentConfig", "Current", "current_body_velocity", "MAX_CURRENT_SPE
 #: the full-scale speed. A larger number is a unit mistake or a typo, so it is refused.
 MAX_CURRENT_SPEED = 10.0
 
-_N3 = "notes 3 [assumption]"
+_N3 = "a modelling assumption"
 
 
 def current_body_velocity(V_c: float, beta_c: float, psi: float) -> tuple[float, float]:
-    """Current velocity on the body axes (notes 3).
+    """Current velocity on the body axes (Fossen 2011 ch. 8.3).
 
     Args:
         V_c: Current speed (m/s).
@@ -72,7 +73,7 @@ def current_body_velocity(V_c: float, beta_c: float, psi: float) -> tuple[float,
 
 @dataclass(frozen=True)
 class CurrentConfig:
-    """Mean current plus optional Gauss-Markov variation (SI units, radians; notes 3).
+    """Mean current plus optional Gauss-Markov variation (SI units, radians).
 
     At the public boundary directions are degrees: :meth:`parse` (``"0.1@90"``: 0.1 m/s going
     to 90 deg, i.e. east), :meth:`from_speed_dir` and :meth:`coerce` (the one conversion every
@@ -83,7 +84,7 @@ class CurrentConfig:
             nominal or ~0.01 U_wind;
             offshore DP 0.5-1 m/s full scale = 0.10-0.20 m/s at 1:24 (notes 3).
         direction_to: Mean direction the current goes TO (rad, clockwise from north).
-        mu: Mean-reversion rate of the speed (1/s, >= 0); notes 3: 1/300.
+        mu: Mean-reversion rate of the speed (1/s, >= 0); assumed 1/300.
         sigma: Intensity of the white noise driving the speed (m/s^1.5, >= 0); 0 = constant.
         v_min: Lower saturation of the speed (m/s, >= 0).
         v_max: Upper saturation of the speed (m/s) or ``None`` (no upper bound).
@@ -92,12 +93,12 @@ class CurrentConfig:
         sample_period: Grid of the samples (s); linear interpolation in between.
     """
 
-    speed: float = param(0.0, "m/s", "notes 3: lake nominal 0")
-    direction_to: float = param(0.0, "rad", "oceanographic, clockwise from north (SPEC 3)")
+    speed: float = param(0.0, "m/s", "assumption: lake nominal 0")
+    direction_to: float = param(0.0, "rad", "oceanographic, clockwise from north")
     mu: float = param(1.0 / 300.0, "1/s", _N3)
     sigma: float = param(0.0, "m/s^1.5", _N3 + ": 0 = constant current")
-    v_min: float = param(0.0, "m/s", "notes 3: saturation")
-    v_max: float | None = param(None, "m/s", "notes 3: saturation (None: unbounded)")
+    v_min: float = param(0.0, "m/s", "saturation")
+    v_max: float | None = param(None, "m/s", "saturation (None: unbounded)")
     direction_mu: float = param(1.0 / 300.0, "1/s", _N3)
     direction_sigma: float = param(0.0, "rad/s^0.5", _N3 + ": 0 = constant direction")
     sample_period: float = param(1.0, "s", "slowly varying: 1 s grid [assumption]")
@@ -177,7 +178,7 @@ class CurrentConfig:
         Args:
             speed: Mean speed (m/s).
             direction_to: Mean direction the current goes to (rad).
-            std: Stationary speed std (m/s), e.g. 0.01 (notes 3 lake default).
+            std: Stationary speed std (m/s), e.g. 0.01 (the assumed lake default).
             time_constant: ``1 / mu`` of the speed (s), e.g. 300.
             direction_std: Stationary direction std (rad).
             direction_time_constant: ``1 / direction_mu`` (s).

@@ -1,8 +1,8 @@
 r"""Wave and wind-gust spectra, shaping-filter fits and Froude scaling (pure NumPy/SciPy).
 
-``notes`` = ``shared/notes/domain-models.md``. Every spectrum is one-sided.
+Every spectrum is one-sided. Full entries of the sources: ``docs/references.md``.
 
-Wave spectra (notes 2.1; Fossen 2011 ch. 8.2; DNV-RP-C205 sec. 3.5.5; MSS ``waveSpectrum.m``),
+Wave spectra (Fossen 2011 ch. 8.2; DNV-RP-C205 sec. 3.5.5; MSS ``waveSpectrum.m``),
 ``S(w)`` in m^2 s/rad for the angular frequency ``w`` in rad/s, normalised so that
 ``m0 = int S dw = Hs^2 / 16``:
 
@@ -10,7 +10,7 @@ Wave spectra (notes 2.1; Fossen 2011 ch. 8.2; DNV-RP-C205 sec. 3.5.5; MSS ``wave
 
       S_PM(w) = (5/16) Hs^2 w_p^4 w^-5 exp(-1.25 (w_p/w)^4),   w_p = 2 pi / Tp
 
-  (= ``487 Hs^2/T0^4 w^-5 exp(-1949/T0^4 w^-4)`` of notes 2.1 with ``T0 = Tp``).
+  (= ``487 Hs^2/T0^4 w^-5 exp(-1949/T0^4 w^-4)`` (ITTC modal form) with ``T0 = Tp``).
 * JONSWAP (DNV-RP-C205 form)::
 
       S_J(w) = (1 - 0.287 ln gamma) S_PM(w) gamma^exp(-(w - w_p)^2 / (2 sigma^2 w_p^2)),
@@ -18,7 +18,7 @@ Wave spectra (notes 2.1; Fossen 2011 ch. 8.2; DNV-RP-C205 sec. 3.5.5; MSS ``wave
 
   whose ``4 sqrt(m0)`` is within 1 % of ``Hs`` for ``1 <= gamma <= 7`` (checked numerically).
 
-Wind-gust spectra (notes 1.7), ``S(f)`` in (m/s)^2/Hz for the frequency ``f`` in Hz, of the
+Wind-gust spectra, ``S(f)`` in (m/s)^2/Hz for the frequency ``f`` in Hz, of the
 longitudinal gust about the mean speed ``U10`` at 10 m (full scale):
 
 * NPD / ISO 19901-1 (Andersen & Lovseth)::
@@ -37,7 +37,7 @@ longitudinal gust about the mean speed ``U10`` at 10 m (full scale):
 
 Conversions: ``S_w(w) = S_f(w / 2 pi) / (2 pi)``.
 
-Froude scaling (notes 0; ITTC 7.5-02-07-04.1): a model at scale ``1:lambda`` sees length,
+Froude scaling (ITTC 7.5-02-07-04.1): a model at scale ``1:lambda`` sees length,
 area and volume times ``1/lambda``, ``1/lambda^2``, ``1/lambda^3``; time and velocity times
 ``1/sqrt(lambda)``; frequency times ``sqrt(lambda)``; force and mass times
 ``(rho_m/rho_s) / lambda^3``; moment times ``(rho_m/rho_s) / lambda^4``; power times
@@ -85,7 +85,7 @@ __all__ = [
 
 #: Gravitational acceleration, m/s^2 (standard gravity).
 G = 9.81
-#: Fresh-water density used for the hydrodynamics of the model, kg/m^3 (notes 0).
+#: Fresh-water density used for the hydrodynamics of the model, kg/m^3 (lake Silm).
 RHO_WATER = 1000.0
 
 _SIGMA_LOW = 0.07
@@ -118,7 +118,8 @@ def _check_pos(name: str, value: float) -> float:
 def pierson_moskowitz(w: ArrayLike, Hs: float, Tp: float) -> NDArray[np.float64]:
     """Modified Pierson-Moskowitz (ITTC / Bretschneider) wave spectrum.
 
-    Source: notes 2.1 (MSS ``waveSpectrum.m`` case "modified PM"); DNV-RP-C205 eq. 3.5.5.
+    Source: Pierson & Moskowitz (1964); MSS ``waveSpectrum.m`` case "modified PM"; DNV-RP-C205
+    eq. 3.5.5.
 
     Args:
         w: Angular frequencies (rad/s), any shape; values ``<= 0`` give 0.
@@ -142,7 +143,8 @@ def pierson_moskowitz(w: ArrayLike, Hs: float, Tp: float) -> NDArray[np.float64]
 def jonswap(w: ArrayLike, Hs: float, Tp: float, gamma: float = 3.3) -> NDArray[np.float64]:
     """JONSWAP wave spectrum in the DNV-RP-C205 form.
 
-    Source: notes 2.1; DNV-RP-C205 (2010) sec. 3.5.5.2; MSS ``waveSpectrum.m`` case 7.
+    Source: Hasselmann et al. (1973); DNV-RP-C205 (2010) sec. 3.5.5.2; MSS ``waveSpectrum.m``
+    case 7.
 
     Args:
         w: Angular frequencies (rad/s), any shape; values ``<= 0`` give 0.
@@ -194,7 +196,7 @@ def dnv_gamma(Hs: float, Tp: float) -> float:
     """DNV-RP-C205 rule for the JONSWAP peak factor from ``k = Tp / sqrt(Hs)``.
 
     ``gamma = 5`` for ``k <= 3.6``, ``exp(5.75 - 1.15 k)`` for ``3.6 < k <= 5``, ``1`` above
-    (notes 2.1). Only meaningful at full scale (``k`` is dimensional, s/m^0.5).
+    (DNV-RP-C205). Only meaningful at full scale (``k`` is dimensional, s/m^0.5).
 
     Args:
         Hs: Significant wave height (m, full scale), ``> 0``.
@@ -212,7 +214,7 @@ def dnv_gamma(Hs: float, Tp: float) -> float:
 
 
 def norsok_peak_period(Hs: float) -> float:
-    """Expected peak period for a given ``Hs`` (NORSOK, North Sea; notes 2.1, MSS ``Wave_init.m``).
+    """Expected peak period for a given ``Hs`` (NORSOK N-003, North Sea; MSS ``Wave_init.m``).
 
     ``Tp = 4.883 + 2.68 Hs^0.54`` (full scale).
 
@@ -263,7 +265,8 @@ def significant_wave_height(elevation: ArrayLike) -> float:
 def npd_wind_spectrum(f: ArrayLike, U10: float, z: float = 10.0) -> NDArray[np.float64]:
     """NPD / ISO 19901-1 (Andersen & Lovseth) wind-gust spectrum, one-sided.
 
-    Source: notes 1.7; ISO 19901-1 (2015) sec. 7.3; DNV-RP-C205 eq. 2.3.2.10 (same formula).
+    Source: Andersen & Lovseth (2006); ISO 19901-1 (2015) sec. 7.3; DNV-RP-C205 eq. 2.3.2.10
+    (same formula).
 
     Args:
         f: Frequencies (Hz, full scale), any shape; values ``<= 0`` give ``S(0+)``.
@@ -291,7 +294,7 @@ def harris_wind_spectrum(
 ) -> NDArray[np.float64]:
     """Harris (1971, DNV-RP-C205) wind-gust spectrum, one-sided.
 
-    Source: notes 1.7 (cross-checked with ``mika-s/pyMarineCybernetics`` and the SIMA
+    Source: Harris (1971) (cross-checked with ``mika-s/pyMarineCybernetics`` and the SIMA
     manual); not valid below about 0.01 Hz at full scale.
 
     Args:
@@ -317,7 +320,7 @@ def gauss_markov_psd(f: ArrayLike, sigma: float, T: float) -> NDArray[np.float64
     """One-sided PSD of a first-order Gauss-Markov (Ornstein-Uhlenbeck) process.
 
     ``S(f) = 4 sigma^2 T / (1 + (2 pi f T)^2)``, so that ``int_0^inf S df = sigma^2``
-    (the process ``x_dot = -x/T + w`` with stationary std ``sigma``; notes 1.7 (c)).
+    (the process ``x_dot = -x/T + w`` with stationary std ``sigma``).
 
     Args:
         f: Frequencies (Hz), any shape.
@@ -342,8 +345,8 @@ def wind_gust_spectrum(
     ``U10 sqrt(lambda)``, frequency ``f / sqrt(lambda)``) and mapped back to the model:
     ``S_m(f) = S_s(f / sqrt(lambda)) / lambda^1.5``: from ``S_m df_m = S_s df_s / lambda``
     (velocity^2 scales with ``1/lambda``) and ``df_s = df_m / sqrt(lambda)``, so the model
-    variance is the full-scale variance over ``lambda`` (notes 1.7: "synthesised then
-    time-compressed by 1/sqrt(24) and speed-scaled by 1/sqrt(24)").
+    variance is the full-scale variance over ``lambda`` (the project's offshore assumption:
+    "synthesised then time-compressed by 1/sqrt(24) and speed-scaled by 1/sqrt(24)").
 
     Args:
         kind: ``"npd"`` or ``"harris"``.
@@ -387,7 +390,7 @@ def harmonic_components(
 
     The band ``[lo, hi]`` is cut into ``n`` bins (equal widths, or equal ratios with
     ``log=True``); each component sits at a uniformly random frequency inside its bin (so the
-    sum never repeats, notes 1.7 (a) and 2.1) with a uniform random phase. Its amplitude is
+    sum never repeats) with a uniform random phase. Its amplitude is
     ``sqrt(2 int_bin S df)`` (the bin's energy, 16-interval Simpson rule) rather than
     ``sqrt(2 S(f_j) df)``: the same to first order, but the energy of every bin, hence of
     every band of whole bins and the variance of the sum, is exact whatever frequency was
@@ -469,7 +472,7 @@ def shaping_filter_psd(w: ArrayLike, lam: float, w0: float, sigma: float) -> NDA
 
     ``h(s) = K_w s / (s^2 + 2 lam w0 s + w0^2)``, ``K_w = 2 lam w0 sigma``, so
     ``P(w) = |h(jw)|^2 = 4 (lam w0 sigma)^2 w^2 / ((w0^2 - w^2)^2 + 4 (lam w0 w)^2)`` with the
-    peak ``P(w0) = sigma^2`` (Fossen 2011 ch. 8.2.5; notes 2.4 (a)).
+    peak ``P(w0) = sigma^2`` (Fossen 2011 ch. 8.2.5).
 
     Args:
         w: Angular frequencies (rad/s).
@@ -489,7 +492,7 @@ def shaping_filter_psd(w: ArrayLike, lam: float, w0: float, sigma: float) -> NDA
 def fit_shaping_filter_lambda(kind: str = "jonswap", gamma: float = 3.3) -> float:
     """Least-squares damping ``lambda`` of Fossen's shaping filter fitted to a wave spectrum.
 
-    Method of MSS ``exLinspec.m`` (notes 2.4 (a)): ``w0 = w_p`` and ``sigma^2 = max S`` are
+    Method of MSS ``exLinspec.m``: ``w0 = w_p`` and ``sigma^2 = max S`` are
     fixed, ``lambda`` minimises ``sum (P(w) - S(w))^2`` over ``0 < w <= 4 w_p``. The spectrum
     shape is scale-invariant, so the result depends only on the spectrum kind and ``gamma``
     (notes: 0.257 for PM, 0.102 for JONSWAP gamma 3.3, 0.081 for gamma 5).

@@ -1,15 +1,16 @@
 r"""Irregular long-crested waves: elevation, first-order (WF) motion and second-order drift.
 
-SPEC section 6; ``notes`` = ``shared/notes/domain-models.md`` sections 2.1-2.5;
-``thesis`` = ``shared/notes/seed002-thesis.md`` (Al-Takie's high-frequency model, ch. 2-3).
+Sources: Pierson & Moskowitz (1964), Hasselmann et al. (1973), Fossen (2011) ch. 8.2,
+Faltinsen (1990) ch. 5, Newman (1974); ``thesis`` = Al-Takie (1982), its high-frequency
+model (ch. 2-3, App. 2). Full entries: ``docs/references.md``.
 
-Conventions (SPEC section 3): NED earth frame, heading ``psi`` clockwise from north (rad),
+Conventions (as in Fossen 2011): NED earth frame, heading ``psi`` clockwise from north (rad),
 body x forward, y starboard. ``direction_from`` is where the waves come *from* (like wind);
 they propagate towards ``beta_p = direction_from + pi``. The angle of the propagation direction
 relative to the bow is ``beta = beta_p - psi`` (``beta = 0``: following sea, ``pi``: head sea,
 ``pi/2``: waves from port pushing to starboard).
 
-**Realisation** (notes 2.1). ``N`` components on equal bins of width ``dw`` over
+**Realisation** (Fossen 2011 ch. 8.2). ``N`` components on equal bins of width ``dw`` over
 ``[w_min, w_max]`` (default ``[0.5, 3.5] w_p``), each at a random frequency inside its bin
 (so the record never repeats within an episode, unlike bin centres, which repeat after
 ``2 pi / dw``) with a random phase::
@@ -18,21 +19,21 @@ relative to the bow is ``beta = beta_p - psi`` (``beta = 0``: following sea, ``p
 
 at the ship (no spatial phase; at DP speeds the encounter frequency equals ``w``).
 
-**Second-order drift on the hull** (notes 2.5). Newman's approximation with the geometric mean
+**Second-order drift on the hull** (Newman 1974). Newman's approximation with the geometric mean
 ``T_jk = sqrt(T_jj T_kk)`` collapses the double sum exactly to (Standing / OrcaFlex)::
 
     F_sv(t) = T(beta) E(t),   E(t) = | sum_j A_j sqrt(R_j) exp(i (w_j t + eps_j)) |^2
 
 whose time mean is ``T(beta) sum_j A_j^2 R_j`` (mean drift, :meth:`Waves.mean_drift_load`).
-Blue Lady's simple wall-sided coefficients (Faltinsen 1990 ch. 5 asymptote; notes 2.5
-[assumption]), with ``rho g / 2`` per unit amplitude squared::
+Blue Lady's simple wall-sided coefficients (Faltinsen 1990 ch. 5 asymptote; a
+modelling assumption), with ``rho g / 2`` per unit amplitude squared::
 
     T_x(beta) = (rho g / 2) (2/3) B cos^2(beta) sign(cos beta)   (bow/stern half-cylinders R=B/2)
     T_y(beta) = (rho g / 2) L_s sin^2(beta) sign(sin beta)       (flat side, L_s = 0.8 L_pp)
     T_n(beta) = -l_N cos(beta) T_y(beta)                          (yaw lever, default 0.05 L_pp)
 
 The yaw lever moves the lateral drift force towards the end the waves hit first (``l_N > 0``
-turns the ship beam-on to the waves, as drifting ships do); notes 2.5 only ask for "a small
+turns the ship beam-on to the waves, as drifting ships do); the project only assumes "a small
 lever ~0.05 L". ``R_j`` is the reflection factor: ``min(1, k_j T / 2)^2`` (``"kT"``, default,
 ``k_j = w_j^2 / g``, ``T`` the draught), 1 (``"full"``) or a constant.
 
@@ -41,8 +42,8 @@ The envelope ``E(t)`` does not depend on the heading, so it is precomputed on a 
 and :meth:`Waves.drift_load` only interpolates it linearly and multiplies by ``T(beta(psi))``
 in plain Python floats (about 1 us per call).
 
-**First-order wave-frequency (WF) motion** (notes 2.4), added to the *measured* position and
-heading only, never to the hull: along the propagation direction (the horizontal orbit of a
+**First-order wave-frequency (WF) motion** (Fossen 2011 ch. 8.2), added to the *measured* position
+and heading only, never to the hull: along the propagation direction (the horizontal orbit of a
 long-crested sea) with std ``wf_position_std`` and in heading with std ``wf_heading_std``::
 
     (dx, dy) = d(t) (cos beta_p, sin beta_p),   dpsi = h(t)
@@ -108,7 +109,7 @@ WAVE_SPECTRA = ("jonswap", "pm", None)
 WF_MODELS = ("fossen", "al-takie", "rao")
 
 #: Thesis Appendix 2 Table 1 (Wimpey Sealab, per-unit alpha_1..alpha_4) by Beaufort number; the
-#: real-time polynomial is ``alpha_i / Tb`` with ``Tb = 3.104 s`` (thesis note section 2.2).
+#: real-time polynomial is ``alpha_i / Tb`` with ``Tb = 3.104 s`` (Al-Takie 1982 App. 2).
 _AL_TAKIE_ALPHA: dict[int, tuple[float, float, float, float]] = {
     5: (4.594, 4.384, 2.988, 1.470),
     6: (3.663, 2.698, 1.452, 0.556),
@@ -160,12 +161,12 @@ def drift_coefficients(
     g: float = G,
     side_fraction: float = 0.8,
 ) -> tuple[float, float]:
-    """Maximum wall-sided drift coefficients ``(T_x0, T_y0)`` of notes 2.5, N/m^2.
+    """Maximum wall-sided drift coefficients ``(T_x0, T_y0)`` (Faltinsen 1990 ch. 5), N/m^2.
 
     ``T_x0 = (rho g / 2) (2/3) B`` (bow/stern as half-cylinders of radius ``B/2``),
     ``T_y0 = (rho g / 2) side_fraction L_pp`` (flat side). Multiply by ``zeta_a^2`` for regular
     waves or by ``sum A_j^2 = Hs^2 / 8`` for irregular ones: Blue Lady in beam seas,
-    ``Hs = 0.05 m``: ``F_y = 16.6 N``; head seas 2.4 N (notes 2.5, full reflection).
+    ``Hs = 0.05 m``: ``F_y = 16.6 N``; head seas 2.4 N (full reflection).
 
     Args:
         hull: Hull dimensions (``B``, ``L_pp`` in m).
@@ -186,11 +187,11 @@ def _is_real(v: Any) -> bool:
 
 @dataclass(frozen=True)
 class WaveConfig:
-    """Sea state and wave-effect switches (SI units, radians; notes 2.1-2.5).
+    """Sea state and wave-effect switches (SI units, radians).
 
-    The default is the lake / harbour sea of notes 2.3 (JONSWAP ``Hs = 0.05 m``, ``Tp = 1 s``,
-    gamma 3.3, drift on, no first-order motion). Use ``Hs = 0`` or ``spectrum=None`` for calm
-    water (every output exactly zero).
+    The default is the project's estimate of the lake / harbour sea (JONSWAP ``Hs = 0.05 m``,
+    ``Tp = 1 s``, gamma 3.3, drift on, no first-order motion). Use ``Hs = 0`` or
+    ``spectrum=None`` for calm water (every output exactly zero).
 
     Attributes:
         spectrum: ``"jonswap"``, ``"pm"`` (Pierson-Moskowitz) or ``None`` (no waves).
@@ -209,33 +210,33 @@ class WaveConfig:
         first_order: Add first-order WF motion to the measured pose.
         wf_model: ``"fossen"``, ``"al-takie"`` or ``"rao"`` (see the module docstring).
         wf_position_std: Target std of the WF motion along the wave direction (m); ``None``:
-            ``Hs / 16`` (notes 2.4: 0.1-0.4 Hs/4 offshore).
+            ``Hs / 16`` (assumed: 0.1-0.4 Hs/4 offshore).
         wf_heading_std: Target std of the WF heading motion (rad); ``None``:
             ``radians(2) Hs w_p^2 / g`` (2 deg times the steepness; 0.2 deg at BF5, 0.35 deg at
-            BF9, inside the 0.2-0.5 deg of notes 2.4).
+            BF9, inside the assumed 0.2-0.5 deg).
         wf_lambda: Damping of Fossen's filter (0 < lambda < 1); ``None``: fitted to the spectrum.
         wf_beaufort: Row of Al-Takie's HF table (5-9), needed for ``wf_model="al-takie"``.
         sample_period: Grid of the precomputed envelope and WF motion (s), ``<= Tp / 10``.
     """
 
-    spectrum: str | None = param("jonswap", "-", "notes 2.3 lake default")
-    Hs: float = param(0.05, "m", "notes 2.3: lake, fetch-limited, U10 ~ 3-5 m/s")
-    Tp: float = param(1.0, "s", "notes 2.3: lake")
-    gamma: float = param(3.3, "1", "notes 2.1/2.3: JONSWAP mean")
-    direction_from: float = param(0.0, "rad", "clockwise from north, coming from (SPEC 3)")
+    spectrum: str | None = param("jonswap", "-", "lake default (estimate)")
+    Hs: float = param(0.05, "m", "estimate: lake, fetch-limited, U10 ~ 3-5 m/s")
+    Tp: float = param(1.0, "s", "estimate: lake")
+    gamma: float = param(3.3, "1", "JONSWAP mean (Hasselmann et al. 1973)")
+    direction_from: float = param(0.0, "rad", "clockwise from north, coming from")
     n_components: int = param(100, "-", "harmonic components [assumption]")
     w_min: float | None = param(None, "rad/s", "None: 0.5 w_p [assumption]")
     w_max: float | None = param(None, "rad/s", "None: 3.5 w_p (>99 % of m0) [assumption]")
-    drift: bool = param(True, "-", "notes 2.3: lake drift not negligible")
-    reflection: str | float = param("kT", "-", "notes 2.5: R(kT) = min(1, kT/2)^2")
+    drift: bool = param(True, "-", "estimate: lake drift not negligible")
+    reflection: str | float = param("kT", "-", "assumption: R(kT) = min(1, kT/2)^2")
     drift_gain: float = param(1.0, "1", "calibration factor [assumption]")
-    drift_yaw_lever: float = param(0.675, "m", "notes 2.5: ~0.05 L_pp")
-    first_order: bool = param(False, "-", "notes 2.3: negligible on the lake")
-    wf_model: str = param("fossen", "-", "notes 2.4 (a)")
-    wf_position_std: float | None = param(None, "m", "None: Hs/16 (notes 2.4 [assumption])")
+    drift_yaw_lever: float = param(0.675, "m", "assumption: ~0.05 L_pp")
+    first_order: bool = param(False, "-", "estimate: negligible on the lake")
+    wf_model: str = param("fossen", "-", "Fossen (2011) ch. 8.2")
+    wf_position_std: float | None = param(None, "m", "None: Hs/16 (assumption)")
     wf_heading_std: float | None = param(None, "rad", "None: rad(2) Hs w_p^2/g [assumption]")
-    wf_lambda: float | None = param(None, "1", "None: LS fit (notes 2.4: 0.102 / 0.257)")
-    wf_beaufort: int | None = param(None, "-", "thesis App. 2 (al-takie model only)")
+    wf_lambda: float | None = param(None, "1", "None: LS fit (0.102 JONSWAP / 0.257 PM)")
+    wf_beaufort: int | None = param(None, "-", "Al-Takie (1982) App. 2 (al-takie model only)")
     sample_period: float = param(0.05, "s", "grid of the precomputed signals [assumption]")
 
     def __post_init__(self) -> None:
@@ -303,7 +304,8 @@ class WaveConfig:
             raise ValueError(f"{name}.wf_beaufort must be None or an int 5-9, got {bf!r}")
         if self.wf_model == "al-takie" and bf is None:
             raise ValueError(
-                f"{name}: wf_model 'al-takie' needs wf_beaufort (5-9), the row of the thesis table"
+                f"{name}: wf_model 'al-takie' needs wf_beaufort (5-9), the row of Al-Takie's "
+                "(1982) table"
             )
         if not self.sample_period > 0:
             raise ValueError(f"{name}.sample_period must be > 0 s, got {self.sample_period!r}")

@@ -1,12 +1,13 @@
 r"""Wind: relative wind, Blendermann (1994) loads and Gauss-Markov gusts.
 
-SPEC section 6; ``notes`` = ``shared/notes/domain-models.md`` sections 1.1, 1.3 and 1.7.
+Sources: Fossen (2011) ch. 8.1 (relative wind), Blendermann (1994) (loads), Harris (1971)
+and ISO 19901-1 (2015) (gust spectra). Full entries: ``docs/references.md``.
 
-Conventions (SPEC section 3): NED earth frame, heading ``psi`` clockwise from north (rad), body
+Conventions (as in Fossen 2011): NED earth frame, heading ``psi`` clockwise from north (rad), body
 x forward, y starboard. The wind direction ``beta_w`` is where the wind comes *from*
 (meteorological), in radians.
 
-Relative wind (Fossen 2011, ch. 8.1; notes 1.1), with ``beta_Vw = beta_w - pi`` the direction
+Relative wind (Fossen 2011, ch. 8.1), with ``beta_Vw = beta_w - pi`` the direction
 the air moves to::
 
     u_w = V_w cos(beta_w - pi - psi),   v_w = V_w sin(beta_w - pi - psi)
@@ -18,7 +19,7 @@ Loads (body frame, N, N, N m)::
     q = 0.5 rho_a V_rw^2
     X = q CX(gamma) A_F,   Y = q CY(gamma) A_L,   N = q CN(gamma) A_L L_oa
 
-Blendermann (1994) coefficients for ``g = |gamma|`` in ``[0, pi]`` (notes 1.3; MSS
+Blendermann (1994) coefficients for ``g = |gamma|`` in ``[0, pi]`` (MSS
 ``blendermann94.m``)::
 
     CD_lAF = CD_lAF(0) if g <= pi/2 else CD_lAF(pi),   CD_l = CD_lAF A_F / A_L
@@ -35,9 +36,9 @@ evaluated either with the :mod:`math` module on plain floats (the physics hot pa
 :class:`WindLoad`) or with NumPy on arrays of any broadcastable shape (:func:`wind_load`,
 :func:`blendermann_coefficients`, :func:`relative_wind`).
 
-Gusts (notes 1.7, default "lake" model, an assumption of the notes): the speed and the
+Gusts (default "lake" model, a modelling assumption of the project): the speed and the
 direction are each a mean plus a first-order Gauss-Markov (Ornstein-Uhlenbeck) process, see
-:class:`WindConfig` and :class:`Wind`. Options (SPEC section 6): a speed gust synthesised from
+:class:`WindConfig` and :class:`Wind`. Options: a speed gust synthesised from
 the NPD / ISO 19901-1 or Harris spectrum (:mod:`shipgym.disturbances.spectra`) by harmonic
 superposition, optionally Froude-scaled from full scale (``spectrum_scale``); the direction gust
 stays Gauss-Markov.
@@ -89,10 +90,10 @@ GUST_SPECTRA = ("gauss-markov", "npd", "harris")
 _PI = math.pi
 _HALF_PI = 0.5 * math.pi
 _TWO_PI = 2.0 * math.pi
-#: Slope of Blendermann's yaw-moment arm, 1/rad (Blendermann 1994; notes 1.3).
+#: Slope of Blendermann's yaw-moment arm, 1/rad (Blendermann 1994).
 _CN_SLOPE = 0.18
 
-_BSRC = "Blendermann (1994) via notes 1.3 / MSS blendermann94.m"
+_BSRC = "Blendermann (1994), as in MSS blendermann94.m"
 
 
 def _require_real(obj: Any, *names: str) -> None:
@@ -116,7 +117,7 @@ class BlendermannCoefficients:
 
     Source: W. Blendermann (1994), "Parameter identification of wind loads on ships",
     J. Wind Eng. Ind. Aerodyn. 51, 339-351; table as in Fossen (2011, ch. 8.1) and
-    ``cybergalactic/MSS : LIBRARY/environment/blendermann94.m`` (notes 1.3).
+    ``cybergalactic/MSS : LIBRARY/environment/blendermann94.m``.
 
     Attributes:
         CD_t: Transverse drag coefficient (beam wind), 1.
@@ -152,7 +153,7 @@ _b = BlendermannCoefficients  # short alias for the table below (positional fiel
 #: against ``mika-s/pyMarineCybernetics : util/wind/wind_coefficients.py`` (same values except
 #: its typo kappa "1,4" for the container ship and 0.92 instead of 0.925 for the drilling
 #: vessel, whose CD_lAF values are the mid-points of Blendermann's ranges 0.70-1.00 and
-#: 0.75-1.10). "tanker-loaded" is the project default (SPEC section 6, notes 1.3).
+#: 0.75-1.10). "tanker-loaded" is the project default (a modelling choice).
 BLENDERMANN: dict[str, BlendermannCoefficients] = {
     "car-carrier": _b(0.95, 0.55, 0.60, 0.80, 1.2),
     "cargo-loaded": _b(0.85, 0.65, 0.55, 0.40, 1.7),
@@ -294,7 +295,7 @@ def blendermann_coefficients(
     coeffs: BlendermannCoefficients | str = "tanker-loaded",
     windage: WindageParameters = BLUE_LADY_WINDAGE,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Blendermann (1994) wind coefficients, folded to both sides (notes 1.3).
+    """Blendermann (1994) wind coefficients, folded to both sides.
 
     Args:
         gamma: Relative wind angle of attack gamma_rw (rad), any shape; 0 = head wind,
@@ -318,7 +319,7 @@ def blendermann_coefficients(
 def relative_wind(
     psi: ArrayLike, u: ArrayLike, v: ArrayLike, V_w: ArrayLike, beta_w: ArrayLike
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Relative wind in body axes (Fossen 2011, ch. 8.1; notes 1.1).
+    """Relative wind in body axes (Fossen 2011, ch. 8.1).
 
     Args:
         psi: Heading (rad), clockwise from north.
@@ -427,12 +428,12 @@ class WindLoad:
 # Gusts
 # ---------------------------------------------------------------------------------------------
 
-_NOTES17 = "notes 1.7 default lake gust model [assumption]"
+_NOTES17 = "default lake gust model (a modelling assumption)"
 
 
 @dataclass(frozen=True)
 class WindConfig:
-    """Mean wind plus gusts in speed and direction (notes 1.7).
+    """Mean wind plus gusts in speed and direction.
 
     ``V_w(t) = speed + g_V(t)``, ``beta_w(t) = direction_from + g_beta(t)``, with ``g_V`` and
     ``g_beta`` independent stationary Ornstein-Uhlenbeck processes of standard deviations
@@ -443,7 +444,7 @@ class WindConfig:
 
     With ``gust_spectrum = "npd"`` or ``"harris"`` the speed gust ``g_V`` is instead a sum of
     ``gust_components`` harmonics on logarithmic bins over ``[gust_f_min, gust_f_max]`` with
-    random phases and random frequencies within the bins (notes 1.7 (a)); the spectrum is
+    random phases and random frequencies within the bins; the spectrum is
     evaluated at full scale for ``U10 = speed sqrt(spectrum_scale)`` and mapped to the simulated
     scale (:func:`~shipgym.disturbances.spectra.wind_gust_spectrum`). ``gust_time_constant`` is
     then unused and ``gust_std`` (when given) rescales the spectrum to that standard deviation.
@@ -453,7 +454,7 @@ class WindConfig:
             (lake: 0-5 m/s).
         direction_from: Mean direction the wind comes FROM (rad, clockwise from north).
         gust_std: Standard deviation of the speed gust (m/s); ``None`` means
-            ``0.15 * speed`` (notes 1.7).
+            ``0.15 * speed`` (a modelling assumption).
         gust_time_constant: Correlation time of the speed gust (s, model time).
         direction_std: Standard deviation of the direction gust (rad).
         direction_time_constant: Correlation time of the direction gust (s).
@@ -466,25 +467,23 @@ class WindConfig:
         gust_components: Number of harmonics of a spectral gust (1-5000).
         gust_f_min: Lowest gust frequency (Hz, simulated time); ``None``: 1/3600 Hz full
             scale (the 1-hour mean of the NPD spectrum) for ``"npd"``, 0.01 Hz full scale (the
-            validity limit of Harris, notes 1.7) for ``"harris"``, times ``sqrt(lambda)``.
+            validity limit of the Harris spectrum) for ``"harris"``, times ``sqrt(lambda)``.
         gust_f_max: Highest gust frequency (Hz, simulated time); ``None``: the smaller of
             1 Hz full scale (times ``sqrt(lambda)``) and ``0.25 / sample_period``.
     """
 
     speed: float = param(
-        0.0, "m/s", "notes 1.7: 0 nominal, 3 'moderate' (seed001 trial: 3 m/s from 300 deg)"
+        0.0, "m/s", "assumption: 0 nominal, 3 'moderate' (Tomera 2014 trial: 3 m/s from 300 deg)"
     )
-    direction_from: float = param(
-        0.0, "rad", "meteorological, clockwise from north (SPEC section 3)"
-    )
-    gust_std: float | None = param(None, "m/s", "notes 1.7: None -> 0.15 * speed")
+    direction_from: float = param(0.0, "rad", "meteorological, clockwise from north")
+    gust_std: float | None = param(None, "m/s", "assumption: None -> 0.15 * speed")
     gust_time_constant: float = param(5.0, "s", _NOTES17)
     direction_std: float = param(math.radians(10.0), "rad", _NOTES17 + ": 10 deg")
     direction_time_constant: float = param(20.0, "s", _NOTES17)
     sample_period: float = param(0.1, "s", "gust sample grid, linear interpolation [assumption]")
-    coefficients: str = param("tanker-loaded", "-", "notes 1.3 recommended row (SPEC section 6)")
-    gust_spectrum: str = param("gauss-markov", "-", "notes 1.7 / SPEC 6: GM default; npd, harris")
-    spectrum_scale: float = param(1.0, "1", "Froude scale of the gust spectrum (notes 1.7)")
+    coefficients: str = param("tanker-loaded", "-", "Blendermann (1994) row, a modelling choice")
+    gust_spectrum: str = param("gauss-markov", "-", "GM default (assumption); npd, harris")
+    spectrum_scale: float = param(1.0, "1", "Froude scale of the gust spectrum")
     gust_components: int = param(200, "-", "harmonics of a spectral gust [assumption]")
     gust_f_min: float | None = param(None, "Hz", "None: 1/3600 Hz (npd), 0.01 Hz (harris) FS")
     gust_f_max: float | None = param(None, "Hz", "None: min(1 Hz FS, 0.25/sample_period)")
@@ -711,7 +710,7 @@ class WindConfig:
 
 
 class Wind(GridPair):
-    """Time-varying wind and its loads on one vessel (notes 1.7, Fossen 2011 ch. 8.1).
+    """Time-varying wind and its loads on one vessel (Fossen 2011 ch. 8.1).
 
     Speed and direction gusts are first-order Gauss-Markov (Ornstein-Uhlenbeck) processes
     sampled on a fixed grid ``t_k = k * sample_period`` with the exact discretisation

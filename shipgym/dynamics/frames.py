@@ -1,4 +1,4 @@
-"""Reference frames and angles (Fossen 2011, ch. 2; SPEC section 3).
+"""Reference frames and angles (Fossen 2011, ch. 2).
 
 NED earth frame (x north, y east, psi clockwise from north) and body frame (x forward,
 y starboard). Every function accepts a leading batch axis.

@@ -1,4 +1,4 @@
-r"""The 3-DOF manoeuvring model (Fossen 2011, ch. 6-7; seed001 eqs. 3-7).
+r"""The 3-DOF manoeuvring model (Fossen 2011, ch. 6-7; Tomera 2014 eqs. 3-7).
 
 .. math::
 
@@ -211,7 +211,7 @@ def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[
 
 
 def seed_linear_matrices() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(M, D_L)`` exactly as printed in seed001 eqs. 49-50 (the model of its controllers)."""
+    """``(M, D_L)`` exactly as printed in Tomera (2014) eqs. 49-50 (its controllers' model)."""
     M = np.diag([23664.9, 24830.6, 455182.1])
     D_L = np.array([[21.10, 0.0, 0.0], [0.0, 259.8, -855.4], [0.0, -855.4, 6130.5]])
     return M, D_L
@@ -229,7 +229,7 @@ def _from_hull(
     M_RB = [[h.m, 0, 0], [0, h.m, h.m * h.x_g], [0, h.m * h.x_g, h.I_z]]
     c = 1.0 if sway_yaw_coupling else 0.0
     M_A = [[-h.X_udot, 0, 0], [0, -h.Y_vdot, -c * h.Y_rdot], [0, -c * h.N_vdot, -h.N_rdot]]
-    D_L = [[-h.X_u, 0, 0], [0, -h.Y_v, -h.Y_r], [0, -h.N_v, -h.N_r]]  # seed001 eq. 7
+    D_L = [[-h.X_u, 0, 0], [0, -h.Y_v, -h.Y_r], [0, -h.N_v, -h.N_r]]  # Tomera (2014) eq. 7
     dq = (-h.X_uu, -h.Y_vv, -h.N_rr) if quadratic_damping else (0.0, 0.0, 0.0)
     return PlantModel(name, M_RB, M_A, D_L, dq, coriolis, h.m, h.x_g)
 
@@ -240,7 +240,7 @@ def _default(hull: HullParameters = BLUE_LADY_HULL) -> PlantModel:
 
 
 def _seed_linear(hull: HullParameters = BLUE_LADY_HULL) -> PlantModel:
-    """Exactly ``M nu_dot + D_L nu = tau`` with M, D_L of seed001 eqs. 49-50, nothing else."""
+    """Exactly ``M nu_dot + D_L nu = tau`` with M, D_L of Tomera (2014) eqs. 49-50, nothing else."""
     M, D_L = seed_linear_matrices()
     M_RB = np.diag([hull.m, hull.m, M[2, 2]])
     return PlantModel("seed-linear", M_RB, M - M_RB, D_L, (0.0, 0.0, 0.0), False, hull.m, 0.0)
@@ -258,7 +258,7 @@ def plant_model(
     """A plant variant by name.
 
     Args:
-        name: ``"default"`` (richer plant) or ``"seed-linear"`` (seed001 eqs. 49-50 only).
+        name: ``"default"`` (richer plant) or ``"seed-linear"`` (Tomera 2014 eqs. 49-50 only).
         hull: hull parameters (the Blue Lady by default).
         **options: for ``"default"`` only: ``coriolis``, ``quadratic_damping``,
             ``sway_yaw_coupling`` (bools) to switch the richer terms off one by one.

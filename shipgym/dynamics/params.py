@@ -1,9 +1,9 @@
-"""Parameter sets of the Blue Lady, each field with its unit and source (SPEC section 4).
+"""Parameter sets of the Blue Lady, each field with its unit and source.
 
-Sources cited by file name:
-- ``seed001`` = ``shared/seeds/001_24f3aa677d413751.txt`` (Tomera 2014, Tables 1-2,
-  eqs. 8-12, 49-50);
-- ``notes`` = ``shared/notes/domain-models.md`` (sections 0, 1.6, 4.2, 8).
+Sources: Tomera (2014), Tables 1-2, eqs. 8-12 and 49-50; the estimates of the richer plant
+use Clarke et al. (1983), Van Berlekom & Goddard (1972), Hoerner (1965), ITTC-57 and
+OCIMF (1994); values marked "assumption" or "estimate" are the project's own.
+Full entries: ``docs/references.md``.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from shipgym._config import param, require_finite, require_positive
 
 __all__ = ["HullParameters", "WindageParameters", "BLUE_LADY_HULL", "BLUE_LADY_WINDAGE"]
 
-_T2 = "seed001 Table 2"
+_T2 = "Tomera (2014) Table 2"
 
 
 @dataclass(frozen=True)
@@ -26,17 +26,17 @@ class HullParameters:
     """
 
     name: str = "Blue Lady (1:24 VLCC model)"
-    m: float = param(22934.4, "kg", "seed001 eq. 49: M11 - (-X_udot) = 23664.9 - 730.5")
-    I_z: float = param(455182.1, "kg m^2", "seed001 eq. 49: M33 (N_rdot = 0, lumped)")
-    x_g: float = param(0.0, "m", "seed001 Table 1: nominal x_G = 0")
+    m: float = param(22934.4, "kg", "Tomera (2014) eq. 49: M11 - (-X_udot) = 23664.9 - 730.5")
+    I_z: float = param(455182.1, "kg m^2", "Tomera (2014) eq. 49: M33 (N_rdot = 0, lumped)")
+    x_g: float = param(0.0, "m", "Tomera (2014) Table 1: nominal x_G = 0")
     X_udot: float = param(-730.5, "kg", _T2)
     Y_vdot: float = param(-1896.2, "kg", _T2)
     Y_rdot: float = param(-18351.9, "kg m", _T2)
     N_vdot: float = param(
         -18351.9,
         "kg m",
-        "seed001 Table 2 prints 0; set equal to Y_rdot because potential-flow added mass is "
-        "symmetric (notes 4.2: Clarke 1983 gives -Y_rdot ~ 19 700, -N_vdot ~ 17 000)",
+        "Tomera (2014) Table 2 prints 0; set equal to Y_rdot because potential-flow added mass is "
+        "symmetric (Clarke et al. 1983 give -Y_rdot ~ 19 700, -N_vdot ~ 17 000)",
     )
     N_rdot: float = param(0.0, "kg m^2", _T2 + " (added inertia lumped into I_z)")
     X_u: float = param(-21.1, "N s/m", _T2 + " at u0 = 0.1 m/s")
@@ -44,13 +44,13 @@ class HullParameters:
     Y_r: float = param(-855.4, "N s", _T2 + " at u0 = 0.1 m/s")
     N_v: float = param(-855.4, "N s", _T2 + " at u0 = 0.1 m/s")
     N_r: float = param(-6130.5, "N m s", _T2 + " at u0 = 0.1 m/s")
-    X_uu: float = param(-70.0, "N s^2/m^2", "notes 4.2: ITTC-57 + form factor, VB bis -64..-81")
-    Y_vv: float = param(-4200.0, "N s^2/m^2", "notes 4.2: Hoerner cross-flow -4320, VB bis -4080")
-    N_rr: float = param(-3.3e5, "N m s^2", "notes 4.2: cross-flow 0.5 rho T Cd L^4/32")
-    L_oa: float = param(13.78, "m", "seed001 Table 1")
-    L_pp: float = param(13.50, "m", "seed001 Table 1")
-    B: float = param(2.38, "m", "seed001 Table 1")
-    T: float = param(0.86, "m", "seed001 Table 1 (mean draught, full load)")
+    X_uu: float = param(-70.0, "N s^2/m^2", "estimate: ITTC-57 + form factor; VB bis -64..-81")
+    Y_vv: float = param(-4200.0, "N s^2/m^2", "estimate: Hoerner cross-flow -4320, VB bis -4080")
+    N_rr: float = param(-3.3e5, "N m s^2", "estimate: cross-flow 0.5 rho T Cd L^4/32")
+    L_oa: float = param(13.78, "m", "Tomera (2014) Table 1")
+    L_pp: float = param(13.50, "m", "Tomera (2014) Table 1")
+    B: float = param(2.38, "m", "Tomera (2014) Table 1")
+    T: float = param(0.86, "m", "Tomera (2014) Table 1 (mean draught, full load)")
 
     def __post_init__(self) -> None:
         require_finite(self)
@@ -59,13 +59,13 @@ class HullParameters:
 
 @dataclass(frozen=True)
 class WindageParameters:
-    """Projected wind areas of the hull above water (SPEC section 6, notes 1.6)."""
+    """Projected wind areas of the hull above water (estimates of the project)."""
 
-    A_F: float = param(1.9, "m^2", "notes 1.6: OCIMF/VLCC full scale scaled 1/576 (range 1.4-2.2)")
-    A_L: float = param(6.4, "m^2", "notes 1.6: scaled lateral area (range 5.6-6.9)")
-    s_L: float = param(-1.1, "m", "notes 1.6: centroid of A_L, -0.08 L_oa (aft house)")
-    L_oa: float = param(13.78, "m", "seed001 Table 1")
-    rho_a: float = param(1.225, "kg/m^3", "ISA air density at 15 C (notes 1.6)")
+    A_F: float = param(1.9, "m^2", "estimate: OCIMF VLCC full scale scaled 1/576 (range 1.4-2.2)")
+    A_L: float = param(6.4, "m^2", "estimate: scaled lateral area (range 5.6-6.9)")
+    s_L: float = param(-1.1, "m", "estimate: centroid of A_L, -0.08 L_oa (aft house)")
+    L_oa: float = param(13.78, "m", "Tomera (2014) Table 1")
+    rho_a: float = param(1.225, "kg/m^3", "ISA air density at 15 C")
 
     def __post_init__(self) -> None:
         require_finite(self)

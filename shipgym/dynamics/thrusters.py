@@ -1,4 +1,4 @@
-"""Thruster models of the Blue Lady DP system (seed001 eqs. 8-12, 24-27; SPEC section 4).
+"""Thruster models of the Blue Lady DP system (Tomera 2014 eqs. 8-12, 24-27).
 
 Three actuators are used, in this order everywhere (commands, states, forces):
 
@@ -37,8 +37,8 @@ __all__ = [
 ACTUATOR_NAMES = ("main_propeller", "bow_tunnel", "stern_tunnel")
 
 _K_NOTE = (
-    "seed001 eq. 8 prints k1 = 1.9589 with n in rpm, i.e. 451 kN at 480 rpm: impossible for a "
-    "23 t model; read as 1.9589e-3 N/rpm^2 (451 N ahead, 78 N astern; SPEC 4, notes 0)"
+    "Tomera (2014) eq. 8 prints k1 = 1.9589 with n in rpm, i.e. 451 kN at 480 rpm: impossible for "
+    "a 23 t model; read as 1.9589e-3 N/rpm^2 (451 N ahead, 78 N astern; a modelling choice)"
 )
 
 
@@ -47,17 +47,17 @@ class ThrusterParameters:
     """Thruster constants, lever arms, ranges and lags."""
 
     k1: float = param(1.9589e-3, "N/rpm^2", _K_NOTE)
-    k2: float = param(44.145, "N", "seed001 eq. 9 prints 44145 (decimal comma lost; SPEC 4)")
-    k3: float = param(44.145, "N", "seed001 eq. 9 prints 44145 (decimal comma lost; SPEC 4)")
-    L2: float = param(3.24, "m", "seed001 eq. 12: bow tunnel forward of CG")
-    L3: float = param(2.376, "m", "seed001 eq. 12: stern tunnel aft of CG")
+    k2: float = param(44.145, "N", "Tomera (2014) eq. 9 prints 44145: decimal comma lost")
+    k3: float = param(44.145, "N", "Tomera (2014) eq. 9 prints 44145: decimal comma lost")
+    L2: float = param(3.24, "m", "Tomera (2014) eq. 12: bow tunnel forward of CG")
+    L3: float = param(2.376, "m", "Tomera (2014) eq. 12: stern tunnel aft of CG")
     x_main: float = param(-6.5, "m", "propeller position, near the stern (drawing only; no moment)")
-    n_min: float = param(-200.0, "rpm", "seed001 / SPEC 4: main propeller range")
-    n_max: float = param(480.0, "rpm", "seed001 / SPEC 4: main propeller range")
-    p_min: float = param(-1.0, "1", "seed001 eq. 9: relative revolutions")
-    p_max: float = param(1.0, "1", "seed001 eq. 9: relative revolutions")
-    T_main: float = param(2.0, "s", "notes 8: electric drive, first-order lag on shaft speed")
-    T_tunnel: float = param(1.0, "s", "notes 8: tunnel thruster first-order lag")
+    n_min: float = param(-200.0, "rpm", "Tomera (2014): main propeller range")
+    n_max: float = param(480.0, "rpm", "Tomera (2014): main propeller range")
+    p_min: float = param(-1.0, "1", "Tomera (2014) eq. 9: relative revolutions")
+    p_max: float = param(1.0, "1", "Tomera (2014) eq. 9: relative revolutions")
+    T_main: float = param(2.0, "s", "assumption: electric drive, first-order lag on shaft speed")
+    T_tunnel: float = param(1.0, "s", "assumption: tunnel thruster first-order lag")
 
     def __post_init__(self) -> None:
         require_finite(self)
@@ -97,7 +97,7 @@ BLUE_LADY_THRUSTERS = ThrusterParameters()
 
 
 def configuration_matrix(p: ThrusterParameters = BLUE_LADY_THRUSTERS) -> NDArray[np.float64]:
-    """Thrust configuration matrix ``T`` of seed001 eq. 12, (3, 3)."""
+    """Thrust configuration matrix ``T`` of Tomera (2014) eq. 12, (3, 3)."""
     return np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 1.0], [0.0, p.L2, -p.L3]])
 
 

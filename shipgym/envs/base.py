@@ -119,7 +119,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ## Description
     The 1:24 VLCC model "Blue Lady" (L 13.78 m, 22.9 t) in the horizontal plane, simulated
     in MuJoCo with exact 3-DOF hydrodynamics, thruster lags and gusty wind. A guidance system
-    moves a virtual ship along a manoeuvre plan (legs in the r-frame of seed001); the agent
+    moves a virtual ship along a manoeuvre plan (legs in the r-frame of Tomera (2014)); the agent
     drives the three thrusters to follow it.
 
     ## Action Space
@@ -483,7 +483,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return rec
 
     def episode_metrics(self) -> dict[str, Any]:
-        """Accuracy indices (seed001 eqs. 54-57), thruster usage, legs and contact so far."""
+        """Accuracy indices (Tomera 2014 eqs. 54-57), thruster usage, legs and contact so far."""
         out = dict(self.metrics.summary())
         out["completed"] = bool(self.guidance.finished)
         out["legs_completed"] = len(self.guidance.leg_completion_times)

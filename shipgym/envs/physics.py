@@ -1,4 +1,4 @@
-r"""MuJoCo physics of a planar hull that moves exactly as the 3-DOF model says (SPEC section 5).
+r"""MuJoCo physics of a planar hull that moves exactly as the 3-DOF model says.
 
 MuJoCo gives a body one scalar mass, so anisotropic and coupled added mass cannot live in the
 body's inertia. Every physics step :class:`VesselPhysics` therefore
@@ -7,7 +7,7 @@ body's inertia. Every physics step :class:`VesselPhysics` therefore
 2. evaluates the full model acceleration ``nu_dot*`` (:meth:`PlantModel.accel`) from the
    thrust, wind and current at this instant,
 3. converts it to the joint acceleration ``qacc* = R(psi) (nu_dot* + r S nu)`` (the time
-   derivative of ``R(psi) nu``, seed001 eq. 22), and
+   derivative of ``R(psi) nu``, Tomera (2014) eq. 22), and
 4. writes ``qfrc_applied = M_q qacc* + qfrc_bias - qfrc_passive - qfrc_actuator``, where
    ``M_q`` is MuJoCo's own joint-space inertia and ``qfrc_actuator`` the thrust MuJoCo's
    actuators apply in this step,
@@ -389,7 +389,7 @@ class VesselPhysics:
             c, s = cos(psi), sin(psi)
             u = c * xd + s * yd
             v = c * yd - s * xd
-            # thrusters (seed001 eqs. 8-12), body frame
+            # thrusters (Tomera 2014 eqs. 8-12), body frame
             f1 = k1 * abs(n1) * n1
             f2 = k2 * p2
             f3 = k3 * p3

@@ -1,4 +1,4 @@
-"""The registered Blue Lady tasks: harbour manoeuvre, station keeping, tracking (SPEC 12)."""
+"""The registered Blue Lady tasks: harbour manoeuvre, station keeping, tracking."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ __all__ = ["BlueLadyHarbourEnv", "BlueLadyStationKeepingEnv", "BlueLadyTrackingE
 
 
 class BlueLadyHarbourEnv(BlueLadyEnv):
-    r"""The 5-leg harbour manoeuvre of seed001 (Tomera 2014, Fig. 7).
+    r"""The 5-leg harbour manoeuvre of Tomera (2014) Fig. 7.
 
     Registered as ``shipgym/BlueLadyHarbour-v0``.
 

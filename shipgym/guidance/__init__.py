@@ -1,10 +1,10 @@
-"""Guidance for harbour manoeuvres (seed001 Figs. 2-3 and 7; SPEC section 8). Pure NumPy.
+"""Guidance for harbour manoeuvres (Tomera 2014 Figs. 2-3 and 7). Pure NumPy.
 
-- :mod:`~shipgym.guidance.rframe`: the leg's r-frame (seed001 eqs. 1-2), ``to_r_frame`` and
+- :mod:`~shipgym.guidance.rframe`: the leg's r-frame (Tomera 2014 eqs. 1-2), ``to_r_frame`` and
   ``from_r_frame``;
 - :mod:`~shipgym.guidance.reference`: :class:`Limits` and the smooth reference of a leg
   (raised-cosine-acceleration trapezoid, DOFs synchronised on a straight r-frame line);
-- :mod:`~shipgym.guidance.plan`: :class:`Leg`, :class:`ManoeuvrePlan`, the seed's 5-leg plan
+- :mod:`~shipgym.guidance.plan`: :class:`Leg`, :class:`ManoeuvrePlan`, the paper's 5-leg plan
   and the plan registry;
 - :mod:`~shipgym.guidance.runtime`: :class:`Guidance` (current leg, reference, switching).
 """

@@ -1,4 +1,4 @@
-"""Manoeuvre plans: legs, switching rule and limits as data (seed001 Fig. 7; SPEC section 8).
+"""Manoeuvre plans: legs, switching rule and limits as data (Tomera 2014 Fig. 7).
 
 A plan is a sequence of :class:`Leg` s, each a displacement ``[surge, sway, yaw]`` expressed in
 the r-frame of the leg's start point P (origin at P, x along the ship's heading at P, y to
@@ -7,7 +7,7 @@ starboard, yaw clockwise positive). The planned end point of a leg is
 ``P_{i+1} = K_i``: legs chain on *planned* poses, so tracking errors never accumulate into the
 plan.
 
-The seed's harbour manoeuvre (:func:`tomera2014_plan`, seed001 Fig. 7):
+The paper's harbour manoeuvre (:func:`tomera2014_plan`, Tomera (2014) Fig. 7):
 
 1. lateral movement to port by 7 m (``sway = -7``);
 2. longitudinal movement forward by 38 m (``surge = 38``);
@@ -15,12 +15,12 @@ The seed's harbour manoeuvre (:func:`tomera2014_plan`, seed001 Fig. 7):
 4. longitudinal movement backward by 15 m (``surge = -15``);
 5. lateral movement to port by 3 m (``sway = -3``).
 
-The seed gives no sign for the rotation; it is taken clockwise (to starboard, ``+pi/2``):
+The paper gives no sign for the rotation; it is taken clockwise (to starboard, ``+pi/2``):
 this is a choice, documented here and configurable (``Leg(yaw=-pi/2)`` turns to port). Started
 at the origin heading north, the planned poses are (0, 0, 0) -> (0, -7, 0) -> (38, -7, 0) ->
 (38, -7, 90 deg) -> (38, -22, 90 deg) -> (41, -22, 90 deg).
 
-The switching rule (seed001: "the change of the performed manoeuvre was done when the ship
+The switching rule (Tomera 2014: "the change of the performed manoeuvre was done when the ship
 was at a distance of 1 m from the turning point and the course difference was smaller than
 5 degrees") is ``switch_distance`` and ``switch_heading``; :class:`~shipgym.guidance.Guidance`
 adds two guards, ``switch_min_progress`` and ``settle_time`` (see there).
@@ -83,9 +83,9 @@ class Leg:
         limits: optional :class:`Limits` for this leg only (override the plan's).
     """
 
-    surge: float = param(0.0, "m", "r-frame of the leg start (seed001 eq. 1)")
-    sway: float = param(0.0, "m", "r-frame of the leg start (seed001 eq. 1)")
-    yaw: float = param(0.0, "rad", "clockwise positive (SPEC 3)")
+    surge: float = param(0.0, "m", "r-frame of the leg start (Tomera 2014 eq. 1)")
+    sway: float = param(0.0, "m", "r-frame of the leg start (Tomera 2014 eq. 1)")
+    yaw: float = param(0.0, "rad", "clockwise positive")
     name: str = ""
     limits: Limits | None = None
 
@@ -139,12 +139,12 @@ class ManoeuvrePlan:
     Attributes:
         legs: the legs, in order (at least one).
         switch_distance: the ship must be closer than this to the leg's planned end point K
-            (m; seed001: 1 m).
+            (m; Tomera 2014: 1 m).
         switch_heading: and its heading error to K's heading must be below this (rad, wrapped;
-            seed001: 5 deg).
+            Tomera (2014): 5 deg).
         limits: speed/acceleration limits of the reference (per leg overridable).
         switch_min_progress: fraction of the leg's reference duration that must have elapsed
-            before the leg may be switched (0: the seed's rule alone; 1, default: the
+            before the leg may be switched (0: the paper's rule alone; 1, default: the
             reference must have reached K). Guards against premature switches, e.g. a leg
             shorter than ``switch_distance`` or a rotation smaller than ``switch_heading``.
         settle_time: the switching conditions must hold continuously this long (s; 0 = at
@@ -153,11 +153,13 @@ class ManoeuvrePlan:
     """
 
     legs: tuple[Leg, ...]
-    switch_distance: float = param(1.0, "m", "seed001 (manoeuvre description): 1 m")
-    switch_heading: float = param(math.radians(5.0), "rad", "seed001: course difference < 5 deg")
+    switch_distance: float = param(1.0, "m", "Tomera (2014) (manoeuvre description): 1 m")
+    switch_heading: float = param(
+        math.radians(5.0), "rad", "Tomera (2014): course difference < 5 deg"
+    )
     limits: Limits = field(default_factory=Limits)
     switch_min_progress: float = param(1.0, "1", "guard against premature switching (ours)")
-    settle_time: float = param(0.0, "s", "optional dwell before switching (notes 6)")
+    settle_time: float = param(0.0, "s", "optional dwell before switching (project addition)")
     name: str = "custom"
 
     def __post_init__(self) -> None:
@@ -282,9 +284,9 @@ class ManoeuvrePlan:
 
 
 def tomera2014_plan(**overrides: Any) -> ManoeuvrePlan:
-    """The 5-leg harbour manoeuvre of seed001 (Fig. 7) with its switching rule (1 m, 5 deg).
+    """The 5-leg harbour manoeuvre of Tomera (2014) (Fig. 7) with its switching rule (1 m, 5 deg).
 
-    The rotation is taken clockwise (``yaw = +pi/2``; the seed gives no sign).
+    The rotation is taken clockwise (``yaw = +pi/2``; the paper gives no sign).
 
     Args:
         **overrides: plan fields to replace (e.g. ``limits=Limits(...)``, ``settle_time=5``).

@@ -1,8 +1,8 @@
-"""Smooth reference trajectories of a manoeuvre leg (seed001 Fig. 3; SPEC section 8).
+"""Smooth reference trajectories of a manoeuvre leg (Tomera 2014 Fig. 3).
 
-The reference generator of seed001 (Fig. 3) gives the position ``eta_d^r(t)``, velocity
+The reference generator of Tomera (2014) (Fig. 3) gives the position ``eta_d^r(t)``, velocity
 ``eta_dot_d^r(t)`` and acceleration ``eta_ddot_d^r(t)`` of a virtual ship moving from the
-leg's start point P to its end point K in the leg's r-frame. The seed does not print the
+leg's start point P to its end point K in the leg's r-frame. The paper does not print the
 generator; this module uses a smooth velocity profile (notes section 6, "trapezoidal velocity
 profile") with a raised-cosine acceleration so that the acceleration is continuous:
 
@@ -24,7 +24,7 @@ profile") with a raised-cosine acceleration so that the acceleration is continuo
   profile starts at rest at 0 and ends at rest exactly at ``Delta``.
 
 The per-DOF limits :class:`Limits` apply to the r-frame coordinates (along and across the
-ship's heading at P, and the heading); for the single-DOF legs of the seed's manoeuvre they
+ship's heading at P, and the heading); for the single-DOF legs of the paper's manoeuvre they
 are body-frame limits.
 """
 
@@ -45,9 +45,10 @@ if TYPE_CHECKING:  # pragma: no cover - typing only (plan.py imports this module
 __all__ = ["Limits", "LegProfile", "leg_profile", "leg_reference", "leg_duration"]
 
 _CAP = (
-    "notes 6 / SPEC 4: thrust capacity 451 N ahead, 78 N astern (main propeller), 2 x 44.1 N "
+    "thrust capacity 451 N ahead, 78 N astern (main propeller), 2 x 44.1 N "
     "sway and ~248 N m yaw (tunnel thrusters) against M = diag(23 665 kg, 24 831 kg, "
-    "4.55e5 kg m^2) (seed001 eq. 49; notes 6 quotes up to 42 t in sway with Clarke added mass)"
+    "4.55e5 kg m^2) (Tomera 2014 eq. 49; up to 42 t in sway with the added mass of "
+    "Clarke et al. 1983)"
 )
 
 
@@ -56,12 +57,12 @@ class Limits:
     """Speed and acceleration limits of the reference per DOF (r-frame of the leg).
 
     Defaults follow the thruster capacity of the Blue Lady with a margin for a 3 m/s lake wind
-    (notes 1.6: ~9 N head, ~25 N and ~27 N m beam) and for the feedback controller; each
+    (Blendermann 1994: ~9 N head, ~25 N and ~27 N m beam) and for the feedback controller; each
     field's ``metadata`` holds its unit and source. Astern surge has its own, lower limits
     because the main propeller gives only 78 N astern.
     """
 
-    surge_speed: float = param(0.2, "m/s", "notes 6: v_max 0.2-0.3 m/s (max speed 3.1 kn)")
+    surge_speed: float = param(0.2, "m/s", "assumed v_max 0.2-0.3 m/s (max speed 3.1 kn)")
     surge_accel: float = param(
         0.0025,
         "m/s^2",
@@ -75,15 +76,15 @@ class Limits:
         _CAP + ": (78 - 9) N / 23 665 kg = 0.0029 m/s^2 peak; the raised-cosine profile "
         "averages half the peak over the acceleration phase",
     )
-    sway_speed: float = param(0.05, "m/s", "notes 6: v_max 0.05-0.1 m/s")
+    sway_speed: float = param(0.05, "m/s", "assumed v_max 0.05-0.1 m/s")
     sway_accel: float = param(
-        0.001, "m/s^2", _CAP + ": (88 - 25) N / 24 831 kg = 0.0025 m/s^2; notes 6: use 0.001"
+        0.001, "m/s^2", _CAP + ": (88 - 25) N / 24 831 kg = 0.0025 m/s^2; chosen: 0.001"
     )
-    yaw_rate: float = param(math.radians(1.0), "rad/s", "notes 6: r_max 1 deg/s")
+    yaw_rate: float = param(math.radians(1.0), "rad/s", "assumed r_max 1 deg/s")
     yaw_accel: float = param(
         2.5e-4,
         "rad/s^2",
-        _CAP + ": (248 - 27) N m / 4.55e5 kg m^2 = 4.9e-4 rad/s^2; notes 6: use 2.5e-4",
+        _CAP + ": (248 - 27) N m / 4.55e5 kg m^2 = 4.9e-4 rad/s^2; chosen: 2.5e-4",
     )
 
     def __post_init__(self) -> None:
@@ -274,7 +275,7 @@ def leg_duration(leg: Leg, limits: Limits | None = None) -> float:
 def leg_reference(
     leg: Leg, limits: Limits | None, t: ArrayLike
 ) -> tuple[NDArray, NDArray, NDArray]:
-    """Desired r-frame pose, velocity and acceleration of the virtual ship (seed001 Fig. 3).
+    """Desired r-frame pose, velocity and acceleration of the virtual ship (Tomera 2014 Fig. 3).
 
     Args:
         leg: the leg (displacement ``[surge, sway, yaw]`` in its r-frame).

@@ -1,4 +1,4 @@
-"""The reference frame r of a manoeuvre leg (seed001 eqs. 1-2, Fig. 2; SPEC sections 3, 8).
+"""The reference frame r of a manoeuvre leg (Tomera 2014 eqs. 1-2, Fig. 2).
 
 The r-frame of a leg has its origin at the leg's start point P and its x axis along the
 ship's heading at P (y to starboard of that heading, heading measured clockwise from the
@@ -6,9 +6,9 @@ x^r axis). It is the n-frame (NED) translated to P and rotated by ``psi_P``:
 
 ``p^r = R(psi_P)^T (p^n - p_P^n)``,  ``psi^r = psi^n - psi_P`` (differenced, hence wrapped).
 
-Seed001 writes this as ``eta^r_k = (eta^n_k - eta^n_P) . R(psi^n_{k-1})`` (eq. 1) with the
+Tomera (2014) writes this as ``eta^r_k = (eta^n_k - eta^n_P) . R(psi^n_{k-1})`` (eq. 1) with the
 matrix of eq. 2, ``[[c, s, 0], [-s, c, 0], [0, 0, 1]]``, which is ``R(psi)^T``; read as a
-matrix times a column vector that is exactly the map above. The seed's angle argument
+matrix times a column vector that is exactly the map above. The paper's angle argument
 ``psi_{k-1}`` is read as the heading that defines the r-frame, i.e. the heading at P (the
 text: "the direction of the x^r axis changes ... shifted to the initial point P of the
 current trajectory segment"); a frame that rotated with the ship would make the r-frame
@@ -32,7 +32,7 @@ __all__ = ["to_r_frame", "from_r_frame"]
 def to_r_frame(
     eta_n: ArrayLike, eta_P: ArrayLike, psi_ref_r: ArrayLike | None = None
 ) -> NDArray[np.float64]:
-    """Express NED poses in the r-frame of a leg that starts at ``eta_P`` (seed001 eq. 1).
+    """Express NED poses in the r-frame of a leg that starts at ``eta_P`` (Tomera 2014 eq. 1).
 
     Args:
         eta_n: NED poses ``[x, y, psi]`` (m, m, rad), shape (3,) or (..., 3).

@@ -1,4 +1,4 @@
-"""Run-time guidance: the current leg, its reference and leg switching (seed001; SPEC 8).
+"""Run-time guidance: the current leg, its reference and leg switching (Tomera 2014).
 
 :class:`Guidance` walks through a :class:`~shipgym.guidance.plan.ManoeuvrePlan`. Each leg's
 reference starts at rest at the leg's planned start point P when the leg starts (at reset,
@@ -8,8 +8,8 @@ or at the switch from the previous leg) and follows the smooth profile of
 Switching rule (:meth:`Guidance.update`): leg i is complete, and the next leg starts at that
 instant, when all of these hold:
 
-1. the ship is closer than ``switch_distance`` to K_i (NED distance, m) - seed001;
-2. ``|wrap(psi - psi_K)| < switch_heading`` - seed001 ("course difference < 5 deg");
+1. the ship is closer than ``switch_distance`` to K_i (NED distance, m) - Tomera (2014);
+2. ``|wrap(psi - psi_K)| < switch_heading`` - Tomera (2014) ("course difference < 5 deg");
 3. at least ``switch_min_progress`` of the leg's reference duration has elapsed (default 1:
    the reference has reached K). Without it, a rotation leg would still be safe (the ship
    starts at K's position but 90 deg off its heading), but any leg shorter than 1 m, or a
@@ -95,13 +95,13 @@ class Reference:
         """A NED pose (or poses, (..., 3)) in this leg's r-frame, heading unwrapped near psi_d^r.
 
         Use it for the ship's (true or measured) pose, so that r-frame errors are
-        ``eta_d_r - ref.to_r(eta_n)`` without any 2 pi jump (seed001 eq. 1).
+        ``eta_d_r - ref.to_r(eta_n)`` without any 2 pi jump (Tomera 2014 eq. 1).
         """
         return to_r_frame(eta_n, self.eta_P, psi_ref_r=self.eta_d_r[2])
 
 
 class Guidance:
-    """Leg-by-leg guidance through a manoeuvre plan (seed001 Figs. 2-3 and 7).
+    """Leg-by-leg guidance through a manoeuvre plan (Tomera 2014 Figs. 2-3 and 7).
 
     Usage::
 

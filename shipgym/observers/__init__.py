@@ -1,9 +1,9 @@
-"""Sensors, state observers (Kalman filters) and the observer wrapper (SPEC sections 7, 10).
+"""Sensors, state observers (Kalman filters) and the observer wrapper.
 
 - :mod:`~shipgym.observers.sensors`: DGPS position and gyrocompass heading samples;
 - :mod:`~shipgym.observers.design`: ``lqe``/``dlqe`` gain design (python-control style);
 - :mod:`~shipgym.observers.kalman`: discrete KF and Kalman-Bucy filters per DOF;
-- :mod:`~shipgym.observers.ekf`: the 9-state extended Kalman filter of seed001;
+- :mod:`~shipgym.observers.ekf`: the 9-state extended Kalman filter of Tomera (2014);
 - :mod:`~shipgym.observers.wrapper`: :class:`ObserverWrapper` (env -> observer -> controller).
 
 ``make_observer(name)`` builds any registered observer (``observer_names()`` lists them).

@@ -1,9 +1,9 @@
-"""The observer interface shared by every state observer (SPEC section 10), and its registry.
+"""The observer interface shared by every state observer, and its registry.
 
 An observer turns sampled measurements of the NED pose ``z = [x, y, psi]`` (DGPS position,
-gyrocompass heading; seed001 "Case of study") and, where its model needs it, the applied body
+gyrocompass heading; Tomera 2014 "Case of study") and, where its model needs it, the applied body
 thrust ``tau = [X, Y, N]`` into estimates of the pose ``eta = [x, y, psi]`` and of the body
-velocity ``nu = [u, v, r]`` (seed000 eq. 60: ``nu = R^T(psi) eta_dot``)::
+velocity ``nu = [u, v, r]`` (Tomera 2011 eq. 60: ``nu = R^T(psi) eta_dot``)::
 
     obs = make_observer("kbf")
     obs.reset(t0, z0)                      # z0: first measured pose
@@ -58,7 +58,7 @@ class Estimate:
         t: time of the estimate (s).
         eta: NED pose ``[x, y, psi]`` (m, m, rad), (3,); heading continuous (not wrapped).
         nu: body velocity ``[u, v, r]`` (m/s, m/s, rad/s), (3,): ``R^T(psi) eta_dot``
-            (seed000 eq. 60).
+            (Tomera 2011 eq. 60).
         P: error covariance of the observer's full state (layout documented by each observer;
             the double-integrator filters use ``[x, y, psi, x_dot, y_dot, psi_dot]``).
         P_eta: covariance of ``eta`` (m^2, rad^2), (3, 3).

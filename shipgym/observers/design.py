@@ -3,81 +3,82 @@ r"""Steady-state Kalman gain design (python-control style) and the observers' de
 Pure functions with textbook names and fixed return tuples, built on
 :func:`scipy.linalg.solve_continuous_are` and :func:`scipy.linalg.solve_discrete_are`:
 
-- ``L, P, E = lqe(A, G, C, Q, R)``: the continuous Kalman-Bucy gain (seed001 eqs. 33-34;
-  seed000 eqs. 39, 45), same meaning and return as python-control's ``lqe``;
+- ``L, P, E = lqe(A, G, C, Q, R)``: the continuous Kalman-Bucy gain (Tomera 2014 eqs. 33-34;
+  Tomera (2011) eqs. 39, 45), same meaning and return as python-control's ``lqe``;
 - ``L, P, E = dlqe(F, G, H, Q, R, form="predictor" | "filter")``: the discrete gain
-  (seed001 Table 3; seed000 eqs. 19, 23-24); ``"predictor"`` is python-control's ``dlqe``,
-  ``"filter"`` the measurement-update gain in which seed001 prints its gains (eq. 30);
+  (Tomera 2014 Table 3; Tomera 2011 eqs. 19, 23-24); ``"predictor"`` is python-control's ``dlqe``,
+  ``"filter"`` the measurement-update gain in which Tomera (2014) prints its gains (eq. 30);
 - :class:`KalmanDesign`: per-DOF design matrices ``(G, Q, R, T)`` of the double-integrator
-  model of seed000 eqs. 56-59, with the presets :data:`TOMERA_DKF`, :data:`TOMERA_KBF`
-  (they reproduce seed001 eqs. 30 and 35) and the tuned :data:`DKF_DESIGN`, :data:`KBF_DESIGN`.
+  model of Tomera (2011) eqs. 56-59, with the presets :data:`TOMERA_DKF`, :data:`TOMERA_KBF`
+  (they reproduce Tomera (2014) eqs. 30 and 35) and the tuned :data:`DKF_DESIGN`,
+  :data:`KBF_DESIGN`.
 
-The per-DOF model (seed000 eqs. 56-59, in the seed's state order)
-----------------------------------------------------------------
+The per-DOF model (Tomera 2011 eqs. 56-59, in the paper's state order)
+----------------------------------------------------------------------
 Each DOF ``p`` in ``{x, y, psi}`` (NED) is a double integrator with state
-``s = [p_dot, p]`` (velocity first, seed000 eq. 59) driven by white noise::
+``s = [p_dot, p]`` (velocity first, Tomera (2011) eq. 59) driven by white noise::
 
-    s_dot = A s + G w,   A = [[0, 0], [1, 0]],   E{w w^T} = Q delta(t)     (seed000 eqs. 1, 27)
-    y     = C s + v,     C = [0, 1]                                       (seed000 eqs. 26, 58)
+    s_dot = A s + G w,   A = [[0, 0], [1, 0]],   E{w w^T} = Q delta(t)     (Tomera 2011 eqs. 1, 27)
+    y     = C s + v,     C = [0, 1]                                       (Tomera 2011 eqs. 26, 58)
 
-Sampled with period ``T``, ``F = exp(A T) = I + A T`` (seed000 eq. 5, exact here since
-``A^2 = 0``) and either ``Q_k = G Q G^T T`` (``discretisation="euler"``, seed000 eq. 31) or the
-exact ``Q_k = int_0^T exp(A s) G Q G^T exp(A^T s) ds`` (``"exact"``, Van Loan). ``R`` of a
+Sampled with period ``T``, ``F = exp(A T) = I + A T`` (Tomera 2011 eq. 5, exact here since
+``A^2 = 0``) and either ``Q_k = G Q G^T T`` (``discretisation="euler"``, Tomera 2011 eq. 31) or
+the exact ``Q_k = int_0^T exp(A s) G Q G^T exp(A^T s) ds`` (``"exact"``, Van Loan). ``R`` of a
 :class:`KalmanDesign` is the variance of one sampled measurement (``R_k`` of Table 3); the
-continuous filter uses the equivalent intensity ``R_c = R T`` (seed000 eq. 35,
-``R_k = R / Delta t``). Gains are printed in the seed's order ``[velocity, position]``.
+continuous filter uses the equivalent intensity ``R_c = R T`` (Tomera 2011 eq. 35,
+``R_k = R / Delta t``). Gains are printed in the paper's order ``[velocity, position]``.
 
-Reproducing seed001 eqs. 30 and 35 from design matrices
-------------------------------------------------------
-Seed001 uses one gain for all three DOFs: ``L = [0.07945, 0.36868]`` (discrete, eq. 30) and
+Reproducing Tomera (2014) eqs. 30 and 35 from design matrices
+-------------------------------------------------------------
+Tomera (2014) uses one gain for all three DOFs: ``L = [0.07945, 0.36868]`` (discrete, eq. 30) and
 ``L = [0.1, 0.45826]`` (continuous, eq. 35). For the continuous double integrator with
 ``G Q G^T = diag(q_v, q_p)`` and measurement intensity ``r`` the algebraic Riccati equation
-(seed001 eq. 34) has the closed form::
+(Tomera 2014 eq. 34) has the closed form::
 
     L = [sqrt(q_v / r), sqrt(2 sqrt(q_v / r) + q_p / r)]
 
 so ``L_v = 0.1`` gives ``q_v / r = 0.01`` and ``L_p^2 = 0.21 = 0.2 + q_p / r`` gives
 ``q_p / r = 0.01``: the design is ``G Q G^T = 0.01 r I`` (white noise of equal intensity on the
 velocity *and* on the position; the ``+0.01`` is the "extra term" of the position noise). With
-``T = 1 s`` ("sampling time equal 1 (s)", seed001), ``Q_k = G Q G^T T`` (eq. 31) and
+``T = 1 s`` ("sampling time equal 1 (s)", Tomera (2014)), ``Q_k = G Q G^T T`` (eq. 31) and
 ``R_k = R`` the same matrices give the discrete filter-form gain ``[0.0794553, 0.3686863]``:
 eq. 30 to a relative 7e-5 and 2e-5. The printed digits look truncated rather than rounded
 (0.0794553 -> 0.07945, 0.3686863 -> 0.36868, whereas eq. 35's 0.4582576 -> 0.45826 is
 rounded); fitting both gains of eq. 30 with a free ``diag(q_v, q_p)`` returns
 ``q_v / R = 0.0099986``, ``q_p / R = 0.0100053``, i.e. 0.01 to 4 digits. So one set of
-matrices, in the spirit of seed000 eqs. 61-62 (``G``, ``Q``, ``R`` per DOF), reproduces both::
+matrices, in the spirit of Tomera (2011) eqs. 61-62 (``G``, ``Q``, ``R`` per DOF), reproduces both::
 
     G = I_2,   Q = 0.01 R I_2,   R = (0.01 m^2, 0.01 m^2, R_psi),   T = 1 s
 
-with the measurement variances ``R_x = R_y = 0.01`` and ``R_psi = 0.1`` of seed000 (section 5;
+with the measurement variances ``R_x = R_y = 0.01`` and ``R_psi = 0.1`` of Tomera (2011) (section 5;
 see :data:`HEADING_VARIANCE_SEED000` for the unit of ``R_psi``). Only the ratio ``Q / R``
 matters for the gains; using the sensors' real variances for ``R`` keeps the covariance
 ``P`` (and with it NIS gating) calibrated.
 
-What does *not* reproduce them: the design values printed in seed000 eqs. 61-62 themselves.
+What does *not* reproduce them: the design values printed in Tomera (2011) eqs. 61-62 themselves.
 ``G_x Q_x G_x^T = diag(0.1, 2e-5)`` with ``R_x = 0.01`` gives ``L = [3.162, 2.515]`` and
 ``G_psi Q_psi G_psi^T = diag(0.04, 1e-4)`` with ``R_psi = 0.1`` gives ``[0.632, 1.125]``;
-seed001 moreover uses one gain for all DOFs. The predictor-form gain (python-control's
-``dlqe``; MATLAB ``dlqr`` on the dual system, which seed001 says it used) of the design above
+Tomera (2014) moreover uses one gain for all DOFs. The predictor-form gain (python-control's
+``dlqe``; MATLAB ``dlqr`` on the dual system, which Tomera (2014) says it used) of the design above
 is ``[0.07946, 0.44814]``, and no diagonal ``Q`` brings the predictor form closer to eq. 30
 than 9 % / 13 %. The exact discretisation of the same continuous design gives
 ``[0.07953, 0.36755]`` (0.3 % off in the position gain); eq. 30 needs the first-order
-``Q_k = G Q G^T T`` of seed000 eq. 31. Seed001's gains are the filter (innovation) form,
-which is what MATLAB's ``dlqe`` returns (``M``), so "dlqr"/"lqr" in seed001 are read as
+``Q_k = G Q G^T T`` of Tomera (2011) eq. 31. Tomera's (2014) gains are the filter (innovation) form,
+which is what MATLAB's ``dlqe`` returns (``M``), so "dlqr"/"lqr" in Tomera (2014) are read as
 ``dlqe``/``lqe``.
 
 Conventions for :func:`dlqe`
 ----------------------------
 Both forms solve the same discrete algebraic Riccati equation for the *predicted* (a priori)
-steady-state covariance ``P = P_bar`` (seed000 eq. 19 with eq. 24 inserted)::
+steady-state covariance ``P = P_bar`` (Tomera 2011 eq. 19 with eq. 24 inserted)::
 
     P = F P F^T - F P H^T (H P H^T + R)^-1 H P F^T + G Q G^T
 
 ``form="predictor"``: ``L = F P H^T (H P H^T + R)^-1`` for
 ``x_bar[k+1] = F x_bar[k] + L (y[k] - H x_bar[k])`` (python-control ``dlqe``).
 ``form="filter"``: ``L = P H^T (H P H^T + R)^-1`` for ``x_hat[k] = x_bar[k] + L (y[k] -
-H x_bar[k])`` (seed000 eqs. 14, 23; seed001 Table 3); the a posteriori covariance is then
-``(I - L H) P`` (seed000 eq. 25). ``E`` is the same in both forms:
+H x_bar[k])`` (Tomera 2011 eqs. 14, 23; Tomera 2014 Table 3); the a posteriori covariance is then
+``(I - L H) P`` (Tomera 2011 eq. 25). ``E`` is the same in both forms:
 ``eig(F - L_pred H) = eig(F (I - L_filt H)) = eig((I - L_filt H) F)``.
 """
 
@@ -110,15 +111,15 @@ __all__ = [
 ]
 
 POSITION_VARIANCE_SEED000 = 0.01
-"""DGPS position variance per axis, m^2 (seed000 section 5: ``R_x = R_y = 0.01``)."""
+"""DGPS position variance per axis, m^2 (Tomera 2011 section 5: ``R_x = R_y = 0.01``)."""
 
 HEADING_VARIANCE_SEED000 = SEED000_HEADING_VARIANCE
-"""Gyrocompass heading variance, rad^2: seed000's ``R_psi = 0.1`` read as deg^2 (the sensors'
+"""Gyrocompass heading variance, rad^2: Tomera's (2011) ``R_psi = 0.1`` read as deg^2 (the sensors'
 default, :data:`shipgym.observers.sensors.SEED000_HEADING_VARIANCE`).
 
-Seed000 gives no unit. As rad^2 it would be a 18 deg standard deviation, impossible for a
+Tomera (2011) gives no unit. As rad^2 it would be a 18 deg standard deviation, impossible for a
 gyrocompass next to a 0.1 m DGPS; as deg^2 it is 0.32 deg, a typical gyrocompass accuracy
-(notes 5.4: 0.1-0.3 deg). ``0.1 deg^2 = 3.046e-5 rad^2``.
+(typically 0.1-0.3 deg). ``0.1 deg^2 = 3.046e-5 rad^2``.
 """
 
 _RANK_TOL = 1e-8  # relative tolerance of the PBH rank tests and the symmetry check
@@ -287,9 +288,9 @@ def lqe(
     r"""Continuous-time linear quadratic estimator (steady-state Kalman-Bucy filter).
 
     For ``x_dot = A x + G w``, ``y = C x + v`` with white noises of intensities
-    ``E{w w^T} = Q delta``, ``E{v v^T} = R delta`` (seed001 eqs. 31-32), the stationary filter
-    ``x_hat_dot = A x_hat + L (y - C x_hat)`` (seed000 eq. 52) with ``L = P C^T R^-1``
-    (seed001 eq. 33) and ``P`` the stabilising solution of (seed001 eq. 34)::
+    ``E{w w^T} = Q delta``, ``E{v v^T} = R delta`` (Tomera 2014 eqs. 31-32), the stationary filter
+    ``x_hat_dot = A x_hat + L (y - C x_hat)`` (Tomera 2011 eq. 52) with ``L = P C^T R^-1``
+    (Tomera 2014 eq. 33) and ``P`` the stabilising solution of (Tomera 2014 eq. 34)::
 
         A P + P A^T + G Q G^T - P C^T R^-1 C P = 0
 
@@ -336,7 +337,7 @@ def dlqe(
     r"""Discrete-time linear quadratic estimator (steady-state Kalman filter).
 
     For ``x[k+1] = F x[k] + G w[k]``, ``y[k] = H x[k] + v[k]`` with ``E{w w^T} = Q``,
-    ``E{v v^T} = R`` (seed001 eqs. 28-29), ``P`` is the predicted (a priori) steady-state
+    ``E{v v^T} = R`` (Tomera 2014 eqs. 28-29), ``P`` is the predicted (a priori) steady-state
     covariance ``P_bar``, the stabilising solution of::
 
         P = F P F^T - F P H^T (H P H^T + R)^-1 H P F^T + G Q G^T
@@ -351,11 +352,11 @@ def dlqe(
             predictor gain of ``x_bar[k+1] = F x_bar[k] + L (y[k] - H x_bar[k])``, exactly what
             python-control's ``dlqe`` returns. ``"filter"``: ``L = P H^T (H P H^T + R)^-1``,
             the measurement-update gain of ``x_hat[k] = x_bar[k] + L (y[k] - H x_bar[k])``
-            (seed001 Table 3, the form of eq. 30; MATLAB ``dlqe``'s ``M``).
+            (Tomera 2014 Table 3, the form of eq. 30; MATLAB ``dlqe``'s ``M``).
 
     Returns:
         ``(L, P, E)``: gain (n, p); the *predicted* covariance ``P_bar`` (n, n) in both forms
-        (the updated one is ``(I - L_filter H) P_bar``, seed000 eq. 25); the estimator poles
+        (the updated one is ``(I - L_filter H) P_bar``, Tomera (2011) eq. 25); the estimator poles
         ``E = eig(F - L_predictor H) = eig((I - L_filter H) F)`` (n,), equal in both forms.
 
     Raises:
@@ -390,8 +391,8 @@ def discretise(
         W: process noise intensity ``G Q G^T``, (n, n).
         T: sampling period (s), ``>= 0``.
         method: ``"exact"``: ``F = exp(A T)``, ``Q_k = int_0^T exp(A s) W exp(A^T s) ds``
-            (Van Loan 1978); ``"euler"``: ``F = I + A T`` (seed000 eq. 5) and ``Q_k = W T``
-            (seed000 eq. 31).
+            (Van Loan 1978); ``"euler"``: ``F = I + A T`` (Tomera 2011 eq. 5) and ``Q_k = W T``
+            (Tomera 2011 eq. 31).
 
     Returns:
         ``(F, Q_k)``, each (n, n).
@@ -418,7 +419,7 @@ def discretise(
 
 
 def double_integrator() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(A, C)`` of one DOF in seed000's state order ``[velocity, position]`` (eqs. 56-59)."""
+    """``(A, C)`` of one DOF in Tomera's (2011) state order ``[velocity, position]``, eqs. 56-59."""
     return np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([[0.0, 1.0]])
 
 
@@ -454,36 +455,36 @@ def _as_tuple(M: NDArray[np.float64]) -> _Matrix:
 
 @dataclass(frozen=True)
 class KalmanDesign:
-    """Design matrices of the per-DOF double-integrator KF/KBF (seed000 eqs. 56-62).
+    """Design matrices of the per-DOF double-integrator KF/KBF (Tomera 2011 eqs. 56-62).
 
     The three DOFs ``x``, ``y`` (NED, m) and ``psi`` (rad) are independent double integrators
-    with state ``[velocity, position]`` (seed000 eq. 59); ``G`` and ``Q`` are in that order.
+    with state ``[velocity, position]`` (Tomera 2011 eq. 59); ``G`` and ``Q`` are in that order.
 
     Attributes:
         G: process noise input matrix per DOF, (2, m), one for all DOFs or three.
         Q: process noise *intensity* per DOF, (m, m): ``G Q G^T`` in (m^2/s^3, m^2/s) for x, y
             and (rad^2/s^3, rad^2/s) for psi (velocity row first).
         R: variance of one sampled measurement per DOF ``(x, y, psi)`` in (m^2, m^2, rad^2).
-            The continuous filter uses the intensity ``R T`` (seed000 eq. 35).
+            The continuous filter uses the intensity ``R T`` (Tomera 2011 eq. 35).
         T: nominal sampling period (s); the filters rebuild ``F``, ``Q_k`` for the actual
             interval between calls, the steady-state gains are designed at ``T``.
-        discretisation: ``"exact"`` (Van Loan) or ``"euler"`` (seed000 eqs. 5, 31:
+        discretisation: ``"exact"`` (Van Loan) or ``"euler"`` (Tomera 2011 eqs. 5, 31:
             ``Q_k = G Q G^T T``).
-        model: ``"double-integrator"`` (the only model of seed000 section 5).
+        model: ``"double-integrator"`` (the only model of Tomera (2011) section 5).
     """
 
-    G: tuple = param(((1.0, 0.0), (0.0, 1.0)), "-", "seed000 eqs. 61-62 (noise input matrix)")
+    G: tuple = param(((1.0, 0.0), (0.0, 1.0)), "-", "Tomera (2011) eqs. 61-62 (noise input matrix)")
     Q: tuple = param(
-        ((1e-4, 0.0), (0.0, 1e-4)), "m^2/s^3, m^2/s (rad for psi)", "seed000 eqs. 61-62"
+        ((1e-4, 0.0), (0.0, 1e-4)), "m^2/s^3, m^2/s (rad for psi)", "Tomera (2011) eqs. 61-62"
     )
     R: tuple = param(
         (POSITION_VARIANCE_SEED000, POSITION_VARIANCE_SEED000, HEADING_VARIANCE_SEED000),
         "m^2, m^2, rad^2",
-        "seed000 section 5: R_x = R_y = 0.01, R_psi = 0.1 (deg^2)",
+        "Tomera (2011) section 5: R_x = R_y = 0.01, R_psi = 0.1 (deg^2)",
     )
-    T: float = param(1.0, "s", "seed001: 'sampling time equal 1 (s)'")
-    discretisation: str = param("exact", "-", "seed000 eqs. 5, 31 ('euler') or Van Loan")
-    model: str = param("double-integrator", "-", "seed000 eqs. 56-59")
+    T: float = param(1.0, "s", "Tomera (2014): 'sampling time equal 1 (s)'")
+    discretisation: str = param("exact", "-", "Tomera (2011) eqs. 5, 31 ('euler') or Van Loan")
+    model: str = param("double-integrator", "-", "Tomera (2011) eqs. 56-59")
 
     def __post_init__(self) -> None:
         if self.model != "double-integrator":
@@ -571,9 +572,9 @@ class KalmanDesign:
     def kbf_gains(
         self,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.complex128]]:
-        """Steady-state Kalman-Bucy gains per DOF by :func:`lqe` (seed001 eqs. 33-35).
+        """Steady-state Kalman-Bucy gains per DOF by :func:`lqe` (Tomera 2014 eqs. 33-35).
 
-        Uses the measurement intensity ``R_c = R T`` (seed000 eq. 35).
+        Uses the measurement intensity ``R_c = R T`` (Tomera 2011 eq. 35).
 
         Returns:
             ``L`` (3, 2) in seed order ``[velocity, position]``, ``P`` (3, 2, 2), ``E`` (3, 2).
@@ -597,12 +598,12 @@ def _tomera(discretisation: str) -> KalmanDesign:
 
 
 TOMERA_DKF = _tomera("euler")
-"""Seed001's discrete KF design: ``G = I``, ``Q = 0.01 R I`` numerically per DOF (``R`` the
-sensor variance in m^2 or rad^2), ``T = 1 s``, ``Q_k = G Q G^T T`` (seed000 eq. 31);
+"""Tomera's (2014) discrete KF design: ``G = I``, ``Q = 0.01 R I`` numerically per DOF (``R`` the
+sensor variance in m^2 or rad^2), ``T = 1 s``, ``Q_k = G Q G^T T`` (Tomera 2011 eq. 31);
 filter-form gain ``[0.07945, 0.36868]`` (eq. 30)."""
 
 TOMERA_KBF = _tomera("euler")
-"""Seed001's Kalman-Bucy design (the same matrices as :data:`TOMERA_DKF`, measurement
+"""Tomera's (2014) Kalman-Bucy design (the same matrices as :data:`TOMERA_DKF`, measurement
 intensity ``R_c = R T``): ``L = [0.1, 0.45826]`` (eq. 35)."""
 
 ACCEL_PSD_XY = 1.5e-4
@@ -640,7 +641,7 @@ real motion has more high-frequency content than the smooth reference and estima
 feeds back into the control: velocity errors were lowest for ``q_xy = 1e-4 ... 2e-4`` and
 ``q_psi ~ 1e-6`` (with ``q_xy = 5e-5`` the Kalman-Bucy filter's extra lag let the ship
 overshoot into the quay in 1 of 10 runs). Chosen: ``q_xy = 1.5e-4 m^2/s^3``
-(``w = 0.35 rad/s``) and ``q_psi = 1e-6 rad^2/s^3`` (``w = 0.43 rad/s``). The seed's design
+(``w = 0.35 rad/s``) and ``q_psi = 1e-6 rad^2/s^3`` (``w = 0.43 rad/s``). The paper's design
 (:data:`TOMERA_DKF`, ``w = 0.32 rad/s`` in every DOF) is close in x, y; the tuned presets
 differ mainly in the heading channel, the time-varying covariance (fast start, dropouts),
 the exact discretisation, the first-order-hold KBF and the outlier gate.

@@ -1,4 +1,4 @@
-r"""Discrete extended Kalman filter on the 9-state DP model (seed001 eqs. 36-53, Table 5).
+r"""Discrete extended Kalman filter on the 9-state DP model (Tomera 2014 eqs. 36-53, Table 5).
 
 Model
 -----
@@ -23,9 +23,9 @@ Reading of eq. 38 and the bias frame
 The printed vector field (eq. 38) is garbled: its second row reads
 ``-M^-1 D_L v(t) + M^-1 R^T(eta(t))`` -- a rotation matrix of the whole pose with nothing to
 rotate and no thrust -- and its third row ``-T_b^-1`` lacks the ``b`` it multiplies. The
-structure is that of Fossen's DP observer model (Fossen 2011 ch. 11; ``notes/domain-models.md``
-section 5.1), ``M nu_dot = -D nu + R^T(psi) b + tau``, ``b_dot = -T_b^-1 b + w_b``, where the
-bias ``b`` is an *NED* force rotated into the body frame by ``R^T(psi)``; the lost symbols are
+structure is that of Fossen's DP observer model (Fossen 2011 ch. 11),
+``M nu_dot = -D nu + R^T(psi) b + tau``, ``b_dot = -T_b^-1 b + w_b``, where the bias ``b`` is an
+*NED* force rotated into the body frame by ``R^T(psi)``; the lost symbols are
 ``b`` (after ``R^T(psi)``, whose argument was misprinted as ``eta``), the thrust ``tau``
 (which a DP observer needs: the controller's thrust is known, and without it the slow bias
 would have to absorb every thrust change) and the ``b`` of the third row.
@@ -46,11 +46,11 @@ Discretisation (Table 5, eqs. 43-45)
 ------------------------------------
 Forward Euler with the period ``T`` taken from the call times:
 ``x_{k+1} = x_k + T f(x_k, tau_k)`` (eq. 43), ``F_k = I + T df/dx|x_k`` (eq. 44, analytic
-Jacobian :meth:`ExtendedKalmanFilter.jacobian`), ``G_k = T E`` (eq. 45). The seed's discrete
+Jacobian :meth:`ExtendedKalmanFilter.jacobian`), ``G_k = T E`` (eq. 45). The paper's discrete
 ``Q_k`` is read as the discrete equivalent ``Q / T`` of a continuous white-noise intensity
-``Q``, so ``G_k Q_k G_k^T = T E Q E^T``: identical to the seed at its ``T = 1`` s and
+``Q``, so ``G_k Q_k G_k^T = T E Q E^T``: identical to the paper at its ``T = 1`` s and
 independent of the call rate otherwise (units: ``Q`` in N^2/s, N^2/s, N^2 m^2/s). A call
-spanning more than ``max_substep`` (default 1 s, the seed's sampling time; e.g. after a
+spanning more than ``max_substep`` (default 1 s, the paper's sampling time; e.g. after a
 dropout) is split into equal Euler sub-steps. The covariance update uses the Joseph form.
 Heading innovations are wrapped to ``(-pi, pi]``, so the heading state stays continuous
 (unwrapped) across north.
@@ -69,7 +69,7 @@ with :func:`~shipgym.observers.base.register_observer`.
 
 Presets
 -------
-- ``tomera-ekf`` (:func:`tomera_ekf`): the seed's design matrices, ``Q = diag(0.1, 0.1, 0.1)``
+- ``tomera-ekf`` (:func:`tomera_ekf`): the paper's design matrices, ``Q = diag(0.1, 0.1, 0.1)``
   (eq. 52), ``R = diag(0.1, 0.1, 0.1)`` (eq. 53, read in m^2, m^2, rad^2), ``E_b = I``,
   ``T_b`` of eq. 51, no velocity process noise.
 - ``ekf`` (:func:`default_ekf`): tuned; see :data:`EKF_PRESETS` and :func:`default_ekf`.
@@ -146,7 +146,7 @@ def _check_sym(arr: NDArray[np.float64], name: str, *, definite: bool) -> None:
     scale = max(1.0, float(np.abs(eig).max()))
     if definite and not eig.min() > 0:
         raise ValueError(
-            f"EKFConfig.{name} must be positive definite (seed001 Table 5: Q = Q^T > 0, "
+            f"EKFConfig.{name} must be positive definite (Tomera 2014 Table 5: Q = Q^T > 0, "
             f"R = R^T > 0), got eigenvalues {eig.tolist()}"
         )
     if not definite and eig.min() < -1e-12 * scale:
@@ -160,7 +160,7 @@ _M49, _D50 = seed_linear_matrices()
 
 @dataclass(frozen=True)
 class EKFConfig:
-    """Design parameters of the 9-state EKF (seed001 eqs. 36-53).
+    """Design parameters of the 9-state EKF (Tomera 2014 eqs. 36-53).
 
     Matrix fields accept a scalar (times identity), three diagonal values or a 3x3 matrix and
     are stored as nested tuples.
@@ -172,47 +172,47 @@ class EKFConfig:
         E_b: bias noise input matrix (-), eq. 39.
         Q: bias process noise intensity (N^2/s, N^2/s, N^2 m^2/s), eq. 52.
         Q_nu: velocity process noise intensity ((m/s)^2/s, (m/s)^2/s, (rad/s)^2/s), an
-            addition to the seed (model mismatch); zero in the seed's design.
+            addition to the paper (model mismatch); zero in the paper's design.
         R: measurement noise covariance (m^2, m^2, rad^2), eq. 53.
         P0: initial covariance diagonal for ``[eta, nu, b]`` (SI units squared), used by
             ``reset`` unless a ``P0`` is passed there.
         bias_frame: ``"body"`` (default; ``nu_dot = M^-1 (tau - D_L nu + b)``) or ``"ned"``
             (Fossen: ``... + R^T(psi) b``).
         antenna_offset: position-sensor offset from the CG in the body frame (m); ``(0, 0)``
-            gives the seed's ``H = [I 0 0]`` (eq. 40).
+            gives the paper's ``H = [I 0 0]`` (eq. 40).
         gate_probability: chi-square probability of the NIS outlier gate (3 dof); ``None``
             disables the gate.
         max_rejections: most gated rejections in a row before a measurement is forced in.
         max_substep: longest Euler step (s); longer intervals are split.
     """
 
-    M: Mat3 = param(_tuple_mat(_M49), "kg, kg m, kg m^2", "seed001 eq. 49")
-    D_L: Mat3 = param(_tuple_mat(_D50), "N s/m, N s, N m s", "seed001 eq. 50")
-    T_b: Vec3 = param((1000.0, 1000.0, 1000.0), "s", "seed001 eq. 51")
-    E_b: Mat3 = param(_tuple_mat(np.eye(3)), "-", "seed001 eq. 39 (E_b not printed: I)")
+    M: Mat3 = param(_tuple_mat(_M49), "kg, kg m, kg m^2", "Tomera (2014) eq. 49")
+    D_L: Mat3 = param(_tuple_mat(_D50), "N s/m, N s, N m s", "Tomera (2014) eq. 50")
+    T_b: Vec3 = param((1000.0, 1000.0, 1000.0), "s", "Tomera (2014) eq. 51")
+    E_b: Mat3 = param(_tuple_mat(np.eye(3)), "-", "Tomera (2014) eq. 39 (E_b not printed: I)")
     Q: Mat3 = param(
-        _tuple_mat(np.diag([0.1, 0.1, 0.1])), "N^2/s, N^2/s, N^2 m^2/s", "seed001 eq. 52"
+        _tuple_mat(np.diag([0.1, 0.1, 0.1])), "N^2/s, N^2/s, N^2 m^2/s", "Tomera (2014) eq. 52"
     )
     Q_nu: Mat3 = param(
         _tuple_mat(np.zeros((3, 3))),
         "(m/s)^2/s, (m/s)^2/s, (rad/s)^2/s",
-        "assumption: none in the seed (eqs. 36, 39)",
+        "assumption: none in the paper (eqs. 36, 39)",
     )
     R: Mat3 = param(
-        _tuple_mat(np.diag([0.1, 0.1, 0.1])), "m^2, m^2, rad^2", "seed001 eq. 53 (as printed)"
+        _tuple_mat(np.diag([0.1, 0.1, 0.1])), "m^2, m^2, rad^2", "Tomera (2014) eq. 53 (as printed)"
     )
     P0: tuple[float, ...] = param(
         (0.1, 0.1, 0.1, 0.01, 0.01, 1e-4, 50.0**2, 50.0**2, 100.0**2),
         "m^2, m^2, rad^2, (m/s)^2, (m/s)^2, (rad/s)^2, N^2, N^2, (N m)^2",
         "assumption: pose ~ R, ship near rest (0.1 m/s, 0.6 deg/s), bias ~ wind load scale",
     )
-    bias_frame: str = param("body", "-", "brief: body frame; Fossen 2011 ch. 11: ned")
-    antenna_offset: tuple[float, float] = param((0.0, 0.0), "m", "seed001 eq. 40: H = [I 0 0]")
+    bias_frame: str = param("body", "-", "body: a modelling choice; Fossen 2011 ch. 11: ned")
+    antenna_offset: tuple[float, float] = param((0.0, 0.0), "m", "Tomera 2014 eq. 40: H = [I 0 0]")
     gate_probability: float | None = param(0.9999, "-", "assumption: 99.99 % chi-square gate")
     max_rejections: int = param(
         5, "-", "assumption: follow a real jump after 5 samples (observers.base.OutlierGate)"
     )
-    max_substep: float = param(1.0, "s", "seed001: sampling time 1 s")
+    max_substep: float = param(1.0, "s", "Tomera (2014): sampling time 1 s")
 
     def __post_init__(self) -> None:
         units = {f.name: str(f.metadata["unit"]) for f in dataclasses.fields(self)}
@@ -292,13 +292,13 @@ _SENSORS = SensorConfig()
 
 #: Tuned default (``ekf``). Why each number (see also :func:`default_ekf`):
 #:
-#: - ``R`` = the default sensors' covariance (seed000 eqs. 61-62: 0.01 m^2 per axis,
-#:   0.1 deg^2 heading). The seed's ``R = 0.1`` (eq. 53) overstates the DGPS variance tenfold
+#: - ``R`` = the default sensors' covariance (Tomera 2011 eqs. 61-62: 0.01 m^2 per axis,
+#:   0.1 deg^2 heading). The paper's ``R = 0.1`` (eq. 53) overstates the DGPS variance tenfold
 #:   and, read in rad^2, the gyrocompass variance 3000-fold, which slows the pose and velocity
 #:   estimates for no benefit.
 #: - ``Q`` (bias) = ``2 sigma_b^2 / T_b``, the intensity whose Gauss-Markov process with
 #:   ``T_b`` = 1000 s has a stationary sigma of 30 N, 30 N, 60 N m (a 3 m/s lake wind on
-#:   A_L = 6.4 m^2 gives ~30 N; ``notes/domain-models.md`` section 1): 1.8, 1.8, 7.2 per s.
+#:   A_L = 6.4 m^2 gives ~30 N by Blendermann 1994): 1.8, 1.8, 7.2 per s.
 #:   Larger Q makes the bias chase the measurement noise, smaller Q makes it too slow to
 #:   follow a body-frame load that rotates as the ship turns.
 #: - ``Q_nu = diag(1e-6, 1e-6, 3e-8)``: acceleration white noise of 1e-3 m/s^2 (5 % of the main
@@ -356,7 +356,7 @@ _I9 = np.eye(9)
 
 
 class ExtendedKalmanFilter(Observer):
-    """Discrete EKF of seed001 Table 5 on the 9-state model ``[eta, nu, b]``.
+    """Discrete EKF of Tomera (2014) Table 5 on the 9-state model ``[eta, nu, b]``.
 
     Implements the shared observer interface: :meth:`reset`, :meth:`step`, :meth:`estimate`
     and ``name``.
@@ -631,7 +631,7 @@ class ExtendedKalmanFilter(Observer):
 
 # ---- factories -------------------------------------------------------------------------------
 def tomera_ekf(**overrides: Any) -> ExtendedKalmanFilter:
-    """The EKF with the seed's design matrices (``tomera-ekf``; seed001 eqs. 49-53).
+    """The EKF with the paper's design matrices (``tomera-ekf``; Tomera 2014 eqs. 49-53).
 
     ``Q = diag(0.1, 0.1, 0.1)`` on the bias noise (eq. 52), ``R = diag(0.1, 0.1, 0.1)``
     (eq. 53, read in m^2, m^2, rad^2: a 0.32 m DGPS and an 18 deg gyrocompass sigma),
@@ -645,10 +645,10 @@ def tomera_ekf(**overrides: Any) -> ExtendedKalmanFilter:
 
 
 def default_ekf(**overrides: Any) -> ExtendedKalmanFilter:
-    """The tuned EKF (``ekf``): the seed's model with realistic noise matrices.
+    """The tuned EKF (``ekf``): the paper's model with realistic noise matrices.
 
     ``R`` from the default sensors (0.01 m^2 per position axis, 3.05e-5 rad^2 heading:
-    seed000 eqs. 61-62); a bias noise ``Q = diag(1.8, 1.8, 7.2)`` (a stationary bias sigma of
+    Tomera (2011) eqs. 61-62); a bias noise ``Q = diag(1.8, 1.8, 7.2)`` (a stationary bias sigma of
     30 N, 30 N, 60 N m with ``T_b`` = 1000 s); velocity process noise
     ``Q_nu = diag(1e-6, 1e-6, 3e-8)`` for the mismatch between the linear model and the richer
     plant. The reasons are listed at :data:`EKF_PRESETS`. For other sensors pass their

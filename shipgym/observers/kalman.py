@@ -1,13 +1,14 @@
-r"""Discrete Kalman filter and Kalman-Bucy filter per DOF on a double integrator (seeds 000, 001).
+r"""Discrete Kalman filter and Kalman-Bucy filter per DOF on a double integrator (Tomera 2011,
+2014).
 
-Model (seed000 eqs. 53-59)
---------------------------
+Model (Tomera 2011 eqs. 53-59)
+------------------------------
 Each NED DOF ``p`` in ``{x, y, psi}`` is an independent double integrator with state
-``[p_dot, p]`` (seed order: velocity first), ``A = [[0, 0], [1, 0]]``, ``C = [0, 1]``, driven by
+``[p_dot, p]`` (Tomera's order: velocity first), ``A = [[0, 0], [1, 0]]``, ``C = [0, 1]``, driven by
 white noise of intensity ``G Q G^T`` (:class:`~shipgym.observers.design.KalmanDesign`). The
-filters are kinematic: seed000 (section 6) "does not take into account the model of ship
+filters are kinematic: Tomera (2011) (section 6) "does not take into account the model of ship
 dynamics", so the thrust ``tau`` is accepted (and checked) but not used. The body velocity
-follows from the NED rates by seed000 eq. 60, ``nu = R^T(psi) eta_dot``, with its covariance
+follows from the NED rates by Tomera (2011) eq. 60, ``nu = R^T(psi) eta_dot``, with its covariance
 ``P_nu = J P J^T`` (``J`` the Jacobian of that map, including ``d nu / d psi = [v, -u, 0]``).
 
 State and covariance layout: :attr:`x` and :attr:`Estimate.P <shipgym.observers.base.Estimate>`
@@ -17,15 +18,15 @@ are wrapped to ``(-pi, pi]``.
 
 Filters
 -------
-:class:`DiscreteKalmanFilter` (seed001 Table 3; seed000 eqs. 14-24): ``F`` and ``Q_k`` are
-rebuilt for the actual interval between calls (``F = I + A dt``, seed000 eq. 5, exact here;
+:class:`DiscreteKalmanFilter` (Tomera 2014 Table 3; Tomera 2011 eqs. 14-24): ``F`` and ``Q_k`` are
+rebuilt for the actual interval between calls (``F = I + A dt``, Tomera (2011) eq. 5, exact here;
 ``Q_k`` per the design's discretisation). Time-varying covariance (default) or, with
 ``constant_gain=True``, the steady-state filter-form gain of
 :func:`~shipgym.observers.design.dlqe` at the design period ``T``, used whatever the interval
-(as seed001 did with eq. 30); the constant-gain filter still propagates its true error
+(as Tomera (2014) did with eq. 30); the constant-gain filter still propagates its true error
 covariance (Joseph form with the fixed gain), so ``P``, NIS and the outlier gate stay honest.
 
-:class:`KalmanBucyFilter` (seed001 Table 4; seed000 eqs. 39, 45, 52) in a sampled-data
+:class:`KalmanBucyFilter` (Tomera 2014 Table 4; Tomera 2011 eqs. 39, 45, 52) in a sampled-data
 implementation. The measurement between two samples is reconstructed by *first-order hold*:
 ``y(t)`` is the straight line from the previous accepted sample ``y_{k-1}`` at ``t_{k-1}`` to
 the new one ``y_k`` at ``t_k``, and the filter ODEs are integrated *exactly* over the interval:
@@ -37,7 +38,7 @@ the new one ``y_k`` at ``t_k``, and the filter ODEs are integrated *exactly* ove
   R_c^-1 C) X^-T`` and ``X^T P = Y^T``, ``x_hat(dt) = X(dt)^-T (x_hat0 + int_0^dt Y(s)^T C^T
   R_c^-1 y(s) ds)``. The integrals come from one matrix exponential per DOF and ``dt``
   (cached), so the step is exact for any stiffness and as cheap as a discrete filter;
-- steady state (``steady_state=True``, seed001 eqs. 33-35): ``L`` of
+- steady state (``steady_state=True``, Tomera (2014) eqs. 33-35): ``L`` of
   :func:`~shipgym.observers.design.lqe`, ``x_hat_dot = (A - L C) x_hat + L y`` solved exactly;
   ``P`` follows the closed-loop Lyapunov equation (so it stays ``P_inf`` while measuring and
   grows during dropouts).
@@ -45,10 +46,10 @@ the new one ``y_k`` at ``t_k``, and the filter ODEs are integrated *exactly* ove
 Why first-order hold: a ship at constant speed ``V`` produces a ramp; holding ``y_k`` (or
 ``y_{k-1}``) over the interval biases the position estimate by about ``V dt / 2`` (0.1 m at
 0.2 m/s, as large as the DGPS noise), whereas the continuous filter, a type-2 loop, tracks the
-ramp of the first-order hold without error. The measurement intensity is ``R_c = R T`` (seed000
+ramp of the first-order hold without error. The measurement intensity is ``R_c = R T`` (Tomera 2011
 eq. 35), ``R`` the sample variance. Without a previous accepted sample (after a reset, a
 dropout or a rejection) and after a forced acceptance (see below; a jump has no ramp) the new
-sample is held over the whole interval instead, the averaged-measurement reading of seed000
+sample is held over the whole interval instead, the averaged-measurement reading of Tomera (2011)
 eq. 32 (starting the line from the filter's own estimate would feed the filter its own
 output as if it were a measurement and make ``P`` optimistic). ``P`` is the
 continuous filter's covariance: for the sampled data at ``T = 1 s`` and the designs here
@@ -181,7 +182,7 @@ class _DoubleIntegratorFilter(Observer):
         self._W = design.intensity()
         self._cache: dict[tuple[str, float], Any] = {}
         self._t: float | None = None
-        self._s = np.zeros((3, 2))  # per DOF [velocity, position] (seed000 eq. 59)
+        self._s = np.zeros((3, 2))  # per DOF [velocity, position] (Tomera 2011 eq. 59)
         self._P = np.zeros((3, 2, 2))
 
     # ---- interface ---------------------------------------------------------------------------
@@ -388,12 +389,12 @@ class _DoubleIntegratorFilter(Observer):
 
 
 class DiscreteKalmanFilter(_DoubleIntegratorFilter):
-    """Discrete Kalman filter per DOF on the double integrator (seed001 Table 3).
+    """Discrete Kalman filter per DOF on the double integrator (Tomera 2014 Table 3).
 
     Args:
         design: :class:`~shipgym.observers.design.KalmanDesign` (or a mapping of its fields).
         constant_gain: use the steady-state filter-form gain of
-            :func:`~shipgym.observers.design.dlqe` at the design period ``T`` (seed001
+            :func:`~shipgym.observers.design.dlqe` at the design period ``T`` (Tomera 2014
             eq. 30) instead of the time-varying gain of Table 3.
         name: the observer's name.
         gate_probability: NIS gate probability (``None``: no gate), see
@@ -427,7 +428,7 @@ class DiscreteKalmanFilter(_DoubleIntegratorFilter):
     @property
     def steady_state_gain(self) -> NDArray[np.float64]:
         """Steady-state filter-form gain at the design period ``T``, (3, 2), seed order
-        ``[velocity, position]`` per DOF (seed001 eq. 30)."""
+        ``[velocity, position]`` per DOF (Tomera 2014 eq. 30)."""
         return self.design.dkf_gains(form="filter")[0]
 
     def _process_noise(self, dt: float) -> NDArray[np.float64]:
@@ -448,9 +449,9 @@ class DiscreteKalmanFilter(_DoubleIntegratorFilter):
         if self.constant_gain:
             K = self._cached("K", 0.0, lambda: self.design.dkf_gains(form="filter")[0])
         else:
-            K = P_bar[:, :, 1] / (P_bar[:, 1, 1] + R)[:, None]  # seed000 eq. 23
+            K = P_bar[:, :, 1] / (P_bar[:, 1, 1] + R)[:, None]  # Tomera (2011) eq. 23
         self.last_gain = K
-        self._s = s_bar + K * innov[:, None]  # seed000 eq. 14
+        self._s = s_bar + K * innov[:, None]  # Tomera (2011) eq. 14
         IKH = np.broadcast_to(_EYE2, (3, 2, 2)).copy()
         IKH[:, :, 1] -= K
         KK = K[:, :, None] * K[:, None, :]
@@ -458,13 +459,13 @@ class DiscreteKalmanFilter(_DoubleIntegratorFilter):
 
 
 class KalmanBucyFilter(_DoubleIntegratorFilter):
-    """Continuous Kalman-Bucy filter per DOF, sampled-data implementation (seed001 Table 4).
+    """Continuous Kalman-Bucy filter per DOF, sampled-data implementation (Tomera 2014 Table 4).
 
     Args:
         design: :class:`~shipgym.observers.design.KalmanDesign` (or a mapping of its fields);
             the continuous measurement intensity is ``R_c = R T``.
         steady_state: use the constant gain of :func:`~shipgym.observers.design.lqe`
-            (seed001 eqs. 33-35) instead of integrating the Riccati ODE.
+            (Tomera 2014 eqs. 33-35) instead of integrating the Riccati ODE.
         name: the observer's name.
         gate_probability: NIS gate probability (``None``: no gate).
         max_rejections: most measurements rejected in a row.
@@ -497,7 +498,7 @@ class KalmanBucyFilter(_DoubleIntegratorFilter):
     @property
     def steady_state_gain(self) -> NDArray[np.float64]:
         """Steady-state gain ``L = P C^T R_c^-1``, (3, 2), seed order ``[velocity, position]``
-        per DOF (seed001 eq. 35)."""
+        per DOF (Tomera 2014 eq. 35)."""
         return self._L.copy()
 
     def _after_reset(self) -> None:

@@ -1,8 +1,8 @@
-r"""Position and heading sensors: DGPS + gyrocompass (SPEC section 7; seeds 000, 001, 004).
+r"""Position and heading sensors: DGPS + gyrocompass (Tomera 2011, 2014; Artyszuk 2003).
 
-The navigation sensors of the Blue Lady trials (seed001, "Case of study"): the position
+The navigation sensors of the Blue Lady trials (Tomera 2014, "Case of study"): the position
 ``(x, y)`` is measured by a DGPS receiver, the heading ``psi`` by a gyrocompass, both sampled
-"with sampling time equal 1 (s)" (seed001, text before Table 6). The measurement is
+"with sampling time equal 1 (s)" (Tomera 2014, text before Table 6). The measurement is
 
 .. math::
 
@@ -16,19 +16,19 @@ y starboard). The heading is returned wrapped to ``(-pi, pi]`` as a gyrocompass 
 
 Noise defaults
 --------------
-- Position: seed000 eq. 61, ``R_x = R_y = 0.01`` (m^2, sigma 0.1 m), "determined based on the
-  experimental tests done on the training ship Blue Lady" (seed000, text after eq. 62).
-- Heading: seed000 eq. 62, ``R_psi = 0.1`` -- printed without a unit. Read in rad^2 it would
-  be a gyrocompass sigma of 18 deg, which no gyrocompass has (typical 0.1-0.3 deg,
-  ``notes/domain-models.md`` section 5.4) and which would swamp every heading plot of the
-  seed. Tomera states and plots headings in degrees (seed001 Table 6, eq. 57: ``psi_E`` in
-  deg), so the project reads it as ``0.1 deg^2`` (sigma 0.316 deg):
+- Position: Tomera (2011) eq. 61, ``R_x = R_y = 0.01`` (m^2, sigma 0.1 m), "determined based on the
+  experimental tests done on the training ship Blue Lady" (Tomera 2011, text after eq. 62).
+- Heading: Tomera (2011) eq. 62, ``R_psi = 0.1`` -- printed without a unit. Read in rad^2 it would
+  be a gyrocompass sigma of 18 deg, which no gyrocompass has (typical 0.1-0.3 deg) and which
+  would swamp every heading plot of the paper. Tomera states and plots headings in degrees
+  (Tomera 2014 Table 6, eq. 57: ``psi_E`` in deg), so the project reads it as ``0.1 deg^2``
+  (sigma 0.316 deg):
   :data:`SEED000_HEADING_VARIANCE` ``= 0.1 (pi/180)^2 = 3.046e-5 rad^2``. Pass
   ``heading_variance=0.1`` for the literal rad^2 reading.
-- ``dgps`` preset: sigma 2 m per axis, the plain DGPS of seed004 ("standard deviation (equal in
-  north and east directions) of order 2 [m]").
-- ``rtk`` preset: sigma 0.02 m, heading sigma 0.2 deg (``notes/domain-models.md`` sections 5.4
-  and 9).
+- ``dgps`` preset: sigma 2 m per axis, the plain DGPS of Artyszuk (2003) ("standard deviation
+  (equal in north and east directions) of order 2 [m]").
+- ``rtk`` preset: sigma 0.02 m, heading sigma 0.2 deg (typical RTK and gyrocompass
+  figures, an assumption).
 
 Faults (all off by default): an *outlier* adds a position error of exactly
 ``outlier_magnitude`` metres in a uniformly random NED direction (heading untouched), with
@@ -64,7 +64,7 @@ __all__ = [
     "sensor_config",
 ]
 
-#: seed000 eq. 62 ``R_psi = 0.1`` read as deg^2, in rad^2 (sigma 0.316 deg)
+#: Tomera (2011) eq. 62 ``R_psi = 0.1`` read as deg^2, in rad^2 (sigma 0.316 deg)
 SEED000_HEADING_VARIANCE = 0.1 * (math.pi / 180.0) ** 2
 
 _EPS_T = 1e-9  # relative tolerance on sample instants (s / period)
@@ -72,12 +72,12 @@ _EPS_T = 1e-9  # relative tolerance on sample instants (s / period)
 
 @dataclass(frozen=True)
 class SensorConfig:
-    """DGPS + gyrocompass sensor parameters (SPEC section 7).
+    """DGPS + gyrocompass sensor parameters.
 
     Attributes:
-        period: sampling period (s), seed001 "sampling time equal 1 (s)".
-        position_variance: DGPS noise variance per NED axis (m^2), seed000 eq. 61.
-        heading_variance: gyrocompass noise variance (rad^2), seed000 eq. 62 (read as deg^2).
+        period: sampling period (s), Tomera (2014) "sampling time equal 1 (s)".
+        position_variance: DGPS noise variance per NED axis (m^2), Tomera (2011) eq. 61.
+        heading_variance: gyrocompass noise variance (rad^2), Tomera (2011) eq. 62 (read as deg^2).
         antenna_offset: DGPS antenna position ``(x_a, y_a)`` in the body frame (m), x forward,
             y starboard; the GPS reads ``p + R(psi) [x_a, y_a]``; the heading is unaffected.
         outlier_probability: probability per sample of a position outlier (-).
@@ -87,14 +87,14 @@ class SensorConfig:
             missing.
     """
 
-    period: float = param(1.0, "s", "seed001: 'sampling time equal 1 (s)'")
+    period: float = param(1.0, "s", "Tomera (2014): 'sampling time equal 1 (s)'")
     position_variance: float = param(
-        0.01, "m^2", "seed000 eq. 61: R_x = R_y = 0.01 (Blue Lady DGPS, experimental)"
+        0.01, "m^2", "Tomera (2011) eq. 61: R_x = R_y = 0.01 (Blue Lady DGPS, experimental)"
     )
     heading_variance: float = param(
         SEED000_HEADING_VARIANCE,
         "rad^2",
-        "seed000 eq. 62: R_psi = 0.1, read as deg^2 (sigma 0.316 deg; see module docstring)",
+        "Tomera (2011) eq. 62: R_psi = 0.1, read as deg^2 (sigma 0.316 deg; see module docstring)",
     )
     antenna_offset: tuple[float, float] = param(
         (0.0, 0.0), "m", "assumption: antenna at the CG; body frame (x forward, y starboard)"
@@ -189,15 +189,15 @@ _RTK_HEADING_SIGMA = math.radians(0.2)
 #: named sensor presets (overrides of the :class:`SensorConfig` defaults)
 SENSOR_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
     {
-        # seed000 eqs. 61-62 / seed001 sampling time: the project default
+        # Tomera (2011) eqs. 61-62, Tomera (2014) sampling time: the default
         "default": MappingProxyType({}),
-        # plain DGPS, seed004: sigma 2 m per axis; gyrocompass as default
+        # plain DGPS of Artyszuk (2003): sigma 2 m per axis; gyrocompass as default
         "dgps": MappingProxyType({"position_variance": 2.0**2}),
-        # RTK GNSS: sigma 0.02 m, heading sigma 0.2 deg (notes/domain-models.md 5.4, 9)
+        # RTK GNSS: sigma 0.02 m, heading sigma 0.2 deg (typical figures, an assumption)
         "rtk": MappingProxyType(
             {"position_variance": 0.02**2, "heading_variance": _RTK_HEADING_SIGMA**2}
         ),
-        # the Blue Lady trials of Tomera (seed000 2014 / seed001): same as default
+        # the Blue Lady trials of Tomera (2011, 2014): same as default
         "tomera2014": MappingProxyType({}),
     }
 )

@@ -1,4 +1,4 @@
-"""Observers as a Gymnasium wrapper (SPEC 10): env -> ObserverWrapper -> controller wrapper.
+"""Observers as a Gymnasium wrapper: env -> ObserverWrapper -> controller wrapper.
 
 Not an ``ObservationWrapper``: the model-based observers need the applied thrust, which the
 environment reports with every sensor sample (``info["measurements"][i]["tau"]``).

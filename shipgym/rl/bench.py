@@ -1,6 +1,6 @@
 """``shipgym bench controllers``: classical and learned controllers on the same harbour runs.
 
-Every controller runs the 5-leg harbour manoeuvre (seed001) for the same seeds, wind and
+Every controller runs the 5-leg harbour manoeuvre (Tomera 2014) for the same seeds, wind and
 observer; the runs go to worker processes in parallel (with a progress bar) and come back as
 one row per controller and seed (:func:`bench_controllers`), summarised in one markdown table
 (:func:`controller_table`): completion, quay contact, J_c (truth and measured, and relative to
@@ -165,7 +165,7 @@ def controller_table(rows: Sequence[dict[str, Any]]) -> str:
     """A markdown table, one line per controller (mean +- std over seeds).
 
     Columns: completed without quay contact, mean legs completed (of 5), quay contacts, J_c
-    from the truth and from the measured pose (seed001 eq. 57), mean J_c relative to ``pid``
+    from the truth and from the measured pose (Tomera 2014 eq. 57), mean J_c relative to ``pid``
     (when present), time to complete (s; completed runs), mean |thrust| per actuator (N),
     wall time per run (s).
     """
@@ -207,5 +207,5 @@ def bench_title(rows: Sequence[dict[str, Any]], wind: Any) -> str:
     return (
         f"Controllers on the harbour manoeuvre (observer {obs}, {w}, seeds "
         f"{seeds[0]}-{seeds[-1]}); J_c from the true pose, 'J_c measured' from the DGPS/gyro "
-        "samples as in seed001 Table 6"
+        "samples as in Tomera (2014) Table 6"
     )

@@ -1,4 +1,4 @@
-"""Visualisation: headless rerun recordings and matplotlib reports (SPEC 13).
+"""Visualisation: headless rerun recordings and matplotlib reports.
 
 The only subpackage that imports ``rerun`` and ``matplotlib``; both are imported lazily, inside
 the functions that need them, so ``import shipgym`` and ``import shipgym.viz`` stay light.

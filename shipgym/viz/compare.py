@@ -1,4 +1,4 @@
-"""Figures comparing observers (``shipgym bench observers --report DIR``), like seed001 Table 6."""
+"""Figures comparing observers (``shipgym bench observers --report DIR``) like Tomera's Table 6."""
 
 from __future__ import annotations
 
@@ -68,7 +68,7 @@ def write_observer_report(
         ax.grid(axis="y", alpha=0.3)
     axes[0].legend(fontsize=8)
     n_seeds = len(rows) // max(len(names), 1)
-    fig.suptitle(f"Accuracy indices (seed001 eqs. 54-57), mean and std over {n_seeds} seeds")
+    fig.suptitle(f"Accuracy indices (Tomera 2014 eqs. 54-57), mean and std over {n_seeds} seeds")
     p1 = out / "observers_indices.png"
     fig.savefig(p1, dpi=DPI, format="png")
 

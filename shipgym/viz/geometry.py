@@ -2,7 +2,7 @@
 
 Pure NumPy (``mujoco`` is only touched through the model and data objects handed in). All map
 coordinates are NED metres: ``x`` north, ``y`` east; body coordinates are ``x`` forward,
-``y`` starboard (SPEC section 3).
+``y`` starboard.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ __all__ = [
 #: Thruster names in actuator order (main propeller, bow tunnel, stern tunnel).
 THRUSTER_NAMES: tuple[str, str, str] = ("main_propeller", "bow_tunnel", "stern_tunnel")
 
-#: Body-frame positions ``(x forward, y starboard)`` of the thrusters (m), seed001 / MJCF sites.
+#: Body-frame positions ``(x forward, y starboard)`` of the thrusters (m), Tomera 2014 / MJCF sites.
 THRUSTER_POSITIONS: NDArray[np.float64] = np.array([[-6.5, 0.0], [3.24, 0.0], [-2.376, 0.0]])
 
 #: Waterline outline of the Blue Lady hull in the body frame ``(x forward, y starboard)`` (m),

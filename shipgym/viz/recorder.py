@@ -1,4 +1,4 @@
-"""Headless rerun recording of shipgym episodes (SPEC 13): the :class:`RecordEpisode` wrapper.
+"""Headless rerun recording of shipgym episodes: the :class:`RecordEpisode` wrapper.
 
 Each episode goes to its own ``.rrd`` file, with no viewer and no display needed (a viewer is
 spawned alongside only on request). Per-step values are buffered in Python lists and written
@@ -186,7 +186,7 @@ class _Episode:
         }
         self.rows_done = 0
         self.meas_done = 0
-        # running accuracy (seed001 eqs. 54-57), same sampling rule as ManoeuvreMetrics
+        # running accuracy (Tomera 2014 eqs. 54-57), same sampling rule as ManoeuvreMetrics
         self.sample_period = float(ctx["sample_period"])
         self.next_k = 0
         self.first = True
@@ -373,7 +373,7 @@ class _Episode:
         m_step: NDArray[np.int64],
         m_z: NDArray[np.float64],
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Running seed001 indices ``[x_E, y_E, psi_E (deg), J_c]`` (truth, measured)."""
+        """Running Tomera (2014) indices ``[x_E, y_E, psi_E (deg), J_c]`` (truth, measured)."""
         w1, w2, w3 = self.ctx["weights"]
         tp = self.sample_period
         tol = 1e-6 * tp
@@ -525,7 +525,7 @@ class RecordEpisode(
     leg end point, the hull outline at every control step, true, desired, estimated and
     measured positions, thrust arrows at the thrusters, a wind arrow), time series of the
     r-frame pose and body velocity (desired, true, estimate, measured), thruster commands and
-    forces, the running accuracy indices of seed001 eqs. 54-57, and the run's metadata;
+    forces, the running accuracy indices of Tomera (2014) eqs. 54-57, and the run's metadata;
     entity paths in :mod:`shipgym.viz.run`. The file opens in the rerun viewer with the map on
     the left and the time series on the right (``rerun PATH.rrd``).
 
@@ -1059,7 +1059,7 @@ def _log_summary(
 
 
 def _blueprint(ctx: dict[str, Any]) -> Any:
-    """Map (left, with the run summary) and time series (right, like seed001 Figs. 9-11)."""
+    """Map (left, with the run summary) and time series (right, like Tomera (2014) Figs. 9-11)."""
     import rerun.blueprint as rrb
 
     lo, hi = ctx["extent"]

@@ -1,4 +1,4 @@
-"""PNG and Markdown reports of a recorded run (SPEC 13; seed001 Figs. 8-11), headless.
+"""PNG and Markdown reports of a recorded run (Tomera 2014 Figs. 8-11), headless.
 
 :func:`write_report` draws with matplotlib's Agg canvas (no display, no pyplot state) at fixed
 figure sizes and resolution (:data:`FIGURE_SIZES`, :data:`DPI`):
@@ -430,7 +430,7 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
         f"({m.get('legs_completed', int(run.legs_completed[-1]) if len(run.t) else 0)} legs) |",
         f"| quay contact | {m.get('quay_contact', 'n/a')} |",
         "",
-        "## Accuracy indices (seed001 eqs. 54-57, r-frame, sampled at 1 s)",
+        "## Accuracy indices (Tomera 2014 eqs. 54-57, r-frame, sampled at 1 s)",
         "",
         "| from | x_E (m) | y_E (m) | psi_E (deg) | J_c |",
         "|---|---|---|---|---|",

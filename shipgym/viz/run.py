@@ -28,7 +28,7 @@ carries a static rotation so that north is up and east is right in rerun's 2-D v
 ``plots/thrust``            thruster forces F1, F2, F3 (N)
 ``plots/command/main``      main propeller command n1 (rpm)
 ``plots/command/tunnels``   tunnel thruster commands p2, p3 (1)
-``plots/accuracy/truth``    running x_E, y_E (m), psi_E (deg), J_c (seed001 eqs. 54-57)
+``plots/accuracy/truth``    running x_E, y_E (m), psi_E (deg), J_c (Tomera 2014 eqs. 54-57)
 ``plots/accuracy/measured`` the same from the measured pose
 ``data/*``                  raw float64 vectors for tools that read the file back
 ``metadata/summary``        run description (markdown), ``metadata/json`` (machine-readable)
