@@ -605,7 +605,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     title = (
         f"Observers on the harbour manoeuvre ({args.controller} controller, wind "
         f"{args.wind.label()}, seeds 0-{args.seeds - 1}); indices from the measured "
-        "pose as in seed001 Table 6, J_c truth from the true pose"
+        "pose as in Tomera (2014) Table 6, J_c truth from the true pose"
     )
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
     log.discard(args.json or args.markdown)

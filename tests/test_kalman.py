@@ -11,7 +11,7 @@ from shipgym.dynamics import rot, wrap_angle
 from shipgym.observers.base import OBSERVERS, Estimate, OutlierGate, make_observer
 from shipgym.observers.design import (
     DKF_DESIGN,
-    HEADING_VARIANCE_SEED000,
+    HEADING_VARIANCE_TOMERA2011,
     KBF_DESIGN,
     TOMERA_DKF,
     TOMERA_KBF,
@@ -21,7 +21,7 @@ from shipgym.observers.design import (
 from shipgym.observers.kalman import DiscreteKalmanFilter, KalmanBucyFilter
 
 PRESETS = ("tomera-dkf", "tomera-kbf", "dkf", "kbf")
-SIGMA = np.sqrt([0.01, 0.01, HEADING_VARIANCE_SEED000])  # default sensor noise (m, m, rad)
+SIGMA = np.sqrt([0.01, 0.01, HEADING_VARIANCE_TOMERA2011])  # default sensor noise (m, m, rad)
 
 
 # --------------------------------------------------------------------------------------------

@@ -12,9 +12,9 @@ from hypothesis.extra.numpy import arrays
 
 from shipgym.observers.design import (
     DKF_DESIGN,
-    HEADING_VARIANCE_SEED000,
+    HEADING_VARIANCE_TOMERA2011,
     KBF_DESIGN,
-    POSITION_VARIANCE_SEED000,
+    POSITION_VARIANCE_TOMERA2011,
     TOMERA_DKF,
     TOMERA_KBF,
     KalmanDesign,
@@ -179,11 +179,11 @@ def test_discretise_exact_and_euler_double_integrator():
 # --------------------------------------------------------------------------------------------
 
 
-def test_seed001_eq30_from_design_matrices():
+def test_tomera2014_eq30_from_design_matrices():
     """Discrete, T = 1 s, F = I + A T (eq. 5), Q_k = G Q G^T T (eq. 31), filter form."""
     A, C = double_integrator()
     T = 1.0
-    for R in (POSITION_VARIANCE_SEED000, HEADING_VARIANCE_SEED000):
+    for R in (POSITION_VARIANCE_TOMERA2011, HEADING_VARIANCE_TOMERA2011):
         G, Q = np.eye(2), 0.01 * R * np.eye(2)
         L, P, E = dlqe(np.eye(2) + A * T, G, C, G @ Q @ G.T * T, R, form="filter")
         np.testing.assert_allclose(L[:, 0], EQ30, rtol=1e-4)
@@ -193,17 +193,17 @@ def test_seed001_eq30_from_design_matrices():
         np.testing.assert_allclose(Lc[:, 0], [0.07946, 0.44814], rtol=1e-4)
 
 
-def test_seed001_eq35_from_design_matrices():
+def test_tomera2014_eq35_from_design_matrices():
     """Continuous, G Q G^T = 0.01 R I, intensity R_c = R T with T = 1 s (Tomera 2011 eq. 35)."""
     A, C = double_integrator()
-    for R in (POSITION_VARIANCE_SEED000, HEADING_VARIANCE_SEED000):
+    for R in (POSITION_VARIANCE_TOMERA2011, HEADING_VARIANCE_TOMERA2011):
         L, _, _ = lqe(A, np.eye(2), C, 0.01 * R * np.eye(2), R * 1.0)
         np.testing.assert_allclose(L[:, 0], EQ35, rtol=1e-4)
         Lc, _, _ = control.lqe(A, np.eye(2), C, 0.01 * R * np.eye(2), R)
         np.testing.assert_allclose(L, Lc, rtol=1e-8)
 
 
-def test_tomera_presets_reproduce_seed001_gains():
+def test_tomera_presets_reproduce_tomera2014_gains():
     for dof in range(3):
         np.testing.assert_allclose(TOMERA_DKF.dkf_gains(form="filter")[0][dof], EQ30, rtol=1e-4)
         np.testing.assert_allclose(TOMERA_KBF.kbf_gains()[0][dof], EQ35, rtol=1e-4)
@@ -211,7 +211,7 @@ def test_tomera_presets_reproduce_seed001_gains():
     assert TOMERA_DKF.discretisation == "euler"
 
 
-def test_seed000_eqs61_62_do_not_give_seed001_gains():
+def test_tomera2011_eqs61_62_do_not_give_tomera2014_gains():
     """The printed Tomera (2011) design values give other gains (documented in design.py)."""
     A, C = double_integrator()
     Gx, Qx = np.diag([1.0, 0.01]), np.diag([0.1, 0.2])
@@ -224,8 +224,8 @@ def test_seed000_eqs61_62_do_not_give_seed001_gains():
 
 def test_default_variances_match_the_sensors():
     cfg = SensorConfig()
-    assert cfg.position_variance == POSITION_VARIANCE_SEED000
-    assert cfg.heading_variance == pytest.approx(HEADING_VARIANCE_SEED000)
+    assert cfg.position_variance == POSITION_VARIANCE_TOMERA2011
+    assert cfg.heading_variance == pytest.approx(HEADING_VARIANCE_TOMERA2011)
     assert DKF_DESIGN.R == (cfg.position_variance, cfg.position_variance, cfg.heading_variance)
     assert KBF_DESIGN == DKF_DESIGN
 

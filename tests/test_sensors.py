@@ -9,8 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shipgym.observers.sensors import (
-    SEED000_HEADING_VARIANCE,
     SENSOR_PRESETS,
+    TOMERA2011_HEADING_VARIANCE,
     Measurement,
     SensorConfig,
     Sensors,
@@ -37,7 +37,7 @@ def test_defaults_are_the_seed_values():
     assert cfg.position_variance == 0.01  # Tomera (2011) eq. 61
     # Tomera (2011) eq. 62: R_psi = 0.1, read as deg^2
     assert cfg.heading_variance == pytest.approx(0.1 * (math.pi / 180) ** 2)
-    assert SEED000_HEADING_VARIANCE == pytest.approx(3.0462e-5, rel=1e-4)
+    assert TOMERA2011_HEADING_VARIANCE == pytest.approx(3.0462e-5, rel=1e-4)
     assert cfg.antenna_offset == (0.0, 0.0)
     assert cfg.outlier_probability == 0.0 and cfg.dropout_probability == 0.0
     assert cfg.outlier_magnitude == 20.0 and cfg.dropout_duration == 10.0

@@ -82,7 +82,7 @@ class CurrentConfig:
     Attributes:
         speed: Mean current speed (m/s, 0 to :data:`MAX_CURRENT_SPEED`). Lake/harbour: 0
             nominal or ~0.01 U_wind;
-            offshore DP 0.5-1 m/s full scale = 0.10-0.20 m/s at 1:24 (notes 3).
+            offshore DP 0.5-1 m/s full scale = 0.10-0.20 m/s at 1:24 (assumption).
         direction_to: Mean direction the current goes TO (rad, clockwise from north).
         mu: Mean-reversion rate of the speed (1/s, >= 0); assumed 1/300.
         sigma: Intensity of the white noise driving the speed (m/s^1.5, >= 0); 0 = constant.

@@ -182,7 +182,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     dropout, ``valid``, ``outlier`` (a truth flag), applied body thrust ``tau``); ``quay_contact``,
     ``contacts``; the ``reward_*`` terms; and at the end of every episode (terminated or
     truncated) ``episode_metrics``
-    (seed001 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
+    (Tomera 2014 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
 
     ## Arguments
     | Argument | Default | Description |

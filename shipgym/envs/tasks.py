@@ -63,7 +63,7 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
     combined (surge and sway together); and, by default, a wind of 0-``max_wind_speed`` m/s
     from any direction with the default gusts (4 m/s on the beam exceeds the 248 N m yaw
     capacity), a constant lake current of 0-``max_current_speed`` m/s in any direction
-    (notes 3: ~1 % of the wind) and sensor noise within the lake presets (DGPS sigma
+    (~1 % of the wind, assumed) and sensor noise within the lake presets (DGPS sigma
     0.07-0.15 m per axis, gyrocompass 0.2-0.45 deg) on top of the ``"default"`` sensors.
     The episode terminates when the last leg completes; time limit 800 control steps.
 

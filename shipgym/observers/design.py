@@ -51,7 +51,7 @@ matrices, in the spirit of Tomera (2011) eqs. 61-62 (``G``, ``Q``, ``R`` per DOF
     G = I_2,   Q = 0.01 R I_2,   R = (0.01 m^2, 0.01 m^2, R_psi),   T = 1 s
 
 with the measurement variances ``R_x = R_y = 0.01`` and ``R_psi = 0.1`` of Tomera (2011) (section 5;
-see :data:`HEADING_VARIANCE_SEED000` for the unit of ``R_psi``). Only the ratio ``Q / R``
+see :data:`HEADING_VARIANCE_TOMERA2011` for the unit of ``R_psi``). Only the ratio ``Q / R``
 matters for the gains; using the sensors' real variances for ``R`` keeps the covariance
 ``P`` (and with it NIS gating) calibrated.
 
@@ -94,14 +94,14 @@ import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from .._config import from_mapping, param
-from .sensors import SEED000_HEADING_VARIANCE
+from .sensors import TOMERA2011_HEADING_VARIANCE
 
 __all__ = [
     "DKF_DESIGN",
-    "HEADING_VARIANCE_SEED000",
+    "HEADING_VARIANCE_TOMERA2011",
     "KBF_DESIGN",
     "KalmanDesign",
-    "POSITION_VARIANCE_SEED000",
+    "POSITION_VARIANCE_TOMERA2011",
     "TOMERA_DKF",
     "TOMERA_KBF",
     "discretise",
@@ -110,12 +110,12 @@ __all__ = [
     "lqe",
 ]
 
-POSITION_VARIANCE_SEED000 = 0.01
+POSITION_VARIANCE_TOMERA2011 = 0.01
 """DGPS position variance per axis, m^2 (Tomera 2011 section 5: ``R_x = R_y = 0.01``)."""
 
-HEADING_VARIANCE_SEED000 = SEED000_HEADING_VARIANCE
+HEADING_VARIANCE_TOMERA2011 = TOMERA2011_HEADING_VARIANCE
 """Gyrocompass heading variance, rad^2: Tomera's (2011) ``R_psi = 0.1`` read as deg^2 (the sensors'
-default, :data:`shipgym.observers.sensors.SEED000_HEADING_VARIANCE`).
+default, :data:`shipgym.observers.sensors.TOMERA2011_HEADING_VARIANCE`).
 
 Tomera (2011) gives no unit. As rad^2 it would be a 18 deg standard deviation, impossible for a
 gyrocompass next to a 0.1 m DGPS; as deg^2 it is 0.32 deg, a typical gyrocompass accuracy
@@ -478,7 +478,7 @@ class KalmanDesign:
         ((1e-4, 0.0), (0.0, 1e-4)), "m^2/s^3, m^2/s (rad for psi)", "Tomera (2011) eqs. 61-62"
     )
     R: tuple = param(
-        (POSITION_VARIANCE_SEED000, POSITION_VARIANCE_SEED000, HEADING_VARIANCE_SEED000),
+        (POSITION_VARIANCE_TOMERA2011, POSITION_VARIANCE_TOMERA2011, HEADING_VARIANCE_TOMERA2011),
         "m^2, m^2, rad^2",
         "Tomera (2011) section 5: R_x = R_y = 0.01, R_psi = 0.1 (deg^2)",
     )
@@ -592,7 +592,7 @@ class KalmanDesign:
 
 
 def _tomera(discretisation: str) -> KalmanDesign:
-    R = (POSITION_VARIANCE_SEED000, POSITION_VARIANCE_SEED000, HEADING_VARIANCE_SEED000)
+    R = (POSITION_VARIANCE_TOMERA2011, POSITION_VARIANCE_TOMERA2011, HEADING_VARIANCE_TOMERA2011)
     Q = tuple(_as_tuple(0.01 * r * np.eye(2)) for r in R)
     return KalmanDesign(G=_as_tuple(np.eye(2)), Q=Q, R=R, T=1.0, discretisation=discretisation)
 
@@ -617,7 +617,7 @@ def _tuned() -> KalmanDesign:
     return KalmanDesign(
         G=((1.0,), (0.0,)),
         Q=(((ACCEL_PSD_XY,),), ((ACCEL_PSD_XY,),), ((ACCEL_PSD_PSI,),)),
-        R=(POSITION_VARIANCE_SEED000, POSITION_VARIANCE_SEED000, HEADING_VARIANCE_SEED000),
+        R=(POSITION_VARIANCE_TOMERA2011, POSITION_VARIANCE_TOMERA2011, HEADING_VARIANCE_TOMERA2011),
         T=1.0,
         discretisation="exact",
     )

@@ -23,7 +23,7 @@ Noise defaults
   would swamp every heading plot of the paper. Tomera states and plots headings in degrees
   (Tomera 2014 Table 6, eq. 57: ``psi_E`` in deg), so the project reads it as ``0.1 deg^2``
   (sigma 0.316 deg):
-  :data:`SEED000_HEADING_VARIANCE` ``= 0.1 (pi/180)^2 = 3.046e-5 rad^2``. Pass
+  :data:`TOMERA2011_HEADING_VARIANCE` ``= 0.1 (pi/180)^2 = 3.046e-5 rad^2``. Pass
   ``heading_variance=0.1`` for the literal rad^2 reading.
 - ``dgps`` preset: sigma 2 m per axis, the plain DGPS of Artyszuk (2003) ("standard deviation
   (equal in north and east directions) of order 2 [m]").
@@ -56,7 +56,7 @@ from shipgym._config import from_mapping, param
 from shipgym.dynamics import wrap_angle
 
 __all__ = [
-    "SEED000_HEADING_VARIANCE",
+    "TOMERA2011_HEADING_VARIANCE",
     "SENSOR_PRESETS",
     "Measurement",
     "SensorConfig",
@@ -65,7 +65,7 @@ __all__ = [
 ]
 
 #: Tomera (2011) eq. 62 ``R_psi = 0.1`` read as deg^2, in rad^2 (sigma 0.316 deg)
-SEED000_HEADING_VARIANCE = 0.1 * (math.pi / 180.0) ** 2
+TOMERA2011_HEADING_VARIANCE = 0.1 * (math.pi / 180.0) ** 2
 
 _EPS_T = 1e-9  # relative tolerance on sample instants (s / period)
 
@@ -92,7 +92,7 @@ class SensorConfig:
         0.01, "m^2", "Tomera (2011) eq. 61: R_x = R_y = 0.01 (Blue Lady DGPS, experimental)"
     )
     heading_variance: float = param(
-        SEED000_HEADING_VARIANCE,
+        TOMERA2011_HEADING_VARIANCE,
         "rad^2",
         "Tomera (2011) eq. 62: R_psi = 0.1, read as deg^2 (sigma 0.316 deg; see module docstring)",
     )
