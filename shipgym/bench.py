@@ -299,14 +299,37 @@ def bench_observers(
     from shipgym.disturbances import WindConfig
 
     wind = WindConfig.coerce(wind, name="wind")
+    if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
+        raise ValueError(f"seeds must be an int >= 1 (runs seeds 0..seeds-1), got {seeds!r}")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 1):  # fmt: skip
+        raise ValueError(f"workers must be None (one per CPU) or an int >= 1, got {workers!r}")
+    if isinstance(observers, str) or not observers:
+        raise ValueError(f"observers must be a non-empty list of names, got {observers!r}")
     jobs = [(obs, s, wind, controller) for obs in observers for s in range(seeds)]
     return run_jobs(
         _one, jobs, workers=workers, progress=progress, desc="observers x seeds", on_result=on_row
     )
 
 
+def mean_std(values: Sequence[float | None], fmt: str = ".4f") -> str:
+    """``"mean +- std"`` of the finite values (a failed run's index is NaN or None), or ``n/a``."""
+    x = np.array([np.nan if v is None else v for v in values], dtype=float)
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return "n/a"
+    return f"{x.mean():{fmt}} +- {x.std():{fmt}}"
+
+
+def _get(d: dict[str, Any] | None, key: str) -> float | None:
+    return None if d is None else d.get(key)
+
+
 def observer_table(rows: Sequence[dict[str, Any]]) -> str:
-    """A markdown table in the form of Tomera (2014) Table 6 (mean +- std over seeds)."""
+    """A markdown table in the form of Tomera (2014) Table 6 (mean +- std over seeds).
+
+    Means and standard deviations are over the runs whose indices are defined (a run that
+    failed has none, see :func:`shipgym.metrics.honest_indices`); ``completed`` counts them."""
     names = list(dict.fromkeys(r["observer"] for r in rows))
     head = (
         "| observer | runs | completed | x_E (m) | y_E (m) | psi_E (deg) | J_c "
@@ -315,14 +338,11 @@ def observer_table(rows: Sequence[dict[str, Any]]) -> str:
     lines = [head, "|" + "---|" * 11]
     for name in names:
         rs = [r for r in rows if r["observer"] == name]
-        meas = {k: np.array([r["measured"][k] for r in rs]) for k in _INDICES}
-        truth = np.array([r["truth"]["J_c"] for r in rs])
-        rm = {k: np.array([r["rmse"][k] for r in rs]) for k in ("u", "v", "r")}
+        meas = {k: [_get(r["measured"], k) for r in rs] for k in _INDICES}
+        truth = [_get(r["truth"], "J_c") for r in rs]
+        rm = {k: [_get(r["rmse"], k) for r in rs] for k in ("u", "v", "r")}
         done = sum(r["completed"] and not r["quay_contact"] for r in rs)
-
-        def ms(a: np.ndarray, f: str = ".4f") -> str:
-            return f"{a.mean():{f}} +- {a.std():{f}}"
-
+        ms = mean_std
         lines.append(
             f"| {name} | {len(rs)} | {done}/{len(rs)} | {ms(meas['x_E'])} | {ms(meas['y_E'])} "
             f"| {ms(meas['psi_E'], '.3f')} | {ms(meas['J_c'])} | {ms(truth)} "

@@ -30,7 +30,7 @@ from shipgym.guidance import plan as named_plan
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
 
-from .physics import NO_CURRENT, VesselPhysics
+from .physics import MAX_TIMESTEP, MIN_TIMESTEP, NO_CURRENT, VesselPhysics
 
 __all__ = [
     "MAX_CONTROL_PERIOD",
@@ -43,13 +43,6 @@ __all__ = [
     "SCENES",
 ]
 
-#: smallest physics timestep (s). The default 0.05 s resolves the fastest dynamics (thruster
-#: lags of 1-2 s, the hull's surge/sway/yaw time constants of tens of seconds) many times
-#: over; below 1e-4 s each simulated second costs more than 10 000 MuJoCo steps for nothing.
-MIN_TIMESTEP = 1e-4
-#: largest physics timestep (s): half the shortest thruster time constant (1 s, the tunnel
-#: thrusters), where MuJoCo's semi-implicit Euler still tracks the first-order lags.
-MAX_TIMESTEP = 0.5
 #: most physics steps per control step (``control_period / timestep``); bounds the work of
 #: one ``env.step`` (10 000 steps are about half a second).
 MAX_SUBSTEPS = 10_000

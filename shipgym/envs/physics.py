@@ -58,7 +58,7 @@ from shipgym.dynamics import (
 )
 from shipgym.envs._mujoco import mujoco
 
-__all__ = ["VesselPhysics", "SimulationDiverged", "DEFAULT_SCENE"]
+__all__ = ["VesselPhysics", "SimulationDiverged", "DEFAULT_SCENE", "MAX_TIMESTEP", "MIN_TIMESTEP"]
 
 DEFAULT_SCENE = ("mjcf", "blue_lady", "scene.xml")
 
@@ -79,6 +79,15 @@ def _current_config(current: object) -> CurrentConfig:
 
 class SimulationDiverged(RuntimeError):
     """The simulation produced a non-finite or physically absurd state; it was stopped."""
+
+
+#: smallest physics timestep (s). The default 0.05 s resolves the fastest dynamics (thruster
+#: lags of 1-2 s, the hull's surge/sway/yaw time constants of tens of seconds) many times
+#: over; below 1e-4 s each simulated second costs more than 10 000 MuJoCo steps for nothing.
+MIN_TIMESTEP = 1e-4
+#: largest physics timestep (s): half the shortest thruster time constant (1 s, the tunnel
+#: thrusters), where MuJoCo's semi-implicit Euler still tracks the first-order lags.
+MAX_TIMESTEP = 0.5
 
 
 class VesselPhysics:
@@ -104,7 +113,8 @@ class VesselPhysics:
             (:meth:`wave_motion`).
         xml_path: MJCF scene with a body ``hull`` on joints ``x``, ``y``, ``psi`` and actuators
             ``main_propeller``, ``bow_tunnel``, ``stern_tunnel`` (default: the Blue Lady scene).
-        timestep: physics step (s); ``None`` keeps the MJCF value (0.05 s).
+        timestep: physics step (s), :data:`MIN_TIMESTEP` to :data:`MAX_TIMESTEP`; ``None``
+            keeps the MJCF value (0.05 s).
 
     The physics owns no task logic: commands in, state out (dm_control's Physics/Task split).
     """
@@ -142,8 +152,13 @@ class VesselPhysics:
             raise FileNotFoundError(f"MJCF file not found: {path}")
         self.model = mujoco.MjModel.from_xml_path(str(path))
         if timestep is not None:
-            if not (timestep > 0 and math.isfinite(timestep)):
-                raise ValueError(f"timestep must be a positive number of seconds, got {timestep!r}")
+            if isinstance(timestep, bool) or not isinstance(timestep, int | float | np.floating):
+                raise TypeError(f"timestep must be a number of seconds, got {timestep!r}")
+            if not MIN_TIMESTEP <= timestep <= MAX_TIMESTEP:
+                raise ValueError(
+                    f"timestep must be from {MIN_TIMESTEP:g} to {MAX_TIMESTEP:g} s, "
+                    f"got {timestep!r}"
+                )
             self.model.opt.timestep = float(timestep)
         self.data = mujoco.MjData(self.model)
         self._bind_model()

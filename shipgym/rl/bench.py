@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from shipgym.bench import mean_std as _ms
 from shipgym.bench import run_jobs
 
 from .evaluation import DEFAULT_WIND, check_observer, default_observer
@@ -151,14 +152,6 @@ def bench_controllers(
     return run_jobs(
         _job, jobs, workers=workers, progress=progress, desc="controllers x seeds", on_result=on_row
     )
-
-
-def _ms(a: Sequence[float], fmt: str = ".3f") -> str:
-    x = np.asarray(a, dtype=float)
-    x = x[np.isfinite(x)]
-    if x.size == 0:
-        return "n/a"
-    return f"{x.mean():{fmt}} +- {x.std():{fmt}}"
 
 
 def controller_table(rows: Sequence[dict[str, Any]]) -> str:
