@@ -45,7 +45,7 @@ _RMSE = ("u", "v", "r", "x", "y", "psi")
 
 
 def _one(job: tuple[str, int, Any, str]) -> dict[str, Any]:
-    from shipgym.cli import run_episode
+    from shipgym.runner import run_episode
 
     observer, seed, wind, controller = job
     res = run_episode("harbour", controller=controller, observer=observer, seed=seed, wind=wind)

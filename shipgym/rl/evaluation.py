@@ -3,7 +3,7 @@
 One runner for everything that compares controllers: the periodic harbour evaluation during
 training (:class:`shipgym.rl.train.HarbourEvalCallback`) and ``shipgym bench controllers``
 (:mod:`shipgym.rl.bench`). A result row carries the same keys as
-:func:`shipgym.cli.run_episode` (``completed``, ``quay_contact``, ``x_E``, ``y_E``,
+:func:`shipgym.runner.run_episode` (``completed``, ``quay_contact``, ``x_E``, ``y_E``,
 ``psi_E``, ``J_c``, ``measured``, ``duration_s``, ``thrust_mean_abs``, ...).
 """
 
@@ -102,7 +102,7 @@ def run_env_episode(
 ) -> dict[str, Any]:
     """Run one episode to its end; ``policy(obs) -> action`` or zeros. Returns the result row.
 
-    The row has the keys of :func:`shipgym.cli.run_episode` that describe the run
+    The row has the keys of :func:`shipgym.runner.run_episode` that describe the run
     (``completed``, ``legs_completed``, ``duration_s``, ``quay_contact``, ``terminated``,
     ``truncated``, ``x_E``, ``y_E``, ``psi_E`` (deg), ``J_c``, ``measured``, ``leg_times``,
     ``thrust_mean_abs`` (N), ``thrust_total_variation`` (N), ``saturated_fraction``,

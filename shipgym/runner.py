@@ -1,0 +1,268 @@
+"""Run one closed-loop episode: the library behind ``shipgym run`` and the benchmarks.
+
+:func:`run_episode` builds the env stack (observer, controller or learned policy, optional
+recording), runs one episode and returns its results as plain data; with ``json_path`` it
+writes them, renamed onto the name together with the recording (:mod:`shipgym._io`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from shipgym._safeload import jsonable
+
+__all__ = ["ENV_DEFAULT", "run_episode"]
+
+
+class _EnvDefault:
+    """The type of :data:`ENV_DEFAULT`."""
+
+    def __repr__(self) -> str:
+        return "ENV_DEFAULT"
+
+
+#: ``run_episode(wind=...)`` default: pass no wind, so the env uses its own default
+ENV_DEFAULT: Any = _EnvDefault()
+
+
+def run_episode(
+    scenario: str,
+    *,
+    controller: str = "pid",
+    observer: str | None = None,
+    seed: int = 0,
+    wind: Any = ENV_DEFAULT,
+    plant: str = "default",
+    progress: bool = False,
+    env_kwargs: dict[str, Any] | None = None,
+    record: Path | None = None,
+    spawn: bool = False,
+    report: Path | None = None,
+    json_path: Path | None = None,
+    scenario_preset: str | None = None,
+) -> dict[str, Any]:
+    """Run one closed-loop episode and return its results (the ``--json`` content).
+
+    Args:
+        scenario: env scenario (``harbour``, ``station-keeping``, ``tracking``) or env id.
+        controller, observer: names (see ``shipgym list``). Observer ``None``: the truth
+            for a classical controller, the model's own observer for a learned one;
+            ``"truth"`` always means the truth (a learned policy trained on an observer's
+            estimate then runs on the true state: an experiment, warned about and recorded
+            in ``observer`` and ``model``).
+        seed: episode seed (an int >= 0).
+        wind: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
+            (``"3@300"``, ``(speed m/s, from deg)``, a ``WindConfig``, ...) or ``None`` (no
+            aerodynamic loads); by default the env's own (3 m/s from 300 deg for the harbour
+            and station keeping, a drawn wind for tracking). The result's ``wind`` is the wind
+            the physics used.
+        plant: plant variant.
+        progress: show a progress bar.
+        env_kwargs: further environment arguments (they win over ``wind`` and ``plant``).
+        record: write a rerun recording (``.rrd``) of the episode here.
+        spawn: also try to open the rerun viewer.
+        report: write PNG figures and ``metrics.md`` into this folder.
+        json_path: also write the results there (JSON). The recording and this file are
+            written under partial names and renamed together when both are complete, so an
+            earlier pair is replaced by a complete new pair or left as it was.
+        scenario_preset: the scenario preset or file the env arguments came from (recorded
+            in the results).
+
+    Raises:
+        shipgym._io.WriteFailed: the results (``.results``) or the recording could not be
+            written (a full disk, a removed folder).
+        KeyboardInterrupt: interrupted: the recording stays at its partial name
+            (``NAME.partial.rrd``), the JSON is not written and an earlier pair is untouched.
+    """
+
+    import shipgym
+    from shipgym.disturbances import WindConfig
+    from shipgym.metrics import honest_indices
+
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be an int >= 0, got {seed!r}")
+
+    kwargs: dict[str, Any] = {"plant": plant}
+    if wind is not ENV_DEFAULT:
+        kwargs["wind"] = WindConfig.coerce(wind, name="wind")
+    kwargs.update(env_kwargs or {})
+    from shipgym.controllers.learned import is_learned_controller
+
+    if is_learned_controller(controller):
+        from shipgym.controllers.learned import make_learned_env
+
+        # the learned policy runs with the observer it was trained with unless one is named;
+        # an explicit one is honoured and recorded below ("observer", "model")
+        obs_kw = {} if observer is None else {"observer": observer}
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*was trained with observer")
+            env = make_learned_env(scenario, controller, **obs_kw, **kwargs)
+        meta = env.policy.metadata  # type: ignore[attr-defined]
+        model_info: dict[str, Any] | None = {
+            "path": str(env.model_path),  # type: ignore[attr-defined]
+            "algorithm": meta.algorithm,
+            "trained_on": meta.env_id,
+            "trained_observer": meta.observer or "truth",
+        }
+    else:
+        env = shipgym.make(scenario, observer=observer, controller=controller, **kwargs)
+        model_info = None
+    if report is not None and record is None:
+        record = report / "run.rrd"
+    if record is not None:
+        from shipgym.viz import RecordEpisode
+
+        env = RecordEpisode(env, record, spawn=spawn, rename=False)
+    limit = env.spec.max_episode_steps if env.spec is not None else None
+    plan_finite = bool(env.unwrapped.terminate_on_finish)  # type: ignore[attr-defined]
+    bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
+    t0 = time.perf_counter()
+    try:
+        env.reset(seed=seed)
+        wc = env.unwrapped.wind_config  # type: ignore[attr-defined]  (the episode's, after reset)
+        wind_out = (
+            None
+            if wc is None
+            else {"speed": wc.speed, "from_deg": math.degrees(wc.direction_from) % 360.0}
+        )
+        zero = np.zeros(3, dtype=np.float32)
+        terminated = truncated = False
+        info: dict[str, Any] = {}
+        while not (terminated or truncated):
+            _, _, terminated, truncated, info = env.step(zero)
+            bar.update(1)
+            bar.set_postfix(leg=info["leg"] + 1, t=f"{info['t']:.0f}s", refresh=False)
+        metrics = env.unwrapped.episode_metrics()  # type: ignore[attr-defined]
+        waves_out = _describe_waves(env.unwrapped.physics.wave_config)  # type: ignore[attr-defined]
+        current_out = _describe_current(env.unwrapped.physics.current_config)  # type: ignore[attr-defined]
+    finally:
+        bar.close()
+        env.close()
+    wall = time.perf_counter() - t0
+    files: list[str] = []
+    if record is not None:
+        files.append(str(record))
+    if report is not None:
+        from shipgym.viz import write_report
+
+        run = getattr(env, "last_run", None)
+        files += [str(p) for p in write_report(run if run is not None else record, report)]
+    idx = honest_indices(metrics, plan_finite=plan_finite)
+    res = {
+        "scenario": scenario,
+        "scenario_preset": scenario_preset,
+        "env_id": env.spec.id if env.spec is not None else None,
+        "controller": controller,
+        "observer": _observer_of(env) or "truth",
+        "seed": seed,
+        "plant": plant,
+        "wind": wind_out,
+        "waves": waves_out,
+        "current": current_out,
+        "model": model_info,
+        "completed": metrics["completed"],
+        "legs_completed": metrics["legs_completed"],
+        "duration_s": metrics["duration_s"],
+        "quay_contact": metrics["quay_contact"],
+        "terminated": bool(terminated),
+        "truncated": bool(truncated),
+        "x_E": idx["x_E"],
+        "y_E": idx["y_E"],
+        "psi_E": idx["psi_E"],
+        "J_c": idx["J_c"],
+        "measured": idx["measured"],
+        "indices_note": idx["indices_note"],
+        "partial_indices": idx["partial_indices"],
+        "n_samples": metrics["n_samples"],
+        "leg_times": metrics["leg_times"],
+        "thrust_mean_abs": metrics["thrust_mean_abs"],
+        "thrust_total_variation": metrics["thrust_total_variation"],
+        "saturated_fraction": metrics["saturated_fraction"],
+        "rmse": info.get("estimation_rmse"),
+        "wall_time_s": wall,
+        "files": files,
+    }
+    if record is not None or json_path is not None:
+        _commit_results(res, env if record is not None else None, json_path)
+    return res
+
+
+def _commit_results(res: dict[str, Any], recorder: Any, json_path: Path | None) -> None:
+    """Rename the recording (``recorder.ended``) and the JSON results onto their names together.
+
+    A JSON file that cannot be written leaves no stale JSON of an earlier run next to the new
+    recording; the failure is raised as :class:`shipgym._io.WriteFailed` with the results.
+    """
+    from shipgym._io import WriteFailed, os_reason, replace_together, write_partial_text
+
+    moves = list(recorder.ended) if recorder is not None else []
+    stale: list[Path] = []
+    failed: list[str] = []
+    if json_path is not None:
+        try:
+            tmp = write_partial_text(json_path, json.dumps(jsonable(res), indent=2))
+        except OSError as exc:
+            failed.append(f"cannot write the results to {json_path} ({os_reason(exc)})")
+            stale.append(json_path)
+        else:
+            if tmp is not None:
+                moves.append((tmp, json_path))
+    try:
+        replace_together(moves, remove=stale)
+        if recorder is not None:
+            recorder.ended.clear()
+    except OSError as exc:
+        where = ", ".join(str(dst) for _, dst in moves)
+        failed.append(f"cannot rename the finished files onto {where} ({os_reason(exc)})")
+    if failed:
+        raise WriteFailed("; ".join(failed), res)
+
+
+def _observer_of(env: Any) -> str | None:
+    """Name of the observer in a wrapper stack (``None``: the controller sees the truth)."""
+    while hasattr(env, "env"):
+        name = getattr(env, "observer_name", None)
+        if name is not None:
+            return str(name)
+        env = env.env
+    return None
+
+
+def _progress(total: int | None, enabled: bool, desc: str) -> Any:
+    """A tqdm bar on stderr, drawn only when ``enabled`` and stderr is a terminal."""
+    from tqdm import tqdm
+
+    from shipgym._argtypes import progress_enabled
+
+    on = enabled and progress_enabled()
+    return tqdm(total=total, disable=not on, desc=desc, unit="step", leave=False)
+
+
+def _describe_waves(w: Any) -> dict[str, Any] | None:
+    """The waves of a run as plain data (``None``: no waves)."""
+    if w is None:
+        return None
+    return {
+        "spectrum": w.spectrum,
+        "Hs": float(w.Hs),
+        "Tp": float(w.Tp),
+        "from_deg": math.degrees(float(w.direction_from)),
+    }
+
+
+def _describe_current(c: Any) -> dict[str, Any] | None:
+    """The current of a run as plain data (``None``: no current)."""
+    if c is None:
+        return None
+    return {
+        "speed": float(c.speed),
+        "to_deg": math.degrees(float(c.direction_to)),
+        "varying": bool(c.sigma > 0 or c.direction_sigma > 0),
+    }
