@@ -15,9 +15,14 @@ SEED ?=
 
 SHELL := /bin/bash
 .SHELLFLAGS := -o pipefail -ec
-# This machine's pip configuration adds local package indexes that lack most names; pip's
-# "Location ... is ignored" notice for each of them is noise.
-QUIET := 2>&1 | { grep -v "^WARNING: Location '.*' is ignored" || true; }
+# pip install, quietly: this machine's pip configuration adds local package indexes that lack
+# most names, and pip's "Location ... is ignored" notice for each of them is noise; so is
+# setuptools' note on editable installs.
+define pip_install
+	@echo "pip install $(1)"
+	@PYTHONWARNINGS="ignore:Editable installation" $(PIP) install --quiet $(1) 2>&1 | \
+		{ grep -v "^WARNING: Location '.*' is ignored" || true; }
+endef
 
 .DEFAULT_GOAL := help
 .PHONY: help demo test test-random test-slow bench lint venv rl lock clean
@@ -34,9 +39,9 @@ $(PY):
 # The locked pip first, then every locked package, then the project without dependencies (the
 # lock has the build backend, so no isolated build environment is fetched).
 $(STAMP): $(LOCK) pyproject.toml | $(PY)
-	$(PIP) install --quiet "$$(grep -m1 '^pip==' $(LOCK))" $(QUIET)
-	$(PIP) install --quiet -r $(LOCK) $(QUIET)
-	$(PIP) install --quiet --no-deps --no-build-isolation -e . $(QUIET)
+	$(call pip_install,"$$(grep -m1 '^pip==' $(LOCK))")
+	$(call pip_install,-r $(LOCK))
+	$(call pip_install,--no-deps --no-build-isolation -e .)
 	@touch $(STAMP)
 
 venv: $(STAMP) ## the venv with the core, test and dev dependencies (no torch)
@@ -45,8 +50,8 @@ venv: $(STAMP) ## the venv with the core, test and dev dependencies (no torch)
 # on the machine (a pip that finds only the index's Linux build also installs its CUDA
 # packages, which the lock leaves out); then stable-baselines3 and the rest of the extra.
 $(RL_STAMP): $(STAMP) $(LOCK_RL)
-	$(PIP) install --quiet "$$(grep -m1 '^torch==' $(LOCK_RL))" -c $(LOCK) -c $(LOCK_RL) $(QUIET)
-	$(PIP) install --quiet -r $(LOCK_RL) -c $(LOCK) $(QUIET)
+	$(call pip_install,"$$(grep -m1 '^torch==' $(LOCK_RL))" -c $(LOCK) -c $(LOCK_RL))
+	$(call pip_install,-r $(LOCK_RL) -c $(LOCK))
 	@touch $(RL_STAMP)
 
 rl: $(RL_STAMP) ## add the rl extra (torch 2.13.0, stable-baselines3) to the venv
