@@ -10,8 +10,7 @@ LOCK_RL := requirements/lock-rl.txt
 # Stamps: a changed lock file (or pyproject.toml) reinstalls. tests/test_lock.py looks for them.
 STAMP    := $(VENV)/.lock-core
 RL_STAMP := $(VENV)/.lock-rl
-# pytest-random-order seed of `make test-random` (empty: a new one each run, printed in the header)
-SEED ?=
+# pytest-random-order seed of `make test-random` (unset: a new one each run, printed first)
 
 SHELL := /bin/bash
 .SHELLFLAGS := -o pipefail -ec
@@ -68,8 +67,10 @@ test: $(RL_STAMP) ## the test suite (slow tests skipped)
 	$(PY) -m pytest -q
 
 test-random: $(RL_STAMP) ## the test suite in a shuffled order (SEED=N repeats an order)
-	$(PY) -m pytest -q --random-order-bucket=global \
-		$(if $(SEED),--random-order-seed=$(SEED))
+	@seed=$${SEED:-$$(( RANDOM * 32768 + RANDOM ))}; \
+	echo "shuffled test order, seed $$seed: 'make test-random SEED=$$seed' repeats it"; \
+	echo "$(PY) -m pytest -q --random-order-bucket=global --random-order-seed=$$seed"; \
+	$(PY) -m pytest -q --random-order-bucket=global --random-order-seed=$$seed
 
 test-slow: $(RL_STAMP) ## only the slow tests (the fuzz test of random episodes, ...)
 	$(PY) -m pytest -q -m slow
