@@ -1,15 +1,17 @@
 # shipgym: every target creates/reuses .venv in the repository and installs what it needs from
-# the lock files (requirements/lock.txt, requirements/lock-rl.txt), then the project itself.
-# `make help` lists the targets.
+# the lock files (requirements/lock.txt: core, lock-dev.txt: test and dev extras, lock-rl.txt:
+# rl extra), then the project itself. `make help` lists the targets.
 PYTHON ?= python3.11
 VENV   := .venv
 PY     := $(VENV)/bin/python
 PIP    := $(PY) -m pip
-LOCK    := requirements/lock.txt
-LOCK_RL := requirements/lock-rl.txt
+LOCK     := requirements/lock.txt
+LOCK_DEV := requirements/lock-dev.txt
+LOCK_RL  := requirements/lock-rl.txt
 # Stamps: a changed lock file (or pyproject.toml) reinstalls. tests/test_lock.py looks for them.
-STAMP    := $(VENV)/.lock-core
-RL_STAMP := $(VENV)/.lock-rl
+STAMP     := $(VENV)/.lock-core
+DEV_STAMP := $(VENV)/.lock-dev
+RL_STAMP  := $(VENV)/.lock-rl
 # pytest-random-order seed of `make test-random` (unset: a new one each run, printed first)
 
 SHELL := /bin/bash
@@ -43,17 +45,22 @@ $(STAMP): $(LOCK) pyproject.toml | $(PY)
 	$(call pip_install,--no-deps --no-build-isolation -e .)
 	@touch $(STAMP)
 
-venv: $(STAMP) ## the venv with the core, test and dev dependencies (no torch)
+# The test and dev extras (pytest, hypothesis, python-control, ruff, mypy).
+$(DEV_STAMP): $(STAMP) $(LOCK_DEV)
+	$(call pip_install,-r $(LOCK_DEV) -c $(LOCK))
+	@touch $(DEV_STAMP)
+
+venv: $(DEV_STAMP) ## the venv with the core, test and dev dependencies (no torch)
 
 # The RL extra: torch on its own first, with plain pip, which picks the CPU build where one lies
 # on the machine (a pip that finds only the index's Linux build also installs its CUDA
 # packages, which the lock leaves out); then stable-baselines3 and the rest of the extra.
-$(RL_STAMP): $(STAMP) $(LOCK_RL)
-	$(call pip_install,"$$(grep -m1 '^torch==' $(LOCK_RL))" -c $(LOCK) -c $(LOCK_RL))
-	$(call pip_install,-r $(LOCK_RL) -c $(LOCK))
+$(RL_STAMP): $(DEV_STAMP) $(LOCK_RL)
+	$(call pip_install,"$$(grep -m1 '^torch==' $(LOCK_RL))" -c $(LOCK) -c $(LOCK_DEV) -c $(LOCK_RL))
+	$(call pip_install,-r $(LOCK_RL) -c $(LOCK) -c $(LOCK_DEV))
 	@touch $(RL_STAMP)
 
-rl: $(RL_STAMP) ## add the rl extra (torch 2.13.0, stable-baselines3) to the venv
+rl: $(RL_STAMP) ## the venv plus the rl extra (torch 2.13.0 CPU build first, stable-baselines3)
 
 # The harbour manoeuvre of Tomera (2014) in the lake-trial wind, PID + Kalman-Bucy filter:
 # a rerun recording, PNG figures and metrics.md in runs/demo/.
@@ -79,7 +86,7 @@ bench: $(STAMP) ## physics and disturbance speed (ratios and us per call)
 	$(PY) benchmarks/bench_physics.py
 	$(PY) benchmarks/bench_disturbances.py
 
-lint: $(STAMP) ## ruff check and format check
+lint: $(DEV_STAMP) ## ruff check and format check
 	$(VENV)/bin/ruff check shipgym tests benchmarks
 	$(VENV)/bin/ruff format --check shipgym tests benchmarks
 

@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Regenerate the lock files from the version ranges in pyproject.toml (run by `make lock`):
-#   requirements/lock.txt     the core dependencies + the test and dev extras, with the
-#                             installer and build tools (pip, setuptools, wheel)
-#   requirements/lock-rl.txt  what the rl extra adds on top (torch, stable-baselines3, ...)
-# Each is the `pip freeze` of a fresh temporary venv: core + test + dev first; then torch on its
-# own, with plain pip, before stable-baselines3, the versions of lock.txt held as constraints.
-# torch's CUDA runtime packages (nvidia-*, triton) are left out of the lock: it records the CPU
-# build's dependency set, and a machine whose pip finds a CUDA build of the pinned torch gets
-# those packages from pip along with it.
+#   requirements/lock.txt      the core dependencies (what `make demo` needs), with the
+#                              installer and build tools (pip, setuptools, wheel)
+#   requirements/lock-dev.txt  what the test and dev extras add (pytest, hypothesis, ruff, ...)
+#   requirements/lock-rl.txt   what the rl extra adds on top of both (torch, stable-baselines3)
+# Each is the `pip freeze` of one fresh temporary venv, built in that order, every step holding
+# the versions of the files before it as constraints; torch goes in on its own, with plain
+# pip, before stable-baselines3. torch's CUDA runtime packages (nvidia-*, triton) are left out
+# of the lock: it records the CPU build's dependency set, and a machine whose pip finds a CUDA
+# build of the pinned torch gets those packages from pip along with it.
 set -euo pipefail
 PYTHON=${PYTHON:-python3.11}
 cd "$(dirname "$0")/.."
@@ -36,32 +37,40 @@ freeze() {
         sed -E 's/^([A-Za-z0-9_.-]+==[^+;[:space:]]+)\+[A-Za-z0-9.]+/\1/' |
         LC_ALL=C sort -f
 }
+# the pins of the lock files written so far, to leave out of the next one
+locked() { cat "$@" | grep -v '^#'; }
 
-# 1. core + test + dev
-quiet "$py" -m pip install --quiet ".[test,dev]"
+# 1. core
+quiet "$py" -m pip install --quiet .
 {
-    header "shipgym: core dependencies + the test and dev extras (make demo, test, lint)"
+    header "shipgym: the core dependencies (make demo, make bench)"
     freeze
 } >"$tmp/lock.txt"
 
-# 2. the rl extra: torch first (plain pip, so it finds the CPU build where one lies on disk),
-#    then the rest of the extra; lock.txt's versions held
-torch=$("$py" - <<'EOF'
+# 2. the test and dev extras
+quiet "$py" -m pip install --quiet ".[test,dev]" -c "$tmp/lock.txt"
+{
+    header "shipgym: what the test and dev extras add to lock.txt (make test, make lint)"
+    freeze | grep -vxFf <(locked "$tmp/lock.txt")
+} >"$tmp/lock-dev.txt"
+
+# 3. the rl extra: torch first (plain pip, so that it finds the CPU build where one lies on
+#    disk), then the rest of the extra
+torch=$("$py" -c '
 import tomllib
 rl = tomllib.load(open("pyproject.toml", "rb"))["project"]["optional-dependencies"]["rl"]
 print(next(r for r in rl if r.replace(" ", "").startswith("torch==")).replace(" ", ""))
-EOF
-)
-quiet "$py" -m pip install --quiet "$torch" -c "$tmp/lock.txt"
-quiet "$py" -m pip install --quiet ".[rl]" -c "$tmp/lock.txt"
+')
+quiet "$py" -m pip install --quiet "$torch" -c "$tmp/lock.txt" -c "$tmp/lock-dev.txt"
+quiet "$py" -m pip install --quiet ".[rl]" -c "$tmp/lock.txt" -c "$tmp/lock-dev.txt"
 {
-    header "shipgym: what the rl extra adds to lock.txt (make rl, make test); torch first"
-    freeze | grep -vxFf <(grep -v '^#' "$tmp/lock.txt")
+    header "shipgym: what the rl extra adds to lock.txt and lock-dev.txt (make rl); torch first"
+    freeze | grep -vxFf <(locked "$tmp/lock.txt" "$tmp/lock-dev.txt")
 } >"$tmp/lock-rl.txt"
 
 grep -qi '^torch==' "$tmp/lock-rl.txt" || { echo "lock.sh: no torch in the rl lock" >&2; exit 1; }
 mkdir -p "$out"
-mv "$tmp/lock.txt" "$out/lock.txt"
-mv "$tmp/lock-rl.txt" "$out/lock-rl.txt"
-echo "wrote $out/lock.txt ($(grep -vc '^#' $out/lock.txt) packages)" \
-    "and $out/lock-rl.txt ($(grep -vc '^#' $out/lock-rl.txt) packages)"
+for f in lock.txt lock-dev.txt lock-rl.txt; do
+    mv "$tmp/$f" "$out/$f"
+    echo "wrote $out/$f ($(grep -vc '^#' "$out/$f") packages)"
+done

@@ -1,8 +1,9 @@
 """The venv built by the Makefile holds exactly the versions of the lock files.
 
-``make`` installs ``requirements/lock.txt`` (and ``requirements/lock-rl.txt`` for the rl
-extra) and leaves a stamp per file in the venv (``.lock-core``, ``.lock-rl``); outside such a
-venv this test is skipped.
+``make`` installs ``requirements/lock.txt`` (core), ``lock-dev.txt`` (test and dev extras)
+and ``lock-rl.txt`` (rl extra) as far as a target needs them, and leaves a stamp per file in
+the venv (``.lock-core``, ``.lock-dev``, ``.lock-rl``); outside such a venv the comparison is
+skipped.
 """
 
 from __future__ import annotations
@@ -17,7 +18,11 @@ from packaging.specifiers import SpecifierSet
 from packaging.utils import canonicalize_name
 
 ROOT = Path(__file__).resolve().parents[1]
-LOCKS = {".lock-core": "requirements/lock.txt", ".lock-rl": "requirements/lock-rl.txt"}
+LOCKS = {
+    ".lock-core": "requirements/lock.txt",
+    ".lock-dev": "requirements/lock-dev.txt",
+    ".lock-rl": "requirements/lock-rl.txt",
+}
 _PIN = re.compile(r"^([A-Za-z0-9][A-Za-z0-9._-]*)==(\S+)$")
 
 
@@ -34,14 +39,17 @@ def _pins(path: Path) -> dict[str, str]:
 
 
 def test_lock_files_are_exact_pins_without_cuda_packages() -> None:
-    core, rl = (_pins(ROOT / p) for p in LOCKS.values())
-    assert core and rl
-    assert not set(core) & set(rl), "a package is locked twice"
+    core, dev, rl = (_pins(ROOT / p) for p in LOCKS.values())
+    assert core and dev and rl
+    names = [*core, *dev, *rl]
+    assert len(names) == len(set(names)), "a package is locked twice"
     assert rl.get("torch") == "2.13.0"
-    for name in (*core, *rl):
+    for name in names:
         assert not name.startswith("nvidia-") and name != "triton", name
-    for name in ("numpy", "mujoco", "gymnasium", "pytest", "pip", "setuptools"):
+    for name in ("numpy", "mujoco", "gymnasium", "rerun-sdk", "pip", "setuptools"):
         assert name in core, name
+    for name in ("pytest", "hypothesis", "control", "ruff", "pytest-random-order"):
+        assert name in dev, name
     assert "stable-baselines3" in rl
 
 
