@@ -53,10 +53,14 @@ $(DEV_STAMP): $(STAMP) $(LOCK_DEV)
 venv: $(DEV_STAMP) ## the venv with the core, test and dev dependencies (no torch)
 
 # The RL extra: torch on its own first, with plain pip, which picks the CPU build where one lies
-# on the machine (a pip that finds only the index's Linux build also installs its CUDA
-# packages, which the lock leaves out); then stable-baselines3 and the rest of the extra.
+# on the machine (a pip that finds only the package index's Linux build also installs that
+# build's CUDA packages, which the lock leaves out); then stable-baselines3 and the rest of the
+# extra. TORCH_PIP_ARGS adds pip options to the torch step only, e.g. an --extra-index-url of
+# the CPU or of one CUDA build of torch.
+TORCH_PIP_ARGS ?=
 $(RL_STAMP): $(DEV_STAMP) $(LOCK_RL)
-	$(call pip_install,"$$(grep -m1 '^torch==' $(LOCK_RL))" -c $(LOCK) -c $(LOCK_DEV) -c $(LOCK_RL))
+	$(call pip_install,"$$(grep -m1 '^torch==' $(LOCK_RL))" $(TORCH_PIP_ARGS) \
+		-c $(LOCK) -c $(LOCK_DEV) -c $(LOCK_RL))
 	$(call pip_install,-r $(LOCK_RL) -c $(LOCK) -c $(LOCK_DEV))
 	@touch $(RL_STAMP)
 
