@@ -5,7 +5,9 @@
 * Hypothesis: with the environment variable ``CI`` set (``.ci/run`` sets ``CI=true``) the ``ci``
   profile is loaded: derandomised (the same examples on every run, so a CI result does not
   depend on luck), no example database, no deadline, and a reproduction blob printed on failure.
-  ``HYPOTHESIS_PROFILE=ci`` (or ``dev``) picks a profile explicitly.
+  Otherwise the ``dev`` profile: random examples and the example database, no deadline either
+  (a deadline is a wall-clock assertion, and no test asserts one). ``HYPOTHESIS_PROFILE=ci``
+  (or ``dev``) picks a profile explicitly.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import pytest
 from hypothesis import settings
 
 settings.register_profile("ci", derandomize=True, database=None, deadline=None, print_blob=True)
-settings.register_profile("dev", print_blob=True)
+settings.register_profile("dev", deadline=None, print_blob=True)
 
 
 def _truthy(name: str) -> bool:
