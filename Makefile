@@ -1,49 +1,101 @@
-# shipgym: every target creates/reuses .venv in the repository and installs what it needs.
+# shipgym: every target creates/reuses .venv in the repository and installs what it needs from
+# the lock files (requirements/lock.txt: core, lock-dev.txt: test and dev extras, lock-rl.txt:
+# rl extra), then the project itself. `make help` lists the targets.
 PYTHON ?= python3.11
 VENV   := .venv
 PY     := $(VENV)/bin/python
-STAMP  := $(VENV)/.installed-core
+PIP    := $(PY) -m pip
+LOCK     := requirements/lock.txt
+LOCK_DEV := requirements/lock-dev.txt
+LOCK_RL  := requirements/lock-rl.txt
+# Stamps: a changed lock file (or pyproject.toml) reinstalls. tests/test_lock.py looks for them.
+STAMP     := $(VENV)/.lock-core
+DEV_STAMP := $(VENV)/.lock-dev
+RL_STAMP  := $(VENV)/.lock-rl
+# pytest-random-order seed of `make test-random` (unset: a new one each run, printed first)
 
-.PHONY: demo test bench lint venv rl clean
+SHELL := /bin/bash
+.SHELLFLAGS := -o pipefail -ec
+# pip install, quietly: this machine's pip configuration adds local package indexes that lack
+# most names, and pip's "Location ... is ignored" notice for each of them is noise; so is
+# setuptools' note on editable installs.
+define pip_install
+	@echo "pip install $(1)"
+	@PYTHONWARNINGS="ignore:Editable installation" $(PIP) install --quiet $(1) 2>&1 | \
+		{ grep -v "^WARNING: Location '.*' is ignored" || true; }
+endef
+
+.DEFAULT_GOAL := help
+.PHONY: help demo test test-random test-slow bench lint venv rl lock clean
+
+help: ## this list
+	@echo "make targets (each creates/reuses .venv and installs the locked versions it needs):"
+	@grep -hE '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | \
+		awk 'BEGIN {FS = ":.*## "}; {printf "  %-12s %s\n", $$1, $$2}'
 
 $(PY):
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; install Python 3.11 or run 'make PYTHON=python3 ...'"; exit 1; }
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
 
-$(STAMP): $(PY) pyproject.toml
-	$(PY) -m pip install --quiet -e ".[test,dev]"
+# The locked pip first, then every locked package, then the project without dependencies (the
+# lock has the build backend, so no isolated build environment is fetched).
+$(STAMP): $(LOCK) pyproject.toml | $(PY)
+	$(call pip_install,"$$(grep -m1 '^pip==' $(LOCK))")
+	$(call pip_install,-r $(LOCK))
+	$(call pip_install,--no-deps --no-build-isolation -e .)
 	@touch $(STAMP)
 
-RL_STAMP := $(VENV)/.installed-rl
+# The test and dev extras (pytest, hypothesis, python-control, ruff, mypy).
+$(DEV_STAMP): $(STAMP) $(LOCK_DEV)
+	$(call pip_install,-r $(LOCK_DEV) -c $(LOCK))
+	@touch $(DEV_STAMP)
 
-venv: $(STAMP)
+venv: $(DEV_STAMP) ## the venv with the core, test and dev dependencies (no torch)
 
-# Optional RL extra: torch's CPU build first (pinned, so pip never pulls CUDA), then SB3.
-$(RL_STAMP): $(STAMP)
-	$(PY) -m pip install --quiet "torch==2.13.0"
-	$(PY) -m pip install --quiet -e ".[rl]"
+# The RL extra: torch on its own first, with plain pip, which picks the CPU build where one lies
+# on the machine (a pip that finds only the package index's Linux build also installs that
+# build's CUDA packages, which the lock leaves out); then stable-baselines3 and the rest of the
+# extra. TORCH_PIP_ARGS adds pip options to the torch step only, e.g. an --extra-index-url of
+# the CPU or of one CUDA build of torch.
+TORCH_PIP_ARGS ?=
+$(RL_STAMP): $(DEV_STAMP) $(LOCK_RL)
+	$(call pip_install,"$$(grep -m1 '^torch==' $(LOCK_RL))" $(TORCH_PIP_ARGS) \
+		-c $(LOCK) -c $(LOCK_DEV) -c $(LOCK_RL))
+	$(call pip_install,-r $(LOCK_RL) -c $(LOCK) -c $(LOCK_DEV))
 	@touch $(RL_STAMP)
 
-rl: $(RL_STAMP)
+rl: $(RL_STAMP) ## the venv plus the rl extra (torch 2.13.0 CPU build first, stable-baselines3)
 
 # The harbour manoeuvre of Tomera (2014) in the lake-trial wind, PID + Kalman-Bucy filter:
 # a rerun recording, PNG figures and metrics.md in runs/demo/.
-demo: $(STAMP)
+demo: $(STAMP) ## the harbour manoeuvre: recording, figures and metrics in runs/demo/
 	$(PY) -m shipgym.cli run harbour --wind 3@300 --observer kbf --controller pid-smooth \
 		--no-progress \
 		--json runs/demo/harbour.json --record runs/demo/harbour.rrd --report runs/demo
 
 # The tests include stable-baselines3's check_env, so they need the RL extra.
-test: $(RL_STAMP)
+test: $(RL_STAMP) ## the test suite (slow tests skipped)
 	$(PY) -m pytest -q
 
-bench: $(STAMP)
-	$(PY) benchmarks/bench_physics.py
+test-random: $(RL_STAMP) ## the test suite in a shuffled order (SEED=N repeats an order)
+	@seed=$${SEED:-$$(( RANDOM * 32768 + RANDOM ))}; \
+	echo "shuffled test order, seed $$seed: 'make test-random SEED=$$seed' repeats it"; \
+	echo "$(PY) -m pytest -q --random-order-bucket=global --random-order-seed=$$seed"; \
+	$(PY) -m pytest -q --random-order-bucket=global --random-order-seed=$$seed
 
-lint: $(STAMP)
+test-slow: $(RL_STAMP) ## only the slow tests (the fuzz test of random episodes, ...)
+	$(PY) -m pytest -q -m slow
+
+bench: $(STAMP) ## physics and disturbance speed (ratios and us per call)
+	$(PY) benchmarks/bench_physics.py
+	$(PY) benchmarks/bench_disturbances.py
+
+lint: $(DEV_STAMP) ## ruff check and format check
 	$(VENV)/bin/ruff check shipgym tests benchmarks
 	$(VENV)/bin/ruff format --check shipgym tests benchmarks
 
-clean:
+lock: ## regenerate requirements/lock*.txt from the ranges in pyproject.toml
+	PYTHON=$(PYTHON) bash requirements/lock.sh
+
+clean: ## remove the venv and caches
 	rm -rf $(VENV) .pytest_cache .ruff_cache .mypy_cache build *.egg-info

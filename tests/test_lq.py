@@ -5,6 +5,7 @@ import math
 import control
 import numpy as np
 import pytest
+from _helpers import assert_same_eigenvalues
 
 from shipgym.controllers import lq
 from shipgym.controllers.lq import (
@@ -19,10 +20,6 @@ from shipgym.controllers.wrappers import CONTROLLERS, controller_spec
 from shipgym.dynamics import seed_linear_matrices
 
 M, D_L = seed_linear_matrices()
-
-
-def _sorted(E):
-    return np.sort_complex(np.asarray(E, dtype=complex))
 
 
 # ---- design functions vs python-control ------------------------------------------------------
@@ -43,7 +40,7 @@ def test_gains_match_python_control_on_the_blue_lady_model(method):
     K_ref, S_ref, E_ref = ref(d.A, d.B, Q, R)
     np.testing.assert_allclose(d.K, K_ref, rtol=1e-6, atol=1e-9 * np.abs(K_ref).max())
     np.testing.assert_allclose(d.S, S_ref, rtol=1e-6, atol=1e-9 * np.abs(S_ref).max())
-    np.testing.assert_allclose(_sorted(d.E), _sorted(E_ref), rtol=1e-6, atol=1e-9)
+    assert_same_eigenvalues(d.E, E_ref, rtol=1e-6, atol=1e-9)
 
 
 def test_lqr_and_dlqr_match_python_control_with_cross_weight():
@@ -60,7 +57,7 @@ def test_lqr_and_dlqr_match_python_control_with_cross_weight():
         K2, S2, E2 = ref(Ad, B, Q, R, N)
         np.testing.assert_allclose(K, K2, rtol=1e-8, atol=1e-10)
         np.testing.assert_allclose(S, S2, rtol=1e-8, atol=1e-10)
-        np.testing.assert_allclose(_sorted(E), _sorted(E2), rtol=1e-8, atol=1e-10)
+        assert_same_eigenvalues(E, E2, rtol=1e-8, atol=1e-10)
 
 
 def test_discrete_cost_equals_riccati_quadratic_form():

@@ -6,6 +6,7 @@ import control
 import numpy as np
 import pytest
 import scipy.linalg
+from _helpers import assert_same_characteristic_polynomial as _same_poles
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -73,10 +74,6 @@ def systems(draw, discrete):
 def _sym(M):
     """Exactly symmetric (python-control rejects G Q G^T with rounding asymmetry)."""
     return 0.5 * (M + M.T)
-
-
-def _same_poles(E1, E2):
-    np.testing.assert_allclose(np.poly(E1), np.poly(E2), rtol=1e-6, atol=1e-8)
 
 
 @settings(max_examples=30, deadline=None)

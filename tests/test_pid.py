@@ -5,6 +5,7 @@ import math
 import control
 import numpy as np
 import pytest
+from _helpers import assert_same_characteristic_polynomial, assert_same_eigenvalues
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -37,10 +38,9 @@ def test_pole_placement_poles(omega, zeta):
     wanted = np.roots(np.polymul([1, omega], [1, 2 * zeta * omega, omega**2]))
     got = loop.poles()
     # a triple pole is ill-conditioned (errors ~ eps^(1/3)): compare the polynomials as well
-    np.testing.assert_allclose(np.sort_complex(got), np.sort_complex(wanted), atol=1e-4 * omega)
-    np.testing.assert_allclose(np.poly(got), np.poly(wanted), rtol=1e-9, atol=1e-14)
-    np.testing.assert_allclose(np.sort_complex(error_loop(K_P, K_I, K_D)[1]),
-                               np.sort_complex(wanted), atol=1e-4 * omega)  # fmt: skip
+    assert_same_eigenvalues(got, wanted, atol=1e-4 * omega)
+    assert_same_characteristic_polynomial(got, wanted, rtol=1e-9, atol=1e-14)
+    assert_same_eigenvalues(error_loop(K_P, K_I, K_D)[1], wanted, atol=1e-4 * omega)
 
 
 def test_pole_placement_vector_and_errors():

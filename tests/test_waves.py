@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -316,35 +315,3 @@ def test_from_dict_rejects_unknown_keys() -> None:
     assert WaveConfig.from_dict({"Hs": 0.1, "Tp": 2.0}).Hs == 0.1
     with pytest.raises(ValueError, match=r"unknown key\(s\) \['hs'\].*valid keys are: spectrum"):
         WaveConfig.from_dict({"hs": 0.1})
-
-
-# ---------------------------------------------------------------------------------------------
-# cost per call
-# ---------------------------------------------------------------------------------------------
-
-
-def _per_call(fn, args_list) -> float:  # type: ignore[no-untyped-def]
-    best = math.inf
-    for _ in range(3):
-        t0 = time.perf_counter()
-        for args in args_list:
-            fn(*args)
-        best = min(best, (time.perf_counter() - t0) / len(args_list))
-    return best
-
-
-def test_per_call_timing() -> None:
-    w = _waves(seed=1, **BF5, first_order=True)
-    n = 20_000
-    w.envelope([n * 0.05 + 1.0])  # pre-generate the chunks: measure the per-step cost only
-    drift = _per_call(w.drift_load, [(k * 0.05, 0.3) for k in range(n)])
-    wf = _per_call(w.wf_motion, [(k * 0.05,) for k in range(n)])
-    t0 = time.perf_counter()
-    w2 = _waves(seed=2, **BF5, first_order=True)
-    w2.envelope([4096.0])
-    gen = (time.perf_counter() - t0) / 4096.0 * 3600.0
-    print(
-        f"drift_load {drift * 1e6:.2f} us/call, wf_motion {wf * 1e6:.2f} us/call, "
-        f"precompute {gen * 1e3:.0f} ms per simulated hour (BF5, first order + drift)"
-    )
-    assert drift < 25e-6 and wf < 25e-6  # target < 5 us; loose bound for busy CI machines

@@ -1,0 +1,46 @@
+"""Helpers shared by the tests (imported as ``from _helpers import ...``).
+
+Eigenvalues come back from LAPACK in an order that is not stable across versions: sorting them
+(``np.sort_complex``) is fragile too, because the real parts of a conjugate pair can differ by
+rounding (1e-14) and the pair then swaps. Compare them as sets instead.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.optimize import linear_sum_assignment
+
+
+def assert_same_eigenvalues(
+    actual: ArrayLike, desired: ArrayLike, *, rtol: float = 1e-7, atol: float = 0.0
+) -> None:
+    """Assert two multisets of (complex) eigenvalues are equal within tolerance.
+
+    The two are paired by an optimal matching (least total distance ``|a_i - b_j|``,
+    ``scipy.optimize.linear_sum_assignment``), so the result does not depend on their order;
+    then each pair is compared as ``np.testing.assert_allclose`` does.
+    """
+    a = np.asarray(actual, dtype=complex).ravel()
+    b = np.asarray(desired, dtype=complex).ravel()
+    assert a.shape == b.shape, f"{a.size} eigenvalues vs {b.size}: {a} vs {b}"
+    rows, cols = linear_sum_assignment(np.abs(a[:, None] - b[None, :]))
+    np.testing.assert_allclose(
+        a[rows], b[cols], rtol=rtol, atol=atol, err_msg=f"eigenvalues {a} vs {b}"
+    )
+
+
+def assert_same_characteristic_polynomial(
+    actual: ArrayLike, desired: ArrayLike, *, rtol: float = 1e-6, atol: float = 1e-8
+) -> None:
+    """Assert two sets of eigenvalues have the same characteristic polynomial (``np.poly``).
+
+    Order-free like :func:`assert_same_eigenvalues`, and well conditioned where repeated or
+    clustered eigenvalues are not (a triple root moves by ~eps^(1/3) under rounding).
+    """
+    a = np.asarray(actual, dtype=complex).ravel()
+    b = np.asarray(desired, dtype=complex).ravel()
+    assert a.shape == b.shape, f"{a.size} eigenvalues vs {b.size}: {a} vs {b}"
+    np.testing.assert_allclose(
+        np.poly(a), np.poly(b), rtol=rtol, atol=atol, err_msg=f"eigenvalues {a} vs {b}"
+    )
