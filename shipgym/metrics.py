@@ -32,6 +32,7 @@ __all__ = [
     "MIN_SAMPLES",
     "SEED_WEIGHTS",
     "accuracy_indices",
+    "episode_result",
     "honest_indices",
     "indices_note",
     "j_c",
@@ -172,6 +173,47 @@ def honest_indices(metrics: Any, *, plan_finite: bool = True) -> dict[str, Any]:
         "measured": None if measured is None else {k: nan for k in INDEX_KEYS},
         "indices_note": note,
         "partial_indices": {"truth": truth, "measured": measured},
+    }
+
+
+def episode_result(
+    metrics: Any,
+    info: dict[str, Any],
+    *,
+    terminated: bool,
+    truncated: bool,
+    plan_finite: bool = True,
+) -> dict[str, Any]:
+    """The plain-data result of one finished episode, shared by ``shipgym run`` and evaluation.
+
+    Args:
+        metrics: the episode's :meth:`ManoeuvreMetrics.summary` (``env.episode_metrics()``).
+        info: the last step's ``info`` (for the observer's ``estimation_rmse``).
+        terminated, truncated: how the episode ended.
+        plan_finite: whether the task's plan ends (see :func:`indices_note`).
+
+    Returns:
+        ``completed``, ``legs_completed``, ``duration_s`` (s), ``quay_contact``, ``terminated``,
+        ``truncated``, the indices of :func:`honest_indices` (``x_E``, ``y_E`` (m), ``psi_E``
+        (deg), ``J_c``, ``measured``, ``indices_note``, ``partial_indices``), ``n_samples``,
+        ``leg_times`` (s), ``thrust_mean_abs``, ``thrust_total_variation`` (N),
+        ``saturated_fraction`` and ``rmse`` (``None`` without an observer).
+    """
+    idx = honest_indices(metrics, plan_finite=plan_finite)
+    return {
+        "completed": bool(metrics["completed"]),
+        "legs_completed": int(metrics["legs_completed"]),
+        "duration_s": float(metrics["duration_s"]),
+        "quay_contact": bool(metrics["quay_contact"]),
+        "terminated": bool(terminated),
+        "truncated": bool(truncated),
+        **idx,
+        "n_samples": int(metrics["n_samples"]),
+        "leg_times": list(metrics["leg_times"]),
+        "thrust_mean_abs": list(metrics["thrust_mean_abs"]),
+        "thrust_total_variation": list(metrics["thrust_total_variation"]),
+        "saturated_fraction": list(metrics["saturated_fraction"]),
+        "rmse": info.get("estimation_rmse"),
     }
 
 

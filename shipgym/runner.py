@@ -84,7 +84,7 @@ def run_episode(
 
     import shipgym
     from shipgym.disturbances import WindConfig
-    from shipgym.metrics import honest_indices
+    from shipgym.metrics import episode_result
 
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be an int >= 0, got {seed!r}")
@@ -154,7 +154,6 @@ def run_episode(
 
         run = getattr(env, "last_run", None)
         files += [str(p) for p in write_report(run if run is not None else record, report)]
-    idx = honest_indices(metrics, plan_finite=plan_finite)
     res = {
         "scenario": scenario,
         "scenario_preset": scenario_preset,
@@ -167,25 +166,9 @@ def run_episode(
         "waves": waves_out,
         "current": current_out,
         "model": model_info,
-        "completed": metrics["completed"],
-        "legs_completed": metrics["legs_completed"],
-        "duration_s": metrics["duration_s"],
-        "quay_contact": metrics["quay_contact"],
-        "terminated": bool(terminated),
-        "truncated": bool(truncated),
-        "x_E": idx["x_E"],
-        "y_E": idx["y_E"],
-        "psi_E": idx["psi_E"],
-        "J_c": idx["J_c"],
-        "measured": idx["measured"],
-        "indices_note": idx["indices_note"],
-        "partial_indices": idx["partial_indices"],
-        "n_samples": metrics["n_samples"],
-        "leg_times": metrics["leg_times"],
-        "thrust_mean_abs": metrics["thrust_mean_abs"],
-        "thrust_total_variation": metrics["thrust_total_variation"],
-        "saturated_fraction": metrics["saturated_fraction"],
-        "rmse": info.get("estimation_rmse"),
+        **episode_result(
+            metrics, info, terminated=terminated, truncated=truncated, plan_finite=plan_finite
+        ),
         "wall_time_s": wall,
         "files": files,
     }

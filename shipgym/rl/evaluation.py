@@ -111,7 +111,7 @@ def run_env_episode(
     its plan or was too short are NaN, with the reason in ``indices_note``
     (:func:`shipgym.metrics.honest_indices`).
     """
-    from shipgym.metrics import honest_indices
+    from shipgym.metrics import episode_result
 
     t0 = time.perf_counter()
     obs, info = env.reset(seed=seed)
@@ -123,28 +123,13 @@ def run_env_episode(
         obs, reward, terminated, truncated, info = env.step(action)
         ret += float(reward)
     metrics = env.unwrapped.episode_metrics()  # type: ignore[attr-defined]
-    idx = honest_indices(metrics, plan_finite=bool(env.unwrapped.terminate_on_finish))  # type: ignore[attr-defined]
+    plan_finite = bool(env.unwrapped.terminate_on_finish)  # type: ignore[attr-defined]
     wall = time.perf_counter() - t0
     return {
         "seed": int(seed),
-        "completed": bool(metrics["completed"]),
-        "legs_completed": int(metrics["legs_completed"]),
-        "duration_s": float(metrics["duration_s"]),
-        "quay_contact": bool(metrics["quay_contact"]),
-        "terminated": bool(terminated),
-        "truncated": bool(truncated),
-        "x_E": idx["x_E"],
-        "y_E": idx["y_E"],
-        "psi_E": idx["psi_E"],
-        "J_c": idx["J_c"],
-        "measured": idx["measured"],
-        "indices_note": idx["indices_note"],
-        "partial_indices": idx["partial_indices"],
-        "leg_times": list(metrics["leg_times"]),
-        "thrust_mean_abs": list(metrics["thrust_mean_abs"]),
-        "thrust_total_variation": list(metrics["thrust_total_variation"]),
-        "saturated_fraction": list(metrics["saturated_fraction"]),
-        "rmse": info.get("estimation_rmse"),
+        **episode_result(
+            metrics, info, terminated=terminated, truncated=truncated, plan_finite=plan_finite
+        ),
         "return": ret,
         "wall_time_s": wall,
     }
