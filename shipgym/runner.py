@@ -126,7 +126,8 @@ def run_episode(
     t0 = time.perf_counter()
     try:
         env.reset(seed=seed)
-        wc = env.unwrapped.wind_config  # type: ignore[attr-defined]  (the episode's, after reset)
+        # the episode's wind, read after reset (the Tracking task draws one per episode)
+        wc = env.unwrapped.wind_config  # type: ignore[attr-defined]
         wind_out = (
             None
             if wc is None

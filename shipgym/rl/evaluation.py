@@ -152,7 +152,7 @@ def run_controlled_episode(
     env = make_controlled_env(scenario, controller, observer=observer, wind=wind, **env_kwargs)
     try:
         row = run_env_episode(env, seed)
-        wc = env.unwrapped.wind_config  # type: ignore[attr-defined]  (the episode's)
+        wc = env.unwrapped.wind_config  # type: ignore[attr-defined]  # the episode's
     finally:
         env.close()
     return {
