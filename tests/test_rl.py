@@ -217,6 +217,15 @@ def test_shipped_baseline():
     load_policy(path)
 
 
+def test_learned_wrapper_keeps_the_env_metadata():
+    # the model's metadata lives in model_metadata; gymnasium's metadata (render modes) stays
+    env = make_learned_env("harbour", "ppo")
+    assert env.metadata["render_modes"] == ["rgb_array"]
+    assert isinstance(env.model_metadata, ModelMetadata)
+    assert env.model_metadata.algorithm == "ppo"
+    env.close()
+
+
 def test_sac_smoke(tmp_path):
     res = train(
         "sac", timesteps=150, seed=0, n_envs=1, out=tmp_path, observer="truth",

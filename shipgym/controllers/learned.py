@@ -941,13 +941,15 @@ class LearnedControllerWrapper(
         gym.Wrapper.__init__(self, env)
         self.model_path = Path(model_path)
         self.policy = load_policy(self.model_path)
-        self.metadata = self.policy.metadata
+        # the model's metadata; ``self.metadata`` stays the env's (render modes, fps)
+        self.model_metadata = self.policy.metadata
         self.deterministic = bool(deterministic)
-        _check_stack(env, self.metadata)
-        if env.observation_space.shape != self.metadata.observation_shape:
+        _check_stack(env, self.model_metadata)
+        if env.observation_space.shape != self.model_metadata.observation_shape:
             raise ValueError(
-                f"the model takes observations of shape {self.metadata.observation_shape}, the "
-                f"environment gives {env.observation_space.shape}"
+                "the model takes observations of shape "
+                f"{self.model_metadata.observation_shape}, the environment gives "
+                f"{env.observation_space.shape}"
             )
         self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
         self._obs: NDArray[np.float32] | None = None
