@@ -450,3 +450,23 @@ def test_uncaught_interrupt_at_exit_still_leaves_the_file(tmp_path):
     assert not path.exists()
     run = load_run(tmp_path / "exit.partial.rrd")
     assert run.n_steps == 30 and recording_problem(run) is not None
+
+
+def test_report_of_an_unfinished_run_says_its_indices_are_partial(tmp_path):
+    from shipgym.runner import run_episode
+
+    res = run_episode(
+        "harbour", env_kwargs={"max_episode_steps": 20}, report=tmp_path / "figs"
+    )  # 20 s of a 1220 s manoeuvre
+    assert res["indices_note"] and not res["completed"]
+    text = (tmp_path / "figs" / "metrics.md").read_text()
+    assert "These indices do not describe a whole run" in text
+    assert "manoeuvre not finished" in text
+
+
+def test_report_of_a_whole_run_has_no_partial_warning(tmp_path):
+    from shipgym.runner import run_episode
+
+    res = run_episode("station-keeping", env_kwargs={"max_episode_steps": 30}, report=tmp_path)
+    assert res["indices_note"] is None  # station keeping holds until its time limit
+    assert "do not describe a whole run" not in (tmp_path / "metrics.md").read_text()

@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shipgym._io import partial_path, replace_together
+from shipgym.metrics import indices_note
 
 from .geometry import hull_outline, hull_polygon, quay_polygons, thruster_positions
 from .run import DATA_VECTORS, P, Run, desired_body_velocity, save_run_json
@@ -799,6 +800,7 @@ class RecordEpisode(
             "wind": wind,
             "plan": getattr(plan, "name", None),
             "legs": legs,
+            "terminate_on_finish": bool(getattr(base, "terminate_on_finish", True)),
             "scene": getattr(base, "scene", None),
             "control_period_s": float(getattr(base, "control_period", float("nan"))),
             "timestep_s": float(getattr(phys, "timestep", float("nan"))),
@@ -1028,6 +1030,9 @@ def _summary_markdown(
                     f"{float(m.get(k, float('nan'))):.4f}" for k in ("x_E", "y_E", "psi_E", "J_c")
                 )
                 lines.append(f"| {name} | {vals} |")
+        note = indices_note(metrics, plan_finite=meta.get("terminate_on_finish", True))
+        if note is not None:
+            lines += ["", f"**These indices do not describe a whole run**: {note}."]
     return "\n".join(lines) + "\n"
 
 
