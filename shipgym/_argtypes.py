@@ -10,9 +10,8 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from collections.abc import Callable
-from typing import Any, NoReturn, TextIO
+from typing import NoReturn
 
 __all__ = [
     "MAX_COUNT",
@@ -23,7 +22,6 @@ __all__ = [
     "bounded_int",
     "nonneg_int",
     "positive_int",
-    "progress_enabled",
     "seed_int",
 ]
 
@@ -117,17 +115,3 @@ class OneLineParser(argparse.ArgumentParser):
         root = self.prog.split()[0] if self.prog else "shipgym"
         msg = " ".join(str(message).split())
         self.exit(2, f"{root}: error: {msg} (see '{self.prog} --help')\n")
-
-
-def progress_enabled(no_progress: bool = False, stream: TextIO | None = None) -> bool:
-    """Whether to draw a progress bar: not switched off and ``stream`` (stderr) is a terminal.
-
-    Pipes and log files get no bar (a bar's ``\\r`` frames would litter them).
-    """
-    if no_progress:
-        return False
-    s: Any = sys.stderr if stream is None else stream
-    try:
-        return bool(s.isatty())
-    except (AttributeError, ValueError):  # closed or unusual streams
-        return False

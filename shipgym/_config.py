@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
 T = TypeVar("T")
 
-__all__ = ["param", "from_mapping", "describe", "require_finite", "require_positive"]
+__all__ = ["param", "from_mapping", "describe", "is_real", "require_finite", "require_positive"]
 
 
 def param(default: Any, unit: str, source: str) -> Any:
@@ -27,6 +28,11 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, where: str = "") -
             f"unknown key(s) {unknown}{ctx} for {cls.__name__}; valid keys are: {', '.join(names)}"
         )
     return cls(**dict(mapping))
+
+
+def is_real(x: Any) -> bool:
+    """Whether ``x`` is a real number (Python or NumPy int or float), ``bool`` excluded."""
+    return isinstance(x, numbers.Real) and not isinstance(x, bool)
 
 
 def describe(obj: Any) -> list[tuple[str, Any, str, str]]:

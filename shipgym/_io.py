@@ -25,6 +25,9 @@ Interrupts: :func:`handle_signals` makes SIGTERM raise :class:`Interrupted` (a
 ``KeyboardInterrupt``) like SIGINT does, so the same clean-up runs for both; a command says
 beforehand what an interrupt would keep with :func:`on_interrupt`, and the command line reports
 it in one line (:func:`interrupt_message`) and exits with ``128 + signal number`` (130, 143).
+
+Terminal: :func:`progress_enabled` tells whether a progress bar may be drawn (stderr is a
+terminal), so pipes and log files get no ``\r`` frames.
 """
 
 from __future__ import annotations
@@ -32,16 +35,18 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 __all__ = [
     "Interrupted",
     "WriteFailed",
     "atomic_path",
     "atomic_write_text",
+    "progress_enabled",
     "handle_signals",
     "interrupt_message",
     "interrupt_status",
@@ -265,3 +270,17 @@ def write_partial_text(path: str | os.PathLike[str], text: str) -> Path | None:
 def os_reason(exc: OSError) -> str:
     """``No space left on device``: the short reason of an ``OSError``."""
     return exc.strerror or str(exc)
+
+
+def progress_enabled(no_progress: bool = False, stream: TextIO | None = None) -> bool:
+    """Whether to draw a progress bar: not switched off and ``stream`` (stderr) is a terminal.
+
+    Pipes and log files get no bar (a bar's ``\\r`` frames would litter them).
+    """
+    if no_progress:
+        return False
+    s: Any = sys.stderr if stream is None else stream
+    try:
+        return bool(s.isatty())
+    except (AttributeError, ValueError):  # closed or unusual streams
+        return False

@@ -248,12 +248,8 @@ def velocity_error_trace(
     ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`.
     """
     import shipgym
-    from shipgym.disturbances import WindConfig
 
-    env = shipgym.make(
-        "harbour", observer=observer, controller=controller,
-        wind=WindConfig.coerce(wind, name="wind"),
-    )  # fmt: skip
+    env = shipgym.make("harbour", observer=observer, controller=controller, wind=wind)
     env.reset(seed=seed)
     t, err = [], []
     done = False

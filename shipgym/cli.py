@@ -345,7 +345,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     log = _row_log(args.json, args.markdown, len(args.observers) * args.seeds)
     t0 = time.perf_counter()
     check_controller(args.controller)
-    from shipgym._argtypes import progress_enabled
+    from shipgym._io import progress_enabled
 
     rows = bench_observers(
         args.observers, seeds=args.seeds, wind=args.wind, workers=args.workers,

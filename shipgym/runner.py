@@ -18,7 +18,7 @@ import numpy as np
 
 from shipgym._safeload import jsonable
 
-__all__ = ["ENV_DEFAULT", "run_episode"]
+__all__ = ["ENV_DEFAULT", "describe_wind", "run_episode"]
 
 
 class _EnvDefault:
@@ -127,12 +127,7 @@ def run_episode(
     try:
         env.reset(seed=seed)
         # the episode's wind, read after reset (the Tracking task draws one per episode)
-        wc = env.unwrapped.wind_config  # type: ignore[attr-defined]
-        wind_out = (
-            None
-            if wc is None
-            else {"speed": wc.speed, "from_deg": math.degrees(wc.direction_from) % 360.0}
-        )
+        wind_out = describe_wind(env.unwrapped.wind_config)  # type: ignore[attr-defined]
         zero = np.zeros(3, dtype=np.float32)
         terminated = truncated = False
         info: dict[str, Any] = {}
@@ -223,10 +218,17 @@ def _progress(total: int | None, enabled: bool, desc: str) -> Any:
     """A tqdm bar on stderr, drawn only when ``enabled`` and stderr is a terminal."""
     from tqdm import tqdm
 
-    from shipgym._argtypes import progress_enabled
+    from shipgym._io import progress_enabled
 
     on = enabled and progress_enabled()
     return tqdm(total=total, disable=not on, desc=desc, unit="step", leave=False)
+
+
+def describe_wind(w: Any) -> dict[str, Any] | None:
+    """The wind of a run as plain data: ``speed`` (m/s), ``from_deg`` (``None``: no wind)."""
+    if w is None:
+        return None
+    return {"speed": float(w.speed), "from_deg": math.degrees(float(w.direction_from)) % 360.0}
 
 
 def _describe_waves(w: Any) -> dict[str, Any] | None:

@@ -58,6 +58,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from shipgym._config import is_real
 from shipgym.disturbances.current import CurrentConfig
 from shipgym.disturbances.spectra import norsok_peak_period
 from shipgym.disturbances.waves import AL_TAKIE_HF_POLYNOMIALS, WaveConfig
@@ -417,16 +418,12 @@ def _pose(value: Any, where: str) -> tuple[float, float, float]:
             vals = list(value)
         except TypeError:
             vals = [value]
-    if len(vals) != 3 or not all(_real(v) and math.isfinite(v) for v in vals):
+    if len(vals) != 3 or not all(is_real(v) and math.isfinite(v) for v in vals):
         raise ValueError(
             f"{where} must be three finite numbers (x m, y m, psi rad) or a mapping "
             f"{{x, y, psi | psi_deg}}, got {value!r}"
         )
     return (float(vals[0]), float(vals[1]), float(vals[2]))
-
-
-def _real(v: Any) -> bool:
-    return isinstance(v, numbers.Real) and not isinstance(v, bool)
 
 
 def _reject(d: Mapping[str, Any], valid: tuple[str, ...] | list[str], where: str) -> None:
@@ -444,7 +441,7 @@ def _angles(d: Mapping[str, Any], names: tuple[str, ...], where: str) -> dict[st
             if name in out:
                 raise ValueError(f"{where}: give either '{name}' (rad) or '{dk}' (deg), not both")
             val = out.pop(dk)
-            if not _real(val) or not math.isfinite(val):
+            if not is_real(val) or not math.isfinite(val):
                 raise ValueError(f"{where}: {dk} must be a finite number of degrees, got {val!r}")
             out[name] = math.radians(val)
     return out
@@ -527,17 +524,17 @@ def _current(value: Any, current: CurrentConfig | None, where: str) -> CurrentCo
         if "mu" in d:
             raise ValueError(f"{where}: give either 'mu' (1/s) or 'time_constant' (s), not both")
         tc = d.pop("time_constant")
-        if not _real(tc) or not tc > 0 or not math.isfinite(tc):
+        if not is_real(tc) or not tc > 0 or not math.isfinite(tc):
             raise ValueError(f"{where}: time_constant must be a number > 0 s, got {tc!r}")
         d["mu"] = 1.0 / tc
     if "std" in d:
         if "sigma" in d:
             raise ValueError(f"{where}: give either 'sigma' (m/s^1.5) or 'std' (m/s), not both")
         std = d.pop("std")
-        if not _real(std) or not std >= 0 or not math.isfinite(std):
+        if not is_real(std) or not std >= 0 or not math.isfinite(std):
             raise ValueError(f"{where}: std must be a number >= 0 m/s, got {std!r}")
         mu = d.get("mu", current.mu if current is not None else CurrentConfig().mu)
-        if not (_real(mu) and mu > 0):
+        if not (is_real(mu) and mu > 0):
             raise ValueError(f"{where}: 'std' needs mu > 0 (or time_constant), got mu = {mu!r}")
         d["sigma"] = std * math.sqrt(2.0 * mu)
     valid = _fields(CurrentConfig)

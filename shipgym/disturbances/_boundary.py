@@ -21,19 +21,16 @@ accepts exactly the same forms with the same meaning.
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Callable, Mapping
 from typing import Any, TypeVar
 
 import numpy as np
 
-__all__ = ["coerce_config", "parse_speed_at"]
+from shipgym._config import is_real
+
+__all__ = ["coerce_config", "parse_config", "parse_speed_at"]
 
 C = TypeVar("C")
-
-
-def _is_real(x: Any) -> bool:
-    return isinstance(x, numbers.Real) and not isinstance(x, bool)
 
 
 def parse_speed_at(text: Any, *, name: str, form: str, example: str) -> tuple[float, float]:
@@ -56,6 +53,27 @@ def parse_speed_at(text: Any, *, name: str, form: str, example: str) -> tuple[fl
     except ValueError:
         raise ValueError(f"malformed {name} {text!r}: expected {form}, e.g. {example}") from None
     return speed, deg
+
+
+def parse_config(
+    text: Any,
+    *,
+    from_deg: Callable[[float, float], C],
+    name: str,
+    form: str,
+    example: str,
+) -> C:
+    """``"SPEED@DEG"`` to a config: :func:`parse_speed_at`, then ``from_deg(speed, deg)``.
+
+    Raises:
+        ValueError: Malformed text, or a value the config refuses (the message names ``name``,
+            the text and the field).
+    """
+    speed, deg = parse_speed_at(text, name=name, form=form, example=example)
+    try:
+        return from_deg(speed, deg)
+    except ValueError as exc:
+        raise ValueError(f"{name} {text!r}: {exc}") from None
 
 
 def coerce_config(
@@ -98,13 +116,13 @@ def coerce_config(
                     if key in d:
                         raise ValueError(f"give '{key}' (rad) or '{deg_key}' (deg), not both")
                     deg = d.pop(deg_key)
-                    if not _is_real(deg):
+                    if not is_real(deg):
                         raise ValueError(f"{deg_key} must be a number of degrees, got {deg!r}")
                     d[key] = math.radians(deg)
             return cls.from_dict(d)  # type: ignore[attr-defined, no-any-return]
         if isinstance(value, tuple | list | np.ndarray) and len(value) == 2:
             speed, deg = (x.item() if isinstance(x, np.generic) else x for x in value)
-            if _is_real(speed) and _is_real(deg):
+            if is_real(speed) and is_real(deg):
                 return from_deg(float(speed), float(deg))
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name} {value!r}: {exc}") from None

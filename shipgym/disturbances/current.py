@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, param, require_finite
 
-from ._boundary import coerce_config, parse_speed_at
+from ._boundary import coerce_config, parse_config
 from ._grid import CHUNK, GridPair
 
 __all__ = ["CurrentConfig", "Current", "current_body_velocity", "MAX_CURRENT_SPEED"]
@@ -229,13 +229,10 @@ class CurrentConfig:
             ValueError: Malformed text, or a value :class:`CurrentConfig` refuses (the message
                 names ``name`` and the field).
         """
-        speed, deg = parse_speed_at(
-            text, name=name, form="SPEED@TO_DEG", example="0.1@90 (0.1 m/s going to 90 deg)"
-        )
-        try:
-            return cls.from_speed_dir(speed, deg)
-        except ValueError as exc:
-            raise ValueError(f"{name} {text!r}: {exc}") from None
+        return parse_config(
+            text, from_deg=cls.from_speed_dir, name=name, form="SPEED@TO_DEG",
+            example="0.1@90 (0.1 m/s going to 90 deg)",
+        )  # fmt: skip
 
     @classmethod
     def coerce(cls, value: Any, *, name: str = "current") -> CurrentConfig | None:

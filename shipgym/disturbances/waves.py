@@ -73,7 +73,6 @@ wave-frequency: the filters' PSD vanishes like ``w^2`` (fossen) or ``w^4`` (al-t
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -81,7 +80,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import from_mapping, param, require_finite
+from shipgym._config import from_mapping, is_real, param, require_finite
 from shipgym.dynamics.params import BLUE_LADY_HULL, HullParameters
 
 from .spectra import (
@@ -181,10 +180,6 @@ def drift_coefficients(
     return half * (2.0 / 3.0) * hull.B, half * side_fraction * hull.L_pp
 
 
-def _is_real(v: Any) -> bool:
-    return isinstance(v, numbers.Real) and not isinstance(v, bool)
-
-
 @dataclass(frozen=True)
 class WaveConfig:
     """Sea state and wave-effect switches (SI units, radians).
@@ -246,13 +241,13 @@ class WaveConfig:
                 f"{name}.spectrum must be one of 'jonswap', 'pm' or None, got {self.spectrum!r}"
             )
         for key in ("Hs", "Tp", "gamma", "direction_from", "drift_gain", "drift_yaw_lever"):
-            if not _is_real(getattr(self, key)):
+            if not is_real(getattr(self, key)):
                 raise ValueError(f"{name}.{key} must be a real number, got {getattr(self, key)!r}")
         for key in ("w_min", "w_max", "wf_position_std", "wf_heading_std", "wf_lambda"):
             val = getattr(self, key)
-            if val is not None and not _is_real(val):
+            if val is not None and not is_real(val):
                 raise ValueError(f"{name}.{key} must be a real number or None, got {val!r}")
-        if not _is_real(self.sample_period):
+        if not is_real(self.sample_period):
             raise ValueError(f"{name}.sample_period must be a real number")
         require_finite(self)
         if self.Hs < 0:
@@ -283,7 +278,7 @@ class WaveConfig:
                 raise ValueError(
                     f"{name}.reflection must be 'kT', 'full' or a number in [0, 1], got {r!r}"
                 )
-        elif not (_is_real(r) and 0.0 <= r <= 1.0):
+        elif not (is_real(r) and 0.0 <= r <= 1.0):
             raise ValueError(
                 f"{name}.reflection must be 'kT', 'full' or a number in [0, 1], got {r!r}"
             )

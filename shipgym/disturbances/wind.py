@@ -59,7 +59,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import from_mapping, param, require_finite, require_positive
 from shipgym.dynamics.params import BLUE_LADY_WINDAGE, WindageParameters
 
-from ._boundary import coerce_config, parse_speed_at
+from ._boundary import coerce_config, parse_config
 from ._grid import CHUNK, GridPair
 from .spectra import harmonic_components, harmonic_sums, wind_gust_spectrum
 
@@ -662,13 +662,10 @@ class WindConfig:
             ValueError: Malformed text, or a value :class:`WindConfig` refuses (the message
                 names ``name`` and the field).
         """
-        speed, deg = parse_speed_at(
-            text, name=name, form="SPEED@FROM_DEG", example="3@300 (3 m/s from 300 deg)"
-        )
-        try:
-            return cls.from_speed_dir(speed, deg)
-        except ValueError as exc:
-            raise ValueError(f"{name} {text!r}: {exc}") from None
+        return parse_config(
+            text, from_deg=cls.from_speed_dir, name=name, form="SPEED@FROM_DEG",
+            example="3@300 (3 m/s from 300 deg)",
+        )  # fmt: skip
 
     @classmethod
     def coerce(cls, value: Any, *, name: str = "wind") -> WindConfig | None:

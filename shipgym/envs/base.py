@@ -20,7 +20,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from shipgym._config import param
+from shipgym._config import is_real, param
 from shipgym.assets import asset_path
 from shipgym.controllers.allocation import action_to_command, command_to_action
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
@@ -30,7 +30,7 @@ from shipgym.guidance import plan as named_plan
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
 
-from .physics import MAX_TIMESTEP, MIN_TIMESTEP, NO_CURRENT, VesselPhysics
+from .physics import MAX_TIMESTEP, MIN_TIMESTEP, NO_CURRENT, VesselPhysics, check_timestep
 
 __all__ = [
     "MAX_CONTROL_PERIOD",
@@ -86,7 +86,7 @@ class RewardWeights:
         # or non-finite one would reward errors or make every reward NaN
         for f in dataclasses.fields(self):
             val = getattr(self, f.name)
-            if isinstance(val, bool) or not isinstance(val, int | float | np.floating):
+            if not is_real(val):
                 raise TypeError(f"reward_weights.{f.name} must be a number, got {val!r}")
             if not (math.isfinite(val) and val >= 0):
                 raise ValueError(
@@ -655,16 +655,10 @@ def _vec3(x: Any, name: str) -> NDArray[np.float64]:
 
 def _check_timing(timestep: Any, control_period: Any) -> None:
     """Bounds of the physics timestep and control period (see :data:`MIN_TIMESTEP` etc.)."""
-    for name, val in (("timestep", timestep), ("control_period", control_period)):
-        if isinstance(val, bool) or not isinstance(val, int | float | np.floating):
-            raise TypeError(f"{name} must be a number of seconds, got {val!r}")
-        if not math.isfinite(val):
-            raise ValueError(f"{name} must be finite, got {val!r}")
-    if not MIN_TIMESTEP <= timestep <= MAX_TIMESTEP:
-        raise ValueError(
-            f"timestep must be from {MIN_TIMESTEP:g} to {MAX_TIMESTEP:g} s, got {timestep!r}"
-        )
-    if not 0 < control_period <= MAX_CONTROL_PERIOD:
+    check_timestep(timestep)
+    if not is_real(control_period):
+        raise TypeError(f"control_period must be a number of seconds, got {control_period!r}")
+    if not 0 < control_period <= MAX_CONTROL_PERIOD:  # NaN fails too
         raise ValueError(
             f"control_period must be > 0 and <= {MAX_CONTROL_PERIOD:g} s, got {control_period!r}"
         )

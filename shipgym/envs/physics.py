@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._config import is_real
 from shipgym.assets import asset_path
 from shipgym.disturbances import (
     Current,
@@ -58,7 +59,14 @@ from shipgym.dynamics import (
 )
 from shipgym.envs._mujoco import mujoco
 
-__all__ = ["VesselPhysics", "SimulationDiverged", "DEFAULT_SCENE", "MAX_TIMESTEP", "MIN_TIMESTEP"]
+__all__ = [
+    "VesselPhysics",
+    "SimulationDiverged",
+    "DEFAULT_SCENE",
+    "MAX_TIMESTEP",
+    "MIN_TIMESTEP",
+    "check_timestep",
+]
 
 DEFAULT_SCENE = ("mjcf", "blue_lady", "scene.xml")
 
@@ -88,6 +96,17 @@ MIN_TIMESTEP = 1e-4
 #: largest physics timestep (s): half the shortest thruster time constant (1 s, the tunnel
 #: thrusters), where MuJoCo's semi-implicit Euler still tracks the first-order lags.
 MAX_TIMESTEP = 0.5
+
+
+def check_timestep(timestep: Any) -> float:
+    """The physics timestep (s) as a float; ``TypeError``/``ValueError`` outside the bounds."""
+    if not is_real(timestep):
+        raise TypeError(f"timestep must be a number of seconds, got {timestep!r}")
+    if not MIN_TIMESTEP <= timestep <= MAX_TIMESTEP:  # NaN fails too
+        raise ValueError(
+            f"timestep must be from {MIN_TIMESTEP:g} to {MAX_TIMESTEP:g} s, got {timestep!r}"
+        )
+    return float(timestep)
 
 
 class VesselPhysics:
@@ -152,14 +171,7 @@ class VesselPhysics:
             raise FileNotFoundError(f"MJCF file not found: {path}")
         self.model = mujoco.MjModel.from_xml_path(str(path))
         if timestep is not None:
-            if isinstance(timestep, bool) or not isinstance(timestep, int | float | np.floating):
-                raise TypeError(f"timestep must be a number of seconds, got {timestep!r}")
-            if not MIN_TIMESTEP <= timestep <= MAX_TIMESTEP:
-                raise ValueError(
-                    f"timestep must be from {MIN_TIMESTEP:g} to {MAX_TIMESTEP:g} s, "
-                    f"got {timestep!r}"
-                )
-            self.model.opt.timestep = float(timestep)
+            self.model.opt.timestep = check_timestep(timestep)
         self.data = mujoco.MjData(self.model)
         self._bind_model()
         self.wind = Wind(self.wind_config, windage)

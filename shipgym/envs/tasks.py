@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import math
-import numbers
 from typing import Any
 
+from shipgym._config import is_real
 from shipgym.disturbances import CurrentConfig, WindConfig
 from shipgym.disturbances.current import MAX_CURRENT_SPEED
 from shipgym.disturbances.wind import MAX_WIND_SPEED
@@ -100,11 +100,11 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
     ) -> None:
         if not (isinstance(max_legs, int) and max_legs >= 1):
             raise ValueError(f"max_legs must be an int >= 1, got {max_legs!r}")
-        if not (_real(max_wind_speed) and 0 <= max_wind_speed <= MAX_WIND_SPEED):
+        if not (_finite_real(max_wind_speed) and 0 <= max_wind_speed <= MAX_WIND_SPEED):
             raise ValueError(
                 f"max_wind_speed must be in [0, {MAX_WIND_SPEED:g}] m/s, got {max_wind_speed!r}"
             )
-        if not (_real(max_current_speed) and 0 <= max_current_speed <= MAX_CURRENT_SPEED):
+        if not (_finite_real(max_current_speed) and 0 <= max_current_speed <= MAX_CURRENT_SPEED):
             raise ValueError(
                 f"max_current_speed must be in [0, {MAX_CURRENT_SPEED:g}] m/s, "
                 f"got {max_current_speed!r}"
@@ -183,5 +183,5 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
         return given.replace(position_variance=pos * pos, heading_variance=psi * psi)
 
 
-def _real(x: Any) -> bool:
-    return isinstance(x, numbers.Real) and not isinstance(x, bool) and math.isfinite(x)
+def _finite_real(x: Any) -> bool:
+    return is_real(x) and math.isfinite(x)

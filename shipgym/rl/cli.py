@@ -24,9 +24,9 @@ from shipgym._argtypes import (
     bounded_float,
     bounded_int,
     nonneg_int,
-    progress_enabled,
     seed_int,
 )
+from shipgym._io import progress_enabled
 
 __all__ = [
     "add_bench_controllers_parser",

@@ -9,7 +9,6 @@ training (:class:`shipgym.rl.train.HarbourEvalCallback`) and ``shipgym bench con
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from typing import Any
@@ -17,6 +16,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
+
+from shipgym.runner import describe_wind
 
 __all__ = [
     "DEFAULT_WIND",
@@ -152,15 +153,13 @@ def run_controlled_episode(
     env = make_controlled_env(scenario, controller, observer=observer, wind=wind, **env_kwargs)
     try:
         row = run_env_episode(env, seed)
-        wc = env.unwrapped.wind_config  # type: ignore[attr-defined]  # the episode's
+        wind_used = describe_wind(env.unwrapped.wind_config)  # type: ignore[attr-defined]
     finally:
         env.close()
     return {
         "scenario": scenario,
         "controller": controller,
         "observer": observer or "truth",
-        "wind": None
-        if wc is None
-        else {"speed": wc.speed, "from_deg": math.degrees(wc.direction_from) % 360.0},
+        "wind": wind_used,
         **row,
     }

@@ -48,6 +48,7 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
+from shipgym._config import is_real
 from shipgym._safeload import jsonable
 from shipgym.controllers.learned import (
     ALGORITHMS,
@@ -263,7 +264,7 @@ def check_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
 
 
 def _is_number(v: Any) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+    return is_real(v) and math.isfinite(v)
 
 
 def _check_hp_types(algo: str, hp: Mapping[str, Any], where: str) -> None:
