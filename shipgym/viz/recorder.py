@@ -38,10 +38,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shipgym._io import partial_path, replace_together
-from shipgym.metrics import indices_note
 
 from .geometry import hull_outline, hull_polygon, quay_polygons, thruster_positions
-from .run import DATA_VECTORS, P, Run, desired_body_velocity, save_run_json
+from .run import DATA_VECTORS, P, Run, desired_body_velocity, indices_warning, save_run_json
 
 __all__ = ["RecordEpisode", "episode_path"]
 
@@ -1030,9 +1029,9 @@ def _summary_markdown(
                     f"{float(m.get(k, float('nan'))):.4f}" for k in ("x_E", "y_E", "psi_E", "J_c")
                 )
                 lines.append(f"| {name} | {vals} |")
-        note = indices_note(metrics, plan_finite=meta.get("terminate_on_finish", True))
-        if note is not None:
-            lines += ["", f"**These indices do not describe a whole run**: {note}."]
+        warning = indices_warning(metrics, meta)
+        if warning is not None:
+            lines += ["", warning]
     return "\n".join(lines) + "\n"
 
 

@@ -27,10 +27,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from shipgym.metrics import indices_note
-
 from .geometry import hull_polygon
-from .run import Run, load_run, recording_problem
+from .run import Run, indices_warning, load_run, recording_problem
 
 os.environ.setdefault("MPLBACKEND", "Agg")  # headless by default, whatever imports pyplot later
 
@@ -398,16 +396,6 @@ def _fmt(x: Any, nd: int = 4) -> str:
     return f"{f:.{nd}f}" if math.isfinite(f) else "n/a"
 
 
-def _indices_warning(metrics: dict[str, Any], meta: dict[str, Any]) -> list[str]:
-    """A warning line when the indices cover only part of a run (a failed or short run)."""
-    if not metrics:
-        return []
-    note = indices_note(metrics, plan_finite=meta.get("terminate_on_finish", True))
-    if note is None:
-        return []
-    return [f"**These indices do not describe a whole run**: {note}.", ""]
-
-
 def _metrics_markdown(run: Run, files: list[Path]) -> str:
     m = run.metrics or {}
     meta = run.metadata or {}
@@ -451,7 +439,7 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
         "",
         "J_c = x_E + y_E + 0.01 psi_E.",
         "",
-        *_indices_warning(m, meta),
+        *([w, ""] if (w := indices_warning(m, meta)) else []),
         "## Legs",
         "",
         "| leg | name | started at (s) | completed at (s) | duration (s) |",

@@ -58,7 +58,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Run", "load_run", "recording_problem", "save_run_json", "P"]
+from shipgym.metrics import indices_note
+
+__all__ = ["Run", "indices_warning", "load_run", "recording_problem", "save_run_json", "P"]
 
 JSON_FORMAT = "shipgym-run"
 JSON_VERSION = 1
@@ -521,3 +523,14 @@ def load_run(path: str | os.PathLike[str]) -> Run:
     if suffix == ".rrd":
         return _load_rrd(path)
     raise ValueError(f"unsupported run file {path}: expected a .rrd or .json file")
+
+
+def indices_warning(metrics: dict[str, Any] | None, meta: dict[str, Any]) -> str | None:
+    """A markdown line when a run's indices cover only part of it (failed, unfinished, short).
+
+    ``meta`` is the run's metadata (its ``terminate_on_finish``: whether the plan ends).
+    """
+    if not metrics:
+        return None
+    note = indices_note(metrics, plan_finite=meta.get("terminate_on_finish", True))
+    return None if note is None else f"**These indices do not describe a whole run**: {note}."
