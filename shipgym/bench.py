@@ -109,6 +109,9 @@ def _worker_init(owner: int, forked: bool) -> None:
 def _stop_pool(pool: ProcessPoolExecutor) -> None:
     """Cancel what has not started and end the workers now (interrupt or failure)."""
     procs = list((getattr(pool, "_processes", None) or {}).values())
+    # the pool's manager thread reaps the workers too (shutdown() forgets it: take it first);
+    # until it has finished, a worker it reaped can still read as alive here
+    manager = getattr(pool, "_executor_manager_thread", None)
     pool.shutdown(wait=False, cancel_futures=True)
     for p in procs:
         with contextlib.suppress(Exception):
@@ -120,6 +123,8 @@ def _stop_pool(pool: ProcessPoolExecutor) -> None:
             if p.is_alive():
                 p.kill()
                 p.join(1.0)
+    if manager is not None:
+        manager.join(max(1.0, deadline - time.monotonic()))
 
 
 def run_jobs(
