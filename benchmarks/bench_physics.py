@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         mujoco.mj_step(m, d, nstep=n)
 
     wind = WindConfig(speed=3.0, direction_from=math.radians(300.0))
-    phys = VesselPhysics("default", wind=wind)
+    phys = VesselPhysics("blue-lady", "default", wind=wind)
     phys.reset(rng=np.random.default_rng(0))
     phys.set_command([300.0, 0.5, -0.5])
 

@@ -48,12 +48,14 @@ def catalogue() -> dict[str, Any]:
         ``scenario_presets`` (name -> description, the named presets and the packaged files),
         ``controllers`` (name -> description, including ``ppo``, ``ppo:PATH``, ``sac:PATH``),
         ``observers``, ``sensor_presets``, ``wave_presets``, ``plans``, ``plant_variants``,
-        ``wind_models`` and ``actuators``.
+        ``wind_models``, ``actuators`` (the Blue Lady's) and ``vessels`` (name -> a one-line
+        description: DOF, length, actuators).
     """
     from shipgym import ENV_IDS
     from shipgym.controllers.wrappers import CONTROLLERS
     from shipgym.disturbances import BLENDERMANN
     from shipgym.dynamics import ACTUATOR_NAMES, PLANT_VARIANTS
+    from shipgym.dynamics.vessel import vessels
     from shipgym.envs.make import SCENARIOS
     from shipgym.guidance.plan import PLANS
     from shipgym.observers import observer_names
@@ -76,6 +78,11 @@ def catalogue() -> dict[str, Any]:
         "plant_variants": list(PLANT_VARIANTS),
         "wind_models": [f"blendermann:{k}" for k in BLENDERMANN],
         "actuators": list(ACTUATOR_NAMES),
+        "vessels": {
+            n: f"{v.title}: {v.dofs} DOF, L_oa {v.L_oa:g} m, "
+            + ", ".join(f"{a.name} ({a.kind})" for a in v.actuators)
+            for n, v in vessels().items()
+        },
     }
 
 
@@ -126,7 +133,10 @@ def _cmd_list(args: argparse.Namespace) -> int:
     print("plans           :", names("plans"))
     print("plant variants  :", names("plant_variants"))
     print("wind models     :", names("wind_models"))
-    print("actuators       :", names("actuators"))
+    print("actuators       :", names("actuators"), "(the Blue Lady's)")
+    print("vessels         :")
+    for name, desc in cat["vessels"].items():
+        print(f"  {name:16s} {desc}")
     return 0
 
 
@@ -204,8 +214,14 @@ def _print_table(res: dict[str, Any]) -> None:
     print(f"  wall time        {res['wall_time_s']:.2f} s")
 
 
+def _no_vessel(env_id: str) -> str:
+    from shipgym.dynamics.vessel import vessel_names
+
+    raise ValueError(f"{env_id} needs --vessel NAME ({', '.join(vessel_names())}) or a path")
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
-    from shipgym.dynamics import plant_model
+    from shipgym.dynamics.vessel import load_vessel
     from shipgym.envs.make import resolve_env_id
 
     env_kwargs: dict[str, Any] = {}
@@ -221,10 +237,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
         env_kwargs["wind"] = args.wind
     if args.plant is not None:
         env_kwargs["plant"] = args.plant
+    if args.vessel is not None:
+        env_kwargs["vessel"] = args.vessel
     args.scenario = scenario_name
-    resolve_env_id(args.scenario)  # validate names before any work
+    env_id = resolve_env_id(args.scenario)  # validate names before any work
     check_controller(args.controller)
-    plant_model(env_kwargs.get("plant", "default"))
+    from shipgym.envs.registration import ALIASES
+
+    vessel = load_vessel(env_kwargs.get("vessel", "blue-lady" if env_id in ALIASES else None)
+                         or _no_vessel(env_id))  # fmt: skip
+    vessel.plant(env_kwargs.get("plant", "default"))
     observer = args.observer  # None: truth, or a learned model's own observer
     if observer not in (None, "truth"):
         from shipgym.observers import make_observer
@@ -411,7 +433,7 @@ def _check_writable(path: Path) -> None:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from shipgym.envs.physics import VesselPhysics
 
-    phys = VesselPhysics(args.plant, wind=args.wind)
+    phys = VesselPhysics("blue-lady", args.plant, wind=args.wind)
     phys.reset(rng=np.random.default_rng(args.seed))
     # open loop: half ahead, bow thruster to starboard and stern thruster to port (turn right)
     phys.set_command([300.0, 0.8, -0.8])
@@ -508,6 +530,10 @@ def _parser() -> argparse.ArgumentParser:
                    help="mean wind, e.g. 3@300 (m/s, deg it comes from; default: the "
                    "scenario's, 3@300 for harbour, drawn per episode for tracking)")  # fmt: skip
     p.add_argument("--plant", default=None, help="plant variant (default: 'default')")
+    p.add_argument(
+        "--vessel", default=None,
+        help="vessel name or package path (see 'shipgym list'; the Blue Lady ids imply it)",
+    )  # fmt: skip
     p.add_argument("--json", type=Path, default=None, metavar="PATH", help="write results")
     p.add_argument("--record", type=Path, default=None, metavar="PATH.rrd",
                    help="record the episode to a rerun file (no viewer needed)")  # fmt: skip

@@ -47,4 +47,4 @@ def test_observer_table_keeps_the_completed_runs_mean():
 @pytest.mark.parametrize("timestep", [1e-9, 0.0, -0.05, 2.0, math.inf, math.nan])
 def test_vessel_physics_bounds_the_timestep(timestep):
     with pytest.raises(ValueError, match="timestep"):
-        VesselPhysics(timestep=timestep)
+        VesselPhysics("blue-lady", timestep=timestep)

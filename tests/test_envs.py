@@ -11,8 +11,9 @@ from gymnasium.utils.env_checker import check_env
 import shipgym
 from shipgym.cli import main
 from shipgym.controllers.wrappers import DPControllerWrapper
+from shipgym.envs.registration import ALIASES
 
-IDS = list(shipgym.ENV_IDS)
+IDS = list(ALIASES)  # the Blue Lady ids (every vessel x task: test_vessel_envs.py)
 
 
 @pytest.mark.parametrize("env_id", IDS)

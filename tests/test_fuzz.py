@@ -22,8 +22,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import shipgym
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
+from shipgym.envs.registration import ALIASES
 
 SEED = 20261201
 EPISODES = 2400  # >= 2000 across the three env ids
@@ -34,7 +34,7 @@ SENSORS = (None, "default", "dgps", "rtk", "tomera2014")
 MAX_CONTROL_PERIOD = 2.0  # s
 MAX_SPEED = 5.0  # m/s: a 13.8 m, 23 t model ship; the fastest manoeuvres are ~0.3 m/s
 MAX_YAW_RATE = 2.0  # rad/s
-ENV_IDS = tuple(shipgym.ENV_IDS)
+ENV_IDS = tuple(ALIASES)
 
 
 def _pick(rng: np.random.Generator, options: tuple[Any, ...], p: tuple[float, ...]) -> Any:

@@ -158,7 +158,10 @@ def test_registered_as_lq_with_constrained_allocation():
     assert "lq" in CONTROLLERS
     spec = controller_spec("lq")
     assert spec.allocation == "constrained"
-    assert isinstance(spec.factory(1.0), LQController)
+    from shipgym.dynamics.vessel import load_vessel
+
+    for name in ("blue-lady", "star-hercules", "wimpey-sealab"):
+        assert isinstance(spec.factory(load_vessel(name), 1.0), LQController)
     lq.register_lq()  # idempotent
 
 

@@ -47,7 +47,7 @@ def _run_physics(phys, duration, ct, cmds, sample=1.0):
 
 
 def _parity_errors(plant, timestep, duration=600.0, wind=GUSTY):
-    phys = VesselPhysics(plant, wind=wind, timestep=timestep)
+    phys = VesselPhysics("blue-lady", plant, wind=wind, timestep=timestep)
     phys.reset(rng=np.random.default_rng(7))
     ct, cmds = _commands(duration, 5.0)
     traj = _run_physics(phys, duration, ct, cmds)
@@ -68,7 +68,7 @@ def _parity_errors(plant, timestep, duration=600.0, wind=GUSTY):
 
 def test_qacc_is_exactly_the_model_acceleration():
     """After one step, MuJoCo's joint acceleration equals R(psi)(nu_dot + r S nu) of the model."""
-    phys = VesselPhysics("default", wind=WindConfig(speed=4.0, direction_from=1.0))
+    phys = VesselPhysics("blue-lady", "default", wind=WindConfig(speed=4.0, direction_from=1.0))
     phys.reset(eta=[1.0, 2.0, 0.7], nu=[0.4, -0.15, 0.02], actuators=[350.0, 0.6, -0.8])
     eta, nu = phys.eta, phys.nu
     tau = np.array([1.9589e-3 * 350**2, 44.145 * (0.6 - 0.8), 44.145 * (3.24 * 0.6 + 2.376 * 0.8)])
@@ -101,7 +101,7 @@ def test_parity_with_scipy_reference(plant):
 
 def test_seed_linear_surge_step_matches_analytic_solution():
     """M11 u_dot + 21.1 u = F: steady speed F/21.1, time constant 23664.9/21.1 s."""
-    phys = VesselPhysics("seed-linear", timestep=0.05)
+    phys = VesselPhysics("blue-lady", "seed-linear", timestep=0.05)
     n = 100.0
     phys.reset(actuators=[n, 0.0, 0.0])  # actuator already at the command: constant force
     phys.set_command([n, 0.0, 0.0])
@@ -124,7 +124,7 @@ def test_seed_linear_surge_step_matches_analytic_solution():
 @pytest.mark.parametrize("psi_deg", [0.0, 45.0, 90.0, 200.0, -120.0])
 def test_thrust_follows_heading(psi_deg):
     psi = math.radians(psi_deg)
-    phys = VesselPhysics("seed-linear")
+    phys = VesselPhysics("blue-lady", "seed-linear")
     phys.reset(eta=[0, 0, psi], actuators=[300.0, 1.0, 0.0])
     phys.set_command([300.0, 1.0, 0.0])
     phys.step()
@@ -137,7 +137,7 @@ def test_thrust_follows_heading(psi_deg):
 
 
 def test_saturation_at_physical_ranges():
-    phys = VesselPhysics()
+    phys = VesselPhysics("blue-lady")
     flags = phys.set_command([900.0, -3.0, 0.5])
     np.testing.assert_array_equal(flags, [True, True, False])
     np.testing.assert_array_equal(phys.command, [480.0, -1.0, 0.5])
@@ -153,7 +153,7 @@ def test_saturation_at_physical_ranges():
 
 @pytest.mark.parametrize("idx,cmd,T", [(0, 400.0, 2.0), (1, 1.0, 1.0), (2, -1.0, 1.0)])
 def test_first_order_lag_time_constant(idx, cmd, T):
-    phys = VesselPhysics("seed-linear", timestep=0.01)
+    phys = VesselPhysics("blue-lady", "seed-linear", timestep=0.01)
     command = np.zeros(3)
     command[idx] = cmd
     phys.set_command(command)
@@ -167,10 +167,14 @@ def test_first_order_lag_time_constant(idx, cmd, T):
 
 
 def test_mjcf_thruster_values_agree_with_parameters():
-    import shipgym.assets as assets
+    # the model built from vessel.toml against the Tomera (2014) record in ThrusterParameters
+    from shipgym.dynamics.vessel import load_vessel
+    from shipgym.envs.scene import build_model
 
-    m = mujoco.MjModel.from_xml_path(str(assets.asset_path("mjcf", "blue_lady", "scene.xml")))
+    m = build_model(load_vessel("blue-lady"))
     p = BLUE_LADY_THRUSTERS
+    sites = [m.site_pos[m.actuator_trnid[i, 0]] for i in range(3)]
+    np.testing.assert_allclose([s[0] for s in sites], [p.x_main, p.L2, -p.L3])
     np.testing.assert_allclose(m.actuator_ctrlrange, np.c_[p.lower, p.upper])
     np.testing.assert_allclose(m.actuator_dynprm[:, 0], p.time_constants)
     np.testing.assert_allclose(m.actuator_gainprm[1:, 0], [p.k2, p.k3])
@@ -182,7 +186,7 @@ def test_mjcf_thruster_values_agree_with_parameters():
 
 
 def test_bad_input_raises_clear_errors():
-    phys = VesselPhysics()
+    phys = VesselPhysics("blue-lady")
     with pytest.raises(ValueError, match="NaN or infinite"):
         phys.set_command([np.nan, 0.0, 0.0])
     with pytest.raises(ValueError, match="NaN or infinite"):
@@ -190,11 +194,11 @@ def test_bad_input_raises_clear_errors():
     with pytest.raises(ValueError, match="shape"):
         phys.set_command([0.0, 0.0])
     with pytest.raises(ValueError, match="unknown plant variant"):
-        VesselPhysics("nonlinear")
+        VesselPhysics("blue-lady", "nonlinear")
     with pytest.raises(ValueError, match="timestep"):
-        VesselPhysics(timestep=-0.1)
+        VesselPhysics("blue-lady", timestep=-0.1)
     with pytest.raises(ValueError, match="current"):
-        VesselPhysics(current=(-1.0, 0.0))
+        VesselPhysics("blue-lady", current=(-1.0, 0.0))
 
 
 def test_diverging_simulation_stops_with_an_error_not_nan():
@@ -202,7 +206,7 @@ def test_diverging_simulation_stops_with_an_error_not_nan():
         "unstable", np.diag([1.0e3, 1.0e3, 1.0e4]), np.zeros((3, 3)),
         -np.diag([5.0e3, 5.0e3, 5.0e4]), coriolis=False,
     )  # fmt: skip
-    phys = VesselPhysics(unstable)
+    phys = VesselPhysics("blue-lady", unstable)
     phys.reset(nu=[0.1, 0.0, 0.0])
     with pytest.raises(SimulationDiverged, match="diverged"):
         phys.step(100_000)
@@ -210,12 +214,12 @@ def test_diverging_simulation_stops_with_an_error_not_nan():
 
 
 def test_separate_models_in_one_process_do_not_interfere():
-    a, b = VesselPhysics("default"), VesselPhysics("seed-linear")
+    a, b = VesselPhysics("blue-lady", "default"), VesselPhysics("blue-lady", "seed-linear")
     for ph in (a, b):
         ph.set_command([300.0, 0.5, -0.5])
     a.step(200)
     b.step(200)
-    c = VesselPhysics("default")
+    c = VesselPhysics("blue-lady", "default")
     c.set_command([300.0, 0.5, -0.5])
     c.step(200)
     np.testing.assert_array_equal(a.eta, c.eta)
@@ -225,13 +229,13 @@ def test_separate_models_in_one_process_do_not_interfere():
 def test_still_air_drags_a_moving_hull_and_none_switches_aerodynamics_off():
     from shipgym.disturbances import wind_load
 
-    still = VesselPhysics("seed-linear", wind=WindConfig(speed=0.0))
+    still = VesselPhysics("blue-lady", "seed-linear", wind=WindConfig(speed=0.0))
     still.reset(nu=[1.0, 0.0, 0.0])
     still.step()
     expect = wind_load(0.0, 0.0, 0.0, 1.0, 0.0)  # 1 m/s head wind on a hull at rest
     np.testing.assert_allclose(still.tau_wind, expect, rtol=1e-9, atol=1e-12)
     assert still.tau_wind[0] < 0
-    off = VesselPhysics("seed-linear", wind=None)
+    off = VesselPhysics("blue-lady", "seed-linear", wind=None)
     off.reset(nu=[1.0, 0.0, 0.0])
     off.step()
     assert off.tau_wind == (0.0, 0.0, 0.0)
@@ -240,6 +244,6 @@ def test_still_air_drags_a_moving_hull_and_none_switches_aerodynamics_off():
 def test_tau_thrusters_equals_the_configuration_matrix_times_thrust():
     from shipgym.dynamics import command_to_tau
 
-    phys = VesselPhysics()
+    phys = VesselPhysics("blue-lady")
     phys.reset(actuators=[-150.0, 0.3, -0.7])
     np.testing.assert_allclose(phys.tau_thrusters, command_to_tau(phys.actuator_state), rtol=1e-12)

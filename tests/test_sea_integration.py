@@ -15,7 +15,7 @@ from shipgym.scenarios import load_scenario
 def test_hull_drifts_with_the_current_and_feels_no_force_moving_with_the_water():
     """No thrust: the ground velocity goes to the current velocity, nu_r -> 0."""
     cur = CurrentConfig(speed=0.1, direction_to=math.radians(60.0))
-    phys = VesselPhysics("default", wind=None, current=cur)
+    phys = VesselPhysics("blue-lady", "default", wind=None, current=cur)
     phys.reset()
     phys.step(round(8000 / phys.timestep))
     v_ned = phys.data.qvel[:2] + 0.5 * phys.timestep * phys.data.qacc[:2]
@@ -23,7 +23,7 @@ def test_hull_drifts_with_the_current_and_feels_no_force_moving_with_the_water()
     np.testing.assert_allclose(v_ned, expect, atol=2e-3)
     assert abs(phys.nu[2]) < 1e-4
     # a hull already moving with the water: no hydrodynamic force at all
-    phys2 = VesselPhysics("default", wind=None, current=cur)
+    phys2 = VesselPhysics("blue-lady", "default", wind=None, current=cur)
     psi = 0.3
     u_c, v_c = 0.1 * math.cos(math.radians(60.0) - psi), 0.1 * math.sin(math.radians(60.0) - psi)
     phys2.reset(eta=[0, 0, psi], nu=[u_c, v_c, 0.0])

@@ -11,10 +11,11 @@ import pytest
 import shipgym
 from shipgym.cli import run_episode
 from shipgym.disturbances import CurrentConfig, WindConfig
+from shipgym.envs.registration import ALIASES
 from shipgym.guidance import Leg, ManoeuvrePlan
 from shipgym.observers.sensors import sensor_config
 
-IDS = list(shipgym.ENV_IDS)
+IDS = list(ALIASES)  # the Blue Lady ids (every vessel x task: test_vessel_envs.py)
 TRACKING = "shipgym/BlueLadyTracking-v0"
 HOLD = ManoeuvrePlan(legs=(Leg(name="hold"),), name="hold")
 

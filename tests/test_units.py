@@ -22,9 +22,10 @@ from shipgym.disturbances.current import MAX_CURRENT_SPEED
 from shipgym.disturbances.wind import MAX_WIND_SPEED
 from shipgym.dynamics.params import BLUE_LADY_WINDAGE
 from shipgym.envs.physics import VesselPhysics
+from shipgym.envs.registration import ALIASES
 from shipgym.scenarios import scenario_from_dict
 
-IDS = list(shipgym.ENV_IDS)
+IDS = list(ALIASES)  # the Blue Lady ids (every vessel x task: test_vessel_envs.py)
 
 #: 3 m/s from 300 deg with the default gusts, and 0.1 m/s going to 90 deg (east)
 REF_WIND = WindConfig(speed=3.0, direction_from=math.radians(300.0))
@@ -76,8 +77,8 @@ def test_regressions_of_the_old_radian_tuples():
     # wind from 300 rad -> 5.2 deg, because the CLI gave radians and the env read degrees)
     w = WindConfig.coerce(cli.parse_wind("3@300"))
     assert w.direction_from == pytest.approx(math.radians(300.0), abs=1e-15)
-    # VesselPhysics(current=(0.1, 90)) is 90 deg (east), not 90 rad
-    phys = VesselPhysics(current=(0.1, 90))
+    # VesselPhysics("blue-lady", current=(0.1, 90)) is 90 deg (east), not 90 rad
+    phys = VesselPhysics("blue-lady", current=(0.1, 90))
     assert phys.current_config.direction_to == pytest.approx(math.pi / 2, abs=1e-15)
     # heading north at rest, a current going east is 0.1 m/s to starboard in the body frame
     assert phys.nu_c == pytest.approx((0.0, 0.1), abs=1e-15)
@@ -134,10 +135,12 @@ def _physics_trace(phys):
 
 
 def test_vessel_physics_and_its_setters_take_every_form():
-    ref = _physics_trace(VesselPhysics(wind=WIND_FORMS[0], current=CURRENT_FORMS[0]))
+    ref = _physics_trace(VesselPhysics("blue-lady", wind=WIND_FORMS[0], current=CURRENT_FORMS[0]))
     for w, c in PAIRS:
-        np.testing.assert_array_equal(_physics_trace(VesselPhysics(wind=w, current=c)), ref)
-        phys = VesselPhysics(wind=None, current=None)
+        np.testing.assert_array_equal(
+            _physics_trace(VesselPhysics("blue-lady", wind=w, current=c)), ref
+        )
+        phys = VesselPhysics("blue-lady", wind=None, current=None)
         phys.set_wind(w)
         phys.set_current(c)
         np.testing.assert_array_equal(_physics_trace(phys), ref)
@@ -268,9 +271,9 @@ def test_config_limits():
         with pytest.raises(ValueError, match="CurrentConfig"):
             CurrentConfig(**kw)
     with pytest.raises(ValueError, match="wind"):
-        VesselPhysics(wind="10000@0")
+        VesselPhysics("blue-lady", wind="10000@0")
     with pytest.raises(ValueError, match="current"):
-        VesselPhysics().set_current("-1@0")
+        VesselPhysics("blue-lady").set_current("-1@0")
 
 
 # --- the absolute numbers, against Blendermann (1994) written out independently ------------
@@ -310,7 +313,7 @@ def test_wind_load_at_rest_matches_blendermann(from_deg, psi_deg, gamma_deg, sig
     gamma = math.radians(gamma_deg)
     expected = _blendermann_loads(gamma, 3.0)
     wind = {"speed": 3.0, "direction_from_deg": from_deg, "gust_std": 0.0, "direction_std": 0.0}
-    phys = VesselPhysics(wind=wind)
+    phys = VesselPhysics("blue-lady", wind=wind)
     phys.reset(eta=(0.0, 0.0, math.radians(psi_deg)))
     np.testing.assert_allclose(phys.tau_wind, expected, rtol=1e-9, atol=1e-9)
     X, Y, _ = phys.tau_wind

@@ -527,6 +527,22 @@ class LQController:
         )
 
 
+def _lq_for(vessel: Any, dt: float) -> LQController:
+    """The ``"lq"`` controller of a vessel: its design model; the ``"tuned"`` weights for the
+    Blue Lady (whose capacity they were chosen for), else Bryson weights with the vessel's
+    force capacity as ``tau_max``."""
+    from .actuation import planar_capacity
+
+    cap = planar_capacity(vessel)
+    weights: LQWeights | str = (
+        "tuned" if "tuned" in vessel.control.get("pid_presets", ()) else
+        LQWeights(tau_max=tuple(float(c) for c in cap))
+    )  # fmt: skip
+    return LQController(
+        weights, M=vessel.design.M, D_L=vessel.design.D_L, dt=dt, integral_limit=cap
+    )
+
+
 def register_lq() -> None:
     """Register ``"lq"`` in the controller registry (idempotent); constrained allocation."""
     from .wrappers import CONTROLLERS, ControllerSpec, register_controller
@@ -535,7 +551,7 @@ def register_lq() -> None:
         register_controller(
             "lq",
             ControllerSpec(
-                lambda dt: LQController("tuned", dt=dt),
+                _lq_for,
                 "constrained",
                 "LQ optimal control with integral action (Al-Takie 1982 ch. 4 on Tomera 2014 "
                 "eqs. 49-50), "

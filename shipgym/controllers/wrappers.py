@@ -18,10 +18,12 @@ from gymnasium import spaces
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym.dynamics import wrap_angle
+from shipgym.dynamics.vessel import Vessel
 from shipgym.guidance import to_r_frame
 
-from .allocation import Allocation, allocate, allocate_inverse, command_to_action
-from .pid import MultivariablePID
+from .actuation import make_allocator, planar_capacity
+from .allocation import Allocation
+from .pid import MultivariablePID, PIDGains
 
 __all__ = [
     "CONTROLLERS",
@@ -54,30 +56,60 @@ class DPController(Protocol):
 
 @dataclass(frozen=True)
 class ControllerSpec:
-    """A named controller: a factory ``f(dt) -> DPController`` and an allocation method."""
+    """A named controller: a factory ``f(vessel, dt) -> DPController`` and an allocation.
 
-    factory: Callable[[float], DPController]
+    The factory designs the controller for the vessel (its design model, capacity and
+    presets) and the control period ``dt`` (s); it raises ``ValueError`` for a vessel the
+    controller does not apply to.
+    """
+
+    factory: Callable[[Vessel, float], DPController]
     allocation: str
     description: str
+
+
+def _pid(preset: str, scale: float = 1.0) -> Callable[[Vessel, float], DPController]:
+    """PID of Tomera (2014) eq. 23 for a vessel: its preset gains where it has them (the
+    Blue Lady's tuned gains), else pole placement at the vessel's bandwidth times ``scale``
+    on its design model (:func:`~shipgym.controllers.pid.pid_pole_placement`)."""
+
+    def make(vessel: Vessel, dt: float) -> DPController:
+        d = vessel.design
+        cap = planar_capacity(vessel)
+        if preset in vessel.control.get("pid_presets", ()):
+            gains: PIDGains | str = preset
+        elif preset == "seed":
+            raise ValueError(
+                f"controller 'pid-seed' holds the printed gains of Tomera (2014) for the Blue "
+                f"Lady; vessel {vessel.name!r} has none: use 'pid'"
+            )
+        else:
+            bw = np.asarray(vessel.control["bandwidth"], dtype=float) * scale
+            gains = PIDGains.from_pole_placement(bw, float(vessel.control["zeta"]))
+        return MultivariablePID(gains, M=d.M, D_L=d.D_L, dt=dt, integral_limit=cap)
+
+    return make
 
 
 #: Controllers selectable by name (``shipgym run --controller NAME``); extend with
 #: :func:`register_controller`.
 CONTROLLERS: dict[str, ControllerSpec] = {
     "pid": ControllerSpec(
-        lambda dt: MultivariablePID("tuned", dt=dt),
+        _pid("tuned"),
         "constrained",
-        "Tomera (2014) eq. 23 PID, tuned gains, constrained allocation",
+        "Tomera (2014) eq. 23 PID (Blue Lady: tuned gains; other vessels: pole placement at "
+        "the vessel's bandwidth), constrained allocation",
     ),
     "pid-smooth": ControllerSpec(
-        lambda dt: MultivariablePID("smooth", dt=dt),
+        _pid("smooth", 0.7),
         "constrained",
         "Tomera (2014) eq. 23 PID, lower bandwidth for observer feedback, constrained allocation",
     ),
     "pid-seed": ControllerSpec(
-        lambda dt: MultivariablePID("seed", dt=dt),
+        _pid("seed"),
         "inverse",
-        "Tomera (2014) eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1",
+        "Tomera (2014) eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1 "
+        "(the Blue Lady only)",
     ),
 }
 
@@ -86,15 +118,13 @@ def register_controller(name: str, spec: ControllerSpec) -> None:
     """Add a named controller (e.g. ``"lq"``); names are unique."""
     if name in CONTROLLERS:
         raise ValueError(f"controller {name!r} is already registered")
-    if spec.allocation not in _ALLOCATORS:
-        raise ValueError(f"unknown allocation {spec.allocation!r}; choose {list(_ALLOCATORS)}")
+    if spec.allocation not in _ALLOCATIONS:
+        raise ValueError(f"unknown allocation {spec.allocation!r}; choose {list(_ALLOCATIONS)}")
     CONTROLLERS[name] = spec
 
 
-_ALLOCATORS: dict[str, Callable[..., Allocation]] = {
-    "constrained": allocate,
-    "inverse": allocate_inverse,
-}
+#: allocation methods (:func:`~shipgym.controllers.actuation.make_allocator`)
+_ALLOCATIONS = ("constrained", "inverse")
 
 
 def controller_spec(name: str) -> ControllerSpec:
@@ -114,7 +144,8 @@ class DPControllerWrapper(
     """Runs the DP controller (Tomera 2014 eq. 23) and the thrust allocation inside ``step``.
 
     The wrapper's action is a *residual* added to the controller's normalised command
-    (``Box(-1, 1, (3,))``, zero: the pure controller), so ``env.step(np.zeros(3))`` runs the
+    (``Box(-1, 1, (n,))``, one per actuator channel; zero: the pure controller), so
+    ``env.step(np.zeros(n))`` runs the
     classical DP system and a learned policy can act on top of it. The sum is clipped to
     [-1, 1] and the clipping flagged in ``info["residual_clipped"]``.
 
@@ -145,10 +176,13 @@ class DPControllerWrapper(
         self.controller_name = controller
         self.residual_scale = float(residual_scale)
         base = env.unwrapped
-        self.thrusters = base.thrusters  # type: ignore[attr-defined]
-        self.controller = spec.factory(base.control_period)  # type: ignore[attr-defined]
-        self._allocate = _ALLOCATORS[spec.allocation]
-        self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        self.vessel: Vessel = base.vessel  # type: ignore[attr-defined]
+        self.actuators = self.vessel.actuators
+        dt = base.control_period  # type: ignore[attr-defined]
+        self.controller = spec.factory(self.vessel, dt)
+        self._allocate = make_allocator(self.vessel, spec.allocation, dt)
+        self._physics = base.physics  # type: ignore[attr-defined]
+        self.action_space = spaces.Box(-1.0, 1.0, (self.actuators.n_channels,), np.float32)
         self._info: dict[str, Any] = {}
         self._leg = 0
         self._psi_P = 0.0
@@ -169,12 +203,15 @@ class DPControllerWrapper(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         residual = np.asarray(action, dtype=np.float64)
-        if residual.shape != (3,) or not np.all(np.isfinite(residual)):
-            raise ValueError(f"residual action must be 3 finite numbers in [-1, 1], got {action!r}")
+        n = self.actuators.n_channels
+        if residual.shape != (n,) or not np.all(np.isfinite(residual)):
+            raise ValueError(
+                f"residual action must be {n} finite numbers in [-1, 1], got {action!r}"
+            )
         if not self._info:
             raise gym.error.ResetNeeded("call reset() before step()")
         tau_c, alloc = self._control(self._info)
-        a_ctrl = command_to_action(alloc.command, self.thrusters)
+        a_ctrl = self.actuators.command_to_action(alloc.command)
         total = a_ctrl + self.residual_scale * residual
         applied = np.clip(total, -1.0, 1.0)
         obs, reward, terminated, truncated, info = self.env.step(applied.astype(np.float32))
@@ -204,4 +241,4 @@ class DPControllerWrapper(
             info["eta_ddot_d_r"],
             saturated=self._tau_error,
         )
-        return tau_c, self._allocate(tau_c, self.thrusters)
+        return tau_c, self._allocate(tau_c, self._physics.actuator_state)

@@ -460,7 +460,8 @@ class WindConfig:
         direction_time_constant: Correlation time of the direction gust (s).
         sample_period: Grid on which gust samples are drawn (s); values in between are
             linearly interpolated in time.
-        coefficients: Name of the Blendermann row in :data:`BLENDERMANN`.
+        coefficients: Name of the Blendermann row in :data:`BLENDERMANN`; ``None`` (default):
+            the vessel's ship type (:attr:`WindageParameters.coefficients`).
         gust_spectrum: ``"gauss-markov"`` (default), ``"npd"`` or ``"harris"``.
         spectrum_scale: Froude scale ``lambda`` between the spectrum (full scale, 10 m) and the
             simulation (1: real wind; 24: a full-scale offshore wind on the 1:24 model).
@@ -481,7 +482,9 @@ class WindConfig:
     direction_std: float = param(math.radians(10.0), "rad", _NOTES17 + ": 10 deg")
     direction_time_constant: float = param(20.0, "s", _NOTES17)
     sample_period: float = param(0.1, "s", "gust sample grid, linear interpolation [assumption]")
-    coefficients: str = param("tanker-loaded", "-", "Blendermann (1994) row, a modelling choice")
+    coefficients: str | None = param(
+        None, "-", "Blendermann (1994) row; None: the vessel's (WindageParameters.coefficients)"
+    )
     gust_spectrum: str = param("gauss-markov", "-", "GM default (assumption); npd, harris")
     spectrum_scale: float = param(1.0, "1", "Froude scale of the gust spectrum")
     gust_components: int = param(200, "-", "harmonics of a spectral gust [assumption]")
@@ -518,7 +521,9 @@ class WindConfig:
             if val is not None and val < 0:
                 raise ValueError(f"WindConfig.{name} must be >= 0, got {val!r}")
         require_positive(self, "gust_time_constant", "direction_time_constant", "sample_period")
-        if not isinstance(self.coefficients, str) or self.coefficients not in BLENDERMANN:
+        if self.coefficients is not None and (
+            not isinstance(self.coefficients, str) or self.coefficients not in BLENDERMANN
+        ):
             raise ValueError(
                 f"WindConfig.coefficients: unknown Blendermann vessel type "
                 f"{self.coefficients!r}; valid names are: {', '.join(sorted(BLENDERMANN))}"
@@ -746,7 +751,7 @@ class Wind(GridPair):
     ) -> None:
         self.config = WindConfig() if config is None else config
         self.windage = windage
-        self.loads = WindLoad(self.config.coefficients, windage)
+        self.loads = WindLoad(self.config.coefficients or windage.coefficients, windage)
         cfg = self.config
         self._dt = float(cfg.sample_period)
         self._inv_dt = 1.0 / self._dt

@@ -66,10 +66,17 @@ class WindageParameters:
     s_L: float = param(-1.1, "m", "estimate: centroid of A_L, -0.08 L_oa (aft house)")
     L_oa: float = param(13.78, "m", "Tomera (2014) Table 1")
     rho_a: float = param(1.225, "kg/m^3", "ISA air density at 15 C")
+    coefficients: str = param(
+        "tanker-loaded", "-", "Blendermann (1994) ship type of the wind coefficients (a choice)"
+    )
 
     def __post_init__(self) -> None:
         require_finite(self)
         require_positive(self, "A_F", "A_L", "L_oa", "rho_a")
+        if not isinstance(self.coefficients, str):
+            raise ValueError(
+                f"coefficients must be a Blendermann ship type, got {self.coefficients!r}"
+            )
 
 
 BLUE_LADY_HULL = HullParameters()

@@ -1,10 +1,13 @@
-"""Independent reference integration of the 3-DOF model with SciPy (the physics' oracle).
+"""Independent reference integration of the hull models with SciPy (the physics' oracle).
 
-Integrates ``eta_dot = R(psi) nu``, the matrix form ``M nu_dot = tau - C nu - D nu``
-(:meth:`PlantModel.nu_dot`, a linear solve, not the expanded kernel the physics uses) and the
-first-order thruster lags ``act_dot = (cmd - act) / T`` with ``scipy.integrate.solve_ivp``
-at tight tolerances, segment by segment between the instants where the piecewise-constant
-commands (or any other input) change.
+Integrates ``eta_dot = R(psi) nu`` (3 DOF) or Fossen's 4-DOF kinematics (``x_dot = u cos psi
+- v cos phi sin psi``, ``y_dot = u sin psi + v cos phi cos psi``, ``phi_dot = p``, ``psi_dot
+= r cos phi``), the matrix form ``M nu_dot = tau - C nu - D nu (- g)`` (``nu_dot``, a linear
+solve, not the expanded kernel the physics uses), the actuator states (first-order lags
+``act_dot = (cmd - act) / T``, integrators ``act_dot = cmd`` for azimuth angles) and their
+thrust (:meth:`ActuatorSet.tau <shipgym.dynamics.actuators.ActuatorSet.tau>`, the matrix
+form) with ``scipy.integrate.solve_ivp`` at tight tolerances, segment by segment between the
+instants where the piecewise-constant commands (or any other input) change.
 """
 
 from __future__ import annotations
@@ -16,7 +19,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 
+from .actuators import ActuatorSet
 from .frames import rot
+from .hull4 import Hull4
 from .model import PlantModel
 from .thrusters import BLUE_LADY_THRUSTERS, ThrusterParameters, command_to_tau
 
@@ -27,7 +32,11 @@ EnvLoad = Callable[[float, NDArray[np.float64], NDArray[np.float64]], ArrayLike]
 
 @dataclass(frozen=True)
 class ReferenceSolution:
-    """Sampled reference trajectory: ``t`` (s), ``eta`` (m, m, rad), ``nu``, actuator states."""
+    """Sampled reference trajectory: ``t`` (s), ``eta`` (m, m, rad), ``nu``, actuator states.
+
+    ``eta`` and ``nu`` are ``[x, y, psi]``, ``[u, v, r]`` for 3 DOF and Fossen's
+    ``[x, y, phi, psi]``, ``[u, v, p, r]`` for 4 DOF.
+    """
 
     t: NDArray[np.float64]
     eta: NDArray[np.float64]
@@ -36,15 +45,16 @@ class ReferenceSolution:
 
 
 def simulate_reference(
-    plant: PlantModel,
+    plant: PlantModel | Hull4,
     t_eval: ArrayLike,
     command_times: ArrayLike,
     commands: ArrayLike,
     *,
     thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
-    eta0: ArrayLike = (0.0, 0.0, 0.0),
-    nu0: ArrayLike = (0.0, 0.0, 0.0),
-    act0: ArrayLike = (0.0, 0.0, 0.0),
+    actuators: ActuatorSet | None = None,
+    eta0: ArrayLike | None = None,
+    nu0: ArrayLike | None = None,
+    act0: ArrayLike | None = None,
     env_load: EnvLoad | None = None,
     current: tuple[float, float] = (0.0, 0.0),
     breakpoints: ArrayLike = (),
@@ -58,9 +68,12 @@ def simulate_reference(
         plant: the model to integrate.
         t_eval: output times (s), increasing, starting at 0.
         command_times: instants (s) at which ``commands[k]`` starts to apply (first one 0).
-        commands: (K, 3) commands ``[n1 (rpm), p2, p3]`` (clipped to the thruster ranges).
-        thrusters: thruster parameters (constants, ranges, lags).
-        eta0, nu0, act0: initial pose, body velocity and actuator states.
+        commands: (K, n) commands in channel order (clipped to the ranges); for the Blue
+            Lady's ``thrusters`` ``[n1 (rpm), p2, p3]``.
+        thrusters: the Blue Lady's thruster parameters (used when ``actuators`` is None).
+        actuators: any vessel's :class:`~shipgym.dynamics.actuators.ActuatorSet`.
+        eta0, nu0, act0: initial pose, body velocity and actuator states (Fossen order for
+            a 4-DOF ``plant``).
         env_load: ``f(t, eta, nu) -> [X, Y, N]`` body-frame environmental load (N, N, N m),
             e.g. the wind; it should be smooth between ``breakpoints``.
         current: constant NED current ``(speed m/s, direction to, rad)``.
@@ -69,25 +82,59 @@ def simulate_reference(
     """
     t_eval = np.asarray(t_eval, dtype=float)
     ct = np.asarray(command_times, dtype=float)
-    cmds = np.clip(np.asarray(commands, dtype=float), thrusters.lower, thrusters.upper)
-    if cmds.shape != (ct.size, 3):
-        raise ValueError(f"commands must have shape ({ct.size}, 3), got {cmds.shape}")
-    tc = thrusters.time_constants
+    four = isinstance(plant, Hull4)
+    nd = 4 if four else 3
+    if actuators is not None:
+        lo, hi = actuators.lower, actuators.upper
+        lagged = np.array([c.dynamics == "lag" for c in actuators.channels])
+        tc = np.array([c.time_constant if c.dynamics == "lag" else 1.0 for c in actuators.channels])
+        tau_of = actuators.tau
+        na = actuators.n_channels
+    else:
+        lo, hi = thrusters.lower, thrusters.upper
+        lagged = np.ones(3, dtype=bool)
+        tc = thrusters.time_constants
+        na = 3
+
+        def tau_of(act: NDArray[np.float64]) -> NDArray[np.float64]:
+            return command_to_tau(act, thrusters)
+
+    cmds = np.clip(np.asarray(commands, dtype=float), lo, hi)
+    if cmds.shape != (ct.size, na):
+        raise ValueError(f"commands must have shape ({ct.size}, {na}), got {cmds.shape}")
     vc, bc = current
+    ip = 3 if four else 2  # index of psi in eta
 
     def rhs(t: float, x: NDArray[np.float64], cmd: NDArray[np.float64]) -> NDArray[np.float64]:
-        eta, nu, act = x[0:3], x[3:6], x[6:9]
-        tau = command_to_tau(act, thrusters)
+        eta, nu, act = x[0:nd], x[nd : 2 * nd], x[2 * nd :]
+        psi = eta[ip]
+        tau = np.asarray(tau_of(act), dtype=float)
         if env_load is not None:
-            tau = tau + np.asarray(env_load(t, eta, nu), dtype=float)
-        nu_c = np.array([vc * np.cos(bc - eta[2]), vc * np.sin(bc - eta[2]), 0.0])
-        return np.concatenate([rot(eta[2]) @ nu, plant.nu_dot(nu, tau, nu_c), (cmd - act) / tc])
+            planar = np.asarray(env_load(t, eta, nu), dtype=float)  # [X, Y, N]
+            tau = tau + (np.array([planar[0], planar[1], 0.0, planar[2]]) if four else planar)
+        nu_c = np.array([vc * np.cos(bc - psi), vc * np.sin(bc - psi), 0.0])
+        act_dot = np.where(lagged, (cmd - act) / tc, cmd)
+        if four:
+            u, v, p, r = nu
+            phi = eta[2]
+            cf = np.cos(phi)
+            c, s = np.cos(psi), np.sin(psi)
+            eta_dot = [u * c - v * cf * s, u * s + v * cf * c, p, r * cf]
+            nu_dot = plant.nu_dot(nu, tau, nu_c[:2], phi)
+        else:
+            eta_dot = rot(psi) @ nu
+            nu_dot = plant.nu_dot(nu, tau, nu_c)
+        return np.concatenate([eta_dot, nu_dot, act_dot])
 
     t_end = float(t_eval[-1])
     cuts = np.unique(np.concatenate([[0.0, t_end], ct, np.asarray(breakpoints, dtype=float)]))
     cuts = cuts[(cuts >= 0.0) & (cuts <= t_end)]
+    zeros = (0.0,) * nd
+    eta0 = zeros if eta0 is None else eta0
+    nu0 = zeros if nu0 is None else nu0
+    act0 = np.zeros(na) if act0 is None else act0
     x = np.concatenate([np.asarray(eta0, float), np.asarray(nu0, float), np.asarray(act0, float)])
-    out = np.empty((t_eval.size, 9))
+    out = np.empty((t_eval.size, x.size))
     if t_eval[0] == 0.0:
         out[0] = x
     for t0, t1 in zip(cuts[:-1], cuts[1:], strict=True):
@@ -105,4 +152,4 @@ def simulate_reference(
         x = sol.y[:, -1] if not mask.any() or sol.t[-1] == t1 else x
         if mask.any() and sol.t[-1] != t1:  # pragma: no cover - solve_ivp always ends at t1
             raise RuntimeError("reference integration did not reach the segment end")
-    return ReferenceSolution(t_eval, out[:, 0:3], out[:, 3:6], out[:, 6:9])
+    return ReferenceSolution(t_eval, out[:, 0:nd], out[:, nd : 2 * nd], out[:, 2 * nd :])

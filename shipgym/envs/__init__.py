@@ -1,5 +1,6 @@
 """MuJoCo physics of ships and the Gymnasium tasks built on it."""
 
-from .physics import DEFAULT_SCENE, SimulationDiverged, VesselPhysics
+from .physics import SimulationDiverged, VesselPhysics
+from .scene import WORLDS, build_model
 
-__all__ = ["DEFAULT_SCENE", "SimulationDiverged", "VesselPhysics"]
+__all__ = ["WORLDS", "SimulationDiverged", "VesselPhysics", "build_model"]

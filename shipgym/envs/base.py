@@ -1,9 +1,11 @@
-"""The Blue Lady Gymnasium environment: physics + guidance task (dm_control's Physics/Task split).
+"""The ship Gymnasium environment: physics + guidance task (dm_control's Physics/Task split).
 
-:class:`BlueLadyEnv` composes a :class:`~shipgym.envs.physics.VesselPhysics` (MuJoCo and the
-3-DOF model) with a task: a manoeuvre plan followed through
+:class:`ShipEnv` composes a :class:`~shipgym.envs.physics.VesselPhysics` (MuJoCo and the
+vessel's hull model) with a task: a manoeuvre plan followed through
 :class:`~shipgym.guidance.Guidance`, a reward made of named terms, metrics and termination.
-The three registered tasks (:mod:`shipgym.envs.tasks`) differ only in their plan, start,
+Everything is generic over the vessel (``vessel=``, a :class:`~shipgym.dynamics.vessel.Vessel`
+package): the action space comes from its actuators, the guidance limits from the vessel file.
+The registered tasks (:mod:`shipgym.envs.tasks`) differ only in their plan, start,
 disturbances and time limit.
 """
 
@@ -21,11 +23,10 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from shipgym._config import is_real, param
-from shipgym.assets import asset_path
-from shipgym.controllers.allocation import action_to_command, command_to_action
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
-from shipgym.dynamics import BLUE_LADY_THRUSTERS, wrap_angle
-from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
+from shipgym.dynamics import wrap_angle
+from shipgym.dynamics.vessel import Vessel, load_vessel
+from shipgym.guidance import Guidance, Limits, ManoeuvrePlan, Reference
 from shipgym.guidance import plan as named_plan
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
@@ -41,6 +42,7 @@ __all__ = [
     "BlueLadyEnv",
     "RewardWeights",
     "SCENES",
+    "ShipEnv",
 ]
 
 #: most physics steps per control step (``control_period / timestep``); bounds the work of
@@ -54,19 +56,19 @@ MAX_CONTROL_PERIOD = 10.0
 #: still resolve 1e-10 m.
 MAX_START_OFFSET = 1e6
 
-SCENES: dict[str, tuple[str, ...]] = {
-    "harbour": ("mjcf", "harbour", "scene.xml"),
-    "open-water": ("mjcf", "blue_lady", "scene.xml"),
-}
+#: the scenes (worlds without a ship, :data:`shipgym.envs.scene.WORLDS`)
+SCENES: tuple[str, ...] = ("harbour", "open-water")
+
+#: observation blocks before the previous action (whose length is the number of channels)
+#: the default wind: the vessel's nominal wind from 300 deg
+_NOMINAL: Any = type("_Nominal", (), {"__repr__": lambda self: "<the vessel's nominal wind>"})()
 
 OBS_LAYOUT = (
     ("pos_error_body", 3),
     ("nu", 3),
     ("nu_ref", 3),
     ("nu_dot_ref", 3),
-    ("prev_action", 3),
 )
-_OBS_DIM = sum(n for _, n in OBS_LAYOUT)
 
 
 @dataclass(frozen=True)
@@ -106,30 +108,37 @@ class _Sample:
     eta_r: NDArray[np.float64]
 
 
-class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
-    r"""Blue Lady on a manoeuvre plan: the common spec of the ``shipgym/BlueLady*`` envs.
+class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+    r"""A vessel on a manoeuvre plan: the common spec of every ``shipgym/...`` env.
 
     ## Description
-    The 1:24 VLCC model "Blue Lady" (L 13.78 m, 22.9 t) in the horizontal plane, simulated
-    in MuJoCo with exact 3-DOF hydrodynamics, thruster lags and gusty wind. A guidance system
-    moves a virtual ship along a manoeuvre plan (legs in the r-frame of Tomera (2014)); the agent
-    drives the three thrusters to follow it.
+    A ship of the vessel library (``vessel=``: ``"blue-lady"``, ``"star-hercules"``,
+    ``"wimpey-sealab"``, or the path of a vessel package; ``shipgym.vessels()``) in the
+    horizontal plane (plus roll for a 4-DOF vessel), simulated in MuJoCo with its exact hull
+    model, actuator lags and gusty wind. A guidance system moves a virtual ship along a
+    manoeuvre plan (legs in the r-frame of Tomera (2014)); the agent drives the actuators to
+    follow it.
 
     ## Action Space
-    ``Box(-1, 1, (3,), float32)``, normalised actuator commands:
+    ``Box(-1, 1, (n,), float32)`` with one normalised command per actuator channel
+    (``vessel.actuators.channel_names``; ``n = 3`` for the Blue Lady). A range around zero is
+    scaled separately on each side (``a >= 0 -> a * upper``, ``a < 0 -> a * |lower|``):
 
-    | Num | Action | Physical command | Unit |
-    |-----|--------|------------------|------|
-    | 0 | main propeller | ``a * 480`` if ``a >= 0`` else ``a * 200`` | rpm |
-    | 1 | bow tunnel thruster | ``p2 = a`` (thrust 44.1 p2, to starboard) | 1 |
-    | 2 | stern tunnel thruster | ``p3 = a`` | 1 |
+    | Vessel | Num | Action | Physical command | Unit |
+    |--------|-----|--------|------------------|------|
+    | Blue Lady | 0 | main propeller | ``a * 480`` if ``a >= 0`` else ``a * 200`` | rpm |
+    |  | 1 | bow tunnel thruster | ``p2 = a`` (thrust 44.1 p2, to starboard) | 1 |
+    |  | 2 | stern tunnel thruster | ``p3 = a`` | 1 |
+    | Star Hercules | 0-3 | main propeller, three tunnels | relative thrust | 1 |
+    | Wimpey Sealab | 0, 2, 4, 6 | azimuth thrust | relative thrust (reversible) | 1 |
+    |  | 1, 3, 5, 7 | azimuth turning rate | ``a * 10`` | deg/s |
 
     Actions outside [-1, 1] are clipped and flagged in ``info["action_clipped"]``; NaN or
     infinite actions raise ``ValueError``.
 
     ## Observation Space
-    ``Box(-inf, inf, (15,), float32)``; what a controller may know (navigation data, i.e. the
-    truth here and an observer's estimate once an observer wrapper is stacked):
+    ``Box(-inf, inf, (12 + n,), float32)``; what a controller may know (navigation data, i.e.
+    the truth here and an observer's estimate once an observer wrapper is stacked):
 
     | Num | Observation | Unit |
     |-----|-------------|------|
@@ -138,7 +147,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | 3-5 | body velocity u, v, r | m/s, m/s, rad/s |
     | 6-8 | reference body velocity | m/s, m/s, rad/s |
     | 9-11 | reference body acceleration | m/s^2, m/s^2, rad/s^2 |
-    | 12-14 | previous (applied) normalised action | 1 |
+    | 12-(11+n) | previous (applied) normalised action | 1 |
 
     ``observation_structure`` maps these names to slices.
 
@@ -164,7 +173,8 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     shipgym id, outside the ``TimeLimit``).
 
     ## Info
-    Truth ``eta`` (m, m, rad; NED), ``nu``; navigation data ``nav_eta``, ``nav_nu`` (what
+    Truth ``eta`` (m, m, rad; NED), ``nu`` (and ``phi`` (rad), ``p`` (rad/s) for a 4-DOF
+    vessel); navigation data ``nav_eta``, ``nav_nu`` (what
     controllers use); reference ``eta_d`` (NED), ``eta_d_r``, ``eta_dot_d_r``,
     ``eta_ddot_d_r``, ``eta_P`` (leg start) and ``eta_r`` (ship in the r-frame); ``leg``,
     ``legs_completed``, ``finished``, ``t`` (s); ``command`` (rpm, 1, 1), ``thrust`` (N),
@@ -180,16 +190,18 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ## Arguments
     | Argument | Default | Description |
     |---|---|---|
+    | ``vessel`` | (required) | vessel name, package path or :class:`Vessel` |
     | ``plan`` | ``"tomera2014"`` | plan name or :class:`ManoeuvrePlan` |
-    | ``plant`` | ``"default"`` | plant variant (``"default"``, ``"seed-linear"``) |
-    | ``wind`` | ``"3@300"`` | ``"SPEED@FROM_DEG"`` (m/s, deg the wind comes from), |
+    | ``plant`` | ``"default"`` | plant variant of the vessel (Blue Lady: ``"seed-linear"`` too) |
+    | ``wind`` | nominal@300 | ``"SPEED@FROM_DEG"`` (m/s, deg the wind comes from; default |
+    |  |  | the vessel's nominal wind from 300 deg: ``"3@300"`` for the Blue Lady), |
     |  |  | ``(speed m/s, from deg)``, ``WindConfig``, mapping, or ``None`` (no wind) |
     | ``sensors`` | ``"default"`` | preset (``default``, ``dgps``, ``rtk``), config or ``None`` |
     | ``waves`` | ``None`` | ``WaveConfig``, preset name or mapping: drift load on the hull, |
     |  |  | first-order motion added to the measurements |
     | ``current`` | ``None`` | ``"SPEED@TO_DEG"`` (m/s, deg the water goes to), |
     |  |  | ``(speed m/s, to deg)``, ``CurrentConfig``, mapping, or ``None`` (none) |
-    | ``scene`` | ``"harbour"`` | ``"harbour"`` or ``"open-water"`` |
+    | ``scene`` | ``"harbour"`` | ``"harbour"`` (vessels that fit it) or ``"open-water"`` |
     | ``start_pose`` | ``(0, 0, 0)`` | NED start pose (m, m, rad); the harbour turns with it |
     | ``start_noise`` | ``(0, 0, 0)`` | uniform start perturbation half-widths (m, m, rad) |
     | ``timestep`` | ``0.05`` | physics step (s) |
@@ -206,16 +218,18 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     that draws its disturbances per episode reports the draw after :meth:`reset`).
 
     ## Version History
-    * v0: initial version.
+    * v0: initial version (the ``shipgym/BlueLady*-v0`` ids are the Blue Lady's aliases of
+      ``shipgym/Harbour-v0``, ``StationKeeping-v0``, ``Tracking-v0``).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
 
     def __init__(
         self,
+        vessel: Vessel | str | None = None,
         plan: str | ManoeuvrePlan = "tomera2014",
         plant: str = "default",
-        wind: Any = "3@300",
+        wind: Any = _NOMINAL,
         sensors: Any = "default",
         waves: Any = None,
         current: Any = None,
@@ -228,6 +242,16 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         reward_weights: RewardWeights | Mapping[str, float] | None = None,
         render_mode: str | None = None,
     ) -> None:
+        if vessel is None:
+            from shipgym.dynamics.vessel import vessel_names
+
+            raise TypeError(
+                f"{type(self).__name__} needs vessel=NAME or a package path; packaged vessels: "
+                f"{', '.join(vessel_names())} (the shipgym/BlueLady* ids pass vessel='blue-lady')"
+            )
+        self.vessel = load_vessel(vessel)
+        if wind is _NOMINAL:
+            wind = f"{self.vessel.nominal_wind:g}@300"
         self.plan = named_plan(plan) if isinstance(plan, str) else plan
         if not isinstance(self.plan, ManoeuvrePlan):
             raise ValueError(f"plan must be a plan name or a ManoeuvrePlan, got {plan!r}")
@@ -274,27 +298,32 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._last_measurement: NDArray[np.float64] | None = None
         self.wave_config = parse_waves_arg(waves)
         self.physics = VesselPhysics(
+            self.vessel,
             plant,
             wind=self._wind,
             waves=self.wave_config,
             current=self._current,
-            xml_path=asset_path(*SCENES[scene]),
+            world=scene,
             timestep=timestep,
         )
-        self.thrusters = BLUE_LADY_THRUSTERS
-        self.guidance = Guidance(self.plan)
-        self.metrics = ManoeuvreMetrics(sample_period=1.0)
+        self.actuators = self.vessel.actuators
+        self.n_actions = self.actuators.n_channels
+        self.limits = Limits.from_dict(dict(self.vessel.limits))
+        self.guidance = Guidance(self.plan, limits=self.limits)
+        self.metrics = ManoeuvreMetrics(sample_period=1.0, n_actuators=len(self.actuators))
+        self._slices = self.actuators.slices
         self.render_mode = render_mode
         self._renderer: Any = None
-        self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
-        self.observation_space = spaces.Box(-np.inf, np.inf, (_OBS_DIM,), np.float32)
+        n = self.n_actions
+        self.action_space = spaces.Box(-1.0, 1.0, (n,), np.float32)
         self.observation_structure: dict[str, slice] = {}
         i = 0
-        for name, n in OBS_LAYOUT:
-            self.observation_structure[name] = slice(i, i + n)
-            i += n
+        for name, k in (*OBS_LAYOUT, ("prev_action", n)):
+            self.observation_structure[name] = slice(i, i + k)
+            i += k
+        self.observation_space = spaces.Box(-np.inf, np.inf, (i,), np.float32)
         self._harbour_body = self._find_body("harbour")
-        self._prev_action = np.zeros(3)
+        self._prev_action = np.zeros(n)
         self._contact = False
         self._sample: _Sample | None = None
 
@@ -343,7 +372,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             start = _vec3(options["start_pose"], "options['start_pose']")
         plan = self._episode_plan()
         if plan is not self.guidance.plan:
-            self.guidance = Guidance(plan)
+            self.guidance = Guidance(plan, limits=self.limits)
         wind = self._episode_wind()
         if wind is not self.wind_config:
             self.physics.set_wind(wind)
@@ -363,12 +392,13 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._last_measurement = None
         self.guidance.reset(start, t0=0.0)
         self.metrics.reset()
-        self._prev_action = np.zeros(3)
+        self._prev_action = np.zeros(self.n_actions)
         self._contact = False
         measurements = [self._measure()] if self.sensors is not None else []
         sample = self._observe()
         self._record_metrics(sample)
-        info = self._info(sample, np.zeros(3), np.zeros(3, bool), False, {}, [])
+        n = self.n_actions
+        info = self._info(sample, self.physics.command, np.zeros(n, bool), False, {}, [])
         info["measurements"] = measurements
         return self._obs(sample), info
 
@@ -388,17 +418,20 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 "step()"
             )
         a = np.asarray(action, dtype=np.float64)
-        if a.shape != (3,):
-            raise ValueError(f"action must have shape (3,), got {a.shape}")
-        a0, a1, a2 = a.tolist()
-        if not (math.isfinite(a0) and math.isfinite(a1) and math.isfinite(a2)):
+        if a.shape != (self.n_actions,):
+            raise ValueError(
+                f"action must have shape ({self.n_actions},) "
+                f"({', '.join(self.actuators.channel_names)}), got {a.shape}"
+            )
+        vals = a.tolist()
+        if not math.isfinite(sum(vals)) and not all(math.isfinite(x) for x in vals):
             raise ValueError(f"action contains NaN or infinite values: {a}")
         clipped = np.clip(a, -1.0, 1.0)
         action_clipped = clipped != a
-        command = action_to_command(clipped, self.thrusters)
+        command = self.actuators.action_to_command(clipped)
         clipped_cmd = self.physics.set_command(command)
         # an actuator is saturated when its command sits at a limit of its range
-        lo, hi = self.thrusters.lower, self.thrusters.upper
+        lo, hi = self.actuators.lower, self.actuators.upper
         tol = 1e-9 * (hi - lo)
         saturated = clipped_cmd | (command <= lo + tol) | (command >= hi - tol)
         phys = self.physics
@@ -500,7 +533,9 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             s.ref.eta_d_r,
             eta_meas_r=None if z is None else s.ref.to_r(z),
             thrust=self.physics.thrust,
-            saturated=saturated,
+            saturated=None
+            if saturated is None
+            else [bool(saturated[sl].any()) for sl in self._slices],
             leg=s.ref.leg,
         )
 
@@ -534,14 +569,16 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         w = self.reward_weights
         ex, ey, epsi = (s.eta_r - s.ref.eta_d_r).tolist()
         du, dv, dr = (s.nu - s.ref.nu_d).tolist()
-        a0, a1, a2 = action.tolist()
-        p0, p1, p2 = self._prev_action.tolist()
+        act = action.tolist()
+        prev = self._prev_action.tolist()
+        effort = sum(x * x for x in act)
+        rate = sum((x - y) ** 2 for x, y in zip(act, prev, strict=True))
         return {
             "reward_position": -w.position * (ex * ex + ey * ey),
             "reward_heading": -w.heading * wrap_angle(epsi) ** 2,
             "reward_velocity": -w.velocity * (du * du + dv * dv + dr * dr),
-            "reward_effort": -w.effort * (a0 * a0 + a1 * a1 + a2 * a2),
-            "reward_rate": -w.rate * ((a0 - p0) ** 2 + (a1 - p1) ** 2 + (a2 - p2) ** 2),
+            "reward_effort": -w.effort * effort,
+            "reward_rate": -w.rate * rate,
             "reward_contact": -w.contact if new_contact else 0.0,
             "reward_leg": w.leg_bonus if switched else 0.0,
         }
@@ -575,7 +612,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "command": np.asarray(command, dtype=float),
             "thrust": phys.thrust,
             "saturated": np.asarray(saturated, dtype=bool),
-            "action_clipped": np.zeros(3, dtype=bool),
+            "action_clipped": np.zeros(self.n_actions, dtype=bool),
             "tau_wind": np.array(phys.tau_wind),
             "tau_waves": np.array(phys.tau_waves),
             "current_body": np.array([*phys.nu_c, 0.0]),
@@ -583,6 +620,9 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "quay_contact": self._contact,
             "contacts": contacts,
         }
+        if phys.dofs == 4:
+            info["phi"] = phys.phi
+            info["p"] = phys.p
         info.update(rewards)
         return info
 
@@ -602,8 +642,21 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         m.body_quat[self._harbour_body] = (math.cos(h), 0.0, 0.0, math.sin(h))
 
     def command_to_action(self, command: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Physical command ``[n1 rpm, p2, p3]`` to the normalised action."""
-        return command_to_action(command, self.thrusters)
+        """Physical command (channel order, each in its unit) to the normalised action."""
+        return self.actuators.command_to_action(command)
+
+    @property
+    def thrusters(self) -> Any:
+        """The vessel's :class:`~shipgym.dynamics.actuators.ActuatorSet` (older name)."""
+        return self.actuators
+
+
+class BlueLadyEnv(ShipEnv):
+    """:class:`ShipEnv` with the Blue Lady (``vessel="blue-lady"``): the older class name."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        kwargs.setdefault("vessel", "blue-lady")
+        super().__init__(**kwargs)
 
 
 def parse_sensors_arg(sensors: Any) -> SensorConfig | None:

@@ -1,4 +1,4 @@
-r"""MuJoCo physics of a planar hull that moves exactly as the 3-DOF model says.
+r"""MuJoCo physics of a hull that moves exactly as its 3-DOF or 4-DOF model says.
 
 MuJoCo gives a body one scalar mass, so anisotropic and coupled added mass cannot live in the
 body's inertia. Every physics step :class:`VesselPhysics` therefore
@@ -13,6 +13,20 @@ body's inertia. Every physics step :class:`VesselPhysics` therefore
    actuators apply in this step,
 
 so that MuJoCo's rigid body produces exactly ``qacc*``; then ``mj_step`` integrates it.
+
+The same holds for a 4-DOF hull (surge, sway, roll, yaw; :class:`~shipgym.dynamics.hull4.Hull4`)
+on the joints ``x, y, psi, phi``: ``qvel = J(q) nu`` with Fossen's kinematics (``x_dot = u cos
+psi - v cos phi sin psi``, ``y_dot = u sin psi + v cos phi cos psi``, ``psi_dot = r cos phi``,
+``phi_dot = p``), ``qacc* = J nu_dot* + J_dot nu``; MuJoCo's joint-space inertia is the
+constant ``diag(m, m, I_z, I_x)`` with no bias force (the hull body has ``I_y = I_z``, see
+:mod:`shipgym.envs.scene`; checked when the model is bound), and the actuators' generalised
+force is ``[c_psi X - s_psi c_phi Y, s_psi X + c_psi c_phi Y, c_phi N + s_phi M_z, K]``
+(``M_z = sum z_i F_x,i``), the force MuJoCo's site transmission applies to a rolled hull.
+
+Thrust comes from the vessel's :class:`~shipgym.dynamics.actuators.ActuatorSet` (one law per
+actuator kind, :meth:`~shipgym.dynamics.actuators.ActuatorSet.kernel`); the MuJoCo actuators
+carry the same force: state-dependent gains (``k |n|``) and azimuth directions (``gear``) are
+refreshed every step, so ``data.actuator_force`` reads each thrust in newtons.
 
 MuJoCo's Euler step is the symplectic update ``qvel += h qacc; qpos += h qvel``. Read with
 ``qvel`` as the velocity at the half step (leapfrog), it is second-order accurate, provided the
@@ -35,8 +49,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import is_real
-from shipgym.assets import asset_path
 from shipgym.disturbances import (
+    BLENDERMANN,
     Current,
     CurrentConfig,
     WaveConfig,
@@ -46,34 +60,27 @@ from shipgym.disturbances import (
     WindLoad,
     blendermann,
 )
-from shipgym.dynamics import (
-    ACTUATOR_NAMES,
-    BLUE_LADY_HULL,
-    BLUE_LADY_THRUSTERS,
-    BLUE_LADY_WINDAGE,
-    PlantModel,
-    ThrusterParameters,
-    WindageParameters,
-    plant_model,
-    validate_command,
-)
+from shipgym.dynamics import PlantModel, WindageParameters
+from shipgym.dynamics.actuators import Azimuth
+from shipgym.dynamics.hull4 import Hull4
+from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.envs._mujoco import mujoco
+
+from .scene import build_model
 
 __all__ = [
     "VesselPhysics",
     "SimulationDiverged",
-    "DEFAULT_SCENE",
     "MAX_TIMESTEP",
     "MIN_TIMESTEP",
     "check_timestep",
 ]
 
-DEFAULT_SCENE = ("mjcf", "blue_lady", "scene.xml")
-
-#: bounds beyond which the simulation is declared diverged (m/s, rad/s): far above anything
-#: the Blue Lady can reach (max speed 3.1 kn = 1.6 m/s).
+#: bounds beyond which the simulation is declared diverged (m/s, rad/s, rad): far above
+#: anything a displacement ship reaches (the Blue Lady: 1.6 m/s; a tanker: 8 m/s).
 _MAX_SPEED = 50.0
 _MAX_YAW_RATE = 10.0
+_MAX_ROLL = 1.2
 
 
 #: the current of a physics without one (one shared object, so that "no change" is cheap to see)
@@ -93,8 +100,9 @@ class SimulationDiverged(RuntimeError):
 #: lags of 1-2 s, the hull's surge/sway/yaw time constants of tens of seconds) many times
 #: over; below 1e-4 s each simulated second costs more than 10 000 MuJoCo steps for nothing.
 MIN_TIMESTEP = 1e-4
-#: largest physics timestep (s): half the shortest thruster time constant (1 s, the tunnel
-#: thrusters), where MuJoCo's semi-implicit Euler still tracks the first-order lags.
+#: largest physics timestep (s): half the Blue Lady's shortest thruster time constant (1 s,
+#: the tunnel thrusters), where MuJoCo's semi-implicit Euler still tracks the lags; a vessel
+#: with faster actuators needs a smaller step (checked against its lags when it is built).
 MAX_TIMESTEP = 0.5
 
 
@@ -110,17 +118,19 @@ def check_timestep(timestep: Any) -> float:
 
 
 class VesselPhysics:
-    """A MuJoCo hull driven by thrusters, the 3-DOF hydrodynamics, wind and current.
+    """A MuJoCo hull driven by its actuators, its hull model, wind, waves and current.
 
     Args:
-        plant: a :class:`PlantModel` or a plant variant name (``"default"``, ``"seed-linear"``).
-        thrusters: thruster parameters; written into the MJCF actuators at load time.
+        vessel: a :class:`~shipgym.dynamics.vessel.Vessel`, a packaged vessel's name
+            (``"blue-lady"``, ``shipgym.vessels()``) or the path of a vessel package.
+        plant: a plant variant name of the vessel (``"default"``, ...) or a model object
+            (:class:`PlantModel` for 3 DOF, :class:`~shipgym.dynamics.hull4.Hull4` for 4).
         wind: wind: a :class:`~shipgym.disturbances.WindConfig`, ``"SPEED@FROM_DEG"``,
             ``(speed m/s, from deg)`` or a mapping (any form of
             :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`). ``None``
             switches aerodynamic loads off altogether; ``WindConfig(speed=0)`` is still air, in
             which a moving hull feels air drag.
-        windage: projected areas for the wind load.
+        windage: projected areas for the wind load; ``None``: the vessel's.
         current: current in NED: a :class:`~shipgym.disturbances.CurrentConfig` (constant or
             Gauss-Markov), ``"SPEED@TO_DEG"``, a constant ``(speed m/s, direction it goes to,
             deg)``, a mapping (:meth:`CurrentConfig.coerce
@@ -130,97 +140,116 @@ class VesselPhysics:
             slowly varying) drift load on the hull, or ``None``. First-order wave motion is
             not a hull motion: the environment adds it to the measurements
             (:meth:`wave_motion`).
-        xml_path: MJCF scene with a body ``hull`` on joints ``x``, ``y``, ``psi`` and actuators
-            ``main_propeller``, ``bow_tunnel``, ``stern_tunnel`` (default: the Blue Lady scene).
-        timestep: physics step (s), :data:`MIN_TIMESTEP` to :data:`MAX_TIMESTEP`; ``None``
-            keeps the MJCF value (0.05 s).
+        world: ``"open-water"`` or ``"harbour"`` (:data:`shipgym.envs.scene.WORLDS`).
+        timestep: physics step (s), :data:`MIN_TIMESTEP` to :data:`MAX_TIMESTEP` and at most
+            half the shortest actuator lag; ``None`` keeps the world's value (0.05 s).
+
+    Pose and velocity: :attr:`eta` ``[x, y, psi]`` and :attr:`nu` ``[u, v, r]`` for every
+    vessel (what the planar DP stack uses); a 4-DOF vessel adds :attr:`phi`, :attr:`p` and the
+    Fossen-ordered :attr:`eta_full` ``[x, y, phi, psi]``, :attr:`nu_full` ``[u, v, p, r]``.
+    Commands and actuator states follow the vessel's channel order
+    (``physics.actuators.channel_names``).
 
     The physics owns no task logic: commands in, state out (dm_control's Physics/Task split).
     """
 
     def __init__(
         self,
-        plant: PlantModel | str = "default",
-        thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
-        wind: WindConfig | str | tuple[float, float] | Mapping[str, Any] | None = None,
-        windage: WindageParameters = BLUE_LADY_WINDAGE,
+        vessel: Vessel | str | Path,
+        plant: PlantModel | Hull4 | str = "default",
         *,
+        wind: WindConfig | str | tuple[float, float] | Mapping[str, Any] | None = None,
+        windage: WindageParameters | None = None,
         current: CurrentConfig | str | tuple[float, float] | Mapping[str, Any] | None = None,
         waves: WaveConfig | None = None,
-        xml_path: str | Path | None = None,
+        world: str = "open-water",
         timestep: float | None = None,
     ) -> None:
-        self.plant = plant_model(plant, BLUE_LADY_HULL) if isinstance(plant, str) else plant
-        if not isinstance(self.plant, PlantModel):
-            raise TypeError(f"plant must be a PlantModel or a variant name, got {plant!r}")
-        self.thrusters = thrusters
-        self._lower = thrusters.lower.tolist()
-        self._upper = thrusters.upper.tolist()
+        self.vessel = load_vessel(vessel)
+        v = self.vessel
+        self.plant = v.plant(plant) if isinstance(plant, str) else plant
+        if not isinstance(self.plant, PlantModel | Hull4):
+            raise TypeError(f"plant must be a PlantModel, a Hull4 or a variant name, got {plant!r}")
+        dofs = 4 if isinstance(self.plant, Hull4) else 3
+        if dofs != v.dofs:
+            raise ValueError(f"plant {plant!r} has {dofs} DOF but vessel {v.name!r} has {v.dofs}")
+        self.dofs = dofs
+        self.actuators = v.actuators
+        self._lower = v.actuators.lower.tolist()
+        self._upper = v.actuators.upper.tolist()
+        self.windage = v.windage if windage is None else windage
+        if not isinstance(self.windage, WindageParameters):
+            raise TypeError(f"windage must be WindageParameters or None, got {windage!r}")
+        if (self.windage.coefficients or "") not in BLENDERMANN:
+            raise ValueError(
+                f"vessel {v.name!r}: windage.coefficients {self.windage.coefficients!r} is not a "
+                f"Blendermann (1994) ship type; valid: {', '.join(sorted(BLENDERMANN))}"
+            )
         wind_cfg = WindConfig.coerce(wind, name="wind")
         self.aerodynamics = wind_cfg is not None
         self.wind_config = wind_cfg if wind_cfg is not None else WindConfig()
-        self.windage = windage
         self.current_config = _current_config(current)
         self.current = Current(self.current_config)
         if waves is not None and not isinstance(waves, WaveConfig):
             raise ValueError(f"waves must be a WaveConfig or None, got {waves!r}")
         self.wave_config = waves
-        self.waves = Waves(waves, BLUE_LADY_HULL) if waves is not None else None
-        path = Path(xml_path) if xml_path is not None else asset_path(*DEFAULT_SCENE)
-        if not path.exists():
-            raise FileNotFoundError(f"MJCF file not found: {path}")
-        self.model = mujoco.MjModel.from_xml_path(str(path))
+        self.waves = Waves(waves, v.hull) if waves is not None else None
+        self.world = world
+        self.model = build_model(v, world)
         if timestep is not None:
             self.model.opt.timestep = check_timestep(timestep)
+        lags = [c.time_constant for c in v.actuators.channels if c.dynamics == "lag"]
+        if lags and self.model.opt.timestep > 0.5 * min(lags) + 1e-12:
+            raise ValueError(
+                f"timestep {self.model.opt.timestep:g} s is more than half the shortest actuator "
+                f"lag of {v.name!r} ({min(lags):g} s): use timestep <= {0.5 * min(lags):g}"
+            )
         self.data = mujoco.MjData(self.model)
         self._bind_model()
-        self.wind = Wind(self.wind_config, windage)
-        self._wind_load = WindLoad(blendermann(self.wind_config.coefficients), windage)
+        self.wind = Wind(self.wind_config, self.windage)
+        self._wind_load = self._make_wind_load()
         self._accel = self.plant.accel
         self.tau_wind = (0.0, 0.0, 0.0)
         self.tau_waves = (0.0, 0.0, 0.0)
         self.nu_c = (0.0, 0.0)
-        self.saturated = np.zeros(3, dtype=bool)
+        self.saturated = np.zeros(v.actuators.n_channels, dtype=bool)
         self._prepare = self._make_prepare()
         self.reset()
 
     # ---- set-up ----------------------------------------------------------------------------
+    def _make_wind_load(self) -> WindLoad:
+        name = self.wind_config.coefficients or self.windage.coefficients
+        return WindLoad(blendermann(name), self.windage)
+
     def _bind_model(self) -> None:
         m = self.model
-        try:
-            jids = [m.joint(n).id for n in ("x", "y", "psi")]
-            self._act_ids = [m.actuator(n).id for n in ACTUATOR_NAMES]
-            self.hull_body = m.body("hull").id
-        except KeyError as exc:
-            raise ValueError(
-                "MJCF must define joints x, y, psi, a body 'hull' and actuators "
-                f"{ACTUATOR_NAMES}: {exc}"
-            ) from exc
-        if jids != [0, 1, 2] or m.nv != 3 or m.nu != 3 or m.na != 3:
-            raise ValueError("MJCF must have exactly the planar joints x, y, psi and 3 actuators")
-        if self._act_ids != [0, 1, 2]:
-            raise ValueError(f"actuators must be declared in the order {ACTUATOR_NAMES}")
-        if np.any(np.abs(m.body_ipos[self.hull_body]) > 1e-12):
-            raise ValueError(
-                "the hull's centre of mass must sit at the body origin (inertial pos 0)"
-            )
-        p = self.thrusters
-        lo, hi, tc = p.lower, p.upper, p.time_constants
-        m.actuator_ctrlrange[:] = np.c_[lo, hi]
-        m.actuator_actrange[:] = np.c_[lo, hi]
-        m.actuator_forcerange[:] = np.c_[p.force_lower, p.force_upper]
-        m.actuator_dynprm[:, 0] = tc
-        m.actuator_gainprm[1, 0] = p.k2
-        m.actuator_gainprm[2, 0] = p.k3
-        for i, x in ((1, p.L2), (2, -p.L3)):
-            m.site_pos[m.actuator_trnid[i, 0], 0] = x
+        names = ("x", "y", "psi", "phi")[: self.dofs]
+        jids = [m.joint(n).id for n in names]
+        self.hull_body = m.body("hull").id
+        self._act_ids = [m.actuator(n).id for n in self.actuators.channel_names]
+        if jids != list(range(self.dofs)) or m.nv != self.dofs:
+            raise ValueError(f"the hull must have exactly the joints {names}, in this order")
+        if self._act_ids != list(range(m.nu)) or m.nu != self.actuators.n_channels:
+            raise ValueError("MuJoCo actuators must be the vessel's channels, in order")
         d = mujoco.MjData(m)
+        if self.dofs == 4:  # a rolled, moving state: the inertia must not depend on it
+            d.qpos[3] = 0.3
+            d.qvel[:] = (0.4, -0.2, 0.05, 0.1)
         mujoco.mj_forward(m, d)
-        Mq = np.zeros((3, 3))
+        Mq = np.zeros((m.nv, m.nv))
         mujoco.mj_fullM(m, d, Mq)
-        if np.any(np.abs(Mq - np.diag(np.diag(Mq))) > 1e-9 * Mq.max()) or Mq[0, 0] != Mq[1, 1]:
-            raise ValueError(f"unexpected joint-space inertia (need diag(m, m, Izz)): {Mq}")
+        diag = np.diag(Mq)
+        scale = float(np.max(np.abs(Mq)))
+        if (
+            np.any(np.abs(Mq - np.diag(diag)) > 1e-9 * scale)
+            or abs(diag[0] - diag[1]) > 1e-12 * diag[0]
+            or np.any(np.abs(d.qfrc_bias) > 1e-9 * scale)
+        ):
+            raise ValueError(
+                f"unexpected joint-space inertia (need a constant diag(m, m, I_z[, I_x])): {Mq}"
+            )
         self._m_q, self._i_q = float(Mq[0, 0]), float(Mq[2, 2])
+        self._i_x = float(Mq[3, 3]) if self.dofs == 4 else 0.0
 
     def set_current(
         self, current: CurrentConfig | str | tuple[float, float] | Mapping[str, Any] | None
@@ -238,31 +267,67 @@ class VesselPhysics:
         self.aerodynamics = wind_cfg is not None
         self.wind_config = wind_cfg if wind_cfg is not None else WindConfig()
         self.wind = Wind(self.wind_config, self.windage)
-        self._wind_load = WindLoad(blendermann(self.wind_config.coefficients), self.windage)
+        self._wind_load = self._make_wind_load()
         self._prepare = self._make_prepare()
 
     # ---- state -----------------------------------------------------------------------------
+    def _vector(self, x: ArrayLike | None, n: tuple[int, ...], what: str) -> NDArray[np.float64]:
+        a = np.asarray(x, dtype=float)
+        if a.shape not in [(k,) for k in n] or not np.all(np.isfinite(a)):
+            raise ValueError(f"{what} must be {' or '.join(map(str, n))} finite numbers, got {x!r}")
+        return a
+
+    def initial_actuator_state(self) -> NDArray[np.float64]:
+        """Actuator states after a reset: zero thrust, azimuths at their rest angle."""
+        out = np.zeros(self.actuators.n_channels)
+        for a, sl in zip(self.actuators, self.actuators.slices, strict=True):
+            if isinstance(a, Azimuth):
+                out[sl.start + 1] = a.angle0
+        return out
+
     def reset(
         self,
         eta: ArrayLike = (0.0, 0.0, 0.0),
         nu: ArrayLike = (0.0, 0.0, 0.0),
-        actuators: ArrayLike = (0.0, 0.0, 0.0),
+        actuators: ArrayLike | None = None,
         rng: np.random.Generator | None = None,
     ) -> None:
-        """Reset to pose ``eta`` (m, m, rad), body velocity ``nu`` and actuator states.
+        """Reset to pose ``eta``, body velocity ``nu`` and actuator states.
 
-        ``rng`` seeds the stochastic disturbances (wind gusts); ``None`` uses a fixed seed 0.
+        ``eta`` is ``[x, y, psi]`` (m, m, rad) or, for a 4-DOF vessel, ``[x, y, phi, psi]``;
+        ``nu`` likewise ``[u, v, r]`` or ``[u, v, p, r]``. ``actuators`` defaults to
+        :meth:`initial_actuator_state`. ``rng`` seeds the stochastic disturbances (wind
+        gusts, current, waves); ``None`` uses a fixed seed 0.
         """
-        eta_a = validate_command(eta)  # same checks: shape (3,), finite
-        nu_a = validate_command(nu)
-        act = validate_command(actuators)
+        n = (3, 4) if self.dofs == 4 else (3,)
+        eta_a = self._vector(eta, n, "eta")
+        nu_a = self._vector(nu, n, "nu")
+        if eta_a.size == 3:
+            eta_a = np.array([eta_a[0], eta_a[1], 0.0, eta_a[2]]) if self.dofs == 4 else eta_a
+        if nu_a.size == 3:
+            nu_a = np.array([nu_a[0], nu_a[1], 0.0, nu_a[2]]) if self.dofs == 4 else nu_a
+        act = (
+            self.initial_actuator_state()
+            if actuators is None
+            else self.actuators.check_states(actuators, "actuators")
+        )
         d = self.data
         mujoco.mj_resetData(self.model, d)
-        d.qpos[:] = eta_a
-        c, s = math.cos(eta_a[2]), math.sin(eta_a[2])
-        d.qvel[:] = (c * nu_a[0] - s * nu_a[1], s * nu_a[0] + c * nu_a[1], nu_a[2])
-        d.act[:] = np.clip(act, self.thrusters.lower, self.thrusters.upper)
-        d.ctrl[:] = d.act
+        if self.dofs == 3:
+            d.qpos[:] = eta_a
+            c, s = math.cos(eta_a[2]), math.sin(eta_a[2])
+            d.qvel[:] = (c * nu_a[0] - s * nu_a[1], s * nu_a[0] + c * nu_a[1], nu_a[2])
+        else:
+            x, y, phi, psi = eta_a.tolist()
+            u, v, p, r = nu_a.tolist()
+            if abs(phi) >= _MAX_ROLL:
+                raise ValueError(f"roll angle must be below {_MAX_ROLL} rad, got {phi!r}")
+            d.qpos[:] = (x, y, psi, phi)
+            c, s, cf = math.cos(psi), math.sin(psi), math.cos(phi)
+            d.qvel[:] = (c * u - s * cf * v, s * u + c * cf * v, r * cf, p)
+        lagged = np.array([ch.dynamics == "lag" for ch in self.actuators.channels])
+        d.act[:] = np.where(lagged, np.clip(act, self.actuators.lower, self.actuators.upper), act)
+        d.ctrl[:] = np.where(lagged, d.act, 0.0)
         self.saturated[:] = False
         rng = rng if rng is not None else np.random.default_rng(0)
         # fixed order, one draw each: the same seed gives the same disturbances
@@ -302,46 +367,74 @@ class VesselPhysics:
         """Physics step (s)."""
         return float(self.model.opt.timestep)
 
+    def _qvel_whole(self) -> list[float]:
+        h = 0.5 * self.model.opt.timestep
+        return (self.data.qvel + h * self.data.qacc).tolist()
+
     @property
     def eta(self) -> NDArray[np.float64]:
         """Pose ``[x (m north), y (m east), psi (rad)]``; psi is continuous (not wrapped)."""
-        return self.data.qpos.copy()
+        return self.data.qpos[:3].copy()
+
+    @property
+    def phi(self) -> float:
+        """Roll angle (rad, starboard down), 0 for a 3-DOF vessel."""
+        return float(self.data.qpos[3]) if self.dofs == 4 else 0.0
 
     @property
     def nu(self) -> NDArray[np.float64]:
         """Body velocity ``[u (m/s), v (m/s), r (rad/s)]``."""
-        xd, yd, r = self.data.qvel + 0.5 * self.model.opt.timestep * self.data.qacc
-        c, s = math.cos(self.data.qpos[2]), math.sin(self.data.qpos[2])
-        return np.array([c * xd + s * yd, -s * xd + c * yd, r])
+        nu = self.nu_full
+        return nu if self.dofs == 3 else nu[[0, 1, 3]]
+
+    @property
+    def p(self) -> float:
+        """Roll rate (rad/s), 0 for a 3-DOF vessel."""
+        return float(self.nu_full[2]) if self.dofs == 4 else 0.0
+
+    @property
+    def eta_full(self) -> NDArray[np.float64]:
+        """``[x, y, psi]`` (3 DOF) or Fossen's ``[x, y, phi, psi]`` (4 DOF)."""
+        q = self.data.qpos
+        return q.copy() if self.dofs == 3 else np.array([q[0], q[1], q[3], q[2]])
+
+    @property
+    def nu_full(self) -> NDArray[np.float64]:
+        """``[u, v, r]`` (3 DOF) or Fossen's ``[u, v, p, r]`` (4 DOF)."""
+        w = self._qvel_whole()
+        psi = float(self.data.qpos[2])
+        c, s = math.cos(psi), math.sin(psi)
+        u = c * w[0] + s * w[1]
+        vh = -s * w[0] + c * w[1]
+        if self.dofs == 3:
+            return np.array([u, vh, w[2]])
+        cf = math.cos(float(self.data.qpos[3]))
+        return np.array([u, vh / cf, w[3], w[2] / cf])
 
     @property
     def actuator_state(self) -> NDArray[np.float64]:
-        """Lagged actuator states ``[n1 (rpm), p2, p3]``."""
+        """Actuator states (lagged commands; azimuth angles in rad), in channel order."""
         return self.data.act.copy()
 
     @property
     def command(self) -> NDArray[np.float64]:
-        """Current (saturated) commands ``[n1 (rpm), p2, p3]``."""
+        """Current (saturated) commands, in channel order."""
         return self.data.ctrl.copy()
 
     @property
     def thrust(self) -> NDArray[np.float64]:
-        """Thrusts ``[F1, F2, F3]`` (N) at the current actuator states."""
-        a = self.data.act
-        p = self.thrusters
-        return np.array([p.k1 * abs(a[0]) * a[0], p.k2 * a[1], p.k3 * a[2]])
+        """Signed thrust of every actuator (N) at the current states."""
+        return self.actuators.thrust(self.data.act)
 
     @property
     def tau_thrusters(self) -> NDArray[np.float64]:
-        """Body-frame thrust ``tau = T F`` (N, N, N m) at the current actuator states."""
-        p = self.thrusters
-        n1, p2, p3 = self.data.act.tolist()
-        f2, f3 = p.k2 * p2, p.k3 * p3
-        return np.array([p.k1 * abs(n1) * n1, f2 + f3, p.L2 * f2 - p.L3 * f3])
+        """Body-frame thrust ``[X, Y, N]`` (N, N, N m) at the current actuator states."""
+        X, Y, _K, N, _ = self._tau_of(self.data.act.tolist())
+        return np.array([X, Y, N])
 
     # ---- stepping --------------------------------------------------------------------------
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
-        """Set thruster commands ``[n1 (rpm), p2, p3]``, clipped to the physical ranges.
+        """Set the actuator commands (channel order), clipped to the physical ranges.
 
         Returns:
             Flags of the commands that were clipped (also kept in :attr:`saturated`).
@@ -349,10 +442,19 @@ class VesselPhysics:
         Raises:
             ValueError: wrong shape, NaN or infinite values.
         """
-        cmd = validate_command(command).tolist()
+        cmd = np.asarray(command, dtype=float)
+        n = self.actuators.n_channels
+        if cmd.shape != (n,):
+            raise ValueError(
+                f"command must have shape ({n},) ({', '.join(self.actuators.channel_names)}), "
+                f"got {cmd.shape}"
+            )
+        vals = cmd.tolist()
+        if not math.isfinite(sum(vals)) and not all(math.isfinite(x) for x in vals):
+            raise ValueError(f"command contains NaN or infinite values: {cmd}")
         lo, hi = self._lower, self._upper
-        clipped = [min(max(c, a), b) for c, a, b in zip(cmd, lo, hi, strict=True)]
-        self.saturated = np.array([c != x for c, x in zip(clipped, cmd, strict=True)])
+        clipped = [min(max(c, a), b) for c, a, b in zip(vals, lo, hi, strict=True)]
+        self.saturated = np.array([c != x for c, x in zip(clipped, vals, strict=True)])
         self.data.ctrl[:] = clipped
         return self.saturated.copy()
 
@@ -388,40 +490,29 @@ class VesselPhysics:
             out.append((a.name, b.name))
         return out
 
+    @property
+    def _tau_of(self):  # type: ignore[no-untyped-def]
+        return self.__dict__.setdefault("_tau_kernel", self.actuators.kernel())
+
     def _make_prepare(self):  # type: ignore[no-untyped-def]
         """Build the per-step force computation as a closure (locals bound once: hot path)."""
         m, d = self.model, self.data
         qpos, qvel, qacc, act, qfrc = d.qpos, d.qvel, d.qacc, d.act, d.qfrc_applied
-        gain = m.actuator_gainprm
-        p = self.thrusters
-        k1, k2, k3, L2, L3 = p.k1, p.k2, p.k3, p.L2, p.L3
-        mq, iq = self._m_q, self._i_q
+        # the thrust law of every actuator kind; it also refreshes MuJoCo's state-dependent
+        # actuator gains (k |n|) and azimuth directions, so MuJoCo applies the same force
+        tau_of = self.actuators.kernel(m.actuator_gainprm, m.actuator_gear)
+        mq, iq, ix = self._m_q, self._i_q, self._i_x
         accel, wind_at, wind_load = self._accel, self.wind.at, self._wind_load
         cc = self.current_config
         current_at = None if (cc.is_constant and cc.speed == 0.0) else self.current.at
         drift = None if self.waves is None or not self.wave_config.drift else self.waves.drift_load
         aero = self.aerodynamics
         cos, sin, isfinite = math.cos, math.sin, math.isfinite
+        four = self.dofs == 4
         this = self
 
-        def prepare() -> None:
-            hh = 0.5 * m.opt.timestep
-            psi = qpos.tolist()[2]
-            t = d.time
-            # velocity at the whole step from the half-step qvel (leapfrog, see module doc)
-            w0, w1, w2 = qvel.tolist()
-            a0, a1, a2 = qacc.tolist()
-            xd, yd, r = w0 + hh * a0, w1 + hh * a1, w2 + hh * a2
-            n1, p2, p3 = act.tolist()
-            c, s = cos(psi), sin(psi)
-            u = c * xd + s * yd
-            v = c * yd - s * xd
-            # thrusters (Tomera 2014 eqs. 8-12), body frame
-            f1 = k1 * abs(n1) * n1
-            f2 = k2 * p2
-            f3 = k3 * p3
-            tx, ty, tn = f1, f2 + f3, L2 * f2 - L3 * f3
-            # wind (relative to the ground velocity) and current (NED, constant)
+        def loads(t: float, psi: float, u: float, v: float) -> tuple[float, ...]:
+            """Wind (relative to the ground velocity), current (NED) and wave drift."""
             if aero:
                 vw, bw = wind_at(t)
                 wx, wy, wn = wind_load(psi, u, v, vw, bw)
@@ -435,20 +526,52 @@ class VesselPhysics:
                 uc = vcb = 0.0
             if drift is not None:
                 dx_, dy_, dn_ = drift(t, psi)
-                wx += dx_
-                wy += dy_
-                wn += dn_
             else:
                 dx_ = dy_ = dn_ = 0.0
-            ud, vd, rd = accel(u, v, r, tx + wx, ty + wy, tn + wn, uc, vcb)
+            return wx, wy, wn, uc, vcb, dx_, dy_, dn_
+
+        def diverged(t: float, nu: tuple[float, ...], nud: tuple[float, ...]) -> None:
+            raise SimulationDiverged(
+                f"simulation diverged at t = {t:.3f} s: nu = ({', '.join(f'{x:.4g}' for x in nu)})"
+                f", nu_dot = ({', '.join(f'{x:.4g}' for x in nud)}); check the plant parameters, "
+                "the timestep and the applied forces"
+            )
+
+        def prepare3() -> None:
+            hh = 0.5 * m.opt.timestep
+            psi = qpos.tolist()[2]
+            t = d.time
+            # velocity at the whole step from the half-step qvel (leapfrog, see module doc)
+            w0, w1, w2 = qvel.tolist()
+            a0, a1, a2 = qacc.tolist()
+            xd, yd, r = w0 + hh * a0, w1 + hh * a1, w2 + hh * a2
+            st = act.tolist()
+            c, s = cos(psi), sin(psi)
+            u = c * xd + s * yd
+            v = c * yd - s * xd
+            tx, ty, _k, tn, _mz = tau_of(st)
+            # wind (relative to the ground velocity), current (NED) and wave drift; written out
+            # here rather than calling loads() (one call less per step on the 3-DOF hot path)
+            if aero:
+                vw, bw = wind_at(t)
+                wx, wy, wn = wind_load(psi, u, v, vw, bw)
+            else:
+                wx = wy = wn = 0.0
+            if current_at is not None:
+                vc, bc = current_at(t)
+                uc = vc * cos(bc - psi)
+                vcb = vc * sin(bc - psi)
+            else:
+                uc = vcb = 0.0
+            if drift is not None:
+                dx_, dy_, dn_ = drift(t, psi)
+            else:
+                dx_ = dy_ = dn_ = 0.0
+            ud, vd, rd = accel(u, v, r, tx + (wx + dx_), ty + (wy + dy_), tn + (wn + dn_), uc, vcb)
             if not (
                 isfinite(ud + vd + rd) and abs(u) + abs(v) < _MAX_SPEED and abs(r) < _MAX_YAW_RATE
             ):
-                raise SimulationDiverged(
-                    f"simulation diverged at t = {d.time:.3f} s: nu = ({u:.4g}, {v:.4g}, {r:.4g}), "
-                    f"nu_dot = ({ud:.4g}, {vd:.4g}, {rd:.4g}); check the plant parameters, "
-                    "the timestep and the applied forces"
-                )
+                diverged(t, (u, v, r), (ud, vd, rd))
             # joint acceleration qacc* = R(psi)(nu_dot + r S nu), S nu = [-v, u, 0]
             bx = ud - r * v
             by = vd + r * u
@@ -456,9 +579,46 @@ class VesselPhysics:
             qfrc[0] = mq * (c * bx - s * by) - (c * tx - s * ty)
             qfrc[1] = mq * (s * bx + c * by) - (s * tx + c * ty)
             qfrc[2] = iq * rd - tn
-            gain[0, 0] = k1 * abs(n1)
-            this.tau_wind = (wx - dx_, wy - dy_, wn - dn_)
+            this.tau_wind = (wx, wy, wn)
             this.tau_waves = (dx_, dy_, dn_)
             this.nu_c = (uc, vcb)
 
-        return prepare
+        def prepare4() -> None:
+            hh = 0.5 * m.opt.timestep
+            _x, _y, psi, phi = qpos.tolist()
+            t = d.time
+            w0, w1, w2, w3 = qvel.tolist()
+            a0, a1, a2, a3 = qacc.tolist()
+            xd, yd, psid, phid = w0 + hh * a0, w1 + hh * a1, w2 + hh * a2, w3 + hh * a3
+            c, s, cf, sf = cos(psi), sin(psi), cos(phi), sin(phi)
+            u = c * xd + s * yd
+            v = (c * yd - s * xd) / cf
+            r = psid / cf
+            p = phid
+            st = act.tolist()
+            tx, ty, tk, tn, tmz = tau_of(st)
+            wx, wy, wn, uc, vcb, dx_, dy_, dn_ = loads(t, psi, u, v)
+            ud, vd, pd, rd = accel(
+                u, v, p, r, phi, tx + (wx + dx_), ty + (wy + dy_), tk, tn + (wn + dn_), uc, vcb
+            )
+            if not (
+                isfinite(ud + vd + pd + rd)
+                and abs(u) + abs(v) < _MAX_SPEED
+                and abs(r) + abs(p) < _MAX_YAW_RATE
+                and abs(phi) < _MAX_ROLL
+            ):
+                diverged(t, (u, v, p, r), (ud, vd, pd, rd))
+            # qacc* = J(q) nu_dot + J_dot nu (Fossen's 4-DOF kinematics, module docstring)
+            xdd = c * ud - s * cf * vd - s * u * psid - c * cf * v * psid + s * sf * v * phid
+            ydd = s * ud + c * cf * vd + c * u * psid - s * cf * v * psid - c * sf * v * phid
+            psidd = cf * rd - sf * r * phid
+            # minus the actuators' generalised force as MuJoCo's site transmission applies it
+            qfrc[0] = mq * xdd - (c * tx - s * cf * ty)
+            qfrc[1] = mq * ydd - (s * tx + c * cf * ty)
+            qfrc[2] = iq * psidd - (cf * tn + sf * tmz)
+            qfrc[3] = ix * pd - tk
+            this.tau_wind = (wx, wy, wn)
+            this.tau_waves = (dx_, dy_, dn_)
+            this.nu_c = (uc, vcb)
+
+        return prepare4 if four else prepare3

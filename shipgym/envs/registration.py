@@ -7,13 +7,23 @@ from gymnasium.envs.registration import WrapperSpec
 
 from .episode import EPISODE_END_ENTRY_POINT
 
-__all__ = ["ENV_IDS", "register_envs"]
+__all__ = ["ALIASES", "ENV_IDS", "register_envs"]
 
 #: env id -> (entry point, max_episode_steps)
 ENV_IDS: dict[str, tuple[str, int]] = {
+    "shipgym/Harbour-v0": ("shipgym.envs.tasks:HarbourEnv", 2000),
+    "shipgym/StationKeeping-v0": ("shipgym.envs.tasks:StationKeepingEnv", 600),
+    "shipgym/Tracking-v0": ("shipgym.envs.tasks:TrackingEnv", 800),
     "shipgym/BlueLadyHarbour-v0": ("shipgym.envs.tasks:BlueLadyHarbourEnv", 2000),
     "shipgym/BlueLadyStationKeeping-v0": ("shipgym.envs.tasks:BlueLadyStationKeepingEnv", 600),
     "shipgym/BlueLadyTracking-v0": ("shipgym.envs.tasks:BlueLadyTrackingEnv", 800),
+}
+
+#: the Blue Lady aliases: id -> the vessel-neutral id they equal with ``vessel="blue-lady"``
+ALIASES: dict[str, str] = {
+    "shipgym/BlueLadyHarbour-v0": "shipgym/Harbour-v0",
+    "shipgym/BlueLadyStationKeeping-v0": "shipgym/StationKeeping-v0",
+    "shipgym/BlueLadyTracking-v0": "shipgym/Tracking-v0",
 }
 
 

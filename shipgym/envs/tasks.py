@@ -1,4 +1,9 @@
-"""The registered Blue Lady tasks: harbour manoeuvre, station keeping, tracking."""
+"""The registered tasks: harbour manoeuvre, station keeping, tracking, for any vessel.
+
+Each task is one class, generic over the vessel (``vessel=``); the ``shipgym/BlueLady*-v0``
+ids register the same classes with ``vessel="blue-lady"`` and give the same episodes as the
+vessel-neutral ids with that vessel.
+"""
 
 from __future__ import annotations
 
@@ -12,22 +17,33 @@ from shipgym.disturbances.wind import MAX_WIND_SPEED
 from shipgym.guidance import Leg, ManoeuvrePlan
 from shipgym.observers.sensors import SensorConfig
 
-from .base import BlueLadyEnv
+from .base import ShipEnv
 
-__all__ = ["BlueLadyHarbourEnv", "BlueLadyStationKeepingEnv", "BlueLadyTrackingEnv"]
+__all__ = [
+    "BlueLadyHarbourEnv",
+    "BlueLadyStationKeepingEnv",
+    "BlueLadyTrackingEnv",
+    "HarbourEnv",
+    "StationKeepingEnv",
+    "TrackingEnv",
+]
+
+#: the Blue Lady's length overall (m): the tracking task's leg lengths are scaled from it
+_BLUE_LADY_L_OA = 13.78
 
 
-class BlueLadyHarbourEnv(BlueLadyEnv):
+class HarbourEnv(ShipEnv):
     r"""The 5-leg harbour manoeuvre of Tomera (2014) Fig. 7.
 
-    Registered as ``shipgym/BlueLadyHarbour-v0``.
+    Registered as ``shipgym/Harbour-v0`` (``vessel=`` a vessel that fits the basin, which was
+    built for the Blue Lady) and ``shipgym/BlueLadyHarbour-v0`` (the Blue Lady).
 
     The ship starts at rest alongside berth A and moves to berth B: 7 m to port, 38 m
     forward, a 90 deg turn to starboard, 15 m astern, 3 m to port. Legs switch when the ship
     is within 1 m of the leg's end point with a heading error below 5 deg (and the leg's
     reference has arrived). Default wind: 3 m/s from 300 deg with gusts (the lake trial).
     The episode terminates when the last leg completes or on quay contact; time limit
-    2000 control steps (2000 s). Spaces, reward and info: see :class:`BlueLadyEnv`.
+    2000 control steps (2000 s). Spaces, reward and info: see :class:`ShipEnv`.
     """
 
     def __init__(self, **kwargs: Any) -> None:
@@ -36,15 +52,17 @@ class BlueLadyHarbourEnv(BlueLadyEnv):
         super().__init__(**kwargs)
 
 
-class BlueLadyStationKeepingEnv(BlueLadyEnv):
+class StationKeepingEnv(ShipEnv):
     r"""Hold the start pose against wind from a perturbed start.
 
-    Registered as ``shipgym/BlueLadyStationKeeping-v0``.
+    Registered as ``shipgym/StationKeeping-v0`` (any vessel, ``vessel=``) and
+    ``shipgym/BlueLadyStationKeeping-v0`` (the Blue Lady).
 
     One zero-displacement leg on open water; the ship starts up to 2 m and 5 deg off the pose
-    (uniform, seeded). Default wind 3 m/s from 300 deg with gusts. Never terminates on
-    reaching the pose; time limit 600 control steps (600 s). Spaces, reward and info: see
-    :class:`BlueLadyEnv`.
+    (uniform, seeded). Default wind: the vessel's nominal wind (3 m/s for the Blue Lady) from
+    300 deg with gusts. Never terminates on reaching the pose; time limit 600 control steps
+    (600 s; pass ``max_episode_steps`` to ``gym.make`` for longer). Spaces, reward and info:
+    see :class:`ShipEnv`.
     """
 
     def __init__(self, **kwargs: Any) -> None:
@@ -55,12 +73,16 @@ class BlueLadyStationKeepingEnv(BlueLadyEnv):
         super().__init__(**kwargs)
 
 
-class BlueLadyTrackingEnv(BlueLadyEnv):
-    r"""Randomised legs and wind on open water (the training task): ``shipgym/BlueLadyTracking-v0``.
+class TrackingEnv(ShipEnv):
+    r"""Randomised legs and wind on open water (the training task).
+
+    Registered as ``shipgym/Tracking-v0`` (any vessel, ``vessel=``) and
+    ``shipgym/BlueLadyTracking-v0`` (the Blue Lady).
 
     Each episode draws from the seeded generator 1-``max_legs`` legs: lateral (2-8 m either
     side), longitudinal (5-30 m ahead or 3-15 m astern), rotation (30-120 deg either way) or
-    combined (surge and sway together); and, by default, a wind of 0-``max_wind_speed`` m/s
+    combined (surge and sway together), the distances for the Blue Lady's 13.78 m and scaled
+    with the vessel's length overall; and, by default, a wind of 0-``max_wind_speed`` m/s
     from any direction with the default gusts (4 m/s on the beam exceeds the 248 N m yaw
     capacity), a constant lake current of 0-``max_current_speed`` m/s in any direction
     (~1 % of the wind, assumed) and sensor noise within the lake presets (DGPS sigma
@@ -72,8 +94,10 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
     | Argument | Default | Description |
     |---|---|---|
     | ``max_legs`` | ``3`` | most legs per episode (int >= 1) |
-    | ``max_wind_speed`` | ``3.5`` | upper end of the drawn mean wind speed (m/s) |
-    | ``max_current_speed`` | ``0.03`` | upper end of the drawn current speed (m/s); 0: none |
+    | ``max_wind_speed`` | ``None`` | upper end of the drawn mean wind speed (m/s); ``None``: |
+    |  |  | 7/6 of the vessel's nominal wind (3.5 m/s for the Blue Lady) |
+    | ``max_current_speed`` | ``None`` | upper end of the drawn current speed (m/s); 0: none; |
+    |  |  | ``None``: 1 % of the nominal wind (0.03 m/s for the Blue Lady) |
     | ``randomize_sensors`` | ``None`` | draw the sensor noise per episode; ``None``: unless |
     |  |  | ``sensors=`` is given |
 
@@ -87,17 +111,26 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
     unchanged. ``max_current_speed=0`` and ``randomize_sensors=False`` switch those draws off
     (the shipped PPO baseline was trained so). ``wind_config``, ``current_config`` and
     ``sensor_config`` report the episode's values after :meth:`reset`. Spaces, reward and
-    info: see :class:`BlueLadyEnv`.
+    info: see :class:`ShipEnv`.
     """
 
     def __init__(
         self,
         max_legs: int = 3,
-        max_wind_speed: float = 3.5,
-        max_current_speed: float = 0.03,
+        max_wind_speed: float | None = None,
+        max_current_speed: float | None = None,
         randomize_sensors: bool | None = None,
         **kwargs: Any,
     ) -> None:
+        from shipgym.dynamics.vessel import load_vessel
+
+        vessel = load_vessel(kwargs["vessel"]) if kwargs.get("vessel") is not None else None
+        nominal = vessel.nominal_wind if vessel is not None else 3.0
+        if max_wind_speed is None:
+            max_wind_speed = 3.5 * nominal / 3.0
+        if max_current_speed is None:
+            max_current_speed = 0.01 * nominal
+        self._leg_scale = 1.0 if vessel is None else vessel.L_oa / _BLUE_LADY_L_OA
         if not (isinstance(max_legs, int) and max_legs >= 1):
             raise ValueError(f"max_legs must be an int >= 1, got {max_legs!r}")
         if not (_finite_real(max_wind_speed) and 0 <= max_wind_speed <= MAX_WIND_SPEED):
@@ -126,26 +159,29 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
             "sensors" not in kwargs if randomize_sensors is None else randomize_sensors
         )
         kwargs.setdefault("scene", "open-water")
-        kwargs.setdefault("plan", ManoeuvrePlan(legs=(Leg(surge=10.0),), name="tracking"))
+        kwargs.setdefault(
+            "plan", ManoeuvrePlan(legs=(Leg(surge=10.0 * self._leg_scale),), name="tracking")
+        )
         super().__init__(**kwargs)
 
     def _episode_plan(self) -> ManoeuvrePlan:
         rng = self.np_random
+        k = self._leg_scale
         legs = []
         for i in range(int(rng.integers(1, self.max_legs + 1))):
             kind = int(rng.integers(4))
             side = 1.0 if rng.random() < 0.5 else -1.0
             if kind == 0:
-                leg = Leg(sway=side * rng.uniform(2.0, 8.0), name=f"{i + 1}: lateral")
+                leg = Leg(sway=side * rng.uniform(2.0, 8.0) * k, name=f"{i + 1}: lateral")
             elif kind == 1:
                 dist = rng.uniform(5.0, 30.0) if side > 0 else -rng.uniform(3.0, 15.0)
-                leg = Leg(surge=dist, name=f"{i + 1}: longitudinal")
+                leg = Leg(surge=dist * k, name=f"{i + 1}: longitudinal")
             elif kind == 2:
                 yaw = side * math.radians(rng.uniform(30.0, 120.0))
                 leg = Leg(yaw=yaw, name=f"{i + 1}: rotation")
             else:
                 leg = Leg(
-                    surge=rng.uniform(3.0, 15.0), sway=side * rng.uniform(2.0, 5.0),
+                    surge=rng.uniform(3.0, 15.0) * k, sway=side * rng.uniform(2.0, 5.0) * k,
                     name=f"{i + 1}: combined",
                 )  # fmt: skip
             legs.append(leg)
@@ -185,3 +221,27 @@ class BlueLadyTrackingEnv(BlueLadyEnv):
 
 def _finite_real(x: Any) -> bool:
     return is_real(x) and math.isfinite(x)
+
+
+def _blue_lady(cls: type[ShipEnv], name: str, doc: str) -> type[ShipEnv]:
+    """The Blue Lady alias of a task class (``vessel="blue-lady"``, the same episodes)."""
+
+    def __init__(self: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("vessel", "blue-lady")
+        cls.__init__(self, **kwargs)
+
+    return type(name, (cls,), {"__init__": __init__, "__doc__": doc, "__module__": __name__})
+
+
+BlueLadyHarbourEnv = _blue_lady(
+    HarbourEnv, "BlueLadyHarbourEnv", "``shipgym/BlueLadyHarbour-v0``: :class:`HarbourEnv` "
+    "with the Blue Lady."
+)  # fmt: skip
+BlueLadyStationKeepingEnv = _blue_lady(
+    StationKeepingEnv, "BlueLadyStationKeepingEnv", "``shipgym/BlueLadyStationKeeping-v0``: "
+    ":class:`StationKeepingEnv` with the Blue Lady."
+)  # fmt: skip
+BlueLadyTrackingEnv = _blue_lady(
+    TrackingEnv, "BlueLadyTrackingEnv", "``shipgym/BlueLadyTracking-v0``: :class:`TrackingEnv` "
+    "with the Blue Lady."
+)  # fmt: skip

@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym.dynamics.frames import wrap_angle
 
 from .plan import ManoeuvrePlan
-from .reference import LegProfile, leg_profile
+from .reference import LegProfile, Limits, leg_profile
 from .rframe import to_r_frame
 
 __all__ = ["Guidance", "Reference"]
@@ -115,12 +115,16 @@ class Guidance:
     its start time.
     """
 
-    def __init__(self, plan: ManoeuvrePlan) -> None:
+    def __init__(self, plan: ManoeuvrePlan, limits: Limits | None = None) -> None:
         if not isinstance(plan, ManoeuvrePlan):
             raise TypeError(f"Guidance needs a ManoeuvrePlan, got {type(plan).__name__}")
+        if limits is not None and not isinstance(limits, Limits):
+            raise TypeError(f"limits must be a Limits or None, got {type(limits).__name__}")
         self.plan = plan
+        #: the plan's limits, else the vessel's (``limits``), else :class:`Limits` defaults
+        self.limits = plan.limits if plan.limits is not None else limits
         self._profiles: tuple[LegProfile, ...] = tuple(
-            leg_profile(leg, plan.limits) for leg in plan.legs
+            leg_profile(leg, self.limits) for leg in plan.legs
         )
         self._waypoints: NDArray[np.float64] | None = None
         self._wp_list: list[list[float]] = []

@@ -47,8 +47,8 @@ class ObserverWrapper(
         from shipgym.observers import make_observer
 
         self.observer_name = observer
-        self.observer = make_observer(observer)
         base = env.unwrapped
+        self.observer = make_observer(observer, vessel=getattr(base, "vessel", None))
         if getattr(base, "sensors", None) is None:
             raise ValueError(
                 "an observer needs sensors: create the environment with sensors='default' "

@@ -1,0 +1,213 @@
+"""Thrust allocation for any vessel: from a requested ``tau`` to actuator commands.
+
+:func:`make_allocator` picks the method from the vessel's actuator set:
+
+- the Blue Lady pattern (a main propeller on the centre line and two tunnel thrusters,
+  Tomera 2014 eq. 12): the exact closed forms of :mod:`shipgym.controllers.allocation`
+  (``"constrained"``, or the paper's ``"inverse"``), the fast path and test oracle;
+- any set of fixed-direction thrusters: box-constrained weighted least squares
+  (:func:`~shipgym.controllers.allocation.allocate_wls`);
+- azimuth thrusters (with or without fixed ones): the extended-thrust QP with magnitude and
+  angle-rate limits (:func:`~shipgym.controllers.allocation.allocate_azimuth`).
+
+Every allocator returns an :class:`~shipgym.controllers.allocation.Allocation` whose
+``command`` and ``saturated`` follow the vessel's channel order and whose ``force`` holds one
+thrust per actuator; the planar ``tau = [X, Y, N]`` is what the DP controllers request.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym.dynamics.actuators import ActuatorSet, Azimuth, Propeller
+from shipgym.dynamics.thrusters import ThrusterParameters
+from shipgym.dynamics.vessel import Vessel
+
+from .allocation import Allocation, allocate, allocate_inverse, force_capacity
+
+__all__ = ["Allocator", "fixed3_parameters", "make_allocator", "planar_capacity"]
+
+Allocator = Callable[[ArrayLike, NDArray[np.float64]], Allocation]
+"""``allocator(tau, state) -> Allocation``: ``state`` the actuator states now (for rates)."""
+
+
+def planar_capacity(vessel: Vessel) -> NDArray[np.float64]:
+    """Largest ``|X|, |Y|, |N|`` of the vessel's actuators, each DOF alone (N, N, N m).
+
+    The exact box of the closed form (:func:`~shipgym.controllers.allocation.force_capacity`)
+    for the Blue Lady pattern; otherwise :meth:`ActuatorSet.capacity`.
+    """
+    p3 = fixed3_parameters(vessel.actuators)
+    if p3 is not None:
+        return force_capacity(p3)
+    cap = vessel.actuators.capacity()
+    return cap if cap.size == 3 else cap[[0, 1, 3]]
+
+
+def fixed3_parameters(actuators: ActuatorSet) -> ThrusterParameters | None:
+    """The :class:`ThrusterParameters` of a Blue-Lady-pattern set, else ``None``.
+
+    The pattern: a main propeller on the centre line (``alpha = 0``, quadratic or linear law
+    with one constant) followed by a bow and a stern tunnel thruster (``alpha = 90 deg``,
+    linear, same range and lag, on the centre line), as in Tomera (2014) eq. 12.
+    """
+    a = actuators.actuators
+    if len(a) != 3 or not all(isinstance(x, Propeller) for x in a) or actuators.dofs != 3:
+        return None
+    main, bow, stern = a  # type: ignore[misc]
+    ok = (
+        main.law == "quadratic"
+        and main.k_ahead == main.k_astern
+        and main.direction == (1.0, 0.0)
+        and main.position[1] == 0.0
+        and all(t.direction == (0.0, 1.0) and t.position[1] == 0.0 for t in (bow, stern))
+        and bow.static_gain is not None
+        and stern.static_gain is not None
+        and (bow.lower, bow.upper, bow.time_constant)
+        == (stern.lower, stern.upper, stern.time_constant)
+        and bow.position[0] > 0.0 > stern.position[0]
+    )
+    if not ok:
+        return None
+    return ThrusterParameters(
+        k1=main.k_ahead, k2=bow.k_ahead, k3=stern.k_ahead, L2=bow.position[0],
+        L3=-stern.position[0], x_main=main.position[0], n_min=main.lower, n_max=main.upper,
+        p_min=bow.lower, p_max=bow.upper, T_main=main.time_constant,
+        T_tunnel=bow.time_constant,
+    )  # fmt: skip
+
+
+def make_allocator(vessel: Vessel, method: str = "constrained", dt: float = 1.0) -> Allocator:
+    """The thrust allocation of ``vessel``.
+
+    Args:
+        vessel: the vessel.
+        method: ``"constrained"`` (optimal within the actuator limits) or ``"inverse"``
+            (Tomera 2014 eq. 25, the Blue Lady pattern only).
+        dt: control period (s): how far an azimuth may turn per call.
+
+    Raises:
+        ValueError: unknown method, or ``"inverse"`` for a vessel it does not fit.
+    """
+    if method not in ("constrained", "inverse"):
+        raise ValueError(f"unknown allocation {method!r}; choose 'constrained' or 'inverse'")
+    acts = vessel.actuators
+    p3 = fixed3_parameters(acts)
+    if p3 is not None:
+        fn = allocate if method == "constrained" else allocate_inverse
+        return lambda tau, state: fn(tau, p3)
+    if method == "inverse":
+        raise ValueError(
+            f"allocation 'inverse' (Tomera 2014 eq. 25) needs the Blue Lady's three-thruster "
+            f"layout; vessel {vessel.name!r} has {acts!r}: use 'constrained'"
+        )
+    if acts.fixed:
+        return _FixedAllocator(acts)
+    return _AzimuthAllocator(acts, dt)
+
+
+def _planar_B(acts: ActuatorSet, idx: list[int]) -> NDArray[np.float64]:
+    """Planar (X, Y, N) columns of the fixed-direction actuators ``idx``."""
+    cols = []
+    for i in idx:
+        a = acts.actuators[i]
+        assert isinstance(a, Propeller)
+        c, s = a.direction
+        x, y, _ = a.position
+        cols.append([c, s, x * s - y * c])
+    return np.array(cols, dtype=float).reshape(-1, 3).T
+
+
+def _tau3(tau: ArrayLike) -> NDArray[np.float64]:
+    t = np.asarray(tau, dtype=float)
+    if t.shape != (3,) or not np.all(np.isfinite(t)):
+        raise ValueError(f"tau must be 3 finite numbers [X N, Y N, N N m], got {tau!r}")
+    return t
+
+
+class _FixedAllocator:
+    """Box-constrained weighted least squares over fixed-direction thrusters."""
+
+    def __init__(self, acts: ActuatorSet) -> None:
+        from .allocation import allocate_wls
+
+        self._wls = allocate_wls
+        self.acts = acts
+        idx = list(range(len(acts)))
+        self.B = _planar_B(acts, idx)
+        self.f_min = np.array([a.force_lower for a in acts.actuators])  # type: ignore[attr-defined]
+        self.f_max = np.array([a.force_upper for a in acts.actuators])  # type: ignore[attr-defined]
+        cap = np.maximum(np.abs(self.B) @ np.maximum(self.f_max, -self.f_min), 1e-9)
+        self.W = 1.0 / cap**2  # each DOF's error relative to its capacity
+
+    def __call__(self, tau: ArrayLike, state: NDArray[np.float64]) -> Allocation:
+        t = _tau3(tau)
+        res = self._wls(t, self.B, self.f_min, self.f_max, W=self.W)
+        cmd = np.array([a.inverse(f) for a, f in zip(self.acts.actuators, res.force, strict=True)])  # type: ignore[attr-defined]
+        cmd = np.clip(cmd, self.acts.lower, self.acts.upper)
+        return Allocation(cmd, np.asarray(res.force), np.asarray(res.tau), t - res.tau,
+                          np.asarray(res.saturated, dtype=bool))  # fmt: skip
+
+
+class _AzimuthAllocator:
+    """Extended-thrust allocation over azimuths (plus any fixed thrusters), rate-limited."""
+
+    def __init__(self, acts: ActuatorSet, dt: float) -> None:
+        from .allocation import AzimuthSet, allocate_azimuth
+
+        self._qp = allocate_azimuth
+        self._AzimuthSet = AzimuthSet
+        self.acts = acts
+        self.dt = float(dt)
+        self.az = [i for i, a in enumerate(acts.actuators) if isinstance(a, Azimuth)]
+        self.fx = [i for i, a in enumerate(acts.actuators) if isinstance(a, Propeller)]
+        az = [acts.actuators[i] for i in self.az]
+        self.pos = np.array([a.position for a in az])
+        self.f_max = np.array([a.max_thrust_n for a in az])  # type: ignore[attr-defined]
+        self.rate = np.array([a.max_rate for a in az])  # type: ignore[attr-defined]
+        self.rev = np.array([a.reversible for a in az])  # type: ignore[attr-defined]
+        self.fixed: Any = None
+        if self.fx:
+            fa = [acts.actuators[i] for i in self.fx]
+            self.fixed = (
+                _planar_B(acts, self.fx),
+                np.array([a.force_lower for a in fa]),  # type: ignore[attr-defined]
+                np.array([a.force_upper for a in fa]),  # type: ignore[attr-defined]
+            )
+        cap = np.maximum(acts.capacity()[[0, 1, -1]], 1e-9)
+        self.W = 1.0 / cap**2
+
+    def __call__(self, tau: ArrayLike, state: NDArray[np.float64]) -> Allocation:
+        t = _tau3(tau)
+        acts = self.acts
+        angle_prev = np.array([state[acts.slices[i].start + 1] for i in self.az])
+        spec = self._AzimuthSet(
+            positions=self.pos, f_max=self.f_max, angle_prev=angle_prev,
+            max_dangle=np.minimum(self.rate * self.dt, math.radians(80.0)), reversible=self.rev,
+        )  # fmt: skip
+        res = self._qp(t, spec, fixed=self.fixed, W=self.W)
+        cmd = np.zeros(acts.n_channels)
+        force = np.zeros(len(acts))
+        sat = np.zeros(acts.n_channels, dtype=bool)
+        res_sat = np.asarray(res.saturated, dtype=bool)
+        for k, i in enumerate(self.az):
+            a = acts.actuators[i]
+            sl = acts.slices[i]
+            cmd[sl.start] = res.thrust[k] / a.max_thrust_n  # type: ignore[attr-defined]
+            rate = (res.angle[k] - angle_prev[k]) / self.dt
+            cmd[sl.start + 1] = min(max(rate, -a.max_rate), a.max_rate)  # type: ignore[attr-defined]
+            force[i] = res.thrust[k]
+            sat[sl] = res_sat[k]
+        for k, i in enumerate(self.fx):
+            a = acts.actuators[i]
+            f = res.force_fixed[k]
+            cmd[acts.slices[i].start] = a.inverse(f)  # type: ignore[attr-defined]
+            force[i] = f
+            sat[acts.slices[i]] = res_sat[len(self.az) + k]
+        cmd = np.clip(cmd, acts.lower, acts.upper)
+        return Allocation(cmd, force, np.asarray(res.tau), t - np.asarray(res.tau), sat)

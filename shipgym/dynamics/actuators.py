@@ -1,0 +1,630 @@
+r"""Actuator kinds and the :class:`ActuatorSet` of a vessel: one thrust law per kind.
+
+Every actuator is one or more MuJoCo actuators on the hull (built from the vessel file by
+:mod:`shipgym.envs.scene`); each of those is a *control channel* with a command range, a unit
+and its dynamics (a first-order lag, ``dyntype="filterexact"``, or an integrator for an angle
+that turns at a limited rate). The channel's MuJoCo *activation* is the actuator state. From
+the states each kind computes its force in the body frame, written once here and used by the
+physics, the allocation and the plots alike:
+
+- :class:`Propeller` (a fixed propeller or a tunnel thruster, the only difference being the
+  mounting angle): state ``a`` (shaft speed in rpm, relative revolutions or relative thrust),
+  thrust along the fixed direction ``alpha`` (0: ahead, 90 deg: to starboard)
+  ``F = k_ahead a`` (``a >= 0``) or ``k_astern a`` (``a < 0``) for ``law = "linear"``, and
+  ``F = k |a| a`` (``k_ahead``/``k_astern`` by sign) for ``law = "quadratic"`` (Tomera 2014
+  eqs. 8-9; Fossen 2011 eq. 12.? ``T = k |n| n``);
+- :class:`Azimuth` (an azimuth thruster): two channels, the thrust state ``a`` (relative
+  thrust, lagged) and the angle ``alpha`` (rad), which integrates a commanded rate limited to
+  ``+-max_rate``; ``F = F_max a`` along ``alpha`` (Fossen 2011 ch. 12, azimuth thrusters;
+  Johansen & Fossen 2013).
+
+Generalised force of a force ``(F_x, F_y)`` applied at ``(x, y, z)`` (body frame, z down):
+``X = F_x``, ``Y = F_y``, ``K = -z F_y``, ``N = x F_y - y F_x`` (Fossen 2011 eq. 12.?).
+
+The protocol (:class:`Actuator`) is what a new kind implements: its channels, the force
+from its states, its force capacity; a rudder (force from the flow speed) fits it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "ACTUATOR_KINDS",
+    "Actuator",
+    "ActuatorSet",
+    "Azimuth",
+    "Channel",
+    "Propeller",
+]
+
+
+@dataclass(frozen=True)
+class Channel:
+    """One MuJoCo actuator of an actuator: command range, unit and dynamics.
+
+    Attributes:
+        name: MuJoCo actuator name (the actuator's name, or ``NAME_angle`` etc.).
+        unit: unit of the command and of the state (e.g. ``"rpm"``, ``"1"``, ``"rad/s"``).
+        lower, upper: command range (``lower <= 0 <= upper`` or ``0 <= lower``).
+        dynamics: ``"lag"`` (first-order lag of the state to the command, ``time_constant``)
+            or ``"integrator"`` (the state integrates the command: an angle from a rate).
+        time_constant: lag time constant (s), ``nan`` for an integrator.
+        state_unit: unit of the state (differs from ``unit`` for an integrator).
+    """
+
+    name: str
+    unit: str
+    lower: float
+    upper: float
+    dynamics: str = "lag"
+    time_constant: float = math.nan
+    state_unit: str = ""
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.lower) and math.isfinite(self.upper)):
+            raise ValueError(f"{self.name}: command range must be finite")
+        if not self.lower < self.upper:
+            raise ValueError(f"{self.name}: command range needs lower < upper, got "
+                             f"[{self.lower}, {self.upper}]")  # fmt: skip
+        if self.dynamics not in ("lag", "integrator"):
+            raise ValueError(f"{self.name}: unknown dynamics {self.dynamics!r}")
+        if self.dynamics == "lag" and not self.time_constant > 0:
+            raise ValueError(f"{self.name}: time_constant must be > 0 s, got {self.time_constant}")
+        if not self.state_unit:
+            object.__setattr__(self, "state_unit", self.unit)
+
+
+class Actuator:
+    """Protocol of an actuator kind (a frozen dataclass subclass)."""
+
+    kind: ClassVar[str] = ""
+    name: str
+    position: tuple[float, float, float]
+    colour: str
+
+    @property
+    def channels(self) -> tuple[Channel, ...]:  # pragma: no cover - protocol
+        raise NotImplementedError
+
+    def force(self, states: NDArray[np.float64]) -> tuple[Any, Any]:  # pragma: no cover
+        """Body force ``(F_x, F_y)`` (N) from this actuator's states (..., n_channels)."""
+        raise NotImplementedError
+
+    def thrust(self, states: NDArray[np.float64]) -> Any:  # pragma: no cover
+        """Signed thrust magnitude (N) along the actuator's direction."""
+        raise NotImplementedError
+
+    @property
+    def max_thrust(self) -> float:  # pragma: no cover
+        """Largest thrust magnitude (N), either direction."""
+        raise NotImplementedError
+
+
+def _check_position(name: str, position: Any) -> tuple[float, float, float]:
+    try:
+        p = tuple(float(v) for v in position)
+    except (TypeError, ValueError):
+        raise ValueError(f"actuator {name!r}: position must be [x, y, z] in m") from None
+    if len(p) == 2:
+        p = (*p, 0.0)
+    if len(p) != 3 or not all(math.isfinite(v) for v in p):
+        raise ValueError(f"actuator {name!r}: position must be 3 finite numbers [x, y, z] (m)")
+    return p  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class Propeller(Actuator):
+    """A fixed-direction thruster: main propeller (``alpha = 0``) or tunnel (90 deg).
+
+    Attributes:
+        name: actuator (and MuJoCo actuator) name.
+        position: ``(x, y, z)`` of the thrust's point of action (m, body frame, z down).
+        alpha: thrust direction (rad) from the bow, positive to starboard.
+        law: ``"linear"`` (``F = k a``) or ``"quadratic"`` (``F = k |a| a``).
+        k_ahead, k_astern: thrust coefficients (N per command unit, or per unit^2) for
+            ``a >= 0`` and ``a < 0``; both > 0.
+        lower, upper: command range (``lower < 0 < upper``), in ``unit``.
+        unit: command unit (``"rpm"`` for a shaft speed, ``"1"`` for relative thrust).
+        time_constant: first-order lag of the state to the command (s).
+        colour: plot colour (``#rrggbb``).
+        tunnel: a tunnel thruster (a label for listings and plots).
+    """
+
+    kind: ClassVar[str] = "propeller"
+    name: str = ""
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    alpha: float = 0.0
+    law: str = "linear"
+    k_ahead: float = 1.0
+    k_astern: float = 1.0
+    lower: float = -1.0
+    upper: float = 1.0
+    unit: str = "1"
+    time_constant: float = 1.0
+    colour: str = "#1f77b4"
+    tunnel: bool = False
+    _c: float = field(init=False, repr=False, compare=False)
+    _s: float = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "position", _check_position(self.name, self.position))
+        if self.law not in ("linear", "quadratic"):
+            raise ValueError(
+                f"actuator {self.name!r}: law must be 'linear' or 'quadratic', got {self.law!r}"
+            )
+        for k in ("k_ahead", "k_astern", "time_constant"):
+            v = getattr(self, k)
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise ValueError(f"actuator {self.name!r}: {k} must be > 0, got {v!r}")
+        if not (self.lower < 0.0 < self.upper):
+            raise ValueError(
+                f"actuator {self.name!r}: the command range must contain zero "
+                f"(lower < 0 < upper), got [{self.lower}, {self.upper}]"
+            )
+        if not math.isfinite(self.alpha):
+            raise ValueError(f"actuator {self.name!r}: alpha must be finite")
+        object.__setattr__(self, "_c", math.cos(self.alpha))
+        object.__setattr__(self, "_s", math.sin(self.alpha))
+
+    @property
+    def channels(self) -> tuple[Channel, ...]:
+        return (Channel(self.name, self.unit, self.lower, self.upper, "lag", self.time_constant),)
+
+    @property
+    def direction(self) -> tuple[float, float]:
+        """Unit thrust direction ``(cos alpha, sin alpha)`` in the body frame."""
+        c, s = self._c, self._s
+        # exact axes for the usual mounting angles (0, +-90, 180 deg)
+        return (0.0 if abs(c) < 1e-15 else c, 0.0 if abs(s) < 1e-15 else s)
+
+    @property
+    def static_gain(self) -> float | None:
+        """MuJoCo's constant actuator gain (N per state unit), ``None`` if state-dependent."""
+        if self.law == "linear" and self.k_ahead == self.k_astern:
+            return self.k_ahead
+        return None
+
+    def gain(self, a: Any) -> Any:
+        """``F / a`` (N per state unit): the MuJoCo actuator gain at state ``a``."""
+        k = np.where(np.asarray(a) >= 0, self.k_ahead, self.k_astern)
+        return k * np.abs(a) if self.law == "quadratic" else k * np.ones_like(np.asarray(a, float))
+
+    def thrust(self, states: NDArray[np.float64]) -> Any:
+        a = np.asarray(states, dtype=float)[..., 0]
+        return self.gain(a) * a
+
+    def inverse(self, force: ArrayLike) -> NDArray[np.float64]:
+        """The state (command) that gives the thrust ``force`` (N), unsaturated."""
+        f = np.asarray(force, dtype=float)
+        k = np.where(f >= 0, self.k_ahead, self.k_astern)
+        if self.law == "quadratic":
+            return np.sign(f) * np.sqrt(np.abs(f) / k)
+        return f / k
+
+    def force(self, states: NDArray[np.float64]) -> tuple[Any, Any]:
+        f = self.thrust(states)
+        c, s = self.direction
+        return c * f, s * f
+
+    @property
+    def force_lower(self) -> float:
+        """Thrust (N) at the lower end of the command range (negative: astern)."""
+        return float(self.thrust(np.array([self.lower])))
+
+    @property
+    def force_upper(self) -> float:
+        """Thrust (N) at the upper end of the command range."""
+        return float(self.thrust(np.array([self.upper])))
+
+    @property
+    def max_thrust(self) -> float:
+        return max(self.force_upper, -self.force_lower)
+
+
+@dataclass(frozen=True)
+class Azimuth(Actuator):
+    """An azimuth thruster: thrust along an angle that turns at a limited rate.
+
+    Channels: ``NAME`` (relative thrust ``a`` in ``[lower, 1]``, first-order lag
+    ``time_constant``; ``lower = -1`` for a reversible (variable-pitch) unit, 0 otherwise)
+    and ``NAME_angle`` (command: the turning rate in rad/s, ``+-max_rate``; state: the angle
+    ``alpha`` in rad from the bow, positive to starboard, continuous). Thrust
+    ``F = max_thrust a`` along ``(cos alpha, sin alpha)``.
+
+    Attributes:
+        name, position, colour: as for :class:`Propeller`.
+        max_thrust_n: largest thrust (N).
+        lower: lower end of the relative-thrust command (-1 reversible, 0 ahead only).
+        time_constant: lag of the thrust (s).
+        max_rate: largest turning rate (rad/s).
+        angle0: angle at rest (rad), the state after a reset.
+    """
+
+    kind: ClassVar[str] = "azimuth"
+    name: str = ""
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    max_thrust_n: float = 1.0
+    lower: float = -1.0
+    time_constant: float = 1.0
+    max_rate: float = math.radians(10.0)
+    angle0: float = 0.0
+    colour: str = "#1f77b4"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "position", _check_position(self.name, self.position))
+        for k in ("max_thrust_n", "time_constant", "max_rate"):
+            v = getattr(self, k)
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise ValueError(f"actuator {self.name!r}: {k} must be > 0, got {v!r}")
+        if self.lower not in (-1.0, 0.0):
+            raise ValueError(
+                f"actuator {self.name!r}: lower must be -1 (reversible) or 0, got {self.lower!r}"
+            )
+        if not math.isfinite(self.angle0):
+            raise ValueError(f"actuator {self.name!r}: angle0 must be finite")
+
+    @property
+    def reversible(self) -> bool:
+        """Whether the thrust can be reversed (variable pitch)."""
+        return self.lower < 0
+
+    @property
+    def channels(self) -> tuple[Channel, ...]:
+        return (
+            Channel(self.name, "1", self.lower, 1.0, "lag", self.time_constant),
+            Channel(
+                self.name + "_angle", "rad/s", -self.max_rate, self.max_rate, "integrator",
+                state_unit="rad",
+            ),
+        )  # fmt: skip
+
+    def thrust(self, states: NDArray[np.float64]) -> Any:
+        return self.max_thrust_n * np.asarray(states, dtype=float)[..., 0]
+
+    def force(self, states: NDArray[np.float64]) -> tuple[Any, Any]:
+        s = np.asarray(states, dtype=float)
+        f = self.max_thrust_n * s[..., 0]
+        return f * np.cos(s[..., 1]), f * np.sin(s[..., 1])
+
+    @property
+    def max_thrust(self) -> float:
+        return float(self.max_thrust_n)
+
+
+#: actuator kinds by the name used in vessel files (``kind = "..."``)
+ACTUATOR_KINDS: dict[str, type[Actuator]] = {
+    "propeller": Propeller,
+    "tunnel": Propeller,
+    "azimuth": Azimuth,
+}
+
+
+class ActuatorSet:
+    """The actuators of a vessel, in order: channels, bounds, ``tau(states)``, action scaling.
+
+    Args:
+        actuators: the actuators (unique names).
+        dofs: 3 (``tau = [X, Y, N]``) or 4 (``[X, Y, K, N]``).
+
+    The state vector (MuJoCo's ``act``) and the command vector (``ctrl``) hold the channels
+    of every actuator in order (:attr:`channel_names`). The normalised action of an env is
+    one number in ``[-1, 1]`` per channel (:meth:`action_to_command`).
+    """
+
+    def __init__(self, actuators: Sequence[Actuator], dofs: int = 3) -> None:
+        self.actuators: tuple[Actuator, ...] = tuple(actuators)
+        if not self.actuators:
+            raise ValueError("a vessel needs at least one actuator")
+        names = [a.name for a in self.actuators]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ValueError(f"actuator names must be unique, repeated: {dup}")
+        if dofs not in (3, 4):
+            raise ValueError(f"dofs must be 3 or 4, got {dofs!r}")
+        self.dofs = dofs
+        self.channels: tuple[Channel, ...] = tuple(c for a in self.actuators for c in a.channels)
+        cnames = [c.name for c in self.channels]
+        dup = sorted({n for n in cnames if cnames.count(n) > 1})
+        if dup:
+            raise ValueError(f"actuator channel names must be unique, repeated: {dup}")
+        self.slices: tuple[slice, ...] = ()
+        i = 0
+        sl = []
+        for a in self.actuators:
+            n = len(a.channels)
+            sl.append(slice(i, i + n))
+            i += n
+        self.slices = tuple(sl)
+        self.lower = np.array([c.lower for c in self.channels])
+        self.upper = np.array([c.upper for c in self.channels])
+        for arr in (self.lower, self.upper):
+            arr.setflags(write=False)
+        self._lo = tuple(self.lower.tolist())
+        self._hi = tuple(self.upper.tolist())
+
+    # ---- description -----------------------------------------------------------------------
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Actuator names, in order."""
+        return tuple(a.name for a in self.actuators)
+
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        """MuJoCo actuator (channel) names, in order: the layout of commands and states."""
+        return tuple(c.name for c in self.channels)
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """Command unit of every channel."""
+        return tuple(c.unit for c in self.channels)
+
+    @property
+    def colours(self) -> tuple[str, ...]:
+        """Plot colour of every actuator."""
+        return tuple(a.colour for a in self.actuators)
+
+    @property
+    def n_channels(self) -> int:
+        return len(self.channels)
+
+    def __len__(self) -> int:
+        return len(self.actuators)
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        return iter(self.actuators)
+
+    def __repr__(self) -> str:
+        kinds = ", ".join(f"{a.name} ({a.kind})" for a in self.actuators)
+        return f"ActuatorSet({kinds})"
+
+    @property
+    def fixed(self) -> bool:
+        """Whether every actuator has a fixed direction (no azimuths)."""
+        return all(isinstance(a, Propeller) for a in self.actuators)
+
+    # ---- forces ----------------------------------------------------------------------------
+    def forces(self, states: ArrayLike) -> NDArray[np.float64]:
+        """Body forces ``(F_x, F_y)`` (N) of every actuator, shape (..., n_actuators, 2)."""
+        s = self.check_states(states)
+        out = [
+            np.stack(a.force(s[..., sl]), -1)
+            for a, sl in zip(self.actuators, self.slices, strict=True)
+        ]
+        return np.stack(out, -2)
+
+    def thrust(self, states: ArrayLike) -> NDArray[np.float64]:
+        """Signed thrust (N) of every actuator, shape (..., n_actuators)."""
+        s = self.check_states(states)
+        return np.stack(
+            [
+                np.asarray(a.thrust(s[..., sl]))
+                for a, sl in zip(self.actuators, self.slices, strict=True)
+            ],
+            -1,
+        )
+
+    def tau(self, states: ArrayLike) -> NDArray[np.float64]:
+        """Generalised body force (..., dofs): ``[X, Y, N]`` or ``[X, Y, K, N]`` (N, N m)."""
+        f = self.forces(states)
+        pos = np.array([a.position for a in self.actuators])
+        fx, fy = f[..., 0], f[..., 1]
+        X = fx.sum(-1)
+        Y = fy.sum(-1)
+        N = (pos[:, 0] * fy - pos[:, 1] * fx).sum(-1)
+        if self.dofs == 3:
+            return np.stack([X, Y, N], -1)
+        K = (-pos[:, 2] * fy).sum(-1)
+        return np.stack([X, Y, K, N], -1)
+
+    def configuration_matrix(self) -> NDArray[np.float64]:
+        """``B`` (dofs, n_actuators) of the fixed-direction actuators: ``tau = B F``.
+
+        Raises:
+            ValueError: the set holds an azimuth (its column depends on the angle).
+        """
+        if not self.fixed:
+            raise ValueError("configuration_matrix needs fixed-direction actuators only")
+        cols = []
+        for a in self.actuators:
+            c, s = a.direction  # type: ignore[attr-defined]
+            x, y, z = a.position
+            col = [c, s, x * s - y * c] if self.dofs == 3 else [c, s, -z * s, x * s - y * c]
+            cols.append(col)
+        return np.array(cols).T
+
+    def capacity(self) -> NDArray[np.float64]:
+        """Largest ``|tau_i|`` per DOF with every actuator helping (N, N m), shape (dofs,).
+
+        Each DOF on its own (the others free): the sum over actuators of the largest
+        contribution; the scale of integral clamps and guidance limits.
+        """
+        out = np.zeros(self.dofs)
+        for a in self.actuators:
+            x, y, z = a.position
+            F = a.max_thrust
+            if isinstance(a, Propeller):
+                c, s = a.direction
+                col = np.abs([c, s, x * s - y * c] if self.dofs == 3 else
+                             [c, s, z * s, x * s - y * c])  # fmt: skip
+                out += F * col
+            else:  # azimuth: any direction
+                r = math.hypot(x, y)
+                col = [1.0, 1.0, r] if self.dofs == 3 else [1.0, 1.0, abs(z), r]
+                out += F * np.asarray(col)
+        return out
+
+    # ---- commands and actions --------------------------------------------------------------
+    def check_states(self, states: ArrayLike, what: str = "actuator states") -> NDArray[Any]:
+        """``states`` as a float array (..., n_channels); ``ValueError`` on shape or NaN."""
+        a = np.asarray(states, dtype=float)
+        if a.ndim == 0 or a.shape[-1] != self.n_channels:
+            raise ValueError(
+                f"{what} must have shape (..., {self.n_channels}) "
+                f"({', '.join(self.channel_names)}),"
+                f" got {a.shape}"
+            )
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{what} contain NaN or infinite values: {a}")
+        return a
+
+    def clip(self, command: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Commands clipped to their ranges and the flags of those clipped."""
+        c = self.check_states(command, "command")
+        out = np.clip(c, self.lower, self.upper)
+        return out, out != c
+
+    def action_to_command(self, action: ArrayLike) -> NDArray[np.float64]:
+        """Normalised action (..., n_channels) in ``[-1, 1]`` -> physical command.
+
+        A range around zero is scaled on each side separately (``a >= 0 -> a upper``,
+        ``a < 0 -> a |lower|``), so 0 is "off" and +-1 the range ends; a range that does not
+        contain zero (``lower >= 0``) is mapped affinely (-1 -> lower, 1 -> upper).
+        """
+        a = np.asarray(action, dtype=float)
+        if a.shape == (self.n_channels,):  # one action per control step: plain floats
+            out = []
+            for v, lo, hi in zip(a.tolist(), self._lo, self._hi, strict=True):
+                if lo < 0.0:
+                    out.append(v * hi if v >= 0.0 else v * -lo)
+                else:
+                    out.append(lo + 0.5 * (v + 1.0) * (hi - lo))
+            return np.array(out)
+        lo, hi = self.lower, self.upper
+        two = np.where(a >= 0.0, a * hi, a * -lo)
+        return np.where(lo < 0.0, two, lo + 0.5 * (a + 1.0) * (hi - lo))
+
+    def command_to_action(self, command: ArrayLike) -> NDArray[np.float64]:
+        """Physical command -> normalised action (the inverse of :meth:`action_to_command`)."""
+        c = np.asarray(command, dtype=float)
+        if c.shape == (self.n_channels,):
+            out = []
+            for v, lo, hi in zip(c.tolist(), self._lo, self._hi, strict=True):
+                if lo < 0.0:
+                    out.append(v / hi if v >= 0.0 else v / -lo)
+                else:
+                    out.append(2.0 * (v - lo) / (hi - lo) - 1.0)
+            return np.array(out)
+        lo, hi = self.lower, self.upper
+        two = np.where(c >= 0.0, c / hi, c / np.where(lo < 0, -lo, 1.0))
+        return np.where(lo < 0.0, two, 2.0 * (c - lo) / (hi - lo) - 1.0)
+
+    # ---- hot path --------------------------------------------------------------------------
+    def kernel(
+        self, gain: Any = None, gear: Any = None
+    ) -> Callable[[list[float]], tuple[float, float, float, float, float]]:
+        """``f(states) -> (X, Y, K, N, M_z)`` on plain floats (the physics step).
+
+        ``M_z = sum z_i F_x,i`` is the moment about the body y axis of the thrusts, which a
+        rolled hull's yaw hinge feels (:mod:`shipgym.envs.physics`); ``K`` and ``M_z`` are
+        returned as 0 for a 3-DOF set.
+
+        Args:
+            gain: optional (n_channels, >=1) array; ``gain[i, 0]`` receives ``F / a`` of every
+                channel whose gain depends on its state (MuJoCo's ``actuator_gainprm``).
+            gear: optional (n_channels, >=2) array; ``gear[i, :2]`` receives the force
+                direction of every azimuth's thrust channel (MuJoCo's ``actuator_gear``).
+        """
+        static = []  # linear law, one constant: MuJoCo's gain is fixed
+        varying = []  # quadratic law or different ahead/astern constants: gain refreshed
+        azim = []
+        i = 0
+        for a in self.actuators:
+            x, y, z = a.position
+            if isinstance(a, Propeller):
+                c, s = a.direction
+                arms = (c, s, x * s - y * c, -z * s, z * c)
+                if a.static_gain is not None:
+                    static.append((i, a.k_ahead, *arms))
+                else:
+                    varying.append((i, a.k_ahead, a.k_astern, a.law == "quadratic", *arms))
+            else:
+                assert isinstance(a, Azimuth)
+                azim.append((i, a.max_thrust_n, x, y, z))
+            i += len(a.channels)
+        static_t, varying_t, azim_t = tuple(static), tuple(varying), tuple(azim)
+        cos, sin = math.cos, math.sin
+        four = self.dofs == 4
+        write = gain is not None
+        turn = gear is not None
+
+        def tau_of(st: list[float]) -> tuple[float, float, float, float, float]:
+            X = Y = K = N = Mz = 0.0
+            for j, kp, kn, quad, c, s, mn, mk, mz in varying_t:
+                a = st[j]
+                g = kp if a >= 0.0 else kn
+                if quad:  # k |a| a, rounded as (k |a|) a (Tomera 2014 eq. 8)
+                    g *= abs(a)
+                f = g * a
+                if write:
+                    gain[j, 0] = g
+                X += c * f
+                Y += s * f
+                N += mn * f
+                K += mk * f
+                Mz += mz * f
+            for j, k, c, s, mn, mk, mz in static_t:
+                f = k * st[j]
+                X += c * f
+                Y += s * f
+                N += mn * f
+                K += mk * f
+                Mz += mz * f
+            for j, fm, x, y, z in azim_t:
+                f = fm * st[j]
+                ca, sa = cos(st[j + 1]), sin(st[j + 1])
+                if turn:
+                    gear[j, 0] = ca
+                    gear[j, 1] = sa
+                fx, fy = f * ca, f * sa
+                X += fx
+                Y += fy
+                N += x * fy - y * fx
+                K -= z * fy
+                Mz += z * fx
+            return X, Y, K, N, Mz
+
+        if four:
+            return tau_of
+        # 3 DOF: the same sums without K and M_z (the hot path of every planar vessel)
+        v3 = tuple(t[:7] for t in varying_t)
+        s3 = tuple(t[:5] for t in static_t)
+        a3 = tuple(t[:4] for t in azim_t)
+
+        def tau_of3(st: list[float]) -> tuple[float, float, float, float, float]:
+            X = Y = N = 0.0
+            for j, kp, kn, quad, c, s, mn in v3:
+                a = st[j]
+                g = kp if a >= 0.0 else kn
+                if quad:
+                    g *= abs(a)
+                f = g * a
+                if write:
+                    gain[j, 0] = g
+                X += c * f
+                Y += s * f
+                N += mn * f
+            for j, k, c, s, mn in s3:
+                f = k * st[j]
+                X += c * f
+                Y += s * f
+                N += mn * f
+            for j, fm, x, y in a3:
+                f = fm * st[j]
+                ca, sa = cos(st[j + 1]), sin(st[j + 1])
+                if turn:
+                    gear[j, 0] = ca
+                    gear[j, 1] = sa
+                fx, fy = f * ca, f * sa
+                X += fx
+                Y += fy
+                N += x * fy - y * fx
+            return X, Y, 0.0, N, 0.0
+
+        return tau_of3

@@ -1,0 +1,145 @@
+r"""A 4-DOF (surge, sway, roll, yaw) hull: ``M nu_dot + D(nu_r) nu_r + g(eta) = tau``.
+
+State in Fossen (2011, ch. 7.? "4-DOF models") notation: ``eta = [x, y, phi, psi]``,
+``nu = [u, v, p, r]``; kinematics (pitch and heave neglected)
+
+.. math::
+
+    \dot x = u\cos\psi - v\cos\phi\sin\psi,\quad
+    \dot y = u\sin\psi + v\cos\phi\cos\psi,\quad
+    \dot\phi = p,\quad \dot\psi = r\cos\phi,
+
+restoring moment in roll ``g_K = K_phi phi`` (``K_phi = rho g nabla GM_T``, N m/rad, the
+small-angle form), damping ``D(nu_r) = D_L + diag(d_quad |nu_r|)``, ``nu_r = nu - nu_c`` with
+``nu_c = [u_c, v_c, 0, 0]``. Linear in everything but the quadratic damping: the family of the
+Van der Klugt (1987) sway-roll-yaw models and of linearised naval hulls (Blanke &
+Christensen 1993). No Coriolis terms (``coriolis=False``): the models of this family are
+linearised about a forward speed, where those terms are already in ``D_L``.
+
+As for :class:`~shipgym.dynamics.model.PlantModel`, a batched matrix form (:meth:`nu_dot`)
+serves the reference integrator and tests, and an expanded scalar kernel (:attr:`accel`) the
+physics step; a test checks one against the other.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["Hull4"]
+
+Mat4 = tuple[tuple[float, ...], ...]
+
+
+def _mat4(name: str, a: ArrayLike) -> Mat4:
+    arr = np.asarray(a, dtype=float)
+    if arr.shape != (4, 4) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be a finite 4x4 matrix, got shape {arr.shape}")
+    return tuple(tuple(float(x) for x in row) for row in arr)
+
+
+@dataclass(frozen=True)
+class Hull4:
+    """A linear 4-DOF hull with quadratic damping and a roll restoring moment.
+
+    Attributes:
+        name: variant name.
+        M: total inertia ``M_RB + M_A`` (kg, kg m, kg m^2), 4x4, order (u, v, p, r).
+        D_L: linear damping, 4x4 (N s/m, N s, N m s).
+        K_phi: roll restoring coefficient (N m/rad), > 0 for a stable hull.
+        d_quad: quadratic damping magnitudes (4,), >= 0.
+        m: rigid-body mass (kg), for the MuJoCo body.
+    """
+
+    name: str
+    M: Mat4
+    D_L: Mat4
+    K_phi: float
+    d_quad: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    m: float = 0.0
+    dofs: int = field(default=4, init=False)
+    _k: Any = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "M", _mat4("M", self.M))
+        object.__setattr__(self, "D_L", _mat4("D_L", self.D_L))
+        dq = tuple(float(x) for x in self.d_quad)
+        if len(dq) != 4 or not all(np.isfinite(dq)) or min(dq) < 0:
+            raise ValueError(f"d_quad must be four finite values >= 0, got {self.d_quad!r}")
+        object.__setattr__(self, "d_quad", dq)
+        if not (np.isfinite(self.K_phi) and self.K_phi > 0):
+            raise ValueError(f"K_phi must be > 0 (N m/rad), got {self.K_phi!r}")
+        M = np.asarray(self.M)
+        if not np.all(np.diag(M) > 0):
+            raise ValueError(f"hull {self.name!r}: the diagonal of M must be > 0: {M}")
+        if not np.linalg.cond(M) < 1e12:
+            raise ValueError(f"hull {self.name!r}: M is singular: {M}")
+        object.__setattr__(self, "_k", _kernel(self, np.linalg.inv(M)))
+
+    def mass_matrix(self) -> NDArray[np.float64]:
+        """``M`` (4, 4)."""
+        return np.array(self.M)
+
+    def nu_dot(
+        self,
+        nu: ArrayLike,
+        tau: ArrayLike,
+        nu_c: ArrayLike | None = None,
+        phi: ArrayLike = 0.0,
+    ) -> NDArray[np.float64]:
+        """Body acceleration (..., 4) by a linear solve (the matrix form).
+
+        Args:
+            nu: ``[u, v, p, r]`` (m/s, m/s, rad/s, rad/s), shape (..., 4).
+            tau: ``[X, Y, K, N]`` (N, N, N m, N m), shape (..., 4).
+            nu_c: current in the body frame ``[u_c, v_c]`` or ``[u_c, v_c, 0, 0]`` (m/s).
+            phi: roll angle (rad).
+        """
+        nu = np.asarray(nu, dtype=float)
+        tau = np.asarray(tau, dtype=float)
+        nc = np.zeros(4)
+        if nu_c is not None:
+            c = np.asarray(nu_c, dtype=float)
+            nc = np.concatenate([c[..., :2], np.zeros(c.shape[:-1] + (2,))], -1)
+        nu_r = nu - nc
+        D = np.asarray(self.D_L)
+        damp = np.einsum("ij,...j->...i", D, nu_r) + np.asarray(self.d_quad) * np.abs(nu_r) * nu_r
+        g = np.zeros(nu.shape)
+        g[..., 2] = self.K_phi * np.asarray(phi, dtype=float)
+        rhs = tau - damp - g
+        return np.linalg.solve(np.asarray(self.M), rhs[..., None])[..., 0]
+
+    @property
+    def accel(self) -> Callable[..., tuple[Any, Any, Any, Any]]:
+        """``accel(u, v, p, r, phi, X, Y, K, N, u_c=0, v_c=0) -> (u_dot, v_dot, p_dot, r_dot)``."""
+        return self._k
+
+
+def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any, Any]]:
+    D = h.D_L
+    q1, q2, q3, q4 = h.d_quad
+    kphi = h.K_phi
+    (i11, i12, i13, i14), (i21, i22, i23, i24), (i31, i32, i33, i34), (i41, i42, i43, i44) = (
+        tuple(map(float, r)) for r in Mi
+    )
+    (d11, d12, d13, d14), (d21, d22, d23, d24), (d31, d32, d33, d34), (d41, d42, d43, d44) = D
+
+    def accel(u, v, p, r, phi, X, Y, K, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
+        ur = u - u_c
+        vr = v - v_c
+        f1 = X - (d11 * ur + d12 * vr + d13 * p + d14 * r + q1 * abs(ur) * ur)
+        f2 = Y - (d21 * ur + d22 * vr + d23 * p + d24 * r + q2 * abs(vr) * vr)
+        f3 = K - (d31 * ur + d32 * vr + d33 * p + d34 * r + q3 * abs(p) * p) - kphi * phi
+        f4 = N - (d41 * ur + d42 * vr + d43 * p + d44 * r + q4 * abs(r) * r)
+        return (
+            i11 * f1 + i12 * f2 + i13 * f3 + i14 * f4,
+            i21 * f1 + i22 * f2 + i23 * f3 + i24 * f4,
+            i31 * f1 + i32 * f2 + i33 * f3 + i34 * f4,
+            i41 * f1 + i42 * f2 + i43 * f3 + i44 * f4,
+        )
+
+    return accel

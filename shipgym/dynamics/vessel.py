@@ -1,0 +1,557 @@
+"""Vessels as data packages: :class:`Vessel`, :func:`load_vessel` and the registry.
+
+A vessel package is a folder (as a robot in MuJoCo Menagerie) holding
+
+- ``vessel.toml``: hull model family and matrices, windage, actuators, the design model for
+  control and observers, guidance limits, model scale; every number either plain or as
+  ``{ value = ..., unit = "...", source = "..." }`` (the unit is checked against the key's);
+- ``vessel.xml``: the MJCF hull body (geometry only: the inertia, joints, thruster sites and
+  actuators are generated from ``vessel.toml`` when the scene is built, so they exist once);
+- ``README.md``: the source of every number.
+
+The packaged vessels live in ``shipgym/assets/mjcf/<name>/`` (:func:`vessels` lists them); a
+user's package anywhere on disk loads with ``load_vessel(path)`` (or ``vessel=PATH`` in the
+environments). Validation happens on load: unknown keys, missing values, wrong units,
+non-positive masses, a singular mass matrix, actuators outside the hull: each raises
+:class:`VesselError` naming the file and the key. This module never imports MuJoCo.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .actuators import ActuatorSet, Azimuth, Propeller
+from .hull4 import Hull4
+from .model import PlantModel, plant_model
+from .params import HullParameters, WindageParameters
+
+__all__ = [
+    "DesignModel",
+    "Vessel",
+    "VesselError",
+    "load_vessel",
+    "vessel_names",
+    "vessels",
+]
+
+#: the folder of the packaged vessel packages (one sub-folder per vessel; ``worlds`` is not one)
+_ASSET_DIR = Path(__file__).resolve().parent.parent / "assets" / "mjcf"
+
+
+class VesselError(ValueError):
+    """A vessel package is invalid; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class DesignModel:
+    """The linear planar model ``M nu_dot + D_L nu = tau`` that controllers and observers use.
+
+    Attributes:
+        M: inertia incl. added mass (3, 3) (kg, kg m, kg m^2), surge-sway-yaw.
+        D_L: linear damping (3, 3) (N s/m, N s, N m s).
+        source: where it comes from.
+    """
+
+    M: NDArray[np.float64]
+    D_L: NDArray[np.float64]
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        for nm in ("M", "D_L"):
+            a = np.array(getattr(self, nm), dtype=float)
+            a.setflags(write=False)
+            object.__setattr__(self, nm, a)
+
+
+@dataclass(frozen=True)
+class Vessel:
+    """A ship: hull model(s), actuators, windage, design model, limits; loaded from a package.
+
+    Attributes:
+        name: registry name (``"blue-lady"``).
+        title: human-readable name.
+        folder: the package folder (``vessel.toml``, ``vessel.xml``, ``README.md``).
+        dofs: 3 (surge, sway, yaw) or 4 (surge, sway, roll, yaw).
+        scale: model scale ``lambda`` (1: full scale; 24: a 1:24 model).
+        hull: the hull parameters (:class:`HullParameters` for the ``fossen3`` family, with
+            the dimensions ``L_oa``, ``L_pp``, ``B``, ``T``) or the 4-DOF parameters.
+        plants: plant variants by name (``"default"`` first), each a
+            :class:`~shipgym.dynamics.model.PlantModel` or :class:`~shipgym.dynamics.hull4.Hull4`.
+        actuators: the :class:`~shipgym.dynamics.actuators.ActuatorSet`.
+        windage: projected wind areas and the Blendermann (1994) ship type.
+        design: the :class:`DesignModel` of the controllers and observers.
+        limits: guidance limits (a mapping of :class:`~shipgym.guidance.Limits` fields).
+        control: controller settings (``bandwidth`` rad/s per DOF, ``zeta``, preset names).
+        observer: kinematic KF settings (``accel_psd_xy`` m^2/s^3, ``accel_psd_psi``).
+        nominal_wind: the wind (m/s) the vessel's default tasks use.
+        rigid_inertia: ``(m, I_x, I_z)`` of the MuJoCo body (kg, kg m^2).
+        sources: ``key -> (unit, source)`` for every value given with a source.
+    """
+
+    name: str
+    title: str
+    folder: Path
+    dofs: int
+    scale: float
+    hull: Any
+    plants: Mapping[str, Any]
+    actuators: ActuatorSet
+    windage: WindageParameters
+    design: DesignModel
+    limits: Mapping[str, float]
+    control: Mapping[str, Any]
+    observer: Mapping[str, float]
+    nominal_wind: float
+    rigid_inertia: tuple[float, float, float]
+    dimensions: tuple[float, float, float, float]
+    sources: Mapping[str, tuple[str, str]] = field(default_factory=dict, repr=False)
+
+    @property
+    def body_xml(self) -> Path:
+        """The MJCF hull body (``vessel.xml``)."""
+        return self.folder / "vessel.xml"
+
+    @property
+    def L_oa(self) -> float:
+        """Length over all (m)."""
+        return self.dimensions[0]
+
+    @property
+    def L_pp(self) -> float:
+        """Length between perpendiculars (m)."""
+        return self.dimensions[1]
+
+    @property
+    def B(self) -> float:
+        """Beam (m)."""
+        return self.dimensions[2]
+
+    @property
+    def T(self) -> float:
+        """Draught (m)."""
+        return self.dimensions[3]
+
+    @property
+    def fits_harbour(self) -> bool:
+        """Whether the hull fits the harbour basin (built for the 13.8 m x 2.4 m Blue Lady)."""
+        return self.L_oa <= 14.0 and self.B <= 2.5
+
+    def plant(self, name: str = "default", **options: bool) -> Any:
+        """A plant variant by name (``options`` for the ``fossen3`` default only).
+
+        Raises:
+            ValueError: unknown name or option (the message lists the valid ones).
+        """
+        if name not in self.plants:
+            raise ValueError(
+                f"unknown plant variant {name!r} for vessel {self.name!r}; choose one of: "
+                f"{', '.join(self.plants)}"
+            )
+        if options:
+            if name != "default" or not isinstance(self.hull, HullParameters):
+                raise ValueError(f"plant {name!r} of {self.name!r} takes no options")
+            return plant_model("default", self.hull, **options)
+        return self.plants[name]
+
+    def __repr__(self) -> str:
+        return (
+            f"Vessel({self.name!r}, {self.dofs} DOF, L_oa {self.L_oa:g} m, "
+            f"{len(self.actuators)} actuators: {', '.join(self.actuators.names)})"
+        )
+
+
+# ---- reading ---------------------------------------------------------------------------------
+_UNITS_HULL3 = {f.name: f.metadata.get("unit", "") for f in fields(HullParameters)}
+_UNITS_WINDAGE = {f.name: f.metadata.get("unit", "") for f in fields(WindageParameters)}
+
+
+class _Reader:
+    """Reads values from the TOML tables, recording units and sources; errors name the key."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.sources: dict[str, tuple[str, str]] = {}
+
+    def fail(self, key: str, msg: str) -> VesselError:
+        return VesselError(f"{self.path}: {key}: {msg}")
+
+    def table(self, data: Mapping[str, Any], key: str, *, required: bool = True) -> dict[str, Any]:
+        sub = data.get(key.rsplit(".", 1)[-1])
+        if sub is None:
+            if required:
+                raise self.fail(key, "missing table")
+            return {}
+        if not isinstance(sub, Mapping):
+            raise self.fail(key, f"must be a table, got {type(sub).__name__}")
+        return dict(sub)
+
+    def keys(self, t: Mapping[str, Any], where: str, allowed: set[str]) -> None:
+        bad = sorted(set(t) - allowed)
+        if bad:
+            raise self.fail(
+                f"{where}.{bad[0]}", f"unknown key; valid keys are: {', '.join(sorted(allowed))}"
+            )
+
+    def value(self, t: Mapping[str, Any], key: str, where: str, unit: str | None = None,
+              default: Any = ...) -> Any:  # fmt: skip
+        full = f"{where}.{key}"
+        if key not in t:
+            if default is ...:
+                raise self.fail(full, "missing value" + (f" ({unit})" if unit else ""))
+            return default
+        v = t[key]
+        if isinstance(v, Mapping):
+            extra = sorted(set(v) - {"value", "unit", "source"})
+            if extra or "value" not in v:
+                raise self.fail(full, "a table value needs 'value' (and optional 'unit', 'source')")
+            given = v.get("unit")
+            if given is not None and unit is not None and given != unit:
+                raise self.fail(full, f"unit must be {unit!r}, got {given!r}")
+            self.sources[full] = (str(given or unit or ""), str(v.get("source", "")))
+            v = v["value"]
+        return v
+
+    def number(self, t: Mapping[str, Any], key: str, where: str, unit: str | None = None,
+               default: Any = ..., positive: bool = False) -> float:  # fmt: skip
+        v = self.value(t, key, where, unit, default)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise self.fail(f"{where}.{key}", f"must be a finite number ({unit}), got {v!r}")
+        if positive and not v > 0:
+            raise self.fail(f"{where}.{key}", f"must be > 0 ({unit}), got {v!r}")
+        return float(v)
+
+    def matrix(self, t: Mapping[str, Any], key: str, where: str, n: int, unit: str = "") -> NDArray:
+        v = self.value(t, key, where, unit or None)
+        try:
+            a = np.array(v, dtype=float)
+        except (TypeError, ValueError):
+            raise self.fail(f"{where}.{key}", f"must be a {n}x{n} matrix of numbers") from None
+        if a.shape != (n, n) or not np.all(np.isfinite(a)):
+            raise self.fail(f"{where}.{key}", f"must be a finite {n}x{n} matrix, got {a.shape}")
+        return a
+
+    def vector(self, t: Mapping[str, Any], key: str, where: str, n: int, unit: str = "",
+               default: Any = ...) -> tuple[float, ...]:  # fmt: skip
+        v = self.value(t, key, where, unit or None, default)
+        try:
+            a = np.array(v, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise self.fail(f"{where}.{key}", f"must be {n} numbers") from None
+        if a.shape != (n,) or not np.all(np.isfinite(a)):
+            raise self.fail(f"{where}.{key}", f"must be {n} finite numbers ({unit}), got {v!r}")
+        return tuple(float(x) for x in a)
+
+    def string(self, t: Mapping[str, Any], key: str, where: str, default: Any = ...) -> str:
+        v = self.value(t, key, where, None, default)
+        if not isinstance(v, str):
+            raise self.fail(f"{where}.{key}", f"must be a string, got {v!r}")
+        return v
+
+
+def _check_mass_matrix(r: _Reader, M: NDArray, key: str) -> None:
+    if not np.all(np.diag(M) > 0):
+        raise r.fail(key, f"the mass matrix needs a positive diagonal, got {np.diag(M).tolist()}")
+    if not np.linalg.cond(M) < 1e12:
+        raise r.fail(key, f"the mass matrix is singular: {M.tolist()}")
+
+
+def _read_hull(r: _Reader, data: Mapping[str, Any], dofs: int) -> tuple[Any, dict[str, Any]]:
+    t = r.table(data, "hull")
+    family = r.string(t, "family", "hull")
+    if family == "fossen3":
+        if dofs != 3:
+            raise r.fail("hull.family", "'fossen3' is a 3-DOF family; use 'linear4' for 4 DOF")
+        r.keys(t, "hull", {"family", *_UNITS_HULL3})
+        vals: dict[str, Any] = {
+            "name": str(data.get("vessel", {}).get("title", r.path.parent.name))
+        }
+        for k, unit in _UNITS_HULL3.items():
+            if k == "name":
+                continue
+            vals[k] = r.number(t, k, "hull", unit)
+        for k in ("m", "I_z", "L_oa", "L_pp", "B", "T"):
+            if not vals[k] > 0:
+                raise r.fail(f"hull.{k}", f"must be > 0 ({_UNITS_HULL3[k]}), got {vals[k]!r}")
+        try:
+            hull = HullParameters(**vals)
+            default = plant_model("default", hull)
+        except ValueError as exc:
+            raise r.fail("hull", str(exc)) from None
+        _check_mass_matrix(r, default.mass_matrix(), "hull (M = M_RB + M_A)")
+        return hull, {"default": default}
+    if family == "linear4":
+        if dofs != 4:
+            raise r.fail("hull.family", "'linear4' is a 4-DOF family: set vessel.dofs = 4")
+        keys = {"family", "M", "D_L", "K_phi", "d_quad", "m", "I_x", "I_z", "L_oa", "L_pp", "B",
+                "T"}  # fmt: skip
+        r.keys(t, "hull", keys)
+        M = r.matrix(t, "M", "hull", 4)
+        _check_mass_matrix(r, M, "hull.M")
+        D = r.matrix(t, "D_L", "hull", 4)
+        vals = {k: r.number(t, k, "hull", u, positive=True) for k, u in (
+            ("K_phi", "N m/rad"), ("m", "kg"), ("I_x", "kg m^2"), ("I_z", "kg m^2"),
+            ("L_oa", "m"), ("L_pp", "m"), ("B", "m"), ("T", "m"))}  # fmt: skip
+        dq = r.vector(t, "d_quad", "hull", 4, default=(0.0, 0.0, 0.0, 0.0))
+        if min(dq) < 0:
+            raise r.fail("hull.d_quad", f"must be >= 0, got {dq}")
+        hull = Hull4("default", M, D, vals["K_phi"], dq, vals["m"])
+        hull_info = dict(vals)
+        return _Dims4(hull_info), {"default": hull}
+    raise r.fail("hull.family", f"unknown hull family {family!r}; choose 'fossen3' or 'linear4'")
+
+
+@dataclass(frozen=True)
+class _Dims4:
+    """The dimensions and rigid inertia of a 4-DOF hull package (``hull`` of a ``linear4``)."""
+
+    values: Mapping[str, float]
+
+    def __getattr__(self, name: str) -> float:
+        try:
+            return self.values[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+
+def _read_plants(r: _Reader, data: Mapping[str, Any], hull: Any, plants: dict[str, Any]) -> None:
+    extra = r.table(data, "plants", required=False)
+    for name, t in extra.items():
+        where = f"plants.{name}"
+        if not isinstance(t, Mapping):
+            raise r.fail(where, "must be a table")
+        family = r.string(t, "family", where)
+        if family != "linear3" or not isinstance(hull, HullParameters):
+            raise r.fail(f"{where}.family", "extra plant variants must be 'linear3' (3 DOF)")
+        r.keys(t, where, {"family", "M", "D_L"})
+        M = r.matrix(t, "M", where, 3)
+        _check_mass_matrix(r, M, f"{where}.M")
+        D = r.matrix(t, "D_L", where, 3)
+        M_RB = np.diag([hull.m, hull.m, M[2, 2]])
+        plants[name] = PlantModel(name, M_RB, M - M_RB, D, (0.0, 0.0, 0.0), False, hull.m, 0.0)
+
+
+def _read_actuators(
+    r: _Reader, data: Mapping[str, Any], dofs: int, dims: tuple[float, float, float, float]
+) -> ActuatorSet:
+    items = data.get("actuator")
+    if not isinstance(items, list) or not items:
+        raise r.fail("actuator", "missing: give one [[actuator]] table per actuator")
+    L_oa, _, B, T = dims
+    out = []
+    common = {"name", "kind", "position", "time_constant", "colour"}
+    for i, t in enumerate(items):
+        where = f"actuator[{i}]"
+        if not isinstance(t, Mapping):
+            raise r.fail(where, "must be a table")
+        name = r.string(t, "name", where)
+        where = f"actuator.{name}"
+        kind = r.string(t, "kind", where)
+        pos = r.vector(t, "position", where, 3, "m")
+        x, y, z = pos
+        if abs(x) > 0.5 * L_oa * 1.02 or abs(y) > 0.5 * B * 1.02 or abs(z) > 2.0 * T:
+            raise r.fail(
+                f"{where}.position",
+                f"[{x:g}, {y:g}, {z:g}] m lies outside the hull (|x| <= L_oa/2 = {0.5 * L_oa:g}, "
+                f"|y| <= B/2 = {0.5 * B:g}, |z| <= 2 T = {2 * T:g} m from the centre of gravity)",
+            )
+        tc = r.number(t, "time_constant", where, "s", positive=True)
+        colour = r.string(t, "colour", where, "#1f77b4")
+        try:
+            if kind in ("propeller", "tunnel"):
+                r.keys(t, where, common | {"law", "k_ahead", "k_astern", "k", "unit", "range",
+                                           "alpha_deg"})  # fmt: skip
+                unit = r.string(t, "unit", where, "1")
+                law = r.string(t, "law", where, "linear")
+                ku = {"linear": f"N/{unit}", "quadratic": f"N/{unit}^2"}.get(law, "")
+                if unit == "1":
+                    ku = "N"
+                if "k" in t:
+                    k = r.number(t, "k", where, ku, positive=True)
+                    ka = kb = k
+                else:
+                    ka = r.number(t, "k_ahead", where, ku, positive=True)
+                    kb = r.number(t, "k_astern", where, ku, positive=True)
+                lo, hi = r.vector(t, "range", where, 2, unit, default=(-1.0, 1.0))
+                alpha = r.number(t, "alpha_deg", where, "deg",
+                                 default=90.0 if kind == "tunnel" else 0.0)  # fmt: skip
+                out.append(Propeller(
+                    name=name, position=pos, alpha=math.radians(alpha), law=law, k_ahead=ka,
+                    k_astern=kb, lower=lo, upper=hi, unit=unit, time_constant=tc, colour=colour,
+                    tunnel=kind == "tunnel"))  # fmt: skip
+            elif kind == "azimuth":
+                r.keys(t, where, common | {"max_thrust", "reversible", "max_rate_deg",
+                                           "angle0_deg"})  # fmt: skip
+                rev = r.value(t, "reversible", where, None, True)
+                if not isinstance(rev, bool):
+                    raise r.fail(f"{where}.reversible", f"must be true or false, got {rev!r}")
+                out.append(Azimuth(
+                    name=name, position=pos,
+                    max_thrust_n=r.number(t, "max_thrust", where, "N", positive=True),
+                    lower=-1.0 if rev else 0.0, time_constant=tc,
+                    max_rate=math.radians(r.number(t, "max_rate_deg", where, "deg/s",
+                                                   positive=True)),
+                    angle0=math.radians(r.number(t, "angle0_deg", where, "deg", default=0.0)),
+                    colour=colour))  # fmt: skip
+            else:
+                raise r.fail(
+                    f"{where}.kind",
+                    f"unknown actuator kind {kind!r}; choose propeller, tunnel, azimuth",
+                )
+        except ValueError as exc:
+            if isinstance(exc, VesselError):
+                raise
+            raise r.fail(where, str(exc)) from None
+    try:
+        return ActuatorSet(out, dofs)
+    except ValueError as exc:
+        raise r.fail("actuator", str(exc)) from None
+
+
+_LIMIT_KEYS = {
+    "surge_speed": "m/s", "surge_accel": "m/s^2", "surge_astern_speed": "m/s",
+    "surge_astern_accel": "m/s^2", "sway_speed": "m/s", "sway_accel": "m/s^2",
+    "yaw_rate": "rad/s", "yaw_accel": "rad/s^2",
+}  # fmt: skip
+
+
+def _read(path: Path) -> Vessel:
+    toml_path = path / "vessel.toml"
+    r = _Reader(toml_path)
+    if not toml_path.is_file():
+        raise VesselError(f"{path}: not a vessel package (no vessel.toml)")
+    try:
+        with toml_path.open("rb") as fh:
+            data = tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise VesselError(f"{toml_path}: not valid TOML: {exc}") from None
+    top = {"vessel", "hull", "plants", "design", "windage", "actuator", "limits", "control",
+           "observer"}  # fmt: skip
+    r.keys(data, "(top level)", top)
+    v = r.table(data, "vessel")
+    r.keys(v, "vessel", {"name", "title", "dofs", "scale", "nominal_wind"})
+    name = r.string(v, "name", "vessel")
+    title = r.string(v, "title", "vessel", name)
+    dofs = r.value(v, "dofs", "vessel", None, 3)
+    if dofs not in (3, 4) or isinstance(dofs, bool):
+        raise r.fail("vessel.dofs", f"must be 3 (surge, sway, yaw) or 4 (+ roll), got {dofs!r}")
+    scale = r.number(v, "scale", "vessel", "1", 1.0, positive=True)
+    nominal_wind = r.number(v, "nominal_wind", "vessel", "m/s", positive=True)
+    hull, plants = _read_hull(r, data, int(dofs))
+    dims = (hull.L_oa, hull.L_pp, hull.B, hull.T)
+    if isinstance(hull, HullParameters):
+        rigid = (hull.m, hull.I_z, hull.I_z)
+    else:
+        rigid = (hull.m, hull.I_x, hull.I_z)
+        if not hull.I_x <= 2 * hull.I_z:
+            raise r.fail("hull.I_x", "a rigid body needs I_x <= I_y + I_z = 2 I_z")
+    _read_plants(r, data, hull, plants)
+    d = r.table(data, "design")
+    r.keys(d, "design", {"M", "D_L", "source"})
+    M = r.matrix(d, "M", "design", 3)
+    _check_mass_matrix(r, M, "design.M")
+    design = DesignModel(M, r.matrix(d, "D_L", "design", 3), r.string(d, "source", "design", ""))
+    w = r.table(data, "windage")
+    r.keys(w, "windage", set(_UNITS_WINDAGE))
+    try:
+        windage = WindageParameters(**{
+            k: r.string(w, k, "windage", WindageParameters.coefficients) if k == "coefficients"
+            else r.number(w, k, "windage", u, getattr(WindageParameters, k, ...))
+            for k, u in _UNITS_WINDAGE.items()})  # fmt: skip
+    except ValueError as exc:
+        if isinstance(exc, VesselError):
+            raise
+        raise r.fail("windage", str(exc)) from None
+    actuators = _read_actuators(r, data, int(dofs), dims)
+    lim = r.table(data, "limits", required=False)
+    r.keys(lim, "limits", set(_LIMIT_KEYS))
+    limits = {k: r.number(lim, k, "limits", _LIMIT_KEYS[k], positive=True) for k in lim}
+    c = r.table(data, "control", required=False)
+    r.keys(c, "control", {"bandwidth", "zeta", "pid_presets", "sensors"})
+    control: dict[str, Any] = {
+        "bandwidth": r.vector(c, "bandwidth", "control", 3, "rad/s", default=(0.1, 0.1, 0.1)),
+        "zeta": r.number(c, "zeta", "control", "1", 1.0, positive=True),
+        "pid_presets": tuple(r.value(c, "pid_presets", "control", None, ())),
+    }
+    if min(control["bandwidth"]) <= 0:
+        raise r.fail("control.bandwidth", "must be > 0 rad/s")
+    o = r.table(data, "observer", required=False)
+    r.keys(o, "observer", {"accel_psd_xy", "accel_psd_psi"})
+    observer = {
+        k: r.number(o, k, "observer", u, positive=True, default=dflt)
+        for k, u, dflt in (
+            ("accel_psd_xy", "m^2/s^3", 1.5e-4),
+            ("accel_psd_psi", "rad^2/s^3", 1e-6),
+        )
+    }
+    if not (path / "vessel.xml").is_file():
+        raise VesselError(f"{path}: vessel.xml (the MJCF hull body) is missing")
+    return Vessel(
+        name=name, title=title, folder=path, dofs=int(dofs), scale=scale, hull=hull,
+        plants=plants, actuators=actuators, windage=windage, design=design, limits=limits,
+        control=control, observer=observer, nominal_wind=nominal_wind, rigid_inertia=rigid,
+        dimensions=dims, sources=dict(r.sources),
+    )  # fmt: skip
+
+
+@lru_cache(maxsize=64)
+def _load_cached(path: Path, mtime: float) -> Vessel:
+    return _read(path)
+
+
+def _packaged() -> dict[str, Path]:
+    out = {}
+    for p in sorted(_ASSET_DIR.iterdir()):
+        if (p / "vessel.toml").is_file():
+            out[p.name.replace("_", "-")] = p
+    return out
+
+
+def vessel_names() -> list[str]:
+    """Names of the packaged vessels (``shipgym/assets/mjcf/<name>/``)."""
+    return list(_packaged())
+
+
+def vessels() -> dict[str, Vessel]:
+    """Every packaged vessel, loaded, by name."""
+    return {n: load_vessel(n) for n in _packaged()}
+
+
+def load_vessel(vessel: str | Path | Vessel) -> Vessel:
+    """A vessel by registry name (``"blue-lady"``), package folder or ``vessel.toml`` path.
+
+    Loading is cached per file (and reloaded when the file changes).
+
+    Raises:
+        VesselError: an invalid package (names the file and the key) or an unknown name
+            (lists the packaged vessels).
+    """
+    if isinstance(vessel, Vessel):
+        return vessel
+    if not isinstance(vessel, str | Path):
+        raise TypeError(f"vessel must be a name, a path or a Vessel, got {vessel!r}")
+    packaged = _packaged()
+    key = str(vessel).replace("_", "-")
+    if isinstance(vessel, str) and key in packaged:
+        path = packaged[key]
+    else:
+        path = Path(vessel).expanduser()
+        if path.name == "vessel.toml":
+            path = path.parent
+        if not path.exists():
+            raise VesselError(
+                f"unknown vessel {str(vessel)!r}: not a packaged vessel ({', '.join(packaged)}) "
+                "and no such folder"
+            )
+    path = path.resolve()
+    toml_path = path / "vessel.toml"
+    mtime = toml_path.stat().st_mtime if toml_path.is_file() else 0.0
+    return _load_cached(path, mtime)

@@ -1,0 +1,131 @@
+"""Build a MuJoCo model from a world and a vessel package (``mujoco.MjSpec``).
+
+Worlds (``shipgym/assets/mjcf/worlds/``: ``open_water.xml``, ``harbour.xml``) hold no ship.
+:func:`build_model` attaches the vessel's hull body (``vessel.xml``, geometry only) to the
+world and generates from ``vessel.toml`` what must exist once:
+
+- the joints: slide ``x``, slide ``y``, hinge ``psi`` (z) and, for a 4-DOF vessel, hinge
+  ``phi`` about the yawed x axis, in this order (``qpos = [x, y, psi(, phi)]``);
+- the rigid-body inertia at the body origin (mass ``m``; ``diag(I_x, I_z, I_z)``: with
+  ``I_y = I_z`` MuJoCo's joint-space inertia is the constant ``diag(m, m, I_z(, I_x))`` for
+  any roll angle, with no velocity-dependent bias force, which the exact force injection of
+  :mod:`shipgym.envs.physics` relies on; a check there verifies it);
+- one site per actuator at its position and one MuJoCo actuator per control channel
+  (:class:`~shipgym.dynamics.actuators.Channel`): ``filterexact`` for lagged states,
+  ``integrator`` for an azimuth angle; force direction (``gear``) and gain from the actuator.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from shipgym.assets import asset_path
+from shipgym.dynamics.actuators import Azimuth, Propeller
+from shipgym.dynamics.vessel import Vessel, VesselError
+
+from ._mujoco import mujoco
+
+__all__ = ["WORLDS", "build_model", "world_path"]
+
+#: world name -> file in ``shipgym/assets/mjcf/worlds/``
+_PREFIX = "vessel/"
+
+WORLDS: dict[str, str] = {"open-water": "open_water.xml", "harbour": "harbour.xml"}
+
+
+def world_path(world: str) -> Path:
+    """The MJCF file of a world by name (:data:`WORLDS`)."""
+    if world not in WORLDS:
+        raise ValueError(f"unknown world {world!r}; choose one of: {', '.join(WORLDS)}")
+    return asset_path("mjcf", "worlds", WORLDS[world])
+
+
+def build_model(vessel: Vessel, world: str = "open-water") -> mujoco.MjModel:
+    """The compiled MuJoCo model of ``vessel`` in ``world``.
+
+    Raises:
+        VesselError: ``vessel.xml`` has no body ``hull`` or fails to compile.
+        ValueError: unknown world, or a vessel that does not fit the harbour.
+    """
+    if world == "harbour" and not vessel.fits_harbour:
+        raise ValueError(
+            f"vessel {vessel.name!r} (L_oa {vessel.L_oa:g} m, B {vessel.B:g} m) does not fit the "
+            "harbour basin (built for the 13.8 m Blue Lady): use the open-water scene"
+        )
+    spec = mujoco.MjSpec.from_file(str(world_path(world)))
+    try:
+        child = mujoco.MjSpec.from_file(str(vessel.body_xml))
+    except Exception as exc:  # noqa: BLE001 - MuJoCo's parser raises assorted errors
+        raise VesselError(f"{vessel.body_xml}: not a valid MJCF file: {exc}") from None
+    src = child.body("hull")
+    if src is None:
+        raise VesselError(f"{vessel.body_xml}: needs a body named 'hull' (the hull geometry)")
+    frame = spec.worldbody.add_frame()
+    hull = frame.attach_body(src, _PREFIX, "")
+    # the vessel's own names, without the attachment prefix (geoms name the contacts)
+    hull.name = "hull"
+    for el in (*hull.geoms, *hull.sites, *hull.cameras):
+        if el.name.startswith(_PREFIX):
+            el.name = el.name[len(_PREFIX) :]
+    for j in list(hull.joints):
+        raise VesselError(
+            f"{vessel.body_xml}: the hull body must have no joints (found {j.name!r}); shipgym "
+            "adds them from the vessel's DOF set"
+        )
+    m, I_x, I_z = vessel.rigid_inertia
+    hull.explicitinertial = True
+    hull.mass = m
+    hull.ipos = [0.0, 0.0, 0.0]
+    hull.iquat = [1.0, 0.0, 0.0, 0.0]
+    hull.inertia = [I_x, I_z, I_z]
+    # joints first in the body: x, y, psi (, phi); MuJoCo composes hinges in order
+    axes = [("x", mujoco.mjtJoint.mjJNT_SLIDE, (1, 0, 0)), ("y", mujoco.mjtJoint.mjJNT_SLIDE,
+            (0, 1, 0)), ("psi", mujoco.mjtJoint.mjJNT_HINGE, (0, 0, 1))]  # fmt: skip
+    if vessel.dofs == 4:
+        axes.append(("phi", mujoco.mjtJoint.mjJNT_HINGE, (1, 0, 0)))
+    for name, typ, axis in axes:
+        hull.add_joint(name=name, type=typ, axis=list(axis))
+    size = 0.009 * vessel.L_oa
+    for a in vessel.actuators:
+        hull.add_site(name=a.name, pos=list(a.position), size=[size, size, size],
+                      rgba=[1.0, 0.8, 0.0, 1.0], group=3)  # fmt: skip
+        for k, ch in enumerate(a.channels):
+            act = spec.add_actuator(name=ch.name, target=a.name)
+            act.trntype = mujoco.mjtTrn.mjTRN_SITE
+            act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            act.ctrlrange = [ch.lower, ch.upper]
+            act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+            act.biastype = mujoco.mjtBias.mjBIAS_NONE
+            gain = 0.0
+            gear = [0.0] * 6
+            if ch.dynamics == "lag":
+                act.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
+                act.dynprm[0] = ch.time_constant
+                act.actlimited = mujoco.mjtLimited.mjLIMITED_TRUE
+                act.actrange = [ch.lower, ch.upper]
+            else:
+                act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
+            if isinstance(a, Propeller):
+                c, s = a.direction
+                gear[:2] = [c, s]
+                # the quadratic or asymmetric law's gain is refreshed every physics step
+                gain = a.static_gain or 0.0
+                act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+                act.forcerange = [a.force_lower, a.force_upper]
+            elif isinstance(a, Azimuth) and k == 0:
+                gear[:2] = [1.0, 0.0]  # turned with the angle every physics step
+                gain = a.max_thrust_n
+            act.gear = gear
+            act.gainprm[0] = gain
+    if world == "open-water":
+        water = spec.geom("water")
+        half = max(200.0, 15.0 * vessel.L_oa)
+        water.size = [half, half, 0.1]
+        L = vessel.L_oa / 13.78  # the Blue Lady's cameras, scaled with the length
+        spec.worldbody.add_camera(name="top", mode=mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM,
+                                  pos=[0, 0, -40 * L], xyaxes=[0, 1, 0, 1, 0, 0])  # fmt: skip
+        spec.worldbody.add_camera(name="map", pos=[0, 0, -120 * L], xyaxes=[0, 1, 0, 1, 0, 0])
+    try:
+        return spec.compile()
+    except Exception as exc:  # noqa: BLE001
+        raise VesselError(f"{vessel.folder}: the MuJoCo model does not compile: {exc}") from None
