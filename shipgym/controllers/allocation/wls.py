@@ -48,7 +48,8 @@ __all__ = ["DEFAULT_H_REL", "WLSAllocation", "WLSAllocator", "allocate_wls"]
 DEFAULT_H_REL = 1e-9
 #: a scaled thrust within this of a bound counts as on it (thrusts scaled to <= 1)
 _BOUND_TOL = 1e-12
-#: a multiplier (scaled problem, curvature normalised to <= 1) above this makes a bound active
+#: a multiplier (divided by the variable's curvature: the scaled distance it would move past
+#: its bound if released) above this makes a bound active
 _MULT_TOL = 1e-10
 _SINGULAR = (
     "B^T W B + diag(H) is singular: the thrusters are redundant or some thruster affects no "
@@ -230,6 +231,7 @@ def _box_qp(
     ]
     xl = [a if v < a else b if v > b else v for v, a, b in zip(xl, lol, hil, strict=True)]
     diag = np.arange(n) * (n + 1)
+    qd = Q.diagonal()
     for _ in range(10 * n + 10):
         fm = np.array([1.0 if k == 0 else 0.0 for k in st])
         xv = np.array(xl)
@@ -266,7 +268,9 @@ def _box_qp(
                 continue
             xl = [t if k == 0 else v for v, t, k in zip(xl, xnl, st, strict=True)]
             xv = xn
-        g = (Q @ xv - c).tolist()  # optimal: g >= 0 on lower bounds, g <= 0 on upper bounds
+        # multipliers, in units of each variable's own curvature (the distance it would move
+        # past its bound if released): >= 0 on lower bounds, <= 0 on upper bounds when optimal
+        g = ((Q @ xv - c) / qd).tolist()
         worst, j = -_MULT_TOL, -1
         for i in range(n):
             k = st[i]
@@ -284,6 +288,11 @@ def _box_qp(
             return np.array(xl), np.array(active)
         st[j] = 0
     raise RuntimeError("allocate_wls: the active-set method did not converge (report this)")
+
+
+def _unscale(x, s, xlo, xhi, lo, hi) -> NDArray[np.float64]:
+    """Thrusts ``x * s``, exactly ``lo`` or ``hi`` where ``x`` sits on a bound."""
+    return np.where(x <= xlo, lo, np.where(x >= xhi, hi, np.minimum(np.maximum(x * s, lo), hi)))
 
 
 class WLSAllocator:
@@ -326,7 +335,7 @@ class WLSAllocator:
         t = _real_array(tau, "tau", (self._n_dof,), "requested generalised force, N and N m")
         c = self._BsWk @ t
         x, active = _box_qp(self._Q, c, self._lo, self._hi, self._fac)
-        f = np.minimum(np.maximum(x * self._s, self.f_min), self.f_max)
+        f = _unscale(x, self._s, self._lo, self._hi, self.f_min, self.f_max)
         delivered = self.B @ f
         return WLSAllocation(f, delivered, t - delivered, active)
 
@@ -378,7 +387,8 @@ def allocate_wls(
     s = _scales(lo, hi)
     w = _weights(W, n_dof, _capacity(Bm, s))
     Q, BsWk = _scaled_problem(Bm, s, w, H)
-    x, active = _box_qp(Q, BsWk @ t, lo / s, hi / s)
-    f = np.minimum(np.maximum(x * s, lo), hi)
+    xlo, xhi = lo / s, hi / s
+    x, active = _box_qp(Q, BsWk @ t, xlo, xhi)
+    f = _unscale(x, s, xlo, xhi, lo, hi)
     delivered = Bm @ f
     return WLSAllocation(f, delivered, t - delivered, active)
