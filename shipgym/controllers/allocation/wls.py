@@ -51,6 +51,10 @@ _BOUND_TOL = 1e-12
 #: a multiplier (divided by the variable's curvature: the scaled distance it would move past
 #: its bound if released) above this makes a bound active
 _MULT_TOL = 1e-10
+#: ... and above this the bound counts as active for the ``saturated`` flag: larger than the
+#: push of the default regularisation H (about DEFAULT_H_REL), so a redundant set that meets
+#: its request is not reported saturated because H prefers a thrust beyond a bound
+_ACTIVE_TOL = 1e-7
 _SINGULAR = (
     "B^T W B + diag(H) is singular: the thrusters are redundant or some thruster affects no "
     "weighted DOF; give H > 0 (the default) for a unique answer"
@@ -65,8 +69,10 @@ class WLSAllocation(NamedTuple):
         tau: delivered generalised force ``B f``, shape (n_dof,) (N, N m).
         tau_error: requested minus delivered ``tau``, shape (n_dof,); round-off (plus the tiny
             bias of ``H``) when nothing saturates.
-        saturated: shape (N,) bool: the thruster sits on a bound and the bound is active (its
-            Lagrange multiplier is positive: the request wanted more than the bound allows).
+        saturated: shape (N,) bool: the thruster sits on a bound and the bound is active: its
+            Lagrange multiplier, divided by the thrust's curvature in the objective (the
+            distance, in units of its range, that the thrust would move past the bound if
+            released), exceeds 1e-7.
     """
 
     force: NDArray[np.float64]
@@ -280,9 +286,9 @@ def _box_qp(
                     worst, j = m, i
         if j < 0:
             active = [
-                (k == -1 and gi > _MULT_TOL)
-                or (k == 1 and gi < -_MULT_TOL)
-                or (k == 2 and abs(gi) > _MULT_TOL)
+                (k == -1 and gi > _ACTIVE_TOL)
+                or (k == 1 and gi < -_ACTIVE_TOL)
+                or (k == 2 and abs(gi) > _ACTIVE_TOL)
                 for k, gi in zip(st, g, strict=True)
             ]
             return np.array(xl), np.array(active)
