@@ -134,80 +134,83 @@ class _FixedAllocator:
     """Box-constrained weighted least squares over fixed-direction thrusters."""
 
     def __init__(self, acts: ActuatorSet) -> None:
-        from .allocation import allocate_wls
+        from .allocation import WLSAllocator
 
-        self._wls = allocate_wls
         self.acts = acts
-        idx = list(range(len(acts)))
-        self.B = _planar_B(acts, idx)
+        self.B = _planar_B(acts, list(range(len(acts))))
         self.f_min = np.array([a.force_lower for a in acts.actuators])  # type: ignore[attr-defined]
         self.f_max = np.array([a.force_upper for a in acts.actuators])  # type: ignore[attr-defined]
-        cap = np.maximum(np.abs(self.B) @ np.maximum(self.f_max, -self.f_min), 1e-9)
-        self.W = 1.0 / cap**2  # each DOF's error relative to its capacity
+        # each DOF's error relative to its capacity
+        self.W = 1.0 / np.maximum(acts.capacity()[[0, 1, -1]], 1e-9) ** 2
+        self._wls = WLSAllocator(self.B, self.f_min, self.f_max, W=self.W)
 
     def __call__(self, tau: ArrayLike, state: NDArray[np.float64]) -> Allocation:
         t = _tau3(tau)
-        res = self._wls(t, self.B, self.f_min, self.f_max, W=self.W)
-        cmd = np.array([a.inverse(f) for a, f in zip(self.acts.actuators, res.force, strict=True)])  # type: ignore[attr-defined]
+        res = self._wls(t)
+        acts = self.acts.actuators
+        cmd = np.array([a.inverse(f) for a, f in zip(acts, res.force, strict=True)])  # type: ignore[attr-defined]
         cmd = np.clip(cmd, self.acts.lower, self.acts.upper)
-        return Allocation(cmd, np.asarray(res.force), np.asarray(res.tau), t - res.tau,
-                          np.asarray(res.saturated, dtype=bool))  # fmt: skip
+        return Allocation(cmd, res.force, res.tau, res.tau_error, res.saturated)
 
 
 class _AzimuthAllocator:
-    """Extended-thrust allocation over azimuths (plus any fixed thrusters), rate-limited."""
+    """Extended-thrust allocation over azimuths (plus any fixed thrusters), rate-limited.
+
+    The angle rate limit of the QP is the unit's turning rate times the control period, so
+    the angle command (a rate, the azimuth's second channel) reaches the allocated angle at
+    the end of the period without exceeding its limit.
+    """
 
     def __init__(self, acts: ActuatorSet, dt: float) -> None:
-        from .allocation import AzimuthSet, allocate_azimuth
+        from .allocation import AzimuthAllocator, Azimuths
 
-        self._qp = allocate_azimuth
-        self._AzimuthSet = AzimuthSet
         self.acts = acts
         self.dt = float(dt)
         self.az = [i for i, a in enumerate(acts.actuators) if isinstance(a, Azimuth)]
         self.fx = [i for i, a in enumerate(acts.actuators) if isinstance(a, Propeller)]
-        az = [acts.actuators[i] for i in self.az]
-        self.pos = np.array([a.position for a in az])
-        self.f_max = np.array([a.max_thrust_n for a in az])  # type: ignore[attr-defined]
-        self.rate = np.array([a.max_rate for a in az])  # type: ignore[attr-defined]
-        self.rev = np.array([a.reversible for a in az])  # type: ignore[attr-defined]
-        self.fixed: Any = None
+        units: list[Azimuth] = [acts.actuators[i] for i in self.az]  # type: ignore[misc]
+        self._angle_idx = [acts.slices[i].start + 1 for i in self.az]
+        self._rate = np.array([a.max_rate for a in units])
+        spec = Azimuths(
+            positions=np.array([a.position[:2] for a in units]),
+            f_max=np.array([a.max_thrust_n for a in units]),
+            angle_prev=np.array([a.angle0 for a in units]),
+            max_dangle=np.minimum(self._rate * self.dt, math.radians(80.0)),
+            reversible=np.array([a.reversible for a in units]),
+        )
+        fixed: Any = None
         if self.fx:
             fa = [acts.actuators[i] for i in self.fx]
-            self.fixed = (
+            fixed = (
                 _planar_B(acts, self.fx),
                 np.array([a.force_lower for a in fa]),  # type: ignore[attr-defined]
                 np.array([a.force_upper for a in fa]),  # type: ignore[attr-defined]
             )
-        cap = np.maximum(acts.capacity()[[0, 1, -1]], 1e-9)
-        self.W = 1.0 / cap**2
+        W = 1.0 / np.maximum(acts.capacity()[[0, 1, -1]], 1e-9) ** 2
+        self._qp = AzimuthAllocator(spec, fixed=fixed, W=W)
 
     def __call__(self, tau: ArrayLike, state: NDArray[np.float64]) -> Allocation:
         t = _tau3(tau)
         acts = self.acts
-        angle_prev = np.array([state[acts.slices[i].start + 1] for i in self.az])
-        spec = self._AzimuthSet(
-            positions=self.pos, f_max=self.f_max, angle_prev=angle_prev,
-            max_dangle=np.minimum(self.rate * self.dt, math.radians(80.0)), reversible=self.rev,
-        )  # fmt: skip
-        res = self._qp(t, spec, fixed=self.fixed, W=self.W)
+        angle_prev = np.asarray(state, dtype=float)[self._angle_idx]
+        res = self._qp(t, angle_prev)
         cmd = np.zeros(acts.n_channels)
         force = np.zeros(len(acts))
         sat = np.zeros(acts.n_channels, dtype=bool)
-        res_sat = np.asarray(res.saturated, dtype=bool)
         for k, i in enumerate(self.az):
-            a = acts.actuators[i]
-            sl = acts.slices[i]
-            cmd[sl.start] = res.thrust[k] / a.max_thrust_n  # type: ignore[attr-defined]
+            a: Any = acts.actuators[i]
+            j = acts.slices[i].start
+            cmd[j] = res.thrust[k] / a.max_thrust_n
             rate = (res.angle[k] - angle_prev[k]) / self.dt
-            cmd[sl.start + 1] = min(max(rate, -a.max_rate), a.max_rate)  # type: ignore[attr-defined]
+            cmd[j + 1] = min(max(rate, -a.max_rate), a.max_rate)
             force[i] = res.thrust[k]
-            sat[sl] = res_sat[k]
+            sat[j] = res.saturated[k] and not res.rate_limited[k]
+            sat[j + 1] = bool(res.rate_limited[k])
         for k, i in enumerate(self.fx):
             a = acts.actuators[i]
             f = res.force_fixed[k]
-            cmd[acts.slices[i].start] = a.inverse(f)  # type: ignore[attr-defined]
+            cmd[acts.slices[i].start] = a.inverse(f)
             force[i] = f
-            sat[acts.slices[i]] = res_sat[len(self.az) + k]
+            sat[acts.slices[i]] = res.saturated[len(self.az) + k]
         cmd = np.clip(cmd, acts.lower, acts.upper)
-        return Allocation(cmd, force, np.asarray(res.tau), t - np.asarray(res.tau), sat)
+        return Allocation(cmd, force, res.tau, res.tau_error, sat)

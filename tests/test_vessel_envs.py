@@ -1,0 +1,116 @@
+"""Every registered vessel x every task: Gymnasium and SB3 check_env, determinism, spec round
+trip, the action space from the actuators. A new vessel package is tested here for free."""
+
+from __future__ import annotations
+
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import shipgym
+from shipgym.dynamics.vessel import load_vessel, vessel_names
+from shipgym.envs.registration import ALIASES
+
+TASKS = [i for i in shipgym.ENV_IDS if i not in ALIASES]
+CASES = [
+    (task, vessel)
+    for task in TASKS
+    for vessel in vessel_names()
+    if task != "shipgym/Harbour-v0" or load_vessel(vessel).fits_harbour
+]
+IDS = [f"{t.split('/')[1]}-{v}" for t, v in CASES]
+
+
+def _make(task: str, vessel: str, **kw):
+    return gym.make(task, vessel=vessel, **kw)
+
+
+@pytest.mark.parametrize(("task", "vessel"), CASES, ids=IDS)
+def test_gymnasium_check_env(task: str, vessel: str) -> None:
+    env = _make(task, vessel)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # infinite observation bounds are intended
+        check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+@pytest.mark.parametrize(("task", "vessel"), CASES, ids=IDS)
+def test_sb3_check_env(task: str, vessel: str) -> None:
+    checker = pytest.importorskip(
+        "stable_baselines3.common.env_checker", reason="the rl extra is not installed"
+    )
+    env = _make(task, vessel)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        checker.check_env(env, warn=False)
+    env.close()
+
+
+@pytest.mark.parametrize(("task", "vessel"), CASES, ids=IDS)
+def test_action_space_comes_from_the_actuators(task: str, vessel: str) -> None:
+    env = _make(task, vessel)
+    acts = load_vessel(vessel).actuators
+    assert env.action_space.shape == (acts.n_channels,)
+    obs, info = env.reset(seed=0)
+    assert obs.shape == env.observation_space.shape == (12 + acts.n_channels,)
+    a = np.ones(acts.n_channels, dtype=np.float32)
+    _, _, _, _, info = env.step(a)
+    np.testing.assert_allclose(info["command"], acts.upper)  # +1 is each range's top
+    assert info["thrust"].shape == (len(acts),)
+    env.close()
+
+
+@pytest.mark.parametrize(("task", "vessel"), CASES, ids=IDS)
+def test_same_seed_same_episode_and_spec_round_trip(task: str, vessel: str) -> None:
+    def run(env) -> list[np.ndarray]:
+        out = []
+        obs, _ = env.reset(seed=11)
+        out.append(obs)
+        rng = np.random.default_rng(5)
+        for _ in range(15):
+            obs, r, term, trunc, info = env.step(
+                rng.uniform(-1, 1, env.action_space.shape).astype(np.float32)
+            )
+            out.append(np.r_[obs, r, info["eta"]])
+            if term or trunc:
+                break
+        return out
+
+    env = _make(task, vessel)
+    a = run(env)
+    b = run(env)
+    c = run(gym.make(env.spec))  # rebuilt from the recorded spec
+    for x, y, z in zip(a, b, c, strict=True):
+        np.testing.assert_array_equal(x, y)
+        np.testing.assert_array_equal(x, z)
+    assert env.spec.kwargs["vessel"] == vessel
+    env.close()
+
+
+@pytest.mark.parametrize("alias", list(ALIASES))
+def test_blue_lady_ids_are_aliases_with_the_same_episodes(alias: str) -> None:
+    a = gym.make(alias)
+    b = gym.make(ALIASES[alias], vessel="blue-lady")
+    oa, _ = a.reset(seed=3)
+    ob, _ = b.reset(seed=3)
+    np.testing.assert_array_equal(oa, ob)
+    rng = np.random.default_rng(0)
+    for _ in range(30):
+        act = rng.uniform(-1, 1, 3).astype(np.float32)
+        ra = a.step(act)
+        rb = b.step(act)
+        np.testing.assert_array_equal(ra[0], rb[0])
+        assert ra[1] == rb[1]
+
+
+def test_vessel_neutral_ids_need_a_vessel() -> None:
+    with pytest.raises(TypeError, match="vessel=NAME"):
+        gym.make("shipgym/StationKeeping-v0")
+
+
+def test_harbour_refuses_a_vessel_that_does_not_fit() -> None:
+    with pytest.raises(ValueError, match="does not fit the harbour"):
+        gym.make("shipgym/Harbour-v0", vessel="wimpey-sealab")
