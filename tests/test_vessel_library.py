@@ -329,3 +329,16 @@ def test_vessel_package_can_be_copied_and_edited(tmp_path: Path) -> None:
     (dst / "vessel.toml").write_text(toml)
     v = load_vessel(dst)
     assert v.name == "sh2" and v.folder == dst.resolve()
+
+
+def test_a_changed_timestep_is_picked_up_by_the_half_step() -> None:
+    """model.opt.timestep changed after construction: the leapfrog half step follows it."""
+    a = VesselPhysics("blue-lady", wind=GUSTY, timestep=0.02)
+    b = VesselPhysics("blue-lady", wind=GUSTY, timestep=0.05)
+    b.model.opt.timestep = 0.02
+    for p in (a, b):
+        p.reset(nu=[0.3, 0.05, 0.01])
+        p.set_command([300.0, 0.5, -0.5])
+        p.step(500)
+    np.testing.assert_array_equal(a.eta, b.eta)
+    np.testing.assert_array_equal(a.nu, b.nu)

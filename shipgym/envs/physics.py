@@ -209,9 +209,7 @@ class VesselPhysics:
         self.wind = Wind(self.wind_config, self.windage)
         self._wind_load = self._make_wind_load()
         self._accel = self.plant.accel
-        self.tau_wind = (0.0, 0.0, 0.0)
-        self.tau_waves = (0.0, 0.0, 0.0)
-        self.nu_c = (0.0, 0.0)
+        self._loads = (0.0,) * 8
         self.saturated = np.zeros(v.actuators.n_channels, dtype=bool)
         self._prepare = self._make_prepare()
         self.reset()
@@ -336,6 +334,8 @@ class VesselPhysics:
         if self.waves is not None:
             self.waves.reset(rng)
         # leapfrog start: qacc = a_0 = f(q_0, v_0), qvel = v_{-1/2} = v_0 - h/2 a_0
+        if self.model.opt.timestep != self._h:
+            self._prepare = self._make_prepare()
         self._prepare()
         mujoco.mj_forward(self.model, d)
         d.qvel[:] -= 0.5 * self.model.opt.timestep * d.qacc
@@ -356,6 +356,21 @@ class VesselPhysics:
         if self.waves is None:
             return 0.0
         return float(np.asarray(self.waves.elevation(self.time)))
+
+    @property
+    def tau_wind(self) -> tuple[float, float, float]:
+        """Wind load ``[X, Y, N]`` (N, N, N m, body) of the last physics step."""
+        return self._loads[0:3]
+
+    @property
+    def tau_waves(self) -> tuple[float, float, float]:
+        """Second-order wave drift load ``[X, Y, N]`` (N, N, N m, body) of the last step."""
+        return self._loads[3:6]
+
+    @property
+    def nu_c(self) -> tuple[float, float]:
+        """Current ``(u_c, v_c)`` (m/s) in the body frame at the last physics step."""
+        return self._loads[6:8]
 
     @property
     def time(self) -> float:
@@ -471,6 +486,8 @@ class VesselPhysics:
         Raises:
             SimulationDiverged: a non-finite or absurd state (the state before the step is kept).
         """
+        if self.model.opt.timestep != self._h:
+            self._prepare = self._make_prepare()
         prepare, mj_step, m, d = self._prepare, mujoco.mj_step, self.model, self.data
         for i in range(n):
             prepare()
@@ -510,6 +527,10 @@ class VesselPhysics:
         cos, sin, isfinite = math.cos, math.sin, math.isfinite
         four = self.dofs == 4
         this = self
+        # half the timestep, read once (a MuJoCo option read costs a third of a microsecond);
+        # step() and reset() rebuild this closure when model.opt.timestep has changed
+        self._h = float(m.opt.timestep)
+        hh = 0.5 * self._h
 
         def loads(t: float, psi: float, u: float, v: float) -> tuple[float, ...]:
             """Wind (relative to the ground velocity), current (NED) and wave drift."""
@@ -538,7 +559,6 @@ class VesselPhysics:
             )
 
         def prepare3() -> None:
-            hh = 0.5 * m.opt.timestep
             psi = qpos.tolist()[2]
             t = d.time
             # velocity at the whole step from the half-step qvel (leapfrog, see module doc)
@@ -579,12 +599,9 @@ class VesselPhysics:
             qfrc[0] = mq * (c * bx - s * by) - (c * tx - s * ty)
             qfrc[1] = mq * (s * bx + c * by) - (s * tx + c * ty)
             qfrc[2] = iq * rd - tn
-            this.tau_wind = (wx, wy, wn)
-            this.tau_waves = (dx_, dy_, dn_)
-            this.nu_c = (uc, vcb)
+            this._loads = (wx, wy, wn, dx_, dy_, dn_, uc, vcb)
 
         def prepare4() -> None:
-            hh = 0.5 * m.opt.timestep
             _x, _y, psi, phi = qpos.tolist()
             t = d.time
             w0, w1, w2, w3 = qvel.tolist()
@@ -617,8 +634,6 @@ class VesselPhysics:
             qfrc[1] = mq * ydd - (s * tx + c * cf * ty)
             qfrc[2] = iq * psidd - (cf * tn + sf * tmz)
             qfrc[3] = ix * pd - tk
-            this.tau_wind = (wx, wy, wn)
-            this.tau_waves = (dx_, dy_, dn_)
-            this.nu_c = (uc, vcb)
+            this._loads = (wx, wy, wn, dx_, dy_, dn_, uc, vcb)
 
         return prepare4 if four else prepare3
