@@ -1,4 +1,7 @@
-"""Physics step rate of the full Blue Lady plant vs bare ``mujoco.mj_step`` on the same MJCF.
+"""Physics step rate of the full plant vs bare ``mujoco.mj_step`` on the same MuJoCo model.
+
+The Blue Lady in detail (plant, waves and current, a closed-loop harbour episode, a recorded
+one), then the full plant of every other packaged vessel against its own bare model.
 
 Run with ``make bench``. Reports ratios, which compare across machines; absolute rates vary
 by +-30 % from run to run on a shared 2-core VM, so each figure is the best of several repeats.
@@ -13,9 +16,10 @@ import time
 import mujoco
 import numpy as np
 
-from shipgym.assets import asset_path
 from shipgym.disturbances import WindConfig
-from shipgym.envs.physics import DEFAULT_SCENE, VesselPhysics
+from shipgym.dynamics.vessel import load_vessel, vessel_names
+from shipgym.envs.physics import VesselPhysics
+from shipgym.envs.scene import build_model
 
 
 def _best_rate(fn, steps: int, repeats: int) -> float:
@@ -48,7 +52,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args(argv)
 
-    m = mujoco.MjModel.from_xml_path(str(asset_path(*DEFAULT_SCENE)))
+    m = build_model(load_vessel("blue-lady"))
     d = mujoco.MjData(m)
     d.ctrl[:] = [300.0, 0.5, -0.5]
 
@@ -73,7 +77,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
     waves = WaveConfig(Hs=0.083, Tp=1.79, n_components=100, drift=True, first_order=True)
     sea = VesselPhysics(
-        "default", wind=wind, waves=waves, current=CurrentConfig.from_std(0.1, 0.5, 0.02, 300.0)
+        "blue-lady", wind=wind, waves=waves, current=CurrentConfig.from_std(0.1, 0.5, 0.02, 300.0)
     )
     sea.reset(rng=np.random.default_rng(0))
     sea.set_command([300.0, 0.5, -0.5])
@@ -125,12 +129,36 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     print(
         f"  ratio recorded / unrecorded             : {rec_wall / best_wall:12.2f}   (target <= 2)"
     )
+    # every other packaged vessel: the full plant against bare mj_step on its own model
+    others = {}
+    for name in vessel_names():
+        if name == "blue-lady":
+            continue
+        v = load_vessel(name)
+        pv = VesselPhysics(v, wind=f"{v.nominal_wind:g}@300")
+        pv.reset(rng=np.random.default_rng(0))
+        pv.set_command(v.actuators.action_to_command(np.full(v.actuators.n_channels, 0.5)))
+        mv = build_model(v)
+        dv = mujoco.MjData(mv)
+
+        def bare_v(n: int, mv=mv, dv=dv) -> None:  # type: ignore[no-untyped-def]
+            for _ in range(n):
+                mujoco.mj_step(mv, dv)
+
+        rb, rf = _best_rate(bare_v, args.steps, args.repeats), _best_rate(pv.step, args.steps,
+                                                                          args.repeats)  # fmt: skip
+        others[name] = rf / rb
+        print(
+            f"{name:18s} full plant ({len(v.actuators)} actuators)   : {rf:12,.0f} steps/s, "
+            f"ratio {rf / rb:.3f}"
+        )
     return {
         "bare": r_bare,
         "bare_c": r_c,
         "full": r_full,
         "ratio": r_full / r_bare,
         "episode_ratio": best_wall / bare_same,
+        **{f"ratio_{k}": val for k, val in others.items()},
     }
 
 

@@ -516,6 +516,30 @@ class ActuatorSet:
         return np.where(lo < 0.0, two, 2.0 * (c - lo) / (hi - lo) - 1.0)
 
     # ---- hot path --------------------------------------------------------------------------
+    def thrust_kernel(self) -> Callable[[list[float]], list[float]]:
+        """``f(states) -> thrusts`` (N, one per actuator) on plain floats: :meth:`thrust`
+        without array overhead (every control step)."""
+        laws = []
+        i = 0
+        for a in self.actuators:
+            if isinstance(a, Propeller):
+                laws.append((i, a.k_ahead, a.k_astern, a.law == "quadratic"))
+            else:
+                assert isinstance(a, Azimuth)
+                laws.append((i, a.max_thrust_n, a.max_thrust_n, False))
+            i += len(a.channels)
+        laws_t = tuple(laws)
+
+        def thrust_of(st: list[float]) -> list[float]:
+            out = []
+            for j, kp, kn, quad in laws_t:
+                a = st[j]
+                g = kp if a >= 0.0 else kn
+                out.append(g * abs(a) * a if quad else g * a)
+            return out
+
+        return thrust_of
+
     def kernel(
         self, gain: Any = None, gear: Any = None
     ) -> Callable[[list[float]], tuple[float, float, float, float, float]]:

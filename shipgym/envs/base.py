@@ -311,7 +311,9 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.limits = Limits.from_dict(dict(self.vessel.limits))
         self.guidance = Guidance(self.plan, limits=self.limits)
         self.metrics = ManoeuvreMetrics(sample_period=1.0, n_actuators=len(self.actuators))
-        self._slices = self.actuators.slices
+        # per-actuator saturation from the channels' (None: one channel per actuator)
+        sl = self.actuators.slices
+        self._slices = None if all(x.stop - x.start == 1 for x in sl) else sl
         self.render_mode = render_mode
         self._renderer: Any = None
         n = self.n_actions
@@ -533,8 +535,8 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             s.ref.eta_d_r,
             eta_meas_r=None if z is None else s.ref.to_r(z),
             thrust=self.physics.thrust,
-            saturated=None
-            if saturated is None
+            saturated=saturated
+            if saturated is None or self._slices is None
             else [bool(saturated[sl].any()) for sl in self._slices],
             leg=s.ref.leg,
         )

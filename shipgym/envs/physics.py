@@ -206,6 +206,9 @@ class VesselPhysics:
             )
         self.data = mujoco.MjData(self.model)
         self._bind_model()
+        # plain-float thrust laws for reading (tau_thrusters, thrust): no MuJoCo writes
+        self._tau_of = v.actuators.kernel()
+        self._thrust_of = v.actuators.thrust_kernel()
         self.wind = Wind(self.wind_config, self.windage)
         self._wind_load = self._make_wind_load()
         self._accel = self.plant.accel
@@ -439,7 +442,7 @@ class VesselPhysics:
     @property
     def thrust(self) -> NDArray[np.float64]:
         """Signed thrust of every actuator (N) at the current states."""
-        return self.actuators.thrust(self.data.act)
+        return np.array(self._thrust_of(self.data.act.tolist()))
 
     @property
     def tau_thrusters(self) -> NDArray[np.float64]:
@@ -506,10 +509,6 @@ class VesselPhysics:
                 a, b = b, a
             out.append((a.name, b.name))
         return out
-
-    @property
-    def _tau_of(self):  # type: ignore[no-untyped-def]
-        return self.__dict__.setdefault("_tau_kernel", self.actuators.kernel())
 
     def _make_prepare(self):  # type: ignore[no-untyped-def]
         """Build the per-step force computation as a closure (locals bound once: hot path)."""
