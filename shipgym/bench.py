@@ -251,7 +251,7 @@ def row_log(json_path: Path | None, markdown: Path | None, total: int) -> Any:
 
     out = json_path or markdown
     usable = out is not None and (not out.exists() or out.is_file())  # not /dev/stdout
-    log = RowLog(partial_path(out, ".jsonl") if usable else None, total)
+    log = RowLog(partial_path(out, ".jsonl") if usable and out is not None else None, total)
     on_interrupt(log.summary)
     return log
 
@@ -303,14 +303,16 @@ def velocity_error_trace(
 
     ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`.
     """
+    from shipgym.records import step_record
     from shipgym.runner import build_env, step_episode
 
     env = build_env("harbour", observer=observer, controller=controller, wind=wind)
     t, err = [], []
 
     def keep(info: dict[str, Any]) -> None:
-        t.append(info["t"])
-        err.append(info["est_error_nu"])
+        rec = step_record(info)
+        t.append(rec.t)
+        err.append(rec.nav.nu - rec.truth.nu)
 
     try:
         step_episode(env, seed, on_step=keep)

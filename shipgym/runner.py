@@ -104,6 +104,7 @@ def run_episode(
     """
 
     from shipgym.disturbances import WindConfig
+    from shipgym.records import step_record
 
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be an int >= 0, got {seed!r}")
@@ -128,8 +129,9 @@ def run_episode(
     bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
 
     def tick(info: dict[str, Any]) -> None:
+        rec = step_record(info)
         bar.update(1)
-        bar.set_postfix(leg=info["leg"] + 1, t=f"{info['t']:.0f}s", refresh=False)
+        bar.set_postfix(leg=rec.reference.leg + 1, t=f"{rec.t:.0f}s", refresh=False)
 
     t0 = time.perf_counter()
     try:
@@ -191,7 +193,7 @@ def build_env(
     if is_learned_controller(controller):
         from shipgym.controllers.learned import make_learned_env
 
-        obs_kw = {} if observer is None else {"observer": observer}
+        obs_kw: dict[str, Any] = {} if observer is None else {"observer": observer}
         return make_learned_env(scenario, controller, **obs_kw, **env_kwargs)
     import shipgym
 
@@ -251,11 +253,12 @@ def episode_summary(env: Any, end: EpisodeEnd) -> dict[str, Any]:
     """The plain-data result of the episode that just ended in ``env``
     (:func:`shipgym.metrics.episode_result`: completion, indices, thruster usage, ...)."""
     from shipgym.metrics import episode_result
+    from shipgym.records import step_record
 
     base = env.unwrapped
     return episode_result(
         base.episode_metrics(),
-        end.info,
+        step_record(end.info),
         terminated=end.terminated,
         truncated=end.truncated,
         plan_finite=bool(base.terminate_on_finish),

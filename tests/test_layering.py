@@ -210,6 +210,7 @@ def test_command_line_modules_are_leaves():
         "shipgym.controllers.allocation",
         "shipgym.controllers.pid",
         "shipgym.metrics",
+        "shipgym.records",
     ],
 )
 def test_pure_layers_never_reach_the_simulator(package):

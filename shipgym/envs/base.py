@@ -24,11 +24,12 @@ from shipgym._config import is_real, param
 from shipgym.assets import asset_path
 from shipgym.controllers.allocation import action_to_command, command_to_action
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
-from shipgym.dynamics import BLUE_LADY_THRUSTERS, wrap_angle
+from shipgym.dynamics import ACTUATOR_NAMES, BLUE_LADY_THRUSTERS, wrap_angle
 from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
 from shipgym.guidance import plan as named_plan
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
+from shipgym.records import StepRecord, step_record_of_env
 
 from .physics import MAX_TIMESTEP, MIN_TIMESTEP, NO_CURRENT, VesselPhysics, check_timestep
 
@@ -370,6 +371,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._record_metrics(sample)
         info = self._info(sample, np.zeros(3), np.zeros(3, bool), False, {}, [])
         info["measurements"] = measurements
+        info["record"] = self._record(info)
         return self._obs(sample), info
 
     def step(
@@ -418,6 +420,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         info = self._info(sample, command, saturated | action_clipped, finished, rewards, contacts)
         info["action_clipped"] = action_clipped
         info["measurements"] = measurements
+        info["record"] = self._record(info)
         if terminated:  # a time-limit truncation is seen by the EpisodeEnd wrapper
             self._episode_over = True
             info["episode_metrics"] = self.episode_metrics()
@@ -585,6 +588,10 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         }
         info.update(rewards)
         return info
+
+    def _record(self, info: Mapping[str, Any]) -> StepRecord:
+        """The typed record of a step (``info["record"]``), holding the same arrays as ``info``."""
+        return step_record_of_env(info, ACTUATOR_NAMES)
 
     def _find_body(self, name: str) -> int | None:
         try:
