@@ -225,3 +225,21 @@ def test_pure_layers_never_reach_the_simulator(package):
         for m in _reach(GRAPH, mod):
             bad = EXTERNAL[m] & set(SIMULATOR_PACKAGES)
             assert not bad, f"{mod} reaches {sorted(bad)} through {m}"
+
+
+def test_the_cli_still_exports_what_it_documents():
+    """The helpers moved down are the same objects under their old names in shipgym.cli."""
+    import shipgym._argtypes
+    import shipgym.bench
+    import shipgym.catalogue
+    import shipgym.cli
+    import shipgym.runner
+
+    cli = shipgym.cli
+    assert cli.parse_wind is shipgym._argtypes.parse_wind
+    assert cli.run_episode is shipgym.runner.run_episode
+    assert cli.ENV_DEFAULT is shipgym.runner.ENV_DEFAULT
+    assert cli.check_controller is shipgym.catalogue.check_controller
+    assert cli.catalogue is shipgym.catalogue.catalogue
+    assert cli.write_bench_outputs is shipgym.bench.write_bench_outputs
+    assert set(cli.__all__) <= set(vars(cli))
