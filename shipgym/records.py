@@ -24,6 +24,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from shipgym.guidance import Reference
+
 __all__ = [
     "POSE_3DOF",
     "VELOCITY_3DOF",
@@ -31,7 +33,6 @@ __all__ = [
     "ControlData",
     "Measurement",
     "NavigationData",
-    "ReferenceData",
     "StepRecord",
     "step_record",
     "step_record_of_env",
@@ -52,6 +53,10 @@ def _same(x: Any, y: Any) -> bool:
         return a.shape == b.shape and bool(np.array_equal(a, b, equal_nan=nan))
     if isinstance(x, tuple) and isinstance(y, tuple):
         return len(x) == len(y) and all(_same(p, q) for p, q in zip(x, y, strict=True))
+    if dataclasses.is_dataclass(x) and not isinstance(x, type):  # e.g. a guidance Reference
+        return type(x) is type(y) and all(
+            _same(getattr(x, f.name), getattr(y, f.name)) for f in dataclasses.fields(x)
+        )
     return bool(x == y)
 
 
@@ -97,38 +102,12 @@ class NavigationData:
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class ReferenceData:
-    """The guidance reference of one instant (Tomera 2014, the r-frame of the current leg).
-
-    Attributes:
-        eta_d: desired NED pose (m, rad).
-        eta_d_r, eta_dot_d_r, eta_ddot_d_r: desired pose in the r-frame and its first two
-            time derivatives.
-        eta_P: the r-frame's origin and orientation in NED (the leg's start pose).
-        leg: index of the current leg (0-based).
-        legs_completed: legs completed so far.
-        finished: whether the plan is complete.
-    """
-
-    __eq__ = _equal
-    __hash__ = None  # type: ignore[assignment]  # mutable arrays inside
-
-    eta_d: Array
-    eta_d_r: Array
-    eta_dot_d_r: Array
-    eta_ddot_d_r: Array
-    eta_P: Array
-    leg: int
-    legs_completed: int
-    finished: bool
-
-
-@dataclass(frozen=True, slots=True, eq=False)
 class ActuatorData:
     """Commands and forces of the vessel's actuators, one entry per actuator, in ``names`` order.
 
     Attributes:
         names: the actuators' names (the vessel's actuator set).
+        action: the normalised action applied, in [-1, 1] (after clipping).
         command: the commands applied, in each actuator's own unit (rpm, fraction of full
             thrust, ...).
         thrust: the thrust each actuator delivers (N).
@@ -140,6 +119,7 @@ class ActuatorData:
     __hash__ = None  # type: ignore[assignment]  # mutable arrays inside
 
     names: tuple[str, ...]
+    action: Array
     command: Array
     thrust: Array
     saturated: NDArray[np.bool_]
@@ -147,15 +127,12 @@ class ActuatorData:
 
     def __post_init__(self) -> None:
         n = len(self.names)
-        if not (
-            len(self.command) == len(self.thrust) == len(self.saturated) == n
-            and len(self.action_clipped) == n
-        ):
+        vectors = (self.action, self.command, self.thrust, self.saturated, self.action_clipped)
+        if any(len(v) != n for v in vectors):
             raise ValueError(
-                f"ActuatorData: command, thrust, saturated and action_clipped must have one "
-                f"entry per actuator ({n}: {', '.join(self.names)}), got lengths "
-                f"{len(self.command)}, {len(self.thrust)}, {len(self.saturated)}, "
-                f"{len(self.action_clipped)}"
+                f"ActuatorData: action, command, thrust, saturated and action_clipped must "
+                f"have one entry per actuator ({n}: {', '.join(self.names)}), got lengths "
+                f"{', '.join(str(len(v)) for v in vectors)}"
             )
 
 
@@ -222,7 +199,9 @@ class StepRecord:
         nav: what a controller uses: the truth, or an observer's estimate
             (:meth:`with_nav`).
         eta_r: the true pose in the r-frame of the current leg.
-        reference: the guidance reference.
+        reference: the guidance reference (:class:`shipgym.guidance.Reference`: desired pose
+            and its derivatives in the r-frame, ``eta_d_n``, ``eta_P``, ``leg``, ...).
+        legs_completed: legs completed so far.
         actuators: commands and thrust per actuator.
         tau_wind, tau_waves: the wind and (second-order) wave loads (body frame).
         current_body: the current's velocity in the body frame (the ``nu`` layout).
@@ -239,7 +218,8 @@ class StepRecord:
     truth: NavigationData
     nav: NavigationData
     eta_r: Array
-    reference: ReferenceData
+    reference: Reference
+    legs_completed: int
     actuators: ActuatorData
     tau_wind: Array
     tau_waves: Array
@@ -276,6 +256,7 @@ class StepRecord:
             nav,
             self.eta_r,
             self.reference,
+            self.legs_completed,
             self.actuators,
             self.tau_wind,
             self.tau_waves,
@@ -302,15 +283,21 @@ def step_record(info: Mapping[str, Any]) -> StepRecord:
     return rec
 
 
-def step_record_of_env(info: Mapping[str, Any], actuator_names: tuple[str, ...]) -> StepRecord:
+def step_record_of_env(
+    info: Mapping[str, Any],
+    reference: Reference,
+    action: Array,
+    actuator_names: tuple[str, ...],
+) -> StepRecord:
     """The record an environment attaches to its ``info`` (same arrays, no copies).
 
     Args:
         info: the environment's own ``info`` of the step (its keys ``t``, ``eta``, ``nu``,
-            ``eta_d``, ``eta_d_r``, ``eta_dot_d_r``, ``eta_ddot_d_r``, ``eta_P``, ``eta_r``,
-            ``leg``, ``legs_completed``, ``finished``, ``command``, ``thrust``,
-            ``saturated``, ``action_clipped``, ``tau_wind``, ``tau_waves``, ``current_body``,
+            ``eta_r``, ``legs_completed``, ``command``, ``thrust``, ``saturated``,
+            ``action_clipped``, ``tau_wind``, ``tau_waves``, ``current_body``,
             ``measurements``, ``quay_contact``).
+        reference: the guidance reference the step's info was made from.
+        action: the normalised action applied (zeros after a reset).
         actuator_names: the names of the vessel's actuators, in the order of its vectors.
     """
     truth = NavigationData(info["t"], info["eta"], info["nu"])
@@ -318,18 +305,11 @@ def step_record_of_env(info: Mapping[str, Any], actuator_names: tuple[str, ...])
         truth=truth,
         nav=truth,
         eta_r=info["eta_r"],
-        reference=ReferenceData(
-            info["eta_d"],
-            info["eta_d_r"],
-            info["eta_dot_d_r"],
-            info["eta_ddot_d_r"],
-            info["eta_P"],
-            int(info["leg"]),
-            int(info["legs_completed"]),
-            bool(info["finished"]),
-        ),
+        reference=reference,
+        legs_completed=int(info["legs_completed"]),
         actuators=ActuatorData(
             tuple(actuator_names),
+            action,
             info["command"],
             info["thrust"],
             info["saturated"],

@@ -40,9 +40,10 @@ def _check_env_part(info):
     eq(rec.nav.nu, info["nav_nu"])
     eq(rec.eta_r, info["eta_r"])
     ref = rec.reference
-    for k in ("eta_d", "eta_d_r", "eta_dot_d_r", "eta_ddot_d_r", "eta_P"):
+    eq(ref.eta_d_n, info["eta_d"])
+    for k in ("eta_d_r", "eta_dot_d_r", "eta_ddot_d_r", "eta_P"):
         eq(getattr(ref, k), info[k])
-    assert (ref.leg, ref.legs_completed, ref.finished) == (
+    assert (ref.leg, rec.legs_completed, ref.finished) == (
         info["leg"],
         info["legs_completed"],
         info["finished"],
@@ -50,7 +51,9 @@ def _check_env_part(info):
     act = rec.actuators
     for k in ("command", "thrust", "saturated", "action_clipped"):
         eq(getattr(act, k), info[k])
-        assert len(getattr(act, k)) == len(act.names)
+    for v in (act.action, act.command, act.thrust, act.saturated, act.action_clipped):
+        assert len(v) == len(act.names)
+    assert np.all(np.abs(act.action) <= 1.0)
     for k in ("tau_wind", "tau_waves", "current_body"):
         eq(getattr(rec, k), info[k])
     assert rec.quay_contact == info["quay_contact"]
@@ -194,12 +197,12 @@ def test_runner_summary_takes_the_rmse_from_the_record():
 def test_actuator_data_has_any_number_of_actuators():
     names = tuple(f"azimuth_{k}" for k in range(6))
     z = np.zeros(6)
-    a = ActuatorData(names, z, z + 1.0, np.zeros(6, bool), np.zeros(6, bool))
+    a = ActuatorData(names, z, z, z + 1.0, np.zeros(6, bool), np.zeros(6, bool))
     assert len(a.thrust) == 6
     with pytest.raises(ValueError, match=r"one entry per actuator \(6: azimuth_0"):
-        ActuatorData(names, z, np.zeros(5), np.zeros(6, bool), np.zeros(6, bool))
-    with pytest.raises(ValueError, match="got lengths 6, 6, 6, 3"):
-        ActuatorData(names, z, z, np.zeros(6, bool), np.zeros(3, bool))
+        ActuatorData(names, z, z, np.zeros(5), np.zeros(6, bool), np.zeros(6, bool))
+    with pytest.raises(ValueError, match="got lengths 6, 6, 6, 6, 3"):
+        ActuatorData(names, z, z, z, np.zeros(6, bool), np.zeros(3, bool))
 
 
 def test_navigation_data_with_a_roll_component():
@@ -238,3 +241,18 @@ def test_records_compare_by_value_pickle_and_are_frozen():
 def test_step_record_of_a_foreign_info_is_a_clear_error():
     with pytest.raises(ValueError, match="no shipgym StepRecord under 'record'"):
         step_record({"t": 0.0, "eta": np.zeros(3)})
+
+
+def test_the_records_action_is_what_the_env_applied():
+    """The normalised action in the record is the action clipped to [-1, 1] (the env's own
+    observation carries it too: its last three entries)."""
+    env = gym.make("shipgym/BlueLadyHarbour-v0")
+    _, info = env.reset(seed=0)
+    np.testing.assert_array_equal(info["record"].actuators.action, np.zeros(3))
+    a = np.array([0.5, -2.0, 1.5], np.float32)
+    obs, _, _, _, info = env.step(a)
+    act = info["record"].actuators
+    np.testing.assert_array_equal(act.action, [0.5, -1.0, 1.0])
+    np.testing.assert_array_equal(act.action_clipped, [False, True, True])
+    np.testing.assert_allclose(obs[-3:], act.action)
+    env.close()

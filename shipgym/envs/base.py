@@ -371,7 +371,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._record_metrics(sample)
         info = self._info(sample, np.zeros(3), np.zeros(3, bool), False, {}, [])
         info["measurements"] = measurements
-        info["record"] = self._record(info)
+        info["record"] = self._record(info, sample)
         return self._obs(sample), info
 
     def step(
@@ -420,7 +420,7 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         info = self._info(sample, command, saturated | action_clipped, finished, rewards, contacts)
         info["action_clipped"] = action_clipped
         info["measurements"] = measurements
-        info["record"] = self._record(info)
+        info["record"] = self._record(info, sample)
         if terminated:  # a time-limit truncation is seen by the EpisodeEnd wrapper
             self._episode_over = True
             info["episode_metrics"] = self.episode_metrics()
@@ -589,9 +589,9 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         info.update(rewards)
         return info
 
-    def _record(self, info: Mapping[str, Any]) -> StepRecord:
+    def _record(self, info: Mapping[str, Any], s: _Sample) -> StepRecord:
         """The typed record of a step (``info["record"]``), holding the same arrays as ``info``."""
-        return step_record_of_env(info, ACTUATOR_NAMES)
+        return step_record_of_env(info, s.ref, self._prev_action, ACTUATOR_NAMES)
 
     def _find_body(self, name: str) -> int | None:
         try:

@@ -59,6 +59,8 @@ class ObserverWrapper(
             )
         self._sq = np.zeros(6)
         self._n = 0
+        # the env's observation layout, rebuilt around the estimate
+        self._observation = base.navigation_observation
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -124,6 +126,5 @@ class ObserverWrapper(
         if rmse is not None:
             info["estimation_rmse"] = rmse
         info["record"] = rec.with_nav(nav, estimation_rmse=rmse)
-        base = self.env.unwrapped
-        obs = base.navigation_observation(est.eta, est.nu, base.reference, base.prev_action)  # type: ignore[attr-defined]
+        obs = self._observation(est.eta, est.nu, rec.reference, rec.actuators.action)
         return obs, info

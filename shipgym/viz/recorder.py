@@ -55,7 +55,7 @@ _VEC_FIELDS = (
     ("nu", attrgetter("truth.nu")),
     ("nav_eta", attrgetter("nav.eta")),
     ("nav_nu", attrgetter("nav.nu")),
-    ("eta_d", attrgetter("reference.eta_d")),
+    ("eta_d", attrgetter("reference.eta_d_n")),
     ("eta_d_r", attrgetter("reference.eta_d_r")),
     ("eta_dot_d_r", attrgetter("reference.eta_dot_d_r")),
     ("eta_r", attrgetter("eta_r")),
@@ -210,7 +210,7 @@ class _Episode:
         for k, get in _VEC_FIELDS:
             vec[k].append(get(rec))
         ref = rec.reference
-        self.legs.append((ref.leg, ref.legs_completed))
+        self.legs.append((ref.leg, rec.legs_completed))
         for m in rec.measurements:
             if m.z is not None:
                 self.meas.append((m.t, i, m.z, m.outlier))
