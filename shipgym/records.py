@@ -127,12 +127,12 @@ class ActuatorData:
 
     def __post_init__(self) -> None:
         n = len(self.names)
-        vectors = (self.action, self.command, self.thrust, self.saturated, self.action_clipped)
-        if any(len(v) != n for v in vectors):
+        a, c, f, s, k = self.action, self.command, self.thrust, self.saturated, self.action_clipped
+        if not (len(a) == len(c) == len(f) == len(s) == len(k) == n):  # per step: kept cheap
             raise ValueError(
                 f"ActuatorData: action, command, thrust, saturated and action_clipped must "
                 f"have one entry per actuator ({n}: {', '.join(self.names)}), got lengths "
-                f"{', '.join(str(len(v)) for v in vectors)}"
+                f"{len(a)}, {len(c)}, {len(f)}, {len(s)}, {len(k)}"
             )
 
 
@@ -301,23 +301,27 @@ def step_record_of_env(
         actuator_names: the names of the vessel's actuators, in the order of its vectors.
     """
     truth = NavigationData(info["t"], info["eta"], info["nu"])
+    ms = info["measurements"]
+    # positional arguments and no conversions: this runs on every step (hot path)
     return StepRecord(
-        truth=truth,
-        nav=truth,
-        eta_r=info["eta_r"],
-        reference=reference,
-        legs_completed=int(info["legs_completed"]),
-        actuators=ActuatorData(
-            tuple(actuator_names),
+        truth,
+        truth,
+        info["eta_r"],
+        reference,
+        info["legs_completed"],
+        ActuatorData(
+            actuator_names,
             action,
             info["command"],
             info["thrust"],
             info["saturated"],
             info["action_clipped"],
         ),
-        tau_wind=info["tau_wind"],
-        tau_waves=info["tau_waves"],
-        current_body=info["current_body"],
-        measurements=tuple(Measurement.from_mapping(m) for m in info["measurements"]),
-        quay_contact=bool(info["quay_contact"]),
+        info["tau_wind"],
+        info["tau_waves"],
+        info["current_body"],
+        tuple([Measurement(m["t"], m["z"], m["valid"], m["outlier"], m["tau"]) for m in ms])
+        if ms
+        else (),
+        info["quay_contact"],
     )
