@@ -177,6 +177,8 @@ class BlueLadyEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ``contacts``; the ``reward_*`` terms; and at the end of every episode (terminated or
     truncated) ``episode_metrics``
     (Tomera 2014 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
+    ``record``: the same as a typed :class:`shipgym.records.StepRecord` (the same arrays),
+    which the observer and controller wrappers hand on with their own parts.
 
     ## Arguments
     | Argument | Default | Description |
