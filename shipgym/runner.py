@@ -158,7 +158,7 @@ def run_episode(
         "scenario_preset": scenario_preset,
         "env_id": env.spec.id if env.spec is not None else None,
         "controller": controller,
-        "observer": _observer_of(env) or "truth",
+        "observer": step_record(end.info).nav.source,  # "truth" or the observer's name
         "seed": seed,
         "plant": plant,
         "wind": wind_out,
@@ -309,16 +309,6 @@ def _commit_results(res: dict[str, Any], recorder: Any, json_path: Path | None) 
         failed.append(f"cannot rename the finished files onto {where} ({os_reason(exc)})")
     if failed:
         raise WriteFailed("; ".join(failed), res)
-
-
-def _observer_of(env: Any) -> str | None:
-    """Name of the observer in a wrapper stack (``None``: the controller sees the truth)."""
-    while hasattr(env, "env"):
-        name = getattr(env, "observer_name", None)
-        if name is not None:
-            return str(name)
-        env = env.env
-    return None
 
 
 def _progress(total: int | None, enabled: bool, desc: str) -> Any:
