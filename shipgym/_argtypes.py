@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Callable
-from typing import NoReturn
+from typing import Any, NoReturn
 
 __all__ = [
     "MAX_COUNT",
@@ -21,6 +21,7 @@ __all__ = [
     "bounded_float",
     "bounded_int",
     "nonneg_int",
+    "parse_wind",
     "positive_int",
     "seed_int",
 ]
@@ -93,6 +94,20 @@ def bounded_float(
 
     parse.__name__ = rng
     return parse
+
+
+def parse_wind(text: str) -> Any:
+    """The ``--wind`` argparse type: :meth:`WindConfig.parse` (``"3@300"``: 3 m/s from 300 deg).
+
+    Returns a :class:`~shipgym.disturbances.WindConfig`; a malformed or out-of-range value
+    becomes an ``argparse`` error (one line, exit status 2).
+    """
+    from shipgym.disturbances import WindConfig
+
+    try:
+        return WindConfig.parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 #: a seed: a whole number from 0 to :data:`MAX_SEED`

@@ -46,6 +46,7 @@ __all__ = [
     "WriteFailed",
     "atomic_path",
     "atomic_write_text",
+    "check_writable",
     "progress_enabled",
     "handle_signals",
     "interrupt_message",
@@ -284,3 +285,21 @@ def progress_enabled(no_progress: bool = False, stream: TextIO | None = None) ->
         return bool(s.isatty())
     except (AttributeError, ValueError):  # closed or unusual streams
         return False
+
+
+def check_writable(path: Path) -> None:
+    """Create the parent folder and check that ``path`` can be written, before any work.
+
+    Raises:
+        ValueError: the folder cannot be created or the file cannot be opened for writing
+            (the message names the path and the reason).
+    """
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        existed = path.exists()
+        with path.open("a"):
+            pass
+        if not existed:
+            path.unlink()
+    except OSError as exc:
+        raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from exc

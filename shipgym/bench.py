@@ -35,8 +35,10 @@ __all__ = [
     "bench_observers",
     "observer_table",
     "observer_traces",
+    "row_log",
     "run_jobs",
     "velocity_error_trace",
+    "write_bench_outputs",
 ]
 
 DEFAULT_OBSERVERS = ("dkf", "kbf", "ekf")
@@ -242,6 +244,55 @@ class RowLog:
         return [d["row"] for d in sorted(items, key=lambda d: d["index"])]
 
 
+def row_log(json_path: Path | None, markdown: Path | None, total: int) -> Any:
+    """A :class:`RowLog` next to the bench's output (``PATH.partial.jsonl``),
+    named in the message of an interrupt."""
+    from shipgym._io import on_interrupt, partial_path
+
+    out = json_path or markdown
+    usable = out is not None and (not out.exists() or out.is_file())  # not /dev/stdout
+    log = RowLog(partial_path(out, ".jsonl") if usable and out is not None else None, total)
+    on_interrupt(log.summary)
+    return log
+
+
+def write_bench_outputs(
+    title: str,
+    table: str,
+    rows: list[dict[str, Any]],
+    wall: float,
+    *,
+    json_path: Path | None = None,
+    markdown: Path | None = None,
+) -> None:
+    """Print a benchmark's title and table; write its rows (JSON) and table (markdown).
+
+    Each file is written atomically (a complete file or the earlier one).
+
+    Raises:
+        shipgym._io.WriteFailed: a file could not be written; its content is in ``results``
+            (the ``shipgym`` command prints it on stdout and exits with status 2).
+    """
+    from shipgym._io import WriteFailed, atomic_write_text, os_reason
+
+    print(title)
+    print(table)
+    print(f"{len(rows)} runs in {wall:.1f} s")
+    outputs = (
+        (json_path, json.dumps(jsonable({"title": title, "rows": rows}), indent=2), "rows"),
+        (markdown, f"{title}\n\n{table}\n", "table"),
+    )
+    for path, text, what in outputs:
+        if path is None:
+            continue
+        try:
+            atomic_write_text(path, text)
+        except OSError as exc:
+            why = f"cannot write the {what} to {path} ({os_reason(exc)})"
+            raise WriteFailed(why, text) from None
+        print(f"{what} written to {path}")
+
+
 def velocity_error_trace(
     observer: str,
     seed: int = 0,
@@ -252,18 +303,21 @@ def velocity_error_trace(
 
     ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`.
     """
-    import shipgym
+    from shipgym.records import step_record
+    from shipgym.runner import build_env, step_episode
 
-    env = shipgym.make("harbour", observer=observer, controller=controller, wind=wind)
-    env.reset(seed=seed)
+    env = build_env("harbour", observer=observer, controller=controller, wind=wind)
     t, err = [], []
-    done = False
-    while not done:
-        _, _, term, trunc, info = env.step(np.zeros(3, np.float32))
-        t.append(info["t"])
-        err.append(info["est_error_nu"])
-        done = term or trunc
-    env.close()
+
+    def keep(info: dict[str, Any]) -> None:
+        rec = step_record(info)
+        t.append(rec.t)
+        err.append(rec.nav.nu - rec.truth.nu)
+
+    try:
+        step_episode(env, seed, on_step=keep)
+    finally:
+        env.close()
     return {"t": np.array(t), "err_nu": np.array(err)}
 
 

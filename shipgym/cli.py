@@ -20,96 +20,25 @@ from typing import Any
 
 import numpy as np
 
+from shipgym._argtypes import parse_wind
+from shipgym._io import check_writable
 from shipgym._safeload import jsonable
+from shipgym.bench import row_log, write_bench_outputs
+from shipgym.catalogue import catalogue, check_controller, controller_catalogue
 from shipgym.runner import ENV_DEFAULT, run_episode
 
-__all__ = ["ENV_DEFAULT", "main", "parse_wind", "run_episode"]
-
-
-def parse_wind(text: str) -> Any:
-    """The ``--wind`` argparse type: :meth:`WindConfig.parse` (``"3@300"``: 3 m/s from 300 deg).
-
-    Returns a :class:`~shipgym.disturbances.WindConfig`; a malformed or out-of-range value
-    becomes an ``argparse`` error (one line, exit status 2).
-    """
-    from shipgym.disturbances import WindConfig
-
-    try:
-        return WindConfig.parse(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def catalogue() -> dict[str, Any]:
-    """Every name ``shipgym`` accepts, read from the registries (``shipgym list`` prints it).
-
-    Returns:
-        A mapping of plain data: ``env_ids``, ``env_scenarios`` (name -> id),
-        ``scenario_presets`` (name -> description, the named presets and the packaged files),
-        ``controllers`` (name -> description, including ``ppo``, ``ppo:PATH``, ``sac:PATH``),
-        ``observers``, ``sensor_presets``, ``wave_presets``, ``plans``, ``plant_variants``,
-        ``wind_models``, ``actuators`` (the Blue Lady's) and ``vessels`` (name -> a one-line
-        description: DOF, length, actuators).
-    """
-    from shipgym import ENV_IDS
-    from shipgym.controllers.wrappers import CONTROLLERS
-    from shipgym.disturbances import BLENDERMANN
-    from shipgym.dynamics import ACTUATOR_NAMES, PLANT_VARIANTS
-    from shipgym.dynamics.vessel import vessels
-    from shipgym.envs.make import SCENARIOS
-    from shipgym.guidance.plan import PLANS
-    from shipgym.observers import observer_names
-    from shipgym.observers.sensors import SENSOR_PRESETS
-    from shipgym.scenarios import SCENARIOS as SCENARIO_PRESETS
-    from shipgym.scenarios import WAVE_PRESETS, scenario_files
-
-    presets = {k: v.description for k, v in SCENARIO_PRESETS.items()}
-    for stem, path in scenario_files().items():
-        presets.setdefault(stem, f"packaged scenario file {path.name}")
-    return {
-        "env_ids": list(ENV_IDS),
-        "env_scenarios": dict(SCENARIOS),
-        "scenario_presets": presets,
-        "controllers": controller_catalogue(CONTROLLERS),
-        "observers": ["truth", *observer_names()],
-        "sensor_presets": list(SENSOR_PRESETS),
-        "wave_presets": list(WAVE_PRESETS),
-        "plans": list(PLANS),
-        "plant_variants": list(PLANT_VARIANTS),
-        "wind_models": [f"blendermann:{k}" for k in BLENDERMANN],
-        "actuators": list(ACTUATOR_NAMES),
-        "vessels": {
-            n: f"{v.title}: {v.dofs} DOF, L_oa {v.L_oa:g} m, "
-            + ", ".join(f"{a.name} ({a.kind})" for a in v.actuators)
-            for n, v in vessels().items()
-        },
-    }
-
-
-def controller_catalogue(classical: Any = None) -> dict[str, str]:
-    """Controller names and descriptions: the classical registry plus the learned names."""
-    if classical is None:
-        from shipgym.controllers.wrappers import CONTROLLERS as classical
-    from shipgym.controllers.learned import ALGORITHMS, BASELINE_MODELS
-
-    out = {name: spec.description for name, spec in classical.items()}
-    for algo, fname in BASELINE_MODELS.items():
-        out[algo] = f"the shipped {algo.upper()} baseline (shipgym/assets/models/{fname})"
-    for algo in ALGORITHMS:
-        out[f"{algo}:PATH"] = f"a {algo.upper()} model trained with 'shipgym train {algo}'"
-    return out
-
-
-def check_controller(name: str) -> None:
-    """Raise ``ValueError`` (listing every valid name) unless ``name`` is a controller name."""
-    from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
-
-    if is_learned_controller(name):
-        parse_learned_controller(name)  # the file exists and is a shipgym model
-        return
-    names = controller_catalogue()
-    if name not in names:
-        raise ValueError(f"unknown controller {name!r}; choose one of: {', '.join(names)}")
+# a leaf: nothing in the library imports this module; the names above are re-exported for the
+# users who import them from here (tests/test_layering.py keeps it so)
+__all__ = [
+    "ENV_DEFAULT",
+    "catalogue",
+    "check_controller",
+    "controller_catalogue",
+    "main",
+    "parse_wind",
+    "run_episode",
+    "write_bench_outputs",
+]
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
@@ -266,7 +195,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             )
     for path in (args.json, args.record):
         if path is not None:
-            _check_writable(path)
+            check_writable(path)
     if args.record is not None and args.record.suffix != ".rrd":
         raise ValueError(f"--record needs a .rrd path, got {args.record}")
     from shipgym._io import on_interrupt, partial_path
@@ -305,56 +234,6 @@ def _truth_none(observer: str | None) -> str | None:
     return None if observer == "truth" else observer
 
 
-def _row_log(json_path: Path | None, markdown: Path | None, total: int) -> Any:
-    """A :class:`shipgym.bench.RowLog` next to the bench's output (``PATH.partial.jsonl``),
-    named in the message of an interrupt."""
-    from shipgym._io import on_interrupt, partial_path
-    from shipgym.bench import RowLog
-
-    out = json_path or markdown
-    usable = out is not None and (not out.exists() or out.is_file())  # not /dev/stdout
-    log = RowLog(partial_path(out, ".jsonl") if usable else None, total)
-    on_interrupt(log.summary)
-    return log
-
-
-def write_bench_outputs(
-    title: str,
-    table: str,
-    rows: list[dict[str, Any]],
-    wall: float,
-    *,
-    json_path: Path | None = None,
-    markdown: Path | None = None,
-) -> None:
-    """Print a benchmark's title and table; write its rows (JSON) and table (markdown).
-
-    Each file is written atomically (a complete file or the earlier one).
-
-    Raises:
-        shipgym._io.WriteFailed: a file could not be written; its content is in ``results``
-            (``shipgym.cli.main`` prints it on stdout and exits with status 2).
-    """
-    from shipgym._io import WriteFailed, atomic_write_text, os_reason
-
-    print(title)
-    print(table)
-    print(f"{len(rows)} runs in {wall:.1f} s")
-    outputs = (
-        (json_path, json.dumps(jsonable({"title": title, "rows": rows}), indent=2), "rows"),
-        (markdown, f"{title}\n\n{table}\n", "table"),
-    )
-    for path, text, what in outputs:
-        if path is None:
-            continue
-        try:
-            atomic_write_text(path, text)
-        except OSError as exc:
-            why = f"cannot write the {what} to {path} ({os_reason(exc)})"
-            raise WriteFailed(why, text) from None
-        print(f"{what} written to {path}")
-
-
 def _cmd_bench(args: argparse.Namespace) -> int:
     from shipgym.bench import bench_observers, observer_table
     from shipgym.observers import make_observer
@@ -363,8 +242,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         make_observer(name)  # unknown names fail before any work
     for path in (args.json, args.markdown):
         if path is not None:
-            _check_writable(path)
-    log = _row_log(args.json, args.markdown, len(args.observers) * args.seeds)
+            check_writable(path)
+    log = row_log(args.json, args.markdown, len(args.observers) * args.seeds)
     t0 = time.perf_counter()
     check_controller(args.controller)
     from shipgym._io import progress_enabled
@@ -415,19 +294,6 @@ def _cmd_report(args: argparse.Namespace) -> int:
     for f in write_report(run, args.out):
         print(f"wrote {f}")
     return 0
-
-
-def _check_writable(path: Path) -> None:
-    """Create the parent folder and check that ``path`` can be written, before any work."""
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        existed = path.exists()
-        with path.open("a"):
-            pass
-        if not existed:
-            path.unlink()
-    except OSError as exc:
-        raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from exc
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:

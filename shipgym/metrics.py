@@ -20,12 +20,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from shipgym.dynamics.frames import wrap_angle
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from shipgym.records import StepRecord
 
 __all__ = [
     "INDEX_KEYS",
@@ -178,7 +181,7 @@ def honest_indices(metrics: Any, *, plan_finite: bool = True) -> dict[str, Any]:
 
 def episode_result(
     metrics: Any,
-    info: dict[str, Any],
+    record: StepRecord | None,
     *,
     terminated: bool,
     truncated: bool,
@@ -188,7 +191,8 @@ def episode_result(
 
     Args:
         metrics: the episode's :meth:`ManoeuvreMetrics.summary` (``env.episode_metrics()``).
-        info: the last step's ``info`` (for the observer's ``estimation_rmse``).
+        record: the last step's :class:`~shipgym.records.StepRecord` (``info["record"]``; for
+            the observer's ``estimation_rmse``), or ``None``.
         terminated, truncated: how the episode ended.
         plan_finite: whether the task's plan ends (see :func:`indices_note`).
 
@@ -213,7 +217,9 @@ def episode_result(
         "thrust_mean_abs": list(metrics["thrust_mean_abs"]),
         "thrust_total_variation": list(metrics["thrust_total_variation"]),
         "saturated_fraction": list(metrics["saturated_fraction"]),
-        "rmse": info.get("estimation_rmse"),
+        "rmse": None
+        if record is None or record.estimation_rmse is None
+        else dict(record.estimation_rmse),
     }
 
 

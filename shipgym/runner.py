@@ -1,8 +1,19 @@
-"""Run one closed-loop episode: the library behind ``shipgym run`` and the benchmarks.
+"""Run closed-loop episodes: the one runner behind ``shipgym run``, the benchmarks and the RL
+evaluation.
 
-:func:`run_episode` builds the env stack (observer, controller or learned policy, optional
-recording), runs one episode and returns its results as plain data; with ``json_path`` it
-writes them, renamed onto the name together with the recording (:mod:`shipgym._io`).
+- :func:`build_env`: the wrapper stack of a named controller (classical or learned) and
+  observer;
+- :func:`step_episode`: reset and step a stack to the end of one episode (zero residual
+  actions, or a policy's);
+- :func:`episode_summary`: the plain-data result of the finished episode
+  (:func:`shipgym.metrics.episode_result`);
+- :func:`run_episode`: all three, with an optional recording and report, as plain data; with
+  ``json_path`` it writes them, renamed onto the name together with the recording
+  (:mod:`shipgym._io`).
+
+``shipgym bench observers`` (:mod:`shipgym.bench`), ``shipgym bench controllers`` and the
+training's harbour evaluation (:mod:`shipgym.rl.evaluation`) use these functions; none of
+them assembles or steps an episode of its own.
 """
 
 from __future__ import annotations
@@ -11,6 +22,8 @@ import json
 import math
 import time
 import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +31,15 @@ import numpy as np
 
 from shipgym._safeload import jsonable
 
-__all__ = ["ENV_DEFAULT", "describe_wind", "run_episode"]
+__all__ = [
+    "ENV_DEFAULT",
+    "EpisodeEnd",
+    "build_env",
+    "describe_wind",
+    "episode_summary",
+    "run_episode",
+    "step_episode",
+]
 
 
 class _EnvDefault:
@@ -82,9 +103,8 @@ def run_episode(
             (``NAME.partial.rrd``), the JSON is not written and an earlier pair is untouched.
     """
 
-    import shipgym
     from shipgym.disturbances import WindConfig
-    from shipgym.metrics import episode_result
+    from shipgym.records import step_record
 
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be an int >= 0, got {seed!r}")
@@ -93,27 +113,12 @@ def run_episode(
     if wind is not ENV_DEFAULT:
         kwargs["wind"] = WindConfig.coerce(wind, name="wind")
     kwargs.update(env_kwargs or {})
-    from shipgym.controllers.learned import is_learned_controller
-
-    if is_learned_controller(controller):
-        from shipgym.controllers.learned import make_learned_env
-
-        # the learned policy runs with the observer it was trained with unless one is named;
-        # an explicit one is honoured and recorded below ("observer", "model")
-        obs_kw = {} if observer is None else {"observer": observer}
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", message=".*was trained with observer")
-            env = make_learned_env(scenario, controller, **obs_kw, **kwargs)
-        meta = env.policy.metadata  # type: ignore[attr-defined]
-        model_info: dict[str, Any] | None = {
-            "path": str(env.model_path),  # type: ignore[attr-defined]
-            "algorithm": meta.algorithm,
-            "trained_on": meta.env_id,
-            "trained_observer": meta.observer or "truth",
-        }
-    else:
-        env = shipgym.make(scenario, observer=observer, controller=controller, **kwargs)
-        model_info = None
+    # a learned policy runs with the observer it was trained with unless one is named; an
+    # explicit one is honoured (the CLI warns) and recorded below ("observer", "model")
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*was trained with observer")
+        env = build_env(scenario, controller=controller, observer=observer, **kwargs)
+    model_info = _model_info(env, controller)
     if report is not None and record is None:
         record = report / "run.rrd"
     if record is not None:
@@ -121,21 +126,19 @@ def run_episode(
 
         env = RecordEpisode(env, record, spawn=spawn, rename=False)
     limit = env.spec.max_episode_steps if env.spec is not None else None
-    plan_finite = bool(env.unwrapped.terminate_on_finish)  # type: ignore[attr-defined]
     bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
+
+    def tick(info: dict[str, Any]) -> None:
+        rec = step_record(info)
+        bar.update(1)
+        bar.set_postfix(leg=rec.reference.leg + 1, t=f"{rec.t:.0f}s", refresh=False)
+
     t0 = time.perf_counter()
     try:
-        env.reset(seed=seed)
-        # the episode's wind, read after reset (the Tracking task draws one per episode)
+        end = step_episode(env, seed, on_step=tick)
+        # the episode's wind (set at reset: the Tracking task draws one per episode)
         wind_out = describe_wind(env.unwrapped.wind_config)  # type: ignore[attr-defined]
-        zero = np.zeros(3, dtype=np.float32)
-        terminated = truncated = False
-        info: dict[str, Any] = {}
-        while not (terminated or truncated):
-            _, _, terminated, truncated, info = env.step(zero)
-            bar.update(1)
-            bar.set_postfix(leg=info["leg"] + 1, t=f"{info['t']:.0f}s", refresh=False)
-        metrics = env.unwrapped.episode_metrics()  # type: ignore[attr-defined]
+        result = episode_summary(env, end)
         waves_out = _describe_waves(env.unwrapped.physics.wave_config)  # type: ignore[attr-defined]
         current_out = _describe_current(env.unwrapped.physics.current_config)  # type: ignore[attr-defined]
     finally:
@@ -155,22 +158,126 @@ def run_episode(
         "scenario_preset": scenario_preset,
         "env_id": env.spec.id if env.spec is not None else None,
         "controller": controller,
-        "observer": _observer_of(env) or "truth",
+        "observer": step_record(end.info).nav.source,  # "truth" or the observer's name
         "seed": seed,
         "plant": plant,
         "wind": wind_out,
         "waves": waves_out,
         "current": current_out,
         "model": model_info,
-        **episode_result(
-            metrics, info, terminated=terminated, truncated=truncated, plan_finite=plan_finite
-        ),
+        **result,
         "wall_time_s": wall,
         "files": files,
     }
     if record is not None or json_path is not None:
         _commit_results(res, env if record is not None else None, json_path)
     return res
+
+
+def build_env(
+    scenario: str, *, controller: str = "pid", observer: str | None = None, **env_kwargs: Any
+) -> Any:
+    """The wrapper stack env -> observer -> controller (classical) or -> learned policy.
+
+    Args:
+        scenario: env scenario (``harbour``, ``station-keeping``, ``tracking``) or env id.
+        controller: a classical controller name (``pid``, ``lq``, ...) or a learned one
+            (``ppo``: the shipped baseline, ``ppo:PATH``, ``sac:PATH``).
+        observer: ``None``: the truth for a classical controller, the model's own observer
+            for a learned one; ``"truth"``: always the truth; or an observer name (a learned
+            policy then runs with it, with a warning if it was trained with another).
+        **env_kwargs: environment arguments (``wind=``, ``plant=``, ...).
+    """
+    from shipgym.controllers.learned import is_learned_controller
+
+    if is_learned_controller(controller):
+        from shipgym.controllers.learned import make_learned_env
+
+        obs_kw: dict[str, Any] = {} if observer is None else {"observer": observer}
+        return make_learned_env(scenario, controller, **obs_kw, **env_kwargs)
+    import shipgym
+
+    return shipgym.make(scenario, observer=observer, controller=controller, **env_kwargs)
+
+
+@dataclass(frozen=True)
+class EpisodeEnd:
+    """How an episode of :func:`step_episode` ended.
+
+    Attributes:
+        terminated, truncated: the flags of the last step.
+        info: the last step's ``info``.
+        steps: control steps taken.
+        ret: the sum of the rewards.
+    """
+
+    terminated: bool
+    truncated: bool
+    info: dict[str, Any]
+    steps: int
+    ret: float
+
+
+def step_episode(
+    env: Any,
+    seed: int,
+    policy: Callable[[Any], Any] | None = None,
+    *,
+    on_step: Callable[[dict[str, Any]], None] | None = None,
+) -> EpisodeEnd:
+    """Reset ``env`` with ``seed`` and step it to the end of the episode.
+
+    Args:
+        env: a stack of :func:`build_env` (any Gymnasium env with a finite episode).
+        seed: the episode seed.
+        policy: ``policy(obs) -> action``; ``None``: zero actions (a controller stack then runs
+            its controller alone).
+        on_step: called with every step's ``info`` (a progress bar, a trace).
+    """
+    obs, info = env.reset(seed=seed)
+    zero = np.zeros(env.action_space.shape, dtype=np.float32)
+    terminated = truncated = False
+    ret = 0.0
+    steps = 0
+    while not (terminated or truncated):
+        action = zero if policy is None else policy(obs)
+        obs, reward, terminated, truncated, info = env.step(action)
+        ret += float(reward)
+        steps += 1
+        if on_step is not None:
+            on_step(info)
+    return EpisodeEnd(bool(terminated), bool(truncated), info, steps, ret)
+
+
+def episode_summary(env: Any, end: EpisodeEnd) -> dict[str, Any]:
+    """The plain-data result of the episode that just ended in ``env``
+    (:func:`shipgym.metrics.episode_result`: completion, indices, thruster usage, ...)."""
+    from shipgym.metrics import episode_result
+    from shipgym.records import step_record
+
+    base = env.unwrapped
+    return episode_result(
+        base.episode_metrics(),
+        step_record(end.info),
+        terminated=end.terminated,
+        truncated=end.truncated,
+        plan_finite=bool(base.terminate_on_finish),
+    )
+
+
+def _model_info(env: Any, controller: str) -> dict[str, Any] | None:
+    """The learned model of a stack as plain data (``None``: a classical controller)."""
+    from shipgym.controllers.learned import is_learned_controller
+
+    if not is_learned_controller(controller):
+        return None
+    meta = env.policy.metadata
+    return {
+        "path": str(env.model_path),
+        "algorithm": meta.algorithm,
+        "trained_on": meta.env_id,
+        "trained_observer": meta.observer or "truth",
+    }
 
 
 def _commit_results(res: dict[str, Any], recorder: Any, json_path: Path | None) -> None:
@@ -202,16 +309,6 @@ def _commit_results(res: dict[str, Any], recorder: Any, json_path: Path | None) 
         failed.append(f"cannot rename the finished files onto {where} ({os_reason(exc)})")
     if failed:
         raise WriteFailed("; ".join(failed), res)
-
-
-def _observer_of(env: Any) -> str | None:
-    """Name of the observer in a wrapper stack (``None``: the controller sees the truth)."""
-    while hasattr(env, "env"):
-        name = getattr(env, "observer_name", None)
-        if name is not None:
-            return str(name)
-        env = env.env
-    return None
 
 
 def _progress(total: int | None, enabled: bool, desc: str) -> Any:

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import shipgym
+from shipgym.records import NavigationData
 from shipgym.viz import (
     RecordEpisode,
     load_run,
@@ -339,10 +340,15 @@ def test_episodes_go_to_numbered_files_and_spec_round_trips(tmp_path):
 
 
 class _FakeObserver(gym.Wrapper):
-    """Shifts the navigation pose, as an observer's estimate would differ from the truth."""
+    """Shifts the navigation pose, as an observer's estimate would differ from the truth.
+
+    Only in the step's record (``info["nav_eta"]`` keeps the truth): the recorder reads the
+    record."""
 
     def _shift(self, info):
-        info["nav_eta"] = info["eta"] + np.array([0.5, -0.25, 0.01])
+        rec = info["record"]
+        nav = NavigationData(rec.t, rec.truth.eta + np.array([0.5, -0.25, 0.01]), rec.truth.nu)
+        info["record"] = rec.with_nav(nav)
         return info
 
     def reset(self, **kwargs):

@@ -1040,8 +1040,7 @@ def make_learned_env(
     Returns:
         The wrapped environment; ``env.step(np.zeros(3))`` runs the learned controller.
     """
-    from shipgym.controllers.wrappers import DPControllerWrapper
-    from shipgym.envs.make import resolve_env_id
+    from shipgym.envs.make import make
 
     path = Path(model_path)
     if not path.is_file() and is_learned_controller(str(model_path)):
@@ -1051,13 +1050,11 @@ def make_learned_env(
     obs_name = meta.observer if observer == _USE_MODEL else observer
     if obs_name == "truth":
         obs_name = None
-    env = gym.make(resolve_env_id(env_id), **env_kwargs)
-    if obs_name is not None:
-        from shipgym.observers.wrapper import ObserverWrapper
-
-        env = ObserverWrapper(env, observer=obs_name)
-    if meta.residual:
-        env = DPControllerWrapper(
-            env, controller=str(meta.controller), residual_scale=meta.residual_scale
-        )
+    env = make(
+        env_id,
+        observer=obs_name,
+        controller=str(meta.controller) if meta.residual else None,
+        residual_scale=meta.residual_scale if meta.residual else 1.0,
+        **env_kwargs,
+    )
     return LearnedControllerWrapper(env, path, deterministic=deterministic)

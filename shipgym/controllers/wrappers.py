@@ -1,14 +1,15 @@
 """Controllers as Gymnasium wrappers (style: gymnasium.wrappers).
 
 Stack order: env -> observer wrapper (optional) -> controller wrapper. The controller reads
-the navigation data (``info["nav_eta"]``, ``info["nav_nu"]``: the truth, or an observer's
-estimate when an observer wrapper sits below) and the guidance reference from the ``info`` of
-the previous step, so it uses only what a real DP system would know.
+the navigation data (``info["record"].nav``, a :class:`shipgym.records.NavigationData`: the
+truth, or an observer's estimate when an observer wrapper sits below) and the guidance
+reference (``info["record"].reference``) of the previous step, so it uses only what a real DP
+system would know.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -20,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym.dynamics import wrap_angle
 from shipgym.dynamics.vessel import Vessel
 from shipgym.guidance import to_r_frame
+from shipgym.records import ControlData, StepRecord, step_record
 
 from .actuation import make_allocator, planar_capacity
 from .allocation import Allocation
@@ -151,10 +153,11 @@ class DPControllerWrapper(
 
     Info gains ``tau_c`` (controller output, N, N, N m, body), ``tau_delivered`` and
     ``tau_error`` (what the allocation could not deliver), ``controller_action`` (normalised)
-    and ``allocation_saturated`` (per actuator).
+    and ``allocation_saturated`` (per actuator); the same in ``info["record"].control`` (a
+    :class:`~shipgym.records.ControlData`).
 
     Args:
-        env: an environment whose ``info`` carries ``nav_eta``, ``nav_nu`` and the reference
+        env: an environment whose ``info`` carries a :class:`~shipgym.records.StepRecord`
             (any ``shipgym/BlueLady*`` env, possibly under an observer wrapper).
         controller: a name in :data:`CONTROLLERS` (``"pid"``, ``"pid-seed"``).
         residual_scale: factor on the residual action (0 disables it).
@@ -183,7 +186,7 @@ class DPControllerWrapper(
         self._allocate = make_allocator(self.vessel, spec.allocation, dt)
         self._physics = base.physics  # type: ignore[attr-defined]
         self.action_space = spaces.Box(-1.0, 1.0, (self.actuators.n_channels,), np.float32)
-        self._info: dict[str, Any] = {}
+        self._record: StepRecord | None = None
         self._leg = 0
         self._psi_P = 0.0
         self._tau_error: NDArray[np.float64] | None = None
@@ -193,9 +196,10 @@ class DPControllerWrapper(
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         self.controller.reset()
-        self._info = info
-        self._leg = int(info["leg"])
-        self._psi_P = float(info["eta_P"][2])
+        rec = step_record(info)
+        self._record = rec
+        self._leg = rec.reference.leg
+        self._psi_P = float(rec.reference.eta_P[2])
         self._tau_error = None
         return obs, info
 
@@ -208,9 +212,9 @@ class DPControllerWrapper(
             raise ValueError(
                 f"residual action must be {n} finite numbers in [-1, 1], got {action!r}"
             )
-        if not self._info:
+        if self._record is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        tau_c, alloc = self._control(self._info)
+        tau_c, alloc = self._control(self._record)
         a_ctrl = self.actuators.command_to_action(alloc.command)
         total = a_ctrl + self.residual_scale * residual
         applied = np.clip(total, -1.0, 1.0)
@@ -222,23 +226,37 @@ class DPControllerWrapper(
         info["allocation_saturated"] = alloc.saturated
         info["residual_clipped"] = applied != total
         self._tau_error = alloc.tau_error
-        if int(info["leg"]) != self._leg:
-            psi_P = float(info["eta_P"][2])
+        rec = step_record(info).with_control(
+            ControlData(
+                self.controller_name,
+                tau_c,
+                alloc.tau,
+                alloc.tau_error,
+                a_ctrl,
+                alloc.saturated,
+                info["residual_clipped"],
+            )
+        )
+        info["record"] = rec
+        ref = rec.reference
+        if ref.leg != self._leg:
+            psi_P = float(ref.eta_P[2])
             self.controller.change_frame(float(wrap_angle(psi_P - self._psi_P)))
-            self._leg, self._psi_P = int(info["leg"]), psi_P
-        self._info = info
+            self._leg, self._psi_P = ref.leg, psi_P
+        self._record = rec
         return obs, reward, terminated, truncated, info
 
-    def _control(self, info: Mapping[str, Any]) -> tuple[NDArray[np.float64], Allocation]:
-        """Controller and allocation from the navigation data and reference in ``info``."""
-        eta_d_r = info["eta_d_r"]
-        eta_r = to_r_frame(info["nav_eta"], info["eta_P"], psi_ref_r=float(eta_d_r[2]))
+    def _control(self, rec: StepRecord) -> tuple[NDArray[np.float64], Allocation]:
+        """Controller and allocation from the navigation data and reference of a record."""
+        ref, nav = rec.reference, rec.nav
+        eta_d_r = ref.eta_d_r
+        eta_r = to_r_frame(nav.eta, ref.eta_P, psi_ref_r=float(eta_d_r[2]))
         tau_c = self.controller(
             eta_r,
-            info["nav_nu"],
+            nav.nu,
             eta_d_r,
-            info["eta_dot_d_r"],
-            info["eta_ddot_d_r"],
+            ref.eta_dot_d_r,
+            ref.eta_ddot_d_r,
             saturated=self._tau_error,
         )
         return tau_c, self._allocate(tau_c, self._physics.actuator_state)

@@ -30,6 +30,7 @@ from shipgym.guidance import Guidance, Limits, ManoeuvrePlan, Reference
 from shipgym.guidance import plan as named_plan
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
+from shipgym.records import StepRecord, step_record_of_env
 
 from .physics import MAX_TIMESTEP, MIN_TIMESTEP, NO_CURRENT, VesselPhysics, check_timestep
 
@@ -186,6 +187,8 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ``contacts``; the ``reward_*`` terms; and at the end of every episode (terminated or
     truncated) ``episode_metrics``
     (Tomera 2014 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
+    ``record``: the same as a typed :class:`shipgym.records.StepRecord` (the same arrays),
+    which the observer and controller wrappers hand on with their own parts.
 
     ## Arguments
     | Argument | Default | Description |
@@ -308,6 +311,9 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         )
         self.actuators = self.vessel.actuators
         self.n_actions = self.actuators.n_channels
+        self._actuator_names = self.actuators.names
+        multi = self.actuators.channel_names != self.actuators.names
+        self._channel_names = self.actuators.channel_names if multi else ()
         self.limits = Limits.from_dict(dict(self.vessel.limits))
         self.guidance = Guidance(self.plan, limits=self.limits)
         self.metrics = ManoeuvreMetrics(sample_period=1.0, n_actuators=len(self.actuators))
@@ -402,6 +408,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         n = self.n_actions
         info = self._info(sample, self.physics.command, np.zeros(n, bool), False, {}, [])
         info["measurements"] = measurements
+        info["record"] = self._record(info, sample)
         return self._obs(sample), info
 
     def step(
@@ -453,6 +460,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         info = self._info(sample, command, saturated | action_clipped, finished, rewards, contacts)
         info["action_clipped"] = action_clipped
         info["measurements"] = measurements
+        info["record"] = self._record(info, sample)
         if terminated:  # a time-limit truncation is seen by the EpisodeEnd wrapper
             self._episode_over = True
             info["episode_metrics"] = self.episode_metrics()
@@ -627,6 +635,12 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             info["p"] = phys.p
         info.update(rewards)
         return info
+
+    def _record(self, info: Mapping[str, Any], s: _Sample) -> StepRecord:
+        """The typed record of a step (``info["record"]``), holding the same arrays as ``info``."""
+        return step_record_of_env(
+            info, s.ref, self._prev_action, self._actuator_names, self._channel_names
+        )
 
     def _find_body(self, name: str) -> int | None:
         try:

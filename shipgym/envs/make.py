@@ -31,15 +31,25 @@ def resolve_env_id(name: str) -> str:
 
 
 def make(
-    env_id: str, *, observer: str | None = None, controller: str | None = None, **kwargs: Any
+    env_id: str,
+    *,
+    observer: str | None = None,
+    controller: str | None = None,
+    residual_scale: float = 1.0,
+    **kwargs: Any,
 ) -> gym.Env[Any, Any]:
     """``gym.make`` plus the wrapper stack: env -> observer wrapper -> controller wrapper.
+
+    The one place that stacks these wrappers (``shipgym.make``, the learned controllers'
+    stacks and the training envs use it).
 
     Args:
         env_id: a registered id or a scenario name (:data:`SCENARIOS`).
         observer: ``None`` or ``"truth"`` (controllers see the true state), or an observer
             name (``shipgym.observers.OBSERVERS``).
         controller: ``None`` (raw thruster actions) or a controller name.
+        residual_scale: the controller wrapper's factor on the residual action (see
+            :class:`~shipgym.controllers.wrappers.DPControllerWrapper`).
         **kwargs: environment arguments (``wind="3@300"``, ``current=(0.1, 90)``, ...: any
             form of ``WindConfig.coerce`` / ``CurrentConfig.coerce``, directions in degrees;
             see :class:`~shipgym.envs.base.BlueLadyEnv`) and ``gym.make``'s own
@@ -53,5 +63,5 @@ def make(
     if controller is not None:
         from shipgym.controllers.wrappers import DPControllerWrapper
 
-        env = DPControllerWrapper(env, controller=controller)
+        env = DPControllerWrapper(env, controller=controller, residual_scale=residual_scale)
     return env

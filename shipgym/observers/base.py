@@ -245,11 +245,28 @@ OBSERVERS: dict[str, Callable[..., Observer]] = {}
 _BUILTIN_MODULES = ("shipgym.observers.kalman", "shipgym.observers.ekf")
 
 
-def register_observer(name: str, factory: Callable[..., Observer]) -> None:
-    """Add (or replace) a named observer factory in :data:`OBSERVERS`."""
+#: ``name -> adapt(vessel) -> overrides``: how a preset is fitted to a vessel (see
+#: :func:`make_observer`); presets without one are used as registered
+VESSEL_ADAPTERS: dict[str, Callable[[Any], dict[str, Any]]] = {}
+
+
+def register_observer(
+    name: str,
+    factory: Callable[..., Observer],
+    vessel_overrides: Callable[[Any], dict[str, Any]] | None = None,
+) -> None:
+    """Add (or replace) a named observer factory in :data:`OBSERVERS`.
+
+    ``vessel_overrides(vessel)`` returns the factory arguments that fit the preset to a
+    :class:`~shipgym.dynamics.vessel.Vessel` (:func:`make_observer` with ``vessel=``).
+    """
     if not isinstance(name, str) or not name:
         raise ValueError(f"an observer name must be a non-empty string, got {name!r}")
     OBSERVERS[name] = factory
+    if vessel_overrides is not None:
+        VESSEL_ADAPTERS[name] = vessel_overrides
+    else:
+        VESSEL_ADAPTERS.pop(name, None)
 
 
 def _load_builtins() -> None:
@@ -267,11 +284,12 @@ def make_observer(name: str, vessel: Any = None, **overrides: Any) -> Observer:
     Args:
         name: a key of :data:`OBSERVERS`.
         vessel: the :class:`~shipgym.dynamics.vessel.Vessel` the observer is for, or ``None``
-            (the preset as registered, i.e. designed for the Blue Lady). With a vessel the
-            tuned kinematic filters (``dkf``, ``kbf``) take its white-noise acceleration
-            intensities (``[observer]`` of the vessel file) and the EKFs (``ekf``,
-            ``tomera-ekf``) its design model ``M``, ``D_L``, with the bias noise scaled by
-            the squared ratio of its force capacity to the Blue Lady's.
+            (the preset as registered, i.e. designed for the Blue Lady). With a vessel, the
+            preset's registered adapter fits it: the tuned kinematic filters (``dkf``,
+            ``kbf``) take its white-noise acceleration intensities (``[observer]`` of the
+            vessel file), the EKFs (``ekf``, ``tomera-ekf``) its design model ``M``, ``D_L``
+            with the bias noise scaled by the squared ratio of its force capacity to the
+            Blue Lady's.
         **overrides: passed to the factory (e.g. design fields, ``gate_probability``);
             they win over the vessel's values.
 
@@ -286,34 +304,6 @@ def make_observer(name: str, vessel: Any = None, **overrides: Any) -> Observer:
         raise ValueError(
             f"unknown observer {name!r}; valid names are: {', '.join(sorted(OBSERVERS))}"
         ) from None
-    if vessel is not None:
-        overrides = {**vessel_overrides(name, vessel), **overrides}
+    if vessel is not None and name in VESSEL_ADAPTERS:
+        overrides = {**VESSEL_ADAPTERS[name](vessel), **overrides}
     return factory(**overrides)
-
-
-#: force capacity (N, N, N m) of the Blue Lady, the vessel the EKF noise presets were tuned for
-_BLUE_LADY_CAPACITY = (451.33056, 88.29, 247.91832)
-
-
-def vessel_overrides(name: str, vessel: Any) -> dict[str, Any]:
-    """The factory arguments that fit a preset observer to ``vessel`` (:func:`make_observer`)."""
-    if name in ("dkf", "kbf"):
-        q_xy = float(vessel.observer["accel_psd_xy"])
-        q_psi = float(vessel.observer["accel_psd_psi"])
-        return {"Q": (((q_xy,),), ((q_xy,),), ((q_psi,),))}
-    if name in ("ekf", "tomera-ekf"):
-        from .ekf import ekf_config
-
-        cfg = ekf_config(name)
-        cap = vessel.actuators.capacity()
-        cap3 = cap if cap.size == 3 else cap[[0, 1, 3]]
-        k = (cap3 / np.asarray(_BLUE_LADY_CAPACITY)) ** 2
-        out: dict[str, Any] = {
-            "M": tuple(map(tuple, np.asarray(vessel.design.M, float).tolist())),
-            "D_L": tuple(map(tuple, np.asarray(vessel.design.D_L, float).tolist())),
-        }
-        if not np.allclose(k, 1.0, rtol=1e-9, atol=0.0):  # the Blue Lady keeps the preset
-            Q = np.asarray(cfg.Q) * np.sqrt(np.outer(k, k))
-            out["Q"] = tuple(map(tuple, Q.tolist()))
-        return out
-    return {}

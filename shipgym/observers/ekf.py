@@ -79,7 +79,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
@@ -660,5 +660,28 @@ def default_ekf(**overrides: Any) -> ExtendedKalmanFilter:
     return ExtendedKalmanFilter(ekf_config("ekf", **overrides), name="ekf")
 
 
-register_observer("ekf", default_ekf)
-register_observer("tomera-ekf", tomera_ekf)
+#: force capacity (N, N, N m) of the Blue Lady, the vessel the bias noise presets were tuned for
+_BLUE_LADY_CAPACITY = (451.33056, 88.29, 247.91832)
+
+
+def _vessel_model(name: str) -> Callable[[Any], dict[str, Any]]:
+    def adapt(vessel: Any) -> dict[str, Any]:
+        """The preset for a vessel: its design model ``M``, ``D_L``; the bias noise ``Q``
+        scaled by the squared ratio of its force capacity to the Blue Lady's."""
+        out: dict[str, Any] = {
+            "M": _tuple_mat(np.asarray(vessel.design.M, dtype=float)),
+            "D_L": _tuple_mat(np.asarray(vessel.design.D_L, dtype=float)),
+        }
+        cap = np.asarray(vessel.actuators.capacity(), dtype=float)
+        cap3 = cap if cap.size == 3 else cap[[0, 1, 3]]
+        k = (cap3 / np.asarray(_BLUE_LADY_CAPACITY)) ** 2
+        if not np.allclose(k, 1.0, rtol=1e-9, atol=0.0):  # the Blue Lady keeps the preset
+            Q = np.asarray(ekf_config(name).Q) * np.sqrt(np.outer(k, k))
+            out["Q"] = _tuple_mat(Q)
+        return out
+
+    return adapt
+
+
+register_observer("ekf", default_ekf, _vessel_model("ekf"))
+register_observer("tomera-ekf", tomera_ekf, _vessel_model("tomera-ekf"))

@@ -626,5 +626,19 @@ register_observer(
 register_observer(
     "tomera-kbf", _factory(KalmanBucyFilter, TOMERA_KBF, "tomera-kbf", steady_state=True)
 )
-register_observer("dkf", _factory(DiscreteKalmanFilter, DKF_DESIGN, "dkf", constant_gain=False))
-register_observer("kbf", _factory(KalmanBucyFilter, KBF_DESIGN, "kbf", steady_state=False))
+
+
+def vessel_noise(vessel: Any) -> dict[str, Any]:
+    """The tuned presets' white-noise acceleration intensities for a vessel (its
+    ``[observer]`` values ``accel_psd_xy`` m^2/s^3, ``accel_psd_psi`` rad^2/s^3)."""
+    q_xy = float(vessel.observer["accel_psd_xy"])
+    q_psi = float(vessel.observer["accel_psd_psi"])
+    return {"Q": (((q_xy,),), ((q_xy,),), ((q_psi,),))}
+
+
+register_observer(
+    "dkf", _factory(DiscreteKalmanFilter, DKF_DESIGN, "dkf", constant_gain=False), vessel_noise
+)
+register_observer(
+    "kbf", _factory(KalmanBucyFilter, KBF_DESIGN, "kbf", steady_state=False), vessel_noise
+)

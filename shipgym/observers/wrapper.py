@@ -1,7 +1,8 @@
 """Observers as a Gymnasium wrapper: env -> ObserverWrapper -> controller wrapper.
 
 Not an ``ObservationWrapper``: the model-based observers need the applied thrust, which the
-environment reports with every sensor sample (``info["measurements"][i]["tau"]``).
+environment reports with every sensor sample (:class:`shipgym.records.Measurement`, in the
+step's :class:`~shipgym.records.StepRecord`, ``info["record"]``).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shipgym.dynamics import wrap_angle
+from shipgym.records import NavigationData, StepRecord, step_record
 
 __all__ = ["ObserverWrapper"]
 
@@ -25,12 +27,13 @@ class ObserverWrapper(
     """Feeds the sensor samples and applied thrust to an observer; exposes its estimate.
 
     After every ``reset``/``step`` the observation is rebuilt from the estimate (same layout
-    as the environment's), ``info["nav_eta"]``/``info["nav_nu"]`` become the estimate (what a
-    controller wrapper stacked above uses) and the info gains the estimation errors against
-    the truth: ``est_error_eta`` (m, m, rad; heading wrapped), ``est_error_nu`` (m/s, m/s,
-    rad/s), ``observer_nis`` and ``observer_rejected`` (outlier gate) of the last update, and
-    at the end of an episode ``estimation_rmse`` (x, y, psi, u, v, r; psi and r in degrees
-    and deg/s).
+    as the environment's), the record's navigation data (``info["record"].nav``, a
+    :class:`~shipgym.records.NavigationData`: what a controller wrapper stacked above uses)
+    and ``info["nav_eta"]``/``info["nav_nu"]`` become the estimate, and the info gains the
+    estimation errors against the truth: ``est_error_eta`` (m, m, rad; heading wrapped),
+    ``est_error_nu`` (m/s, m/s, rad/s), ``observer_nis`` and ``observer_rejected`` (outlier
+    gate) of the last update, and at the end of an episode ``estimation_rmse`` (x, y, psi, u,
+    v, r; psi and r in degrees and deg/s; also ``info["record"].estimation_rmse``).
 
     Args:
         env: a ``shipgym/BlueLady*`` environment with sensors.
@@ -56,33 +59,35 @@ class ObserverWrapper(
             )
         self._sq = np.zeros(6)
         self._n = 0
+        # the env's observation layout, rebuilt around the estimate
+        self._observation = base.navigation_observation
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
-        meas = [m for m in info["measurements"] if m["z"] is not None]
+        rec = step_record(info)
+        meas = [m for m in rec.measurements if m.z is not None]
         if meas:
-            self.observer.reset(meas[0]["t"], meas[0]["z"])
+            self.observer.reset(meas[0].t, meas[0].z)
         else:  # a dropout at the start: begin from the planned start pose (the berth)
-            self.observer.reset(info["t"], info["eta_P"])
+            self.observer.reset(rec.t, rec.reference.eta_P)
         self._sq[:] = 0.0
         self._n = 0
-        return self._apply(obs, info, None)
+        return self._apply(obs, info, rec, None)
 
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         obs, reward, terminated, truncated, info = self.env.step(action)
+        rec = step_record(info)
         last = None
-        for m in info["measurements"]:
-            last = self.observer.step(m["t"], m["z"], m["tau"])
-        if not info["measurements"] or info["measurements"][-1]["t"] < info["t"]:
-            tau = info["measurements"][-1]["tau"] if info["measurements"] else None
-            self.observer.step(info["t"], None, tau)  # coast to now
-        obs, info = self._apply(obs, info, last)
-        if terminated or truncated:
-            info["estimation_rmse"] = self.estimation_rmse()
+        ms = rec.measurements
+        for m in ms:
+            last = self.observer.step(m.t, m.z, m.tau)
+        if not ms or ms[-1].t < rec.t:
+            self.observer.step(rec.t, None, ms[-1].tau if ms else None)  # coast to now
+        obs, info = self._apply(obs, info, rec, last, ended=terminated or truncated)
         return obs, reward, terminated, truncated, info
 
     def estimation_rmse(self) -> dict[str, float]:
@@ -93,22 +98,33 @@ class ObserverWrapper(
         return dict(zip(("x", "y", "psi", "u", "v", "r"), r.tolist(), strict=True))
 
     def _apply(
-        self, obs: NDArray[np.float32], info: dict[str, Any], step_info: Any
+        self,
+        obs: NDArray[np.float32],
+        info: dict[str, Any],
+        rec: StepRecord,
+        step_info: Any,
+        ended: bool = False,
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         est = self.observer.estimate()
-        eta, nu = info["eta"], info["nu"]
+        eta, nu = rec.truth.eta, rec.truth.nu
         e_eta = np.array(
             [est.eta[0] - eta[0], est.eta[1] - eta[1], wrap_angle(est.eta[2] - eta[2])]
         )
         e_nu = est.nu - nu
         self._sq += np.concatenate([e_eta, e_nu]) ** 2
         self._n += 1
-        info["nav_eta"] = np.array(est.eta)
-        info["nav_nu"] = np.array(est.nu)
+        nav = NavigationData(
+            rec.t, np.array(est.eta), np.array(est.nu), est.P_eta, est.P_nu, self.observer_name
+        )
+        rmse = self.estimation_rmse() if ended else None
+        info["nav_eta"] = nav.eta
+        info["nav_nu"] = nav.nu
         info["est_error_eta"] = e_eta
         info["est_error_nu"] = e_nu
         info["observer_nis"] = None if step_info is None else step_info.nis
         info["observer_rejected"] = False if step_info is None else bool(step_info.rejected)
-        base = self.env.unwrapped
-        obs = base.navigation_observation(est.eta, est.nu, base.reference, base.prev_action)  # type: ignore[attr-defined]
+        if rmse is not None:
+            info["estimation_rmse"] = rmse
+        info["record"] = rec.with_nav(nav, estimation_rmse=rmse)
+        obs = self._observation(est.eta, est.nu, rec.reference, rec.actuators.action)
         return obs, info

@@ -24,9 +24,10 @@ from shipgym._argtypes import (
     bounded_float,
     bounded_int,
     nonneg_int,
+    parse_wind,
     seed_int,
 )
-from shipgym._io import progress_enabled
+from shipgym._io import check_writable, progress_enabled
 
 __all__ = [
     "add_bench_controllers_parser",
@@ -34,12 +35,6 @@ __all__ = [
     "cmd_bench_controllers",
     "cmd_train",
 ]
-
-
-def _wind(text: str) -> Any:
-    from shipgym.cli import parse_wind
-
-    return parse_wind(text)  # a WindConfig (WindConfig.parse), errors as argparse errors
 
 
 def add_train_parser(sub: Any) -> argparse.ArgumentParser:
@@ -178,7 +173,7 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
     )
     b.add_argument(
         "--wind",
-        type=_wind,
+        type=parse_wind,
         default="3@300",
         metavar="SPEED@FROM_DEG",
         help="mean wind (3@300)",
@@ -196,15 +191,9 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
     return b
 
 
-def _check_writable(path: Path) -> None:
-    from shipgym.cli import _check_writable as check
-
-    check(path)
-
-
 def cmd_bench_controllers(args: argparse.Namespace) -> int:
     """Run :func:`shipgym.rl.bench.bench_controllers`; print and write the table / rows."""
-    from shipgym.cli import check_controller
+    from shipgym.catalogue import check_controller
     from shipgym.rl.bench import bench_controllers, bench_title, controller_table
 
     for name in args.controllers:
@@ -215,10 +204,10 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
         make_observer(args.observer)
     for path in (args.json, args.markdown):
         if path is not None:
-            _check_writable(path)
-    from shipgym.cli import _row_log, write_bench_outputs
+            check_writable(path)
+    from shipgym.bench import row_log, write_bench_outputs
 
-    log = _row_log(args.json, args.markdown, len(args.controllers) * max(args.seeds, 0))
+    log = row_log(args.json, args.markdown, len(args.controllers) * max(args.seeds, 0))
     t0 = time.perf_counter()
     rows = bench_controllers(
         args.controllers,

@@ -1,6 +1,7 @@
 """Closed-loop episodes of any controller (classical or learned) and their result rows.
 
-One runner for everything that compares controllers: the periodic harbour evaluation during
+Thin on :mod:`shipgym.runner` (which builds and steps every episode), for everything that
+compares controllers: the periodic harbour evaluation during
 training (:class:`shipgym.rl.train.HarbourEvalCallback`) and ``shipgym bench controllers``
 (:mod:`shipgym.rl.bench`). A result row carries the same keys as
 :func:`shipgym.runner.run_episode` (``completed``, ``quay_contact``, ``x_E``, ``y_E``,
@@ -17,7 +18,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from shipgym.runner import describe_wind
+from shipgym.runner import build_env, describe_wind, episode_summary, step_episode
 
 __all__ = [
     "DEFAULT_WIND",
@@ -83,18 +84,15 @@ def make_controlled_env(
             (``"3@300"``, ``(speed m/s, from deg)``, a ``WindConfig``) or ``None`` (calm).
         **env_kwargs: further environment arguments.
     """
-    import shipgym
-    from shipgym.controllers.learned import is_learned_controller, make_learned_env
+    from shipgym.controllers.learned import is_learned_controller
     from shipgym.disturbances import WindConfig
 
     wind_cfg = WindConfig.coerce(wind, name="wind")
     observer = check_observer(observer)
-    if is_learned_controller(controller):
-        return make_learned_env(
-            scenario, controller, observer=observer, wind=wind_cfg, **env_kwargs
-        )
-    return shipgym.make(
-        scenario, observer=observer, controller=controller, wind=wind_cfg, **env_kwargs
+    if observer is None and is_learned_controller(controller):
+        observer = "truth"  # build_env's None would mean the model's own observer
+    return build_env(
+        scenario, controller=controller, observer=observer, wind=wind_cfg, **env_kwargs
     )
 
 
@@ -112,28 +110,11 @@ def run_env_episode(
     its plan or was too short are NaN, with the reason in ``indices_note``
     (:func:`shipgym.metrics.honest_indices`).
     """
-    from shipgym.metrics import episode_result
-
     t0 = time.perf_counter()
-    obs, info = env.reset(seed=seed)
-    zero = np.zeros(env.action_space.shape, dtype=np.float32)
-    terminated = truncated = False
-    ret = 0.0
-    while not (terminated or truncated):
-        action = zero if policy is None else policy(obs)
-        obs, reward, terminated, truncated, info = env.step(action)
-        ret += float(reward)
-    metrics = env.unwrapped.episode_metrics()  # type: ignore[attr-defined]
-    plan_finite = bool(env.unwrapped.terminate_on_finish)  # type: ignore[attr-defined]
+    end = step_episode(env, seed, policy)
+    result = episode_summary(env, end)
     wall = time.perf_counter() - t0
-    return {
-        "seed": int(seed),
-        **episode_result(
-            metrics, info, terminated=terminated, truncated=truncated, plan_finite=plan_finite
-        ),
-        "return": ret,
-        "wall_time_s": wall,
-    }
+    return {"seed": int(seed), **result, "return": end.ret, "wall_time_s": wall}
 
 
 def run_controlled_episode(

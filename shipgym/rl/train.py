@@ -394,7 +394,7 @@ def build_env(
         randomize: apply ``hp["randomize"]``.
     """
     import shipgym  # noqa: F401  (registers the ids in worker processes)
-    from shipgym.controllers.wrappers import DPControllerWrapper
+    from shipgym.envs.make import make
 
     kwargs = dict(hp.get("env_kwargs") or {}) if env_kwargs is None else dict(env_kwargs)
     rnd = hp.get("randomize") or {}
@@ -403,17 +403,14 @@ def build_env(
         raise ValueError(f"randomize: unknown keys {unknown}; valid: ['sensors']")
     if randomize and "sensors" in rnd:
         kwargs["sensors"] = _draw_sensors(rnd["sensors"], seed, rank)
-    env = gym.make(env_id, **kwargs)
-    observer = check_observer(hp.get("observer"))
-    if observer is not None:
-        from shipgym.observers.wrapper import ObserverWrapper
-
-        env = ObserverWrapper(env, observer=observer)
-    if hp.get("residual"):
-        env = DPControllerWrapper(
-            env, controller=hp["controller"], residual_scale=float(hp["residual_scale"])
-        )
-    return env
+    residual = bool(hp.get("residual"))
+    return make(
+        env_id,
+        observer=check_observer(hp.get("observer")),
+        controller=hp["controller"] if residual else None,
+        residual_scale=float(hp["residual_scale"]) if residual else 1.0,
+        **kwargs,
+    )
 
 
 def build_vec_env(

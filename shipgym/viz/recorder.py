@@ -30,6 +30,7 @@ import socket
 import sys
 import uuid
 import weakref
+from operator import attrgetter
 from pathlib import Path
 from typing import Any, SupportsFloat
 
@@ -38,33 +39,35 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shipgym._io import partial_path, replace_together
+from shipgym.records import step_record
 
 from .geometry import hull_outline, hull_polygon, quay_polygons, thruster_positions
 from .run import DATA_VECTORS, P, Run, desired_body_velocity, indices_warning, save_run_json
 
 __all__ = ["RecordEpisode", "episode_path"]
 
-_NAN3 = np.full(3, np.nan)
 _DEG = 180.0 / math.pi
 _TWO_PI = 2.0 * math.pi
-#: info keys buffered every step (each a 3-vector).
-_VEC_KEYS = (
-    "eta",
-    "nu",
-    "nav_eta",
-    "nav_nu",
-    "eta_d",
-    "eta_d_r",
-    "eta_dot_d_r",
-    "eta_r",
-    "eta_P",
-    "command",
-    "thrust",
-    "saturated",
-    "tau_wind",
-    "tau_waves",
-    "current_body",
+#: values buffered every step: the name (an ``info`` key and a :class:`~shipgym.viz.Run`
+#: field) and where it is in the step's :class:`~shipgym.records.StepRecord`
+_VEC_FIELDS = (
+    ("eta", attrgetter("truth.eta")),
+    ("nu", attrgetter("truth.nu")),
+    ("nav_eta", attrgetter("nav.eta")),
+    ("nav_nu", attrgetter("nav.nu")),
+    ("eta_d", attrgetter("reference.eta_d_n")),
+    ("eta_d_r", attrgetter("reference.eta_d_r")),
+    ("eta_dot_d_r", attrgetter("reference.eta_dot_d_r")),
+    ("eta_r", attrgetter("eta_r")),
+    ("eta_P", attrgetter("reference.eta_P")),
+    ("command", attrgetter("actuators.command")),
+    ("thrust", attrgetter("actuators.thrust")),
+    ("saturated", attrgetter("actuators.saturated")),
+    ("tau_wind", attrgetter("tau_wind")),
+    ("tau_waves", attrgetter("tau_waves")),
+    ("current_body", attrgetter("current_body")),
 )
+_VEC_KEYS = tuple(k for k, _ in _VEC_FIELDS)
 #: port of a spawned rerun viewer, and the longest wait for the sinks at the end (s).
 VIEWER_PORT = 9876
 FLUSH_TIMEOUT = 60.0
@@ -198,17 +201,19 @@ class _Episode:
 
     # -- hot path ------------------------------------------------------------------------------
     def capture(self, info: dict[str, Any]) -> None:
-        """Buffer one control step's ``info`` (cheap: references only)."""
+        """Buffer one control step (cheap: references only), from the step's
+        :class:`~shipgym.records.StepRecord` (``info["record"]``)."""
+        rec = step_record(info)
         i = len(self.t)
-        self.t.append(float(info["t"]))
-        get = info.get
-        for k, lst in self.vec.items():
-            lst.append(get(k, _NAN3))
-        self.legs.append((int(get("leg", 0)), int(get("legs_completed", 0))))
-        for m in get("measurements", ()):
-            z = m.get("z")
-            if z is not None:
-                self.meas.append((float(m["t"]), i, z, bool(m.get("outlier", False))))
+        self.t.append(float(rec.t))
+        vec = self.vec
+        for k, get in _VEC_FIELDS:
+            vec[k].append(get(rec))
+        ref = rec.reference
+        self.legs.append((ref.leg, rec.legs_completed))
+        for m in rec.measurements:
+            if m.z is not None:
+                self.meas.append((m.t, i, m.z, m.outlier))
 
     @property
     def pending(self) -> int:

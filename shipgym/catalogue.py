@@ -1,0 +1,82 @@
+"""Every name ``shipgym`` accepts, read from the registries (``shipgym list`` prints it).
+
+The command line and the benchmarks validate controller names here before any work
+(:func:`check_controller`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["catalogue", "check_controller", "controller_catalogue"]
+
+
+def catalogue() -> dict[str, Any]:
+    """Every name ``shipgym`` accepts, read from the registries (``shipgym list`` prints it).
+
+    Returns:
+        A mapping of plain data: ``env_ids``, ``env_scenarios`` (name -> id),
+        ``scenario_presets`` (name -> description, the named presets and the packaged files),
+        ``controllers`` (name -> description, including ``ppo``, ``ppo:PATH``, ``sac:PATH``),
+        ``observers``, ``sensor_presets``, ``wave_presets``, ``plans``, ``plant_variants``,
+        ``wind_models`` and ``actuators``.
+    """
+    from shipgym import ENV_IDS
+    from shipgym.controllers.wrappers import CONTROLLERS
+    from shipgym.disturbances import BLENDERMANN
+    from shipgym.dynamics import ACTUATOR_NAMES, PLANT_VARIANTS
+    from shipgym.dynamics.vessel import vessels
+    from shipgym.envs.make import SCENARIOS
+    from shipgym.guidance.plan import PLANS
+    from shipgym.observers import observer_names
+    from shipgym.observers.sensors import SENSOR_PRESETS
+    from shipgym.scenarios import SCENARIOS as SCENARIO_PRESETS
+    from shipgym.scenarios import WAVE_PRESETS, scenario_files
+
+    presets = {k: v.description for k, v in SCENARIO_PRESETS.items()}
+    for stem, path in scenario_files().items():
+        presets.setdefault(stem, f"packaged scenario file {path.name}")
+    return {
+        "env_ids": list(ENV_IDS),
+        "env_scenarios": dict(SCENARIOS),
+        "scenario_presets": presets,
+        "controllers": controller_catalogue(CONTROLLERS),
+        "observers": ["truth", *observer_names()],
+        "sensor_presets": list(SENSOR_PRESETS),
+        "wave_presets": list(WAVE_PRESETS),
+        "plans": list(PLANS),
+        "plant_variants": list(PLANT_VARIANTS),
+        "wind_models": [f"blendermann:{k}" for k in BLENDERMANN],
+        "actuators": list(ACTUATOR_NAMES),
+        "vessels": {
+            n: f"{v.title}: {v.dofs} DOF, L_oa {v.L_oa:g} m, "
+            + ", ".join(f"{a.name} ({a.kind})" for a in v.actuators)
+            for n, v in vessels().items()
+        },
+    }
+
+
+def controller_catalogue(classical: Any = None) -> dict[str, str]:
+    """Controller names and descriptions: the classical registry plus the learned names."""
+    if classical is None:
+        from shipgym.controllers.wrappers import CONTROLLERS as classical
+    from shipgym.controllers.learned import ALGORITHMS, BASELINE_MODELS
+
+    out = {name: spec.description for name, spec in classical.items()}
+    for algo, fname in BASELINE_MODELS.items():
+        out[algo] = f"the shipped {algo.upper()} baseline (shipgym/assets/models/{fname})"
+    for algo in ALGORITHMS:
+        out[f"{algo}:PATH"] = f"a {algo.upper()} model trained with 'shipgym train {algo}'"
+    return out
+
+
+def check_controller(name: str) -> None:
+    """Raise ``ValueError`` (listing every valid name) unless ``name`` is a controller name."""
+    from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
+
+    if is_learned_controller(name):
+        parse_learned_controller(name)  # the file exists and is a shipgym model
+        return
+    names = controller_catalogue()
+    if name not in names:
+        raise ValueError(f"unknown controller {name!r}; choose one of: {', '.join(names)}")
