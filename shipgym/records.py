@@ -119,6 +119,8 @@ class ActuatorData:
         saturated: whether each command sat at a limit, or its normalised action was clipped.
         action_clipped: whether each normalised action was outside [-1, 1] and clipped.
         channels: the channel names, in the order of ``action`` (``names`` when empty).
+        state: the actuator states (lagged commands; an azimuth's angle in rad), per
+            channel, or ``None``.
     """
 
     __eq__ = _equal
@@ -131,6 +133,7 @@ class ActuatorData:
     saturated: NDArray[np.bool_]
     action_clipped: NDArray[np.bool_]
     channels: tuple[str, ...] = ()
+    state: Array | None = None
 
     def __post_init__(self) -> None:
         n = len(self.names)
@@ -329,6 +332,7 @@ def step_record_of_env(
             info["saturated"],
             info["action_clipped"],
             channel_names,
+            info.get("actuator_state"),
         ),
         info["tau_wind"],
         info["tau_waves"],

@@ -621,6 +621,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "finished": finished,
             "command": np.asarray(command, dtype=float),
             "thrust": phys.thrust,
+            "actuator_state": phys.actuator_state,
             "saturated": np.asarray(saturated, dtype=bool),
             "action_clipped": np.zeros(self.n_actions, dtype=bool),
             "tau_wind": np.array(phys.tau_wind),
