@@ -48,8 +48,13 @@ __all__ = ["DEFAULT_H_REL", "WLSAllocation", "WLSAllocator", "allocate_wls"]
 DEFAULT_H_REL = 1e-9
 #: a scaled thrust within this of a bound counts as on it (thrusts scaled to <= 1)
 _BOUND_TOL = 1e-12
-#: a multiplier (scaled problem, curvature normalised to <= 1) above this makes a bound active
+#: a multiplier (divided by the variable's curvature: the scaled distance it would move past
+#: its bound if released) above this makes a bound active
 _MULT_TOL = 1e-10
+#: ... and above this the bound counts as active for the ``saturated`` flag: larger than the
+#: push of the default regularisation H (about DEFAULT_H_REL), so a redundant set that meets
+#: its request is not reported saturated because H prefers a thrust beyond a bound
+_ACTIVE_TOL = 1e-7
 _SINGULAR = (
     "B^T W B + diag(H) is singular: the thrusters are redundant or some thruster affects no "
     "weighted DOF; give H > 0 (the default) for a unique answer"
@@ -64,8 +69,10 @@ class WLSAllocation(NamedTuple):
         tau: delivered generalised force ``B f``, shape (n_dof,) (N, N m).
         tau_error: requested minus delivered ``tau``, shape (n_dof,); round-off (plus the tiny
             bias of ``H``) when nothing saturates.
-        saturated: shape (N,) bool: the thruster sits on a bound and the bound is active (its
-            Lagrange multiplier is positive: the request wanted more than the bound allows).
+        saturated: shape (N,) bool: the thruster sits on a bound and the bound is active: its
+            Lagrange multiplier, divided by the thrust's curvature in the objective (the
+            distance, in units of its range, that the thrust would move past the bound if
+            released), exceeds 1e-7.
     """
 
     force: NDArray[np.float64]
@@ -230,6 +237,7 @@ def _box_qp(
     ]
     xl = [a if v < a else b if v > b else v for v, a, b in zip(xl, lol, hil, strict=True)]
     diag = np.arange(n) * (n + 1)
+    qd = Q.diagonal()
     for _ in range(10 * n + 10):
         fm = np.array([1.0 if k == 0 else 0.0 for k in st])
         xv = np.array(xl)
@@ -266,7 +274,9 @@ def _box_qp(
                 continue
             xl = [t if k == 0 else v for v, t, k in zip(xl, xnl, st, strict=True)]
             xv = xn
-        g = (Q @ xv - c).tolist()  # optimal: g >= 0 on lower bounds, g <= 0 on upper bounds
+        # multipliers, in units of each variable's own curvature (the distance it would move
+        # past its bound if released): >= 0 on lower bounds, <= 0 on upper bounds when optimal
+        g = ((Q @ xv - c) / qd).tolist()
         worst, j = -_MULT_TOL, -1
         for i in range(n):
             k = st[i]
@@ -276,14 +286,19 @@ def _box_qp(
                     worst, j = m, i
         if j < 0:
             active = [
-                (k == -1 and gi > _MULT_TOL)
-                or (k == 1 and gi < -_MULT_TOL)
-                or (k == 2 and abs(gi) > _MULT_TOL)
+                (k == -1 and gi > _ACTIVE_TOL)
+                or (k == 1 and gi < -_ACTIVE_TOL)
+                or (k == 2 and abs(gi) > _ACTIVE_TOL)
                 for k, gi in zip(st, g, strict=True)
             ]
             return np.array(xl), np.array(active)
         st[j] = 0
     raise RuntimeError("allocate_wls: the active-set method did not converge (report this)")
+
+
+def _unscale(x, s, xlo, xhi, lo, hi) -> NDArray[np.float64]:
+    """Thrusts ``x * s``, exactly ``lo`` or ``hi`` where ``x`` sits on a bound."""
+    return np.where(x <= xlo, lo, np.where(x >= xhi, hi, np.minimum(np.maximum(x * s, lo), hi)))
 
 
 class WLSAllocator:
@@ -326,7 +341,7 @@ class WLSAllocator:
         t = _real_array(tau, "tau", (self._n_dof,), "requested generalised force, N and N m")
         c = self._BsWk @ t
         x, active = _box_qp(self._Q, c, self._lo, self._hi, self._fac)
-        f = np.minimum(np.maximum(x * self._s, self.f_min), self.f_max)
+        f = _unscale(x, self._s, self._lo, self._hi, self.f_min, self.f_max)
         delivered = self.B @ f
         return WLSAllocation(f, delivered, t - delivered, active)
 
@@ -378,7 +393,8 @@ def allocate_wls(
     s = _scales(lo, hi)
     w = _weights(W, n_dof, _capacity(Bm, s))
     Q, BsWk = _scaled_problem(Bm, s, w, H)
-    x, active = _box_qp(Q, BsWk @ t, lo / s, hi / s)
-    f = np.minimum(np.maximum(x * s, lo), hi)
+    xlo, xhi = lo / s, hi / s
+    x, active = _box_qp(Q, BsWk @ t, xlo, xhi)
+    f = _unscale(x, s, xlo, xhi, lo, hi)
     delivered = Bm @ f
     return WLSAllocation(f, delivered, t - delivered, active)
