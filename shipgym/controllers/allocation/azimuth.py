@@ -33,10 +33,14 @@ subject to
 
 A reversible unit (variable pitch: thrust in ``[-F_max, F_max]`` along its axis) may also point
 within ``+-max_dangle`` of the reversed direction. The union of the two sectors is not convex,
-so one branch is chosen before the QP: the sector that contains the projection, onto the unit's
-previous axis, of the unconstrained optimum (the minimiser of the same objective without any
-constraint, one linear solve); a tie keeps the forward sector. Zero force lies in every branch
-and so is always feasible.
+so one branch is chosen before the QP, by a first QP on its convex relaxation: the double
+sector replaced by its convex hull (the whole polygon and ``|cross(e_j, f_j)| <= F_max_j
+sin(max_dangle_j)``, a strip along the axis ``e_j``). The branch is the sector that contains
+the projection, onto the unit's previous axis, of the relaxed optimum; a tie keeps the forward
+sector. Where the relaxed optimum lies in the double sector (the usual case) it is the exact
+optimum of the non-convex problem; otherwise the answer is the exact optimum of the chosen
+branch. Units without a rate limit need no branch (the polygon alone is convex). Zero force
+lies in every branch and so is always feasible.
 
 The QP is solved by DAQP (Arnström, Bemporad & Axehill 2022), a dual active-set method:
 exact to round-off for a problem this small. The reported forces are then made exactly
@@ -58,11 +62,16 @@ from .wls import _bounds, _capacity, _config_matrix, _real_array, _scaled_proble
 
 __all__ = ["AzimuthAllocation", "Azimuths", "allocate_azimuth", "extended_thrust_matrix"]
 
-#: a multiplier (scaled problem, curvature normalised to <= 1) above this makes a limit active
-_MULT_TOL = 1e-9
+#: a limit is active (``saturated``) where its multiplier over the curvature of the variables it
+#: acts on exceeds this (as in :mod:`.wls`: above the push of the default regularisation)
+_ACTIVE_TOL = 1e-7
 #: a force below this fraction of F_max has no direction: the unit keeps its angle
 _ZERO_FORCE = 1e-12
 _NO_BOUND = 1e30  # DAQP's "no lower bound"
+#: DAQP settings: the proximal-point iteration (eps_prox > 0) keeps the dual method exact when
+#: the objective is nearly singular (a redundant set with the tiny default H), iterated until
+#: the proximal steps change the answer by less than eta_prox
+_DAQP_SETTINGS = {"primal_tol": 1e-10, "eps_prox": 1e-6, "eta_prox": 1e-12}
 _TWO_PI = 2.0 * math.pi
 
 
@@ -92,11 +101,29 @@ class _Rows(NamedTuple):
     equality: NDArray[np.bool_]
 
 
-def _row_structure(dmax: NDArray[np.float64], ns: int) -> _Rows:
+def _row_structure(
+    dmax: NDArray[np.float64], ns: int, hull: NDArray[np.bool_] | None = None
+) -> _Rows:
+    """The rows of each unit's polygon facets and rate sector; for the units where ``hull`` is
+    set, the convex hull of the double sector instead (whole polygon, ``|cross(e, f)| <=
+    F_max sin(max_dangle)``: the branch-choosing relaxation of a reversible unit)."""
     half = math.pi / ns
     apothem = math.cos(half)
     owner, offset, lower, upper, rate = [], [], [], [], []
     for j, d in enumerate(dmax.tolist()):
+        if hull is not None and hull[j]:
+            for o in range(ns):
+                owner.append(j)
+                offset.append((2 * o + 1) * half)
+                lower.append(-_NO_BOUND)
+                upper.append(apothem)
+                rate.append(False)
+            owner.append(j)
+            offset.append(0.5 * math.pi)
+            lower.append(-math.sin(d))
+            upper.append(math.sin(d))
+            rate.append(True)
+            continue
         # the facets that meet the sector: vertices at centre + 2 pi k / ns, facet normals
         # half-way between them
         q = ns // 2 if d == math.inf else max(1, math.ceil(d / (2.0 * half) - 1e-9))
@@ -153,6 +180,7 @@ class Azimuths:
     reversible: NDArray[np.bool_] | bool = False
     n_sides: int = 16
     _rows: _Rows = field(init=False, repr=False, compare=False)
+    _hull_rows: _Rows | None = field(init=False, repr=False, compare=False)
     _B: NDArray[np.float64] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -207,6 +235,10 @@ class Azimuths:
             object.__setattr__(self, name, a)
         object.__setattr__(self, "n_sides", int(ns))
         object.__setattr__(self, "_rows", _row_structure(dmax, int(ns)))
+        hull = rev & (dmax < math.inf)
+        object.__setattr__(
+            self, "_hull_rows", _row_structure(dmax, int(ns), hull) if hull.any() else None
+        )
         object.__setattr__(self, "_B", extended_thrust_matrix(pos))
 
     @property
@@ -285,10 +317,11 @@ def extended_thrust_matrix(positions: ArrayLike) -> NDArray[np.float64]:
 def _fixed_part(fixed: Any, n_dof: int):
     if fixed is None:
         return np.zeros((n_dof, 0)), np.zeros(0), np.zeros(0)
-    try:
-        Bf, lo, hi = fixed
-    except (TypeError, ValueError):
-        raise ValueError("fixed must be a tuple (B_fixed, f_min, f_max)") from None
+    if not isinstance(fixed, tuple | list) or len(fixed) != 3:
+        raise ValueError(
+            f"fixed must be a tuple (B_fixed, f_min, f_max), got {type(fixed).__name__}"
+        )
+    Bf, lo, hi = fixed
     Bm = _config_matrix(Bf)
     if Bm.shape[0] != n_dof:
         raise ValueError(
@@ -297,6 +330,35 @@ def _fixed_part(fixed: Any, n_dof: int):
         )
     lo, hi = _bounds(lo, hi, Bm.shape[1], zero_inside=True)
     return Bm, lo, hi
+
+
+def _solve(
+    Q: NDArray[np.float64],
+    c: NDArray[np.float64],
+    rows: _Rows,
+    centre: NDArray[np.float64],
+    xlo: NDArray[np.float64],
+    xhi: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``argmin 0.5 x^T Q x - c^T x`` with the fixed thrusts (the first ``k``) in
+    ``[xlo, xhi]`` and the azimuth rows about ``centre``, by DAQP. Returns ``x`` and the
+    multipliers' magnitudes (the ``k`` bounds, then the rows)."""
+    k = xlo.shape[0]
+    ow = rows.owner
+    ps = centre[ow] + rows.offset
+    nrow = ps.size
+    A = np.zeros((nrow, c.shape[0]))
+    r = np.arange(nrow)
+    A[r, k + 2 * ow] = np.cos(ps)
+    A[r, k + 2 * ow + 1] = np.sin(ps)
+    bu = np.concatenate((xhi, rows.upper))
+    bl = np.concatenate((xlo, rows.lower))
+    sense = np.zeros(k + nrow, dtype=np.int32)
+    sense[k:][rows.equality] = 5
+    x, _, flag, info = _daqp().solve(Q.copy(), -c, A, bu, bl, sense, **_DAQP_SETTINGS)
+    if flag not in (1, 2):
+        raise RuntimeError(f"allocate_azimuth: the QP solver DAQP failed (exit flag {flag})")
+    return np.asarray(x), np.abs(np.asarray(info["lam"]))
 
 
 def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -353,36 +415,22 @@ def allocate_azimuth(
     c = R @ t
 
     # the sector of each unit: its centre angle (the reversed one for a reversible unit whose
-    # unconstrained optimum points backwards) and half-width
+    # relaxed optimum points backwards) and half-width
     a_prev = az.angle_prev
     dmax = az.max_dangle
     limited = dmax < math.inf
-    centre = a_prev.copy()
+    qd = Q.diagonal().copy()
+    centre = a_prev
     backwards = np.zeros(m, dtype=bool)
-    pick = az.reversible & limited
-    if pick.any():
-        xu = np.linalg.solve(Q, c)[k:].reshape(m, 2)
-        backwards = pick & (xu[:, 0] * np.cos(a_prev) + xu[:, 1] * np.sin(a_prev) < 0.0)
-        centre[backwards] += math.pi
-
-    # constraint rows: [cos psi, sin psi] . (fx_j, fy_j) / F_max_j in [lower, upper]
+    if az._hull_rows is not None:
+        x = _solve(Q, c, az._hull_rows, a_prev, flo / s[:k], fhi / s[:k])[0]
+        xy = x[k:].reshape(m, 2)
+        backwards = az.reversible & limited
+        backwards &= xy[:, 0] * np.cos(a_prev) + xy[:, 1] * np.sin(a_prev) < 0.0
+        centre = a_prev + np.where(backwards, math.pi, 0.0)
     rows = az._rows
     ow = rows.owner
-    ps = centre[ow] + rows.offset
-    nrow = ps.size
-    A = np.zeros((nrow, k + 2 * m))
-    r = np.arange(nrow)
-    A[r, k + 2 * ow] = np.cos(ps)
-    A[r, k + 2 * ow + 1] = np.sin(ps)
-    bu = np.concatenate((fhi / s[:k], rows.upper))
-    bl = np.concatenate((flo / s[:k], rows.lower))
-    sense = np.zeros(k + nrow, dtype=np.int32)
-    sense[k:][rows.equality] = 5
-    daqp = _daqp()
-    x, _, flag, info = daqp.solve(Q, -c, A, bu, bl, sense, primal_tol=1e-10)
-    if flag not in (1, 2):
-        raise RuntimeError(f"allocate_azimuth: the QP solver DAQP failed (exit flag {flag})")
-    lam = np.abs(np.asarray(info["lam"]))
+    x, lam = _solve(Q, c, rows, centre, flo / s[:k], fhi / s[:k])
 
     # fixed thrusters within their limits; azimuth angle and magnitude within theirs exactly
     f_fixed = np.minimum(np.maximum(x[:k] * s[:k], flo), fhi)
@@ -395,7 +443,7 @@ def allocate_azimuth(
     sign[flip] = -1.0
     rel[flip] = _wrap(rel[flip] - math.pi)
     clamped = np.where(limited, np.clip(rel, -dmax, dmax), rel)
-    thrust = sign * np.minimum(mag * np.cos(rel - clamped), fmax)
+    thrust = sign * np.minimum(mag * np.maximum(np.cos(rel - clamped), 0.0), fmax)
     tiny = mag <= _ZERO_FORCE * fmax
     thrust[tiny] = 0.0
     clamped[tiny] = 0.0
@@ -404,13 +452,16 @@ def allocate_azimuth(
     u = np.concatenate((f_fixed, f_az.reshape(-1)))
     delivered = B @ u
 
-    row_active = lam[k:] > _MULT_TOL
+    # active limits: multiplier over the curvature of the variables it acts on (the distance,
+    # in units of F_max or of the thrust range, the force would move past it if released)
+    curv_az = 0.5 * (qd[k::2] + qd[k + 1 :: 2])
+    row_active = lam[k:] > _ACTIVE_TOL * curv_az[ow]
     rate_row = rows.rate
     rate_limited = np.zeros(m, dtype=bool)
     np.logical_or.at(rate_limited, ow[row_active & rate_row], True)
     saturated = np.zeros(m + k, dtype=bool)
     np.logical_or.at(saturated, ow[row_active], True)
-    saturated[m:] = lam[:k] > _MULT_TOL
+    saturated[m:] = lam[:k] > _ACTIVE_TOL * qd[:k]
     return AzimuthAllocation(
         thrust, angle, f_az, f_fixed, delivered, t - delivered, saturated, rate_limited
     )
