@@ -86,9 +86,10 @@ test-random: $(RL_STAMP) ## the test suite in a shuffled order (SEED=N repeats a
 test-slow: $(RL_STAMP) ## only the slow tests (the fuzz test of random episodes, ...)
 	$(PY) -m pytest -q -m slow
 
-bench: $(STAMP) ## physics and disturbance speed (ratios and us per call)
+bench: $(STAMP) ## physics, disturbance and allocation speed (ratios and us per call)
 	$(PY) benchmarks/bench_physics.py
 	$(PY) benchmarks/bench_disturbances.py
+	$(PY) benchmarks/bench_allocation.py
 
 lint: $(DEV_STAMP) ## ruff check and format check
 	$(VENV)/bin/ruff check shipgym tests benchmarks
