@@ -4,7 +4,7 @@
   form (Tomera 2014 eqs. 24-27): :func:`allocate`, :func:`allocate_inverse`, the normalised
   action mapping. The fast path for that vessel and a test oracle for the general methods.
 - :mod:`~shipgym.controllers.allocation.wls`: :func:`allocate_wls`, box-constrained weighted
-  least squares for any number of fixed-direction thrusters, 3 or 4 DOF (Fossen 2011 ch. 12).
+  least squares for any number of fixed-direction thrusters, 3 or 4 DOF (Fossen 2011 sec. 12.3).
 - :mod:`~shipgym.controllers.allocation.azimuth`: :func:`allocate_azimuth`, azimuth thrusters
   by the extended-thrust formulation with magnitude and angle-rate limits, mixed with fixed
   thrusters, solved as a small convex QP (Johansen & Fossen 2013).

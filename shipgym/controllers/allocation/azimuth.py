@@ -3,7 +3,7 @@ r"""Azimuth-thruster allocation by the extended-thrust formulation, with angle-r
 An azimuth thruster ``j`` at ``(x_j, y_j)`` m (and ``z_j`` m below the centre of gravity, for
 roll) delivers a force of magnitude ``|T_j|`` in the direction ``alpha_j`` it points in. Its
 body-frame components ``fx_j = T_j cos(alpha_j)``, ``fy_j = T_j sin(alpha_j)`` enter ``tau``
-linearly (the extended thrust of Fossen 2011 ch. 12.3.2 and Johansen & Fossen 2013 sec. 2.2):
+linearly (the extended thrust of Fossen 2011 sec. 12.3 and Johansen & Fossen 2013):
 
 .. math::
 
@@ -28,7 +28,7 @@ subject to
 - angle rate: the new direction within ``+-max_dangle_j`` of the previous angle ``alpha_j``
   (``max_dangle`` = slew rate (rad/s) x control period (s), below 90 deg). The sector
   ``|angle(f_j) - alpha_j| <= max_dangle`` with its apex at the origin is convex for
-  ``max_dangle < 90 deg``: two half-planes through the origin (Johansen & Fossen 2013 sec. 3.3
+  ``max_dangle < 90 deg``: two half-planes through the origin (Johansen & Fossen 2013
   on rate constraints). Only the polygon's facets that meet the sector are kept.
 
 A reversible unit (variable pitch: thrust in ``[-F_max, F_max]`` along its axis) may also point
@@ -297,7 +297,7 @@ def extended_thrust_matrix(positions: ArrayLike) -> NDArray[np.float64]:
     Columns ``2j, 2j + 1`` are the generalised force of a unit ``fx_j``, ``fy_j``:
     ``[1, 0, -y_j]`` and ``[0, 1, x_j]`` for ``[X, Y, N]`` ((M, 2) positions), or
     ``[1, 0, 0, -y_j]`` and ``[0, 1, -z_j, x_j]`` for ``[X, Y, K, N]`` ((M, 3) positions, ``z``
-    below the centre of gravity) (Fossen 2011 ch. 12.3.2).
+    below the centre of gravity) (Fossen 2011 sec. 12.3).
     """
     pos = np.asarray(positions, dtype=float)
     if pos.ndim != 2 or pos.shape[1] not in (2, 3):

@@ -2,7 +2,7 @@ r"""Box-constrained weighted least-squares allocation for N fixed-direction thru
 
 A set of N thrusters whose force directions are fixed in the body frame (propellers, tunnel
 thrusters, a rudder at a fixed angle, an azimuth held at its angle) acts on the hull through
-the configuration matrix ``B`` (Fossen 2011 ch. 12.3),
+the configuration matrix ``B`` (Fossen 2011 sec. 12.3),
 
 .. math::
 
@@ -17,8 +17,8 @@ with ``f`` the N thrusts (N) and ``tau`` the ``n`` generalised forces: ``n = 3``
     \min_f \; (B f - \tau)^T W (B f - \tau) + f^T H f
     \quad \text{s.t.} \quad f_{\min} \le f \le f_{\max},
 
-the weighted least-squares allocation with thrust limits of Fossen (2011) ch. 12.3 and
-Johansen & Fossen (2013) sec. 3. ``W`` weighs the error of each DOF; the small diagonal ``H``
+the weighted least-squares allocation with thrust limits of Fossen (2011) sec. 12.3 and
+Johansen & Fossen (2013). ``W`` weighs the error of each DOF; the small diagonal ``H``
 makes the answer unique when ``B`` has more columns than rank (a redundant set: many thrust
 combinations give the same ``tau``; then the one of least weighted thrust is chosen).
 
@@ -355,7 +355,7 @@ def allocate_wls(
     W: ArrayLike | None = None,
     H: ArrayLike | None = None,
 ) -> WLSAllocation:
-    r"""Exact box-constrained weighted least-squares thrust allocation (Fossen 2011 ch. 12.3).
+    r"""Exact box-constrained weighted least-squares thrust allocation (Fossen 2011 sec. 12.3).
 
     Minimises ``(B f - tau)^T W (B f - tau) + f^T diag(H) f`` subject to
     ``f_min <= f <= f_max`` (see the module docstring for the method). For repeated calls
@@ -366,7 +366,7 @@ def allocate_wls(
             (N, N m).
         B: configuration matrix, shape (n_dof, N): column ``j`` is the generalised force of a
             unit thrust of thruster ``j`` (``[cos a, sin a, x sin a - y cos a]`` for a thruster
-            at ``(x, y)`` m pointing at angle ``a`` in 3 DOF; Fossen 2011 ch. 12.3).
+            at ``(x, y)`` m pointing at angle ``a`` in 3 DOF; Fossen 2011 sec. 12.3).
         f_min, f_max: thrust limits (N), shape (N,), ``f_min <= f_max`` (equal: a thrust held).
         W: weights of the tau error, shape (n_dof,) (a diagonal, >= 0) or (n_dof, n_dof)
             (symmetric positive semi-definite), units 1/N^2 and 1/(N m)^2. ``None``:
