@@ -6,9 +6,10 @@ a third beyond it, so that the active-set methods work for their answer):
 - ``allocate``: the Blue Lady's three fixed thrusters in closed form (Tomera 2014 eqs. 24-27);
 - ``allocate_wls`` / ``WLSAllocator``: six fixed thrusters (two propellers, four tunnel
   thrusters), box-constrained weighted least squares, per call and prepared once;
-- ``allocate_azimuth``: two tunnel thrusters and four azimuths (rate-limited, not reversible),
-  and six azimuths (rate-limited, two of them reversible, which costs a second QP for the
-  branch), each call starting from the previous call's angles as in a control loop.
+- ``allocate_azimuth`` / ``AzimuthAllocator``: two tunnel thrusters and four azimuths
+  (rate-limited, not reversible), and six azimuths (rate-limited, two of them reversible, which
+  costs a second QP for the branch), each call starting from the previous call's angles as in
+  a control loop; per call and prepared once.
 
 Each figure is the median over ``--repeats`` passes of the mean time per call in one pass, in
 microseconds; absolute figures vary by +-30 % on a shared 2-core machine.
@@ -25,6 +26,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from shipgym.controllers.allocation import (
+    AzimuthAllocator,
     Azimuths,
     WLSAllocator,
     allocate,
@@ -67,16 +69,22 @@ def median_us(fn: Callable[[np.ndarray], object], args: Sequence[np.ndarray], re
     return statistics.median(per) * 1e6
 
 
-def azimuth_loop(az: Azimuths, fixed) -> Callable[[np.ndarray], object]:
+def azimuth_loop(az: Azimuths, fixed, prepared: bool) -> Callable[[np.ndarray], object]:
     """One control step: allocate from the previous call's angles and keep the new ones."""
-    state = {"az": az}
+    state = {"az": az, "angle": az.angle_prev}
+    allocator = AzimuthAllocator(az, fixed=fixed)
 
     def step(tau: np.ndarray) -> object:
         r = allocate_azimuth(tau, state["az"], fixed=fixed)
         state["az"] = state["az"].with_angles(r.angle)
         return r
 
-    return step
+    def step_prepared(tau: np.ndarray) -> object:
+        r = allocator(tau, state["angle"])
+        state["angle"] = r.angle
+        return r
+
+    return step_prepared if prepared else step
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
@@ -105,14 +113,20 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         ),
         "WLSAllocator (prepared), 6 fixed": median_us(prepared, requests(cap6, n), rep),
         "allocate_azimuth, 2 tunnels + 4 azimuths": median_us(
-            azimuth_loop(az4, TUNNELS), requests(cap_mix, n), rep
+            azimuth_loop(az4, TUNNELS, False), requests(cap_mix, n), rep
+        ),
+        "AzimuthAllocator (prepared), 2 tunnels + 4 az.": median_us(
+            azimuth_loop(az4, TUNNELS, True), requests(cap_mix, n), rep
         ),
         "allocate_azimuth, 6 azimuths (2 reversible)": median_us(
-            azimuth_loop(az6, None), requests(cap_az6, n), rep
+            azimuth_loop(az6, None, False), requests(cap_az6, n), rep
+        ),
+        "AzimuthAllocator (prepared), 6 azimuths": median_us(
+            azimuth_loop(az6, None, True), requests(cap_az6, n), rep
         ),
     }
     for name, us in results.items():
-        print(f"{name:<44}: {us:8.1f} us/call")
+        print(f"{name:<47}: {us:8.1f} us/call")
     return results
 
 

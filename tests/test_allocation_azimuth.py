@@ -16,6 +16,7 @@ from scipy.optimize import minimize
 
 from shipgym.controllers.allocation import (
     AzimuthAllocation,
+    AzimuthAllocator,
     Azimuths,
     allocate_azimuth,
     allocate_wls,
@@ -210,7 +211,7 @@ def oracle(tau, az, fixed, W, h, backwards):
     return best.fun * J0, J0
 
 
-@pytest.mark.parametrize("seed", range(60))
+@pytest.mark.parametrize("seed", range(30))
 def test_optimal_against_slsqp(seed):
     rng = np.random.default_rng(1000 + seed)
     az, fixed, tau, cap = random_case(rng)
@@ -370,6 +371,26 @@ def test_with_angles():
         az.with_angles([1.0, np.nan, 0.0, 0.0])
     with pytest.raises(ValueError):
         b.angle_prev[0] = 3.0  # read-only
+
+
+def test_prepared_allocator_gives_the_same_answers():
+    rng = np.random.default_rng(21)
+    for _ in range(30):
+        az, fixed, tau, _ = random_case(rng)
+        al = AzimuthAllocator(az, fixed=fixed)
+        angles = az.angle_prev
+        for _ in range(4):
+            t = tau * rng.uniform(-1.5, 1.5)
+            a = al(t, angles)
+            b = allocate_azimuth(t, az.with_angles(angles), fixed=fixed)
+            for x, y in zip(a, b, strict=True):
+                np.testing.assert_array_equal(x, y)
+            angles = a.angle
+        np.testing.assert_array_equal(al(tau).angle, allocate_azimuth(tau, az, fixed=fixed).angle)
+    with pytest.raises(ValueError, match="angle_prev must have shape"):
+        al(tau, [0.0] * (az.n + 1))
+    with pytest.raises(TypeError, match="Azimuths instance"):
+        AzimuthAllocator("not azimuths")
 
 
 # ---- bad input ---------------------------------------------------------------------------------

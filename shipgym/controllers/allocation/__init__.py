@@ -15,6 +15,7 @@ vessels.
 
 from .azimuth import (
     AzimuthAllocation,
+    AzimuthAllocator,
     Azimuths,
     allocate_azimuth,
     extended_thrust_matrix,
@@ -33,6 +34,7 @@ from .wls import WLSAllocation, WLSAllocator, allocate_wls
 __all__ = [
     "Allocation",
     "AzimuthAllocation",
+    "AzimuthAllocator",
     "Azimuths",
     "WLSAllocation",
     "WLSAllocator",

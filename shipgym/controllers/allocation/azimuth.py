@@ -37,15 +37,17 @@ so one branch is chosen before the QP, by a first QP on its convex relaxation: t
 sector replaced by its convex hull (the whole polygon and ``|cross(e_j, f_j)| <= F_max_j
 sin(max_dangle_j)``, a strip along the axis ``e_j``). The branch is the sector that contains
 the projection, onto the unit's previous axis, of the relaxed optimum; a tie keeps the forward
-sector. Where the relaxed optimum lies in the double sector (the usual case) it is the exact
-optimum of the non-convex problem; otherwise the answer is the exact optimum of the chosen
-branch. Units without a rate limit need no branch (the polygon alone is convex). Zero force
-lies in every branch and so is always feasible.
+sector. Where the relaxed optimum lies in the double sector it is also the exact optimum of
+the non-convex problem (the relaxation contains every feasible force); otherwise the answer
+is the exact optimum of the chosen branch. Units without a rate limit need no branch (the
+polygon alone is convex). Zero force lies in every branch and so is always feasible.
 
 The QP is solved by DAQP (Arnström, Bemporad & Axehill 2022), a dual active-set method:
 exact to round-off for a problem this small. The reported forces are then made exactly
 consistent with the limits (the angle change clamped to ``max_dangle``, the magnitude to
-``F_max``; both move the solver's answer by round-off only) and ``tau`` is recomputed from them.
+``F_max``; both move the solver's answer by its tolerance, 1e-10 of ``F_max``, only) and ``tau``
+is recomputed from them. :class:`AzimuthAllocator` prepares everything that does not depend on
+the angles once, for a control loop.
 """
 
 from __future__ import annotations
@@ -60,7 +62,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from .wls import _bounds, _capacity, _config_matrix, _real_array, _scaled_problem, _scales, _weights
 
-__all__ = ["AzimuthAllocation", "Azimuths", "allocate_azimuth", "extended_thrust_matrix"]
+__all__ = [
+    "AzimuthAllocation",
+    "AzimuthAllocator",
+    "Azimuths",
+    "allocate_azimuth",
+    "extended_thrust_matrix",
+]
 
 #: a limit is active (``saturated``) where its multiplier over the curvature of the variables it
 #: acts on exceeds this (as in :mod:`.wls`: above the push of the default regularisation)
@@ -400,26 +408,83 @@ def allocate_azimuth(
         TypeError: ``azimuths`` is not an :class:`Azimuths`.
         RuntimeError: the QP solver failed (it should not: zero force is always feasible).
     """
-    if not isinstance(azimuths, Azimuths):
-        raise TypeError(f"azimuths must be an Azimuths instance, got {type(azimuths).__name__}")
-    az = azimuths
-    n_dof, m = az.n_dof, az.n
-    t = _real_array(tau, "tau", (n_dof,), "requested generalised force, N and N m")
+    prep = _prepare(azimuths, fixed, W, H)
+    t = _real_array(tau, "tau", (prep.n_dof,), "requested generalised force, N and N m")
+    return _allocate(prep, azimuths, azimuths.angle_prev, t)
+
+
+class _Prepared(NamedTuple):
+    """What depends on the units, the fixed thrusters and the weights but not on the angles."""
+
+    n_dof: int
+    k: int
+    B: NDArray[np.float64]
+    s: NDArray[np.float64]
+    flo: NDArray[np.float64]
+    fhi: NDArray[np.float64]
+    Q: NDArray[np.float64]
+    R: NDArray[np.float64]
+    qd: NDArray[np.float64]
+
+
+def _prepare(az: Azimuths, fixed: Any, W: ArrayLike | None, H: ArrayLike | None) -> _Prepared:
+    if not isinstance(az, Azimuths):
+        raise TypeError(f"azimuths must be an Azimuths instance, got {type(az).__name__}")
+    n_dof = az.n_dof
     Bf, flo, fhi = _fixed_part(fixed, n_dof)
     k = Bf.shape[1]
     B = np.hstack((Bf, az._B)) if k else az._B
-    fmax = az.f_max
-    s = np.concatenate((_scales(flo, fhi), np.repeat(fmax, 2)))
+    s = np.concatenate((_scales(flo, fhi), np.repeat(az.f_max, 2)))
     w = _weights(W, n_dof, _capacity(B, s))
     Q, R = _scaled_problem(B, s, w, H)
-    c = R @ t
+    return _Prepared(n_dof, k, B, s, flo, fhi, Q, R, Q.diagonal().copy())
+
+
+class AzimuthAllocator:
+    """:func:`allocate_azimuth` for one set of units, fixed thrusters and weights, prepared once.
+
+    ``AzimuthAllocator(azimuths, fixed=..., W=..., H=...)(tau, angle_prev)`` equals
+    ``allocate_azimuth(tau, azimuths.with_angles(angle_prev), fixed=..., W=..., H=...)``
+    (``angle_prev=None``: ``azimuths.angle_prev``); the configuration, scaling and weights are
+    validated and built at construction, a call validates ``tau`` and the angles only.
+    """
+
+    __slots__ = ("azimuths", "_prep")
+
+    def __init__(
+        self,
+        azimuths: Azimuths,
+        *,
+        fixed: tuple[ArrayLike, ArrayLike, ArrayLike] | None = None,
+        W: ArrayLike | None = None,
+        H: ArrayLike | None = None,
+    ) -> None:
+        self._prep = _prepare(azimuths, fixed, W, H)
+        self.azimuths = azimuths
+
+    def __call__(self, tau: ArrayLike, angle_prev: ArrayLike | None = None) -> AzimuthAllocation:
+        """The allocation of ``tau`` (N, N m) from the angles ``angle_prev`` (rad, (M,))."""
+        az = self.azimuths
+        t = _real_array(tau, "tau", (self._prep.n_dof,), "requested generalised force, N and N m")
+        if angle_prev is None:
+            a = az.angle_prev
+        else:
+            a = _real_array(angle_prev, "angle_prev", (az.n,), "previous angle of each unit, rad")
+        return _allocate(self._prep, az, a, t)
+
+
+def _allocate(
+    prep: _Prepared, az: Azimuths, a_prev: NDArray[np.float64], t: NDArray[np.float64]
+) -> AzimuthAllocation:
+    k, B, s, flo, fhi, Q, qd = prep.k, prep.B, prep.s, prep.flo, prep.fhi, prep.Q, prep.qd
+    m = az.n
+    fmax = az.f_max
+    c = prep.R @ t
 
     # the sector of each unit: its centre angle (the reversed one for a reversible unit whose
     # relaxed optimum points backwards) and half-width
-    a_prev = az.angle_prev
     dmax = az.max_dangle
     limited = dmax < math.inf
-    qd = Q.diagonal().copy()
     centre = a_prev
     backwards = np.zeros(m, dtype=bool)
     if az._hull_rows is not None:
