@@ -6,6 +6,7 @@ from the polygon's vertices, the rate sector from its two edge directions); the 
 closed form where azimuths are held at a fixed angle.
 """
 
+import itertools
 import math
 
 import numpy as np
@@ -229,12 +230,20 @@ def test_optimal_against_slsqp(seed):
     )
     r = allocate_azimuth(tau, az, fixed=fixed, W=W, H=h)
     check_limits(r, az, fixed)
-    # the branch of each reversible unit: the one its thrust sign shows (a zero thrust: forward)
-    backwards = az.reversible & np.isfinite(az.max_dangle) & (r.thrust < 0.0)
+    # the branch of each reversible unit: the one its thrust sign shows; a unit with no thrust
+    # is in both, so the oracle takes the better of them
+    branched = az.reversible & np.isfinite(az.max_dangle)
+    backwards = branched & (r.thrust < 0.0)
+    either = np.flatnonzero(branched & (r.thrust == 0.0))
     u = np.concatenate((r.force_fixed, r.force_azimuth.reshape(-1)))
     e = r.tau - tau
     J = float(e @ (W * e) + u @ (h * u))
-    J_ref, J0 = oracle(tau, az, fixed, W, h, backwards)
+    J_ref = math.inf
+    for flips in itertools.product([False, True], repeat=either.size):
+        bw = backwards.copy()
+        bw[either] = flips
+        Jb, J0 = oracle(tau, az, fixed, W, h, bw)
+        J_ref = min(J_ref, Jb)
     assert J <= J_ref + 1e-9 * J0  # SLSQP finds nothing better
     assert J >= J_ref - 1e-6 * J0  # and it agrees (SLSQP's own accuracy)
 
@@ -251,6 +260,32 @@ def test_reversible_branch_follows_the_unconstrained_optimum():
     assert abs(r.thrust[0]) < 1e-6
     np.testing.assert_allclose(r.tau_error, [-50.0, 0.0, 0.0], atol=1e-6)
     assert r.angle[0] == 0.0  # no force: the angle is kept
+
+
+def test_ambiguous_branch_tries_both():
+    """A case (found by a random search) where the relaxed optimum of the reversible unit lies
+    off both of its sectors and its projection picks the worse branch: both are tried."""
+    rng = np.random.default_rng(6133)
+    az, fixed, tau, cap = random_case(rng)
+    k = 0 if fixed is None else fixed[0].shape[1]
+    W = 1.0 / cap**2
+    s = np.concatenate(
+        (np.ones(k) if fixed is None else np.maximum(-fixed[1], fixed[2]), np.repeat(az.f_max, 2))
+    )
+    h = np.full(k + 2 * az.n, 1e-6) / s**2
+    r = allocate_azimuth(tau, az, fixed=fixed, W=W, H=h)
+    u = np.concatenate((r.force_fixed, r.force_azimuth.reshape(-1)))
+    e = r.tau - tau
+    J = float(e @ (W * e) + u @ (h * u))
+    branched = np.flatnonzero(az.reversible & np.isfinite(az.max_dangle))
+    J_all = []
+    for flips in itertools.product([False, True], repeat=branched.size):
+        bw = np.zeros(az.n, dtype=bool)
+        bw[branched] = flips
+        J_all.append(oracle(tau, az, fixed, W, h, bw))
+    J_best, J0 = min(J_all)
+    assert max(j for j, _ in J_all) > J_best + 1e-4 * J0  # the branches differ
+    assert J <= J_best + 1e-9 * J0  # the better one is found
 
 
 # ---- (d) the Wimpey Sealab's four azimuths: a sway step met as the units turn -------------------

@@ -37,10 +37,13 @@ so one branch is chosen before the QP, by a first QP on its convex relaxation: t
 sector replaced by its convex hull (the whole polygon and ``|cross(e_j, f_j)| <= F_max_j
 sin(max_dangle_j)``, a strip along the axis ``e_j``). The branch is the sector that contains
 the projection, onto the unit's previous axis, of the relaxed optimum; a tie keeps the forward
-sector. Where the relaxed optimum lies in the double sector it is also the exact optimum of
-the non-convex problem (the relaxation contains every feasible force); otherwise the answer
-is the exact optimum of the chosen branch. Units without a rate limit need no branch (the
-polygon alone is convex). Zero force lies in every branch and so is always feasible.
+sector. Where the relaxed optimum lies in the double sectors it is also the exact optimum of
+the non-convex problem (the relaxation contains every feasible force). A unit whose relaxed
+force lies in neither of its sectors has an ambiguous branch: both are solved and the better
+kept (for up to three such units, 2^3 QPs at most; any further ones keep the projection's
+branch). The answer is always the exact optimum of the branches it reports. Units without a
+rate limit need no branch (the polygon alone is convex). Zero force lies in every branch and
+so is always feasible.
 
 The QP is solved by DAQP (Arnström, Bemporad & Axehill 2022), a dual active-set method:
 exact to round-off for a problem this small. The reported forces are then made exactly
@@ -76,10 +79,20 @@ _ACTIVE_TOL = 1e-7
 #: a force below this fraction of F_max has no direction: the unit keeps its angle
 _ZERO_FORCE = 1e-12
 _NO_BOUND = 1e30  # DAQP's "no lower bound"
-#: DAQP settings: the proximal-point iteration (eps_prox > 0) keeps the dual method exact when
-#: the objective is nearly singular (a redundant set with the tiny default H), iterated until
-#: the proximal steps change the answer by less than eta_prox
-_DAQP_SETTINGS = {"primal_tol": 1e-10, "eps_prox": 1e-6, "eta_prox": 1e-12}
+#: a reversible unit's relaxed force more than this (of F_max) outside both of its sectors
+#: makes its branch ambiguous: both are tried, for at most _MAX_TRIED such units
+_BRANCH_TOL = 1e-9
+_MAX_TRIED = 3
+#: DAQP settings, tried in turn. The proximal-point iteration (eps_prox > 0) keeps the dual
+#: method exact when the objective is nearly singular (a redundant set with the tiny default
+#: H), iterated until the proximal steps change the answer by less than eta_prox. A rare
+#: degenerate problem makes DAQP report cycling (exit flag -2) or infeasibility with one
+#: setting; the next (a larger proximal weight) is tried then
+_DAQP_SETTINGS = (
+    {"primal_tol": 1e-10, "eps_prox": 1e-6, "eta_prox": 1e-12},
+    {"primal_tol": 1e-10, "eps_prox": 1e-4, "eta_prox": 1e-12},
+    {"primal_tol": 1e-9, "eps_prox": 1e-2, "eta_prox": 1e-12, "iter_limit": 100_000},
+)
 _TWO_PI = 2.0 * math.pi
 
 
@@ -363,10 +376,17 @@ def _solve(
     bl = np.concatenate((xlo, rows.lower))
     sense = np.zeros(k + nrow, dtype=np.int32)
     sense[k:][rows.equality] = 5
-    x, _, flag, info = _daqp().solve(Q.copy(), -c, A, bu, bl, sense, **_DAQP_SETTINGS)
-    if flag not in (1, 2):
-        raise RuntimeError(f"allocate_azimuth: the QP solver DAQP failed (exit flag {flag})")
-    return np.asarray(x), np.abs(np.asarray(info["lam"]))
+    solve = _daqp().solve
+    flags = []
+    for settings in _DAQP_SETTINGS:
+        x, _, flag, info = solve(Q.copy(), -c, A, bu, bl, sense, **settings)
+        if flag in (1, 2):
+            return np.asarray(x), np.abs(np.asarray(info["lam"]))
+        flags.append(flag)
+    raise RuntimeError(
+        f"allocate_azimuth: the QP solver DAQP failed (exit flags {flags}; please report the "
+        "request and the azimuths)"
+    )
 
 
 def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -487,15 +507,35 @@ def _allocate(
     limited = dmax < math.inf
     centre = a_prev
     backwards = np.zeros(m, dtype=bool)
-    if az._hull_rows is not None:
-        x = _solve(Q, c, az._hull_rows, a_prev, flo / s[:k], fhi / s[:k])[0]
-        xy = x[k:].reshape(m, 2)
-        backwards = az.reversible & limited
-        backwards &= xy[:, 0] * np.cos(a_prev) + xy[:, 1] * np.sin(a_prev) < 0.0
-        centre = a_prev + np.where(backwards, math.pi, 0.0)
     rows = az._rows
     ow = rows.owner
-    x, lam = _solve(Q, c, rows, centre, flo / s[:k], fhi / s[:k])
+    xlo, xhi = flo / s[:k], fhi / s[:k]
+    if az._hull_rows is None:
+        x, lam = _solve(Q, c, rows, centre, xlo, xhi)
+    else:
+        xr = _solve(Q, c, az._hull_rows, a_prev, xlo, xhi)[0]
+        xy = xr[k:].reshape(m, 2)
+        pick = az.reversible & limited
+        along = xy[:, 0] * np.cos(a_prev) + xy[:, 1] * np.sin(a_prev)
+        across = np.abs(-xy[:, 0] * np.sin(a_prev) + xy[:, 1] * np.cos(a_prev))
+        backwards = pick & (along < 0.0)
+        # units whose relaxed force lies in neither sector (beyond the rate limit off the axis):
+        # both branches are tried (the first _MAX_TRIED of them; the others by projection)
+        tan_d = np.tan(np.where(pick, dmax, 0.0))
+        outside = pick & (across > np.abs(along) * tan_d + _BRANCH_TOL)
+        ambiguous = np.flatnonzero(outside)[:_MAX_TRIED]
+        best = None
+        for flips in range(1 << ambiguous.size):
+            bw = backwards.copy()
+            for i, j in enumerate(ambiguous):
+                bw[j] = bool(flips >> i & 1)
+            cen = a_prev + np.where(bw, math.pi, 0.0)
+            xb, lb = _solve(Q, c, rows, cen, xlo, xhi)
+            J = 0.5 * float(xb @ Q @ xb) - float(c @ xb)
+            if best is None or J < best[0]:
+                best = (J, xb, lb, bw, cen)
+        assert best is not None
+        _, x, lam, backwards, centre = best
 
     # fixed thrusters within their limits; azimuth angle and magnitude within theirs exactly
     f_fixed = np.minimum(np.maximum(x[:k] * s[:k], flo), fhi)

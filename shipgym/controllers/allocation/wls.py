@@ -48,8 +48,8 @@ __all__ = ["DEFAULT_H_REL", "WLSAllocation", "WLSAllocator", "allocate_wls"]
 DEFAULT_H_REL = 1e-9
 #: a scaled thrust within this of a bound counts as on it (thrusts scaled to <= 1)
 _BOUND_TOL = 1e-12
-#: a multiplier (divided by the variable's curvature: the scaled distance it would move past
-#: its bound if released) above this makes a bound active
+#: a bound whose multiplier (divided by the variable's curvature: the scaled distance it would
+#: move past the bound if released) has the wrong sign by more than this is released
 _MULT_TOL = 1e-10
 #: ... and above this the bound counts as active for the ``saturated`` flag: larger than the
 #: push of the default regularisation H (about DEFAULT_H_REL), so a redundant set that meets
