@@ -169,12 +169,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.vessel is not None:
         env_kwargs["vessel"] = args.vessel
     args.scenario = scenario_name
-    env_id = resolve_env_id(args.scenario)  # validate names before any work
+    # validate names before any work
+    env_id = resolve_env_id(args.scenario, env_kwargs.get("vessel"))
     check_controller(args.controller)
     from shipgym.envs.registration import ALIASES
 
-    vessel = load_vessel(env_kwargs.get("vessel", "blue-lady" if env_id in ALIASES else None)
-                         or _no_vessel(env_id))  # fmt: skip
+    name = env_kwargs.get("vessel", "blue-lady" if env_id in ALIASES else None)
+    vessel = load_vessel(name if name is not None else _no_vessel(env_id))
     vessel.plant(env_kwargs.get("plant", "default"))
     observer = args.observer  # None: truth, or a learned model's own observer
     if observer not in (None, "truth"):

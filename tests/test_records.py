@@ -195,14 +195,24 @@ def test_runner_summary_takes_the_rmse_from_the_record():
 
 
 def test_actuator_data_has_any_number_of_actuators():
-    names = tuple(f"azimuth_{k}" for k in range(6))
+    names = tuple(f"tunnel_{k}" for k in range(6))
     z = np.zeros(6)
     a = ActuatorData(names, z, z, z + 1.0, np.zeros(6, bool), np.zeros(6, bool))
     assert len(a.thrust) == 6
-    with pytest.raises(ValueError, match=r"one entry per actuator \(6: azimuth_0"):
+    with pytest.raises(ValueError, match=r"one per actuator \(6: tunnel_0"):
         ActuatorData(names, z, z, np.zeros(5), np.zeros(6, bool), np.zeros(6, bool))
-    with pytest.raises(ValueError, match="got lengths 6, 6, 6, 6, 3"):
+    with pytest.raises(ValueError, match="got lengths 6, 6, 6, 3 and 6"):
         ActuatorData(names, z, z, z, np.zeros(6, bool), np.zeros(3, bool))
+
+
+def test_actuator_data_of_azimuths_has_two_channels_per_actuator():
+    names = ("a1", "a2")
+    channels = ("a1", "a1_angle", "a2", "a2_angle")
+    c = np.zeros(4)
+    a = ActuatorData(names, c, c, np.ones(2), np.zeros(4, bool), np.zeros(4, bool), channels)
+    assert len(a.thrust) == 2 and len(a.command) == 4
+    with pytest.raises(ValueError, match=r"one entry per channel \(1: a1\)"):
+        ActuatorData(names, c, c, np.ones(4), np.zeros(4, bool), np.zeros(4, bool), ("a1",))
 
 
 def test_navigation_data_with_a_roll_component():

@@ -21,8 +21,13 @@ physics, the allocation and the plots alike:
 Generalised force of a force ``(F_x, F_y)`` applied at ``(x, y, z)`` (body frame, z down):
 ``X = F_x``, ``Y = F_y``, ``K = -z F_y``, ``N = x F_y - y F_x`` (Fossen 2011 eq. 12.?).
 
-The protocol (:class:`Actuator`) is what a new kind implements: its channels, the force
-from its states, its force capacity; a rudder (force from the flow speed) fits it.
+The protocol (:class:`Actuator`) is what a new kind implements: its channels (any number of
+MuJoCo actuators, each a lag or an integrator: a rudder's angle with its rate limit is an
+integrator channel like an azimuth's), the force from its states, its force capacity, and a
+branch in :meth:`ActuatorSet.kernel` (the plain-float law of the physics step). A kind whose
+force also depends on the flow (a rudder's lift from the speed through the water) needs the
+relative velocity in ``force`` and in the kernel; the physics has it at that point of the
+step (``u, v, r`` and the current), so adding it extends these two signatures only.
 """
 
 from __future__ import annotations

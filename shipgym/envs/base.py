@@ -26,8 +26,9 @@ from shipgym._config import is_real, param
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
 from shipgym.dynamics import wrap_angle
 from shipgym.dynamics.vessel import Vessel, load_vessel
-from shipgym.guidance import Guidance, Limits, ManoeuvrePlan, Reference
+from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
 from shipgym.guidance import plan as named_plan
+from shipgym.guidance.limits import vessel_limits
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
 from shipgym.records import StepRecord, step_record_of_env
@@ -314,7 +315,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._actuator_names = self.actuators.names
         multi = self.actuators.channel_names != self.actuators.names
         self._channel_names = self.actuators.channel_names if multi else ()
-        self.limits = Limits.from_dict(dict(self.vessel.limits))
+        self.limits = vessel_limits(self.vessel)
         self.guidance = Guidance(self.plan, limits=self.limits)
         self.metrics = ManoeuvreMetrics(sample_period=1.0, n_actuators=len(self.actuators))
         # per-actuator saturation from the channels' (None: one channel per actuator)

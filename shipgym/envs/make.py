@@ -6,11 +6,12 @@ from typing import Any
 
 import gymnasium as gym
 
-from .registration import ENV_IDS
+from .registration import ALIASES, ENV_IDS
 
 __all__ = ["SCENARIOS", "make", "resolve_env_id"]
 
-#: short scenario names accepted by ``shipgym run`` and ``shipgym.make``.
+#: short scenario names accepted by ``shipgym run`` and ``shipgym.make``: the Blue Lady's
+#: ids; with ``vessel=`` another vessel, the vessel-neutral id of the same task.
 SCENARIOS: dict[str, str] = {
     "harbour": "shipgym/BlueLadyHarbour-v0",
     "station-keeping": "shipgym/BlueLadyStationKeeping-v0",
@@ -18,12 +19,19 @@ SCENARIOS: dict[str, str] = {
 }
 
 
-def resolve_env_id(name: str) -> str:
-    """A registered env id from an id or a scenario name; unknown names list the valid ones."""
+def resolve_env_id(name: str, vessel: Any = None) -> str:
+    """A registered env id from an id or a scenario name; unknown names list the valid ones.
+
+    A scenario name means the Blue Lady's id, or with a ``vessel`` other than the Blue Lady
+    the vessel-neutral id of the same task (``"harbour"`` -> ``shipgym/Harbour-v0``).
+    """
     if name in ENV_IDS:
         return name
     if name in SCENARIOS:
-        return SCENARIOS[name]
+        env_id = SCENARIOS[name]
+        if vessel is not None and vessel != "blue-lady":
+            return ALIASES[env_id]
+        return env_id
     raise ValueError(
         f"unknown scenario or env id {name!r}; choose a scenario ({', '.join(SCENARIOS)}) "
         f"or an id ({', '.join(ENV_IDS)})"
@@ -44,7 +52,8 @@ def make(
     stacks and the training envs use it).
 
     Args:
-        env_id: a registered id or a scenario name (:data:`SCENARIOS`).
+        env_id: a registered id or a scenario name (:data:`SCENARIOS`; with ``vessel=`` in
+            ``kwargs`` a scenario name is that vessel's task, see :func:`resolve_env_id`).
         observer: ``None`` or ``"truth"`` (controllers see the true state), or an observer
             name (``shipgym.observers.OBSERVERS``).
         controller: ``None`` (raw thruster actions) or a controller name.
@@ -52,10 +61,10 @@ def make(
             :class:`~shipgym.controllers.wrappers.DPControllerWrapper`).
         **kwargs: environment arguments (``wind="3@300"``, ``current=(0.1, 90)``, ...: any
             form of ``WindConfig.coerce`` / ``CurrentConfig.coerce``, directions in degrees;
-            see :class:`~shipgym.envs.base.BlueLadyEnv`) and ``gym.make``'s own
+            ``vessel=``; see :class:`~shipgym.envs.base.ShipEnv`) and ``gym.make``'s own
             (``max_episode_steps``).
     """
-    env = gym.make(resolve_env_id(env_id), **kwargs)
+    env = gym.make(resolve_env_id(env_id, kwargs.get("vessel")), **kwargs)
     if observer not in (None, "truth"):
         from shipgym.observers.wrapper import ObserverWrapper
 

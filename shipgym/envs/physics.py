@@ -569,23 +569,7 @@ class VesselPhysics:
             u = c * xd + s * yd
             v = c * yd - s * xd
             tx, ty, _k, tn, _mz = tau_of(st)
-            # wind (relative to the ground velocity), current (NED) and wave drift; written out
-            # here rather than calling loads() (one call less per step on the 3-DOF hot path)
-            if aero:
-                vw, bw = wind_at(t)
-                wx, wy, wn = wind_load(psi, u, v, vw, bw)
-            else:
-                wx = wy = wn = 0.0
-            if current_at is not None:
-                vc, bc = current_at(t)
-                uc = vc * cos(bc - psi)
-                vcb = vc * sin(bc - psi)
-            else:
-                uc = vcb = 0.0
-            if drift is not None:
-                dx_, dy_, dn_ = drift(t, psi)
-            else:
-                dx_ = dy_ = dn_ = 0.0
+            wx, wy, wn, uc, vcb, dx_, dy_, dn_ = loads(t, psi, u, v)
             ud, vd, rd = accel(u, v, r, tx + (wx + dx_), ty + (wy + dy_), tn + (wn + dn_), uc, vcb)
             if not (
                 isfinite(ud + vd + rd) and abs(u) + abs(v) < _MAX_SPEED and abs(r) < _MAX_YAW_RATE

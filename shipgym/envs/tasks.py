@@ -227,7 +227,12 @@ def _blue_lady(cls: type[ShipEnv], name: str, doc: str) -> type[ShipEnv]:
     """The Blue Lady alias of a task class (``vessel="blue-lady"``, the same episodes)."""
 
     def __init__(self: Any, **kwargs: Any) -> None:
-        kwargs.setdefault("vessel", "blue-lady")
+        vessel = kwargs.setdefault("vessel", "blue-lady")
+        if vessel != "blue-lady":
+            raise ValueError(
+                f"{name} is the Blue Lady's task; for vessel={vessel!r} use the vessel-neutral "
+                f"{cls.__name__} (gym.make('shipgym/{cls.__name__[:-3]}-v0', vessel=...))"
+            )
         cls.__init__(self, **kwargs)
 
     return type(name, (cls,), {"__init__": __init__, "__doc__": doc, "__module__": __name__})
