@@ -528,19 +528,54 @@ class LQController:
 
 
 def _lq_for(vessel: Any, dt: float) -> LQController:
-    """The ``"lq"`` controller of a vessel: its design model; the ``"tuned"`` weights for the
-    Blue Lady (whose capacity they were chosen for), else Bryson weights with the vessel's
-    force capacity as ``tau_max``."""
+    """The ``"lq"`` controller of a vessel, on its design model.
+
+    The Blue Lady keeps its ``"tuned"`` weights (fastest closed-loop pole 0.125 rad/s).
+    Another vessel gets them carried over by Froude similarity (lengths times
+    ``lambda = L_oa / 13.78 m``, speeds times ``sqrt(lambda)``, angular rates divided by it,
+    the integral of a position error times ``lambda^1.5``, of the heading error times
+    ``sqrt(lambda)``) with force limits proportional to its capacity, scaled (bisection on
+    one factor) so that the fastest closed-loop pole sits at three times the vessel's PID
+    bandwidth (``[control] bandwidth``), below the kinematic observers' 0.4 rad/s.
+    """
     from .actuation import planar_capacity
 
     cap = planar_capacity(vessel)
-    weights: LQWeights | str = (
-        "tuned" if "tuned" in vessel.control.get("pid_presets", ()) else
-        LQWeights(tau_max=tuple(float(c) for c in cap))
-    )  # fmt: skip
+    if "tuned" in vessel.control.get("pid_presets", ()):
+        return LQController(
+            "tuned", M=vessel.design.M, D_L=vessel.design.D_L, dt=dt, integral_limit=cap
+        )
+    t = LQ_PRESETS["tuned"]
+    lam = vessel.L_oa / _BLUE_LADY_L_OA
+    r = math.sqrt(lam)
+
+    def weights(f: float) -> LQWeights:
+        return LQWeights(
+            e_max=(t.e_max[0] * lam, t.e_max[1] * lam, t.e_max[2]),
+            v_max=(t.v_max[0] * r, t.v_max[1] * r, t.v_max[2] / r),
+            xi_max=(t.xi_max[0] * lam * r, t.xi_max[1] * lam * r, t.xi_max[2] * r),
+            tau_max=tuple(float(x) for x in f * cap),
+        )
+
+    target = 3.0 * float(max(vessel.control["bandwidth"]))
+    lo, hi = 1e-4, 1.0  # fraction of the capacity; the fastest pole grows with it
+
+    def fastest(f: float) -> float:
+        d = lq_design(weights(f), dt=dt, M=vessel.design.M, D_L=vessel.design.D_L)
+        return float(np.max(np.abs(d.continuous_poles)))
+
+    for _ in range(30):
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if fastest(mid) < target else (lo, mid)
     return LQController(
-        weights, M=vessel.design.M, D_L=vessel.design.D_L, dt=dt, integral_limit=cap
+        weights(lo), M=vessel.design.M, D_L=vessel.design.D_L, dt=dt, integral_limit=cap
     )
+
+
+#: the Blue Lady's length overall (m) and design inertia (kg, kg, kg m^2; Tomera 2014 eq. 49):
+#: the reference of the tuned weights when they are carried over to another vessel
+_BLUE_LADY_L_OA = 13.78
+_BLUE_LADY_M = (23664.9, 24830.6, 455182.1)
 
 
 def register_lq() -> None:
