@@ -945,6 +945,20 @@ class LearnedControllerWrapper(
         self.model_metadata = self.policy.metadata
         self.deterministic = bool(deterministic)
         _check_stack(env, self.model_metadata)
+        from shipgym.envs.registration import ALIASES
+
+        vessel = getattr(env.unwrapped, "vessel", None)
+        if (
+            self.model_metadata.env_id in ALIASES
+            and vessel is not None
+            and (vessel.name != "blue-lady")
+        ):
+            raise ValueError(
+                f"{self.model_path.name} was trained on the Blue Lady "
+                f"({self.model_metadata.env_id}); it cannot drive vessel {vessel.name!r} "
+                f"({vessel.actuators.n_channels} actuator channels): train one for that "
+                "vessel"
+            )
         if env.observation_space.shape != self.model_metadata.observation_shape:
             raise ValueError(
                 "the model takes observations of shape "
