@@ -13,13 +13,14 @@ from gymnasium.utils.env_checker import check_env
 import shipgym
 from shipgym.dynamics.vessel import load_vessel, vessel_names
 from shipgym.envs.registration import ALIASES
+from shipgym.envs.scene import fits
 
 TASKS = [i for i in shipgym.ENV_IDS if i not in ALIASES]
 CASES = [
     (task, vessel)
     for task in TASKS
     for vessel in vessel_names()
-    if task != "shipgym/Harbour-v0" or load_vessel(vessel).fits_harbour
+    if task != "shipgym/Harbour-v0" or fits(load_vessel(vessel), "harbour")
 ]
 IDS = [f"{t.split('/')[1]}-{v}" for t, v in CASES]
 
@@ -112,5 +113,5 @@ def test_vessel_neutral_ids_need_a_vessel() -> None:
 
 
 def test_harbour_refuses_a_vessel_that_does_not_fit() -> None:
-    with pytest.raises(ValueError, match="does not fit the harbour"):
+    with pytest.raises(ValueError, match="does not fit the harbour world"):
         gym.make("shipgym/Harbour-v0", vessel="wimpey-sealab")

@@ -140,11 +140,6 @@ class Vessel:
         """Draught (m)."""
         return self.dimensions[3]
 
-    @property
-    def fits_harbour(self) -> bool:
-        """Whether the hull fits the harbour basin (built for the 13.8 m x 2.4 m Blue Lady)."""
-        return self.L_oa <= 14.0 and self.B <= 2.5
-
     def plant(self, name: str = "default", **options: bool) -> Any:
         """A plant variant by name (``options`` for the ``fossen3`` default only).
 

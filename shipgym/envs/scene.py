@@ -25,7 +25,7 @@ from shipgym.dynamics.vessel import Vessel, VesselError
 
 from ._mujoco import mujoco
 
-__all__ = ["WORLDS", "build_model", "world_path"]
+__all__ = ["WORLDS", "build_model", "fits", "world_path"]
 
 #: world name -> file in ``shipgym/assets/mjcf/worlds/``
 _PREFIX = "vessel/"
@@ -40,6 +40,18 @@ def world_path(world: str) -> Path:
     return asset_path("mjcf", "worlds", WORLDS[world])
 
 
+def _max_hull(spec: mujoco.MjSpec) -> tuple[float, float] | None:
+    """The largest ``(L_oa, B)`` (m) a world takes (its numeric ``shipgym_max_hull``), if any."""
+    n = spec.numeric("shipgym_max_hull")
+    return None if n is None else (float(n.data[0]), float(n.data[1]))
+
+
+def fits(vessel: Vessel, world: str) -> bool:
+    """Whether ``vessel`` fits ``world`` (a world may declare its largest hull)."""
+    limit = _max_hull(mujoco.MjSpec.from_file(str(world_path(world))))
+    return limit is None or (vessel.L_oa <= limit[0] and vessel.B <= limit[1])
+
+
 def build_model(vessel: Vessel, world: str = "open-water") -> mujoco.MjModel:
     """The compiled MuJoCo model of ``vessel`` in ``world``.
 
@@ -47,12 +59,13 @@ def build_model(vessel: Vessel, world: str = "open-water") -> mujoco.MjModel:
         VesselError: ``vessel.xml`` has no body ``hull`` or fails to compile.
         ValueError: unknown world, or a vessel that does not fit the harbour.
     """
-    if world == "harbour" and not vessel.fits_harbour:
+    spec = mujoco.MjSpec.from_file(str(world_path(world)))
+    limit = _max_hull(spec)
+    if limit is not None and (vessel.L_oa > limit[0] or vessel.B > limit[1]):
         raise ValueError(
             f"vessel {vessel.name!r} (L_oa {vessel.L_oa:g} m, B {vessel.B:g} m) does not fit the "
-            "harbour basin (built for the 13.8 m Blue Lady): use the open-water scene"
+            f"{world} world (at most {limit[0]:g} m x {limit[1]:g} m): use the open-water scene"
         )
-    spec = mujoco.MjSpec.from_file(str(world_path(world)))
     try:
         child = mujoco.MjSpec.from_file(str(vessel.body_xml))
     except Exception as exc:  # noqa: BLE001 - MuJoCo's parser raises assorted errors
