@@ -50,7 +50,7 @@ def catalogue() -> dict[str, Any]:
         "actuators": list(ACTUATOR_NAMES),
         "vessels": {
             n: f"{v.title}: {v.dofs} DOF, L_oa {v.L_oa:g} m, "
-            + ", ".join(f"{a.name} ({a.kind})" for a in v.actuators)
+            + ", ".join(f"{a.name} ({a.label})" for a in v.actuators)
             for n, v in vessels().items()
         },
     }

@@ -95,6 +95,11 @@ class Actuator:
     colour: str
 
     @property
+    def label(self) -> str:
+        """The kind as a vessel file names it (``propeller``, ``tunnel``, ``azimuth``)."""
+        return self.kind
+
+    @property
     def channels(self) -> tuple[Channel, ...]:  # pragma: no cover - protocol
         raise NotImplementedError
 
@@ -177,6 +182,10 @@ class Propeller(Actuator):
             raise ValueError(f"actuator {self.name!r}: alpha must be finite")
         object.__setattr__(self, "_c", math.cos(self.alpha))
         object.__setattr__(self, "_s", math.sin(self.alpha))
+
+    @property
+    def label(self) -> str:
+        return "tunnel" if self.tunnel else "propeller"
 
     @property
     def channels(self) -> tuple[Channel, ...]:
@@ -386,7 +395,7 @@ class ActuatorSet:
         return iter(self.actuators)
 
     def __repr__(self) -> str:
-        kinds = ", ".join(f"{a.name} ({a.kind})" for a in self.actuators)
+        kinds = ", ".join(f"{a.name} ({a.label})" for a in self.actuators)
         return f"ActuatorSet({kinds})"
 
     @property
