@@ -82,7 +82,8 @@ class TrackingEnv(ShipEnv):
     Each episode draws from the seeded generator 1-``max_legs`` legs: lateral (2-8 m either
     side), longitudinal (5-30 m ahead or 3-15 m astern), rotation (30-120 deg either way) or
     combined (surge and sway together), the distances for the Blue Lady's 13.78 m and scaled
-    with the vessel's length overall; and, by default, a wind of 0-``max_wind_speed`` m/s
+    with the square root of the vessel's length overall (so that at Froude-scaled reference
+    speeds an episode takes as long); and, by default, a wind of 0-``max_wind_speed`` m/s
     from any direction with the default gusts (4 m/s on the beam exceeds the 248 N m yaw
     capacity), a constant lake current of 0-``max_current_speed`` m/s in any direction
     (~1 % of the wind, assumed) and sensor noise within the lake presets (DGPS sigma
@@ -130,7 +131,9 @@ class TrackingEnv(ShipEnv):
             max_wind_speed = 3.5 * nominal / 3.0
         if max_current_speed is None:
             max_current_speed = 0.01 * nominal
-        self._leg_scale = 1.0 if vessel is None else vessel.L_oa / _BLUE_LADY_L_OA
+        # distances with sqrt(L): at Froude-scaled reference speeds (sqrt(L), the vessels'
+        # [limits]) an episode takes about as long as the Blue Lady's and fits the time limit
+        self._leg_scale = 1.0 if vessel is None else math.sqrt(vessel.L_oa / _BLUE_LADY_L_OA)
         if not (isinstance(max_legs, int) and max_legs >= 1):
             raise ValueError(f"max_legs must be an int >= 1, got {max_legs!r}")
         if not (_finite_real(max_wind_speed) and 0 <= max_wind_speed <= MAX_WIND_SPEED):
