@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "REFERENCE_LENGTH",
     "convex_outline",
     "hull_length",
     "hull_outline",
@@ -22,6 +23,10 @@ __all__ = [
     "thrust_arrows",
     "thruster_positions",
 ]
+
+#: Lengths drawn on a map (arrows, margins, line widths) are given for a hull of this overall
+#: length (m; the Blue Lady, 13.78 m) and scale with the vessel's ``L_oa``.
+REFERENCE_LENGTH = 13.78
 
 
 def convex_outline(points: ArrayLike) -> NDArray[np.float64]:

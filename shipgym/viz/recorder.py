@@ -42,6 +42,7 @@ from shipgym._io import partial_path, replace_together
 from shipgym.records import step_record
 
 from .geometry import (
+    REFERENCE_LENGTH,
     hull_outline,
     hull_polygon,
     quay_polygons,
@@ -87,10 +88,9 @@ _VEC_KEYS = tuple(k for k, _ in _VEC_FIELDS)
 #: port of a spawned rerun viewer, and the longest wait for the sinks at the end (s).
 VIEWER_PORT = 9876
 FLUSH_TIMEOUT = 60.0
-#: Lengths on the map scale with the vessel: they are given for a hull of REFERENCE_LENGTH
-#: (m, the Blue Lady's L_oa) and multiplied by ``L_oa / REFERENCE_LENGTH``: the arrow of an
-#: actuator at full thrust (m), the wind arrow per m/s (m), map margins and line widths.
-REFERENCE_LENGTH = 13.78
+#: Lengths on the map are given for a hull of REFERENCE_LENGTH and multiplied by
+#: ``L_oa / REFERENCE_LENGTH``: the arrow of an actuator at full thrust (m), the wind arrow
+#: per m/s (m), map margins and line widths.
 THRUST_ARROW_LENGTH = 4.0
 WIND_ARROW_SCALE = 2.0
 
