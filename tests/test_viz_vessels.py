@@ -286,3 +286,25 @@ def test_runs_recorded_before_the_actuator_names_read_as_the_blue_lady(recording
     assert run.vessel_title == "Blue Lady"
     assert np.isnan(run.actuator_state).all() and run.actuator_state.shape == (len(run.t), 3)
     assert cli_main(["report", str(old), "--out", str(tmp_path / "r")]) == 0
+
+
+def test_recording_a_non_shipgym_env_is_refused(tmp_path):
+    import gymnasium as gym
+
+    env = RecordEpisode(gym.make("CartPole-v1"), tmp_path / "x.rrd")
+    with pytest.raises(ValueError, match="shipgym environment"):
+        env.reset(seed=0)
+
+
+def test_observer_comparison_names_the_vessel(tmp_path):
+    from shipgym.viz import write_observer_report
+
+    idx = {"x_E": 1.0, "y_E": 2.0, "psi_E": 3.0, "J_c": 3.03}
+    rows = [{"observer": o, "measured": idx, "truth": idx} for o in ("kbf", "ekf")]
+    t = np.arange(5.0)
+    traces = {o: {"t": t, "err_nu": np.zeros((5, 3))} for o in ("kbf", "ekf")}
+    files = write_observer_report(
+        rows, traces, tmp_path, vessel="Wimpey Sealab (drill ship)", task="station keeping"
+    )
+    assert [f.name for f in files] == ["observers_indices.png", "observers_velocity_errors.png"]
+    assert all(f.stat().st_size > 0 for f in files)
