@@ -23,7 +23,7 @@ from shipgym.viz import (
     save_run_json,
     write_report,
 )
-from shipgym.viz.run import DATA_VECTORS, P
+from shipgym.viz.run import DATA_VECTORS, P, command_path
 
 STEPS = 200  # a shortened harbour episode (truncated by the time limit)
 
@@ -112,8 +112,8 @@ def test_recording_has_entities_and_one_row_per_step(recorded):
         f"{P.POSITION}/psi/measured",
         f"{P.VELOCITY}/r",
         P.PLOT_THRUST,
-        P.COMMAND_MAIN,
-        P.COMMAND_TUNNELS,
+        command_path("rpm"),  # the main propeller
+        command_path("1"),  # the tunnel thrusters
         P.ACCURACY,
         P.ACCURACY_MEAS,
         *(f"{P.DATA}/{k}" for k in DATA_VECTORS),

@@ -35,6 +35,10 @@ def write_observer_report(
     rows: Sequence[Mapping[str, Any]],
     traces: Mapping[str, Mapping[str, Any]],
     out_dir: str | os.PathLike[str],
+    *,
+    vessel: str | None = None,
+    task: str = "harbour manoeuvre",
+    seed: int = 0,
 ) -> list[Path]:
     """Bar chart of the accuracy indices per observer and velocity-error plots.
 
@@ -44,6 +48,8 @@ def write_observer_report(
         traces: per observer, ``{"t": (N,), "err_nu": (N, 3)}`` velocity estimation errors
             ``[u, v, r]`` (m/s, m/s, rad/s) of one episode.
         out_dir: folder for ``observers_indices.png`` and ``observers_velocity_errors.png``.
+        vessel, task, seed: what the runs were (the vessel's title, if given; the task; the
+            seed of ``traces``), named in the figure titles.
 
     Returns:
         The written paths.
@@ -68,7 +74,10 @@ def write_observer_report(
         ax.grid(axis="y", alpha=0.3)
     axes[0].legend(fontsize=8)
     n_seeds = len(rows) // max(len(names), 1)
-    fig.suptitle(f"Accuracy indices (Tomera 2014 eqs. 54-57), mean and std over {n_seeds} seeds")
+    what = task if vessel is None else f"{vessel}, {task}"
+    fig.suptitle(
+        f"{what}: accuracy indices (Tomera 2014 eqs. 54-57), mean and std over {n_seeds} seeds"
+    )
     p1 = out / "observers_indices.png"
     fig.savefig(p1, dpi=DPI, format="png")
 
@@ -89,7 +98,7 @@ def write_observer_report(
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncol=len(names))
     axes[-1].set_xlabel("time (s)")
-    fig.suptitle("Velocity estimation error (estimate - truth), harbour manoeuvre, seed 0")
+    fig.suptitle(f"{what}, seed {seed}: velocity estimation error (estimate - truth)")
     p2 = out / "observers_velocity_errors.png"
     fig.savefig(p2, dpi=DPI, format="png")
     return [p1, p2]

@@ -1,4 +1,4 @@
-"""Map geometry of a run, taken from the MuJoCo model: quays, hull outline, thruster positions.
+"""Map geometry of a run from the MuJoCo model and the vessel: quays, hull outline, thrusters.
 
 Pure NumPy (``mujoco`` is only touched through the model and data objects handed in). All map
 coordinates are NED metres: ``x`` north, ``y`` east; body coordinates are ``x`` forward,
@@ -14,37 +14,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
-    "HULL_OUTLINE",
-    "THRUSTER_NAMES",
-    "THRUSTER_POSITIONS",
+    "REFERENCE_LENGTH",
     "convex_outline",
+    "hull_length",
     "hull_outline",
     "hull_polygon",
     "quay_polygons",
+    "thrust_arrows",
     "thruster_positions",
 ]
 
-#: Thruster names in actuator order (main propeller, bow tunnel, stern tunnel).
-THRUSTER_NAMES: tuple[str, str, str] = ("main_propeller", "bow_tunnel", "stern_tunnel")
-
-#: Body-frame positions ``(x forward, y starboard)`` of the thrusters (m), Tomera 2014 / MJCF sites.
-THRUSTER_POSITIONS: NDArray[np.float64] = np.array([[-6.5, 0.0], [3.24, 0.0], [-2.376, 0.0]])
-
-#: Waterline outline of the Blue Lady hull in the body frame ``(x forward, y starboard)`` (m),
-#: counter-clockwise in (x, y); the convex outline of the MJCF mesh ``hull_outline`` (Loa 13.78 m,
-#: B 2.38 m). Used when a model without that mesh is recorded.
-HULL_OUTLINE: NDArray[np.float64] = np.array(
-    [
-        [-6.89, -0.7378], [-6.8377, -0.9215], [-6.6806, -1.0227], [-6.4176, -1.0967],
-        [-6.0426, -1.1487], [-5.53, -1.1797], [3.8, -1.19], [4.679, -1.1724],
-        [5.2759, -1.1197], [5.7661, -1.0325], [6.1669, -0.9115], [6.481, -0.7572],
-        [6.7074, -0.5684], [6.8442, -0.3385], [6.89, 0.0], [6.8442, 0.3385],
-        [6.7074, 0.5684], [6.481, 0.7572], [6.1669, 0.9115], [5.7661, 1.0325],
-        [5.2759, 1.1197], [4.679, 1.1724], [3.8, 1.19], [-5.53, 1.1797],
-        [-6.0426, 1.1487], [-6.4176, 1.0967], [-6.6806, 1.0227], [-6.8377, 0.9215],
-        [-6.89, 0.7378],
-    ]
-)  # fmt: skip
+#: Lengths drawn on a map (arrows, margins, line widths) are given for a hull of this overall
+#: length (m; the Blue Lady, 13.78 m) and scale with the vessel's ``L_oa``.
+REFERENCE_LENGTH = 13.78
 
 
 def convex_outline(points: ArrayLike) -> NDArray[np.float64]:
@@ -88,51 +70,104 @@ def _quat_to_mat(q: ArrayLike) -> NDArray[np.float64]:
     )
 
 
-def hull_outline(model: Any = None, mesh: str = "hull_outline") -> NDArray[np.float64]:
+#: geom types of ``mujoco.mjtGeom`` (the outline of each is sampled in its own frame)
+_SPHERE, _CAPSULE, _ELLIPSOID, _CYLINDER, _BOX, _MESH = 2, 3, 4, 5, 6, 7
+_N_ARC = 32  # points per circle when sampling round geoms
+
+
+def _geom_points(model: Any, g: int) -> NDArray[np.float64]:
+    """Points spanning geom ``g`` in its parent body's frame (m), shape (k, 3); empty for a
+    geom type without a finite shape (plane, height field)."""
+    kind = int(model.geom_type[g])
+    size = np.asarray(model.geom_size[g], dtype=float)
+    ang = np.linspace(0.0, 2.0 * math.pi, _N_ARC, endpoint=False)
+    circle = np.column_stack([np.cos(ang), np.sin(ang), np.zeros_like(ang)])
+    if kind == _BOX:
+        local = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)]) * size
+    elif kind == _CYLINDER:
+        r, h = size[0], size[1]
+        local = np.vstack([r * circle + [0, 0, -h], r * circle + [0, 0, h]])
+    elif kind == _CAPSULE:  # a cylinder with hemispherical ends
+        r, h = size[0], size[1]
+        ball = r * np.vstack([circle, circle[:, [0, 2, 1]], circle[:, [2, 0, 1]]])
+        local = np.vstack([ball + [0, 0, -h], ball + [0, 0, h]])
+    elif kind in (_SPHERE, _ELLIPSOID):
+        axes = np.full(3, size[0]) if kind == _SPHERE else size
+        ring = np.vstack([circle, circle[:, [0, 2, 1]], circle[:, [2, 0, 1]]])
+        local = ring * axes
+    elif kind == _MESH:
+        mesh_id = int(model.geom_dataid[g])
+        adr, num = int(model.mesh_vertadr[mesh_id]), int(model.mesh_vertnum[mesh_id])
+        local = np.asarray(model.mesh_vert[adr : adr + num], dtype=float)
+    else:
+        return np.zeros((0, 3))
+    return local @ _quat_to_mat(model.geom_quat[g]).T + np.asarray(model.geom_pos[g], dtype=float)
+
+
+def hull_outline(model: Any, body: str = "hull") -> NDArray[np.float64]:
     """Waterline outline of the hull in the body frame ``(x forward, y starboard)`` (m).
 
-    Takes the convex outline of the mesh vertices, mapped back to the body frame through the
-    geom's pose (MuJoCo re-centres and re-orients meshes when it compiles them). Falls back to
-    :data:`HULL_OUTLINE` when ``model`` is ``None`` or has no such mesh.
+    The convex outline, seen from above, of the collision geoms (``contype`` or
+    ``conaffinity`` non-zero) of the hull body: boxes, cylinders, capsules, spheres,
+    ellipsoids and meshes (a mesh's vertices, mapped back to the body frame through the geom's
+    pose, as MuJoCo re-centres and re-orients meshes when it compiles them). Drawing-only
+    geoms (a deckhouse, a derrick) are left out; a hull body with no collision geom uses all
+    its geoms.
 
     Args:
-        model: a ``mujoco.MjModel`` (or ``None``).
-        mesh: name of the hull mesh.
+        model: a ``mujoco.MjModel`` holding the vessel.
+        body: name of the hull body.
 
     Returns:
         (k, 2) outline vertices, counter-clockwise in (x, y), not closed.
+
+    Raises:
+        ValueError: the model has no such body, or the body has no geom with a shape.
     """
-    if model is None:
-        return HULL_OUTLINE.copy()
     try:
-        mesh_id = int(model.mesh(mesh).id)
-    except (KeyError, AttributeError):
-        return HULL_OUTLINE.copy()
-    users = np.flatnonzero(np.asarray(model.geom_dataid) == mesh_id)
-    geoms = [int(g) for g in users if int(model.geom_type[g]) == 7]  # mjGEOM_MESH
-    if not geoms:
-        return HULL_OUTLINE.copy()
-    g = geoms[0]
-    adr, num = int(model.mesh_vertadr[mesh_id]), int(model.mesh_vertnum[mesh_id])
-    vert = np.asarray(model.mesh_vert[adr : adr + num], dtype=float)
-    body = vert @ _quat_to_mat(model.geom_quat[g]).T + np.asarray(model.geom_pos[g], dtype=float)
-    return convex_outline(body[:, :2])
+        body_id = int(model.body(body).id)
+    except KeyError:
+        raise ValueError(f"the model has no hull body named {body!r}") from None
+    geoms = np.flatnonzero(np.asarray(model.geom_bodyid) == body_id).tolist()
+    collide = [
+        g for g in geoms if int(model.geom_contype[g]) != 0 or int(model.geom_conaffinity[g]) != 0
+    ]
+    pts = [_geom_points(model, g) for g in (collide or geoms)]
+    xy = np.vstack([p[:, :2] for p in pts]) if pts else np.zeros((0, 2))
+    if len(xy) < 3:
+        raise ValueError(f"the hull body {body!r} has no geom to draw its outline from")
+    return convex_outline(xy)
 
 
-def thruster_positions(model: Any = None) -> NDArray[np.float64]:
-    """Body-frame ``(x, y)`` positions (m) of the three thrusters, from the model's sites.
+def hull_length(outline: ArrayLike) -> float:
+    """Length (m) of a body-frame hull outline along x (forward); 0 for an empty outline."""
+    o = np.asarray(outline, dtype=float).reshape(-1, 2)
+    return float(o[:, 0].max() - o[:, 0].min()) if len(o) else 0.0
 
-    Falls back to :data:`THRUSTER_POSITIONS` for sites the model lacks.
+
+def thruster_positions(actuators: Any) -> NDArray[np.float64]:
+    """Body-frame ``(x, y)`` positions (m) of a vessel's actuators, shape (n_actuators, 2).
+
+    Args:
+        actuators: the vessel's :class:`~shipgym.dynamics.actuators.ActuatorSet`.
     """
-    out = THRUSTER_POSITIONS.copy()
-    if model is None:
-        return out
-    for i, name in enumerate(THRUSTER_NAMES):
-        try:
-            out[i] = np.asarray(model.site(name).pos, dtype=float)[:2]
-        except (KeyError, AttributeError):
-            pass
-    return out
+    return np.array([a.position[:2] for a in actuators], dtype=float).reshape(-1, 2)
+
+
+def thrust_arrows(actuators: Any, states: ArrayLike, length: float) -> NDArray[np.float64]:
+    """Thrust arrows ``(dx, dy)`` in the body frame (m), shape (..., n_actuators, 2).
+
+    Each arrow points along the actuator's force (an azimuth's turns with its angle state)
+    and is ``length`` long at the actuator's largest thrust (``max_thrust``).
+
+    Args:
+        actuators: the :class:`~shipgym.dynamics.actuators.ActuatorSet`.
+        states: actuator states (..., n_channels) (MuJoCo's ``act``; ``info["actuator_state"]``).
+        length: arrow length (m) at full thrust.
+    """
+    f = actuators.forces(states)
+    f_max = np.array([max(float(a.max_thrust), 1e-12) for a in actuators])
+    return length * f / f_max[:, None]
 
 
 def quay_polygons(model: Any, data: Any) -> tuple[list[str], NDArray[np.float64]]:

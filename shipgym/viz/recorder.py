@@ -41,8 +41,24 @@ from numpy.typing import NDArray
 from shipgym._io import partial_path, replace_together
 from shipgym.records import step_record
 
-from .geometry import hull_outline, hull_polygon, quay_polygons, thruster_positions
-from .run import DATA_VECTORS, P, Run, desired_body_velocity, indices_warning, save_run_json
+from .geometry import (
+    REFERENCE_LENGTH,
+    hull_outline,
+    hull_polygon,
+    quay_polygons,
+    thrust_arrows,
+    thruster_positions,
+)
+from .run import (
+    DATA_VECTORS,
+    P,
+    Run,
+    actuator_description,
+    command_path,
+    desired_body_velocity,
+    indices_warning,
+    save_run_json,
+)
 
 __all__ = ["RecordEpisode", "episode_path"]
 
@@ -63,6 +79,7 @@ _VEC_FIELDS = (
     ("command", attrgetter("actuators.command")),
     ("thrust", attrgetter("actuators.thrust")),
     ("saturated", attrgetter("actuators.saturated")),
+    ("actuator_state", attrgetter("actuators.state")),
     ("tau_wind", attrgetter("tau_wind")),
     ("tau_waves", attrgetter("tau_waves")),
     ("current_body", attrgetter("current_body")),
@@ -71,7 +88,9 @@ _VEC_KEYS = tuple(k for k, _ in _VEC_FIELDS)
 #: port of a spawned rerun viewer, and the longest wait for the sinks at the end (s).
 VIEWER_PORT = 9876
 FLUSH_TIMEOUT = 60.0
-#: arrow length of a thruster at full thrust (m) and of the wind arrow per m/s (m).
+#: Lengths on the map are given for a hull of REFERENCE_LENGTH and multiplied by
+#: ``L_oa / REFERENCE_LENGTH``: the arrow of an actuator at full thrust (m), the wind arrow
+#: per m/s (m), map margins and line widths.
 THRUST_ARROW_LENGTH = 4.0
 WIND_ARROW_SCALE = 2.0
 
@@ -86,7 +105,6 @@ _C_TRACE = (255, 215, 0, 110)
 _C_QUAY = (150, 150, 140, 255)
 _C_PLAN = (255, 160, 40, 160)
 _C_WIND = (120, 190, 255, 255)
-_C_THRUST = ((255, 80, 80, 255), (80, 220, 255, 255), (80, 255, 160, 255))
 _SERIES_COLORS = [_C_REF, _C_TRUTH, _C_EST]
 
 
@@ -152,6 +170,23 @@ def _stack(items: list[Any], n: int, width: int = 3) -> NDArray[np.float64]:
     return np.asarray(items, dtype=float).reshape(n, width)
 
 
+def _rgba(colour: str) -> tuple[int, int, int, int]:
+    """``#rrggbb`` -> an RGBA tuple (opaque); mid grey for anything else."""
+    c = colour.lstrip("#")
+    try:
+        return (int(c[0:2], 16), int(c[2:4], 16), int(c[4:6], 16), 255)
+    except (ValueError, IndexError):
+        return (128, 128, 128, 255)
+
+
+def _command_groups(units: tuple[str, ...]) -> list[tuple[str, list[int]]]:
+    """Channels grouped by command unit, in order of first appearance: ``(unit, [index])``."""
+    groups: dict[str, list[int]] = {}
+    for i, u in enumerate(units):
+        groups.setdefault(u, []).append(i)
+    return list(groups.items())
+
+
 def _find_attr(env: gym.Env[Any, Any], name: str) -> Any:
     """The first ``name`` attribute found walking down a wrapper stack (None if none)."""
     e: Any = env
@@ -182,6 +217,7 @@ class _Episode:
         self.t: list[float] = []
         self.vec: dict[str, list[Any]] = {k: [] for k in _VEC_KEYS}
         self.legs: list[tuple[int, int]] = []
+        self.roll: list[tuple[float, float]] | None = [] if ctx["dofs"] == 4 else None
         self.meas: list[tuple[float, int, Any, bool]] = []
         # derived, per flushed block
         self.blocks: dict[str, list[NDArray[Any]]] = {
@@ -209,6 +245,8 @@ class _Episode:
         vec = self.vec
         for k, get in _VEC_FIELDS:
             vec[k].append(get(rec))
+        if self.roll is not None:
+            self.roll.append((info["phi"], info["p"]))
         ref = rec.reference
         self.legs.append((ref.leg, rec.legs_completed))
         for m in rec.measurements:
@@ -233,7 +271,8 @@ class _Episode:
         t = np.asarray(self.t[i0:i1], dtype=float)
         steps = np.arange(i0, i1)
         idx = [rr.TimeColumn("sim_time", duration=t), rr.TimeColumn("step", sequence=steps)]
-        v = {k: _stack(self.vec[k][i0:i1], n) for k in _VEC_KEYS}
+        widths = self.ctx["widths"]
+        v = {k: _stack(self.vec[k][i0:i1], n, widths[k]) for k in _VEC_KEYS}
         legs = np.asarray(self.legs[i0:i1], dtype=float).reshape(n, 2)
         eta, eta_d_r = v["eta"], v["eta_d_r"]
         nu_d = desired_body_velocity(eta_d_r, v["eta_dot_d_r"])
@@ -261,16 +300,16 @@ class _Episode:
                 translation=np.column_stack([eta[:, :2], zeros]), quaternion=quat
             ),
         )
-        scale = THRUST_ARROW_LENGTH * v["thrust"] / self.ctx["f_max"]
-        vectors = np.zeros((n, 3, 2))
-        vectors[:, 0, 0] = scale[:, 0]
-        vectors[:, 1, 1] = scale[:, 1]
-        vectors[:, 2, 1] = scale[:, 2]
-        origins = np.broadcast_to(self.ctx["thrusters"], (n, 3, 2)).reshape(-1, 2)
+        acts = self.ctx["actuators"]
+        n_act = len(acts)
+        vectors = thrust_arrows(acts, v["actuator_state"], self.ctx["arrow_length"])
+        origins = np.broadcast_to(self.ctx["thrusters"], (n, n_act, 2)).reshape(-1, 2)
         rec.send_columns(
             P.THRUST,
             idx,
-            rr.Arrows2D.columns(vectors=vectors.reshape(-1, 2), origins=origins).partition([3] * n),
+            rr.Arrows2D.columns(vectors=vectors.reshape(-1, 2), origins=origins).partition(
+                [n_act] * n
+            ),
         )
         rec.send_columns(P.TRACK_TRUTH, idx, rr.Points2D.columns(positions=eta[:, :2]))
         rec.send_columns(P.TRACK_REF, idx, rr.Points2D.columns(positions=v["eta_d"][:, :2]))
@@ -300,7 +339,8 @@ class _Episode:
         self._log_hull_trace(t, steps, eta)
         if wind is not None:
             to = wind[:, 1] + math.pi
-            vec = WIND_ARROW_SCALE * wind[:, :1] * np.column_stack([np.cos(to), np.sin(to)])
+            length = WIND_ARROW_SCALE * self.ctx["scale"] * wind[:, :1]
+            vec = length * np.column_stack([np.cos(to), np.sin(to)])
             anchor = self.ctx["wind_anchor"]
             labels = [
                 f"wind {s:.1f} m/s from {math.degrees(b) % 360.0:.0f}°" for s, b in wind.tolist()
@@ -335,8 +375,12 @@ class _Episode:
                 m_idx,
             )
         scal(P.PLOT_THRUST, v["thrust"])
-        scal(P.COMMAND_MAIN, v["command"][:, 0])
-        scal(P.COMMAND_TUNNELS, v["command"][:, 1:])
+        for unit, cols in _command_groups(acts.units):
+            scal(command_path(unit), v["command"][:, cols])
+        if self.roll is not None:
+            roll = _stack(self.roll[i0:i1], n, 2)
+            scal(P.ROLL, roll * _DEG)
+            scal(f"{P.DATA}/roll", roll)
         scal(P.ACCURACY, acc)
         scal(P.ACCURACY_MEAS, acc_m)
         scal("plots/disturbances/wind_load", v["tau_wind"])
@@ -472,7 +516,8 @@ class _Episode:
     def to_run(self, metrics: dict[str, Any]) -> Run:
         """The flushed rows as a :class:`Run` (float64, exactly the ``info`` values)."""
         n = self.rows_done
-        v = {k: _stack(self.vec[k][:n], n) for k in _VEC_KEYS}
+        widths = self.ctx["widths"]
+        v = {k: _stack(self.vec[k][:n], n, widths[k]) for k in _VEC_KEYS}
         legs = np.asarray(self.legs[:n], dtype=np.int64).reshape(n, 2)
         ms = self.meas[: self.meas_done]
 
@@ -501,6 +546,9 @@ class _Episode:
             quay_names=list(ctx["quay_names"]),
             hull=np.asarray(ctx["hull"], dtype=float),
             thrusters=np.asarray(ctx["thrusters"], dtype=float),
+            actuators=actuator_description(ctx["actuators"]),
+            vessel=dict(ctx["vessel"]),
+            roll=_stack(self.roll[:n], n, 2) if self.roll is not None else np.zeros((0, 2)),
             metadata=dict(ctx["metadata"]),
             metrics=metrics,
         )
@@ -526,13 +574,14 @@ class RecordEpisode(
 ):
     """Records every episode to a rerun ``.rrd`` file, headless (stack it outermost).
 
-    Logs a top-down harbour map in NED metres with north up (quays, planned path and current
-    leg end point, the hull outline at every control step, true, desired, estimated and
-    measured positions, thrust arrows at the thrusters, a wind arrow), time series of the
-    r-frame pose and body velocity (desired, true, estimate, measured), thruster commands and
-    forces, the running accuracy indices of Tomera (2014) eqs. 54-57, and the run's metadata;
-    entity paths in :mod:`shipgym.viz.run`. The file opens in the rerun viewer with the map on
-    the left and the time series on the right (``rerun PATH.rrd``).
+    Logs a top-down map in NED metres with north up (quays, planned path and current leg end
+    point, the hull outline at every control step, true, desired, estimated and measured
+    positions, a thrust arrow per actuator along its force, a wind arrow), time series of the
+    r-frame pose and body velocity (desired, true, estimate, measured), the actuators'
+    commands (one plot per command unit) and thrusts, the running accuracy indices of Tomera
+    (2014) eqs. 54-57, and the run's metadata; entity paths in :mod:`shipgym.viz.run`. The
+    file opens in the rerun viewer with the map on the left and the time series on the right
+    (``rerun PATH.rrd``).
 
     Values are buffered per step and written in columns every ``flush_every`` steps, at the
     end of an episode, in :meth:`close` and when the wrapper is garbage collected: an episode
@@ -543,7 +592,7 @@ class RecordEpisode(
     complete one (see the module docstring). An episode closed before any step is discarded.
 
     Args:
-        env: a ``shipgym/BlueLady*`` environment, possibly under observer and controller
+        env: a shipgym environment of any vessel, possibly under observer and controller
             wrappers (``shipgym.make(..., observer=..., controller=...)``).
         path: the ``.rrd`` file of the first episode; later episodes go to
             ``<stem>-<k>.rrd`` (or replace ``{episode}`` in the path). Parent folders are
@@ -731,19 +780,29 @@ class RecordEpisode(
             quay_names, quays = quay_polygons(model, data)
         else:
             quay_names, quays = [], np.zeros((0, 4, 2))
-        try:
-            f_max = np.abs(np.asarray(model.actuator_forcerange, dtype=float)).max(axis=1)[:3]
-        except Exception:  # noqa: BLE001
-            f_max = np.ones(3)
-        f_max = np.where(f_max > 0, f_max, 1.0)
+        vessel: Any = getattr(base, "vessel", None)
+        actuators: Any = getattr(base, "actuators", None)
+        if vessel is None or actuators is None or model is None:
+            raise ValueError(
+                "RecordEpisode needs a shipgym environment (with a vessel, its actuators and a "
+                f"MuJoCo model) under its wrappers, got {type(base).__name__}"
+            )
+        scale = float(vessel.L_oa) / REFERENCE_LENGTH
         # map extent: quays, else the plan, with margins (m)
         pts = quays.reshape(-1, 2) if len(quays) else waypoints[:, :2]
         if len(pts) == 0:
             pts = np.zeros((1, 2))
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         if not len(quays):
-            lo, hi = lo - 15.0, hi + 15.0
-        wind_anchor = np.array([hi[0] + 6.0, lo[1] + 6.0])
+            lo, hi = lo - 15.0 * scale, hi + 15.0 * scale
+        wind_anchor = np.array([hi[0] + 6.0 * scale, lo[1] + 6.0 * scale])
+        widths = {k: 3 for k in _VEC_KEYS}
+        widths.update(
+            command=actuators.n_channels,
+            saturated=actuators.n_channels,
+            actuator_state=actuators.n_channels,
+            thrust=len(actuators),
+        )
         metrics_obj = getattr(base, "metrics", None)
         from shipgym.metrics import SEED_WEIGHTS
 
@@ -753,8 +812,19 @@ class RecordEpisode(
             "quays": quays,
             "quay_names": quay_names,
             "hull": hull_outline(model),
-            "thrusters": thruster_positions(model),
-            "f_max": f_max,
+            "thrusters": thruster_positions(actuators),
+            "actuators": actuators,
+            "dofs": int(vessel.dofs),
+            "vessel": {
+                "name": str(vessel.name),
+                "title": str(vessel.title),
+                "dofs": int(vessel.dofs),
+                "L_oa": float(vessel.L_oa),
+                "B": float(vessel.B),
+            },
+            "scale": scale,
+            "arrow_length": THRUST_ARROW_LENGTH * scale,
+            "widths": widths,
             "extent": (lo, hi),
             "wind_anchor": wind_anchor,
             "sample_period": float(getattr(metrics_obj, "sample_period", 1.0)),
@@ -788,16 +858,15 @@ class RecordEpisode(
             }
         plan = getattr(guidance, "plan", None)
         legs = [str(getattr(leg, "name", "")) for leg in getattr(plan, "legs", ())]
-        thr = getattr(base, "thrusters", None)
-        limits = None
-        if thr is not None and hasattr(thr, "lower"):
-            limits = [np.asarray(thr.lower, float).tolist(), np.asarray(thr.upper, float).tolist()]
+        thr = base.actuators
+        limits = [np.asarray(thr.lower, float).tolist(), np.asarray(thr.upper, float).tolist()]
         now = _dt.datetime.now(_dt.UTC)
         run_id = f"{scenario}-seed{seed}-{now:%Y%m%dT%H%M%S}-{uuid.uuid4().hex[:6]}"
         return {
             "run_id": run_id,
             "env_id": env_id,
             "scenario": scenario,
+            "vessel": str(base.vessel.name),
             "seed": None if seed is None else int(seed),
             "observer": str(observer),
             "controller": str(controller),
@@ -909,13 +978,16 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
             static=True,
         )
     hull = ctx["hull"]
+    k = ctx["scale"]
+    acts = ctx["actuators"]
+    colours = [_rgba(c) for c in acts.colours]
     rec.log(
         P.HULL,
         rr.LineStrips2D(
             [np.vstack([hull, hull[:1]])],
-            radii=0.06,
+            radii=0.06 * k,
             colors=[_C_HULL],
-            labels=["Blue Lady"],
+            labels=[ctx["vessel"]["title"]],
             show_labels=False,
         ),
         static=True,
@@ -923,7 +995,7 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
     rec.log(
         P.THRUST,
         rr.Arrows2D.from_fields(
-            colors=list(_C_THRUST), radii=0.1, labels=["main", "bow", "stern"], show_labels=False
+            colors=colours, radii=0.1 * k, labels=list(acts.names), show_labels=False
         ),
         static=True,
     )
@@ -936,9 +1008,11 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
         (P.TARGET, _C_REF, 0.4),
     )
     for ent, color, radius in styles:
-        rec.log(ent, rr.Points2D.from_fields(colors=[color], radii=radius), static=True)
-    rec.log(P.HULL_TRACE, rr.LineStrips2D.from_fields(colors=[_C_TRACE], radii=0.04), static=True)
-    rec.log(P.WIND, rr.Arrows2D.from_fields(colors=[_C_WIND], radii=0.12), static=True)
+        rec.log(ent, rr.Points2D.from_fields(colors=[color], radii=radius * k), static=True)
+    rec.log(
+        P.HULL_TRACE, rr.LineStrips2D.from_fields(colors=[_C_TRACE], radii=0.04 * k), static=True
+    )
+    rec.log(P.WIND, rr.Arrows2D.from_fields(colors=[_C_WIND], radii=0.12 * k), static=True)
     for dof, unit in (("x", "m"), ("y", "m"), ("psi", "deg")):
         rec.log(
             f"{P.POSITION}/{dof}",
@@ -966,15 +1040,21 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
         )
     rec.log(
         P.PLOT_THRUST,
-        rr.SeriesLines(names=["F1 main (N)", "F2 bow (N)", "F3 stern (N)"], colors=list(_C_THRUST)),
+        rr.SeriesLines(names=[f"{a} (N)" for a in acts.names], colors=colours),
         static=True,
     )
-    rec.log(P.COMMAND_MAIN, rr.SeriesLines(names=["n1 (rpm)"], colors=[_C_THRUST[0]]), static=True)
-    rec.log(
-        P.COMMAND_TUNNELS,
-        rr.SeriesLines(names=["p2 bow", "p3 stern"], colors=list(_C_THRUST[1:])),
-        static=True,
-    )
+    owner = actuator_description(acts)["channel_actuator"]
+    for unit, cols in _command_groups(acts.units):
+        rec.log(
+            command_path(unit),
+            rr.SeriesLines(
+                names=[f"{acts.channel_names[i]} ({unit})" for i in cols],
+                colors=[colours[owner[i]] for i in cols],
+            ),
+            static=True,
+        )
+    if ctx["dofs"] == 4:
+        rec.log(P.ROLL, rr.SeriesLines(names=["phi (deg)", "p (deg/s)"]), static=True)
     acc_names = ["x_E (m)", "y_E (m)", "psi_E (deg)", "J_c"]
     for ent, tag in ((P.ACCURACY, "true"), (P.ACCURACY_MEAS, "measured")):
         rec.log(ent, rr.SeriesLines(names=[f"{a} {tag}" for a in acc_names]), static=True)
@@ -984,6 +1064,8 @@ def _log_static(rec: Any, ctx: dict[str, Any]) -> None:
         "quay_names": ctx["quay_names"],
         "hull": ctx["hull"],
         "thrusters": ctx["thrusters"],
+        "actuators": actuator_description(acts),
+        "vessel": ctx["vessel"],
     }
     from .run import _clean
 
@@ -1006,6 +1088,7 @@ def _summary_markdown(
         "| | |",
         "|---|---|",
         f"| env | `{meta.get('env_id')}` |",
+        f"| vessel | {meta.get('vessel')} |",
         f"| observer | {meta.get('observer')} |",
         f"| controller | {meta.get('controller')} |",
         f"| wind | {wind_txt} |",
@@ -1072,11 +1155,12 @@ def _blueprint(ctx: dict[str, Any]) -> Any:
     import rerun.blueprint as rrb
 
     lo, hi = ctx["extent"]
-    m = 4.0
+    k = ctx["scale"]
+    m = 4.0 * k
     # screen coordinates of the map view: x = east, y = -north (rerun 2-D y points down)
     bounds = rrb.VisualBounds2D(
         x_range=[float(lo[1] - m), float(hi[1] + m)],
-        y_range=[float(-(hi[0] + 12.0)), float(-(lo[0] - m))],
+        y_range=[float(-(hi[0] + 12.0 * k)), float(-(lo[0] - m))],
     )
     trail = rrb.VisibleTimeRanges(
         timeline="sim_time",
@@ -1089,7 +1173,7 @@ def _blueprint(ctx: dict[str, Any]) -> Any:
     }
     map_view = rrb.Spatial2DView(
         origin=P.MAP,
-        name="Harbour map (north up, m)",
+        name=("Harbour map" if len(ctx["quays"]) else "Map") + " (north up, m)",
         visual_bounds=bounds,
         background=[12, 40, 64],
         overrides=trails,
@@ -1110,10 +1194,16 @@ def _blueprint(ctx: dict[str, Any]) -> Any:
         grid_columns=2,
         name="r-frame pose and body velocity",
     )
+    acts = ctx["actuators"]
+    commands = [
+        ts(command_path(unit), f"commands ({unit}): " + ", ".join(acts.channel_names[i] for i in c))
+        for unit, c in _command_groups(acts.units)
+    ]
+    roll = [ts(P.ROLL, "roll (deg, deg/s)")] if ctx["dofs"] == 4 else []
     thr = rrb.Tabs(
         ts(P.PLOT_THRUST, "thrust (N)"),
-        ts(P.COMMAND_MAIN, "main propeller n1 (rpm)"),
-        ts(P.COMMAND_TUNNELS, "tunnel thrusters p2, p3"),
+        *commands,
+        *roll,
         ts("plots/accuracy", "accuracy indices"),
         ts("plots/disturbances", "disturbances (wind, wave drift: N, N, N m; current m/s)"),
     )

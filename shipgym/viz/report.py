@@ -3,12 +3,16 @@
 :func:`write_report` draws with matplotlib's Agg canvas (no display, no pyplot state) at fixed
 figure sizes and resolution (:data:`FIGURE_SIZES`, :data:`DPI`):
 
-- ``trajectory.png``: harbour map, north up, east right, in metres: quays, desired and true
-  path, hull outlines every ``hull_every`` seconds, start and end berths, wind arrow (Fig. 8);
+- ``trajectory.png``: map, north up, east right, in metres: quays (in a harbour), desired and
+  true path, hull outlines every ``hull_every`` seconds, start and end poses, wind arrow
+  (Fig. 8);
 - ``positions.png``: x^r, y^r, psi^r in the leg's r-frame, desired (dashed) vs measured
-  (solid) and true (Figs. 9-11, left columns);
-- ``velocities.png``: u, v, r, desired (dashed) vs estimated (solid) and true (right columns);
-- ``thrusters.png``: commands and forces of the three thrusters, saturation shaded;
+  (solid) and true (Figs. 9-11, left columns), and the roll angle of a 4-DOF vessel;
+- ``velocities.png``: u, v, r, desired (dashed) vs estimated (solid) and true (right columns),
+  and the roll rate of a 4-DOF vessel;
+- ``thrusters.png``: one row per actuator of the vessel: its channel commands (left) and its
+  thrust (right; an azimuth's angle on a second axis), in the vessel's colours, saturation
+  shaded;
 - ``metrics.md``: accuracy indices (eqs. 54-57) from the truth and the measurements, leg
   times, thruster usage; a run whose recording is incomplete
   (:func:`~shipgym.viz.run.recording_problem`) says so in a line starting with
@@ -27,7 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .geometry import hull_polygon
+from .geometry import REFERENCE_LENGTH, hull_length, hull_polygon
 from .run import Run, indices_warning, load_run, recording_problem
 
 os.environ.setdefault("MPLBACKEND", "Agg")  # headless by default, whatever imports pyplot later
@@ -92,7 +96,18 @@ def _title(run: Run) -> str:
     parts.append(f"observer {m.get('observer', '?')}, controller {m.get('controller', '?')}")
     if recording_problem(run) is not None:
         parts.append("INCOMPLETE recording")
-    return "Blue Lady: " + ", ".join(parts)
+    return f"{run.vessel_title}: " + ", ".join(parts)
+
+
+def _scale(run: Run) -> float:
+    """Lengths on the map are given for a 13.78 m hull (the Blue Lady) and scale with L_oa."""
+    length = float(run.vessel.get("L_oa") or hull_length(run.hull) or REFERENCE_LENGTH)
+    return length / REFERENCE_LENGTH
+
+
+def _label(name: str) -> str:
+    """An actuator or channel name for a plot (``bow_tunnel`` -> ``bow tunnel``)."""
+    return name.replace("_", " ")
 
 
 def _wind_text(run: Run) -> str | None:
@@ -132,6 +147,7 @@ def _plot_trajectory(run: Run, path: Path, hull_every: float) -> Path:
     from matplotlib.patches import Polygon
 
     fig = _figure("trajectory")
+    k = _scale(run)
     ax = fig.add_subplot()
     ax.set_facecolor(_C_WATER)
     harbour = len(run.quays) > 0
@@ -215,7 +231,8 @@ def _plot_trajectory(run: Run, path: Path, hull_every: float) -> Path:
             )
             # label on the aft half of the hull, clear of the leg end point at the centre
             psi = float(eta[i, 2])
-            cx, cy = eta[i, 0] - 3.2 * math.cos(psi), eta[i, 1] - 3.2 * math.sin(psi)
+            aft = 3.2 * k
+            cx, cy = eta[i, 0] - aft * math.cos(psi), eta[i, 1] - aft * math.sin(psi)
             ax.text(
                 cy,
                 cx,
@@ -229,9 +246,9 @@ def _plot_trajectory(run: Run, path: Path, hull_every: float) -> Path:
             )
     allp = np.vstack(extent)
     lo, hi = allp.min(axis=0), allp.max(axis=0)
-    margin = 3.0 if harbour else 5.0
+    margin = (3.0 if harbour else 5.0) * k
     ax.set_xlim(lo[1] - margin, hi[1] + margin)
-    ax.set_ylim(lo[0] - margin, hi[0] + margin + 6.0)  # room for the wind arrow
+    ax.set_ylim(lo[0] - margin, hi[0] + margin + 6.0 * k)  # room for the wind arrow
     ax.set_aspect("equal", adjustable="box")
     wind = _wind_text(run)
     w = run.metadata.get("wind")
@@ -300,10 +317,13 @@ def _hull_indices(t: NDArray[np.float64], every: float) -> list[int]:
 # ---- time series ------------------------------------------------------------------------------
 def _plot_positions(run: Run, path: Path) -> Path:
     fig = _figure("positions")
-    axes = fig.subplots(3, 1, sharex=True)
+    roll = len(run.roll) == len(run.t) and len(run.t) > 0
+    axes = fig.subplots(3 + roll, 1, sharex=True)
     labels = (r"$x^r$ (m)", r"$y^r$ (m)", r"$\psi^r$ (deg)")
     scale = (1.0, 1.0, _DEG)
-    for k, ax in enumerate(axes):
+    if roll:
+        _plot_roll(axes[3], run, 0, r"$\phi$ (deg)")
+    for k, ax in enumerate(axes[:3]):
         s = scale[k]
         ax.plot(run.t, run.eta_r[:, k] * s, color=_C_TRUE, lw=0.9, alpha=0.8, label="true")
         if len(run.meas_t):
@@ -324,12 +344,15 @@ def _plot_positions(run: Run, path: Path) -> Path:
 
 def _plot_velocities(run: Run, path: Path) -> Path:
     fig = _figure("velocities")
-    axes = fig.subplots(3, 1, sharex=True)
+    roll = len(run.roll) == len(run.t) and len(run.t) > 0
+    axes = fig.subplots(3 + roll, 1, sharex=True)
     labels = ("u (m/s)", "v (m/s)", "r (deg/s)")
     scale = (1.0, 1.0, _DEG)
     nu_d = run.nu_d
     differs = bool(len(run.nu)) and bool(np.any(np.abs(run.nav_nu - run.nu) > 1e-12))
-    for k, ax in enumerate(axes):
+    if roll:
+        _plot_roll(axes[3], run, 1, "p (deg/s)")
+    for k, ax in enumerate(axes[:3]):
         s = scale[k]
         ax.plot(run.t, run.nu[:, k] * s, color=_C_TRUE, lw=0.9, alpha=0.8, label="true")
         if differs:
@@ -345,6 +368,14 @@ def _plot_velocities(run: Run, path: Path) -> Path:
     return _save(fig, path)
 
 
+def _plot_roll(ax: Any, run: Run, col: int, label: str) -> None:
+    """The true roll angle (``col`` 0) or rate (1) of a 4-DOF vessel, in degrees."""
+    ax.plot(run.t, run.roll[:, col] * _DEG, color=_C_TRUE, lw=0.9, label="true")
+    ax.set_ylabel(label)
+    ax.grid(True, alpha=0.3)
+    _leg_marks(ax, run, top=False)
+
+
 def _spans(flags: NDArray[np.bool_]) -> list[tuple[int, int]]:
     """Index ranges ``[start, end)`` of consecutive True flags."""
     f = np.concatenate([[False], np.asarray(flags, dtype=bool), [False]])
@@ -353,36 +384,53 @@ def _spans(flags: NDArray[np.bool_]) -> list[tuple[int, int]]:
 
 
 def _plot_thrusters(run: Run, path: Path) -> Path:
+    """One row per actuator: its channel commands (left), its thrust (right)."""
     fig = _figure("thrusters")
-    axes = fig.subplots(3, 2, sharex=True)
-    names = ("main propeller", "bow tunnel", "stern tunnel")
-    cmd_labels = ("$n_1$ (rpm)", "$p_2$ (1)", "$p_3$ (1)")
+    acts = run.actuators
+    names, colours = acts["names"], acts["colours"]
+    owner = list(acts["channel_actuator"])
+    units, state_units = acts["units"], acts["state_units"]
+    n = len(names)
+    axes = fig.subplots(n, 2, sharex=True, squeeze=False)
     t = run.t
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     limits = run.metadata.get("command_limits")
-    for k in range(3):
-        ax_c, ax_f = axes[k]
-        ax_c.step(t, run.command[:, k], where="pre", color="#444444", lw=1.0)
-        ax_f.plot(t, run.thrust[:, k], color=("#d62728", "#1f77b4", "#2ca02c")[k], lw=1.0)
-        for a, b in _spans(run.saturated[:, k]):
+    for i in range(n):
+        ax_c, ax_f = axes[i]
+        cols = [j for j, o in enumerate(owner) if o == i]
+        colour = colours[i]
+        for m, j in enumerate(cols):
+            ax = ax_c if m == 0 else ax_c.twinx()
+            ls = "-" if m == 0 else "--"
+            ax.step(t, run.command[:, j], where="pre", color="#444444" if m == 0 else colour,
+                    lw=1.0, ls=ls)  # fmt: skip
+            if limits and j < len(limits[0]):
+                for lim in (limits[0][j], limits[1][j]):
+                    ax.axhline(lim, color="#d62728", lw=0.8, ls=":")
+            ax.set_ylabel(f"{_label(acts['channels'][j])} ({units[j]})", fontsize=8)
+        ax_f.plot(t, run.thrust[:, i], color=colour, lw=1.0)
+        angles = [j for j in cols if state_units[j] == "rad"]
+        if angles and run.actuator_state.shape[1] > max(angles):
+            ax_a = ax_f.twinx()
+            for j in angles:
+                ax_a.plot(t, run.actuator_state[:, j] * _DEG, color="0.4", lw=0.9, ls="--")
+            ax_a.set_ylabel("angle (deg, dashed)", fontsize=8)
+        sat = np.any(run.saturated[:, cols], axis=1) if cols else np.zeros(len(t), bool)
+        for a, b in _spans(sat):
             t0 = t[a] - dt
             t1 = t[b - 1]
             for ax in (ax_c, ax_f):
                 ax.axvspan(t0, t1, color=_C_SAT, alpha=0.25, lw=0, zorder=0)
-        if limits:
-            for lim in (limits[0][k], limits[1][k]):
-                ax_c.axhline(lim, color="#d62728", lw=0.8, ls=":")
-        ax_c.set_ylabel(cmd_labels[k])
-        ax_f.set_ylabel(f"$F_{k + 1}$ (N)")
-        ax_c.set_title(f"{names[k]}: command", fontsize=9, loc="left")
-        ax_f.set_title(f"{names[k]}: force", fontsize=9, loc="left")
+        ax_f.set_ylabel(f"$F_{{{i + 1}}}$ (N)")
+        ax_c.set_title(f"{_label(names[i])}: command", fontsize=9, loc="left")
+        ax_f.set_title(f"{_label(names[i])}: thrust", fontsize=9, loc="left")
         for ax in (ax_c, ax_f):
             ax.grid(True, alpha=0.3)
             ax.axhline(0.0, color="0.5", lw=0.6)
     for ax in axes[-1]:
         ax.set_xlabel("t (s)")
     fig.suptitle(
-        _title(run) + "\nthrusters (dotted: command limits; shaded: saturated)", fontsize=10
+        _title(run) + "\nactuators (dotted: command limits; shaded: saturated)", fontsize=10
     )
     return _save(fig, path)
 
@@ -419,6 +467,7 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
         "| | |",
         "|---|---|",
         f"| env id | `{meta.get('env_id')}` |",
+        f"| vessel | {run.vessel_title} |",
         f"| seed | {meta.get('seed')} |",
         f"| observer | {meta.get('observer')} |",
         f"| controller | {meta.get('controller')} |",
@@ -464,15 +513,20 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
         "",
         "## Thrusters",
         "",
-        "| thruster | mean abs F (N) | total variation (N) | saturated fraction | "
+        "| actuator | mean abs F (N) | total variation (N) | saturated fraction | "
         "saturated time (s) |",
         "|---|---|---|---|---|",
     ]
+    act_names = run.actuator_names
+    owner = np.asarray(run.actuators["channel_actuator"], dtype=int)
+    per_actuator = np.column_stack(
+        [np.any(run.saturated[:, owner == i], axis=1) for i in range(len(act_names))]
+    ) if len(run.t) else np.zeros((0, len(act_names)), bool)  # fmt: skip
     mean_abs = m.get("thrust_mean_abs") or np.mean(np.abs(run.thrust), axis=0).tolist()
     tv = m.get("thrust_total_variation") or np.abs(np.diff(run.thrust, axis=0)).sum(0).tolist()
-    sat_f = m.get("saturated_fraction") or run.saturated.mean(axis=0).tolist()
-    sat_t = m.get("saturated_time") or [float("nan")] * 3
-    for i, name in enumerate(("main propeller", "bow tunnel", "stern tunnel")):
+    sat_f = m.get("saturated_fraction") or per_actuator.mean(axis=0).tolist()
+    sat_t = m.get("saturated_time") or [float("nan")] * len(act_names)
+    for i, name in enumerate(_label(a) for a in act_names):
         lines.append(
             f"| {name} | {_fmt(mean_abs[i], 2)} | {_fmt(tv[i], 1)} | {_fmt(sat_f[i], 3)} | "
             f"{_fmt(sat_t[i], 1)} |"

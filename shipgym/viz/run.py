@@ -14,23 +14,28 @@ carries a static rotation so that north is up and east is right in rerun's 2-D v
 ``map/ned/waypoints``       leg end points ``P, 1, ..., n`` (static points)
 ``map/ned/ship``            true pose every control step (Transform3D, float32)
 ``map/ned/ship/hull``       hull outline in the body frame (static)
-``map/ned/ship/thrust``     thrust arrows at the thrusters (body frame; 4 m = full thrust)
+``map/ned/ship/thrust``     one thrust arrow per actuator at its position, along its force
+                            (body frame; full thrust = 0.29 L_oa, 4 m on the Blue Lady)
 ``map/ned/target``          end point of the current leg
 ``map/ned/track/truth``     true position (x, y) every step (float32)
 ``map/ned/track/reference`` desired position every step
 ``map/ned/track/estimate``  navigation (observer) position, when it differs from the truth
 ``map/ned/dgps``            measured positions (DGPS), ``map/ned/dgps_outliers``
 ``map/ned/hull_trace``      hull outlines every ``hull_every`` s (NED)
-``map/ned/wind``            wind arrow (where the wind goes; 2 m per m/s)
+``map/ned/wind``            wind arrow (where the wind goes; 2 m per m/s on a 13.78 m hull,
+                            scaled with L_oa)
 ``plots/position/{x,y,psi}`` r-frame pose: desired, true, estimate (m, m, deg) and
                             ``.../measured`` (DGPS and gyro-compass)
 ``plots/velocity/{u,v,r}``  body velocity: desired, true, estimate (m/s, m/s, deg/s)
-``plots/thrust``            thruster forces F1, F2, F3 (N)
-``plots/command/main``      main propeller command n1 (rpm)
-``plots/command/tunnels``   tunnel thruster commands p2, p3 (1)
+``plots/thrust``            thrust of every actuator (N), one series per actuator
+``plots/command/<unit>``    channel commands grouped by unit (:func:`command_path`: ``rpm``,
+                            ``1`` -> ``relative``, ``rad/s`` -> ``rad_per_s``)
+``plots/roll``              roll angle and rate (deg, deg/s), 4-DOF vessels only
 ``plots/accuracy/truth``    running x_E, y_E (m), psi_E (deg), J_c (Tomera 2014 eqs. 54-57)
 ``plots/accuracy/measured`` the same from the measured pose
-``data/*``                  raw float64 vectors for tools that read the file back
+``data/*``                  raw float64 vectors for tools that read the file back;
+                            ``data/static``: geometry and the actuators' names, channels,
+                            units and colours
 ``metadata/summary``        run description (markdown), ``metadata/json`` (machine-readable)
 =========================== ======================================================
 
@@ -60,7 +65,16 @@ from numpy.typing import NDArray
 
 from shipgym.metrics import indices_note
 
-__all__ = ["Run", "indices_warning", "load_run", "recording_problem", "save_run_json", "P"]
+__all__ = [
+    "P",
+    "Run",
+    "actuator_description",
+    "command_path",
+    "indices_warning",
+    "load_run",
+    "recording_problem",
+    "save_run_json",
+]
 
 JSON_FORMAT = "shipgym-run"
 JSON_VERSION = 1
@@ -88,8 +102,8 @@ class P:
     POSITION = "plots/position"  # /x, /y, /psi and /<dof>/measured
     VELOCITY = "plots/velocity"  # /u, /v, /r
     PLOT_THRUST = "plots/thrust"
-    COMMAND_MAIN = "plots/command/main"
-    COMMAND_TUNNELS = "plots/command/tunnels"
+    COMMAND = "plots/command"  # /<unit>: command_path(unit)
+    ROLL = "plots/roll"
     ACCURACY = "plots/accuracy/truth"
     ACCURACY_MEAS = "plots/accuracy/measured"
     DATA = "data"  # /<name> for the names in DATA_VECTORS
@@ -97,8 +111,10 @@ class P:
     META_JSON = "metadata/json"
 
 
-#: Per-step float64 vectors logged under ``data/<name>`` (name -> width).
-DATA_VECTORS: dict[str, int] = {
+#: Per-step float64 vectors logged under ``data/<name>`` (name -> width; ``None``: one entry
+#: per control channel or per actuator of the vessel). 4-DOF vessels add ``data/roll``
+#: (``[phi (rad), p (rad/s)]``).
+DATA_VECTORS: dict[str, int | None] = {
     "eta": 3,
     "nu": 3,
     "nav_eta": 3,
@@ -108,15 +124,67 @@ DATA_VECTORS: dict[str, int] = {
     "eta_dot_d_r": 3,
     "eta_r": 3,
     "eta_P": 3,
-    "command": 3,
-    "thrust": 3,
-    "saturated": 3,
+    "command": None,
+    "thrust": None,
+    "saturated": None,
+    "actuator_state": None,
     "tau_wind": 3,
     "tau_waves": 3,
     "current_body": 3,
     "wind": 2,
     "leg": 2,
 }
+
+#: unit -> entity name under ``plots/command`` (units with a slash or "1" are renamed)
+_UNIT_SLUGS = {"1": "relative", "rad/s": "rad_per_s", "deg/s": "deg_per_s"}
+
+
+def command_path(unit: str) -> str:
+    """Entity path of the command plot of the channels whose command unit is ``unit``."""
+    slug = _UNIT_SLUGS.get(unit) or "".join(c if c.isalnum() else "_" for c in unit) or "none"
+    return f"{P.COMMAND}/{slug}"
+
+
+def actuator_description(actuators: Any) -> dict[str, list[Any]]:
+    """Names, colours, channels and units of an ActuatorSet, as stored with a run.
+
+    Keys: ``names``, ``colours``, ``kinds``, ``max_thrust`` (N) per actuator; ``channels``,
+    ``units`` (command unit), ``state_units`` and ``channel_actuator`` (index of the
+    actuator owning the channel) per control channel.
+    """
+    owner = [i for i, sl in enumerate(actuators.slices) for _ in range(sl.start, sl.stop)]
+    return {
+        "names": list(actuators.names),
+        "colours": list(actuators.colours),
+        "kinds": [a.kind for a in actuators],
+        "max_thrust": [float(a.max_thrust) for a in actuators],
+        "channels": list(actuators.channel_names),
+        "units": list(actuators.units),
+        "state_units": [c.state_unit for c in actuators.channels],
+        "channel_actuator": owner,
+    }
+
+
+def _legacy_actuators(n_thrust: int) -> dict[str, list[Any]]:
+    """The actuators of a run recorded before runs carried them: the Blue Lady's (the only
+    vessel then), or numbered ones when the widths do not match hers."""
+    from shipgym.dynamics.vessel import load_vessel
+
+    bl = actuator_description(load_vessel("blue-lady").actuators)
+    if n_thrust == len(bl["names"]):
+        return bl
+    names = [f"actuator {i + 1}" for i in range(n_thrust)]
+    return {
+        "names": names,
+        "colours": ["#1f77b4"] * n_thrust,
+        "kinds": [""] * n_thrust,
+        "max_thrust": [float("nan")] * n_thrust,
+        "channels": list(names),
+        "units": [""] * n_thrust,
+        "state_units": [""] * n_thrust,
+        "channel_actuator": list(range(n_thrust)),
+    }
+
 
 _N3 = ("eta", "nu", "nav_eta", "nav_nu", "eta_d", "eta_d_r", "eta_dot_d_r", "eta_r", "eta_P")
 
@@ -132,7 +200,9 @@ class Run:
         eta_d: desired NED pose; eta_d_r, eta_dot_d_r: desired pose and its rate in the leg's
             r-frame; eta_r: true pose in the r-frame; eta_P: NED pose of the leg start, (N, 3).
         leg: index of the leg being performed, legs_completed, (N,) int.
-        command: ``[n1 (rpm), p2, p3]``; thrust: ``[F1, F2, F3]`` (N); saturated: flags, (N, 3).
+        command: the channel commands (each in its unit), (N, C); actuator_state: the
+            channel states (lagged commands; an azimuth's angle in rad), (N, C); saturated:
+            per-channel flags, (N, C); thrust: per actuator (N), (N, A).
         tau_wind: wind load ``[X (N), Y (N), N (N m)]`` in the body frame, (N, 3).
         tau_waves: second-order wave drift load, body frame (N, N, N m), (N, 3).
         current_body: current velocity on the body axes ``[u_c, v_c, 0]`` (m/s), (N, 3).
@@ -145,7 +215,11 @@ class Run:
         waypoints: planned NED leg end points (m, m, rad), (legs + 1, 3).
         quays: NED corner polygons (m), (K, 4, 2); quay_names: their geom names.
         hull: body-frame hull outline ``(x forward, y starboard)`` (m), (H, 2).
-        thrusters: body-frame thruster positions (m), (3, 2).
+        thrusters: body-frame actuator positions (m), (A, 2).
+        actuators: the vessel's actuators (:func:`actuator_description`: ``names``,
+            ``colours``, ``channels``, ``units``, ...).
+        vessel: ``name``, ``title``, ``dofs``, ``L_oa`` (m), ``B`` (m) of the vessel.
+        roll: ``[phi (rad), p (rad/s)]`` of a 4-DOF vessel, (N, 2); (0, 2) for 3 DOF.
         metadata: env id, scenario, seed, observer, controller, wind, plan, ...
         metrics: the environment's episode metrics (accuracy indices, leg times, thrusters).
     """
@@ -179,11 +253,38 @@ class Run:
     quays: NDArray[np.float64]
     quay_names: list[str] = field(default_factory=list)
     hull: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
-    thrusters: NDArray[np.float64] = field(default_factory=lambda: np.zeros((3, 2)))
+    thrusters: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
     metadata: dict[str, Any] = field(default_factory=dict)
     metrics: dict[str, Any] = field(default_factory=dict)
     tau_waves: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
     current_body: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    actuator_state: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 0)))
+    actuators: dict[str, list[Any]] = field(default_factory=dict)
+    vessel: dict[str, Any] = field(default_factory=dict)
+    roll: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
+
+    def __post_init__(self) -> None:
+        if not self.actuators:
+            self.actuators = _legacy_actuators(self.thrust.shape[1] if self.thrust.ndim == 2 else 3)
+        if not self.vessel:  # recorded before runs carried it: the Blue Lady
+            self.vessel = {"name": "blue-lady", "title": "Blue Lady", "dofs": 3}
+        if self.actuator_state.size == 0 and len(self.t):
+            self.actuator_state = np.full((len(self.t), len(self.channel_names)), np.nan)
+
+    @property
+    def actuator_names(self) -> list[str]:
+        """Names of the vessel's actuators (the columns of ``thrust``)."""
+        return list(self.actuators["names"])
+
+    @property
+    def channel_names(self) -> list[str]:
+        """Names of the control channels (the columns of ``command``)."""
+        return list(self.actuators["channels"])
+
+    @property
+    def vessel_title(self) -> str:
+        """The vessel's human-readable name."""
+        return str(self.vessel.get("title") or self.vessel.get("name") or "vessel")
 
     @property
     def n_steps(self) -> int:
@@ -257,7 +358,7 @@ def save_run_json(run: Run, path: str | os.PathLike[str]) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     arrays = {}
     for f in fields(run):
-        if f.name in ("metadata", "metrics", "quay_names"):
+        if f.name in _DOC_FIELDS:
             continue
         arrays[f.name] = getattr(run, f.name)
     doc = {
@@ -266,12 +367,17 @@ def save_run_json(run: Run, path: str | os.PathLike[str]) -> Path:
         "metadata": run.metadata,
         "metrics": run.metrics,
         "quay_names": list(run.quay_names),
+        "actuators": run.actuators,
+        "vessel": run.vessel,
         "arrays": arrays,
     }
     atomic_write_text(path, json.dumps(_clean(doc), separators=(",", ":")))
     return path
 
 
+_DOC_FIELDS = ("metadata", "metrics", "quay_names", "actuators", "vessel")
+#: arrays a run file written before they existed may lack (the Run's defaults fill them)
+_OPTIONAL_ARRAYS = ("actuator_state", "roll")
 _INT_FIELDS = ("step", "leg", "legs_completed", "meas_step")
 _BOOL_FIELDS = ("saturated", "meas_outlier")
 _SHAPES = {
@@ -284,10 +390,8 @@ _SHAPES = {
     "hull": (0, 2),
     "thrusters": (0, 2),
     "wind": (0, 2),
-    **{
-        k: (0, 3)
-        for k in (*_N3, "command", "thrust", "saturated", "tau_wind", "tau_waves", "current_body")
-    },
+    "roll": (0, 2),
+    **{k: (0, 3) for k in (*_N3, "tau_wind", "tau_waves", "current_body")},
 }
 
 
@@ -314,15 +418,31 @@ def _load_json(path: Path) -> Run:
             f'"format": "{JSON_FORMAT}", as written by shipgym.viz.save_run_json)'
         )
     arrays = doc.get("arrays", {})
+    widths = {"command": 3, "thrust": 3, "saturated": 3}  # files before per-vessel widths
+    acts = doc.get("actuators")
+    if isinstance(acts, dict) and acts.get("names"):
+        widths = {
+            "command": len(acts["channels"]),
+            "saturated": len(acts["channels"]),
+            "actuator_state": len(acts["channels"]),
+            "thrust": len(acts["names"]),
+        }
     kwargs: dict[str, Any] = {}
     for f in fields(Run):
-        if f.name in ("metadata", "metrics", "quay_names"):
+        if f.name in _DOC_FIELDS:
+            continue
+        if f.name not in arrays and f.name in _OPTIONAL_ARRAYS:
             continue
         if f.name not in arrays:
             raise ValueError(f"{path}: the run file lacks the array {f.name!r}")
-        kwargs[f.name] = _as_array(f.name, arrays[f.name])
+        a = _as_array(f.name, arrays[f.name])
+        if a.size == 0 and f.name in widths:
+            a = a.reshape(0, widths[f.name])
+        kwargs[f.name] = a
     return Run(
         **kwargs,
+        actuators=dict(acts) if isinstance(acts, dict) else {},
+        vessel=dict(doc.get("vessel") or {}),
         quay_names=list(doc.get("quay_names", [])),
         metadata=dict(doc.get("metadata") or {}),
         metrics=dict(doc.get("metrics") or {}),
@@ -398,7 +518,7 @@ def _vectors(ents: dict[str, dict[str, Any]], name: str, width: int) -> NDArray[
     _, vals = _sorted_by_step(rows, "Scalars:scalars")
     if not vals:
         return np.zeros((0, width))
-    return np.array(vals, dtype=float).reshape(-1, width)
+    return np.array(vals, dtype=float).reshape(len(vals), -1)
 
 
 def _load_rrd(path: Path) -> Run:
@@ -426,7 +546,17 @@ def _load_rrd(path: Path) -> Run:
     rows = _rows(ents, f"{P.DATA}/eta")
     step, _ = _sorted_by_step(rows, "Scalars:scalars")
     t_ns = np.asarray(rows["sim_time"], dtype=np.int64)[np.argsort(rows["step"], kind="stable")]
-    vec = {name: _vectors(ents, name, w) for name, w in DATA_VECTORS.items()}
+    static = ents.get(f"{P.DATA}/static", {}).get("static", {})
+    geo = json.loads(static["TextDocument:text"]) if static else {}
+    acts = geo.get("actuators") if isinstance(geo.get("actuators"), dict) else {}
+    n_ch, n_act = (len(acts["channels"]), len(acts["names"])) if acts else (3, 3)
+    widths = {"command": n_ch, "saturated": n_ch, "actuator_state": n_ch, "thrust": n_act}
+    vec = {
+        name: _vectors(ents, name, w if w is not None else widths[name])
+        for name, w in DATA_VECTORS.items()
+        if f"{P.DATA}/{name}" in ents or name != "actuator_state"  # older files lack it
+    }
+    roll = _vectors(ents, "roll", 2) if f"{P.DATA}/roll" in ents else np.zeros((0, 2))
     legs = vec.pop("leg").astype(np.int64)
     wind = vec.pop("wind")
     sat = vec.pop("saturated") > 0.5
@@ -446,8 +576,6 @@ def _load_rrd(path: Path) -> Run:
         mt, mstep, m = mt[order], mstep[order], m[order]
     else:
         mt, mstep, m = np.zeros(0), np.zeros(0, np.int64), np.zeros((0, 7))
-    static = ents.get(f"{P.DATA}/static", {}).get("static", {})
-    geo = json.loads(static["TextDocument:text"]) if static else {}
     return Run(
         t=np.asarray(t_ns * 1e-9, dtype=float),
         step=step,
@@ -468,6 +596,9 @@ def _load_rrd(path: Path) -> Run:
         quay_names=list(geo.get("quay_names", [])),
         hull=_as_array("hull", geo.get("hull", [])),
         thrusters=_as_array("thrusters", geo.get("thrusters", [])),
+        actuators=dict(acts),
+        vessel=dict(geo.get("vessel") or {}),
+        roll=roll,
         metadata=metadata,
         metrics=dict(doc.get("metrics") or {}),
     )
