@@ -246,4 +246,6 @@ def test_tau_thrusters_equals_the_configuration_matrix_times_thrust():
 
     phys = VesselPhysics("blue-lady")
     phys.reset(actuators=[-150.0, 0.3, -0.7])
-    np.testing.assert_allclose(phys.tau_thrusters, command_to_tau(phys.actuator_state), rtol=1e-12)
+    np.testing.assert_allclose(
+        phys.tau_thrusters, command_to_tau(phys.actuator_state, BLUE_LADY_THRUSTERS), rtol=1e-12
+    )

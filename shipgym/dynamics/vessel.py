@@ -463,7 +463,7 @@ def _read(path: Path) -> Vessel:
     r.keys(w, "windage", set(_UNITS_WINDAGE))
     try:
         windage = WindageParameters(**{
-            k: r.string(w, k, "windage", WindageParameters.coefficients) if k == "coefficients"
+            k: r.string(w, k, "windage") if k == "coefficients"
             else r.number(w, k, "windage", u, getattr(WindageParameters, k, ...))
             for k, u in _UNITS_WINDAGE.items()})  # fmt: skip
     except ValueError as exc:
