@@ -289,7 +289,7 @@ GAIN_PRESETS: Mapping[str, PIDGains] = MappingProxyType(
 
 
 def pid_gains(name: str) -> PIDGains:
-    """A Blue Lady gain preset by name (``"seed"``, ``"tuned"``, ``"smooth"``; :data:`GAIN_PRESETS`).
+    """A gain preset of the Blue Lady by name (``"seed"``, ``"tuned"``, ``"smooth"``).
 
     Raises:
         ValueError: unknown name (the message lists the valid ones).

@@ -79,7 +79,14 @@ class Limits:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Limits:
-        """Build from a mapping of field names (SI units); unknown keys raise ``ValueError``."""
+        """Build from a mapping of every field (SI units); unknown or missing keys raise
+        ``ValueError`` naming them (no vessel's values fill the gaps)."""
+        missing = [f.name for f in fields(cls) if f.name not in d]
+        if missing and not set(d) - {f.name for f in fields(cls)}:
+            raise ValueError(
+                f"limits need every field; missing {missing} (give the vessel's limits, e.g. "
+                "load_vessel('blue-lady').limits, or a [limits] table in the vessel file)"
+            )
         return from_mapping(cls, {k: float(v) for k, v in d.items()}, where="limits")
 
     def to_dict(self) -> dict[str, float]:

@@ -641,7 +641,7 @@ class ExtendedKalmanFilter(Observer):
 
 # ---- factories -------------------------------------------------------------------------------
 def tomera_ekf(**overrides: Any) -> ExtendedKalmanFilter:
-    """The Blue Lady's EKF with the paper's design matrices (``tomera-ekf``; Tomera 2014 eqs. 49-53).
+    """The Blue Lady's EKF with the paper's matrices (``tomera-ekf``; Tomera 2014 eqs. 49-53).
 
     ``Q = diag(0.1, 0.1, 0.1)`` on the bias noise (eq. 52), ``R = diag(0.1, 0.1, 0.1)``
     (eq. 53, read in m^2, m^2, rad^2: a 0.32 m DGPS and an 18 deg gyrocompass sigma),
