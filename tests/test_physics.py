@@ -11,6 +11,7 @@ from shipgym.disturbances import WindConfig
 from shipgym.dynamics import (
     BLUE_LADY_HULL,
     BLUE_LADY_THRUSTERS,
+    BLUE_LADY_WINDAGE,
     PlantModel,
     plant_model,
     rot,
@@ -235,7 +236,8 @@ def test_still_air_drags_a_moving_hull_and_none_switches_aerodynamics_off():
     still = VesselPhysics("blue-lady", "seed-linear", wind=WindConfig(speed=0.0))
     still.reset(nu=[1.0, 0.0, 0.0])
     still.step()
-    expect = wind_load(0.0, 0.0, 0.0, 1.0, 0.0)  # 1 m/s head wind on a hull at rest
+    # 1 m/s head wind on a hull at rest
+    expect = wind_load(0.0, 0.0, 0.0, 1.0, 0.0, windage=BLUE_LADY_WINDAGE)
     np.testing.assert_allclose(still.tau_wind, expect, rtol=1e-9, atol=1e-12)
     assert still.tau_wind[0] < 0
     off = VesselPhysics("blue-lady", "seed-linear", wind=None)

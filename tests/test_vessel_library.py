@@ -60,6 +60,16 @@ s_L = 0.0
 L_oa = 80.0
 coefficients = "research"
 
+[limits]
+surge_speed = 0.5
+surge_accel = 0.01
+surge_astern_speed = 0.3
+surge_astern_accel = 0.008
+sway_speed = 0.2
+sway_accel = 0.004
+yaw_rate = 0.0087
+yaw_accel = 2.0e-4
+
 [[actuator]]
 name = "propeller"
 kind = "propeller"
@@ -207,6 +217,14 @@ def test_unknown_key_is_named(tmp_path: Path) -> None:
 def test_missing_value_is_named(tmp_path: Path) -> None:
     toml = re.sub(r"\nY_vdot = [^\n]*", "", BL_TOML, count=1)
     assert "hull.Y_vdot: missing value" in _bad(tmp_path, toml)
+
+
+def test_missing_limit_is_named(tmp_path: Path) -> None:
+    """No vessel's limits fill the gaps: every guidance limit must be in the file."""
+    toml = re.sub(r"\nyaw_accel = [^\n]*", "", BL_TOML, count=1)
+    assert "limits.yaw_accel: missing value" in _bad(tmp_path, toml)
+    toml = re.sub(r"\n\[limits\]\n(?:[a-z_]+ = [^\n]*\n)+", "\n", BL_TOML, count=1)
+    assert "limits: missing table" in _bad(tmp_path, toml)
 
 
 def test_non_positive_mass_is_named(tmp_path: Path) -> None:

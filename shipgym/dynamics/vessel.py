@@ -471,9 +471,9 @@ def _read(path: Path) -> Vessel:
             raise
         raise r.fail("windage", str(exc)) from None
     actuators = _read_actuators(r, data, int(dofs), dims)
-    lim = r.table(data, "limits", required=False)
+    lim = r.table(data, "limits")  # every key: no vessel's limits fill the gaps
     r.keys(lim, "limits", set(_LIMIT_KEYS))
-    limits = {k: r.number(lim, k, "limits", _LIMIT_KEYS[k], positive=True) for k in lim}
+    limits = {k: r.number(lim, k, "limits", u, positive=True) for k, u in _LIMIT_KEYS.items()}
     c = r.table(data, "control", required=False)
     r.keys(c, "control", {"bandwidth", "zeta", "pid_presets", "sensors"})
     control: dict[str, Any] = {
