@@ -337,7 +337,7 @@ def lq_design(
     """Gains of the LQ controller with integral action (module docstring).
 
     Args:
-        weights: :class:`LQWeights` or a preset name (``"tuned"``).
+        weights: :class:`LQWeights` or a preset name of the Blue Lady (``"tuned"``).
         dt: control period (s), used by the discrete design.
         method: ``"discrete"`` (:func:`dlqr` on the sampled model; default) or
             ``"continuous"`` (:func:`lqr`).
@@ -381,7 +381,7 @@ class LQController:
     ``tau = [X, Y, N]`` (N, N, N m) for the allocation.
 
     Args:
-        weights: :class:`LQWeights` or a preset name (``"tuned"``).
+        weights: :class:`LQWeights` or a preset name of the Blue Lady (``"tuned"``).
         M: inertia (kg, kg m^2) of the control model, required: the vessel's ``design.M``
             (the Blue Lady's: Tomera (2014) eq. 49).
         D_L: linear damping (N s/m, N s, N m s), required: the vessel's ``design.D_L`` (the
