@@ -107,7 +107,9 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     )
 
     results = {
-        "allocate, 3 fixed (Blue Lady)": median_us(allocate, requests(cap3, n), rep),
+        "allocate, 3 fixed (Blue Lady)": median_us(
+            lambda t: allocate(t, p), requests(cap3, n), rep
+        ),
         "allocate_wls, 6 fixed": median_us(
             lambda t: allocate_wls(t, B6, LO6, HI6), requests(cap6, n), rep
         ),

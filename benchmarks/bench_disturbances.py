@@ -20,6 +20,7 @@ import numpy as np
 
 from shipgym.assets import asset_path
 from shipgym.disturbances import Current, CurrentConfig, WaveConfig, Waves, Wind, WindConfig
+from shipgym.dynamics import BLUE_LADY_HULL, BLUE_LADY_WINDAGE
 from shipgym.envs.physics import DEFAULT_SCENE
 
 TARGET_US = 5.0
@@ -51,8 +52,10 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     mj = per_call(lambda: mujoco.mj_step(m, d), [()] * n, args.repeats)
 
     results: dict[str, float] = {}
-    wind_gm = Wind(WindConfig(speed=3.0))
-    wind_harris = Wind(WindConfig(speed=3.0, gust_spectrum="harris", direction_std=0.1))
+    wind_gm = Wind(WindConfig(speed=3.0), BLUE_LADY_WINDAGE)
+    wind_harris = Wind(
+        WindConfig(speed=3.0, gust_spectrum="harris", direction_std=0.1), BLUE_LADY_WINDAGE
+    )
     current = Current(CurrentConfig.from_std(0.1, 0.5, std=0.02, direction_std=0.1))
     for name, proc in (
         ("Wind.at, Gauss-Markov gusts", wind_gm),
@@ -63,7 +66,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         proc.series(np.array([0.0, t_end]))  # generate the grid first: time the lookups only
         results[name] = per_call(proc.at, times, args.repeats)
 
-    waves = Waves(WaveConfig(**BF5, first_order=True))  # type: ignore[arg-type]
+    waves = Waves(WaveConfig(**BF5, first_order=True), BLUE_LADY_HULL)  # type: ignore[arg-type]
     waves.reset(np.random.default_rng(1))
     waves.envelope([t_end])
     results["Waves.drift_load, BF5"] = per_call(
@@ -71,7 +74,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     )
     results["Waves.wf_motion, BF5"] = per_call(waves.wf_motion, times, args.repeats)
     t0 = time.perf_counter()
-    fresh = Waves(WaveConfig(**BF5, first_order=True))  # type: ignore[arg-type]
+    fresh = Waves(WaveConfig(**BF5, first_order=True), BLUE_LADY_HULL)  # type: ignore[arg-type]
     fresh.reset(np.random.default_rng(2))
     fresh.envelope([4096.0])
     precompute = (time.perf_counter() - t0) / 4096.0 * 3600.0

@@ -10,12 +10,41 @@ from typing import Any, TypeVar
 
 T = TypeVar("T")
 
-__all__ = ["param", "from_mapping", "describe", "is_real", "require_finite", "require_positive"]
+__all__ = [
+    "param",
+    "required_param",
+    "require_given",
+    "from_mapping",
+    "describe",
+    "is_real",
+    "require_finite",
+    "require_positive",
+]
 
 
 def param(default: Any, unit: str, source: str) -> Any:
     """A dataclass field carrying its physical unit and its source in ``metadata``."""
     return dataclasses.field(default=default, metadata={"unit": unit, "source": source})
+
+
+def required_param(unit: str, meaning: str) -> Any:
+    """A dataclass field without a default, carrying its physical unit and its meaning.
+
+    For parameters that belong to one vessel (no vessel is a default): the values and their
+    sources live in the vessel's package or in a named record such as ``BLUE_LADY_HULL``.
+    """
+    return dataclasses.field(metadata={"unit": unit, "meaning": meaning})
+
+
+def require_given(where: str, hint: str, **values: Any) -> None:
+    """Raise ``TypeError`` naming the arguments of ``values`` that are ``None`` and what to pass.
+
+    For vessel-specific arguments that have no default (no vessel is a default below the
+    registry), e.g. ``require_given("LQController()", "...", M=M, D_L=D_L)``.
+    """
+    missing = [k for k, v in values.items() if v is None]
+    if missing:
+        raise TypeError(f"{where} needs {' and '.join(missing)} (no vessel is a default): {hint}")
 
 
 def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, where: str = "") -> T:

@@ -44,3 +44,18 @@ def assert_same_characteristic_polynomial(
     np.testing.assert_allclose(
         np.poly(a), np.poly(b), rtol=rtol, atol=atol, err_msg=f"eigenvalues {a} vs {b}"
     )
+
+
+def _blue_lady_kwargs() -> tuple[dict, dict]:
+    from shipgym.controllers.actuation import planar_capacity
+    from shipgym.dynamics.vessel import load_vessel
+
+    v = load_vessel("blue-lady")
+    design = {"M": v.design.M, "D_L": v.design.D_L}
+    return design, {**design, "integral_limit": planar_capacity(v)}
+
+
+#: The Blue Lady's design model as keyword arguments (``M``, ``D_L``) and, with its force
+#: capacity as ``integral_limit``, those of the PID and LQ controllers: no vessel is a default
+#: below the registry, so the tests name the vessel they use.
+BLUE_LADY_DESIGN, BLUE_LADY_CONTROL = _blue_lady_kwargs()

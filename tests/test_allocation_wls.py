@@ -5,6 +5,8 @@ Oracles: scipy's bounded-variable least squares (``lsq_linear(method='bvls')``, 
 Lady's closed form ``fixed3.allocate`` (the same objective with ``H = 0``).
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -18,7 +20,7 @@ from shipgym.controllers.allocation import (
     allocate_wls,
     default_weights,
 )
-from shipgym.dynamics import BLUE_LADY_THRUSTERS, ThrusterParameters, configuration_matrix
+from shipgym.dynamics import BLUE_LADY_THRUSTERS, configuration_matrix
 
 P = BLUE_LADY_THRUSTERS
 T = configuration_matrix(P)
@@ -229,7 +231,7 @@ def test_default_weights_give_the_closed_form_within_h_bias():
 
 
 def test_other_thruster_geometry_matches_closed_form():
-    p = ThrusterParameters(k1=1.0, k2=2.0, k3=1.0, L2=5.0, L3=1.0)
+    p = dataclasses.replace(P, k1=1.0, k2=2.0, k3=1.0, L2=5.0, L3=1.0)
     B = configuration_matrix(p)
     w = default_weights(p)
     rng = np.random.default_rng(5)

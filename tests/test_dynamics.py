@@ -10,9 +10,9 @@ from hypothesis import strategies as st
 from shipgym._config import describe, from_mapping
 from shipgym.dynamics import (
     BLUE_LADY_HULL,
+    BLUE_LADY_THRUSTERS,
     HullParameters,
     PlantModel,
-    ThrusterParameters,
     configuration_matrix,
     inverse_thrust,
     plant_model,
@@ -46,7 +46,7 @@ def test_rot_is_orthonormal_and_batched():
 
 
 def test_seed_linear_is_exactly_eqs_49_50():
-    p = plant_model("seed-linear")
+    p = plant_model("seed-linear", hull=BLUE_LADY_HULL)
     np.testing.assert_array_equal(p.mass_matrix(), np.diag([23664.9, 24830.6, 455182.1]))
     np.testing.assert_array_equal(
         np.asarray(p.D_L), [[21.1, 0, 0], [0, 259.8, -855.4], [0, -855.4, 6130.5]]
@@ -58,7 +58,7 @@ def test_seed_linear_is_exactly_eqs_49_50():
 
 
 def test_default_plant_mass_matrix_from_table_2():
-    M = plant_model().mass_matrix()
+    M = plant_model(hull=BLUE_LADY_HULL).mass_matrix()
     assert M[0, 0] == pytest.approx(23664.9)
     assert M[1, 1] == pytest.approx(24830.6)
     assert M[2, 2] == pytest.approx(455182.1)
@@ -66,7 +66,7 @@ def test_default_plant_mass_matrix_from_table_2():
 
 
 def test_coriolis_matrices_are_skew_symmetric():
-    p = plant_model()
+    p = plant_model(hull=BLUE_LADY_HULL)
     nu = np.random.default_rng(0).normal(size=(20, 3))
     for C in (p.coriolis_rb(nu), p.coriolis_a(nu)):
         np.testing.assert_allclose(C, -np.swapaxes(C, -1, -2), atol=1e-9)
@@ -82,7 +82,7 @@ def test_coriolis_matrices_are_skew_symmetric():
     st.sampled_from(["default", "seed-linear"]),
 )
 def test_kernel_equals_matrix_form(nu, tau, cur, name):
-    p = plant_model(name)
+    p = plant_model(name, hull=BLUE_LADY_HULL)
     nu = np.array(nu) * [1.0, 0.5, 0.05]
     tau = np.array(tau) * [400.0, 80.0, 250.0]
     nu_c = np.array([cur[0] * 0.2, cur[1] * 0.2, 0.0])
@@ -92,7 +92,7 @@ def test_kernel_equals_matrix_form(nu, tau, cur, name):
 
 
 def test_kernel_accepts_batches():
-    p = plant_model()
+    p = plant_model(hull=BLUE_LADY_HULL)
     rng = np.random.default_rng(3)
     nu, tau = rng.normal(size=(4, 5, 3)) * 0.2, rng.normal(size=(4, 5, 3)) * 50
     a = p.nu_dot(nu, tau)
@@ -102,32 +102,32 @@ def test_kernel_accepts_batches():
 
 def test_current_and_ship_moving_together_feel_no_hydrodynamic_force():
     # nu = nu_c and no rotation: nu_r = 0, so no damping and no acceleration
-    p = plant_model()
+    p = plant_model(hull=BLUE_LADY_HULL)
     np.testing.assert_allclose(p.nu_dot([0.1, 0.05, 0.0], [0, 0, 0], [0.1, 0.05, 0]), 0, atol=1e-15)
 
 
 def test_switchable_terms():
     nu = np.array([0.5, 0.2, 0.01])
-    off = plant_model("default", coriolis=False, quadratic_damping=False)
+    off = plant_model("default", coriolis=False, quadratic_damping=False, hull=BLUE_LADY_HULL)
     np.testing.assert_array_equal(off.coriolis_rb(nu), 0)
     np.testing.assert_array_equal(off.damping(nu), np.asarray(off.D_L))
-    nc = plant_model("default", sway_yaw_coupling=False)
+    nc = plant_model("default", sway_yaw_coupling=False, hull=BLUE_LADY_HULL)
     assert nc.mass_matrix()[1, 2] == 0
 
 
 def test_bad_parameters_raise_clear_errors():
     with pytest.raises(ValueError, match="m must be > 0"):
-        HullParameters(m=-1.0)
+        dataclasses.replace(BLUE_LADY_HULL, m=-1.0)
     with pytest.raises(ValueError, match="I_z must be > 0"):
-        HullParameters(I_z=0.0)
+        dataclasses.replace(BLUE_LADY_HULL, I_z=0.0)
     with pytest.raises(ValueError, match="T_main must be > 0"):
-        ThrusterParameters(T_main=-2.0)
+        dataclasses.replace(BLUE_LADY_THRUSTERS, T_main=-2.0)
     with pytest.raises(ValueError, match="finite"):
-        HullParameters(X_u=float("nan"))
+        dataclasses.replace(BLUE_LADY_HULL, X_u=float("nan"))
     with pytest.raises(ValueError, match="unknown plant variant 'linear'.*default, seed-linear"):
-        plant_model("linear")
+        plant_model("linear", hull=BLUE_LADY_HULL)
     with pytest.raises(ValueError, match="unknown plant option"):
-        plant_model("default", coriolis_terms=False)
+        plant_model("default", coriolis_terms=False, hull=BLUE_LADY_HULL)
     with pytest.raises(ValueError, match="singular"):
         M_A = [[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
         PlantModel("bad", np.zeros((3, 3)), M_A, np.eye(3), coriolis=False)
@@ -136,15 +136,26 @@ def test_bad_parameters_raise_clear_errors():
 
 
 def test_every_parameter_has_unit_and_source():
-    for obj in (BLUE_LADY_HULL, ThrusterParameters()):
-        for name, _, unit, source in describe(obj):
-            if name == "name":
-                continue
-            assert unit and source, f"{type(obj).__name__}.{name} lacks unit or source"
+    """The records' fields carry their units; the Blue Lady's values their sources (its
+    vessel package, which BLUE_LADY_HULL and BLUE_LADY_THRUSTERS equal)."""
+    from shipgym.dynamics.vessel import load_vessel
+
+    for obj in (BLUE_LADY_HULL, BLUE_LADY_THRUSTERS):
+        for name, _, unit, _ in describe(obj):
+            assert unit, f"{type(obj).__name__}.{name} lacks a unit"
+    v = load_vessel("blue-lady")
+    for name, *_ in describe(BLUE_LADY_HULL):
+        if name != "name":
+            unit, source = v.sources[f"hull.{name}"]
+            assert unit and source, f"hull.{name} lacks unit or source"
+    for a in ("main_propeller", "bow_tunnel", "stern_tunnel"):
+        for key in ("position", "k", "range", "time_constant"):
+            unit, source = v.sources[f"actuator.{a}.{key}"]
+            assert unit and source, f"actuator.{a}.{key} lacks unit or source"
 
 
 def test_thruster_model_and_inverse():
-    p = ThrusterParameters()
+    p = BLUE_LADY_THRUSTERS
     F = thrust([480.0, 1.0, -1.0], p)
     np.testing.assert_allclose(F, [1.9589e-3 * 480**2, 44.145, -44.145])
     assert thrust([-200.0, 0, 0], p)[0] == pytest.approx(-1.9589e-3 * 200**2)

@@ -1,5 +1,6 @@
 """Guidance: r-frame (Tomera 2014 eqs. 1-2), smooth leg references, 5-leg plan, leg switching."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -9,10 +10,10 @@ from hypothesis import strategies as st
 
 from shipgym.dynamics import wrap_angle
 from shipgym.guidance import (
+    BLUE_LADY_LIMITS,
     PLANS,
     Guidance,
     Leg,
-    Limits,
     ManoeuvrePlan,
     from_r_frame,
     leg_duration,
@@ -106,10 +107,10 @@ LEGS = [
 
 @pytest.mark.parametrize("leg", LEGS)
 def test_reference_derivatives_are_consistent(leg):
-    prof = leg_profile(leg, Limits())
+    prof = leg_profile(leg, BLUE_LADY_LIMITS)
     T = prof.duration
     t = np.linspace(-0.05 * T, 1.05 * T, 22001)
-    p, v, a = leg_reference(leg, Limits(), t)
+    p, v, a = leg_reference(leg, BLUE_LADY_LIMITS, t)
     assert p.shape == v.shape == a.shape == (t.size, 3)
     dt = t[1] - t[0]
     scale_v = np.max(np.abs(v), axis=0) + 1e-300
@@ -128,7 +129,7 @@ def test_reference_derivatives_are_consistent(leg):
 
 @pytest.mark.parametrize("leg", LEGS)
 def test_reference_limits_and_endpoints(leg):
-    lim = Limits()
+    lim = BLUE_LADY_LIMITS
     T = leg_duration(leg, lim)
     t = np.linspace(0.0, T, 50001)
     p, v, a = leg_reference(leg, lim, t)
@@ -154,7 +155,7 @@ def test_reference_limits_and_endpoints(leg):
 
 
 def test_combined_leg_is_synchronised_on_a_straight_line():
-    lim = Limits()
+    lim = BLUE_LADY_LIMITS
     leg = Leg(surge=10.0, sway=3.0, yaw=-0.4)
     T = leg_duration(leg, lim)
     singles = [leg_duration(Leg(surge=10.0), lim), leg_duration(Leg(sway=3.0), lim)]
@@ -169,7 +170,7 @@ def test_combined_leg_is_synchronised_on_a_straight_line():
 
 
 def test_durations_of_the_seed_legs_match_the_closed_forms():
-    lim = Limits()
+    lim = BLUE_LADY_LIMITS
     # raised-cosine trapezoid: T = d / v + 2 v / a ; triangle (d < 2 v^2 / a): T = 2 sqrt(2 d / a)
     assert leg_duration(Leg(sway=-7.0), lim) == pytest.approx(7 / 0.05 + 2 * 0.05 / 0.001)
     assert leg_duration(Leg(surge=38.0), lim) == pytest.approx(38 / 0.2 + 2 * 0.2 / 0.0025)
@@ -180,17 +181,17 @@ def test_durations_of_the_seed_legs_match_the_closed_forms():
     assert leg_duration(Leg(sway=-3.0), lim) == pytest.approx(2 * math.sqrt(2 * 3 / 0.001))
     assert leg_duration(Leg(), lim) == 0.0
     # the per-leg override wins over the plan's limits
-    fast = Limits(sway_speed=0.1, sway_accel=0.01)
+    fast = dataclasses.replace(BLUE_LADY_LIMITS, sway_speed=0.1, sway_accel=0.01)
     assert leg_duration(Leg(sway=-7.0, limits=fast), lim) == pytest.approx(7 / 0.1 + 20.0)
-    assert tomera2014_plan().durations() == pytest.approx(
+    assert tomera2014_plan().durations(BLUE_LADY_LIMITS) == pytest.approx(
         [240.0, 350.0, 224.19964865591714, 250.0, 154.91933384829667]
     )
 
 
 def test_zero_leg_is_at_rest():
-    p, v, a = leg_reference(Leg(), None, np.array([0.0, 1.0]))
+    p, v, a = leg_reference(Leg(), BLUE_LADY_LIMITS, np.array([0.0, 1.0]))
     assert not np.any(p) and not np.any(v) and not np.any(a)
-    assert leg_profile(Leg()).duration == 0.0
+    assert leg_profile(Leg(), BLUE_LADY_LIMITS).duration == 0.0
 
 
 # -- plans -----------------------------------------------------------------------------------------
@@ -238,12 +239,12 @@ def test_plan_from_dict_round_trip_and_degrees():
         {
             "legs": [{"yaw_deg": -90, "name": "turn to port"}, {"surge": 5}],
             "switch_heading_deg": 3.0,
-            "limits": {"yaw_rate": 0.01},
+            "limits": {**BLUE_LADY_LIMITS.to_dict(), "yaw_rate": 0.01},
         }
     )
     assert q.legs[0].yaw == pytest.approx(-math.pi / 2)
     assert q.switch_heading == pytest.approx(3 * DEG)
-    assert q.limits.yaw_rate == 0.01 and q.limits.sway_speed == Limits().sway_speed
+    assert q.limits.yaw_rate == 0.01 and q.limits.sway_speed == BLUE_LADY_LIMITS.sway_speed
     assert q.switch_distance == 1.0
 
 
@@ -264,8 +265,17 @@ def test_plan_from_dict_round_trip_and_degrees():
         ({"legs": [{"surge": 1}], "switch_min_progress": 1.5}, r"\[0, 1\]"),
         ({"legs": [{"surge": 1}], "settle_time": -1.0}, "settle_time"),
         ({"legs": [{"surge": 1}], "limits": {"surge_max": 1.0}}, "valid keys are: surge_speed"),
-        ({"legs": [{"surge": 1}], "limits": {"sway_accel": -1.0}}, "must be > 0"),
-        ({"legs": [{"surge": 1}], "limits": {"yaw_rate": float("nan")}}, "finite"),
+        (
+            {"legs": [{"surge": 1}], "limits": {**BLUE_LADY_LIMITS.to_dict(), "sway_accel": -1.0}},
+            "must be > 0",
+        ),
+        (
+            {
+                "legs": [{"surge": 1}],
+                "limits": {**BLUE_LADY_LIMITS.to_dict(), "yaw_rate": float("nan")},
+            },
+            "finite",
+        ),
     ],
 )
 def test_bad_plans_raise_clear_errors(data, match):
@@ -290,7 +300,7 @@ def test_bad_names_and_constructors():
 # -- runtime guidance and switching ------------------------------------------------------------
 def run_perfect_tracker(p, start, dt=1.0, t_end=3000.0):
     """A ship that sits exactly on the reference; returns the guidance and the sampled refs."""
-    g = Guidance(p)
+    g = Guidance(p, limits=BLUE_LADY_LIMITS)
     g.reset(start)
     refs, t = [], 0.0
     while t <= t_end:
@@ -305,7 +315,7 @@ def test_perfect_tracker_completes_legs_on_the_reference_schedule():
     p = tomera2014_plan()
     g, refs = run_perfect_tracker(p, [0.0, 0.0, 0.0], dt=0.5)
     assert g.finished and g.leg_index == 4 and g.n_legs == 5
-    durations = np.array(p.durations())
+    durations = np.array(p.durations(BLUE_LADY_LIMITS))
     # switching waits for the reference (switch_min_progress = 1): each leg lasts its
     # reference duration rounded up to the 0.5 s step
     np.testing.assert_allclose(g.leg_durations, np.ceil(durations / 0.5) * 0.5)
@@ -336,12 +346,12 @@ def test_reference_heading_has_no_jump_across_north():
 
 def test_no_switch_until_all_conditions_hold():
     p = tomera2014_plan()
-    g = Guidance(p)
+    g = Guidance(p, limits=BLUE_LADY_LIMITS)
     with pytest.raises(RuntimeError, match="reset"):
         g.reference(0.0)
     g.reset([0.0, 0.0, 0.0])
     K = g.waypoints[1]
-    T0 = p.durations()[0]
+    T0 = p.durations(BLUE_LADY_LIMITS)[0]
     # ship at rest at the start: 7 m from K
     assert not g.update(T0 + 100, [0.0, 0.0, 0.0])
     # ship already at K but the reference is still moving: no premature switch
@@ -363,7 +373,7 @@ def test_rotation_leg_needs_heading_even_without_progress_guard():
     # seed rule alone (switch_min_progress = 0): at the start of the 90 deg rotation the
     # ship is within 1 m of K, but its heading is 90 deg off, so no switch
     p = ManoeuvrePlan(legs=(Leg(yaw=math.pi / 2), Leg(surge=1.0)), switch_min_progress=0.0)
-    g = Guidance(p)
+    g = Guidance(p, limits=BLUE_LADY_LIMITS)
     g.reset([5.0, 5.0, 350 * DEG])
     assert not g.update(0.0, [5.0, 5.0, 350 * DEG])
     assert not g.update(10.0, [5.2, 5.0, 80 * DEG - 6 * DEG])
@@ -376,20 +386,20 @@ def test_seed_rule_alone_switches_early_and_the_guard_prevents_it():
     legs = (Leg(sway=-7.0), Leg(surge=5.0))
     early = ManoeuvrePlan(legs=legs, switch_min_progress=0.0)
     g, _ = run_perfect_tracker(early, [0.0, 0.0, 0.0], t_end=500.0)
-    assert g.leg_durations[0] < leg_duration(legs[0], Limits()) - 10.0
+    assert g.leg_durations[0] < leg_duration(legs[0], BLUE_LADY_LIMITS) - 10.0
     g, _ = run_perfect_tracker(ManoeuvrePlan(legs=legs), [0.0, 0.0, 0.0], t_end=500.0)
-    assert g.leg_durations[0] == leg_duration(legs[0], Limits())
+    assert g.leg_durations[0] == leg_duration(legs[0], BLUE_LADY_LIMITS)
     # a leg shorter than the switch distance waits for its reference too
-    g = Guidance(ManoeuvrePlan(legs=(Leg(surge=0.5), Leg(surge=0.5))))
+    g = Guidance(ManoeuvrePlan(legs=(Leg(surge=0.5), Leg(surge=0.5))), limits=BLUE_LADY_LIMITS)
     g.reset([0.0, 0.0, 0.0])
     assert not g.update(0.0, [0.0, 0.0, 0.0])
 
 
 def test_settle_time_requires_the_conditions_to_hold_continuously():
     p = ManoeuvrePlan(legs=(Leg(surge=2.0), Leg(surge=2.0)), settle_time=5.0)
-    g = Guidance(p)
+    g = Guidance(p, limits=BLUE_LADY_LIMITS)
     g.reset([0.0, 0.0, 0.0])
-    T = p.durations()[0]
+    T = p.durations(BLUE_LADY_LIMITS)[0]
     K = g.waypoints[1]
     assert not g.update(T, K)
     assert not g.update(T + 3.0, K)
@@ -402,9 +412,9 @@ def test_settle_time_requires_the_conditions_to_hold_continuously():
 
 def test_body_frame_reference_velocity_and_its_derivative():
     leg = Leg(surge=10.0, sway=3.0, yaw=1.2)
-    g = Guidance(ManoeuvrePlan(legs=(leg,)))
+    g = Guidance(ManoeuvrePlan(legs=(leg,)), limits=BLUE_LADY_LIMITS)
     g.reset([1.0, 2.0, 3.0])
-    T = leg_duration(leg, Limits())
+    T = leg_duration(leg, BLUE_LADY_LIMITS)
     h = 1e-3
     for t in np.linspace(0.05 * T, 0.95 * T, 7):
         ref = g.reference(t)

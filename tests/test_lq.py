@@ -5,7 +5,7 @@ import math
 import control
 import numpy as np
 import pytest
-from _helpers import assert_same_eigenvalues
+from _helpers import BLUE_LADY_CONTROL, BLUE_LADY_DESIGN, assert_same_eigenvalues
 
 from shipgym.controllers import lq
 from shipgym.controllers.lq import (
@@ -34,7 +34,7 @@ def test_lqr_scalar_closed_form():
 
 @pytest.mark.parametrize("method", ["continuous", "discrete"])
 def test_gains_match_python_control_on_the_blue_lady_model(method):
-    d = lq_design("tuned", dt=1.0, method=method)
+    d = lq_design("tuned", dt=1.0, method=method, **BLUE_LADY_DESIGN)
     ref = control.lqr if method == "continuous" else control.dlqr
     Q, R = (d.Q, d.R) if method == "continuous" else (d.dt * d.Q, d.dt * d.R)
     K_ref, S_ref, E_ref = ref(d.A, d.B, Q, R)
@@ -62,7 +62,7 @@ def test_lqr_and_dlqr_match_python_control_with_cross_weight():
 
 def test_discrete_cost_equals_riccati_quadratic_form():
     # sum_k x'Qd x + u'Rd u along the closed loop from x0 equals x0' S x0 (DARE solution)
-    d = lq_design("tuned", dt=1.0)
+    d = lq_design("tuned", dt=1.0, **BLUE_LADY_DESIGN)
     Qd, Rd = d.dt * d.Q, d.dt * d.R
     Acl = d.A - d.B @ d.K
     x = np.array([1.0, -0.5, math.radians(3.0), 0.02, 0.0, 0.001, 2.0, 1.0, 0.1])
@@ -76,11 +76,11 @@ def test_discrete_cost_equals_riccati_quadratic_form():
 
 
 def test_design_model_and_poles():
-    A, B = lq_model()
+    A, B = lq_model(**BLUE_LADY_DESIGN)
     np.testing.assert_allclose(A[3:6, 3:6], -np.linalg.solve(M, D_L))
     np.testing.assert_allclose(B[3:6], np.linalg.inv(M))
-    c = lq_design("tuned", method="continuous")
-    d = lq_design("tuned", dt=1.0)
+    c = lq_design("tuned", method="continuous", **BLUE_LADY_DESIGN)
+    d = lq_design("tuned", dt=1.0, **BLUE_LADY_DESIGN)
     assert np.all(c.E.real < 0)
     assert np.all(np.abs(d.E) < 1)
     w = np.abs(d.continuous_poles)
@@ -102,18 +102,18 @@ def test_bad_input():
     with pytest.raises(ValueError, match="stabilising"):
         lqr(np.eye(2), [[1.0], [0.0]], np.eye(2), [[1.0]])  # second mode uncontrollable
     with pytest.raises(ValueError, match="preset"):
-        lq_design("fast")
+        lq_design("fast", **BLUE_LADY_DESIGN)
     with pytest.raises(ValueError, match="method"):
-        lq_design("tuned", method="euler")
+        lq_design("tuned", method="euler", **BLUE_LADY_DESIGN)
     with pytest.raises(ValueError, match="e_max"):
         LQWeights(e_max=(0.5, -1.0, 2.0))
     with pytest.raises(ValueError, match="eta_r"):
-        LQController()([0.0, np.nan, 0.0], [0, 0, 0], [0, 0, 0])
+        LQController(**BLUE_LADY_CONTROL)([0.0, np.nan, 0.0], [0, 0, 0], [0, 0, 0])
 
 
 # ---- the online controller --------------------------------------------------------------------
 def test_feedforward_and_feedback_signs():
-    ctrl = LQController(dt=1.0)
+    ctrl = LQController(dt=1.0, **BLUE_LADY_CONTROL)
     # on the reference at rest: no force
     np.testing.assert_allclose(ctrl([0, 0, 0], [0, 0, 0], [0, 0, 0]), 0.0, atol=1e-12)
     ctrl.reset()
@@ -132,7 +132,7 @@ def test_feedforward_and_feedback_signs():
 
 
 def test_change_frame_keeps_integral_force():
-    ctrl = LQController(dt=1.0)
+    ctrl = LQController(dt=1.0, **BLUE_LADY_CONTROL)
     for _ in range(5):
         ctrl([0.3, -0.2, 0.02], [0, 0, 0], [0, 0, 0])
     ctrl([0.3, -0.2, 0.02], [0, 0, 0], [0, 0, 0])  # integrates the pending error
@@ -145,7 +145,7 @@ def test_change_frame_keeps_integral_force():
 
 
 def test_anti_windup_drops_increment_into_a_saturated_dof():
-    a, b = LQController(dt=1.0), LQController(dt=1.0)
+    a, b = LQController(dt=1.0, **BLUE_LADY_CONTROL), LQController(dt=1.0, **BLUE_LADY_CONTROL)
     for c in (a, b):
         c([2.0, 0.0, 0.0], [0, 0, 0], [0, 0, 0])  # ahead of the reference: pushes astern
     a([2.0, 0.0, 0.0], [0, 0, 0], [0, 0, 0], saturated=np.array([50.0, 0.0, 0.0]))  # cut ahead

@@ -1,5 +1,6 @@
 """MuJoCo physics vs the 3-DOF model: exactness, parity with SciPy, thrusters, bad input."""
 
+import dataclasses
 import math
 
 import mujoco
@@ -10,6 +11,7 @@ from shipgym.disturbances import WindConfig
 from shipgym.dynamics import (
     BLUE_LADY_HULL,
     BLUE_LADY_THRUSTERS,
+    BLUE_LADY_WINDAGE,
     PlantModel,
     plant_model,
     rot,
@@ -57,7 +59,7 @@ def _parity_errors(plant, timestep, duration=600.0, wind=GUSTY):
         return phys.wind.load(t, eta[2], nu[0], nu[1])
 
     ref = simulate_reference(
-        phys.plant, t_eval, ct, cmds, env_load=env_load,
+        phys.plant, t_eval, ct, cmds, thrusters=BLUE_LADY_THRUSTERS, env_load=env_load,
         breakpoints=np.arange(0.0, duration, wind.sample_period), rtol=1e-10, atol=1e-10,
     )  # fmt: skip
     dist = np.sum(np.hypot(*np.diff(ref.eta[:, :2], axis=0).T))
@@ -86,9 +88,11 @@ def test_parity_with_scipy_reference(plant):
     """600 s, time-varying saturating commands, gusty wind, quadratic damping, Coriolis and
     sway-yaw added-mass coupling: within 0.5 % of the distance and 0.5 deg; halving dt helps."""
     if plant == "default":
-        model = plant_model("default")
+        model = plant_model("default", hull=BLUE_LADY_HULL)
     else:  # sway added mass equal to the rigid-body mass: the lagged scheme is unstable here
-        model = plant_model("default", BLUE_LADY_HULL.__class__(Y_vdot=-BLUE_LADY_HULL.m))
+        model = plant_model(
+            "default", dataclasses.replace(BLUE_LADY_HULL, Y_vdot=-BLUE_LADY_HULL.m)
+        )
         assert model.M_A[1][1] == pytest.approx(model.M_RB[1][1])
     e1, h1, dist, ref = _parity_errors(model, 0.05)
     assert dist > 20.0, "the manoeuvre must actually travel"
@@ -131,7 +135,7 @@ def test_thrust_follows_heading(psi_deg):
     tau_b = np.array([1.9589e-3 * 300**2, 44.145, 3.24 * 44.145])
     np.testing.assert_allclose(phys.data.qfrc_actuator, rot(psi) @ tau_b, rtol=1e-9)
     # the hull accelerates along R(psi) M^-1 tau
-    M = plant_model("seed-linear").mass_matrix()
+    M = plant_model("seed-linear", hull=BLUE_LADY_HULL).mass_matrix()
     expect = rot(psi) @ np.linalg.solve(M, tau_b)
     np.testing.assert_allclose(phys.data.qacc, expect, rtol=1e-9)
 
@@ -232,7 +236,8 @@ def test_still_air_drags_a_moving_hull_and_none_switches_aerodynamics_off():
     still = VesselPhysics("blue-lady", "seed-linear", wind=WindConfig(speed=0.0))
     still.reset(nu=[1.0, 0.0, 0.0])
     still.step()
-    expect = wind_load(0.0, 0.0, 0.0, 1.0, 0.0)  # 1 m/s head wind on a hull at rest
+    # 1 m/s head wind on a hull at rest
+    expect = wind_load(0.0, 0.0, 0.0, 1.0, 0.0, windage=BLUE_LADY_WINDAGE)
     np.testing.assert_allclose(still.tau_wind, expect, rtol=1e-9, atol=1e-12)
     assert still.tau_wind[0] < 0
     off = VesselPhysics("blue-lady", "seed-linear", wind=None)
@@ -246,4 +251,6 @@ def test_tau_thrusters_equals_the_configuration_matrix_times_thrust():
 
     phys = VesselPhysics("blue-lady")
     phys.reset(actuators=[-150.0, 0.3, -0.7])
-    np.testing.assert_allclose(phys.tau_thrusters, command_to_tau(phys.actuator_state), rtol=1e-12)
+    np.testing.assert_allclose(
+        phys.tau_thrusters, command_to_tau(phys.actuator_state, BLUE_LADY_THRUSTERS), rtol=1e-12
+    )

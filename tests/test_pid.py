@@ -5,7 +5,12 @@ import math
 import control
 import numpy as np
 import pytest
-from _helpers import assert_same_characteristic_polynomial, assert_same_eigenvalues
+from _helpers import (
+    BLUE_LADY_CONTROL,
+    BLUE_LADY_DESIGN,
+    assert_same_characteristic_polynomial,
+    assert_same_eigenvalues,
+)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -20,7 +25,7 @@ from shipgym.controllers import (
     pid_pole_placement,
 )
 from shipgym.controllers.pid import TUNED_OMEGA
-from shipgym.dynamics import rot, seed_linear_matrices
+from shipgym.dynamics import BLUE_LADY_THRUSTERS, rot, seed_linear_matrices
 
 M, D_L = seed_linear_matrices()
 Z = np.zeros(3)
@@ -107,7 +112,7 @@ def test_seed_gains_unstable_at_1s_sampling_and_tuned_stable():
 # ---- the control law -------------------------------------------------------------------------
 def test_zero_error_at_rest_gives_zero_tau():
     for name in GAIN_PRESETS:
-        ctrl = MultivariablePID(name)
+        ctrl = MultivariablePID(name, **BLUE_LADY_CONTROL)
         eta = np.array([3.0, -2.0, 0.4])
         np.testing.assert_array_equal(ctrl(eta, Z, eta, Z, Z), 0.0)
 
@@ -115,7 +120,7 @@ def test_zero_error_at_rest_gives_zero_tau():
 @pytest.mark.parametrize("r", [0.0, 0.02, -0.05])
 def test_steady_motion_on_reference_gives_damping_compensation(r):
     """e = e_dot = 0 and the reference's own acceleration: nu_dot = 0, tau = D_L nu (eq. 20)."""
-    ctrl = MultivariablePID("tuned")
+    ctrl = MultivariablePID("tuned", **BLUE_LADY_CONTROL)
     eta = np.array([1.0, 2.0, 0.7])
     nu = np.array([0.2, -0.05, r])
     eta_dot = rot(eta[2]) @ nu
@@ -124,7 +129,7 @@ def test_steady_motion_on_reference_gives_damping_compensation(r):
 
 
 def test_reference_acceleration_is_fed_forward():
-    ctrl = MultivariablePID("tuned")
+    ctrl = MultivariablePID("tuned", **BLUE_LADY_CONTROL)
     psi = 0.3
     a = np.array([0.01, -0.002, 1e-4])
     tau = ctrl([0, 0, psi], Z, [0, 0, psi], Z, a)
@@ -133,7 +138,7 @@ def test_reference_acceleration_is_fed_forward():
 
 def test_pure_surge_error_gives_pure_surge_force():
     g = pid_gains("tuned")
-    ctrl = MultivariablePID(g)
+    ctrl = MultivariablePID(g, **BLUE_LADY_CONTROL)
     e = 1.5
     tau = ctrl([e, 0, 0], Z, Z, Z, Z)
     np.testing.assert_allclose(tau, [-M[0, 0] * g.K_P[0] * e, 0, 0], atol=1e-12)
@@ -145,7 +150,7 @@ def test_pure_surge_error_gives_pure_surge_force():
 
 def test_heading_error_is_wrapped():
     g = pid_gains("tuned")
-    ctrl = MultivariablePID(g)
+    ctrl = MultivariablePID(g, **BLUE_LADY_CONTROL)
     tau = ctrl([0, 0, math.radians(359)], Z, [0, 0, math.radians(1)], Z, Z)
     # error = -2 deg, not +358 deg: a positive (clockwise) moment
     np.testing.assert_allclose(tau[2], M[2, 2] * g.K_P[2] * math.radians(2), rtol=1e-9)
@@ -153,14 +158,18 @@ def test_heading_error_is_wrapped():
     ctrl(Z, Z, Z)
     np.testing.assert_allclose(ctrl.integral, [0, 0, -math.radians(2)], rtol=1e-9)
     # continuity across +-180 deg
-    t1 = MultivariablePID(g)([0, 0, math.radians(179.9)], Z, [0, 0, math.radians(-179.9)])
-    t2 = MultivariablePID(g)([0, 0, math.radians(-179.9)], Z, [0, 0, math.radians(179.9)])
+    t1 = MultivariablePID(g, **BLUE_LADY_CONTROL)(
+        [0, 0, math.radians(179.9)], Z, [0, 0, math.radians(-179.9)]
+    )
+    t2 = MultivariablePID(g, **BLUE_LADY_CONTROL)(
+        [0, 0, math.radians(-179.9)], Z, [0, 0, math.radians(179.9)]
+    )
     np.testing.assert_allclose(t1[2], -t2[2], rtol=1e-6)
     assert abs(t1[2]) < M[2, 2] * g.K_P[2] * math.radians(0.3)
 
 
 def test_integral_is_forward_euler_with_dt():
-    ctrl = MultivariablePID("tuned", dt=0.5, integral_limit=np.inf)
+    ctrl = MultivariablePID("tuned", dt=0.5, integral_limit=np.inf, **BLUE_LADY_DESIGN)
     e = np.array([0.3, -0.2, 0.05])
     for k in range(5):
         ctrl(e, Z, Z)
@@ -181,7 +190,7 @@ def test_change_frame_keeps_the_integral_action(gains):
     """After change_frame the integral gives the same body-frame force as before."""
 
     def wound_up():
-        c = MultivariablePID(gains, integral_limit=np.inf)
+        c = MultivariablePID(gains, integral_limit=np.inf, **BLUE_LADY_DESIGN)
         for _ in range(30):
             c([0.4, -0.3, 0.02], Z, Z)
         c(Z, Z, Z)  # zero error: nothing left pending
@@ -205,7 +214,7 @@ def test_change_frame_keeps_the_integral_action(gains):
 
 
 def test_change_frame_rotates_pending_error():
-    ctrl = MultivariablePID("tuned", integral_limit=np.inf)
+    ctrl = MultivariablePID("tuned", integral_limit=np.inf, **BLUE_LADY_DESIGN)
     ctrl([1.0, 0.0, 0.0], Z, Z)  # pending error: 1 m along old x
     ctrl.change_frame(math.pi / 2)
     ctrl(Z, Z, Z)
@@ -217,11 +226,13 @@ def test_change_frame_rotates_pending_error():
 
 # ---- anti-windup -----------------------------------------------------------------------------
 def test_conditional_integration_blocks_only_the_saturated_direction():
-    ctrl = MultivariablePID("tuned", integral_limit=np.inf)
+    ctrl = MultivariablePID("tuned", integral_limit=np.inf, **BLUE_LADY_DESIGN)
     e = np.array([1.0, 0.0, 0.0])  # ship 1 m ahead: the controller pulls astern (X < 0)
     tau = ctrl(e, Z, Z)
     assert tau[0] < 0
-    cut = allocate(tau - [500.0, 0, 0]).tau_error  # astern demand cut: tau_error X < 0
+    cut = allocate(
+        tau - [500.0, 0, 0], BLUE_LADY_THRUSTERS
+    ).tau_error  # astern demand cut: tau_error X < 0
     assert cut[0] < 0
     for _ in range(10):
         ctrl(e, Z, Z, saturated=cut)
@@ -248,7 +259,7 @@ def test_conditional_integration_blocks_only_the_saturated_direction():
 def test_conditional_integration_in_a_rotated_ship():
     """Saturation is in the body frame, the integral in the r-frame: only the cut body axis
     is removed from the increment."""
-    ctrl = MultivariablePID("tuned", integral_limit=np.inf)
+    ctrl = MultivariablePID("tuned", integral_limit=np.inf, **BLUE_LADY_DESIGN)
     psi = math.pi / 2  # body x = r-frame y
     e = np.array([1.0, 1.0, 0.0])  # r-frame error; body: x = +1 (r-y), y = -1 (r-x)
     ctrl([e[0], e[1], psi], Z, [0, 0, psi])
@@ -258,8 +269,8 @@ def test_conditional_integration_in_a_rotated_ship():
 
 
 def test_integral_clamp_respects_the_force_limit():
-    ctrl = MultivariablePID("tuned")
-    cap = force_capacity()
+    ctrl = MultivariablePID("tuned", **BLUE_LADY_CONTROL)
+    cap = force_capacity(BLUE_LADY_THRUSTERS)
     for _ in range(2000):
         ctrl([5.0, -5.0, 0.5], Z, Z)
     f = M @ rot(0.5).T @ (np.array(ctrl.gains.K_I) * ctrl.integral)  # body frame, psi = 0.5
@@ -269,7 +280,7 @@ def test_integral_clamp_respects_the_force_limit():
 
 # ---- validation ------------------------------------------------------------------------------
 def test_bad_inputs_raise():
-    ctrl = MultivariablePID()
+    ctrl = MultivariablePID(**BLUE_LADY_CONTROL)
     for bad in ([np.nan, 0, 0], [0, 0], np.zeros((3, 1)), "abc", [0, np.inf, 0]):
         with pytest.raises(ValueError):
             ctrl(bad, Z, Z)
@@ -280,15 +291,15 @@ def test_bad_inputs_raise():
     with pytest.raises(ValueError):
         ctrl(Z, Z, Z, saturated=[np.nan, 0, 0])
     with pytest.raises(ValueError, match="dt"):
-        MultivariablePID(dt=0.0)
+        MultivariablePID(dt=0.0, **BLUE_LADY_CONTROL)
     with pytest.raises(ValueError, match="M"):
-        MultivariablePID(M=np.zeros((3, 3)))
+        MultivariablePID(**{**BLUE_LADY_CONTROL, "M": np.zeros((3, 3))})
     with pytest.raises(ValueError, match="D_L"):
-        MultivariablePID(D_L=np.eye(2))
+        MultivariablePID(**{**BLUE_LADY_CONTROL, "D_L": np.eye(2)})
     with pytest.raises(ValueError, match="preset"):
-        MultivariablePID("fast")
+        MultivariablePID("fast", **BLUE_LADY_CONTROL)
     with pytest.raises(ValueError, match="integral_limit"):
-        MultivariablePID(integral_limit=[1.0, -1.0, 1.0])
+        MultivariablePID(integral_limit=[1.0, -1.0, 1.0], **BLUE_LADY_DESIGN)
 
 
 @settings(max_examples=100, deadline=None)
@@ -301,9 +312,11 @@ def test_equal_xy_gains_make_the_law_frame_invariant(eta, nu, dpsi):
     """With the tuned (equal x/y) gains the body tau does not depend on the r-frame's heading."""
     eta = np.array(eta)
     ref = np.array([0.3, -0.2, 0.1])
-    a = MultivariablePID("tuned")(eta, nu, ref, [0.01, 0.02, 0.0], [1e-3, 0, 0])
+    a = MultivariablePID("tuned", **BLUE_LADY_CONTROL)(
+        eta, nu, ref, [0.01, 0.02, 0.0], [1e-3, 0, 0]
+    )
     Rt = rot(dpsi)[:2, :2].T
-    b = MultivariablePID("tuned")(
+    b = MultivariablePID("tuned", **BLUE_LADY_CONTROL)(
         [*(Rt @ eta[:2]), eta[2] - dpsi],
         nu,
         [*(Rt @ ref[:2]), ref[2] - dpsi],
@@ -322,7 +335,7 @@ def station_keeping(gains, *, T=500.0, dt=1.0, h=0.05, saturate=True, disturbanc
     """
     Mi = np.linalg.inv(M)
     d = np.asarray(disturbance, float)
-    ctrl = MultivariablePID(gains, dt=dt)
+    ctrl = MultivariablePID(gains, dt=dt, **BLUE_LADY_CONTROL)
     eta = np.array([2.0, -2.0, math.radians(5.0)])
     nu = np.zeros(3)
     sat = None
@@ -330,7 +343,7 @@ def station_keeping(gains, *, T=500.0, dt=1.0, h=0.05, saturate=True, disturbanc
     for k in range(round(T / dt)):
         tau = ctrl(eta, nu, Z, Z, Z, saturated=sat)
         if saturate:
-            alloc = allocate(tau)
+            alloc = allocate(tau, BLUE_LADY_THRUSTERS)
             tau_d, sat, flags = alloc.tau, alloc.tau_error, alloc.saturated
         else:
             tau_d, flags = tau, np.zeros(3, bool)

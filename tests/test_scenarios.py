@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from shipgym.disturbances import CurrentConfig, WaveConfig, Waves, WindConfig
+from shipgym.dynamics import BLUE_LADY_HULL
 from shipgym.scenarios import (
     BEAUFORT_TABLE,
     ENV_SCENARIOS,
@@ -79,13 +80,13 @@ def test_beaufort0_is_calm_and_every_row_builds() -> None:
     wind, waves = beaufort(0)
     assert wind.speed == 0.0 and wind.is_constant
     assert waves.Hs == 0.0 and waves.is_calm
-    w = Waves(waves)
+    w = Waves(waves, hull=BLUE_LADY_HULL)
     w.reset(np.random.default_rng(1))
     assert w.drift_load(10.0, 0.0) == (0.0, 0.0, 0.0)
     assert len(BEAUFORT_TABLE) == 10
     for n in range(10):
         wind, waves = beaufort(n, scale=24)
-        Waves(waves)  # every preset builds
+        Waves(waves, hull=BLUE_LADY_HULL)  # every preset builds
     with pytest.raises(ValueError, match="Beaufort number must be an int 0-9"):
         beaufort(10)
     with pytest.raises(ValueError, match="scale must be a number >= 1"):

@@ -60,6 +60,16 @@ s_L = 0.0
 L_oa = 80.0
 coefficients = "research"
 
+[limits]
+surge_speed = 0.5
+surge_accel = 0.01
+surge_astern_speed = 0.3
+surge_astern_accel = 0.008
+sway_speed = 0.2
+sway_accel = 0.004
+yaw_rate = 0.0087
+yaw_accel = 2.0e-4
+
 [[actuator]]
 name = "propeller"
 kind = "propeller"
@@ -207,6 +217,25 @@ def test_unknown_key_is_named(tmp_path: Path) -> None:
 def test_missing_value_is_named(tmp_path: Path) -> None:
     toml = re.sub(r"\nY_vdot = [^\n]*", "", BL_TOML, count=1)
     assert "hull.Y_vdot: missing value" in _bad(tmp_path, toml)
+
+
+def test_missing_limits_are_derived_from_the_capacity(tmp_path: Path) -> None:
+    """Limits the file leaves out come from the capacity (shipgym.guidance.limits), those it
+    gives are kept; a bad one is named."""
+    from shipgym.guidance.limits import vessel_limits
+
+    src = Path(__file__).parents[1] / "shipgym/assets/mjcf/blue_lady/vessel.xml"
+    toml = re.sub(r"\nyaw_accel = [^\n]*", "", BL_TOML, count=1)
+    v = load_vessel(write_package(tmp_path / "a", toml, src.read_text()))
+    lim = vessel_limits(v)
+    cap = v.actuators.capacity()
+    assert lim.yaw_accel == pytest.approx(cap[2] / (6 * v.design.M[2, 2]))
+    assert lim.surge_speed == 0.2  # given in the file
+    toml = re.sub(r"\n\[limits\]\n(?:[a-z_]+ = [^\n]*\n)+", "\n", BL_TOML, count=1)
+    lim = vessel_limits(load_vessel(write_package(tmp_path / "b", toml, src.read_text())))
+    assert lim.surge_speed == pytest.approx(0.2)  # the Froude-scaled Blue Lady speed, lambda 1
+    bad = BL_TOML.replace('yaw_accel = { value = 2.5e-4', 'yaw_accel = { value = -2.5e-4', 1)
+    assert "limits.yaw_accel: must be > 0" in _bad(tmp_path, bad)
 
 
 def test_non_positive_mass_is_named(tmp_path: Path) -> None:

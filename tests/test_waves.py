@@ -16,7 +16,7 @@ BF5 = {"Hs": 2.0 / 24, "Tp": (4.883 + 2.68 * 2.0**0.54) / math.sqrt(24)}  # NORS
 
 
 def _waves(seed: int = 1, **kw: object) -> Waves:
-    w = Waves(WaveConfig(**kw))  # type: ignore[arg-type]
+    w = Waves(WaveConfig(**kw), hull=BLUE_LADY_HULL)  # type: ignore[arg-type]
     w.reset(np.random.default_rng(seed))
     return w
 
@@ -85,8 +85,8 @@ def test_same_seed_same_realisation_and_stream_independence() -> None:
     assert np.array_equal(a.elevation(ts), b.elevation(ts))
     # the parent generator advances by one draw whatever the sea state
     p1, p2 = np.random.default_rng(5), np.random.default_rng(5)
-    Waves(WaveConfig(**kw)).reset(p1)  # type: ignore[arg-type]
-    Waves(WaveConfig(Hs=0.0)).reset(p2)
+    Waves(WaveConfig(**kw), hull=BLUE_LADY_HULL).reset(p1)  # type: ignore[arg-type]
+    Waves(WaveConfig(Hs=0.0), hull=BLUE_LADY_HULL).reset(p2)
     assert p1.integers(2**63) == p2.integers(2**63)
     # the drift realisation does not depend on the first-order switch
     d = _waves(7, **BF5)
@@ -133,7 +133,7 @@ def test_drift_envelope_is_the_newman_geometric_mean_sum() -> None:
     dbl = np.einsum("j,k,tjk->t", a, a, np.cos(ph[:, :, None] - ph[:, None, :]))
     assert w.envelope(t) == pytest.approx(dbl, rel=1e-9, abs=1e-15)
     assert w.mean_drift_load(0.0)[0] == pytest.approx(
-        -drift_coefficients()[0] * float(np.sum(a**2))
+        -drift_coefficients(BLUE_LADY_HULL)[0] * float(np.sum(a**2))
     )
 
 
@@ -173,7 +173,7 @@ def test_calm_is_exactly_zero() -> None:
         WaveConfig(Hs=0.0, first_order=True),
         WaveConfig(spectrum=None, first_order=True),
     ):
-        w = Waves(cfg)
+        w = Waves(cfg, hull=BLUE_LADY_HULL)
         w.reset(None)  # no generator needed
         assert w.drift_load(12.3, 0.4) == (0.0, 0.0, 0.0)
         assert w.wf_motion(12.3) == (0.0, 0.0, 0.0)
@@ -190,7 +190,7 @@ def test_calm_is_exactly_zero() -> None:
 
 
 def test_errors_before_reset_and_for_negative_time() -> None:
-    w = Waves(WaveConfig(**BF5))  # type: ignore[arg-type]
+    w = Waves(WaveConfig(**BF5), hull=BLUE_LADY_HULL)  # type: ignore[arg-type]
     with pytest.raises(RuntimeError, match="reset"):
         w.drift_load(1.0, 0.0)
     with pytest.raises(ValueError, match="unless Hs = 0"):
@@ -216,7 +216,7 @@ def test_wf_motion_std_zero_mean_and_no_low_frequency(model: str) -> None:
         wf_beaufort=5,
         direction_from=math.radians(30.0),
     )
-    w = Waves(cfg)
+    w = Waves(cfg, hull=BLUE_LADY_HULL)
     w.reset(np.random.default_rng(21))
     t = np.arange(0.0, 6000.0, 0.05)
     dx, dy, dpsi = w.wf_series(t)
@@ -242,7 +242,7 @@ def test_wf_motion_std_zero_mean_and_no_low_frequency(model: str) -> None:
 
 def test_wf_fossen_psd_peaks_at_wp_and_explicit_std() -> None:
     cfg = WaveConfig(**BF5, first_order=True, wf_position_std=0.01, wf_heading_std=0.002)
-    w = Waves(cfg)
+    w = Waves(cfg, hull=BLUE_LADY_HULL)
     w.reset(np.random.default_rng(4))
     t = np.arange(0.0, 4096.0, 0.05)
     dx, dy, dpsi = w.wf_series(t)

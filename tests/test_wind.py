@@ -68,7 +68,7 @@ def test_following_wind_pushes_ahead_without_side_force() -> None:
     X, Y, N = WL(0.0, 0.0, 0.0, 3.0, PI)  # wind from south
     assert X == pytest.approx(0.5 * 1.225 * 9.0 * 0.55 * 1.9, rel=1e-12)
     assert Y == 0.0 and N == 0.0  # exactly: no sign ambiguity at gamma = pi
-    cx, cy, cn = blendermann_coefficients([PI, -PI, 3 * PI])
+    cx, cy, cn = blendermann_coefficients([PI, -PI, 3 * PI], windage=BLUE_LADY_WINDAGE)
     np.testing.assert_array_equal(cy, 0.0)
     np.testing.assert_array_equal(cn, 0.0)
     np.testing.assert_allclose(cx, 0.55)
@@ -103,15 +103,17 @@ def test_heading_rotates_the_wind() -> None:
 
 def test_symmetry_of_coefficients() -> None:
     g = np.linspace(0.0, PI, 181)
-    cx, cy, cn = blendermann_coefficients(g)
-    cxm, cym, cnm = blendermann_coefficients(-g)
+    cx, cy, cn = blendermann_coefficients(g, windage=BLUE_LADY_WINDAGE)
+    cxm, cym, cnm = blendermann_coefficients(-g, windage=BLUE_LADY_WINDAGE)
     np.testing.assert_allclose(cxm, cx, rtol=0, atol=1e-15)
     np.testing.assert_allclose(cym, -cy, rtol=0, atol=1e-15)
     np.testing.assert_allclose(cnm, -cn, rtol=0, atol=1e-15)
     assert cy[0] == 0.0 and cn[0] == 0.0
     assert np.all(cy[1:-1] > 0)  # gamma > 0: wind from port pushes to starboard
     # Wrapping: gamma + 2 pi gives the same coefficients.
-    for a, b in zip(blendermann_coefficients(g + 2 * PI), (cx, cy, cn), strict=True):
+    for a, b in zip(
+        blendermann_coefficients(g + 2 * PI, windage=BLUE_LADY_WINDAGE), (cx, cy, cn), strict=True
+    ):
         np.testing.assert_allclose(a, b, atol=1e-12)
 
 
@@ -123,7 +125,7 @@ def test_coefficients_match_the_unfolded_formula_on_starboard_side() -> None:
     den = 1 - 0.5 * k.delta * (1 - cd * w.A_F / w.A_L / k.CD_t) * np.sin(2 * g) ** 2
     cy = k.CD_t * np.sin(g) / den
     cn = (w.s_L / w.L_oa - 0.18 * (g - PI / 2)) * cy
-    got = blendermann_coefficients(g)
+    got = blendermann_coefficients(g, windage=BLUE_LADY_WINDAGE)
     for a, b in zip(got, (-cd * np.cos(g) / den, cy, cn), strict=True):
         np.testing.assert_allclose(a, b, atol=1e-14)
 
@@ -135,18 +137,22 @@ def test_load_matches_coefficients_and_fossen_relative_wind() -> None:
     u_rw, v_rw, V_rw, gamma = relative_wind(psi, u, v, V, beta)
     np.testing.assert_allclose(u_rw, u - V * np.cos(beta - PI - psi))
     np.testing.assert_allclose(v_rw, v - V * np.sin(beta - PI - psi))
-    cx, cy, cn = blendermann_coefficients(gamma)
+    cx, cy, cn = blendermann_coefficients(gamma, windage=BLUE_LADY_WINDAGE)
     q = 0.5 * 1.225 * V_rw**2
     w = BLUE_LADY_WINDAGE
     expect = np.stack([q * cx * w.A_F, q * cy * w.A_L, q * cn * w.A_L * w.L_oa], axis=-1)
-    np.testing.assert_allclose(wind_load(psi, u, v, V, beta), expect, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(
+        wind_load(psi, u, v, V, beta, windage=BLUE_LADY_WINDAGE), expect, rtol=1e-10, atol=1e-12
+    )
 
 
 def test_zero_relative_wind_gives_zero_load() -> None:
     # Ship heading north-east at 2 m/s, wind from south-west at 2 m/s: moving with the air.
     psi = math.radians(45.0)
     assert WL(psi, 2.0, 0.0, 2.0, psi + PI) == pytest.approx((0.0, 0.0, 0.0), abs=1e-12)
-    np.testing.assert_allclose(wind_load(psi, 2.0, 0.0, 2.0, psi + PI), 0.0, atol=1e-12)
+    np.testing.assert_allclose(
+        wind_load(psi, 2.0, 0.0, 2.0, psi + PI, windage=BLUE_LADY_WINDAGE), 0.0, atol=1e-12
+    )
     assert WL(0.0, 0.0, 0.0, 0.0, 0.0) == (0.0, 0.0, 0.0)  # no wind at all: no NaN
 
 
@@ -162,14 +168,16 @@ def test_ship_moving_in_calm_air_feels_head_wind() -> None:
 def test_batch_shapes(shape: tuple[int, ...]) -> None:
     rng = np.random.default_rng(0)
     psi = rng.uniform(-PI, PI, shape)
-    out = wind_load(psi, 0.3, 0.0, 3.0, rng.uniform(0, 2 * PI, shape))
+    out = wind_load(psi, 0.3, 0.0, 3.0, rng.uniform(0, 2 * PI, shape), windage=BLUE_LADY_WINDAGE)
     assert out.shape == shape + (3,)
-    cx, cy, cn = blendermann_coefficients(psi)
+    cx, cy, cn = blendermann_coefficients(psi, windage=BLUE_LADY_WINDAGE)
     assert cx.shape == cy.shape == cn.shape == shape
     # Scalar inputs give shape (3,).
-    assert wind_load(0.0, 0.0, 0.0, 3.0, 1.0).shape == (3,)
+    assert wind_load(0.0, 0.0, 0.0, 3.0, 1.0, windage=BLUE_LADY_WINDAGE).shape == (3,)
     # Broadcasting across arguments.
-    assert wind_load(np.zeros((2, 1)), 0.0, 0.0, np.ones(4), 1.0).shape == (2, 4, 3)
+    assert wind_load(
+        np.zeros((2, 1)), 0.0, 0.0, np.ones(4), 1.0, windage=BLUE_LADY_WINDAGE
+    ).shape == (2, 4, 3)
 
 
 _f = st.floats
@@ -187,7 +195,7 @@ _f = st.floats
 def test_scalar_path_equals_array_path(
     psi: float, u: float, v: float, V: float, beta: float, name: str
 ) -> None:
-    wl = WindLoad(name, WindageParameters(A_F=1.7, A_L=6.0, s_L=0.4, L_oa=13.0))
+    wl = WindLoad(name, WindageParameters(A_F=1.7, A_L=6.0, s_L=0.4, L_oa=13.0, coefficients=name))
     scalar = wl(psi, u, v, V, beta)
     assert all(isinstance(x, float) for x in scalar)
     np.testing.assert_allclose(scalar, wl.array(psi, u, v, V, beta), rtol=1e-12, atol=1e-10)
@@ -242,7 +250,10 @@ def test_config_helpers() -> None:
 
 
 def test_constant_wind_needs_no_rng() -> None:
-    w = Wind(WindConfig(speed=2.0, direction_from=1.0, gust_std=0.0, direction_std=0.0))
+    w = Wind(
+        WindConfig(speed=2.0, direction_from=1.0, gust_std=0.0, direction_std=0.0),
+        windage=BLUE_LADY_WINDAGE,
+    )
     assert w.is_constant
     assert w.at(0.0) == (2.0, 1.0)
     w.reset()
@@ -254,7 +265,7 @@ def test_constant_wind_needs_no_rng() -> None:
 
 
 def test_gusty_wind_needs_rng() -> None:
-    w = Wind(WindConfig(speed=3.0))
+    w = Wind(WindConfig(speed=3.0), windage=BLUE_LADY_WINDAGE)
     with pytest.raises(RuntimeError, match="reset"):
         w.at(1.0)
     with pytest.raises(ValueError, match="Generator"):
@@ -270,7 +281,7 @@ def _cfg() -> WindConfig:
 
 def test_gust_statistics() -> None:
     cfg = _cfg()
-    w = Wind(cfg)
+    w = Wind(cfg, windage=BLUE_LADY_WINDAGE)
     w.reset(np.random.default_rng(12345))
     dt = cfg.sample_period
     n = int(2e5 / dt)
@@ -294,7 +305,11 @@ def test_gust_statistics() -> None:
 
 def test_same_seed_same_gusts_different_seeds_differ() -> None:
     t = np.linspace(0.0, 900.0, 777)
-    w1, w2, w3 = Wind(_cfg()), Wind(_cfg()), Wind(_cfg())
+    w1, w2, w3 = (
+        Wind(_cfg(), windage=BLUE_LADY_WINDAGE),
+        Wind(_cfg(), windage=BLUE_LADY_WINDAGE),
+        Wind(_cfg(), windage=BLUE_LADY_WINDAGE),
+    )
     w1.reset(np.random.default_rng(7))
     w2.reset(np.random.default_rng(7))
     w3.reset(np.random.default_rng(8))
@@ -309,7 +324,7 @@ def test_same_seed_same_gusts_different_seeds_differ() -> None:
 
 def test_realisation_independent_of_query_order() -> None:
     ts = [0.037 * i for i in range(13515)]  # 0 .. 500 s, across chunk boundaries
-    w1, w2 = Wind(_cfg()), Wind(_cfg())
+    w1, w2 = Wind(_cfg(), windage=BLUE_LADY_WINDAGE), Wind(_cfg(), windage=BLUE_LADY_WINDAGE)
     w1.reset(np.random.default_rng(42))
     w2.reset(np.random.default_rng(42))
     in_order = [w1.at(t) for t in ts]
@@ -323,7 +338,7 @@ def test_realisation_independent_of_query_order() -> None:
 
 
 def test_speed_clipped_at_zero_and_load_uses_gusts() -> None:
-    w = Wind(WindConfig(speed=0.2, gust_std=1.0, direction_std=0.0))
+    w = Wind(WindConfig(speed=0.2, gust_std=1.0, direction_std=0.0), windage=BLUE_LADY_WINDAGE)
     w.reset(np.random.default_rng(1))
     V, beta = w.series(np.arange(0.0, 300.0, 0.05))
     assert V.min() == 0.0  # the process does go negative and is clipped

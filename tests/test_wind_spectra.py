@@ -35,6 +35,7 @@ from shipgym.disturbances.spectra import (
     wave_spectrum,
     wind_gust_spectrum,
 )
+from shipgym.dynamics import BLUE_LADY_WINDAGE
 
 W = np.linspace(1e-3, 40.0, 100_001)
 
@@ -233,7 +234,7 @@ def _band_ratios(cfg: WindConfig, seed: int, duration: float) -> tuple[list[floa
     """
     from scipy.signal import periodogram
 
-    w = Wind(cfg)
+    w = Wind(cfg, windage=BLUE_LADY_WINDAGE)
     w.reset(np.random.default_rng(seed))
     fs = 1.0 / cfg.sample_period
     t = np.arange(0.0, duration, cfg.sample_period)
@@ -282,7 +283,7 @@ def test_spectral_gust_sigma_and_rescale() -> None:
     assert cfg2.gust_sigma == 0.3
     ff = np.geomspace(lo, hi, 20001)
     assert np.trapezoid(cfg2.gust_psd(ff) * ff, np.log(ff)) == pytest.approx(0.09, rel=1e-3)
-    w = Wind(cfg2)
+    w = Wind(cfg2, windage=BLUE_LADY_WINDAGE)
     w.reset(np.random.default_rng(5))
     V, _ = w.series(np.arange(0, 8000.0, 0.1))
     assert float(np.std(V)) == pytest.approx(0.3, rel=0.1)
@@ -295,7 +296,11 @@ def test_spectral_gust_sigma_and_rescale() -> None:
 
 def test_spectral_gust_same_seed_same_realisation() -> None:
     cfg = WindConfig(speed=3.0, gust_spectrum="harris", direction_std=0.1)
-    a, b, c = Wind(cfg), Wind(cfg), Wind(cfg)
+    a, b, c = (
+        Wind(cfg, windage=BLUE_LADY_WINDAGE),
+        Wind(cfg, windage=BLUE_LADY_WINDAGE),
+        Wind(cfg, windage=BLUE_LADY_WINDAGE),
+    )
     a.reset(np.random.default_rng(11))
     b.reset(np.random.default_rng(11))
     c.reset(np.random.default_rng(12))
@@ -314,7 +319,7 @@ def test_spectral_gust_same_seed_same_realisation() -> None:
 def test_spectral_calm_is_constant() -> None:
     cfg = WindConfig(speed=0.0, gust_spectrum="npd", spectrum_scale=24.0)
     assert cfg.gust_sigma == 0.0 and cfg.is_constant
-    w = Wind(cfg)
+    w = Wind(cfg, windage=BLUE_LADY_WINDAGE)
     w.reset(None)
     assert w.at(12.0) == (0.0, 0.0)
 

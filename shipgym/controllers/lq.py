@@ -78,12 +78,9 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import param
-from shipgym.controllers.allocation import force_capacity
-from shipgym.dynamics.model import seed_linear_matrices
-from shipgym.dynamics.thrusters import BLUE_LADY_THRUSTERS
+from shipgym._config import param, require_given
 
-from .pid import _saturation_directions, _vec3
+from .pid import _DESIGN_HINT, _LIMIT_HINT, _saturation_directions, _vec3
 
 __all__ = [
     "LQ_PRESETS",
@@ -222,7 +219,9 @@ class LQWeights:
     """Bryson-rule weights: the largest acceptable value of each state and input.
 
     ``Q = diag(1/e_max^2, 1/v_max^2, 1/xi_max^2)``, ``R = diag(1/tau_max^2)``. Angles are in
-    degrees here (converted to rad inside :meth:`matrices`).
+    degrees here (converted to rad inside :meth:`matrices`). The defaults are the Blue Lady's
+    ``"tuned"`` preset (``tau_max`` from its thruster capacity); for another vessel give at
+    least ``tau_max`` from its capacity.
 
     Attributes:
         e_max: position error (m, m, deg): x, y (body frame) and heading.
@@ -251,7 +250,8 @@ class LQWeights:
         return Q, R
 
 
-#: weight presets by name (``"tuned"``: see the module docstring)
+#: the Blue Lady's weight presets by name (``"tuned"``: chosen for its thruster capacity, see
+#: the module docstring; other vessels get Bryson weights from their capacity)
 LQ_PRESETS: Mapping[str, LQWeights] = MappingProxyType({"tuned": LQWeights()})
 
 
@@ -259,12 +259,17 @@ def lq_model(M: ArrayLike | None = None, D_L: ArrayLike | None = None) -> tuple[
     """The continuous design model ``(A, B)`` (9 states, 3 inputs) of the module docstring.
 
     Args:
-        M: inertia (kg, kg m^2), default Tomera (2014) eq. 49.
-        D_L: linear damping (N s/m, N s, N m s), default Tomera (2014) eq. 50.
+        M: inertia (kg, kg m^2), required: the vessel's ``design.M`` (the Blue Lady's is
+            Tomera (2014) eq. 49).
+        D_L: linear damping (N s/m, N s, N m s), required: the vessel's ``design.D_L``
+            (the Blue Lady's is Tomera (2014) eq. 50).
+
+    Raises:
+        TypeError: ``M`` or ``D_L`` not given.
     """
-    M0, D0 = seed_linear_matrices()
-    M_ = M0 if M is None else np.asarray(M, dtype=float)
-    D_ = D0 if D_L is None else np.asarray(D_L, dtype=float)
+    require_given("lq_model()", _DESIGN_HINT, M=M, D_L=D_L)
+    M_ = np.asarray(M, dtype=float)
+    D_ = np.asarray(D_L, dtype=float)
     if M_.shape != (3, 3) or D_.shape != (3, 3):
         raise ValueError(f"M and D_L must be 3x3, got {M_.shape} and {D_.shape}")
     Mi = np.linalg.inv(M_)
@@ -332,12 +337,17 @@ def lq_design(
     """Gains of the LQ controller with integral action (module docstring).
 
     Args:
-        weights: :class:`LQWeights` or a preset name (``"tuned"``).
+        weights: :class:`LQWeights` or a preset name of the Blue Lady (``"tuned"``).
         dt: control period (s), used by the discrete design.
         method: ``"discrete"`` (:func:`dlqr` on the sampled model; default) or
             ``"continuous"`` (:func:`lqr`).
-        M, D_L: control model (default Tomera (2014) eqs. 49-50).
+        M, D_L: control model, required: the vessel's ``design.M``, ``design.D_L`` (the
+            Blue Lady's: Tomera (2014) eqs. 49-50).
+
+    Raises:
+        TypeError: ``M`` or ``D_L`` not given.
     """
+    require_given("lq_design()", _DESIGN_HINT, M=M, D_L=D_L)
     if isinstance(weights, str):
         try:
             weights = LQ_PRESETS[weights]
@@ -371,17 +381,28 @@ class LQController:
     ``tau = [X, Y, N]`` (N, N, N m) for the allocation.
 
     Args:
-        weights: :class:`LQWeights` or a preset name (``"tuned"``).
-        M: inertia (kg, kg m^2) of the control model; default Tomera (2014) eq. 49.
-        D_L: linear damping (N s/m, N s, N m s); default Tomera (2014) eq. 50.
+        weights: :class:`LQWeights` or a preset name of the Blue Lady (``"tuned"``).
+        M: inertia (kg, kg m^2) of the control model, required: the vessel's ``design.M``
+            (the Blue Lady's: Tomera (2014) eq. 49).
+        D_L: linear damping (N s/m, N s, N m s), required: the vessel's ``design.D_L`` (the
+            Blue Lady's: Tomera (2014) eq. 50).
         dt: control period (s).
         method: ``"discrete"`` (default) or ``"continuous"`` gain design.
-        integral_limit: bound on the integral force ``|K_xi xi_b|`` per body DOF (N, N, N m);
-            default the thruster capacity; ``inf`` disables it.
+        integral_limit: bound on the integral force ``|K_xi xi_b|`` per body DOF (N, N, N m),
+            required: the vessel's force capacity
+            (:func:`~shipgym.controllers.actuation.planar_capacity`); ``inf`` disables it.
+
+    Raises:
+        TypeError: ``M``, ``D_L`` or ``integral_limit`` not given.
 
     Example:
+        >>> from shipgym.controllers.actuation import planar_capacity
         >>> from shipgym.controllers.lq import LQController
-        >>> ctrl = LQController(dt=1.0)
+        >>> from shipgym.dynamics.vessel import load_vessel
+        >>> v = load_vessel("blue-lady")
+        >>> ctrl = LQController(
+        ...     M=v.design.M, D_L=v.design.D_L, dt=1.0, integral_limit=planar_capacity(v)
+        ... )
         >>> tau = ctrl([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])  # 1 m too far ahead
         >>> bool(tau[0] < 0)
         True
@@ -397,16 +418,13 @@ class LQController:
         method: str = "discrete",
         integral_limit: ArrayLike | None = None,
     ) -> None:
-        M0, D0 = seed_linear_matrices()
-        self.M = M0 if M is None else np.array(M, dtype=float)
-        self.D_L = D0 if D_L is None else np.array(D_L, dtype=float)
+        require_given("LQController()", _DESIGN_HINT, M=M, D_L=D_L)
+        require_given("LQController()", _LIMIT_HINT, integral_limit=integral_limit)
+        self.M = np.array(M, dtype=float)
+        self.D_L = np.array(D_L, dtype=float)
         self.design = lq_design(weights, dt=dt, method=method, M=self.M, D_L=self.D_L)
         self.dt = float(dt)
-        lim = (
-            force_capacity(BLUE_LADY_THRUSTERS)
-            if integral_limit is None
-            else np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
-        )
+        lim = np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
         if np.any(np.isnan(lim)) or np.any(lim <= 0):
             raise ValueError(f"integral_limit must be > 0 (N, N, N m; inf allowed), got {lim!r}")
         self.integral_limit = np.array(lim)

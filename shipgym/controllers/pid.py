@@ -93,7 +93,8 @@ increment ``h e_{k-1}`` is added at call ``k``, once the allocation of ``tau_{k-
 force it would add, ``-M R^T(psi) K_I h e``; every body component that would push a DOF further
 into the direction in which the allocation has just cut it is removed, and the rest is mapped
 back. Then the integral force ``M R^T(psi) K_I xi`` is clamped to ``integral_limit`` per body
-DOF (default: the thruster capacity, :func:`~shipgym.controllers.allocation.force_capacity`).
+DOF (required: the vessel's force capacity,
+:func:`~shipgym.controllers.actuation.planar_capacity`, or ``inf``).
 """
 
 from __future__ import annotations
@@ -107,9 +108,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym.controllers.allocation import force_capacity
-from shipgym.dynamics.model import seed_linear_matrices
-from shipgym.dynamics.thrusters import BLUE_LADY_THRUSTERS
+from shipgym._config import require_given
+
+_DESIGN_HINT = (
+    "pass the vessel's design model, e.g. M=v.design.M, D_L=v.design.D_L with "
+    "v = load_vessel('blue-lady')"
+)
+_LIMIT_HINT = (
+    "pass the vessel's force capacity (N, N, N m), e.g. "
+    "integral_limit=planar_capacity(load_vessel('blue-lady')), or inf"
+)
 
 __all__ = [
     "PIDGains",
@@ -264,8 +272,10 @@ TUNED_OMEGA: Vec3 = (0.06, 0.06, 0.1)
 #: (harbour manoeuvre, seeds 0-3, wind 3 m/s from 300 deg).
 SMOOTH_OMEGA: Vec3 = (0.05, 0.05, 0.06)
 
-#: Gain presets by name. ``"seed"``: Tomera (2014) eqs. 46-48 as printed. ``"tuned"``:
-#: :func:`pid_pole_placement` with ``omega = TUNED_OMEGA``, ``zeta = 1`` (module docstring).
+#: The Blue Lady's gain presets by name (tuned for that vessel; other vessels get
+#: :func:`pid_pole_placement` at their bandwidth). ``"seed"``: Tomera (2014) eqs. 46-48 as
+#: printed. ``"tuned"``: :func:`pid_pole_placement` with ``omega = TUNED_OMEGA``, ``zeta = 1``
+#: (module docstring). ``"smooth"``: the same at ``SMOOTH_OMEGA`` (for observer feedback).
 GAIN_PRESETS: Mapping[str, PIDGains] = MappingProxyType(
     {
         "seed": PIDGains(K_P=(1.0, 1.0, 1.0), K_I=(0.01, 0.01, 0.01), K_D=(100.0, 100.0, 100.0)),
@@ -279,7 +289,7 @@ GAIN_PRESETS: Mapping[str, PIDGains] = MappingProxyType(
 
 
 def pid_gains(name: str) -> PIDGains:
-    """A gain preset by name (``"seed"`` or ``"tuned"``; see :data:`GAIN_PRESETS`).
+    """A gain preset of the Blue Lady by name (``"seed"``, ``"tuned"``, ``"smooth"``).
 
     Raises:
         ValueError: unknown name (the message lists the valid ones).
@@ -315,8 +325,8 @@ def _vec3(x: ArrayLike, name: str) -> Vec3:
     return a, b, c
 
 
-def _mat3(x: ArrayLike | None, default: NDArray[np.float64], name: str) -> NDArray[np.float64]:
-    a = default if x is None else np.asarray(x, dtype=float)
+def _mat3(x: ArrayLike, name: str) -> NDArray[np.float64]:
+    a = np.asarray(x, dtype=float)
     if a.shape != (3, 3) or not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be a finite 3x3 matrix, got shape {a.shape}: {a!r}")
     return a
@@ -339,13 +349,21 @@ class MultivariablePID:
     """The PID-type DP controller of Tomera (2014) eq. 23 in the r-frame of the current leg.
 
     Args:
-        gains: a :class:`PIDGains` or a preset name (``"tuned"``, ``"seed"``).
-        M: inertia matrix (kg, kg m^2) of the control model; default Tomera (2014) eq. 49.
-        D_L: linear damping (N s/m, N s, N m s) of the control model; default Tomera (2014) eq. 50.
+        gains: a :class:`PIDGains` or a preset name of the Blue Lady (``"tuned"``,
+            ``"smooth"``, ``"seed"``); other vessels: :meth:`PIDGains.from_pole_placement`.
+        M: inertia matrix (kg, kg m^2) of the control model, required: the vessel's
+            ``design.M`` (the Blue Lady's is Tomera (2014) eq. 49).
+        D_L: linear damping (N s/m, N s, N m s) of the control model, required: the
+            vessel's ``design.D_L`` (the Blue Lady's is Tomera (2014) eq. 50).
         dt: control period (s): the integral is advanced by ``dt * e`` per call.
         integral_limit: bound on the integral action ``|M R^T K_I xi|`` per body DOF
-            (N, N, N m); default the thruster capacity ``(451.3, 88.3, 247.9)``;
-            ``inf`` disables the clamp.
+            (N, N, N m), required: the vessel's force capacity
+            (:func:`~shipgym.controllers.actuation.planar_capacity`; the Blue Lady's
+            ``(451.3, 88.3, 247.9)``); ``inf`` disables the clamp.
+
+    Raises:
+        TypeError: ``M``, ``D_L`` or ``integral_limit`` not given (the message says what to
+            pass).
 
     Call it once per control period with the state and the reference expressed in the
     r-frame (see the module docstring); it returns the body-frame ``tau = [X, Y, N]``
@@ -354,9 +372,15 @@ class MultivariablePID:
 
     Example:
         >>> from shipgym.controllers import MultivariablePID, allocate
-        >>> ctrl = MultivariablePID("tuned", dt=1.0)
+        >>> from shipgym.controllers.actuation import planar_capacity
+        >>> from shipgym.dynamics import BLUE_LADY_THRUSTERS
+        >>> from shipgym.dynamics.vessel import load_vessel
+        >>> v = load_vessel("blue-lady")
+        >>> ctrl = MultivariablePID(
+        ...     "tuned", M=v.design.M, D_L=v.design.D_L, dt=1.0, integral_limit=planar_capacity(v)
+        ... )
         >>> tau = ctrl([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])  # 1 m too far ahead
-        >>> alloc = allocate(tau)  # -> alloc.command for the thrusters
+        >>> alloc = allocate(tau, BLUE_LADY_THRUSTERS)  # -> alloc.command for the thrusters
         >>> tau = ctrl([0.9, 0, 0], [-0.05, 0, 0], [0, 0, 0], saturated=alloc.tau_error)
     """
 
@@ -373,9 +397,10 @@ class MultivariablePID:
             gains = pid_gains(gains)
         if not isinstance(gains, PIDGains):
             raise ValueError(f"gains must be PIDGains or a preset name, got {type(gains).__name__}")
-        M0, D0 = seed_linear_matrices()
-        Ma = _mat3(M, M0, "M")
-        Da = _mat3(D_L, D0, "D_L")
+        require_given("MultivariablePID()", _DESIGN_HINT, M=M, D_L=D_L)
+        require_given("MultivariablePID()", _LIMIT_HINT, integral_limit=integral_limit)
+        Ma = _mat3(M, "M")
+        Da = _mat3(D_L, "D_L")
         if not np.linalg.cond(Ma) < 1e12:
             raise ValueError(f"M must be invertible, got {Ma!r}")
         try:
@@ -384,11 +409,7 @@ class MultivariablePID:
             raise ValueError(f"dt must be a control period in seconds, got {dt!r}") from None
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a finite control period > 0 (s), got {dt!r}")
-        lim = (
-            force_capacity(BLUE_LADY_THRUSTERS)
-            if integral_limit is None
-            else np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
-        )
+        lim = np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
         if np.any(np.isnan(lim)) or np.any(lim <= 0):
             raise ValueError(f"integral_limit must be > 0 (N, N, N m; inf allowed), got {lim!r}")
         self.gains = gains

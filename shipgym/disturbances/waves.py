@@ -81,7 +81,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, is_real, param, require_finite
-from shipgym.dynamics.params import BLUE_LADY_HULL, HullParameters
+from shipgym.dynamics.params import HullParameters
 
 from .spectra import (
     RHO_WATER,
@@ -155,7 +155,7 @@ def al_takie_hf_polynomial(beaufort: int, peak_frequency: float | None = None) -
 
 
 def drift_coefficients(
-    hull: HullParameters = BLUE_LADY_HULL,
+    hull: HullParameters,
     rho: float = RHO_WATER,
     g: float = G,
     side_fraction: float = 0.8,
@@ -367,11 +367,13 @@ class Waves:
 
     Args:
         config: Sea state (default: the lake sea of :class:`WaveConfig`).
-        hull: Hull dimensions (``B``, ``L_pp``, draught ``T``), the Blue Lady by default.
+        hull: Hull dimensions (``B``, ``L_pp``, draught ``T``); required (e.g.
+            ``load_vessel("blue-lady").hull``).
         rho: Water density (kg/m^3).
 
     Example:
-        >>> waves = Waves(WaveConfig(Hs=0.083, Tp=1.79, first_order=True))
+        >>> from shipgym.dynamics import BLUE_LADY_HULL
+        >>> waves = Waves(WaveConfig(Hs=0.083, Tp=1.79, first_order=True), BLUE_LADY_HULL)
         >>> waves.reset(np.random.default_rng(1))
         >>> X, Y, N = waves.drift_load(12.3, psi=0.2)   # every physics step, body frame
         >>> dx, dy, dpsi = waves.wf_motion(12.3)        # add to the measured pose (NED)
@@ -380,9 +382,13 @@ class Waves:
     def __init__(
         self,
         config: WaveConfig | None = None,
-        hull: HullParameters = BLUE_LADY_HULL,
+        hull: HullParameters | None = None,
         rho: float = RHO_WATER,
     ) -> None:
+        if hull is None:
+            raise TypeError(
+                "Waves() needs the vessel's hull: pass hull=..., e.g. load_vessel('blue-lady').hull"
+            )
         self.config = cfg = WaveConfig() if config is None else config
         self.hull = hull
         self.rho = float(rho)

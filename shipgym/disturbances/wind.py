@@ -57,7 +57,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, param, require_finite, require_positive
-from shipgym.dynamics.params import BLUE_LADY_WINDAGE, WindageParameters
+from shipgym.dynamics.params import WindageParameters
 
 from ._boundary import coerce_config, parse_config
 from ._grid import CHUNK, GridPair
@@ -153,7 +153,7 @@ _b = BlendermannCoefficients  # short alias for the table below (positional fiel
 #: against ``mika-s/pyMarineCybernetics : util/wind/wind_coefficients.py`` (same values except
 #: its typo kappa "1,4" for the container ship and 0.92 instead of 0.925 for the drilling
 #: vessel, whose CD_lAF values are the mid-points of Blendermann's ranges 0.70-1.00 and
-#: 0.75-1.10). "tanker-loaded" is the project default (a modelling choice).
+#: 0.75-1.10). A vessel names its type in its windage (the Blue Lady: "tanker-loaded", a choice).
 BLENDERMANN: dict[str, BlendermannCoefficients] = {
     "car-carrier": _b(0.95, 0.55, 0.60, 0.80, 1.2),
     "cargo-loaded": _b(0.85, 0.65, 0.55, 0.40, 1.7),
@@ -234,6 +234,18 @@ class _Consts(NamedTuple):
     kn: float  # 0.5 rho_a A_L L_oa
 
 
+def _need_windage(windage: WindageParameters | None, where: str) -> WindageParameters:
+    """``windage`` itself; a ``TypeError`` saying what to pass when it is missing."""
+    if windage is None:
+        raise TypeError(
+            f"{where} needs the vessel's windage: pass windage=..., e.g. "
+            "load_vessel('blue-lady').windage"
+        )
+    if not isinstance(windage, WindageParameters):
+        raise TypeError(f"windage must be WindageParameters, got {type(windage).__name__}")
+    return windage
+
+
 def _consts(coeffs: BlendermannCoefficients, windage: WindageParameters) -> _Consts:
     half_rho = 0.5 * windage.rho_a
     return _Consts(
@@ -292,22 +304,25 @@ def _loads(
 
 def blendermann_coefficients(
     gamma: ArrayLike,
-    coeffs: BlendermannCoefficients | str = "tanker-loaded",
-    windage: WindageParameters = BLUE_LADY_WINDAGE,
+    coeffs: BlendermannCoefficients | str | None = None,
+    windage: WindageParameters | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Blendermann (1994) wind coefficients, folded to both sides.
 
     Args:
         gamma: Relative wind angle of attack gamma_rw (rad), any shape; 0 = head wind,
             -pi/2 = wind from starboard. Any real value (it is wrapped to (-pi, pi]).
-        coeffs: A :class:`BlendermannCoefficients` row or its name in :data:`BLENDERMANN`.
-        windage: Projected areas (A_F, A_L in m^2), centroid s_L (m) and L_oa (m).
+        coeffs: A :class:`BlendermannCoefficients` row or its name in :data:`BLENDERMANN`;
+            ``None``: the ship type of ``windage`` (``windage.coefficients``).
+        windage: Projected areas (A_F, A_L in m^2), centroid s_L (m) and L_oa (m); required
+            (e.g. ``load_vessel("blue-lady").windage``).
 
     Returns:
         ``(CX, CY, CN)``, dimensionless arrays of the shape of ``gamma``. CX is even in gamma,
         CY and CN are odd; ``CY = CN = 0`` exactly at ``gamma = 0`` and ``gamma = pi``.
     """
-    k = _consts(_as_coeffs(coeffs), windage)
+    w = _need_windage(windage, "blendermann_coefficients()")
+    k = _consts(_as_coeffs(w.coefficients if coeffs is None else coeffs), w)
     g = np.asarray(gamma, dtype=float)
     g = _PI - np.mod(_PI - g, _TWO_PI)  # (-pi, pi]
     ga = np.abs(g)
@@ -350,8 +365,8 @@ def wind_load(
     v: ArrayLike,
     V_w: ArrayLike,
     beta_w: ArrayLike,
-    coeffs: BlendermannCoefficients | str = "tanker-loaded",
-    windage: WindageParameters = BLUE_LADY_WINDAGE,
+    coeffs: BlendermannCoefficients | str | None = None,
+    windage: WindageParameters | None = None,
 ) -> NDArray[np.float64]:
     """Blendermann wind loads on the body axes for any broadcastable batch of inputs.
 
@@ -361,8 +376,10 @@ def wind_load(
         v: Sway velocity over ground (m/s).
         V_w: True wind speed (m/s).
         beta_w: True wind direction, where the wind comes from (rad).
-        coeffs: A :class:`BlendermannCoefficients` row or its name in :data:`BLENDERMANN`.
-        windage: Projected areas and air density (:class:`WindageParameters`).
+        coeffs: A :class:`BlendermannCoefficients` row or its name in :data:`BLENDERMANN`;
+            ``None``: the ship type of ``windage``.
+        windage: Projected areas and air density (:class:`WindageParameters`); required
+            (e.g. ``load_vessel("blue-lady").windage``).
 
     Returns:
         Array of shape ``broadcast_shape + (3,)`` holding ``[X, Y, N]`` in N, N, N m.
@@ -374,11 +391,14 @@ class WindLoad:
     """Blendermann wind loads for one vessel, with a fast scalar path for the physics.
 
     Args:
-        coeffs: A :class:`BlendermannCoefficients` row or its name in :data:`BLENDERMANN`.
-        windage: Projected areas, centroid and air density (:class:`WindageParameters`).
+        coeffs: A :class:`BlendermannCoefficients` row or its name in :data:`BLENDERMANN`;
+            ``None``: the ship type of ``windage``.
+        windage: Projected areas, centroid and air density (:class:`WindageParameters`);
+            required (e.g. ``load_vessel("blue-lady").windage``).
 
     Example:
-        >>> wl = WindLoad("tanker-loaded")
+        >>> from shipgym.dynamics import BLUE_LADY_WINDAGE
+        >>> wl = WindLoad("tanker-loaded", BLUE_LADY_WINDAGE)
         >>> X, Y, N = wl(0.0, 0.0, 0.0, 3.0, math.pi / 2)  # 3 m/s from the east (starboard)
         >>> round(Y, 1), round(N, 1)
         (-24.7, 27.2)
@@ -388,10 +408,11 @@ class WindLoad:
 
     def __init__(
         self,
-        coeffs: BlendermannCoefficients | str = "tanker-loaded",
-        windage: WindageParameters = BLUE_LADY_WINDAGE,
+        coeffs: BlendermannCoefficients | str | None = None,
+        windage: WindageParameters | None = None,
     ) -> None:
-        self.coeffs = _as_coeffs(coeffs)
+        windage = _need_windage(windage, "WindLoad()")
+        self.coeffs = _as_coeffs(windage.coefficients if coeffs is None else coeffs)
         self.windage = windage
         self._k = _consts(self.coeffs, windage)
 
@@ -735,10 +756,12 @@ class Wind(GridPair):
 
     Args:
         config: Mean wind and gust parameters (default: calm, constant).
-        windage: Projected areas and air density of the vessel.
+        windage: Projected areas and air density of the vessel; required (e.g.
+            ``load_vessel("blue-lady").windage``).
 
     Example:
-        >>> w = Wind(WindConfig.from_speed_dir(3.0, 300.0))
+        >>> from shipgym.dynamics import load_vessel
+        >>> w = Wind(WindConfig.from_speed_dir(3.0, 300.0), load_vessel("blue-lady").windage)
         >>> w.reset(np.random.default_rng(1))
         >>> V, beta = w.at(12.3)
         >>> X, Y, N = w.load(12.3, psi=0.0, u=0.5, v=0.0)
@@ -747,8 +770,9 @@ class Wind(GridPair):
     def __init__(
         self,
         config: WindConfig | None = None,
-        windage: WindageParameters = BLUE_LADY_WINDAGE,
+        windage: WindageParameters | None = None,
     ) -> None:
+        windage = _need_windage(windage, "Wind()")
         self.config = WindConfig() if config is None else config
         self.windage = windage
         self.loads = WindLoad(self.config.coefficients or windage.coefficients, windage)

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .params import BLUE_LADY_HULL, HullParameters
+from .params import HullParameters
 
 __all__ = ["PlantModel", "plant_model", "PLANT_VARIANTS", "seed_linear_matrices"]
 
@@ -211,7 +211,11 @@ def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[
 
 
 def seed_linear_matrices() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(M, D_L)`` exactly as printed in Tomera (2014) eqs. 49-50 (its controllers' model)."""
+    """The Blue Lady's ``(M, D_L)`` exactly as printed in Tomera (2014) eqs. 49-50.
+
+    The design model of the paper's controllers and EKF for that vessel (equal to
+    ``load_vessel("blue-lady").design``); no function below the registry defaults to it.
+    """
     M = np.diag([23664.9, 24830.6, 455182.1])
     D_L = np.array([[21.10, 0.0, 0.0], [0.0, 259.8, -855.4], [0.0, -855.4, 6130.5]])
     return M, D_L
@@ -234,13 +238,13 @@ def _from_hull(
     return PlantModel(name, M_RB, M_A, D_L, dq, coriolis, h.m, h.x_g)
 
 
-def _default(hull: HullParameters = BLUE_LADY_HULL) -> PlantModel:
+def _default(hull: HullParameters) -> PlantModel:
     """The richer plant: Table 2 M and D_L, Coriolis, quadratic damping, sway-yaw coupling."""
     return _from_hull(hull, "default")
 
 
-def _seed_linear(hull: HullParameters = BLUE_LADY_HULL) -> PlantModel:
-    """Exactly ``M nu_dot + D_L nu = tau`` with M, D_L of Tomera (2014) eqs. 49-50, nothing else."""
+def _seed_linear(hull: HullParameters) -> PlantModel:
+    """The Blue Lady's ``M nu_dot + D_L nu = tau`` of Tomera (2014) eqs. 49-50, nothing else."""
     M, D_L = seed_linear_matrices()
     M_RB = np.diag([hull.m, hull.m, M[2, 2]])
     return PlantModel("seed-linear", M_RB, M - M_RB, D_L, (0.0, 0.0, 0.0), False, hull.m, 0.0)
@@ -253,19 +257,27 @@ PLANT_VARIANTS: dict[str, Callable[..., PlantModel]] = {
 
 
 def plant_model(
-    name: str = "default", hull: HullParameters = BLUE_LADY_HULL, **options: bool
+    name: str = "default", hull: HullParameters | None = None, **options: bool
 ) -> PlantModel:
     """A plant variant by name.
 
     Args:
         name: ``"default"`` (richer plant) or ``"seed-linear"`` (Tomera 2014 eqs. 49-50 only).
-        hull: hull parameters (the Blue Lady by default).
+        hull: hull parameters, required (e.g. ``load_vessel("blue-lady").hull`` or
+            :data:`~shipgym.dynamics.params.BLUE_LADY_HULL`); ``"seed-linear"`` is the Blue
+            Lady's model of Tomera (2014) and takes only the mass ``m`` from it.
         **options: for ``"default"`` only: ``coriolis``, ``quadratic_damping``,
             ``sway_yaw_coupling`` (bools) to switch the richer terms off one by one.
 
     Raises:
+        TypeError: no ``hull`` given.
         ValueError: unknown name or option.
     """
+    if hull is None:
+        raise TypeError(
+            "plant_model() needs the hull: pass hull=..., e.g. load_vessel('blue-lady').hull "
+            "(or use Vessel.plant(name))"
+        )
     if name not in PLANT_VARIANTS:
         raise ValueError(
             f"unknown plant variant {name!r}; choose one of: {', '.join(PLANT_VARIANTS)}"

@@ -23,7 +23,7 @@ from .actuators import ActuatorSet
 from .frames import rot
 from .hull4 import Hull4
 from .model import PlantModel
-from .thrusters import BLUE_LADY_THRUSTERS, ThrusterParameters, command_to_tau
+from .thrusters import ThrusterParameters, command_to_tau
 
 __all__ = ["ReferenceSolution", "simulate_reference"]
 
@@ -50,7 +50,7 @@ def simulate_reference(
     command_times: ArrayLike,
     commands: ArrayLike,
     *,
-    thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
+    thrusters: ThrusterParameters | None = None,
     actuators: ActuatorSet | None = None,
     eta0: ArrayLike | None = None,
     nu0: ArrayLike | None = None,
@@ -70,8 +70,11 @@ def simulate_reference(
         command_times: instants (s) at which ``commands[k]`` starts to apply (first one 0).
         commands: (K, n) commands in channel order (clipped to the ranges); for the Blue
             Lady's ``thrusters`` ``[n1 (rpm), p2, p3]``.
-        thrusters: the Blue Lady's thruster parameters (used when ``actuators`` is None).
-        actuators: any vessel's :class:`~shipgym.dynamics.actuators.ActuatorSet`.
+        thrusters: :class:`~shipgym.dynamics.thrusters.ThrusterParameters` of a three-thruster
+            vessel (e.g. ``BLUE_LADY_THRUSTERS``), used when ``actuators`` is None.
+        actuators: any vessel's :class:`~shipgym.dynamics.actuators.ActuatorSet`
+            (``load_vessel(name).actuators``). One of ``thrusters`` and ``actuators`` is
+            required.
         eta0, nu0, act0: initial pose, body velocity and actuator states (Fossen order for
             a 4-DOF ``plant``).
         env_load: ``f(t, eta, nu) -> [X, Y, N]`` body-frame environmental load (N, N, N m),
@@ -79,6 +82,9 @@ def simulate_reference(
         current: constant NED current ``(speed m/s, direction to, rad)``.
         breakpoints: extra instants (s) where ``env_load`` is not smooth.
         rtol, atol, method: passed to ``solve_ivp``.
+
+    Raises:
+        TypeError: neither ``actuators`` nor ``thrusters`` given.
     """
     t_eval = np.asarray(t_eval, dtype=float)
     ct = np.asarray(command_times, dtype=float)
@@ -90,14 +96,20 @@ def simulate_reference(
         tc = np.array([c.time_constant if c.dynamics == "lag" else 1.0 for c in actuators.channels])
         tau_of = actuators.tau
         na = actuators.n_channels
-    else:
-        lo, hi = thrusters.lower, thrusters.upper
+    elif thrusters is not None:
+        p3 = thrusters
+        lo, hi = p3.lower, p3.upper
         lagged = np.ones(3, dtype=bool)
-        tc = thrusters.time_constants
+        tc = p3.time_constants
         na = 3
 
         def tau_of(act: NDArray[np.float64]) -> NDArray[np.float64]:
-            return command_to_tau(act, thrusters)
+            return command_to_tau(act, p3)
+    else:
+        raise TypeError(
+            "simulate_reference() needs the vessel's actuators: pass "
+            "actuators=load_vessel(name).actuators (or thrusters=BLUE_LADY_THRUSTERS)"
+        )
 
     cmds = np.clip(np.asarray(commands, dtype=float), lo, hi)
     if cmds.shape != (ct.size, na):

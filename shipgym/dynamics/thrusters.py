@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import param, require_finite, require_positive
+from shipgym._config import require_finite, require_positive, required_param
 
 __all__ = [
     "ThrusterParameters",
@@ -36,28 +36,28 @@ __all__ = [
 
 ACTUATOR_NAMES = ("main_propeller", "bow_tunnel", "stern_tunnel")
 
-_K_NOTE = (
-    "Tomera (2014) eq. 8 prints k1 = 1.9589 with n in rpm, i.e. 451 kN at 480 rpm: impossible for "
-    "a 23 t model; read as 1.9589e-3 N/rpm^2 (451 N ahead, 78 N astern; a modelling choice)"
-)
-
 
 @dataclass(frozen=True)
 class ThrusterParameters:
-    """Thruster constants, lever arms, ranges and lags."""
+    """Constants, lever arms, ranges and lags of the three-thruster pattern of Tomera (2014).
 
-    k1: float = param(1.9589e-3, "N/rpm^2", _K_NOTE)
-    k2: float = param(44.145, "N", "Tomera (2014) eq. 9 prints 44145: decimal comma lost")
-    k3: float = param(44.145, "N", "Tomera (2014) eq. 9 prints 44145: decimal comma lost")
-    L2: float = param(3.24, "m", "Tomera (2014) eq. 12: bow tunnel forward of CG")
-    L3: float = param(2.376, "m", "Tomera (2014) eq. 12: stern tunnel aft of CG")
-    x_main: float = param(-6.5, "m", "propeller position, near the stern (drawing only; no moment)")
-    n_min: float = param(-200.0, "rpm", "Tomera (2014): main propeller range")
-    n_max: float = param(480.0, "rpm", "Tomera (2014): main propeller range")
-    p_min: float = param(-1.0, "1", "Tomera (2014) eq. 9: relative revolutions")
-    p_max: float = param(1.0, "1", "Tomera (2014) eq. 9: relative revolutions")
-    T_main: float = param(2.0, "s", "assumption: electric drive, first-order lag on shaft speed")
-    T_tunnel: float = param(1.0, "s", "assumption: tunnel thruster first-order lag")
+    Every field must be given (no vessel is a default): the Blue Lady's values are
+    :data:`BLUE_LADY_THRUSTERS`; any vessel of this pattern gives its own through
+    :func:`shipgym.controllers.actuation.fixed3_parameters`.
+    """
+
+    k1: float = required_param("N/rpm^2", "main propeller thrust constant, F1 = k1 |n1| n1")
+    k2: float = required_param("N", "bow tunnel thrust constant, F2 = k2 p2")
+    k3: float = required_param("N", "stern tunnel thrust constant, F3 = k3 p3")
+    L2: float = required_param("m", "bow tunnel forward of the CG")
+    L3: float = required_param("m", "stern tunnel aft of the CG")
+    x_main: float = required_param("m", "main propeller position (drawing only; no moment)")
+    n_min: float = required_param("rpm", "main propeller lowest shaft speed (astern)")
+    n_max: float = required_param("rpm", "main propeller highest shaft speed (ahead)")
+    p_min: float = required_param("1", "tunnel thrusters lowest relative revolutions")
+    p_max: float = required_param("1", "tunnel thrusters highest relative revolutions")
+    T_main: float = required_param("s", "main propeller first-order lag")
+    T_tunnel: float = required_param("s", "tunnel thrusters first-order lag")
 
     def __post_init__(self) -> None:
         require_finite(self)
@@ -93,37 +93,47 @@ class ThrusterParameters:
         return thrust(self.upper, self)
 
 
-BLUE_LADY_THRUSTERS = ThrusterParameters()
+#: The Blue Lady's three thrusters (Tomera 2014 eqs. 8-12): unit and source in each comment.
+BLUE_LADY_THRUSTERS = ThrusterParameters(
+    # N/rpm^2; Tomera (2014) eq. 8 prints k1 = 1.9589 with n in rpm, i.e. 451 kN at 480 rpm:
+    # impossible for a 23 t model; read as 1.9589e-3 N/rpm^2 (451 N ahead, 78 N astern)
+    k1=1.9589e-3,
+    k2=44.145,  # N; Tomera (2014) eq. 9 prints 44145: decimal comma lost
+    k3=44.145,  # N; Tomera (2014) eq. 9 prints 44145: decimal comma lost
+    L2=3.24,  # m; Tomera (2014) eq. 12: bow tunnel forward of CG
+    L3=2.376,  # m; Tomera (2014) eq. 12: stern tunnel aft of CG
+    x_main=-6.5,  # m; assumption: propeller near the stern (drawing only; no moment)
+    n_min=-200.0,  # rpm; Tomera (2014): main propeller range
+    n_max=480.0,  # rpm; Tomera (2014): main propeller range
+    p_min=-1.0,  # 1; Tomera (2014) eq. 9: relative revolutions
+    p_max=1.0,  # 1; Tomera (2014) eq. 9: relative revolutions
+    T_main=2.0,  # s; assumption: electric drive, first-order lag on shaft speed
+    T_tunnel=1.0,  # s; assumption: tunnel thruster first-order lag
+)
 
 
-def configuration_matrix(p: ThrusterParameters = BLUE_LADY_THRUSTERS) -> NDArray[np.float64]:
+def configuration_matrix(p: ThrusterParameters) -> NDArray[np.float64]:
     """Thrust configuration matrix ``T`` of Tomera (2014) eq. 12, (3, 3)."""
     return np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 1.0], [0.0, p.L2, -p.L3]])
 
 
-def thrust(state: ArrayLike, p: ThrusterParameters = BLUE_LADY_THRUSTERS) -> NDArray[np.float64]:
+def thrust(state: ArrayLike, p: ThrusterParameters) -> NDArray[np.float64]:
     """Thrusts ``[F1, F2, F3]`` (N) from actuator states ``[n1 (rpm), p2, p3]`` (eqs. 8-9)."""
     s = np.asarray(state, dtype=float)
     return np.stack([p.k1 * np.abs(s[..., 0]) * s[..., 0], p.k2 * s[..., 1], p.k3 * s[..., 2]], -1)
 
 
-def thrust_to_tau(
-    forces: ArrayLike, p: ThrusterParameters = BLUE_LADY_THRUSTERS
-) -> NDArray[np.float64]:
+def thrust_to_tau(forces: ArrayLike, p: ThrusterParameters) -> NDArray[np.float64]:
     """Body-frame ``tau = T u`` (N, N, N m) from thrusts (N), eq. 11."""
     return np.einsum("ij,...j->...i", configuration_matrix(p), np.asarray(forces, dtype=float))
 
 
-def command_to_tau(
-    state: ArrayLike, p: ThrusterParameters = BLUE_LADY_THRUSTERS
-) -> NDArray[np.float64]:
+def command_to_tau(state: ArrayLike, p: ThrusterParameters) -> NDArray[np.float64]:
     """Body-frame ``tau`` from actuator states: ``T @ thrust(state)``."""
     return thrust_to_tau(thrust(state, p), p)
 
 
-def inverse_thrust(
-    forces: ArrayLike, p: ThrusterParameters = BLUE_LADY_THRUSTERS
-) -> NDArray[np.float64]:
+def inverse_thrust(forces: ArrayLike, p: ThrusterParameters) -> NDArray[np.float64]:
     """Commands ``[n1 (rpm), p2, p3]`` that produce the thrusts (N), eqs. 26-27 (unsaturated)."""
     f = np.asarray(forces, dtype=float)
     n1 = np.sign(f[..., 0]) * np.sqrt(np.abs(f[..., 0]) / p.k1)
@@ -154,7 +164,7 @@ def validate_command(cmd: ArrayLike, shape: tuple[int, ...] = (3,)) -> NDArray[n
 
 
 def saturate(
-    cmd: ArrayLike, p: ThrusterParameters = BLUE_LADY_THRUSTERS
+    cmd: ArrayLike, p: ThrusterParameters
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """Clip commands to the physical ranges; return ``(clipped, saturated_flags)``."""
     a = validate_command(cmd)

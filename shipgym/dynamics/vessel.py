@@ -458,7 +458,7 @@ def _read(path: Path) -> Vessel:
     r.keys(w, "windage", set(_UNITS_WINDAGE))
     try:
         windage = WindageParameters(**{
-            k: r.string(w, k, "windage", WindageParameters.coefficients) if k == "coefficients"
+            k: r.string(w, k, "windage") if k == "coefficients"
             else r.number(w, k, "windage", u, getattr(WindageParameters, k, ...))
             for k, u in _UNITS_WINDAGE.items()})  # fmt: skip
     except ValueError as exc:
@@ -466,6 +466,7 @@ def _read(path: Path) -> Vessel:
             raise
         raise r.fail("windage", str(exc)) from None
     actuators = _read_actuators(r, data, int(dofs), dims)
+    # any subset: shipgym.guidance.limits.vessel_limits derives the others from the capacity
     lim = r.table(data, "limits", required=False)
     r.keys(lim, "limits", set(_LIMIT_KEYS))
     limits = {k: r.number(lim, k, "limits", _LIMIT_KEYS[k], positive=True) for k in lim}

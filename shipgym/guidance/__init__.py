@@ -10,7 +10,14 @@
 """
 
 from .plan import PLANS, Leg, ManoeuvrePlan, plan, tomera2014_plan
-from .reference import LegProfile, Limits, leg_duration, leg_profile, leg_reference
+from .reference import (
+    BLUE_LADY_LIMITS,
+    LegProfile,
+    Limits,
+    leg_duration,
+    leg_profile,
+    leg_reference,
+)
 from .rframe import from_r_frame, to_r_frame
 from .runtime import Guidance, Reference
 
@@ -19,6 +26,7 @@ __all__ = [
     "Guidance",
     "Leg",
     "LegProfile",
+    "BLUE_LADY_LIMITS",
     "Limits",
     "ManoeuvrePlan",
     "Reference",

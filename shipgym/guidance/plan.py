@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -142,7 +142,9 @@ class ManoeuvrePlan:
             (m; Tomera 2014: 1 m).
         switch_heading: and its heading error to K's heading must be below this (rad, wrapped;
             Tomera (2014): 5 deg).
-        limits: speed/acceleration limits of the reference (per leg overridable).
+        limits: speed/acceleration limits of the reference (per leg overridable); ``None``
+            (default): the vessel's, given to :class:`~shipgym.guidance.Guidance` (the
+            environments pass ``Limits.from_dict(vessel.limits)``).
         switch_min_progress: fraction of the leg's reference duration that must have elapsed
             before the leg may be switched (0: the paper's rule alone; 1, default: the
             reference must have reached K). Guards against premature switches, e.g. a leg
@@ -157,7 +159,7 @@ class ManoeuvrePlan:
     switch_heading: float = param(
         math.radians(5.0), "rad", "Tomera (2014): course difference < 5 deg"
     )
-    limits: Limits = field(default_factory=Limits)
+    limits: Limits | None = None
     switch_min_progress: float = param(1.0, "1", "guard against premature switching (ours)")
     settle_time: float = param(0.0, "s", "optional dwell before switching (project addition)")
     name: str = "custom"
@@ -185,8 +187,8 @@ class ManoeuvrePlan:
             raise ValueError(f"ManoeuvrePlan.switch_min_progress must be in [0, 1], got {mp}")
         if not st >= 0.0:
             raise ValueError(f"ManoeuvrePlan.settle_time must be >= 0 s, got {st}")
-        if not isinstance(self.limits, Limits):
-            raise ValueError(f"ManoeuvrePlan.limits must be a Limits, got {self.limits!r}")
+        if self.limits is not None and not isinstance(self.limits, Limits):
+            raise ValueError(f"ManoeuvrePlan.limits must be a Limits or None, got {self.limits!r}")
         if not isinstance(self.name, str):
             raise ValueError(f"ManoeuvrePlan.name must be a string, got {self.name!r}")
         for key, val in (
@@ -202,14 +204,18 @@ class ManoeuvrePlan:
         """Number of legs."""
         return len(self.legs)
 
-    def leg_limits(self, i: int) -> Limits:
-        """The limits that apply to leg ``i`` (its own, else the plan's)."""
+    def leg_limits(self, i: int, limits: Limits | None = None) -> Limits | None:
+        """The limits that apply to leg ``i``: its own, else the plan's, else ``limits``."""
         own = self.legs[i].limits
-        return self.limits if own is None else own
+        if own is not None:
+            return own
+        return self.limits if self.limits is not None else limits
 
-    def durations(self) -> tuple[float, ...]:
-        """Reference duration of each leg (s) under its limits."""
-        return tuple(leg_duration(leg, self.limits) for leg in self.legs)
+    def durations(self, limits: Limits | None = None) -> tuple[float, ...]:
+        """Reference duration of each leg (s) under its limits (``limits``: the vessel's,
+        used where neither the leg nor the plan has its own)."""
+        lim = self.limits if self.limits is not None else limits
+        return tuple(leg_duration(leg, lim) for leg in self.legs)
 
     def waypoints(self, eta_start: ArrayLike) -> NDArray[np.float64]:
         """Planned NED poses ``[P_0, K_0, K_1, ...]``, shape (n_legs + 1, 3) (m, m, rad).
@@ -260,7 +266,7 @@ class ManoeuvrePlan:
             leg if isinstance(leg, Leg) else Leg.from_dict(leg, where=f"plan legs[{i}]")
             for i, leg in enumerate(raw)
         )
-        lim = d.get("limits", Limits())
+        lim = d.get("limits")
         if isinstance(lim, Mapping):
             lim = Limits.from_dict(dict(lim))
         kwargs: dict[str, Any] = {"legs": legs, "limits": lim}
@@ -272,15 +278,17 @@ class ManoeuvrePlan:
 
     def to_dict(self) -> dict[str, Any]:
         """A plain dict that :meth:`from_dict` reads back (SI units)."""
-        return {
+        out: dict[str, Any] = {
             "name": self.name,
             "legs": [leg.to_dict() for leg in self.legs],
             "switch_distance": self.switch_distance,
             "switch_heading": self.switch_heading,
-            "limits": self.limits.to_dict(),
-            "switch_min_progress": self.switch_min_progress,
-            "settle_time": self.settle_time,
         }
+        if self.limits is not None:
+            out["limits"] = self.limits.to_dict()
+        out["switch_min_progress"] = self.switch_min_progress
+        out["settle_time"] = self.settle_time
+        return out
 
 
 def tomera2014_plan(**overrides: Any) -> ManoeuvrePlan:

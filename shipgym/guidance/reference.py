@@ -37,55 +37,41 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import from_mapping, param, require_finite, require_positive
+from shipgym._config import from_mapping, require_finite, require_positive, required_param
 
 if TYPE_CHECKING:  # pragma: no cover - typing only (plan.py imports this module)
     from .plan import Leg
 
-__all__ = ["Limits", "LegProfile", "leg_profile", "leg_reference", "leg_duration"]
-
-_CAP = (
-    "thrust capacity 451 N ahead, 78 N astern (main propeller), 2 x 44.1 N "
-    "sway and ~248 N m yaw (tunnel thrusters) against M = diag(23 665 kg, 24 831 kg, "
-    "4.55e5 kg m^2) (Tomera 2014 eq. 49; up to 42 t in sway with the added mass of "
-    "Clarke et al. 1983)"
-)
+__all__ = [
+    "BLUE_LADY_LIMITS",
+    "Limits",
+    "LegProfile",
+    "leg_profile",
+    "leg_reference",
+    "leg_duration",
+]
 
 
 @dataclass(frozen=True)
 class Limits:
     """Speed and acceleration limits of the reference per DOF (r-frame of the leg).
 
-    Defaults follow the thruster capacity of the Blue Lady with a margin for a 3 m/s lake wind
-    (Blendermann 1994: ~9 N head, ~25 N and ~27 N m beam) and for the feedback controller; each
-    field's ``metadata`` holds its unit and source. Astern surge has its own, lower limits
-    because the main propeller gives only 78 N astern.
+    Every field must be given (no vessel is a default): a vessel's limits come from its file
+    (``Limits.from_dict(load_vessel(name).limits)``, chosen from its thrust capacity); the
+    Blue Lady's are :data:`BLUE_LADY_LIMITS`. Each field's ``metadata`` holds its unit. Astern
+    surge has its own limits (a main propeller is usually weaker astern).
     """
 
-    surge_speed: float = param(0.2, "m/s", "assumed v_max 0.2-0.3 m/s (max speed 3.1 kn)")
-    surge_accel: float = param(
-        0.0025,
-        "m/s^2",
-        _CAP + ": a forward leg is braked by the 78 N astern thrust, (78 - 9) N / 23 665 kg "
-        "= 0.0029 m/s^2 (ahead, 451 N, would allow 0.019 m/s^2)",
+    surge_speed: float = required_param("m/s", "largest reference surge speed ahead")
+    surge_accel: float = required_param("m/s^2", "largest reference surge acceleration ahead")
+    surge_astern_speed: float = required_param("m/s", "largest reference surge speed astern")
+    surge_astern_accel: float = required_param(
+        "m/s^2", "largest reference surge acceleration astern"
     )
-    surge_astern_speed: float = param(0.1, "m/s", "half of surge_speed (78 N astern thrust)")
-    surge_astern_accel: float = param(
-        0.002,
-        "m/s^2",
-        _CAP + ": (78 - 9) N / 23 665 kg = 0.0029 m/s^2 peak; the raised-cosine profile "
-        "averages half the peak over the acceleration phase",
-    )
-    sway_speed: float = param(0.05, "m/s", "assumed v_max 0.05-0.1 m/s")
-    sway_accel: float = param(
-        0.001, "m/s^2", _CAP + ": (88 - 25) N / 24 831 kg = 0.0025 m/s^2; chosen: 0.001"
-    )
-    yaw_rate: float = param(math.radians(1.0), "rad/s", "assumed r_max 1 deg/s")
-    yaw_accel: float = param(
-        2.5e-4,
-        "rad/s^2",
-        _CAP + ": (248 - 27) N m / 4.55e5 kg m^2 = 4.9e-4 rad/s^2; chosen: 2.5e-4",
-    )
+    sway_speed: float = required_param("m/s", "largest reference sway speed")
+    sway_accel: float = required_param("m/s^2", "largest reference sway acceleration")
+    yaw_rate: float = required_param("rad/s", "largest reference yaw rate")
+    yaw_accel: float = required_param("rad/s^2", "largest reference yaw acceleration")
 
     def __post_init__(self) -> None:
         require_finite(self)
@@ -93,7 +79,14 @@ class Limits:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Limits:
-        """Build from a mapping of field names (SI units); unknown keys raise ``ValueError``."""
+        """Build from a mapping of every field (SI units); unknown or missing keys raise
+        ``ValueError`` naming them (no vessel's values fill the gaps)."""
+        missing = [f.name for f in fields(cls) if f.name not in d]
+        if missing and not set(d) - {f.name for f in fields(cls)}:
+            raise ValueError(
+                f"limits need every field; missing {missing} (give the vessel's limits, e.g. "
+                "load_vessel('blue-lady').limits, or a [limits] table in the vessel file)"
+            )
         return from_mapping(cls, {k: float(v) for k, v in d.items()}, where="limits")
 
     def to_dict(self) -> dict[str, float]:
@@ -119,7 +112,26 @@ class Limits:
         )
 
 
-DEFAULT_LIMITS = Limits()
+#: The Blue Lady's limits (equal to ``[limits]`` of its vessel file; a test checks it), each
+#: with its unit and source. The capacity notes: thrust capacity 451 N ahead, 78 N astern
+#: (main propeller), 2 x 44.1 N sway and ~248 N m yaw (tunnel thrusters) against
+#: M = diag(23 665 kg, 24 831 kg, 4.55e5 kg m^2) (Tomera 2014 eq. 49; up to 42 t in sway with
+#: the added mass of Clarke et al. 1983); wind loads at 3 m/s: Blendermann (1994).
+BLUE_LADY_LIMITS = Limits(
+    surge_speed=0.2,  # m/s; assumed v_max 0.2-0.3 m/s (max speed 3.1 kn)
+    # m/s^2; capacity: a forward leg is braked by the 78 N astern thrust,
+    # (78 - 9) N / 23 665 kg = 0.0029 m/s^2 (ahead, 451 N, would allow 0.019 m/s^2)
+    surge_accel=0.0025,
+    surge_astern_speed=0.1,  # m/s; half of surge_speed (78 N astern thrust)
+    # m/s^2; capacity: (78 - 9) N / 23 665 kg = 0.0029 m/s^2 peak; the raised-cosine profile
+    # averages half the peak over the acceleration phase
+    surge_astern_accel=0.002,
+    sway_speed=0.05,  # m/s; assumed v_max 0.05-0.1 m/s
+    sway_accel=0.001,  # m/s^2; capacity: (88 - 25) N / 24 831 kg = 0.0025 m/s^2; chosen 0.001
+    yaw_rate=math.radians(1.0),  # rad/s; assumed r_max 1 deg/s
+    # rad/s^2; capacity: (248 - 27) N m / 4.55e5 kg m^2 = 4.9e-4 rad/s^2; chosen: 2.5e-4
+    yaw_accel=2.5e-4,
+)
 
 
 @dataclass(frozen=True)
@@ -234,7 +246,12 @@ def _effective_limits(leg: Leg, limits: Limits | None) -> Limits:
     own = getattr(leg, "limits", None)
     if own is not None:
         return own
-    return DEFAULT_LIMITS if limits is None else limits
+    if limits is None:
+        raise TypeError(
+            "the reference needs the vessel's limits: pass limits=..., e.g. "
+            "Limits.from_dict(load_vessel('blue-lady').limits) (or give the leg its own)"
+        )
+    return limits
 
 
 def leg_profile(leg: Leg, limits: Limits | None = None) -> LegProfile:
@@ -242,7 +259,10 @@ def leg_profile(leg: Leg, limits: Limits | None = None) -> LegProfile:
 
     Args:
         leg: a :class:`~shipgym.guidance.plan.Leg` (its ``displacement`` and ``limits``).
-        limits: plan-wide limits; ``None`` uses :class:`Limits` defaults.
+        limits: plan-wide limits (the vessel's); ``None``: the leg must have its own.
+
+    Raises:
+        TypeError: neither ``limits`` nor ``leg.limits`` given.
 
     Returns:
         The :class:`LegProfile` (see the module docstring for the profile).
@@ -279,7 +299,8 @@ def leg_reference(
 
     Args:
         leg: the leg (displacement ``[surge, sway, yaw]`` in its r-frame).
-        limits: plan-wide :class:`Limits` (``None``: defaults); ``leg.limits`` overrides.
+        limits: plan-wide :class:`Limits` (the vessel's); ``leg.limits`` overrides; one of
+            the two is required.
         t: time since the leg started (s), scalar or array.
 
     Returns:

@@ -105,7 +105,7 @@ class Guidance:
 
     Usage::
 
-        g = Guidance(tomera2014_plan())
+        g = Guidance(tomera2014_plan(), limits=Limits.from_dict(vessel.limits))
         g.reset(eta_start)
         for each control step at time t:
             g.update(t, eta_n)          # may switch to the next leg (returns True)
@@ -121,7 +121,7 @@ class Guidance:
         if limits is not None and not isinstance(limits, Limits):
             raise TypeError(f"limits must be a Limits or None, got {type(limits).__name__}")
         self.plan = plan
-        #: the plan's limits, else the vessel's (``limits``), else :class:`Limits` defaults
+        #: the plan's limits, else the vessel's (``limits``); each leg's own limits win
         self.limits = plan.limits if plan.limits is not None else limits
         self._profiles: tuple[LegProfile, ...] = tuple(
             leg_profile(leg, self.limits) for leg in plan.legs

@@ -598,19 +598,20 @@ def _tomera(discretisation: str) -> KalmanDesign:
 
 
 TOMERA_DKF = _tomera("euler")
-"""Tomera's (2014) discrete KF design: ``G = I``, ``Q = 0.01 R I`` numerically per DOF (``R`` the
-sensor variance in m^2 or rad^2), ``T = 1 s``, ``Q_k = G Q G^T T`` (Tomera 2011 eq. 31);
-filter-form gain ``[0.07945, 0.36868]`` (eq. 30)."""
+"""Tomera's (2014) discrete KF design for the Blue Lady (preset ``tomera-dkf``): ``G = I``,
+``Q = 0.01 R I`` numerically per DOF (``R`` the sensor variance in m^2 or rad^2), ``T = 1 s``,
+``Q_k = G Q G^T T`` (Tomera 2011 eq. 31); filter-form gain ``[0.07945, 0.36868]`` (eq. 30)."""
 
 TOMERA_KBF = _tomera("euler")
-"""Tomera's (2014) Kalman-Bucy design (the same matrices as :data:`TOMERA_DKF`, measurement
-intensity ``R_c = R T``): ``L = [0.1, 0.45826]`` (eq. 35)."""
+"""Tomera's (2014) Kalman-Bucy design for the Blue Lady (preset ``tomera-kbf``; the same
+matrices as :data:`TOMERA_DKF`, measurement intensity ``R_c = R T``): ``L = [0.1, 0.45826]``
+(eq. 35)."""
 
 ACCEL_PSD_XY = 1.5e-4
-"""Tuned white-noise acceleration intensity in x, y, m^2/s^3 (see :data:`DKF_DESIGN`)."""
+"""The Blue Lady's tuned white-noise acceleration intensity in x, y (m^2/s^3; DKF_DESIGN)."""
 
 ACCEL_PSD_PSI = 1e-6
-"""Tuned white-noise yaw acceleration intensity, rad^2/s^3 (see :data:`DKF_DESIGN`)."""
+"""The Blue Lady's tuned white-noise yaw acceleration intensity (rad^2/s^3; DKF_DESIGN)."""
 
 
 def _tuned() -> KalmanDesign:
@@ -648,4 +649,4 @@ the exact discretisation, the first-order-hold KBF and the outlier gate.
 """
 
 KBF_DESIGN = DKF_DESIGN
-"""The tuned Kalman-Bucy design: the same matrices as :data:`DKF_DESIGN`."""
+"""The Blue Lady's tuned Kalman-Bucy design: the same matrices as :data:`DKF_DESIGN`."""

@@ -14,7 +14,9 @@ unmodelled hydrodynamics):
     \dot b &= -T_b^{-1} b + E_b w_b, \\
     y &= H x + v, \qquad H = [I_3\; 0\; 0] \quad (\text{eq. 40}),
 
-with ``M`` and ``D_L`` of eqs. 49-50 (:func:`shipgym.dynamics.seed_linear_matrices`),
+with the vessel's design model ``M``, ``D_L`` (required in :class:`EKFConfig`; the Blue
+Lady's presets ``ekf`` and ``tomera-ekf`` hold those of Tomera (2014) eqs. 49-50,
+:func:`shipgym.dynamics.seed_linear_matrices`),
 ``T_b = diag(1000, 1000, 1000)`` s (eq. 51), the applied thrust ``tau`` (N, N, N m) held
 between calls, ``w_b`` of intensity ``Q`` (eq. 52) and ``v`` of covariance ``R`` (eq. 53).
 
@@ -87,7 +89,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import from_mapping, param
+from shipgym._config import from_mapping, param, required_param
 from shipgym.dynamics import seed_linear_matrices, wrap_angle
 from shipgym.observers.base import (
     Estimate,
@@ -155,7 +157,8 @@ def _check_sym(arr: NDArray[np.float64], name: str, *, definite: bool) -> None:
         )
 
 
-_M49, _D50 = seed_linear_matrices()
+#: the Blue Lady's design model, Tomera (2014) eqs. 49-50 (its presets below hold it)
+_BLUE_LADY_M, _BLUE_LADY_D_L = seed_linear_matrices()
 
 
 @dataclass(frozen=True)
@@ -186,8 +189,8 @@ class EKFConfig:
         max_substep: longest Euler step (s); longer intervals are split.
     """
 
-    M: Mat3 = param(_tuple_mat(_M49), "kg, kg m, kg m^2", "Tomera (2014) eq. 49")
-    D_L: Mat3 = param(_tuple_mat(_D50), "N s/m, N s, N m s", "Tomera (2014) eq. 50")
+    M: Mat3 = required_param("kg, kg m, kg m^2", "the vessel's design inertia (Blue Lady: eq. 49)")
+    D_L: Mat3 = required_param("N s/m, N s, N m s", "the vessel's design damping (eq. 50)")
     T_b: Vec3 = param((1000.0, 1000.0, 1000.0), "s", "Tomera (2014) eq. 51")
     E_b: Mat3 = param(_tuple_mat(np.eye(3)), "-", "Tomera (2014) eq. 39 (E_b not printed: I)")
     Q: Mat3 = param(
@@ -290,7 +293,10 @@ class EKFConfig:
 # ---- presets ---------------------------------------------------------------------------------
 _SENSORS = SensorConfig()
 
-#: Tuned default (``ekf``). Why each number (see also :func:`default_ekf`):
+#: The Blue Lady's EKF presets: its design model (Tomera 2014 eqs. 49-50) and noise matrices
+#: tuned for it (:func:`~shipgym.observers.make_observer` with a vessel replaces ``M``, ``D_L``
+#: and scales ``Q``). ``tomera-ekf``: the paper's matrices. Tuned default (``ekf``). Why each
+#: number (see also :func:`default_ekf`):
 #:
 #: - ``R`` = the default sensors' covariance (Tomera 2011 eqs. 61-62: 0.01 m^2 per axis,
 #:   0.1 deg^2 heading). The paper's ``R = 0.1`` (eq. 53) overstates the DGPS variance tenfold
@@ -316,9 +322,13 @@ _SENSORS = SensorConfig()
 #: change them by < 10 % (a flat optimum), Q_nu = 0 raises the yaw-rate error by 15 %.
 EKF_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
     {
-        "tomera-ekf": MappingProxyType({}),
+        "tomera-ekf": MappingProxyType(
+            {"M": _tuple_mat(_BLUE_LADY_M), "D_L": _tuple_mat(_BLUE_LADY_D_L)}
+        ),
         "ekf": MappingProxyType(
             {
+                "M": _tuple_mat(_BLUE_LADY_M),
+                "D_L": _tuple_mat(_BLUE_LADY_D_L),
                 "R": _tuple_mat(_SENSORS.covariance),
                 "Q": _tuple_mat(np.diag([1.8, 1.8, 7.2])),
                 "Q_nu": _tuple_mat(np.diag([1e-6, 1e-6, 3e-8])),
@@ -340,7 +350,7 @@ EKF_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
 
 
 def ekf_config(name: str = "ekf", **overrides: Any) -> EKFConfig:
-    """A named EKF preset (``"ekf"`` or ``"tomera-ekf"``) with optional field overrides.
+    """A named EKF preset of the Blue Lady (``"ekf"``, ``"tomera-ekf"``) with field overrides.
 
     Raises:
         ValueError: unknown preset (the message lists the valid names), unknown field or bad
@@ -631,7 +641,7 @@ class ExtendedKalmanFilter(Observer):
 
 # ---- factories -------------------------------------------------------------------------------
 def tomera_ekf(**overrides: Any) -> ExtendedKalmanFilter:
-    """The EKF with the paper's design matrices (``tomera-ekf``; Tomera 2014 eqs. 49-53).
+    """The Blue Lady's EKF with the paper's matrices (``tomera-ekf``; Tomera 2014 eqs. 49-53).
 
     ``Q = diag(0.1, 0.1, 0.1)`` on the bias noise (eq. 52), ``R = diag(0.1, 0.1, 0.1)``
     (eq. 53, read in m^2, m^2, rad^2: a 0.32 m DGPS and an 18 deg gyrocompass sigma),
@@ -645,7 +655,7 @@ def tomera_ekf(**overrides: Any) -> ExtendedKalmanFilter:
 
 
 def default_ekf(**overrides: Any) -> ExtendedKalmanFilter:
-    """The tuned EKF (``ekf``): the paper's model with realistic noise matrices.
+    """The Blue Lady's tuned EKF (``ekf``): the paper's model with realistic noise matrices.
 
     ``R`` from the default sensors (0.01 m^2 per position axis, 3.05e-5 rad^2 heading:
     Tomera (2011) eqs. 61-62); a bias noise ``Q = diag(1.8, 1.8, 7.2)`` (a stationary bias sigma of

@@ -392,7 +392,9 @@ class DiscreteKalmanFilter(_DoubleIntegratorFilter):
     """Discrete Kalman filter per DOF on the double integrator (Tomera 2014 Table 3).
 
     Args:
-        design: :class:`~shipgym.observers.design.KalmanDesign` (or a mapping of its fields).
+        design: :class:`~shipgym.observers.design.KalmanDesign` (or a mapping of its fields);
+            default the Blue Lady's tuned :data:`~shipgym.observers.design.DKF_DESIGN` (for
+            another vessel: ``make_observer("dkf", vessel)``).
         constant_gain: use the steady-state filter-form gain of
             :func:`~shipgym.observers.design.dlqe` at the design period ``T`` (Tomera 2014
             eq. 30) instead of the time-varying gain of Table 3.
@@ -463,7 +465,9 @@ class KalmanBucyFilter(_DoubleIntegratorFilter):
 
     Args:
         design: :class:`~shipgym.observers.design.KalmanDesign` (or a mapping of its fields);
-            the continuous measurement intensity is ``R_c = R T``.
+            the continuous measurement intensity is ``R_c = R T``; default the Blue Lady's
+            tuned :data:`~shipgym.observers.design.KBF_DESIGN` (for another vessel:
+            ``make_observer("kbf", vessel)``).
         steady_state: use the constant gain of :func:`~shipgym.observers.design.lqe`
             (Tomera 2014 eqs. 33-35) instead of integrating the Riccati ODE.
         name: the observer's name.

@@ -1,4 +1,4 @@
-r"""Thrust allocation for the Blue Lady DP system (Tomera 2014 eqs. 24-27).
+r"""Thrust allocation for the three-thruster pattern of the Blue Lady (Tomera 2014 eqs. 24-27).
 
 The three actuators (main propeller, bow and stern tunnel thrusters, in this order) act on the
 hull through the configuration matrix of Tomera (2014) eq. 12,
@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym.dynamics.thrusters import BLUE_LADY_THRUSTERS, ThrusterParameters
+from shipgym.dynamics.thrusters import ThrusterParameters
 
 __all__ = [
     "Allocation",
@@ -175,7 +175,7 @@ def _result(
     )
 
 
-def force_capacity(thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS) -> NDArray[np.float64]:
+def force_capacity(thrusters: ThrusterParameters) -> NDArray[np.float64]:
     """Largest ``|X|, |Y|, |N|`` (N, N, N m) the thrusters can produce, each DOF alone.
 
     For the Blue Lady: ``k1 n_max^2 = 451.3 N`` ahead (astern only 78.4 N),
@@ -193,7 +193,7 @@ def force_capacity(thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS) -> NDArr
     )
 
 
-def default_weights(thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS) -> tuple[float, ...]:
+def default_weights(thrusters: ThrusterParameters) -> tuple[float, ...]:
     """Default ``(w_X, w_Y, w_N)`` of :func:`allocate`: ``(1, 1, 10 / (L2 + L3)^2)``.
 
     The moment error is normalised by the lever arm ``L2 + L3`` (a moment error of
@@ -207,9 +207,7 @@ def default_weights(thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS) -> tupl
 
 
 # ---- the allocators --------------------------------------------------------------------------
-def allocate_inverse(
-    tau: ArrayLike, thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS
-) -> Allocation:
+def allocate_inverse(tau: ArrayLike, thrusters: ThrusterParameters) -> Allocation:
     """The paper's allocation: ``F = T^-1 tau`` (eq. 25), inverse characteristics, saturation.
 
     ``n1 = sgn(F1) sqrt(|F1| / k1)`` (eq. 26; the paper prints ``sqrt(F1 / k1)``, which is
@@ -240,7 +238,7 @@ def allocate_inverse(
 
 def allocate(
     tau: ArrayLike,
-    thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
+    thrusters: ThrusterParameters,
     weights: tuple[float, float, float] | None = None,
 ) -> Allocation:
     r"""Constrained weighted allocation: exact box-constrained least squares for sway/yaw.
@@ -355,7 +353,7 @@ def _as_batch3(x: ArrayLike, what: str) -> NDArray[np.float64]:
 
 def command_to_action(
     command: ArrayLike,
-    thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
+    thrusters: ThrusterParameters,
     *,
     clip: bool = False,
 ) -> NDArray[np.float64]:
@@ -391,7 +389,7 @@ def command_to_action(
 
 def action_to_command(
     action: ArrayLike,
-    thrusters: ThrusterParameters = BLUE_LADY_THRUSTERS,
+    thrusters: ThrusterParameters,
     *,
     clip: bool = False,
 ) -> NDArray[np.float64]:
