@@ -108,6 +108,7 @@ class _Sample:
     nu: NDArray[np.float64]
     ref: Reference
     eta_r: NDArray[np.float64]
+    thrust: NDArray[np.float64]  # of every actuator (N), read once per step
 
 
 class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
@@ -534,7 +535,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         eta, nu = phys.eta, phys.nu
         ref = self.guidance.reference(phys.time)
         self.reference = ref
-        return _Sample(eta, nu, ref, ref.to_r(eta))
+        return _Sample(eta, nu, ref, ref.to_r(eta), phys.thrust)
 
     def _record_metrics(self, s: _Sample, saturated: NDArray[np.bool_] | None = None) -> None:
         z = self._last_measurement
@@ -543,7 +544,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             s.eta_r,
             s.ref.eta_d_r,
             eta_meas_r=None if z is None else s.ref.to_r(z),
-            thrust=self.physics.thrust,
+            thrust=s.thrust,
             saturated=saturated
             if saturated is None or self._slices is None
             else [bool(saturated[sl].any()) for sl in self._slices],
@@ -582,8 +583,11 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         du, dv, dr = (s.nu - s.ref.nu_d).tolist()
         act = action.tolist()
         prev = self._prev_action.tolist()
-        effort = sum(x * x for x in act)
-        rate = sum((x - y) ** 2 for x, y in zip(act, prev, strict=True))
+        # sums from 0 in channel order: for three channels exactly a0^2 + a1^2 + a2^2
+        effort = rate = 0.0
+        for x, y in zip(act, prev, strict=True):
+            effort += x * x
+            rate += (x - y) ** 2
         return {
             "reward_position": -w.position * (ex * ex + ey * ey),
             "reward_heading": -w.heading * wrap_angle(epsi) ** 2,
@@ -621,7 +625,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "legs_completed": len(self.guidance.leg_completion_times),
             "finished": finished,
             "command": np.asarray(command, dtype=float),
-            "thrust": phys.thrust,
+            "thrust": s.thrust,
             "actuator_state": phys.actuator_state,
             "saturated": np.asarray(saturated, dtype=bool),
             "action_clipped": np.zeros(self.n_actions, dtype=bool),

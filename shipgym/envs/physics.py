@@ -402,8 +402,13 @@ class VesselPhysics:
     @property
     def nu(self) -> NDArray[np.float64]:
         """Body velocity ``[u (m/s), v (m/s), r (rad/s)]``."""
-        nu = self.nu_full
-        return nu if self.dofs == 3 else nu[[0, 1, 3]]
+        if self.dofs == 4:
+            return self.nu_full[[0, 1, 3]]
+        # the velocity at the whole step (leapfrog, module docstring), written out: every step
+        xd, yd, r = (self.data.qvel + self._h * 0.5 * self.data.qacc).tolist()
+        psi = self.data.qpos[2]
+        c, s = math.cos(psi), math.sin(psi)
+        return np.array([c * xd + s * yd, -s * xd + c * yd, r])
 
     @property
     def p(self) -> float:
