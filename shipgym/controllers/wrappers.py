@@ -184,7 +184,6 @@ class DPControllerWrapper(
         dt = base.control_period  # type: ignore[attr-defined]
         self.controller = spec.factory(self.vessel, dt)
         self._allocate = make_allocator(self.vessel, spec.allocation, dt)
-        self._physics = base.physics  # type: ignore[attr-defined]
         self.action_space = spaces.Box(-1.0, 1.0, (self.actuators.n_channels,), np.float32)
         self._record: StepRecord | None = None
         self._leg = 0
@@ -259,4 +258,5 @@ class DPControllerWrapper(
             ref.eta_ddot_d_r,
             saturated=self._tau_error,
         )
-        return tau_c, self._allocate(tau_c, self._physics.actuator_state)
+        # the actuator states of the record (azimuth angles: where the rate limit starts)
+        return tau_c, self._allocate(tau_c, rec.actuators.state)
