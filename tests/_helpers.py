@@ -7,6 +7,8 @@ rounding (1e-14) and the pair then swaps. Compare them as sets instead.
 
 from __future__ import annotations
 
+from collections import defaultdict
+
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import linear_sum_assignment
@@ -59,3 +61,25 @@ def _blue_lady_kwargs() -> tuple[dict, dict]:
 #: capacity as ``integral_limit``, those of the PID and LQ controllers: no vessel is a default
 #: below the registry, so the tests name the vessel they use.
 BLUE_LADY_DESIGN, BLUE_LADY_CONTROL = _blue_lady_kwargs()
+
+
+def read_rrd(path):
+    """Per entity: static component values and temporal rows (step, sim_time, components)."""
+    from rerun.chunk import RrdReader
+
+    static = defaultdict(dict)
+    rows = defaultdict(lambda: defaultdict(list))
+    for ch in RrdReader(path).stream():
+        rb = ch.to_record_batch()
+        ent = ch.entity_path.lstrip("/")
+        for i, name in enumerate(rb.schema.names):
+            if name.startswith("rerun.controls"):
+                continue
+            col = rb.column(i)
+            if ch.is_static:
+                static[ent][name] = col.to_pylist()[-1]
+            elif name == "sim_time":
+                rows[ent][name].extend(col.cast("int64").to_pylist())
+            else:
+                rows[ent][name].extend(col.to_pylist())
+    return static, rows

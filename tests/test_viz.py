@@ -5,12 +5,12 @@ import os
 import shutil
 import subprocess
 import sys
-from collections import defaultdict
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from _helpers import read_rrd
 
 import shipgym
 from shipgym.records import NavigationData
@@ -41,28 +41,6 @@ def _rerun_verify(path):
 
 def _make(max_steps=STEPS):
     return shipgym.make("harbour", controller="pid", max_episode_steps=max_steps)
-
-
-def _read(path):
-    """Per entity: static component values and temporal rows (step, sim_time, components)."""
-    from rerun.chunk import RrdReader
-
-    static = defaultdict(dict)
-    rows = defaultdict(lambda: defaultdict(list))
-    for ch in RrdReader(path).stream():
-        rb = ch.to_record_batch()
-        ent = ch.entity_path.lstrip("/")
-        for i, name in enumerate(rb.schema.names):
-            if name.startswith("rerun.controls"):
-                continue
-            col = rb.column(i)
-            if ch.is_static:
-                static[ent][name] = col.to_pylist()[-1]
-            elif name == "sim_time":
-                rows[ent][name].extend(col.cast("int64").to_pylist())
-            else:
-                rows[ent][name].extend(col.to_pylist())
-    return static, rows
 
 
 def _sorted(rows, column):
@@ -98,7 +76,7 @@ def test_recording_has_entities_and_one_row_per_step(recorded):
     assert recorded["truncated"], "the shortened episode ends by the time limit"
     n_steps = len(recorded["infos"]) - 1
     assert n_steps == STEPS
-    static, rows = _read(recorded["rrd"])
+    static, rows = read_rrd(recorded["rrd"])
     expected = [
         P.SHIP,
         P.THRUST,
@@ -134,7 +112,7 @@ def test_logged_truth_equals_info_values(recorded):
     infos = recorded["infos"]
     eta = np.array([i["eta"] for i in infos])
     t = np.array([i["t"] for i in infos])
-    _, rows = _read(recorded["rrd"])
+    _, rows = read_rrd(recorded["rrd"])
     steps, trans = _sorted(rows[P.SHIP], "Transform3D:translation")
     trans = np.array(trans).reshape(-1, 3)
     np.testing.assert_array_equal(trans[:, :2], eta[:, :2].astype(np.float32))
@@ -204,7 +182,7 @@ def test_interrupted_episode_leaves_a_readable_file(tmp_path, how):
     _interrupted(path, how)
     partial = tmp_path / "interrupted.partial.rrd"
     assert not path.exists(), "an incomplete episode never takes the final name"
-    _, rows = _read(partial)
+    _, rows = read_rrd(partial)
     np.testing.assert_array_equal(np.sort(rows[P.SHIP]["step"]), np.arange(51))
     run = load_run(partial)
     assert run.n_steps == 50
@@ -368,7 +346,7 @@ def test_estimate_track_is_logged_when_it_differs(tmp_path):
         env.step(np.zeros(3, np.float32))
     env.close()
     path = env.paths[0]
-    _, rows = _read(path)
+    _, rows = read_rrd(path)
     assert len(rows[P.TRACK_EST]["step"]) == 11
     run = load_run(path)
     np.testing.assert_allclose(run.nav_eta - run.eta, np.tile([0.5, -0.25, 0.01], (11, 1)))

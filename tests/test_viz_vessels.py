@@ -10,11 +10,11 @@ file's mounting angles, not by the viz code.
 import json
 import math
 import sys
-from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 import pytest
+from _helpers import read_rrd
 
 import shipgym
 from shipgym.cli import main as cli_main
@@ -33,26 +33,6 @@ USER = "user-hull4"  # the 4-DOF package written by the test
 VESSELS = [*vessel_names(), USER]
 #: the vessels with azimuth thrusters (the user package has one)
 AZIMUTH_VESSELS = [n for n in vessel_names() if not load_vessel(n).actuators.fixed] + [USER]
-
-
-def _read(path):
-    """Per entity: static component values and temporal rows (step, components)."""
-    from rerun.chunk import RrdReader
-
-    static = defaultdict(dict)
-    rows = defaultdict(lambda: defaultdict(list))
-    for ch in RrdReader(path).stream():
-        rb = ch.to_record_batch()
-        ent = ch.entity_path.lstrip("/")
-        for i, name in enumerate(rb.schema.names):
-            if name.startswith("rerun.controls"):
-                continue
-            col = rb.column(i)
-            if ch.is_static:
-                static[ent][name] = col.to_pylist()[-1]
-            elif name != "sim_time":
-                rows[ent][name].extend(col.to_pylist())
-    return static, rows
 
 
 def _by_step(rows, column):
@@ -131,7 +111,7 @@ def test_arrows_follow_the_actuators(recordings, name):
     r = recordings[name]
     vessel, infos = r["vessel"], r["infos"]
     acts = vessel.actuators
-    static, rows = _read(r["rrd"])
+    static, rows = read_rrd(r["rrd"])
     # one arrow per actuator, named and coloured as in the vessel file, at its position
     assert static[P.THRUST]["Arrows2D:labels"] == list(acts.names)
     colours = [f"#{c >> 24:02x}{(c >> 16) & 255:02x}{(c >> 8) & 255:02x}"
@@ -156,7 +136,7 @@ def test_azimuth_arrows_turn_with_the_angle(recordings, name):
     """The arrow of an azimuth points along its angle state (or against it, thrust < 0)."""
     r = recordings[name]
     acts = r["vessel"].actuators
-    _, rows = _read(r["rrd"])
+    _, rows = read_rrd(r["rrd"])
     got = np.array(_by_step(rows[P.THRUST], "Arrows2D:vectors"), dtype=float)
     states = np.array([i["actuator_state"] for i in r["infos"]])
     thrust = np.array([i["thrust"] for i in r["infos"]])
@@ -181,7 +161,7 @@ def test_azimuth_arrows_turn_with_the_angle(recordings, name):
 def test_thrust_and_command_series_are_named_by_the_vessel(recordings, name):
     r = recordings[name]
     acts = r["vessel"].actuators
-    static, rows = _read(r["rrd"])
+    static, rows = read_rrd(r["rrd"])
     assert static[P.PLOT_THRUST]["SeriesLines:names"] == [f"{n} (N)" for n in acts.names]
     thrust = np.array(_by_step(rows[P.PLOT_THRUST], "Scalars:scalars"), dtype=float)
     np.testing.assert_allclose(thrust, [i["thrust"] for i in r["infos"]], rtol=1e-6)
@@ -202,7 +182,7 @@ def test_thrust_and_command_series_are_named_by_the_vessel(recordings, name):
 
 
 def test_blue_lady_keeps_its_two_command_plots(recordings):
-    static, _ = _read(recordings["blue-lady"]["rrd"])
+    static, _ = read_rrd(recordings["blue-lady"]["rrd"])
     assert static[command_path("rpm")]["SeriesLines:names"] == ["main_propeller (rpm)"]
     assert static[command_path("1")]["SeriesLines:names"] == ["bow_tunnel (1)", "stern_tunnel (1)"]
 

@@ -488,6 +488,21 @@ class ActuatorSet:
             raise ValueError(f"{what} contain NaN or infinite values: {a}")
         return a
 
+    def as_vector(self, x: ArrayLike, what: str) -> tuple[NDArray[np.float64], list[float]]:
+        """One command or action ``x`` (one value per channel) as an array and a list of
+        floats; ``ValueError`` naming ``what`` on a wrong shape or NaN/inf (cheap: every step).
+        """
+        a = np.asarray(x, dtype=float)
+        if a.shape != (self.n_channels,):
+            raise ValueError(
+                f"{what} must have shape ({self.n_channels},) "
+                f"({', '.join(self.channel_names)}), got {a.shape}"
+            )
+        vals = a.tolist()
+        if not math.isfinite(sum(vals)) and not all(math.isfinite(v) for v in vals):
+            raise ValueError(f"{what} contains NaN or infinite values: {a}")
+        return a, vals
+
     def clip(self, command: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Commands clipped to their ranges and the flags of those clipped."""
         c = self.check_states(command, "command")

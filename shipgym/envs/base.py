@@ -428,15 +428,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 "the episode has ended (terminated) or was never started: call reset() before "
                 "step()"
             )
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (self.n_actions,):
-            raise ValueError(
-                f"action must have shape ({self.n_actions},) "
-                f"({', '.join(self.actuators.channel_names)}), got {a.shape}"
-            )
-        vals = a.tolist()
-        if not math.isfinite(sum(vals)) and not all(math.isfinite(x) for x in vals):
-            raise ValueError(f"action contains NaN or infinite values: {a}")
+        a, _ = self.actuators.as_vector(action, "action")
         clipped = np.clip(a, -1.0, 1.0)
         action_clipped = clipped != a
         command = self.actuators.action_to_command(clipped)

@@ -465,16 +465,7 @@ class VesselPhysics:
         Raises:
             ValueError: wrong shape, NaN or infinite values.
         """
-        cmd = np.asarray(command, dtype=float)
-        n = self.actuators.n_channels
-        if cmd.shape != (n,):
-            raise ValueError(
-                f"command must have shape ({n},) ({', '.join(self.actuators.channel_names)}), "
-                f"got {cmd.shape}"
-            )
-        vals = cmd.tolist()
-        if not math.isfinite(sum(vals)) and not all(math.isfinite(x) for x in vals):
-            raise ValueError(f"command contains NaN or infinite values: {cmd}")
+        _, vals = self.actuators.as_vector(command, "command")
         lo, hi = self._lower, self._upper
         clipped = [min(max(c, a), b) for c, a, b in zip(vals, lo, hi, strict=True)]
         self.saturated = np.array([c != x for c, x in zip(clipped, vals, strict=True)])
