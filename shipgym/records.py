@@ -8,6 +8,12 @@ the runner and the metrics) use these fields instead of raw ``info`` keys or the
 of ``env.unwrapped``. The ``info`` keys stay, with the same values: the record holds the
 same arrays, not copies.
 
+Records are read-only by convention, not frozen: they hold the step's arrays (shared with
+``info``), so freezing would protect only the outer layer, and a frozen dataclass costs six
+times as much to build (a few microseconds per control step, the largest part of the stack's
+overhead). They are slotted (no attribute can be added) and unhashable; a wrapper that
+changes a part builds a new record (:meth:`StepRecord.with_nav`, :meth:`~StepRecord.with_control`).
+
 Nothing here fixes the number of actuators or of degrees of freedom: actuator vectors have
 the length of the vessel's actuator set and carry its names (:class:`ActuatorData`), and pose
 and velocity come with the names of their components (:class:`NavigationData`; today
@@ -69,7 +75,7 @@ def _equal(self: Any, other: Any) -> Any:
     )
 
 
-@dataclass(frozen=True, slots=True, eq=False)
+@dataclass(slots=True, eq=False)
 class NavigationData:
     """Pose and velocity at one instant: the true state, or an observer's estimate of it.
 
@@ -101,7 +107,7 @@ class NavigationData:
         return self.source == "truth"
 
 
-@dataclass(frozen=True, slots=True, eq=False)
+@dataclass(slots=True, eq=False)
 class ActuatorData:
     """Commands and forces of the vessel's actuators.
 
@@ -148,7 +154,7 @@ class ActuatorData:
             )
 
 
-@dataclass(frozen=True, slots=True, eq=False)
+@dataclass(slots=True, eq=False)
 class Measurement:
     """One position-reference sample (DGPS and gyrocompass) with the thrust applied then.
 
@@ -176,7 +182,7 @@ class Measurement:
         return cls(float(m["t"]), m["z"], bool(m["valid"]), bool(m["outlier"]), m["tau"])
 
 
-@dataclass(frozen=True, slots=True, eq=False)
+@dataclass(slots=True, eq=False)
 class ControlData:
     """What a DP controller wrapper computed for the step.
 
@@ -202,7 +208,7 @@ class ControlData:
     residual_clipped: NDArray[np.bool_]
 
 
-@dataclass(frozen=True, slots=True, eq=False)
+@dataclass(slots=True, eq=False)
 class StepRecord:
     """Everything one control step produced, as typed fields (``info["record"]``).
 
