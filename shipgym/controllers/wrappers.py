@@ -205,12 +205,7 @@ class DPControllerWrapper(
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        residual = np.asarray(action, dtype=np.float64)
-        n = self.actuators.n_channels
-        if residual.shape != (n,) or not np.all(np.isfinite(residual)):
-            raise ValueError(
-                f"residual action must be {n} finite numbers in [-1, 1], got {action!r}"
-            )
+        residual, _ = self.actuators.as_vector(action, "residual action")
         if self._record is None:
             raise gym.error.ResetNeeded("call reset() before step()")
         tau_c, alloc = self._control(self._record)

@@ -647,7 +647,9 @@ class ActuatorSet:
             return tau_of
         # 3 DOF: the same sums without K and M_z (the hot path of every planar vessel)
         v3 = tuple(t[:7] for t in varying_t)
-        s3 = tuple(t[:5] for t in static_t)
+        # constant-gain thrusters pointing athwartships (tunnels: cos alpha = 0) add nothing to X
+        lat = tuple((t[0], t[1], t[3], t[4]) for t in static_t if t[2] == 0.0)
+        s3 = tuple(t[:5] for t in static_t if t[2] != 0.0)
         a3 = tuple(t[:4] for t in azim_t)
 
         def tau_of3(st: list[float]) -> tuple[float, float, float, float, float]:
@@ -661,6 +663,10 @@ class ActuatorSet:
                 if write:
                     gain[j, 0] = g
                 X += c * f
+                Y += s * f
+                N += mn * f
+            for j, k, s, mn in lat:
+                f = k * st[j]
                 Y += s * f
                 N += mn * f
             for j, k, c, s, mn in s3:

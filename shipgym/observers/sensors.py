@@ -304,7 +304,7 @@ class Sensors:
         if self._rng_noise is None or self._rng_outlier is None or self._rng_dropout is None:
             raise RuntimeError("Sensors.reset(rng) must be called before measure()")
         eta = np.asarray(eta_true, dtype=float)
-        if eta.shape != (3,) or not np.all(np.isfinite(eta)):
+        if eta.shape != (3,) or not all(map(math.isfinite, eta.tolist())):
             raise ValueError(f"eta_true must be 3 finite values [x, y, psi], got {eta_true!r}")
         cfg = self.config
         # every stream draws the same amount at every sample (common random numbers)
