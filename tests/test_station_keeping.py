@@ -85,3 +85,13 @@ def test_wimpey_allocation_respects_the_azimuth_rate_limits() -> None:
         assert dangle.max() <= a.max_rate * 1.0 * (1 + 1e-9), (a.name, dangle.max())
         turned |= bool(np.any(dangle >= 0.999 * a.max_rate))
     assert turned
+
+
+def test_a_user_package_with_the_default_settings_keeps_station(tmp_path) -> None:
+    """A 4-DOF package without [control] or [observer] tables (the defaults: PID bandwidth
+    0.05 rad/s, kinematic KF noise of the Blue Lady's tuned presets) keeps station, rolling."""
+    from test_vessel_library import HULL4_TOML, write_package
+
+    pkg = write_package(tmp_path / "hull4", HULL4_TOML)
+    r, e, _, _ = station_keep(str(pkg), "8@300", seed=0, duration=600)
+    assert np.mean(r <= RADIUS) >= 0.95 and np.sqrt(np.mean(e**2)) <= HEADING_RMS

@@ -90,7 +90,9 @@ class Vessel:
         windage: projected wind areas and the Blendermann (1994) ship type.
         design: the :class:`DesignModel` of the controllers and observers.
         limits: guidance limits (a mapping of :class:`~shipgym.guidance.Limits` fields).
-        control: controller settings (``bandwidth`` rad/s per DOF, ``zeta``, preset names).
+        control: controller settings (``bandwidth`` rad/s per DOF of the generic PID's pole
+            placement, default 0.05 rad/s: a conservative DP bandwidth, to be tuned per
+            vessel; ``zeta``; the names of the vessel's PID presets).
         observer: kinematic KF settings (``accel_psd_xy`` m^2/s^3, ``accel_psd_psi``).
         nominal_wind: the wind (m/s) the vessel's default tasks use.
         rigid_inertia: ``(m, I_x, I_z)`` of the MuJoCo body (kg, kg m^2).
@@ -473,7 +475,7 @@ def _read(path: Path) -> Vessel:
     c = r.table(data, "control", required=False)
     r.keys(c, "control", {"bandwidth", "zeta", "pid_presets", "sensors"})
     control: dict[str, Any] = {
-        "bandwidth": r.vector(c, "bandwidth", "control", 3, "rad/s", default=(0.1, 0.1, 0.1)),
+        "bandwidth": r.vector(c, "bandwidth", "control", 3, "rad/s", default=(0.05, 0.05, 0.05)),
         "zeta": r.number(c, "zeta", "control", "1", 1.0, positive=True),
         "pid_presets": tuple(r.value(c, "pid_presets", "control", None, ())),
     }
