@@ -480,3 +480,22 @@ def test_bad_allocation_input_raises(tau, kw, exc, match):
 def test_azimuths_type_checked():
     with pytest.raises(TypeError, match="Azimuths instance"):
         allocate_azimuth([0.0, 0.0, 0.0], {"positions": [[0.0, 0.0]]})
+
+
+def test_turn_weight_keeps_the_angles_when_the_request_allows() -> None:
+    """Two reversible units on the centre line pointing athwartships, a pure sway request:
+    with the turning cost the answer keeps both angles and meets the request; the weight
+    must be a finite number >= 0."""
+    az = Azimuths(
+        positions=np.array([[10.0, 0.0], [-10.0, 0.0]]),
+        f_max=np.array([1e5, 1e5]),
+        angle_prev=np.array([math.pi / 2, math.pi / 2]),
+        max_dangle=math.radians(10.0),
+        reversible=True,
+    )
+    tau = np.array([0.0, 5e4, 0.0])
+    r = AzimuthAllocator(az, turn_weight=0.1)(tau)
+    np.testing.assert_allclose(r.angle, az.angle_prev, atol=1e-9)
+    np.testing.assert_allclose(r.tau, tau, atol=1e-3)
+    with pytest.raises(ValueError, match="turn_weight"):
+        AzimuthAllocator(az, turn_weight=-1.0)

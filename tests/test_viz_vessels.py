@@ -152,8 +152,10 @@ def test_azimuth_arrows_turn_with_the_angle(recordings, name):
         expected = angle[on] + np.where(thrust[on, i] < 0, math.pi, 0.0)
         diff = (drawn - expected + math.pi) % (2 * math.pi) - math.pi
         np.testing.assert_allclose(diff, 0.0, atol=1e-4)
-        # the angle really turned in these 60 s, so the check above covers several directions
-        assert np.ptp(angle) > math.radians(5.0)
+        # the check above covers several directions: the angle turned in these 60 s, or the
+        # thrust reversed (the allocation's turning cost holds the angles when it can)
+        f = thrust[on, i]
+        assert np.ptp(angle) > math.radians(5.0) or (f.max() > 0 > f.min())
     assert n_az >= 1
 
 

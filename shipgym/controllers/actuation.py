@@ -161,6 +161,11 @@ class _AzimuthAllocator:
     the end of the period without exceeding its limit.
     """
 
+    #: the QP's cost on turning (``AzimuthAllocator(turn_weight=...)``). Off: with it (0.01 to
+    #: 0.1) Wimpey Sealab's units turned ~60 instead of ~7 900 deg in 1 000 s of station keeping,
+    #: but one case of 40 (15 m/s from 225 deg, seed 3) drifted 25 m off; not yet understood
+    TURN_WEIGHT = 0.0
+
     def __init__(self, acts: ActuatorSet, dt: float) -> None:
         from .allocation import AzimuthAllocator, Azimuths
 
@@ -187,7 +192,7 @@ class _AzimuthAllocator:
                 np.array([a.force_upper for a in fa]),  # type: ignore[attr-defined]
             )
         W = 1.0 / np.maximum(acts.capacity()[[0, 1, -1]], 1e-9) ** 2
-        self._qp = AzimuthAllocator(spec, fixed=fixed, W=W)
+        self._qp = AzimuthAllocator(spec, fixed=fixed, W=W, turn_weight=self.TURN_WEIGHT)
 
     def __call__(self, tau: ArrayLike, state: NDArray[np.float64]) -> Allocation:
         t = _tau3(tau)

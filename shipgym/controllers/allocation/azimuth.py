@@ -445,9 +445,12 @@ class _Prepared(NamedTuple):
     Q: NDArray[np.float64]
     R: NDArray[np.float64]
     qd: NDArray[np.float64]
+    turn: float = 0.0
 
 
-def _prepare(az: Azimuths, fixed: Any, W: ArrayLike | None, H: ArrayLike | None) -> _Prepared:
+def _prepare(
+    az: Azimuths, fixed: Any, W: ArrayLike | None, H: ArrayLike | None, turn: float = 0.0
+) -> _Prepared:
     if not isinstance(az, Azimuths):
         raise TypeError(f"azimuths must be an Azimuths instance, got {type(az).__name__}")
     n_dof = az.n_dof
@@ -457,7 +460,9 @@ def _prepare(az: Azimuths, fixed: Any, W: ArrayLike | None, H: ArrayLike | None)
     s = np.concatenate((_scales(flo, fhi), np.repeat(az.f_max, 2)))
     w = _weights(W, n_dof, _capacity(B, s))
     Q, R = _scaled_problem(B, s, w, H)
-    return _Prepared(n_dof, k, B, s, flo, fhi, Q, R, Q.diagonal().copy())
+    if not (isinstance(turn, int | float) and math.isfinite(turn) and turn >= 0.0):
+        raise ValueError(f"turn_weight must be a finite number >= 0, got {turn!r}")
+    return _Prepared(n_dof, k, B, s, flo, fhi, Q, R, Q.diagonal().copy(), float(turn))
 
 
 class AzimuthAllocator:
@@ -467,6 +472,13 @@ class AzimuthAllocator:
     ``allocate_azimuth(tau, azimuths.with_angles(angle_prev), fixed=..., W=..., H=...)``
     (``angle_prev=None``: ``azimuths.angle_prev``); the configuration, scaling and weights are
     validated and built at construction, a call validates ``tau`` and the angles only.
+
+    ``turn_weight`` (default 0: the plain problem) adds a cost on each unit's force across its
+    previous direction, ``turn_weight * q_j * (e_perp(alpha_prev) . f_j / F_max_j)^2`` with
+    ``q_j`` the unit's mean curvature in the objective: among allocations that deliver
+    (nearly) the same ``tau`` it prefers those that keep the angles, so a redundant set of
+    units stops turning back and forth. It trades a little of ``tau`` for that; the delivered
+    ``tau`` and ``tau_error`` are reported as always.
     """
 
     __slots__ = ("azimuths", "_prep")
@@ -478,8 +490,9 @@ class AzimuthAllocator:
         fixed: tuple[ArrayLike, ArrayLike, ArrayLike] | None = None,
         W: ArrayLike | None = None,
         H: ArrayLike | None = None,
+        turn_weight: float = 0.0,
     ) -> None:
-        self._prep = _prepare(azimuths, fixed, W, H)
+        self._prep = _prepare(azimuths, fixed, W, H, turn_weight)
         self.azimuths = azimuths
 
     def __call__(self, tau: ArrayLike, angle_prev: ArrayLike | None = None) -> AzimuthAllocation:
@@ -500,6 +513,14 @@ def _allocate(
     m = az.n
     fmax = az.f_max
     c = prep.R @ t
+    if prep.turn > 0.0:  # a cost on the force across each unit's previous direction
+        Q = Q.copy()
+        ep = np.column_stack((-np.sin(a_prev), np.cos(a_prev)))  # (M, 2) unit normals
+        q = prep.turn * 0.5 * (qd[k::2] + qd[k + 1 :: 2])
+        blocks = q[:, None, None] * ep[:, :, None] * ep[:, None, :]
+        for j in range(m):
+            i = k + 2 * j
+            Q[i : i + 2, i : i + 2] += blocks[j]
 
     # the sector of each unit: its centre angle (the reversed one for a reversible unit whose
     # relaxed optimum points backwards) and half-width
