@@ -79,6 +79,7 @@ import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import param, require_given
+from shipgym.dynamics.params import BLUE_LADY_HULL
 
 from .pid import _DESIGN_HINT, _LIMIT_HINT, _saturation_directions, _vec3
 
@@ -566,7 +567,7 @@ def _lq_for(vessel: Any, dt: float) -> LQController:
             "tuned", M=vessel.design.M, D_L=vessel.design.D_L, dt=dt, integral_limit=cap
         )
     t = LQ_PRESETS["tuned"]
-    lam = vessel.L_oa / _BLUE_LADY_L_OA
+    lam = vessel.L_oa / BLUE_LADY_HULL.L_oa
     r = math.sqrt(lam)
 
     def weights(f: float) -> LQWeights:
@@ -590,12 +591,6 @@ def _lq_for(vessel: Any, dt: float) -> LQController:
     return LQController(
         weights(lo), M=vessel.design.M, D_L=vessel.design.D_L, dt=dt, integral_limit=cap
     )
-
-
-#: the Blue Lady's length overall (m) and design inertia (kg, kg, kg m^2; Tomera 2014 eq. 49):
-#: the reference of the tuned weights when they are carried over to another vessel
-_BLUE_LADY_L_OA = 13.78
-_BLUE_LADY_M = (23664.9, 24830.6, 455182.1)
 
 
 def register_lq() -> None:

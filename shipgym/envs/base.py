@@ -659,11 +659,6 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         """Physical command (channel order, each in its unit) to the normalised action."""
         return self.actuators.command_to_action(command)
 
-    @property
-    def thrusters(self) -> Any:
-        """The vessel's :class:`~shipgym.dynamics.actuators.ActuatorSet` (older name)."""
-        return self.actuators
-
 
 class BlueLadyEnv(ShipEnv):
     """:class:`ShipEnv` with the Blue Lady (``vessel="blue-lady"``): the older class name."""

@@ -386,8 +386,8 @@ class VesselPhysics:
         return float(self.model.opt.timestep)
 
     def _qvel_whole(self) -> list[float]:
-        h = 0.5 * self.model.opt.timestep
-        return (self.data.qvel + h * self.data.qacc).tolist()
+        """The joint velocity at the whole step (leapfrog, module docstring)."""
+        return (self.data.qvel + 0.5 * self._h * self.data.qacc).tolist()
 
     @property
     def eta(self) -> NDArray[np.float64]:
@@ -404,8 +404,7 @@ class VesselPhysics:
         """Body velocity ``[u (m/s), v (m/s), r (rad/s)]``."""
         if self.dofs == 4:
             return self.nu_full[[0, 1, 3]]
-        # the velocity at the whole step (leapfrog, module docstring), written out: every step
-        xd, yd, r = (self.data.qvel + self._h * 0.5 * self.data.qacc).tolist()
+        xd, yd, r = self._qvel_whole()
         psi = self.data.qpos[2]
         c, s = math.cos(psi), math.sin(psi)
         return np.array([c * xd + s * yd, -s * xd + c * yd, r])
@@ -424,13 +423,13 @@ class VesselPhysics:
     @property
     def nu_full(self) -> NDArray[np.float64]:
         """``[u, v, r]`` (3 DOF) or Fossen's ``[u, v, p, r]`` (4 DOF)."""
+        if self.dofs == 3:
+            return self.nu
         w = self._qvel_whole()
         psi = float(self.data.qpos[2])
         c, s = math.cos(psi), math.sin(psi)
         u = c * w[0] + s * w[1]
         vh = -s * w[0] + c * w[1]
-        if self.dofs == 3:
-            return np.array([u, vh, w[2]])
         cf = math.cos(float(self.data.qpos[3]))
         return np.array([u, vh / cf, w[3], w[2] / cf])
 

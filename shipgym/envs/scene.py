@@ -21,6 +21,7 @@ from pathlib import Path
 
 from shipgym.assets import asset_path
 from shipgym.dynamics.actuators import Azimuth, Propeller
+from shipgym.dynamics.params import BLUE_LADY_HULL
 from shipgym.dynamics.vessel import Vessel, VesselError
 
 from ._mujoco import mujoco
@@ -134,7 +135,7 @@ def build_model(vessel: Vessel, world: str = "open-water") -> mujoco.MjModel:
         water = spec.geom("water")
         half = max(200.0, 15.0 * vessel.L_oa)
         water.size = [half, half, 0.1]
-        L = vessel.L_oa / 13.78  # the Blue Lady's cameras, scaled with the length
+        L = vessel.L_oa / BLUE_LADY_HULL.L_oa  # the Blue Lady's cameras, scaled with the length
         spec.worldbody.add_camera(name="top", mode=mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM,
                                   pos=[0, 0, -40 * L], xyaxes=[0, 1, 0, 1, 0, 0])  # fmt: skip
         spec.worldbody.add_camera(name="map", pos=[0, 0, -120 * L], xyaxes=[0, 1, 0, 1, 0, 0])

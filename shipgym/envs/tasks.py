@@ -14,6 +14,7 @@ from shipgym._config import is_real
 from shipgym.disturbances import CurrentConfig, WindConfig
 from shipgym.disturbances.current import MAX_CURRENT_SPEED
 from shipgym.disturbances.wind import MAX_WIND_SPEED
+from shipgym.dynamics.params import BLUE_LADY_HULL
 from shipgym.guidance import Leg, ManoeuvrePlan
 from shipgym.observers.sensors import SensorConfig
 
@@ -27,9 +28,6 @@ __all__ = [
     "StationKeepingEnv",
     "TrackingEnv",
 ]
-
-#: the Blue Lady's length overall (m): the tracking task's leg lengths are scaled from it
-_BLUE_LADY_L_OA = 13.78
 
 
 class HarbourEnv(ShipEnv):
@@ -133,7 +131,7 @@ class TrackingEnv(ShipEnv):
             max_current_speed = 0.01 * nominal
         # distances with sqrt(L): at Froude-scaled reference speeds (sqrt(L), the vessels'
         # [limits]) an episode takes about as long as the Blue Lady's and fits the time limit
-        self._leg_scale = 1.0 if vessel is None else math.sqrt(vessel.L_oa / _BLUE_LADY_L_OA)
+        self._leg_scale = 1.0 if vessel is None else math.sqrt(vessel.L_oa / BLUE_LADY_HULL.L_oa)
         if not (isinstance(max_legs, int) and max_legs >= 1):
             raise ValueError(f"max_legs must be an int >= 1, got {max_legs!r}")
         if not (_finite_real(max_wind_speed) and 0 <= max_wind_speed <= MAX_WIND_SPEED):

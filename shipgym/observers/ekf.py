@@ -670,10 +670,6 @@ def default_ekf(**overrides: Any) -> ExtendedKalmanFilter:
     return ExtendedKalmanFilter(ekf_config("ekf", **overrides), name="ekf")
 
 
-#: force capacity (N, N, N m) of the Blue Lady, the vessel the bias noise presets were tuned for
-_BLUE_LADY_CAPACITY = (451.33056, 88.29, 247.91832)
-
-
 def _vessel_model(name: str) -> Callable[[Any], dict[str, Any]]:
     def adapt(vessel: Any) -> dict[str, Any]:
         """The preset for a vessel: its design model ``M``, ``D_L``; the bias noise ``Q``
@@ -684,7 +680,10 @@ def _vessel_model(name: str) -> Callable[[Any], dict[str, Any]]:
         }
         cap = np.asarray(vessel.actuators.capacity(), dtype=float)
         cap3 = cap if cap.size == 3 else cap[[0, 1, 3]]
-        k = (cap3 / np.asarray(_BLUE_LADY_CAPACITY)) ** 2
+        # the Blue Lady's capacity: the vessel the bias noise presets were tuned for
+        from shipgym.dynamics.vessel import load_vessel
+
+        k = (cap3 / load_vessel("blue-lady").actuators.capacity()) ** 2
         if not np.allclose(k, 1.0, rtol=1e-9, atol=0.0):  # the Blue Lady keeps the preset
             Q = np.asarray(ekf_config(name).Q) * np.sqrt(np.outer(k, k))
             out["Q"] = _tuple_mat(Q)

@@ -13,6 +13,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym.dynamics.params import BLUE_LADY_HULL
+
 __all__ = [
     "REFERENCE_LENGTH",
     "convex_outline",
@@ -26,7 +28,7 @@ __all__ = [
 
 #: Lengths drawn on a map (arrows, margins, line widths) are given for a hull of this overall
 #: length (m; the Blue Lady, 13.78 m) and scale with the vessel's ``L_oa``.
-REFERENCE_LENGTH = 13.78
+REFERENCE_LENGTH = BLUE_LADY_HULL.L_oa
 
 
 def convex_outline(points: ArrayLike) -> NDArray[np.float64]:
