@@ -1,0 +1,599 @@
+r"""Wave-filtering Kalman filters of Al-Takie (1982): 14-state, reduced, semi-constant, EKF.
+
+The filters separate the slow (LF) ship motion from the first-order wave (HF) motion in the
+position and heading measurements, on the combined model of
+:func:`~shipgym.dynamics.altakie.wave_filter_model` (per unit, ``x = [v, y, r, psi, f_Y, f_N,
+HF sway(4), HF yaw(4)]``, ``z = [x2 + x9, x4 + x13] + v``).
+
+Core filters (per unit, NumPy arrays; Al-Takie 1982 eqs. 5.4-5.12, App. 3)
+-------------------------------------------------------------------------
+- :class:`DiscreteKF`: ``Phi = e^{A dt}``, ``Delta = int Phi B``, ``Gamma = int Phi G``,
+  ``Q_D = Q / dt``; predict ``x- = Phi x + Delta u``, ``P- = Phi P Phi^T + Gamma Q_D Gamma^T``;
+  gain ``K = P- H^T (H P- H^T + R)^-1``; update ``x = x- + K (z - H x-)`` with the Joseph form
+  ``P = (I - K H) P- (I - K H)^T + K R K^T``; ``P(0|0) = 0`` [printed]. Time-varying; with
+  ``freeze_after`` steps it becomes the **semi-constant-gain** filter of 6.3 (gain computed on
+  line, frozen from then on: no more covariance propagation).
+- :class:`ReducedKF`: the 12-state filter of 6.2: the thruster states ``x5, x6`` are
+  measured without noise, so the filter keeps the 4 LF + 8 HF states and takes the thruster
+  states at both ends of each interval as inputs (the lag between them fixes the demand); with
+  exact thruster states it reproduces the 14-state filter's LF estimates (the thrusters carry no
+  noise, so their covariance rows stay zero in the 14-state filter).
+- :class:`WaveFilterEKF`: ch. 7: the thruster outputs pass through the saturation
+  ``psi(x) = F1 sign(x)(1 - e^{-F2 |x|})`` before they act on the hull; the state is predicted
+  through the nonlinear model (RK4) and ``Phi`` re-linearised at the estimate every
+  ``relinearise_every`` steps (2 printed; 5 "no loss of accuracy").
+
+The sampling interval is ``dt = 0.1`` per-unit time [printed, App. 3; the unit reconstructed:
+0.31 s Wimpey Sealab, 0.27 s Star Hercules].
+
+Observers for the simulated vessels (SI, NED; :class:`WaveFilterObserver`)
+--------------------------------------------------------------------------
+The presets ``alt-kf14``, ``alt-kf12``, ``alt-semiconstant`` and ``alt-ekf`` (and
+``alt-lf6``: the LF model alone, no wave model, the "no wave filtering" reference) wrap a core
+filter for a vessel: the LF model from the vessel's design (:func:`lf_model_from_vessel`), per
+unit on its own ``m``, ``L_pp``; surge, decoupled in the thesis, gets its own filter of the
+same structure (``[u, x, f_X]`` + 4 HF states). Positions are taken in the frame of the heading
+at :meth:`~WaveFilterObserver.reset` (the DP set-point heading: the linear model is valid
+for small heading changes, as in the thesis).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym.dynamics.altakie import (
+    WaveFilterModel,
+    discretise,
+    hf_alpha,
+    hf_block,
+    lf_model_from_vessel,
+    saturation,
+    saturation_slope,
+    surge_model_from_vessel,
+    wave_filter_model,
+)
+from shipgym.dynamics.perunit import PerUnit
+
+from .base import Estimate, Observer, StepInfo, as_pose, as_tau, no_measurement, register_observer
+
+__all__ = [
+    "DiscreteKF",
+    "ReducedKF",
+    "WaveFilterEKF",
+    "WaveFilterObserver",
+    "hf_gain_for_std",
+]
+
+Array = NDArray[np.float64]
+
+
+class DiscreteKF:
+    """Time-varying discrete Kalman filter with the Joseph update (Al-Takie 1982 App. 3).
+
+    Args:
+        A, B, G, H: continuous model, (n, n), (n, m), (n, p), (q, n) (per-unit time).
+        Q: process-noise intensity of ``w``, (p, p); ``Q_D = Q / dt``.
+        R: measurement-noise covariance, (q, q).
+        dt: sampling interval (per-unit time).
+        freeze_after: ``None`` (time-varying) or the number of steps after which the gain is
+            frozen (the semi-constant-gain filter).
+
+    Attributes:
+        x, P: state estimate and covariance after the last step.
+        K: the last gain (n, q).
+        steps: number of steps since :meth:`reset`.
+    """
+
+    def __init__(
+        self,
+        A: ArrayLike,
+        B: ArrayLike,
+        G: ArrayLike,
+        H: ArrayLike,
+        Q: ArrayLike,
+        R: ArrayLike,
+        dt: float,
+        freeze_after: int | None = None,
+    ) -> None:
+        self.A = np.asarray(A, dtype=float)
+        self.B = np.asarray(B, dtype=float)
+        self.G = np.asarray(G, dtype=float)
+        self.H = np.asarray(H, dtype=float)
+        self.Q = np.asarray(Q, dtype=float)
+        self.R = np.asarray(R, dtype=float)
+        n = self.A.shape[0]
+        if self.A.shape != (n, n) or self.B.shape[0] != n or self.G.shape[0] != n:
+            raise ValueError(f"inconsistent shapes A {self.A.shape}, B {self.B.shape}")
+        if self.H.shape[1] != n or self.R.shape != (self.H.shape[0],) * 2:
+            raise ValueError(f"inconsistent shapes H {self.H.shape}, R {self.R.shape}")
+        if freeze_after is not None and (isinstance(freeze_after, bool) or freeze_after < 1):
+            raise ValueError(
+                f"freeze_after must be None or a step count >= 1, got {freeze_after!r}"
+            )
+        self.dt = float(dt)
+        self.freeze_after = freeze_after
+        self.Phi, self.Delta, self.Gamma = discretise(self.A, self.B, self.G, self.dt)
+        self.W = self.Gamma @ (self.Q / self.dt) @ self.Gamma.T
+        self.W = 0.5 * (self.W + self.W.T)
+        self.reset()
+
+    @property
+    def n(self) -> int:
+        """Number of states."""
+        return int(self.A.shape[0])
+
+    @property
+    def frozen(self) -> bool:
+        """Whether the gain is frozen (semi-constant filter past ``freeze_after`` steps)."""
+        return self.freeze_after is not None and self.steps >= self.freeze_after
+
+    def reset(self, x0: ArrayLike | None = None, P0: ArrayLike | None = None) -> None:
+        """Start from ``x0`` (default 0) with covariance ``P0`` (default 0, as printed)."""
+        n = self.n
+        self.x = np.zeros(n) if x0 is None else np.array(x0, dtype=float)
+        self.P = np.zeros((n, n)) if P0 is None else np.array(P0, dtype=float)
+        self.K = np.zeros((n, self.H.shape[0]))
+        self.steps = 0
+        self.innovation = np.full(self.H.shape[0], np.nan)
+        self.nis: float | None = None
+
+    def predict(self, u: ArrayLike) -> None:
+        """``x- = Phi x + Delta u`` and, unless frozen, ``P- = Phi P Phi^T + W``."""
+        self.x = self.Phi @ self.x + self.Delta @ np.asarray(u, dtype=float)
+        if not self.frozen:
+            self.P = self.Phi @ self.P @ self.Phi.T + self.W
+
+    def update(self, z: ArrayLike | None, wrap: Callable[[Array], Array] | None = None) -> None:
+        """Measurement update with ``z`` (``None``: no measurement, the prediction stands)."""
+        self.steps += 1
+        if z is None:
+            self.innovation = np.full(self.H.shape[0], np.nan)
+            self.nis = None
+            return
+        nu = np.asarray(z, dtype=float) - self.H @ self.x
+        if wrap is not None:
+            nu = wrap(nu)
+        if not self.frozen:
+            S = self.H @ self.P @ self.H.T + self.R
+            self.K = np.linalg.solve(S, self.H @ self.P).T
+            IKH = np.eye(self.n) - self.K @ self.H
+            self.P = IKH @ self.P @ IKH.T + self.K @ self.R @ self.K.T
+            self._S = S
+        else:
+            S = getattr(self, "_S", self.H @ self.P @ self.H.T + self.R)
+        self.x = self.x + self.K @ nu
+        self.innovation = nu
+        self.nis = float(nu @ np.linalg.solve(S, nu))
+
+    def step(self, z: ArrayLike | None, u: ArrayLike) -> None:
+        """One sampling interval: predict with ``u`` (held over it), then update with ``z``."""
+        self.predict(u)
+        self.update(z)
+
+
+class ReducedKF(DiscreteKF):
+    """The reduced-order filter of Al-Takie (1982) 6.2 on a 14-state model: 12 states.
+
+    The thruster states (indices 4, 5 of the LF model) are measured exactly; the filter keeps
+    ``[v, y, r, psi]`` and the 8 HF states. :meth:`step` takes the thruster states at the
+    start and at the end of the interval (``f0``, ``f1``); with the first-order lag they fix
+    the demand ``u = Delta_f^-1 (f1 - Phi_f f0)`` over the interval, so the prediction is the
+    14-state filter's, exactly.
+
+    Args:
+        model: the 14-state :class:`~shipgym.dynamics.altakie.WaveFilterModel`.
+        dt, freeze_after: as :class:`DiscreteKF`.
+    """
+
+    KEEP = np.r_[0:4, 6:14]
+    THRUST = np.r_[4:6]
+
+    def __init__(self, model: WaveFilterModel, dt: float, freeze_after: int | None = None) -> None:
+        Phi, Delta, _ = discretise(model.A, model.B, model.G, dt)
+        k, f = self.KEEP, self.THRUST
+        super().__init__(
+            model.A[np.ix_(k, k)],
+            model.A[np.ix_(k, f)],
+            model.G[k],
+            model.H[:, k],
+            model.Q,
+            model.R,
+            dt,
+            freeze_after,
+        )
+        # exact: the kept states see the thruster states through the 14-state Phi, Delta
+        self.Phi = Phi[np.ix_(k, k)]
+        self._Phi_kf = Phi[np.ix_(k, f)]
+        self._Delta_k = Delta[k]
+        self._Phi_f = Phi[np.ix_(f, f)]
+        self._Delta_f = Delta[f]
+
+    def step_thrust(self, z: ArrayLike | None, f0: ArrayLike, f1: ArrayLike) -> None:
+        """One interval with the measured thruster states at its start ``f0`` and end ``f1``."""
+        f0_ = np.asarray(f0, dtype=float)
+        u = np.linalg.solve(self._Delta_f, np.asarray(f1, dtype=float) - self._Phi_f @ f0_)
+        self.x = self.Phi @ self.x + self._Phi_kf @ f0_ + self._Delta_k @ u
+        if not self.frozen:
+            self.P = self.Phi @ self.P @ self.Phi.T + self.W
+        self.update(z)
+
+    def step(self, z: ArrayLike | None, u: ArrayLike) -> None:  # noqa: D102
+        raise TypeError("ReducedKF takes the measured thruster states: use step_thrust(z, f0, f1)")
+
+
+class WaveFilterEKF(DiscreteKF):
+    """The extended filter of Al-Takie (1982) ch. 7 with saturating thrusters.
+
+    The LF model's thruster columns act through ``psi(x5)``, ``psi(x6)``
+    (:func:`~shipgym.dynamics.altakie.saturation`); the prediction integrates that nonlinear
+    model over the interval (RK4, ``substeps``); ``Phi`` (and ``W``) are re-linearised at the
+    estimate every ``relinearise_every`` steps.
+
+    Args:
+        model: the 14-state model.
+        dt: sampling interval (p.u.).
+        F1, F2: saturation limit (p.u.) and slope factor (``F1 F2 = 1``: slope 1 at 0).
+        relinearise_every: steps between re-linearisations (2 printed).
+        substeps: RK4 steps per interval.
+    """
+
+    def __init__(
+        self,
+        model: WaveFilterModel,
+        dt: float,
+        F1: float = 0.02,
+        F2: float = 50.0,
+        relinearise_every: int = 2,
+        substeps: int = 4,
+    ) -> None:
+        super().__init__(model.A, model.B, model.G, model.H, model.Q, model.R, dt)
+        if isinstance(relinearise_every, bool) or int(relinearise_every) < 1:
+            raise ValueError(f"relinearise_every must be >= 1, got {relinearise_every!r}")
+        self.F1, self.F2 = float(F1), float(F2)
+        self.relinearise_every = int(relinearise_every)
+        self.substeps = int(substeps)
+        self._A_thr = model.A[:, 4:6].copy()  # the thruster columns (act through psi)
+        self._A_lin = model.A.copy()
+        self._A_lin[:, 4:6] = 0.0
+        self.relinearisations = 0
+
+    def jacobian(self, x: ArrayLike) -> Array:
+        """``A(x) = df/dx``: the thruster columns times ``psi'(x5)``, ``psi'(x6)``."""
+        x_ = np.asarray(x, dtype=float)
+        F = self._A_lin.copy()
+        F[:, 4:6] = self._A_thr * saturation_slope(x_[4:6], self.F1, self.F2)
+        return F
+
+    def _f(self, x: Array, u: Array) -> Array:
+        return self._A_lin @ x + self._A_thr @ saturation(x[4:6], self.F1, self.F2) + self.B @ u
+
+    def predict(self, u: ArrayLike) -> None:
+        u_ = np.asarray(u, dtype=float)
+        if self.steps % self.relinearise_every == 0:
+            self.Phi, _, self.Gamma = discretise(self.jacobian(self.x), self.B, self.G, self.dt)
+            W = self.Gamma @ (self.Q / self.dt) @ self.Gamma.T
+            self.W = 0.5 * (W + W.T)
+            self.relinearisations += 1
+        h = self.dt / self.substeps
+        x = self.x
+        for _ in range(self.substeps):
+            k1 = self._f(x, u_)
+            k2 = self._f(x + 0.5 * h * k1, u_)
+            k3 = self._f(x + 0.5 * h * k2, u_)
+            k4 = self._f(x + h * k3, u_)
+            x = x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        self.x = x
+        self.P = self.Phi @ self.P @ self.Phi.T + self.W
+
+
+# ---- observers for the simulated vessels -------------------------------------------------------
+
+
+def hf_gain_for_std(alpha: ArrayLike, Tb: float, std: float) -> float:
+    """The HF noise gain ``d`` (``D_h = [0, 0, 0, d]``, unit noise) giving an output std ``std``.
+
+    From the stationary Lyapunov solution of the per-unit block ``A_hs``.
+    """
+    A = hf_block(alpha, Tb)
+    Bw = np.array([[0.0], [0.0], [0.0], [1.0]])
+    P = scipy.linalg.solve_continuous_lyapunov(A, -Bw @ Bw.T)
+    return float(std) / math.sqrt(float(P[2, 2]))
+
+
+_SIGMA_POSITION = 1.0 / 3.0  # m: the thesis's position reference (Al-Takie 1982 2.4.2) [printed]
+_SIGMA_HEADING = 0.02  # rad: the thesis's gyro (Al-Takie 1982 2.4.2) [printed]
+
+
+class WaveFilterObserver(Observer):
+    """An Al-Takie (1982) wave filter for a simulated vessel (SI, NED; the presets ``alt-*``).
+
+    Args:
+        vessel: the :class:`~shipgym.dynamics.vessel.Vessel` (its design model and lags).
+        kind: ``"kf14"`` (time-varying 14-state), ``"semiconstant"`` (frozen at
+            ``freeze_time``), ``"kf12"`` (reduced: takes the applied thrust as measured thruster
+            states), ``"ekf"`` (saturating thrusters, ``F1`` the saturation in p.u.) or
+            ``"lf6"`` (the LF model only: no wave model).
+        beaufort: Beaufort number (5-9) of the filter's HF model; the thesis's nominal design
+            is 8 (and it recommends designing for a higher sea than expected).
+        hf_std: ``(position m, heading rad)`` std of the first-order motion the HF model
+            expects; ``None``: the WF stds of the Beaufort preset at the vessel's scale
+            (``shipgym.scenarios.beaufort``: ``Hs/16`` and ``radians(2) Hs w_p^2 / g``).
+        sigma_position, sigma_heading: measurement-noise stds (m, rad); the thesis's 1/3 m and
+            0.02 rad by default.
+        q_l: LF noise variances (sway force, yaw moment, p.u.^2); ``None``: printed sway,
+            reconstructed yaw (17.8 x printed).
+        dt: sampling interval in per-unit time (0.1 printed).
+        freeze_time: when the semi-constant filter freezes its gain (s real time; 28 s printed).
+        relinearise_every: EKF steps between re-linearisations (2 printed).
+        F1: EKF thruster saturation (p.u. force); ``None``: the vessel's sway capacity in p.u.
+
+    The filter expects one :meth:`step` per sampling interval ``dt`` (real time ``dt T_b``);
+    a call at another interval raises. ``thrust_input`` is ``"command"`` (the demand, which
+    the filter lags itself), except for ``kf12`` (``"applied"``: measured thruster states).
+    """
+
+    thrust_input = "command"
+
+    def __init__(
+        self,
+        vessel: Any = None,
+        kind: str = "kf14",
+        *,
+        beaufort: int = 8,
+        hf_std: tuple[float, float] | None = None,
+        sigma_position: float = _SIGMA_POSITION,
+        sigma_heading: float = _SIGMA_HEADING,
+        q_l: tuple[float, float] | None = None,
+        dt: float = 0.1,
+        freeze_time: float = 28.0,
+        relinearise_every: int = 2,
+        F1: float | None = None,
+    ) -> None:
+        if vessel is None:
+            raise TypeError(
+                "the Al-Takie wave filters need the vessel: make_observer(name, vessel=...) "
+                "or shipgym.make(..., vessel=..., observer=name)"
+            )
+        if kind not in _KINDS:
+            raise ValueError(f"kind must be one of {', '.join(_KINDS)}, got {kind!r}")
+        self.vessel = vessel
+        self.kind = kind
+        self.name = f"alt-{kind}"
+        if kind == "kf12":
+            self.thrust_input = "applied"
+        pu = PerUnit.of_vessel(vessel)
+        self.pu = pu
+        self.dt_pu = float(dt)
+        self.dt = self.dt_pu * pu.time
+        if hf_std is None:
+            hf_std = _preset_hf_std(vessel, beaufort)
+        L = pu.L
+        alpha = hf_alpha(beaufort, pu, vessel.name)
+        d_pos = hf_gain_for_std(alpha, pu.time, hf_std[0] / L)
+        d_psi = hf_gain_for_std(alpha, pu.time, hf_std[1])
+        r = ((sigma_position / L) ** 2, sigma_heading**2)
+        lf = lf_model_from_vessel(vessel)
+        self.model = wave_filter_model(
+            lf, beaufort, ship=vessel.name, d_h=(d_pos, d_psi), q_l=q_l, r=r
+        )
+        m = self.model
+        freeze = None
+        if kind == "semiconstant":
+            freeze = max(1, math.ceil(freeze_time / self.dt - 1e-9))
+        if kind == "kf12":
+            self.core: DiscreteKF = ReducedKF(m, self.dt_pu)
+        elif kind == "ekf":
+            F1_ = _sway_capacity_pu(vessel, pu) if F1 is None else float(F1)
+            self.core = WaveFilterEKF(
+                m, self.dt_pu, F1=F1_, F2=1.0 / F1_, relinearise_every=relinearise_every
+            )
+        elif kind == "lf6":
+            keep = np.r_[0:6]
+            self.core = DiscreteKF(
+                m.A[np.ix_(keep, keep)],
+                m.B[keep],
+                m.G[keep, :2],
+                m.H[:, keep],
+                m.Q[:2, :2],
+                m.R,
+                self.dt_pu,
+            )
+        else:
+            self.core = DiscreteKF(m.A, m.B, m.G, m.H, m.Q, m.R, self.dt_pu, freeze)
+        # surge: the decoupled [u, x, f_X] + 4 HF states, same design
+        As, Bs, Cs, Ds = surge_model_from_vessel(vessel)
+        n_hf = 0 if kind == "lf6" else 4
+        A = scipy.linalg.block_diag(As, hf_block(alpha, pu.time)) if n_hf else As
+        B = np.vstack([Bs, np.zeros((n_hf, 1))])
+        G = np.zeros((3 + n_hf, 1 + (n_hf > 0)))
+        G[:3, 0] = Ds[:, 0]
+        H = np.zeros((1, 3 + n_hf))
+        H[0, 1] = 1.0
+        Qs = [m.Q[0, 0]]
+        if n_hf:
+            G[6, 1] = d_pos
+            H[0, 5] = 1.0
+            Qs.append(1.0)
+        self.surge = DiscreteKF(A, B, G, H, np.diag(Qs), m.R[:1, :1], self.dt_pu, freeze)
+        self._origin = np.zeros(3)
+        self._c = 1.0
+        self._s = 0.0
+        self._t = 0.0
+        self._f_prev = np.zeros(3)
+        self._psi_unwrap = 0.0
+
+    # -- frames ------------------------------------------------------------------------------
+    def _to_local(self, z: Array) -> Array:
+        """NED pose -> ``[x', y', psi']`` in the reset frame (p.u. positions, rad)."""
+        dx, dy = z[0] - self._origin[0], z[1] - self._origin[1]
+        c, s = self._c, self._s
+        psi = self._psi_unwrap + _wrap(z[2] - self._psi_unwrap)
+        self._psi_unwrap = psi
+        L = self.pu.L
+        return np.array([(c * dx + s * dy) / L, (-s * dx + c * dy) / L, psi - self._origin[2]])
+
+    def _forces(self, tau: Array | None) -> Array:
+        if tau is None:
+            return np.zeros(3)
+        return np.array([tau[0] / self.pu.force, tau[1] / self.pu.force, tau[2] / self.pu.moment])
+
+    # -- Observer interface ------------------------------------------------------------------
+    def reset(
+        self,
+        t0: float,
+        eta0: ArrayLike,
+        *,
+        nu0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+    ) -> None:
+        e = as_pose(eta0, "eta0")
+        self._origin = e.copy()
+        self._c, self._s = math.cos(e[2]), math.sin(e[2])
+        self._psi_unwrap = float(e[2])
+        self._t = float(t0)
+        x0 = np.zeros(self.core.n)
+        xs = np.zeros(self.surge.n)
+        if nu0 is not None:
+            n0 = as_pose(nu0, "nu0", "[u, v, r] (m/s, m/s, rad/s)")
+            xs[0] = n0[0] / self.pu.velocity
+            x0[0] = n0[1] / self.pu.velocity
+            x0[2] = n0[2] / self.pu.angular_velocity  # index 2 in both state layouts
+        self.core.reset(x0, P0)
+        self.surge.reset(xs)
+        self._f_prev = np.zeros(3)
+        self._last_info = no_measurement()
+
+    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
+        dt = float(t) - self._t
+        if dt <= 1e-9 * self.dt:
+            return self._last_info
+        if abs(dt - self.dt) > 1e-6 * self.dt:
+            raise ValueError(
+                f"{self.name} samples every {self.dt:.6g} s (0.1 per-unit time of "
+                f"{self.vessel.name}); got an interval of {dt:.6g} s: run the env with "
+                f"control_period={self.dt:.6g} and sensors sampled at it"
+            )
+        self._t = float(t)
+        f = self._forces(as_tau(tau))
+        zl = None if z is None else self._to_local(as_pose(z))
+        core = self.core
+        if isinstance(core, ReducedKF):
+            core.step_thrust(None if zl is None else zl[1:], self._f_prev[1:], f[1:])
+            # surge keeps its own lag model: the applied thrust's demand from the same lag law
+            s_phi, s_del = self.surge.Phi[2, 2], self.surge.Delta[2, 0]
+            self.surge.step(
+                None if zl is None else zl[:1], [(f[0] - s_phi * self._f_prev[0]) / s_del]
+            )
+        else:
+            core.predict(f[1:])
+            core.update(None if zl is None else zl[1:], wrap=_wrap_heading)
+            self.surge.step(None if zl is None else zl[:1], f[:1])
+        self._f_prev = f
+        if zl is None:
+            self._last_info = no_measurement()
+        else:
+            inn = np.array(
+                [
+                    self.surge.innovation[0] * self.pu.L,
+                    core.innovation[0] * self.pu.L,
+                    core.innovation[1],
+                ]
+            )
+            # in NED: rotate the position innovation back
+            c, s = self._c, self._s
+            inn[:2] = [c * inn[0] - s * inn[1], s * inn[0] + c * inn[1]]
+            nis = (core.nis or 0.0) + (self.surge.nis or 0.0)
+            self._last_info = StepInfo(inn, nis, False)
+        return self._last_info
+
+    def lf_state(self) -> Array:
+        """The per-unit LF estimate ``[v, y, r, psi, f_Y, f_N]`` (sway-yaw, reset frame)."""
+        core = self.core
+        if isinstance(core, ReducedKF):
+            x = np.zeros(6)
+            x[[0, 1, 2, 3]] = core.x[:4]
+            x[4:6] = self._f_prev[1:]
+            return x
+        return core.x[:6].copy()
+
+    def hf_motion(self) -> Array:
+        """The estimated first-order wave motion ``[x, y, psi]`` (m, m, rad; reset frame)."""
+        core = self.core
+        if self.kind == "lf6":
+            return np.zeros(3)
+        i_s, i_y = (6, 10) if isinstance(core, ReducedKF) else (8, 12)
+        L = self.pu.L
+        return np.array([self.surge.x[5] * L, core.x[i_s] * L, core.x[i_y]])
+
+    def estimate(self) -> Estimate:
+        lf = self.lf_state()
+        pu = self.pu
+        xs, us = self.surge.x[1], self.surge.x[0]
+        c, s = self._c, self._s
+        X, Y = xs * pu.L, lf[1] * pu.L
+        eta = np.array(
+            [
+                self._origin[0] + c * X - s * Y,
+                self._origin[1] + s * X + c * Y,
+                self._origin[2] + lf[3],
+            ]
+        )
+        nu = np.array([us * pu.velocity, lf[0] * pu.velocity, lf[2] * pu.angular_velocity])
+        P = self.core.P
+        iy, ipsi, iv, ir = (1, 3, 0, 2)  # the same in the 14-, 12- and 6-state layouts
+        scale_pos = pu.L**2
+        Ps = self.surge.P
+        P_eta = np.diag([Ps[1, 1] * scale_pos, P[iy, iy] * scale_pos, P[ipsi, ipsi]])
+        P_nu = np.diag(
+            [
+                Ps[0, 0] * pu.velocity**2,
+                P[iv, iv] * pu.velocity**2,
+                P[ir, ir] * pu.angular_velocity**2,
+            ]
+        )
+        return Estimate(self._t, eta, nu, scipy.linalg.block_diag(Ps, P), P_eta, P_nu)
+
+
+_KINDS = ("kf14", "kf12", "semiconstant", "ekf", "lf6")
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def _wrap_heading(nu: Array) -> Array:
+    nu = nu.copy()
+    nu[-1] = _wrap(float(nu[-1]))
+    return nu
+
+
+def _preset_hf_std(vessel: Any, beaufort: int) -> tuple[float, float]:
+    from shipgym.scenarios import beaufort as sea_state
+
+    waves = sea_state(int(beaufort), scale=float(vessel.scale)).waves
+    return float(waves.position_std), float(waves.heading_std)
+
+
+def _sway_capacity_pu(vessel: Any, pu: PerUnit) -> float:
+    return float(vessel.actuators.capacity()[1]) / pu.force
+
+
+def _factory(kind: str) -> Callable[..., WaveFilterObserver]:
+    def make(**kw: Any) -> WaveFilterObserver:
+        return WaveFilterObserver(kind=kind, **kw)
+
+    return make
+
+
+def _with_vessel(vessel: Any) -> dict[str, Any]:
+    return {"vessel": vessel}
+
+
+for _kind in _KINDS:
+    register_observer(f"alt-{_kind}", _factory(_kind), _with_vessel)
