@@ -258,37 +258,46 @@ class WaveFilterEKF(DiscreteKF):
         self.F1, self.F2 = float(F1), float(F2)
         self.relinearise_every = int(relinearise_every)
         self.substeps = int(substeps)
-        self._A_thr = model.A[:, 4:6].copy()  # the thruster columns (act through psi)
-        self._A_lin = model.A.copy()
+        # the LF block is nonlinear; the HF blocks are linear and fixed (exact transition)
+        self._A_thr = model.A[:6, 4:6].copy()  # the thruster columns (act through psi)
+        self._A_lin = model.A[:6, :6].copy()
         self._A_lin[:, 4:6] = 0.0
+        self._B_lf = model.B[:6]
+        self._G_lf = model.G[:6]
         self.relinearisations = 0
 
     def jacobian(self, x: ArrayLike) -> Array:
         """``A(x) = df/dx``: the thruster columns times ``psi'(x5)``, ``psi'(x6)``."""
         x_ = np.asarray(x, dtype=float)
-        F = self._A_lin.copy()
-        F[:, 4:6] = self._A_thr * saturation_slope(x_[4:6], self.F1, self.F2)
+        F = self.A.copy()
+        F[:6, 4:6] = self._A_thr * saturation_slope(x_[4:6], self.F1, self.F2)
         return F
 
     def _f(self, x: Array, u: Array) -> Array:
-        return self._A_lin @ x + self._A_thr @ saturation(x[4:6], self.F1, self.F2) + self.B @ u
+        """The nonlinear LF dynamics (6 states)."""
+        return self._A_lin @ x + self._A_thr @ saturation(x[4:6], self.F1, self.F2) + self._B_lf @ u
 
     def predict(self, u: ArrayLike) -> None:
         u_ = np.asarray(u, dtype=float)
         if self.steps % self.relinearise_every == 0:
-            self.Phi, _, self.Gamma = discretise(self.jacobian(self.x), self.B, self.G, self.dt)
+            # only the LF block depends on the estimate (the HF blocks are decoupled from it)
+            F = self.jacobian(self.x)[:6, :6]
+            Phi_l, _, Gam_l = discretise(F, self._B_lf, self._G_lf, self.dt)
+            self.Phi[:6, :6] = Phi_l
+            self.Gamma[:6] = Gam_l
             W = self.Gamma @ (self.Q / self.dt) @ self.Gamma.T
             self.W = 0.5 * (W + W.T)
             self.relinearisations += 1
         h = self.dt / self.substeps
-        x = self.x
+        hf = self.Phi[6:, 6:] @ self.x[6:]
+        x = self.x[:6]
         for _ in range(self.substeps):
             k1 = self._f(x, u_)
             k2 = self._f(x + 0.5 * h * k1, u_)
             k3 = self._f(x + 0.5 * h * k2, u_)
             k4 = self._f(x + h * k3, u_)
             x = x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        self.x = x
+        self.x = np.concatenate([x, hf])
         self.P = self.Phi @ self.P @ self.Phi.T + self.W
 
 
