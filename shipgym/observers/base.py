@@ -242,7 +242,7 @@ class OutlierGate:
 OBSERVERS: dict[str, Callable[..., Observer]] = {}
 """Observer factories by name; ``factory(**overrides)`` returns a new observer."""
 
-_BUILTIN_MODULES = ("shipgym.observers.kalman", "shipgym.observers.ekf")
+_BUILTIN_MODULES = ("shipgym.observers.kalman", "shipgym.observers.ekf", "shipgym.observers.notch")
 
 
 #: ``name -> adapt(vessel) -> overrides``: how a preset is fitted to a vessel (see
