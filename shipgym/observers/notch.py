@@ -50,8 +50,9 @@ Observer (:class:`NotchObserver`, preset ``notch``)
   to the DP closed-loop time scales of about 50-100 s), rotated into the body frame
   ``nu = R^T(psi) eta_dot`` (Fossen 2011 eq. 2.40);
 - dropouts (``z`` is ``None``): the estimate is predicted with the held velocity,
-  ``eta += eta_dot dt``, and the cascade is fed that prediction, so that it keeps running
-  and the return of the measurements does not step its state;
+  ``eta += eta_dot dt``, and the cascade keeps running on the predicted measurement,
+  ``eta + eta_dot tau_g`` (``tau_g`` its DC group delay, the lag of a ramp), so that on a
+  steady ramp the return of the measurements does not step its state;
 - sampling interval: the discretisation needs a fixed ``dt``; it is the first interval between
   :meth:`~NotchObserver.reset` / :meth:`~NotchObserver.step` calls (or the constructor's
   ``dt``), and a later interval that differs by more than 1e-6 relative raises ``ValueError``;
@@ -60,9 +61,10 @@ Observer (:class:`NotchObserver`, preset ``notch``)
   stationary covariance of the estimate's error caused by white measurement noise of
   variance ``measurement_variance`` alone, the variance pushed through the linear chain
   (cascade, filtered difference): ``R sum_k h_k^2`` for the pose (``0.935 R`` for the
-  default design at ``dt`` = 0.31 s: the DC gain is 1 and the notches remove a little of the white noise), and
-  likewise for the rates and the pose-rate covariance. It leaves out the ramp lag and the
-  residual wave motion, so it is a lower bound, not a consistent filter covariance. Before the
+  default design at ``dt`` = 0.31 s: the DC gain is 1 and the notches remove a little of the
+  white noise), and likewise for the rates and the pose-rate covariance. It leaves out the
+  ramp lag and the residual wave motion, so it is a lower bound, not a consistent filter
+  covariance. Before the
   first interval is known the pose block is ``R`` (the estimate is one measurement) and
   the rate block is ``inf`` (unknown), with ``P_nu = None``;
 - :class:`~shipgym.observers.base.StepInfo`: the innovation is ``z`` minus the one-step
@@ -322,6 +324,16 @@ class NotchCascade:
         f = np.atleast_1d(np.asarray(f_hz, dtype=float))
         return scipy.signal.sosfreqz(np.array(self.sos), worN=f, fs=1.0 / self.dt)[1]
 
+    @property
+    def dc_group_delay(self) -> float:
+        """Group delay at zero frequency (s): a ramp comes out delayed by exactly this much
+        in steady state (DC gain 1). Per section ``sum n b_n / sum b_n - sum n a_n / sum a_n``
+        samples."""
+        n = np.arange(3.0)
+        b, a = self.sos[:, :3], self.sos[:, 3:]
+        samples = (b @ n) / b.sum(axis=1) - (a @ n) / a.sum(axis=1)
+        return float(samples.sum() * self.dt)
+
     def impulse_response(self, n: int) -> NDArray[np.float64]:
         """The first ``n`` samples of the cascade's impulse response (-)."""
         x = np.zeros(int(n))
@@ -463,7 +475,9 @@ class NotchObserver(Observer):
         h = self._dt
         pred = self._eta + self._eta_dot * h
         if z is None:
-            self._y_prev = cascade.step(pred)
+            # the cascade is fed the predicted *measurement*: the prediction led by the
+            # cascade's delay, so that on a ramp its input goes on as the measurements would
+            self._y_prev = cascade.step(pred + self._eta_dot * cascade.dc_group_delay)
             self._eta = pred
             self._t = t
             return StepInfo(np.full(3, np.nan), None, False)
