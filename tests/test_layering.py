@@ -205,12 +205,14 @@ def test_command_line_modules_are_leaves():
         "shipgym.observers.base",
         "shipgym.observers.kalman",
         "shipgym.observers.ekf",
+        "shipgym.observers.notch",
         "shipgym.observers.design",
         "shipgym.observers.sensors",
         "shipgym.controllers.allocation",
         "shipgym.controllers.pid",
         "shipgym.metrics",
         "shipgym.records",
+        "shipgym.dp",
     ],
 )
 def test_pure_layers_never_reach_the_simulator(package):
@@ -225,6 +227,21 @@ def test_pure_layers_never_reach_the_simulator(package):
         for m in _reach(GRAPH, mod):
             bad = EXTERNAL[m] & set(SIMULATOR_PACKAGES)
             assert not bad, f"{mod} reaches {sorted(bad)} through {m}"
+
+
+DP_USERS = ("shipgym.cli", "shipgym.bench")
+
+
+def test_dp_is_a_high_layer():
+    """``shipgym.dp`` may use the pure layers; only the command line and the bench import it."""
+    assert "shipgym.dp.metrics" in GRAPH["shipgym.dp"]  # the check reads real edges
+    users = {
+        mod
+        for mod, deps in GRAPH.items()
+        if not (mod == "shipgym.dp" or mod.startswith("shipgym.dp."))
+        and any(d == "shipgym.dp" or d.startswith("shipgym.dp.") for d in deps)
+    }
+    assert users <= set(DP_USERS), f"modules importing shipgym.dp: {sorted(users - set(DP_USERS))}"
 
 
 def test_the_cli_still_exports_what_it_documents():

@@ -246,6 +246,7 @@ _BUILTIN_MODULES = (
     "shipgym.observers.kalman",
     "shipgym.observers.ekf",
     "shipgym.observers.wavefilter",
+    "shipgym.observers.notch",
 )
 
 

@@ -1,0 +1,603 @@
+r"""Notch-filter wave filtering of the measured pose (Al-Takie 1982 section 1.2, eq. 1.1).
+
+The classical DP wave filter that the thesis compares its Kalman filters with: the measured pose
+``[x, y, psi]`` passes through a cascade of notch filters centred on the first-order wave band,
+so that the controller sees the low-frequency (LF) motion only.
+
+Section (Al-Takie 1982 eq. 1.1)
+-------------------------------
+``H(s) = (s^2 + (b d / k) s + w0^2) / (s^2 + (b / k) s + w0^2)``, ``k = sqrt(1 - 2 d^2)``, with
+``w0`` the centre (rad/s), ``b`` the 3-dB bandwidth (rad/s) and ``d`` the gain at the centre,
+``0 < d < 1/sqrt(2)``. What eq. 1.1 gives exactly (derived here, tested):
+
+- ``H(0) = H(j inf) = 1`` and ``H(j w0) = d`` (real, no phase at the centre);
+- ``|H(j w)|^2 = 1/2`` where ``(w0^2 - w^2)^2 + d^2 Y^2 = ((w0^2 - w^2)^2 + Y^2) / 2`` with
+  ``Y = b w / k``, i.e. ``|w0^2 - w^2| = b w``: at ``w_pm = sqrt(w0^2 + b^2/4) pm b/2``. The
+  two 3-dB edges are exactly ``b`` apart and geometrically symmetric (``w_+ w_- = w0^2``); they
+  are ``w0 pm b/2`` only to first order in ``b / w0`` (for ``b = 0.3 w0`` they sit 1.1 % of
+  ``w0`` above those points). The factor ``1/k`` is what makes ``b`` the exact 3-dB width;
+- the low-frequency group delay is ``b (1 - d) / (k w0^2)`` (s) per section (the ``s`` term of
+  ``H`` at ``s -> 0``), so a ramp of slope ``V`` is followed with a lag ``V sum_i b_i (1 - d) /
+  (k w0_i^2)``.
+
+Design (:class:`NotchDesign`, all at full scale)
+------------------------------------------------
+Three sections [printed: "three cascaded sections", centres in 0.06-0.12 Hz for Beaufort 9-5,
+Al-Takie (1982) 1.2]; centres 0.069, 0.083 and 0.128 Hz [chosen: the lightly damped HF poles of
+the thesis's Beaufort 9, 8 and 5 wave models, Al-Takie (1982) App. 2], ``b = 0.3 w0``
+[chosen], ``d = 0.1`` [chosen]. Note that the cascade leaves a gap between the 0.083 and
+0.128 Hz notches: the Beaufort 6 and 7 peaks (0.100 and 0.088 Hz) are attenuated only to
+0.62 and 0.30 (-4 and -11 dB), while the cascade's gain at each centre is 0.074-0.092
+(-21 to -23 dB).
+
+Discretisation (:class:`NotchCascade`)
+--------------------------------------
+Each section is discretised with the bilinear transform prewarped at its own centre,
+``s = (w0 / tan(w0 dt / 2)) (z - 1) / (z + 1)``, so that the discrete notch is exactly at
+``w0`` with exactly the gain ``d``; ``s = 0`` maps to ``z = 1`` (DC gain exactly 1). The sections
+run as second-order sections in transposed direct form II (the state convention of
+``scipy.signal.sosfilt``), vectorised over channels. A centre must be below the Nyquist
+frequency ``1 / (2 dt)``.
+
+Observer (:class:`NotchObserver`, preset ``notch``)
+---------------------------------------------------
+- pose: the measured pose (heading unwrapped next to the prediction, so the estimate is
+  continuous through north) filtered by the cascade;
+- velocity: the derivative of the filtered pose by a first-order filtered difference,
+  ``eta_dot_k = a eta_dot_{k-1} + (1 - a) (eta_k - eta_{k-1}) / dt``, ``a = exp(-dt / T_v)``
+  (``T_v`` = 3 s at full scale [chosen]: it attenuates the residual wave motion at 0.1 Hz
+  about twofold more and the differentiated position noise, while its lag stays small next
+  to the DP closed-loop time scales of about 50-100 s), rotated into the body frame
+  ``nu = R^T(psi) eta_dot`` (Fossen 2011 eq. 2.40);
+- dropouts (``z`` is ``None``): the estimate is predicted with the held velocity,
+  ``eta += eta_dot dt``, and the cascade keeps running on the predicted measurement,
+  ``eta + eta_dot tau_g`` (``tau_g`` its DC group delay, the lag of a ramp), so that on a
+  steady ramp the return of the measurements does not step its state;
+- sampling interval: the discretisation needs a fixed ``dt``; it is the first interval between
+  :meth:`~NotchObserver.reset` / :meth:`~NotchObserver.step` calls (or the constructor's
+  ``dt``), and a later interval that differs by more than 1e-6 relative raises ``ValueError``;
+- covariance: the filter has no statistical model; :attr:`Estimate.P
+  <shipgym.observers.base.Estimate>` (layout ``[x, y, psi, x_dot, y_dot, psi_dot]``) is the
+  stationary covariance of the estimate's error caused by white measurement noise of
+  variance ``measurement_variance`` alone, the variance pushed through the linear chain
+  (cascade, filtered difference): ``R sum_k h_k^2`` for the pose (``0.935 R`` for the
+  default design at ``dt`` = 0.31 s: the DC gain is 1 and the notches remove a little of the
+  white noise), and likewise for the rates and the pose-rate covariance. It leaves out the
+  ramp lag and the residual wave motion, so it is a lower bound, not a consistent filter
+  covariance. Before the
+  first interval is known the pose block is ``R`` (the estimate is one measurement) and
+  the rate block is ``inf`` (unknown), with ``P_nu = None``;
+- :class:`~shipgym.observers.base.StepInfo`: the innovation is ``z`` minus the one-step
+  prediction ``eta + eta_dot dt`` (heading wrapped), including the wave motion; there is no
+  NIS (``None``: the residual is not a white Gaussian innovation) and no outlier gate.
+
+For a model-scale vessel the preset's adapter Froude-scales the design (frequencies times
+``sqrt(scale)``, times divided by it): ``f_model = f_full sqrt(vessel.scale)`` (1:24 Blue Lady:
+0.338, 0.407 and 0.627 Hz, the last above the 0.5 Hz Nyquist frequency of its 1 s sensors,
+so it needs ``dt < 0.797 s`` or other ``centres_hz``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.signal
+from numpy.typing import ArrayLike, NDArray
+
+from .._config import from_mapping, param
+from ..dynamics import wrap_angle
+from .base import Estimate, Observer, StepInfo, as_pose, as_tau, register_observer
+
+__all__ = [
+    "NotchCascade",
+    "NotchDesign",
+    "NotchObserver",
+    "MEASUREMENT_VARIANCE_ALTAKIE",
+    "notch_section",
+]
+
+MEASUREMENT_VARIANCE_ALTAKIE = (1.0 / 9.0, 1.0 / 9.0, 4e-4)
+"""Measurement variances ``(x, y, psi)`` (m^2, m^2, rad^2): position sigma 1/3 m, gyro sigma
+0.02 rad [printed, Al-Takie (1982) 2.4]."""
+
+_DT_RTOL = 1e-6
+
+
+def _positive(name: str, value: Any, unit: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if isinstance(value, bool) or not (math.isfinite(v) and v > 0.0):
+        raise ValueError(f"{name} must be a finite number > 0 ({unit}), got {value!r}")
+    return v
+
+
+def notch_section(w0: float, b: float, d: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """One continuous notch section, Al-Takie (1982) eq. 1.1.
+
+    ``H(s) = (s^2 + (b d / sqrt(1 - 2 d^2)) s + w0^2) / (s^2 + (b / sqrt(1 - 2 d^2)) s + w0^2)``.
+
+    Args:
+        w0: centre frequency (rad/s), > 0.
+        b: 3-dB bandwidth (rad/s), > 0: ``|H| = 1/sqrt(2)`` at
+            ``sqrt(w0^2 + b^2/4) +- b/2`` (module doc).
+        d: gain at the centre, ``|H(j w0)| = d`` (-), ``0 < d < 1/sqrt(2)``.
+
+    Returns:
+        ``(num, den)``: polynomial coefficients in ``s``, highest power first (as
+        ``scipy.signal.freqs`` takes them), each (3,).
+
+    Raises:
+        ValueError: a non-finite or out-of-range argument.
+    """
+    w0 = _positive("w0 (notch centre)", w0, "rad/s")
+    b = _positive("b (3-dB bandwidth)", b, "rad/s")
+    try:
+        d = float(d)
+    except (TypeError, ValueError):
+        d = math.nan
+    if not 0.0 < d < 1.0 / math.sqrt(2.0):
+        raise ValueError(
+            f"d (gain at the notch centre) must be in (0, 1/sqrt(2)) = (0, 0.7071), got {d!r}; "
+            "e.g. 0.1 for -20 dB"
+        )
+    k = math.sqrt(1.0 - 2.0 * d * d)
+    num = np.array([1.0, b * d / k, w0 * w0])
+    den = np.array([1.0, b / k, w0 * w0])
+    return num, den
+
+
+@dataclass(frozen=True)
+class NotchDesign:
+    """The notch cascade and velocity filter of :class:`NotchObserver` (full scale by default).
+
+    Attributes:
+        centres_hz: centre frequencies of the sections (Hz), ascending, each > 0.
+        bandwidth_ratio: 3-dB bandwidth of each section over its centre, ``b / w0`` (-).
+        attenuation: gain ``d`` at each centre (-), ``0 < d < 1/sqrt(2)``.
+        velocity_time_constant: ``T_v`` of the filtered difference that gives the velocity (s).
+    """
+
+    centres_hz: tuple[float, ...] = param(
+        (0.069, 0.083, 0.128),
+        "Hz",
+        "chosen: HF peaks of the Beaufort 9, 8, 5 wave models, Al-Takie (1982) App. 2; "
+        "printed range 0.06-0.12 Hz, 3 sections, Al-Takie (1982) 1.2",
+    )
+    bandwidth_ratio: float = param(0.3, "-", "chosen: b = 0.3 w0")
+    attenuation: float = param(0.1, "-", "chosen: d = 0.1 (-20 dB at each centre)")
+    velocity_time_constant: float = param(
+        3.0, "s", "chosen: smooths the residual wave motion, small next to DP time scales"
+    )
+
+    def __post_init__(self) -> None:
+        c = self.centres_hz
+        if isinstance(c, int | float):
+            c = (c,)
+        try:
+            cs = tuple(float(x) for x in c)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"centres_hz must be a sequence of frequencies > 0 (Hz), got {self.centres_hz!r}"
+            ) from None
+        if not cs or not all(math.isfinite(x) and x > 0.0 for x in cs):
+            raise ValueError(
+                f"centres_hz must be one or more finite frequencies > 0 (Hz), got {c!r}"
+            )
+        object.__setattr__(self, "centres_hz", cs)
+        object.__setattr__(
+            self, "bandwidth_ratio", _positive("bandwidth_ratio", self.bandwidth_ratio, "b / w0")
+        )
+        object.__setattr__(
+            self,
+            "velocity_time_constant",
+            _positive("velocity_time_constant", self.velocity_time_constant, "s"),
+        )
+        notch_section(1.0, self.bandwidth_ratio, self.attenuation)  # validates d
+        object.__setattr__(self, "attenuation", float(self.attenuation))
+
+    @classmethod
+    def from_dict(cls, mapping: Mapping[str, Any]) -> NotchDesign:
+        """A design from a mapping of its fields; unknown keys raise ``ValueError``."""
+        return from_mapping(cls, mapping, where="the notch design")
+
+    def sections(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+        """The continuous sections ``(num, den)`` of :func:`notch_section`, one per centre."""
+        out = []
+        for f in self.centres_hz:
+            w0 = 2.0 * math.pi * f
+            out.append(notch_section(w0, self.bandwidth_ratio * w0, self.attenuation))
+        return out
+
+    def froude_scaled(self, scale: float) -> NotchDesign:
+        """The design for a ``1:scale`` model: frequencies times ``sqrt(scale)``, the velocity
+        time constant divided by it (Froude similarity: time scales as ``sqrt(L)``)."""
+        lam = _positive("scale", scale, "model scale lambda")
+        r = math.sqrt(lam)
+        return dataclasses.replace(
+            self,
+            centres_hz=tuple(f * r for f in self.centres_hz),
+            velocity_time_constant=self.velocity_time_constant / r,
+        )
+
+    def frequency_response(self, f_hz: ArrayLike) -> NDArray[np.complex128]:
+        """The continuous cascade's ``H(j 2 pi f)`` at frequencies ``f_hz`` (Hz)."""
+        w = 2.0 * math.pi * np.asarray(f_hz, dtype=float)
+        h = np.ones(w.shape, dtype=complex)
+        for num, den in self.sections():
+            h = h * scipy.signal.freqs(num, den, worN=np.atleast_1d(w))[1].reshape(w.shape)
+        return h
+
+    def ramp_lag(self) -> float:
+        """Low-frequency group delay of the continuous cascade (s): ``sum b (1 - d) / (k w0^2)``."""
+        d = self.attenuation
+        k = math.sqrt(1.0 - 2.0 * d * d)
+        return sum(
+            self.bandwidth_ratio * (1.0 - d) / (k * 2.0 * math.pi * f) for f in self.centres_hz
+        )
+
+
+class NotchCascade:
+    """The sections of a :class:`NotchDesign` in cascade, discretised for a fixed ``dt``.
+
+    Bilinear transform prewarped at each section's centre (the notch stays exactly at ``w0``
+    with gain ``d``; DC gain exactly 1); transposed direct form II second-order sections with
+    state, vectorised over a leading channel axis.
+
+    Args:
+        design: the :class:`NotchDesign` (or a mapping of its fields).
+        dt: sampling interval (s), > 0; every centre must be below ``1 / (2 dt)``.
+        channels: number of independent channels (e.g. 3 for ``x, y, psi``).
+
+    Attributes:
+        sos: (n_sections, 6) ``[b0, b1, b2, 1, a1, a2]`` rows (``scipy.signal.sosfilt`` layout).
+    """
+
+    def __init__(
+        self, design: NotchDesign | Mapping[str, Any], dt: float, channels: int = 3
+    ) -> None:
+        if isinstance(design, Mapping):
+            design = NotchDesign.from_dict(design)
+        if not isinstance(design, NotchDesign):
+            raise ValueError(f"design must be a NotchDesign or a mapping, got {design!r}")
+        dt = _positive("dt (sampling interval)", dt, "s")
+        if isinstance(channels, bool) or int(channels) != channels or channels < 1:
+            raise ValueError(f"channels must be an integer >= 1, got {channels!r}")
+        nyquist = 0.5 / dt
+        too_high = [f for f in design.centres_hz if f >= nyquist]
+        if too_high:
+            raise ValueError(
+                f"notch centre(s) {too_high} Hz at or above the Nyquist frequency {nyquist:.4g} Hz "
+                f"of dt = {dt:.6g} s: sample faster (dt < {0.5 / max(too_high):.4g} s) or "
+                "choose centres_hz below it"
+            )
+        rows = []
+        for f, (num, den) in zip(design.centres_hz, design.sections(), strict=True):
+            w0 = 2.0 * math.pi * f
+            fs_warp = w0 / (2.0 * math.tan(0.5 * w0 * dt))  # s = 2 fs_warp (z - 1)/(z + 1)
+            bz, az = scipy.signal.bilinear(num, den, fs=fs_warp)
+            rows.append(np.concatenate([bz / az[0], az / az[0]]))
+        self.design = design
+        self.dt = dt
+        self.channels = int(channels)
+        self.sos = np.array(rows)
+        self.sos.setflags(write=False)
+        self._state = np.zeros((self.channels, len(rows), 2))
+
+    @property
+    def state(self) -> NDArray[np.float64]:
+        """A copy of the section states, (channels, n_sections, 2) (``sosfilt``'s ``zi``)."""
+        return self._state.copy()
+
+    def reset(self, x0: ArrayLike = 0.0) -> None:
+        """Start in steady state at the constant input ``x0`` (scalar or (channels,)): the
+        output is ``x0`` from the first step on (DC gain 1, no start transient)."""
+        x = np.broadcast_to(np.asarray(x0, dtype=float), (self.channels,))
+        if not np.isfinite(x).all():
+            raise ValueError(f"x0 must be finite, got {x0!r}")
+        b0, b1, b2, _, a1, a2 = self.sos.T
+        s2 = (b2 - a2)[None, :] * x[:, None]
+        s1 = (b1 - a1)[None, :] * x[:, None] + s2
+        self._state = np.stack([s1, s2], axis=-1)
+
+    def step(self, u: ArrayLike) -> NDArray[np.float64]:
+        """Filter one sample ``u`` (scalar or (channels,)); returns the output (channels,)."""
+        x = np.array(np.broadcast_to(np.asarray(u, dtype=float), (self.channels,)))
+        if not np.isfinite(x).all():
+            raise ValueError(f"the cascade's input must be finite, got {u!r}")
+        st = self._state
+        for i, (b0, b1, b2, _, a1, a2) in enumerate(self.sos):
+            y = b0 * x + st[:, i, 0]
+            st[:, i, 0] = b1 * x - a1 * y + st[:, i, 1]
+            st[:, i, 1] = b2 * x - a2 * y
+            x = y
+        return x
+
+    def frequency_response(self, f_hz: ArrayLike) -> NDArray[np.complex128]:
+        """The discrete cascade's frequency response at ``f_hz`` (Hz), ``scipy.signal.sosfreqz``."""
+        f = np.atleast_1d(np.asarray(f_hz, dtype=float))
+        return scipy.signal.sosfreqz(np.array(self.sos), worN=f, fs=1.0 / self.dt)[1]
+
+    @property
+    def dc_group_delay(self) -> float:
+        """Group delay at zero frequency (s): a ramp comes out delayed by exactly this much
+        in steady state (DC gain 1). Per section ``sum n b_n / sum b_n - sum n a_n / sum a_n``
+        samples."""
+        n = np.arange(3.0)
+        b, a = self.sos[:, :3], self.sos[:, 3:]
+        samples = (b @ n) / b.sum(axis=1) - (a @ n) / a.sum(axis=1)
+        return float(samples.sum() * self.dt)
+
+    def impulse_response(self, n: int) -> NDArray[np.float64]:
+        """The first ``n`` samples of the cascade's impulse response (-)."""
+        x = np.zeros(int(n))
+        x[0] = 1.0
+        return scipy.signal.sosfilt(np.array(self.sos), x)
+
+
+class NotchObserver(Observer):
+    """Notch-filter wave filter with a filtered-difference velocity (module doc).
+
+    Args:
+        design: the :class:`NotchDesign` (or a mapping of its fields); default the full-scale
+            design of Al-Takie (1982) 1.2 with the [chosen] values (module doc).
+        measurement_variance: variance of one measurement ``(x, y, psi)`` (m^2, m^2, rad^2),
+            only for the noise covariance ``P`` reported; default Al-Takie (1982) 2.4.
+        dt: the fixed sampling interval (s); ``None``: the first interval between calls.
+        name: the observer's name.
+    """
+
+    def __init__(
+        self,
+        design: NotchDesign | Mapping[str, Any] | None = None,
+        *,
+        measurement_variance: ArrayLike = MEASUREMENT_VARIANCE_ALTAKIE,
+        dt: float | None = None,
+        name: str = "notch",
+    ) -> None:
+        if design is None:
+            design = NotchDesign()
+        elif isinstance(design, Mapping):
+            design = NotchDesign.from_dict(design)
+        if not isinstance(design, NotchDesign):
+            raise ValueError(f"design must be a NotchDesign or a mapping, got {design!r}")
+        R = np.asarray(measurement_variance, dtype=float)
+        if R.shape != (3,) or not np.isfinite(R).all() or (R < 0).any():
+            raise ValueError(
+                "measurement_variance must be 3 finite values >= 0 (m^2, m^2, rad^2), "
+                f"got {measurement_variance!r}"
+            )
+        self.design = design
+        self.name = str(name)
+        self._R = R
+        self._dt_fixed = None if dt is None else _positive("dt (sampling interval)", dt, "s")
+        self._dt: float | None = None
+        self._cascade: NotchCascade | None = None
+        self._P6: NDArray[np.float64] | None = None
+        self._t: float | None = None
+        self._eta = np.zeros(3)
+        self._eta_dot = np.zeros(3)
+        self._y_prev = np.zeros(3)
+        if self._dt_fixed is not None:
+            self._build(self._dt_fixed)
+
+    # ---- interface ---------------------------------------------------------------------------
+    def reset(
+        self,
+        t0: float,
+        eta0: ArrayLike,
+        *,
+        nu0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+    ) -> None:
+        """Start at ``t0`` in steady state at the pose ``eta0`` (no start transient).
+
+        Args:
+            t0: initial time (s).
+            eta0: ``[x, y, psi]`` (m, m, rad); the heading's branch is kept.
+            nu0: ``[u, v, r]`` (m/s, m/s, rad/s), the velocity filter's start; ``None`` = 0.
+            P0: must be ``None``: the notch filter has no covariance state.
+
+        Raises:
+            ValueError: non-finite or mis-shaped arguments, or ``P0`` given.
+        """
+        t0 = float(t0)
+        if not math.isfinite(t0):
+            raise ValueError(f"t0 must be finite, got {t0!r}")
+        if P0 is not None:
+            raise ValueError(
+                "the notch observer has no covariance state: pass P0=None "
+                "(its P is the measurement-noise covariance through the filter, module doc)"
+            )
+        eta = as_pose(eta0, "eta0")
+        if nu0 is None:
+            eta_dot = np.zeros(3)
+        else:
+            nu = as_pose(nu0, "nu0", "[u, v, r] (m/s, m/s, rad/s)")
+            c, s = math.cos(eta[2]), math.sin(eta[2])
+            eta_dot = np.array([c * nu[0] - s * nu[1], s * nu[0] + c * nu[1], nu[2]])
+        self._t = t0
+        self._eta = eta.copy()
+        self._eta_dot = eta_dot
+        self._y_prev = eta.copy()
+        if self._cascade is not None:
+            self._cascade.reset(eta)
+        if self._dt_fixed is None:  # the interval is learned again from this episode
+            self._dt = None
+            self._cascade = None
+            self._P6 = None
+
+    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
+        """Advance one sampling interval to ``t`` and filter ``z`` (``None``: coast).
+
+        Args:
+            t: time now (s): the previous call's time plus the fixed sampling interval.
+            z: measured ``[x, y, psi]`` (m, m, rad; heading in any branch) or ``None``.
+            tau: body thrust ``[X, Y, N]`` (N, N, N m); checked, not used (a signal filter).
+
+        Returns:
+            :class:`~shipgym.observers.base.StepInfo`: innovation ``z`` minus the one-step
+            prediction (NaN without ``z``), no NIS, never rejected.
+
+        Raises:
+            RuntimeError: :meth:`reset` was not called.
+            ValueError: the interval is not the fixed one (or the first is <= 0), or ``z`` /
+                ``tau`` not 3 finite values.
+        """
+        if self._t is None:
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
+        t = float(t)
+        dt = t - self._t
+        if self._dt is None:
+            if not (math.isfinite(dt) and dt > 0.0):
+                raise ValueError(
+                    f"{self.name}: the first step must come after reset (t0 = {self._t}, "
+                    f"got t = {t!r}); its interval fixes the sampling interval"
+                )
+            self._build(dt)
+            assert self._cascade is not None
+            self._cascade.reset(self._y_prev)
+        elif not abs(dt - self._dt) <= _DT_RTOL * self._dt:
+            raise ValueError(
+                f"{self.name}: the notch filter is discretised for a fixed sampling interval "
+                f"{self._dt:.9g} s but this step is {dt:.9g} s after the previous one: call step() "
+                "once per sample (z=None for a missing one), or make a new observer (dt=...)"
+            )
+        as_tau(tau)
+        cascade = self._cascade
+        assert cascade is not None and self._dt is not None
+        h = self._dt
+        pred = self._eta + self._eta_dot * h
+        if z is None:
+            # the cascade is fed the predicted *measurement*: the prediction led by the
+            # cascade's delay, so that on a ramp its input goes on as the measurements would
+            self._y_prev = cascade.step(pred + self._eta_dot * cascade.dc_group_delay)
+            self._eta = pred
+            self._t = t
+            return StepInfo(np.full(3, np.nan), None, False)
+        zz = as_pose(z)
+        innov = zz - pred
+        innov[2] = wrap_angle(float(innov[2]))
+        y = cascade.step(pred + innov)  # the heading unwrapped next to the prediction
+        a = math.exp(-h / self.design.velocity_time_constant)
+        self._eta_dot = a * self._eta_dot + (1.0 - a) * (y - self._y_prev) / h
+        self._y_prev = y
+        self._eta = y.copy()
+        self._t = t
+        return StepInfo(innov, None, False)
+
+    def estimate(self) -> Estimate:
+        """The current estimate (copies); ``P`` in ``[x, y, psi, x_dot, y_dot, psi_dot]``,
+        the measurement-noise covariance through the filter (module doc)."""
+        if self._t is None:
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
+        eta = self._eta.copy()
+        ed = self._eta_dot
+        c, s = math.cos(eta[2]), math.sin(eta[2])
+        u = c * ed[0] + s * ed[1]
+        v = -s * ed[0] + c * ed[1]
+        nu = np.array([u, v, ed[2]])
+        if self._P6 is None:
+            P6 = np.diag(np.concatenate([self._R, np.full(3, np.inf)]))
+            return Estimate(self._t, eta, nu, P6, np.diag(self._R), None)
+        P6 = self._P6.copy()
+        J = np.zeros((3, 6))
+        J[0, 2], J[1, 2] = v, -u
+        J[0, 3], J[0, 4], J[1, 3], J[1, 4], J[2, 5] = c, s, -s, c, 1.0
+        P_nu = J @ P6 @ J.T
+        return Estimate(self._t, eta, nu, P6, P6[:3, :3].copy(), 0.5 * (P_nu + P_nu.T))
+
+    # ---- extras ------------------------------------------------------------------------------
+    @property
+    def dt(self) -> float | None:
+        """The fixed sampling interval (s), ``None`` until known."""
+        return self._dt
+
+    @property
+    def cascade(self) -> NotchCascade | None:
+        """The discretised cascade, ``None`` until the sampling interval is known."""
+        return self._cascade
+
+    @property
+    def t(self) -> float | None:
+        """Time of the current estimate (s), ``None`` before :meth:`reset`."""
+        return self._t
+
+    def noise_gains(self) -> tuple[float, float, float]:
+        """``(sum h^2, sum g^2, sum h g)`` of the chain's impulse responses (``h``: pose, -;
+        ``g``: rate, 1/s): the pose variance, rate variance and their covariance per unit
+        measurement variance."""
+        if self._cascade is None or self._dt is None:
+            raise RuntimeError(f"{self.name}: the sampling interval is not known yet")
+        dt = self._dt
+        slowest = min(self.design.centres_hz)
+        damping = math.pi * slowest * self.design.bandwidth_ratio  # b / 2 of the slowest (1/s)
+        tmax = 60.0 / damping + 60.0 * self.design.velocity_time_constant
+        n = int(min(max(math.ceil(tmax / dt), 64), 2_000_000))
+        hresp = self._cascade.impulse_response(n)
+        a = math.exp(-dt / self.design.velocity_time_constant)
+        diff = np.diff(hresp, prepend=0.0) / dt
+        g = scipy.signal.lfilter([1.0 - a], [1.0, -a], diff)
+        return float(hresp @ hresp), float(g @ g), float(hresp @ g)
+
+    def _build(self, dt: float) -> None:
+        self._dt = dt
+        self._cascade = NotchCascade(self.design, dt, channels=3)
+        hh, gg, hg = self.noise_gains()
+        P6 = np.zeros((6, 6))
+        i = np.arange(3)
+        P6[i, i] = hh * self._R
+        P6[i + 3, i + 3] = gg * self._R
+        P6[i, i + 3] = P6[i + 3, i] = hg * self._R
+        self._P6 = P6
+
+
+# --------------------------------------------------------------------------------------------
+# Preset and registry
+# --------------------------------------------------------------------------------------------
+
+_DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(NotchDesign))
+_CTOR_KEYS = ("design", "measurement_variance", "dt")
+
+
+def notch_observer(**overrides: Any) -> NotchObserver:
+    """The ``notch`` preset: :class:`NotchObserver` with the full-scale :class:`NotchDesign`.
+
+    Args:
+        **overrides: :class:`NotchDesign` fields (``centres_hz``, ``bandwidth_ratio``,
+            ``attenuation``, ``velocity_time_constant``) and the constructor's keywords
+            (``design``, ``measurement_variance``, ``dt``).
+
+    Raises:
+        ValueError: an unknown option (the message lists the valid ones).
+    """
+    unknown = sorted(set(overrides) - set(_DESIGN_KEYS) - set(_CTOR_KEYS))
+    if unknown:
+        raise ValueError(
+            f"unknown option(s) {unknown} for observer 'notch'; valid: "
+            f"{', '.join(sorted(_DESIGN_KEYS + _CTOR_KEYS))}"
+        )
+    design = overrides.pop("design", None)
+    if design is None:
+        design = NotchDesign()
+    elif isinstance(design, Mapping):
+        design = NotchDesign.from_dict(design)
+    changes = {k: overrides.pop(k) for k in list(overrides) if k in _DESIGN_KEYS}
+    if changes:
+        design = dataclasses.replace(design, **changes)
+    return NotchObserver(design, name="notch", **overrides)
+
+
+def vessel_design(vessel: Any) -> dict[str, Any]:
+    """The ``notch`` preset for a vessel: the full-scale design Froude-scaled to its
+    ``vessel.scale`` (``f_model = f_full sqrt(scale)``, ``T_v`` divided by ``sqrt(scale)``)."""
+    return {"design": NotchDesign().froude_scaled(float(vessel.scale))}
+
+
+register_observer("notch", notch_observer, vessel_design)
