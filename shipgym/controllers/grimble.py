@@ -33,7 +33,7 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .lq import lqr
+from .design import lqr
 
 __all__ = [
     "PRINTED_GAINS",

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from shipgym.controllers.design import lqr
 from shipgym.controllers.grimble import PRINTED_GAINS, grimble_weights
-from shipgym.controllers.lq import lqr
 from shipgym.dynamics.altakie import (
     R_PRINTED,
     discretise,

@@ -583,7 +583,7 @@ def _wrap_heading(nu: Array) -> Array:
 
 
 def _preset_hf_std(vessel: Any, beaufort: int) -> tuple[float, float]:
-    from shipgym.scenarios import beaufort as sea_state
+    from shipgym.disturbances.seastate import beaufort as sea_state
 
     waves = sea_state(int(beaufort), scale=float(vessel.scale)).waves
     return float(waves.position_std), float(waves.heading_std)
