@@ -27,16 +27,27 @@ The Star Hercules gain printed in 4.5 is not re-derivable from the stated weight
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from types import MappingProxyType
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym.dynamics.altakie import (
+    THESIS_LF,
+    lf_model_from_vessel,
+    saturation_slope,
+    surge_model_from_vessel,
+)
+from shipgym.dynamics.perunit import PerUnit
+
 from .design import lqr
 
 __all__ = [
     "PRINTED_GAINS",
+    "VARIANTS",
+    "GrimbleLQController",
     "grimble_lq",
     "grimble_weights",
     "markov_order",
@@ -151,3 +162,143 @@ def grimble_lq(
     ratios = (1.5, 1.0) if case == "a" else None
     Q, R, _, _ = grimble_weights(A, B, C, ratios, f)
     return lqr(A, B, Q, R)
+
+
+# ---- the DP controller for a simulated vessel (SI in, SI out) ---------------------------------
+
+#: controller variants: ``"lq"`` (Grimble's case, re-solved on the vessel's own per-unit LF
+#: model), ``"printed"`` (the thesis's printed gain of the vessel), ``"sdre"`` (re-solved on the
+#: model linearised at the thruster states every ``relinearise_every`` calls, ch. 7)
+VARIANTS = ("lq", "printed", "sdre")
+
+
+class GrimbleLQController:
+    """Al-Takie (1982) ch. 4 LQ (and ch. 7 SDRE) on a vessel, as a DP control law.
+
+    Per unit on the vessel's own bases (:class:`~shipgym.dynamics.perunit.PerUnit`), the LF
+    sway-yaw state ``x = [v, y_e, r, psi_e, f_Y, f_N]`` (body sway velocity, sway position
+    error in the body frame, yaw rate, heading error, the thruster states) gives
+    ``[Y, N] = -K x``; surge, decoupled in the thesis, gets the same design on its own model
+    ``[u, x_e, f_X]`` (:func:`~shipgym.dynamics.altakie.surge_model_from_vessel`; Grimble's
+    weights with ``k = 2``). No integral action (as in the thesis, which assumes wind
+    feedforward): a steady load leaves an offset ``K^-1``-small at these gains.
+
+    The thruster states are the controller's own first-order lag model of the force it asked
+    for and was delivered (the 14-state filter's estimate of them is exactly that: they carry
+    no noise, so its gain on them is zero).
+
+    Args:
+        vessel: the :class:`~shipgym.dynamics.vessel.Vessel`.
+        dt: control period (s).
+        variant: one of :data:`VARIANTS`.
+        case: Grimble's case ``"a"`` or ``"b"`` (``"lq"``/``"sdre"``).
+        relinearise_every: SDRE calls between re-solutions (2 printed).
+        F1: SDRE saturation (p.u. force); ``None``: the vessel's sway capacity in p.u.
+    """
+
+    def __init__(
+        self,
+        vessel: object,
+        dt: float,
+        *,
+        variant: str = "lq",
+        case: str = "b",
+        relinearise_every: int = 2,
+        F1: float | None = None,
+    ) -> None:
+        if variant not in VARIANTS:
+            raise ValueError(f"variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
+        self.vessel = vessel
+        self.dt = float(dt)
+        self.variant = variant
+        self.pu = pu = PerUnit.of_vessel(vessel)
+        lf = lf_model_from_vessel(vessel)
+        self.lf = lf
+        self._Q, self._R, _, _ = grimble_weights(
+            lf.A, lf.B, lf.C, (1.5, 1.0) if case == "a" else None
+        )
+        name = getattr(vessel, "name", "")
+        if variant == "printed":
+            key = f"{name}/b" if name == "wimpey-sealab" else name
+            if key not in PRINTED_GAINS or name not in THESIS_LF:
+                raise ValueError(
+                    f"the thesis prints LQ gains for {', '.join(THESIS_LF)} only, not {name!r}: "
+                    "use the 'alt-lq' controller (Grimble's weights re-solved)"
+                )
+            Y = THESIS_LF[name].Y
+            T = np.eye(6)
+            T[4:, 4:] = Y
+            # printed: u_units = K_p x_units; generalised: u = Y K_p T^-1 x (thesis sign u = K x)
+            self.K = -(Y @ PRINTED_GAINS[key] @ np.linalg.inv(T))
+        else:
+            self.K = lqr(lf.A, lf.B, self._Q, self._R)[0]
+        As, Bs, Cs, _ = surge_model_from_vessel(vessel)
+        Qs, Rs, _, _ = grimble_weights(As, Bs, Cs)
+        self.K_surge = lqr(As, Bs, Qs, Rs)[0]
+        T_lag = 1.0 / (float(lf.thruster_pole[0]) / pu.time)  # s
+        self._a = math.exp(-self.dt / T_lag)
+        self.relinearise_every = int(relinearise_every)
+        self.F1 = float(vessel.actuators.capacity()[1]) / pu.force if F1 is None else float(F1)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the thruster states and the last command."""
+        self._f = np.zeros(3)  # p.u. [f_X, f_Y, f_N]
+        self._u = np.zeros(3)
+        self._calls = 0
+        self._K_now = self.K
+
+    def change_frame(self, dpsi: float) -> None:
+        """Nothing to rotate: the state is in the body frame."""
+
+    def _gain(self) -> Array:
+        if self.variant != "sdre":
+            return self.K
+        if self._calls % self.relinearise_every == 0:
+            A1 = self.lf.A.copy()
+            A1[:, 4:6] = self.lf.A[:, 4:6] * saturation_slope(self._f[1:], self.F1, 1.0 / self.F1)
+            self._K_now = lqr(A1, self.lf.B, self._Q, self._R)[0]
+        return self._K_now
+
+    def __call__(
+        self,
+        eta_r: ArrayLike,
+        nu: ArrayLike,
+        eta_d_r: ArrayLike,
+        eta_dot_d_r: ArrayLike | None = None,
+        eta_ddot_d_r: ArrayLike | None = None,
+        *,
+        saturated: ArrayLike | None = None,
+    ) -> Array:
+        """Body-frame control force ``[X, Y, N]`` (N, N, N m) from the r-frame pose errors.
+
+        Args:
+            eta_r, nu, eta_d_r: pose (m, m, rad; r-frame), body velocity, set-point.
+            eta_dot_d_r, eta_ddot_d_r: ignored (a set-point regulator, as in the thesis).
+            saturated: the allocation's ``tau_error`` of the previous call (N, N, N m): the
+                thruster model integrates what was delivered.
+        """
+        e = np.asarray(eta_r, dtype=float) - np.asarray(eta_d_r, dtype=float)
+        n = np.asarray(nu, dtype=float)
+        pu = self.pu
+        if self._calls:
+            delivered = self._u.copy()
+            if saturated is not None:
+                err = np.asarray(saturated, dtype=float)
+                if err.shape == (3,) and err.dtype != bool:
+                    delivered -= np.array(
+                        [err[0] / pu.force, err[1] / pu.force, err[2] / pu.moment]
+                    )
+            self._f = self._a * self._f + (1.0 - self._a) * delivered
+        psi = float(eta_r[2])  # type: ignore[index]
+        c, s = math.cos(psi), math.sin(psi)
+        ex, ey = c * e[0] + s * e[1], -s * e[0] + c * e[1]
+        epsi = (e[2] + math.pi) % (2.0 * math.pi) - math.pi
+        L, V, W = pu.L, pu.velocity, pu.angular_velocity
+        x = np.array([n[1] / V, ey / L, n[2] / W, epsi, self._f[1], self._f[2]])
+        xs = np.array([n[0] / V, ex / L, self._f[0]])
+        u_sy = -self._gain() @ x
+        u_x = float(-(self.K_surge @ xs)[0])
+        self._u = np.array([u_x, u_sy[0], u_sy[1]])
+        self._calls += 1
+        return np.array([u_x * pu.force, u_sy[0] * pu.force, u_sy[1] * pu.moment])

@@ -25,6 +25,7 @@ from shipgym.records import ControlData, StepRecord, step_record
 
 from .actuation import make_allocator, planar_capacity
 from .allocation import Allocation
+from .grimble import GrimbleLQController
 from .pid import MultivariablePID, PIDGains
 
 __all__ = [
@@ -93,6 +94,15 @@ def _pid(preset: str, scale: float = 1.0) -> Callable[[Vessel, float], DPControl
     return make
 
 
+def _grimble(variant: str) -> Callable[[Vessel, float], DPController]:
+    """Al-Takie (1982) LQ of :class:`~shipgym.controllers.grimble.GrimbleLQController`."""
+
+    def make(vessel: Vessel, dt: float) -> DPController:
+        return GrimbleLQController(vessel, dt, variant=variant)
+
+    return make
+
+
 #: Controllers selectable by name (``shipgym run --controller NAME``); extend with
 #: :func:`register_controller`.
 CONTROLLERS: dict[str, ControllerSpec] = {
@@ -112,6 +122,24 @@ CONTROLLERS: dict[str, ControllerSpec] = {
         "inverse",
         "Tomera (2014) eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1 "
         "(the Blue Lady only)",
+    ),
+    "alt-lq": ControllerSpec(
+        _grimble("lq"),
+        "constrained",
+        "Al-Takie (1982) ch. 4 LQ with Grimble's weights (case b) re-solved on the vessel's "
+        "per-unit LF model, surge alike; no integral action; constrained allocation",
+    ),
+    "alt-lq-printed": ControllerSpec(
+        _grimble("printed"),
+        "constrained",
+        "Al-Takie (1982) 4.4-4.5: the printed LQ gain of Wimpey Sealab (case b) or Star "
+        "Hercules (those vessels only), constrained allocation",
+    ),
+    "alt-sdre": ControllerSpec(
+        _grimble("sdre"),
+        "constrained",
+        "Al-Takie (1982) ch. 7: the LQ re-solved every 2 steps on the model linearised at the "
+        "saturating thruster states (SDRE), constrained allocation",
     ),
 }
 
