@@ -3,7 +3,8 @@ r"""Offshore dynamic-positioning tasks of Al-Takie (1982): station keeping and t
 Sources: Al-Takie (1982) (the thesis: Wimpey Sealab and Star Hercules, per-unit time App. 1,
 sampling App. 3, sensor noise 2.4.2, Beaufort 8 wind 3.2.3, HF wave filter App. 2, the
 0.02 p.u. sway-step test ch. 5); WMO (1998) and NORSOK N-003 (the Beaufort table of
-:mod:`shipgym.scenarios`); DNV-RP-C205 (2010) (current). Full entries: ``docs/references.md``.
+:mod:`shipgym.scenarios`); Fossen (2011) ch. 8.3 (Gauss-Markov current). Full entries:
+``docs/references.md``.
 
 Both tasks are generic over the vessel (``vessel=``): the thesis's vessels are at full scale
 (``vessel.scale == 1``); any other (the 1:24 Blue Lady) gets the same sea, current, sensors
@@ -57,8 +58,9 @@ DP_BEAUFORT: tuple[int, ...] = (5, 6, 7, 8, 9)
 AL_TAKIE1982_MEAN_WIND: Mapping[int, float] = MappingProxyType({8: 19.0})
 
 #: the default offshore current, full scale (Froude-scaled with the vessel): [chosen] a mean
-#: of 0.5 m/s (DNV-RP-C205 (2010) gives 0.5-1 m/s tidal and wind-driven surface currents
-#: offshore; the lower end, as the packaged ``beaufort5-offshore`` scenario), slowly varying
+#: of 0.5 m/s (the lower end of the project's offshore assumption of 0.5-1 m/s, see
+#: :class:`~shipgym.disturbances.CurrentConfig`, as the packaged ``beaufort5-offshore``
+#: scenario; the thesis prints no current), slowly varying
 #: (first-order Gauss-Markov, Fossen 2011 ch. 8.3) with a stationary std of 0.05 m/s and a
 #: time constant of 1500 s (the scenario's 300 s at 1:24 is 1470 s at full scale), bounded to
 #: [0, 1] m/s; it sets east (to 90 deg), across the heading of a ship heading north, the
@@ -75,6 +77,7 @@ MAX_DP_TIMESTEP = 0.05
 #: which makes the printed gain-settling times consistent; 0.3104 s Wimpey, 0.2728 s Star
 #: Hercules)
 DP_CONTROL_PERIOD_PU = 0.1
+
 
 def dp_mean_wind(n: int) -> float:
     """The full-scale mean wind (m/s) of Beaufort ``n`` in the DP tasks.
@@ -115,7 +118,7 @@ def _check_beaufort(n: Any) -> None:
 def _check_number(x: Any, name: str, unit: str, lo: float | None = None) -> float:
     if isinstance(x, bool) or not isinstance(x, numbers.Real) or not math.isfinite(x):
         raise ValueError(f"{name} must be a finite number ({unit}), got {x!r}")
-    if lo is not None and not x >= lo:
+    if lo is not None and not float(x) >= lo:
         raise ValueError(f"{name} must be >= {lo:g} {unit}, got {x!r}")
     return float(x)
 
@@ -180,9 +183,10 @@ class OffshoreDPEnv(StationKeepingEnv):
 
     ## Episode End
     Never terminates on reaching the pose. Truncated after ``episode_duration`` seconds
-    (default 2000 s; the env itself truncates, since the number of control steps depends
-    on the vessel's control period: 6444 steps for Wimpey Sealab). ``gym.make``'s
-    ``max_episode_steps`` adds a ``TimeLimit`` on top.
+    (default 2000 s; the env itself truncates, with ``info["episode_metrics"]``, since the
+    number of control steps depends on the vessel's control period: 6445 steps for Wimpey
+    Sealab, 7332 for Star Hercules; the ids are registered without ``max_episode_steps``).
+    ``gym.make``'s ``max_episode_steps`` adds a ``TimeLimit`` on top.
 
     ## Arguments (besides those of :class:`~shipgym.envs.base.ShipEnv`)
     | Argument | Default | Description |
@@ -214,8 +218,7 @@ class OffshoreDPEnv(StationKeepingEnv):
         _check_beaufort(beaufort)
         if not isinstance(wave_motion, str) or wave_motion not in WF_MODELS:
             raise ValueError(
-                f"wave_motion must be one of {', '.join(map(repr, WF_MODELS))}, got "
-                f"{wave_motion!r}"
+                f"wave_motion must be one of {', '.join(map(repr, WF_MODELS))}, got {wave_motion!r}"
             )
         direction = _check_number(direction_from_deg, "direction_from_deg", "deg")
         current_to = _check_number(current_direction_to_deg, "current_direction_to_deg", "deg")
@@ -236,7 +239,7 @@ class OffshoreDPEnv(StationKeepingEnv):
             kwargs["control_period"] = dp_control_period(vessel.hull.L_pp)
         if "timestep" not in kwargs:
             cp = kwargs["control_period"]
-            if isinstance(cp, numbers.Real) and not isinstance(cp, bool) and cp > 0:
+            if isinstance(cp, numbers.Real) and not isinstance(cp, bool) and float(cp) > 0:
                 kwargs["timestep"] = dp_timing(float(cp))[0]
         # wind and waves: the Beaufort preset, Al-Takie's printed Beaufort 8 wind
         sea = beaufort_sea(self.beaufort, scale, math.radians(direction), wave_motion)

@@ -210,9 +210,7 @@ class VesselPhysics:
         self._tau_of = v.actuators.kernel()
         self._thrust_of = v.actuators.thrust_kernel()
         # channels whose state lags its command (the others integrate it: azimuth angles)
-        self._lagged = tuple(
-            i for i, c in enumerate(v.actuators.channels) if c.dynamics == "lag"
-        )
+        self._lagged = tuple(i for i, c in enumerate(v.actuators.channels) if c.dynamics == "lag")
         self.wind = Wind(self.wind_config, self.windage)
         self._wind_load = self._make_wind_load()
         self._accel = self.plant.accel
