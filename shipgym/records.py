@@ -164,6 +164,10 @@ class Measurement:
         valid: whether the receiver flagged the sample valid.
         outlier: whether the sample is an injected outlier.
         tau: the actuators' generalised force at the sample (body frame, N and N m).
+        tau_command: the generalised force ``[X, Y, N]`` (N, N, N m, body) that the commands
+            held over the interval ending at the sample would give in steady state, at the
+            actuators' current angles: the demand a model-based filter with its own thruster
+            lags takes as input (Al-Takie 1982 eq. 3.21 ``u``); ``None`` where not reported.
     """
 
     __eq__ = _equal
@@ -174,12 +178,20 @@ class Measurement:
     valid: bool
     outlier: bool
     tau: Array
+    tau_command: Array | None = None
 
     @classmethod
     def from_mapping(cls, m: Mapping[str, Any]) -> Measurement:
         """From the form of ``info["measurements"]`` (``t``, ``z``, ``valid``, ``outlier``,
-        ``tau``)."""
-        return cls(float(m["t"]), m["z"], bool(m["valid"]), bool(m["outlier"]), m["tau"])
+        ``tau`` and, when present, ``tau_command``)."""
+        return cls(
+            float(m["t"]),
+            m["z"],
+            bool(m["valid"]),
+            bool(m["outlier"]),
+            m["tau"],
+            m.get("tau_command"),
+        )
 
 
 @dataclass(slots=True, eq=False)
@@ -343,7 +355,14 @@ def step_record_of_env(
         info["tau_wind"],
         info["tau_waves"],
         info["current_body"],
-        tuple([Measurement(m["t"], m["z"], m["valid"], m["outlier"], m["tau"]) for m in ms])
+        tuple(
+            [
+                Measurement(
+                    m["t"], m["z"], m["valid"], m["outlier"], m["tau"], m.get("tau_command")
+                )
+                for m in ms
+            ]
+        )
         if ms
         else (),
         info["quay_contact"],

@@ -47,7 +47,7 @@ def test_defaults_are_the_seed_values():
 
 
 def test_presets():
-    assert set(SENSOR_PRESETS) == {"default", "dgps", "rtk", "tomera2014"}
+    assert set(SENSOR_PRESETS) == {"default", "dgps", "rtk", "tomera2014", "al-takie1982"}
     assert sensor_config("default") == SensorConfig()
     assert sensor_config("tomera2014") == SensorConfig()
     dgps = sensor_config("dgps")  # Artyszuk (2003): sigma 2 m per axis

@@ -58,7 +58,8 @@ Models (``wf_model``):
 * ``"al-takie"``: the 4th-order filter ``K s^2 / (s^4 + c1 s^3 + c2 s^2 + c3 s + c4)`` of the
   thesis (Appendix 2, Wimpey Sealab Table 1 divided by ``Tb = 3.104 s``; the same polynomial
   for both thesis ships) for ``wf_beaufort`` 5-9, with frequencies rescaled so that its peak
-  ``|G(jw)|`` falls on ``w_p`` (the thesis poles are full scale for a 95 m ship).
+  ``|G(jw)|`` falls on ``w_p`` (the thesis poles are full scale for a 95 m ship), or on
+  ``wf_peak_frequency`` when given.
 * ``"rao"``: RAO-like constant gains on the wave components (coherent with the elevation):
   ``d = g_d sum A_j sin(w_j t + eps_j)`` (surface particle displacement) and
   ``h = g_h sum k_j A_j sin(w_j t + eps_j)`` (wave slope), gains set to the target stds.
@@ -96,6 +97,7 @@ __all__ = [
     "WAVE_SPECTRA",
     "WF_MODELS",
     "AL_TAKIE_HF_POLYNOMIALS",
+    "al_takie_hf_peak_frequency",
     "al_takie_hf_polynomial",
     "WaveConfig",
     "Waves",
@@ -147,11 +149,24 @@ def al_takie_hf_polynomial(beaufort: int, peak_frequency: float | None = None) -
     den = np.array([1.0, *AL_TAKIE_HF_POLYNOMIALS[beaufort]])
     if peak_frequency is None:
         return den
+    r = float(peak_frequency) / al_takie_hf_peak_frequency(beaufort)
+    return den * r ** np.arange(5)
+
+
+def al_takie_hf_peak_frequency(beaufort: int) -> float:
+    """Peak of ``|G(jw)|`` of Al-Takie's HF filter at the thesis's own, full-scale real-time
+    frequencies (rad/s): 0.806 at BF5 (0.128 Hz) ... 0.436 at BF9 (0.069 Hz) (App. 2;
+    to 5e-5 rad/s, the grid step).
+
+    Args:
+        beaufort: Beaufort number 5-9.
+    """
+    if isinstance(beaufort, bool) or beaufort not in AL_TAKIE_HF_POLYNOMIALS:
+        raise ValueError(f"Al-Takie's HF filter exists for Beaufort 5-9 only, got {beaufort!r}")
+    den = np.array([1.0, *AL_TAKIE_HF_POLYNOMIALS[beaufort]])
     w = np.linspace(0.05, 3.0, 60001)
     s = 1j * w
-    peak = float(w[int(np.argmax(np.abs(s * s / np.polyval(den, s))))])
-    r = float(peak_frequency) / peak
-    return den * r ** np.arange(5)
+    return float(w[int(np.argmax(np.abs(s * s / np.polyval(den, s))))])
 
 
 def drift_coefficients(
@@ -211,6 +226,9 @@ class WaveConfig:
             BF9, inside the assumed 0.2-0.5 deg).
         wf_lambda: Damping of Fossen's filter (0 < lambda < 1); ``None``: fitted to the spectrum.
         wf_beaufort: Row of Al-Takie's HF table (5-9), needed for ``wf_model="al-takie"``.
+        wf_peak_frequency: Where the ``"al-takie"`` filter's peak ``|G(jw)|`` falls (rad/s);
+            ``None``: on ``w_p``. The offshore DP tasks put it on the thesis's own peak
+            (:func:`al_takie_hf_peak_frequency`, Froude-scaled). Other models ignore it.
         sample_period: Grid of the precomputed envelope and WF motion (s), ``<= Tp / 10``.
     """
 
@@ -233,6 +251,9 @@ class WaveConfig:
     wf_lambda: float | None = param(None, "1", "None: LS fit (0.102 JONSWAP / 0.257 PM)")
     wf_beaufort: int | None = param(None, "-", "Al-Takie (1982) App. 2 (al-takie model only)")
     sample_period: float = param(0.05, "s", "grid of the precomputed signals [assumption]")
+    wf_peak_frequency: float | None = param(
+        None, "rad/s", "None: w_p; peak of the al-takie filter (Al-Takie 1982 App. 2)"
+    )
 
     def __post_init__(self) -> None:
         name = type(self).__name__
@@ -243,7 +264,14 @@ class WaveConfig:
         for key in ("Hs", "Tp", "gamma", "direction_from", "drift_gain", "drift_yaw_lever"):
             if not is_real(getattr(self, key)):
                 raise ValueError(f"{name}.{key} must be a real number, got {getattr(self, key)!r}")
-        for key in ("w_min", "w_max", "wf_position_std", "wf_heading_std", "wf_lambda"):
+        for key in (
+            "w_min",
+            "w_max",
+            "wf_position_std",
+            "wf_heading_std",
+            "wf_lambda",
+            "wf_peak_frequency",
+        ):
             val = getattr(self, key)
             if val is not None and not is_real(val):
                 raise ValueError(f"{name}.{key} must be a real number or None, got {val!r}")
@@ -292,6 +320,11 @@ class WaveConfig:
             val = getattr(self, key)
             if val is not None and val < 0:
                 raise ValueError(f"{name}.{key} must be >= 0 or None, got {val!r}")
+        if self.wf_peak_frequency is not None and not self.wf_peak_frequency > 0.0:
+            raise ValueError(
+                f"{name}.wf_peak_frequency must be > 0 rad/s or None, "
+                f"got {self.wf_peak_frequency!r}"
+            )
         if self.wf_lambda is not None and not 0.0 < self.wf_lambda < 1.0:
             raise ValueError(f"{name}.wf_lambda must be in (0, 1) or None, got {self.wf_lambda!r}")
         bf = self.wf_beaufort
@@ -429,7 +462,8 @@ class Waves:
             den = np.array([1.0, 2.0 * lam * wp, wp * wp])
             out = 1  # y = xi_2 = s xi_1
         else:  # al-takie
-            den = al_takie_hf_polynomial(int(cfg.wf_beaufort), wp)  # type: ignore[arg-type]
+            peak = wp if cfg.wf_peak_frequency is None else float(cfg.wf_peak_frequency)
+            den = al_takie_hf_polynomial(int(cfg.wf_beaufort), peak)  # type: ignore[arg-type]
             out = 2  # y = x_3 = s^2 x_1
         n = den.size - 1
         A = np.zeros((n, n))

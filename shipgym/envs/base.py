@@ -185,7 +185,10 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ``current_body`` (``nu_c = [u_c, v_c, 0]``, m/s), ``wave_elevation`` (m, wave reference point);
     ``measurements`` (the
     sensor samples taken during the step: ``t``, measured NED pose ``z`` or ``None`` in a
-    dropout, ``valid``, ``outlier`` (a truth flag), applied body thrust ``tau``); ``quay_contact``,
+    dropout, ``valid``, ``outlier`` (a truth flag), applied body thrust ``tau`` and
+    ``tau_command``, the body thrust the held commands give in steady state at the current
+    azimuth angles, :attr:`VesselPhysics.tau_command
+    <shipgym.envs.physics.VesselPhysics.tau_command>`); ``quay_contact``,
     ``contacts``; the ``reward_*`` terms; and at the end of every episode (terminated or
     truncated) ``episode_metrics``
     (Tomera 2014 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
@@ -495,7 +498,8 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return out
 
     def _measure(self) -> dict[str, Any]:
-        """One sensor sample now: measured NED pose (or None in a dropout) and applied thrust."""
+        """One sensor sample now: measured NED pose (or None in a dropout), applied thrust and
+        the steady-state thrust of the held commands (``tau_command``)."""
         assert self.sensors is not None
         phys = self.physics
         eta = phys.eta
@@ -507,6 +511,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "valid": bool(m.valid),
             "outlier": bool(m.outlier),
             "tau": phys.tau_thrusters,
+            "tau_command": phys.tau_command,
         }
         if rec["z"] is not None:
             self._last_measurement = rec["z"]

@@ -209,6 +209,8 @@ class VesselPhysics:
         # plain-float thrust laws for reading (tau_thrusters, thrust): no MuJoCo writes
         self._tau_of = v.actuators.kernel()
         self._thrust_of = v.actuators.thrust_kernel()
+        # channels whose state lags its command (the others integrate it: azimuth angles)
+        self._lagged = tuple(i for i, c in enumerate(v.actuators.channels) if c.dynamics == "lag")
         self.wind = Wind(self.wind_config, self.windage)
         self._wind_load = self._make_wind_load()
         self._accel = self.plant.accel
@@ -452,6 +454,23 @@ class VesselPhysics:
     def tau_thrusters(self) -> NDArray[np.float64]:
         """Body-frame thrust ``[X, Y, N]`` (N, N, N m) at the current actuator states."""
         X, Y, _K, N, _ = self._tau_of(self.data.act.tolist())
+        return np.array([X, Y, N])
+
+    @property
+    def tau_command(self) -> NDArray[np.float64]:
+        """Body-frame thrust ``[X, Y, N]`` (N, N, N m) the current commands give in steady state.
+
+        The thrust law of :attr:`tau_thrusters` with every lagged channel's state replaced by
+        its (saturated) command, while integrator channels (azimuth angles) keep their current
+        state: the force the held commands would give once the lags have settled, at the
+        actuators' current angles (the demand ``u`` of a model with its own thruster lags,
+        Al-Takie 1982 eq. 3.21).
+        """
+        st = self.data.act.tolist()
+        ctrl = self.data.ctrl.tolist()
+        for i in self._lagged:
+            st[i] = ctrl[i]
+        X, Y, _K, N, _ = self._tau_of(st)
         return np.array([X, Y, N])
 
     # ---- stepping --------------------------------------------------------------------------

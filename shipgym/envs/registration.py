@@ -9,11 +9,14 @@ from .episode import EPISODE_END_ENTRY_POINT
 
 __all__ = ["ALIASES", "ENV_IDS", "register_envs"]
 
-#: env id -> (entry point, max_episode_steps)
-ENV_IDS: dict[str, tuple[str, int]] = {
+#: env id -> (entry point, max_episode_steps); ``None``: the env truncates itself after its
+#: ``episode_duration`` (the DP tasks, whose number of steps depends on the vessel)
+ENV_IDS: dict[str, tuple[str, int | None]] = {
     "shipgym/Harbour-v0": ("shipgym.envs.tasks:HarbourEnv", 2000),
     "shipgym/StationKeeping-v0": ("shipgym.envs.tasks:StationKeepingEnv", 600),
     "shipgym/Tracking-v0": ("shipgym.envs.tasks:TrackingEnv", 800),
+    "shipgym/DPStationKeeping-v0": ("shipgym.envs.offshore:OffshoreDPEnv", None),
+    "shipgym/DPSwayStep-v0": ("shipgym.envs.offshore:SwayStepEnv", None),
     "shipgym/BlueLadyHarbour-v0": ("shipgym.envs.tasks:BlueLadyHarbourEnv", 2000),
     "shipgym/BlueLadyStationKeeping-v0": ("shipgym.envs.tasks:BlueLadyStationKeepingEnv", 600),
     "shipgym/BlueLadyTracking-v0": ("shipgym.envs.tasks:BlueLadyTrackingEnv", 800),

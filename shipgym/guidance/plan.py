@@ -81,6 +81,10 @@ class Leg:
         yaw: heading change (rad, + clockwise / to starboard).
         name: a label for plots and reports.
         limits: optional :class:`Limits` for this leg only (override the plan's).
+        delay: the reference rests at P for this long after the leg starts (s, >= 0).
+        step: ``True``: the reference is a step, not a smooth profile: it jumps to the end
+            point K at ``delay`` after the leg start, with zero velocity and acceleration
+            (the set-point step of a DP test, Al-Takie 1982 ch. 5; the limits are not used).
     """
 
     surge: float = param(0.0, "m", "r-frame of the leg start (Tomera 2014 eq. 1)")
@@ -88,6 +92,8 @@ class Leg:
     yaw: float = param(0.0, "rad", "clockwise positive")
     name: str = ""
     limits: Limits | None = None
+    delay: float = param(0.0, "s", "rest at P before the reference moves (project addition)")
+    step: bool = param(False, "-", "step reference instead of the smooth profile (DP tests)")
 
     def __post_init__(self) -> None:
         for key in ("surge", "sway", "yaw"):
@@ -96,17 +102,24 @@ class Leg:
             raise ValueError(f"Leg.name must be a string, got {self.name!r}")
         if self.limits is not None and not isinstance(self.limits, Limits):
             raise ValueError(f"Leg.limits must be a Limits or None, got {self.limits!r}")
+        delay = _finite("Leg", "delay", self.delay)
+        if delay < 0.0:
+            raise ValueError(f"Leg.delay must be >= 0 s, got {delay!r}")
+        object.__setattr__(self, "delay", delay)
+        if not isinstance(self.step, bool):
+            raise ValueError(f"Leg.step must be True or False, got {self.step!r}")
 
     @property
     def displacement(self) -> NDArray[np.float64]:
         """``[surge, sway, yaw]`` (m, m, rad), shape (3,)."""
         return np.array([self.surge, self.sway, self.yaw])
 
-    _KEYS = ("surge", "sway", "yaw", "yaw_deg", "name", "limits")
+    _KEYS = ("surge", "sway", "yaw", "yaw_deg", "name", "limits", "delay", "step")
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], where: str = "leg") -> Leg:
-        """Build from a mapping; ``yaw`` in rad or ``yaw_deg`` in degrees; ``limits`` a dict.
+        """Build from a mapping; ``yaw`` in rad or ``yaw_deg`` in degrees; ``limits`` a dict;
+        ``delay`` (s) and ``step`` (bool) optional.
 
         Raises:
             ValueError: unknown keys (the message lists the valid ones), non-finite values.
@@ -121,6 +134,8 @@ class Leg:
             yaw=_deg_or_rad(d, "yaw", where, 0.0),
             name=d.get("name", ""),
             limits=lim,
+            delay=d.get("delay", 0.0),
+            step=d.get("step", False),
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -129,6 +144,10 @@ class Leg:
         out["name"] = self.name
         if self.limits is not None:
             out["limits"] = self.limits.to_dict()
+        if self.delay:
+            out["delay"] = self.delay
+        if self.step:
+            out["step"] = True
         return out
 
 

@@ -23,6 +23,11 @@ profile") with a raised-cosine acceleration so that the acceleration is continuo
   acceleration is continuous, the jerk is bounded (``pi A / T_a``) and continuous, and the
   profile starts at rest at 0 and ends at rest exactly at ``Delta``.
 
+A leg may wait ``delay`` seconds at P before its profile starts, and a ``step`` leg has no
+profile at all: its reference jumps from P to K at ``delay`` (zero velocity and acceleration
+before and after; the step input of a DP test, Al-Takie 1982 ch. 5). Its duration is
+``delay``.
+
 The per-DOF limits :class:`Limits` apply to the r-frame coordinates (along and across the
 ship's heading at P, and the heading); for the single-DOF legs of the paper's manoeuvre they
 are body-frame limits.
@@ -146,7 +151,11 @@ class LegProfile:
         accel: peak acceleration ``A`` of ``s`` (1/s^2).
         t_accel: duration ``T_a`` of the acceleration (and of the deceleration) phase (s).
         t_cruise: duration ``T_c`` of the constant-speed phase (s); 0 for a triangle.
-        duration: total duration ``T = 2 T_a + T_c`` (s); 0 for a zero displacement.
+        duration: total duration ``T = 2 T_a + T_c`` (s); 0 for a zero displacement. With a
+            ``delay`` the profile is shifted by it, and the leg's duration is
+            :attr:`total_duration`.
+        delay: rest at 0 before the profile starts (s).
+        step: a step: ``s`` jumps from 0 to 1 at ``delay`` (``s_dot = s_ddot = 0``).
     """
 
     displacement: NDArray[np.float64]
@@ -155,13 +164,31 @@ class LegProfile:
     t_accel: float
     t_cruise: float
     duration: float
+    delay: float = 0.0
+    step: bool = False
+
+    @property
+    def total_duration(self) -> float:
+        """``delay + duration`` (s): when the reference has arrived at the end point."""
+        return self.delay + self.duration
 
     def path(self, t: ArrayLike) -> tuple[Any, Any, Any]:
         """Normalised path parameter ``(s, s_dot, s_ddot)`` at time ``t`` (s) since the start.
 
         Scalar ``t`` gives Python floats, array ``t`` arrays of its shape. ``s = 0`` before
-        the start and ``s = 1`` (exactly) from ``t = duration`` on.
+        the start and ``s = 1`` (exactly) from ``t = total_duration`` on; a step has
+        ``s = 1`` from ``t = delay`` on.
         """
+        if self.step:
+            tt = np.asarray(t, dtype=float)
+            if not np.all(np.isfinite(tt)):
+                raise ValueError(f"time must be finite, got {t!r}")
+            s = np.where(tt >= self.delay, 1.0, 0.0)
+            if np.ndim(t) == 0:
+                return float(s), 0.0, 0.0
+            return s, np.zeros_like(s), np.zeros_like(s)
+        if self.delay:
+            t = np.asarray(t, dtype=float) - self.delay if np.ndim(t) else float(t) - self.delay
         if np.ndim(t) == 0:
             return self._path_scalar(float(np.asarray(t)))
         return self._path_array(np.asarray(t, dtype=float))
@@ -267,13 +294,16 @@ def leg_profile(leg: Leg, limits: Limits | None = None) -> LegProfile:
     Returns:
         The :class:`LegProfile` (see the module docstring for the profile).
     """
-    lim = _effective_limits(leg, limits)
     disp = np.asarray(leg.displacement, dtype=float).copy()
     disp.setflags(write=False)
+    delay = float(getattr(leg, "delay", 0.0))
+    if getattr(leg, "step", False):  # no profile, no limits needed
+        return LegProfile(disp, 0.0, 0.0, 0.0, 0.0, 0.0, delay, True)
+    lim = _effective_limits(leg, limits)
     mag = np.abs(disp)
     moving = mag > 0.0
     if not np.any(moving):
-        return LegProfile(disp, 0.0, 0.0, 0.0, 0.0, 0.0)
+        return LegProfile(disp, 0.0, 0.0, 0.0, 0.0, 0.0, delay)
     v_max, a_max = lim.for_displacement(disp)
     V = float(np.min(v_max[moving] / mag[moving]))
     A = float(np.min(a_max[moving] / mag[moving]))
@@ -284,12 +314,13 @@ def leg_profile(leg: Leg, limits: Limits | None = None) -> LegProfile:
         V = math.sqrt(0.5 * A)
         Ta = 2.0 * V / A
         Tc = 0.0
-    return LegProfile(disp, V, A, Ta, Tc, 2.0 * Ta + Tc)
+    return LegProfile(disp, V, A, Ta, Tc, 2.0 * Ta + Tc, delay)
 
 
 def leg_duration(leg: Leg, limits: Limits | None = None) -> float:
-    """Duration (s) of the leg's reference under the limits (the leg's own limits win)."""
-    return leg_profile(leg, limits).duration
+    """Duration (s) of the leg's reference under the limits (the leg's own limits win),
+    its ``delay`` included."""
+    return leg_profile(leg, limits).total_duration
 
 
 def leg_reference(

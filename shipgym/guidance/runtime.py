@@ -196,7 +196,7 @@ class Guidance:
     @property
     def reference_durations(self) -> tuple[float, ...]:
         """Planned reference duration (s) of every leg."""
-        return tuple(p.duration for p in self._profiles)
+        return tuple(p.total_duration for p in self._profiles)
 
     # -- outputs -----------------------------------------------------------------------------
     def reference(self, t: float) -> Reference:
@@ -242,7 +242,7 @@ class Guidance:
         dist = math.hypot(eta[0] - K[0], eta[1] - K[1])
         head = abs(float(wrap_angle(eta[2] - K[2])))
         t_leg = float(t) - self._starts[i]
-        need = self.plan.switch_min_progress * self._profiles[i].duration
+        need = self.plan.switch_min_progress * self._profiles[i].total_duration
         return (
             dist < self.plan.switch_distance,
             head < self.plan.switch_heading,

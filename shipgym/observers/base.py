@@ -109,9 +109,19 @@ class Observer(ABC):
     """The interface of every observer: ``reset``, ``step``, ``estimate`` and a ``name``.
 
     ``step`` is called once per sample (1 s by default) and must be cheap.
+
+    Attributes:
+        name: the observer's name.
+        thrust_input: which thrust :class:`~shipgym.observers.wrapper.ObserverWrapper` hands
+            to :meth:`step`: ``"applied"`` (default), the actuators' applied generalised force
+            (:attr:`Measurement.tau <shipgym.records.Measurement.tau>`); ``"command"``, the
+            steady-state force of the held commands (:attr:`Measurement.tau_command
+            <shipgym.records.Measurement.tau_command>`), for filters that model the thruster
+            lags themselves (Al-Takie 1982 eq. 3.21).
     """
 
     name: str = "observer"
+    thrust_input: str = "applied"
 
     @abstractmethod
     def reset(

@@ -29,6 +29,10 @@ Noise defaults
   (equal in north and east directions) of order 2 [m]").
 - ``rtk`` preset: sigma 0.02 m, heading sigma 0.2 deg (typical RTK and gyrocompass
   figures, an assumption).
+- ``al-takie1982`` preset: position-reference sigma 1/3 m per axis and gyro sigma 0.02 rad,
+  Al-Takie (1982) 2.4.2 (printed, ``R = diag(1e-5, 4e-4)`` p.u.^2 for Wimpey Sealab); no
+  faults. The thesis samples every 0.1 per-unit time (App. 3); the DP tasks
+  (:mod:`shipgym.envs.offshore`) set ``period`` to their control period.
 
 Faults (all off by default): an *outlier* adds a position error of exactly
 ``outlier_magnitude`` metres in a uniformly random NED direction (heading untouched), with
@@ -56,6 +60,8 @@ from shipgym._config import from_mapping, param
 from shipgym.dynamics import wrap_angle
 
 __all__ = [
+    "AL_TAKIE1982_HEADING_SIGMA",
+    "AL_TAKIE1982_POSITION_SIGMA",
     "TOMERA2011_HEADING_VARIANCE",
     "SENSOR_PRESETS",
     "Measurement",
@@ -186,6 +192,11 @@ def _unit(name: str) -> str:
 
 _RTK_HEADING_SIGMA = math.radians(0.2)
 
+#: Al-Takie (1982) 2.4.2 [printed]: position-reference sigma 1/3 m per axis (m), from
+#: R = 1e-5 p.u.^2 (sigma 0.0033 Lpp), and gyro sigma 0.02 rad (R = 4e-4 rad^2)
+AL_TAKIE1982_POSITION_SIGMA = 1.0 / 3.0
+AL_TAKIE1982_HEADING_SIGMA = 0.02
+
 #: named sensor presets (overrides of the :class:`SensorConfig` defaults)
 SENSOR_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
     {
@@ -199,6 +210,16 @@ SENSOR_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
         ),
         # the Blue Lady trials of Tomera (2011, 2014): same as default
         "tomera2014": MappingProxyType({}),
+        # Al-Takie (1982) 2.4.2, Wimpey Sealab: R = diag(1e-5, 4e-4) p.u.^2, i.e. position
+        # sigma 1/3 m per axis and gyro sigma 0.02 rad (printed); no faults. Sampled every
+        # 0.1 p.u. (App. 3; 0.31 s Wimpey): the DP tasks set the period to their control
+        # period (shipgym.envs.offshore), the preset keeps the default 1 s.
+        "al-takie1982": MappingProxyType(
+            {
+                "position_variance": AL_TAKIE1982_POSITION_SIGMA**2,
+                "heading_variance": AL_TAKIE1982_HEADING_SIGMA**2,
+            }
+        ),
     }
 )
 
@@ -207,7 +228,8 @@ def sensor_config(name: str = "default", **overrides: Any) -> SensorConfig:
     """A named sensor preset with optional field overrides.
 
     Args:
-        name: one of :data:`SENSOR_PRESETS` (``default``, ``dgps``, ``rtk``, ``tomera2014``).
+        name: one of :data:`SENSOR_PRESETS` (``default``, ``dgps``, ``rtk``, ``tomera2014``,
+            ``al-takie1982``).
         **overrides: :class:`SensorConfig` fields to change.
 
     Raises:

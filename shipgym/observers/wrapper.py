@@ -26,6 +26,12 @@ class ObserverWrapper(
 ):
     """Feeds the sensor samples and applied thrust to an observer; exposes its estimate.
 
+    The thrust handed to ``observer.step`` is each sample's applied force
+    (:attr:`Measurement.tau <shipgym.records.Measurement.tau>`), or, for an observer with
+    ``thrust_input = "command"`` (one that models the thruster lags itself), the steady-state
+    force of the held commands (:attr:`Measurement.tau_command
+    <shipgym.records.Measurement.tau_command>`).
+
     After every ``reset``/``step`` the observation is rebuilt from the estimate (same layout
     as the environment's), the record's navigation data (``info["record"].nav``, a
     :class:`~shipgym.records.NavigationData`: what a controller wrapper stacked above uses)
@@ -52,6 +58,13 @@ class ObserverWrapper(
         self.observer_name = observer
         base = env.unwrapped
         self.observer = make_observer(observer, vessel=getattr(base, "vessel", None))
+        mode = getattr(self.observer, "thrust_input", "applied")
+        if mode not in ("applied", "command"):
+            raise ValueError(
+                f"observer {observer!r}: thrust_input must be 'applied' or 'command', got {mode!r}"
+            )
+        # "command": the filter models the thruster lags itself and takes the commands' force
+        self._command_input = mode == "command"
         if getattr(base, "sensors", None) is None:
             raise ValueError(
                 "an observer needs sensors: create the environment with sensors='default' "
@@ -83,10 +96,12 @@ class ObserverWrapper(
         rec = step_record(info)
         last = None
         ms = rec.measurements
+        command = self._command_input
         for m in ms:
-            last = self.observer.step(m.t, m.z, m.tau)
+            last = self.observer.step(m.t, m.z, m.tau_command if command else m.tau)
         if not ms or ms[-1].t < rec.t:
-            self.observer.step(rec.t, None, ms[-1].tau if ms else None)  # coast to now
+            tau = None if not ms else (ms[-1].tau_command if command else ms[-1].tau)
+            self.observer.step(rec.t, None, tau)  # coast to now
         obs, info = self._apply(obs, info, rec, last, ended=terminated or truncated)
         return obs, reward, terminated, truncated, info
 
