@@ -333,7 +333,9 @@ def test_ekf_linear_in_the_small_and_relinearises():
 
 
 # ---- observer presets ---------------------------------------------------------------------------
-@pytest.mark.parametrize("name", ["alt-kf14", "alt-kf12", "alt-semiconstant", "alt-ekf", "alt-lf6"])
+@pytest.mark.parametrize(
+    "name", ["alt-kf14", "alt-kf12", "alt-semiconstant", "alt-ekf", "alt-lf6", "alt-raw"]
+)
 @pytest.mark.parametrize("vessel", [WIMPEY, HERCULES])
 def test_observer_presets_follow_a_still_ship(name, vessel):
     v = load_vessel(vessel)

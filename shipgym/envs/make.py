@@ -42,6 +42,7 @@ def make(
     env_id: str,
     *,
     observer: str | None = None,
+    observer_options: dict[str, Any] | None = None,
     controller: str | None = None,
     residual_scale: float = 1.0,
     **kwargs: Any,
@@ -56,6 +57,8 @@ def make(
             ``kwargs`` a scenario name is that vessel's task, see :func:`resolve_env_id`).
         observer: ``None`` or ``"truth"`` (controllers see the true state), or an observer
             name (``shipgym.observers.OBSERVERS``).
+        observer_options: keyword arguments for the observer (e.g. ``{"beaufort": 5}`` for the
+            ``alt-*`` wave filters: the sea state their HF model is designed for).
         controller: ``None`` (raw thruster actions) or a controller name.
         residual_scale: the controller wrapper's factor on the residual action (see
             :class:`~shipgym.controllers.wrappers.DPControllerWrapper`).
@@ -68,7 +71,7 @@ def make(
     if observer not in (None, "truth"):
         from shipgym.observers.wrapper import ObserverWrapper
 
-        env = ObserverWrapper(env, observer=observer)
+        env = ObserverWrapper(env, observer=observer, options=observer_options)
     if controller is not None:
         from shipgym.controllers.wrappers import DPControllerWrapper
 

@@ -327,7 +327,8 @@ class WaveFilterObserver(Observer):
         kind: ``"kf14"`` (time-varying 14-state), ``"semiconstant"`` (frozen at
             ``freeze_time``), ``"kf12"`` (reduced: takes the applied thrust as measured thruster
             states), ``"ekf"`` (saturating thrusters, ``F1`` the saturation in p.u.) or
-            ``"lf6"`` (the LF model only: no wave model).
+            ``"lf6"`` (the LF model only: no wave model) or ``"raw"`` (the measured pose as the
+            estimate, velocities from the ``lf6`` filter: a controller "on raw measurements").
         beaufort: Beaufort number (5-9) of the filter's HF model; the thesis's nominal design
             is 8 (and it recommends designing for a higher sea than expected).
         hf_std: ``(position m, heading rad)`` std of the first-order motion the HF model
@@ -402,7 +403,7 @@ class WaveFilterObserver(Observer):
             self.core = WaveFilterEKF(
                 m, self.dt_pu, F1=F1_, F2=1.0 / F1_, relinearise_every=relinearise_every
             )
-        elif kind == "lf6":
+        elif kind in ("lf6", "raw"):
             keep = np.r_[0:6]
             self.core = DiscreteKF(
                 m.A[np.ix_(keep, keep)],
@@ -417,7 +418,7 @@ class WaveFilterObserver(Observer):
             self.core = DiscreteKF(m.A, m.B, m.G, m.H, m.Q, m.R, self.dt_pu, freeze)
         # surge: the decoupled [u, x, f_X] + 4 HF states, same design
         As, Bs, Cs, Ds = surge_model_from_vessel(vessel)
-        n_hf = 0 if kind == "lf6" else 4
+        n_hf = 0 if kind in ("lf6", "raw") else 4
         A = scipy.linalg.block_diag(As, hf_block(alpha, pu.time)) if n_hf else As
         B = np.vstack([Bs, np.zeros((n_hf, 1))])
         G = np.zeros((3 + n_hf, 1 + (n_hf > 0)))
@@ -436,6 +437,7 @@ class WaveFilterObserver(Observer):
         self._t = 0.0
         self._f_prev = np.zeros(3)
         self._psi_unwrap = 0.0
+        self._z_last: Array | None = None
 
     # -- frames ------------------------------------------------------------------------------
     def _to_local(self, z: Array) -> Array:
@@ -476,6 +478,7 @@ class WaveFilterObserver(Observer):
         self.core.reset(x0, P0)
         self.surge.reset(xs)
         self._f_prev = np.zeros(3)
+        self._z_last = None
         self._last_info = no_measurement()
 
     def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
@@ -491,6 +494,8 @@ class WaveFilterObserver(Observer):
         self._t = float(t)
         f = self._forces(as_tau(tau))
         zl = None if z is None else self._to_local(as_pose(z))
+        if zl is not None:
+            self._z_last = zl
         core = self.core
         if isinstance(core, ReducedKF):
             core.step_thrust(None if zl is None else zl[1:], self._f_prev[1:], f[1:])
@@ -534,7 +539,7 @@ class WaveFilterObserver(Observer):
     def hf_motion(self) -> Array:
         """The estimated first-order wave motion ``[x, y, psi]`` (m, m, rad; reset frame)."""
         core = self.core
-        if self.kind == "lf6":
+        if self.kind in ("lf6", "raw"):
             return np.zeros(3)
         i_s, i_y = (6, 10) if isinstance(core, ReducedKF) else (8, 12)
         L = self.pu.L
@@ -544,6 +549,9 @@ class WaveFilterObserver(Observer):
         lf = self.lf_state()
         pu = self.pu
         xs, us = self.surge.x[1], self.surge.x[0]
+        if self.kind == "raw" and self._z_last is not None:  # the measurement itself
+            xs, lf = self._z_last[0], lf.copy()
+            lf[1], lf[3] = self._z_last[1], self._z_last[2]
         c, s = self._c, self._s
         X, Y = xs * pu.L, lf[1] * pu.L
         eta = np.array(
@@ -569,7 +577,7 @@ class WaveFilterObserver(Observer):
         return Estimate(self._t, eta, nu, scipy.linalg.block_diag(Ps, P), P_eta, P_nu)
 
 
-_KINDS = ("kf14", "kf12", "semiconstant", "ekf", "lf6")
+_KINDS = ("kf14", "kf12", "semiconstant", "ekf", "lf6", "raw")
 
 
 def _wrap(a: float) -> float:

@@ -8,6 +8,7 @@ step's :class:`~shipgym.records.StepRecord`, ``info["record"]``).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import gymnasium as gym
@@ -44,20 +45,31 @@ class ObserverWrapper(
     Args:
         env: a ``shipgym/BlueLady*`` environment with sensors.
         observer: an observer name (``shipgym.observers.OBSERVERS``: ``dkf``, ``kbf``, ``ekf``,
-            ``tomera-dkf``, ...).
+            ``tomera-dkf``, ``alt-kf14``, ...).
+        options: keyword arguments for the observer's factory (e.g. ``{"beaufort": 5}``, the
+            sea state an ``alt-*`` wave filter is designed for); they win over the vessel's.
 
     Note:
         Records its constructor arguments, so ``gym.make(env.spec)`` rebuilds the stack.
     """
 
-    def __init__(self, env: gym.Env[Any, Any], observer: str = "kbf") -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, observer=observer)
+    def __init__(
+        self,
+        env: gym.Env[Any, Any],
+        observer: str = "kbf",
+        options: Mapping[str, Any] | None = None,
+    ) -> None:
+        gym.utils.RecordConstructorArgs.__init__(
+            self, observer=observer, options=None if options is None else dict(options)
+        )
         gym.Wrapper.__init__(self, env)
         from shipgym.observers import make_observer
 
         self.observer_name = observer
         base = env.unwrapped
-        self.observer = make_observer(observer, vessel=getattr(base, "vessel", None))
+        self.observer = make_observer(
+            observer, vessel=getattr(base, "vessel", None), **dict(options or {})
+        )
         mode = getattr(self.observer, "thrust_input", "applied")
         if mode not in ("applied", "command"):
             raise ValueError(
