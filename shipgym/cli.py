@@ -279,6 +279,58 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _beaufort_list(text: str) -> list[int]:
+    """``"5..9"``, ``"8"`` or ``"5,8"`` -> Beaufort numbers (5-9), else ``ValueError``."""
+    try:
+        if ".." in text:
+            a, b = (int(x) for x in text.split(".."))
+            out = list(range(a, b + 1))
+        else:
+            out = [int(x) for x in text.split(",")]
+    except ValueError:
+        out = []
+    if not out or any(not 5 <= n <= 9 for n in out):
+        raise ValueError(f"--beaufort must be numbers 5-9 as N, A..B or N,M; got {text!r}")
+    return out
+
+
+def _cmd_bench_dp(args: argparse.Namespace) -> int:
+    from shipgym._io import progress_enabled
+    from shipgym.dp.bench import METHODS, bench_dp, dp_table
+    from shipgym.dynamics.vessel import load_vessel
+
+    beauforts = _beaufort_list(args.beaufort)
+    for v in args.vessel:
+        load_vessel(v)  # unknown names fail before any work
+    methods = args.methods or list(METHODS)
+    for m in methods:
+        if m not in METHODS:
+            raise ValueError(f"unknown DP method {m!r}; choose from {', '.join(METHODS)}")
+    if not (math.isfinite(args.duration) and args.duration >= 100.0):
+        raise ValueError(f"--duration must be >= 100 s (the metrics' spectra), got {args.duration}")
+    for path in (args.json, args.markdown):
+        if path is not None:
+            check_writable(path)
+    total = len(args.vessel) * len(beauforts) * len(methods) * args.seeds
+    log = row_log(args.json, args.markdown, total)
+    t0 = time.perf_counter()
+    rows = bench_dp(
+        args.vessel, beauforts, args.seeds, methods=methods, duration=args.duration,
+        workers=args.workers, progress=progress_enabled(args.no_progress), on_row=log.add,
+    )  # fmt: skip
+    wall = time.perf_counter() - t0
+    title = (
+        f"Al-Takie (1982) DP in closed loop: {', '.join(args.vessel)}, Beaufort "
+        f"{args.beaufort}, seeds 0-{args.seeds - 1}, {args.duration:g} s episodes "
+        "(shipgym/DPStationKeeping-v0); wave-band ratio = thrust-command power in "
+        "0.05-0.25 Hz over 0-0.04 Hz"
+    )
+    write_bench_outputs(title, dp_table(rows), rows, wall, json_path=args.json,
+                        markdown=args.markdown)  # fmt: skip
+    log.discard(args.json or args.markdown)
+    return 0
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from shipgym.viz import load_run, recording_problem, write_report
 
@@ -436,6 +488,28 @@ def _parser() -> argparse.ArgumentParser:
                    help="bar chart of the indices and velocity-error plots (PNG)")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=_cmd_bench)
+    b = bsub.add_parser(
+        "dp", help="Al-Takie (1982) DP wave filters in closed loop, Beaufort 5-9 (table)"
+    )
+    b.add_argument("--vessel", nargs="+", default=["wimpey-sealab", "star-hercules"],
+                   metavar="NAME", help="vessels (wimpey-sealab star-hercules)")  # fmt: skip
+    b.add_argument("--beaufort", default="5..9", metavar="N|A..B",
+                   help="Beaufort numbers 5-9: one, a range A..B or a list 5,8 (5..9)")  # fmt: skip
+    b.add_argument(
+        "--seeds", type=bounded_int(1, MAX_COUNT), default=3,
+        help=f"seeds 0..N-1 per case, 1 <= N <= {MAX_COUNT} (3)",
+    )  # fmt: skip
+    b.add_argument("--methods", nargs="+", default=None, metavar="NAME",
+                   help="methods of shipgym.dp.bench.METHODS (all)")  # fmt: skip
+    b.add_argument("--duration", type=float, default=600.0, help="episode length, s (600)")
+    b.add_argument(
+        "--workers", type=bounded_int(1, MAX_WORKERS), default=None,
+        help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
+    )  # fmt: skip
+    b.add_argument("--json", type=Path, default=None, metavar="PATH")
+    b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    b.add_argument("--no-progress", action="store_true")
+    b.set_defaults(func=_cmd_bench_dp)
     from shipgym.rl.cli import add_bench_controllers_parser, add_train_parser
 
     add_bench_controllers_parser(bsub)
