@@ -328,6 +328,24 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
     write_bench_outputs(title, dp_table(rows), rows, wall, json_path=args.json,
                         markdown=args.markdown)  # fmt: skip
     log.discard(args.json or args.markdown)
+    if args.figures is not None:
+        from shipgym.dp.bench import dp_gain_history, dp_trace
+        from shipgym.viz.dp import write_dp_figures
+
+        bf = max(beauforts)
+        for v in args.vessel:
+            traces = {
+                m: dp_trace((v, bf, m, 0, args.duration))
+                for m in ("kf14", "kf16", "raw-lq")
+                if m in methods
+            }
+            if not traces:
+                raise ValueError("--figures needs one of the methods kf14, kf16, raw-lq")
+            out = args.figures / v
+            for f in write_dp_figures(
+                traces, dp_gain_history(v, bf), out, title=f"{v}, Beaufort {bf}"
+            ):
+                print(f"wrote {f}")
     return 0
 
 
@@ -508,6 +526,9 @@ def _parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     b.add_argument("--json", type=Path, default=None, metavar="PATH")
     b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    b.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                   help="estimates vs truth, thrust spectra and gain history (PNG), per vessel "
+                   "at the highest Beaufort number given, seed 0")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=_cmd_bench_dp)
     from shipgym.rl.cli import add_bench_controllers_parser, add_train_parser

@@ -361,3 +361,38 @@ def test_observer_presets_need_the_vessel():
         from shipgym.observers.wavefilter import WaveFilterObserver
 
         WaveFilterObserver(load_vessel(WIMPEY), kind="kf13")
+
+
+def test_gain_settling_steps_and_the_semiconstant_freeze():
+    """The first gain within 2 % / 5 %: the 84th / 70th (A6); the presets freeze after it."""
+    from shipgym.observers.wavefilter import gain_settling_steps
+
+    m = wave_filter_model(lf_model(WIMPEY), 8, ship=WIMPEY)
+    args = (m.A, m.G, m.H, m.Q, m.R, 0.1)
+    assert gain_settling_steps(*args, tol=0.05) == 70
+    assert gain_settling_steps(*args, tol=0.02) == 84
+    v = load_vessel(WIMPEY)
+    thesis = make_observer("alt-semiconstant", vessel=v, design="thesis")
+    assert thesis.core.freeze_after * thesis.dt == pytest.approx(28.0, abs=thesis.dt)
+    sim = make_observer("alt-semiconstant", vessel=v)
+    core = sim.core
+    assert core.freeze_after == gain_settling_steps(core.A, core.G, core.H, core.Q, core.R, core.dt)
+    with pytest.raises(ValueError, match="design must be one of"):
+        make_observer("alt-kf14", vessel=v, design="tuned")
+
+
+def test_bias_states():
+    """alt-kf16: two bias states in sway-yaw (16) and one in surge; a constant load is found."""
+    v = load_vessel(HERCULES)
+    obs = make_observer("alt-kf16", vessel=v)
+    assert obs.core.n == 16 and obs.surge.n == 8 and obs.name == "alt-kf16"
+    # the ship at rest while the thrusters push: the filter attributes it to a bias force
+    tau = np.array([2.0e4, 3.0e4, 1.0e6])
+    obs.reset(0.0, [0.0, 0.0, 0.0])
+    t = 0.0
+    for _ in range(20000):
+        t += obs.dt
+        obs.step(t, [0.0, 0.0, 0.0], tau)
+    est = obs.estimate()
+    np.testing.assert_allclose(est.bias, -tau, rtol=0.05)
+    assert make_observer("alt-kf14", vessel=v).estimate().bias is None

@@ -70,3 +70,26 @@ def test_dp_table_and_cli(tmp_path, capsys):
         err = capsys.readouterr().err
         assert "--beaufort" in err or "unknown DP method" in err or "--duration" in err
     assert set(METHODS) >= {"kf14", "kf12", "semiconstant", "ekf", "notch-pid"}
+
+
+def test_dp_figures(tmp_path):
+    """The figures are written (PNG of the documented size) from a short trace."""
+    from shipgym.dp.bench import dp_gain_history, dp_trace
+    from shipgym.viz.dp import DP_SIZES, write_dp_figures
+    from shipgym.viz.report import DPI
+
+    traces = {m: dp_trace(("star-hercules", 5, m, 0, 120.0)) for m in ("kf14", "raw-lq")}
+    tr = traces["kf14"]
+    assert tr["eta"].shape == tr["hf"].shape == tr["hf_hat"].shape == (len(tr["t"]), 3)
+    # the filter's HF estimate follows the true wave motion on the measurement
+    c = np.corrcoef(tr["hf"][200:, 1], tr["hf_hat"][200:, 1])[0, 1]
+    assert c > 0.5
+    gains = dp_gain_history("star-hercules", 5, duration=60.0)
+    assert gains["K"].shape[1:] == (14, 2) and gains["settled"] > 0
+    paths = write_dp_figures(traces, gains, tmp_path, title="test")
+    from PIL import Image
+
+    for p in paths:
+        w, h = Image.open(p).size
+        W, H = DP_SIZES[p.stem]
+        assert (w, h) == (round(W * DPI), round(H * DPI))

@@ -7,18 +7,21 @@ of the thesis sampled every 0.1 per-unit time) with one estimator + controller p
 =====================  ==================  =============  ===========================
 method                 observer            controller     note
 =====================  ==================  =============  ===========================
-``kf14``               ``alt-kf14``        ``alt-lq``     14-state KF + Grimble LQ
-``kf12``               ``alt-kf12``        ``alt-lq``     reduced filter
-``semiconstant``       ``alt-semiconstant``  ``alt-lq``   gain frozen at 28 s
+``kf14``               ``alt-kf14``        thesis LQ      14-state KF + the thesis's LQ
+``kf16``               ``alt-kf16``        thesis LQ      + two bias states (16)
+``kf12``               ``alt-kf12``        thesis LQ      reduced filter
+``semiconstant``       ``alt-semiconstant``  thesis LQ    gain frozen once settled
 ``ekf``                ``alt-ekf``         ``alt-sdre``   saturating thrusters, SDRE
 ``notch-pid``          ``notch``           ``pid``        three notches + PID
-``raw-lq``             ``alt-raw``         ``alt-lq``     LQ on raw measurements
+``raw-lq``             ``alt-raw``         thesis LQ      LQ on raw measurements
 ``kbf-pid``            ``kbf``             ``pid``        the vessel library's generic DP
-``kf14-bf5``           ``alt-kf14`` (Bf 5) ``alt-lq``     robustness: filter for Bf 5
-``kf14-noise100``      ``alt-kf14``        ``alt-lq``     robustness: plant noise x100
+``kf14-bf5``           ``alt-kf14`` (Bf 5) thesis LQ      robustness: filter for Bf 5
+``kf14-noise100``      ``alt-kf14``        thesis LQ      robustness: plant noise x100
 =====================  ==================  =============  ===========================
 
-The ``alt-*`` filters are designed for the run's Beaufort number (``kf14-bf5``: for 5,
+"thesis LQ" is the printed gain where the thesis prints one for the vessel (``alt-lq-printed``:
+Wimpey Sealab case b, Star Hercules), else Grimble's case b re-solved (``alt-lq``). The
+``alt-*`` filters are designed for the run's Beaufort number (``kf14-bf5``: for 5,
 whatever the sea). Metrics: :func:`~shipgym.dp.metrics.dp_metrics` on the true pose against the
 set-point, the controller's command ``tau_c``, the allocation's saturation flags, the estimation
 error of the pose, the observers' NIS; the cost per filter step is the wall time of the
@@ -27,53 +30,72 @@ observer's ``step`` calls.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
 
 from .metrics import dp_metrics
 
-__all__ = ["METHODS", "bench_dp", "dp_run", "dp_table"]
+__all__ = [
+    "METHODS",
+    "bench_dp",
+    "dp_gain_history",
+    "dp_run",
+    "dp_table",
+    "dp_trace",
+    "thesis_controller",
+]
 
 #: method -> (observer, controller, observer options, env overrides); see the module docstring
 METHODS: dict[str, tuple[str, str, dict[str, Any] | None, str | None]] = {
-    "kf14": ("alt-kf14", "alt-lq", None, None),
-    "kf12": ("alt-kf12", "alt-lq", None, None),
-    "semiconstant": ("alt-semiconstant", "alt-lq", None, None),
+    "kf14": ("alt-kf14", "thesis-lq", None, None),
+    "kf16": ("alt-kf16", "thesis-lq", None, None),
+    "kf12": ("alt-kf12", "thesis-lq", None, None),
+    "semiconstant": ("alt-semiconstant", "thesis-lq", None, None),
     "ekf": ("alt-ekf", "alt-sdre", None, None),
     "notch-pid": ("notch", "pid", None, None),
-    "raw-lq": ("alt-raw", "alt-lq", None, None),
+    "raw-lq": ("alt-raw", "thesis-lq", None, None),
     "kbf-pid": ("kbf", "pid", None, None),
-    "kf14-bf5": ("alt-kf14", "alt-lq", {"beaufort": 5}, None),
-    "kf14-noise100": ("alt-kf14", "alt-lq", None, "noise100"),
+    "kf14-bf5": ("alt-kf14", "thesis-lq", {"beaufort": 5}, None),
+    "kf14-noise100": ("alt-kf14", "thesis-lq", None, "noise100"),
 }
 
 
-def dp_run(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
-    """One episode: ``(vessel, beaufort, method, seed, duration_s)`` -> a row of metrics."""
+def thesis_controller(vessel: str) -> str:
+    """``alt-lq-printed`` for a vessel with a printed gain (Al-Takie 1982 4.4-4.5), else
+    ``alt-lq``."""
+    from shipgym.controllers.grimble import PRINTED_GAINS
+
+    return "alt-lq-printed" if any(k.split("/")[0] == vessel for k in PRINTED_GAINS) else "alt-lq"
+
+
+def _make_env(vessel_name: str, bf: int, method: str, duration: float) -> Any:
+    """The environment stack of one method (see :data:`METHODS`)."""
     import shipgym
     from shipgym.dynamics.vessel import load_vessel
     from shipgym.envs.offshore import dp_control_period
     from shipgym.observers.sensors import AL_TAKIE1982_HEADING_SIGMA, AL_TAKIE1982_POSITION_SIGMA
 
-    vessel_name, bf, method, seed, duration = job
     obs_name, ctl, opts, env_mod = METHODS[method]
     vessel = load_vessel(vessel_name)
+    if ctl == "thesis-lq":
+        ctl = thesis_controller(vessel_name)
     options = None
     if obs_name.startswith("alt-"):
         options = {"beaufort": bf} if opts is None else dict(opts)
     kwargs: dict[str, Any] = {}
     if env_mod == "noise100":
-        scale = float(vessel.scale)
         kwargs["sensors"] = {
             "period": dp_control_period(float(vessel.hull.L_pp)),
-            "position_variance": 100.0 * (AL_TAKIE1982_POSITION_SIGMA / scale) ** 2,
+            "position_variance": 100.0 * (AL_TAKIE1982_POSITION_SIGMA / float(vessel.scale)) ** 2,
             "heading_variance": 100.0 * AL_TAKIE1982_HEADING_SIGMA**2,
         }
-    env = shipgym.make(
+    return shipgym.make(
         "shipgym/DPStationKeeping-v0",
         vessel=vessel_name,
         beaufort=bf,
@@ -83,6 +105,14 @@ def dp_run(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
         controller=ctl,
         **kwargs,
     )
+
+
+def _episode(
+    job: tuple[str, int, str, int, float], on_step: Callable[[Any, dict[str, Any]], None]
+) -> tuple[Any, float]:
+    """One episode, ``on_step(env, info)`` after every step; ``(env, filter seconds per step)``."""
+    vessel_name, bf, method, seed, duration = job
+    env = _make_env(vessel_name, bf, method, duration)
     observer = env.env.observer  # the ObserverWrapper's observer (controller wrapper above)
     spent = [0.0, 0]
     step = observer.step
@@ -95,11 +125,24 @@ def dp_run(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
         return out
 
     observer.step = timed  # type: ignore[method-assign]
-    _, info = env.reset(seed=seed)
+    env.reset(seed=seed)
     a = np.zeros(env.action_space.shape, np.float32)
-    t, eta, eta_d, tau, sat, err, nis = [], [], [], [], [], [], []
     while True:
         _, _, term, trunc, info = env.step(a)
+        on_step(env, info)
+        if term or trunc:
+            break
+    env.close()
+    return env, spent[0] / max(spent[1], 1)
+
+
+def dp_run(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
+    """One episode: ``(vessel, beaufort, method, seed, duration_s)`` -> a row of metrics."""
+    from shipgym.controllers.actuation import planar_capacity
+
+    t, eta, eta_d, tau, sat, err, nis = [], [], [], [], [], [], []
+
+    def keep(env: Any, info: dict[str, Any]) -> None:
         rec = info["record"]
         t.append(rec.t)
         eta.append(rec.truth.eta)
@@ -108,18 +151,16 @@ def dp_run(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
         sat.append(bool(np.any(info["allocation_saturated"])))
         err.append(info["est_error_eta"])
         nis.append(np.nan if info["observer_nis"] is None else info["observer_nis"])
-        if term or trunc:
-            break
-    env.close()
-    cap = np.asarray(vessel.actuators.capacity(), dtype=float)
-    cap = cap if cap.size == 3 else cap[[0, 1, 3]]
+
+    env, per_step = _episode(job, keep)
+    vessel_name, bf, method, seed, _ = job
     nis_a = np.array(nis, dtype=float)
     m = dp_metrics(
         np.array(t),
         np.array(eta),
         np.array(eta_d),
         np.array(tau),
-        cap,
+        planar_capacity(env.unwrapped.vessel),
         saturated=np.array(sat)[:, None],
         lf_error=np.array(err),
         nis=nis_a[np.isfinite(nis_a)] if np.isfinite(nis_a).any() else None,
@@ -129,12 +170,65 @@ def dp_run(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
         vessel=vessel_name,
         beaufort=bf,
         method=method,
-        observer=obs_name,
-        controller=ctl,
+        observer=METHODS[method][0],
+        controller=env.controller_name,
         seed=seed,
-        filter_step_us=1e6 * spent[0] / max(spent[1], 1),
+        filter_step_us=1e6 * per_step,
     )
     return m
+
+
+def dp_trace(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
+    """One episode's time series for the figures (:func:`shipgym.viz.dp.write_dp_figures`).
+
+    Returns:
+        ``t`` (s), ``eta`` (true pose), ``eta_hat`` (estimate), ``z`` (last measurement),
+        ``hf`` (true first-order wave motion on the measurement), ``hf_hat`` (the filter's
+        estimate of it, zeros for filters without), ``tau_c`` (N, N, N m), ``capacity``.
+    """
+    from shipgym.controllers.actuation import planar_capacity
+
+    cols: dict[str, list[Any]] = {k: [] for k in ("t", "eta", "eta_hat", "z", "hf", "hf_hat")}
+    cols["tau_c"] = []
+
+    def keep(env: Any, info: dict[str, Any]) -> None:
+        rec = info["record"]
+        obs = env.env.observer
+        zs = [m.z for m in rec.measurements if m.z is not None]
+        cols["t"].append(rec.t)
+        cols["eta"].append(rec.truth.eta)
+        cols["eta_hat"].append(rec.nav.eta)
+        cols["z"].append(zs[-1] if zs else np.full(3, np.nan))
+        cols["hf"].append(np.array(env.unwrapped.physics.wave_motion()))
+        cols["hf_hat"].append(obs.hf_motion() if hasattr(obs, "hf_motion") else np.zeros(3))
+        cols["tau_c"].append(info["tau_c"])
+
+    env, _ = _episode(job, keep)
+    out: dict[str, Any] = {k: np.array(v, dtype=float) for k, v in cols.items()}
+    out["capacity"] = planar_capacity(env.unwrapped.vessel)
+    return out
+
+
+def dp_gain_history(vessel: str, beaufort: int, duration: float = 120.0) -> dict[str, Any]:
+    """The ``alt-kf14`` filter's gains from ``P(0) = 0`` over ``duration`` s (its own design).
+
+    Returns:
+        ``t`` (s), ``K`` (steps, 14, 2) and ``settled`` (s): when every gain is within 2 % of
+        steady state (:func:`~shipgym.observers.wavefilter.gain_settling_steps`).
+    """
+    from shipgym.dynamics.vessel import load_vessel
+    from shipgym.observers import make_observer
+    from shipgym.observers.wavefilter import gain_settling_steps
+
+    obs = make_observer("alt-kf14", vessel=load_vessel(vessel), beaufort=beaufort)
+    kf = obs.core
+    n = int(round(duration / obs.dt))
+    K = np.zeros((n, kf.n, 2))
+    for k in range(n):
+        kf.step(np.zeros(2), np.zeros(2))
+        K[k] = kf.K
+    settled = gain_settling_steps(kf.A, kf.G, kf.H, kf.Q, kf.R, kf.dt) * obs.dt
+    return {"t": (np.arange(n) + 1) * obs.dt, "K": K, "settled": settled}
 
 
 def bench_dp(
@@ -162,9 +256,34 @@ def bench_dp(
         for m in names
         for s in range(seeds)
     ]
-    return run_jobs(
-        dp_run, jobs, workers=workers, progress=progress, desc="dp runs", on_result=on_row
-    )
+    # one BLAS thread per worker: the runs are small-matrix work and threaded BLAS in every
+    # worker oversubscribes the cores (5x slower on 2 cores); fresh workers (forkserver) read
+    # the setting when they load numpy
+    with _single_threaded_blas():
+        return run_jobs(
+            dp_run,
+            jobs,
+            workers=workers,
+            progress=progress,
+            desc="dp runs",
+            on_result=on_row,
+            start_method="forkserver",
+        )
+
+
+@contextlib.contextmanager
+def _single_threaded_blas() -> Iterator[None]:
+    keys = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    old = {k: os.environ.get(k) for k in keys}
+    os.environ.update(dict.fromkeys(keys, "1"))
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
 
 def _ms(vals: list[float], fmt: str) -> str:

@@ -388,10 +388,12 @@ class WaveFilterModel:
     """The combined LF + HF model of Al-Takie (1982) ch. 5 (per unit).
 
     ``dx/dt' = A x + B u + G w`` (``E{w w^T} = Q delta``), ``z = H x + v`` (``E{v v^T} = R``),
-    ``x = [LF(6); HF sway(4); HF yaw(4)]``, ``w = [w_Y, w_N, w_hs, w_hy]``.
+    ``x = [LF(6); HF sway(4); HF yaw(4)]``, ``w = [w_Y, w_N, w_hs, w_hy]``; with bias states
+    (``bias_q`` of :func:`wave_filter_model`) also ``[b_Y, b_N]`` (16 states, 6 noises).
 
     Attributes:
-        A, B, G, H, Q, R: the matrices, (14, 14), (14, 2), (14, 4), (2, 14), (4, 4), (2, 2).
+        A, B, G, H, Q, R: the matrices, (n, n), (n, 2), (n, p), (2, n), (p, p), (2, 2); ``n``
+            14 (the thesis) or 16, ``p`` 4 or 6.
         lf: the LF model inside.
         beaufort: Beaufort numbers of the sway and yaw HF blocks.
         d_h: HF noise gains ``(d_sway, d_yaw)``.
@@ -425,8 +427,9 @@ def wave_filter_model(
     d_h: tuple[float, float] | None = None,
     q_l: tuple[float, float] | None = None,
     r: tuple[float, float] = R_PRINTED,
+    bias_q: tuple[float, float] | None = None,
 ) -> WaveFilterModel:
-    """The 14-state LF + HF model of Al-Takie (1982) ch. 5.
+    """The 14-state LF + HF model of Al-Takie (1982) ch. 5 (optionally with 2 bias states).
 
     Args:
         lf: the LF model (:func:`lf_model`, :func:`lf_model_from_vessel`).
@@ -437,6 +440,10 @@ def wave_filter_model(
         q_l: LF noise variances (sway force, yaw moment; p.u.^2); ``None``: the printed
             :data:`Q_L_PRINTED` with the yaw entry times the reconstructed factor (17.8).
         r: measurement-noise variances (position p.u.^2, heading rad^2).
+        bias_q: ``None`` (the thesis: the mean wind is fed forward) or the intensities
+            (p.u.^2 per p.u. time) of two random-walk bias forces ``b_Y``, ``b_N`` that act on
+            the hull like the thruster states (states 15, 16; Fossen 2011 ch. 11.3.3): the slowly
+            varying wind, drift and current loads a simulated plant has and the model lacks.
     """
     bf = (beaufort, beaufort) if isinstance(beaufort, int) else tuple(beaufort)
     if len(bf) != 2:
@@ -445,7 +452,8 @@ def wave_filter_model(
         d_h = (D_H_RECONSTRUCTED["d_sway"], D_H_RECONSTRUCTED["d_yaw"])
     if q_l is None:
         q_l = (Q_L_PRINTED[0], Q_L_PRINTED[1] * D_H_RECONSTRUCTED["q_yaw_factor"])
-    for name, pair in (("d_h", d_h), ("q_l", q_l), ("r", r)):
+    checks = [("d_h", d_h), ("q_l", q_l), ("r", r)] + ([("bias_q", bias_q)] if bias_q else [])
+    for name, pair in checks:
         vals = np.asarray(pair, dtype=float)
         if vals.shape != (2,) or not np.isfinite(vals).all() or (vals < 0).any():
             raise ValueError(f"{name} must be two finite numbers >= 0, got {pair!r}")
@@ -465,6 +473,13 @@ def wave_filter_model(
     H[:, :6] = lf.C
     H[0, 8] = H[1, 12] = 1.0
     Q = np.diag([float(q_l[0]), float(q_l[1]), 1.0, 1.0])
+    if bias_q is not None:
+        A = scipy.linalg.block_diag(A, np.zeros((2, 2)))
+        A[:4, 14:16] = lf.A[:4, 4:6]  # a force on the hull, like the thruster outputs
+        B = np.vstack([B, np.zeros((2, 2))])
+        G = scipy.linalg.block_diag(G, np.eye(2))
+        H = np.hstack([H, np.zeros((2, 2))])
+        Q = scipy.linalg.block_diag(Q, np.diag(np.asarray(bias_q, dtype=float)))
     return WaveFilterModel(
         A,
         B,
