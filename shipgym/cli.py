@@ -425,10 +425,21 @@ def _version() -> str:
     return f"shipgym {shipgym.__version__}"
 
 
+def _add_bench_outputs(b: argparse.ArgumentParser) -> None:
+    """A benchmark's ``--workers``, ``--json`` and ``--markdown`` options."""
+    from shipgym._argtypes import MAX_WORKERS, bounded_int
+
+    b.add_argument(
+        "--workers", type=bounded_int(1, MAX_WORKERS), default=None,
+        help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
+    )  # fmt: skip
+    b.add_argument("--json", type=Path, default=None, metavar="PATH")
+    b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+
+
 def _parser() -> argparse.ArgumentParser:
     from shipgym._argtypes import (
         MAX_COUNT,
-        MAX_WORKERS,
         OneLineParser,
         bounded_float,
         bounded_int,
@@ -496,12 +507,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     b.add_argument("--wind", type=parse_wind, default="3@300",
                    metavar="SPEED@FROM_DEG", help="mean wind (3@300)")  # fmt: skip
-    b.add_argument(
-        "--workers", type=bounded_int(1, MAX_WORKERS), default=None,
-        help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
-    )  # fmt: skip
-    b.add_argument("--json", type=Path, default=None, metavar="PATH")
-    b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    _add_bench_outputs(b)
     b.add_argument("--report", type=Path, default=None, metavar="DIR",
                    help="bar chart of the indices and velocity-error plots (PNG)")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
@@ -520,12 +526,7 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--methods", nargs="+", default=None, metavar="NAME",
                    help="methods of shipgym.dp.bench.METHODS (all)")  # fmt: skip
     b.add_argument("--duration", type=float, default=600.0, help="episode length, s (600)")
-    b.add_argument(
-        "--workers", type=bounded_int(1, MAX_WORKERS), default=None,
-        help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
-    )  # fmt: skip
-    b.add_argument("--json", type=Path, default=None, metavar="PATH")
-    b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    _add_bench_outputs(b)
     b.add_argument("--figures", type=Path, default=None, metavar="DIR",
                    help="estimates vs truth, thrust spectra and gain history (PNG), per vessel "
                    "at the highest Beaufort number given, seed 0")  # fmt: skip

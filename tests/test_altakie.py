@@ -329,7 +329,29 @@ def test_ekf_linear_in_the_small_and_relinearises():
     assert ekf.relinearisations == 10
     np.testing.assert_allclose(ekf.x, lin.x, rtol=1e-4, atol=1e-12)
     J = ekf.jacobian(np.r_[np.zeros(4), 0.05, -0.05, np.zeros(8)])
-    np.testing.assert_allclose(J[:, 4], m.A[:, 4] * saturation_slope(0.05))
+    # the hull rows see psi'(x5); the thruster's own lag stays linear
+    np.testing.assert_allclose(J[:4, 4], m.A[:4, 4] * saturation_slope(0.05))
+    np.testing.assert_allclose(J[4:, 4], m.A[4:, 4])
+
+
+def test_saturated_lf_step_against_solve_ivp():
+    """The saturating LF model integrated by RK4 equals scipy's solve_ivp of the same ODE."""
+    from scipy.integrate import solve_ivp
+
+    from shipgym.dynamics.altakie import saturated_lf_step
+
+    A = lf_model(WIMPEY).A
+    B = lf_model(WIMPEY).B
+    u = np.array([0.03, -0.01])
+    x0 = np.array([0.001, 0.0, 0.0, 0.0, 0.015, -0.02])
+
+    def f(_t, x):
+        dx = A @ x + B @ u
+        dx[:4] += A[:4, 4:6] @ (saturation(x[4:6]) - x[4:6])  # the hull sees psi(x5, x6)
+        return dx
+
+    ref = solve_ivp(f, (0.0, 0.1), x0, rtol=1e-12, atol=1e-14).y[:, -1]
+    np.testing.assert_allclose(saturated_lf_step(x0, B @ u, A, 0.1), ref, atol=1e-12)
 
 
 # ---- observer presets ---------------------------------------------------------------------------

@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym.dynamics.altakie import (
     THESIS_LF,
     lf_model_from_vessel,
-    saturation_slope,
+    saturated_lf_matrix,
     surge_model_from_vessel,
 )
 from shipgym.dynamics.perunit import PerUnit
@@ -255,8 +255,7 @@ class GrimbleLQController:
         if self.variant != "sdre":
             return self.K
         if self._calls % self.relinearise_every == 0:
-            A1 = self.lf.A.copy()
-            A1[:, 4:6] = self.lf.A[:, 4:6] * saturation_slope(self._f[1:], self.F1, 1.0 / self.F1)
+            A1 = saturated_lf_matrix(self.lf.A, self._f[1:], self.F1, 1.0 / self.F1)
             self._K_now = lqr(A1, self.lf.B, self._Q, self._R)[0]
         return self._K_now
 

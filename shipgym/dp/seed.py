@@ -32,7 +32,8 @@ from shipgym.dynamics.altakie import (
     R_PRINTED,
     discretise,
     lf_model,
-    saturation,
+    saturated_lf_matrix,
+    saturated_lf_step,
     wave_filter_model,
 )
 from shipgym.observers.wavefilter import DiscreteKF, ReducedKF, WaveFilterEKF
@@ -160,24 +161,20 @@ def simulate_seed(
     out_z = np.zeros((n, 2))
     out_K = np.zeros((n, kf.n, 2))
     out_nis = np.full(n, np.nan)
-    A_thr = plant.A[:6, 4:6]
-    A_lin = plant.A[:6, :6].copy()
-    A_lin[:, 4:6] = 0.0
     sdre = filter == "ekf" and saturate
     K_now = K
     spent = 0.0
     for k in range(n):
         lf_hat = _lf_estimate(kf, x) if k else np.zeros(6)
         if sdre and k % relinearise_every == 0:
-            A1 = lf.A.copy()
             # the slope of psi at the estimate, as the thesis's linearised entries (7.19-7.21)
-            A1[:, 4:6] = lf.A[:, 4:6] * _slope(lf_hat[4:6], F1)
+            A1 = saturated_lf_matrix(lf.A, lf_hat[4:6], F1, 1.0 / F1)
             K_now = lqr(A1, lf.B, Q, R)[0]
         u = -K_now @ (lf_hat - x_ref)
         f0 = x[4:6].copy()
         w = rng.normal(size=4) * w_std
         if saturate:
-            x_lf = _nonlinear_step(x[:6], u, A_lin, A_thr, plant.B[:6], dt, F1)
+            x_lf = saturated_lf_step(x[:6], plant.B[:6] @ u, plant.A, dt, F1, 1.0 / F1)
             x = np.concatenate([x_lf, Phi[6:, 6:] @ x[6:]]) + Gamma @ w
         else:
             x = Phi @ x + Delta @ u + Gamma @ w
@@ -197,26 +194,6 @@ def simulate_seed(
         out_nis[k] = np.nan if kf.nis is None else kf.nis
     t = (np.arange(n) + 1) * dt * Tb
     return SeedRun(t, out_x, out_xh, out_u, out_z, out_K, out_nis, spent, Tb)
-
-
-def _slope(x: Array, F1: float) -> Array:
-    return np.exp(-np.abs(x) / F1)  # F1 F2 e^{-F2 |x|} with F2 = 1/F1
-
-
-def _nonlinear_step(
-    x: Array, u: Array, A_lin: Array, A_thr: Array, B: Array, dt: float, F1: float, sub: int = 8
-) -> Array:
-    def f(s: Array) -> Array:
-        return A_lin @ s + A_thr @ saturation(s[4:6], F1, 1.0 / F1) + B @ u
-
-    h = dt / sub
-    for _ in range(sub):
-        k1 = f(x)
-        k2 = f(x + 0.5 * h * k1)
-        k3 = f(x + 0.5 * h * k2)
-        k4 = f(x + h * k3)
-        x = x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    return x
 
 
 def _lf_estimate(kf: DiscreteKF, x_true: Array) -> Array:

@@ -70,6 +70,8 @@ __all__ = [
     "hf_peak_frequency",
     "lf_model",
     "lf_model_from_vessel",
+    "saturated_lf_matrix",
+    "saturated_lf_step",
     "saturation",
     "saturation_slope",
     "surge_model_from_vessel",
@@ -529,3 +531,51 @@ def saturation_slope(x: ArrayLike, F1: float = 0.02, F2: float = 50.0) -> Any:
     """``d psi / dx = F1 F2 exp(-F2 |x|)`` (Al-Takie 1982 eqs. 7.7-7.8)."""
     x_ = np.asarray(x, dtype=float)
     return F1 * F2 * np.exp(-F2 * np.abs(x_))
+
+
+def saturated_lf_matrix(A: ArrayLike, f: ArrayLike, F1: float = 0.02, F2: float = 50.0) -> Array:
+    """The LF matrix linearised at the thruster states ``f = [x5, x6]`` (Al-Takie 1982 7.2).
+
+    The hull rows (``v``, ``y``, ``r``, ``psi``) see the thruster outputs through ``psi(f)``:
+    their thruster columns are scaled by ``psi'(f)``; the thruster rows (the lags) stay linear.
+    The state matrix of the EKF's prediction and of the SDRE controller; (6, 6) or larger.
+    """
+    A1 = np.array(A, dtype=float)
+    A1[:4, 4:6] = A1[:4, 4:6] * saturation_slope(np.asarray(f, dtype=float), F1, F2)
+    return A1
+
+
+def saturated_lf_step(
+    x: ArrayLike,
+    u: ArrayLike,
+    A: ArrayLike,
+    dt: float,
+    F1: float = 0.02,
+    F2: float = 50.0,
+    substeps: int = 8,
+) -> Array:
+    """Integrate the LF model with saturating thrusters over ``dt`` (RK4), input held.
+
+    ``dx/dt = A_0 x + A_f psi(x5, x6) + u`` on the hull rows (``A_0`` = ``A`` without its
+    thruster columns there, ``A_f`` those columns) and ``A x + u`` on the thruster rows;
+    ``u`` is the whole input ``B u_d (+ other states' coupling)``, (6,).
+    """
+    A_ = np.asarray(A, dtype=float)[:6, :6]
+    A_thr = np.zeros((6, 2))
+    A_thr[:4] = A_[:4, 4:6]
+    A_lin = A_.copy()
+    A_lin[:4, 4:6] = 0.0
+    u_ = np.asarray(u, dtype=float)
+
+    def f(s: Array) -> Array:
+        return A_lin @ s + A_thr @ saturation(s[4:6], F1, F2) + u_
+
+    h = dt / substeps
+    s = np.array(x, dtype=float)
+    for _ in range(substeps):
+        k1 = f(s)
+        k2 = f(s + 0.5 * h * k1)
+        k3 = f(s + 0.5 * h * k2)
+        k4 = f(s + h * k3)
+        s = s + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return s

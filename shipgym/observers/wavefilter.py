@@ -53,8 +53,8 @@ from shipgym.dynamics.altakie import (
     hf_alpha,
     hf_block,
     lf_model_from_vessel,
-    saturation,
-    saturation_slope,
+    saturated_lf_matrix,
+    saturated_lf_step,
     surge_model_from_vessel,
     wave_filter_model,
 )
@@ -263,9 +263,6 @@ class WaveFilterEKF(DiscreteKF):
         self.relinearise_every = int(relinearise_every)
         self.substeps = int(substeps)
         # the LF block is nonlinear; the HF blocks are linear and fixed (exact transition)
-        self._A_thr = model.A[:6, 4:6].copy()  # the thruster columns (act through psi)
-        self._A_lin = model.A[:6, :6].copy()
-        self._A_lin[:, 4:6] = 0.0
         self._A_rest = model.A[:6, 6:]  # the LF block's input from the other states (bias)
         self._B_lf = model.B[:6]
         self._G_lf = model.G[:6]
@@ -275,12 +272,8 @@ class WaveFilterEKF(DiscreteKF):
         """``A(x) = df/dx``: the thruster columns times ``psi'(x5)``, ``psi'(x6)``."""
         x_ = np.asarray(x, dtype=float)
         F = self.A.copy()
-        F[:6, 4:6] = self._A_thr * saturation_slope(x_[4:6], self.F1, self.F2)
+        F[:6, :6] = saturated_lf_matrix(self.A[:6, :6], x_[4:6], self.F1, self.F2)
         return F
-
-    def _f(self, x: Array, u: Array) -> Array:
-        """The nonlinear LF dynamics (6 states); ``u`` includes the other states' input."""
-        return self._A_lin @ x + self._A_thr @ saturation(x[4:6], self.F1, self.F2) + u
 
     def predict(self, u: ArrayLike) -> None:
         u_ = np.asarray(u, dtype=float)
@@ -293,16 +286,11 @@ class WaveFilterEKF(DiscreteKF):
             W = self.Gamma @ (self.Q / self.dt) @ self.Gamma.T
             self.W = 0.5 * (W + W.T)
             self.relinearisations += 1
-        h = self.dt / self.substeps
         hf = self.Phi[6:, 6:] @ self.x[6:]
-        u_ = self._B_lf @ u_ + self._A_rest @ self.x[6:]  # held over the interval
-        x = self.x[:6]
-        for _ in range(self.substeps):
-            k1 = self._f(x, u_)
-            k2 = self._f(x + 0.5 * h * k1, u_)
-            k3 = self._f(x + 0.5 * h * k2, u_)
-            k4 = self._f(x + h * k3, u_)
-            x = x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        u_in = self._B_lf @ u_ + self._A_rest @ self.x[6:]  # held over the interval
+        x = saturated_lf_step(
+            self.x[:6], u_in, self.A, self.dt, self.F1, self.F2, substeps=self.substeps
+        )
         self.x = np.concatenate([x, hf])
         self.P = self.Phi @ self.P @ self.Phi.T + self.W
 
