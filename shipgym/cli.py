@@ -296,7 +296,7 @@ def _beaufort_list(text: str) -> list[int]:
 
 def _cmd_bench_dp(args: argparse.Namespace) -> int:
     from shipgym._io import progress_enabled
-    from shipgym.dp.bench import METHODS, bench_dp, dp_table
+    from shipgym.dp.bench import METHODS, TASKS, bench_dp, dp_table
     from shipgym.dynamics.vessel import load_vessel
 
     beauforts = _beaufort_list(args.beaufort)
@@ -306,6 +306,8 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
     for m in methods:
         if m not in METHODS:
             raise ValueError(f"unknown DP method {m!r}; choose from {', '.join(METHODS)}")
+    if args.duration is None:
+        args.duration = 400.0 if args.task == "sway-step" else 600.0
     if not (math.isfinite(args.duration) and args.duration >= 100.0):
         raise ValueError(f"--duration must be >= 100 s (the metrics' spectra), got {args.duration}")
     for path in (args.json, args.markdown):
@@ -316,13 +318,14 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     rows = bench_dp(
         args.vessel, beauforts, args.seeds, methods=methods, duration=args.duration,
-        workers=args.workers, progress=progress_enabled(args.no_progress), on_row=log.add,
+        task=args.task, workers=args.workers, progress=progress_enabled(args.no_progress),
+        on_row=log.add,
     )  # fmt: skip
     wall = time.perf_counter() - t0
     title = (
         f"Al-Takie (1982) DP in closed loop: {', '.join(args.vessel)}, Beaufort "
         f"{args.beaufort}, seeds 0-{args.seeds - 1}, {args.duration:g} s episodes "
-        "(shipgym/DPStationKeeping-v0); wave-band ratio = thrust-command power in "
+        f"({TASKS[args.task]}); wave-band ratio = thrust-command power in "
         "0.05-0.25 Hz over 0-0.04 Hz"
     )
     write_bench_outputs(title, dp_table(rows), rows, wall, json_path=args.json,
@@ -335,7 +338,7 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
         bf = max(beauforts)
         for v in args.vessel:
             traces = {
-                m: dp_trace((v, bf, m, 0, args.duration))
+                m: dp_trace((v, bf, m, 0, args.duration, args.task))
                 for m in ("kf14", "kf16", "raw-lq")
                 if m in methods
             }
@@ -525,7 +528,11 @@ def _parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     b.add_argument("--methods", nargs="+", default=None, metavar="NAME",
                    help="methods of shipgym.dp.bench.METHODS (all)")  # fmt: skip
-    b.add_argument("--duration", type=float, default=600.0, help="episode length, s (600)")
+    b.add_argument("--duration", type=float, default=None,
+                   help="episode length, s (600; the sway step: 400)")  # fmt: skip
+    b.add_argument("--task", choices=("station-keeping", "sway-step"), default="station-keeping",
+                   help="DPStationKeeping-v0 or the thesis's 0.02 p.u. sway step, DPSwayStep-v0 "
+                   "(station-keeping)")  # fmt: skip
     _add_bench_outputs(b)
     b.add_argument("--figures", type=Path, default=None, metavar="DIR",
                    help="estimates vs truth, thrust spectra and gain history (PNG), per vessel "

@@ -93,3 +93,13 @@ def test_dp_figures(tmp_path):
         w, h = Image.open(p).size
         W, H = DP_SIZES[p.stem]
         assert (w, h) == (round(W * DPI), round(H * DPI))
+
+
+def test_sway_step_task():
+    """The thesis's 0.02 p.u. sway step on the simulated Star Hercules (1.46 m at 100 s)."""
+    row = dp_run(("star-hercules", 5, "kf16", 0, 300.0, "sway-step"))
+    assert row["task"] == "sway-step"
+    assert 5.0 < row["rise_time_s"] < 100.0
+    assert row["overshoot_pct"] < 100.0
+    with pytest.raises(ValueError, match="unknown DP task"):
+        dp_run(("star-hercules", 5, "kf16", 0, 300.0, "zigzag"))

@@ -184,3 +184,27 @@ def test_bad_input_raises(kwargs):
 def test_dp_radius_rejects_bad_depths(depth):
     with pytest.raises(ValueError, match="depth"):
         dp_radius(depth)
+
+
+def test_step_metrics_of_a_second_order_response():
+    """Against the analytic step response of zeta = 0.5, w_n = 0.2 rad/s."""
+    from shipgym.dp.metrics import step_metrics
+
+    z, wn, t0, A = 0.5, 0.2, 100.0, 1.9
+    t = np.arange(0.0, 400.0, 0.01)
+    tau = np.clip(t - t0, 0.0, None)
+    wd = wn * np.sqrt(1 - z * z)
+    y = A * (
+        1 - np.exp(-z * wn * tau) * (np.cos(wd * tau) + z / np.sqrt(1 - z * z) * np.sin(wd * tau))
+    )
+    m = step_metrics(t, y, t0, A)
+    assert m["overshoot_pct"] == pytest.approx(
+        100 * np.exp(-np.pi * z / np.sqrt(1 - z * z)), rel=1e-3
+    )
+    # the 10-90 % rise time of this system: 1.64 / w_n (the standard table value for zeta 0.5)
+    assert m["rise_time_s"] == pytest.approx(1.64 / wn, rel=0.01)
+    assert 4.0 / (z * wn) * 0.6 < m["settling_time_s"] < 4.0 / (z * wn) * 1.1
+    never = step_metrics(t, 0.5 * y, t0, A)  # stops at half the step
+    assert never["rise_time_s"] == np.inf and never["settling_time_s"] == np.inf
+    with pytest.raises(ValueError, match="step must be"):
+        step_metrics(t, y, t0, 0.0)

@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from .metrics import dp_metrics
+from .metrics import dp_metrics, step_metrics
 
 __all__ = [
     "METHODS",
@@ -48,6 +48,7 @@ __all__ = [
     "dp_run",
     "dp_table",
     "dp_trace",
+    "TASKS",
     "thesis_controller",
 ]
 
@@ -74,8 +75,14 @@ def thesis_controller(vessel: str) -> str:
     return "alt-lq-printed" if any(k.split("/")[0] == vessel for k in PRINTED_GAINS) else "alt-lq"
 
 
-def _make_env(vessel_name: str, bf: int, method: str, duration: float) -> Any:
-    """The environment stack of one method (see :data:`METHODS`)."""
+#: the tasks of the benchmark: the env ids
+TASKS = {"station-keeping": "shipgym/DPStationKeeping-v0", "sway-step": "shipgym/DPSwayStep-v0"}
+
+
+def _make_env(
+    vessel_name: str, bf: int, method: str, duration: float, task: str = "station-keeping"
+) -> Any:
+    """The environment stack of one method (see :data:`METHODS`) on a task of :data:`TASKS`."""
     import shipgym
     from shipgym.dynamics.vessel import load_vessel
     from shipgym.envs.offshore import dp_control_period
@@ -96,7 +103,7 @@ def _make_env(vessel_name: str, bf: int, method: str, duration: float) -> Any:
             "heading_variance": 100.0 * AL_TAKIE1982_HEADING_SIGMA**2,
         }
     return shipgym.make(
-        "shipgym/DPStationKeeping-v0",
+        TASKS[task],
         vessel=vessel_name,
         beaufort=bf,
         episode_duration=duration,
@@ -108,11 +115,11 @@ def _make_env(vessel_name: str, bf: int, method: str, duration: float) -> Any:
 
 
 def _episode(
-    job: tuple[str, int, str, int, float], on_step: Callable[[Any, dict[str, Any]], None]
+    job: tuple[Any, ...], on_step: Callable[[Any, dict[str, Any]], None]
 ) -> tuple[Any, float]:
     """One episode, ``on_step(env, info)`` after every step; ``(env, filter seconds per step)``."""
-    vessel_name, bf, method, seed, duration = job
-    env = _make_env(vessel_name, bf, method, duration)
+    vessel_name, bf, method, seed, duration = job[:5]
+    env = _make_env(vessel_name, bf, method, duration, _task(job))
     observer = env.env.observer  # the ObserverWrapper's observer (controller wrapper above)
     spent = [0.0, 0]
     step = observer.step
@@ -136,8 +143,14 @@ def _episode(
     return env, spent[0] / max(spent[1], 1)
 
 
-def dp_run(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
-    """One episode: ``(vessel, beaufort, method, seed, duration_s)`` -> a row of metrics."""
+def dp_run(job: tuple[Any, ...]) -> dict[str, Any]:
+    """One episode: ``(vessel, beaufort, method, seed, duration_s[, task])`` -> a row of metrics.
+
+    ``task`` is a key of :data:`TASKS` (``"station-keeping"``); the sway step's rows also have
+    ``rise_time_s`` and ``overshoot_pct`` (:func:`~shipgym.dp.metrics.step_metrics` of the true
+    sway in the set-point's frame, from its mean over the 10 s before the step; no settling
+    time: in waves and gusts the response rarely stays within 5 % of the step).
+    """
     from shipgym.controllers.actuation import planar_capacity
 
     t, eta, eta_d, tau, sat, err, nis = [], [], [], [], [], [], []
@@ -146,14 +159,14 @@ def dp_run(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
         rec = info["record"]
         t.append(rec.t)
         eta.append(rec.truth.eta)
-        eta_d.append(rec.reference.eta_P)
+        eta_d.append(rec.reference.eta_d_n)
         tau.append(info["tau_c"])
         sat.append(bool(np.any(info["allocation_saturated"])))
         err.append(info["est_error_eta"])
         nis.append(np.nan if info["observer_nis"] is None else info["observer_nis"])
 
     env, per_step = _episode(job, keep)
-    vessel_name, bf, method, seed, _ = job
+    vessel_name, bf, method, seed, _ = job[:5]
     nis_a = np.array(nis, dtype=float)
     m = dp_metrics(
         np.array(t),
@@ -173,12 +186,31 @@ def dp_run(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
         observer=METHODS[method][0],
         controller=env.controller_name,
         seed=seed,
+        task=_task(job),
         filter_step_us=1e6 * per_step,
     )
+    if _task(job) == "sway-step":
+        base = env.unwrapped
+        c, s_ = np.cos(eta_d[0][2]), np.sin(eta_d[0][2])
+        e = np.array(eta)[:, :2] - np.array(eta_d[0])[:2]
+        sway = -s_ * e[:, 0] + c * e[:, 1]  # in the set-point's frame
+        ta = np.array(t)
+        before = (ta >= base.step_time - 10.0) & (ta < base.step_time)
+        if before.any():  # from where the ship held before the step (its LF offset)
+            sway = sway - float(np.mean(sway[before]))
+        sm = step_metrics(ta, sway, base.step_time, base.step_size)
+        m.update(rise_time_s=sm["rise_time_s"], overshoot_pct=sm["overshoot_pct"])
     return m
 
 
-def dp_trace(job: tuple[str, int, str, int, float]) -> dict[str, Any]:
+def _task(job: tuple[Any, ...]) -> str:
+    task = job[5] if len(job) > 5 else "station-keeping"
+    if task not in TASKS:
+        raise ValueError(f"unknown DP task {task!r}; choose from {', '.join(TASKS)}")
+    return str(task)
+
+
+def dp_trace(job: tuple[Any, ...]) -> dict[str, Any]:
     """One episode's time series for the figures (:func:`shipgym.viz.dp.write_dp_figures`).
 
     Returns:
@@ -238,6 +270,7 @@ def bench_dp(
     *,
     methods: Sequence[str] | None = None,
     duration: float = 600.0,
+    task: str = "station-keeping",
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, Any], None] | None = None,
@@ -249,8 +282,9 @@ def bench_dp(
     for m in names:
         if m not in METHODS:
             raise ValueError(f"unknown DP method {m!r}; choose from {', '.join(METHODS)}")
+    _task(("", 0, "", 0, 0.0, task))
     jobs = [
-        (v, int(bf), m, s, float(duration))
+        (v, int(bf), m, s, float(duration), task)
         for v in vessels
         for bf in beauforts
         for m in names
@@ -304,6 +338,11 @@ def dp_table(rows: Sequence[dict[str, Any]]) -> str:
         "est. RMSE x, y (m) | NIS mean | filter step (us) |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )
+    step = any("rise_time_s" in r for r in rows)
+    if step:
+        head = head.replace("| filter step (us) |", "| rise 10-90 % (s) | overshoot (%) | "
+                            "filter step (us) |")  # fmt: skip
+        head += "---|---|"
     lines = [head]
     for (v, bf, m), rs in keys.items():
         lf = [r.get("lf_rmse") for r in rs]
@@ -319,6 +358,12 @@ def dp_table(rows: Sequence[dict[str, Any]]) -> str:
             f"{_ms([r['wave_band_ratio'] for r in rs], '.3f')} | "
             f"{_ms(lf_xy, '.2f')} | "
             f"{_ms([r['nis_mean'] for r in rs], '.2f')} | "
-            f"{_ms([r['filter_step_us'] for r in rs], '.0f')} |"
+            + (
+                f"{_ms([r['rise_time_s'] for r in rs], '.1f')} | "
+                f"{_ms([r['overshoot_pct'] for r in rs], '.1f')} | "
+                if step
+                else ""
+            )
+            + f"{_ms([r['filter_step_us'] for r in rs], '.0f')} |"
         )
     return "\n".join(lines)

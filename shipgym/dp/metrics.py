@@ -30,7 +30,7 @@ from scipy.stats import chi2
 
 from shipgym.dynamics.frames import wrap_angle
 
-__all__ = ["DP_RADIUS_MAX", "dp_metrics", "dp_radius", "wave_band_ratio"]
+__all__ = ["DP_RADIUS_MAX", "dp_metrics", "dp_radius", "step_metrics", "wave_band_ratio"]
 
 DP_RADIUS_MAX = 7.0
 """The largest allowed radius of the DP requirement (m) [printed, Al-Takie (1982) 2.3]."""
@@ -285,3 +285,49 @@ def dp_metrics(
         out["nis_mean"] = float(q.mean())
         out["nis_inside_95_pct"] = 100.0 * float(np.mean((q >= lo) & (q <= hi)))
     return out
+
+
+def step_metrics(
+    t: ArrayLike, y: ArrayLike, t_step: float, step: float, *, settle: float = 0.05
+) -> dict[str, float]:
+    """Rise time, overshoot and settling time of a set-point step response.
+
+    Args:
+        t: sample times (s), increasing.
+        y: the response (the true sway position, m), measured from its pre-step value.
+        t_step: when the set-point stepped (s).
+        step: the step (m), nonzero.
+        settle: the settling band (fraction of the step; 5 %).
+
+    Returns:
+        ``rise_time_s`` (10 % to 90 % of the step; ``inf`` if never reached),
+        ``overshoot_pct`` (largest excess over the step, % of it, >= 0) and ``settling_time_s``
+        (from the step until the response stays inside the band; ``inf`` if it never does).
+    """
+    if not (math.isfinite(step) and step != 0.0):
+        raise ValueError(f"step must be a finite nonzero length, got {step!r}")
+    tt = np.asarray(t, dtype=float)
+    yy = np.asarray(y, dtype=float) / float(step)
+    if tt.shape != yy.shape or tt.ndim != 1:
+        raise ValueError(f"t and y must be 1-D of one length, got {tt.shape} and {yy.shape}")
+    after = tt >= t_step
+    ta, ya = tt[after], yy[after]
+    if ta.size == 0:
+        raise ValueError(f"no samples after the step time {t_step!r} s")
+
+    def first(level: float) -> float:
+        hit = np.nonzero(ya >= level)[0]
+        return float(ta[hit[0]]) if hit.size else math.inf
+
+    outside = np.nonzero(np.abs(ya - 1.0) > settle)[0]
+    if outside.size == 0:
+        settling = 0.0
+    elif outside[-1] + 1 < ta.size:
+        settling = float(ta[outside[-1] + 1] - t_step)
+    else:
+        settling = math.inf
+    return {
+        "rise_time_s": first(0.9) - first(0.1),
+        "overshoot_pct": max(0.0, 100.0 * (float(ya.max()) - 1.0)),
+        "settling_time_s": settling,
+    }
