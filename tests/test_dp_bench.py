@@ -87,11 +87,12 @@ def test_dp_figures(tmp_path):
     gains = dp_gain_history("star-hercules", 5, duration=60.0)
     assert gains["K"].shape[1:] == (14, 2) and gains["settled"] > 0
     paths = write_dp_figures(traces, gains, tmp_path, title="test")
+    assert {p.name for p in paths} == {"dp_estimates_kf14.png", "dp_thrust.png", "dp_gains.png"}
     from PIL import Image
 
     for p in paths:
         w, h = Image.open(p).size
-        W, H = DP_SIZES[p.stem]
+        W, H = DP_SIZES["dp_estimates" if p.stem.startswith("dp_estimates") else p.stem]
         assert (w, h) == (round(W * DPI), round(H * DPI))
 
 
@@ -103,3 +104,13 @@ def test_sway_step_task():
     assert row["overshoot_pct"] < 100.0
     with pytest.raises(ValueError, match="unknown DP task"):
         dp_run(("star-hercules", 5, "kf16", 0, 300.0, "zigzag"))
+
+
+def test_shipgym_run_builds_the_wave_filter_for_the_vessel(capsys):
+    """`shipgym run` validates an alt-* observer with the run's vessel (it needs one)."""
+    from shipgym.cli import main
+
+    rc = main(["run", "shipgym/DPStationKeeping-v0", "--vessel", "star-hercules",
+               "--observer", "alt-kf16", "--controller", "alt-lq-printed"])  # fmt: skip
+    assert rc == 0
+    assert "estimation RMSE" in capsys.readouterr().out

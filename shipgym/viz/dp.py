@@ -42,7 +42,7 @@ def write_dp_figures(
     *,
     title: str = "",
 ) -> list[Path]:
-    """Write ``dp_estimates.png``, ``dp_thrust.png`` and ``dp_gains.png``.
+    """Write ``dp_estimates_<filter>.png`` (kf14, kf16), ``dp_thrust.png`` and ``dp_gains.png``.
 
     Args:
         traces: per method (``"kf14"``, ``"raw-lq"``, ...), one episode as returned by
@@ -63,44 +63,41 @@ def write_dp_figures(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
-    kf = traces.get("kf14") or next(iter(traces.values()))
-    fig = _figure("dp_estimates")
-    axes = fig.subplots(3, 2, sharex=True)
-    labels = (("sway position (m)", 1, 1.0), ("heading (deg)", 2, np.degrees(1.0)))
-    for row, (label, i, k) in enumerate(labels):
-        ax = axes[row, 0]
-        ax.plot(kf["t"], k * kf["z"][:, i], color="0.75", lw=0.6, label="measured")
-        ax.plot(kf["t"], k * kf["eta"][:, i], color="k", lw=1.0, label="true (LF)")
-        ax.plot(kf["t"], k * kf["eta_hat"][:, i], color="#d62728", lw=1.0, label="LF estimate")
-        ax.set_ylabel(label)
-        ax.grid(alpha=0.3)
-        ax = axes[row, 1]
-        ax.plot(kf["t"], k * kf["hf"][:, i], color="k", lw=0.8, label="true HF motion")
-        ax.plot(kf["t"], k * kf["hf_hat"][:, i], color="#1f77b4", lw=0.8, label="HF estimate")
-        ax.set_ylabel("HF " + label)
-        ax.grid(alpha=0.3)
-    ax = axes[2, 0]
-    ax.plot(kf["t"], kf["eta"][:, 0], color="k", lw=1.0, label="true surge")
-    ax.plot(kf["t"], kf["eta_hat"][:, 0], color="#d62728", lw=1.0, label="surge estimate")
-    ax.set_ylabel("surge position (m)")
-    ax.set_xlabel("t (s)")
-    ax.grid(alpha=0.3)
-    ax = axes[2, 1]
-    ax.plot(kf["t"], kf["hf"][:, 0], color="k", lw=0.8)
-    ax.plot(kf["t"], kf["hf_hat"][:, 0], color="#1f77b4", lw=0.8)
-    ax.set_ylabel("HF surge (m)")
-    ax.set_xlabel("t (s)")
-    ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize=8, loc="upper right")
-    axes[0, 1].legend(fontsize=8, loc="upper right")
-    fig.suptitle(f"{title}: 14-state KF, LF and HF estimates against the truth")
-    paths.append(out / "dp_estimates.png")
-    fig.savefig(paths[-1])
+    colours = {"kf14": "#d62728", "raw-lq": "0.5", "kf16": "#9467bd", "notch-pid": "#2ca02c"}
+    filters = [m for m in ("kf14", "kf16") if m in traces] or [next(iter(traces))]
+    rows = (("sway position (m)", 1, 1.0), ("heading (deg)", 2, float(np.degrees(1.0))),
+            ("surge position (m)", 0, 1.0))  # fmt: skip
+    for m in filters:  # one figure per filter: its estimates against its own episode's truth
+        tr = traces[m]
+        fig = _figure("dp_estimates")
+        axes = fig.subplots(3, 2, sharex=True)
+        for row, (label, i, k) in enumerate(rows):
+            ax, hf = axes[row]
+            if i:
+                ax.plot(tr["t"], k * tr["z"][:, i], color="0.8", lw=0.6, label="measured")
+            ax.plot(tr["t"], k * tr["eta"][:, i], color="k", lw=1.0, label="true")
+            ax.plot(tr["t"], k * tr["eta_hat"][:, i], color=colours.get(m, "#d62728"), lw=1.0,
+                    label="LF estimate")  # fmt: skip
+            hf.plot(tr["t"], k * tr["hf"][:, i], color="k", lw=0.8, label="true HF motion")
+            hf.plot(tr["t"], k * tr["hf_hat"][:, i], color="#1f77b4", lw=0.7,
+                    label="HF estimate")  # fmt: skip
+            ax.set_ylabel(label)
+            hf.set_ylabel("HF " + label)
+            for a_ in (ax, hf):
+                a_.grid(alpha=0.3)
+        for a_ in axes[2]:
+            a_.set_xlabel("t (s)")
+        axes[0, 0].legend(fontsize=8, loc="upper right")
+        axes[0, 1].legend(fontsize=8, loc="upper right")
+        fig.suptitle(f"{title}: {m}, LF and HF estimates against the truth")
+        paths.append(out / f"dp_estimates_{m}.png")
+        fig.savefig(paths[-1])
 
     fig = _figure("dp_thrust")
     axes = fig.subplots(2, 2)
-    colours = {"kf14": "#d62728", "raw-lq": "0.5", "kf16": "#9467bd", "notch-pid": "#2ca02c"}
-    for name, tr in traces.items():
+    order = sorted(traces, key=lambda m: m != "raw-lq")  # the raw measurements' first, below
+    for name in order:
+        tr = traces[name]
         cap = np.asarray(tr["capacity"], dtype=float)
         u = np.asarray(tr["tau_c"]) / cap
         c = colours.get(name, None)
