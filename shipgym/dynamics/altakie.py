@@ -411,8 +411,7 @@ class WaveFilterModel:
     beaufort: tuple[int, int]
     d_h: tuple[float, float]
 
-    #: indices of the LF states, the HF outputs (x9, x13: the first-order wave motion)
-    LF = slice(0, 6)
+    #: indices of the HF outputs (x9, x13: the first-order wave motion in sway and yaw)
     HF_OUT = (8, 12)
 
     @property

@@ -618,7 +618,9 @@ class WaveFilterObserver(Observer):
         core = self.core
         if self.kind in ("lf6", "raw"):
             return np.zeros(3)
-        i_s, i_y = (6, 10) if isinstance(core, ReducedKF) else (8, 12)
+        i_s, i_y = self.model.HF_OUT
+        if isinstance(core, ReducedKF):  # without the two thruster states
+            i_s, i_y = i_s - 2, i_y - 2
         L = self.pu.L
         X, Y = self.surge.x[5] * L, core.x[i_s] * L
         c, s = self._c, self._s
