@@ -20,7 +20,8 @@ CASES = [
     (task, vessel)
     for task in TASKS
     for vessel in vessel_names()
-    if task != "shipgym/Harbour-v0" or fits(load_vessel(vessel), "harbour")
+    if load_vessel(vessel).can_position
+    and (task != "shipgym/Harbour-v0" or fits(load_vessel(vessel), "harbour"))
 ]
 IDS = [f"{t.split('/')[1]}-{v}" for t, v in CASES]
 

@@ -136,9 +136,14 @@ def test_model_built_from_the_vessel_file(name: str) -> None:
     m = build_model(v)
     acts = v.actuators
     assert m.nu == acts.n_channels and m.na == acts.n_channels and m.nv == v.dofs
-    np.testing.assert_array_equal(m.actuator_ctrlrange, np.c_[acts.lower, acts.upper])
     for i, ch in enumerate(acts.channels):
         assert m.actuator(i).name == ch.name
+        if ch.dynamics == "servo":  # MuJoCo integrates the servo's rate; the angle is limited
+            np.testing.assert_array_equal(m.actuator_ctrlrange[i], [-ch.rate, ch.rate])
+            np.testing.assert_array_equal(m.actuator_actrange[i], [ch.lower, ch.upper])
+            assert m.actuator_actlimited[i] and m.actuator_gainprm[i, 0] == 0.0
+        else:
+            np.testing.assert_array_equal(m.actuator_ctrlrange[i], [ch.lower, ch.upper])
         if ch.dynamics == "lag":
             assert m.actuator_dynprm[i, 0] == ch.time_constant
     for a in acts:

@@ -16,7 +16,11 @@ physics, the allocation and the plots alike:
 - :class:`Azimuth` (an azimuth thruster): two channels, the thrust state ``a`` (relative
   thrust, lagged) and the angle ``alpha`` (rad), which integrates a commanded rate limited to
   ``+-max_rate``; ``F = F_max a`` along ``alpha`` (Fossen 2011 ch. 12, azimuth thrusters;
-  Johansen & Fossen 2013).
+  Johansen & Fossen 2013);
+- :class:`Rudder`: one channel, the commanded angle, which the state follows through a
+  rate-limited servo; lift ``k_L U_R |U_R| C(alpha_e)`` from the flow speed at the rudder,
+  capped (or dropping) past the stall angle (Fossen 2011 ch. 9; Blanke & Christensen 1993
+  for the naval vessel's rudder data).
 
 Generalised force of a force ``(F_x, F_y)`` applied at ``(x, y, z)`` (body frame, z down):
 ``X = F_x``, ``Y = F_y``, ``K = -z F_y``, ``N = x F_y - y F_x`` (Fossen 2011 eq. 12.?).
@@ -25,9 +29,10 @@ The protocol (:class:`Actuator`) is what a new kind implements: its channels (an
 MuJoCo actuators, each a lag or an integrator: a rudder's angle with its rate limit is an
 integrator channel like an azimuth's), the force from its states, its force capacity, and a
 branch in :meth:`ActuatorSet.kernel` (the plain-float law of the physics step). A kind whose
-force also depends on the flow (a rudder's lift from the speed through the water) needs the
-relative velocity in ``force`` and in the kernel; the physics has it at that point of the
-step (``u, v, r`` and the current), so adding it extends these two signatures only.
+force also depends on the flow (the rudder's lift from the speed through the water) takes the
+body velocity in ``force`` and has its plain-float law in :meth:`ActuatorSet.flow_kernel`;
+MuJoCo's actuator for it carries no force (gain 0), the physics adds the flow-dependent force
+to the hull's loads itself.
 """
 
 from __future__ import annotations
@@ -47,6 +52,7 @@ __all__ = [
     "Azimuth",
     "Channel",
     "Propeller",
+    "Rudder",
 ]
 
 
@@ -58,10 +64,15 @@ class Channel:
         name: MuJoCo actuator name (the actuator's name, or ``NAME_angle`` etc.).
         unit: unit of the command and of the state (e.g. ``"rpm"``, ``"1"``, ``"rad/s"``).
         lower, upper: command range (``lower <= 0 <= upper`` or ``0 <= lower``).
-        dynamics: ``"lag"`` (first-order lag of the state to the command, ``time_constant``)
-            or ``"integrator"`` (the state integrates the command: an angle from a rate).
-        time_constant: lag time constant (s), ``nan`` for an integrator.
+        dynamics: ``"lag"`` (first-order lag of the state to the command, ``time_constant``),
+            ``"integrator"`` (the state integrates the command: an angle from a rate) or
+            ``"servo"`` (the command is an angle the state follows at a rate limited to
+            ``+-rate``: ``state_dot = clip((command - state) / T, -rate, rate)`` with
+            ``T = time_constant``, or the physics step when ``time_constant`` is 0: an ideal
+            rate-limited servo; MuJoCo integrates the rate, :mod:`shipgym.envs.physics`).
+        time_constant: lag time constant (s), ``nan`` for an integrator, ``>= 0`` for a servo.
         state_unit: unit of the state (differs from ``unit`` for an integrator).
+        rate: largest rate of a servo's state (state unit per second), ``nan`` otherwise.
     """
 
     name: str
@@ -71,6 +82,7 @@ class Channel:
     dynamics: str = "lag"
     time_constant: float = math.nan
     state_unit: str = ""
+    rate: float = math.nan
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.lower) and math.isfinite(self.upper)):
@@ -78,8 +90,13 @@ class Channel:
         if not self.lower < self.upper:
             raise ValueError(f"{self.name}: command range needs lower < upper, got "
                              f"[{self.lower}, {self.upper}]")  # fmt: skip
-        if self.dynamics not in ("lag", "integrator"):
+        if self.dynamics not in ("lag", "integrator", "servo"):
             raise ValueError(f"{self.name}: unknown dynamics {self.dynamics!r}")
+        if self.dynamics == "servo" and not (self.time_constant >= 0 and self.rate > 0):
+            raise ValueError(
+                f"{self.name}: a servo needs time_constant >= 0 s and rate > 0, got "
+                f"{self.time_constant}, {self.rate}"
+            )
         if self.dynamics == "lag" and not self.time_constant > 0:
             raise ValueError(f"{self.name}: time_constant must be > 0 s, got {self.time_constant}")
         if not self.state_unit:
@@ -312,11 +329,138 @@ class Azimuth(Actuator):
         return float(self.max_thrust_n)
 
 
+@dataclass(frozen=True)
+class Rudder(Actuator):
+    r"""A rudder: a lifting foil whose force grows with the square of the flow speed.
+
+    One channel ``NAME``: the command is the rudder angle ``delta_c`` (rad, ``+-max_angle``),
+    the state the angle ``delta`` (rad), which follows the command through a rate-limited
+    servo (``delta_dot = clip((delta_c - delta) / T, +-max_rate)``, ``T = servo_time_constant``
+    or, for 0, one physics step: an ideal servo that moves at full rate until it reaches the
+    command; MuJoCo integrates the rate and clamps the angle to ``+-max_angle``, so neither
+    limit can be exceeded). Positive ``delta`` gives a force to starboard (at a rudder aft of
+    the centre of gravity, a yaw moment to port).
+
+    Force (lifting-line form without drag, Fossen 2011 ch. 9.? "rudder forces"; the chosen
+    model of the notes of the rudder-roll task): sway force at the rudder
+
+    .. math::
+
+        F = k_L\,U_R |U_R|\, C(\alpha_e),\qquad k_L = \tfrac12 \rho A_R\, \partial C_L /
+        \partial\alpha,\qquad C(\alpha) = \begin{cases} \alpha & |\alpha| \le
+        \alpha_s\\ \operatorname{sign}(\alpha)\, f_s \alpha_s & |\alpha| > \alpha_s
+        \end{cases}
+
+    with the flow speed ``U_R = u`` (``inflow = False``: the hull's derivatives already hold
+    the rudder's share of the sway and yaw damping, as captive-model derivatives measured
+    with the rudder on do) or ``U_R^2 = u^2 + v_R^2`` and the effective angle ``alpha_e =
+    delta - atan2(v_R, |u|)``, ``v_R = v + x_R r - z_R p`` (``inflow = True``). Past the stall
+    angle ``alpha_s`` the lift stops growing (``f_s = 1``, a cap) or drops to the fraction
+    ``f_s`` of its stall value. Generalised force: ``Y = F``, ``K = -z_R F``, ``N = x_R F``.
+
+    Attributes:
+        name, position, colour: as for :class:`Propeller` (the position is the rudder's centre
+            of pressure, body frame, z down).
+        lift_gain: ``k_L`` (N per rad per (m/s)^2).
+        max_angle: largest angle (rad).
+        max_rate: largest turning rate (rad/s).
+        stall_angle: stall angle (rad), ``inf`` for none.
+        post_stall: fraction ``f_s`` of the stall lift kept past the stall angle (0 to 1).
+        servo_time_constant: servo time constant (s), 0 for an ideal servo.
+        inflow: whether the hull's motion changes the rudder's inflow (above).
+    """
+
+    kind: ClassVar[str] = "rudder"
+    name: str = ""
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    lift_gain: float = 1.0
+    max_angle: float = math.radians(35.0)
+    max_rate: float = math.radians(10.0)
+    stall_angle: float = math.inf
+    post_stall: float = 1.0
+    servo_time_constant: float = 0.0
+    inflow: bool = False
+    colour: str = "#d62728"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "position", _check_position(self.name, self.position))
+        for k in ("lift_gain", "max_angle", "max_rate", "stall_angle"):
+            v = getattr(self, k)
+            if not (isinstance(v, int | float) and v > 0 and not math.isnan(v)):
+                raise ValueError(f"actuator {self.name!r}: {k} must be > 0, got {v!r}")
+        if not 0.0 <= self.post_stall <= 1.0:
+            raise ValueError(
+                f"actuator {self.name!r}: post_stall must be from 0 to 1, got {self.post_stall!r}"
+            )
+        if not (math.isfinite(self.servo_time_constant) and self.servo_time_constant >= 0):
+            raise ValueError(
+                f"actuator {self.name!r}: servo_time_constant must be >= 0 s (0: an ideal "
+                f"servo), got {self.servo_time_constant!r}"
+            )
+
+    @property
+    def channels(self) -> tuple[Channel, ...]:
+        return (
+            Channel(
+                self.name, "rad", -self.max_angle, self.max_angle, "servo",
+                self.servo_time_constant, rate=self.max_rate,
+            ),
+        )  # fmt: skip
+
+    def flow(self, states: ArrayLike, nu: ArrayLike) -> tuple[Any, Any, Any]:
+        """``(alpha_e, U_R |U_R|, stalled)`` at the rudder (rad, (m/s)^2, bool).
+
+        Args:
+            states: the rudder's state (..., 1): the angle (rad).
+            nu: body velocity ``[u, v, r]`` or ``[u, v, p, r]`` (m/s, rad/s), (..., 3 or 4).
+        """
+        delta = np.asarray(states, dtype=float)[..., 0]
+        n = np.asarray(nu, dtype=float)
+        if n.shape[-1] not in (3, 4):
+            raise ValueError(f"nu must be [u, v, r] or [u, v, p, r], got shape {n.shape}")
+        u, v = n[..., 0], n[..., 1]
+        r = n[..., -1]
+        p = n[..., 2] if n.shape[-1] == 4 else 0.0
+        if self.inflow:
+            x, _y, z = self.position
+            vr = v + x * r - z * p
+            q = np.sign(u) * (u * u + vr * vr)
+            alpha = delta - np.arctan2(vr, np.abs(u))
+        else:
+            q = u * np.abs(u)
+            alpha = delta + 0.0 * u
+        return alpha, q, np.abs(alpha) > self.stall_angle
+
+    def lift(self, states: ArrayLike, nu: ArrayLike) -> Any:
+        """The rudder's sway force ``F`` (N), shape (...)."""
+        alpha, q, stalled = self.flow(states, nu)
+        c = np.where(stalled, np.sign(alpha) * self.post_stall * self.stall_angle, alpha)
+        return self.lift_gain * q * c
+
+    def force(self, states: NDArray[np.float64], nu: ArrayLike | None = None) -> tuple[Any, Any]:
+        if nu is None:
+            raise ValueError(
+                f"the force of rudder {self.name!r} depends on the flow: pass the body velocity "
+                "nu = [u, v, r] or [u, v, p, r]"
+            )
+        f = self.lift(states, nu)
+        return 0.0 * f, f
+
+    def thrust(self, states: NDArray[np.float64], nu: ArrayLike | None = None) -> Any:
+        return self.force(states, nu)[1]
+
+    @property
+    def max_thrust(self) -> float:
+        """0: a rudder's force has no bound without a flow speed (:meth:`lift`)."""
+        return 0.0
+
+
 #: actuator kinds by the name used in vessel files (``kind = "..."``)
 ACTUATOR_KINDS: dict[str, type[Actuator]] = {
     "propeller": Propeller,
     "tunnel": Propeller,
     "azimuth": Azimuth,
+    "rudder": Rudder,
 }
 
 
@@ -404,29 +548,40 @@ class ActuatorSet:
         return all(isinstance(a, Propeller) for a in self.actuators)
 
     # ---- forces ----------------------------------------------------------------------------
-    def forces(self, states: ArrayLike) -> NDArray[np.float64]:
-        """Body forces ``(F_x, F_y)`` (N) of every actuator, shape (..., n_actuators, 2)."""
+    @property
+    def flow_dependent(self) -> bool:
+        """Whether a force depends on the flow past the hull (a rudder): pass ``nu``."""
+        return any(isinstance(a, Rudder) for a in self.actuators)
+
+    def _each(self, states: ArrayLike, nu: ArrayLike | None, what: str) -> list[Any]:
         s = self.check_states(states)
-        out = [
-            np.stack(a.force(s[..., sl]), -1)
-            for a, sl in zip(self.actuators, self.slices, strict=True)
-        ]
+        out = []
+        for a, sl in zip(self.actuators, self.slices, strict=True):
+            if isinstance(a, Rudder):
+                out.append(getattr(a, what)(s[..., sl], nu))
+            else:
+                out.append(getattr(a, what)(s[..., sl]))
+        return out
+
+    def forces(self, states: ArrayLike, nu: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Body forces ``(F_x, F_y)`` (N) of every actuator, shape (..., n_actuators, 2).
+
+        ``nu``: the body velocity ``[u, v, r]`` or ``[u, v, p, r]`` (m/s, rad/s), needed by the
+        flow-dependent kinds (a :class:`Rudder`).
+        """
+        out = [np.stack(np.broadcast_arrays(*f), -1) for f in self._each(states, nu, "force")]
         return np.stack(out, -2)
 
-    def thrust(self, states: ArrayLike) -> NDArray[np.float64]:
-        """Signed thrust (N) of every actuator, shape (..., n_actuators)."""
-        s = self.check_states(states)
-        return np.stack(
-            [
-                np.asarray(a.thrust(s[..., sl]))
-                for a, sl in zip(self.actuators, self.slices, strict=True)
-            ],
-            -1,
-        )
+    def thrust(self, states: ArrayLike, nu: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Signed thrust (N) of every actuator, shape (..., n_actuators) (a rudder: its lift)."""
+        return np.stack(np.broadcast_arrays(*self._each(states, nu, "thrust")), -1)
 
-    def tau(self, states: ArrayLike) -> NDArray[np.float64]:
-        """Generalised body force (..., dofs): ``[X, Y, N]`` or ``[X, Y, K, N]`` (N, N m)."""
-        f = self.forces(states)
+    def tau(self, states: ArrayLike, nu: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Generalised body force (..., dofs): ``[X, Y, N]`` or ``[X, Y, K, N]`` (N, N m).
+
+        ``nu`` as for :meth:`forces`.
+        """
+        f = self.forces(states, nu)
         pos = np.array([a.position for a in self.actuators])
         fx, fy = f[..., 0], f[..., 1]
         X = fx.sum(-1)
@@ -457,12 +612,15 @@ class ActuatorSet:
         """Largest ``|tau_i|`` per DOF with every actuator helping (N, N m), shape (dofs,).
 
         Each DOF on its own (the others free): the sum over actuators of the largest
-        contribution; the scale of integral clamps and guidance limits.
+        contribution; the scale of integral clamps and guidance limits. Rudders are not
+        counted: their force depends on the flow speed.
         """
         out = np.zeros(self.dofs)
         for a in self.actuators:
             x, y, z = a.position
             F = a.max_thrust
+            if isinstance(a, Rudder):  # no bound without a flow speed
+                continue
             if isinstance(a, Propeller):
                 c, s = a.direction
                 col = np.abs([c, s, x * s - y * c] if self.dofs == 3 else
@@ -547,12 +705,15 @@ class ActuatorSet:
     # ---- hot path --------------------------------------------------------------------------
     def thrust_kernel(self) -> Callable[[list[float]], list[float]]:
         """``f(states) -> thrusts`` (N, one per actuator) on plain floats: :meth:`thrust`
-        without array overhead (every control step)."""
+        without array overhead (every control step). A rudder reads 0 here: its lift depends
+        on the flow (:meth:`flow_kernel`)."""
         laws = []
         i = 0
         for a in self.actuators:
             if isinstance(a, Propeller):
                 laws.append((i, a.k_ahead, a.k_astern, a.law == "quadratic"))
+            elif isinstance(a, Rudder):  # its lift needs the flow: flow_kernel
+                laws.append((i, 0.0, 0.0, False))
             else:
                 assert isinstance(a, Azimuth)
                 laws.append((i, a.max_thrust_n, a.max_thrust_n, False))
@@ -576,7 +737,8 @@ class ActuatorSet:
 
         ``M_z = sum z_i F_x,i`` is the moment about the body y axis of the thrusts, which a
         rolled hull's yaw hinge feels (:mod:`shipgym.envs.physics`); ``K`` and ``M_z`` are
-        returned as 0 for a 3-DOF set.
+        returned as 0 for a 3-DOF set. The force of every actuator MuJoCo applies through its
+        actuators: flow-dependent kinds (rudders) are left out (:meth:`flow_kernel`).
 
         Args:
             gain: optional (n_channels, >=1) array; ``gain[i, 0]`` receives ``F / a`` of every
@@ -590,6 +752,9 @@ class ActuatorSet:
         i = 0
         for a in self.actuators:
             x, y, z = a.position
+            if isinstance(a, Rudder):  # not a MuJoCo-applied force: flow_kernel
+                i += len(a.channels)
+                continue
             if isinstance(a, Propeller):
                 c, s = a.direction
                 arms = (c, s, x * s - y * c, -z * s, z * c)
@@ -687,3 +852,55 @@ class ActuatorSet:
             return X, Y, 0.0, N, 0.0
 
         return tau_of3
+
+    def flow_kernel(
+        self,
+    ) -> Callable[[list[float], float, float, float, float], tuple[Any, ...]] | None:
+        """``f(states, u, v, p, r) -> (Y, K, N, lifts, stalled)`` of the rudders, plain floats.
+
+        The generalised force (N, N m m) of every flow-dependent actuator (:class:`Rudder`),
+        which the physics adds to the hull's loads itself (MuJoCo's actuator carries no force
+        for them), with the lift (N) and the stall flag of each, in actuator order; ``None``
+        when the set has no such actuator. :meth:`Rudder.lift` is the array form (a test
+        checks one against the other).
+        """
+        rud = []
+        i = 0
+        for a in self.actuators:
+            if isinstance(a, Rudder):
+                x, _y, z = a.position
+                rud.append((i, a.lift_gain, x, z, a.stall_angle, a.post_stall * a.stall_angle,
+                            a.inflow))  # fmt: skip
+            i += len(a.channels)
+        if not rud:
+            return None
+        rud_t = tuple(rud)
+        atan2 = math.atan2
+
+        def flow_of(
+            st: list[float], u: float, v: float, p: float, r: float
+        ) -> tuple[float, float, float, tuple[float, ...], tuple[bool, ...]]:
+            Y = K = N = 0.0
+            lifts = []
+            stalls = []
+            for j, k, x, z, a_s, c_s, inflow in rud_t:
+                if inflow:
+                    vr = v + x * r - z * p
+                    q = u * u + vr * vr
+                    if u < 0.0:
+                        q = -q
+                    alpha = st[j] - atan2(vr, abs(u))
+                else:
+                    q = u * abs(u)
+                    alpha = st[j]
+                stalled = abs(alpha) > a_s
+                c = (c_s if alpha > 0.0 else -c_s) if stalled else alpha
+                f = k * q * c
+                Y += f
+                K -= z * f
+                N += x * f
+                lifts.append(f)
+                stalls.append(stalled)
+            return Y, K, N, tuple(lifts), tuple(stalls)
+
+        return flow_of

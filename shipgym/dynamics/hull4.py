@@ -10,8 +10,16 @@ State in Fossen (2011, ch. 7.? "4-DOF models") notation: ``eta = [x, y, phi, psi
     \dot\phi = p,\quad \dot\psi = r\cos\phi,
 
 restoring moment in roll ``g_K = K_phi phi`` (``K_phi = rho g nabla GM_T``, N m/rad, the
-small-angle form), damping ``D(nu_r) = D_L + diag(d_quad |nu_r|)``, ``nu_r = nu - nu_c`` with
-``nu_c = [u_c, v_c, 0, 0]``. Linear in everything but the quadratic damping: the family of the
+small-angle form), damping ``D(nu_r) = D_L + |u_r| D_u + diag(d_quad |nu_r|)``, ``nu_r = nu -
+nu_c`` with ``nu_c = [u_c, v_c, 0, 0]``. The speed-proportional part ``|u_r| D_u`` holds the
+derivatives of the form ``Y_|u|v`` (Blanke & Christensen 1993) and every coefficient of a
+model written at a forward speed ``U`` as ``a + b U`` (Van der Klugt 1987: ``T_v = 78/U``), so
+that one hull serves every speed.
+
+``kinematics = "linear"`` replaces the kinematics by their small-roll form ``psi_dot = r``,
+``x_dot = u cos psi - v sin psi``, ``y_dot = u sin psi + v cos psi``: the form of a linear
+state-space model (Radhakrishnan (n.d.) eq. 10), which the MuJoCo hull then reproduces
+exactly. Linear in everything but the quadratic damping: the family of the
 Van der Klugt (1987) sway-roll-yaw models and of linearised naval hulls (Blanke &
 Christensen 1993). No Coriolis terms (``coriolis=False``): the models of this family are
 linearised about a forward speed, where those terms are already in ``D_L``.
@@ -30,7 +38,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["Hull4"]
+__all__ = ["KINEMATICS", "Hull4"]
+
+#: the kinematics a 4-DOF hull can use (module docstring)
+KINEMATICS = ("fossen", "linear")
 
 Mat4 = tuple[tuple[float, ...], ...]
 
@@ -53,6 +64,9 @@ class Hull4:
         K_phi: roll restoring coefficient (N m/rad), > 0 for a stable hull.
         d_quad: quadratic damping magnitudes (4,), >= 0.
         m: rigid-body mass (kg), for the MuJoCo body.
+        D_u: speed-proportional damping, 4x4 (N s^2/m^2, N s^2/m, N m s^2/m), multiplied by
+            ``|u_r|``; zero by default.
+        kinematics: ``"fossen"`` (default, the 4-DOF kinematics above) or ``"linear"``.
     """
 
     name: str
@@ -61,12 +75,19 @@ class Hull4:
     K_phi: float
     d_quad: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
     m: float = 0.0
+    D_u: Mat4 = ((0.0,) * 4,) * 4
+    kinematics: str = "fossen"
     dofs: int = field(default=4, init=False)
     _k: Any = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "M", _mat4("M", self.M))
         object.__setattr__(self, "D_L", _mat4("D_L", self.D_L))
+        object.__setattr__(self, "D_u", _mat4("D_u", self.D_u))
+        if self.kinematics not in KINEMATICS:
+            raise ValueError(
+                f"kinematics must be one of {', '.join(KINEMATICS)}, got {self.kinematics!r}"
+            )
         dq = tuple(float(x) for x in self.d_quad)
         if len(dq) != 4 or not all(np.isfinite(dq)) or min(dq) < 0:
             raise ValueError(f"d_quad must be four finite values >= 0, got {self.d_quad!r}")
@@ -106,8 +127,8 @@ class Hull4:
             c = np.asarray(nu_c, dtype=float)
             nc = np.concatenate([c[..., :2], np.zeros(c.shape[:-1] + (2,))], -1)
         nu_r = nu - nc
-        D = np.asarray(self.D_L)
-        damp = np.einsum("ij,...j->...i", D, nu_r) + np.asarray(self.d_quad) * np.abs(nu_r) * nu_r
+        D = np.asarray(self.D_L) + np.abs(nu_r[..., :1, None]) * np.asarray(self.D_u)
+        damp = np.einsum("...ij,...j->...i", D, nu_r) + np.asarray(self.d_quad) * np.abs(nu_r) * nu_r
         g = np.zeros(nu.shape)
         g[..., 2] = self.K_phi * np.asarray(phi, dtype=float)
         rhs = tau - damp - g
@@ -121,12 +142,34 @@ class Hull4:
 
 def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any, Any]]:
     D = h.D_L
+    E = h.D_u
+    speed = any(x != 0.0 for row in E for x in row)
     q1, q2, q3, q4 = h.d_quad
     kphi = h.K_phi
     (i11, i12, i13, i14), (i21, i22, i23, i24), (i31, i32, i33, i34), (i41, i42, i43, i44) = (
         tuple(map(float, r)) for r in Mi
     )
     (d11, d12, d13, d14), (d21, d22, d23, d24), (d31, d32, d33, d34), (d41, d42, d43, d44) = D
+    (e11, e12, e13, e14), (e21, e22, e23, e24), (e31, e32, e33, e34), (e41, e42, e43, e44) = E
+
+    def accel_u(u, v, p, r, phi, X, Y, K, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
+        ur = u - u_c
+        vr = v - v_c
+        a = abs(ur)
+        f1 = X - (d11 * ur + d12 * vr + d13 * p + d14 * r + q1 * a * ur)
+        f1 -= a * (e11 * ur + e12 * vr + e13 * p + e14 * r)
+        f2 = Y - (d21 * ur + d22 * vr + d23 * p + d24 * r + q2 * abs(vr) * vr)
+        f2 -= a * (e21 * ur + e22 * vr + e23 * p + e24 * r)
+        f3 = K - (d31 * ur + d32 * vr + d33 * p + d34 * r + q3 * abs(p) * p) - kphi * phi
+        f3 -= a * (e31 * ur + e32 * vr + e33 * p + e34 * r)
+        f4 = N - (d41 * ur + d42 * vr + d43 * p + d44 * r + q4 * abs(r) * r)
+        f4 -= a * (e41 * ur + e42 * vr + e43 * p + e44 * r)
+        return (
+            i11 * f1 + i12 * f2 + i13 * f3 + i14 * f4,
+            i21 * f1 + i22 * f2 + i23 * f3 + i24 * f4,
+            i31 * f1 + i32 * f2 + i33 * f3 + i34 * f4,
+            i41 * f1 + i42 * f2 + i43 * f3 + i44 * f4,
+        )
 
     def accel(u, v, p, r, phi, X, Y, K, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
         ur = u - u_c
@@ -142,4 +185,4 @@ def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, 
             i41 * f1 + i42 * f2 + i43 * f3 + i44 * f4,
         )
 
-    return accel
+    return accel_u if speed else accel

@@ -93,17 +93,26 @@ def simulate_reference(
     if actuators is not None:
         lo, hi = actuators.lower, actuators.upper
         lagged = np.array([c.dynamics == "lag" for c in actuators.channels])
-        tc = np.array([c.time_constant if c.dynamics == "lag" else 1.0 for c in actuators.channels])
-        tau_of = actuators.tau
+        servo = np.array([c.dynamics == "servo" for c in actuators.channels])
+        tc = np.array([c.time_constant if c.dynamics != "integrator" else 1.0
+                       for c in actuators.channels])  # fmt: skip
+        rate = np.array([c.rate if c.dynamics == "servo" else np.inf for c in actuators.channels])
+        flow = actuators.flow_dependent
+
+        def tau_of(act: NDArray[np.float64], nu: NDArray[np.float64]) -> NDArray[np.float64]:
+            return actuators.tau(act, nu if flow else None)
+
         na = actuators.n_channels
     elif thrusters is not None:
         p3 = thrusters
         lo, hi = p3.lower, p3.upper
         lagged = np.ones(3, dtype=bool)
+        servo = np.zeros(3, dtype=bool)
         tc = p3.time_constants
+        rate = np.full(3, np.inf)
         na = 3
 
-        def tau_of(act: NDArray[np.float64]) -> NDArray[np.float64]:
+        def tau_of(act: NDArray[np.float64], nu: NDArray[np.float64]) -> NDArray[np.float64]:
             return command_to_tau(act, p3)
     else:
         raise TypeError(
@@ -117,19 +126,27 @@ def simulate_reference(
     vc, bc = current
     ip = 3 if four else 2  # index of psi in eta
 
-    def rhs(t: float, x: NDArray[np.float64], cmd: NDArray[np.float64]) -> NDArray[np.float64]:
+    ideal = servo & (tc == 0.0)  # ideal servos: full rate until the command is reached
+    linear_kin = four and getattr(plant, "kinematics", "fossen") == "linear"
+
+    def rhs(
+        t: float, x: NDArray[np.float64], cmd: NDArray[np.float64], ideal_rate: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
         eta, nu, act = x[0:nd], x[nd : 2 * nd], x[2 * nd :]
         psi = eta[ip]
-        tau = np.asarray(tau_of(act), dtype=float)
+        tau = np.asarray(tau_of(act, nu), dtype=float)
         if env_load is not None:
             planar = np.asarray(env_load(t, eta, nu), dtype=float)  # [X, Y, N]
             tau = tau + (np.array([planar[0], planar[1], 0.0, planar[2]]) if four else planar)
         nu_c = np.array([vc * np.cos(bc - psi), vc * np.sin(bc - psi), 0.0])
         act_dot = np.where(lagged, (cmd - act) / tc, cmd)
+        if servo.any():
+            w = np.clip((cmd - act) / np.where(ideal, 1.0, tc), -rate, rate)
+            act_dot = np.where(servo, np.where(ideal, ideal_rate, w), act_dot)
         if four:
             u, v, p, r = nu
             phi = eta[2]
-            cf = np.cos(phi)
+            cf = 1.0 if linear_kin else np.cos(phi)
             c, s = np.cos(psi), np.sin(psi)
             eta_dot = [u * c - v * cf * s, u * s + v * cf * c, p, r * cf]
             nu_dot = plant.nu_dot(nu, tau, nu_c[:2], phi)
@@ -149,19 +166,35 @@ def simulate_reference(
     out = np.empty((t_eval.size, x.size))
     if t_eval[0] == 0.0:
         out[0] = x
+    pieces = []
     for t0, t1 in zip(cuts[:-1], cuts[1:], strict=True):
         k = int(np.searchsorted(ct, t0, side="right")) - 1
-        cmd = cmds[max(k, 0)]
+        pieces.append((t0, t1, cmds[max(k, 0)]))
+    while pieces:
+        t0, t1, cmd = pieces.pop(0)
+        ideal_rate = np.zeros(na)
+        if ideal.any():  # an ideal servo reaches its command at t0 + |cmd - act| / rate: a cut
+            gap = np.where(ideal, cmd - x[2 * nd :], 0.0)
+            reach = t0 + np.abs(gap) / rate
+            ideal_rate = np.where(reach > t0 + 1e-12, np.sign(gap) * rate, 0.0)
+            inner = reach[(ideal_rate != 0.0) & (reach < t1 - 1e-12)]
+            if inner.size:
+                tm = float(inner.min())
+                pieces.insert(0, (tm, t1, cmd))
+                t1 = tm
         mask = (t_eval > t0) & (t_eval <= t1)
+        te = t_eval[mask]
+        if te.size == 0 or te[-1] != t1:  # the segment's end too: the next segment starts there
+            te = np.append(te, t1)
         sol = solve_ivp(
-            rhs, (t0, t1), x, method=method, rtol=rtol, atol=atol,
-            t_eval=t_eval[mask] if mask.any() else None, args=(cmd,),
+            rhs, (t0, t1), x, method=method, rtol=rtol, atol=atol, t_eval=te,
+            args=(cmd, ideal_rate),
         )  # fmt: skip
-        if not sol.success:
+        if not sol.success or sol.t[-1] != t1:
             raise RuntimeError(f"reference integration failed on [{t0}, {t1}]: {sol.message}")
         if mask.any():
-            out[mask] = sol.y.T[-mask.sum() :]
-        x = sol.y[:, -1] if not mask.any() or sol.t[-1] == t1 else x
-        if mask.any() and sol.t[-1] != t1:  # pragma: no cover - solve_ivp always ends at t1
-            raise RuntimeError("reference integration did not reach the segment end")
+            out[mask] = sol.y.T[: mask.sum()]
+        x = sol.y[:, -1].copy()
+        if ideal.any():  # land exactly on the command reached at this cut
+            x[2 * nd :] = np.where(ideal & (np.abs(x[2 * nd :] - cmd) < 1e-9), cmd, x[2 * nd :])
     return ReferenceSolution(t_eval, out[:, 0:nd], out[:, nd : 2 * nd], out[:, 2 * nd :])

@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .actuators import ActuatorSet, Azimuth, Propeller
-from .hull4 import Hull4
+from .actuators import ActuatorSet, Azimuth, Propeller, Rudder
+from .hull4 import KINEMATICS, Hull4
 from .model import PlantModel, plant_model
 from .params import HullParameters, WindageParameters
 
@@ -141,6 +141,23 @@ class Vessel:
     def T(self) -> float:
         """Draught (m)."""
         return self.dimensions[3]
+
+    @property
+    def can_position(self) -> bool:
+        """Whether the actuators can push the hull in surge, sway and yaw at zero speed.
+
+        The condition of the dynamic-positioning and harbour tasks: a ship steered by rudders
+        only (their force needs a flow speed) cannot hold a position.
+        """
+        cap = self.actuators.capacity()
+        planar = cap[[0, 1, -1]]
+        return bool(np.all(planar > 0.0))
+
+    @property
+    def rudders(self) -> tuple[str, ...]:
+        """Names of the vessel's rudders (the steering of the course-keeping and rudder-roll
+        tasks)."""
+        return tuple(a.name for a in self.actuators if isinstance(a, Rudder))
 
     def plant(self, name: str = "default", **options: bool) -> Any:
         """A plant variant by name (``options`` for the ``fossen3`` default only).
@@ -288,19 +305,23 @@ def _read_hull(r: _Reader, data: Mapping[str, Any], dofs: int) -> tuple[Any, dic
     if family == "linear4":
         if dofs != 4:
             raise r.fail("hull.family", "'linear4' is a 4-DOF family: set vessel.dofs = 4")
-        keys = {"family", "M", "D_L", "K_phi", "d_quad", "m", "I_x", "I_z", "L_oa", "L_pp", "B",
-                "T"}  # fmt: skip
+        keys = {"family", "M", "D_L", "D_u", "kinematics", "K_phi", "d_quad", "m", "I_x", "I_z",
+                "L_oa", "L_pp", "B", "T"}  # fmt: skip
         r.keys(t, "hull", keys)
         M = r.matrix(t, "M", "hull", 4)
         _check_mass_matrix(r, M, "hull.M")
         D = r.matrix(t, "D_L", "hull", 4)
+        Du = r.matrix(t, "D_u", "hull", 4) if "D_u" in t else np.zeros((4, 4))
+        kin = r.string(t, "kinematics", "hull", "fossen")
+        if kin not in KINEMATICS:
+            raise r.fail("hull.kinematics", f"choose one of {', '.join(KINEMATICS)}, got {kin!r}")
         vals = {k: r.number(t, k, "hull", u, positive=True) for k, u in (
             ("K_phi", "N m/rad"), ("m", "kg"), ("I_x", "kg m^2"), ("I_z", "kg m^2"),
             ("L_oa", "m"), ("L_pp", "m"), ("B", "m"), ("T", "m"))}  # fmt: skip
         dq = r.vector(t, "d_quad", "hull", 4, default=(0.0, 0.0, 0.0, 0.0))
         if min(dq) < 0:
             raise r.fail("hull.d_quad", f"must be >= 0, got {dq}")
-        hull = Hull4("default", M, D, vals["K_phi"], dq, vals["m"])
+        hull = Hull4("default", M, D, vals["K_phi"], dq, vals["m"], Du, kin)
         hull_info = dict(vals)
         return _Dims4(hull_info), {"default": hull}
     raise r.fail("hull.family", f"unknown hull family {family!r}; choose 'fossen3' or 'linear4'")
@@ -360,7 +381,8 @@ def _read_actuators(
                 f"[{x:g}, {y:g}, {z:g}] m lies outside the hull (|x| <= L_oa/2 = {0.5 * L_oa:g}, "
                 f"|y| <= B/2 = {0.5 * B:g}, |z| <= 2 T = {2 * T:g} m from the centre of gravity)",
             )
-        tc = r.number(t, "time_constant", where, "s", positive=True)
+        if kind != "rudder":
+            tc = r.number(t, "time_constant", where, "s", positive=True)
         colour = r.string(t, "colour", where, "#1f77b4")
         try:
             if kind in ("propeller", "tunnel"):
@@ -398,10 +420,12 @@ def _read_actuators(
                                                    positive=True)),
                     angle0=math.radians(r.number(t, "angle0_deg", where, "deg", default=0.0)),
                     colour=colour))  # fmt: skip
+            elif kind == "rudder":
+                out.append(_read_rudder(r, t, where, name, pos, colour))
             else:
                 raise r.fail(
                     f"{where}.kind",
-                    f"unknown actuator kind {kind!r}; choose propeller, tunnel, azimuth",
+                    f"unknown actuator kind {kind!r}; choose propeller, tunnel, azimuth, rudder",
                 )
         except ValueError as exc:
             if isinstance(exc, VesselError):
@@ -411,6 +435,45 @@ def _read_actuators(
         return ActuatorSet(out, dofs)
     except ValueError as exc:
         raise r.fail("actuator", str(exc)) from None
+
+
+#: the unit of a rudder's lift gain k_L = rho A dC_L/dalpha / 2
+LIFT_GAIN_UNIT = "N s^2/(m^2 rad)"
+
+
+def _read_rudder(
+    r: _Reader, t: Mapping[str, Any], where: str, name: str, pos: tuple[float, ...], colour: str
+) -> Rudder:
+    """A ``kind = "rudder"`` table: the lift gain directly or from area, slope and density."""
+    r.keys(t, where, {"name", "kind", "position", "colour", "lift_gain", "area", "lift_slope",
+                      "rho", "stall_angle_deg", "post_stall", "max_angle_deg", "max_rate_deg",
+                      "servo_time_constant", "inflow"})  # fmt: skip
+    foil = [k for k in ("area", "lift_slope", "rho") if k in t]
+    if ("lift_gain" in t) == bool(foil) or (foil and len(foil) != 3):
+        raise r.fail(
+            f"{where}.lift_gain",
+            f"give either lift_gain ({LIFT_GAIN_UNIT}) or all of area (m^2), lift_slope (1/rad)"
+            " and rho (kg/m^3)",
+        )
+    if foil:
+        k = 0.5 * r.number(t, "rho", where, "kg/m^3", positive=True) * r.number(
+            t, "area", where, "m^2", positive=True
+        ) * r.number(t, "lift_slope", where, "1/rad", positive=True)
+    else:
+        k = r.number(t, "lift_gain", where, LIFT_GAIN_UNIT, positive=True)
+    inflow = r.value(t, "inflow", where, None, False)
+    if not isinstance(inflow, bool):
+        raise r.fail(f"{where}.inflow", f"must be true or false, got {inflow!r}")
+    stall = r.number(t, "stall_angle_deg", where, "deg") if "stall_angle_deg" in t else math.inf
+    return Rudder(
+        name=name, position=pos, lift_gain=k,
+        max_angle=math.radians(r.number(t, "max_angle_deg", where, "deg", positive=True)),
+        max_rate=math.radians(r.number(t, "max_rate_deg", where, "deg/s", positive=True)),
+        stall_angle=math.radians(stall) if math.isfinite(stall) else math.inf,
+        post_stall=r.number(t, "post_stall", where, "1", default=1.0),
+        servo_time_constant=r.number(t, "servo_time_constant", where, "s", default=0.0),
+        inflow=inflow, colour=colour,
+    )  # fmt: skip
 
 
 _LIMIT_KEYS = {

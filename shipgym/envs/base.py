@@ -258,6 +258,13 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 f"{', '.join(vessel_names())} (the shipgym/BlueLady* ids pass vessel='blue-lady')"
             )
         self.vessel = load_vessel(vessel)
+        if not self.vessel.can_position:
+            raise ValueError(
+                f"{type(self).__name__} is a positioning task: vessel {self.vessel.name!r} cannot "
+                f"push itself in surge, sway and yaw at zero speed (actuators: "
+                f"{', '.join(a.label for a in self.vessel.actuators)}); steer it in "
+                "shipgym/RudderRollStabilisation-v0"
+            )
         if wind is _NOMINAL:
             wind = f"{self.vessel.nominal_wind:g}@300"
         self.plan = named_plan(plan) if isinstance(plan, str) else plan

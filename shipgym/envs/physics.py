@@ -211,6 +211,23 @@ class VesselPhysics:
         self._thrust_of = v.actuators.thrust_kernel()
         # channels whose state lags its command (the others integrate it: azimuth angles)
         self._lagged = tuple(i for i, c in enumerate(v.actuators.channels) if c.dynamics == "lag")
+        # rate-limited servos (rudders): (channel, largest rate rad/s, time constant s or 0)
+        self._servos = tuple(
+            (i, c.rate, c.time_constant)
+            for i, c in enumerate(v.actuators.channels)
+            if c.dynamics == "servo"
+        )
+        self._servo_cmd = [0.0] * len(self._servos)
+        self._flow_of = v.actuators.flow_kernel()
+        n_flow = sum(1 for a in v.actuators if a.kind == "rudder")
+        #: per servo channel: whether the servo ran at its rate limit in the last :meth:`step`
+        self.rate_limited = np.zeros(len(self._servos), dtype=bool)
+        #: per rudder: whether its effective angle was past the stall angle at the last step
+        self.stalled = np.zeros(n_flow, dtype=bool)
+        self._flow = (0.0, 0.0, 0.0, (0.0,) * n_flow, (False,) * n_flow)
+        self._rate_hits = [0] * len(self._servos)
+        self._external = (0.0, 0.0, 0.0, 0.0)
+        self._linear_kin = getattr(self.plant, "kinematics", "fossen") == "linear"
         self.wind = Wind(self.wind_config, self.windage)
         self._wind_load = self._make_wind_load()
         self._accel = self.plant.accel
@@ -326,12 +343,18 @@ class VesselPhysics:
             if abs(phi) >= _MAX_ROLL:
                 raise ValueError(f"roll angle must be below {_MAX_ROLL} rad, got {phi!r}")
             d.qpos[:] = (x, y, psi, phi)
-            c, s, cf = math.cos(psi), math.sin(psi), math.cos(phi)
+            c, s = math.cos(psi), math.sin(psi)
+            cf = 1.0 if self._linear_kin else math.cos(phi)
             d.qvel[:] = (c * u - s * cf * v, s * u + c * cf * v, r * cf, p)
         lagged = np.array([ch.dynamics == "lag" for ch in self.actuators.channels])
         d.act[:] = np.where(lagged, np.clip(act, self.actuators.lower, self.actuators.upper), act)
+        for k, (j, _rate, _tc) in enumerate(self._servos):  # a servo's angle within its range
+            d.act[j] = min(max(float(act[j]), self._lower[j]), self._upper[j])
+            self._servo_cmd[k] = float(d.act[j])
         d.ctrl[:] = np.where(lagged, d.act, 0.0)
         self.saturated[:] = False
+        self.rate_limited[:] = False
+        self._external = (0.0, 0.0, 0.0, 0.0)
         rng = rng if rng is not None else np.random.default_rng(0)
         # fixed order, one draw each: the same seed gives the same disturbances
         self.wind.reset(rng)
@@ -432,7 +455,7 @@ class VesselPhysics:
         c, s = math.cos(psi), math.sin(psi)
         u = c * w[0] + s * w[1]
         vh = -s * w[0] + c * w[1]
-        cf = math.cos(float(self.data.qpos[3]))
+        cf = 1.0 if self._linear_kin else math.cos(float(self.data.qpos[3]))
         return np.array([u, vh / cf, w[3], w[2] / cf])
 
     @property
@@ -442,19 +465,62 @@ class VesselPhysics:
 
     @property
     def command(self) -> NDArray[np.float64]:
-        """Current (saturated) commands, in channel order."""
-        return self.data.ctrl.copy()
+        """Current (saturated) commands, in channel order (a servo's: its commanded angle)."""
+        out = self.data.ctrl.copy()
+        for k, (j, _rate, _tc) in enumerate(self._servos):
+            out[j] = self._servo_cmd[k]
+        return out
 
     @property
     def thrust(self) -> NDArray[np.float64]:
-        """Signed thrust of every actuator (N) at the current states."""
-        return np.array(self._thrust_of(self.data.act.tolist()))
+        """Signed thrust of every actuator (N) at the current states (a rudder: its lift at the
+        last physics step)."""
+        out = self._thrust_of(self.data.act.tolist())
+        if self._flow_of is not None:
+            lifts = iter(self._flow[3])
+            out = [next(lifts) if a.kind == "rudder" else f
+                   for a, f in zip(self.actuators, out, strict=True)]  # fmt: skip
+        return np.array(out)
+
+    def _flow_now(self, st: list[float]) -> tuple[float, float, float]:
+        """The rudders' ``(Y, K, N)`` at the actuator states ``st`` and the current velocity."""
+        if self._flow_of is None:
+            return 0.0, 0.0, 0.0
+        u, v, p, r = self.nu_full.tolist() if self.dofs == 4 else (*self.nu[:2], 0.0, self.nu[2])
+        Y, K, N, _l, _s = self._flow_of(st, u, v, p, r)
+        return Y, K, N
 
     @property
     def tau_thrusters(self) -> NDArray[np.float64]:
-        """Body-frame thrust ``[X, Y, N]`` (N, N, N m) at the current actuator states."""
-        X, Y, _K, N, _ = self._tau_of(self.data.act.tolist())
-        return np.array([X, Y, N])
+        """Body-frame actuator force ``[X, Y, N]`` (N, N, N m) at the current actuator states
+        (rudders at the current flow)."""
+        return self.tau_actuators[[0, 1, 3]]
+
+    @property
+    def tau_actuators(self) -> NDArray[np.float64]:
+        """Body-frame actuator force ``[X, Y, K, N]`` (N, N, N m, N m) at the current actuator
+        states and flow (``K`` is 0 for a 3-DOF vessel)."""
+        st = self.data.act.tolist()
+        X, Y, K, N, _ = self._tau_of(st)
+        fy, fk, fn = self._flow_now(st)
+        return np.array([X, Y + fy, K + fk if self.dofs == 4 else 0.0, N + fn])
+
+    @property
+    def external_force(self) -> tuple[float, float, float, float]:
+        """The external load ``[X, Y, K, N]`` (N, N, N m, N m, body) set by
+        :meth:`set_external_force`."""
+        return self._external
+
+    def set_external_force(self, tau: ArrayLike) -> None:
+        """Hold an external body load ``[X, Y, K, N]`` (N, N, N m, N m; ``[X, Y, N]`` for 3 DOF)
+        until changed: a task's disturbance (wave roll and yaw moments). Reset clears it.
+
+        Raises:
+            ValueError: wrong shape or a non-finite value.
+        """
+        a = self._vector(tau, (self.dofs,), "external force")
+        vals = a.tolist()
+        self._external = tuple(vals) if self.dofs == 4 else (vals[0], vals[1], 0.0, vals[2])
 
     @property
     def tau_command(self) -> NDArray[np.float64]:
@@ -470,8 +536,11 @@ class VesselPhysics:
         ctrl = self.data.ctrl.tolist()
         for i in self._lagged:
             st[i] = ctrl[i]
+        for k, (j, _rate, _tc) in enumerate(self._servos):
+            st[j] = self._servo_cmd[k]
         X, Y, _K, N, _ = self._tau_of(st)
-        return np.array([X, Y, N])
+        fy, _fk, fn = self._flow_now(st)
+        return np.array([X, Y + fy, N + fn])
 
     # ---- stepping --------------------------------------------------------------------------
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
@@ -487,6 +556,10 @@ class VesselPhysics:
         lo, hi = self._lower, self._upper
         clipped = [min(max(c, a), b) for c, a, b in zip(vals, lo, hi, strict=True)]
         self.saturated = np.array([c != x for c, x in zip(clipped, vals, strict=True)])
+        if self._servos:  # a servo's command is its angle; prepare() turns it into a rate
+            for k, (j, _rate, _tc) in enumerate(self._servos):
+                self._servo_cmd[k] = clipped[j]
+                clipped[j] = float(self.data.ctrl[j])
         self.data.ctrl[:] = clipped
         return self.saturated.copy()
 
@@ -506,12 +579,21 @@ class VesselPhysics:
         if self.model.opt.timestep != self._h:
             self._prepare = self._make_prepare()
         prepare, mj_step, m, d = self._prepare, mujoco.mj_step, self.model, self.data
+        hits = self._rate_hits
+        for k in range(len(hits)):
+            hits[k] = 0
+        taken = n
         for i in range(n):
             prepare()
             mj_step(m, d)
             if stop_on_contact and d.ncon:
-                return i + 1
-        return n
+                taken = i + 1
+                break
+        if self._servos:
+            self.rate_limited[:] = [h > 0 for h in hits]
+        if self._flow_of is not None:
+            self.stalled[:] = self._flow[4]
+        return taken
 
     def contacts(self) -> list[tuple[str, str]]:
         """Pairs of geom names in contact now (the hull's geom first when it is involved)."""
@@ -540,6 +622,10 @@ class VesselPhysics:
         cos, sin, isfinite = math.cos, math.sin, math.isfinite
         four = self.dofs == 4
         this = self
+        servos = tuple((k, j, rate, tc) for k, (j, rate, tc) in enumerate(self._servos))
+        servo_cmd, hits, ctrl = self._servo_cmd, self._rate_hits, d.ctrl
+        flow_of = self._flow_of
+        linear_kin = self._linear_kin
         # half the timestep, read once (a MuJoCo option read costs a third of a microsecond);
         # step() and reset() rebuild this closure when model.opt.timestep has changed
         self._h = float(m.opt.timestep)
@@ -564,6 +650,18 @@ class VesselPhysics:
                 dx_ = dy_ = dn_ = 0.0
             return wx, wy, wn, uc, vcb, dx_, dy_, dn_
 
+        def servo(st: list[float]) -> None:
+            """Each servo's rate this step: towards its command, limited (Channel "servo")."""
+            for k, j, rate, tc in servos:
+                w = (servo_cmd[k] - st[j]) / (tc if tc > 0.0 else this._h)
+                if w > rate:
+                    w = rate
+                    hits[k] += 1
+                elif w < -rate:
+                    w = -rate
+                    hits[k] += 1
+                ctrl[j] = w
+
         def diverged(t: float, nu: tuple[float, ...], nud: tuple[float, ...]) -> None:
             raise SimulationDiverged(
                 f"simulation diverged at t = {t:.3f} s: nu = ({', '.join(f'{x:.4g}' for x in nu)})"
@@ -584,7 +682,17 @@ class VesselPhysics:
             v = c * yd - s * xd
             tx, ty, _k, tn, _mz = tau_of(st)
             wx, wy, wn, uc, vcb, dx_, dy_, dn_ = loads(t, psi, u, v)
-            ud, vd, rd = accel(u, v, r, tx + (wx + dx_), ty + (wy + dy_), tn + (wn + dn_), uc, vcb)
+            ex, ey, _ek, en = this._external
+            if servos:
+                servo(st)
+            if flow_of is not None:
+                fl = flow_of(st, u - uc, v - vcb, 0.0, r)
+                this._flow = fl
+                ey += fl[0]
+                en += fl[2]
+            ud, vd, rd = accel(
+                u, v, r, tx + (wx + dx_ + ex), ty + (wy + dy_ + ey), tn + (wn + dn_ + en), uc, vcb
+            )
             if not (
                 isfinite(ud + vd + rd) and abs(u) + abs(v) < _MAX_SPEED and abs(r) < _MAX_YAW_RATE
             ):
@@ -604,7 +712,10 @@ class VesselPhysics:
             w0, w1, w2, w3 = qvel.tolist()
             a0, a1, a2, a3 = qacc.tolist()
             xd, yd, psid, phid = w0 + hh * a0, w1 + hh * a1, w2 + hh * a2, w3 + hh * a3
-            c, s, cf, sf = cos(psi), sin(psi), cos(phi), sin(phi)
+            c, s = cos(psi), sin(psi)
+            # MuJoCo's transmission of the rolled hull (ct, st_), and the model's kinematics
+            ct, st_ = cos(phi), sin(phi)
+            cf, sf = (1.0, 0.0) if linear_kin else (ct, st_)
             u = c * xd + s * yd
             v = (c * yd - s * xd) / cf
             r = psid / cf
@@ -612,9 +723,19 @@ class VesselPhysics:
             st = act.tolist()
             tx, ty, tk, tn, tmz = tau_of(st)
             wx, wy, wn, uc, vcb, dx_, dy_, dn_ = loads(t, psi, u, v)
+            ex, ey, ek, en = this._external
+            if servos:
+                servo(st)
+            if flow_of is not None:
+                fl = flow_of(st, u - uc, v - vcb, p, r)
+                this._flow = fl
+                ey += fl[0]
+                ek += fl[1]
+                en += fl[2]
             ud, vd, pd, rd = accel(
-                u, v, p, r, phi, tx + (wx + dx_), ty + (wy + dy_), tk, tn + (wn + dn_), uc, vcb
-            )
+                u, v, p, r, phi, tx + (wx + dx_ + ex), ty + (wy + dy_ + ey), tk + ek,
+                tn + (wn + dn_ + en), uc, vcb,
+            )  # fmt: skip
             if not (
                 isfinite(ud + vd + pd + rd)
                 and abs(u) + abs(v) < _MAX_SPEED
@@ -627,9 +748,9 @@ class VesselPhysics:
             ydd = s * ud + c * cf * vd + c * u * psid - s * cf * v * psid - c * sf * v * phid
             psidd = cf * rd - sf * r * phid
             # minus the actuators' generalised force as MuJoCo's site transmission applies it
-            qfrc[0] = mq * xdd - (c * tx - s * cf * ty)
-            qfrc[1] = mq * ydd - (s * tx + c * cf * ty)
-            qfrc[2] = iq * psidd - (cf * tn + sf * tmz)
+            qfrc[0] = mq * xdd - (c * tx - s * ct * ty)
+            qfrc[1] = mq * ydd - (s * tx + c * ct * ty)
+            qfrc[2] = iq * psidd - (ct * tn + st_ * tmz)
             qfrc[3] = ix * pd - tk
             this._loads = (wx, wy, wn, dx_, dy_, dn_, uc, vcb)
 

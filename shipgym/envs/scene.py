@@ -12,7 +12,9 @@ world and generates from ``vessel.toml`` what must exist once:
   :mod:`shipgym.envs.physics` relies on; a check there verifies it);
 - one site per actuator at its position and one MuJoCo actuator per control channel
   (:class:`~shipgym.dynamics.actuators.Channel`): ``filterexact`` for lagged states,
-  ``integrator`` for an azimuth angle; force direction (``gear``) and gain from the actuator.
+  ``integrator`` for an azimuth angle and a rudder servo (its rate, with the angle limited by
+  ``actrange``); force direction (``gear``) and gain from the actuator (0 for a rudder, whose
+  flow-dependent force the physics applies).
 """
 
 from __future__ import annotations
@@ -107,7 +109,10 @@ def build_model(vessel: Vessel, world: str = "open-water") -> mujoco.MjModel:
             act = spec.add_actuator(name=ch.name, target=a.name)
             act.trntype = mujoco.mjtTrn.mjTRN_SITE
             act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
-            act.ctrlrange = [ch.lower, ch.upper]
+            if ch.dynamics == "servo":  # MuJoCo integrates the rate the physics commands
+                act.ctrlrange = [-ch.rate, ch.rate]
+            else:
+                act.ctrlrange = [ch.lower, ch.upper]
             act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
             act.biastype = mujoco.mjtBias.mjBIAS_NONE
             gain = 0.0
@@ -119,6 +124,9 @@ def build_model(vessel: Vessel, world: str = "open-water") -> mujoco.MjModel:
                 act.actrange = [ch.lower, ch.upper]
             else:
                 act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
+                if ch.dynamics == "servo":  # an angle that cannot pass its limits
+                    act.actlimited = mujoco.mjtLimited.mjLIMITED_TRUE
+                    act.actrange = [ch.lower, ch.upper]
             if isinstance(a, Propeller):
                 c, s = a.direction
                 gear[:2] = [c, s]
