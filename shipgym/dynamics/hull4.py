@@ -128,7 +128,8 @@ class Hull4:
             nc = np.concatenate([c[..., :2], np.zeros(c.shape[:-1] + (2,))], -1)
         nu_r = nu - nc
         D = np.asarray(self.D_L) + np.abs(nu_r[..., :1, None]) * np.asarray(self.D_u)
-        damp = np.einsum("...ij,...j->...i", D, nu_r) + np.asarray(self.d_quad) * np.abs(nu_r) * nu_r
+        quad = np.asarray(self.d_quad) * np.abs(nu_r) * nu_r
+        damp = np.einsum("...ij,...j->...i", D, nu_r) + quad
         g = np.zeros(nu.shape)
         g[..., 2] = self.K_phi * np.asarray(phi, dtype=float)
         rhs = tau - damp - g

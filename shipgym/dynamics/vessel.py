@@ -456,9 +456,12 @@ def _read_rudder(
             " and rho (kg/m^3)",
         )
     if foil:
-        k = 0.5 * r.number(t, "rho", where, "kg/m^3", positive=True) * r.number(
-            t, "area", where, "m^2", positive=True
-        ) * r.number(t, "lift_slope", where, "1/rad", positive=True)
+        k = (
+            0.5
+            * r.number(t, "rho", where, "kg/m^3", positive=True)
+            * r.number(t, "area", where, "m^2", positive=True)
+            * r.number(t, "lift_slope", where, "1/rad", positive=True)
+        )
     else:
         k = r.number(t, "lift_gain", where, LIFT_GAIN_UNIT, positive=True)
     inflow = r.value(t, "inflow", where, None, False)
