@@ -327,7 +327,7 @@ def nomoto_first_order(model: Any) -> tuple[float, float]:
     ``K = G(0) = -c A'^-1 b`` and ``T = -G'(0)/G(0) = -c A'^-2 b / (c A'^-1 b)``. For the Van
     der Klugt model this is Nomoto's ``T = T_1 + T_2 - T_3`` of ``r/delta = K (1 + T_3 s) /
     ((1 + T_v s)(1 + T_r s))`` with ``K = K_dr + K_vr K_dv`` and ``T_3 = K_dr T_v / K``
-    (Fossen 1995): the sway path is included.
+    (Nomoto's approximation, Fossen (1995)): the sway path is included.
 
     Args:
         model: ``A`` (n, n), ``B`` (n,) in the seed's state order (``r`` = 1, ``psi`` = 2).
@@ -372,7 +372,7 @@ def heading_pid_gains(
     The law ``delta = -(kp e + ki int e + kd r)`` makes the characteristic polynomial
     ``s^3 + (a + b kd) s^2 + b kp s + b ki``, placed at ``(s^2 + 2 zeta w s + w^2)(s + w_i)``
     with ``w = bandwidth`` and ``w_i = integral_ratio w`` (the integral pole a decade below,
-    Fossen 1995's rule of thumb)::
+    a rule of thumb for PID autopilots, e.g. Fossen (1995))::
 
         kd = (2 zeta w + w_i - a) / b,  kp = (w^2 + 2 zeta w w_i) / b,  ki = w^2 w_i / b
 

@@ -23,7 +23,7 @@ noise input; the design here is [chosen] (notes on seed 003):
 - ``dt = 0.1`` s (:data:`DT`);
 - ``Q_W = (G dt) diag(q) / dt (G dt)^T + 1e-8 e_v e_v^T`` (:func:`process_noise`), the wave
   disturbance ``w = [w_phi, w_psi]`` of intensity ``q = (q_phi, q_psi)`` through the model's
-  ``G`` (the first-order approximation of the exact sampled covariance, Van Loan 1978), plus a
+  ``G`` (the first-order approximation of the exact sampled covariance of Van Loan (1978)), plus a
   little noise on ``v`` (:data:`Q_V`) so the filter never stops listening for the sway;
 - ``R_v = diag((0.05 deg/s)^2, (0.1 deg)^2, (0.05 deg/s)^2, (0.1 deg)^2)`` in rad
   (:data:`R_SWAY`): a rate gyro and a vertical/heading gyro;
@@ -390,7 +390,7 @@ def simulate_sway_kf(
     """The seed's sway-velocity KF experiment on the exactly sampled reconstructed plant.
 
     Truth: ``x_{k+1} = A_d x_k + B_d delta_k + w_k``, ``w_k ~ N(0, Q_k)`` with ``Q_k`` the exact
-    sampled covariance of the wave noise ``G w`` (Van Loan 1978), ``x_0 = 0``;
+    sampled covariance of the wave noise ``G w`` (Van Loan (1978)), ``x_0 = 0``;
     ``delta_k = amplitude sin(omega t_k)`` held over each step (Radhakrishnan (n.d.) section 4:
     10 deg at 0.43 rad/s); ``y_k = C x_k + v_k``, ``v_k ~ N(0, R_v)`` (:data:`R_SWAY`). The KF is
     :class:`SwayVelocityKF` with its defaults. One seeded ``numpy`` Generator draws everything.
