@@ -46,8 +46,6 @@ def test_process_noise_is_the_chosen_formula():
 
 def test_steady_gain_is_the_dare_solution():
     """The recursion's gain converges to the steady gain of scipy's DARE (independent Riccati)."""
-    if importlib.util.find_spec("filterpy") is not None:  # pragma: no cover - not installed here
-        pytest.skip("filterpy is installed: see test_against_filterpy")
     m = roll_model(13.0)
     kf = SwayVelocityKF(m)
     for _ in range(3000):
