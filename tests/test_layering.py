@@ -217,6 +217,9 @@ def test_command_line_modules_are_leaves():
         "shipgym.controllers.grimble",
         "shipgym.dp.metrics",
         "shipgym.dp.seed",
+        "shipgym.dynamics.vanderklugt",
+        "shipgym.observers.sway",
+        "shipgym.controllers.rollcontrol",
     ],
 )
 def test_pure_layers_never_reach_the_simulator(package):
