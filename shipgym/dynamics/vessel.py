@@ -324,7 +324,51 @@ def _read_hull(r: _Reader, data: Mapping[str, Any], dofs: int) -> tuple[Any, dic
         hull = Hull4("default", M, D, vals["K_phi"], dq, vals["m"], Du, kin)
         hull_info = dict(vals)
         return _Dims4(hull_info), {"default": hull}
-    raise r.fail("hull.family", f"unknown hull family {family!r}; choose 'fossen3' or 'linear4'")
+    if family == "blanke4":
+        if dofs != 4:
+            raise r.fail("hull.family", "'blanke4' is a 4-DOF family: set vessel.dofs = 4")
+        return _read_blanke4(r, data, t)
+    raise r.fail(
+        "hull.family",
+        f"unknown hull family {family!r}; choose 'fossen3', 'linear4' or 'blanke4'",
+    )
+
+
+def _read_blanke4(
+    r: _Reader, data: Mapping[str, Any], t: Mapping[str, Any]
+) -> tuple[Any, dict[str, Any]]:
+    """A ``blanke4`` hull: one key per :class:`~shipgym.dynamics.blanke4.Blanke4Hull` field.
+
+    Plus ``L_oa`` and the MuJoCo body's rigid inertia ``m``, ``I_x``, ``I_z``, which must
+    equal the hull's ``rho nabla``, ``I_xx``, ``I_zz`` (one number, one source).
+    """
+    from .blanke4 import Blanke4Hull  # here, so that the family's import stays in its reader
+
+    hull_fields = {
+        f.name: f.metadata["unit"]
+        for f in fields(Blanke4Hull)
+        if f.init and f.name not in ("name", "source")
+    }
+    extra = {"L_oa": "m", "m": "kg", "I_x": "kg m^2", "I_z": "kg m^2"}
+    r.keys(t, "hull", {"family", "source", *hull_fields, *extra})
+    vals: dict[str, Any] = {k: r.number(t, k, "hull", u) for k, u in hull_fields.items()}
+    name = str(data.get("vessel", {}).get("title", r.path.parent.name))
+    source = r.string(t, "source", "hull", f"{r.path}")
+    try:
+        hull = Blanke4Hull(name=name, source=source, **vals)
+    except ValueError as exc:
+        raise r.fail("hull", str(exc)) from None
+    _check_mass_matrix(r, hull.mass_matrix(), "hull (M = M_RB + M_A)")
+    info = {k: r.number(t, k, "hull", u, positive=True) for k, u in extra.items()}
+    for key, want in (("m", hull.m), ("I_x", hull.I_xx), ("I_z", hull.I_zz)):
+        if not math.isclose(info[key], want, rel_tol=1e-9):
+            raise r.fail(
+                f"hull.{key}",
+                f"must equal the hull's {want:.10g} ({extra[key]}; m = rho nabla, I_x = I_xx, "
+                f"I_z = I_zz), got {info[key]!r}",
+            )
+    info.update(L_pp=hull.L_pp, B=hull.B, T=hull.T)
+    return _Dims4(info), {"default": hull}
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,530 @@
+r"""The nonlinear 4-DOF naval vessel of Blanke & Christensen (1993) (surge, sway, roll, yaw).
+
+The model of the multipurpose naval vessel that Blanke & Christensen (1993) use for rudder-roll
+damping, with the data of MSS ``CRAFT/SHIP/models/navalvessel.m`` (Fossen & Perez 2004; DMI PMM
+tests, adapted by T. Perez to an ADI design). The numbers are taken from that file; the
+equations below are written here from the structure of the model (every hydrodynamic force is a
+sum of the listed derivative terms), no code is copied.
+
+Body frame: the PMM reference frame of the tests (x forward, y starboard, z down), origin on the
+waterline; the centre of gravity lies at ``(x_G, 0, z_G)`` with ``x_G = -3.38 m`` and ``z_G =
+-(VCG - T) = -1.06 m`` (1.06 m above the waterline). Every force and moment, the actuators' too,
+is taken about this origin. State ``nu = [u, v, p, r]``, roll ``phi``; ``tau = [X, Y, K, N]``.
+
+.. math::
+
+    M \dot\nu = f_h(\nu_r, p, r, \phi) + f_c(\nu, \phi) + \tau
+
+with ``M`` (:meth:`Blanke4Hull.mass_matrix`, rows and columns ``u, v, p, r``)::
+
+    [[m - X_udot, 0,                   0,                 0              ],
+     [0,          m - Y_vdot,          -(m z_G + Y_pdot), m x_G - Y_rdot ],
+     [0,          -(m z_G + K_vdot),   I_xx - K_pdot,     -K_rdot        ],
+     [0,          m x_G - N_vdot,      -N_pdot,           I_zz - N_rdot  ]]
+
+the hydrodynamic terms (``a`` marks an absolute value, ``ph`` the roll angle; ``u`` and ``v``
+below are the velocities relative to the water, ``u_r = u - u_c``, ``v_r = v - v_c``; the
+current is irrotational, so ``p`` and ``r`` are unchanged)::
+
+    X_h = X_uau u|u| + X_vr v r
+    Y_h = Y_auv |u| v + Y_ur u r + Y_vav v|v| + Y_rar r|r| + Y_var v|r| + Y_rav r|v|
+          + Y_phauv ph|u v| + Y_phaur ph|u r| + Y_phuu ph u^2
+    K_h = K_auv |u| v + K_ur u r + K_vav v|v| + K_rar r|r| + K_var v|r| + K_rav r|v|
+          + K_phauv ph|u v| + K_phaur ph|u r| + K_phuu ph u^2 + K_aup |u| p + K_pap p|p|
+          + K_p p + K_phphph ph^3 - rho g nabla GM ph
+    N_h = N_auv |u| v + N_aur |u| r + N_vav v|v| + N_rar r|r| + N_var v|r| + N_rav r|v|
+          + N_phauv ph|u v| + N_phuar ph u|r| + N_phuau ph u|u|
+
+and the rigid-body centripetal terms of the model (absolute velocities)::
+
+    X_c = m (v r + x_G r^2 - z_G p r),  Y_c = -m u r,  K_c = m z_G u r,  N_c = -m x_G u r.
+
+Notes on the data (all visible in ``navalvessel.m``):
+
+- the roll restoring is ``-rho g nabla GM phi + K_phphph phi^3`` with ``GM = 1.1 m``; the file
+  also defines ``K_phi = 0.776 m g`` (an older DMI value) but does not use it, nor do we;
+- ``Y_rar``, ``K_rar``, ``K_rdot``, ``N_vav``, ``N_var``, ``N_pdot`` are 0 in the data; they
+  are kept in the sums so that the form is complete;
+- ``navalvessel.m`` multiplies ``N_phauv`` by ``ph |u ph|`` instead of the ``ph |u v|`` that
+  its name and the sway and roll equations have; we use ``ph |u v|`` (second order: the
+  linearisation is unaffected);
+- the added mass acts on ``nu_dot`` (as in :class:`~shipgym.dynamics.hull4.Hull4`): the
+  rate of change of a constant current on the body axes, ``O(r V_c)``, is neglected.
+
+The model has no rudder; :func:`linear_roll_model` and :func:`roll_rhs` take the rudder's sway
+force ``Y = lift_gain U^2 delta`` at ``(rudder_x, 0, rudder_z)`` (``K = -z Y``, ``N = x Y``),
+and the seed's 5-state order ``x = [v, r, psi, p, phi]`` (Radhakrishnan (n.d.) eq. 9) of the
+roll controllers and Kalman filters. Full entries of the sources: ``docs/references.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym._config import require_positive, required_param
+
+__all__ = [
+    "Blanke4Hull",
+    "NAVAL_VESSEL",
+    "NAVAL_VESSEL_SOURCE",
+    "roll_natural_frequency",
+    "roll_damping_ratio",
+    "linear_roll_model",
+    "roll_rhs",
+    "surge_thrust",
+    "SEED_STATE",
+]
+
+#: the seed's state order of :func:`linear_roll_model` and :func:`roll_rhs`
+SEED_STATE = ("v", "r", "psi", "p", "phi")
+
+
+@dataclass(frozen=True)
+class Blanke4Hull:
+    """Data of a Blanke & Christensen (1993) nonlinear 4-DOF hull (dimensional derivatives).
+
+    Every field is required (no vessel is a default); :data:`NAVAL_VESSEL` holds the naval
+    vessel of ``navalvessel.m``. Naming: ``a`` marks an absolute value and ``ph`` the roll
+    angle, e.g. ``Y_auv`` is ``Y_{|u|v}``, ``K_phauv`` is ``K_{phi|uv|}``, ``N_phuar`` is
+    ``N_{phi u|r|}`` (the module docstring has the equations). Units in each field's metadata.
+
+    Derived attributes: ``m = rho nabla`` (kg), ``K_phi = rho g nabla GM`` (N m/rad, the
+    linear roll restoring), ``dofs = 4``.
+    """
+
+    name: str = required_param("-", "the hull's name")
+    source: str = required_param("-", "where the numbers come from")
+    rho: float = required_param("kg/m^3", "water density")
+    g: float = required_param("m/s^2", "gravity")
+    L_pp: float = required_param("m", "length between perpendiculars")
+    B: float = required_param("m", "beam")
+    T: float = required_param("m", "draught")
+    nabla: float = required_param("m^3", "displaced volume (m = rho nabla)")
+    I_xx: float = required_param("kg m^2", "roll moment of inertia")
+    I_zz: float = required_param("kg m^2", "yaw moment of inertia")
+    x_G: float = required_param("m", "x of the CG in the body frame (forward +)")
+    z_G: float = required_param("m", "z of the CG in the body frame (down +; < 0 above the WL)")
+    GM: float = required_param("m", "transverse metacentric height")
+    X_udot: float = required_param("kg", "surge added mass")
+    X_uau: float = required_param("kg/m", "X_{u|u|}, surge resistance")
+    X_vr: float = required_param("kg", "X_{vr}")
+    Y_vdot: float = required_param("kg", "sway added mass")
+    Y_pdot: float = required_param("kg m", "sway-roll added mass")
+    Y_rdot: float = required_param("kg m", "sway-yaw added mass")
+    Y_auv: float = required_param("kg/m", "Y_{|u|v}")
+    Y_ur: float = required_param("kg", "Y_{ur}")
+    Y_vav: float = required_param("kg/m", "Y_{v|v|}")
+    Y_rar: float = required_param("kg m", "Y_{r|r|}")
+    Y_var: float = required_param("kg", "Y_{v|r|}")
+    Y_rav: float = required_param("kg", "Y_{r|v|}")
+    Y_phauv: float = required_param("kg/m", "Y_{phi|uv|}")
+    Y_phaur: float = required_param("kg", "Y_{phi|ur|}")
+    Y_phuu: float = required_param("kg/m", "Y_{phi uu}")
+    K_vdot: float = required_param("kg m", "roll-sway added mass")
+    K_pdot: float = required_param("kg m^2", "roll added inertia")
+    K_rdot: float = required_param("kg m^2", "roll-yaw added inertia")
+    K_auv: float = required_param("kg", "K_{|u|v}")
+    K_ur: float = required_param("kg m", "K_{ur}")
+    K_vav: float = required_param("kg", "K_{v|v|}")
+    K_rar: float = required_param("kg m^2", "K_{r|r|}")
+    K_var: float = required_param("kg m", "K_{v|r|}")
+    K_rav: float = required_param("kg m", "K_{r|v|}")
+    K_phauv: float = required_param("kg", "K_{phi|uv|}")
+    K_phaur: float = required_param("kg m", "K_{phi|ur|}")
+    K_phuu: float = required_param("kg", "K_{phi uu}")
+    K_aup: float = required_param("kg m", "K_{|u|p}")
+    K_pap: float = required_param("kg m^2", "K_{p|p|}")
+    K_p: float = required_param("N m s", "K_{p}, linear roll damping")
+    K_phphph: float = required_param("N m", "K_{phi phi phi}, cubic roll restoring")
+    N_vdot: float = required_param("kg m", "yaw-sway added mass")
+    N_pdot: float = required_param("kg m^2", "yaw-roll added inertia")
+    N_rdot: float = required_param("kg m^2", "yaw added inertia")
+    N_auv: float = required_param("kg", "N_{|u|v}")
+    N_aur: float = required_param("kg m", "N_{|u|r}")
+    N_vav: float = required_param("kg", "N_{v|v|}")
+    N_rar: float = required_param("kg m^2", "N_{r|r|}")
+    N_var: float = required_param("kg m", "N_{v|r|}")
+    N_rav: float = required_param("kg m", "N_{r|v|}")
+    N_phauv: float = required_param("kg", "N_{phi|uv|}")
+    N_phuar: float = required_param("kg m", "N_{phi u|r|}")
+    N_phuau: float = required_param("kg", "N_{phi u|u|}")
+    m: float = field(init=False, metadata={"unit": "kg", "meaning": "rigid mass rho nabla"})
+    K_phi: float = field(init=False, metadata={"unit": "N m/rad", "meaning": "rho g nabla GM"})
+    dofs: int = field(default=4, init=False)
+    _Mi: Any = field(init=False, repr=False, compare=False)
+    _k: Any = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            if f.init and f.name not in ("name", "source"):
+                val = getattr(self, f.name)
+                if (
+                    isinstance(val, bool)
+                    or not isinstance(val, int | float)
+                    or not (math.isfinite(val))
+                ):
+                    raise ValueError(
+                        f"Blanke4Hull.{f.name} must be a finite number ({f.metadata['unit']}), "
+                        f"got {val!r}"
+                    )
+                object.__setattr__(self, f.name, float(val))
+        object.__setattr__(self, "m", self.rho * self.nabla)
+        object.__setattr__(self, "K_phi", self.rho * self.g * self.nabla * self.GM)
+        require_positive(self, "rho", "g", "L_pp", "B", "T", "nabla", "I_xx", "I_zz", "GM")
+        M = self.mass_matrix()
+        if not np.all(np.diag(M) > 0) or not np.linalg.cond(M) < 1e12:
+            raise ValueError(
+                f"hull {self.name!r}: the mass matrix M_RB + M_A must have a positive diagonal "
+                f"and be regular (check the added-mass signs: X_udot etc. < 0): {M.tolist()}"
+            )
+        Mi = np.linalg.inv(M)
+        object.__setattr__(self, "_Mi", Mi)
+        object.__setattr__(self, "_k", _kernel(self, Mi))
+
+    def mass_matrix(self) -> NDArray[np.float64]:
+        """``M = M_RB + M_A`` (4, 4), order ``u, v, p, r`` (kg, kg m, kg m^2)."""
+        m, xg, zg = self.m, self.x_G, self.z_G
+        return np.array(
+            [
+                [m - self.X_udot, 0.0, 0.0, 0.0],
+                [0.0, m - self.Y_vdot, -(m * zg + self.Y_pdot), m * xg - self.Y_rdot],
+                [0.0, -(m * zg + self.K_vdot), self.I_xx - self.K_pdot, -self.K_rdot],
+                [0.0, m * xg - self.N_vdot, -self.N_pdot, self.I_zz - self.N_rdot],
+            ]
+        )
+
+    def forces(
+        self,
+        nu: ArrayLike,
+        nu_c: ArrayLike | None = None,
+        phi: ArrayLike = 0.0,
+    ) -> NDArray[np.float64]:
+        """Hydrodynamic, restoring and rigid-body centripetal forces ``f_h + f_c`` (..., 4).
+
+        Args:
+            nu: ``[u, v, p, r]`` (m/s, m/s, rad/s, rad/s), shape (..., 4).
+            nu_c: current on the body axes ``[u_c, v_c]`` or ``[u_c, v_c, 0, 0]`` (m/s).
+            phi: roll angle (rad), broadcast against ``nu[..., 0]``.
+
+        Returns:
+            ``[X, Y, K, N]`` (N, N, N m, N m), shape (..., 4).
+        """
+        nu = np.asarray(nu, dtype=float)
+        u, v, p, r = (nu[..., i] for i in range(4))
+        ph = np.asarray(phi, dtype=float)
+        if nu_c is None:
+            ur, vr = u, v
+        else:
+            c = np.asarray(nu_c, dtype=float)
+            ur, vr = u - c[..., 0], v - c[..., 1]
+        h = self
+        au, av, ar, ap = np.abs(ur), np.abs(vr), np.abs(r), np.abs(p)
+        auv, aur = np.abs(ur * vr), np.abs(ur * r)
+        X = h.X_uau * ur * au + h.X_vr * vr * r
+        Y = (h.Y_auv * au * vr + h.Y_ur * ur * r + h.Y_vav * vr * av + h.Y_rar * r * ar
+             + h.Y_var * vr * ar + h.Y_rav * r * av
+             + ph * (h.Y_phauv * auv + h.Y_phaur * aur + h.Y_phuu * ur * ur))  # fmt: skip
+        K = (h.K_auv * au * vr + h.K_ur * ur * r + h.K_vav * vr * av + h.K_rar * r * ar
+             + h.K_var * vr * ar + h.K_rav * r * av
+             + ph * (h.K_phauv * auv + h.K_phaur * aur + h.K_phuu * ur * ur)
+             + h.K_aup * au * p + h.K_pap * p * ap + h.K_p * p
+             + h.K_phphph * ph**3 - h.K_phi * ph)  # fmt: skip
+        N = (h.N_auv * au * vr + h.N_aur * au * r + h.N_vav * vr * av + h.N_rar * r * ar
+             + h.N_var * vr * ar + h.N_rav * r * av
+             + ph * (h.N_phauv * auv + h.N_phuar * ur * ar + h.N_phuau * ur * au))  # fmt: skip
+        m, xg, zg = h.m, h.x_G, h.z_G
+        X = X + m * (v * r + xg * r * r - zg * p * r)
+        Y = Y - m * u * r
+        K = K + m * zg * u * r
+        N = N - m * xg * u * r
+        return np.stack(np.broadcast_arrays(X, Y, K, N), -1)
+
+    def nu_dot(
+        self,
+        nu: ArrayLike,
+        tau: ArrayLike,
+        nu_c: ArrayLike | None = None,
+        phi: ArrayLike = 0.0,
+    ) -> NDArray[np.float64]:
+        """Body acceleration (..., 4) by a linear solve (the matrix form).
+
+        Args:
+            nu: ``[u, v, p, r]`` (m/s, m/s, rad/s, rad/s), shape (..., 4).
+            tau: external ``[X, Y, K, N]`` (N, N, N m, N m), shape (..., 4).
+            nu_c: current on the body axes ``[u_c, v_c]`` or ``[u_c, v_c, 0, 0]`` (m/s).
+            phi: roll angle (rad).
+
+        Returns:
+            ``[u_dot, v_dot, p_dot, r_dot]`` (m/s^2, m/s^2, rad/s^2, rad/s^2), shape (..., 4).
+        """
+        rhs = np.asarray(tau, dtype=float) + self.forces(nu, nu_c, phi)
+        return np.linalg.solve(self.mass_matrix(), rhs[..., None])[..., 0]
+
+    @property
+    def accel(self) -> Callable[..., tuple[Any, Any, Any, Any]]:
+        """``accel(u, v, p, r, phi, X, Y, K, N, u_c=0, v_c=0) -> (u_dot, v_dot, p_dot, r_dot)``.
+
+        Plain-float kernel of :meth:`nu_dot` (precomputed inverse mass matrix; SI units).
+        """
+        return self._k
+
+
+def _kernel(h: Blanke4Hull, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any, Any]]:
+    (i11, i12, i13, i14), (i21, i22, i23, i24), (i31, i32, i33, i34), (i41, i42, i43, i44) = (
+        tuple(map(float, row)) for row in Mi
+    )
+    m, xg, zg, kphi = h.m, h.x_G, h.z_G, h.K_phi
+    Xuau, Xvr = h.X_uau, h.X_vr
+    Yauv, Yur, Yvav, Yrar, Yvar, Yrav = h.Y_auv, h.Y_ur, h.Y_vav, h.Y_rar, h.Y_var, h.Y_rav
+    Ybauv, Ybaur, Ybuu = h.Y_phauv, h.Y_phaur, h.Y_phuu
+    Kauv, Kur, Kvav, Krar, Kvar, Krav = h.K_auv, h.K_ur, h.K_vav, h.K_rar, h.K_var, h.K_rav
+    Kbauv, Kbaur, Kbuu = h.K_phauv, h.K_phaur, h.K_phuu
+    Kaup, Kpap, Kp, Kbbb = h.K_aup, h.K_pap, h.K_p, h.K_phphph
+    Nauv, Naur, Nvav, Nrar, Nvar, Nrav = h.N_auv, h.N_aur, h.N_vav, h.N_rar, h.N_var, h.N_rav
+    Nbauv, Nbuar, Nbuau = h.N_phauv, h.N_phuar, h.N_phuau
+
+    def accel(u, v, p, r, phi, X, Y, K, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
+        ur = u - u_c
+        vr = v - v_c
+        au = abs(ur)
+        av = abs(vr)
+        ar = abs(r)
+        auv = abs(ur * vr)
+        aur = au * ar
+        f1 = X + Xuau * ur * au + Xvr * vr * r + m * (v * r + xg * r * r - zg * p * r)
+        f2 = (Y + Yauv * au * vr + Yur * ur * r + Yvav * vr * av + Yrar * r * ar
+              + Yvar * vr * ar + Yrav * r * av
+              + phi * (Ybauv * auv + Ybaur * aur + Ybuu * ur * ur) - m * u * r)  # fmt: skip
+        f3 = (K + Kauv * au * vr + Kur * ur * r + Kvav * vr * av + Krar * r * ar
+              + Kvar * vr * ar + Krav * r * av
+              + phi * (Kbauv * auv + Kbaur * aur + Kbuu * ur * ur - kphi + Kbbb * phi * phi)
+              + (Kaup * au + Kpap * abs(p) + Kp) * p + m * zg * u * r)  # fmt: skip
+        f4 = (N + Nauv * au * vr + Naur * au * r + Nvav * vr * av + Nrar * r * ar
+              + Nvar * vr * ar + Nrav * r * av - m * xg * u * r
+              + phi * (Nbauv * auv + Nbuar * ur * ar + Nbuau * ur * au))  # fmt: skip
+        return (
+            i11 * f1 + i12 * f2 + i13 * f3 + i14 * f4,
+            i21 * f1 + i22 * f2 + i23 * f3 + i24 * f4,
+            i31 * f1 + i32 * f2 + i33 * f3 + i34 * f4,
+            i41 * f1 + i42 * f2 + i43 * f3 + i44 * f4,
+        )
+
+    return accel
+
+
+_MSS = "published: MSS CRAFT/SHIP/models/navalvessel.m (Fossen & Perez 2004)"
+
+#: source label of :data:`NAVAL_VESSEL`
+NAVAL_VESSEL_SOURCE = (
+    f"{_MSS}, after Blanke & Christensen (1993); DMI PMM data adapted by T. Perez to an ADI design"
+)
+
+_M_NAVAL = 1014.0 * 357.0
+_MG_NAVAL = _M_NAVAL * 9.81
+
+#: The naval vessel of Blanke & Christensen (1993) with the data of ``navalvessel.m`` (51.5 m,
+#: 362 t, U_nom = 8 m/s). ``X_vr = 0.33 m``, ``K_phphph = -0.325 m g`` as in the file.
+NAVAL_VESSEL = Blanke4Hull(
+    name="naval vessel (Blanke & Christensen 1993)",
+    source=NAVAL_VESSEL_SOURCE,
+    rho=1014.0, g=9.81, L_pp=51.5, B=8.6, T=2.3, nabla=357.0,
+    I_xx=2.3763e6, I_zz=47.934e6, x_G=-3.38, z_G=-(3.36 - 2.3), GM=1.1,
+    X_udot=-17400.0, X_uau=-1.96e3, X_vr=0.33 * _M_NAVAL,
+    Y_vdot=-393000.0, Y_pdot=-296000.0, Y_rdot=-1400000.0, Y_auv=-11800.0, Y_ur=131000.0,
+    Y_vav=-3700.0, Y_rar=0.0, Y_var=-794000.0, Y_rav=-182000.0, Y_phauv=10800.0,
+    Y_phaur=251000.0, Y_phuu=-74.0,
+    K_vdot=296000.0, K_pdot=-774000.0, K_rdot=0.0, K_auv=9260.0, K_ur=-102000.0,
+    K_vav=29300.0, K_rar=0.0, K_var=621000.0, K_rav=142000.0, K_phauv=-8400.0,
+    K_phaur=-196000.0, K_phuu=-1180.0, K_aup=-15500.0, K_pap=-416000.0, K_p=-500000.0,
+    K_phphph=-0.325 * _MG_NAVAL,
+    N_vdot=538000.0, N_pdot=0.0, N_rdot=-38.7e6, N_auv=-92000.0, N_aur=-4710000.0,
+    N_vav=0.0, N_rar=-202000000.0, N_var=0.0, N_rav=-15600000.0, N_phauv=-214000.0,
+    N_phuar=-4980000.0, N_phuau=-8000.0,
+)  # fmt: skip
+
+
+# ---- roll: natural frequency, linearisation, the 5-state right-hand side ---------------------
+
+
+def roll_natural_frequency(hull: Blanke4Hull) -> float:
+    """Uncoupled roll natural frequency ``sqrt(rho g nabla GM / (I_xx - K_pdot))`` (rad/s).
+
+    Ignores the sway/yaw couplings and the speed-dependent ``K_phuu U^2`` restoring (about
+    1.1 rad/s for :data:`NAVAL_VESSEL`, the notes' estimate).
+    """
+    return math.sqrt(hull.K_phi / (hull.I_xx - hull.K_pdot))
+
+
+def roll_damping_ratio(hull: Blanke4Hull, U: float) -> float:
+    """Uncoupled linear roll damping ratio at speed ``U`` (m/s), dimensionless.
+
+    ``zeta = -(K_p + K_aup |U|) / (2 sqrt(K_eff (I_xx - K_pdot)))`` with the linear restoring
+    ``K_eff = rho g nabla GM - K_phuu U^2`` (the roll row of the model alone).
+    """
+    k_eff = hull.K_phi - hull.K_phuu * U * U
+    return -(hull.K_p + hull.K_aup * abs(U)) / (2.0 * math.sqrt(k_eff * (hull.I_xx - hull.K_pdot)))
+
+
+def _check_speed(U: float) -> float:
+    if isinstance(U, bool) or not isinstance(U, int | float) or not U > 0 or not math.isfinite(U):
+        raise ValueError(f"U must be a forward speed > 0 m/s, got {U!r}")
+    return float(U)
+
+
+def _rudder_column(rudder_x: float, rudder_z: float) -> NDArray[np.float64]:
+    """``[X, Y, K, N]`` of a unit sway force at ``(x, 0, z)`` (z down): ``[0, 1, -z, x]``."""
+    return np.array([0.0, 1.0, -float(rudder_z), float(rudder_x)])
+
+
+def linear_roll_model(
+    hull: Blanke4Hull,
+    U: float,
+    rudder_x: float,
+    rudder_z: float,
+    lift_gain: float,
+    *,
+    method: str = "analytic",
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Linear sway-yaw-roll model ``x_dot = A x + B delta + G w`` about straight running.
+
+    State in the seed's order ``x = [v, r, psi, p, phi]`` (Radhakrishnan (n.d.) eq. 9; m/s,
+    rad/s, rad, rad/s, rad), linearised about ``u = U``, ``v = p = r = phi = 0`` with the surge
+    decoupled (``u`` held at ``U``). The rudder gives ``Y = lift_gain U^2 delta`` at
+    ``(rudder_x, 0, rudder_z)``: ``K = -rudder_z Y``, ``N = rudder_x Y``; ``w = [K_w, N_w]``
+    are an external roll and yaw moment (N m).
+
+    Args:
+        hull: the hull.
+        U: forward speed (m/s), > 0.
+        rudder_x: x of the rudder's centre of pressure in the body frame (m, < 0 aft).
+        rudder_z: z of the rudder's centre of pressure (m, down +, body frame).
+        lift_gain: ``dY/d(delta)/U^2`` (N s^2/(m^2 rad)), e.g. ``0.5 rho A dC_L/dalpha``.
+        method: ``"analytic"`` (from the derivatives) or ``"numerical"`` (central
+            differences of :meth:`Blanke4Hull.nu_dot`; the two agree, a test checks it).
+
+    Returns:
+        ``(A (5, 5), B (5,), G (5, 2))``: ``B`` in (state units)/rad, ``G`` per N m.
+
+    Raises:
+        ValueError: ``U <= 0`` or an unknown ``method``.
+    """
+    U = _check_speed(U)
+    if method == "numerical":
+        return _linear_numerical(hull, U, rudder_x, rudder_z, lift_gain)
+    if method != "analytic":
+        raise ValueError(f"method must be 'analytic' or 'numerical', got {method!r}")
+    h = hull
+    m = h.m
+    # d[Y, K, N] / d[v, p, r, phi] at u = U > 0 (module docstring; second-order terms vanish)
+    D = np.array(
+        [
+            [h.Y_auv * U, 0.0, (h.Y_ur - m) * U, h.Y_phuu * U * U],
+            [h.K_auv * U, h.K_aup * U + h.K_p, (h.K_ur + m * h.z_G) * U,
+             h.K_phuu * U * U - h.K_phi],
+            [h.N_auv * U, 0.0, (h.N_aur - m * h.x_G) * U, h.N_phuau * U * U],
+        ]
+    )  # fmt: skip
+    M3i = np.linalg.inv(h.mass_matrix()[1:, 1:])  # rows/cols v, p, r
+    acc = M3i @ D  # [v_dot, p_dot, r_dot] per [v, p, r, phi]
+    b3 = M3i @ (_rudder_column(rudder_x, rudder_z)[1:] * (lift_gain * U * U))
+    g3 = M3i[:, 1:]  # per [K, N]
+    # seed order: x = [v, r, psi, p, phi]; acc columns are [v, p, r, phi]
+    col = [0, 2, None, 1, 3]
+    A = np.zeros((5, 5))
+    for row, k in ((0, 0), (1, 2), (3, 1)):
+        for j, c in enumerate(col):
+            if c is not None:
+                A[row, j] = acc[k, c]
+    A[2, 1] = 1.0  # psi_dot = r cos(phi) -> r
+    A[4, 3] = 1.0  # phi_dot = p
+    B = np.array([b3[0], b3[2], 0.0, b3[1], 0.0])
+    G = np.zeros((5, 2))
+    G[0], G[1], G[3] = g3[0], g3[2], g3[1]
+    return A, B, G
+
+
+def roll_rhs(
+    hull: Blanke4Hull,
+    U: float,
+    rudder_x: float,
+    rudder_z: float,
+    lift_gain: float,
+    stall_angle: float | None = None,
+) -> Callable[..., NDArray[np.float64]]:
+    """The nonlinear 5-state right-hand side ``f(x, delta, w=None) -> x_dot`` (for an EKF).
+
+    The full model with ``u`` held at ``U`` (surge decoupled), state ``x = [v, r, psi, p,
+    phi]`` (seed order), ``psi_dot = r cos(phi)``, the rudder's sway force ``Y = lift_gain U^2
+    delta_e`` at ``(rudder_x, 0, rudder_z)`` with ``delta_e = clip(delta, -stall, stall)``.
+
+    Args:
+        hull: the hull.
+        U: forward speed (m/s), > 0.
+        rudder_x, rudder_z: the rudder's centre of pressure (m, body frame, z down).
+        lift_gain: ``dY/d(delta)/U^2`` (N s^2/(m^2 rad)).
+        stall_angle: the rudder angle (rad) above which the force stays constant, or ``None``.
+
+    Returns:
+        ``f(x, delta, w=None)``: ``x`` (..., 5), ``delta`` (rad, broadcast), ``w`` optional
+        ``[K_w, N_w]`` (N m); returns ``x_dot`` (..., 5).
+    """
+    U = _check_speed(U)
+    if stall_angle is not None and not stall_angle > 0:
+        raise ValueError(f"stall_angle must be > 0 rad or None, got {stall_angle!r}")
+    col = _rudder_column(rudder_x, rudder_z) * (lift_gain * U * U)
+
+    def f(x: ArrayLike, delta: ArrayLike, w: ArrayLike | None = None) -> NDArray[np.float64]:
+        x = np.asarray(x, dtype=float)
+        d = np.asarray(delta, dtype=float)
+        if stall_angle is not None:
+            d = np.clip(d, -stall_angle, stall_angle)
+        v, r, p, ph = x[..., 0], x[..., 1], x[..., 3], x[..., 4]
+        nu = np.stack(np.broadcast_arrays(np.full_like(v, U), v, p, r), -1)
+        tau = d[..., None] * col
+        if w is not None:
+            wk = np.asarray(w, dtype=float)
+            tau = tau + np.concatenate([np.zeros(wk.shape[:-1] + (2,)), wk], -1)
+        acc = hull.nu_dot(nu, tau, phi=ph)
+        return np.stack(
+            np.broadcast_arrays(acc[..., 1], acc[..., 3], r * np.cos(ph), acc[..., 2], p), -1
+        )
+
+    return f
+
+
+def _linear_numerical(
+    hull: Blanke4Hull, U: float, rudder_x: float, rudder_z: float, lift_gain: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    f = roll_rhs(hull, U, rudder_x, rudder_z, lift_gain)
+    x0 = np.zeros(5)
+    scale = np.array([U, U / hull.L_pp, 1.0, U / hull.L_pp, 1.0])
+    A = np.zeros((5, 5))
+    for j in range(5):
+        e = np.zeros(5)
+        e[j] = 1e-9 * scale[j]  # O(h) error from the |.| kinks: keep h small
+        A[:, j] = (f(x0 + e, 0.0) - f(x0 - e, 0.0)) / (2.0 * e[j])
+    hd = 1e-6
+    B = (f(x0, hd) - f(x0, -hd)) / (2.0 * hd)
+    G = np.zeros((5, 2))
+    for j in range(2):
+        w = np.zeros(2)
+        w[j] = 1.0e3
+        G[:, j] = (f(x0, 0.0, w) - f(x0, 0.0, -w)) / (2.0 * w[j])
+    return A, B, G
+
+
+def surge_thrust(hull: Blanke4Hull, U: float) -> float:
+    """The propeller thrust (N) that holds ``u = U`` in straight running (``v = p = r = 0``).
+
+    ``X = -X_uau U |U|`` (the only surge force at ``v = r = 0``); ``U`` in m/s, relative to
+    the water.
+    """
+    if isinstance(U, bool) or not isinstance(U, int | float) or not math.isfinite(U):
+        raise ValueError(f"U must be a finite speed (m/s), got {U!r}")
+    return float(-hull.X_uau * U * abs(U))
