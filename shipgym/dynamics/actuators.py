@@ -434,6 +434,8 @@ class Rudder(Actuator):
     def lift(self, states: ArrayLike, nu: ArrayLike) -> Any:
         """The rudder's sway force ``F`` (N), shape (...)."""
         alpha, q, stalled = self.flow(states, nu)
+        if not math.isfinite(self.stall_angle):  # no stall
+            return self.lift_gain * q * alpha
         c = np.where(stalled, np.sign(alpha) * self.post_stall * self.stall_angle, alpha)
         return self.lift_gain * q * c
 

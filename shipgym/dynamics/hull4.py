@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["KINEMATICS", "Hull4"]
+__all__ = ["KINEMATICS", "Hull4", "is_hull4"]
 
 #: the kinematics a 4-DOF hull can use (module docstring)
 KINEMATICS = ("fossen", "linear")
@@ -187,3 +187,13 @@ def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, 
         )
 
     return accel_u if speed else accel
+
+
+def is_hull4(plant: Any) -> bool:
+    """Whether ``plant`` is a 4-DOF hull model: a :class:`Hull4` or any model with ``dofs ==
+    4``, a plain-float ``accel(u, v, p, r, phi, X, Y, K, N, u_c, v_c)`` kernel and a batched
+    ``nu_dot(nu, tau, nu_c, phi)`` (the nonlinear :class:`~shipgym.dynamics.blanke4.Blanke4Hull`)."""
+    return isinstance(plant, Hull4) or (
+        getattr(plant, "dofs", None) == 4 and callable(getattr(plant, "nu_dot", None))
+        and callable(getattr(plant, "accel", None))
+    )  # fmt: skip

@@ -21,7 +21,7 @@ from scipy.integrate import solve_ivp
 
 from .actuators import ActuatorSet
 from .frames import rot
-from .hull4 import Hull4
+from .hull4 import Hull4, is_hull4
 from .model import PlantModel
 from .thrusters import ThrusterParameters, command_to_tau
 
@@ -88,7 +88,7 @@ def simulate_reference(
     """
     t_eval = np.asarray(t_eval, dtype=float)
     ct = np.asarray(command_times, dtype=float)
-    four = isinstance(plant, Hull4)
+    four = is_hull4(plant)
     nd = 4 if four else 3
     if actuators is not None:
         lo, hi = actuators.lower, actuators.upper

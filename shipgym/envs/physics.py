@@ -62,7 +62,7 @@ from shipgym.disturbances import (
 )
 from shipgym.dynamics import PlantModel, WindageParameters
 from shipgym.dynamics.actuators import Azimuth
-from shipgym.dynamics.hull4 import Hull4
+from shipgym.dynamics.hull4 import Hull4, is_hull4
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.envs._mujoco import mujoco
 
@@ -168,9 +168,13 @@ class VesselPhysics:
         self.vessel = load_vessel(vessel)
         v = self.vessel
         self.plant = v.plant(plant) if isinstance(plant, str) else plant
-        if not isinstance(self.plant, PlantModel | Hull4):
-            raise TypeError(f"plant must be a PlantModel, a Hull4 or a variant name, got {plant!r}")
-        dofs = 4 if isinstance(self.plant, Hull4) else 3
+        four = is_hull4(self.plant)
+        if not (four or isinstance(self.plant, PlantModel)):
+            raise TypeError(
+                f"plant must be a PlantModel, a 4-DOF hull (Hull4, Blanke4Hull) or a variant "
+                f"name, got {plant!r}"
+            )
+        dofs = 4 if four else 3
         if dofs != v.dofs:
             raise ValueError(f"plant {plant!r} has {dofs} DOF but vessel {v.name!r} has {v.dofs}")
         self.dofs = dofs
