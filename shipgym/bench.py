@@ -20,7 +20,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import Any
@@ -37,6 +37,7 @@ __all__ = [
     "observer_traces",
     "row_log",
     "run_jobs",
+    "single_threaded_blas",
     "velocity_error_trace",
     "write_bench_outputs",
 ]
@@ -404,3 +405,21 @@ def observer_table(rows: Sequence[dict[str, Any]]) -> str:
             f"| {ms(rm['u'], '.5f')} | {ms(rm['v'], '.5f')} | {ms(rm['r'], '.4f')} |"
         )
     return "\n".join(lines)
+
+
+@contextlib.contextmanager
+def single_threaded_blas() -> Iterator[None]:
+    """One BLAS thread in the worker processes started inside (set before they load numpy):
+    the runs are small-matrix work, and threaded BLAS in every worker oversubscribes the
+    cores (5x slower on 2 cores)."""
+    keys = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    old = {k: os.environ.get(k) for k in keys}
+    os.environ.update(dict.fromkeys(keys, "1"))
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v

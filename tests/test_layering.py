@@ -220,6 +220,10 @@ def test_command_line_modules_are_leaves():
         "shipgym.dynamics.vanderklugt",
         "shipgym.observers.sway",
         "shipgym.controllers.rollcontrol",
+        "shipgym.controllers.rollpilot",
+        "shipgym.dynamics.linearise",
+        "shipgym.dynamics.blanke4",
+        "shipgym.disturbances.rollwaves",
     ],
 )
 def test_pure_layers_never_reach_the_simulator(package):
@@ -267,3 +271,16 @@ def test_the_cli_still_exports_what_it_documents():
     assert cli.catalogue is shipgym.catalogue.catalogue
     assert cli.write_bench_outputs is shipgym.bench.write_bench_outputs
     assert set(cli.__all__) <= set(vars(cli))
+
+
+def test_rrs_is_a_high_layer():
+    """``shipgym.rrs`` (the roll bench) may use every layer below; only the command line and
+    the viz import it."""
+    assert "shipgym.rrs.bench" in GRAPH
+    users = {
+        mod
+        for mod, deps in GRAPH.items()
+        if not (mod == "shipgym.rrs" or mod.startswith("shipgym.rrs."))
+        and any(d == "shipgym.rrs" or d.startswith("shipgym.rrs.") for d in deps)
+    }
+    assert users <= {"shipgym.cli"}, f"modules importing shipgym.rrs: {sorted(users)}"

@@ -30,11 +30,9 @@ observer's ``step`` calls.
 
 from __future__ import annotations
 
-import contextlib
 import math
-import os
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -276,7 +274,7 @@ def bench_dp(
     on_row: Callable[[int, Any], None] | None = None,
 ) -> list[dict[str, Any]]:
     """All (vessel, Beaufort, method, seed) runs, in worker processes; rows of metrics."""
-    from shipgym.bench import run_jobs
+    from shipgym.bench import run_jobs, single_threaded_blas
 
     names = list(METHODS) if methods is None else list(methods)
     for m in names:
@@ -293,7 +291,7 @@ def bench_dp(
     # one BLAS thread per worker: the runs are small-matrix work and threaded BLAS in every
     # worker oversubscribes the cores (5x slower on 2 cores); fresh workers (forkserver) read
     # the setting when they load numpy
-    with _single_threaded_blas():
+    with single_threaded_blas():
         return run_jobs(
             dp_run,
             jobs,
@@ -303,21 +301,6 @@ def bench_dp(
             on_result=on_row,
             start_method="forkserver",
         )
-
-
-@contextlib.contextmanager
-def _single_threaded_blas() -> Iterator[None]:
-    keys = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-    old = {k: os.environ.get(k) for k in keys}
-    os.environ.update(dict.fromkeys(keys, "1"))
-    try:
-        yield
-    finally:
-        for k, v in old.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
 
 
 def _ms(vals: list[float], fmt: str) -> str:

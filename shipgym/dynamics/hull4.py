@@ -192,7 +192,8 @@ def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, 
 def is_hull4(plant: Any) -> bool:
     """Whether ``plant`` is a 4-DOF hull model: a :class:`Hull4` or any model with ``dofs ==
     4``, a plain-float ``accel(u, v, p, r, phi, X, Y, K, N, u_c, v_c)`` kernel and a batched
-    ``nu_dot(nu, tau, nu_c, phi)`` (the nonlinear :class:`~shipgym.dynamics.blanke4.Blanke4Hull`)."""
+    ``nu_dot(nu, tau, nu_c, phi)`` (the nonlinear
+    :class:`~shipgym.dynamics.blanke4.Blanke4Hull`)."""
     return isinstance(plant, Hull4) or (
         getattr(plant, "dofs", None) == 4 and callable(getattr(plant, "nu_dot", None))
         and callable(getattr(plant, "accel", None))

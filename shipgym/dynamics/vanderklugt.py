@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -225,7 +226,8 @@ class RollModel:
         G: (5, 2) wave-disturbance input, ``w = [w_phi, w_psi]`` (rad, rad/s).
         C: (4, 5) the measured outputs ``y = [r, psi, p, phi]``.
         U: forward speed (m/s).
-        parameters: the numbers at ``U`` (:class:`RollParameters`).
+        parameters: the numbers at ``U`` (:class:`RollParameters`), or ``None`` for a model
+            that is not the seed's (:func:`shipgym.dynamics.linearise.roll_model_of`).
         variant: ``"reconstructed"`` or ``"seed-printed"``.
         states, outputs: the names.
         source: where the matrices come from.
@@ -236,15 +238,25 @@ class RollModel:
     G: Array
     C: Array
     U: float
-    parameters: RollParameters
+    parameters: RollParameters | None
     variant: str
     states: tuple[str, ...] = STATE_NAMES
     outputs: tuple[str, ...] = OUTPUT_NAMES
     source: str = ""
+    q: tuple[float, float] | None = None
 
     @property
     def Q_w(self) -> Array:
-        """The disturbance intensity ``diag(q_phi, q_psi)`` (rad^2 s, rad^2/s), (2, 2)."""
+        """The disturbance intensity (2, 2): ``q`` if given, else the seed's ``diag(q_phi,
+        q_psi)`` (rad^2 s, rad^2/s).
+
+        Raises:
+            ValueError: neither ``q`` nor the seed's parameters.
+        """
+        if self.q is not None:
+            return np.diag(np.asarray(self.q, dtype=float))
+        if self.parameters is None:
+            raise ValueError(f"the model {self.source!r} has no disturbance intensity q")
         return np.diag([self.parameters.q_phi, self.parameters.q_psi])
 
 
@@ -424,3 +436,44 @@ def open_loop_amplitudes(
         raise ValueError(f"amplitude must be finite and >= 0 rad, got {amplitude!r}")
     gain = frequency_response(roll_model(U, variant, kdp_law), omega)
     return {name: float(abs(g) * amplitude) for name, g in zip(STATE_NAMES, gain, strict=True)}
+
+
+#: the rudder's roll arm (m) of the ``van-der-klugt`` package times ``U^4``, for the printed
+#: law ``K_dp = -0.0014/U^2``: ``z_R = -w_n^2 K_dp T_v / K_dv = 0.63^2 (0.0014)(78)/(0.01 U^4)``
+PRINTED_ROLL_ARM_U4 = 0.63**2 * 0.0014 * 78.0 / 0.01
+
+
+def seed_vessel(kdp_law: str = "U2", speed: float | None = None) -> Any:
+    """The ``van-der-klugt`` vessel package with the direct rudder-roll law ``kdp_law``.
+
+    ``"U2"`` (the reconstructed ``K_dp = -0.0014 U^2``) is the package itself, valid at every
+    speed: the rudder's lift grows with ``U^2`` at a fixed point. ``"printed"``
+    (``K_dp = -0.0014/U^2``) cannot be one rudder at a fixed point: the package's rudder is
+    moved to the roll arm ``z_R = 4.334/U^4`` m that gives the printed law at ``speed`` (m/s)
+    only (kept to compare with the seed's print, Radhakrishnan (n.d.) section 4).
+
+    Raises:
+        ValueError: an unknown law, or ``"printed"`` without a speed > 0.
+    """
+    import dataclasses
+
+    from .actuators import ActuatorSet, Rudder
+    from .vessel import load_vessel
+
+    law = _check_law(kdp_law)
+    v = load_vessel("van-der-klugt")
+    if law == "U2":
+        return v
+    if speed is None:
+        raise ValueError("the printed K_dp law holds at one speed only: give speed= (m/s)")
+    U = _check_speed(speed)
+    acts = []
+    for a in v.actuators:
+        if isinstance(a, Rudder):
+            x, y, _z = a.position
+            a = dataclasses.replace(a, position=(x, y, PRINTED_ROLL_ARM_U4 / U**4))
+        acts.append(a)
+    return dataclasses.replace(
+        v, title=f"{v.title} (printed K_dp law at {U:g} m/s)",
+        actuators=ActuatorSet(acts, v.dofs),
+    )  # fmt: skip

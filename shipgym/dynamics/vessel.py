@@ -97,6 +97,10 @@ class Vessel:
         nominal_wind: the wind (m/s) the vessel's default tasks use.
         rigid_inertia: ``(m, I_x, I_z)`` of the MuJoCo body (kg, kg m^2).
         sources: ``key -> (unit, source)`` for every value given with a source.
+        roll_control: the rudder-roll design of a 4-DOF rudder vessel (``[roll_control]``:
+            ``design_speed`` m/s, the LQR weights ``Q`` (5, state ``[v, r, psi, p, phi]``)
+            and ``R``, the heading autopilot's ``heading_bandwidth`` rad/s and
+            ``heading_zeta``); empty when the file has none.
     """
 
     name: str
@@ -116,6 +120,7 @@ class Vessel:
     rigid_inertia: tuple[float, float, float]
     dimensions: tuple[float, float, float, float]
     sources: Mapping[str, tuple[str, str]] = field(default_factory=dict, repr=False)
+    roll_control: Mapping[str, Any] = field(default_factory=dict, repr=False)
 
     @property
     def body_xml(self) -> Path:
@@ -541,6 +546,7 @@ def _read(path: Path) -> Vessel:
     except tomllib.TOMLDecodeError as exc:
         raise VesselError(f"{toml_path}: not valid TOML: {exc}") from None
     top = {"vessel", "hull", "plants", "design", "windage", "actuator", "limits", "control",
+           "roll_control",
            "observer"}  # fmt: skip
     r.keys(data, "(top level)", top)
     v = r.table(data, "vessel")
@@ -600,14 +606,39 @@ def _read(path: Path) -> Vessel:
             ("accel_psd_psi", "rad^2/s^3", 1e-6),
         )
     }
+    roll_control = _read_roll_control(r, data, int(dofs), actuators)
     if not (path / "vessel.xml").is_file():
         raise VesselError(f"{path}: vessel.xml (the MJCF hull body) is missing")
     return Vessel(
         name=name, title=title, folder=path, dofs=int(dofs), scale=scale, hull=hull,
         plants=plants, actuators=actuators, windage=windage, design=design, limits=limits,
         control=control, observer=observer, nominal_wind=nominal_wind, rigid_inertia=rigid,
-        dimensions=dims, sources=dict(r.sources),
+        dimensions=dims, sources=dict(r.sources), roll_control=roll_control,
     )  # fmt: skip
+
+
+def _read_roll_control(
+    r: _Reader, data: Mapping[str, Any], dofs: int, actuators: ActuatorSet
+) -> dict[str, Any]:
+    """The optional ``[roll_control]`` table: the rudder-roll design of a 4-DOF rudder vessel."""
+    t = r.table(data, "roll_control", required=False)
+    if not t:
+        return {}
+    if dofs != 4 or not any(isinstance(a, Rudder) for a in actuators):
+        raise r.fail("roll_control", "needs a 4-DOF vessel with a rudder")
+    r.keys(t, "roll_control", {"design_speed", "Q", "R", "heading_bandwidth", "heading_zeta"})
+    out = {
+        "design_speed": r.number(t, "design_speed", "roll_control", "m/s", positive=True),
+        "Q": r.vector(t, "Q", "roll_control", 5, "1"),
+        "R": r.number(t, "R", "roll_control", "1", positive=True),
+        "heading_bandwidth": r.number(t, "heading_bandwidth", "roll_control", "rad/s",
+                                      default=0.1, positive=True),
+        "heading_zeta": r.number(t, "heading_zeta", "roll_control", "1", default=1.0,
+                                 positive=True),
+    }  # fmt: skip
+    if min(out["Q"]) < 0:
+        raise r.fail("roll_control.Q", f"the LQR state weights must be >= 0, got {out['Q']}")
+    return out
 
 
 @lru_cache(maxsize=64)

@@ -224,7 +224,10 @@ class VesselPhysics:
         self._servo_cmd = [0.0] * len(self._servos)
         self._flow_of = v.actuators.flow_kernel()
         n_flow = sum(1 for a in v.actuators if a.kind == "rudder")
-        #: per servo channel: whether the servo ran at its rate limit in the last :meth:`step`
+        #: per servo channel: whether the servo was still running at its rate limit in the last
+        #: physics step of the last :meth:`step` (it has not reached its command because of the
+        #: rate limit; an ideal servo runs at full rate for every move, and only a move that
+        #: outlasts the call counts)
         self.rate_limited = np.zeros(len(self._servos), dtype=bool)
         #: per rudder: whether its effective angle was past the stall angle at the last step
         self.stalled = np.zeros(n_flow, dtype=bool)
@@ -584,8 +587,6 @@ class VesselPhysics:
             self._prepare = self._make_prepare()
         prepare, mj_step, m, d = self._prepare, mujoco.mj_step, self.model, self.data
         hits = self._rate_hits
-        for k in range(len(hits)):
-            hits[k] = 0
         taken = n
         for i in range(n):
             prepare()
@@ -660,10 +661,12 @@ class VesselPhysics:
                 w = (servo_cmd[k] - st[j]) / (tc if tc > 0.0 else this._h)
                 if w > rate:
                     w = rate
-                    hits[k] += 1
+                    hits[k] = 1
                 elif w < -rate:
                     w = -rate
-                    hits[k] += 1
+                    hits[k] = 1
+                else:
+                    hits[k] = 0
                 ctrl[j] = w
 
         def diverged(t: float, nu: tuple[float, ...], nud: tuple[float, ...]) -> None:

@@ -17,6 +17,8 @@ ENV_IDS: dict[str, tuple[str, int | None]] = {
     "shipgym/Tracking-v0": ("shipgym.envs.tasks:TrackingEnv", 800),
     "shipgym/DPStationKeeping-v0": ("shipgym.envs.offshore:OffshoreDPEnv", None),
     "shipgym/DPSwayStep-v0": ("shipgym.envs.offshore:SwayStepEnv", None),
+    "shipgym/RudderRollStabilisation-v0": ("shipgym.envs.rollstab:SeedRollEnv", None),
+    "shipgym/NavalRollDamping-v0": ("shipgym.envs.rollstab:NavalRollEnv", None),
     "shipgym/BlueLadyHarbour-v0": ("shipgym.envs.tasks:BlueLadyHarbourEnv", 2000),
     "shipgym/BlueLadyStationKeeping-v0": ("shipgym.envs.tasks:BlueLadyStationKeepingEnv", 600),
     "shipgym/BlueLadyTracking-v0": ("shipgym.envs.tasks:BlueLadyTrackingEnv", 800),

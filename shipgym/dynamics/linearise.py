@@ -1,0 +1,124 @@
+r"""The linear sway-yaw-roll model of any 4-DOF vessel with a rudder, about straight running.
+
+:func:`roll_model_of` linearises a vessel's hull (any 4-DOF plant: the linear
+:class:`~shipgym.dynamics.hull4.Hull4`, the nonlinear
+:class:`~shipgym.dynamics.blanke4.Blanke4Hull`) and its rudder's lift about ``u = U``,
+``v = p = r = phi = 0``, with the surge held at ``U``, into the
+:class:`~shipgym.dynamics.vanderklugt.RollModel` of Radhakrishnan (n.d.) eq. 8: state ``x =
+[v, r, psi, p, phi]`` (eq. 9), rudder input ``delta``, disturbance input ``w = [K_w, N_w]``
+(a roll and a yaw moment, N m), outputs ``[r, psi, p, phi]``. The roll controllers and sway
+filters (:mod:`shipgym.controllers.rollcontrol`, :mod:`shipgym.observers.sway`) are designed
+on it, for every vessel alike.
+
+It differentiates the model the physics integrates (``plant.nu_dot`` and
+:meth:`~shipgym.dynamics.actuators.Rudder.lift`) by central differences; the tests compare it
+with the seed's state space written from the paper (``van-der-klugt``) and with the naval
+vessel's analytic linearisation (Blanke & Christensen 1993). The kinematics linearise to
+``psi_dot = r`` for either kinematics of a 4-DOF hull.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .actuators import Rudder
+from .hull4 import is_hull4
+from .vanderklugt import OUTPUT_NAMES, STATE_NAMES, RollModel
+
+__all__ = ["roll_model_of", "rudder_of"]
+
+#: the seed's state order (Radhakrishnan n.d. eq. 9) in the hull's ``nu = [u, v, p, r]``
+_V, _R, _PSI, _P, _PHI = range(5)
+
+
+def rudder_of(vessel: Any, name: str | None = None) -> Rudder:
+    """The vessel's rudder ``name`` (default: its only or first rudder).
+
+    Raises:
+        ValueError: the vessel has no rudder, or none of that name.
+    """
+    rudders = [a for a in vessel.actuators if isinstance(a, Rudder)]
+    if not rudders:
+        raise ValueError(f"vessel {vessel.name!r} has no rudder (actuators: "
+                         f"{', '.join(vessel.actuators.names)})")  # fmt: skip
+    if name is None:
+        return rudders[0]
+    for a in rudders:
+        if a.name == name:
+            return a
+    raise ValueError(f"vessel {vessel.name!r} has no rudder {name!r}; its rudders: "
+                     f"{', '.join(a.name for a in rudders)}")  # fmt: skip
+
+
+def _rhs(plant: Any, rudder: Rudder, U: float, x: NDArray[np.float64], delta: float,
+         w: NDArray[np.float64]) -> NDArray[np.float64]:  # fmt: skip
+    v, r, _psi, p, phi = x
+    nu = np.array([U, v, p, r])
+    F = float(rudder.lift(np.array([delta]), nu))
+    xr, _yr, zr = rudder.position
+    tau = np.array([0.0, F, -zr * F + w[0], xr * F + w[1]])
+    nd = plant.nu_dot(nu, tau, None, phi)
+    return np.array([nd[1], nd[3], r, nd[2], p])
+
+
+def roll_model_of(
+    vessel: Any,
+    U: float,
+    *,
+    rudder: str | None = None,
+    plant: str = "default",
+    q: tuple[float, float] | None = None,
+) -> RollModel:
+    """The vessel's linear sway-yaw-roll model at the forward speed ``U`` (module docstring).
+
+    Args:
+        vessel: a :class:`~shipgym.dynamics.vessel.Vessel` with 4 DOF and a rudder.
+        U: forward speed (m/s), > 0.
+        rudder: the rudder's name (default: the first).
+        plant: the plant variant.
+        q: intensities ``(q_K, q_N)`` of the disturbance moments ((N m)^2 s), for a filter.
+
+    Returns:
+        :class:`~shipgym.dynamics.vanderklugt.RollModel` with ``G`` per N m of roll and yaw
+        moment, ``parameters = None``.
+
+    Raises:
+        ValueError: ``U <= 0``, a 3-DOF vessel, no rudder.
+    """
+    if not (isinstance(U, int | float) and math.isfinite(U) and U > 0):
+        raise ValueError(f"U must be a forward speed > 0 m/s, got {U!r}")
+    hull = vessel.plant(plant)
+    if not is_hull4(hull):
+        raise ValueError(f"vessel {vessel.name!r} has {vessel.dofs} DOF: a roll model needs 4")
+    rud = rudder_of(vessel, rudder)
+    U = float(U)
+    x0 = np.zeros(5)
+    w0 = np.zeros(2)
+    f0 = _rhs(hull, rud, U, x0, 0.0, w0)
+    # central differences with small steps: a term v|v| differences to h|h|/h = h, not 0
+    A = np.zeros((5, 5))
+    for j, h in enumerate((1e-7 * U, 1e-8, 1e-3, 1e-8, 1e-8)):
+        e = np.zeros(5)
+        e[j] = h
+        A[:, j] = (_rhs(hull, rud, U, x0 + e, 0.0, w0) - _rhs(hull, rud, U, x0 - e, 0.0, w0)) / (
+            2 * h
+        )
+    hd = 1e-5
+    B = (_rhs(hull, rud, U, x0, hd, w0) - _rhs(hull, rud, U, x0, -hd, w0)) / (2 * hd)
+    # the moments enter linearly: one-sided with a large step is exact to rounding
+    hw = 1.0e3
+    G = np.stack(
+        [(_rhs(hull, rud, U, x0, 0.0, np.array(e)) - f0) / hw for e in ((hw, 0.0), (0.0, hw))], 1
+    )
+    C = np.zeros((4, 5))
+    for i, name in enumerate(OUTPUT_NAMES):
+        C[i, STATE_NAMES.index(name)] = 1.0
+    return RollModel(
+        A, B, G, C, U, None, "linearised",
+        source=f"{vessel.name} ({type(hull).__name__}) with rudder {rud.name!r}, linearised at "
+        f"U = {U:g} m/s", q=q,
+    )  # fmt: skip
