@@ -12,7 +12,7 @@ from gymnasium.utils.env_checker import check_env
 
 import shipgym
 from shipgym.dynamics.vessel import load_vessel, vessel_names
-from shipgym.envs.registration import ALIASES
+from shipgym.envs.registration import ALIASES, NEEDS, task_fits_vessel
 from shipgym.envs.scene import fits
 
 TASKS = [i for i in shipgym.ENV_IDS if i not in ALIASES]
@@ -20,7 +20,7 @@ CASES = [
     (task, vessel)
     for task in TASKS
     for vessel in vessel_names()
-    if load_vessel(vessel).can_position
+    if task_fits_vessel(task, load_vessel(vessel))
     and (task != "shipgym/Harbour-v0" or fits(load_vessel(vessel), "harbour"))
 ]
 IDS = [f"{t.split('/')[1]}-{v}" for t, v in CASES]
@@ -54,7 +54,18 @@ def test_sb3_check_env(task: str, vessel: str) -> None:
 @pytest.mark.parametrize(("task", "vessel"), CASES, ids=IDS)
 def test_action_space_comes_from_the_actuators(task: str, vessel: str) -> None:
     env = _make(task, vessel)
-    acts = load_vessel(vessel).actuators
+    v = load_vessel(vessel)
+    acts = v.actuators
+    if NEEDS[task] == "roll-steering":  # the rudders steer; a propeller holds the speed
+        n = len(v.rudders)
+        assert env.action_space.shape == (n,)
+        obs, info = env.reset(seed=0)
+        assert obs.shape == env.observation_space.shape == (5 + n,)
+        _, _, _, _, info = env.step(np.ones(n, dtype=np.float32))
+        top = [a.max_angle for a in acts if a.name in v.rudders]
+        np.testing.assert_allclose(info["rudder_command"], top)  # +1 is each rudder's limit
+        env.close()
+        return
     assert env.action_space.shape == (acts.n_channels,)
     obs, info = env.reset(seed=0)
     assert obs.shape == env.observation_space.shape == (12 + acts.n_channels,)

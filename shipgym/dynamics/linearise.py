@@ -29,7 +29,7 @@ from .actuators import Rudder
 from .hull4 import is_hull4
 from .vanderklugt import OUTPUT_NAMES, STATE_NAMES, RollModel
 
-__all__ = ["roll_model_of", "rudder_of"]
+__all__ = ["roll_model_of", "roll_rhs_of", "rudder_of"]
 
 #: the seed's state order (Radhakrishnan n.d. eq. 9) in the hull's ``nu = [u, v, p, r]``
 _V, _R, _PSI, _P, _PHI = range(5)
@@ -122,3 +122,44 @@ def roll_model_of(
         source=f"{vessel.name} ({type(hull).__name__}) with rudder {rud.name!r}, linearised at "
         f"U = {U:g} m/s", q=q,
     )  # fmt: skip
+
+
+def roll_rhs_of(vessel: Any, U: float, *, rudder: str | None = None, plant: str = "default") -> Any:
+    """The vessel's nonlinear sway-yaw-roll dynamics at the held speed ``U``, for an EKF.
+
+    ``f(x, delta, w=None) -> x_dot`` with ``x = [v, r, psi, p, phi]`` (the seed's order),
+    ``delta`` the rudder angle (rad), ``w = [K_w, N_w]`` optional moments (N m): the hull's
+    plain-float kernel (``plant.accel``) and the rudder's lift (stall included) with ``u = U``
+    held and the kinematics ``psi_dot = r cos(phi)`` (``r`` for ``kinematics = "linear"``).
+    The model :func:`roll_model_of` linearises; the EKF variant of the seed's filter
+    (:class:`~shipgym.observers.sway.SwayVelocityEKF`) propagates it.
+
+    Raises:
+        ValueError: as :func:`roll_model_of`.
+    """
+    if not (isinstance(U, int | float) and math.isfinite(U) and U > 0):
+        raise ValueError(f"U must be a forward speed > 0 m/s, got {U!r}")
+    hull = vessel.plant(plant)
+    if not is_hull4(hull):
+        raise ValueError(f"vessel {vessel.name!r} has {vessel.dofs} DOF: a roll model needs 4")
+    rud = rudder_of(vessel, rudder)
+    acts = vessel.actuators
+    j = acts.channel_names.index(rud.name)
+    flow_of = acts.flow_kernel()
+    accel = hull.accel
+    linear = getattr(hull, "kinematics", "fossen") == "linear"
+    st = [0.0] * acts.n_channels
+    Uf = float(U)
+
+    def f(x: Any, delta: float, w: Any = None) -> NDArray[np.float64]:
+        v, r, _psi, p, phi = (float(c) for c in x)
+        st[j] = float(delta)
+        Y, K, N, _l, _s = flow_of(st, Uf, v, p, r)
+        if w is not None:
+            K += float(w[0])
+            N += float(w[1])
+        _ud, vd, pd, rd = accel(Uf, v, p, r, phi, 0.0, Y, K, N)
+        psid = r if linear else r * math.cos(phi)
+        return np.array([vd, rd, psid, pd, p])
+
+    return f

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import gymnasium as gym
 from gymnasium.envs.registration import WrapperSpec
 
 from .episode import EPISODE_END_ENTRY_POINT
 
-__all__ = ["ALIASES", "ENV_IDS", "register_envs"]
+__all__ = ["ALIASES", "ENV_IDS", "NEEDS", "register_envs", "task_fits_vessel"]
 
 #: env id -> (entry point, max_episode_steps); ``None``: the env truncates itself after its
 #: ``episode_duration`` (the DP tasks, whose number of steps depends on the vessel)
@@ -30,6 +32,22 @@ ALIASES: dict[str, str] = {
     "shipgym/BlueLadyStationKeeping-v0": "shipgym/StationKeeping-v0",
     "shipgym/BlueLadyTracking-v0": "shipgym/Tracking-v0",
 }
+
+
+#: what an id needs of its vessel: ``"positioning"`` (thrust in surge, sway and yaw at rest:
+#: :attr:`Vessel.can_position <shipgym.dynamics.vessel.Vessel.can_position>`) or
+#: ``"roll-steering"`` (4 DOF and a rudder)
+NEEDS: dict[str, str] = {
+    env_id: "roll-steering" if "Roll" in env_id else "positioning" for env_id in ENV_IDS
+}
+
+
+def task_fits_vessel(env_id: str, vessel: Any) -> bool:
+    """Whether the task ``env_id`` can run ``vessel`` (a :class:`~shipgym.dynamics.vessel.
+    Vessel`): see :data:`NEEDS`."""
+    if NEEDS[env_id] == "roll-steering":
+        return vessel.dofs == 4 and bool(vessel.rudders)
+    return bool(vessel.can_position)
 
 
 def register_envs() -> None:

@@ -35,7 +35,8 @@ from .base import _check_timing, _make_renderer, _whole_multiple
 from .physics import VesselPhysics
 
 __all__ = [
-    "NAVAL_SEA",
+    "AUTO_WAVES",
+    "BEAM_SEA",
     "NavalRollEnv",
     "ROLL_SENSOR_STD",
     "RollRewardWeights",
@@ -54,6 +55,16 @@ ROLL_SENSOR_STD: tuple[float, float, float, float] = tuple(math.sqrt(x) for x in
 
 #: the observation's entries, in order (the last only with ``sway_estimate=True``)
 OBSERVATION = ("r", "heading_error", "p", "phi", "rudder", "speed", "v_hat")
+
+
+#: the default sea of a hull with a displacement: [chosen] a slight beam sea (sea state 3),
+#: Hs 0.5 m, Tp 7 s (JONSWAP, gamma 3.3), whose roll-moment spectrum reaches the naval
+#: vessel's roll mode (1.1 rad/s) and which its 10 deg/s rudder can still work against (the
+#: rudder-rate demand grows with Hs: at Hs 1.5 m the same design is rate-limited most of the time)
+BEAM_SEA = RollWaveConfig(Hs=0.5, Tp=7.0, chi=math.pi / 2)
+
+#: ``waves="auto"``: the seed's waves for the seed model, :data:`BEAM_SEA` otherwise
+AUTO_WAVES = "auto"
 
 
 @dataclass(frozen=True)
@@ -125,7 +136,9 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ``heading``. A propeller, if the vessel has one, is held by the task at the thrust that
     balances the hull's resistance at ``U`` plus a proportional speed loop; the agent steers.
 
-    **Waves.** ``waves="seed"``: the white-noise roll and yaw disturbances ``w_phi``,
+    **Waves.** ``waves="auto"`` (default): ``"seed"`` for a hull without a displacement (the
+    per-unit ``van-der-klugt`` model), else the beam sea :data:`BEAM_SEA`. ``waves="seed"``:
+    the white-noise roll and yaw disturbances ``w_phi``,
     ``w_psi`` of Radhakrishnan (n.d.) eqs. 6-7 (:func:`seed_wave_intensities`; for the
     ``van-der-klugt`` hull, whose moments are per unit inertia), one sample per control
     period; a :class:`~shipgym.disturbances.rollwaves.RollWaveConfig` (or its mapping): a
@@ -154,7 +167,8 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     **Termination**: ``|phi| > max_roll`` (30 deg). **Truncation**: ``episode_duration``
     (600 s) of simulated time.
 
-    **Info**: ``time`` (s), ``speed`` (u, m/s), ``v`` (m/s), ``roll``, ``heading_error``
+    **Info**: ``time`` (s), ``eta`` ``[x, y, phi, psi]`` (m, m, rad, rad) and ``nu`` ``[u, v,
+    p, r]`` (m/s, rad/s) (true), ``speed`` (u, m/s), ``v`` (m/s), ``roll``, ``heading_error``
     (rad), ``rudder``, ``rudder_command`` (rad), ``rudder_rate`` (rad/s), ``saturated`` (each
     rudder at its angle limit or its command clipped), ``rate_limited`` (its servo at the rate
     limit during the step), ``stalled``, ``action_clipped``, ``wave_moment`` ``[K, N]`` (N m),
@@ -164,7 +178,7 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         vessel: a 4-DOF vessel with a rudder (name, path or :class:`Vessel`); required.
         speed: forward speed (m/s) or a range ``(lo, hi)`` drawn per episode.
         heading: desired (and initial) heading (rad).
-        waves: ``"seed"``, a :class:`RollWaveConfig` / mapping, or ``None``.
+        waves: ``"auto"``, ``"seed"``, a :class:`RollWaveConfig` / mapping, or ``None``.
         kdp_law: ``"U2"`` or ``"printed"``: the seed's direct rudder-roll law (``van-der-klugt``
             only; :func:`~shipgym.dynamics.vanderklugt.seed_vessel`).
         rudder_test: add the seed's sinusoidal rudder to the command.
@@ -187,7 +201,7 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         vessel: Vessel | str | None = None,
         speed: float | tuple[float, float] = (8.0, 15.0),
         heading: float = 0.0,
-        waves: str | RollWaveConfig | Mapping[str, Any] | None = None,
+        waves: str | RollWaveConfig | Mapping[str, Any] | None = "auto",
         kdp_law: str = "U2",
         rudder_test: bool = False,
         rudder_test_amplitude: float = math.radians(10.0),
@@ -285,10 +299,13 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def _parse_waves(self, waves: Any) -> str | RollWaveConfig | None:
         if waves is None:
             return None
+        if isinstance(waves, str) and waves == AUTO_WAVES:
+            hull = self.base_vessel.plant()
+            return BEAM_SEA if hasattr(hull, "nabla") else SEED_WAVES
         if isinstance(waves, str):
             if waves != SEED_WAVES:
-                raise ValueError(f"waves must be None, 'seed', a RollWaveConfig or a mapping, "
-                                 f"got {waves!r}")  # fmt: skip
+                raise ValueError(f"waves must be None, 'auto', 'seed', a RollWaveConfig or a "
+                                 f"mapping, got {waves!r}")  # fmt: skip
             if self.base_vessel.name != "van-der-klugt":
                 raise ValueError(
                     "waves='seed' are the seed's disturbances per unit inertia of the "
@@ -467,6 +484,8 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         rate_limited = np.array([bool(rl[k]) for k in range(len(self._rudder_idx))])
         info: dict[str, Any] = {
             "time": phys.time,
+            "eta": eta,
+            "nu": nu,
             "speed": float(nu[0]),
             "v": float(nu[1]),
             "p": float(nu[2]),
@@ -575,33 +594,27 @@ class SeedRollEnv(RudderRollEnv):
     """``shipgym/RudderRollStabilisation-v0``: :class:`RudderRollEnv` on the seed's model.
 
     The Van der Klugt (1987) hull of Radhakrishnan (n.d.) (``vessel="van-der-klugt"``, the
-    reconstructed model), ``U`` drawn from 8-15 m/s per episode, the seed's white-noise waves
-    (``waves="seed"``); every argument of :class:`RudderRollEnv` can be given.
+    reconstructed model) unless ``vessel=`` names another, ``U`` drawn from 8-15 m/s per
+    episode, the vessel's ``waves="auto"`` (the seed's white noise for the seed's model);
+    every argument of :class:`RudderRollEnv` can be given.
     """
 
     def __init__(self, **kwargs: Any) -> None:
         kwargs.setdefault("vessel", "van-der-klugt")
-        kwargs.setdefault("waves", SEED_WAVES)
         kwargs.setdefault("speed", (8.0, 15.0))
         super().__init__(**kwargs)
-
-
-#: the naval vessel's default sea: [chosen] a slight beam sea (sea state 3), Hs 0.5 m,
-#: Tp 7 s (JONSWAP, gamma 3.3), whose roll-moment spectrum reaches the hull's roll mode
-#: (1.1 rad/s)
-NAVAL_SEA = RollWaveConfig(Hs=0.5, Tp=7.0, chi=math.pi / 2)
 
 
 class NavalRollEnv(RudderRollEnv):
     """``shipgym/NavalRollDamping-v0``: :class:`RudderRollEnv` on the naval vessel.
 
     The nonlinear 4-DOF naval vessel of Blanke & Christensen (1993) (``vessel=
-    "naval-vessel"``), ``U`` drawn from 6-10 m/s, in the beam sea :data:`NAVAL_SEA`; every
-    argument of :class:`RudderRollEnv` can be given.
+    "naval-vessel"``) unless ``vessel=`` names another, ``U`` drawn from 6-10 m/s, in the
+    vessel's ``waves="auto"`` (the beam sea :data:`BEAM_SEA`); every argument of
+    :class:`RudderRollEnv` can be given.
     """
 
     def __init__(self, **kwargs: Any) -> None:
         kwargs.setdefault("vessel", "naval-vessel")
-        kwargs.setdefault("waves", NAVAL_SEA)
         kwargs.setdefault("speed", (6.0, 10.0))
         super().__init__(**kwargs)

@@ -17,7 +17,7 @@ method             controller
 Tasks (:data:`TASKS`): ``seed-test``, the seed's experiment (Radhakrishnan (n.d.) section 4:
 the sinusoidal 10 deg / 0.43 rad/s rudder added to the command, calm water), the default of
 the ``van-der-klugt`` model; ``beam-sea``, the naval task's beam sea
-(:data:`~shipgym.envs.rollstab.NAVAL_SEA`), the default of a hull with a displacement. The
+(:data:`~shipgym.envs.rollstab.BEAM_SEA`), the default of a hull with a displacement. The
 metrics skip the first ``settle`` seconds (the transient): RMS of roll, heading error,
 rudder and rudder rate, the fraction of control steps that end with the rudder rate-limited,
 the RMS error of the filter's ``v_hat``, ``trace(P)`` at the end; the roll reduction ratio
@@ -88,12 +88,12 @@ def default_task(vessel: Any) -> str:
 
 
 def _env(vessel: str, U: float, task: str, duration: float) -> Any:
-    from shipgym.envs.rollstab import NAVAL_SEA, RudderRollEnv
+    from shipgym.envs.rollstab import BEAM_SEA, RudderRollEnv
 
     if task == "seed-test":
         kw: dict[str, Any] = {"waves": None, "rudder_test": True}
     elif task == "beam-sea":
-        kw = {"waves": NAVAL_SEA}
+        kw = {"waves": BEAM_SEA}
     else:
         raise ValueError(f"unknown roll task {task!r}; choose from {', '.join(TASKS)}")
     return RudderRollEnv(vessel=vessel, speed=U, episode_duration=duration, **kw)
