@@ -152,8 +152,38 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
             f"{name:18s} full plant ({len(v.actuators)} actuators)   : {rf:12,.0f} steps/s, "
             f"ratio {rf / rb:.3f}"
         )
+    # a rudder-roll episode (seed model at 12 m/s, its waves, the seed's rudder test, the sway
+    # filter in the observation) against bare mj_step for the same number of physics steps
+    from shipgym.envs.rollstab import RudderRollEnv
+
+    renv = RudderRollEnv(vessel="van-der-klugt", speed=12.0, waves="seed", rudder_test=True,
+                         sway_estimate=True, episode_duration=120.0)  # fmt: skip
+    zero = np.zeros(1, dtype=np.float32)
+    r_wall = math.inf
+    for _ in range(args.repeats):
+        renv.reset(seed=0)
+        t0 = time.perf_counter()
+        done = False
+        while not done:
+            _, _, term, trunc, _ = renv.step(zero)
+            done = term or trunc
+        r_wall = min(r_wall, time.perf_counter() - t0)
+    n_roll = round(120.0 / renv.timestep)
+    mr = renv.physics.model
+    dr = mujoco.MjData(mr)
+
+    def bare_r(n: int) -> None:
+        for _ in range(n):
+            mujoco.mj_step(mr, dr)
+
+    bare_roll = n_roll / _best_rate(bare_r, n_roll, args.repeats)
+    print(
+        f"rudder-roll episode (120 s, KF in the obs) : {r_wall:12.3f} s wall, "
+        f"{120.0 / r_wall:,.0f}x real time, {r_wall / bare_roll:.1f}x bare mj_step"
+    )
     return {
         "bare": r_bare,
+        "roll_episode_ratio": r_wall / bare_roll,
         "bare_c": r_c,
         "full": r_full,
         "ratio": r_full / r_bare,

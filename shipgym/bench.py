@@ -37,7 +37,9 @@ __all__ = [
     "observer_traces",
     "row_log",
     "run_jobs",
+    "mean_std",
     "single_threaded_blas",
+    "table_cell",
     "velocity_error_trace",
     "write_bench_outputs",
 ]
@@ -368,13 +370,30 @@ def bench_observers(
     )
 
 
-def mean_std(values: Sequence[float | None], fmt: str = ".4f") -> str:
-    """``"mean +- std"`` of the finite values (a failed run's index is NaN or None), or ``n/a``."""
-    x = np.array([np.nan if v is None else v for v in values], dtype=float)
+def mean_std(
+    values: Sequence[float | None],
+    fmt: str = ".4f",
+    *,
+    scale: float = 1.0,
+    sep: str = " +- ",
+    missing: str = "n/a",
+    single: bool = False,
+) -> str:
+    """``"mean +- std"`` of the finite values (a failed run's index is NaN or None) times
+    ``scale``, or ``missing``; with ``single=True`` one value is written alone."""
+    x = scale * np.array([np.nan if v is None else v for v in values], dtype=float)
     x = x[np.isfinite(x)]
     if x.size == 0:
-        return "n/a"
-    return f"{x.mean():{fmt}} +- {x.std():{fmt}}"
+        return missing
+    if single and x.size == 1:
+        return f"{x[0]:{fmt}}"
+    return f"{x.mean():{fmt}}{sep}{x.std():{fmt}}"
+
+
+def table_cell(values: Sequence[float | None], fmt: str, scale: float = 1.0) -> str:
+    """A sweep table's cell: ``"mean ± std"`` over the seeds, one seed's value alone, ``-``
+    for none (:func:`mean_std`)."""
+    return mean_std(values, fmt, scale=scale, sep=" ± ", missing="-", single=True)
 
 
 def _get(d: dict[str, Any] | None, key: str) -> float | None:

@@ -40,7 +40,9 @@ def test_the_seed_models_linear_analysis_through_its_package():
     assert s0 == pytest.approx(8.75, abs=0.1) and w0 == pytest.approx(0.075, abs=0.005)
     assert an["onset"][0.2][0] == pytest.approx(15.7, abs=0.1)
     text = roll_analysis_table(an)
-    assert "unstable above 8.7" in text and "stable on 2-30 m/s" in text
+    assert "unstable above 8.7" in text and "stable up to 30 m/s" in text
+    naval = roll_analysis("naval-vessel", [2.0, 8.0, 20.0])  # its model holds to 10 m/s
+    assert naval["speeds"] == [2.0, 8.0] and naval["top"] == 10.0
     assert "not reproducible" in SEED_CLAIM and "one tenth" in SEED_CLAIM
 
 

@@ -30,7 +30,6 @@ observer's ``step`` calls.
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -303,15 +302,10 @@ def bench_dp(
         )
 
 
-def _ms(vals: list[float], fmt: str) -> str:
-    a = np.array([v for v in vals if v is not None and math.isfinite(v)], dtype=float)
-    if not a.size:
-        return "-"
-    return f"{a.mean():{fmt}}" if a.size == 1 else f"{a.mean():{fmt}} ± {a.std():{fmt}}"
-
-
 def dp_table(rows: Sequence[dict[str, Any]]) -> str:
     """A Markdown table: one line per (vessel, Beaufort, method), means ± std over seeds."""
+    from shipgym.bench import table_cell
+
     keys: dict[tuple[str, int, str], list[dict[str, Any]]] = {}
     for r in rows:
         keys.setdefault((r["vessel"], r["beaufort"], r["method"]), []).append(r)
@@ -332,21 +326,21 @@ def dp_table(rows: Sequence[dict[str, Any]]) -> str:
         lf_xy = [None if x is None else float(np.hypot(x[0], x[1])) for x in lf]
         lines.append(
             f"| {v} | {bf} | {m} | "
-            f"{_ms([r['position_rms_m'] for r in rs], '.2f')} | "
-            f"{_ms([r['max_radial_error_m'] for r in rs], '.2f')} | "
-            f"{_ms([r['inside_radius_pct'] for r in rs], '.1f')} | "
-            f"{_ms([r['heading_rms_deg'] for r in rs], '.2f')} | "
-            f"{_ms([r['thrust_usage_mean'] for r in rs], '.3f')} | "
-            f"{_ms([r['saturated_pct'] for r in rs], '.1f')} | "
-            f"{_ms([r['wave_band_ratio'] for r in rs], '.3f')} | "
-            f"{_ms(lf_xy, '.2f')} | "
-            f"{_ms([r['nis_mean'] for r in rs], '.2f')} | "
+            f"{table_cell([r['position_rms_m'] for r in rs], '.2f')} | "
+            f"{table_cell([r['max_radial_error_m'] for r in rs], '.2f')} | "
+            f"{table_cell([r['inside_radius_pct'] for r in rs], '.1f')} | "
+            f"{table_cell([r['heading_rms_deg'] for r in rs], '.2f')} | "
+            f"{table_cell([r['thrust_usage_mean'] for r in rs], '.3f')} | "
+            f"{table_cell([r['saturated_pct'] for r in rs], '.1f')} | "
+            f"{table_cell([r['wave_band_ratio'] for r in rs], '.3f')} | "
+            f"{table_cell(lf_xy, '.2f')} | "
+            f"{table_cell([r['nis_mean'] for r in rs], '.2f')} | "
             + (
-                f"{_ms([r['rise_time_s'] for r in rs], '.1f')} | "
-                f"{_ms([r['overshoot_pct'] for r in rs], '.1f')} | "
+                f"{table_cell([r['rise_time_s'] for r in rs], '.1f')} | "
+                f"{table_cell([r['overshoot_pct'] for r in rs], '.1f')} | "
                 if step
                 else ""
             )
-            + f"{_ms([r['filter_step_us'] for r in rs], '.0f')} |"
+            + f"{table_cell([r['filter_step_us'] for r in rs], '.0f')} |"
         )
     return "\n".join(lines)

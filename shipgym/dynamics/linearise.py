@@ -54,6 +54,15 @@ def rudder_of(vessel: Any, name: str | None = None) -> Rudder:
                      f"{', '.join(a.name for a in rudders)}")  # fmt: skip
 
 
+def _hull_and_rudder(vessel: Any, U: Any, rudder: str | None, plant: str) -> tuple[Any, Rudder]:
+    if not (isinstance(U, int | float) and math.isfinite(U) and U > 0):
+        raise ValueError(f"U must be a forward speed > 0 m/s, got {U!r}")
+    hull = vessel.plant(plant)
+    if not is_hull4(hull):
+        raise ValueError(f"vessel {vessel.name!r} has {vessel.dofs} DOF: a roll model needs 4")
+    return hull, rudder_of(vessel, rudder)
+
+
 def _rhs(plant: Any, rudder: Rudder, U: float, x: NDArray[np.float64], delta: float,
          w: NDArray[np.float64]) -> NDArray[np.float64]:  # fmt: skip
     v, r, _psi, p, phi = x
@@ -89,12 +98,7 @@ def roll_model_of(
     Raises:
         ValueError: ``U <= 0``, a 3-DOF vessel, no rudder.
     """
-    if not (isinstance(U, int | float) and math.isfinite(U) and U > 0):
-        raise ValueError(f"U must be a forward speed > 0 m/s, got {U!r}")
-    hull = vessel.plant(plant)
-    if not is_hull4(hull):
-        raise ValueError(f"vessel {vessel.name!r} has {vessel.dofs} DOF: a roll model needs 4")
-    rud = rudder_of(vessel, rudder)
+    hull, rud = _hull_and_rudder(vessel, U, rudder, plant)
     U = float(U)
     x0 = np.zeros(5)
     w0 = np.zeros(2)
@@ -137,12 +141,7 @@ def roll_rhs_of(vessel: Any, U: float, *, rudder: str | None = None, plant: str 
     Raises:
         ValueError: as :func:`roll_model_of`.
     """
-    if not (isinstance(U, int | float) and math.isfinite(U) and U > 0):
-        raise ValueError(f"U must be a forward speed > 0 m/s, got {U!r}")
-    hull = vessel.plant(plant)
-    if not is_hull4(hull):
-        raise ValueError(f"vessel {vessel.name!r} has {vessel.dofs} DOF: a roll model needs 4")
-    rud = rudder_of(vessel, rudder)
+    hull, rud = _hull_and_rudder(vessel, U, rudder, plant)
     acts = vessel.actuators
     j = acts.channel_names.index(rud.name)
     flow_of = acts.flow_kernel()
