@@ -1,7 +1,7 @@
 """The naval vessel package (``shipgym/assets/mjcf/naval_vessel``) and the ``blanke4`` family.
 
-The package's rudder is of the kind ``rudder``, which the loader learns with the rudder
-actuator; until then the package is loaded from a copy without it (``tmp_path``).
+The package is loaded as shipped (its rudder of the kind ``rudder`` included); the tests of
+bad packages edit a copy (``tmp_path``).
 """
 
 from __future__ import annotations
@@ -22,23 +22,17 @@ from shipgym.dynamics.vessel import VesselError, load_vessel
 PKG = Path(__file__).resolve().parents[1] / "shipgym" / "assets" / "mjcf" / "naval_vessel"
 
 
-def _without_rudder(text: str) -> str:
-    """The toml without its ``[[actuator]]`` table named "rudder"."""
-    blocks = re.split(r"(?m)^(?=\[)", text)
-    return "".join(b for b in blocks if not b.startswith('[[actuator]]\nname = "rudder"'))
-
-
 def _copy(tmp_path: Path, text: str | None = None) -> Path:
     dst = tmp_path / "naval_vessel"
     shutil.copytree(PKG, dst)
-    src = (PKG / "vessel.toml").read_text()
-    (dst / "vessel.toml").write_text(_without_rudder(src) if text is None else text)
+    if text is not None:
+        (dst / "vessel.toml").write_text(text)
     return dst
 
 
 @pytest.fixture
-def naval(tmp_path: Path):
-    return load_vessel(_copy(tmp_path))
+def naval():
+    return load_vessel(PKG)
 
 
 def test_the_package_loads_as_the_published_hull(naval):
@@ -50,7 +44,8 @@ def test_the_package_loads_as_the_published_hull(naval):
             assert getattr(hull, f.name) == pytest.approx(getattr(NAVAL_VESSEL, f.name), rel=1e-12)
     assert naval.dimensions == (55.0, 51.5, 8.6, 2.3)
     assert naval.rigid_inertia == pytest.approx((1014.0 * 357.0, 2.3763e6, 47.934e6))
-    assert list(naval.actuators.names) == ["propeller"]
+    assert list(naval.actuators.names) == ["propeller", "rudder"]
+    assert naval.rudders == ("rudder",) and naval.roll_control["design_speed"] == 8.0
     assert naval.sources["hull.K_p"][0] == "N m s"
     assert "navalvessel.m" in naval.sources["hull.N_rar"][1]
 
@@ -102,7 +97,7 @@ def test_readme_lists_every_sourced_number(naval):
 
 
 def test_bad_blanke4_packages_raise_naming_the_key(tmp_path: Path):
-    text = _without_rudder((PKG / "vessel.toml").read_text())
+    text = (PKG / "vessel.toml").read_text()
     cases = [
         (text.replace('family = "blanke4"', 'family = "blanke4"\nY_vv = 1.0'), "hull.Y_vv"),
         (text.replace("dofs = 4", "dofs = 3"), "4-DOF family"),

@@ -127,6 +127,8 @@ def simulate_reference(
     ip = 3 if four else 2  # index of psi in eta
 
     ideal = servo & (tc == 0.0)  # ideal servos: full rate until the command is reached
+    tc_lag = np.where(tc > 0.0, tc, 1.0)  # no division by an ideal servo's 0
+    servo_rate = np.where(servo, rate, 0.0)
     linear_kin = four and getattr(plant, "kinematics", "fossen") == "linear"
 
     def rhs(
@@ -139,9 +141,9 @@ def simulate_reference(
             planar = np.asarray(env_load(t, eta, nu), dtype=float)  # [X, Y, N]
             tau = tau + (np.array([planar[0], planar[1], 0.0, planar[2]]) if four else planar)
         nu_c = np.array([vc * np.cos(bc - psi), vc * np.sin(bc - psi), 0.0])
-        act_dot = np.where(lagged, (cmd - act) / tc, cmd)
+        act_dot = np.where(lagged, (cmd - act) / tc_lag, cmd)
         if servo.any():
-            w = np.clip((cmd - act) / np.where(ideal, 1.0, tc), -rate, rate)
+            w = np.clip((cmd - act) / np.where(ideal, 1.0, tc_lag), -rate, rate)
             act_dot = np.where(servo, np.where(ideal, ideal_rate, w), act_dot)
         if four:
             u, v, p, r = nu
@@ -175,8 +177,8 @@ def simulate_reference(
         ideal_rate = np.zeros(na)
         if ideal.any():  # an ideal servo reaches its command at t0 + |cmd - act| / rate: a cut
             gap = np.where(ideal, cmd - x[2 * nd :], 0.0)
-            reach = t0 + np.abs(gap) / rate
-            ideal_rate = np.where(reach > t0 + 1e-12, np.sign(gap) * rate, 0.0)
+            reach = t0 + np.abs(gap) / np.where(ideal, servo_rate, 1.0)
+            ideal_rate = np.where(reach > t0 + 1e-12, np.sign(gap) * servo_rate, 0.0)
             inner = reach[(ideal_rate != 0.0) & (reach < t1 - 1e-12)]
             if inner.size:
                 tm = float(inner.min())

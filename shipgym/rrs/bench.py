@@ -48,6 +48,7 @@ __all__ = [
     "roll_analysis",
     "roll_run",
     "roll_table",
+    "roll_trace",
     "roll_analysis_table",
 ]
 
@@ -101,7 +102,7 @@ def _env(vessel: str, U: float, task: str, duration: float) -> Any:
     return RudderRollEnv(vessel=vessel, speed=U, episode_duration=duration, **kw)
 
 
-def _episode(job: tuple[Any, ...], keep: bool = False) -> dict[str, Any]:
+def _episode(job: tuple[Any, ...]) -> dict[str, Any]:
     from shipgym.controllers.rollpilot import roll_pilot
 
     vessel, U, method, seed, duration, task = job
@@ -177,7 +178,7 @@ def roll_run(job: tuple[Any, ...]) -> dict[str, Any]:
 def roll_trace(job: tuple[Any, ...]) -> dict[str, Any]:
     """One run's time series (``t``, ``roll``, ``heading_error``, ``rudder``, ``v``, ``v_hat``,
     ``trace_P``, ...), for the figures."""
-    return _episode(job, keep=True)
+    return _episode(job)
 
 
 def bench_roll(
@@ -237,7 +238,7 @@ def roll_analysis(
 ) -> dict[str, Any]:
     """The linear analysis of the vessel's RRS design against speed.
 
-    Returns a mapping with ``speeds``; ``margin[scale]`` (max Re lambda, 1/s, of the fixed
+    Returns a mapping with ``vessel`` (the argument, as the rows name it), ``speeds``; ``margin[scale]`` (max Re lambda, 1/s, of the fixed
     design-speed gain with the sway gain x scale) and ``margin_scheduled``; ``roll_ratio``
     (closed/open roll amplitude of the seed's sinusoidal rudder, fixed gain, full sway);
     ``onset[scale]``: ``(speed m/s, frequency rad/s)`` above which the fixed gain is unstable
@@ -280,7 +281,7 @@ def roll_analysis(
     for s in sway_scales:
         o = instability_onset(K, s, speeds=(min(2.0, 0.5 * top), top), model_fn=model_fn)
         onset[s] = None if o is None else (float(o.speed), float(o.frequency))
-    return {"vessel": v.name, "speeds": [float(u) for u in speeds], "design_speed":
+    return {"vessel": str(vessel), "speeds": [float(u) for u in speeds], "design_speed":
             rc["design_speed"], "gain": K.tolist(), "margin": margin,
             "margin_scheduled": sched, "roll_ratio": ratio, "onset": onset,
             "top": top}  # fmt: skip
