@@ -356,6 +356,8 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
 
 #: the fastest speed ``shipgym bench roll`` accepts (m/s): the seed's analysis range, 2-30 m/s
 MAX_ROLL_SPEED = 30.0
+#: most speeds in one ``--speeds`` range
+MAX_ROLL_SPEEDS = 1000
 
 
 def _speed_list(text: str) -> list[float]:
@@ -375,6 +377,8 @@ def _speed_list(text: str) -> list[float]:
             if not (math.isfinite(a) and math.isfinite(b)) or b < a:
                 raise ValueError(f"--speeds: A..B needs A <= B, got {text!r}")
             n = math.floor((b - a) / step + 1e-9)
+            if n >= MAX_ROLL_SPEEDS:
+                raise ValueError(f"--speeds: at most {MAX_ROLL_SPEEDS} speeds, got {n + 1}")
             out = [round(a + i * step, 9) for i in range(n + 1)]
         else:
             out = [float(x) for x in text.split(",")]
