@@ -354,6 +354,150 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
     return 0
 
 
+#: the fastest speed ``shipgym bench roll`` accepts (m/s): the seed's analysis range, 2-30 m/s
+MAX_ROLL_SPEED = 30.0
+#: most speeds in one ``--speeds`` range
+MAX_ROLL_SPEEDS = 1000
+
+
+def _speed_list(text: str) -> list[float]:
+    """``"2..30"`` (step 2 m/s), ``"2..10:4"``, ``"8,13,15"`` or ``"8"`` -> sorted speeds (m/s).
+
+    Raises:
+        ValueError: not of that form, a step <= 0, or a speed not in (0, 30] m/s.
+    """
+    form = "A..B[:STEP] or A,B,C in m/s, e.g. 2..30, 2..10:4 or 8,13,15"
+    try:
+        if ".." in text:
+            span, _, step_s = text.partition(":")
+            a, b = (float(x) for x in span.split(".."))
+            step = float(step_s) if step_s else 2.0
+            if not (math.isfinite(step) and step > 0.0):
+                raise ValueError(f"--speeds: the step must be > 0, got {step_s!r}")
+            if not (math.isfinite(a) and math.isfinite(b)) or b < a:
+                raise ValueError(f"--speeds: A..B needs A <= B, got {text!r}")
+            n = math.floor((b - a) / step + 1e-9)
+            if n >= MAX_ROLL_SPEEDS:
+                raise ValueError(f"--speeds: at most {MAX_ROLL_SPEEDS} speeds, got {n + 1}")
+            out = [round(a + i * step, 9) for i in range(n + 1)]
+        else:
+            out = [float(x) for x in text.split(",")]
+    except ValueError as exc:
+        if str(exc).startswith("--speeds"):
+            raise
+        raise ValueError(f"--speeds must be {form}; got {text!r}") from None
+    bad = [u for u in out if not (math.isfinite(u) and 0.0 < u <= MAX_ROLL_SPEED)]
+    if not out or bad:
+        raise ValueError(f"--speeds must lie in (0, {MAX_ROLL_SPEED:g}] m/s ({form}); got {text!r}")
+    return sorted(set(out))
+
+
+def _write_json(path: Path, payload: dict[str, Any]) -> None:
+    """``payload`` as JSON, atomically; ``WriteFailed`` (its text) if it cannot be written."""
+    from shipgym._io import WriteFailed, atomic_write_text, os_reason
+
+    text = json.dumps(jsonable(payload), indent=2)
+    try:
+        atomic_write_text(path, text)
+    except OSError as exc:
+        raise WriteFailed(f"cannot write the rows to {path} ({os_reason(exc)})", text) from None
+    print(f"rows written to {path}")
+
+
+def _cmd_bench_roll(args: argparse.Namespace) -> int:
+    from shipgym._io import progress_enabled
+    from shipgym.dynamics.vessel import load_vessel
+    from shipgym.rrs.bench import (
+        METHODS,
+        SEED_CLAIM,
+        TASKS,
+        bench_roll,
+        default_task,
+        roll_analysis,
+        roll_analysis_table,
+        roll_table,
+    )
+
+    speeds = _speed_list(args.speeds)
+    vessels = {}
+    for v in args.vessel:
+        vv = load_vessel(v)  # unknown names fail before any work
+        if not vv.roll_control:
+            raise ValueError(
+                f"vessel {vv.name!r} has no [roll_control] table (a 4-DOF rudder vessel's "
+                "rudder-roll design); choose e.g. van-der-klugt or naval-vessel"
+            )
+        vessels[v] = vv
+    methods = args.methods or list(METHODS)
+    for m in methods:
+        if m not in METHODS:
+            raise ValueError(f"unknown roll method {m!r}; choose from {', '.join(METHODS)}")
+    if args.task is not None and args.task not in TASKS:
+        raise ValueError(f"unknown roll task {args.task!r}; choose from {', '.join(TASKS)}")
+    if not (math.isfinite(args.duration) and args.duration >= 150.0):
+        raise ValueError(
+            f"--duration must be >= 150 s (the metrics skip the first 100 s), got {args.duration}"
+        )
+    for path in (args.json, args.markdown):
+        if path is not None:
+            check_writable(path)
+    run_speeds: dict[str, list[float]] = {}
+    for v, vv in vessels.items():
+        top = vv.limits.get("surge_speed", math.inf)
+        run_speeds[v] = [u for u in speeds if u <= top + 1e-9]
+        skipped = [u for u in speeds if u > top + 1e-9]
+        if skipped:
+            print(f"{v}: speeds {', '.join(f'{u:g}' for u in skipped)} m/s skipped (above its "
+                  f"surge_speed limit, {top:g} m/s)")  # fmt: skip
+    if not any(run_speeds.values()):
+        raise ValueError("no runs: every speed lies above the vessels' surge_speed limits")
+    n_methods = len(methods) + ("autopilot" not in methods)  # the RRR's baseline is added
+    total = sum(len(u) for u in run_speeds.values()) * n_methods * args.seeds
+    log = row_log(args.json, args.markdown, total)
+    t0 = time.perf_counter()
+    rows = bench_roll(
+        list(vessels), speeds, args.seeds, methods=methods, duration=args.duration,
+        task=args.task, workers=args.workers, progress=progress_enabled(args.no_progress),
+        on_row=log.add,
+    )  # fmt: skip
+    analyses = {v: roll_analysis(v, u) for v, u in run_speeds.items() if u}
+    wall = time.perf_counter() - t0
+    tasks = {v: args.task or default_task(vv) for v, vv in vessels.items()}
+    task_s = "; ".join(f"{v}: {t} ({TASKS[t]})" for v, t in tasks.items())
+    title = (
+        f"Rudder-roll stabilisation, Radhakrishnan (n.d.) after Van der Klugt (1987): "
+        f"{', '.join(vessels)}, speeds {args.speeds} m/s, seeds 0-{args.seeds - 1}, "
+        f"{args.duration:g} s episodes, metrics after 100 s; tasks {task_s}; "
+        "RRR = 1 - roll RMS / roll RMS (heading autopilot only)"
+    )
+    parts = [roll_table(rows)]
+    parts += [roll_analysis_table(an) for an in analyses.values()]
+    parts.append(SEED_CLAIM)
+    write_bench_outputs(title, "\n\n".join(parts), rows, wall, markdown=args.markdown)
+    if args.json is not None:
+        _write_json(args.json, {"title": title, "rows": rows, "analyses": list(analyses.values()),
+                                "seed_claim": SEED_CLAIM})  # fmt: skip
+    log.discard(args.json or args.markdown)
+    if args.figures is not None:
+        from shipgym.dynamics.actuators import Rudder
+        from shipgym.rrs.bench import roll_trace
+        from shipgym.viz.rrs import write_roll_figures
+
+        traces, rates = {}, {}
+        for v, vv in vessels.items():
+            U = float(vv.roll_control["design_speed"])
+            tr = dict(roll_trace((v, U, "rrs", 0, args.duration, tasks[v])))
+            tr.update(speed=U, method="rrs")
+            traces[v] = tr
+            rudders = [a.max_rate for a in vv.actuators if isinstance(a, Rudder)]
+            if rudders:
+                rates[v] = float(min(rudders))
+        for f in write_roll_figures(rows, analyses, traces, args.figures, rate_limits=rates,
+                                    title="bench roll"):  # fmt: skip
+            print(f"wrote {f}")
+    return 0
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from shipgym.viz import load_run, recording_problem, write_report
 
@@ -499,7 +643,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("run", type=Path, help="RUN.rrd or RUN.json")
     p.add_argument("--out", type=Path, required=True, metavar="DIR")
     p.set_defaults(func=_cmd_report)
-    p = sub.add_parser("bench", help="benchmarks: 'bench observers', 'bench controllers'")
+    p = sub.add_parser(
+        "bench", help="benchmarks: 'bench observers', 'bench controllers', 'bench dp', 'bench roll'"
+    )
     bsub = p.add_subparsers(dest="what", required=True)
     b = bsub.add_parser("observers", help="Tomera (2014) Table-6-style comparison of observers")
     b.add_argument("--observers", nargs="+", default=["dkf", "kbf", "ekf"], metavar="NAME")
@@ -541,6 +687,34 @@ def _parser() -> argparse.ArgumentParser:
                    "in Beaufort 8 (or the highest given), seed 0")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=_cmd_bench_dp)
+    b = bsub.add_parser(
+        "roll", help="Radhakrishnan (n.d.) rudder-roll stabilisation across speeds (table)"
+    )
+    b.add_argument("--vessel", nargs="+", default=["van-der-klugt", "naval-vessel"],
+                   metavar="NAME",
+                   help="4-DOF rudder vessels (van-der-klugt naval-vessel)")  # fmt: skip
+    b.add_argument("--speeds", default="2..30", metavar="A..B[:STEP]|A,B,C",
+                   help=f"speeds in (0, {MAX_ROLL_SPEED:g}] m/s: a range A..B (step 2 m/s, or "
+                   "A..B:STEP), a list 8,13,15 or one; those above a vessel's surge_speed "
+                   "limit are skipped (2..30)")  # fmt: skip
+    b.add_argument(
+        "--seeds", type=bounded_int(1, MAX_COUNT), default=1,
+        help=f"seeds 0..N-1 per case, 1 <= N <= {MAX_COUNT} (1)",
+    )  # fmt: skip
+    b.add_argument("--methods", nargs="+", default=None, metavar="NAME",
+                   help="methods of shipgym.rrs.bench.METHODS (all; autopilot, the RRR's "
+                   "baseline, always runs)")  # fmt: skip
+    b.add_argument("--task", default=None, metavar="seed-test|beam-sea",
+                   help="the seed's sinusoidal rudder in calm water, or a beam sea (each "
+                   "vessel's default: seed-test for van-der-klugt, else beam-sea)")  # fmt: skip
+    b.add_argument("--duration", type=float, default=400.0,
+                   help="episode length, s, >= 150 (400)")  # fmt: skip
+    _add_bench_outputs(b)
+    b.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                   help="RRR, heading/rudder, stability margin against speed, and one episode "
+                   "per vessel at its design speed (PNG)")  # fmt: skip
+    b.add_argument("--no-progress", action="store_true")
+    b.set_defaults(func=_cmd_bench_roll)
     from shipgym.rl.cli import add_bench_controllers_parser, add_train_parser
 
     add_bench_controllers_parser(bsub)
