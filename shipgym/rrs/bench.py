@@ -238,7 +238,8 @@ def roll_analysis(
 ) -> dict[str, Any]:
     """The linear analysis of the vessel's RRS design against speed.
 
-    Returns a mapping with ``vessel`` (the argument, as the rows name it), ``speeds``; ``margin[scale]`` (max Re lambda, 1/s, of the fixed
+    Returns a mapping with ``vessel`` (the argument, as the rows name it), ``speeds``;
+    ``margin[scale]`` (max Re lambda, 1/s, of the fixed
     design-speed gain with the sway gain x scale) and ``margin_scheduled``; ``roll_ratio``
     (closed/open roll amplitude of the seed's sinusoidal rudder, fixed gain, full sway);
     ``onset[scale]``: ``(speed m/s, frequency rad/s)`` above which the fixed gain is unstable
