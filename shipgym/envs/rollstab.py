@@ -471,7 +471,8 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         terms = {
             "roll": -((phi / w.phi0) ** 2),
             "heading": -((e_psi / w.psi0) ** 2),
-            "rudder_rate": -w.rate * float(np.mean((rate / self._max_rate) ** 2)),
+            "rudder_rate": -w.rate * sum(x * x for x in (rate / self._max_rate).tolist())
+            / len(rate),
         }
         reward = float(sum(terms.values()))
         terminated = abs(phi) > self.max_roll
@@ -561,12 +562,13 @@ class _RollMetrics:
         s = self.sums
         s["roll"] += info["roll"] ** 2
         s["heading_error"] += info["heading_error"] ** 2
-        s["rudder"] += float(np.mean(np.asarray(info["rudder"]) ** 2))
-        s["rudder_rate"] += float(np.mean(np.asarray(info["rudder_rate"]) ** 2))
+        d, w = info["rudder"].tolist(), info["rudder_rate"].tolist()  # plain floats: cheap
+        s["rudder"] += sum(x * x for x in d) / len(d)
+        s["rudder_rate"] += sum(x * x for x in w) / len(w)
         self.max_roll = max(self.max_roll, abs(info["roll"]))
         self.max_heading = max(self.max_heading, abs(info["heading_error"]))
-        self.rate_limited += int(np.any(info["rate_limited"]))
-        self.saturated += int(np.any(info["saturated"]))
+        self.rate_limited += any(info["rate_limited"].tolist())
+        self.saturated += any(info["saturated"].tolist())
         if "v_hat" in info:
             s["v_error"] += (info["v_hat"] - info["v"]) ** 2
             self.n_est += 1
