@@ -471,7 +471,8 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         terms = {
             "roll": -((phi / w.phi0) ** 2),
             "heading": -((e_psi / w.psi0) ** 2),
-            "rudder_rate": -w.rate * sum(x * x for x in (rate / self._max_rate).tolist())
+            "rudder_rate": -w.rate
+            * sum(x * x for x in (rate / self._max_rate).tolist())
             / len(rate),
         }
         reward = float(sum(terms.values()))
