@@ -171,6 +171,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
     args.scenario = scenario_name
     # validate names before any work
     env_id = resolve_env_id(args.scenario, env_kwargs.get("vessel"))
+    from shipgym.envs.registration import NEEDS
+
+    if NEEDS.get(env_id) == "roll-steering":
+        raise ValueError(
+            f"shipgym run drives the positioning tasks; {env_id} is a rudder-roll task: run its "
+            "classical pilots with 'shipgym bench roll --vessel NAME --speeds U', or use "
+            "gym.make(...) with shipgym.controllers.rollpilot.roll_pilot"
+        )
     check_controller(args.controller)
     from shipgym.envs.registration import ALIASES
 

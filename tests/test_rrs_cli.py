@@ -179,3 +179,12 @@ def test_write_roll_figures_from_json_rows(bench, tmp_path):
         assert p.stat().st_size > 10_000
     with pytest.raises(ValueError, match="at least one vessel"):
         write_roll_figures([], {}, {}, tmp_path)
+
+
+@pytest.mark.parametrize(
+    "env_id", ["shipgym/RudderRollStabilisation-v0", "shipgym/NavalRollDamping-v0"]
+)
+def test_shipgym_run_points_a_roll_task_to_bench_roll(env_id, capsys):
+    assert main(["run", env_id, "--vessel", "van-der-klugt", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "rudder-roll task" in err and "shipgym bench roll" in err and err.count("\n") == 1
