@@ -83,13 +83,13 @@ def test_bad_rudders_are_refused(kw, match):
         _rudder(**kw)
 
 
-def test_hull4_speed_damping_kernel_equals_the_matrix_form():
+def test_hull4_speed_damping_and_roll_coupling_kernel_equals_the_matrix_form():
     rng = np.random.default_rng(2)
     M = np.eye(4) * [2.0e6, 3.0e6, 6.0e7, 1.0e9] + 1e5 * np.array(
         [[0, 0, 0, 0], [0, 0, -1, 2], [0, -1, 0, 0], [0, 2, 0, 0]]
     )
     h = Hull4("t", M, np.diag([5e4, 3e5, 6.9e6, 2e7]), 1.96e7, (0, 1e4, 0, 1e7), 2e6,
-              D_u=rng.normal(0, 1e4, (4, 4)))  # fmt: skip
+              D_u=rng.normal(0, 1e4, (4, 4)), phi_coupling=(5e4, 2e7))  # fmt: skip
     for _ in range(50):
         nu = rng.normal(0, 1, 4)
         tau = rng.normal(0, 1e5, 4)

@@ -9,12 +9,14 @@ State in Fossen (2011, ch. 7.? "4-DOF models") notation: ``eta = [x, y, phi, psi
     \dot y = u\sin\psi + v\cos\phi\cos\psi,\quad
     \dot\phi = p,\quad \dot\psi = r\cos\phi,
 
-restoring moment in roll ``g_K = K_phi phi`` (``K_phi = rho g nabla GM_T``, N m/rad, the
-small-angle form), damping ``D(nu_r) = D_L + |u_r| D_u + diag(d_quad |nu_r|)``, ``nu_r = nu -
-nu_c`` with ``nu_c = [u_c, v_c, 0, 0]``. The speed-proportional part ``|u_r| D_u`` holds the
-derivatives of the form ``Y_|u|v`` (Blanke & Christensen 1993) and every coefficient of a
-model written at a forward speed ``U`` as ``a + b U`` (Van der Klugt 1987: ``T_v = 78/U``), so
-that one hull serves every speed.
+restoring moment in roll ``g_K = K_phi phi`` (``K_phi = rho g nabla GM_T``, N m/rad, the small-
+angle form) and, for a linearised model that has them, the roll's sway force and yaw moment
+``g_Y = Y_phi phi``, ``g_N = N_phi phi`` (``phi_coupling``; Son & Nomoto 1982), damping
+``D(nu_r) = D_L + |u_r| D_u + diag(d_quad |nu_r|)``, ``nu_r = nu - nu_c`` with ``nu_c = [u_c,
+v_c, 0, 0]``. The speed-proportional part ``|u_r| D_u`` holds the derivatives of the form
+``Y_|u|v`` (Blanke & Christensen 1993) and every coefficient of a model written at a forward
+speed ``U`` as ``a + b U`` (Van der Klugt 1987: ``T_v = 78/U``), so that one hull serves every
+speed.
 
 ``kinematics = "linear"`` replaces the kinematics by their small-roll form ``psi_dot = r``,
 ``x_dot = u cos psi - v sin psi``, ``y_dot = u sin psi + v cos psi``: the form of a linear
@@ -67,6 +69,11 @@ class Hull4:
         D_u: speed-proportional damping, 4x4 (N s^2/m^2, N s^2/m, N m s^2/m), multiplied by
             ``|u_r|``; zero by default.
         kinematics: ``"fossen"`` (default, the 4-DOF kinematics above) or ``"linear"``.
+        phi_coupling: ``(Y_phi, N_phi)`` (N/rad, N m/rad): the sway force and yaw moment of
+            the roll angle on the left-hand side (``g = [0, Y_phi, K_phi, N_phi] phi``).
+        nabla: displaced volume (m^3), 0 when the model has none (a per-unit model); the wave
+            moments of :mod:`shipgym.disturbances.rollwaves` need it.
+        rho: water density (kg/m^3).
     """
 
     name: str
@@ -77,6 +84,9 @@ class Hull4:
     m: float = 0.0
     D_u: Mat4 = ((0.0,) * 4,) * 4
     kinematics: str = "fossen"
+    phi_coupling: tuple[float, float] = (0.0, 0.0)
+    nabla: float = 0.0
+    rho: float = 1025.0
     dofs: int = field(default=4, init=False)
     _k: Any = field(init=False, repr=False, compare=False)
 
@@ -92,6 +102,14 @@ class Hull4:
         if len(dq) != 4 or not all(np.isfinite(dq)) or min(dq) < 0:
             raise ValueError(f"d_quad must be four finite values >= 0, got {self.d_quad!r}")
         object.__setattr__(self, "d_quad", dq)
+        pc = tuple(float(x) for x in self.phi_coupling)
+        if len(pc) != 2 or not all(np.isfinite(pc)):
+            raise ValueError(f"phi_coupling must be two finite values, got {self.phi_coupling!r}")
+        object.__setattr__(self, "phi_coupling", pc)
+        if not (np.isfinite(self.nabla) and self.nabla >= 0 and np.isfinite(self.rho)
+                and self.rho > 0):  # fmt: skip
+            raise ValueError(f"nabla must be >= 0 m^3 and rho > 0 kg/m^3, got {self.nabla!r}, "
+                             f"{self.rho!r}")  # fmt: skip
         if not (np.isfinite(self.K_phi) and self.K_phi > 0):
             raise ValueError(f"K_phi must be > 0 (N m/rad), got {self.K_phi!r}")
         M = np.asarray(self.M)
@@ -131,7 +149,10 @@ class Hull4:
         quad = np.asarray(self.d_quad) * np.abs(nu_r) * nu_r
         damp = np.einsum("...ij,...j->...i", D, nu_r) + quad
         g = np.zeros(nu.shape)
-        g[..., 2] = self.K_phi * np.asarray(phi, dtype=float)
+        ph = np.asarray(phi, dtype=float)
+        g[..., 1] = self.phi_coupling[0] * ph
+        g[..., 2] = self.K_phi * ph
+        g[..., 3] = self.phi_coupling[1] * ph
         rhs = tau - damp - g
         return np.linalg.solve(np.asarray(self.M), rhs[..., None])[..., 0]
 
@@ -147,6 +168,7 @@ def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, 
     speed = any(x != 0.0 for row in E for x in row)
     q1, q2, q3, q4 = h.d_quad
     kphi = h.K_phi
+    yphi, nphi = h.phi_coupling
     (i11, i12, i13, i14), (i21, i22, i23, i24), (i31, i32, i33, i34), (i41, i42, i43, i44) = (
         tuple(map(float, r)) for r in Mi
     )
@@ -159,11 +181,11 @@ def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, 
         a = abs(ur)
         f1 = X - (d11 * ur + d12 * vr + d13 * p + d14 * r + q1 * a * ur)
         f1 -= a * (e11 * ur + e12 * vr + e13 * p + e14 * r)
-        f2 = Y - (d21 * ur + d22 * vr + d23 * p + d24 * r + q2 * abs(vr) * vr)
+        f2 = Y - (d21 * ur + d22 * vr + d23 * p + d24 * r + q2 * abs(vr) * vr) - yphi * phi
         f2 -= a * (e21 * ur + e22 * vr + e23 * p + e24 * r)
         f3 = K - (d31 * ur + d32 * vr + d33 * p + d34 * r + q3 * abs(p) * p) - kphi * phi
         f3 -= a * (e31 * ur + e32 * vr + e33 * p + e34 * r)
-        f4 = N - (d41 * ur + d42 * vr + d43 * p + d44 * r + q4 * abs(r) * r)
+        f4 = N - (d41 * ur + d42 * vr + d43 * p + d44 * r + q4 * abs(r) * r) - nphi * phi
         f4 -= a * (e41 * ur + e42 * vr + e43 * p + e44 * r)
         return (
             i11 * f1 + i12 * f2 + i13 * f3 + i14 * f4,
@@ -176,9 +198,9 @@ def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, 
         ur = u - u_c
         vr = v - v_c
         f1 = X - (d11 * ur + d12 * vr + d13 * p + d14 * r + q1 * abs(ur) * ur)
-        f2 = Y - (d21 * ur + d22 * vr + d23 * p + d24 * r + q2 * abs(vr) * vr)
+        f2 = Y - (d21 * ur + d22 * vr + d23 * p + d24 * r + q2 * abs(vr) * vr) - yphi * phi
         f3 = K - (d31 * ur + d32 * vr + d33 * p + d34 * r + q3 * abs(p) * p) - kphi * phi
-        f4 = N - (d41 * ur + d42 * vr + d43 * p + d44 * r + q4 * abs(r) * r)
+        f4 = N - (d41 * ur + d42 * vr + d43 * p + d44 * r + q4 * abs(r) * r) - nphi * phi
         return (
             i11 * f1 + i12 * f2 + i13 * f3 + i14 * f4,
             i21 * f1 + i22 * f2 + i23 * f3 + i24 * f4,

@@ -310,7 +310,8 @@ def _read_hull(r: _Reader, data: Mapping[str, Any], dofs: int) -> tuple[Any, dic
     if family == "linear4":
         if dofs != 4:
             raise r.fail("hull.family", "'linear4' is a 4-DOF family: set vessel.dofs = 4")
-        keys = {"family", "M", "D_L", "D_u", "kinematics", "K_phi", "d_quad", "m", "I_x", "I_z",
+        keys = {"family", "M", "D_L", "D_u", "kinematics", "K_phi", "phi_coupling", "d_quad", "m",
+                "I_x", "I_z", "nabla", "rho",
                 "L_oa", "L_pp", "B", "T"}  # fmt: skip
         r.keys(t, "hull", keys)
         M = r.matrix(t, "M", "hull", 4)
@@ -326,7 +327,12 @@ def _read_hull(r: _Reader, data: Mapping[str, Any], dofs: int) -> tuple[Any, dic
         dq = r.vector(t, "d_quad", "hull", 4, default=(0.0, 0.0, 0.0, 0.0))
         if min(dq) < 0:
             raise r.fail("hull.d_quad", f"must be >= 0, got {dq}")
-        hull = Hull4("default", M, D, vals["K_phi"], dq, vals["m"], Du, kin)
+        pc = r.vector(t, "phi_coupling", "hull", 2, default=(0.0, 0.0))
+        nabla = r.number(t, "nabla", "hull", "m^3", default=0.0)
+        rho = r.number(t, "rho", "hull", "kg/m^3", default=1025.0, positive=True)
+        if nabla < 0:
+            raise r.fail("hull.nabla", f"must be >= 0 m^3 (0: none), got {nabla!r}")
+        hull = Hull4("default", M, D, vals["K_phi"], dq, vals["m"], Du, kin, pc, nabla, rho)
         hull_info = dict(vals)
         return _Dims4(hull_info), {"default": hull}
     if family == "blanke4":

@@ -136,8 +136,9 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ``heading``. A propeller, if the vessel has one, is held by the task at the thrust that
     balances the hull's resistance at ``U`` plus a proportional speed loop; the agent steers.
 
-    **Waves.** ``waves="auto"`` (default): ``"seed"`` for a hull without a displacement (the
-    per-unit ``van-der-klugt`` model), else the beam sea :data:`BEAM_SEA`. ``waves="seed"``:
+    **Waves.** ``waves="auto"`` (default): the beam sea :data:`BEAM_SEA` for a hull with a
+    displacement (``nabla``), ``"seed"`` for the per-unit ``van-der-klugt`` model, calm water
+    otherwise. ``waves="seed"``:
     the white-noise roll and yaw disturbances ``w_phi``,
     ``w_psi`` of Radhakrishnan (n.d.) eqs. 6-7 (:func:`seed_wave_intensities`; for the
     ``van-der-klugt`` hull, whose moments are per unit inertia), one sample per control
@@ -300,8 +301,9 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         if waves is None:
             return None
         if isinstance(waves, str) and waves == AUTO_WAVES:
-            hull = self.base_vessel.plant()
-            return BEAM_SEA if hasattr(hull, "nabla") else SEED_WAVES
+            if getattr(self.base_vessel.plant(), "nabla", 0.0) > 0:
+                return BEAM_SEA
+            return SEED_WAVES if self.base_vessel.name == "van-der-klugt" else None
         if isinstance(waves, str):
             if waves != SEED_WAVES:
                 raise ValueError(f"waves must be None, 'auto', 'seed', a RollWaveConfig or a "
@@ -314,12 +316,11 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             return SEED_WAVES
         cfg = RollWaveConfig.coerce(waves, name="waves")
         hull = self.base_vessel.plant()
-        for k in ("nabla", "rho", "L_pp", "K_phi"):
-            if not hasattr(hull, k):
-                raise ValueError(
-                    f"a wave spectrum needs the hull's displacement: {self.base_vessel.name!r} "
-                    f"({type(hull).__name__}) has no {k!r}; use waves='seed' or None"
-                )
+        if not getattr(hull, "nabla", 0.0) > 0:
+            raise ValueError(
+                f"a wave spectrum needs the hull's displacement: {self.base_vessel.name!r} "
+                f"({type(hull).__name__}) has none (hull.nabla); use waves='seed' or None"
+            )
         return cfg
 
     def _vessel_at(self, U: float) -> Vessel:
@@ -389,7 +390,8 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                     math.sqrt(q_N / self.control_period))  # fmt: skip
         hull = self.physics.plant  # type: ignore[union-attr]
         cfg = dataclasses.replace(self.waves, U=U)
-        w = RollWaves(cfg, hull.K_phi, length=hull.L_pp, nabla=hull.nabla, rho=hull.rho)
+        w = RollWaves(cfg, hull.K_phi, length=self.physics.vessel.L_pp, nabla=hull.nabla,  # type: ignore[union-attr]
+                      rho=hull.rho)  # fmt: skip
         w.reset(self._wave_rng)
         return ("sea", w)
 

@@ -86,8 +86,9 @@ SETTLE = 100.0
 
 
 def default_task(vessel: Any) -> str:
-    """``seed-test`` for the per-unit seed model (no displacement), else ``beam-sea``."""
-    return "beam-sea" if hasattr(vessel.plant(), "nabla") else "seed-test"
+    """``beam-sea`` for a hull with a displacement, else ``seed-test`` (the per-unit seed
+    model)."""
+    return "beam-sea" if getattr(vessel.plant(), "nabla", 0.0) > 0 else "seed-test"
 
 
 def _env(vessel: str, U: float, task: str, duration: float) -> Any:
