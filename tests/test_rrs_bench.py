@@ -103,3 +103,19 @@ def test_bench_rows_and_table():
     with pytest.raises(ValueError, match="no runs"):
         bench_roll(["naval-vessel"], [20.0], 1)
     assert set(METHODS) >= {"autopilot", "rrs", "rrs-nosway", "rrs-sway0.2", "rrs-scheduled"}
+
+
+def test_roll_pilot_defaults_and_errors():
+    from shipgym.controllers.rollpilot import roll_pilot
+    from shipgym.dynamics.vessel import load_vessel
+    from shipgym.observers.sway import calm_water_intensities
+
+    v = load_vessel("naval-vessel")
+    p = roll_pilot(v, 8.0)  # calm-water filter noise by default
+    q = calm_water_intensities(v.plant())
+    np.testing.assert_allclose(np.diag(p.model.Q_w), q)
+    assert p(np.zeros(4), 0.0) == 0.0  # at rest on the heading: no rudder
+    auto = roll_pilot(v, 8.0, "autopilot")
+    assert auto.gain is None and p.gain is not None
+    with pytest.raises(ValueError, match="roll_control"):
+        roll_pilot(load_vessel("blue-lady"), 8.0)

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym.dynamics.vanderklugt import RollModel
-from shipgym.observers.sway import SwayVelocityKF
+from shipgym.observers.sway import SwayVelocityKF, calm_water_intensities
 
 from .rollcontrol import HeadingAutopilot, RollDampingController, heading_pid_gains, rrs_lqr
 
@@ -161,7 +161,9 @@ def roll_pilot(
         sway_scale: factor on the sway-velocity gain (1 full, 0.2 scaled, 0 none).
         schedule: redesign the LQR at ``speed`` instead of the design speed.
         dt: sample time (s).
-        q: the filter's disturbance intensities ((N m)^2 s of roll and yaw moment).
+        q: the filter's disturbance intensities ((N m)^2 s of roll and yaw moment); default
+            :func:`~shipgym.observers.sway.calm_water_intensities` (a task's waves: its
+            :meth:`~shipgym.envs.rollstab.RudderRollEnv.filter_intensities`).
 
     Raises:
         ValueError: the vessel has no ``[roll_control]`` table.
@@ -175,7 +177,9 @@ def roll_pilot(
             "vessel.toml: the roll pilot's design needs one"
         )
     rud = rudder_of(vessel)
-    model = roll_model_of(vessel, speed, q=None if q is None else (float(q[0]), float(q[1])))
+    if q is None:
+        q = calm_water_intensities(vessel.plant())
+    model = roll_model_of(vessel, speed, q=(float(q[0]), float(q[1])))
     K = None
     if mode == "rrs":
         design = model if schedule else roll_model_of(vessel, rc["design_speed"])

@@ -29,7 +29,7 @@ from shipgym.dynamics.actuators import Propeller, Rudder
 from shipgym.dynamics.linearise import roll_model_of
 from shipgym.dynamics.vanderklugt import KDP_LAWS, VAN_DER_KLUGT, seed_vessel
 from shipgym.dynamics.vessel import Vessel, load_vessel
-from shipgym.observers.sway import R_SWAY, SwayVelocityKF
+from shipgym.observers.sway import R_SWAY, SwayVelocityKF, calm_water_intensities
 
 from .base import _check_timing, _make_renderer, _whole_multiple
 from .physics import VesselPhysics
@@ -138,8 +138,7 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     **Waves.** ``waves="auto"`` (default): the beam sea :data:`BEAM_SEA` for a hull with a
     displacement (``nabla``), ``"seed"`` for the per-unit ``van-der-klugt`` model, calm water
-    otherwise. ``waves="seed"``:
-    the white-noise roll and yaw disturbances ``w_phi``,
+    otherwise. ``waves="seed"``: the white-noise roll and yaw disturbances ``w_phi``,
     ``w_psi`` of Radhakrishnan (n.d.) eqs. 6-7 (:func:`seed_wave_intensities`; for the
     ``van-der-klugt`` hull, whose moments are per unit inertia), one sample per control
     period; a :class:`~shipgym.disturbances.rollwaves.RollWaveConfig` (or its mapping): a
@@ -149,8 +148,8 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     (``rudder_test_amplitude`` 10 deg at ``rudder_test_frequency`` 0.43 rad/s) to the command.
 
     **Action** (``Box(-1, 1, (n,))``, one per rudder of the vessel): the commanded rudder
-    angle as a fraction of its limit ``max_angle`` (35 deg); values beyond +-1 are clipped
-    (``info["action_clipped"]``).
+    angle as a fraction of its limit ``max_angle`` (35 deg for the seed model and the naval
+    vessel); values beyond +-1 are clipped (``info["action_clipped"]``).
 
     **Observation** (``float32``): ``[r (rad/s), e_psi (rad, wrapped heading error psi -
     psi_d), p (rad/s), phi (rad), delta (rad, each rudder's angle), U (m/s, the episode's
@@ -171,9 +170,12 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     **Info**: ``time`` (s), ``eta`` ``[x, y, phi, psi]`` (m, m, rad, rad) and ``nu`` ``[u, v,
     p, r]`` (m/s, rad/s) (true), ``speed`` (u, m/s), ``v`` (m/s), ``roll``, ``heading_error``
     (rad), ``rudder``, ``rudder_command`` (rad), ``rudder_rate`` (rad/s), ``saturated`` (each
-    rudder at its angle limit or its command clipped), ``rate_limited`` (its servo at the rate
-    limit during the step), ``stalled``, ``action_clipped``, ``wave_moment`` ``[K, N]`` (N m),
-    ``reward_terms``, and ``v_hat``, ``trace_P`` with the filter.
+    rudder at its angle limit or its command clipped), ``rate_limited`` (its servo still at
+    the rate limit at the end of the step: it has not reached its command), ``stalled``,
+    ``action_clipped``, ``wave_moment`` ``[K, N]`` (N m), ``reward_terms``, and ``v_hat``,
+    ``trace_P`` with the filter; at the end ``episode_metrics`` (RMS of roll, heading error,
+    rudder and rudder rate, the fractions rate-limited and saturated, the v-hat RMSE).
+    :meth:`filter_intensities` gives the wave-noise intensities a pilot's filter should use.
 
     Args:
         vessel: a 4-DOF vessel with a rudder (name, path or :class:`Vessel`); required.
@@ -365,7 +367,7 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._wave_source = self._make_waves(U)
         self._filter = None
         if self.sway_estimate:
-            q = self._filter_intensities(U)
+            q = self.filter_intensities(U)
             model = roll_model_of(phys.vessel, U, rudder=self._rudders[0].name)
             x0 = np.array([0.0, 0.0, self.heading, 0.0, 0.0])  # starts on the known heading
             self._filter = SwayVelocityKF(model, dt=self.control_period, q=q, x0=x0)
@@ -395,13 +397,15 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         w.reset(self._wave_rng)
         return ("sea", w)
 
-    def _filter_intensities(self, U: float) -> tuple[float, float]:
+    def filter_intensities(self, U: float) -> tuple[float, float]:
         """The filter's white-noise intensities of the roll and yaw moments ((N m)^2 s).
 
         The seed's (:func:`seed_wave_intensities`) for its waves; for a sea, ``q_K = pi
         S_K(w_roll)`` (the one-sided roll-moment spectrum at the roll natural frequency: a white
-        noise with that density there) and ``q_N = q_K`` [chosen]; in calm water the seed's
-        model values scaled by the hull's roll restoring (a small process noise).
+        noise with that density there) and ``q_N = q_K`` [chosen]; in calm water
+        :func:`~shipgym.observers.sway.calm_water_intensities` (a small process noise).
+        The filter of ``sway_estimate=True`` uses them; pass them to a pilot of your own
+        (:func:`~shipgym.controllers.rollpilot.roll_pilot`).
         """
         if self.waves == SEED_WAVES:
             return seed_wave_intensities(U)
@@ -414,8 +418,7 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             s = math.sin(w.config.chi)
             q = math.pi * (hull.K_phi * s * wn**2 / 9.81) ** 2 * S
             return q, q
-        q = (hull.K_phi * math.radians(0.1)) ** 2
-        return q, q
+        return calm_water_intensities(hull)
 
     def _wave_moment(self, t0: float) -> tuple[float, float]:
         src = self._wave_source

@@ -50,6 +50,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -440,3 +441,11 @@ def simulate_sway_kf(
         v_error_rms=float(np.sqrt(np.mean((x_hat[1:, 0] - x[1:, 0]) ** 2))),
         trace_settle_time=settle,
     )
+
+
+def calm_water_intensities(hull: Any) -> tuple[float, float]:
+    """A small process noise for a filter in calm water: white roll and yaw moments of
+    intensity ``(K_phi 0.1 deg)^2`` ((N m)^2 s, the restoring moment of 0.1 deg of heel)
+    [chosen], for a hull with a roll restoring ``K_phi`` (N m/rad)."""
+    q = (float(hull.K_phi) * math.radians(0.1)) ** 2
+    return q, q
