@@ -224,6 +224,7 @@ def test_command_line_modules_are_leaves():
         "shipgym.dynamics.linearise",
         "shipgym.dynamics.blanke4",
         "shipgym.disturbances.rollwaves",
+        "shipgym.observers.dgps",
     ],
 )
 def test_pure_layers_never_reach_the_simulator(package):

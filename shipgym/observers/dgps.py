@@ -1,0 +1,283 @@
+r"""A DGPS receiver's position-velocity Kalman filter (Artyszuk 2003), and what it does to trials.
+
+The receiver estimates the ship's ground velocity from 1 Hz positions with a 4-state
+position-velocity (PV) filter, Artyszuk (2003) eqs. 2-5:
+
+.. math::
+
+    x = [v_{NS}, v_{EW}, x, y],\quad
+    \Phi = \begin{bmatrix}1&0&0&0\\0&1&0&0\\\Delta t&0&1&0\\0&\Delta t&0&1\end{bmatrix},\quad
+    H = \begin{bmatrix}0&0&1&0\\0&0&0&1\end{bmatrix},
+
+``R = diag(sigma^2, sigma^2)`` (``sigma = 2`` m, printed ``R = diag(4, 4)``) and the random-walk
+velocity noise ``Q = S_p [[dt, 0, dt^2/2, 0], [0, dt, 0, dt^2/2], [dt^2/2, 0, dt^3/3, 0], [0,
+dt^2/2, 0, dt^3/3]]`` (eq. 4), ``dt = 1`` s. The gain converges in "< 30 cycles"; the receiver
+then runs the steady form (eq. 5) ``x_{k+1} = Phi x_k + K_inf (z_{k+1} - H Phi x_k)``.
+
+The velocity estimate behaves as a second-order low-pass of the true velocity: it lags a
+turn's direction by about ``r tau`` and a speed loss by ``tau |U_dot|`` (``tau`` 5.85 s for
+``S_p = 0.01``, :func:`pv_lag`), which is the bias of the drift angle and speed the seed
+finds in manoeuvring trials. Outputs (:func:`velocity_outputs`): the track speed ``v_xy``,
+the course ``chi = atan2(v_EW, v_NS)`` and, with the gyro heading ``psi``, the drift angle
+``beta_A = psi - chi`` (Artyszuk 2003 §2; positive when the bow points inside a starboard
+turn). The seed's recommendation, differentiating the raw positions, is
+:func:`raw_velocity`; its current correction (§1) is :func:`water_velocity`.
+
+Pure NumPy/SciPy; the sensor noise of a simulation comes from its own seeded generator.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import ArrayLike, NDArray
+
+from shipgym.dynamics.frames import wrap_angle
+
+__all__ = [
+    "DGPS_DT",
+    "DGPS_SIGMA",
+    "S_P_OPTIMAL",
+    "DGPSPVFilter",
+    "PVModel",
+    "apply_current",
+    "gain_cycles",
+    "pv_lag",
+    "pv_model",
+    "pv_steady_gain",
+    "raw_velocity",
+    "velocity_outputs",
+    "water_velocity",
+]
+
+Array = NDArray[np.float64]
+
+#: the receiver's sample time (s) [printed, Artyszuk 2003 eq. 4]
+DGPS_DT = 1.0
+#: the DGPS position noise standard deviation (m) per axis [printed, R = diag(4, 4) m^2]
+DGPS_SIGMA = 2.0
+#: the seed's "optimal" spectral amplitude of the PV random walk (m^2/s^3) [printed]
+S_P_OPTIMAL = 0.01
+
+
+class PVModel(NamedTuple):
+    """The printed PV filter matrices (Artyszuk 2003 eqs. 3-4): ``Phi`` (4, 4), ``H`` (2, 4),
+    ``Q`` (4, 4) (``S_p`` times the printed pattern of powers of ``dt``; m^2/s^2 on the
+    velocities, m^2 on the positions), ``R`` (2, 2) (m^2)."""
+
+    Phi: Array
+    H: Array
+    Q: Array
+    R: Array
+
+
+def _positive(x: float, name: str, unit: str) -> float:
+    if not (isinstance(x, int | float) and math.isfinite(x) and x > 0):
+        raise ValueError(f"{name} must be > 0 {unit}, got {x!r}")
+    return float(x)
+
+
+def pv_model(S_p: float = S_P_OPTIMAL, dt: float = DGPS_DT, sigma: float = DGPS_SIGMA) -> PVModel:
+    """The PV filter of Artyszuk (2003) eqs. 3-4.
+
+    Args:
+        S_p: spectral amplitude of the velocity random walk (m^2/s^3), > 0.
+        dt: sample time (s).
+        sigma: position noise standard deviation per axis (m).
+    """
+    S_p = _positive(S_p, "S_p", "m^2/s^3")
+    dt = _positive(dt, "dt", "s")
+    sigma = _positive(sigma, "sigma", "m")
+    Phi = np.eye(4)
+    Phi[2, 0] = Phi[3, 1] = dt
+    H = np.zeros((2, 4))
+    H[0, 2] = H[1, 3] = 1.0
+    Q = S_p * np.array(
+        [
+            [dt, 0.0, dt**2 / 2, 0.0],
+            [0.0, dt, 0.0, dt**2 / 2],
+            [dt**2 / 2, 0.0, dt**3 / 3, 0.0],
+            [0.0, dt**2 / 2, 0.0, dt**3 / 3],
+        ]
+    )
+    R = sigma**2 * np.eye(2)
+    return PVModel(Phi, H, Q, R)
+
+
+def pv_steady_gain(
+    S_p: float = S_P_OPTIMAL, dt: float = DGPS_DT, sigma: float = DGPS_SIGMA
+) -> tuple[Array, Array]:
+    """``(K_inf (4, 2), P_prior (4, 4))``: the converged gain of eq. 5 and the a-priori
+    covariance, from the discrete Riccati equation (scipy ``solve_discrete_are``)."""
+    m = pv_model(S_p, dt, sigma)
+    P = scipy.linalg.solve_discrete_are(m.Phi.T, m.H.T, m.Q, m.R)
+    K = P @ m.H.T @ np.linalg.inv(m.H @ P @ m.H.T + m.R)
+    return K, P
+
+
+def gain_cycles(
+    S_p: float = S_P_OPTIMAL,
+    P0: ArrayLike | None = None,
+    tol: float = 0.01,
+    dt: float = DGPS_DT,
+    sigma: float = DGPS_SIGMA,
+    max_cycles: int = 1000,
+) -> int:
+    """Cycles of the recursion from ``P0`` (default 0) until the gain stays within ``tol``
+    (relative, largest entry) of ``K_inf`` (the seed: "< 30 cycles")."""
+    m = pv_model(S_p, dt, sigma)
+    K_inf, _ = pv_steady_gain(S_p, dt, sigma)
+    P = np.zeros((4, 4)) if P0 is None else np.asarray(P0, dtype=float)
+    scale = float(np.max(np.abs(K_inf)))
+    last_bad = 0
+    for k in range(1, max_cycles + 1):
+        Pm = m.Phi @ P @ m.Phi.T + m.Q
+        K = Pm @ m.H.T @ np.linalg.inv(m.H @ Pm @ m.H.T + m.R)
+        P = (np.eye(4) - K @ m.H) @ Pm
+        if np.max(np.abs(K - K_inf)) > tol * scale:
+            last_bad = k
+        elif k - last_bad > 50:
+            break
+    return last_bad + 1
+
+
+def pv_lag(
+    S_p: float = S_P_OPTIMAL, dt: float = DGPS_DT, sigma: float = DGPS_SIGMA
+) -> tuple[float, float, float]:
+    """``(tau s, position lag m per m/s^2, noise-only sigma_v m/s)`` of the steady filter.
+
+    ``tau``: the velocity estimate's steady lag behind a velocity that grows at a constant
+    acceleration ``a`` (``v_hat = v - a tau``); the position lags by the second figure times
+    ``a``; ``sigma_v``: the velocity estimate's standard deviation from the position noise
+    alone (a true motion the model holds exactly), from a discrete Lyapunov equation.
+    """
+    m = pv_model(S_p, dt, sigma)
+    K, _ = pv_steady_gain(S_p, dt, sigma)
+    IKH = np.eye(4) - K @ m.H
+    A = IKH @ m.Phi
+    # one axis (north): the truth's step under a unit acceleration, v += dt, x += v dt + dt^2/2
+    d = np.array([dt, 0.0, dt**2 / 2, 0.0])
+    # the error truth - estimate obeys e+ = (I - K H)(Phi e + d): its steady value for a = 1
+    e = np.linalg.solve(np.eye(4) - A, IKH @ d)
+    S = scipy.linalg.solve_discrete_lyapunov(A, K @ m.R @ K.T)
+    return float(e[0]), float(e[2]), float(math.sqrt(S[0, 0]))
+
+
+class DGPSPVFilter:
+    """The receiver's PV filter: ``step(z) -> [v_NS, v_EW, x, y]`` (m/s, m/s, m, m).
+
+    Args:
+        S_p: spectral amplitude of the velocity random walk (m^2/s^3).
+        dt: sample time (s).
+        sigma: position noise per axis (m).
+        steady: the converged gain of eq. 5 (the receiver, default) or the recursion.
+        x0: initial state (default: at rest at the origin); the first measurement after
+            :meth:`reset` starts the position if ``x0`` is not given.
+        P0: initial covariance (the recursion; default ``P_prior`` of the steady filter).
+    """
+
+    def __init__(
+        self,
+        S_p: float = S_P_OPTIMAL,
+        dt: float = DGPS_DT,
+        sigma: float = DGPS_SIGMA,
+        *,
+        steady: bool = True,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+    ) -> None:
+        self.model = pv_model(S_p, dt, sigma)
+        self.S_p, self.dt, self.sigma = float(S_p), float(dt), float(sigma)
+        self.steady = bool(steady)
+        self.K_inf, self.P_inf = pv_steady_gain(S_p, dt, sigma)
+        self._x0 = None if x0 is None else np.asarray(x0, dtype=float).reshape(4).copy()
+        self._P0 = self.P_inf.copy() if P0 is None else np.asarray(P0, dtype=float).copy()
+        if self._P0.shape != (4, 4):
+            raise ValueError(f"P0 must be 4x4, got {self._P0.shape}")
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to ``x0`` (or to the next measurement) and ``P0``."""
+        self.x: Array = np.zeros(4) if self._x0 is None else self._x0.copy()
+        self._started = self._x0 is not None
+        self.P: Array = self._P0.copy()
+        self.K: Array = self.K_inf.copy()
+
+    def step(self, z: ArrayLike) -> Array:
+        """One cycle with the measured position ``z = [x, y]`` (m, north, east)."""
+        z = np.asarray(z, dtype=float).reshape(-1)
+        if z.shape != (2,) or not np.all(np.isfinite(z)):
+            raise ValueError(f"z must be a finite position [x, y] (m), got {z}")
+        if not self._started:  # the first fix starts the position, at rest
+            self.x = np.array([0.0, 0.0, z[0], z[1]])
+            self._started = True
+            return self.x.copy()
+        m = self.model
+        x_pred = m.Phi @ self.x
+        if self.steady:
+            K = self.K_inf
+        else:
+            Pm = m.Phi @ self.P @ m.Phi.T + m.Q
+            K = Pm @ m.H.T @ np.linalg.inv(m.H @ Pm @ m.H.T + m.R)
+            self.P = (np.eye(4) - K @ m.H) @ Pm
+        self.K = K
+        self.x = x_pred + K @ (z - m.H @ x_pred)
+        return self.x.copy()
+
+    def run(self, positions: ArrayLike) -> Array:
+        """The filter over a series of positions (n, 2): the estimates (n, 4)."""
+        p = np.asarray(positions, dtype=float)
+        return np.array([self.step(z) for z in p])
+
+
+def velocity_outputs(
+    v_ns: ArrayLike, v_ew: ArrayLike, psi: ArrayLike
+) -> tuple[Array, Array, Array]:
+    """``(v_xy m/s, course chi rad, drift angle beta_A rad)`` from a ground velocity (north,
+    east, m/s) and the gyro heading ``psi`` (rad): ``beta_A = psi - chi`` wrapped (Artyszuk
+    2003 §2; ``tan beta = -v/u`` in the body frame)."""
+    vn, ve = np.asarray(v_ns, dtype=float), np.asarray(v_ew, dtype=float)
+    chi = np.arctan2(ve, vn)
+    return np.hypot(vn, ve), chi, np.asarray(wrap_angle(np.asarray(psi, dtype=float) - chi))
+
+
+def raw_velocity(positions: ArrayLike, dt: float = DGPS_DT) -> Array:
+    """The seed's alternative: the raw positions (n, 2) differentiated (central differences,
+    one-sided at the ends; ``numpy.gradient``), (n, 2) m/s."""
+    p = np.asarray(positions, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] < 2:
+        raise ValueError(f"positions must be (n >= 2, 2), got {p.shape}")
+    return np.gradient(p, _positive(dt, "dt", "s"), axis=0)
+
+
+def _current_body(psi: ArrayLike, speed: float, gamma_c: float) -> Array:
+    """The current ``[u_c, v_c]`` (m/s) in the body frame: ``D^T(psi) [|v_c| cos g, |v_c| sin
+    g]`` (Artyszuk 2003 §1, ``gamma_c = 0``: a current towards north)."""
+    ps = np.asarray(psi, dtype=float)
+    cn, ce = speed * math.cos(gamma_c), speed * math.sin(gamma_c)
+    return np.stack([np.cos(ps) * cn + np.sin(ps) * ce, -np.sin(ps) * cn + np.cos(ps) * ce], -1)
+
+
+def water_velocity(v_ground: ArrayLike, psi: ArrayLike, speed: float, gamma_c: float) -> Array:
+    """The seed's current correction (§1): ``v_water = v_ground - D^T(psi) [|v_c| cos gamma_c,
+    |v_c| sin gamma_c]``, velocities ``[v_x, v_y]`` in the body frame (m/s, (..., 2)).
+
+    Args:
+        v_ground: the ground-referenced body velocity (..., 2) (m/s).
+        psi: heading (rad), broadcast with ``v_ground[..., 0]``.
+        speed: current speed (m/s), >= 0.
+        gamma_c: the direction the current goes to (rad; 0 north, pi/2 east).
+    """
+    if not (math.isfinite(speed) and speed >= 0):
+        raise ValueError(f"the current speed must be >= 0 m/s, got {speed!r}")
+    return np.asarray(v_ground, dtype=float) - _current_body(psi, speed, gamma_c)
+
+
+def apply_current(v_water: ArrayLike, psi: ArrayLike, speed: float, gamma_c: float) -> Array:
+    """The inverse of :func:`water_velocity`: the ground-referenced body velocity (m/s)."""
+    if not (math.isfinite(speed) and speed >= 0):
+        raise ValueError(f"the current speed must be >= 0 m/s, got {speed!r}")
+    return np.asarray(v_water, dtype=float) + _current_body(psi, speed, gamma_c)
