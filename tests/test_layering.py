@@ -225,6 +225,7 @@ def test_command_line_modules_are_leaves():
         "shipgym.dynamics.blanke4",
         "shipgym.disturbances.rollwaves",
         "shipgym.observers.dgps",
+        "shipgym.dynamics.mmg",
     ],
 )
 def test_pure_layers_never_reach_the_simulator(package):

@@ -1,0 +1,256 @@
+r"""The MMG standard manoeuvring model (Yasukawa & Yoshimura 2015) of a single-screw ship.
+
+Surge, sway and yaw about the midship point (``x_G != 0``), with the hull, propeller and
+rudder forces of the MMG standard method (Yasukawa & Yoshimura 2015, eqs. 4-8 and the
+propeller and rudder models of its §2.4-2.5):
+
+.. math::
+
+    (m + m_x)\dot u - (m + m_y) v r - x_G m r^2 = X_H + X_R + X_P \\
+    (m + m_y)\dot v + x_G m \dot r + (m + m_x) u r = Y_H + Y_R \\
+    (I_{zG} + x_G^2 m + J_z)\dot r + x_G m (\dot v + u r) = N_H + N_R
+
+- hull: ``X_H = rho/2 L d U^2 X'_H(v', r')`` with ``X'_H = -R'_0 + X'_vv v'^2 + X'_vr v'r' +
+  X'_rr r'^2 + X'_vvvv v'^4``, ``Y_H``, ``N_H = rho/2 L^2 d U^2 N'_H`` likewise (third-order
+  polynomials), ``v' = v/U``, ``r' = r L/U``;
+- propeller: ``X_P = (1 - t_P) rho n^2 D_P^4 K_T(J_P)``, ``K_T = k0 + k1 J + k2 J^2``,
+  ``J_P = u (1 - w_P)/(n D_P)``, ``1 - w_P = (1 - w_P0)[1 + (1 - exp(-C1 |beta_P|))(C2 -
+  1)]``, ``beta_P = beta - x'_P r'``;
+- rudder: ``F_N = rho/2 A_R U_R^2 f_alpha sin(alpha_R)``, ``alpha_R = delta - atan2(v_R,
+  u_R)``, ``u_R = eps u (1 - w_P) sqrt(eta [1 + kappa (sqrt(1 + 8 K_T/(pi J^2)) - 1)]^2 +
+  1 - eta)``, ``v_R = U gamma_R beta_R``, ``beta_R = beta - l'_R r'``; ``X_R = -(1 - t_R)
+  F_N sin(delta)``, ``Y_R = -(1 + a_H) F_N cos(delta)``, ``N_R = -(x_R + a_H x_H) F_N
+  cos(delta)``.
+
+Signs are the paper's: ``beta = atan2(-v, u)``, and a positive rudder angle turns the ship
+to starboard (``r > 0``). The extensions a stopping manoeuvre needs (astern thrust for
+``n < 0``, no slipstream on the rudder for ``n <= 0``, an optional astern side force) are
+the notes' [chosen] ones: ``K_T = -(0.2 + 0.25 J)`` astern with ``J = u(1 - w_P)/(|n|
+D_P)``; ``Y_P = -c_y |X_P|`` at ``x_P`` when ``n < 0``.
+
+Two bugs of open implementations are absent (tests): the wake fraction's bracket (``1 -
+exp(-C1|beta_P|)`` multiplies ``(C2 - 1)``, not the other way round) and ``x_R = x'_R L``.
+
+Pure NumPy; :meth:`MMGModel.nu_dot` accepts a leading batch axis.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["KVLCC2_L7", "MMGModel", "MMGParameters", "kvlcc2"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class MMGParameters:
+    """A ship's MMG parameters: geometry in SI, the rest nondimensional (primes, ``rho/2 L d``
+    / ``rho/2 L^2 d`` / ``rho/2 L^4 d`` bases).
+
+    Every field but ``rho`` and ``c_y`` is required (no ship is a default): the published
+    values of the KVLCC2 L7 model (Yasukawa & Yoshimura 2015 Tables 1-4) are
+    :data:`KVLCC2_L7` (``x_P`` -0.48 as the notes recall it; implementations use -0.5 or
+    -0.69).
+
+    Attributes:
+        L, B, d: length, beam, draught (m); nabla: displaced volume (m^3); x_G: longitudinal
+        centre of gravity from midship (m, forward +); D_P: propeller diameter (m); H_R: rudder
+        span (m); A_R: rudder area (m^2); rho: water density (kg/m^3); k_zz: yaw radius of
+        gyration as a fraction of L.
+        R0 ... N_rrr: hull resistance and manoeuvring derivatives.
+        m_x, m_y, J_z: added masses and added moment (primes).
+        t_P, w_P0, k0, k1, k2, C1, C2_pos, C2_neg, x_P: propeller.
+        t_R, a_H, x_H, x_R, gamma_pos, gamma_neg, l_R, eps, kappa, f_alpha: rudder.
+        c_y: astern side-force factor (chosen extension; 0 by default).
+    """
+
+    L: float
+    B: float
+    d: float
+    nabla: float
+    x_G: float
+    D_P: float
+    H_R: float
+    A_R: float
+    k_zz: float
+    R0: float
+    X_vv: float
+    X_vr: float
+    X_rr: float
+    X_vvvv: float
+    Y_v: float
+    Y_r: float
+    Y_vvv: float
+    Y_vvr: float
+    Y_vrr: float
+    Y_rrr: float
+    N_v: float
+    N_r: float
+    N_vvv: float
+    N_vvr: float
+    N_vrr: float
+    N_rrr: float
+    m_x: float
+    m_y: float
+    J_z: float
+    t_P: float
+    w_P0: float
+    k0: float
+    k1: float
+    k2: float
+    C1: float
+    C2_pos: float
+    C2_neg: float
+    x_P: float
+    t_R: float
+    a_H: float
+    x_H: float
+    x_R: float
+    gamma_neg: float
+    gamma_pos: float
+    l_R: float
+    eps: float
+    kappa: float
+    f_alpha: float
+    rho: float = 1025.0
+    c_y: float = 0.0
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if not (isinstance(v, int | float) and math.isfinite(v)):
+                raise ValueError(f"MMGParameters.{f.name} must be a finite number, got {v!r}")
+        for k in ("L", "B", "d", "nabla", "D_P", "H_R", "A_R", "rho", "k_zz"):
+            if not getattr(self, k) > 0:
+                raise ValueError(f"MMGParameters.{k} must be > 0, got {getattr(self, k)!r}")
+
+    def scaled(self, L: float) -> MMGParameters:
+        """The same hull geometrically scaled to the length ``L`` (m): lengths x ``L/self.L``,
+        the volume x its cube; the nondimensional coefficients stay."""
+        s = float(L) / self.L
+        return dataclasses.replace(
+            self, L=self.L * s, B=self.B * s, d=self.d * s, nabla=self.nabla * s**3,
+            x_G=self.x_G * s, D_P=self.D_P * s, H_R=self.H_R * s, A_R=self.A_R * s**2,
+        )  # fmt: skip
+
+
+#: the KVLCC2 L7 model (Yasukawa & Yoshimura 2015): L 7 m, B 1.27 m, d 0.46 m, nabla
+#: 3.27 m^3, x_G 0.25 m, D_P 0.216 m, H_R 0.345 m, A_R 0.0539 m^2 [published]
+KVLCC2_L7 = MMGParameters(
+    L=7.00, B=1.27, d=0.46, nabla=3.27, x_G=0.25, D_P=0.216, H_R=0.345, A_R=0.0539,
+    k_zz=0.25, R0=0.022, X_vv=-0.040, X_vr=0.002, X_rr=0.011, X_vvvv=0.771, Y_v=-0.315,
+    Y_r=0.083, Y_vvv=-1.607, Y_vvr=0.379, Y_vrr=-0.391, Y_rrr=0.008, N_v=-0.137,
+    N_r=-0.049, N_vvv=-0.030, N_vvr=-0.294, N_vrr=0.055, N_rrr=-0.013, m_x=0.022,
+    m_y=0.223, J_z=0.011, t_P=0.220, w_P0=0.40, k0=0.2931, k1=-0.2753, k2=-0.1385, C1=2.0,
+    C2_pos=1.6, C2_neg=1.1, x_P=-0.48, t_R=0.387, a_H=0.312, x_H=-0.464, x_R=-0.5,
+    gamma_neg=0.395, gamma_pos=0.640, l_R=-0.710, eps=1.09, kappa=0.50, f_alpha=2.747,
+)  # fmt: skip
+
+
+def kvlcc2(L: float = 7.0) -> MMGParameters:
+    """The KVLCC2 at the length ``L`` (m): 7 m the L7 model, 100 m the seed's tanker."""
+    return KVLCC2_L7.scaled(L)
+
+
+class MMGModel:
+    """The MMG equations of :class:`MMGParameters` (module docstring).
+
+    Args:
+        p: the parameters.
+    """
+
+    def __init__(self, p: MMGParameters) -> None:
+        self.p = p
+        h = 0.5 * p.rho * p.L * p.d
+        self.m = p.rho * p.nabla
+        self.mx = p.m_x * h * p.L
+        self.my = p.m_y * h * p.L
+        self.Jz = p.J_z * h * p.L**3
+        self.IzG = self.m * (p.k_zz * p.L) ** 2
+        M = np.array([[self.m + self.my, p.x_G * self.m],
+                      [p.x_G * self.m, self.IzG + p.x_G**2 * self.m + self.Jz]])  # fmt: skip
+        self._Minv = np.linalg.inv(M)
+
+    def wake(self, beta_P: Array) -> Array:
+        """``1 - w_P`` (Yasukawa & Yoshimura 2015): ``(1 - w_P0)[1 + (1 - exp(-C1 |beta_P|))
+        (C2 - 1)]``, ``C2`` by the sign of ``beta_P``."""
+        p = self.p
+        C2 = np.where(beta_P > 0, p.C2_pos, p.C2_neg)
+        return (1 - p.w_P0) * (1 + (1 - np.exp(-p.C1 * np.abs(beta_P))) * (C2 - 1))
+
+    def forces(
+        self, nu: ArrayLike, delta: ArrayLike, n: ArrayLike
+    ) -> tuple[Array, Array, Array, dict[str, Array]]:
+        """``(X, Y, N, parts)`` (N, N, N m) at ``nu = [u, v, r]`` (..., 3), rudder angle
+        ``delta`` (rad) and propeller speed ``n`` (rps); ``parts`` holds the hull, propeller
+        and rudder terms and ``K_T``, ``J_P``, ``u_R``, ``v_R``, ``alpha_R``, ``F_N``."""
+        p = self.p
+        nu = np.asarray(nu, dtype=float)
+        u, v, r = nu[..., 0], nu[..., 1], nu[..., 2]
+        delta = np.asarray(delta, dtype=float)
+        n = np.asarray(n, dtype=float)
+        U = np.hypot(u, v)
+        Us = np.where(U > 1e-9, U, 1e-9)
+        vp, rp = v / Us, r * p.L / Us
+        beta = np.arctan2(-v, u)
+        q = 0.5 * p.rho * p.L * p.d * U**2
+        XH = q * (-p.R0 + p.X_vv * vp**2 + p.X_vr * vp * rp + p.X_rr * rp**2
+                  + p.X_vvvv * vp**4)  # fmt: skip
+        YH = q * (p.Y_v * vp + p.Y_r * rp + p.Y_vvv * vp**3 + p.Y_vvr * vp**2 * rp
+                  + p.Y_vrr * vp * rp**2 + p.Y_rrr * rp**3)  # fmt: skip
+        NH = q * p.L * (p.N_v * vp + p.N_r * rp + p.N_vvv * vp**3 + p.N_vvr * vp**2 * rp
+                        + p.N_vrr * vp * rp**2 + p.N_rrr * rp**3)  # fmt: skip
+        # propeller
+        one_w = self.wake(beta - p.x_P * rp)
+        na = np.abs(n)
+        ns = np.where(na > 1e-9, na, 1e-9)
+        J = u * one_w / (ns * p.D_P)
+        ahead = n > 0
+        KT = np.where(ahead, p.k0 + p.k1 * J + p.k2 * J**2, -(0.2 + 0.25 * J))
+        T = p.rho * n**2 * p.D_P**4 * KT
+        XP = (1 - p.t_P) * T
+        YP = np.where(n < 0, -p.c_y * np.abs(XP), 0.0)
+        NP = p.x_P * p.L * YP
+        # rudder
+        eta = p.D_P / p.H_R
+        Js = np.where(np.abs(J) > 1e-9, J, 1e-9)
+        race = np.sqrt(np.maximum(1 + 8 * KT / (math.pi * Js**2), 0.0))
+        slip = np.sqrt(eta * (1 + p.kappa * (race - 1)) ** 2 + 1 - eta)
+        uR = p.eps * u * one_w * np.where(ahead, slip, 1.0)
+        beta_R = beta - p.l_R * rp
+        vR = U * np.where(beta_R < 0, p.gamma_neg, p.gamma_pos) * beta_R
+        alpha = delta - np.arctan2(vR, uR)
+        FN = 0.5 * p.rho * p.A_R * (uR**2 + vR**2) * p.f_alpha * np.sin(alpha)
+        XR = -(1 - p.t_R) * FN * np.sin(delta)
+        YR = -(1 + p.a_H) * FN * np.cos(delta)
+        NR = -(p.x_R * p.L + p.a_H * p.x_H * p.L) * FN * np.cos(delta)
+        parts = {"X_H": XH, "Y_H": YH, "N_H": NH, "X_P": XP, "Y_P": YP, "N_P": NP, "X_R": XR,
+                 "Y_R": YR, "N_R": NR, "K_T": KT, "J_P": J, "u_R": uR, "v_R": vR,
+                 "alpha_R": alpha, "F_N": FN}  # fmt: skip
+        return XH + XP + XR, YH + YP + YR, NH + NP + NR, parts
+
+    def nu_dot(self, nu: ArrayLike, delta: ArrayLike, n: ArrayLike) -> Array:
+        """``[u_dot, v_dot, r_dot]`` (m/s^2, m/s^2, rad/s^2), shape of ``nu``."""
+        p = self.p
+        nu = np.asarray(nu, dtype=float)
+        u, v, r = nu[..., 0], nu[..., 1], nu[..., 2]
+        X, Y, N, _ = self.forces(nu, delta, n)
+        ud = (X + (self.m + self.my) * v * r + p.x_G * self.m * r**2) / (self.m + self.mx)
+        b1 = Y - (self.m + self.mx) * u * r
+        b2 = N - p.x_G * self.m * u * r
+        Mi = self._Minv
+        vd = Mi[0, 0] * b1 + Mi[0, 1] * b2
+        rd = Mi[1, 0] * b1 + Mi[1, 1] * b2
+        return np.stack(np.broadcast_arrays(ud, vd, rd), -1)
+
+    def self_propulsion(self, U: float) -> float:
+        """The propeller speed (rps) that holds ``u = U`` in straight running (``X = 0``)."""
+        from scipy.optimize import brentq
+
+        return float(brentq(lambda n: self.nu_dot([U, 0.0, 0.0], 0.0, n)[0], 1e-3, 1e3))

@@ -1,0 +1,120 @@
+"""The MMG model (Yasukawa & Yoshimura 2015) of the KVLCC2, scaled to the seed's 100 m
+tanker (Artyszuk 2003), against the notes' independent computation (checks C4, C5) and
+the bugs of open implementations that it must not have."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from shipgym.dynamics.mmg import KVLCC2_L7, MMGModel, MMGParameters, kvlcc2
+
+D = math.pi / 180.0
+RATE = 2.32 * D  # IMO: 35 deg one side to 30 deg the other in 28 s
+
+
+@pytest.fixture(scope="module")
+def tanker():
+    m = MMGModel(kvlcc2(100.0))
+    return m, m.self_propulsion(7.0)
+
+
+def test_the_100_m_tanker(tanker):
+    m, n = tanker
+    assert m.m / 1e3 == pytest.approx(9772, abs=1)  # t
+    assert n == pytest.approx(4.926, abs=1e-3)  # rps for 7 m/s (295.5 rpm)
+    p = m.p
+    assert (p.B, p.d, p.D_P, p.A_R) == pytest.approx((18.14, 6.57, 3.09, 11.00), abs=0.01)
+
+
+def test_C4_turning_circle_35_deg(tanker):
+    """Advance 3.37 L and tactical diameter 3.14 L (+-0.05 L); 90 deg at 66 s, steady speed
+    2.68 m/s, steady drift angle 19.0 deg (the notes' computation from the same paper)."""
+    m, n = tanker
+
+    def rhs(t, x):
+        u, v, r, _x, _y, psi = x
+        ud, vd, rd = m.nu_dot([u, v, r], min(RATE * t, 35 * D), n)
+        c, s = math.cos(psi), math.sin(psi)
+        return [ud, vd, rd, u * c - v * s, u * s + v * c, r]
+
+    sol = solve_ivp(rhs, (0, 400), [7.0, 0, 0, 0, 0, 0], rtol=1e-9, atol=1e-9,
+                    dense_output=True, max_step=1.0)  # fmt: skip
+    t = np.linspace(0, 400, 40001)
+    u, v, r, x, y, psi = sol.sol(t)
+    i90, i180 = np.argmax(psi >= math.pi / 2), np.argmax(psi >= math.pi)
+    assert x[i90] / 100 == pytest.approx(3.37, abs=0.05)
+    assert y[i180] / 100 == pytest.approx(3.14, abs=0.05)
+    assert t[i90] == pytest.approx(66.0, abs=1.0)
+    assert math.hypot(u[-1], v[-1]) == pytest.approx(2.68, abs=0.02)
+    assert math.degrees(math.atan2(-v[-1], u[-1])) == pytest.approx(19.0, abs=0.2)
+    assert r.max() / D == pytest.approx(1.84, abs=0.02) and r[-1] > 0  # to starboard
+
+
+def _zigzag(m, n, angle):
+    """First overshoot (deg) of the angle/angle zigzag (IMO MSC.137(76)), RK4 at 0.05 s."""
+    h, x, d, target = 0.05, np.array([7.0, 0.0, 0.0, 0.0]), 0.0, angle * D  # u, v, r, psi
+
+    def f(s, d):
+        return np.r_[m.nu_dot(s[:3], d, n), s[2]]
+
+    over, switched = 0.0, False
+    for _ in range(int(400 / h)):
+        d += float(np.clip(target - d, -RATE * h, RATE * h))
+        k1 = f(x, d)
+        k2 = f(x + 0.5 * h * k1, d)
+        k3 = f(x + 0.5 * h * k2, d)
+        k4 = f(x + h * k3, d)
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if not switched and x[3] >= angle * D:  # the first execute: counter-rudder
+            target, switched = -angle * D, True
+        if switched:
+            over = max(over, x[3] / D - angle)
+            if x[2] < 0:  # the heading turned back: the first overshoot is over
+                break
+    return over
+
+
+@pytest.mark.parametrize("angle, first", [(10.0, 7.4), (20.0, 18.3)])
+def test_C5_zigzag_first_overshoot(tanker, angle, first):
+    m, n = tanker
+    assert _zigzag(m, n, angle) == pytest.approx(first, abs=0.5)
+
+
+def test_no_wake_bracket_bug_and_x_R_is_a_length():
+    """mmgdynamics/TUD_RL: ``1 - exp(-C1|b|)*(C2 - 1)`` (wrong bracket) and ``x_R`` without
+    its factor L; here ``1 - w_P = 1 - w_P0`` straight ahead, and ``N_R/Y_R`` is the lever."""
+    m = MMGModel(KVLCC2_L7)
+    p = m.p
+    assert float(m.wake(np.array(0.0))) == pytest.approx(1 - p.w_P0, abs=1e-15)
+    b = 0.2
+    want = (1 - p.w_P0) * (1 + (1 - math.exp(-p.C1 * b)) * (p.C2_pos - 1))
+    assert float(m.wake(np.array(b))) == pytest.approx(want, rel=1e-14)
+    _, _, _, parts = m.forces([1.179, 0.0, 0.0], 20 * D, 10.0)
+    lever = (p.x_R + p.a_H * p.x_H) * p.L / (1 + p.a_H)
+    assert float(parts["N_R"] / parts["Y_R"]) == pytest.approx(lever, rel=1e-12)
+    assert float(parts["F_N"]) > 0 and float(parts["N_R"]) > 0  # positive rudder: starboard
+
+
+def test_batched_and_astern():
+    m = MMGModel(kvlcc2(100.0))
+    rng = np.random.default_rng(0)
+    nu = np.c_[rng.uniform(1, 8, 20), rng.normal(0, 0.5, 20), rng.normal(0, 0.02, 20)]
+    delta, n = rng.uniform(-0.6, 0.6, 20), rng.uniform(-5, 5, 20)
+    batch = m.nu_dot(nu, delta, n)
+    one = np.array([m.nu_dot(nu[i], delta[i], n[i]) for i in range(20)])
+    np.testing.assert_allclose(batch, one, rtol=1e-13, atol=1e-15)
+    # astern: the propeller pulls back, and the rudder has no slipstream
+    _, _, _, a = m.forces([5.0, 0.0, 0.0], 0.0, -4.0)
+    assert float(a["X_P"]) < 0 and float(a["u_R"]) == pytest.approx(
+        m.p.eps * 5.0 * float(m.wake(np.array(0.0))), rel=1e-12
+    )
+    import dataclasses
+
+    with pytest.raises(ValueError, match="must be > 0"):
+        dataclasses.replace(KVLCC2_L7, L=0.0)
+    with pytest.raises(TypeError):  # no ship is a default: every coefficient is required
+        MMGParameters(L=7.0, B=1.27, d=0.46, nabla=3.27, x_G=0.25, D_P=0.2, H_R=0.3, A_R=0.05)
