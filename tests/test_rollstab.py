@@ -34,8 +34,10 @@ def test_the_rudder_never_passes_its_limits_and_flags_what_it_clipped(env_id):
     rng = np.random.default_rng(0)
     prev = obs[4]
     seen = {"clipped": False, "rate": False, "saturated": False}
+    a = np.zeros(1, dtype=np.float32)
     for k in range(600):
-        a = rng.uniform(-1.6, 1.6, 1).astype(np.float32) if k % 5 == 0 else a  # noqa: F821
+        if k % 5 == 0:  # a new random action, beyond the limits too, held for 5 steps
+            a = rng.uniform(-1.6, 1.6, 1).astype(np.float32)
         obs, r, term, trunc, info = env.step(a)
         d = info["rudder"][0]
         assert abs(d) <= rud.max_angle * (1 + 1e-12)
