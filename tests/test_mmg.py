@@ -4,6 +4,7 @@ the bugs of open implementations that it must not have."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -118,3 +119,58 @@ def test_batched_and_astern():
         dataclasses.replace(KVLCC2_L7, L=0.0)
     with pytest.raises(TypeError):  # no ship is a default: every coefficient is required
         MMGParameters(L=7.0, B=1.27, d=0.46, nabla=3.27, x_G=0.25, D_P=0.2, H_R=0.3, A_R=0.05)
+
+
+# ---- the MMG hull and unit in shipgym: plain-float kernels against the array forms --------
+def test_kernels_equal_the_array_forms():
+    """hull_kernel, propulsion_kernel and MMGHull.accel against hull_forces,
+    propulsion_forces and MMGHull.nu_dot (random states, ahead and astern, with current)."""
+    from shipgym.dynamics.mmg import MMGHull, hull_kernel, propulsion_kernel
+
+    p = dataclasses.replace(kvlcc2(100.0), c_y=0.1)
+    m, hull = MMGModel(p), MMGHull(p)
+    hk, pk, acc = hull_kernel(p), propulsion_kernel(p), hull.accel
+    rng = np.random.default_rng(3)
+    for _ in range(300):
+        nu = np.array([rng.uniform(-1, 8), rng.normal(0, 1), rng.normal(0, 0.02)])
+        delta, n = rng.uniform(-0.6, 0.6), rng.uniform(-6, 6)
+        np.testing.assert_allclose(hk(*nu), m.hull_forces(nu), rtol=1e-12, atol=1e-6)
+        X, Y, N, parts = m.propulsion_forces(nu, delta, n)
+        np.testing.assert_allclose(pk(*nu, delta, n), (X, Y, N, parts["T"]), rtol=1e-12,
+                                   atol=1e-6)  # fmt: skip
+        tau = rng.normal(0, 1e5, 3)
+        nc = np.array([rng.normal(0, 0.3), rng.normal(0, 0.3), 0.0])
+        np.testing.assert_allclose(
+            acc(*nu, *tau, nc[0], nc[1]), hull.nu_dot(nu, tau, nc), rtol=1e-9, atol=1e-12
+        )
+
+
+def test_mmg_hull_without_current_is_the_papers_equations():
+    """MMGHull.nu_dot with no current equals MMGModel.nu_dot (Yasukawa & Yoshimura 2015
+    eq. 4) with the unit's force added as tau."""
+    from shipgym.dynamics.mmg import MMGHull
+
+    p = kvlcc2(100.0)
+    m, hull = MMGModel(p), MMGHull(p)
+    nu = np.array([[6.5, -0.4, 0.01], [3.0, 0.8, -0.02]])
+    delta, n = np.array([0.3, -0.5]), np.array([4.9, 3.0])
+    X, Y, N, _ = m.propulsion_forces(nu, delta, n)
+    np.testing.assert_allclose(
+        hull.nu_dot(nu, np.stack([X, Y, N], -1)), m.nu_dot(nu, delta, n), rtol=1e-10
+    )
+
+
+def test_the_unit_uses_shipgyms_rudder_sign():
+    """In the vessel's actuator set, a positive rudder angle pushes the stern to starboard
+    (Y > 0) and turns the bow to port (N < 0): the paper's angle is its negative."""
+    from shipgym.dynamics.vessel import load_vessel
+
+    acts = load_vessel("kvlcc2-100m").actuators
+    tau = acts.tau(np.array([4.926, math.radians(20)]), np.array([7.0, 0.0, 0.0]))
+    assert tau[1] > 0 and tau[2] < 0
+    X, Y, N, _ = MMGModel(kvlcc2(100.0)).propulsion_forces([7.0, 0.0, 0.0], -math.radians(20),
+                                                            4.926)  # fmt: skip
+    np.testing.assert_allclose(tau, [X, Y, N], rtol=1e-12)
+    flow = acts.flow_kernel()
+    out = flow([4.926, math.radians(20)], 7.0, 0.0, 0.0, 0.0)
+    np.testing.assert_allclose(out[:4], [tau[0], tau[1], 0.0, tau[2]], rtol=1e-12)

@@ -46,7 +46,8 @@ def test_lift_kernel_equals_the_array_law(inflow, post_stall):
             rng.normal(0, 0.1),
             rng.normal(0, 0.05),
         )
-        Y, K, N, lifts, stalls = flow([d], u, v, p, r)
+        X, Y, K, N, lifts, stalls = flow([d], u, v, p, r)
+        assert X == 0.0  # a rudder without drag
         F = float(rud.lift(np.array([d]), np.array([u, v, p, r])))
         assert lifts[0] == pytest.approx(F, rel=1e-12, abs=1e-12)
         assert (Y, K, N) == pytest.approx((F, -2.0 * F, -20.0 * F), rel=1e-12, abs=1e-9)

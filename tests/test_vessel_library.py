@@ -18,6 +18,7 @@ import pytest
 from shipgym.disturbances import WindConfig
 from shipgym.dynamics import simulate_reference, wrap_angle
 from shipgym.dynamics.actuators import Azimuth
+from shipgym.dynamics.mmg import MMGHull
 from shipgym.dynamics.vessel import VesselError, load_vessel, vessel_names, vessels
 from shipgym.envs.physics import VesselPhysics
 from shipgym.envs.scene import build_model
@@ -300,7 +301,16 @@ def _parity(vessel, plant=None, timestep: float = 0.05, duration: float = 600.0)
     acts = phys.actuators
     ct, cmds = _commands(acts, duration, 10.0, seed=1)
     act0 = phys.initial_actuator_state()
-    phys.reset(actuators=act0)
+    nu0 = np.zeros(phys.dofs)
+    if isinstance(phys.plant, MMGHull):
+        # a manoeuvring model (not valid at low speed): from its approach speed, the propeller
+        # between 70 % and 100 % of the self-propulsion point, the rudder anywhere
+        U0 = phys.vessel.trials["approach_speed"]
+        n0 = phys.plant.model.self_propulsion(U0)
+        nu0[0] = U0
+        act0[0] = n0
+        cmds[:, 0] = n0 * (0.85 + 0.15 * np.clip(cmds[:, 0] / acts.upper[0], -1.0, 1.0))
+    phys.reset(nu=nu0, actuators=act0)
     n_cmd = round(10.0 / timestep)
     traj = [phys.eta_full]
     for k in range(ct.size):
@@ -317,7 +327,7 @@ def _parity(vessel, plant=None, timestep: float = 0.05, duration: float = 600.0)
         return phys.wind.load(t, psi, nu[0], nu[1])
 
     ref = simulate_reference(
-        phys.plant, t_eval, ct, cmds, actuators=acts, act0=act0, env_load=env_load,
+        phys.plant, t_eval, ct, cmds, actuators=acts, act0=act0, nu0=nu0, env_load=env_load,
         breakpoints=np.arange(0.0, duration, GUSTY.sample_period),
     )  # fmt: skip
     dist = np.sum(np.hypot(*np.diff(ref.eta[:, :2], axis=0).T))

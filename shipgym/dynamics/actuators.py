@@ -51,6 +51,7 @@ __all__ = [
     "ActuatorSet",
     "Azimuth",
     "Channel",
+    "MMGPropulsion",
     "Propeller",
     "Rudder",
 ]
@@ -107,6 +108,9 @@ class Actuator:
     """Protocol of an actuator kind (a frozen dataclass subclass)."""
 
     kind: ClassVar[str] = ""
+    #: whether the force depends on the flow past the hull (``force(states, nu)``); MuJoCo's
+    #: actuator then carries no force and the physics adds it (:meth:`ActuatorSet.flow_kernel`)
+    flow_dependent: ClassVar[bool] = False
     name: str
     position: tuple[float, float, float]
     colour: str
@@ -371,6 +375,7 @@ class Rudder(Actuator):
     """
 
     kind: ClassVar[str] = "rudder"
+    flow_dependent: ClassVar[bool] = True
     name: str = ""
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     lift_gain: float = 1.0
@@ -457,12 +462,121 @@ class Rudder(Actuator):
         return 0.0
 
 
+@dataclass(frozen=True)
+class MMGPropulsion(Actuator):
+    r"""The propeller and rudder of an MMG hull (Yasukawa & Yoshimura 2015), one unit: the
+    rudder works in the propeller's slipstream, so the two forces are one law.
+
+    Two channels: ``NAME`` the propeller speed ``n`` (rps, ``[min_rps, max_rps]``), which
+    follows its command at a rate limited to ``shaft_rate`` (a servo: a controllable-pitch
+    propeller's pitch change or an engine's speed change, approximated as the shaft speed's
+    ramp; the notes' [chosen] stopping manoeuvres reverse it from ``+n0`` to ``-n0`` in 20 s),
+    and ``rudder`` (:attr:`rudder_name`) the rudder angle (rad, ``+-max_angle``), a
+    rate-limited servo as for :class:`Rudder`. Positive ``delta`` gives a force to starboard
+    (a turn to port), shipgym's sign for every rudder; the paper's angle is ``-delta``.
+
+    Force: :meth:`~shipgym.dynamics.mmg.MMGModel.propulsion_forces` of :attr:`params` at the
+    velocity through the water (thrust from ``K_T(J_P)`` with the wake and thrust
+    deduction, the rudder's normal force with the flow straightening and the slipstream,
+    the hull-rudder interaction ``a_H``, ``x_H``; the astern extensions). The generalised
+    force is not that of one point force (``N_R = -(x_R + a_H x_H) F_N cos delta``):
+    :meth:`generalised`. A 3-DOF unit: the MMG standard model is planar.
+
+    Attributes:
+        name: the unit's name and its propeller channel's.
+        params: the ship's :class:`~shipgym.dynamics.mmg.MMGParameters`.
+        position: the propeller's position (m, body frame; for drawing: the law uses
+            ``params``).
+        max_rps, min_rps: propeller speed range (rps; ``min_rps < 0`` astern).
+        shaft_rate: largest rate of the propeller speed (rps/s).
+        shaft_time_constant: the shaft servo's time constant (s), 0 for an ideal ramp.
+        max_angle, max_rate, servo_time_constant: the rudder's, as for :class:`Rudder`.
+        rudder_name: the rudder channel's name.
+    """
+
+    kind: ClassVar[str] = "mmg"
+    flow_dependent: ClassVar[bool] = True
+    name: str = ""
+    params: Any = None
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    max_rps: float = 1.0
+    min_rps: float = -1.0
+    shaft_rate: float = 1.0
+    shaft_time_constant: float = 0.0
+    max_angle: float = math.radians(35.0)
+    max_rate: float = math.radians(2.32)
+    servo_time_constant: float = 0.0
+    rudder_name: str = "rudder"
+    colour: str = "#9467bd"
+
+    def __post_init__(self) -> None:
+        from .mmg import MMGModel, MMGParameters
+
+        if not isinstance(self.params, MMGParameters):
+            raise ValueError(f"actuator {self.name!r}: params must be MMGParameters")
+        object.__setattr__(self, "position", _check_position(self.name, self.position))
+        for k in ("max_rps", "shaft_rate", "max_angle", "max_rate"):
+            v = getattr(self, k)
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise ValueError(f"actuator {self.name!r}: {k} must be > 0, got {v!r}")
+        if not (math.isfinite(self.min_rps) and self.min_rps <= 0):
+            raise ValueError(f"actuator {self.name!r}: min_rps must be <= 0, got {self.min_rps!r}")
+        for k in ("shaft_time_constant", "servo_time_constant"):
+            v = getattr(self, k)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"actuator {self.name!r}: {k} must be >= 0 s, got {v!r}")
+        if self.rudder_name == self.name:
+            raise ValueError(f"actuator {self.name!r}: rudder_name must differ from the name")
+        object.__setattr__(self, "_model", MMGModel(self.params))
+
+    @property
+    def channels(self) -> tuple[Channel, ...]:
+        return (
+            Channel(self.name, "rps", self.min_rps, self.max_rps, "servo",
+                    self.shaft_time_constant, rate=self.shaft_rate),
+            Channel(self.rudder_name, "rad", -self.max_angle, self.max_angle, "servo",
+                    self.servo_time_constant, rate=self.max_rate),
+        )  # fmt: skip
+
+    def _parts(self, states: ArrayLike, nu: ArrayLike | None) -> tuple[Any, ...]:
+        if nu is None:
+            raise ValueError(
+                f"the force of the MMG unit {self.name!r} depends on the flow: pass the body "
+                "velocity through the water nu = [u, v, r]"
+            )
+        s = np.asarray(states, dtype=float)
+        n = np.asarray(nu, dtype=float)
+        if n.shape[-1] != 3:
+            raise ValueError(f"an MMG unit is planar: nu must be [u, v, r], got shape {n.shape}")
+        return self._model.propulsion_forces(n, -s[..., 1], s[..., 0])  # type: ignore[attr-defined]
+
+    def generalised(self, states: ArrayLike, nu: ArrayLike | None = None) -> tuple[Any, Any, Any]:
+        """``(X, Y, N)`` (N, N, N m) of the propeller and rudder, shape (...)."""
+        X, Y, N, _ = self._parts(states, nu)
+        return X, Y, N
+
+    def force(self, states: NDArray[np.float64], nu: ArrayLike | None = None) -> tuple[Any, Any]:
+        X, Y, _N, _ = self._parts(states, nu)
+        return X, Y
+
+    def thrust(self, states: NDArray[np.float64], nu: ArrayLike | None = None) -> Any:
+        """The propeller thrust ``T`` (N, signed), shape (...)."""
+        return self._parts(states, nu)[3]["T"]
+
+    @property
+    def max_thrust(self) -> float:
+        """The bollard-pull surge force ``(1 - t_P) rho n_max^2 D_P^4 k_0`` (N)."""
+        p = self.params
+        return (1 - p.t_P) * p.rho * self.max_rps**2 * p.D_P**4 * p.k0
+
+
 #: actuator kinds by the name used in vessel files (``kind = "..."``)
 ACTUATOR_KINDS: dict[str, type[Actuator]] = {
     "propeller": Propeller,
     "tunnel": Propeller,
     "azimuth": Azimuth,
     "rudder": Rudder,
+    "mmg": MMGPropulsion,
 }
 
 
@@ -553,13 +667,13 @@ class ActuatorSet:
     @property
     def flow_dependent(self) -> bool:
         """Whether a force depends on the flow past the hull (a rudder): pass ``nu``."""
-        return any(isinstance(a, Rudder) for a in self.actuators)
+        return any(a.flow_dependent for a in self.actuators)
 
     def _each(self, states: ArrayLike, nu: ArrayLike | None, what: str) -> list[Any]:
         s = self.check_states(states)
         out = []
         for a, sl in zip(self.actuators, self.slices, strict=True):
-            if isinstance(a, Rudder):
+            if a.flow_dependent:
                 out.append(getattr(a, what)(s[..., sl], nu))
             else:
                 out.append(getattr(a, what)(s[..., sl]))
@@ -585,14 +699,20 @@ class ActuatorSet:
         """
         f = self.forces(states, nu)
         pos = np.array([a.position for a in self.actuators])
-        fx, fy = f[..., 0], f[..., 1]
+        point = np.array([not hasattr(a, "generalised") for a in self.actuators])
+        fx, fy = f[..., 0] * point, f[..., 1] * point
         X = fx.sum(-1)
         Y = fy.sum(-1)
         N = (pos[:, 0] * fy - pos[:, 1] * fx).sum(-1)
+        s = self.check_states(states)
+        for a, sl in zip(self.actuators, self.slices, strict=True):
+            if hasattr(a, "generalised"):  # not one point force (an MMG unit)
+                gx, gy, gn = a.generalised(s[..., sl], nu)
+                X, Y, N = X + gx, Y + gy, N + gn
         if self.dofs == 3:
-            return np.stack([X, Y, N], -1)
+            return np.stack(np.broadcast_arrays(X, Y, N), -1)
         K = (-pos[:, 2] * fy).sum(-1)
-        return np.stack([X, Y, K, N], -1)
+        return np.stack(np.broadcast_arrays(X, Y, K, N), -1)
 
     def configuration_matrix(self) -> NDArray[np.float64]:
         """``B`` (dofs, n_actuators) of the fixed-direction actuators: ``tau = B F``.
@@ -622,6 +742,9 @@ class ActuatorSet:
             x, y, z = a.position
             F = a.max_thrust
             if isinstance(a, Rudder):  # no bound without a flow speed
+                continue
+            if isinstance(a, MMGPropulsion):  # the propeller's bollard pull (the rudder: none)
+                out[0] += F
                 continue
             if isinstance(a, Propeller):
                 c, s = a.direction
@@ -714,7 +837,7 @@ class ActuatorSet:
         for a in self.actuators:
             if isinstance(a, Propeller):
                 laws.append((i, a.k_ahead, a.k_astern, a.law == "quadratic"))
-            elif isinstance(a, Rudder):  # its lift needs the flow: flow_kernel
+            elif a.flow_dependent:  # its force needs the flow: flow_kernel
                 laws.append((i, 0.0, 0.0, False))
             else:
                 assert isinstance(a, Azimuth)
@@ -754,7 +877,7 @@ class ActuatorSet:
         i = 0
         for a in self.actuators:
             x, y, z = a.position
-            if isinstance(a, Rudder):  # not a MuJoCo-applied force: flow_kernel
+            if a.flow_dependent:  # not a MuJoCo-applied force: flow_kernel
                 i += len(a.channels)
                 continue
             if isinstance(a, Propeller):
@@ -858,34 +981,48 @@ class ActuatorSet:
     def flow_kernel(
         self,
     ) -> Callable[[list[float], float, float, float, float], tuple[Any, ...]] | None:
-        """``f(states, u, v, p, r) -> (Y, K, N, lifts, stalled)`` of the rudders, plain floats.
+        """``f(states, u, v, p, r) -> (X, Y, K, N, forces, stalled)``, plain floats.
 
-        The generalised force (N, N m m) of every flow-dependent actuator (:class:`Rudder`),
-        which the physics adds to the hull's loads itself (MuJoCo's actuator carries no force
-        for them), with the lift (N) and the stall flag of each, in actuator order; ``None``
-        when the set has no such actuator. :meth:`Rudder.lift` is the array form (a test
-        checks one against the other).
+        The generalised force (N, N, N m, N m) of every flow-dependent actuator (a
+        :class:`Rudder`, an :class:`MMGPropulsion` unit) at the velocity through the water
+        ``(u, v, p, r)``, which the physics adds to the hull's loads itself (MuJoCo's
+        actuator carries no force for them), with one force (N) per such actuator, in actuator
+        order (a rudder's lift, an MMG unit's propeller thrust) and its stall flag (an MMG
+        unit's is False); ``None`` when the set has none. The array forms
+        (:meth:`Rudder.lift`, :meth:`MMGPropulsion.generalised`) are checked against it.
         """
-        rud = []
+        from .mmg import propulsion_kernel
+
+        laws = []
         i = 0
         for a in self.actuators:
             if isinstance(a, Rudder):
                 x, _y, z = a.position
-                rud.append((i, a.lift_gain, x, z, a.stall_angle, a.post_stall * a.stall_angle,
-                            a.inflow))  # fmt: skip
+                laws.append((0, i, a.lift_gain, x, z, a.stall_angle, a.post_stall * a.stall_angle,
+                             a.inflow))  # fmt: skip
+            elif isinstance(a, MMGPropulsion):
+                laws.append((1, i, propulsion_kernel(a.params), 0.0, 0.0, 0.0, 0.0, False))
             i += len(a.channels)
-        if not rud:
+        if not laws:
             return None
-        rud_t = tuple(rud)
+        laws_t = tuple(laws)
         atan2 = math.atan2
 
         def flow_of(
             st: list[float], u: float, v: float, p: float, r: float
-        ) -> tuple[float, float, float, tuple[float, ...], tuple[bool, ...]]:
-            Y = K = N = 0.0
+        ) -> tuple[float, float, float, float, tuple[float, ...], tuple[bool, ...]]:
+            X = Y = K = N = 0.0
             lifts = []
             stalls = []
-            for j, k, x, z, a_s, c_s, inflow in rud_t:
+            for kind, j, k, x, z, a_s, c_s, inflow in laws_t:
+                if kind == 1:  # an MMG unit: states [n, delta], the paper's angle is -delta
+                    fx, fy, fn, T = k(u, v, r, -st[j + 1], st[j])
+                    X += fx
+                    Y += fy
+                    N += fn
+                    lifts.append(T)
+                    stalls.append(False)
+                    continue
                 if inflow:
                     vr = v + x * r - z * p
                     q = u * u + vr * vr
@@ -903,6 +1040,6 @@ class ActuatorSet:
                 N += x * f
                 lifts.append(f)
                 stalls.append(stalled)
-            return Y, K, N, tuple(lifts), tuple(stalls)
+            return X, Y, K, N, tuple(lifts), tuple(stalls)
 
         return flow_of

@@ -153,7 +153,7 @@ def roll_rhs_of(vessel: Any, U: float, *, rudder: str | None = None, plant: str 
     def f(x: Any, delta: float, w: Any = None) -> NDArray[np.float64]:
         v, r, _psi, p, phi = (float(c) for c in x)
         st[j] = float(delta)
-        Y, K, N, _l, _s = flow_of(st, Uf, v, p, r)
+        _X, Y, K, N, _l, _s = flow_of(st, Uf, v, p, r)
         if w is not None:
             K += float(w[0])
             N += float(w[1])

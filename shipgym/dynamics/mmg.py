@@ -38,12 +38,21 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["KVLCC2_L7", "MMGModel", "MMGParameters", "kvlcc2"]
+__all__ = [
+    "KVLCC2_L7",
+    "MMGHull",
+    "MMGModel",
+    "MMGParameters",
+    "hull_kernel",
+    "kvlcc2",
+    "propulsion_kernel",
+]
 
 Array = NDArray[np.float64]
 
@@ -184,21 +193,15 @@ class MMGModel:
         C2 = np.where(beta_P > 0, p.C2_pos, p.C2_neg)
         return (1 - p.w_P0) * (1 + (1 - np.exp(-p.C1 * np.abs(beta_P))) * (C2 - 1))
 
-    def forces(
-        self, nu: ArrayLike, delta: ArrayLike, n: ArrayLike
-    ) -> tuple[Array, Array, Array, dict[str, Array]]:
-        """``(X, Y, N, parts)`` (N, N, N m) at ``nu = [u, v, r]`` (..., 3), rudder angle
-        ``delta`` (rad) and propeller speed ``n`` (rps); ``parts`` holds the hull, propeller
-        and rudder terms and ``K_T``, ``J_P``, ``u_R``, ``v_R``, ``alpha_R``, ``F_N``."""
+    def hull_forces(self, nu: ArrayLike) -> tuple[Array, Array, Array]:
+        """``(X_H, Y_H, N_H)`` (N, N, N m) of the bare hull at ``nu = [u, v, r]`` (..., 3)
+        through the water (Yasukawa & Yoshimura 2015 eqs. 9-11)."""
         p = self.p
         nu = np.asarray(nu, dtype=float)
         u, v, r = nu[..., 0], nu[..., 1], nu[..., 2]
-        delta = np.asarray(delta, dtype=float)
-        n = np.asarray(n, dtype=float)
         U = np.hypot(u, v)
         Us = np.where(U > 1e-9, U, 1e-9)
         vp, rp = v / Us, r * p.L / Us
-        beta = np.arctan2(-v, u)
         q = 0.5 * p.rho * p.L * p.d * U**2
         XH = q * (-p.R0 + p.X_vv * vp**2 + p.X_vr * vp * rp + p.X_rr * rp**2
                   + p.X_vvvv * vp**4)  # fmt: skip
@@ -206,6 +209,25 @@ class MMGModel:
                   + p.Y_vrr * vp * rp**2 + p.Y_rrr * rp**3)  # fmt: skip
         NH = q * p.L * (p.N_v * vp + p.N_r * rp + p.N_vvv * vp**3 + p.N_vvr * vp**2 * rp
                         + p.N_vrr * vp * rp**2 + p.N_rrr * rp**3)  # fmt: skip
+        return XH, YH, NH
+
+    def propulsion_forces(
+        self, nu: ArrayLike, delta: ArrayLike, n: ArrayLike
+    ) -> tuple[Array, Array, Array, dict[str, Array]]:
+        """``(X, Y, N, parts)`` of the propeller and rudder (N, N, N m) at ``nu = [u, v, r]``
+        (..., 3) through the water, rudder angle ``delta`` (rad, the paper's sign: positive
+        turns to starboard) and propeller speed ``n`` (rps); ``parts`` holds ``X_P``, ``Y_P``,
+        ``N_P``, ``X_R``, ``Y_R``, ``N_R``, the thrust ``T``, ``K_T``, ``J_P``, ``u_R``,
+        ``v_R``, ``alpha_R`` and ``F_N``."""
+        p = self.p
+        nu = np.asarray(nu, dtype=float)
+        u, v, r = nu[..., 0], nu[..., 1], nu[..., 2]
+        delta = np.asarray(delta, dtype=float)
+        n = np.asarray(n, dtype=float)
+        U = np.hypot(u, v)
+        Us = np.where(U > 1e-9, U, 1e-9)
+        rp = r * p.L / Us
+        beta = np.arctan2(-v, u)
         # propeller
         one_w = self.wake(beta - p.x_P * rp)
         na = np.abs(n)
@@ -230,10 +252,22 @@ class MMGModel:
         XR = -(1 - p.t_R) * FN * np.sin(delta)
         YR = -(1 + p.a_H) * FN * np.cos(delta)
         NR = -(p.x_R * p.L + p.a_H * p.x_H * p.L) * FN * np.cos(delta)
-        parts = {"X_H": XH, "Y_H": YH, "N_H": NH, "X_P": XP, "Y_P": YP, "N_P": NP, "X_R": XR,
-                 "Y_R": YR, "N_R": NR, "K_T": KT, "J_P": J, "u_R": uR, "v_R": vR,
-                 "alpha_R": alpha, "F_N": FN}  # fmt: skip
-        return XH + XP + XR, YH + YP + YR, NH + NP + NR, parts
+        parts = {"X_P": XP, "Y_P": YP, "N_P": NP, "X_R": XR, "Y_R": YR, "N_R": NR, "T": T,
+                 "K_T": KT, "J_P": J, "u_R": uR, "v_R": vR, "alpha_R": alpha,
+                 "F_N": FN}  # fmt: skip
+        return XP + XR, YP + YR, NP + NR, parts
+
+    def forces(
+        self, nu: ArrayLike, delta: ArrayLike, n: ArrayLike
+    ) -> tuple[Array, Array, Array, dict[str, Array]]:
+        """``(X, Y, N, parts)`` (N, N, N m) at ``nu = [u, v, r]`` (..., 3), rudder angle
+        ``delta`` (rad, the paper's sign) and propeller speed ``n`` (rps): the hull's
+        (:meth:`hull_forces`) plus the propeller's and rudder's (:meth:`propulsion_forces`);
+        ``parts`` holds the hull terms ``X_H``, ``Y_H``, ``N_H`` too."""
+        XH, YH, NH = self.hull_forces(nu)
+        X, Y, N, parts = self.propulsion_forces(nu, delta, n)
+        parts = {"X_H": XH, "Y_H": YH, "N_H": NH, **parts}
+        return XH + X, YH + Y, NH + N, parts
 
     def nu_dot(self, nu: ArrayLike, delta: ArrayLike, n: ArrayLike) -> Array:
         """``[u_dot, v_dot, r_dot]`` (m/s^2, m/s^2, rad/s^2), shape of ``nu``."""
@@ -254,3 +288,182 @@ class MMGModel:
         from scipy.optimize import brentq
 
         return float(brentq(lambda n: self.nu_dot([U, 0.0, 0.0], 0.0, n)[0], 1e-3, 1e3))
+
+
+def hull_kernel(p: MMGParameters) -> Callable[[float, float, float], tuple[float, float, float]]:
+    """``f(u, v, r) -> (X_H, Y_H, N_H)`` on plain floats: :meth:`MMGModel.hull_forces` for
+    the physics step (a test checks one against the other)."""
+    h = 0.5 * p.rho * p.L * p.d
+    L = p.L
+    R0, Xvv, Xvr, Xrr, Xvvvv = p.R0, p.X_vv, p.X_vr, p.X_rr, p.X_vvvv
+    Yv, Yr, Yvvv, Yvvr, Yvrr, Yrrr = p.Y_v, p.Y_r, p.Y_vvv, p.Y_vvr, p.Y_vrr, p.Y_rrr
+    Nv, Nr, Nvvv, Nvvr, Nvrr, Nrrr = p.N_v, p.N_r, p.N_vvv, p.N_vvr, p.N_vrr, p.N_rrr
+    sqrt = math.sqrt
+
+    def hull(u: float, v: float, r: float) -> tuple[float, float, float]:
+        U2 = u * u + v * v
+        U = sqrt(U2)
+        Us = U if U > 1e-9 else 1e-9
+        vp = v / Us
+        rp = r * L / Us
+        q = h * U2
+        v2 = vp * vp
+        r2 = rp * rp
+        X = q * (-R0 + Xvv * v2 + Xvr * vp * rp + Xrr * r2 + Xvvvv * v2 * v2)
+        Y = q * (Yv * vp + Yr * rp + Yvvv * v2 * vp + Yvvr * v2 * rp + Yvrr * vp * r2
+                 + Yrrr * r2 * rp)  # fmt: skip
+        N = q * L * (Nv * vp + Nr * rp + Nvvv * v2 * vp + Nvvr * v2 * rp + Nvrr * vp * r2
+                     + Nrrr * r2 * rp)  # fmt: skip
+        return X, Y, N
+
+    return hull
+
+
+def propulsion_kernel(
+    p: MMGParameters,
+) -> Callable[[float, float, float, float, float], tuple[float, float, float, float]]:
+    """``f(u, v, r, delta, n) -> (X, Y, N, T)`` on plain floats: the propeller's and rudder's
+    force (:meth:`MMGModel.propulsion_forces`; ``delta`` with the paper's sign) and the
+    propeller thrust ``T`` (N), for the physics step (a test checks one against the other)."""
+    L, rho, D = p.L, p.rho, p.D_P
+    D4 = D**4
+    k0, k1, k2 = p.k0, p.k1, p.k2
+    w0, C1, C2p, C2n, xP = 1 - p.w_P0, p.C1, p.C2_pos, p.C2_neg, p.x_P
+    tP, tR, aH = p.t_P, p.t_R, p.a_H
+    arm = p.x_R * L + p.a_H * p.x_H * L
+    xPL, cy = p.x_P * L, p.c_y
+    eta = D / p.H_R
+    kap, eps, gn, gp, lR = p.kappa, p.eps, p.gamma_neg, p.gamma_pos, p.l_R
+    fa = 0.5 * rho * p.A_R * p.f_alpha
+    sqrt, exp, atan2, sin, cos, pi = math.sqrt, math.exp, math.atan2, math.sin, math.cos, math.pi
+
+    def propulsion(u: float, v: float, r: float, delta: float, n: float):  # type: ignore[no-untyped-def]
+        U = sqrt(u * u + v * v)
+        Us = U if U > 1e-9 else 1e-9
+        rp = r * L / Us
+        beta = atan2(-v, u)
+        bP = beta - xP * rp
+        one_w = w0 * (1 + (1 - exp(-C1 * abs(bP))) * ((C2p if bP > 0 else C2n) - 1))
+        na = abs(n)
+        J = u * one_w / ((na if na > 1e-9 else 1e-9) * D)
+        ahead = n > 0
+        KT = k0 + k1 * J + k2 * J * J if ahead else -(0.2 + 0.25 * J)
+        T = rho * n * n * D4 * KT
+        XP = (1 - tP) * T
+        YP = -cy * abs(XP) if n < 0 else 0.0
+        uR = eps * u * one_w
+        if ahead:
+            Js = J if abs(J) > 1e-9 else 1e-9
+            race = 1 + 8 * KT / (pi * Js * Js)
+            race = sqrt(race) if race > 0.0 else 0.0
+            uR *= sqrt(eta * (1 + kap * (race - 1)) ** 2 + 1 - eta)
+        bR = beta - lR * rp
+        vR = U * (gn if bR < 0 else gp) * bR
+        FN = fa * (uR * uR + vR * vR) * sin(delta - atan2(vR, uR))
+        cd = cos(delta)
+        return (
+            XP - (1 - tR) * FN * sin(delta),
+            YP - (1 + aH) * FN * cd,
+            xPL * YP - arm * FN * cd,
+            T,
+        )
+
+    return propulsion
+
+
+class MMGHull:
+    r"""The MMG hull as a shipgym plant (3 DOF, midship origin): the bare hull's forces
+    (:meth:`MMGModel.hull_forces`) and the inertia of the MMG equations, with the propeller
+    and rudder as the vessel's actuator (:class:`~shipgym.dynamics.actuators.MMGPropulsion`,
+    whose force the physics adds to ``tau``).
+
+    With a current ``nu_c`` (constant in NED), the rigid body moves with ``nu`` and the water
+    forces and added masses with ``nu_r = nu - nu_c``:
+
+    .. math::
+
+        m(\dot u - v r - x_G r^2) + m_x \dot u_r - m_y v_r r = X_H(\nu_r) + X \\
+        m(\dot v + u r + x_G \dot r) + m_y \dot v_r + m_x u_r r = Y_H(\nu_r) + Y \\
+        (I_{zG} + x_G^2 m)\dot r + x_G m(\dot v + u r) + J_z \dot r = N_H(\nu_r) + N
+
+    with ``dot nu_r = dot nu - [r v_c, -r u_c, 0]``; without current these are Yasukawa &
+    Yoshimura (2015) eq. 4 (the paper's yaw equation has no Munk moment of the added masses:
+    it is in ``N'_v``).
+
+    Args:
+        p: the parameters.
+        name: the plant variant's name.
+    """
+
+    dofs = 3
+
+    def __init__(self, p: MMGParameters, name: str = "default") -> None:
+        if not isinstance(p, MMGParameters):
+            raise TypeError(f"MMGHull needs MMGParameters, got {type(p).__name__}")
+        self.p = p
+        self.name = name
+        self.model = MMGModel(p)
+        self.m = self.model.m
+        self._k = self._make_kernel()
+
+    def __repr__(self) -> str:
+        return f"MMGHull({self.name!r}, L = {self.p.L:g} m)"
+
+    def mass_matrix(self) -> Array:
+        """``M = M_RB + M_A`` (kg, kg m, kg m^2) about midship, (3, 3)."""
+        md = self.model
+        xg = self.p.x_G * md.m
+        return np.array([[md.m + md.mx, 0.0, 0.0], [0.0, md.m + md.my, xg],
+                         [0.0, xg, md.IzG + self.p.x_G * xg + md.Jz]])  # fmt: skip
+
+    def nu_dot(self, nu: ArrayLike, tau: ArrayLike, nu_c: ArrayLike | None = None) -> Array:
+        """Body-frame acceleration (..., 3) by a linear solve of the equations above.
+
+        Args:
+            nu: body velocity over ground ``[u, v, r]`` (m/s, m/s, rad/s), (..., 3).
+            tau: the actuators' and the environment's force ``[X, Y, N]`` (N, N, N m).
+            nu_c: body-frame current ``[u_c, v_c, 0]`` (m/s).
+        """
+        md = self.model
+        nu = np.asarray(nu, dtype=float)
+        tau = np.asarray(tau, dtype=float)
+        nu_c = np.zeros(3) if nu_c is None else np.asarray(nu_c, dtype=float)
+        nu_r = nu - nu_c
+        u, v, r = nu[..., 0], nu[..., 1], nu[..., 2]
+        ur, vr = nu_r[..., 0], nu_r[..., 1]
+        uc, vc = nu_c[..., 0], nu_c[..., 1]
+        XH, YH, NH = md.hull_forces(nu_r)
+        m, xg = md.m, self.p.x_G
+        rhs = np.stack(np.broadcast_arrays(
+            XH + tau[..., 0] + m * (v * r + xg * r * r) + md.my * vr * r + md.mx * r * vc,
+            YH + tau[..., 1] - m * u * r - md.mx * ur * r - md.my * r * uc,
+            NH + tau[..., 2] - m * xg * u * r,
+        ), -1)  # fmt: skip
+        return np.linalg.solve(self.mass_matrix(), rhs[..., None])[..., 0]
+
+    @property
+    def accel(self) -> Callable[..., tuple[float, float, float]]:
+        """``accel(u, v, r, X, Y, N, u_c=0, v_c=0) -> (u_dot, v_dot, r_dot)`` on plain floats:
+        :meth:`nu_dot` written out for the physics step (a test checks one against the
+        other)."""
+        return self._k
+
+    def _make_kernel(self):  # type: ignore[no-untyped-def]
+        md = self.model
+        hull = hull_kernel(self.p)
+        m, mx, my, xg = md.m, md.mx, md.my, self.p.x_G
+        mxg = m * xg
+        Mi = np.linalg.inv(self.mass_matrix())
+        iu = 1.0 / (m + mx)
+        (_a, _b, _c), (_d, i22, i23), (_e, i32, i33) = Mi.tolist()
+
+        def accel(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
+            ur = u - u_c
+            vr = v - v_c
+            XH, YH, NH = hull(ur, vr, r)
+            fx = XH + X + m * (v * r + xg * r * r) + my * vr * r + mx * r * v_c
+            fy = YH + Y - m * u * r - mx * ur * r - my * r * u_c
+            fn = NH + N - mxg * u * r
+            return iu * fx, i22 * fy + i23 * fn, i32 * fy + i33 * fn
+
+        return accel

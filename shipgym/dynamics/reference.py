@@ -136,11 +136,13 @@ def simulate_reference(
     ) -> NDArray[np.float64]:
         eta, nu, act = x[0:nd], x[nd : 2 * nd], x[2 * nd :]
         psi = eta[ip]
-        tau = np.asarray(tau_of(act, nu), dtype=float)
+        nu_c = np.array([vc * np.cos(bc - psi), vc * np.sin(bc - psi), 0.0])
+        # the flow-dependent actuators (rudders, MMG units) feel the velocity through the water
+        nu_w = nu - (np.array([nu_c[0], nu_c[1], 0.0, 0.0]) if four else nu_c)
+        tau = np.asarray(tau_of(act, nu_w), dtype=float)
         if env_load is not None:
             planar = np.asarray(env_load(t, eta, nu), dtype=float)  # [X, Y, N]
             tau = tau + (np.array([planar[0], planar[1], 0.0, planar[2]]) if four else planar)
-        nu_c = np.array([vc * np.cos(bc - psi), vc * np.sin(bc - psi), 0.0])
         act_dot = np.where(lagged, (cmd - act) / tc_lag, cmd)
         if servo.any():
             w = np.clip((cmd - act) / np.where(ideal, 1.0, tc_lag), -rate, rate)

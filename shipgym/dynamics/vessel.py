@@ -18,6 +18,7 @@ non-positive masses, a singular mass matrix, actuators outside the hull: each ra
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from collections.abc import Mapping
@@ -29,7 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .actuators import ActuatorSet, Azimuth, Propeller, Rudder
+from .actuators import ActuatorSet, Azimuth, MMGPropulsion, Propeller, Rudder
 from .hull4 import KINEMATICS, Hull4
 from .model import PlantModel, plant_model
 from .params import HullParameters, WindageParameters
@@ -101,6 +102,8 @@ class Vessel:
             ``design_speed`` m/s, the LQR weights ``Q`` (5, state ``[v, r, psi, p, phi]``)
             and ``R``, the heading autopilot's ``heading_bandwidth`` rad/s and
             ``heading_zeta``); empty when the file has none.
+        trials: the sea-trial settings (``[trials]``: ``approach_speed`` m/s, the speed of the
+            IMO manoeuvres); empty when the file has none.
     """
 
     name: str
@@ -121,6 +124,7 @@ class Vessel:
     dimensions: tuple[float, float, float, float]
     sources: Mapping[str, tuple[str, str]] = field(default_factory=dict, repr=False)
     roll_control: Mapping[str, Any] = field(default_factory=dict, repr=False)
+    trials: Mapping[str, float] = field(default_factory=dict, repr=False)
 
     @property
     def body_xml(self) -> Path:
@@ -160,9 +164,28 @@ class Vessel:
 
     @property
     def rudders(self) -> tuple[str, ...]:
-        """Names of the vessel's rudders (the steering of the course-keeping and rudder-roll
-        tasks)."""
-        return tuple(a.name for a in self.actuators if isinstance(a, Rudder))
+        """Channel names of the vessel's rudders (the steering of the course-keeping, trial and
+        rudder-roll tasks): every :class:`Rudder` and the rudder of every MMG unit."""
+        out = []
+        for a in self.actuators:
+            if isinstance(a, Rudder):
+                out.append(a.name)
+            elif isinstance(a, MMGPropulsion):
+                out.append(a.rudder_name)
+        return tuple(out)
+
+    @property
+    def shafts(self) -> tuple[str, ...]:
+        """Channel names of the vessel's main propellers (the ahead/astern thrust of the
+        stopping manoeuvres): every MMG unit's propeller and every fixed propeller pointing
+        ahead (not tunnels)."""
+        out = []
+        for a in self.actuators:
+            if isinstance(a, MMGPropulsion):
+                out.append(a.name)
+            elif isinstance(a, Propeller) and not a.tunnel and a.alpha == 0.0:
+                out.append(a.name)
+        return tuple(out)
 
     def plant(self, name: str = "default", **options: bool) -> Any:
         """A plant variant by name (``options`` for the ``fossen3`` default only).
@@ -339,10 +362,51 @@ def _read_hull(r: _Reader, data: Mapping[str, Any], dofs: int) -> tuple[Any, dic
         if dofs != 4:
             raise r.fail("hull.family", "'blanke4' is a 4-DOF family: set vessel.dofs = 4")
         return _read_blanke4(r, data, t)
+    if family == "mmg":
+        if dofs != 3:
+            raise r.fail("hull.family", "'mmg' is a 3-DOF family (surge, sway, yaw): dofs = 3")
+        return _read_mmg(r, data, t)
     raise r.fail(
         "hull.family",
-        f"unknown hull family {family!r}; choose 'fossen3', 'linear4' or 'blanke4'",
+        f"unknown hull family {family!r}; choose 'fossen3', 'linear4', 'blanke4' or 'mmg'",
     )
+
+
+#: units of the MMG parameters in a vessel file (the rest are nondimensional: "1")
+_UNITS_MMG = {"L": "m", "B": "m", "d": "m", "nabla": "m^3", "x_G": "m", "D_P": "m", "H_R": "m",
+              "A_R": "m^2", "rho": "kg/m^3"}  # fmt: skip
+
+
+def _read_mmg(
+    r: _Reader, data: Mapping[str, Any], t: Mapping[str, Any]
+) -> tuple[Any, dict[str, Any]]:
+    """An ``mmg`` hull: one key per :class:`~shipgym.dynamics.mmg.MMGParameters` field (the
+    published values), an optional ``scale_to`` (m: the same hull geometrically scaled to
+    this length between perpendiculars) and ``L_oa`` (m)."""
+    from .mmg import MMGHull, MMGParameters  # here, so that the family's import stays here
+
+    pf = [f for f in fields(MMGParameters)]
+    units = {f.name: _UNITS_MMG.get(f.name, "1") for f in pf}
+    r.keys(t, "hull", {"family", "source", "scale_to", "L_oa", *units})
+    vals = {}
+    for f in pf:
+        dflt = f.default if f.default is not dataclasses.MISSING else ...
+        vals[f.name] = r.number(t, f.name, "hull", units[f.name], default=dflt)
+    try:
+        p = MMGParameters(**vals)
+        if "scale_to" in t:
+            p = p.scaled(r.number(t, "scale_to", "hull", "m", positive=True))
+    except ValueError as exc:
+        raise r.fail("hull", str(exc)) from None
+    hull = MMGHull(p)
+    _check_mass_matrix(r, hull.mass_matrix(), "hull (M = M_RB + M_A)")
+    L_oa = r.number(t, "L_oa", "hull", "m", positive=True)
+    if L_oa < p.L:
+        raise r.fail("hull.L_oa", f"must be >= L = {p.L:g} m (the length between perpendiculars)")
+    Iz = hull.model.IzG + p.x_G**2 * hull.m  # about midship, the body origin
+    info = {"m": hull.m, "I_x": Iz, "I_z": Iz, "L_oa": L_oa, "L_pp": p.L, "B": p.B, "T": p.d,
+            "params": p}  # fmt: skip
+    return _Dims4(info), {"default": hull}
 
 
 def _read_blanke4(
@@ -413,9 +477,14 @@ def _read_plants(r: _Reader, data: Mapping[str, Any], hull: Any, plants: dict[st
 
 
 def _read_actuators(
-    r: _Reader, data: Mapping[str, Any], dofs: int, dims: tuple[float, float, float, float]
+    r: _Reader,
+    data: Mapping[str, Any],
+    dofs: int,
+    dims: tuple[float, float, float, float],
+    hull: Any = None,
 ) -> ActuatorSet:
     items = data.get("actuator")
+    mmg = getattr(hull, "values", {}).get("params")
     if not isinstance(items, list) or not items:
         raise r.fail("actuator", "missing: give one [[actuator]] table per actuator")
     L_oa, _, B, T = dims
@@ -436,7 +505,7 @@ def _read_actuators(
                 f"[{x:g}, {y:g}, {z:g}] m lies outside the hull (|x| <= L_oa/2 = {0.5 * L_oa:g}, "
                 f"|y| <= B/2 = {0.5 * B:g}, |z| <= 2 T = {2 * T:g} m from the centre of gravity)",
             )
-        if kind != "rudder":
+        if kind not in ("rudder", "mmg"):
             tc = r.number(t, "time_constant", where, "s", positive=True)
         colour = r.string(t, "colour", where, "#1f77b4")
         try:
@@ -477,10 +546,15 @@ def _read_actuators(
                     colour=colour))  # fmt: skip
             elif kind == "rudder":
                 out.append(_read_rudder(r, t, where, name, pos, colour))
+            elif kind == "mmg":
+                if mmg is None:
+                    raise r.fail(f"{where}.kind", "an 'mmg' unit needs an 'mmg' hull family")
+                out.append(_read_mmg_unit(r, t, where, name, pos, colour, mmg))
             else:
                 raise r.fail(
                     f"{where}.kind",
-                    f"unknown actuator kind {kind!r}; choose propeller, tunnel, azimuth, rudder",
+                    f"unknown actuator kind {kind!r}; choose propeller, tunnel, azimuth, rudder, "
+                    "mmg",
                 )
         except ValueError as exc:
             if isinstance(exc, VesselError):
@@ -534,6 +608,28 @@ def _read_rudder(
     )  # fmt: skip
 
 
+def _read_mmg_unit(
+    r: _Reader, t: Mapping[str, Any], where: str, name: str, pos: tuple[float, ...],
+    colour: str, params: Any,
+) -> MMGPropulsion:  # fmt: skip
+    """A ``kind = "mmg"`` table: the propeller and rudder of the ``mmg`` hull (its law's
+    parameters are the hull's), their ranges, rates and servos."""
+    r.keys(t, where, {"name", "kind", "position", "colour", "max_rps", "min_rps", "shaft_rate",
+                      "shaft_time_constant", "max_angle_deg", "max_rate_deg",
+                      "servo_time_constant", "rudder_name"})  # fmt: skip
+    return MMGPropulsion(
+        name=name, params=params, position=pos, colour=colour,
+        max_rps=r.number(t, "max_rps", where, "rps", positive=True),
+        min_rps=r.number(t, "min_rps", where, "rps"),
+        shaft_rate=r.number(t, "shaft_rate", where, "rps/s", positive=True),
+        shaft_time_constant=r.number(t, "shaft_time_constant", where, "s", default=0.0),
+        max_angle=math.radians(r.number(t, "max_angle_deg", where, "deg", positive=True)),
+        max_rate=math.radians(r.number(t, "max_rate_deg", where, "deg/s", positive=True)),
+        servo_time_constant=r.number(t, "servo_time_constant", where, "s", default=0.0),
+        rudder_name=r.string(t, "rudder_name", where, "rudder"),
+    )  # fmt: skip
+
+
 _LIMIT_KEYS = {
     "surge_speed": "m/s", "surge_accel": "m/s^2", "surge_astern_speed": "m/s",
     "surge_astern_accel": "m/s^2", "sway_speed": "m/s", "sway_accel": "m/s^2",
@@ -552,7 +648,7 @@ def _read(path: Path) -> Vessel:
     except tomllib.TOMLDecodeError as exc:
         raise VesselError(f"{toml_path}: not valid TOML: {exc}") from None
     top = {"vessel", "hull", "plants", "design", "windage", "actuator", "limits", "control",
-           "roll_control",
+           "roll_control", "trials",
            "observer"}  # fmt: skip
     r.keys(data, "(top level)", top)
     v = r.table(data, "vessel")
@@ -589,7 +685,7 @@ def _read(path: Path) -> Vessel:
         if isinstance(exc, VesselError):
             raise
         raise r.fail("windage", str(exc)) from None
-    actuators = _read_actuators(r, data, int(dofs), dims)
+    actuators = _read_actuators(r, data, int(dofs), dims, hull)
     # any subset: shipgym.guidance.limits.vessel_limits derives the others from the capacity
     lim = r.table(data, "limits", required=False)
     r.keys(lim, "limits", set(_LIMIT_KEYS))
@@ -613,13 +709,16 @@ def _read(path: Path) -> Vessel:
         )
     }
     roll_control = _read_roll_control(r, data, int(dofs), actuators)
+    tr = r.table(data, "trials", required=False)
+    r.keys(tr, "trials", {"approach_speed"})
+    trials = {k: r.number(tr, k, "trials", "m/s", positive=True) for k in tr}
     if not (path / "vessel.xml").is_file():
         raise VesselError(f"{path}: vessel.xml (the MJCF hull body) is missing")
     return Vessel(
         name=name, title=title, folder=path, dofs=int(dofs), scale=scale, hull=hull,
         plants=plants, actuators=actuators, windage=windage, design=design, limits=limits,
         control=control, observer=observer, nominal_wind=nominal_wind, rigid_inertia=rigid,
-        dimensions=dims, sources=dict(r.sources), roll_control=roll_control,
+        dimensions=dims, sources=dict(r.sources), roll_control=roll_control, trials=trials,
     )  # fmt: skip
 
 

@@ -63,6 +63,7 @@ from shipgym.disturbances import (
 from shipgym.dynamics import PlantModel, WindageParameters
 from shipgym.dynamics.actuators import Azimuth
 from shipgym.dynamics.hull4 import Hull4, is_hull4
+from shipgym.dynamics.mmg import MMGHull
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.envs._mujoco import mujoco
 
@@ -169,9 +170,10 @@ class VesselPhysics:
         v = self.vessel
         self.plant = v.plant(plant) if isinstance(plant, str) else plant
         four = is_hull4(self.plant)
-        if not (four or isinstance(self.plant, PlantModel)):
+        if not (four or isinstance(self.plant, PlantModel | MMGHull)):
             raise TypeError(
-                f"plant must be a PlantModel, a 4-DOF hull (Hull4, Blanke4Hull) or a variant "
+                f"plant must be a PlantModel, an MMGHull, a 4-DOF hull (Hull4, Blanke4Hull) or a "
+                f"variant "
                 f"name, got {plant!r}"
             )
         dofs = 4 if four else 3
@@ -223,15 +225,16 @@ class VesselPhysics:
         )
         self._servo_cmd = [0.0] * len(self._servos)
         self._flow_of = v.actuators.flow_kernel()
-        n_flow = sum(1 for a in v.actuators if a.kind == "rudder")
+        n_flow = sum(1 for a in v.actuators if a.flow_dependent)
         #: per servo channel: whether the servo was still running at its rate limit in the last
         #: physics step of the last :meth:`step` (it has not reached its command because of the
         #: rate limit; an ideal servo runs at full rate for every move, and only a move that
         #: outlasts the call counts)
         self.rate_limited = np.zeros(len(self._servos), dtype=bool)
-        #: per rudder: whether its effective angle was past the stall angle at the last step
+        #: per flow-dependent actuator (rudders, MMG units): whether its effective angle was
+        #: past the stall angle at the last step (an MMG unit never stalls)
         self.stalled = np.zeros(n_flow, dtype=bool)
-        self._flow = (0.0, 0.0, 0.0, (0.0,) * n_flow, (False,) * n_flow)
+        self._flow = (0.0, 0.0, 0.0, 0.0, (0.0,) * n_flow, (False,) * n_flow)
         self._rate_hits = [0] * len(self._servos)
         self._external = (0.0, 0.0, 0.0, 0.0)
         self._linear_kin = getattr(self.plant, "kinematics", "fossen") == "linear"
@@ -480,22 +483,24 @@ class VesselPhysics:
 
     @property
     def thrust(self) -> NDArray[np.float64]:
-        """Signed thrust of every actuator (N) at the current states (a rudder: its lift at the
-        last physics step)."""
+        """Signed thrust of every actuator (N) at the current states (a rudder: its lift, an
+        MMG unit: its propeller thrust, at the last physics step)."""
         out = self._thrust_of(self.data.act.tolist())
         if self._flow_of is not None:
-            lifts = iter(self._flow[3])
-            out = [next(lifts) if a.kind == "rudder" else f
+            lifts = iter(self._flow[4])
+            out = [next(lifts) if a.flow_dependent else f
                    for a, f in zip(self.actuators, out, strict=True)]  # fmt: skip
         return np.array(out)
 
-    def _flow_now(self, st: list[float]) -> tuple[float, float, float]:
-        """The rudders' ``(Y, K, N)`` at the actuator states ``st`` and the current velocity."""
+    def _flow_now(self, st: list[float]) -> tuple[float, float, float, float]:
+        """The flow-dependent actuators' ``(X, Y, K, N)`` at the actuator states ``st`` and the
+        current velocity through the water (the current of the last physics step)."""
         if self._flow_of is None:
-            return 0.0, 0.0, 0.0
+            return 0.0, 0.0, 0.0, 0.0
         u, v, p, r = self.nu_full.tolist() if self.dofs == 4 else (*self.nu[:2], 0.0, self.nu[2])
-        Y, K, N, _l, _s = self._flow_of(st, u, v, p, r)
-        return Y, K, N
+        uc, vc = self._loads[6], self._loads[7]
+        X, Y, K, N, _l, _s = self._flow_of(st, u - uc, v - vc, p, r)
+        return X, Y, K, N
 
     @property
     def tau_thrusters(self) -> NDArray[np.float64]:
@@ -509,8 +514,8 @@ class VesselPhysics:
         states and flow (``K`` is 0 for a 3-DOF vessel)."""
         st = self.data.act.tolist()
         X, Y, K, N, _ = self._tau_of(st)
-        fy, fk, fn = self._flow_now(st)
-        return np.array([X, Y + fy, K + fk if self.dofs == 4 else 0.0, N + fn])
+        fx, fy, fk, fn = self._flow_now(st)
+        return np.array([X + fx, Y + fy, K + fk if self.dofs == 4 else 0.0, N + fn])
 
     @property
     def external_force(self) -> tuple[float, float, float, float]:
@@ -546,8 +551,8 @@ class VesselPhysics:
         for k, (j, _rate, _tc) in enumerate(self._servos):
             st[j] = self._servo_cmd[k]
         X, Y, _K, N, _ = self._tau_of(st)
-        fy, _fk, fn = self._flow_now(st)
-        return np.array([X, Y + fy, N + fn])
+        fx, fy, _fk, fn = self._flow_now(st)
+        return np.array([X + fx, Y + fy, N + fn])
 
     # ---- stepping --------------------------------------------------------------------------
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
@@ -597,7 +602,7 @@ class VesselPhysics:
         if self._servos:
             self.rate_limited[:] = [h > 0 for h in hits]
         if self._flow_of is not None:
-            self.stalled[:] = self._flow[4]
+            self.stalled[:] = self._flow[5]
         return taken
 
     def contacts(self) -> list[tuple[str, str]]:
@@ -695,8 +700,9 @@ class VesselPhysics:
             if flow_of is not None:
                 fl = flow_of(st, u - uc, v - vcb, 0.0, r)
                 this._flow = fl
-                ey += fl[0]
-                en += fl[2]
+                ex += fl[0]
+                ey += fl[1]
+                en += fl[3]
             ud, vd, rd = accel(
                 u, v, r, tx + (wx + dx_ + ex), ty + (wy + dy_ + ey), tn + (wn + dn_ + en), uc, vcb
             )
@@ -736,9 +742,10 @@ class VesselPhysics:
             if flow_of is not None:
                 fl = flow_of(st, u - uc, v - vcb, p, r)
                 this._flow = fl
-                ey += fl[0]
-                ek += fl[1]
-                en += fl[2]
+                ex += fl[0]
+                ey += fl[1]
+                ek += fl[2]
+                en += fl[3]
             ud, vd, pd, rd = accel(
                 u, v, p, r, phi, tx + (wx + dx_ + ex), ty + (wy + dy_ + ey), tk + ek,
                 tn + (wn + dn_ + en), uc, vcb,
