@@ -169,7 +169,8 @@ class ZigZag:
 @dataclass(frozen=True)
 class InitialTurning:
     """The initial turning test: rudder ``angle`` to ``side``; the metric is the distance run
-    until the heading has changed by ``heading_change`` (IMO MSC.137(76) Annex 5.3.2: 10 deg, 10 deg).
+    until the heading has changed by ``heading_change`` (IMO MSC.137(76) Annex 5.3.2: 10 deg
+    rudder, 10 deg heading change).
 
     Attributes:
         name; angle (rad); side (+1 starboard); heading_change (rad).
