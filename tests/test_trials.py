@@ -370,3 +370,21 @@ def test_monte_carlo_is_seeded(runs):
     assert a.speed_bias_max == c.speed_bias_max  # the bias is the noise-free run's
     with pytest.raises(ValueError, match="runs"):
         receiver_bias(t, eta, nu, S_p=0.01, runs=1)
+
+
+def test_plots(runs, turn_bias, tmp_path):
+    from shipgym.viz.trials import plot_bias, plot_tracks
+
+    tracks = {nm: runs[nm][1][::20] for nm in ("turning35_stbd", "turning35_port", "crash_stop")}
+    fig = plot_tracks(tracks, L, path=tmp_path / "tracks.png", outlines=4)
+    assert (tmp_path / "tracks.png").stat().st_size > 1000
+    (ax,) = fig.axes
+    assert len(ax.lines) == 3 * (1 + 4)
+    x_end = ax.lines[0].get_ydata()[-1]  # north / L of the starboard turn's end
+    assert x_end == pytest.approx(tracks["turning35_stbd"][-1, 0] / L)
+    b = turn_bias[0.01]
+    fig = plot_bias(b.t, b.truth, {S: turn_bias[S].estimate for S in (0.001, 0.01, 0.1)},
+                    path=tmp_path / "bias.png")  # fmt: skip
+    assert len(fig.axes) == 3 and (tmp_path / "bias.png").stat().st_size > 1000
+    assert len(fig.axes[1].lines) == 4
+    np.testing.assert_allclose(fig.axes[1].lines[0].get_ydata(), b.truth["beta_A"] / D)
