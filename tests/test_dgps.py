@@ -11,8 +11,11 @@ import pytest
 
 from shipgym.observers.dgps import (
     DGPSPVFilter,
+    DGPSReceiver,
+    antenna_motion,
     apply_current,
     gain_cycles,
+    pv_filter_batch,
     pv_lag,
     pv_model,
     pv_steady_gain,
@@ -93,3 +96,68 @@ def test_outputs_raw_velocity_and_the_current_correction_round_trip():
         pv_model(0.0)
     with pytest.raises(ValueError, match="position"):
         DGPSPVFilter().step([np.nan, 0.0])
+
+
+def _track(n=120):
+    """A ship accelerating into a starboard turn, sampled at 1 Hz (analytic)."""
+    t = np.arange(float(n))
+    psi = 0.3 + 0.0004 * t**2
+    r = 0.0008 * t
+    u = 6.0 - 0.01 * t
+    x = np.cumsum(u * np.cos(psi)) + 10.0
+    y = np.cumsum(u * np.sin(psi)) - 5.0
+    return np.c_[x, y, psi], np.c_[u, 0.1 * np.ones(n), r]
+
+
+def test_receiver_streaming_and_batch_agree_exactly():
+    eta, nu = _track()
+    for kw in ({}, {"antenna": (-40.0, 1.5)}, {"S_p": 0.1, "sigma": 0.5}):
+        batch = DGPSReceiver(**kw, rng=7).run(eta, nu[0])
+        rec = DGPSReceiver(**kw, rng=7)
+        first = rec.reset(eta[0], nu[0])
+        stream = [first] + [rec.update(e) for e in eta[1:]]
+        for name in batch._fields:
+            got = np.array([getattr(o, name) for o in stream])
+            np.testing.assert_array_equal(got, getattr(batch, name), err_msg=name)
+        # and against the printed filter (matrix form) on the same measurements
+        x0 = np.r_[batch.v_ns[0], batch.v_ew[0], batch.x_hat[0], batch.y_hat[0]]
+        f = DGPSPVFilter(kw.get("S_p", 0.01), x0=x0)
+        ref = np.array([x0] + [f.step(z) for z in batch.z[1:]])
+        np.testing.assert_allclose(np.c_[batch.v_ns, batch.v_ew, batch.x_hat, batch.y_hat], ref,
+                                   atol=1e-9)  # fmt: skip
+        np.testing.assert_array_equal(pv_filter_batch(batch.z, x0, kw.get("S_p", 0.01))[:, 0],
+                                      batch.v_ns)  # fmt: skip
+    # the recursion form: the gain from P_prior, and sigma 0 is noise-free
+    rs = DGPSReceiver(steady=False, sigma=0.0).run(eta, nu[0])
+    np.testing.assert_array_equal(rs.z, eta[:, :2])
+    with pytest.raises(RuntimeError, match="reset"):
+        DGPSReceiver().update(eta[0])
+    with pytest.raises(ValueError, match="sigma"):
+        DGPSReceiver(sigma=-1.0)
+
+
+def test_receiver_starts_at_the_truth_and_an_antenna_in_a_pure_rotation():
+    # straight run: started at the truth, noise-free, the estimate stays on it
+    n = 60
+    t = np.arange(float(n))
+    eta = np.c_[7.0 * t * math.cos(0.4), 7.0 * t * math.sin(0.4), np.full(n, 0.4)]
+    nu = np.tile([7.0, 0.0, 0.0], (n, 1))
+    out = DGPSReceiver(sigma=0.0).run(eta, nu[0])
+    np.testing.assert_allclose(out.v_xy, 7.0, atol=1e-12)
+    np.testing.assert_allclose(out.beta_A, 0.0, atol=1e-12)
+    np.testing.assert_allclose(np.c_[out.x_hat, out.y_hat], eta[:, :2], atol=1e-9)
+    # a pure rotation about the origin: the antenna traces R(psi) a
+    psi = np.linspace(0.0, 2.0, n)
+    rot = np.c_[np.zeros(n), np.zeros(n), psi]
+    a = np.array([-40.0, 3.0])
+    o = DGPSReceiver(sigma=0.0, antenna=a).run(rot, [0.0, 0.0, psi[1] - psi[0]])
+    want = np.c_[np.cos(psi) * a[0] - np.sin(psi) * a[1], np.sin(psi) * a[0] + np.cos(psi) * a[1]]
+    np.testing.assert_allclose(o.z, want, atol=1e-12)
+    # the antenna's velocity in a pure rotation is r x a, perpendicular to a
+    _, v = antenna_motion([0.0, 0.0, 0.0], [0.0, 0.0, 0.1], a)
+    np.testing.assert_allclose(v, [-0.1 * a[1], 0.1 * a[0]], atol=1e-15)
+    # noise: seeded, and about sigma
+    e1 = DGPSReceiver(rng=3).run(eta, nu[0]).z - eta[:, :2]
+    e2 = DGPSReceiver(rng=3).run(eta, nu[0]).z - eta[:, :2]
+    np.testing.assert_array_equal(e1, e2)
+    assert np.std(e1[1:]) == pytest.approx(2.0, rel=0.2)

@@ -226,6 +226,7 @@ def test_command_line_modules_are_leaves():
         "shipgym.disturbances.rollwaves",
         "shipgym.observers.dgps",
         "shipgym.dynamics.mmg",
+        "shipgym.trials",
     ],
 )
 def test_pure_layers_never_reach_the_simulator(package):

@@ -23,6 +23,13 @@ the course ``chi = atan2(v_EW, v_NS)`` and, with the gyro heading ``psi``, the d
 turn). The seed's recommendation, differentiating the raw positions, is
 :func:`raw_velocity`; its current correction (§1) is :func:`water_velocity`.
 
+:class:`DGPSReceiver` is the receiver of a simulated trial: antenna positions (with an offset
+from midship), noise, the filter started at the truth, and its outputs, in a batch
+(:meth:`DGPSReceiver.run`) and a streaming form (:meth:`DGPSReceiver.reset`,
+:meth:`DGPSReceiver.update`) for an environment sampling at 1 Hz; :func:`pv_filter_batch` runs
+the steady filter over many noise series at once (the Monte Carlo of
+:func:`shipgym.trials.bias.receiver_bias`).
+
 Pure NumPy/SciPy; the sensor noise of a simulation comes from its own seeded generator.
 """
 
@@ -41,11 +48,15 @@ __all__ = [
     "DGPS_DT",
     "DGPS_SIGMA",
     "S_P_OPTIMAL",
+    "DGPSOutput",
     "DGPSPVFilter",
+    "DGPSReceiver",
     "PVModel",
+    "antenna_motion",
     "apply_current",
     "gain_cycles",
     "pv_lag",
+    "pv_filter_batch",
     "pv_model",
     "pv_steady_gain",
     "raw_velocity",
@@ -281,3 +292,186 @@ def apply_current(v_water: ArrayLike, psi: ArrayLike, speed: float, gamma_c: flo
     if not (math.isfinite(speed) and speed >= 0):
         raise ValueError(f"the current speed must be >= 0 m/s, got {speed!r}")
     return np.asarray(v_water, dtype=float) + _current_body(psi, speed, gamma_c)
+
+
+class DGPSOutput(NamedTuple):
+    """The receiver's outputs per sample (arrays (..., n)): the velocity estimate ``v_ns``,
+    ``v_ew`` (m/s), the position estimate ``x_hat``, ``y_hat`` (m, north, east), the track
+    speed ``v_xy`` (m/s), the course ``chi`` and the drift angle ``beta_A`` (rad, with the
+    gyro heading; :func:`velocity_outputs`), and the measured antenna positions ``z``
+    (..., n, 2) (m)."""
+
+    v_ns: Array
+    v_ew: Array
+    x_hat: Array
+    y_hat: Array
+    v_xy: Array
+    chi: Array
+    beta_A: Array
+    z: Array
+
+
+def _steady_step(x: Array, z: Array, K: Array, dt: float) -> Array:
+    """One cycle of eq. 5, ``x+ = Phi x + K (z - H Phi x)``, written out elementwise so that
+    a single state (4,) and a batch (..., 4) give bit-identical results."""
+    vn, ve = x[..., 0], x[..., 1]
+    px, py = x[..., 2] + dt * vn, x[..., 3] + dt * ve
+    ex, ey = z[..., 0] - px, z[..., 1] - py
+    return np.stack(
+        [
+            vn + K[0, 0] * ex + K[0, 1] * ey,
+            ve + K[1, 0] * ex + K[1, 1] * ey,
+            px + K[2, 0] * ex + K[2, 1] * ey,
+            py + K[3, 0] * ex + K[3, 1] * ey,
+        ],
+        axis=-1,
+    )
+
+
+def antenna_motion(eta: ArrayLike, nu: ArrayLike, antenna: ArrayLike) -> tuple[Array, Array]:
+    """``(position (..., 2) m, ground velocity (..., 2) m/s)`` north/east of an antenna at
+    ``antenna = [x_a, y_a]`` (m, body frame, from the point ``eta``/``nu`` describe):
+    ``p = [x, y] + R(psi) a`` and ``v = R(psi) [u - r y_a, v + r x_a]``."""
+    eta = np.asarray(eta, dtype=float)
+    nu = np.asarray(nu, dtype=float)
+    ax, ay = (float(a) for a in np.asarray(antenna, dtype=float).reshape(2))
+    c, s = np.cos(eta[..., 2]), np.sin(eta[..., 2])
+    pos = np.stack([eta[..., 0] + c * ax - s * ay, eta[..., 1] + s * ax + c * ay], -1)
+    ub, vb = nu[..., 0] - nu[..., 2] * ay, nu[..., 1] + nu[..., 2] * ax
+    return pos, np.stack([c * ub - s * vb, s * ub + c * vb], -1)
+
+
+class DGPSReceiver:
+    """A DGPS receiver: antenna positions with noise through the PV filter of Artyszuk (2003).
+
+    Given the true pose at the receiver's samples, it forms the antenna position (``eta``'s
+    ``[x, y] + R(psi) antenna``), adds ``N(0, sigma^2)`` per axis, runs :class:`DGPSPVFilter`
+    started at the truth's antenna state at the first sample (``x0 = [v_N, v_E, x, y]``, the
+    straight-run steady state of the notes' setup), and outputs :class:`DGPSOutput` with the
+    gyro heading ``psi`` of ``eta`` (noise-free). The outputs are at the antenna; they are not
+    transformed back to midship (the seed's comparison with an antenna 40 m aft is at the
+    antenna).
+
+    Sample 0 is the initial state itself (no measurement is used there); sample ``k >= 1`` is
+    the filter after the measurement ``z_k``. The noise of samples ``1, 2, ...`` comes from
+    the generator in that order, two values (north, east) per sample, so the batch
+    (:meth:`run`) and the streaming form (:meth:`reset`, :meth:`update`) agree exactly.
+
+    Args:
+        S_p: the filter's spectral amplitude (m^2/s^3).
+        sigma: the position noise added per axis (m, >= 0; 0 noise-free).
+        dt: sample time (s).
+        antenna: the antenna's ``[x, y]`` in the body frame (m, forward and starboard of the
+            point ``eta`` describes, midship in :mod:`shipgym.dynamics.mmg`); the seed's aft
+            antenna is e.g. ``(-40.0, 0.0)``.
+        steady: the converged gain (eq. 5, the receiver) or the recursion from ``P_prior``.
+        rng: a ``numpy.random.Generator``, a seed, or ``None`` (seed 0).
+        filter_sigma: the noise the filter's ``R`` assumes (m; printed ``R = diag(4, 4)``,
+            2 m), kept when ``sigma`` is 0.
+    """
+
+    def __init__(
+        self,
+        S_p: float = S_P_OPTIMAL,
+        *,
+        sigma: float = DGPS_SIGMA,
+        dt: float = DGPS_DT,
+        antenna: ArrayLike = (0.0, 0.0),
+        steady: bool = True,
+        rng: np.random.Generator | int | None = None,
+        filter_sigma: float = DGPS_SIGMA,
+    ) -> None:
+        if not (isinstance(sigma, int | float) and math.isfinite(sigma) and sigma >= 0):
+            raise ValueError(f"sigma must be >= 0 m, got {sigma!r}")
+        a = np.asarray(antenna, dtype=float).reshape(-1)
+        if a.shape != (2,) or not np.all(np.isfinite(a)):
+            raise ValueError(f"antenna must be a finite [x, y] (m), got {antenna!r}")
+        self.filter = DGPSPVFilter(S_p, dt, filter_sigma, steady=steady)
+        self.S_p, self.sigma, self.dt = float(S_p), float(sigma), float(dt)
+        self.antenna = a
+        self.steady = bool(steady)
+        self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+        self._x: Array | None = None
+
+    def _initial(self, eta0: ArrayLike, nu0: ArrayLike) -> Array:
+        p, v = antenna_motion(eta0, nu0, self.antenna)
+        return np.r_[v, p]
+
+    def _outputs(self, x: Array, psi: ArrayLike, z: Array) -> DGPSOutput:
+        vxy, chi, beta = velocity_outputs(x[..., 0], x[..., 1], psi)
+        return DGPSOutput(x[..., 0], x[..., 1], x[..., 2], x[..., 3], vxy, chi, beta, z)
+
+    def _measure(self, pos: Array) -> Array:
+        if self.sigma == 0:
+            return pos
+        return pos + self.sigma * self.rng.standard_normal(pos.shape)
+
+    def _step(self, x: Array, z: Array) -> Array:
+        if self.steady:
+            return _steady_step(x, z, self.filter.K_inf, self.dt)
+        self.filter.x = x
+        return self.filter.step(z)
+
+    def reset(self, eta0: ArrayLike, nu0: ArrayLike) -> DGPSOutput:
+        """Start at the truth ``eta0 = [x, y, psi]``, ``nu0 = [u, v, r]``; the outputs of
+        sample 0 (the initial state)."""
+        self.filter.reset()
+        self.filter._started = True
+        self._x = self._initial(eta0, nu0)
+        pos, _ = antenna_motion(eta0, nu0, self.antenna)
+        return self._outputs(self._x, np.asarray(eta0, dtype=float)[2], pos)
+
+    def update(self, eta: ArrayLike) -> DGPSOutput:
+        """One sample ``dt`` after the last: measure the antenna at the true pose ``eta``,
+        filter, and return the outputs."""
+        if self._x is None:
+            raise RuntimeError("call reset(eta0, nu0) first")
+        eta = np.asarray(eta, dtype=float).reshape(3)
+        pos, _ = antenna_motion(eta, np.zeros(3), self.antenna)
+        z = self._measure(pos)
+        self._x = self._step(self._x, z)
+        return self._outputs(self._x, eta[2], z)
+
+    def run(self, eta: ArrayLike, nu0: ArrayLike) -> DGPSOutput:
+        """The receiver over the true poses ``eta`` (n, 3) sampled at ``dt``, started at the
+        truth (``eta[0]``, ``nu0``): outputs of shape (n,)."""
+        eta = np.asarray(eta, dtype=float)
+        if eta.ndim != 2 or eta.shape[1] != 3 or eta.shape[0] < 1:
+            raise ValueError(f"eta must be (n >= 1, 3), got {eta.shape}")
+        x = np.empty((eta.shape[0], 4))
+        self.reset(eta[0], nu0)
+        assert self._x is not None
+        x[0] = self._x
+        pos, _ = antenna_motion(eta, np.zeros_like(eta), self.antenna)
+        z = pos.copy()
+        z[1:] = self._measure(pos[1:])
+        for k in range(1, eta.shape[0]):
+            x[k] = self._x = self._step(self._x, z[k])
+        return self._outputs(x, eta[:, 2], z)
+
+
+def pv_filter_batch(
+    z: ArrayLike, x0: ArrayLike, S_p: float = S_P_OPTIMAL, dt: float = DGPS_DT,
+    sigma: float = DGPS_SIGMA,
+) -> Array:  # fmt: skip
+    """The steady filter (eq. 5) over a batch of measurement series at once.
+
+    Args:
+        z: measured positions (..., n, 2) (m); sample 0 is not used (the initial state).
+        x0: the initial states (..., 4) or (4,) (``[v_N, v_E, x, y]``).
+        S_p, dt, sigma: the filter (:func:`pv_model`).
+
+    Returns:
+        The estimates (..., n, 4), sample 0 ``x0``; bit-identical to :class:`DGPSReceiver`'s.
+    """
+    z = np.asarray(z, dtype=float)
+    if z.ndim < 2 or z.shape[-1] != 2:
+        raise ValueError(f"z must be (..., n, 2), got {z.shape}")
+    K, _ = pv_steady_gain(S_p, dt, sigma)
+    x = np.broadcast_to(np.asarray(x0, dtype=float), z.shape[:-2] + (4,)).copy()
+    out = np.empty(z.shape[:-1] + (4,))
+    out[..., 0, :] = x
+    for k in range(1, z.shape[-2]):
+        x = _steady_step(x, z[..., k, :], K, float(dt))
+        out[..., k, :] = x
+    return out
