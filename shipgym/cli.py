@@ -506,6 +506,89 @@ def _cmd_bench_roll(args: argparse.Namespace) -> int:
     return 0
 
 
+def _float_list(text: str, what: str) -> list[float]:
+    """``"0.001,0.01,0.1"`` -> floats > 0; ``ValueError`` naming ``what`` otherwise."""
+    try:
+        out = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise ValueError(f"{what} must be numbers separated by commas, got {text!r}") from None
+    if not out or not all(math.isfinite(x) and x > 0 for x in out):
+        raise ValueError(f"{what} must be positive numbers separated by commas, got {text!r}")
+    return out
+
+
+def _cmd_trials(args: argparse.Namespace) -> int:
+    from shipgym._io import progress_enabled
+    from shipgym.dynamics.vessel import load_vessel
+    from shipgym.envs.seatrial import trial_study
+    from shipgym.trials.manoeuvres import manoeuvre_names
+    from shipgym.trials.report import bias_table, trials_table
+
+    v = load_vessel(args.vessel)
+    names = None
+    if args.manoeuvres != "all":
+        names = [m.strip() for m in args.manoeuvres.split(",") if m.strip()]
+        bad = [m for m in names if m not in manoeuvre_names()]
+        if bad or not names:
+            raise ValueError(f"unknown manoeuvre {bad[0] if bad else args.manoeuvres!r}; choose "
+                             f"from {', '.join(manoeuvre_names())} or all")  # fmt: skip
+    sps = _float_list(args.sp, "--sp")
+    try:
+        ax, ay = (float(x) for x in args.antenna.split(","))
+    except ValueError:
+        raise ValueError(f"--antenna must be X,Y in m (body frame), got {args.antenna!r}") from None
+    receiver = None if args.receiver == "none" else args.receiver
+    for path in (args.json, args.markdown):
+        if path is not None:
+            check_writable(path)
+    bar = None
+    if progress_enabled(args.no_progress):
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(names or manoeuvre_names()), unit="trial", leave=False)
+
+    def tick(done: int, total: int, label: str) -> None:
+        if bar is not None:
+            bar.total = total
+            bar.set_postfix_str(label)
+            bar.update(1)
+
+    t0 = time.perf_counter()
+    study = trial_study(
+        v, names, speed=args.speed, current=args.current, receiver=receiver, S_p=sps,
+        runs=args.runs, seed=args.seed, antenna=(ax, ay), progress=tick,
+    )  # fmt: skip
+    if bar is not None:
+        bar.close()
+    wall = time.perf_counter() - t0
+    rec0 = next(iter(study.records.values()))
+    cur = rec0.current
+    title = (
+        f"Sea trials (IMO MSC.137(76)) of {v.name}: L = {rec0.L:g} m, approach speed "
+        f"{rec0.U0:g} m/s (L/V {rec0.L / rec0.U0:.1f} s), current "
+        + (f"{cur[0]:g} m/s to {math.degrees(cur[1]):g} deg" if cur[0] > 0 else "none")
+    )
+    parts = [trials_table(study.rows)]
+    if receiver is not None:
+        parts.append(
+            f"DGPS receiver (Artyszuk 2003): PV Kalman filter, S_p = {args.sp} m^2/s^3, 2 m "
+            f"noise at 1 Hz, antenna at ({ax:g}, {ay:g}) m; bias of the noise-free run, noise "
+            f"spread of {args.runs} Monte-Carlo runs (seed {args.seed}); stops up to u = 0"
+        )
+        parts.append(bias_table(study.bias_rows))
+    write_bench_outputs(title, "\n\n".join(parts), study.rows, wall,
+                        markdown=args.markdown)  # fmt: skip
+    if args.json is not None:
+        _write_json(args.json, {"title": title, "trials": study.rows, "bias": study.bias_rows,
+                                "wall_s": wall})  # fmt: skip
+    if args.figures is not None:
+        from shipgym.viz.trials import write_trial_figures
+
+        for f in write_trial_figures(study, args.figures, title=v.name):
+            print(f"wrote {f}")
+    return 0
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from shipgym.viz import load_run, recording_problem, write_report
 
@@ -727,6 +810,50 @@ def _parser() -> argparse.ArgumentParser:
 
     add_bench_controllers_parser(bsub)
     add_train_parser(sub)
+    p = sub.add_parser(
+        "trials", help="IMO sea trials (turning, zig-zag, stops) and the DGPS receiver's bias"
+    )
+    p.add_argument("--vessel", default="kvlcc2-100m", metavar="NAME",
+                   help="a vessel with a rudder (kvlcc2-100m)")  # fmt: skip
+    p.add_argument("--manoeuvres", default="all", metavar="A,B|all",
+                   help="turning35_stbd, turning35_port, zigzag10, zigzag20, initial_turning, "
+                   "crash_stop, coasting_stop (all the vessel can fly)")  # fmt: skip
+    p.add_argument("--speed", type=bounded_float(0.01, 50.0), default=None,
+                   help="approach speed, m/s (the vessel's [trials] approach_speed)")  # fmt: skip
+    p.add_argument("--current", default=None, metavar="SPEED@TO_DEG",
+                   help="constant current, e.g. 0.25@225 (0.25 m/s going south-west)")  # fmt: skip
+    p.add_argument(
+        "--receiver",
+        choices=["none", "dgps-pv"],
+        default="none",
+        help="the DGPS receiver's PV Kalman filter (Artyszuk 2003): bias study",
+    )
+    p.add_argument(
+        "--sp",
+        default="0.001,0.01,0.1",
+        metavar="A,B,C",
+        help="the receiver filter's S_p values, m^2/s^3 (0.001,0.01,0.1)",
+    )
+    p.add_argument("--runs", type=bounded_int(2, 10000), default=50,
+                   help="Monte-Carlo runs of the receiver noise (50)")  # fmt: skip
+    p.add_argument("--seed", type=seed_int, default=0, help="the Monte Carlo's seed (0)")
+    p.add_argument(
+        "--antenna",
+        default="0,0",
+        metavar="X,Y",
+        help="antenna position, m, body frame from midship (0,0; the seed's: aft)",
+    )
+    p.add_argument("--json", type=Path, default=None, metavar="PATH")
+    p.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    p.add_argument(
+        "--figures",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="tracks, drift angle and speed against time, receiver bias (PNG)",
+    )
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(func=_cmd_trials)
     p = sub.add_parser("demo", help="open-loop turn in gusty wind; prints a summary")
     p.add_argument("--wind", type=parse_wind, default="3@300",
                    metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip

@@ -56,6 +56,17 @@ def test_action_space_comes_from_the_actuators(task: str, vessel: str) -> None:
     env = _make(task, vessel)
     v = load_vessel(vessel)
     acts = v.actuators
+    if task == "shipgym/SeaTrial-v0":  # scripted: one no-op action; override: every channel
+        assert env.action_space == gym.spaces.Discrete(1)
+        env.close()
+        env = _make(task, vessel, override=True)
+        assert env.action_space.shape == (acts.n_channels,)
+        env.reset(seed=0)
+        _, _, _, _, info = env.step(np.ones(acts.n_channels, dtype=np.float32))
+        j = list(acts.channel_names).index(v.rudders[0])
+        assert info["rudder_command"] == pytest.approx(acts.upper[j])
+        env.close()
+        return
     if NEEDS[task] == "roll-steering":  # the rudders steer; a propeller holds the speed
         n = len(v.rudders)
         assert env.action_space.shape == (n,)
@@ -83,10 +94,10 @@ def test_same_seed_same_episode_and_spec_round_trip(task: str, vessel: str) -> N
         obs, _ = env.reset(seed=11)
         out.append(obs)
         rng = np.random.default_rng(5)
+        discrete = isinstance(env.action_space, gym.spaces.Discrete)
         for _ in range(15):
-            obs, r, term, trunc, info = env.step(
-                rng.uniform(-1, 1, env.action_space.shape).astype(np.float32)
-            )
+            act = 0 if discrete else rng.uniform(-1, 1, env.action_space.shape)
+            obs, r, term, trunc, info = env.step(act if discrete else act.astype(np.float32))
             out.append(np.r_[obs, r, info["eta"]])
             if term or trunc:
                 break

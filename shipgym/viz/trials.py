@@ -3,7 +3,9 @@
 - :func:`plot_tracks`: the midship tracks of trials in ship lengths (north up, east right),
   optionally with ship outlines along them;
 - :func:`plot_bias`: speed, drift angle and position error against time, the truth and the
-  receiver's estimate for each ``S_p`` (the seed's Figs. 2-7).
+  receiver's estimate for each ``S_p`` (the seed's Figs. 2-7);
+- :func:`plot_histories`: speed, drift angle and rudder against time of trials;
+- :func:`write_trial_figures`: all of them for a ``shipgym trials`` study.
 
 Inputs in SI (m, rad, m/s, s); angles are plotted in degrees. matplotlib is imported inside
 the functions (Agg canvas, no display needed). Each function returns the Figure and saves it
@@ -15,6 +17,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,7 +25,7 @@ from numpy.typing import ArrayLike
 
 from .report import DPI
 
-__all__ = ["plot_bias", "plot_tracks"]
+__all__ = ["plot_bias", "plot_histories", "plot_tracks", "write_trial_figures"]
 
 _DEG = 180.0 / math.pi
 
@@ -137,3 +140,65 @@ def plot_bias(
     if path is not None:
         fig.savefig(path, dpi=DPI)
     return fig
+
+
+def plot_histories(records: Mapping[str, Any], *, path: str | os.PathLike[str] | None = None,
+                   title: str = "") -> Any:  # fmt: skip
+    """Drift angle, speed and rudder angle against time of trials (the seed's Fig. 1 style).
+
+    Args:
+        records: label -> a :class:`~shipgym.envs.seatrial.TrialRecord` (or anything with
+            ``t``, ``nu`` (n, 3) over ground and ``rudder`` (n,)).
+        path: save the figure there (PNG) when given.
+        title: the figure title.
+    """
+    fig = _figure((8.0, 8.0))
+    axes = [fig.add_subplot(3, 1, i + 1) for i in range(3)]
+    for label, rec in records.items():
+        t = np.asarray(rec.t)
+        nu = np.asarray(rec.nu)
+        axes[0].plot(t, np.hypot(nu[:, 0], nu[:, 1]), lw=1.0, label=label)
+        axes[1].plot(t, np.degrees(np.arctan2(-nu[:, 1], nu[:, 0])), lw=1.0, label=label)
+        axes[2].plot(t, np.degrees(np.asarray(rec.rudder)), lw=1.0, label=label)
+    for ax, yl in zip(axes, ("speed over ground (m/s)", "drift angle beta (deg)",
+                             "rudder angle (deg, + to port)"), strict=True):  # fmt: skip
+        ax.set_ylabel(yl)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=7, ncol=2)
+    axes[-1].set_xlabel("time (s)")
+    if title:
+        fig.suptitle(title)
+    if path is not None:
+        fig.savefig(path, dpi=DPI)
+    return fig
+
+
+def write_trial_figures(
+    study: Any, folder: str | os.PathLike[str], *, title: str = ""
+) -> list[str]:
+    """The figures of a :class:`~shipgym.envs.seatrial.TrialStudy` in ``folder`` (PNG): the
+    tracks (``trial_tracks.png``), the time histories (``trial_histories.png``) and, with a
+    receiver, one bias figure per manoeuvre (``bias_<manoeuvre>.png``, every ``S_p``, the
+    ground-referenced estimate). Returns the paths written."""
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    recs = study.records
+    if not recs:
+        return []
+    L = next(iter(recs.values())).L
+    written = []
+    plot_tracks({m: r.eta for m, r in recs.items()}, L, outlines=4,
+                      path=out / "trial_tracks.png", title=f"{title}: tracks")  # fmt: skip
+    written.append(str(out / "trial_tracks.png"))
+    plot_histories(recs, path=out / "trial_histories.png", title=f"{title}: histories")
+    written.append(str(out / "trial_histories.png"))
+    for m in recs:
+        found = {sp: b for (mm, sp, corr), b in study.bias.items() if mm == m and not corr}
+        if not found:
+            continue
+        b0 = next(iter(found.values()))
+        path = out / f"bias_{m}.png"
+        plot_bias(b0.t, b0.truth, {sp: b.estimate for sp, b in found.items()}, path=path,
+                  title=f"{title}: {m}, DGPS receiver against the truth")  # fmt: skip
+        written.append(str(path))
+    return written

@@ -1,0 +1,210 @@
+"""Sea trials on the MuJoCo hull (Artyszuk 2003; IMO MSC.137(76)): the KVLCC2 scaled to 100 m
+against the notes' independent computation from the MMG paper (C4, C5), the L7 model at the
+paper's scale, the DGPS receiver's bias on the simulated trials (C6-C9), the current's effect
+against the geometry (C10), the env and the ``shipgym trials`` command."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import time
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import shipgym  # noqa: F401  (registers the ids)
+from shipgym.envs.seatrial import SeaTrialEnv, run_trial, trial_study
+from shipgym.trials.bias import receiver_bias
+
+D = math.pi / 180.0
+
+
+@pytest.fixture(scope="module")
+def trials():
+    """The 100 m tanker's trials, flown once by the MuJoCo hull (0.05 s physics step)."""
+    names = ("turning35_stbd", "zigzag10", "zigzag20", "crash_stop", "initial_turning")
+    return {m: run_trial("kvlcc2-100m", m) for m in names}
+
+
+def test_C4_turning_circle_on_the_mujoco_hull(trials):
+    """Advance 3.37 L and tactical diameter 3.14 L (+-0.05 L); 90 deg at 66 s, steady speed
+    2.68 m/s (the notes' integration of the same equations)."""
+    rec = trials["turning35_stbd"]
+    m = rec.metrics()
+    assert m.advance / rec.L == pytest.approx(3.37, abs=0.05)
+    assert m.tactical_diameter / rec.L == pytest.approx(3.14, abs=0.05)
+    assert m.transfer / rec.L == pytest.approx(1.35, abs=0.05)
+    assert m.time_90 == pytest.approx(66.0, abs=1.0)
+    assert m.steady_speed == pytest.approx(2.68, abs=0.03)
+    assert rec.eta[-1, 2] > 2 * math.pi  # turned to starboard (psi grows)
+    assert max(abs(rec.rudder)) == pytest.approx(35 * D, abs=1e-9)  # never past its limit
+
+
+def test_C5_zigzag_overshoots_on_the_mujoco_hull(trials):
+    ov10 = trials["zigzag10"].metrics().overshoots
+    ov20 = trials["zigzag20"].metrics().overshoots
+    assert ov10[0] / D == pytest.approx(7.4, abs=0.5)
+    assert ov20[0] / D == pytest.approx(18.3, abs=0.5)
+    assert ov10[1] / D == pytest.approx(18.2, abs=0.5)
+
+
+def test_every_imo_criterion_passes(trials):
+    for m, rec in trials.items():
+        crit = rec.criteria()
+        assert crit, m
+        assert all(c[3] for c in crit), (m, crit)
+    assert trials["initial_turning"].metrics().initial_turning_distance / 100 == pytest.approx(
+        1.87, abs=0.05
+    )
+
+
+@pytest.mark.parametrize(("name", "advance", "tactical"), [
+    ("turning35_stbd", 3.08, 3.12), ("turning35_port", 3.09, 3.10),
+])  # fmt: skip
+def test_the_L7_model_at_the_papers_scale(name, advance, tactical):
+    """KVLCC2 L7 at 1.179 m/s, rudder 15.8 deg/s: the notes' 3.08 / 3.12 L (starboard) and
+    3.09 / 3.10 L (port)."""
+    rec = run_trial("kvlcc2-l7", name, timestep=0.02)
+    m = rec.metrics()
+    assert m.advance / rec.L == pytest.approx(advance, abs=0.05)
+    assert m.tactical_diameter / rec.L == pytest.approx(tactical, abs=0.05)
+
+
+# ---- the DGPS receiver on the simulated trials (Artyszuk 2003) ----------------------------
+def _bias(rec, S_p, runs=30):
+    return receiver_bias(rec.t, rec.eta, rec.nu, S_p=S_p, runs=runs, seed=1)
+
+
+def test_C6_C7_C8_turning_bias(trials):
+    """S_p 0.01: drift-angle bias +8..+12 deg, speed bias +0.25..+0.6 m/s, position < 5 m;
+    S_p 0.001: position bias 7-13 m ("even 10 m"); S_p 0.1: smaller bias, > 2x the noise."""
+    rec = trials["turning35_stbd"]
+    b1, b2, b3 = (_bias(rec, s) for s in (0.001, 0.01, 0.1))
+    assert 8 * D <= b2.drift_bias_max <= 12 * D
+    assert 0.25 <= b2.speed_bias_max <= 0.6
+    assert b2.position_bias_max < 5.0
+    assert 7.0 <= b1.position_bias_max <= 13.0
+    assert b3.drift_bias_max < b2.drift_bias_max and b3.speed_bias_max < b2.speed_bias_max
+    assert b3.position_bias_max < b2.position_bias_max
+    assert b3.sigma_v > 2 * b2.sigma_v
+
+
+def test_C9_crash_stop_speed_bias(trials):
+    rec = trials["crash_stop"]
+    k = int(np.argmax(rec.nu[:, 0] <= 0.0)) + 1  # up to the stop
+    b = receiver_bias(rec.t[:k], rec.eta[:k], rec.nu[:k], S_p=0.01, runs=10)
+    assert b.speed_bias_max > 0.3
+
+
+def test_C10_current_shifts_the_drift_angle_as_the_geometry_says():
+    """A uniform current moves the hull with the water (the MuJoCo hull feels only the
+    velocity through the water): the ground-referenced velocity of the turn in a 0.25 m/s
+    current is the no-current turn's plus the current, at the same headings, and the drift
+    angle over ground shifts by up to atan(0.25 / 2.68) = 5.3 deg in the steady turn."""
+    calm = run_trial("kvlcc2-100m", "turning35_stbd", record_period=0.5)
+    vc, bc = 0.25, math.radians(225.0)  # going south-west: the seed's south and west current
+    cur = run_trial("kvlcc2-100m", "turning35_stbd", current="0.25@225", record_period=0.5)
+    np.testing.assert_allclose(cur.eta[:, 2], calm.eta[:, 2], atol=1e-6)  # same headings
+    psi = calm.eta[:, 2]
+    uc = vc * np.cos(bc - psi)
+    vcb = vc * np.sin(bc - psi)
+    np.testing.assert_allclose(cur.nu[:, 0], calm.nu[:, 0] + uc, atol=1e-6)
+    np.testing.assert_allclose(cur.nu[:, 1], calm.nu[:, 1] + vcb, atol=1e-6)
+    drift = lambda nu: np.arctan2(-nu[:, 1], nu[:, 0])  # noqa: E731
+    steady = calm.t > 300.0
+    shift = np.degrees(drift(cur.nu) - drift(calm.nu))[steady]
+    assert np.max(np.abs(shift)) == pytest.approx(math.degrees(math.atan(0.25 / 2.68)), abs=0.6)
+    # the track drifts with the current: 0.25 m/s over the record, to the south-west
+    d = cur.eta[-1, :2] - calm.eta[-1, :2]
+    np.testing.assert_allclose(d, vc * cur.t[-1] * np.array([math.cos(bc), math.sin(bc)]),
+                               atol=1e-3)  # fmt: skip
+
+
+# ---- the env --------------------------------------------------------------------------------
+def test_the_registered_trial_is_the_tankers_turn_and_reports_the_figures():
+    env = gym.make("shipgym/SeaTrial-v0", receiver="dgps-pv")
+    obs, info = env.reset(seed=0)
+    assert env.unwrapped.base_vessel.name == "kvlcc2-100m" and obs.shape == (13,)
+    done, n = False, 0
+    betas = []
+    while not done:
+        obs, r, term, trunc, info = env.step(0)
+        done = term or trunc
+        n += 1
+        assert r == 0.0 and info["reward_terms"] == {}
+        betas.append((info["drift"], info["receiver"]["beta_A"]))
+    assert info["trial"]["advance"] / 100 == pytest.approx(3.37, abs=0.05)
+    assert info["episode_metrics"]["imo_pass"] is True
+    assert n == env.unwrapped.max_steps
+    b = np.array(betas)
+    assert np.max(b[:, 1] - b[:, 0]) > 4 * D  # the receiver's drift angle lags high
+    env.close()
+
+
+def test_stops_need_a_main_propeller_and_bad_input_is_named():
+    with pytest.raises(ValueError, match="needs a main propeller"):
+        SeaTrialEnv("van-der-klugt", "crash_stop")
+    with pytest.raises(ValueError, match="unknown manoeuvre|choose"):
+        SeaTrialEnv("kvlcc2-100m", "figure_eight")
+    with pytest.raises(ValueError, match="unknown receiver"):
+        SeaTrialEnv("kvlcc2-100m", receiver="gps")
+    with pytest.raises(ValueError, match="has no rudder"):
+        SeaTrialEnv("blue-lady")
+    env = SeaTrialEnv("kvlcc2-100m")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action must be 0"):
+        env.step(1)
+    env = SeaTrialEnv("kvlcc2-100m", override=True)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="finite numbers"):
+        env.step(np.array([np.nan, 0.0]))
+    _, _, _, _, info = env.step(np.array([1.0, 1.5]))
+    assert info["clipped"]
+
+
+def test_override_flies_the_same_trial_as_the_script():
+    """A controller that sends the script's commands through the action gets the script's
+    figures (the override path is the same physics)."""
+    env = SeaTrialEnv("kvlcc2-100m", "turning35_stbd", override=True, control_period=0.05)
+    acts = env.physics.actuators
+    env.reset(seed=0)
+    done = False
+    while not done:
+        cmd = np.array([env.n0, -35 * D])
+        _, _, done, _, info = env.step(acts.command_to_action(cmd))
+    ref = run_trial("kvlcc2-100m", "turning35_stbd").metrics()
+    assert info["trial"]["advance"] == pytest.approx(ref.advance, rel=1e-9)
+
+
+def test_trial_study_with_current_correction():
+    """The seed's correction removes the current from the receiver's drift angle: with it the
+    bias on the current's turn equals the no-current bias."""
+    calm = trial_study("kvlcc2-100m", ["turning35_stbd"], receiver="dgps-pv", S_p=[0.01], runs=4)
+    cur = trial_study("kvlcc2-100m", ["turning35_stbd"], receiver="dgps-pv", S_p=[0.01], runs=4,
+                      current="0.25@225")  # fmt: skip
+    b0 = calm.bias[("turning35_stbd", 0.01, False)]
+    bc = cur.bias[("turning35_stbd", 0.01, True)]
+    bg = cur.bias[("turning35_stbd", 0.01, False)]
+    assert bc.drift_bias_max == pytest.approx(b0.drift_bias_max, abs=0.05 * D)
+    assert abs(bg.drift_bias_max - b0.drift_bias_max) > 0.2 * D  # uncorrected: it differs
+
+
+@pytest.mark.slow
+def test_shipgym_trials_runs_every_manoeuvre_and_three_S_p_in_under_5_minutes(tmp_path):
+    t0 = time.perf_counter()
+    out = subprocess.run(
+        [sys.executable, "-m", "shipgym.cli", "trials", "--receiver", "dgps-pv", "--sp",
+         "0.001,0.01,0.1", "--json", str(tmp_path / "t.json"), "--figures", str(tmp_path),
+         "--no-progress"],
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    wall = time.perf_counter() - t0
+    assert wall < 300.0
+    data = json.loads((tmp_path / "t.json").read_text())
+    assert len(data["trials"]) == 7 and len(data["bias"]) == 21
+    assert all(r["imo_pass"] in (True, None) for r in data["trials"])
+    assert "FAIL" not in out.stdout
+    assert (tmp_path / "bias_turning35_stbd.png").is_file()
