@@ -174,3 +174,33 @@ def test_the_unit_uses_shipgyms_rudder_sign():
     flow = acts.flow_kernel()
     out = flow([4.926, math.radians(20)], 7.0, 0.0, 0.0, 0.0)
     np.testing.assert_allclose(out[:4], [tau[0], tau[1], 0.0, tau[2]], rtol=1e-12)
+
+
+def test_vessel_file_mistakes_are_named(tmp_path):
+    """An mmg unit on a non-mmg hull, a misspelt coefficient and an mmg hull with 4 DOF are
+    refused with the key named."""
+    import shutil
+
+    from shipgym.dynamics.vessel import VesselError, load_vessel
+
+    src = load_vessel("kvlcc2-100m").folder
+    text = (src / "vessel.toml").read_text()
+
+    def pkg(name, new):
+        d = tmp_path / name
+        shutil.copytree(src, d)
+        (d / "vessel.toml").write_text(new)
+        return d
+
+    with pytest.raises(VesselError, match="hull.Y_vv: unknown key"):
+        load_vessel(pkg("a", text.replace("\nY_vvv = ", "\nY_vv = ")))
+    with pytest.raises(VesselError, match="3-DOF family"):
+        load_vessel(pkg("b", text.replace("dofs = 3", "dofs = 4")))
+    with pytest.raises(VesselError, match="actuator.propeller.max_rps: missing"):
+        load_vessel(pkg("c", "\n".join(line for line in text.splitlines()
+                                       if not line.startswith("max_rps"))))  # fmt: skip
+    blue = (load_vessel("blue-lady").folder / "vessel.toml").read_text()
+    unit = text[text.index("[[actuator]]") : text.index("[limits]")]
+    with pytest.raises(VesselError, match="needs an 'mmg' hull"):
+        load_vessel(pkg("d", blue + "\n" + unit.replace("[-48.0, 0.0, 3.2857143]",
+                                                        "[-5.0, 0.0, 0.5]")))  # fmt: skip
