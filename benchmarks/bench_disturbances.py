@@ -18,10 +18,9 @@ from collections.abc import Callable, Sequence
 import mujoco
 import numpy as np
 
-from shipgym.assets import asset_path
 from shipgym.disturbances import Current, CurrentConfig, WaveConfig, Waves, Wind, WindConfig
-from shipgym.dynamics import BLUE_LADY_HULL, BLUE_LADY_WINDAGE
-from shipgym.envs.physics import DEFAULT_SCENE
+from shipgym.dynamics import BLUE_LADY_HULL, BLUE_LADY_WINDAGE, load_vessel
+from shipgym.envs.scene import build_model
 
 TARGET_US = 5.0
 BF5 = {"Hs": 2.0 / 24, "Tp": (4.883 + 2.68 * 2.0**0.54) / math.sqrt(24)}  # Beaufort 5 at 1:24
@@ -47,7 +46,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     times = [(100.0 + dt * k,) for k in range(n)]
     t_end = 100.0 + dt * n + 1.0
 
-    m = mujoco.MjModel.from_xml_path(str(asset_path(*DEFAULT_SCENE)))
+    m = build_model(load_vessel("blue-lady"))  # the Blue Lady's model on open water
     d = mujoco.MjData(m)
     mj = per_call(lambda: mujoco.mj_step(m, d), [()] * n, args.repeats)
 

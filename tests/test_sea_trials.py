@@ -204,7 +204,7 @@ def test_shipgym_trials_runs_every_manoeuvre_and_three_S_p_in_under_5_minutes(tm
     wall = time.perf_counter() - t0
     assert wall < 300.0
     data = json.loads((tmp_path / "t.json").read_text())
-    assert len(data["trials"]) == 7 and len(data["bias"]) == 21
+    assert len(data["trials"]) == 7 and len(data["bias"]) == 7 * 4  # three S_p and raw
     assert all(r["imo_pass"] in (True, None) for r in data["trials"])
     assert "FAIL" not in out.stdout
     assert (tmp_path / "bias_turning35_stbd.png").is_file()
@@ -245,3 +245,18 @@ def test_the_half_ahead_65_deg_schilling_turn_is_not_reproduced():
     assert a[:, 3].max() / D < 1.0  # r_max 0.94 deg/s (the 35 deg full-ahead turn: 1.84)
     b = receiver_bias(a[:, 0], a[:, [4, 5, 6]], a[:, [1, 2, 3]], S_p=0.01, runs=4)
     assert b.speed_bias_max < 0.2 and b.drift_bias_max < 6 * D  # notes: 0.12 m/s, 4.7 deg
+
+
+def test_raw_positions_differentiated_are_unbiased_but_noisy(trials):
+    """The seed's recommendation: the raw 1 Hz positions differentiated (central differences)
+    have no lag, so no bias to speak of on the turn, and the noise of a difference of two
+    2 m fixes over 2 s: sigma / sqrt(2) = 1.41 m/s per axis."""
+    rec = trials["turning35_stbd"]
+    raw = receiver_bias(rec.t, rec.eta, rec.nu, S_p=0.01, runs=40, seed=2, method="raw")
+    kf = _bias(rec, 0.01)
+    assert abs(raw.speed_bias_max) < 0.05 and abs(raw.drift_bias_max) < 1.0 * D
+    assert raw.position_bias_max < 1e-9  # the raw fixes are the positions
+    assert raw.sigma_v == pytest.approx(2.0 / math.sqrt(2.0), rel=0.05)
+    assert raw.sigma_v > 10 * kf.sigma_v
+    with pytest.raises(ValueError, match="unknown method"):
+        receiver_bias(rec.t, rec.eta, rec.nu, S_p=0.01, method="smoothed")

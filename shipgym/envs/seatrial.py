@@ -502,7 +502,7 @@ def _until_stopped(rec: TrialRecord) -> TrialRecord:
 class TrialStudy:
     """The result of :func:`trial_study`: the records, the trial rows (SI, with the IMO
     criteria), the receiver-bias rows (SI) and the :class:`~shipgym.trials.bias.ReceiverBias`
-    objects by ``(manoeuvre, S_p, corrected)``."""
+    objects by ``(manoeuvre, S_p or "raw", corrected)``."""
 
     records: dict[str, TrialRecord]
     rows: list[dict[str, Any]]
@@ -527,8 +527,9 @@ def trial_study(
     """Run manoeuvres (all by default) and, with ``receiver="dgps-pv"``, the receiver-bias
     study of Artyszuk (2003) on each: per ``S_p`` the bias of the noise-free run and the noise
     of ``runs`` Monte-Carlo runs (:func:`shipgym.trials.bias.receiver_bias`), ground-referenced
-    and, with a current, also water-referenced (the seed's correction). A stopping
-    manoeuvre's bias is measured up to the stop.
+    and, with a current, also water-referenced (the seed's correction); and the same for the
+    seed's recommended alternative, the raw positions differentiated (key ``"raw"`` in
+    :attr:`TrialStudy.bias`). A stopping manoeuvre's bias is measured up to the stop.
 
     Args:
         vessel, speed, current, timestep: as for :class:`SeaTrialEnv`.
@@ -563,11 +564,13 @@ def trial_study(
         if receiver is not None:
             cut = _until_stopped(rec) if manoeuvre(m).kind == "stop" else rec
             modes = [False, True] if rec.current[0] > 0 else [False]
-            for s in sps:
+            for s in [*sps, "raw"]:
                 for corr in modes:
-                    b = receiver_bias(cut.t, cut.eta, cut.nu, S_p=s, runs=runs, seed=seed,
-                                      antenna=antenna, current=_seed_current(rec.current),
-                                      correct=corr)  # fmt: skip
+                    b = receiver_bias(
+                        cut.t, cut.eta, cut.nu, S_p=sps[0] if s == "raw" else s, runs=runs,
+                        seed=seed, antenna=antenna, current=_seed_current(rec.current),
+                        correct=corr, method="raw" if s == "raw" else "dgps-pv",
+                    )  # fmt: skip
                     bias[(m, s, corr)] = b
                     brows.append(bias_row(v.name, m, b, antenna=antenna, current=rec.current))
         if progress is not None:

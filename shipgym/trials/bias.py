@@ -45,9 +45,13 @@ from shipgym.observers.dgps import (
     water_velocity,
 )
 
-__all__ = ["ReceiverBias", "receiver_bias", "resample"]
+__all__ = ["METHODS", "ReceiverBias", "receiver_bias", "resample"]
 
 Array = NDArray[np.float64]
+
+#: the velocity estimates of :func:`receiver_bias`: the receiver's PV filter, or the raw
+#: positions differentiated (the seed's recommendation)
+METHODS = ("dgps-pv", "raw")
 
 
 @dataclass(frozen=True)
@@ -55,7 +59,7 @@ class ReceiverBias:
     """The receiver's bias and noise on one trial (SI: m/s, rad, m).
 
     Attributes:
-        S_p (m^2/s^3), sigma (m), runs, seed, transient (s), corrected: the set-up.
+        S_p (m^2/s^3), sigma (m), runs, seed, transient (s), corrected, method: the set-up.
         speed_bias_max, speed_bias_min, speed_bias_rms: ``v_xy_hat - v_xy`` (m/s).
         drift_bias_max, drift_bias_min, drift_bias_rms: ``beta_A_hat - beta_A`` (rad).
         position_bias_max, position_bias_rms: ``|p_hat - p|`` (m).
@@ -71,6 +75,7 @@ class ReceiverBias:
     seed: int
     transient: float
     corrected: bool
+    method: str
     speed_bias_max: float
     speed_bias_min: float
     speed_bias_rms: float
@@ -140,6 +145,7 @@ def receiver_bias(
     correct: bool = False,
     dt: float = DGPS_DT,
     transient: float = 30.0,
+    method: str = "dgps-pv",
 ) -> ReceiverBias:
     """The receiver's bias and noise on a true trial (module docstring).
 
@@ -156,12 +162,17 @@ def receiver_bias(
             a current towards north), used when ``correct``.
         correct: compare water-referenced velocities (the seed's correction).
         dt: the receiver's sample time (s); transient: the seconds the noise statistics skip.
+        method: ``"dgps-pv"`` (the receiver's filter) or ``"raw"``: the seed's recommended
+            alternative, the raw positions differentiated (central differences,
+            :func:`~shipgym.observers.dgps.raw_velocity`; no lag, the full noise).
 
     Returns:
         :class:`ReceiverBias`.
     """
     if not (isinstance(sigma, int | float) and math.isfinite(sigma) and sigma >= 0):
         raise ValueError(f"sigma must be >= 0 m, got {sigma!r}")
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if not (isinstance(runs, int) and runs >= 2):
         raise ValueError(f"runs must be an integer >= 2, got {runs!r}")
     if current is not None:
@@ -175,7 +186,13 @@ def receiver_bias(
     psi = e[:, 2]
     pos, vel = antenna_motion(e, v, antenna)
     x0 = np.r_[vel[0], pos[0]]
-    free = pv_filter_batch(pos, x0, S_p, dt)
+
+    def estimate(z: Array) -> Array:
+        if method == "raw":
+            return np.concatenate([np.gradient(z, dt, axis=-2), z], -1)
+        return pv_filter_batch(z, x0, S_p, dt)
+
+    free = estimate(pos)
     v_true, b_true = _speed_drift(vel, psi, current, correct)
     v_hat, b_hat = _speed_drift(free[:, :2], psi, current, correct)
     dv = v_hat - v_true
@@ -186,7 +203,7 @@ def receiver_bias(
         rng = np.random.default_rng(seed)
         z = np.broadcast_to(pos, (runs,) + pos.shape).copy()
         z[:, 1:] += sigma * rng.standard_normal((runs, tk.size - 1, 2))
-        mc = pv_filter_batch(z, x0, S_p, dt)
+        mc = estimate(z)
         v_mc, b_mc = _speed_drift(mc[..., :2], psi, current, correct)
         sig_v = float(np.sqrt(np.mean((v_mc - v_hat)[:, keep] ** 2)))
         sig_b = float(np.sqrt(np.mean(np.asarray(wrap_angle(b_mc - b_hat))[:, keep] ** 2)))
@@ -195,7 +212,7 @@ def receiver_bias(
     rms = lambda a: float(np.sqrt(np.mean(a**2)))  # noqa: E731
     return ReceiverBias(
         S_p=float(S_p), sigma=float(sigma), runs=runs, seed=int(seed),
-        transient=float(transient), corrected=bool(correct),
+        transient=float(transient), corrected=bool(correct), method=method,
         speed_bias_max=float(dv.max()), speed_bias_min=float(dv.min()), speed_bias_rms=rms(dv),
         drift_bias_max=float(db.max()), drift_bias_min=float(db.min()), drift_bias_rms=rms(db),
         position_bias_max=float(perr.max()), position_bias_rms=rms(perr),

@@ -95,7 +95,7 @@ def trials_table(rows: Sequence[Mapping[str, Any]]) -> str:
 def bias_row(vessel: str, manoeuvre: str, b: Any, *, antenna: Sequence[float] = (0.0, 0.0),
              current: tuple[float, float] = (0.0, 0.0)) -> dict[str, Any]:  # fmt: skip
     """One receiver-bias row (SI: m/s, rad, m) of a :class:`~shipgym.trials.bias.ReceiverBias`."""
-    keys = ("S_p", "sigma", "runs", "seed", "transient", "corrected", "speed_bias_max",
+    keys = ("method", "S_p", "sigma", "runs", "seed", "transient", "corrected", "speed_bias_max",
             "speed_bias_min", "speed_bias_rms", "drift_bias_max", "drift_bias_min",
             "drift_bias_rms", "position_bias_max", "position_bias_rms", "sigma_v",
             "sigma_beta")  # fmt: skip
@@ -105,13 +105,14 @@ def bias_row(vessel: str, manoeuvre: str, b: Any, *, antenna: Sequence[float] = 
 
 def bias_table(rows: Sequence[Mapping[str, Any]]) -> str:
     """The receiver's bias as a Markdown table (speed m/s, drift angle deg, position m)."""
-    head = ["vessel", "manoeuvre", "S_p (m^2/s^3)", "current corr.", "speed bias max / min "
+    head = ["vessel", "manoeuvre", "filter S_p (m^2/s^3)", "current corr.", "speed bias max / min "
             "(m/s)", "drift bias max / min (deg)", "position bias max (m)", "sigma_v (m/s)",
             "sigma_beta (deg)"]  # fmt: skip
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         lines.append(
-            f"| {r['vessel']} | {r['manoeuvre']} | {r['S_p']:g} | "
+            f"| {r['vessel']} | {r['manoeuvre']} | "
+            f"{'raw positions' if r.get('method') == 'raw' else format(r['S_p'], 'g')} | "
             f"{'yes' if r['corrected'] else 'no'} | "
             f"{r['speed_bias_max']:+.3f} / {r['speed_bias_min']:+.3f} | "
             f"{r['drift_bias_max'] * _DEG:+.2f} / {r['drift_bias_min'] * _DEG:+.2f} | "

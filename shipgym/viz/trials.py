@@ -193,7 +193,8 @@ def write_trial_figures(
     plot_histories(recs, path=out / "trial_histories.png", title=f"{title}: histories")
     written.append(str(out / "trial_histories.png"))
     for m in recs:
-        found = {sp: b for (mm, sp, corr), b in study.bias.items() if mm == m and not corr}
+        found = {sp: b for (mm, sp, corr), b in study.bias.items()
+                 if mm == m and not corr and sp != "raw"}  # fmt: skip
         if not found:
             continue
         b0 = next(iter(found.values()))
