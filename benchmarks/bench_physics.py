@@ -46,6 +46,31 @@ def _best_episode(env, repeats: int):  # type: ignore[no-untyped-def]
     return best, info
 
 
+def _episode_vs_bare(env, action, repeats: int) -> tuple[float, float]:  # type: ignore[no-untyped-def]
+    """Best wall time (s) of one whole episode of ``env`` under a constant ``action``, and of
+    bare ``mj_step`` on the env's model for the same number of physics steps."""
+    wall = math.inf
+    steps = 0
+    for _ in range(repeats):
+        env.reset(seed=0)
+        t0 = time.perf_counter()
+        done, steps = False, 0
+        while not done:
+            _, _, term, trunc, _ = env.step(action)
+            done = term or trunc
+            steps += 1
+        wall = min(wall, time.perf_counter() - t0)
+    n = steps * round(env.control_period / env.physics.timestep)
+    m = env.physics.model
+    d = mujoco.MjData(m)
+
+    def bare(k: int) -> None:
+        for _ in range(k):
+            mujoco.mj_step(m, d)
+
+    return wall, n / _best_rate(bare, n, repeats)
+
+
 def main(argv: list[str] | None = None) -> dict[str, float]:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--steps", type=int, default=50_000, help="physics steps per repeat")
@@ -158,25 +183,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
     renv = RudderRollEnv(vessel="van-der-klugt", speed=12.0, waves="seed", rudder_test=True,
                          sway_estimate=True, episode_duration=120.0)  # fmt: skip
-    zero = np.zeros(1, dtype=np.float32)
-    r_wall = math.inf
-    for _ in range(args.repeats):
-        renv.reset(seed=0)
-        t0 = time.perf_counter()
-        done = False
-        while not done:
-            _, _, term, trunc, _ = renv.step(zero)
-            done = term or trunc
-        r_wall = min(r_wall, time.perf_counter() - t0)
-    n_roll = round(120.0 / renv.timestep)
-    mr = renv.physics.model
-    dr = mujoco.MjData(mr)
-
-    def bare_r(n: int) -> None:
-        for _ in range(n):
-            mujoco.mj_step(mr, dr)
-
-    bare_roll = n_roll / _best_rate(bare_r, n_roll, args.repeats)
+    r_wall, bare_roll = _episode_vs_bare(renv, np.zeros(1, dtype=np.float32), args.repeats)
     print(
         f"rudder-roll episode (120 s, KF in the obs) : {r_wall:12.3f} s wall, "
         f"{120.0 / r_wall:,.0f}x real time, {r_wall / bare_roll:.1f}x bare mj_step"
@@ -186,23 +193,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     from shipgym.envs.seatrial import SeaTrialEnv
 
     tenv = SeaTrialEnv("kvlcc2-100m", "turning35_stbd", receiver="dgps-pv")
-    t_wall = math.inf
-    for _ in range(args.repeats):
-        tenv.reset(seed=0)
-        t0 = time.perf_counter()
-        done = False
-        while not done:
-            _, _, done, _, _ = tenv.step(0)
-        t_wall = min(t_wall, time.perf_counter() - t0)
-    n_trial = tenv.max_steps * tenv.n_sub
-    mt = tenv.physics.model
-    dt_ = mujoco.MjData(mt)
-
-    def bare_t(n: int) -> None:
-        for _ in range(n):
-            mujoco.mj_step(mt, dt_)
-
-    bare_trial = n_trial / _best_rate(bare_t, n_trial, args.repeats)
+    t_wall, bare_trial = _episode_vs_bare(tenv, 0, args.repeats)
     print(
         f"sea trial (35 deg turn, {tenv.duration:.0f} s, DGPS)   : {t_wall:12.3f} s wall, "
         f"{tenv.duration / t_wall:,.0f}x real time, {t_wall / bare_trial:.1f}x bare mj_step"
