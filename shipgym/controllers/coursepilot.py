@@ -49,10 +49,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym.dynamics.frames import wrap_angle
 
-from .rollcontrol import HeadingAutopilot, HeadingPIDGains, heading_pid_gains
+from .rollcontrol import HeadingPIDGains, heading_pid_gains
 
 __all__ = [
     "COURSE_BANDWIDTH_PRIME",
+    "COURSE_INTEGRAL_RATIO",
+    "INTEGRAL_BAND",
     "RATE_FILTER_PRIME",
     "CoursePilot",
     "SteeringModel",
@@ -65,13 +67,21 @@ __all__ = [
 Array = NDArray[np.float64]
 
 #: the heading loop's bandwidth of a vessel without a ``[roll_control]`` table, per ``U/L``
-#: [chosen]: 0.5 (0.035 rad/s, a 180 s period, for the 100 m tanker at 7 m/s), about a
-#: sixth of the yaw-rate pole (-0.20 rad/s) and slow enough for the 2.32 deg/s steering gear
-COURSE_BANDWIDTH_PRIME = 0.5
+#: [chosen]: 0.7 (0.049 rad/s, a 128 s period, for the 100 m tanker at 7 m/s), a quarter of
+#: the yaw-rate pole (-0.20 rad/s) and slow enough for the 2.32 deg/s steering gear (0.5
+#: settles the tanker's heading changes more slowly: 1.5 deg against 0.6 deg RMS, the tests)
+COURSE_BANDWIDTH_PRIME = 0.7
 
 #: the yaw-rate low-pass of the D term, per ``L/U`` [chosen]: 0.35 (5 s for the 100 m tanker
-#: at 7 m/s), well inside the loop's bandwidth (``w T_f`` = 0.18)
+#: at 7 m/s), inside the loop's bandwidth (``w T_f`` = 0.25)
 RATE_FILTER_PRIME = 0.35
+
+#: the integral pole over the bandwidth [chosen]: 0.25, a steady wind moment trimmed in about
+#: 1/(0.25 w) = 82 s on the tanker (a tenth, the roll pilots' rule of thumb, takes 200 s)
+COURSE_INTEGRAL_RATIO = 0.25
+
+#: the heading error below which the integral runs [chosen]: 5 deg (no wind-up in a turn)
+INTEGRAL_BAND = math.radians(5.0)
 
 _V, _R, _PSI = 0, 1, 2
 
@@ -168,7 +178,11 @@ def _design_bandwidth(vessel: Any, U: float) -> tuple[float, float]:
 
 
 def course_pilot_gains(
-    vessel: Any, U: float, bandwidth: float | None = None, zeta: float | None = None
+    vessel: Any,
+    U: float,
+    bandwidth: float | None = None,
+    zeta: float | None = None,
+    integral_ratio: float | None = None,
 ) -> HeadingPIDGains:
     """The PID gains of the vessel's course autopilot at ``U`` (module docstring).
 
@@ -178,15 +192,17 @@ def course_pilot_gains(
         bandwidth: the heading loop's natural frequency (rad/s); default the vessel's
             ``heading_bandwidth`` or :data:`COURSE_BANDWIDTH_PRIME` ``U/L``.
         zeta: damping ratio; default the vessel's ``heading_zeta`` or 1.
+        integral_ratio: the integral pole over the bandwidth; default
+            :data:`COURSE_INTEGRAL_RATIO`.
 
     Returns:
-        :class:`~shipgym.controllers.rollcontrol.HeadingPIDGains` (integral pole at a tenth
-        of the bandwidth).
+        :class:`~shipgym.controllers.rollcontrol.HeadingPIDGains`.
     """
     w0, z0 = _design_bandwidth(vessel, U)
     w = w0 if bandwidth is None else float(bandwidth)
     z = z0 if zeta is None else float(zeta)
-    return heading_pid_gains(steering_model(vessel, U), w, z)
+    ir = COURSE_INTEGRAL_RATIO if integral_ratio is None else float(integral_ratio)
+    return heading_pid_gains(steering_model(vessel, U), w, z, integral_ratio=ir)
 
 
 def closed_loop_poles(model: Any, gains: HeadingPIDGains) -> Array:
@@ -208,54 +224,88 @@ def closed_loop_poles(model: Any, gains: HeadingPIDGains) -> Array:
 class CoursePilot:
     """The PID course autopilot on the gyro heading and the low-passed rate gyro.
 
+    ``delta = -(kp e + ki int e + kd r_f)``, clipped to ``+-delta_max``; the integral is
+    forward Euler over ``dt`` and runs only while ``|e| < integral_band`` (it trims a steady
+    wind or current moment and does not wind up during a heading change) and not while the
+    output is at its limit with the error pushing it further (conditional integration, as
+    :class:`~shipgym.controllers.rollcontrol.HeadingAutopilot`).
+
     Args:
         gains: :class:`~shipgym.controllers.rollcontrol.HeadingPIDGains` (rad/rad, rad/(rad
             s), rad/(rad/s); the rudder's sign).
-        delta_max: rudder limit (rad).
+        delta_max: rudder limit (rad), > 0.
         dt: sample time (s) of the calls.
         rate_filter: time constant (s) of the yaw rate's first-order low-pass (0: none).
+        integral_band: the largest ``|e|`` (rad) at which the integral runs (``inf``: always).
     """
 
     def __init__(
-        self, gains: HeadingPIDGains, *, delta_max: float, dt: float, rate_filter: float = 0.0
+        self,
+        gains: HeadingPIDGains,
+        *,
+        delta_max: float,
+        dt: float,
+        rate_filter: float = 0.0,
+        integral_band: float = math.inf,
     ) -> None:
+        for name, g in zip(("kp", "ki", "kd"), gains, strict=True):
+            if not math.isfinite(g):
+                raise ValueError(f"{name} must be finite, got {g!r}")
+        if not (math.isfinite(delta_max) and delta_max > 0):
+            raise ValueError(f"delta_max must be > 0 rad, got {delta_max!r}")
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be > 0 s, got {dt!r}")
         if not (math.isfinite(rate_filter) and rate_filter >= 0):
             raise ValueError(f"rate_filter must be >= 0 s, got {rate_filter!r}")
-        self.gains = gains
+        if not integral_band > 0:
+            raise ValueError(f"integral_band must be > 0 rad, got {integral_band!r}")
+        self.gains = HeadingPIDGains(*(float(g) for g in gains))
+        self.delta_max = float(delta_max)
         self.dt = float(dt)
         self.rate_filter = float(rate_filter)
-        self.pid = HeadingAutopilot(gains.kp, gains.ki, gains.kd, delta_max)
+        self.integral_band = float(integral_band)
         # the exact discretisation of the low-pass at the sample time
         self._alpha = 1.0 if rate_filter == 0 else 1.0 - math.exp(-self.dt / self.rate_filter)
         self.reset()
 
     def reset(self) -> None:
-        """Clear the integral, the time and the rate filter."""
-        self.pid.reset()
-        self._t = 0.0
+        """Clear the integral and the rate filter."""
+        self.integral = 0.0
         self._r: float | None = None
+        self._saturated = 0.0  # sign of the last saturation (0: none)
 
     def __call__(self, psi: float, r: float, psi_d: float) -> float:
         """The rudder command (rad) after measuring the heading ``psi`` (rad) and the yaw rate
         ``r`` (rad/s), for the desired heading ``psi_d`` (rad); one call per ``dt``."""
-        if self._r is None:
+        kp, ki, kd = self.gains
+        e = float(wrap_angle(float(psi) - float(psi_d)))
+        if self._r is None:  # the first call only measures
             self._r = float(r)
         else:
-            self._t += self.dt
             self._r += self._alpha * (float(r) - self._r)
-        return float(self.pid(self._t, [self._r, float(psi), 0.0, 0.0], psi_d=float(psi_d)))
+            pushes = self._saturated != 0.0 and math.copysign(1.0, -ki * e) == self._saturated
+            if abs(e) < self.integral_band and not pushes:
+                self.integral += e * self.dt
+        u = -(kp * e + ki * self.integral + kd * self._r)
+        out = min(max(u, -self.delta_max), self.delta_max)
+        self._saturated = math.copysign(1.0, u) if out != u else 0.0
+        return out
 
-    def act(self, obs: ArrayLike, psi_d: float = 0.0) -> float:
+    def act(self, obs: ArrayLike) -> float:
         """The command from a :class:`~shipgym.envs.coursekeeping.CourseKeepingEnv`
-        observation (``[e_psi, r, ...]``): the heading error is the heading relative to
-        ``psi_d``, so ``psi_d`` is 0."""
+        observation ``[e_psi, r, ...]`` (the heading error is the heading relative to the
+        set-point, so ``psi_d`` is 0)."""
         o = np.asarray(obs, dtype=float).reshape(-1)
-        return self(float(wrap_angle(o[0])), float(o[1]), psi_d)
+        return self(float(o[0]), float(o[1]), 0.0)
 
 
-def course_autopilot(env: Any, bandwidth: float | None = None, zeta: float | None = None) -> Any:
+def course_autopilot(
+    env: Any,
+    bandwidth: float | None = None,
+    zeta: float | None = None,
+    integral_ratio: float | None = None,
+    integral_band: float = INTEGRAL_BAND,
+) -> Any:
     """A policy ``obs -> action`` (float32, shape ``env.action_space.shape``) that steers a
     :class:`~shipgym.envs.coursekeeping.CourseKeepingEnv` with :class:`CoursePilot`.
 
@@ -266,14 +316,16 @@ def course_autopilot(env: Any, bandwidth: float | None = None, zeta: float | Non
     Args:
         env: the environment (its ``unwrapped`` is used): ``base_vessel``, ``U``,
             ``control_period``, ``max_angle`` (rad per rudder), ``action_space``.
-        bandwidth, zeta: as :func:`course_pilot_gains`.
+        bandwidth, zeta, integral_ratio: as :func:`course_pilot_gains`.
+        integral_band: as :class:`CoursePilot`.
     """
     e = getattr(env, "unwrapped", env)
     v = e.base_vessel
-    gains = course_pilot_gains(v, e.U, bandwidth, zeta)
+    gains = course_pilot_gains(v, e.U, bandwidth, zeta, integral_ratio)
     dmax = float(np.min(e.max_angle))
     pilot = CoursePilot(gains, delta_max=dmax, dt=e.control_period,
-                        rate_filter=RATE_FILTER_PRIME * v.L_pp / e.U)  # fmt: skip
+                        rate_filter=RATE_FILTER_PRIME * v.L_pp / e.U,
+                        integral_band=integral_band)  # fmt: skip
     shape = e.action_space.shape
 
     class _Policy:

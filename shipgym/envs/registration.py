@@ -21,6 +21,7 @@ ENV_IDS: dict[str, tuple[str, int | None]] = {
     "shipgym/DPSwayStep-v0": ("shipgym.envs.offshore:SwayStepEnv", None),
     "shipgym/RudderRollStabilisation-v0": ("shipgym.envs.rollstab:SeedRollEnv", None),
     "shipgym/NavalRollDamping-v0": ("shipgym.envs.rollstab:NavalRollEnv", None),
+    "shipgym/CourseKeeping-v0": ("shipgym.envs.coursekeeping:TankerCourseKeepingEnv", None),
     "shipgym/BlueLadyHarbour-v0": ("shipgym.envs.tasks:BlueLadyHarbourEnv", 2000),
     "shipgym/BlueLadyStationKeeping-v0": ("shipgym.envs.tasks:BlueLadyStationKeepingEnv", 600),
     "shipgym/BlueLadyTracking-v0": ("shipgym.envs.tasks:BlueLadyTrackingEnv", 800),
@@ -35,11 +36,13 @@ ALIASES: dict[str, str] = {
 
 
 #: what an id needs of its vessel: ``"positioning"`` (thrust in surge, sway and yaw at rest:
-#: :attr:`Vessel.can_position <shipgym.dynamics.vessel.Vessel.can_position>`) or
-#: ``"roll-steering"`` (4 DOF and a rudder)
+#: :attr:`Vessel.can_position <shipgym.dynamics.vessel.Vessel.can_position>`),
+#: ``"roll-steering"`` (4 DOF and a rudder) or ``"steering"`` (a rudder and a known approach
+#: speed: ``[trials] approach_speed`` or ``[roll_control] design_speed``)
 NEEDS: dict[str, str] = {
     env_id: "roll-steering" if "Roll" in env_id else "positioning" for env_id in ENV_IDS
 }
+NEEDS["shipgym/CourseKeeping-v0"] = "steering"
 
 
 def task_fits_vessel(env_id: str, vessel: Any) -> bool:
@@ -47,6 +50,9 @@ def task_fits_vessel(env_id: str, vessel: Any) -> bool:
     Vessel`): see :data:`NEEDS`."""
     if NEEDS[env_id] == "roll-steering":
         return vessel.dofs == 4 and bool(vessel.rudders)
+    if NEEDS[env_id] == "steering":
+        speed = "approach_speed" in vessel.trials or "design_speed" in vessel.roll_control
+        return bool(vessel.rudders) and speed
     return bool(vessel.can_position)
 
 
