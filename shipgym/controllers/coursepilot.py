@@ -14,9 +14,9 @@ anti-windup of :class:`~shipgym.controllers.rollcontrol.HeadingAutopilot`, which
 itself. It uses neither the DGPS velocity nor the drift angle: the learner's observation holds
 more than the baseline needs.
 
-Gains (:func:`heading_pid_gains`): pole placement on the first-order Nomoto model ``r/delta
-= K/(1 + T s)`` (Nomoto; Fossen (1995)) fitted to the vessel's linear sway-yaw(-roll) model at
-the approach speed in value and slope at ``s = 0``
+Gains (:func:`course_pilot_gains`): pole placement on the first-order Nomoto model
+``r/delta = K/(1 + T s)`` (Nomoto's model, Fossen (1995)) fitted to the vessel's linear
+sway-yaw(-roll) model at the approach speed in value and slope at ``s = 0``
 (:func:`~shipgym.controllers.rollcontrol.nomoto_first_order`). For a course-unstable hull
 such as the KVLCC2 (a real pole at +1.7e-4 rad/s at 7 m/s, L = 100 m) the fit has ``T < 0``
 (``K = 13.0 1/s``, ``T = -5777 s``): an unstable first-order plant whose ``b = K/T = -2.25e-3
