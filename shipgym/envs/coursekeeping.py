@@ -164,8 +164,9 @@ class CourseKeepingEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     frame, default midship) with ``dgps_sigma`` (2 m) noise per axis, started at the truth;
     ``"truth"``: the true ground velocity of the antenna; ``"raw"``: the noisy positions
     differentiated over one sample, ``(z_k - z_{k-1}) / dt`` (noise ``sqrt(2) sigma/dt`` per
-    axis: 2.8 m/s). All three use the same receiver and noise; ``sensor_noise=False`` removes
-    the gyro noise (``dgps_sigma=0`` the position noise).
+    axis: 2.8 m/s; the reset's observation is the truth, as the filter starts there). All
+    three use the same receiver and noise; ``sensor_noise=False`` removes the gyro noise
+    (``dgps_sigma=0`` the position noise).
 
     **Reward**: ``heading + rudder``, ``heading = -(e_psi/psi0)^2`` (the true heading error),
     ``rudder = -w (delta/max_angle)^2`` (mean over the rudders; :class:`CourseRewardWeights`:
