@@ -179,6 +179,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
             "classical pilots with 'shipgym bench roll --vessel NAME --speeds U', or use "
             "gym.make(...) with shipgym.controllers.rollpilot.roll_pilot"
         )
+    if NEEDS.get(env_id) == "steering":
+        raise ValueError(
+            f"shipgym run drives the positioning tasks; {env_id} is a steering task: run the "
+            "sea trials with 'shipgym trials --vessel NAME', or use gym.make(...) (course "
+            "keeping: shipgym.controllers.coursepilot.course_autopilot)"
+        )
     check_controller(args.controller)
     from shipgym.envs.registration import ALIASES
 

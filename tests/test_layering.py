@@ -227,6 +227,7 @@ def test_command_line_modules_are_leaves():
         "shipgym.observers.dgps",
         "shipgym.dynamics.mmg",
         "shipgym.trials",
+        "shipgym.controllers.coursepilot",
     ],
 )
 def test_pure_layers_never_reach_the_simulator(package):

@@ -260,3 +260,24 @@ def test_raw_positions_differentiated_are_unbiased_but_noisy(trials):
     assert raw.sigma_v > 10 * kf.sigma_v
     with pytest.raises(ValueError, match="unknown method"):
         receiver_bias(rec.t, rec.eta, rec.nu, S_p=0.01, method="smoothed")
+
+
+@pytest.mark.parametrize("env_id", ["shipgym/SeaTrial-v0", "shipgym/CourseKeeping-v0"])
+def test_shipgym_run_points_a_steering_task_to_trials(env_id, capsys):
+    from shipgym.cli import main
+
+    assert main(["run", env_id, "--vessel", "kvlcc2-100m", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "steering task" in err and "shipgym trials" in err and err.count("\n") == 1
+
+
+def test_shipgym_trials_names_bad_input(capsys):
+    from shipgym.cli import main
+
+    for argv, text in ((["--manoeuvres", "loop"], "unknown manoeuvre"),
+                       (["--sp", "0,1"], "--sp must be positive"),
+                       (["--antenna", "1"], "--antenna must be X,Y"),
+                       (["--vessel", "blue-lady"], "has no rudder")):  # fmt: skip
+        assert main(["trials", *argv, "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert text in err and err.count("\n") == 1, err

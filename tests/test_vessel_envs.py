@@ -77,6 +77,17 @@ def test_action_space_comes_from_the_actuators(task: str, vessel: str) -> None:
         np.testing.assert_allclose(info["rudder_command"], top)  # +1 is each rudder's limit
         env.close()
         return
+    if NEEDS[task] == "steering":  # the rudders steer; the speed is the task's
+        n = len(v.rudders)
+        assert env.action_space.shape == (n,)
+        obs, info = env.reset(seed=0)
+        assert obs.shape == env.observation_space.shape == (4 + n,)
+        _, _, _, _, info = env.step(np.ones(n, dtype=np.float32))
+        top = [getattr(a, "max_angle", None) for a in acts
+               if a.name in v.rudders or getattr(a, "rudder_name", None) in v.rudders]  # fmt: skip
+        np.testing.assert_allclose(info["rudder_command"], top)  # +1 is each rudder's limit
+        env.close()
+        return
     assert env.action_space.shape == (acts.n_channels,)
     obs, info = env.reset(seed=0)
     assert obs.shape == env.observation_space.shape == (12 + acts.n_channels,)

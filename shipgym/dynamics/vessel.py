@@ -175,6 +175,16 @@ class Vessel:
         return tuple(out)
 
     @property
+    def approach_speed(self) -> float | None:
+        """The speed (m/s) of the vessel's trials and course keeping: ``[trials]
+        approach_speed``, else the rudder-roll design speed, else ``None``."""
+        if "approach_speed" in self.trials:
+            return float(self.trials["approach_speed"])
+        if "design_speed" in self.roll_control:
+            return float(self.roll_control["design_speed"])
+        return None
+
+    @property
     def shafts(self) -> tuple[str, ...]:
         """Channel names of the vessel's main propellers (the ahead/astern thrust of the
         stopping manoeuvres): every MMG unit's propeller and every fixed propeller pointing

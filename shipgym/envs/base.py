@@ -263,8 +263,9 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 f"{type(self).__name__} is a positioning task: vessel {self.vessel.name!r} cannot "
                 f"push itself in surge, sway and yaw at zero speed (actuators: "
                 f"{', '.join(a.label for a in self.vessel.actuators)}); steer it in "
-                + ("shipgym/RudderRollStabilisation-v0 or shipgym/SeaTrial-v0"
-                   if self.vessel.dofs == 4 else "shipgym/SeaTrial-v0")
+                + ("shipgym/RudderRollStabilisation-v0, shipgym/CourseKeeping-v0 or "
+                   "shipgym/SeaTrial-v0" if self.vessel.dofs == 4
+                   else "shipgym/CourseKeeping-v0 or shipgym/SeaTrial-v0")
             )  # fmt: skip
         if wind is _NOMINAL:
             wind = f"{self.vessel.nominal_wind:g}@300"

@@ -9,7 +9,7 @@ from gymnasium.envs.registration import WrapperSpec
 
 from .episode import EPISODE_END_ENTRY_POINT
 
-__all__ = ["ALIASES", "DEFAULT_KWARGS", "ENV_IDS", "NEEDS", "register_envs", "task_fits_vessel"]
+__all__ = ["ALIASES", "ENV_IDS", "NEEDS", "register_envs", "task_fits_vessel"]
 
 #: env id -> (entry point, max_episode_steps); ``None``: the env truncates itself after its
 #: ``episode_duration`` (the DP tasks, whose number of steps depends on the vessel)
@@ -21,7 +21,8 @@ ENV_IDS: dict[str, tuple[str, int | None]] = {
     "shipgym/DPSwayStep-v0": ("shipgym.envs.offshore:SwayStepEnv", None),
     "shipgym/RudderRollStabilisation-v0": ("shipgym.envs.rollstab:SeedRollEnv", None),
     "shipgym/NavalRollDamping-v0": ("shipgym.envs.rollstab:NavalRollEnv", None),
-    "shipgym/SeaTrial-v0": ("shipgym.envs.seatrial:SeaTrialEnv", None),
+    "shipgym/SeaTrial-v0": ("shipgym.envs.seatrial:TankerSeaTrialEnv", None),
+    "shipgym/CourseKeeping-v0": ("shipgym.envs.coursekeeping:TankerCourseKeepingEnv", None),
     "shipgym/BlueLadyHarbour-v0": ("shipgym.envs.tasks:BlueLadyHarbourEnv", 2000),
     "shipgym/BlueLadyStationKeeping-v0": ("shipgym.envs.tasks:BlueLadyStationKeepingEnv", 600),
     "shipgym/BlueLadyTracking-v0": ("shipgym.envs.tasks:BlueLadyTrackingEnv", 800),
@@ -37,15 +38,14 @@ ALIASES: dict[str, str] = {
 
 #: what an id needs of its vessel: ``"positioning"`` (thrust in surge, sway and yaw at rest:
 #: :attr:`Vessel.can_position <shipgym.dynamics.vessel.Vessel.can_position>`),
-#: ``"roll-steering"`` (4 DOF and a rudder) or ``"steering"`` (a rudder and a known
-#: approach speed: the sea trials)
+#: ``"roll-steering"`` (4 DOF and a rudder) or ``"steering"`` (a rudder and a known approach
+#: speed: ``[trials] approach_speed`` or ``[roll_control] design_speed``: the sea trials and
+#: course keeping)
 NEEDS: dict[str, str] = {
     env_id: "roll-steering" if "Roll" in env_id else "positioning" for env_id in ENV_IDS
 }
 NEEDS["shipgym/SeaTrial-v0"] = "steering"
-
-#: the default kwargs of ids whose class takes a vessel (the vessel-neutral classes)
-DEFAULT_KWARGS: dict[str, dict[str, Any]] = {"shipgym/SeaTrial-v0": {"vessel": "kvlcc2-100m"}}
+NEEDS["shipgym/CourseKeeping-v0"] = "steering"
 
 
 def task_fits_vessel(env_id: str, vessel: Any) -> bool:
@@ -54,8 +54,7 @@ def task_fits_vessel(env_id: str, vessel: Any) -> bool:
     if NEEDS[env_id] == "roll-steering":
         return vessel.dofs == 4 and bool(vessel.rudders)
     if NEEDS[env_id] == "steering":
-        known = "approach_speed" in vessel.trials or "design_speed" in vessel.roll_control
-        return bool(vessel.rudders) and known
+        return bool(vessel.rudders) and vessel.approach_speed is not None
     return bool(vessel.can_position)
 
 
@@ -74,5 +73,4 @@ def register_envs() -> None:
                 entry_point=entry_point,
                 max_episode_steps=steps,
                 additional_wrappers=(end,),
-                kwargs=DEFAULT_KWARGS.get(env_id, {}),
             )

@@ -40,9 +40,9 @@ __all__ = [
     "RECEIVERS",
     "SeaTrialEnv",
     "TrialRecord",
+    "TankerSeaTrialEnv",
     "TrialStudy",
     "approach_command",
-    "approach_speed",
     "run_trial",
     "trial_study",
 ]
@@ -53,16 +53,6 @@ RECEIVERS = (None, "dgps-pv")
 #: the observation's entries, in order (the last four only with a receiver)
 OBSERVATION = ("x/L", "y/L", "sin psi", "cos psi", "u/U0", "v/U0", "r L/U0", "rudder/max",
                "shaft/n0", "v_xy_hat/U0", "beta_A_hat", "x_hat/L", "y_hat/L")  # fmt: skip
-
-
-def approach_speed(vessel: Vessel) -> float | None:
-    """The speed (m/s) of a vessel's trials: its ``[trials] approach_speed``, else its
-    rudder-roll design speed, else ``None``."""
-    if "approach_speed" in vessel.trials:
-        return float(vessel.trials["approach_speed"])
-    if "design_speed" in vessel.roll_control:
-        return float(vessel.roll_control["design_speed"])
-    return None
 
 
 def approach_command(physics: VesselPhysics, shaft: int, U0: float) -> float:
@@ -144,7 +134,8 @@ class SeaTrialEnv(gym.Env[NDArray[np.float32], Any]):
     :meth:`CurrentConfig.coerce <shipgym.disturbances.CurrentConfig.coerce>`, e.g.
     ``"0.25@225"``: 0.25 m/s going south-west); optional wind. The ship starts at ``eta = 0``
     (heading north) running straight at the approach speed ``U0`` through the water
-    (``speed``, default :func:`approach_speed` of the vessel) with its main propeller at the
+    (``speed``, default :attr:`Vessel.approach_speed <shipgym.dynamics.vessel.Vessel.
+    approach_speed>`) with its main propeller at the
     command that holds it (:func:`approach_command`) and the rudder amidships.
 
     **Task.** ``manoeuvre``: one of :func:`~shipgym.trials.manoeuvres.manoeuvre_names`
@@ -222,7 +213,7 @@ class SeaTrialEnv(gym.Env[NDArray[np.float32], Any]):
             )
         self.base_vessel = v
         self.manoeuvre = _manoeuvre(manoeuvre)
-        U0 = approach_speed(v) if speed is None else speed
+        U0 = v.approach_speed if speed is None else speed
         if U0 is None:
             raise ValueError(
                 f"vessel {v.name!r} has no approach speed ([trials] approach_speed): pass "
@@ -450,6 +441,15 @@ class SeaTrialEnv(gym.Env[NDArray[np.float32], Any]):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+
+class TankerSeaTrialEnv(SeaTrialEnv):
+    """``shipgym/SeaTrial-v0``: :class:`SeaTrialEnv` on the seed's 100 m tanker
+    (``kvlcc2-100m``) unless ``vessel=`` says otherwise."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        kwargs.setdefault("vessel", "kvlcc2-100m")
+        super().__init__(**kwargs)
 
 
 def _manoeuvre(name: Any) -> Any:
