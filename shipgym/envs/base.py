@@ -771,3 +771,27 @@ def _make_renderer(model: Any) -> Any:
             "machine set MUJOCO_GL=egl (or MUJOCO_GL=osmesa with PYOPENGL_PLATFORM=osmesa and "
             "libosmesa installed) before importing mujoco"
         ) from exc
+
+
+class TopCameraRender:
+    """``render()`` and ``close()`` of an env that holds ``physics`` (a
+    :class:`~shipgym.envs.physics.VesselPhysics` or ``None`` before the first reset),
+    ``render_mode`` and ``_renderer``: an RGB frame from the world's ``top`` camera. Put it
+    before ``gym.Env`` in the bases."""
+
+    physics: Any
+    render_mode: str | None
+    _renderer: Any
+
+    def render(self) -> Any:
+        if self.render_mode is None or self.physics is None:
+            return None
+        if self._renderer is None:
+            self._renderer = _make_renderer(self.physics.model)
+        self._renderer.update_scene(self.physics.data, camera="top")
+        return self._renderer.render()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None

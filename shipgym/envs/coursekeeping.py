@@ -40,7 +40,7 @@ from shipgym.observers.dgps import (
     velocity_outputs,
 )
 
-from .base import _check_timing, _make_renderer, _whole_multiple
+from .base import TopCameraRender, _check_timing, _whole_multiple
 from .physics import VesselPhysics
 
 __all__ = [
@@ -102,7 +102,7 @@ def _finite(x: Any) -> bool:
     return is_real(x) and math.isfinite(x)
 
 
-class CourseKeepingEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+class CourseKeepingEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     r"""Hold and change the heading with the rudder, seeing the DGPS receiver's velocity.
 
     **Physics.** Any vessel with a rudder (:attr:`Vessel.rudders
@@ -528,19 +528,6 @@ class CourseKeepingEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def episode_metrics(self) -> dict[str, Any]:
         """Heading, rudder and receiver-bias statistics of the episode so far."""
         return self._metrics.summary(self)
-
-    def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None or self.physics is None:
-            return None
-        if self._renderer is None:
-            self._renderer = _make_renderer(self.physics.model)
-        self._renderer.update_scene(self.physics.data, camera="top")
-        return self._renderer.render()
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
 
 
 class _CourseMetrics:

@@ -31,7 +31,7 @@ from shipgym.dynamics.vanderklugt import KDP_LAWS, VAN_DER_KLUGT, seed_vessel
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.observers.sway import R_SWAY, SwayVelocityKF, calm_water_intensities
 
-from .base import _check_timing, _make_renderer, _whole_multiple
+from .base import TopCameraRender, _check_timing, _whole_multiple
 from .physics import VesselPhysics
 
 __all__ = [
@@ -124,7 +124,7 @@ def _speed_range(speed: Any) -> tuple[float, float]:
     return lo, hi
 
 
-class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+class RudderRollEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     r"""Hold a heading at speed with the rudder while damping the roll in waves.
 
     **Physics.** A 4-DOF vessel (surge, sway, roll, yaw) with a rudder (:class:`~shipgym.
@@ -535,19 +535,6 @@ class RudderRollEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def episode_metrics(self) -> dict[str, Any]:
         """Roll, heading and rudder statistics of the episode so far (:class:`_RollMetrics`)."""
         return self._metrics.summary(self)
-
-    def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None or self.physics is None:
-            return None
-        if self._renderer is None:
-            self._renderer = _make_renderer(self.physics.model)
-        self._renderer.update_scene(self.physics.data, camera="top")
-        return self._renderer.render()
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
 
 
 class _RollMetrics:

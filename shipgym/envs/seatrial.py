@@ -33,7 +33,7 @@ from shipgym.observers.dgps import S_P_OPTIMAL, DGPSReceiver
 from shipgym.trials.manoeuvres import manoeuvre, manoeuvre_names
 from shipgym.trials.metrics import imo_criteria, trial_metrics
 
-from .base import _check_timing, _make_renderer, _whole_multiple
+from .base import TopCameraRender, _check_timing, _whole_multiple
 from .physics import VesselPhysics
 
 __all__ = [
@@ -126,7 +126,7 @@ class TrialRecord:
         return imo_criteria(self.metrics(), self.L, self.U0)
 
 
-class SeaTrialEnv(gym.Env[NDArray[np.float32], Any]):
+class SeaTrialEnv(TopCameraRender, gym.Env[NDArray[np.float32], Any]):
     r"""One IMO manoeuvre per episode, scripted, on a vessel with a rudder.
 
     **Physics.** The vessel's MuJoCo hull (:class:`~shipgym.envs.physics.VesselPhysics`),
@@ -421,26 +421,6 @@ class SeaTrialEnv(gym.Env[NDArray[np.float32], Any]):
         m = rec.metrics()
         crit = imo_criteria(m, self.L, self.U0)
         return {**m.as_dict(), "imo_pass": all(c[3] for c in crit) if crit else None}
-
-    def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode != "rgb_array":
-            return None
-        from shipgym.envs._mujoco import mujoco
-
-        if self._renderer is None:
-            self._renderer = _make_renderer(self.physics.model)
-        cam = mujoco.MjvCamera()
-        cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
-        cam.trackbodyid = self.physics.hull_body
-        cam.distance = 3.0 * self.base_vessel.L_oa
-        cam.elevation = -60.0
-        self._renderer.update_scene(self.physics.data, cam)
-        return self._renderer.render()
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
 
 
 class TankerSeaTrialEnv(SeaTrialEnv):
