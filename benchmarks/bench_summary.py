@@ -1,0 +1,211 @@
+"""The headline speed ratios of shipgym, measured as interleaved pairs, with their spread.
+
+Every ratio divides two timings taken in the same repeat, one right after the other (the order
+alternating from repeat to repeat), so that both see the same machine load; each is printed as
+the median over the repeats with the smallest and largest repeat, and all are written to
+``runs/bench/bench.json`` (``--json``):
+
+- ``physics_over_bare``: physics steps per second of the Blue Lady's full plant (thrusters,
+  gusty wind, hydrodynamics) over bare ``mujoco.mj_step`` on the same model (higher is better);
+- ``waves_over_no_waves``: the full plant with 100 wave components, drift and a Gauss-Markov
+  current over the plain full plant (higher is better);
+- ``episode_pid_over_bare``, ``episode_kbf_pid_over_bare``: the wall time of a whole
+  closed-loop harbour episode (PID; the KBF observer and PID) over bare ``mj_step`` for the
+  same number of physics steps (lower is better);
+- ``tracking_step_over_bare``: one ``shipgym/Tracking-v0`` step (random actions) over bare
+  ``mj_step`` for its physics steps (lower is better);
+- ``recording_overhead``: a recorded harbour episode (rerun) over an unrecorded one;
+- ``allocation_us_6_thrusters``: the prepared least-squares allocator over six fixed thrusters,
+  microseconds per call (median);
+- ``batched_hull_steps_per_s``, ``batched_over_single``, ``ppo_fps_batched_over_single``: the
+  batched vector env's, ``null`` until it exists (the ``missing`` key says why).
+
+Absolute rates are printed too (this machine's); ratios are what compares across machines.
+Run with ``make bench``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import statistics
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+
+Timed = Callable[[], float]
+
+
+def _timed(fn: Callable[[], Any]) -> Timed:
+    def run() -> float:
+        t0 = time.perf_counter()
+        fn()
+        return time.perf_counter() - t0
+
+    return run
+
+
+def pair(a: Timed, b: Timed, repeats: int, *, per_a: float = 1.0, per_b: float = 1.0) -> dict:
+    """``(time of a / per_a) / (time of b / per_b)`` per repeat, a and b interleaved.
+
+    Returns ``{"median", "min", "max", "a_s", "b_s"}`` (the ratios and the median seconds of
+    each side per unit ``per_a`` / ``per_b``).
+    """
+    ratios, ta, tb = [], [], []
+    for k in range(repeats):
+        if k % 2 == 0:
+            x, y = a(), b()
+        else:
+            y, x = b(), a()
+        ta.append(x / per_a)
+        tb.append(y / per_b)
+        ratios.append(ta[-1] / tb[-1])
+    return {"median": statistics.median(ratios), "min": min(ratios), "max": max(ratios),
+            "a_s": statistics.median(ta), "b_s": statistics.median(tb)}  # fmt: skip
+
+
+def _bare(model: Any, n: int) -> Timed:
+    d = mujoco.MjData(model)
+
+    def run() -> float:
+        t0 = time.perf_counter()
+        for _ in range(n):
+            mujoco.mj_step(model, d)
+        return time.perf_counter() - t0
+
+    return run
+
+
+def _episode(env: Any, action: Any) -> tuple[Timed, int]:
+    """A timed whole episode (reset excluded) and its number of physics steps."""
+    box: dict[str, int] = {}
+
+    def run() -> float:
+        env.reset(seed=0)
+        t0 = time.perf_counter()
+        done, steps = False, 0
+        while not done:
+            _, _, term, trunc, _ = env.step(action)
+            done = term or trunc
+            steps += 1
+        wall = time.perf_counter() - t0
+        box["steps"] = steps
+        return wall
+
+    run()
+    u = env.unwrapped
+    return run, box["steps"] * round(u.control_period / u.physics.timestep)
+
+
+def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
+    """Every figure of the module docstring (a dict, as written to ``bench.json``)."""
+    import shipgym
+    from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
+    from shipgym.dynamics import load_vessel
+    from shipgym.envs.physics import VesselPhysics
+    from shipgym.envs.scene import build_model
+
+    out: dict[str, Any] = {"repeats": repeats}
+    model = build_model(load_vessel("blue-lady"))
+    wind = WindConfig(speed=3.0, direction_from=math.radians(300.0))
+    phys = VesselPhysics("blue-lady", wind=wind)
+    phys.reset(rng=np.random.default_rng(0))
+    phys.set_command([300.0, 0.5, -0.5])
+    waves = WaveConfig(Hs=0.083, Tp=1.79, n_components=100, drift=True, first_order=True)
+    sea = VesselPhysics("blue-lady", wind=wind, waves=waves,
+                        current=CurrentConfig.from_std(0.1, 0.5, 0.02, 300.0))  # fmt: skip
+    sea.reset(rng=np.random.default_rng(0))
+    sea.set_command([300.0, 0.5, -0.5])
+    bare = _bare(model, steps)
+    r = pair(bare, _timed(lambda: phys.step(steps)), repeats)
+    out["physics_over_bare"] = r
+    out["bare_steps_per_s"] = steps / r["a_s"]
+    out["physics_steps_per_s"] = steps / r["b_s"]
+    out["waves_over_no_waves"] = pair(
+        _timed(lambda: phys.step(steps)), _timed(lambda: sea.step(steps)), repeats
+    )
+    for key, observer in (("episode_pid_over_bare", None), ("episode_kbf_pid_over_bare", "kbf")):
+        env = shipgym.make("harbour", controller="pid", observer=observer, wind="3@300")
+        ep, n = _episode(env, np.zeros(3, np.float32))
+        out[key] = pair(ep, _bare(env.unwrapped.physics.model, n), repeats)
+        env.close()
+    env = shipgym.make("shipgym/Tracking-v0", vessel="blue-lady")
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    acts = [rng.uniform(-1, 1, env.action_space.shape).astype(np.float32) for _ in range(200)]
+    u = env.unwrapped
+    n_sub = round(u.control_period / u.physics.timestep)
+
+    def tracking() -> None:
+        env.reset(seed=0)
+        for a in acts:
+            _, _, term, trunc, _ = env.step(a)
+            if term or trunc:
+                env.reset(seed=0)
+
+    out["tracking_step_over_bare"] = pair(
+        _timed(tracking), _bare(u.physics.model, len(acts) * n_sub), repeats
+    )
+    env.close()
+    from shipgym.viz import RecordEpisode
+
+    with tempfile.TemporaryDirectory() as tmp:
+        rec = RecordEpisode(shipgym.make("harbour", controller="pid", wind="3@300"),
+                            Path(tmp) / "bench.rrd")  # fmt: skip
+        plain = shipgym.make("harbour", controller="pid", wind="3@300")
+        er, _ = _episode(rec, np.zeros(3, np.float32))
+        ep, _ = _episode(plain, np.zeros(3, np.float32))
+        out["recording_overhead"] = pair(er, ep, max(3, repeats // 2))
+        rec.close()
+        plain.close()
+    from bench_allocation import B6, HI6, LO6, requests
+
+    from shipgym.controllers.allocation import WLSAllocator
+
+    alloc = WLSAllocator(B6, LO6, HI6)
+    reqs = requests(np.abs(B6) @ np.maximum(-LO6, HI6), 600)
+    per = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for q in reqs:
+            alloc(q)
+        per.append((time.perf_counter() - t0) / len(reqs) * 1e6)
+    out["allocation_us_6_thrusters"] = statistics.median(per)
+    for k in ("batched_hull_steps_per_s", "batched_over_single", "ppo_fps_batched_over_single"):
+        out[k] = None
+    out["missing"] = {"batched_*": "the batched vector env is not built yet"}
+    return out
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--steps", type=int, default=30_000, help="physics steps per plant timing")
+    ap.add_argument("--json", type=Path, default=Path("runs/bench/bench.json"))
+    args = ap.parse_args(argv)
+    res = measure(args.repeats, args.steps)
+    print(f"ratios: median [min, max] over {args.repeats} interleaved repeats")
+    for k, v in res.items():
+        if isinstance(v, dict) and "median" in v:
+            print(f"  {k:28s}: {v['median']:8.3f}  [{v['min']:.3f}, {v['max']:.3f}]")
+    print(f"  {'bare mj_step':28s}: {res['bare_steps_per_s']:10,.0f} steps/s")
+    print(f"  {'full plant':28s}: {res['physics_steps_per_s']:10,.0f} steps/s")
+    print(f"  {'allocation_us_6_thrusters':28s}: {res['allocation_us_6_thrusters']:8.1f} us")
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    flat = {k: (v["median"] if isinstance(v, dict) and "median" in v else v)
+            for k, v in res.items()}  # fmt: skip
+    flat["spread"] = {k: [v["min"], v["max"]] for k, v in res.items()
+                      if isinstance(v, dict) and "median" in v}  # fmt: skip
+    args.json.write_text(json.dumps(flat, indent=2))
+    print(f"written to {args.json}")
+    return flat
+
+
+if __name__ == "__main__":
+    main()
