@@ -8,10 +8,12 @@ PIP    := $(PY) -m pip
 LOCK     := requirements/lock.txt
 LOCK_DEV := requirements/lock-dev.txt
 LOCK_RL  := requirements/lock-rl.txt
+LOCK_RAY := requirements/lock-ray.txt
 # Stamps: a changed lock file (or pyproject.toml) reinstalls. tests/test_lock.py looks for them.
 STAMP     := $(VENV)/.lock-core
 DEV_STAMP := $(VENV)/.lock-dev
 RL_STAMP  := $(VENV)/.lock-rl
+RAY_STAMP := $(VENV)/.lock-ray
 # pytest-random-order seed of `make test-random` (unset: a new one each run, printed first)
 
 SHELL := /bin/bash
@@ -26,7 +28,7 @@ define pip_install
 endef
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-random test-slow bench lint venv rl lock clean
+.PHONY: help demo test test-random test-slow bench lint venv rl ray lock clean
 
 help: ## this list
 	@echo "make targets (each creates/reuses .venv and installs the locked versions it needs):"
@@ -65,6 +67,13 @@ $(RL_STAMP): $(DEV_STAMP) $(LOCK_RL)
 	@touch $(RL_STAMP)
 
 rl: $(RL_STAMP) ## the venv plus the rl extra (torch 2.13.0 CPU build first, stable-baselines3)
+
+# The ray extra (--executor ray of the benchmarks): Ray and what it needs.
+$(RAY_STAMP): $(DEV_STAMP) $(LOCK_RAY)
+	$(call pip_install,-r $(LOCK_RAY) -c $(LOCK) -c $(LOCK_DEV))
+	@touch $(RAY_STAMP)
+
+ray: $(RAY_STAMP) ## the venv plus the ray extra (sweeps as Ray tasks: --executor ray)
 
 # The harbour manoeuvre of Tomera (2014) in the lake-trial wind, PID + Kalman-Bucy filter:
 # a rerun recording, PNG figures and metrics.md in runs/demo/.

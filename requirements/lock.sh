@@ -4,6 +4,7 @@
 #                              installer and build tools (pip, setuptools, wheel)
 #   requirements/lock-dev.txt  what the test and dev extras add (pytest, hypothesis, ruff, ...)
 #   requirements/lock-rl.txt   what the rl extra adds on top of both (torch, stable-baselines3)
+#   requirements/lock-ray.txt  what the ray extra adds on top of lock.txt and lock-dev.txt
 # Each is the `pip freeze` of one fresh temporary venv, built in that order, every step holding
 # the versions of the files before it as constraints; torch goes in on its own, with plain
 # pip, before stable-baselines3. torch's CUDA runtime packages (nvidia-*, triton) are left out
@@ -68,9 +69,20 @@ quiet "$py" -m pip install --quiet ".[rl]" -c "$tmp/lock.txt" -c "$tmp/lock-dev.
     freeze | grep -vxFf <(locked "$tmp/lock.txt" "$tmp/lock-dev.txt")
 } >"$tmp/lock-rl.txt"
 
+# 4. the ray extra, in a venv of its own with the core and dev pins (not with torch)
+"$PYTHON" -m venv "$tmp/venv-ray"
+pyr=$tmp/venv-ray/bin/python
+quiet "$pyr" -m pip install --quiet --upgrade pip setuptools wheel
+quiet "$pyr" -m pip install --quiet ".[test,dev,ray]" -c "$tmp/lock.txt" -c "$tmp/lock-dev.txt"
+{
+    header "shipgym: what the ray extra adds to lock.txt and lock-dev.txt (make ray)"
+    py=$pyr freeze | grep -vxFf <(locked "$tmp/lock.txt" "$tmp/lock-dev.txt")
+} >"$tmp/lock-ray.txt"
+
 grep -qi '^torch==' "$tmp/lock-rl.txt" || { echo "lock.sh: no torch in the rl lock" >&2; exit 1; }
+grep -qi '^ray==' "$tmp/lock-ray.txt" || { echo "lock.sh: no ray in the ray lock" >&2; exit 1; }
 mkdir -p "$out"
-for f in lock.txt lock-dev.txt lock-rl.txt; do
+for f in lock.txt lock-dev.txt lock-rl.txt lock-ray.txt; do
     mv "$tmp/$f" "$out/$f"
     echo "wrote $out/$f ($(grep -vc '^#' "$out/$f") packages)"
 done

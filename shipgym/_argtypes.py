@@ -18,7 +18,9 @@ __all__ = [
     "MAX_SEED",
     "MAX_WORKERS",
     "OneLineParser",
+    "add_executor_options",
     "bounded_float",
+    "executor_of",
     "bounded_int",
     "nonneg_int",
     "parse_wind",
@@ -116,6 +118,25 @@ seed_int = bounded_int(0, MAX_SEED, rng=">= 0 (at most 2**63 - 1)")
 nonneg_int = bounded_int(0)
 #: a whole number >= 1
 positive_int = bounded_int(1)
+
+
+def add_executor_options(p: argparse.ArgumentParser) -> None:
+    """A benchmark's ``--executor process|ray`` and ``--ray-address`` options."""
+    p.add_argument("--executor", choices=["process", "ray"], default="process",
+                   help="run the jobs in a local process pool (default) or as Ray tasks "
+                   "(the ray extra)")  # fmt: skip
+    p.add_argument("--ray-address", default=None, metavar="ADDRESS",
+                   help="a Ray cluster (ray://host:10001, auto); default: a local Ray "
+                   "instance of --workers CPUs")  # fmt: skip
+
+
+def executor_of(args: argparse.Namespace) -> Any:
+    """The :class:`shipgym.bench.Executor` of :func:`add_executor_options`' options."""
+    from shipgym.bench import Executor
+
+    if args.ray_address is not None and args.executor != "ray":
+        raise ValueError("--ray-address needs --executor ray")
+    return Executor(args.executor, args.ray_address)
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -22,6 +22,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +32,8 @@ from shipgym._safeload import jsonable
 
 __all__ = [
     "DEFAULT_OBSERVERS",
+    "EXECUTORS",
+    "Executor",
     "RowLog",
     "bench_observers",
     "observer_table",
@@ -132,6 +135,86 @@ def _stop_pool(pool: ProcessPoolExecutor) -> None:
         manager.join(max(1.0, deadline - time.monotonic()))
 
 
+#: the executors of :func:`run_jobs`: a local process pool, or Ray (the ``ray`` extra)
+EXECUTORS = ("process", "ray")
+
+
+@dataclass(frozen=True)
+class Executor:
+    """Where :func:`run_jobs` runs its jobs.
+
+    Attributes:
+        kind: ``"process"`` (a local process pool) or ``"ray"`` (Ray tasks: ``ray.init()`` on
+            this machine, or the cluster at ``address``; needs the ``ray`` extra).
+        address: a Ray cluster's address (``"ray://host:10001"``, ``"auto"``); ``None`` starts
+            a local Ray instance with ``workers`` CPUs for the call (and stops it after).
+    """
+
+    kind: str = "process"
+    address: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in EXECUTORS:
+            raise ValueError(
+                f"unknown executor {self.kind!r}; choose one of {', '.join(EXECUTORS)}"
+            )
+        if self.address is not None and self.kind != "ray":
+            raise ValueError("an executor address needs kind='ray'")
+
+    @classmethod
+    def coerce(cls, x: Executor | str | None) -> Executor:
+        """An :class:`Executor` from itself, a kind name or ``None`` (the process pool)."""
+        if x is None:
+            return cls()
+        if isinstance(x, Executor):
+            return x
+        if isinstance(x, str):
+            return cls(x)
+        raise TypeError(f"executor must be an Executor or one of {', '.join(EXECUTORS)}, got {x!r}")
+
+
+def _import_ray() -> Any:
+    try:
+        import ray
+    except ImportError:
+        raise ImportError(
+            "the Ray executor needs the ray extra: pip install 'shipgym[ray]' (or make ray)"
+        ) from None
+    return ray
+
+
+def _run_ray(
+    fn: Callable[[Any], Any], jobs: Sequence[Any], n: int, address: str | None,
+    done: Callable[[int, Any], None],
+) -> None:  # fmt: skip
+    """The jobs as Ray tasks (:func:`run_jobs`), results handed to ``done`` as they finish."""
+    ray = _import_ray()
+    started = False
+    if not ray.is_initialized():
+        kw: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False,
+                              "configure_logging": False}  # fmt: skip
+        if address is None:
+            kw["num_cpus"] = n
+        ray.init(address=address, **kw)
+        started = True
+    try:
+        task = ray.remote(num_cpus=1)(fn)
+        pending = {task.remote(job): i for i, job in enumerate(jobs)}
+        try:
+            while pending:
+                ready, _ = ray.wait(list(pending), num_returns=1)
+                for ref in ready:
+                    done(pending.pop(ref), ray.get(ref))
+        except BaseException:
+            for ref in pending:
+                with contextlib.suppress(Exception):
+                    ray.cancel(ref, force=True)
+            raise
+    finally:
+        if started:
+            ray.shutdown()
+
+
 def run_jobs(
     fn: Callable[[Any], Any],
     jobs: Sequence[Any],
@@ -141,6 +224,7 @@ def run_jobs(
     desc: str = "runs",
     on_result: Callable[[int, Any], None] | None = None,
     start_method: str | None = None,
+    executor: Executor | str | None = None,
 ) -> list[Any]:
     """``[fn(job) for job in jobs]`` in worker processes, in order, with a progress bar.
 
@@ -151,10 +235,18 @@ def run_jobs(
     (``KeyboardInterrupt``, also SIGTERM under ``shipgym.cli.main``) the jobs not started are
     cancelled and the workers ended before it propagates; workers also die if this process is
     killed.
+
+    ``executor`` (:class:`Executor`, ``"process"`` or ``"ray"``): with Ray the jobs are Ray
+    tasks on a local instance of ``workers`` CPUs (or the cluster at its address); a job's
+    result depends on the job only (its seed travels with it), so every executor gives the
+    same list.
     """
     from tqdm import tqdm
 
+    ex = Executor.coerce(executor)
     n = workers or min(len(jobs), os.cpu_count() or 1)
+    if ex.kind == "ray":
+        _import_ray()  # a missing extra fails before any work
     bar = tqdm(total=len(jobs), disable=not progress, desc=desc, unit="run")
     out: list[Any] = [None] * len(jobs)
 
@@ -165,7 +257,9 @@ def run_jobs(
         bar.update(1)
 
     try:
-        if n <= 1:
+        if ex.kind == "ray":
+            _run_ray(fn, jobs, max(n, 1), ex.address, done)
+        elif n <= 1:
             for i, job in enumerate(jobs):
                 done(i, fn(job))
         else:
@@ -347,8 +441,11 @@ def bench_observers(
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, dict[str, Any]], None] | None = None,
+    executor: Executor | str | None = None,
 ) -> list[dict[str, Any]]:
     """Run the manoeuvre for every observer and seed; one row per run, in a fixed order.
+
+    ``executor``: where the runs go (:func:`run_jobs`; the process pool by default, or Ray).
 
     ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
     (``"3@300"``: 3 m/s from 300 deg, the default), checked before any run.
@@ -366,8 +463,9 @@ def bench_observers(
         raise ValueError(f"observers must be a non-empty list of names, got {observers!r}")
     jobs = [(obs, s, wind, controller) for obs in observers for s in range(seeds)]
     return run_jobs(
-        _one, jobs, workers=workers, progress=progress, desc="observers x seeds", on_result=on_row
-    )
+        _one, jobs, workers=workers, progress=progress, desc="observers x seeds",
+        on_result=on_row, executor=executor,
+    )  # fmt: skip
 
 
 def mean_std(

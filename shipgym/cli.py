@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from shipgym._argtypes import parse_wind
+from shipgym._argtypes import add_executor_options, executor_of, parse_wind
 from shipgym._io import check_writable
 from shipgym._safeload import jsonable
 from shipgym.bench import row_log, write_bench_outputs
@@ -268,7 +268,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     rows = bench_observers(
         args.observers, seeds=args.seeds, wind=args.wind, workers=args.workers,
         progress=progress_enabled(args.no_progress), controller=args.controller,
-        on_row=log.add,
+        on_row=log.add, executor=executor_of(args),
     )  # fmt: skip
     wall = time.perf_counter() - t0
     table = observer_table(rows)
@@ -335,7 +335,7 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
     rows = bench_dp(
         args.vessel, beauforts, args.seeds, methods=methods, duration=args.duration,
         task=args.task, workers=args.workers, progress=progress_enabled(args.no_progress),
-        on_row=log.add,
+        on_row=log.add, executor=executor_of(args),
     )  # fmt: skip
     wall = time.perf_counter() - t0
     title = (
@@ -472,7 +472,7 @@ def _cmd_bench_roll(args: argparse.Namespace) -> int:
     rows = bench_roll(
         list(vessels), speeds, args.seeds, methods=methods, duration=args.duration,
         task=args.task, workers=args.workers, progress=progress_enabled(args.no_progress),
-        on_row=log.add,
+        on_row=log.add, executor=executor_of(args),
     )  # fmt: skip
     analyses = {v: roll_analysis(v, u) for v, u in run_speeds.items() if u}
     wall = time.perf_counter() - t0
@@ -681,6 +681,7 @@ def _add_bench_outputs(b: argparse.ArgumentParser) -> None:
     )  # fmt: skip
     b.add_argument("--json", type=Path, default=None, metavar="PATH")
     b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    add_executor_options(b)
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -1,9 +1,9 @@
 """The venv built by the Makefile holds exactly the versions of the lock files.
 
 ``make`` installs ``requirements/lock.txt`` (core), ``lock-dev.txt`` (test and dev extras)
-and ``lock-rl.txt`` (rl extra) as far as a target needs them, and leaves a stamp per file in
-the venv (``.lock-core``, ``.lock-dev``, ``.lock-rl``); outside such a venv the comparison is
-skipped.
+``lock-rl.txt`` (rl extra) and ``lock-ray.txt`` (ray extra) as far as a target needs them,
+and leaves a stamp per file in the venv (``.lock-core``, ``.lock-dev``, ``.lock-rl``,
+``.lock-ray``); outside such a venv the comparison is skipped.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ LOCKS = {
     ".lock-core": "requirements/lock.txt",
     ".lock-dev": "requirements/lock-dev.txt",
     ".lock-rl": "requirements/lock-rl.txt",
+    ".lock-ray": "requirements/lock-ray.txt",
 }
 _PIN = re.compile(r"^([A-Za-z0-9][A-Za-z0-9._-]*)==(\S+)$")
 
@@ -39,10 +40,14 @@ def _pins(path: Path) -> dict[str, str]:
 
 
 def test_lock_files_are_exact_pins_without_cuda_packages() -> None:
-    core, dev, rl = (_pins(ROOT / p) for p in LOCKS.values())
-    assert core and dev and rl
+    core, dev, rl, ray = (_pins(ROOT / p) for p in LOCKS.values())
+    assert core and dev and rl and ray
     names = [*core, *dev, *rl]
     assert len(names) == len(set(names)), "a package is locked twice"
+    assert not set(ray) & (set(core) | set(dev)), "the ray lock repeats a core or dev pin"
+    clash = {n: (rl[n], ray[n]) for n in set(rl) & set(ray) if rl[n] != ray[n]}
+    assert not clash, f"the rl and ray extras lock different versions: {clash}"
+    assert "ray" in ray
     assert rl.get("torch") == "2.13.0"
     for name in names:
         assert not name.startswith("nvidia-") and name != "triton", name

@@ -271,8 +271,10 @@ def bench_dp(
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, Any], None] | None = None,
+    executor: Any = None,
 ) -> list[dict[str, Any]]:
-    """All (vessel, Beaufort, method, seed) runs, in worker processes; rows of metrics."""
+    """All (vessel, Beaufort, method, seed) runs, in worker processes (or Ray tasks:
+    ``executor``, :func:`shipgym.bench.run_jobs`); rows of metrics."""
     from shipgym.bench import run_jobs, single_threaded_blas
 
     names = list(METHODS) if methods is None else list(methods)
@@ -299,6 +301,7 @@ def bench_dp(
             desc="dp runs",
             on_result=on_row,
             start_method="forkserver",
+            executor=executor,
         )
 
 

@@ -95,6 +95,7 @@ def bench_controllers(
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, dict[str, Any]], None] | None = None,
+    executor: Any = None,
 ) -> list[dict[str, Any]]:
     """Run the harbour manoeuvre for every controller and seed ``0..seeds-1``.
 
@@ -108,6 +109,7 @@ def bench_controllers(
         observer: ``"default"`` (the Kalman-Bucy filter ``kbf`` when available, else the
             truth), ``"truth"``/``None`` or an observer name; the same for every controller.
         workers: processes (default: CPUs, at most the number of runs); 1 runs in-process.
+        executor: the process pool (default) or Ray (:func:`shipgym.bench.run_jobs`).
         progress: show a progress bar.
         on_row: called with ``(index, row)`` as each run finishes (e.g.
             :meth:`shipgym.bench.RowLog.add`, which keeps finished rows on an interrupt).
@@ -150,8 +152,9 @@ def bench_controllers(
         for s in range(seeds)
     ]
     return run_jobs(
-        _job, jobs, workers=workers, progress=progress, desc="controllers x seeds", on_result=on_row
-    )
+        _job, jobs, workers=workers, progress=progress, desc="controllers x seeds",
+        on_result=on_row, executor=executor,
+    )  # fmt: skip
 
 
 def controller_table(rows: Sequence[dict[str, Any]]) -> str:

@@ -21,8 +21,10 @@ from typing import Any
 from shipgym._argtypes import (
     MAX_COUNT,
     MAX_WORKERS,
+    add_executor_options,
     bounded_float,
     bounded_int,
+    executor_of,
     nonneg_int,
     parse_wind,
     seed_int,
@@ -186,6 +188,7 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
     )
     b.add_argument("--json", type=Path, default=None, metavar="PATH")
     b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    add_executor_options(b)
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=cmd_bench_controllers)
     return b
@@ -217,6 +220,7 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
         workers=args.workers,
         progress=progress_enabled(args.no_progress),
         on_row=log.add,
+        executor=executor_of(args),
     )
     wall = time.perf_counter() - t0
     title = bench_title(rows, args.wind)

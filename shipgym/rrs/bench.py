@@ -193,11 +193,13 @@ def bench_roll(
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, Any], None] | None = None,
+    executor: Any = None,
 ) -> list[dict[str, Any]]:
     """All (vessel, speed, method, seed) runs in worker processes; rows with the RRR added.
 
     Speeds above a vessel's ``limits.surge_speed`` are skipped for it (its propeller cannot
-    hold them). ``task`` ``None``: each vessel's :func:`default_task`.
+    hold them). ``task`` ``None``: each vessel's :func:`default_task`. ``executor``: the
+    process pool (default) or Ray (:func:`shipgym.bench.run_jobs`).
     """
     from shipgym.bench import run_jobs, single_threaded_blas
     from shipgym.dynamics.vessel import load_vessel
@@ -225,7 +227,8 @@ def bench_roll(
         raise ValueError("no runs: every speed lies above the vessels' surge_speed limits")
     with single_threaded_blas():
         rows = run_jobs(roll_run, jobs, workers=workers, progress=progress, desc="roll runs",
-                        on_result=on_row, start_method="forkserver")  # fmt: skip
+                        on_result=on_row, start_method="forkserver",
+                        executor=executor)  # fmt: skip
     base = {(r["vessel"], r["speed"], r["seed"]): r["roll_rms"] for r in rows
             if r["method"] == "autopilot"}  # fmt: skip
     for r in rows:
