@@ -17,6 +17,9 @@ the median over the repeats with the smallest and largest repeat, and all are wr
 - ``recording_overhead``: a recorded harbour episode (rerun) over an unrecorded one;
 - ``allocation_us_6_thrusters``: the prepared least-squares allocator over six fixed thrusters,
   microseconds per call (median);
+- ``batched_physics_hull_steps_per_s`` (N = 256) and ``batched_physics_over_single``: the
+  batched physics (:class:`~shipgym.envs.batchphysics.BatchedPhysics`: plant and actuators,
+  calm air and water) against the single MuJoCo physics, hull-steps per second;
 - ``batched_hull_steps_per_s``, ``batched_over_single``, ``ppo_fps_batched_over_single``: the
   batched vector env's, ``null`` until it exists (the ``missing`` key says why).
 
@@ -177,9 +180,27 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
             alloc(q)
         per.append((time.perf_counter() - t0) / len(reqs) * 1e6)
     out["allocation_us_6_thrusters"] = statistics.median(per)
+    # the batched physics (plant and actuators, calm air and water: what exists of the batched
+    # env so far) against the single MuJoCo physics, the same hull-steps
+    from shipgym.envs.batchphysics import BatchedPhysics
+
+    nb, kb = 256, 100
+    bp = BatchedPhysics("blue-lady", nb)
+    bp.set_command([300.0, 0.5, -0.5])
+    calm = VesselPhysics("blue-lady", wind=None)
+    calm.reset()
+    calm.set_command([300.0, 0.5, -0.5])
+    rb = pair(_timed(lambda: calm.step(nb * kb // 4)), _timed(lambda: bp.step(kb)), repeats,
+              per_a=nb * kb // 4, per_b=nb * kb)  # fmt: skip
+    out["batched_physics_over_single"] = rb
+    out["batched_physics_hull_steps_per_s"] = 1.0 / rb["b_s"]
     for k in ("batched_hull_steps_per_s", "batched_over_single", "ppo_fps_batched_over_single"):
         out[k] = None
-    out["missing"] = {"batched_*": "the batched vector env is not built yet"}
+    out["missing"] = {
+        "batched_hull_steps_per_s, batched_over_single, ppo_fps_batched_over_single": "the "
+        "batched vector env (gusts, sensors, observers, controllers) is not built yet; "
+        "batched_physics_* time its physics alone (plant and actuators, no wind)"
+    }
     return out
 
 
@@ -197,6 +218,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     print(f"  {'bare mj_step':28s}: {res['bare_steps_per_s']:10,.0f} steps/s")
     print(f"  {'full plant':28s}: {res['physics_steps_per_s']:10,.0f} steps/s")
     print(f"  {'allocation_us_6_thrusters':28s}: {res['allocation_us_6_thrusters']:8.1f} us")
+    print(f"  {'batched physics, N = 256':28s}: {res['batched_physics_hull_steps_per_s']:10,.0f} "
+          "hull-steps/s")  # fmt: skip
     args.json.parent.mkdir(parents=True, exist_ok=True)
     flat = {k: (v["median"] if isinstance(v, dict) and "median" in v else v)
             for k, v in res.items()}  # fmt: skip

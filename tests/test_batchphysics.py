@@ -1,0 +1,87 @@
+"""The batched physics against the MuJoCo single physics: the same commands give the same
+trajectories (same integration scheme) for every 3-DOF vessel; resets by mask; bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from shipgym.dynamics.mmg import MMGHull
+from shipgym.dynamics.vessel import load_vessel, vessel_names
+from shipgym.envs.batchphysics import BatchedPhysics
+from shipgym.envs.physics import VesselPhysics
+
+PLANAR = [n for n in vessel_names() if load_vessel(n).dofs == 3]
+
+
+def _start(bp: BatchedPhysics) -> tuple[np.ndarray, np.ndarray, float]:
+    """Rest, or an MMG hull's approach speed with its shaft at the self-propulsion point."""
+    nu0 = np.zeros((bp.n, 3))
+    act0 = bp.initial_actuator_state()
+    n0 = 0.0
+    if isinstance(bp.plant, MMGHull):
+        U = bp.vessel.approach_speed
+        n0 = bp.plant.model.self_propulsion(U)
+        nu0[:, 0] = U
+        act0[:, 0] = n0
+    return nu0, act0, n0
+
+
+@pytest.mark.parametrize("name", PLANAR)
+def test_same_commands_same_trajectories_as_the_mujoco_physics(name: str) -> None:
+    """300 s of random, partly saturating commands changed every 10 s, three hulls each with
+    its own: every pose and velocity within 1e-6 m, m/s and rad of the single physics."""
+    n = 3
+    bp = BatchedPhysics(name, n)
+    acts = bp.actuators
+    nu0, act0, n0 = _start(bp)
+    bp.reset(nu=nu0, actuators=act0)
+    singles = []
+    for i in range(n):
+        p = VesselPhysics(name, wind=None)
+        p.reset(nu=nu0[i], actuators=act0[i])
+        singles.append(p)
+    rng = np.random.default_rng(7)
+    err = 0.0
+    for _ in range(30):
+        a = np.clip(rng.normal(0.0, 0.7, (n, acts.n_channels)), -1.3, 1.3)
+        cmd = acts.action_to_command(np.clip(a, -1, 1)) * np.where(np.abs(a) > 1, 1.2, 1.0)
+        if n0:
+            cmd[:, 0] = n0 * (0.85 + 0.15 * np.clip(a[:, 0], -1, 1))
+        flags = bp.set_command(cmd)
+        for i, p in enumerate(singles):
+            np.testing.assert_array_equal(flags[i], p.set_command(cmd[i]))
+        bp.step(200)
+        for p in singles:
+            p.step(200)
+        eta = np.array([p.eta for p in singles])
+        nu = np.array([p.nu for p in singles])
+        err = max(err, float(np.abs(eta - bp.eta).max()), float(np.abs(nu - bp.nu).max()))
+        np.testing.assert_allclose(bp.actuator_state, [p.actuator_state for p in singles],
+                                   rtol=0, atol=1e-9)  # fmt: skip
+    assert np.abs(bp.eta[:, :2]).max() > 5.0  # the hulls moved
+    assert err < 1e-6, err
+
+
+def test_a_mask_resets_some_hulls_only():
+    bp = BatchedPhysics("blue-lady", 4)
+    bp.set_command([300.0, 0.5, -0.5])
+    bp.step(100)
+    before = bp.eta
+    bp.reset(eta=[1.0, 2.0, 0.3], mask=[False, True, False, True])
+    after = bp.eta
+    np.testing.assert_array_equal(after[[0, 2]], before[[0, 2]])
+    np.testing.assert_array_equal(after[[1, 3]], [[1.0, 2.0, 0.3]] * 2)
+    np.testing.assert_allclose(bp.nu[[1, 3]], 0.0, atol=1e-12)
+
+
+def test_bad_input_is_named():
+    with pytest.raises(ValueError, match="3-DOF hulls only"):
+        BatchedPhysics("naval-vessel", 2)
+    with pytest.raises(ValueError, match="n must be an int >= 1"):
+        BatchedPhysics("blue-lady", 0)
+    bp = BatchedPhysics("blue-lady", 2)
+    with pytest.raises(ValueError, match=r"command must be \(3,\) or \(2, 3\)"):
+        bp.set_command(np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="finite"):
+        bp.set_command([np.nan, 0.0, 0.0])
