@@ -18,8 +18,8 @@ the median over the repeats with the smallest and largest repeat, and all are wr
 - ``allocation_us_6_thrusters``: the prepared least-squares allocator over six fixed thrusters,
   microseconds per call (median);
 - ``batched_physics_hull_steps_per_s`` (N = 256) and ``batched_physics_over_single``: the
-  batched physics (:class:`~shipgym.envs.batchphysics.BatchedPhysics`: plant and actuators,
-  calm air and water) against the single MuJoCo physics, hull-steps per second;
+  batched physics (:class:`~shipgym.envs.batchphysics.BatchedPhysics`: plant, actuators and
+  gusty wind) against the single MuJoCo physics in the same wind, hull-steps per second;
 - ``batched_hull_steps_per_s``, ``batched_over_single``, ``ppo_fps_batched_over_single``: the
   batched vector env's, ``null`` until it exists (the ``missing`` key says why).
 
@@ -180,16 +180,15 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
             alloc(q)
         per.append((time.perf_counter() - t0) / len(reqs) * 1e6)
     out["allocation_us_6_thrusters"] = statistics.median(per)
-    # the batched physics (plant and actuators, calm air and water: what exists of the batched
-    # env so far) against the single MuJoCo physics, the same hull-steps
+    # the batched physics (plant, actuators, gusty wind: what exists of the batched env so far)
+    # against the single MuJoCo physics in the same wind, the same hull-steps
     from shipgym.envs.batchphysics import BatchedPhysics
 
     nb, kb = 256, 100
-    bp = BatchedPhysics("blue-lady", nb)
+    bp = BatchedPhysics("blue-lady", nb, wind=wind)
+    bp.reset(rngs=[np.random.default_rng(i) for i in range(nb)])
     bp.set_command([300.0, 0.5, -0.5])
-    calm = VesselPhysics("blue-lady", wind=None)
-    calm.reset()
-    calm.set_command([300.0, 0.5, -0.5])
+    calm = phys  # the single full plant in the same gusty wind
     rb = pair(_timed(lambda: calm.step(nb * kb // 4)), _timed(lambda: bp.step(kb)), repeats,
               per_a=nb * kb // 4, per_b=nb * kb)  # fmt: skip
     out["batched_physics_over_single"] = rb
@@ -199,7 +198,7 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
     out["missing"] = {
         "batched_hull_steps_per_s, batched_over_single, ppo_fps_batched_over_single": "the "
         "batched vector env (gusts, sensors, observers, controllers) is not built yet; "
-        "batched_physics_* time its physics alone (plant and actuators, no wind)"
+        "batched_physics_* time its physics alone (plant, actuators, gusty wind)"
     }
     return out
 

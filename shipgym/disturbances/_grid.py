@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["CHUNK", "GridPair"]
+__all__ = ["CHUNK", "GridBatch", "GridPair"]
 
 #: samples per chunk (each chunk also stores the first sample of the next one)
 CHUNK = 4096
@@ -106,3 +106,64 @@ class GridPair:
         s0, s1 = grid[0, k], grid[0, k + 1]
         d0, d1 = grid[1, k], grid[1, k + 1]
         return s0 + f * (s1 - s0), d0 + f * (d1 - d0)
+
+
+class GridBatch:
+    """The processes of N envs (each a :class:`GridPair`, reset on its own) read at once:
+    ``at(t)`` for a time per env, the same values as each process's scalar query (the same
+    interpolation, in arrays). A constant process reads as its constant.
+
+    Args:
+        processes: one process per env (already reset).
+    """
+
+    def __init__(self, processes: list[GridPair]) -> None:
+        self.processes = list(processes)
+        n = len(self.processes)
+        self._rows = np.arange(n)
+        self._inv_dt = np.zeros(n)
+        self._valid = np.zeros(n, dtype=np.int64)  # samples held per env
+        self._g0 = np.zeros((n, 2))
+        self._g1 = np.zeros((n, 2))
+        for i in range(n):
+            self.refresh(i)
+
+    def _grid(self, i: int, j: int) -> NDArray[np.float64]:
+        p = self.processes[i]
+        p._extend_to(j)
+        return np.concatenate([c[:, :CHUNK] for c in p._chunks[: j + 1]]
+                              + [p._chunks[j][:, CHUNK:]], axis=1)  # fmt: skip
+
+    def _store(self, i: int, grid: NDArray[np.float64]) -> None:
+        width = grid.shape[1]
+        if width > self._g0.shape[1]:  # widen every row (padded with its last value)
+            pad = width - self._g0.shape[1]
+            self._g0 = np.concatenate([self._g0, np.repeat(self._g0[:, -1:], pad, 1)], 1)
+            self._g1 = np.concatenate([self._g1, np.repeat(self._g1[:, -1:], pad, 1)], 1)
+        self._g0[i, :width] = grid[0]
+        self._g1[i, :width] = grid[1]
+        self._g0[i, width:] = grid[0, -1]
+        self._g1[i, width:] = grid[1, -1]
+        self._valid[i] = width
+
+    def refresh(self, i: int) -> None:
+        """Re-read env ``i``'s process (after its reset)."""
+        p = self.processes[i]
+        if p._const is not None:
+            self._inv_dt[i] = 0.0
+            self._store(i, np.array([[p._const[0]] * 2, [p._const[1]] * 2]))
+            return
+        self._inv_dt[i] = p._inv_dt
+        self._store(i, self._grid(i, 0))
+
+    def at(self, t: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Both channels at the times ``t`` (n,) (s, >= 0), one per env."""
+        x = t * self._inv_dt
+        k = x.astype(np.int64)  # x >= 0: int() truncation, as the scalar query
+        over = np.nonzero(k + 1 >= self._valid)[0]
+        for i in over.tolist():  # a new chunk (rare): in time order, as the scalar query
+            self._store(i, self._grid(i, int(k[i]) // CHUNK))
+        f = x - k
+        r = self._rows
+        a0, b0 = self._g0[r, k], self._g1[r, k]
+        return a0 + f * (self._g0[r, k + 1] - a0), b0 + f * (self._g1[r, k + 1] - b0)

@@ -15,9 +15,12 @@ trajectories (to round-off): per physics step ``h``
    servo's time constant or ``h``), each clamped to its range; ``qvel += h qacc``; ``qpos += h
    qvel``.
 
-Pose ``eta`` and velocity ``nu`` are arrays of shape ``(N, 3)``; commands ``(N, n_channels)``,
-clipped to the channels' ranges (:attr:`saturated` flags). Wind, waves and current, and the
-4-DOF hulls, are not batched yet: :class:`BatchedPhysics` refuses them.
+Wind (gusts included: each hull its own realisation, drawn as the single physics draws it
+from its generator) acts through the Blendermann (1994) load on the velocity over ground, and
+the current through the velocity through the water, as in the single physics. Pose ``eta``
+and velocity ``nu`` are arrays of shape ``(N, 3)``; commands ``(N, n_channels)``, clipped to
+the channels' ranges (:attr:`saturated` flags); every hull keeps its own time (a reset
+restarts it). Waves and the 4-DOF hulls are not batched yet.
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym.disturbances import Current, CurrentConfig, Wind, WindConfig, WindLoad, blendermann
+from shipgym.disturbances._grid import GridBatch
 from shipgym.dynamics import PlantModel
 from shipgym.dynamics.hull4 import is_hull4
 from shipgym.dynamics.vessel import Vessel, load_vessel
@@ -53,6 +58,8 @@ class BatchedPhysics:
             (:class:`~shipgym.dynamics.model.PlantModel`, whose expanded kernel takes arrays,
             or any model with a batched ``nu_dot(nu, tau)``: :class:`~shipgym.dynamics.mmg.
             MMGHull`).
+        wind: any form of ``VesselPhysics(wind=)`` or ``None`` (no aerodynamic load).
+        current: any form of ``VesselPhysics(current=)`` or ``None``.
         timestep: physics step (s), at most half the shortest actuator lag.
     """
 
@@ -62,6 +69,8 @@ class BatchedPhysics:
         n: int,
         plant: Any = "default",
         *,
+        wind: Any = None,
+        current: Any = None,
         timestep: float = DEFAULT_TIMESTEP,
     ) -> None:
         self.vessel = load_vessel(vessel)
@@ -101,13 +110,26 @@ class BatchedPhysics:
         # the expanded kernel takes arrays for a PlantModel; other hulls (MMG, whose kernel is
         # scalar) go through their batched matrix form
         self._kernel = self.plant.accel if isinstance(self.plant, PlantModel) else None
+        wind_cfg = WindConfig.coerce(wind, name="wind")
+        self.aerodynamics = wind_cfg is not None
+        self.wind_config = wind_cfg if wind_cfg is not None else WindConfig()
+        self.winds = [Wind(self.wind_config, v.windage) for _ in range(n)]
+        self._wind_load = WindLoad(
+            blendermann(self.wind_config.coefficients or v.windage.coefficients), v.windage
+        )
+        cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
+        self.current_config = cc
+        self.currents = [Current(cc) for _ in range(n)]
+        self._has_current = not (cc.is_constant and cc.speed == 0.0)
+        self.t = np.zeros(n)
         self.qpos = np.zeros((n, 3))
         self.qvel = np.zeros((n, 3))
         self.qacc = np.zeros((n, 3))
         self.act = np.zeros((n, len(chans)))
         self.cmd = np.zeros((n, len(chans)))
-        self.time = 0.0
         self.saturated = np.zeros((n, len(chans)), dtype=bool)
+        self._wind_at: GridBatch | None = None
+        self._current_at: GridBatch | None = None
         self.reset()
 
     # ---- state -----------------------------------------------------------------------------
@@ -140,9 +162,15 @@ class BatchedPhysics:
         nu: ArrayLike | None = None,
         actuators: ArrayLike | None = None,
         mask: ArrayLike | None = None,
+        rngs: list[np.random.Generator] | None = None,
     ) -> None:
         """Reset the hulls (all, or those where ``mask`` is True) to ``eta``, ``nu`` (each
-        ``(3,)`` or ``(n, 3)``) and actuator states; commands are set to hold them."""
+        ``(3,)`` or ``(n, 3)``) and actuator states; commands are set to hold them.
+
+        ``rngs``: one generator per hull (the reset ones are used) for its wind gusts and
+        current, drawn in the single physics' order (wind, then current); ``None``: seed 0 for
+        each, as ``VesselPhysics.reset(rng=None)``.
+        """
         zeros = np.zeros((self.n, 3))
         e = self._rows(eta, 3, "eta", zeros)
         w = self._rows(nu, 3, "nu", zeros)
@@ -161,8 +189,19 @@ class BatchedPhysics:
         self.act[m] = act[m]
         self.cmd[m] = np.where(self._lag | self._servo, act, 0.0)[m]
         self.saturated[m] = False
-        if mask is None:
-            self.time = 0.0
+        self.t[m] = 0.0
+        if rngs is not None and len(rngs) != self.n:
+            raise ValueError(f"rngs must hold one generator per hull ({self.n}), got {len(rngs)}")
+        for i in np.nonzero(m)[0].tolist():
+            g = rngs[i] if rngs is not None else np.random.default_rng(0)
+            self.winds[i].reset(g)
+            self.currents[i].reset(g)
+            if self._wind_at is not None and self._current_at is not None:
+                self._wind_at.refresh(i)
+                self._current_at.refresh(i)
+        if self._wind_at is None or self._current_at is None:
+            self._wind_at = GridBatch(self.winds)
+            self._current_at = GridBatch(self.currents)
         # leapfrog start: qacc = a_0 = f(q_0, v_0), qvel = v_{-1/2} = v_0 - h/2 a_0
         self.qacc[m] = 0.0
         a0 = self._qacc()
@@ -206,12 +245,23 @@ class BatchedPhysics:
         u = c * w[:, 0] + s * w[:, 1]
         v = c * w[:, 1] - s * w[:, 0]
         r = w[:, 2]
-        nu = np.stack([u, v, r], -1)
-        tau = self.actuators.tau(self.act, nu if self._flow else None)
-        if self._kernel is not None:
-            ud, vd, rd = self._kernel(u, v, r, tau[:, 0], tau[:, 1], tau[:, 2], 0.0, 0.0)
+        if self._has_current:
+            assert self._current_at is not None
+            vc, bc = self._current_at.at(self.t)
+            uc, vcb = vc * np.cos(bc - psi), vc * np.sin(bc - psi)
         else:
-            ud, vd, rd = self.plant.nu_dot(nu, tau).T
+            uc = vcb = np.zeros_like(u)
+        nu_w = np.stack([u - uc, v - vcb, r], -1)
+        tau = self.actuators.tau(self.act, nu_w if self._flow else None)
+        if self.aerodynamics:
+            assert self._wind_at is not None
+            Vw, bw = self._wind_at.at(self.t)
+            tau = tau + self._wind_load.array(psi, u, v, np.maximum(Vw, 0.0), bw)
+        if self._kernel is not None:
+            ud, vd, rd = self._kernel(u, v, r, tau[:, 0], tau[:, 1], tau[:, 2], uc, vcb)
+        else:
+            nu_c = np.stack([uc, vcb, np.zeros_like(u)], -1)
+            ud, vd, rd = self.plant.nu_dot(np.stack([u, v, r], -1), tau, nu_c).T
         bx = ud - r * v
         by = vd + r * u
         return np.stack([c * bx - s * by, s * bx + c * by, np.broadcast_to(rd, u.shape)], -1)
@@ -229,7 +279,7 @@ class BatchedPhysics:
             if not np.all(np.isfinite(qacc)):
                 bad = np.nonzero(~np.all(np.isfinite(qacc), axis=1))[0]
                 raise SimulationDiverged(
-                    f"simulation diverged at t = {self.time:.3f} s in hulls {bad.tolist()}: "
+                    f"simulation diverged in hulls {bad.tolist()} (t = {self.t[bad].tolist()} s): "
                     "check the plant parameters, the timestep and the applied forces"
                 )
             act = self.act
@@ -243,6 +293,6 @@ class BatchedPhysics:
             self.qacc = qacc
             self.qvel = self.qvel + h * qacc
             self.qpos = self.qpos + h * self.qvel
-            self.time += h
+            self.t += h
         if not np.all(np.abs(self.qvel) < 1e3):
-            raise SimulationDiverged(f"simulation diverged at t = {self.time:.3f} s")
+            raise SimulationDiverged("simulation diverged: a hull passed 1 km/s")
