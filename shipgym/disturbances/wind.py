@@ -49,7 +49,7 @@ from __future__ import annotations
 import functools
 import math
 import numbers
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -432,6 +432,11 @@ class WindLoad:
             A tuple of three Python floats.
         """
         return _loads(_MATH, self._k, float(psi), float(u), float(v), float(V_w), float(beta_w))
+
+    def kernel(self) -> Callable[[float, float, float, float, float], tuple[float, float, float]]:
+        """``f(psi, u, v, V_w, beta_w) -> (X, Y, N)`` for plain floats: :meth:`__call__`
+        without its argument conversion (the physics step, whose inputs are floats)."""
+        return functools.partial(_loads, _MATH, self._k)
 
     def array(
         self, psi: ArrayLike, u: ArrayLike, v: ArrayLike, V_w: ArrayLike, beta_w: ArrayLike

@@ -624,7 +624,7 @@ class VesselPhysics:
         # actuator gains (k |n|) and azimuth directions, so MuJoCo applies the same force
         tau_of = self.actuators.kernel(m.actuator_gainprm, m.actuator_gear)
         mq, iq, ix = self._m_q, self._i_q, self._i_x
-        accel, wind_at, wind_load = self._accel, self.wind.at, self._wind_load
+        accel, wind_at, wind_load = self._accel, self.wind.at, self._wind_load.kernel()
         cc = self.current_config
         current_at = None if (cc.is_constant and cc.speed == 0.0) else self.current.at
         drift = None if self.waves is None or not self.wave_config.drift else self.waves.drift_load
