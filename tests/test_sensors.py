@@ -248,3 +248,39 @@ def test_seeding_reproducible_and_common_random_numbers():
     same = [i for i, m in enumerate(faulty) if m.valid and not m.outlier]
     assert len(same) > 50
     np.testing.assert_array_equal(np.array([faulty[i].z for i in same]), np.array(a)[same])
+
+
+def test_batched_sensors_measure_what_each_env_s_sensors_measure():
+    """Four envs, each seeded as a Sensors of its own, with noise, outliers, dropouts and an
+    antenna offset; block refills every 7 samples: the same flags, the same fixes (to
+    round-off: the batched form uses NumPy's cos/sin)."""
+    import dataclasses
+
+    from shipgym.observers.sensors import BatchedSensors
+
+    cfg = dataclasses.replace(sensor_config("dgps"), outlier_probability=0.1,
+                              dropout_probability=0.05, antenna_offset=(-3.0, 1.0))  # fmt: skip
+    n = 4
+    batched = BatchedSensors(cfg, n, block=7)
+    batched.reset([np.random.default_rng(i) for i in range(n)])
+    single = [Sensors(cfg) for _ in range(n)]
+    for i, s in enumerate(single):
+        s.reset(np.random.default_rng(i))
+    rng = np.random.default_rng(99)
+    counts = {"valid": 0, "outlier": 0, "dropped": 0}
+    for k in range(80):
+        eta = rng.normal(0.0, 50.0, (n, 3))
+        z, valid, outlier = batched.measure(np.full(n, float(k)), eta)
+        for i, s in enumerate(single):
+            m = s.measure(float(k), eta[i])
+            assert (m.valid, m.outlier) == (bool(valid[i]), bool(outlier[i])), (k, i)
+            if m.valid:
+                np.testing.assert_allclose(z[i], m.z, rtol=0, atol=1e-12)
+            else:
+                assert np.all(np.isnan(z[i]))
+        counts["valid"] += int(valid.sum())
+        counts["outlier"] += int(outlier.sum())
+        counts["dropped"] += int((~valid).sum())
+    assert min(counts.values()) > 0  # every branch was taken
+    with pytest.raises(RuntimeError, match="reset"):
+        BatchedSensors(cfg, 2).measure([0.0, 0.0], np.zeros((2, 3)))

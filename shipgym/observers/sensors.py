@@ -66,6 +66,7 @@ __all__ = [
     "SENSOR_PRESETS",
     "Measurement",
     "SensorConfig",
+    "BatchedSensors",
     "Sensors",
     "sensor_config",
 ]
@@ -262,6 +263,13 @@ class Measurement:
     outlier: bool = False
 
 
+def _streams(rng: np.random.Generator) -> tuple[np.random.Generator, ...]:
+    """The noise, outlier and dropout streams of one sensor set: one ``integers(2**63)`` draw
+    from ``rng`` seeds a sequence that spawns the three."""
+    seq = np.random.SeedSequence(int(rng.integers(2**63)))
+    return tuple(np.random.default_rng(s) for s in seq.spawn(3))
+
+
 class Sensors:
     """Runtime DGPS + gyrocompass model drawing its noise from a seeded generator.
 
@@ -300,10 +308,7 @@ class Sensors:
             raise TypeError(
                 f"rng must be a numpy.random.Generator or an int seed, got {type(rng).__name__}"
             )
-        seq = np.random.SeedSequence(int(rng.integers(2**63)))
-        self._rng_noise, self._rng_outlier, self._rng_dropout = (
-            np.random.default_rng(s) for s in seq.spawn(3)
-        )
+        self._rng_noise, self._rng_outlier, self._rng_dropout = _streams(rng)
         self._dropout_until = -math.inf
 
     def sample_times(self, t0: float, t1: float) -> NDArray[np.float64]:
@@ -350,3 +355,93 @@ class Sensors:
             z[1] += cfg.outlier_magnitude * math.sin(a)
         z[2] = wrap_angle(float(z[2]))
         return Measurement(t, z, True, outlier)
+
+
+class BatchedSensors:
+    """The sensors of ``n`` envs sampled at once: the array form of :class:`Sensors`, each env
+    with its own three streams, drawn as :meth:`Sensors.reset` draws them from the env's
+    generator, so that env ``i`` measures what a :class:`Sensors` reset with the same
+    generator measures (a test checks it). Draws are taken in blocks (a generator's
+    ``standard_normal((k, 3))`` is the stream of ``k`` calls of ``standard_normal(3)``).
+
+    Args:
+        config: the sensor parameters (shared by the envs).
+        n: number of envs.
+        block: samples drawn per refill.
+    """
+
+    def __init__(self, config: SensorConfig, n: int, block: int = 256) -> None:
+        if not isinstance(config, SensorConfig):
+            raise TypeError(f"config must be a SensorConfig, got {type(config).__name__}")
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise ValueError(f"n must be an int >= 1, got {n!r}")
+        self.config = config
+        self.n = n
+        self.block = int(block)
+        self._sig = np.array([config.position_sigma, config.position_sigma, config.heading_sigma])
+        self._gens: list[tuple[np.random.Generator, ...] | None] = [None] * n
+        self._noise = np.zeros((n, self.block, 3))
+        self._out = np.zeros((n, self.block, 2))
+        self._drop = np.zeros((n, self.block))
+        self._k = np.full(n, self.block)  # next unused draw per env (block: refill)
+        self._until = np.full(n, -math.inf)
+        self._rows = np.arange(n)
+
+    def reset(self, rngs: list[np.random.Generator], mask: ArrayLike | None = None) -> None:
+        """Restart the streams of the envs (all, or those where ``mask`` is True), one
+        generator per env (the reset ones are used)."""
+        if len(rngs) != self.n:
+            raise ValueError(f"rngs must hold one generator per env ({self.n}), got {len(rngs)}")
+        m = np.ones(self.n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        for i in np.nonzero(m)[0].tolist():
+            self._gens[i] = _streams(rngs[i])
+            self._k[i] = self.block
+            self._until[i] = -math.inf
+
+    def _refill(self, i: int) -> None:
+        gens = self._gens[i]
+        if gens is None:
+            raise RuntimeError("BatchedSensors.reset(rngs) must be called before measure()")
+        noise, outlier, dropout = gens
+        self._noise[i] = noise.standard_normal((self.block, 3))
+        self._out[i] = outlier.random((self.block, 2))
+        self._drop[i] = dropout.random(self.block)
+        self._k[i] = 0
+
+    def measure(
+        self, t: ArrayLike, eta_true: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
+        """Sample every env at its time ``t`` (n,) for its true pose ``eta_true`` (n, 3).
+
+        Returns:
+            ``(z, valid, outlier)``: the measured poses (n, 3) (``nan`` rows during a
+            dropout; heading in ``(-pi, pi]``), whether each is available, and the outlier
+            truth flags.
+        """
+        eta = np.asarray(eta_true, dtype=float)
+        tt = np.broadcast_to(np.asarray(t, dtype=float), (self.n,))
+        if eta.shape != (self.n, 3) or not np.all(np.isfinite(eta)):
+            raise ValueError(f"eta_true must be ({self.n}, 3) finite values, got {eta.shape}")
+        for i in np.nonzero(self._k >= self.block)[0].tolist():
+            self._refill(i)
+        cfg = self.config
+        r, k = self._rows, self._k
+        noise = self._noise[r, k] * self._sig
+        u_out, ang = self._out[r, k, 0], self._out[r, k, 1]
+        u_drop = self._drop[r, k]
+        self._k = k + 1
+        held = tt < self._until - _EPS_T * cfg.period
+        start = ~held & (u_drop < cfg.dropout_probability)
+        self._until = np.where(start, tt + cfg.dropout_duration, self._until)
+        valid = ~(held | start)
+        psi = eta[:, 2]
+        c, s = np.cos(psi), np.sin(psi)
+        xa, ya = cfg.antenna_offset
+        z = np.stack([eta[:, 0] + c * xa - s * ya, eta[:, 1] + s * xa + c * ya, psi], -1) + noise
+        outlier = valid & (u_out < cfg.outlier_probability)
+        a = 2.0 * math.pi * ang
+        z[:, 0] += np.where(outlier, cfg.outlier_magnitude * np.cos(a), 0.0)
+        z[:, 1] += np.where(outlier, cfg.outlier_magnitude * np.sin(a), 0.0)
+        z[:, 2] = np.asarray(wrap_angle(z[:, 2]))
+        z[~valid] = np.nan
+        return z, valid, outlier
