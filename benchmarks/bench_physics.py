@@ -10,35 +10,14 @@ load; printed as the median over the repeats with the smallest and largest.
 from __future__ import annotations
 
 import argparse
-import time
 
 import mujoco
 import numpy as np
-from bench_summary import _bare, _timed, pair
+from bench_summary import _bare, _episode, _timed, pair
 
 from shipgym.dynamics.vessel import load_vessel, vessel_names
 from shipgym.envs.physics import VesselPhysics
 from shipgym.envs.scene import build_model
-
-
-def _episode(env, action) -> tuple:  # type: ignore[no-untyped-def]
-    """A timed whole episode of ``env`` under a constant ``action`` and its physics steps."""
-    box = {}
-
-    def run() -> float:
-        env.reset(seed=0)
-        t0 = time.perf_counter()
-        done, steps = False, 0
-        while not done:
-            _, _, term, trunc, _ = env.step(action)
-            done = term or trunc
-            steps += 1
-        wall = time.perf_counter() - t0
-        box["steps"] = steps
-        return wall
-
-    run()
-    return run, box["steps"] * round(env.control_period / env.physics.timestep)
 
 
 def _fmt(r: dict) -> str:
