@@ -274,11 +274,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             raise ValueError(f"plan must be a plan name or a ManoeuvrePlan, got {plan!r}")
         if scene not in SCENES:
             raise ValueError(f"unknown scene {scene!r}; choose one of: {', '.join(SCENES)}")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}, "
-                f"got {render_mode!r}"
-            )
+        _check_render_mode(render_mode, self.metadata)
         _check_timing(timestep, control_period)
         self.n_substeps = _whole_multiple(control_period, timestep)
         self.control_period = float(control_period)
@@ -742,6 +738,14 @@ def _check_timing(timestep: Any, control_period: Any) -> None:
         raise ValueError(
             f"control_period / timestep = {control_period / timestep:.0f} physics steps per "
             f"control step, more than {MAX_SUBSTEPS}: use a larger timestep"
+        )
+
+
+def _check_render_mode(render_mode: Any, metadata: Mapping[str, Any]) -> None:
+    """``ValueError`` unless ``render_mode`` is ``None`` or one of the env's render modes."""
+    if render_mode is not None and render_mode not in metadata["render_modes"]:
+        raise ValueError(
+            f"render_mode must be None or one of {metadata['render_modes']}, got {render_mode!r}"
         )
 
 

@@ -40,7 +40,7 @@ from shipgym.observers.dgps import (
     velocity_outputs,
 )
 
-from .base import TopCameraRender, _check_timing, _whole_multiple
+from .base import TopCameraRender, _check_render_mode, _check_timing, _whole_multiple
 from .physics import VesselPhysics
 
 __all__ = [
@@ -296,9 +296,7 @@ class CourseKeepingEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.
         self.n_substeps = _whole_multiple(control_period, timestep)
         self.timestep = float(timestep)
         self.control_period = float(control_period)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or one of "
-                             f"{self.metadata['render_modes']}, got {render_mode!r}")  # fmt: skip
+        _check_render_mode(render_mode, self.metadata)
         self.render_mode = render_mode
         self._wind_arg = self._parse_disturbance(wind, WindConfig, "wind")
         self._current_arg = self._parse_disturbance(current, CurrentConfig, "current")

@@ -31,7 +31,7 @@ from shipgym.dynamics.vanderklugt import KDP_LAWS, VAN_DER_KLUGT, seed_vessel
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.observers.sway import R_SWAY, SwayVelocityKF, calm_water_intensities
 
-from .base import TopCameraRender, _check_timing, _whole_multiple
+from .base import TopCameraRender, _check_render_mode, _check_timing, _whole_multiple
 from .physics import VesselPhysics
 
 __all__ = [
@@ -267,9 +267,7 @@ class RudderRollEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.flo
         self.n_substeps = _whole_multiple(control_period, timestep)
         self.timestep = float(timestep)
         self.control_period = float(control_period)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or one of "
-                             f"{self.metadata['render_modes']}, got {render_mode!r}")  # fmt: skip
+        _check_render_mode(render_mode, self.metadata)
         self.render_mode = render_mode
         self._renderer: Any = None
         chans = v.actuators.channel_names

@@ -33,7 +33,7 @@ from shipgym.observers.dgps import S_P_OPTIMAL, DGPSReceiver
 from shipgym.trials.manoeuvres import manoeuvre, manoeuvre_names
 from shipgym.trials.metrics import imo_criteria, trial_metrics
 
-from .base import TopCameraRender, _check_timing, _whole_multiple
+from .base import TopCameraRender, _check_render_mode, _check_timing, _whole_multiple
 from .physics import VesselPhysics
 
 __all__ = [
@@ -225,8 +225,7 @@ class SeaTrialEnv(TopCameraRender, gym.Env[NDArray[np.float32], Any]):
         if receiver not in RECEIVERS:
             raise ValueError(f"unknown receiver {receiver!r}; choose None or 'dgps-pv'")
         self.receiver_name = receiver
-        if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        _check_render_mode(render_mode, self.metadata)
         self.render_mode = render_mode
         _check_timing(timestep, control_period)
         self.n_sub = _whole_multiple(control_period, timestep)

@@ -39,6 +39,13 @@ def _figure(size: tuple[float, float]) -> Any:
     return fig
 
 
+def _saved(fig: Any, path: str | os.PathLike[str] | None) -> Any:
+    """``fig``, saved as a PNG at ``path`` first when one is given."""
+    if path is not None:
+        fig.savefig(path, dpi=DPI)
+    return fig
+
+
 def _outline(x: float, y: float, psi: float, L: float, B: float) -> np.ndarray:
     """A ship outline (pointed bow) of length ``L`` and beam ``B`` at midship ``(x, y)``."""
     body = np.array([[0.5, 0.0], [0.3, 0.5], [-0.5, 0.5], [-0.5, -0.5], [0.3, -0.5], [0.5, 0.0]])
@@ -91,9 +98,7 @@ def plot_tracks(
         ax.legend(fontsize=8)
     if title:
         ax.set_title(title)
-    if path is not None:
-        fig.savefig(path, dpi=DPI)
-    return fig
+    return _saved(fig, path)
 
 
 def plot_bias(
@@ -137,9 +142,7 @@ def plot_bias(
     axes[-1].set_xlabel("time (s)")
     if title:
         fig.suptitle(title)
-    if path is not None:
-        fig.savefig(path, dpi=DPI)
-    return fig
+    return _saved(fig, path)
 
 
 def plot_histories(records: Mapping[str, Any], *, path: str | os.PathLike[str] | None = None,
@@ -168,9 +171,7 @@ def plot_histories(records: Mapping[str, Any], *, path: str | os.PathLike[str] |
     axes[-1].set_xlabel("time (s)")
     if title:
         fig.suptitle(title)
-    if path is not None:
-        fig.savefig(path, dpi=DPI)
-    return fig
+    return _saved(fig, path)
 
 
 def write_trial_figures(
