@@ -697,22 +697,20 @@ class ActuatorSet:
 
         ``nu`` as for :meth:`forces`.
         """
-        f = self.forces(states, nu)
-        pos = np.array([a.position for a in self.actuators])
-        point = np.array([not hasattr(a, "generalised") for a in self.actuators])
-        fx, fy = f[..., 0] * point, f[..., 1] * point
-        X = fx.sum(-1)
-        Y = fy.sum(-1)
-        N = (pos[:, 0] * fy - pos[:, 1] * fx).sum(-1)
         s = self.check_states(states)
+        X = Y = K = N = 0.0
         for a, sl in zip(self.actuators, self.slices, strict=True):
-            if hasattr(a, "generalised"):  # not one point force (an MMG unit)
-                gx, gy, gn = a.generalised(s[..., sl], nu)
+            st = s[..., sl]
+            if hasattr(a, "generalised"):  # not one point force (an MMG unit, planar)
+                gx, gy, gn = a.generalised(st, nu)
                 X, Y, N = X + gx, Y + gy, N + gn
-        if self.dofs == 3:
-            return np.stack(np.broadcast_arrays(X, Y, N), -1)
-        K = (-pos[:, 2] * fy).sum(-1)
-        return np.stack(np.broadcast_arrays(X, Y, K, N), -1)
+                continue
+            fx, fy = a.force(st, nu) if a.flow_dependent else a.force(st)
+            x, y, z = a.position
+            X, Y, N = X + fx, Y + fy, N + (x * fy - y * fx)
+            K = K - z * fy
+        out = (X, Y, N) if self.dofs == 3 else (X, Y, K, N)
+        return np.stack(np.broadcast_arrays(*out, np.zeros(s.shape[:-1])), -1)[..., :-1]
 
     def configuration_matrix(self) -> NDArray[np.float64]:
         """``B`` (dofs, n_actuators) of the fixed-direction actuators: ``tau = B F``.
