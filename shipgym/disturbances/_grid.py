@@ -157,12 +157,14 @@ class GridBatch:
         self._store(i, self._grid(i, 0))
 
     def at(self, t: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Both channels at the times ``t`` (n,) (s, >= 0), one per env."""
+        """Both channels at the times ``t`` (n,) (s, >= 0), one per env; or (k, n): k times per
+        env (the steps of a control period, read at once)."""
         x = t * self._inv_dt
         k = x.astype(np.int64)  # x >= 0: int() truncation, as the scalar query
-        over = np.nonzero(k + 1 >= self._valid)[0]
+        last = k if k.ndim == 1 else k.max(axis=0)
+        over = np.nonzero(last + 1 >= self._valid)[0]
         for i in over.tolist():  # a new chunk (rare): in time order, as the scalar query
-            self._store(i, self._grid(i, int(k[i]) // CHUNK))
+            self._store(i, self._grid(i, int(last[i]) // CHUNK))
         f = x - k
         r = self._rows
         a0, b0 = self._g0[r, k], self._g1[r, k]

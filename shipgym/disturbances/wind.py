@@ -438,6 +438,11 @@ class WindLoad:
         without its argument conversion (the physics step, whose inputs are floats)."""
         return functools.partial(_loads, _MATH, self._k)
 
+    def array_kernel(self) -> Callable[[Any, Any, Any, Any, Any], tuple[Any, Any, Any]]:
+        """``f(psi, u, v, V_w, beta_w) -> (X, Y, N)`` for NumPy arrays of one shape: :meth:`array`
+        without its conversion and stacking (the batched physics step)."""
+        return functools.partial(_loads, _NUMPY, self._k)
+
     def array(
         self, psi: ArrayLike, u: ArrayLike, v: ArrayLike, V_w: ArrayLike, beta_w: ArrayLike
     ) -> NDArray[np.float64]:

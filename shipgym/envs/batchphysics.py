@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym.disturbances import Current, CurrentConfig, Wind, WindConfig, WindLoad, blendermann
 from shipgym.disturbances._grid import GridBatch
 from shipgym.dynamics import PlantModel
+from shipgym.dynamics.actuators import ActuatorSet, Azimuth, Propeller
 from shipgym.dynamics.hull4 import is_hull4
 from shipgym.dynamics.vessel import Vessel, load_vessel
 
@@ -55,12 +56,14 @@ class BatchedPhysics:
             package path.
         n: number of hulls, >= 1.
         plant: a plant variant name of the vessel or a 3-DOF model
-            (:class:`~shipgym.dynamics.model.PlantModel`, whose expanded kernel takes arrays,
-            or any model with a batched ``nu_dot(nu, tau)``: :class:`~shipgym.dynamics.mmg.
-            MMGHull`).
+            (:class:`~shipgym.dynamics.model.PlantModel`, or any model with a batched
+            ``nu_dot(nu, tau, nu_c)``: :class:`~shipgym.dynamics.mmg.MMGHull`).
         wind: any form of ``VesselPhysics(wind=)`` or ``None`` (no aerodynamic load).
         current: any form of ``VesselPhysics(current=)`` or ``None``.
         timestep: physics step (s), at most half the shortest actuator lag.
+
+    The state is held component-major (``(3, n)``, ``(n_channels, n)``) so that every row is a
+    contiguous array; the properties return the usual ``(n, 3)`` layout.
     """
 
     def __init__(
@@ -94,39 +97,42 @@ class BatchedPhysics:
                 f"timestep {self.h:g} s is more than half the shortest actuator lag of "
                 f"{v.name!r} ({min(lags):g} s): use timestep <= {0.5 * min(lags):g}"
             )
+        col = (slice(None), None)  # per-channel constants as columns, (n_channels, 1)
         self.lower = v.actuators.lower.copy()
         self.upper = v.actuators.upper.copy()
+        self._lo, self._hi = self.lower[col], self.upper[col]
         dyn = np.array([c.dynamics for c in chans])
-        self._lag = dyn == "lag"
-        self._servo = dyn == "servo"
-        self._integ = dyn == "integrator"
+        lag, servo, integ = dyn == "lag", dyn == "servo", dyn == "integrator"
+        self._lag, self._servo, self._integ = lag, servo, integ
+        self._any_servo, self._any_integ = bool(servo.any()), bool(integ.any())
+        self._bounded = (lag | servo)[col]
         tc = np.array([c.time_constant if c.dynamics == "lag" else 1.0 for c in chans])
-        self._alpha = np.where(self._lag, 1.0 - np.exp(-self.h / tc), 0.0)
-        self._rate = np.array([c.rate if c.dynamics == "servo" else 0.0 for c in chans])
+        self._alpha = np.where(lag, 1.0 - np.exp(-self.h / tc), 0.0)[col]
+        self._rate = np.array([c.rate if c.dynamics == "servo" else 0.0 for c in chans])[col]
         self._servo_T = np.array(
             [(c.time_constant or self.h) if c.dynamics == "servo" else 1.0 for c in chans]
-        )
+        )[col]
         self._flow = v.actuators.flow_dependent
-        # the expanded kernel takes arrays for a PlantModel; other hulls (MMG, whose kernel is
-        # scalar) go through their batched matrix form
-        self._kernel = self.plant.accel if isinstance(self.plant, PlantModel) else None
+        self._tau = _actuator_kernel(v.actuators)
+        self._accel = _plant_kernel(self.plant)
         wind_cfg = WindConfig.coerce(wind, name="wind")
         self.aerodynamics = wind_cfg is not None
         self.wind_config = wind_cfg if wind_cfg is not None else WindConfig()
         self.winds = [Wind(self.wind_config, v.windage) for _ in range(n)]
         self._wind_load = WindLoad(
             blendermann(self.wind_config.coefficients or v.windage.coefficients), v.windage
-        )
+        ).array_kernel()
         cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
         self.current_config = cc
         self.currents = [Current(cc) for _ in range(n)]
         self._has_current = not (cc.is_constant and cc.speed == 0.0)
+        self._zeros = np.zeros(n)
         self.t = np.zeros(n)
-        self.qpos = np.zeros((n, 3))
-        self.qvel = np.zeros((n, 3))
-        self.qacc = np.zeros((n, 3))
-        self.act = np.zeros((n, len(chans)))
-        self.cmd = np.zeros((n, len(chans)))
+        self._q = np.zeros((3, n))
+        self._v = np.zeros((3, n))
+        self._a = np.zeros((3, n))
+        self._act = np.zeros((len(chans), n))
+        self._cmd = np.zeros((len(chans), n))
         self.saturated = np.zeros((n, len(chans)), dtype=bool)
         self._wind_at: GridBatch | None = None
         self._current_at: GridBatch | None = None
@@ -182,16 +188,16 @@ class BatchedPhysics:
         m = np.ones(self.n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
         if m.shape != (self.n,):
             raise ValueError(f"mask must be ({self.n},) booleans, got shape {m.shape}")
-        c, s = np.cos(e[:, 2]), np.sin(e[:, 2])
-        qvel = np.stack([c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1], w[:, 2]], -1)
-        self.qpos[m] = e[m]
-        self.qvel[m] = qvel[m]
-        self.act[m] = act[m]
-        self.cmd[m] = np.where(self._lag | self._servo, act, 0.0)[m]
-        self.saturated[m] = False
-        self.t[m] = 0.0
         if rngs is not None and len(rngs) != self.n:
             raise ValueError(f"rngs must hold one generator per hull ({self.n}), got {len(rngs)}")
+        c, s = np.cos(e[:, 2]), np.sin(e[:, 2])
+        qvel = np.stack([c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1], w[:, 2]])
+        self._q[:, m] = e.T[:, m]
+        self._v[:, m] = qvel[:, m]
+        self._act[:, m] = act.T[:, m]
+        self._cmd[:, m] = np.where(self._lag | self._servo, act, 0.0).T[:, m]
+        self.saturated[m] = False
+        self.t[m] = 0.0
         for i in np.nonzero(m)[0].tolist():
             g = rngs[i] if rngs is not None else np.random.default_rng(0)
             self.winds[i].reset(g)
@@ -203,68 +209,87 @@ class BatchedPhysics:
             self._wind_at = GridBatch(self.winds)
             self._current_at = GridBatch(self.currents)
         # leapfrog start: qacc = a_0 = f(q_0, v_0), qvel = v_{-1/2} = v_0 - h/2 a_0
-        self.qacc[m] = 0.0
-        a0 = self._qacc()
-        self.qacc[m] = a0[m]
-        self.qvel[m] -= 0.5 * self.h * a0[m]
+        self._a[:, m] = 0.0
+        Vw, bw, vc, bc = self._disturbances(self.t[None])
+        a0 = self._qacc(self._q, self._v, self._a, self._act, Vw[0], bw[0], vc[0], bc[0])
+        self._a[:, m] = a0[:, m]
+        self._v[:, m] -= 0.5 * self.h * a0[:, m]
 
     @property
     def eta(self) -> Array:
         """Poses ``[x, y, psi]`` (n, 3) (m, m, rad; psi continuous)."""
-        return self.qpos.copy()
+        return self._q.T.copy()
 
     @property
     def nu(self) -> Array:
         """Body velocities ``[u, v, r]`` (n, 3) at the whole step."""
-        w = self.qvel + 0.5 * self.h * self.qacc
-        psi = self.qpos[:, 2]
-        c, s = np.cos(psi), np.sin(psi)
-        return np.stack([c * w[:, 0] + s * w[:, 1], -s * w[:, 0] + c * w[:, 1], w[:, 2]], -1)
+        w = self._v + 0.5 * self.h * self._a
+        c, s = np.cos(self._q[2]), np.sin(self._q[2])
+        return np.stack([c * w[0] + s * w[1], c * w[1] - s * w[0], w[2]], -1)
 
     @property
     def actuator_state(self) -> Array:
         """Actuator states (n, n_channels)."""
-        return self.act.copy()
+        return self._act.T.copy()
+
+    @property
+    def command(self) -> Array:
+        """The held (clipped) commands (n, n_channels)."""
+        return self._cmd.T.copy()
 
     # ---- stepping --------------------------------------------------------------------------
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
         """Commands ``(n, n_channels)`` (or one row for all), clipped to the channels' ranges;
         returns the clip flags (also :attr:`saturated`)."""
-        c = self._rows(command, self.actuators.n_channels, "command", self.cmd)
+        c = self._rows(command, self.actuators.n_channels, "command", self._cmd.T)
         clipped = np.clip(c, self.lower, self.upper)
         self.saturated = clipped != c
-        self.cmd = clipped
+        self._cmd = np.ascontiguousarray(clipped.T)
         return self.saturated.copy()
 
-    def _qacc(self) -> Array:
-        """``qacc*`` of the current state (steps 1-2 of the module docstring)."""
-        h = self.h
-        w = self.qvel + 0.5 * h * self.qacc
-        psi = self.qpos[:, 2]
-        c, s = np.cos(psi), np.sin(psi)
-        u = c * w[:, 0] + s * w[:, 1]
-        v = c * w[:, 1] - s * w[:, 0]
-        r = w[:, 2]
-        if self._has_current:
-            assert self._current_at is not None
-            vc, bc = self._current_at.at(self.t)
-            uc, vcb = vc * np.cos(bc - psi), vc * np.sin(bc - psi)
-        else:
-            uc = vcb = np.zeros_like(u)
-        nu_w = np.stack([u - uc, v - vcb, r], -1)
-        tau = self.actuators.tau(self.act, nu_w if self._flow else None)
+    def _disturbances(self, ts: Array) -> tuple[Array, Array, Array, Array]:
+        """Wind ``(V_w, beta_w)`` and current ``(V_c, beta_c)`` at the times ``ts`` (k, n)."""
+        z = np.zeros_like(ts)
         if self.aerodynamics:
             assert self._wind_at is not None
-            Vw, bw = self._wind_at.at(self.t)
-            tau = tau + self._wind_load.array(psi, u, v, np.maximum(Vw, 0.0), bw)
-        if self._kernel is not None:
-            ud, vd, rd = self._kernel(u, v, r, tau[:, 0], tau[:, 1], tau[:, 2], uc, vcb)
+            Vw, bw = self._wind_at.at(ts)
+            Vw = np.maximum(Vw, 0.0)
         else:
-            nu_c = np.stack([uc, vcb, np.zeros_like(u)], -1)
-            ud, vd, rd = self.plant.nu_dot(np.stack([u, v, r], -1), tau, nu_c).T
+            Vw = bw = z
+        if self._has_current:
+            assert self._current_at is not None
+            vc, bc = self._current_at.at(ts)
+        else:
+            vc = bc = z
+        return Vw, bw, vc, bc
+
+    def _qacc(
+        self, q: Array, qv: Array, qa: Array, act: Array, Vw: Any, bw: Any, vc: Any, bc: Any
+    ) -> Array:
+        """``qacc*`` (3, n) of a state (steps 1-2 of the module docstring)."""
+        h = 0.5 * self.h
+        w0, w1, r = qv[0] + h * qa[0], qv[1] + h * qa[1], qv[2] + h * qa[2]
+        psi = q[2]
+        c, s = np.cos(psi), np.sin(psi)
+        u = c * w0 + s * w1
+        v = c * w1 - s * w0
+        if self._has_current:
+            d = bc - psi
+            uc, vcb = vc * np.cos(d), vc * np.sin(d)
+        else:
+            uc = vcb = self._zeros
+        X, Y, N = self._tau(act, u - uc, v - vcb, r)
+        if self.aerodynamics:
+            wx, wy, wn = self._wind_load(psi, u, v, Vw, bw)
+            X, Y, N = X + wx, Y + wy, N + wn
+        ud, vd, rd = self._accel(u, v, r, X, Y, N, uc, vcb)
         bx = ud - r * v
         by = vd + r * u
-        return np.stack([c * bx - s * by, s * bx + c * by, np.broadcast_to(rd, u.shape)], -1)
+        out = np.empty((3, self.n))
+        out[0] = c * bx - s * by
+        out[1] = s * bx + c * by
+        out[2] = rd
+        return out
 
     def step(self, k: int = 1) -> None:
         """Advance every hull ``k`` physics steps.
@@ -273,26 +298,94 @@ class BatchedPhysics:
             SimulationDiverged: a non-finite or absurd state (naming the hulls).
         """
         h = self.h
-        lag, servo, integ = self._lag, self._servo, self._integ
-        for _ in range(k):
-            qacc = self._qacc()
-            if not np.all(np.isfinite(qacc)):
-                bad = np.nonzero(~np.all(np.isfinite(qacc), axis=1))[0]
-                raise SimulationDiverged(
-                    f"simulation diverged in hulls {bad.tolist()} (t = {self.t[bad].tolist()} s): "
-                    "check the plant parameters, the timestep and the applied forces"
-                )
-            act = self.act
-            new = act + self._alpha * (self.cmd - act)  # lags (filterexact)
-            if servo.any():
-                wr = np.clip((self.cmd - act) / self._servo_T, -self._rate, self._rate)
-                new = np.where(servo, act + h * wr, new)
-            if integ.any():
-                new = np.where(integ, act + h * self.cmd, new)
-            self.act = np.where(lag | servo, np.clip(new, self.lower, self.upper), new)
-            self.qacc = qacc
-            self.qvel = self.qvel + h * qacc
-            self.qpos = self.qpos + h * self.qvel
-            self.t += h
-        if not np.all(np.abs(self.qvel) < 1e3):
+        # each hull's times of the k steps, by the same additions as the clock (t += h)
+        ts = np.empty((k, self.n))
+        ts[0] = self.t
+        for j in range(1, k):
+            ts[j] = ts[j - 1] + h
+        Vw, bw, vc, bc = self._disturbances(ts)
+        alpha, cmd, lo, hi = self._alpha, self._cmd, self._lo, self._hi
+        q, qv, act = self._q, self._v, self._act
+        for j in range(k):
+            qa = self._qacc(q, qv, self._a, act, Vw[j], bw[j], vc[j], bc[j])
+            new = act + alpha * (cmd - act)  # lags (filterexact)
+            if self._any_servo:
+                wr = np.clip((cmd - act) / self._servo_T, -self._rate, self._rate)
+                new = np.where(self._servo[:, None], act + h * wr, new)
+            if self._any_integ:
+                new = np.where(self._integ[:, None], act + h * cmd, new)
+            act = np.where(self._bounded, np.clip(new, lo, hi), new)
+            self._a = qa
+            qv = qv + h * qa
+            q = q + h * qv
+        self._q, self._v, self._act = q, qv, act
+        self.t = ts[-1] + h
+        if not np.all(np.isfinite(self._a)):
+            bad = np.nonzero(~np.all(np.isfinite(self._a), axis=0))[0]
+            raise SimulationDiverged(
+                f"simulation diverged in hulls {bad.tolist()} (t = {self.t[bad].tolist()} s): "
+                "check the plant parameters, the timestep and the applied forces"
+            )
+        if not np.all(np.abs(qv) < 1e3):
             raise SimulationDiverged("simulation diverged: a hull passed 1 km/s")
+
+
+def _actuator_kernel(acts: ActuatorSet) -> Any:
+    """``f(states (n_channels, n), u_r, v_r, r) -> (X, Y, N)``: the actuators' body force.
+
+    Fixed-direction propellers and tunnels through their configuration matrix, azimuths
+    through their angles, any other kind (rudders, MMG units) through
+    :meth:`ActuatorSet.tau <shipgym.dynamics.actuators.ActuatorSet.tau>`.
+    """
+    if all(type(a) is Propeller for a in acts):
+        ahead = np.array([a.k_ahead for a in acts])[:, None]
+        astern = np.array([a.k_astern for a in acts])[:, None]
+        quad = np.array([a.law == "quadratic" for a in acts])[:, None]
+        B = acts.configuration_matrix()
+
+        def propellers(st: Array, ur: Array, vr: Array, r: Array) -> tuple[Array, Array, Array]:
+            k = np.where(st >= 0.0, ahead, astern)
+            F = np.where(quad, k * np.abs(st), k) * st
+            X, Y, N = B @ F
+            return X, Y, N
+
+        return propellers
+    if all(type(a) is Azimuth for a in acts):
+        sl = acts.slices
+        thr = np.array([s.start for s in sl])
+        ang = thr + 1
+        Fmax = np.array([a.max_thrust_n for a in acts])[:, None]
+        px = np.array([a.position[0] for a in acts])[:, None]
+        py = np.array([a.position[1] for a in acts])[:, None]
+
+        def azimuths(st: Array, ur: Array, vr: Array, r: Array) -> tuple[Array, Array, Array]:
+            f = Fmax * st[thr]
+            al = st[ang]
+            fx, fy = f * np.cos(al), f * np.sin(al)
+            return fx.sum(0), fy.sum(0), (px * fy - py * fx).sum(0)
+
+        return azimuths
+    flow = acts.flow_dependent
+
+    def generic(st: Array, ur: Array, vr: Array, r: Array) -> tuple[Array, Array, Array]:
+        nu = np.stack([ur, vr, r], -1) if flow else None
+        X, Y, N = acts.tau(st.T, nu).T
+        return X, Y, N
+
+    return generic
+
+
+def _plant_kernel(plant: Any) -> Any:
+    """``f(u, v, r, X, Y, N, u_c, v_c) -> (u_dot, v_dot, r_dot)`` on (n,) arrays: a
+    :class:`PlantModel`'s expanded kernel (which takes arrays), else the model's batched
+    ``nu_dot``."""
+    if isinstance(plant, PlantModel):
+        return plant.accel
+
+    def nu_dot(u: Array, v: Array, r: Array, X: Array, Y: Array, N: Array, uc: Any, vc: Any):  # type: ignore[no-untyped-def]
+        z = np.zeros_like(u)
+        nu_c = np.stack([uc + z, vc + z, z], -1)
+        ud, vd, rd = plant.nu_dot(np.stack([u, v, r], -1), np.stack([X, Y, N], -1), nu_c).T
+        return ud, vd, rd
+
+    return nu_dot
