@@ -119,3 +119,29 @@ def test_grid_batch_reads_what_each_process_reads():
         cv, cd = cb.at(t)
         for i in range(5):
             assert (cv[i], cd[i]) == currents[i].at(float(t[i]))
+
+
+def test_each_hull_its_own_wind_and_current():
+    """Hulls given their own wind (one none) and current by set_disturbances move as a single
+    physics with that wind and current."""
+    cases = [(GUSTY, None), (None, GM_CURRENT), ("2@45", "0.2@90"), (None, None)]
+    bp = BatchedPhysics("blue-lady", len(cases), wind="3@300")
+    for i, (w, c) in enumerate(cases):
+        bp.set_disturbances(i, w, c)
+    assert bp.wind_configs[1] is None and bp.current_configs[2].speed == pytest.approx(0.2)
+    bp.reset(rngs=[np.random.default_rng(5 + i) for i in range(len(cases))])
+    singles = []
+    for i, (w, c) in enumerate(cases):
+        p = VesselPhysics("blue-lady", wind=w, current=c)
+        p.reset(rng=np.random.default_rng(5 + i))
+        singles.append(p)
+    cmd = np.array([[300.0, 0.5, -0.5], [-150.0, -0.3, 0.8], [100.0, 1.0, 1.0], [0.0, 0.2, 0.2]])
+    bp.set_command(cmd)
+    for i, p in enumerate(singles):
+        p.set_command(cmd[i])
+        p.step(1200)
+    bp.step(1200)
+    np.testing.assert_allclose(bp.eta, [p.eta for p in singles], rtol=0, atol=1e-7)
+    np.testing.assert_allclose(bp.nu, [p.nu for p in singles], rtol=0, atol=1e-8)
+    with pytest.raises(ValueError, match="coefficients"):
+        bp.set_disturbances(0, WindConfig(speed=3.0, coefficients="destroyer"))

@@ -116,16 +116,15 @@ class BatchedPhysics:
         self._tau = _actuator_kernel(v.actuators)
         self._accel = _plant_kernel(self.plant)
         wind_cfg = WindConfig.coerce(wind, name="wind")
-        self.aerodynamics = wind_cfg is not None
-        self.wind_config = wind_cfg if wind_cfg is not None else WindConfig()
-        self.winds = [Wind(self.wind_config, v.windage) for _ in range(n)]
-        self._wind_load = WindLoad(
-            blendermann(self.wind_config.coefficients or v.windage.coefficients), v.windage
-        ).array_kernel()
         cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
-        self.current_config = cc
+        self._coeffs = (wind_cfg.coefficients if wind_cfg else None) or v.windage.coefficients
+        self._wind_load = WindLoad(blendermann(self._coeffs), v.windage).array_kernel()
+        self.wind_configs: list[WindConfig | None] = [wind_cfg] * n
+        self.current_configs: list[CurrentConfig] = [cc] * n
+        self.winds = [Wind(wind_cfg or WindConfig(), v.windage) for _ in range(n)]
         self.currents = [Current(cc) for _ in range(n)]
-        self._has_current = not (cc.is_constant and cc.speed == 0.0)
+        self._aero = np.full(n, wind_cfg is not None)
+        self._update_flags()
         self._zeros = np.zeros(n)
         self.t = np.zeros(n)
         self._q = np.zeros((3, n))
@@ -137,6 +136,33 @@ class BatchedPhysics:
         self._wind_at: GridBatch | None = None
         self._current_at: GridBatch | None = None
         self.reset()
+
+    def _update_flags(self) -> None:
+        self.aerodynamics = bool(self._aero.any())
+        self._aero_gate = None if self._aero.all() else self._aero.astype(float)
+        self._has_current = not all(c.is_constant and c.speed == 0.0 for c in self.current_configs)
+
+    def set_disturbances(self, i: int, wind: Any = None, current: Any = None) -> None:
+        """Give hull ``i`` its own wind and current (any form of ``VesselPhysics(wind=,
+        current=)``; ``None``: none), effective at its next :meth:`reset`, as
+        ``VesselPhysics.set_wind`` / ``set_current``. Every hull's wind uses the same
+        Blendermann coefficients (the vessel's, or those the constructor's wind names)."""
+        wind_cfg = WindConfig.coerce(wind, name="wind")
+        cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
+        if wind_cfg is not None and (wind_cfg.coefficients or self._coeffs) != self._coeffs:
+            raise ValueError(
+                f"hull {i}: wind coefficients {wind_cfg.coefficients!r} differ from the batch's "
+                f"{self._coeffs!r}; one batch uses one set of Blendermann coefficients"
+            )
+        self.wind_configs[i] = wind_cfg
+        self.current_configs[i] = cc
+        self.winds[i] = Wind(wind_cfg or WindConfig(), self.vessel.windage)
+        self.currents[i] = Current(cc)
+        if self._wind_at is not None and self._current_at is not None:
+            self._wind_at.processes[i] = self.winds[i]
+            self._current_at.processes[i] = self.currents[i]
+        self._aero[i] = wind_cfg is not None
+        self._update_flags()
 
     # ---- state -----------------------------------------------------------------------------
     def _rows(self, x: ArrayLike | None, width: int, what: str, default: Array) -> Array:
@@ -281,6 +307,9 @@ class BatchedPhysics:
         X, Y, N = self._tau(act, u - uc, v - vcb, r)
         if self.aerodynamics:
             wx, wy, wn = self._wind_load(psi, u, v, Vw, bw)
+            if self._aero_gate is not None:  # hulls without aerodynamic loads
+                g = self._aero_gate
+                wx, wy, wn = wx * g, wy * g, wn * g
             X, Y, N = X + wx, Y + wy, N + wn
         ud, vd, rd = self._accel(u, v, r, X, Y, N, uc, vcb)
         bx = ud - r * v
