@@ -284,3 +284,39 @@ def test_batched_sensors_measure_what_each_env_s_sensors_measure():
     assert min(counts.values()) > 0  # every branch was taken
     with pytest.raises(RuntimeError, match="reset"):
         BatchedSensors(cfg, 2).measure([0.0, 0.0], np.zeros((2, 3)))
+
+
+def test_batched_sensors_per_env_noise_and_masked_samples():
+    """Each env its own variances (set_config) and its own sample instants (a mask): env i
+    measures what a Sensors of its configuration measures at its own instants."""
+    import dataclasses
+
+    from shipgym.observers.sensors import BatchedSensors
+
+    base = dataclasses.replace(sensor_config("dgps"), outlier_probability=0.05,
+                               dropout_probability=0.05)  # fmt: skip
+    n = 3
+    cfgs = [base.replace(position_variance=0.01 * (i + 1) ** 2, heading_variance=1e-4 * (i + 1))
+            for i in range(n)]  # fmt: skip
+    batched = BatchedSensors(base, n, block=5)
+    for i, c in enumerate(cfgs):
+        batched.set_config(i, c)
+    batched.reset([np.random.default_rng(40 + i) for i in range(n)])
+    single = [Sensors(c) for c in cfgs]
+    for i, s in enumerate(single):
+        s.reset(np.random.default_rng(40 + i))
+    rng = np.random.default_rng(3)
+    seen = np.zeros(n, int)
+    for k in range(120):
+        mask = rng.random(n) < 0.6
+        eta = rng.normal(0.0, 20.0, (n, 3))
+        z, valid, _ = batched.measure(np.full(n, float(k)), eta, mask)
+        for i in np.nonzero(mask)[0]:
+            m = single[i].measure(float(k), eta[i])
+            assert m.valid == bool(valid[i])
+            if m.valid:
+                np.testing.assert_allclose(z[i], m.z, rtol=0, atol=1e-12)
+            seen[i] += 1
+    assert seen.min() > 50
+    with pytest.raises(ValueError, match="differ only"):
+        batched.set_config(0, base.replace(period=2.0))

@@ -378,7 +378,8 @@ class BatchedSensors:
         self.config = config
         self.n = n
         self.block = int(block)
-        self._sig = np.array([config.position_sigma, config.position_sigma, config.heading_sigma])
+        self._sig = np.tile(_sigmas(config), (n, 1))
+        self.configs = [config] * n
         self._gens: list[tuple[np.random.Generator, ...] | None] = [None] * n
         self._noise = np.zeros((n, self.block, 3))
         self._out = np.zeros((n, self.block, 2))
@@ -386,6 +387,22 @@ class BatchedSensors:
         self._k = np.full(n, self.block)  # next unused draw per env (block: refill)
         self._until = np.full(n, -math.inf)
         self._rows = np.arange(n)
+
+    def set_config(self, i: int, config: SensorConfig) -> None:
+        """Env ``i``'s own noise variances (``config`` may differ from the shared one in
+        ``position_variance`` and ``heading_variance`` only: the sample grid, dropouts and
+        outliers are the batch's)."""
+        same = config.replace(
+            position_variance=self.config.position_variance,
+            heading_variance=self.config.heading_variance,
+        )
+        if same != self.config:
+            raise ValueError(
+                "a batched env's sensors may differ only in position_variance and "
+                f"heading_variance; got {config!r} against {self.config!r}"
+            )
+        self.configs[i] = config
+        self._sig[i] = _sigmas(config)
 
     def reset(self, rngs: list[np.random.Generator], mask: ArrayLike | None = None) -> None:
         """Restart the streams of the envs (all, or those where ``mask`` is True), one
@@ -409,9 +426,10 @@ class BatchedSensors:
         self._k[i] = 0
 
     def measure(
-        self, t: ArrayLike, eta_true: ArrayLike
+        self, t: ArrayLike, eta_true: ArrayLike, mask: NDArray[np.bool_] | None = None
     ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
-        """Sample every env at its time ``t`` (n,) for its true pose ``eta_true`` (n, 3).
+        """Sample every env (or those where ``mask`` is True: only their streams advance) at
+        its time ``t`` (n,) for its true pose ``eta_true`` (n, 3).
 
         Returns:
             ``(z, valid, outlier)``: the measured poses (n, 3) (``nan`` rows during a
@@ -429,10 +447,12 @@ class BatchedSensors:
         noise = self._noise[r, k] * self._sig
         u_out, ang = self._out[r, k, 0], self._out[r, k, 1]
         u_drop = self._drop[r, k]
-        self._k = k + 1
+        self._k = k + 1 if mask is None else k + mask
         held = tt < self._until - _EPS_T * cfg.period
         start = ~held & (u_drop < cfg.dropout_probability)
-        self._until = np.where(start, tt + cfg.dropout_duration, self._until)
+        self._until = np.where(
+            start if mask is None else start & mask, tt + cfg.dropout_duration, self._until
+        )
         valid = ~(held | start)
         psi = eta[:, 2]
         c, s = np.cos(psi), np.sin(psi)
@@ -445,3 +465,8 @@ class BatchedSensors:
         z[:, 2] = np.asarray(wrap_angle(z[:, 2]))
         z[~valid] = np.nan
         return z, valid, outlier
+
+
+def _sigmas(config: SensorConfig) -> NDArray[np.float64]:
+    """Noise standard deviations ``[x, y, psi]`` (m, m, rad) of a configuration."""
+    return np.array([config.position_sigma, config.position_sigma, config.heading_sigma])
