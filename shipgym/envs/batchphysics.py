@@ -302,16 +302,21 @@ class BatchedPhysics:
         if self._has_current:
             d = bc - psi
             uc, vcb = vc * np.cos(d), vc * np.sin(d)
+            ur, vr = u - uc, v - vcb
         else:
-            uc = vcb = self._zeros
-        X, Y, N = self._tau(act, u - uc, v - vcb, r)
+            uc = vcb = None
+            ur, vr = u, v
+        tau = np.empty((3, self.n))
+        tau[0], tau[1], tau[2] = self._tau(act, ur, vr, r)
         if self.aerodynamics:
             wx, wy, wn = self._wind_load(psi, u, v, Vw, bw)
             if self._aero_gate is not None:  # hulls without aerodynamic loads
                 g = self._aero_gate
                 wx, wy, wn = wx * g, wy * g, wn * g
-            X, Y, N = X + wx, Y + wy, N + wn
-        ud, vd, rd = self._accel(u, v, r, X, Y, N, uc, vcb)
+            tau[0] += wx
+            tau[1] += wy
+            tau[2] += wn
+        ud, vd, rd = self._accel(u, v, r, tau, uc, vcb)
         bx = ud - r * v
         by = vd + r * u
         out = np.empty((3, self.n))
@@ -405,16 +410,53 @@ def _actuator_kernel(acts: ActuatorSet) -> Any:
 
 
 def _plant_kernel(plant: Any) -> Any:
-    """``f(u, v, r, X, Y, N, u_c, v_c) -> (u_dot, v_dot, r_dot)`` on (n,) arrays: a
-    :class:`PlantModel`'s expanded kernel (which takes arrays), else the model's batched
-    ``nu_dot``."""
+    """``f(u, v, r, tau (3, n), u_c, v_c) -> nu_dot (3, n)`` on (n,) arrays (``u_c = v_c =
+    None``: no current). A :class:`PlantModel` in matrix form over the batch (the terms of its
+    expanded kernel, :meth:`PlantModel.accel`, in a few array operations); other hulls through
+    their batched ``nu_dot``."""
     if isinstance(plant, PlantModel):
-        return plant.accel
+        return _matrix_accel(plant)
 
-    def nu_dot(u: Array, v: Array, r: Array, X: Array, Y: Array, N: Array, uc: Any, vc: Any):  # type: ignore[no-untyped-def]
+    def nu_dot(u: Array, v: Array, r: Array, tau: Array, uc: Any, vc: Any) -> Array:
         z = np.zeros_like(u)
-        nu_c = np.stack([uc + z, vc + z, z], -1)
-        ud, vd, rd = plant.nu_dot(np.stack([u, v, r], -1), np.stack([X, Y, N], -1), nu_c).T
-        return ud, vd, rd
+        nu_c = np.stack([z if uc is None else uc + z, z if vc is None else vc + z, z], -1)
+        return np.asarray(plant.nu_dot(np.stack([u, v, r], -1), tau.T, nu_c)).T
 
     return nu_dot
+
+
+def _matrix_accel(p: PlantModel) -> Any:
+    """``M^-1 (tau - D_L nu_r - d |nu_r| nu_r - C_RB(nu) nu - C_A(nu_r) nu_r + M_A nu_c_dot)``
+    (Fossen 2011 eq. 10.1 with the current as in the single physics) for (3, n) arrays."""
+    A = np.asarray(p.M_A)
+    a11, a22, a32 = A[0, 0], A[1, 1], A[2, 1]
+    a23s = 0.5 * (A[1, 2] + A[2, 1])
+    D = np.asarray(p.D_L)
+    q = np.asarray(p.d_quad)[:, None]
+    quad = bool(np.any(q))
+    Mi = np.linalg.inv(p.mass_matrix())
+    cor = p.coriolis
+    m, xg = p.m, p.x_g
+    mxg = m * xg
+
+    def accel(u: Array, v: Array, r: Array, tau: Array, uc: Any, vc: Any) -> Array:
+        ur = u if uc is None else u - uc
+        vr = v if vc is None else v - vc
+        nr = np.stack((ur, vr, r))
+        f = tau - D @ nr
+        if quad:
+            f -= q * np.abs(nr) * nr
+        if cor:  # C_RB(nu) nu + C_A(nu_r) nu_r
+            w = a22 * vr + a23s * r
+            a11u = a11 * ur
+            f[0] += (m * (xg * r + v) + w) * r
+            f[1] -= (m * u + a11u) * r
+            f[2] -= mxg * r * u + w * ur - a11u * vr
+        if uc is not None:  # + M_A nu_c_dot, nu_c_dot = [r v_c, -r u_c, 0]
+            f[0] += a11 * (r * vc)
+            ay = r * uc
+            f[1] -= a22 * ay
+            f[2] -= a32 * ay
+        return Mi @ f
+
+    return accel
