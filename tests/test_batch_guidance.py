@@ -290,3 +290,30 @@ def test_a_finished_env_ignores_its_pose_as_guidance_does() -> None:
     assert not s.update(2.0, nan_pose[0])
     ref = g.reference(np.full(2, 5000.0))
     assert np.allclose(ref.eta_d_n, K, rtol=0.0, atol=1e-12) and not np.any(ref.eta_dot_d_r)
+
+
+def test_a_longer_plan_at_a_reset_pads_the_tables() -> None:
+    """Envs reset with 1-leg plans, then one of them with the paper's 5 legs mid-run: the
+    other env's plan goes on unchanged, and both follow their Guidance to the end."""
+    plans = [ManoeuvrePlan(legs=(Leg(surge=3.0),)), ManoeuvrePlan(legs=(Leg(sway=2.0),))]
+    g = BatchedGuidance(2, limits=LIM)
+    g.reset(plans, np.zeros((2, 3)), t0=[0.0, -300.0])
+    singles = [Guidance(p, limits=LIM) for p in plans]
+    singles[0].reset(np.zeros(3), t0=0.0)
+    singles[1].reset(np.zeros(3), t0=-300.0)
+    err: dict[str, float] = {}
+    eta = np.zeros((2, 3))
+    for k in range(1, 1500):
+        t = np.array([k, k - 300.0])
+        if k == 40:  # env 0 mid-leg: a longer plan than the tables hold
+            g.reset([tomera2014_plan()], eta, t0=t, mask=np.array([True, False]))
+            singles[0] = Guidance(tomera2014_plan(), limits=LIM)
+            singles[0].reset(eta[0], t0=t[0])
+        switched = g.update(t, eta)
+        assert np.array_equal(switched, [s.update(t[i], eta[i]) for i, s in enumerate(singles)])
+        refs = [s.reference(t[i]) for i, s in enumerate(singles)]
+        _compare(g.reference(t), refs, eta, err)
+        eta = np.array([r.eta_d_n for r in refs])  # the ship on the reference
+    assert max(err.values()) <= 1e-10, err
+    assert g.finished.all() and np.array_equal(g.legs_completed, [5, 1])
+    assert g.leg_completion_times() == [list(s.leg_completion_times) for s in singles]

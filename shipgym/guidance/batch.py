@@ -7,9 +7,12 @@ compares every output to 1e-10, the switch instants exactly):
 
 - the reference of the current leg is the smooth straight-line profile of
   :mod:`shipgym.guidance.reference` (raised-cosine acceleration, trapezoidal or triangular
-  speed, Tomera (2014) Fig. 3), its phases (rest before the start or during the ``delay``,
-  acceleration, cruise, deceleration, rest at K; a ``step`` leg jumps at ``delay``) chosen per
-  env with ``np.where``;
+  speed, Tomera (2014) Fig. 3), its phases chosen per env with ``np.where`` and a clipped
+  ramp time: the ramp runs on the time since the start (acceleration) or to the end
+  (deceleration), clipped to ``[0, T_a]``, so that 0 gives the rest at P (before the start,
+  during the ``delay``) and at K (from ``T`` on; a ``step`` leg, ``T = 0``, jumps at its
+  ``delay``), and ``T_a`` the cruise, written ``1 - ramp(T_a) - V (T - T_a - t)`` (equal to
+  the scalar ``V T_a / 2 + V (t - T_a)`` to round-off, as ``2 ramp(T_a) + V T_c = 1``);
 - the switching rule of :meth:`Guidance.update <shipgym.guidance.runtime.Guidance.update>`
   (distance to K and heading error to K, Tomera (2014); progress and ``settle_time``, ours).
 
