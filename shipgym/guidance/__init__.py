@@ -6,9 +6,12 @@
   (raised-cosine-acceleration trapezoid, DOFs synchronised on a straight r-frame line);
 - :mod:`~shipgym.guidance.plan`: :class:`Leg`, :class:`ManoeuvrePlan`, the paper's 5-leg plan
   and the plan registry;
-- :mod:`~shipgym.guidance.runtime`: :class:`Guidance` (current leg, reference, switching).
+- :mod:`~shipgym.guidance.runtime`: :class:`Guidance` (current leg, reference, switching);
+- :mod:`~shipgym.guidance.batch`: :class:`BatchedGuidance`, the guidance of N envs at once
+  (each its own plan), per env exactly :class:`Guidance`.
 """
 
+from .batch import BatchedGuidance, BatchedReference
 from .plan import PLANS, Leg, ManoeuvrePlan, plan, tomera2014_plan
 from .reference import (
     BLUE_LADY_LIMITS,
@@ -23,6 +26,8 @@ from .runtime import Guidance, Reference
 
 __all__ = [
     "PLANS",
+    "BatchedGuidance",
+    "BatchedReference",
     "Guidance",
     "Leg",
     "LegProfile",
