@@ -225,8 +225,9 @@ def test_truncated_episode_reports_metrics_and_refuses_steps(env_id, stack):
 
 
 def test_station_keeping_reports_metrics_at_its_registered_time_limit():
-    """Station keeping never terminates: before issue 10 it never reported its metrics."""
-    env = gym.make("shipgym/BlueLadyStationKeeping-v0")
+    """Station keeping never terminates: before issue 10 it never reported its metrics.
+    (``shipgym.make``: a batched id carries no EpisodeEnd under a bare ``gym.make``.)"""
+    env = shipgym.make("shipgym/BlueLadyStationKeeping-v0")
     n, term, trunc, info = _run_to_end(env, steps=1000)
     assert (n, term, trunc) == (shipgym.ENV_IDS[env.spec.id][1], False, True) == (600, False, True)
     assert info["episode_metrics"]["duration_s"] == pytest.approx(600.0)

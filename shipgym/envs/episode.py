@@ -11,6 +11,11 @@ outside the ``TimeLimit``; it sees every episode end (termination or truncation)
 * refuses :meth:`step` after the end with ``gymnasium.error.ResetNeeded`` until :meth:`reset`,
   instead of silently stepping on (and changing the metrics).
 
+The ids with a native batched form (:data:`~shipgym.envs.registration.VECTOR_IDS`) cannot
+carry it (Gymnasium refuses a vector entry point next to additional wrappers): for them
+``shipgym.make`` applies it, and a bare ``gym.make`` gives Gymnasium's plain ``TimeLimit``
+(the env still reports ``episode_metrics`` and refuses steps when it terminates).
+
 Gymnasium's own vector envs and stable-baselines3's ``VecEnv`` reset a finished env instead
 of stepping it, so they never hit the error.
 """

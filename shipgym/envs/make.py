@@ -68,6 +68,10 @@ def make(
             (``max_episode_steps``).
     """
     env = gym.make(resolve_env_id(env_id, kwargs.get("vessel")), **kwargs)
+    if not any(w.name == "EpisodeEnd" for w in env.spec.additional_wrappers):  # type: ignore[union-attr]
+        from .episode import EpisodeEnd  # the batched ids' (registration.VECTOR_IDS)
+
+        env = EpisodeEnd(env)
     if observer not in (None, "truth"):
         from shipgym.observers.wrapper import ObserverWrapper
 

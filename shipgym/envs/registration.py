@@ -9,7 +9,7 @@ from gymnasium.envs.registration import WrapperSpec
 
 from .episode import EPISODE_END_ENTRY_POINT
 
-__all__ = ["ALIASES", "ENV_IDS", "NEEDS", "register_envs", "task_fits_vessel"]
+__all__ = ["ALIASES", "ENV_IDS", "NEEDS", "VECTOR_IDS", "register_envs", "task_fits_vessel"]
 
 #: env id -> (entry point, max_episode_steps); ``None``: the env truncates itself after its
 #: ``episode_duration`` (the DP tasks, whose number of steps depends on the vessel)
@@ -26,6 +26,18 @@ ENV_IDS: dict[str, tuple[str, int | None]] = {
     "shipgym/BlueLadyHarbour-v0": ("shipgym.envs.tasks:BlueLadyHarbourEnv", 2000),
     "shipgym/BlueLadyStationKeeping-v0": ("shipgym.envs.tasks:BlueLadyStationKeepingEnv", 600),
     "shipgym/BlueLadyTracking-v0": ("shipgym.envs.tasks:BlueLadyTrackingEnv", 800),
+}
+
+#: ids with a native batched form (:class:`~shipgym.envs.vector.ShipVectorEnv`): id -> its
+#: vector entry point, for ``gymnasium.make_vec(id, num_envs=N)``. Gymnasium refuses a vector
+#: entry point next to additional wrappers, so these ids do without :class:`EpisodeEnd`
+#: under a bare ``gym.make``: ``shipgym.make`` applies it (episode metrics at a time-limit
+#: truncation, no step after the end); the env itself reports its metrics when it terminates.
+VECTOR_IDS: dict[str, str] = {
+    "shipgym/Tracking-v0": "shipgym.envs.vector:tracking_vector_env",
+    "shipgym/StationKeeping-v0": "shipgym.envs.vector:station_keeping_vector_env",
+    "shipgym/BlueLadyTracking-v0": "shipgym.envs.vector:blue_lady_tracking_vector_env",
+    "shipgym/BlueLadyStationKeeping-v0": "shipgym.envs.vector:blue_lady_station_keeping_vector_env",
 }
 
 #: the Blue Lady aliases: id -> the vessel-neutral id they equal with ``vessel="blue-lady"``
@@ -72,5 +84,6 @@ def register_envs() -> None:
                 id=env_id,
                 entry_point=entry_point,
                 max_episode_steps=steps,
-                additional_wrappers=(end,),
+                additional_wrappers=() if env_id in VECTOR_IDS else (end,),
+                vector_entry_point=VECTOR_IDS.get(env_id),
             )

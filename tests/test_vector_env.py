@@ -1,0 +1,183 @@
+"""The native batched env (``gymnasium.make_vec(id, vectorization_mode="vector_entry_point")``)
+against the single MuJoCo env: env i with seed s + i is the single env reset with that seed,
+and the same actions give the same episodes (poses within 1e-6 m and rad, the same rewards,
+terminations and truncations, autoresets included) for every batched task and positioning
+vessel; gymnasium's vector-env conventions; bad input."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import shipgym
+from shipgym.dynamics.vessel import load_vessel, vessel_names
+from shipgym.envs.registration import VECTOR_IDS
+
+POSITIONING = [
+    n for n in vessel_names() if load_vessel(n).can_position and load_vessel(n).dofs == 3
+]
+TASKS = ["shipgym/Tracking-v0", "shipgym/StationKeeping-v0"]
+
+
+def _pair(env_id, n, steps, **kw):
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
+                        max_episode_steps=steps, **kw)  # fmt: skip
+    # the single envs, driven by the PID DP controller (so that legs complete and episodes
+    # terminate); the vector env gets the actions the controller applied
+    singles = [shipgym.make(env_id, controller="pid", max_episode_steps=steps, **kw)
+               for _ in range(n)]  # fmt: skip
+    return venv, singles
+
+
+@pytest.mark.parametrize("vessel", POSITIONING)
+@pytest.mark.parametrize("env_id", TASKS)
+def test_batched_episodes_equal_the_single_envs(env_id, vessel):
+    n, steps, total = 2, 250, 600
+    kw = {"max_legs": 1} if env_id == "shipgym/Tracking-v0" else {}
+    venv, singles = _pair(env_id, n, steps, vessel=vessel, **kw)
+    obs, info = venv.reset(seed=30)
+    for i, s in enumerate(singles):
+        o, inf = s.reset(seed=30 + i)
+        np.testing.assert_allclose(obs[i], o, rtol=0, atol=1e-6)
+        np.testing.assert_allclose(info["eta"][i], inf["eta"], rtol=0, atol=1e-12)
+    pending = np.zeros(n, bool)  # NEXT_STEP: the single env resets when the batched one does
+    ends = {"terminated": 0, "truncated": 0}
+    err = 0.0
+    for _ in range(total):
+        actions = np.zeros((n, venv.single_action_space.shape[0]), np.float32)
+        outs = []
+        for i, s in enumerate(singles):
+            if pending[i]:
+                outs.append(("reset", *s.reset()))
+            else:
+                out = s.step(np.zeros(s.action_space.shape, np.float32))
+                actions[i] = s.unwrapped.prev_action
+                outs.append(("step", *out))
+        obs, rew, term, trunc, info = venv.step(actions)
+        for i, out in enumerate(outs):
+            if out[0] == "reset":
+                _, o, inf = out
+                assert rew[i] == 0.0 and not term[i] and not trunc[i]
+            else:
+                _, o, r, te, tr, inf = out
+                assert (bool(term[i]), bool(trunc[i])) == (te, tr)
+                assert rew[i] == pytest.approx(r, rel=1e-7, abs=1e-9)
+                ends["terminated"] += te
+                ends["truncated"] += tr
+            e = np.abs(info["eta"][i] - inf["eta"])
+            err = max(err, float(e.max()))
+            np.testing.assert_allclose(obs[i], o, rtol=1e-5, atol=1e-5)
+            assert info["leg"][i] == inf["leg"]
+        pending = term | trunc
+    assert err < 1e-6, err
+    assert ends["terminated"] + ends["truncated"] >= n  # every env autoreset at least once
+    # Tracking: legs completed and episodes ended; station keeping: the time limit
+    assert ends["terminated" if env_id == "shipgym/Tracking-v0" else "truncated"] > 0
+
+
+def test_same_step_autoreset_and_episode_statistics():
+    venv = gym.make_vec("shipgym/BlueLadyStationKeeping-v0", num_envs=3, max_episode_steps=4,
+                        autoreset_mode="same-step")  # fmt: skip
+    assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    obs0, _ = venv.reset(seed=1)
+    a = np.zeros((3, 3), np.float32)
+    total = np.zeros(3)
+    for k in range(4):
+        obs, r, term, trunc, info = venv.step(a)
+        total += r
+    assert trunc.all() and not term.any()
+    np.testing.assert_array_equal(info["_final_obs"], [True] * 3)
+    np.testing.assert_allclose(info["episode_summary"]["return"], total)
+    np.testing.assert_array_equal(info["episode_summary"]["length"], [4, 4, 4])
+    # the returned observation is the next episode's first one (same generator, not seed 1)
+    assert not np.allclose(obs, obs0)
+    assert np.abs(info["final_obs"] - obs).max() > 0
+
+
+def test_vector_env_follows_gymnasium_conventions():
+    venv = gym.make_vec("shipgym/BlueLadyTracking-v0", num_envs=4)
+    assert isinstance(venv.unwrapped, gym.vector.VectorEnv)
+    assert venv.observation_space.shape == (4, 15) and venv.action_space.shape == (4, 3)
+    obs, info = venv.reset(seed=0)
+    assert venv.observation_space.contains(obs)
+    assert info["eta"].shape == (4, 3) and info["_eta"].all()
+    obs, r, term, trunc, info = venv.step(venv.action_space.sample())
+    assert obs.dtype == np.float32 and r.shape == (4,) and term.dtype == bool
+    terms = [k for k in info if k.startswith("reward_") and not k.startswith("_")]
+    np.testing.assert_allclose(sum(info[k] for k in terms), r)
+    # same seed, same episodes; a different seed, different ones
+    a = np.full((4, 3), 0.3, np.float32)
+    runs = []
+    for seed in (5, 5, 6):
+        venv.reset(seed=seed)
+        runs.append(venv.step(a)[0])
+    np.testing.assert_array_equal(runs[0], runs[1])
+    assert not np.allclose(runs[0], runs[2])
+    # env i with seed s + i: env 1 of seed 5 is env 0 of seed 6
+    np.testing.assert_array_equal(runs[0][1], runs[2][0])
+    assert set(VECTOR_IDS) <= set(gym.registry)
+
+
+def test_bad_input_is_refused_clearly():
+    venv = gym.make_vec("shipgym/BlueLadyTracking-v0", num_envs=2)
+    with pytest.raises(gym.error.ResetNeeded):
+        venv.step(np.zeros((2, 3)))
+    venv.reset(seed=0)
+    with pytest.raises(ValueError, match="shape"):
+        venv.step(np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="envs \\[1\\]"):
+        venv.step(np.array([[0, 0, 0], [np.nan, 0, 0]]))
+    with pytest.raises(ValueError, match="reset options"):
+        venv.reset(options={"start_pose": (0, 0, 0)})
+    with pytest.raises(ValueError, match="open water"):
+        from shipgym.envs.vector import ShipVectorEnv
+        from shipgym.envs.tasks import HarbourEnv
+
+        ShipVectorEnv(2, HarbourEnv, vessel="blue-lady", max_episode_steps=10)
+    with pytest.raises(ValueError, match="no batched form"):
+        from shipgym.envs.vector import ShipVectorEnv
+
+        ShipVectorEnv(2, "shipgym/Harbour-v0")
+
+
+@pytest.mark.parametrize("env_id", TASKS)
+def test_same_as_gymnasiums_sync_vector_env(env_id):
+    """Gymnasium's own SyncVectorEnv of the single envs is the reference of the vector
+    semantics (seeding, NEXT_STEP autoreset, info masks): the same actions give the same
+    observations, rewards and ends, step by step."""
+    n, kw = 3, {"vessel": "blue-lady", "max_episode_steps": 7}
+    native = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kw)
+    sync = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", **kw)
+    assert sync.metadata["autoreset_mode"] == native.metadata["autoreset_mode"]
+    for venv in (native, sync):
+        venv.action_space.seed(3)
+    o1, i1 = native.reset(seed=11)
+    o2, i2 = sync.reset(seed=11)
+    np.testing.assert_allclose(o1, o2, rtol=0, atol=1e-6)
+    rng = np.random.default_rng(4)
+    ends = np.zeros(n, int)
+    for _ in range(20):
+        a = rng.uniform(-1.2, 1.2, (n, 3)).astype(np.float32)
+        o1, r1, t1, u1, i1 = native.step(a)
+        o2, r2, t2, u2, i2 = sync.step(a)
+        np.testing.assert_allclose(o1, o2, rtol=1e-6, atol=1e-6)
+        np.testing.assert_allclose(r1, r2, rtol=1e-9, atol=1e-9)
+        np.testing.assert_array_equal(t1, t2)
+        np.testing.assert_array_equal(u1, u2)
+        np.testing.assert_allclose(i1["eta"], i2["eta"], rtol=0, atol=1e-9)
+        np.testing.assert_array_equal(i1["_eta"], i2["_eta"])
+        np.testing.assert_array_equal(i1["action_clipped"], i2["action_clipped"])
+        ends += u1.astype(int)
+    np.testing.assert_array_equal(ends, [2, 2, 2])  # 20 steps of 7 (+1 reset step): autoresets
+
+
+def test_gymnasium_vector_wrappers_work_on_it():
+    from gymnasium.wrappers.vector import ClipAction, NormalizeObservation, RecordEpisodeStatistics
+
+    venv = gym.make_vec("shipgym/BlueLadyStationKeeping-v0", num_envs=2, max_episode_steps=3)
+    venv = RecordEpisodeStatistics(NormalizeObservation(ClipAction(venv)))
+    venv.reset(seed=0)
+    for _ in range(3):
+        _, _, _, trunc, info = venv.step(np.full((2, 3), 2.0, np.float32))
+    assert trunc.all() and info["_episode"].all() and (info["episode"]["l"] == 3).all()
