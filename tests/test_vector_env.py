@@ -83,7 +83,7 @@ def test_same_step_autoreset_and_episode_statistics():
     obs0, _ = venv.reset(seed=1)
     a = np.zeros((3, 3), np.float32)
     total = np.zeros(3)
-    for k in range(4):
+    for _ in range(4):
         obs, r, term, trunc, info = venv.step(a)
         total += r
     assert trunc.all() and not term.any()
@@ -131,8 +131,8 @@ def test_bad_input_is_refused_clearly():
     with pytest.raises(ValueError, match="reset options"):
         venv.reset(options={"start_pose": (0, 0, 0)})
     with pytest.raises(ValueError, match="open water"):
-        from shipgym.envs.vector import ShipVectorEnv
         from shipgym.envs.tasks import HarbourEnv
+        from shipgym.envs.vector import ShipVectorEnv
 
         ShipVectorEnv(2, HarbourEnv, vessel="blue-lady", max_episode_steps=10)
     with pytest.raises(ValueError, match="no batched form"):

@@ -223,9 +223,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         clipped = np.clip(a, -1.0, 1.0)
         action_clipped = clipped != a
         command = self.actuators.action_to_command(clipped)
-        saturated = (
-            self.physics.set_command(command) | (command <= self._lo_tol) | (command >= self._hi_tol)
-        )  # fmt: skip
+        held = self.physics.set_command(command)
+        saturated = held | (command <= self._lo_tol) | (command >= self._hi_tol)
         self._advance(active)
         t = self.physics.t
         eta = self.physics.eta
