@@ -25,8 +25,10 @@ a per-env selection (``np.where``) here, with the work skipped when no env takes
 The iterative allocations (the active-set weighted least squares of fixed-thruster sets, the
 azimuth QP) are not batched: :class:`BatchedAllocation` raises ``NotImplementedError`` naming
 the vessel and the method. (An exact batch of the active-set method would not even agree with
-the scalar solver to 1e-10: the regularised problem of a redundant set is conditioned ~1e9,
-so the least-thrust direction carries ~1e-7 of round-off in the scalar result itself.)
+the scalar solver to 1e-10: the regularised problem of a redundant set is conditioned ~2e9
+(Star Hercules), so another exact solver of the same system moves the least-thrust direction by
+~5e-9 of the thrust range (LU against the scalar's Cholesky, unsaturated requests); only an
+operation-for-operation copy of the LAPACK path would match.)
 
 Layout: inputs and outputs are ``(N, 3)`` arrays (``(N, n_channels)`` for commands); the
 state is kept as ``(3, N)`` rows so each DOF is one contiguous ``(N,)`` array.
