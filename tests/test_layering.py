@@ -210,6 +210,7 @@ def test_command_line_modules_are_leaves():
         "shipgym.observers.sensors",
         "shipgym.controllers.allocation",
         "shipgym.controllers.pid",
+        "shipgym.controllers.batch",
         "shipgym.metrics",
         "shipgym.records",
         "shipgym.observers.wavefilter",

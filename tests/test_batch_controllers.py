@@ -1,0 +1,392 @@
+"""The batched DP controller (shipgym.controllers.batch) against the scalar one, env by env.
+
+Reference: :class:`~shipgym.controllers.pid.MultivariablePID`, the scalar allocators of
+:func:`~shipgym.controllers.actuation.make_allocator` and the controller wrapper's factories,
+each run once per env on the same inputs. Every run asserts that the branches it is meant to
+cover (allocation saturation in both directions, conditional integration, the integral clamp,
+frame changes, partial resets) did occur.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import shipgym
+from shipgym.controllers import MultivariablePID, PIDGains, allocate, allocate_inverse
+from shipgym.controllers.actuation import fixed3_parameters, make_allocator
+from shipgym.controllers.batch import (
+    BATCHED_CONTROLLERS,
+    BatchedAllocation,
+    BatchedPID,
+    _pid_for,
+    apply_residual,
+    batched_dp_controller,
+)
+from shipgym.controllers.wrappers import CONTROLLERS, controller_spec
+
+TOL = 1e-10
+VESSELS = shipgym.vessels()
+
+
+def _close(a, b, scale=1.0):
+    """``|a - b| <= 1e-10 (scale + |b|)`` elementwise (relative, with an absolute floor)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return bool(np.all(np.abs(a - b) <= TOL * (scale + np.abs(b))))
+
+
+def _unsupported(vessel):
+    """Why the batched controller does not run ``vessel`` (``None``: it does)."""
+    if vessel.dofs != 3:
+        return f"{vessel.name}: {vessel.dofs}-DOF vessel (the batched DP controller is 3-DOF)"
+    try:
+        BatchedAllocation(vessel, "constrained")
+    except NotImplementedError as e:
+        return str(e)
+    except ValueError as e:
+        return f"{vessel.name}: the scalar allocation fails too ({e})"
+    return None
+
+
+class _Errors:
+    """Random error trajectories per env: a biased random walk of the pose error around a
+    random reference, with bias sizes spread from small (integral builds, clamp) to large
+    (allocation saturated, conditional integration)."""
+
+    def __init__(self, n, seed):
+        self.rng = np.random.default_rng(seed)
+        r = self.rng
+        self.n = n
+        self.err = r.normal(0.0, 0.5, (n, 3)) * [1.0, 1.0, 0.05]
+        self.bias = np.exp(r.uniform(np.log(1e-3), np.log(0.3), (n, 3))) * r.choice(
+            [-1.0, 1.0], (n, 3)
+        )
+        self.bias[:, 2] *= 0.05
+
+    def step(self, k):
+        r, n = self.rng, self.n
+        self.err += self.bias + r.normal(0.0, 0.05, (n, 3)) * [1.0, 1.0, 0.01]
+        self.err = np.clip(self.err, -8.0, 8.0)
+        eta_d = r.normal(0.0, 3.0, (n, 3))
+        eta = eta_d + self.err
+        nu = r.normal(0.0, 0.1, (n, 3)) * [1.0, 1.0, 0.01]
+        if k % 3 == 0:  # the defaults (no reference motion)
+            return eta, nu, eta_d, None, None
+        vd = r.normal(0.0, 0.1, (n, 3)) * [1.0, 1.0, 0.01]
+        ad = r.normal(0.0, 0.01, (n, 3)) * [1.0, 1.0, 0.001]
+        return eta, nu, eta_d, vd, ad
+
+
+def _integral_force(pid, xi, psi):
+    """``|M R^T(psi) K_I xi|`` per env (n, 3): the quantity the clamp bounds."""
+    q = np.asarray(pid.gains.K_I) * xi
+    c, s = np.cos(psi), np.sin(psi)
+    b = np.stack([c * q[:, 0] + s * q[:, 1], -s * q[:, 0] + c * q[:, 1], q[:, 2]], -1)
+    return np.abs(b @ np.asarray(pid.M).T)
+
+
+def _names(vessel):
+    return [
+        name
+        for name in BATCHED_CONTROLLERS
+        if name != "pid-seed" or "seed" in vessel.control.get("pid_presets", ())
+    ]
+
+
+# ---- the controller and its allocation, env by env, against the wrapper's scalar stack -------
+@pytest.mark.parametrize("vessel_name", sorted(VESSELS))
+def test_batched_controller_equals_the_scalar_one_per_env(vessel_name):
+    vessel = VESSELS[vessel_name]
+    why = _unsupported(vessel)
+    if why:
+        pytest.skip(why)
+    n, steps, dt = 32, 240, 1.0
+    acts = vessel.actuators
+    for name in _names(vessel):
+        spec = controller_spec(name)
+        scalars = [spec.factory(vessel, dt) for _ in range(n)]
+        alloc_s = make_allocator(vessel, spec.allocation, dt)
+        batch = batched_dp_controller(name, vessel, n, dt)
+        shadow = BatchedPID.from_scalar(scalars[0], n)  # integrates unconditionally
+        tau_err = [None] * n
+        errs = _Errors(n, seed=list(BATCHED_CONTROLLERS).index(name))
+        seen = dict(cut_pos=0, cut_neg=0, windup=0, clamp=0, switch=0, reset=0, edge=0)
+        for k in range(steps):
+            eta, nu, eta_d, vd, ad = errs.step(k)
+            tau_b, al_b, act_b = batch(eta, nu, eta_d, vd, ad)
+            shadow(eta, nu, eta_d, vd, ad)
+            for i in range(n):
+                row = (None if vd is None else vd[i], None if ad is None else ad[i])
+                tau = scalars[i](eta[i], nu[i], eta_d[i], *row, saturated=tau_err[i])
+                al = alloc_s(tau, np.zeros(acts.n_channels))
+                tau_err[i] = al.tau_error
+                scale = float(np.abs(tau).max()) + 1.0
+                assert _close(tau_b[i], tau, scale), (name, k, i, tau_b[i], tau)
+                assert _close(al_b.command[i], al.command), (name, k, i)
+                assert _close(al_b.force[i], al.force, scale), (name, k, i)
+                assert _close(al_b.tau[i], al.tau, scale), (name, k, i)
+                assert _close(al_b.tau_error[i], al.tau_error, scale), (name, k, i)
+                assert np.array_equal(al_b.saturated[i], al.saturated), (name, k, i)
+                assert _close(act_b[i], acts.command_to_action(al.command)), (name, k, i)
+            xi_s = np.array([c.integral for c in scalars])
+            assert _close(batch.pid.integral, xi_s, 1.0 + float(np.abs(xi_s).max()))
+            # branches
+            te = al_b.tau_error
+            seen["cut_pos"] += int((te > 1e-6).sum())
+            seen["cut_neg"] += int((te < -1e-6).sum())
+            seen["edge"] += int((al_b.saturated[:, 1:].any(axis=1) & ~al_b.saturated[:, 0]).sum())
+            if not np.array_equal(shadow.integral, batch.pid.integral):
+                seen["windup"] += 1
+            lim = np.asarray(batch.pid.integral_limit)
+            f = _integral_force(batch.pid, batch.pid.integral, eta[:, 2])
+            seen["clamp"] += int((f >= lim * (1.0 - 1e-9)).any(axis=1).sum())
+            if k % 37 == 36:  # leg switches of some envs
+                m = errs.rng.random(n) < 0.4
+                dpsi = errs.rng.uniform(-np.pi, np.pi, n)
+                batch.change_frame(dpsi, m)
+                shadow.change_frame(dpsi, m)
+                for i in np.flatnonzero(m):
+                    scalars[i].change_frame(float(dpsi[i]))
+                seen["switch"] += int(m.sum())
+            if k % 61 == 60:  # a few envs start a new episode
+                m = errs.rng.random(n) < 0.25
+                batch.reset(m)
+                shadow.reset(m)
+                for i in np.flatnonzero(m):
+                    scalars[i].reset()
+                    tau_err[i] = None
+                seen["reset"] += int(m.sum())
+        assert all(v > 0 for v in seen.values()), (name, seen)
+
+
+def test_batched_pid_general_model_bool_flags_and_a_zero_integral_gain():
+    """A full M and D_L, K_I = 0 in surge (the scalar's ``kI > 0`` branches and the unit
+    rotation scale of change_frame), saturation given as floats, booleans or None."""
+    rng = np.random.default_rng(7)
+    M = np.array([[2.0e4, 0.0, 0.0], [0.0, 2.5e4, 1.8e4], [0.0, 1.8e4, 4.5e5]])
+    D = np.array([[20.0, 1.0, 0.0], [0.0, 260.0, -855.0], [3.0, -855.0, 6130.0]])
+    gains = PIDGains(K_P=(0.01, 0.012, 0.03), K_I=(0.0, 5e-4, 2e-3), K_D=(0.2, 0.18, 0.3))
+    lim = (400.0, 90.0, 250.0)
+    n = 32
+    scalars = [MultivariablePID(gains, M=M, D_L=D, dt=0.5, integral_limit=lim) for _ in range(n)]
+    batch = BatchedPID(n, gains, M=M, D_L=D, dt=0.5, integral_limit=lim)
+    shadow = BatchedPID(n, gains, M=M, D_L=D, dt=0.5, integral_limit=lim)  # no anti-windup
+    errs = _Errors(n, seed=3)
+    dropped = clamped = 0
+    for k in range(220):
+        eta, nu, eta_d, vd, ad = errs.step(k)
+        kind = k % 4
+        if kind == 0:
+            sat = None
+        elif kind == 1:
+            sat = rng.random((n, 3)) < 0.3
+        else:
+            sat = rng.normal(0.0, 1.0, (n, 3)) * (rng.random((n, 3)) < 0.5)
+        tau_b = batch(eta, nu, eta_d, vd, ad, saturated=sat)
+        shadow(eta, nu, eta_d, vd, ad)
+        for i in range(n):
+            row = (None if vd is None else vd[i], None if ad is None else ad[i])
+            s_i = None if sat is None else sat[i]
+            tau = scalars[i](eta[i], nu[i], eta_d[i], *row, saturated=s_i)
+            assert _close(tau_b[i], tau, 1.0 + float(np.abs(tau).max())), (k, i)
+        xi_s = np.array([c.integral for c in scalars])
+        assert _close(batch.integral, xi_s, 1.0 + float(np.abs(xi_s).max()))
+        dropped += int(not np.array_equal(shadow.integral, batch.integral))
+        f = _integral_force(batch, batch.integral, eta[:, 2])
+        clamped += int((f >= np.asarray(lim) * (1.0 - 1e-9)).any(axis=1).sum())
+        if k % 29 == 28:
+            m = rng.random(n) < 0.5
+            dpsi = rng.uniform(-3.0, 3.0, n)
+            batch.change_frame(dpsi, m)
+            shadow.change_frame(dpsi, m)
+            for i in np.flatnonzero(m):
+                scalars[i].change_frame(float(dpsi[i]))
+        if k % 53 == 52:
+            m = rng.random(n) < 0.3
+            batch.reset(m)
+            shadow.reset(m)
+            for i in np.flatnonzero(m):
+                scalars[i].reset()
+    assert dropped > 0 and clamped > 0, (dropped, clamped)
+
+
+def test_change_frame_of_all_envs_and_a_scalar_dpsi():
+    v = VESSELS["blue-lady"]
+    n = 8
+    spec = controller_spec("pid")
+    scalars = [spec.factory(v, 1.0) for _ in range(n)]
+    batch = BatchedPID.from_scalar(scalars[0], n)
+    errs = _Errors(n, seed=11)
+    for k in range(30):
+        eta, nu, eta_d, vd, ad = errs.step(k)
+        tau_b = batch(eta, nu, eta_d, vd, ad)
+        for i in range(n):
+            row = (None if vd is None else vd[i], None if ad is None else ad[i])
+            assert _close(tau_b[i], scalars[i](eta[i], nu[i], eta_d[i], *row), 1e3)
+        if k % 10 == 9:
+            batch.change_frame(0.7)  # every env (mask None), one angle
+            for c in scalars:
+                c.change_frame(0.7)
+    assert np.abs(batch.integral).max() > 0.0
+
+
+# ---- the allocation alone, on requests spread over the whole box -------------------------------
+@pytest.mark.parametrize("method", ["constrained", "inverse"])
+def test_batched_allocation_equals_the_closed_forms(method):
+    v = VESSELS["blue-lady"]
+    p = fixed3_parameters(v.actuators)
+    rng = np.random.default_rng(5)
+    n = 4000
+    tau = rng.normal(0.0, 1.0, (n, 3)) * [300.0, 80.0, 250.0]
+    tau[:50, 0] = 0.0  # F1 = 0: the command's zero branch
+    tau[50:100] *= 1e-3  # well inside the box
+    tau[100:110, 0] = 451.3 * 2  # far ahead
+    batch = BatchedAllocation(v, method)
+    res = batch(tau)
+    scalar = allocate if method == "constrained" else allocate_inverse
+    patterns = set()
+    for i in range(n):
+        a = scalar(tau[i], p)
+        scale = float(np.abs(tau[i]).max()) + 1.0
+        assert _close(res.command[i], a.command), i
+        assert _close(res.force[i], a.force, scale), i
+        assert _close(res.tau[i], a.tau, scale), i
+        assert _close(res.tau_error[i], a.tau_error, scale), i
+        assert np.array_equal(res.saturated[i], a.saturated), i
+        patterns.add(tuple(a.saturated.tolist()))
+    assert np.all(res.command[:50, 0] == 0.0)
+    # every combination of saturated actuators occurs (inside, each edge, corners)
+    assert len(patterns) == 8, patterns
+    act = batch.command_to_action(res.command)
+    for i in range(0, n, 97):
+        assert _close(act[i], v.actuators.command_to_action(res.command[i]))
+
+
+def test_apply_residual_is_the_wrappers_sum_and_clip():
+    a = np.array([[0.5, -0.9, 1.0], [0.0, 0.2, -0.3]])
+    r = np.array([[1.0, -1.0, 0.0], [0.1, -0.1, 0.5]])
+    applied, clipped = apply_residual(a, r, 0.5)
+    assert np.array_equal(applied, np.clip(a + 0.5 * r, -1.0, 1.0))
+    assert np.allclose(applied, [[1.0, -1.0, 1.0], [0.05, 0.15, -0.05]], rtol=0, atol=1e-15)
+    assert np.array_equal(clipped, [[False, True, False], [False, False, False]])
+
+
+# ---- against the real wrapper (MuJoCo env), several envs in lockstep ---------------------------
+def test_against_the_controller_wrapper_in_a_tracking_run():
+    """``make(..., controller="pid")``: the batched controller, fed each env's record as the
+    wrapper reads it (to_r_frame, the tau_error of the previous step, change_frame on a leg
+    switch), gives the wrapper's tau_c, controller action, allocation and residual clip."""
+    from shipgym.dynamics import wrap_angle
+    from shipgym.envs.make import make
+    from shipgym.guidance import to_r_frame
+
+    n, scale = 3, 0.4
+    envs = [
+        make("shipgym/Tracking-v0", vessel="blue-lady", controller="pid", residual_scale=scale)
+        for _ in range(n)
+    ]
+    recs = [e.reset(seed=i)[1]["record"] for i, e in enumerate(envs)]
+    batch = batched_dp_controller("pid", "blue-lady", n, envs[0].unwrapped.control_period)
+    batch.reset()
+    legs = np.array([r.reference.leg for r in recs])
+    psi_P = np.array([float(r.reference.eta_P[2]) for r in recs])
+    rng = np.random.default_rng(0)
+    switches = clipped = 0
+    for _ in range(260):
+        eta_r = np.array(
+            [
+                to_r_frame(r.nav.eta, r.reference.eta_P, psi_ref_r=float(r.reference.eta_d_r[2]))
+                for r in recs
+            ]
+        )
+        nu = np.array([r.nav.nu for r in recs])
+        eta_d = np.array([r.reference.eta_d_r for r in recs])
+        vd = np.array([r.reference.eta_dot_d_r for r in recs])
+        ad = np.array([r.reference.eta_ddot_d_r for r in recs])
+        tau_b, al_b, act_b = batch(eta_r, nu, eta_d, vd, ad)
+        residual = rng.uniform(-1.0, 1.0, (n, 3)).astype(np.float32)
+        applied, res_clipped = apply_residual(act_b, residual, scale)
+        for i, e in enumerate(envs):
+            info = e.step(residual[i])[4]
+            assert _close(tau_b[i], info["tau_c"], 1e3)
+            assert _close(act_b[i], info["controller_action"])
+            assert _close(al_b.tau_error[i], info["tau_error"], 1e3)
+            assert np.array_equal(al_b.saturated[i], info["allocation_saturated"])
+            assert np.array_equal(res_clipped[i], info["residual_clipped"])
+            recs[i] = info["record"]
+        clipped += int(res_clipped.sum())
+        new_legs = np.array([r.reference.leg for r in recs])
+        m = new_legs != legs
+        if m.any():
+            new_psi = np.array([float(r.reference.eta_P[2]) for r in recs])
+            batch.change_frame(wrap_angle(new_psi - psi_P), m)
+            psi_P = np.where(m, new_psi, psi_P)
+            legs = new_legs
+            switches += int(m.sum())
+    assert switches > 0 and clipped > 0, (switches, clipped)
+    assert np.abs(batch.pid.integral).max() > 0.0
+
+
+# ---- the factory, and what is not batched ------------------------------------------------------
+def test_factory_mirrors_the_wrappers_pid_entries():
+    for name, (_, _, method) in BATCHED_CONTROLLERS.items():
+        assert CONTROLLERS[name].allocation == method, name
+    for vname, v in VESSELS.items():
+        if v.dofs != 3:
+            continue
+        for name, (preset, scale, _) in BATCHED_CONTROLLERS.items():
+            try:
+                ref = CONTROLLERS[name].factory(v, 0.5)
+            except ValueError as e:  # the same refusal (pid-seed elsewhere; no capacity)
+                with pytest.raises(ValueError) as mine_e:
+                    _pid_for(v, preset, scale, 0.5)
+                assert str(mine_e.value) == str(e), (vname, name)
+                continue
+            mine = _pid_for(v, preset, scale, 0.5)
+            assert mine.gains == ref.gains, (vname, name)
+            assert np.array_equal(mine.M, ref.M) and np.array_equal(mine.D_L, ref.D_L)
+            assert np.array_equal(mine.integral_limit, ref.integral_limit)
+            assert mine.dt == ref.dt
+
+
+def test_what_is_not_batched_says_so():
+    with pytest.raises(NotImplementedError, match="star-hercules.*least squares"):
+        batched_dp_controller("pid", "star-hercules", 4, 1.0)
+    with pytest.raises(NotImplementedError, match="wimpey-sealab.*azimuth QP"):
+        batched_dp_controller("pid", "wimpey-sealab", 4, 1.0)
+    with pytest.raises(ValueError, match="integral_limit"):  # as the wrapper's factory fails
+        batched_dp_controller("pid", "kvlcc2-100m", 4, 1.0)
+    with pytest.raises(ValueError, match="3-DOF"):
+        batched_dp_controller("pid", "naval-vessel", 4, 1.0)
+    with pytest.raises(ValueError, match="pid-seed"):
+        batched_dp_controller("pid-seed", "star-hercules", 4, 1.0)
+    with pytest.raises(NotImplementedError, match="alt-lq.*no batched form"):
+        batched_dp_controller("alt-lq", "blue-lady", 4, 1.0)
+    with pytest.raises(ValueError, match="inverse"):
+        BatchedAllocation("star-hercules", "inverse")
+
+
+def test_bad_inputs_raise_and_leave_the_state_alone():
+    b = batched_dp_controller("pid", "blue-lady", 4, 1.0)
+    z = np.zeros((4, 3))
+    e = np.full((4, 3), 0.5)
+    b(e, z, z)
+    xi = b.pid.integral
+    bad = e.copy()
+    bad[2, 1] = np.nan
+    with pytest.raises(ValueError, match="eta_r"):
+        b.pid(bad, z, z, saturated=b.tau_error)
+    with pytest.raises(ValueError, match="shape"):
+        b.pid(e[:3], z, z)
+    with pytest.raises(ValueError, match="saturated contains NaN"):
+        b.pid(e, z, z, saturated=np.where(bad > 1, 0.0, bad))
+    with pytest.raises(ValueError, match="mask"):
+        b.reset(np.ones(3, bool))
+    with pytest.raises(ValueError, match="finite"):
+        b.change_frame(np.array([0.0, np.inf, 0.0, 0.0]))
+    with pytest.raises(ValueError, match="tau"):
+        b.allocation(np.full((4, 3), np.inf))
+    assert np.array_equal(b.pid.integral, xi)
+    b.change_frame(np.array([0.0, np.inf, 0.0, 0.0]), np.array([True, False, True, True]))
+    with pytest.raises(ValueError, match="n must be"):
+        BatchedPID.from_scalar(controller_spec("pid").factory(VESSELS["blue-lady"], 1.0), 0)
