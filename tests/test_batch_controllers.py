@@ -19,10 +19,10 @@ from shipgym.controllers.batch import (
     BATCHED_CONTROLLERS,
     BatchedAllocation,
     BatchedPID,
-    _pid_for,
     apply_residual,
     batched_dp_controller,
 )
+from shipgym.controllers.pid import vessel_pid
 from shipgym.controllers.wrappers import CONTROLLERS, controller_spec
 
 TOL = 1e-10
@@ -339,10 +339,10 @@ def test_factory_mirrors_the_wrappers_pid_entries():
                 ref = CONTROLLERS[name].factory(v, 0.5)
             except ValueError as e:  # the same refusal (pid-seed elsewhere; no capacity)
                 with pytest.raises(ValueError) as mine_e:
-                    _pid_for(v, preset, scale, 0.5)
+                    vessel_pid(v, preset, scale, 0.5)
                 assert str(mine_e.value) == str(e), (vname, name)
                 continue
-            mine = _pid_for(v, preset, scale, 0.5)
+            mine = vessel_pid(v, preset, scale, 0.5)
             assert mine.gains == ref.gains, (vname, name)
             assert np.array_equal(mine.M, ref.M) and np.array_equal(mine.D_L, ref.D_L)
             assert np.array_equal(mine.integral_limit, ref.integral_limit)

@@ -44,8 +44,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym.dynamics.vessel import Vessel, load_vessel
 
-from .actuation import fixed3_parameters, make_allocator, planar_capacity
-from .pid import SATURATION_TOL, MultivariablePID, PIDGains
+from .actuation import fixed3_parameters, make_allocator
+from .pid import SATURATION_TOL, MultivariablePID, PIDGains, vessel_pid
 
 __all__ = [
     "BATCHED_CONTROLLERS",
@@ -673,23 +673,6 @@ BATCHED_CONTROLLERS: dict[str, tuple[str, float, str]] = {
 }
 
 
-def _pid_for(vessel: Vessel, preset: str, scale: float, dt: float) -> MultivariablePID:
-    """The wrapper's ``_pid(preset, scale)`` factory (:mod:`shipgym.controllers.wrappers`)."""
-    d = vessel.design
-    cap = planar_capacity(vessel)
-    if preset in vessel.control.get("pid_presets", ()):
-        gains: PIDGains | str = preset
-    elif preset == "seed":
-        raise ValueError(
-            f"controller 'pid-seed' holds the printed gains of Tomera (2014) for the Blue "
-            f"Lady; vessel {vessel.name!r} has none: use 'pid'"
-        )
-    else:
-        bw = np.asarray(vessel.control["bandwidth"], dtype=float) * scale
-        gains = PIDGains.from_pole_placement(bw, float(vessel.control["zeta"]))
-    return MultivariablePID(gains, M=d.M, D_L=d.D_L, dt=dt, integral_limit=cap)
-
-
 class BatchedDPController:
     """A :class:`BatchedPID` and its :class:`BatchedAllocation`, with the ``tau_error`` each
     env feeds back (the controller wrapper's state, less the leg bookkeeping).
@@ -768,5 +751,5 @@ def batched_dp_controller(
     if v.dofs != 3:
         raise ValueError(f"the batched DP controller is 3-DOF; {v.name!r} has {v.dofs} DOF")
     preset, scale, method = BATCHED_CONTROLLERS[name]
-    pid = BatchedPID.from_scalar(_pid_for(v, preset, scale, dt), n)
+    pid = BatchedPID.from_scalar(vessel_pid(v, preset, scale, dt), n)
     return BatchedDPController(name, pid, BatchedAllocation(v, method, dt))

@@ -601,3 +601,36 @@ def _saturation_directions(saturated: ArrayLike) -> list[int]:
             raise ValueError(f"saturated contains NaN: {saturated!r}")
         out.append(1 if f > SATURATION_TOL else -1 if f < -SATURATION_TOL else 0)
     return out
+
+
+def vessel_pid(vessel: Any, preset: str, scale: float, dt: float) -> MultivariablePID:
+    """The PID of Tomera (2014) eq. 23 designed for a vessel (the ``pid*`` controllers).
+
+    Args:
+        vessel: a :class:`~shipgym.dynamics.vessel.Vessel` (its design model, ``[control]``
+            presets, bandwidth and damping ratio).
+        preset: a gain preset of the vessel (``"tuned"``, ``"smooth"``, ``"seed"``); a vessel
+            without it gets pole placement at its bandwidth times ``scale``
+            (:meth:`PIDGains.from_pole_placement`), except ``"seed"`` (the printed gains of
+            Tomera (2014), the Blue Lady's only).
+        scale: factor on the vessel's bandwidth for pole placement.
+        dt: control period (s).
+
+    Raises:
+        ValueError: ``"seed"`` for a vessel without those gains.
+    """
+    from .actuation import planar_capacity
+
+    d = vessel.design
+    cap = planar_capacity(vessel)
+    if preset in vessel.control.get("pid_presets", ()):
+        gains: PIDGains | str = preset
+    elif preset == "seed":
+        raise ValueError(
+            f"controller 'pid-seed' holds the printed gains of Tomera (2014) for the Blue "
+            f"Lady; vessel {vessel.name!r} has none: use 'pid'"
+        )
+    else:
+        bw = np.asarray(vessel.control["bandwidth"], dtype=float) * scale
+        gains = PIDGains.from_pole_placement(bw, float(vessel.control["zeta"]))
+    return MultivariablePID(gains, M=d.M, D_L=d.D_L, dt=dt, integral_limit=cap)

@@ -23,10 +23,10 @@ from shipgym.dynamics.vessel import Vessel
 from shipgym.guidance import to_r_frame
 from shipgym.records import ControlData, StepRecord, step_record
 
-from .actuation import make_allocator, planar_capacity
+from .actuation import make_allocator
 from .allocation import Allocation
 from .grimble import GrimbleLQController
-from .pid import MultivariablePID, PIDGains
+from .pid import vessel_pid
 
 __all__ = [
     "CONTROLLERS",
@@ -77,19 +77,7 @@ def _pid(preset: str, scale: float = 1.0) -> Callable[[Vessel, float], DPControl
     on its design model (:func:`~shipgym.controllers.pid.pid_pole_placement`)."""
 
     def make(vessel: Vessel, dt: float) -> DPController:
-        d = vessel.design
-        cap = planar_capacity(vessel)
-        if preset in vessel.control.get("pid_presets", ()):
-            gains: PIDGains | str = preset
-        elif preset == "seed":
-            raise ValueError(
-                f"controller 'pid-seed' holds the printed gains of Tomera (2014) for the Blue "
-                f"Lady; vessel {vessel.name!r} has none: use 'pid'"
-            )
-        else:
-            bw = np.asarray(vessel.control["bandwidth"], dtype=float) * scale
-            gains = PIDGains.from_pole_placement(bw, float(vessel.control["zeta"]))
-        return MultivariablePID(gains, M=d.M, D_L=d.D_L, dt=dt, integral_limit=cap)
+        return vessel_pid(vessel, preset, scale, dt)
 
     return make
 
