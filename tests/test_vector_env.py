@@ -181,3 +181,44 @@ def test_gymnasium_vector_wrappers_work_on_it():
     for _ in range(3):
         _, _, _, trunc, info = venv.step(np.full((2, 3), 2.0, np.float32))
     assert trunc.all() and info["_episode"].all() and (info["episode"]["l"] == 3).all()
+
+
+@pytest.mark.parametrize("env_id", TASKS)
+def test_batched_controller_residuals_equal_the_controller_wrapper(env_id):
+    """``controller="pid"``: the actions are residuals on the batched PID and allocation, as
+    ``shipgym.make(..., controller="pid")`` forms them (leg switches turn its frame)."""
+    n, steps, scale = 3, 150, 0.3
+    kw = {"vessel": "blue-lady", "max_episode_steps": steps}
+    if env_id == "shipgym/Tracking-v0":
+        kw["max_legs"] = 2
+    venv = gym.make_vec(env_id, num_envs=n, controller="pid", residual_scale=scale, **kw)
+    singles = [shipgym.make(env_id, controller="pid", residual_scale=scale, **kw)
+               for _ in range(n)]  # fmt: skip
+    venv.reset(seed=50)
+    for i, s in enumerate(singles):
+        s.reset(seed=50 + i)
+    rng = np.random.default_rng(8)
+    pending = np.zeros(n, bool)
+    legs = clipped = 0
+    err = 0.0
+    for _ in range(320):
+        res = rng.normal(0.0, 0.6, (n, 3)).astype(np.float32)
+        obs, rew, term, trunc, info = venv.step(res)
+        for i, s in enumerate(singles):
+            if pending[i]:
+                o, inf = s.reset()
+            else:
+                o, r, te, tr, inf = s.step(res[i])
+                assert (te, tr) == (bool(term[i]), bool(trunc[i]))
+                assert rew[i] == pytest.approx(r, rel=1e-7, abs=1e-9)
+                np.testing.assert_allclose(info["tau_c"][i], inf["tau_c"], rtol=1e-7, atol=1e-6)
+                np.testing.assert_array_equal(info["residual_clipped"][i], inf["residual_clipped"])
+                clipped += int(inf["residual_clipped"].any())
+            err = max(err, float(np.abs(info["eta"][i] - inf["eta"]).max()))
+            np.testing.assert_allclose(obs[i], o, rtol=1e-5, atol=1e-5)
+        legs += int(info["legs_completed"].sum())
+        pending = term | trunc
+    assert err < 1e-6, err
+    assert clipped > 0
+    if env_id == "shipgym/Tracking-v0":
+        assert legs > 0

@@ -38,6 +38,7 @@ Backends: NumPy. Waves, the harbour, 4-DOF hulls and rendering are the single en
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -83,6 +84,12 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             :class:`~shipgym.envs.tasks.StationKeepingEnv` or a subclass) or its registered id.
         max_episode_steps: the time limit (control steps); ``None``: the id's registered one.
         autoreset_mode: ``"next-step"`` (default) or ``"same-step"``.
+        controller: ``None`` (the actions drive the actuators) or a DP controller name
+            (``"pid"``, ``"pid-smooth"``, ``"pid-seed"``: :func:`~shipgym.controllers.batch.
+            batched_dp_controller`): the actions are residuals on its normalised command, as
+            under :class:`~shipgym.controllers.wrappers.DPControllerWrapper`
+            (``shipgym.make(..., controller=)``).
+        residual_scale: the factor on the residual actions (with ``controller``).
         **kwargs: the single env's arguments (``vessel=``, ``wind=``, ``max_legs=``, ...); the
             scene must be open water, without waves.
 
@@ -99,6 +106,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         *,
         max_episode_steps: int | None = None,
         autoreset_mode: str | AutoresetMode = "next-step",
+        controller: str | None = None,
+        residual_scale: float = 1.0,
         **kwargs: Any,
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
@@ -158,6 +167,18 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self._started = False
         lo, hi = self.actuators.lower, self.actuators.upper
         self._lo_tol, self._hi_tol = lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)
+        self.controller_name = controller
+        self.residual_scale = float(residual_scale)
+        self.controller = None
+        if controller is not None:
+            from shipgym.controllers.batch import batched_dp_controller
+
+            if not (isinstance(residual_scale, int | float) and math.isfinite(residual_scale)):
+                raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
+            self.controller = batched_dp_controller(controller, self.vessel, n, self.control_period)
+        self._ref: Any = None
+        self._leg = np.zeros(n, dtype=np.int64)
+        self._psi_P = np.zeros(n)
         self._last_z = np.full((n, 3), np.nan)
         self._z_valid = np.zeros(n, dtype=bool)
         self._z_outlier = np.zeros(n, dtype=bool)
@@ -220,6 +241,9 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             raise ValueError(f"actions must be finite; NaN or infinite in envs {bad}")
         resetting = self._ended.copy()  # NEXT_STEP: these reset now and ignore their action
         active = ~resetting
+        control: dict[str, Array] = {}
+        if self.controller is not None:
+            a, control = self._control(a)
         clipped = np.clip(a, -1.0, 1.0)
         action_clipped = clipped != a
         command = self.actuators.action_to_command(clipped)
@@ -232,6 +256,13 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         ref = self.guidance.reference(t)
         rewards = self._reward_terms(eta, ref, clipped, switched)
         self._ref = ref
+        if self.controller is not None:  # a leg switch turns the controller's r-frame
+            moved = ref.leg != self._leg
+            if moved.any():
+                psi_P = ref.eta_P[:, 2]
+                self.controller.change_frame(wrap_angle(psi_P - self._psi_P), moved)
+                self._leg = np.where(moved, ref.leg, self._leg)
+                self._psi_P = np.where(moved, psi_P, self._psi_P)
         reward = sum(rewards.values())
         self._prev = clipped
         self._elapsed += 1
@@ -240,6 +271,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         done = (terminated | truncated) & active
         self._return += reward
         info = self._info(np.ones(n, bool), saturated, action_clipped, command, rewards, done=done)
+        for k, v in control.items():
+            info[k], info["_" + k] = v, np.ones(n, bool)
         if self.autoreset_mode == AutoresetMode.NEXT_STEP:
             obs = self._observation(ref)
             if resetting.any():
@@ -263,6 +296,29 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         return obs, reward, terminated, truncated, info
 
     # ---- internals ------------------------------------------------------------------------
+    def _control(self, residual: Array) -> tuple[Array, dict[str, Array]]:
+        """The DP controller's action plus the residual, as the controller wrapper forms it
+        (from the navigation data and reference at the end of the previous step)."""
+        from shipgym.controllers.batch import apply_residual
+
+        assert self.controller is not None
+        ref = self._ref
+        eta, nu = self.physics.eta, self.physics.nu
+        tau_c, alloc, a_ctrl = self.controller(
+            ref.to_r(eta), nu, ref.eta_d_r, ref.eta_dot_d_r, ref.eta_ddot_d_r,
+            state=self.physics.actuator_state,
+        )  # fmt: skip
+        applied, clipped = apply_residual(a_ctrl, residual, self.residual_scale)
+        info = {
+            "tau_c": np.ascontiguousarray(tau_c),
+            "tau_delivered": np.ascontiguousarray(alloc.tau),
+            "tau_error": np.ascontiguousarray(alloc.tau_error),
+            "controller_action": np.ascontiguousarray(a_ctrl),
+            "residual_clipped": clipped,
+        }
+        # the wrapper hands the env a float32 action
+        return applied.astype(np.float32).astype(np.float64), info
+
     def _reset_envs(self, mask: NDArray[np.bool_]) -> None:
         """Reset the masked envs, each from its generator in the single env's order."""
         tmpl = self.template
@@ -288,6 +344,13 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self._return[mask] = 0.0
         self._prev[mask] = 0.0
         self.guidance.reset(plans, np.broadcast_to(start, (self.num_envs, 3)), 0.0, mask=mask)
+        ref = self.guidance.reference(self.physics.t)
+        # the reset envs' rows of the reference the next step's controller reads
+        self._ref = ref if self._ref is None else _rows_from(self._ref, ref, mask)
+        if self.controller is not None:
+            self.controller.reset(mask)
+            self._leg[mask] = ref.leg[mask]
+            self._psi_P[mask] = ref.eta_P[mask, 2]
         if self.sensors is not None:
             self.sensors.reset(rngs, mask)  # type: ignore[arg-type]
             self._sample(mask)
@@ -415,6 +478,18 @@ def navigation_observations(
     out[:, 9:12] = ref.nu_dot_d
     out[:, 12:] = prev_action
     return out
+
+
+def _rows_from(old: Any, new: Any, mask: NDArray[np.bool_]) -> Any:
+    """A batched reference with the rows of ``mask`` from ``new``, the others from ``old``."""
+    from shipgym.guidance.batch import BatchedReference
+
+    def pick(a: Any, b: Any) -> Any:
+        return np.where(mask.reshape(mask.shape + (1,) * (np.ndim(a) - 1)), b, a)
+
+    names = ("eta_d_r", "eta_dot_d_r", "eta_ddot_d_r", "eta_P", "eta_d_n", "eta_K", "leg",
+             "t_leg", "finished")  # fmt: skip
+    return BatchedReference(*(pick(getattr(old, k), getattr(new, k)) for k in names))
 
 
 def _merge_reset_info(
