@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 
 from shipgym.dynamics.frames import wrap_angle
 from shipgym.guidance.batch import BatchedGuidance
-from shipgym.observers.sensors import BatchedSensors
+from shipgym.observers.sensors import BatchedSensors, SensorConfig
 
 from .base import ShipEnv
 from .batchphysics import BatchedPhysics
@@ -90,6 +90,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             under :class:`~shipgym.controllers.wrappers.DPControllerWrapper`
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
+        env_sensors: one sensor configuration per env, each as the ``sensors=`` of env ``i``
+            (the training stack's per-env noise); they may differ only in their variances.
         **kwargs: the single env's arguments (``vessel=``, ``wind=``, ``max_legs=``, ...); the
             scene must be open water, without waves.
 
@@ -108,6 +110,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         autoreset_mode: str | AutoresetMode = "next-step",
         controller: str | None = None,
         residual_scale: float = 1.0,
+        observer: str | None = None,
+        env_sensors: Sequence[SensorConfig] | None = None,
         **kwargs: Any,
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
@@ -125,6 +129,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             raise ValueError(
                 f"autoreset_mode must be 'next-step' or 'same-step', got {autoreset_mode!r}"
             )
+        if observer not in (None, "truth"):
+            raise NotImplementedError("observers in the batched env: next commit")
         if kwargs.get("render_mode") is not None:
             raise ValueError("the batched env does not render; use the single env (gym.make)")
         # the single env of these arguments: its configuration and its per-episode draws
@@ -176,6 +182,13 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             if not (isinstance(residual_scale, int | float) and math.isfinite(residual_scale)):
                 raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
             self.controller = batched_dp_controller(controller, self.vessel, n, self.control_period)
+        if env_sensors is not None:
+            env_sensors = list(env_sensors)
+            if len(env_sensors) != n or not all(isinstance(c, SensorConfig) for c in env_sensors):
+                raise ValueError(f"env_sensors must be {n} SensorConfigs (one per env)")
+            if self.sensors is None:
+                raise ValueError("env_sensors needs sensors (the env was made with sensors=None)")
+        self._env_sensors = env_sensors
         self._ref: Any = None
         self._leg = np.zeros(n, dtype=np.int64)
         self._psi_P = np.zeros(n)
@@ -333,6 +346,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             plans.append(tmpl._episode_plan())
             wind, current = tmpl._episode_wind(), tmpl._episode_current()
             self.physics.set_disturbances(i, wind, current)
+            if self._env_sensors is not None:  # env i as made with sensors=env_sensors[i]
+                tmpl._sensor_setting = self._env_sensors[i]
             sensors = tmpl._episode_sensors()
             if sensors is not None and self.sensors is not None:
                 self.sensors.set_config(i, sensors)

@@ -91,7 +91,13 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
         default=None,
         help="steps between checkpoints (0: none)",
     )
-    p.add_argument("--vec-env", choices=["dummy", "subproc"], default=None)
+    p.add_argument(
+        "--vec-env",
+        choices=["dummy", "subproc", "batched"],
+        default=None,
+        help="dummy: one process; subproc: a process per env; batched: the native batched env "
+        "(open-water tasks; every env in one array computation)",
+    )
     p.add_argument(
         "--max-minutes",
         type=bounded_float(0.0, 525_600.0, lo_open=True, unit="min"),

@@ -423,13 +423,38 @@ def build_vec_env(
         raise ValueError(f"n_envs must be an int >= 1, got {n_envs!r}")
     hp = dict(hp)
     fns = [_EnvFactory(env_id, hp, seed, i) for i in range(n_envs)]
+    if vec_env == "batched":
+        return VecMonitor(_batched_vec_env(env_id, hp, n_envs, seed))
     if vec_env == "dummy":
         venv = DummyVecEnv(fns)  # type: ignore[arg-type]
     elif vec_env == "subproc":
         venv = SubprocVecEnv(fns, start_method="forkserver")  # type: ignore[arg-type]
     else:
-        raise ValueError(f"vec_env must be 'dummy' or 'subproc', got {vec_env!r}")
+        raise ValueError(f"vec_env must be 'dummy', 'subproc' or 'batched', got {vec_env!r}")
     return VecMonitor(venv)
+
+
+def _batched_vec_env(env_id: str, hp: Mapping[str, Any], n_envs: int, seed: int) -> Any:
+    """The training stack of :func:`build_env` for ``n_envs`` envs as one native batched env
+    (:mod:`shipgym.rl.vec`): the same envs, observer, controller and per-env sensors."""
+    import shipgym  # noqa: F401  (registers the ids)
+    from shipgym.rl.vec import make_batched_vec_env
+
+    kwargs = dict(hp.get("env_kwargs") or {})
+    rnd = hp.get("randomize") or {}
+    unknown = sorted(set(rnd) - {"sensors"})
+    if unknown:
+        raise ValueError(f"randomize: unknown keys {unknown}; valid: ['sensors']")
+    if "sensors" in rnd:
+        kwargs["env_sensors"] = [_draw_sensors(rnd["sensors"], seed, i) for i in range(n_envs)]
+        kwargs["sensors"] = kwargs["env_sensors"][0]
+    observer = check_observer(hp.get("observer"))
+    if observer is not None:
+        kwargs["observer"] = observer
+    if hp.get("residual"):
+        kwargs["controller"] = hp["controller"]
+        kwargs["residual_scale"] = float(hp["residual_scale"])
+    return make_batched_vec_env(env_id, n_envs, **kwargs)
 
 
 @dataclass
@@ -768,7 +793,8 @@ def train(
         eval_freq: steps between harbour evaluations (default YAML; 0 disables).
         eval_seeds: harbour seeds of each evaluation (default YAML, ``[100, 101]``).
         checkpoint_freq: steps between checkpoints (default YAML; 0 disables).
-        vec_env: ``"dummy"`` or ``"subproc"`` (default YAML).
+        vec_env: ``"dummy"``, ``"subproc"`` or ``"batched"`` (the native batched env,
+            :mod:`shipgym.rl.vec`) (default YAML).
         max_minutes: stop after this wall-clock time (the model so far is saved).
         progress: show a progress bar.
         deterministic: single thread, deterministic torch algorithms (see module docstring).

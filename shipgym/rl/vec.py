@@ -1,0 +1,124 @@
+"""stable-baselines3's ``VecEnv`` over shipgym's native batched env.
+
+:class:`BatchedVecEnv` adapts a :class:`~shipgym.envs.vector.ShipVectorEnv` (in its
+``"same-step"`` autoreset mode, the one SB3 expects) to
+:class:`stable_baselines3.common.vec_env.VecEnv`: ``step_wait`` returns the next episode's
+first observation for an env whose episode ended, with the last one under
+``infos[i]["terminal_observation"]`` and ``infos[i]["TimeLimit.truncated"]`` for a time-limit
+end, as ``DummyVecEnv`` does. Seeding follows ``DummyVecEnv``: ``seed(s)`` gives env ``i`` the
+seed ``s + i`` at the next :meth:`reset`, later episodes go on with each env's generator; so
+the same seed gives the same episodes as a ``DummyVecEnv`` of the single envs (a test checks
+it). Usage::
+
+    from shipgym.rl.vec import make_batched_vec_env
+    venv = make_batched_vec_env("shipgym/BlueLadyTracking-v0", n_envs=64, controller="pid")
+    model = stable_baselines3.PPO("MlpPolicy", VecMonitor(venv)).learn(100_000)
+
+``shipgym train ... --vec-env batched`` (or ``vec_env: batched`` in the hyperparameter file)
+trains on it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from stable_baselines3.common.vec_env import VecEnv
+
+from shipgym.envs.vector import ShipVectorEnv
+
+__all__ = ["BatchedVecEnv", "make_batched_vec_env"]
+
+
+class BatchedVecEnv(VecEnv):
+    """An SB3 ``VecEnv`` of a :class:`ShipVectorEnv` (module docstring).
+
+    Args:
+        venv: a ``ShipVectorEnv`` in ``autoreset_mode="same-step"``.
+    """
+
+    def __init__(self, venv: ShipVectorEnv) -> None:
+        if not isinstance(venv, ShipVectorEnv):
+            raise TypeError(f"BatchedVecEnv needs a ShipVectorEnv, got {type(venv).__name__}")
+        if venv.autoreset_mode != gym.vector.AutoresetMode.SAME_STEP:
+            raise ValueError(
+                "BatchedVecEnv needs the same-step autoreset (SB3's semantics): make the env "
+                "with autoreset_mode='same-step'"
+            )
+        self.venv = venv
+        super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
+        self._actions: np.ndarray | None = None
+
+    def reset(self) -> np.ndarray:
+        seeds = list(self._seeds)
+        seed = None if all(s is None for s in seeds) else seeds
+        obs, _ = self.venv.reset(seed=seed)
+        self._reset_seeds()
+        self._reset_options()
+        self.reset_infos = [{} for _ in range(self.num_envs)]
+        return obs
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = np.asarray(actions)
+
+    def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
+        if self._actions is None:
+            raise RuntimeError("step_async(actions) must come before step_wait()")
+        obs, reward, terminated, truncated, info = self.venv.step(self._actions)
+        self._actions = None
+        done = terminated | truncated
+        infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
+        if done.any():
+            final = info["final_obs"]
+            for i in np.nonzero(done)[0].tolist():
+                infos[i]["terminal_observation"] = final[i]
+                infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
+                self.reset_infos[i] = {}
+        return obs, reward.astype(np.float32), done, infos
+
+    def close(self) -> None:
+        self.venv.close()
+
+    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
+        return [getattr(self.venv.template, attr_name) for _ in self._get_indices(indices)]
+
+    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        raise AttributeError(
+            f"BatchedVecEnv: the envs share one configuration; cannot set {attr_name!r}"
+        )
+
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any
+    ) -> list[Any]:
+        fn = getattr(self.venv.template, method_name)
+        return [fn(*method_args, **method_kwargs) for _ in self._get_indices(indices)]
+
+    def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: Any = None) -> list[bool]:
+        return [False for _ in self._get_indices(indices)]
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        return [None for _ in range(self.num_envs)]
+
+    def _get_indices(self, indices: Any) -> Iterable[int]:
+        if indices is None:
+            return range(self.num_envs)
+        if isinstance(indices, int):
+            return [indices]
+        return indices
+
+
+def make_batched_vec_env(
+    env_id: str, n_envs: int, *, seed: int | None = None, **kwargs: Any
+) -> BatchedVecEnv:
+    """``gymnasium.make_vec(env_id, n_envs, vector_entry_point, autoreset_mode="same-step",
+    **kwargs)`` as an SB3 ``VecEnv`` (seeded with ``seed`` at its first reset when given)."""
+    venv = gym.make_vec(
+        env_id, num_envs=n_envs, vectorization_mode="vector_entry_point",
+        autoreset_mode="same-step", **kwargs,
+    )  # fmt: skip
+    out = BatchedVecEnv(venv.unwrapped)  # type: ignore[arg-type]
+    if seed is not None:
+        out.seed(seed)
+    return out

@@ -1,0 +1,65 @@
+"""The SB3 adapter of the native batched env (shipgym.rl.vec) and ``shipgym train --vec-env
+batched``: the same transitions as SB3's DummyVecEnv of the single envs, seeded the same way."""
+
+import numpy as np
+import pytest
+
+pytest.importorskip("stable_baselines3")
+pytest.importorskip("torch")
+
+from stable_baselines3.common.vec_env import DummyVecEnv  # noqa: E402
+
+import shipgym  # noqa: E402
+from shipgym.rl.train import build_vec_env, load_hyperparams, train  # noqa: E402
+from shipgym.rl.vec import BatchedVecEnv, make_batched_vec_env  # noqa: E402
+
+ID = "shipgym/BlueLadyTracking-v0"
+
+
+def test_batched_vec_env_gives_dummy_vec_envs_transitions():
+    n, kw = 3, {"max_episode_steps": 6, "controller": "pid", "residual_scale": 0.25}
+    batched = make_batched_vec_env(ID, n, **kw)
+    dummy = DummyVecEnv([lambda: shipgym.make(ID, **kw) for _ in range(n)])
+    for venv in (batched, dummy):
+        venv.seed(21)
+    o1, o2 = batched.reset(), dummy.reset()
+    np.testing.assert_allclose(o1, o2, rtol=0, atol=1e-6)
+    rng = np.random.default_rng(1)
+    dones = 0
+    for _ in range(14):
+        a = rng.uniform(-1, 1, (n, 3)).astype(np.float32)
+        o1, r1, d1, i1 = batched.step(a)
+        o2, r2, d2, i2 = dummy.step(a)
+        np.testing.assert_allclose(o1, o2, rtol=1e-5, atol=1e-5)
+        np.testing.assert_allclose(r1, r2, rtol=1e-6, atol=1e-6)
+        np.testing.assert_array_equal(d1, d2)
+        for i in np.nonzero(d1)[0]:
+            np.testing.assert_allclose(i1[i]["terminal_observation"],
+                                       i2[i]["terminal_observation"], rtol=1e-5, atol=1e-5)  # fmt: skip
+            assert i1[i]["TimeLimit.truncated"] == i2[i]["TimeLimit.truncated"]
+            dones += 1
+    assert dones >= 2 * n  # two autoresets per env
+    assert batched.env_is_wrapped(object) == [False] * n
+    assert batched.get_attr("control_period") == [1.0] * n
+
+
+def test_adapter_needs_the_same_step_mode():
+    import gymnasium as gym
+
+    venv = gym.make_vec(ID, num_envs=2)
+    with pytest.raises(ValueError, match="same-step"):
+        BatchedVecEnv(venv.unwrapped)
+
+
+def test_train_on_the_batched_env(tmp_path):
+    """``vec_env: batched`` builds the training stack as one batched env and PPO learns on it."""
+    hp = dict(load_hyperparams("ppo", ID), observer="truth")
+    venv = build_vec_env(ID, hp, 4, 0, "batched")
+    assert isinstance(venv.venv, BatchedVecEnv)
+    venv.reset()
+    sigmas = [c.position_sigma for c in venv.venv.venv.sensors.configs]
+    assert len(set(sigmas)) == 4  # each env its own drawn sensor noise (randomize.sensors)
+    run = train("ppo", timesteps=256, seed=0, n_envs=4, out=tmp_path, observer="truth",
+                residual=True, vec_env="batched", eval_freq=0, checkpoint_freq=0,
+                overrides={"n_steps": 64, "batch_size": 64, "n_epochs": 1})  # fmt: skip
+    assert run.model_path.exists()
