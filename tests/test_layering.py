@@ -208,6 +208,7 @@ def test_command_line_modules_are_leaves():
         "shipgym.observers.notch",
         "shipgym.observers.design",
         "shipgym.observers.sensors",
+        "shipgym.observers.batch",
         "shipgym.controllers.allocation",
         "shipgym.controllers.pid",
         "shipgym.controllers.batch",
