@@ -34,8 +34,8 @@ def test_batched_vec_env_gives_dummy_vec_envs_transitions():
         np.testing.assert_allclose(r1, r2, rtol=1e-6, atol=1e-6)
         np.testing.assert_array_equal(d1, d2)
         for i in np.nonzero(d1)[0]:
-            np.testing.assert_allclose(i1[i]["terminal_observation"],
-                                       i2[i]["terminal_observation"], rtol=1e-5, atol=1e-5)  # fmt: skip
+            t1, t2 = i1[i]["terminal_observation"], i2[i]["terminal_observation"]
+            np.testing.assert_allclose(t1, t2, rtol=1e-5, atol=1e-5)
             assert i1[i]["TimeLimit.truncated"] == i2[i]["TimeLimit.truncated"]
             dones += 1
     assert dones >= 2 * n  # two autoresets per env
