@@ -17,7 +17,8 @@ ID = "shipgym/BlueLadyTracking-v0"
 
 
 def test_batched_vec_env_gives_dummy_vec_envs_transitions():
-    n, kw = 3, {"max_episode_steps": 6, "controller": "pid", "residual_scale": 0.25}
+    n, kw = 3, {"max_episode_steps": 6, "controller": "pid", "residual_scale": 0.25,
+                "observer": "kbf"}  # fmt: skip
     batched = make_batched_vec_env(ID, n, **kw)
     dummy = DummyVecEnv([lambda: shipgym.make(ID, **kw) for _ in range(n)])
     for venv in (batched, dummy):
@@ -53,13 +54,14 @@ def test_adapter_needs_the_same_step_mode():
 
 def test_train_on_the_batched_env(tmp_path):
     """``vec_env: batched`` builds the training stack as one batched env and PPO learns on it."""
-    hp = dict(load_hyperparams("ppo", ID), observer="truth")
+    hp = load_hyperparams("ppo", ID, residual=True)  # the shipped stack: KBF, PID residual
     venv = build_vec_env(ID, hp, 4, 0, "batched")
+    assert venv.venv.venv.observer is not None and venv.venv.venv.controller is not None
     assert isinstance(venv.venv, BatchedVecEnv)
     venv.reset()
     sigmas = [c.position_sigma for c in venv.venv.venv.sensors.configs]
     assert len(set(sigmas)) == 4  # each env its own drawn sensor noise (randomize.sensors)
-    run = train("ppo", timesteps=256, seed=0, n_envs=4, out=tmp_path, observer="truth",
+    run = train("ppo", timesteps=256, seed=0, n_envs=4, out=tmp_path, observer="kbf",
                 residual=True, vec_env="batched", eval_freq=0, checkpoint_freq=0,
                 overrides={"n_steps": 64, "batch_size": 64, "n_epochs": 1})  # fmt: skip
     assert run.model_path.exists()

@@ -27,15 +27,18 @@ def _pair(env_id, n, steps, **kw):
     # terminate); the vector env gets the actions the controller applied
     singles = [shipgym.make(env_id, controller="pid", max_episode_steps=steps, **kw)
                for _ in range(n)]  # fmt: skip
+    assert venv.unwrapped.observer is not None
     return venv, singles
 
 
 @pytest.mark.parametrize("vessel", POSITIONING)
 @pytest.mark.parametrize("env_id", TASKS)
 def test_batched_episodes_equal_the_single_envs(env_id, vessel):
+    """Whole episodes and autoresets with the KBF observer (what the policy sees: its
+    estimate), the single envs driven by the PID controller."""
     n, steps, total = 2, 250, 600
     kw = {"max_legs": 1} if env_id == "shipgym/Tracking-v0" else {}
-    venv, singles = _pair(env_id, n, steps, vessel=vessel, **kw)
+    venv, singles = _pair(env_id, n, steps, vessel=vessel, observer="kbf", **kw)
     obs, info = venv.reset(seed=30)
     for i, s in enumerate(singles):
         o, inf = s.reset(seed=30 + i)
@@ -183,12 +186,17 @@ def test_gymnasium_vector_wrappers_work_on_it():
     assert trunc.all() and info["_episode"].all() and (info["episode"]["l"] == 3).all()
 
 
+@pytest.mark.parametrize("observer", [None, "kbf", "dkf", "tomera-kbf"])
 @pytest.mark.parametrize("env_id", TASKS)
-def test_batched_controller_residuals_equal_the_controller_wrapper(env_id):
+def test_batched_controller_residuals_equal_the_controller_wrapper(env_id, observer):
     """``controller="pid"``: the actions are residuals on the batched PID and allocation, as
-    ``shipgym.make(..., controller="pid")`` forms them (leg switches turn its frame)."""
+    ``shipgym.make(..., controller="pid")`` forms them (leg switches turn its frame); with an
+    observer, the controller and the observation use its estimate, as under the observer
+    wrapper."""
     n, steps, scale = 3, 150, 0.3
-    kw = {"vessel": "blue-lady", "max_episode_steps": steps}
+    kw = {"vessel": "blue-lady", "max_episode_steps": steps, "observer": observer}
+    if observer is not None:  # outliers and dropouts, so the gate and the holds act
+        kw["sensors"] = {"outlier_probability": 0.05, "dropout_probability": 0.03}
     if env_id == "shipgym/Tracking-v0":
         kw["max_legs"] = 2
     venv = gym.make_vec(env_id, num_envs=n, controller="pid", residual_scale=scale, **kw)
@@ -199,7 +207,7 @@ def test_batched_controller_residuals_equal_the_controller_wrapper(env_id):
         s.reset(seed=50 + i)
     rng = np.random.default_rng(8)
     pending = np.zeros(n, bool)
-    legs = clipped = 0
+    legs = clipped = rejected = 0
     err = 0.0
     for _ in range(320):
         res = rng.normal(0.0, 0.6, (n, 3)).astype(np.float32)
@@ -215,10 +223,16 @@ def test_batched_controller_residuals_equal_the_controller_wrapper(env_id):
                 np.testing.assert_array_equal(info["residual_clipped"][i], inf["residual_clipped"])
                 clipped += int(inf["residual_clipped"].any())
             err = max(err, float(np.abs(info["eta"][i] - inf["eta"]).max()))
+            err = max(err, float(np.abs(info["nav_eta"][i] - inf["nav_eta"]).max()))
             np.testing.assert_allclose(obs[i], o, rtol=1e-5, atol=1e-5)
+            if observer is not None and "observer_rejected" in inf:
+                assert info["observer_rejected"][i] == inf["observer_rejected"]
+                rejected += int(inf["observer_rejected"])
         legs += int(info["legs_completed"].sum())
         pending = term | trunc
     assert err < 1e-6, err
     assert clipped > 0
-    if env_id == "shipgym/Tracking-v0":
-        assert legs > 0
+    if observer is not None:
+        assert rejected > 0
+    if env_id == "shipgym/Tracking-v0" and observer in (None, "kbf"):
+        assert legs > 0  # leg switches turned the controller's frame

@@ -90,6 +90,12 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             under :class:`~shipgym.controllers.wrappers.DPControllerWrapper`
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
+        observer: ``None`` / ``"truth"`` (the observation and the controller use the true
+            state) or a Kalman observer (``"kbf"``, ``"dkf"``, ``"tomera-kbf"``,
+            ``"tomera-dkf"``: :class:`~shipgym.observers.batch.BatchedKalman`) fed every sensor
+            sample, whose estimate they use instead, as under
+            :class:`~shipgym.observers.wrapper.ObserverWrapper` (``shipgym.make(...,
+            observer=)``).
         env_sensors: one sensor configuration per env, each as the ``sensors=`` of env ``i``
             (the training stack's per-env noise); they may differ only in their variances.
         **kwargs: the single env's arguments (``vessel=``, ``wind=``, ``max_legs=``, ...); the
@@ -129,8 +135,6 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             raise ValueError(
                 f"autoreset_mode must be 'next-step' or 'same-step', got {autoreset_mode!r}"
             )
-        if observer not in (None, "truth"):
-            raise NotImplementedError("observers in the batched env: next commit")
         if kwargs.get("render_mode") is not None:
             raise ValueError("the batched env does not render; use the single env (gym.make)")
         # the single env of these arguments: its configuration and its per-episode draws
@@ -189,6 +193,27 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             if self.sensors is None:
                 raise ValueError("env_sensors needs sensors (the env was made with sensors=None)")
         self._env_sensors = env_sensors
+        self.observer_name = None if observer in (None, "truth") else observer
+        self.observer = None
+        if self.observer_name is not None:
+            from shipgym.observers.batch import BatchedKalman
+
+            every = self._sensor_steps
+            if self.sensors is None or every is None:
+                raise ValueError(
+                    "an observer needs sensors: create the env with sensors='default' (or "
+                    "another preset), not sensors=None"
+                )
+            if self.n_substeps % every:
+                raise ValueError(
+                    f"the batched env's observer needs a sensor period that divides the control "
+                    f"period ({self.control_period:g} s); got {self.sensors.config.period:g} s: "
+                    "use the single env (shipgym.make) for it"
+                )
+            # the design noise of the vessel, as the observer wrapper's make_observer
+            self.observer = BatchedKalman(self.observer_name, n, vessel=self.vessel)
+        self._nis = np.full(n, np.nan)
+        self._rejected = np.zeros(n, bool)
         self._ref: Any = None
         self._leg = np.zeros(n, dtype=np.int64)
         self._psi_P = np.zeros(n)
@@ -309,6 +334,12 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         return obs, reward, terminated, truncated, info
 
     # ---- internals ------------------------------------------------------------------------
+    def _navigation(self) -> tuple[Array, Array]:
+        """What the controller and the observation use: the estimate, else the truth."""
+        if self.observer is not None:
+            return self.observer.eta, self.observer.nu
+        return self.physics.eta, self.physics.nu
+
     def _control(self, residual: Array) -> tuple[Array, dict[str, Array]]:
         """The DP controller's action plus the residual, as the controller wrapper forms it
         (from the navigation data and reference at the end of the previous step)."""
@@ -316,7 +347,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
 
         assert self.controller is not None
         ref = self._ref
-        eta, nu = self.physics.eta, self.physics.nu
+        eta, nu = self._navigation()
         tau_c, alloc, a_ctrl = self.controller(
             ref.to_r(eta), nu, ref.eta_d_r, ref.eta_dot_d_r, ref.eta_ddot_d_r,
             state=self.physics.actuator_state,
@@ -368,12 +399,21 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             self._psi_P[mask] = ref.eta_P[mask, 2]
         if self.sensors is not None:
             self.sensors.reset(rngs, mask)  # type: ignore[arg-type]
-            self._sample(mask)
+            self._sample(mask, observe=False)
+        if self.observer is not None:  # from the first fix, or the leg's start in a dropout
+            eta_start = np.where(self._z_valid[:, None], self._last_z, ref.eta_P)
+            self.observer.reset(self.physics.t, eta_start, mask=mask)
 
-    def _sample(self, mask: NDArray[np.bool_]) -> None:
-        """A sensor sample of the masked envs now (the single env's ``_measure``)."""
+    def _sample(self, mask: NDArray[np.bool_], observe: bool = True) -> None:
+        """A sensor sample of the masked envs now (the single env's ``_measure``), fed to the
+        observer (every env samples at the same instants: the sensor period divides the
+        control period)."""
         assert self.sensors is not None
         z, valid, outlier = self.sensors.measure(self.physics.t, self.physics.eta, mask)
+        if observe and self.observer is not None:
+            info = self.observer.step(self.physics.t, z, valid & mask)
+            self._nis = info.nis
+            self._rejected = info.rejected
         self._last_z = np.where(mask[:, None], z, self._last_z)
         self._z_valid = np.where(mask, valid, self._z_valid)
         self._z_outlier = np.where(mask, outlier, self._z_outlier)
@@ -382,6 +422,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         """``n_substeps`` physics steps, the sensors sampled on their grid (active envs)."""
         left = self.n_substeps
         every = self._sensor_steps
+        self._nis = np.full(self.num_envs, np.nan)
+        self._rejected = np.zeros(self.num_envs, bool)
         if self.sensors is not None:
             self._last_z[:] = np.nan
             self._z_valid[:] = False
@@ -403,7 +445,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         """The single env's observation (its class docstring) of every env, from the truth."""
         if ref is None:
             ref = self.guidance.reference(self.physics.t)
-        return navigation_observations(self.physics.eta, self.physics.nu, ref, self._prev)
+        eta, nu = self._navigation()
+        return navigation_observations(eta, nu, ref, self._prev)
 
     def _reward_terms(
         self, eta: Array, ref: Any, action: Array, switched: NDArray[np.bool_]
@@ -441,12 +484,13 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         n, m = self.num_envs, self.n_actions
         g = self.guidance
         eta, nu = self.physics.eta, self.physics.nu
+        nav_eta, nav_nu = self._navigation()
         info: dict[str, Any] = {
             "t": self.physics.t.copy(),
             "eta": eta,
             "nu": nu,
-            "nav_eta": eta,
-            "nav_nu": nu,
+            "nav_eta": nav_eta,
+            "nav_nu": nav_nu,
             "leg": g.leg.copy(),
             "legs_completed": g.legs_completed.copy(),
             "finished": g.finished.copy(),
@@ -454,6 +498,13 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             "saturated": np.zeros((n, m), bool) if saturated is None else saturated,
             "action_clipped": np.zeros((n, m), bool) if action_clipped is None else action_clipped,
         }
+        if self.observer is not None:
+            e = nav_eta - eta
+            e[:, 2] = wrap_angle(e[:, 2])
+            info["est_error_eta"] = e
+            info["est_error_nu"] = nav_nu - nu
+            info["observer_nis"] = self._nis.copy()
+            info["observer_rejected"] = self._rejected.copy()
         if self.sensors is not None:
             info["z"] = self._last_z.copy()
             info["z_valid"] = self._z_valid.copy()
