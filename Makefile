@@ -95,7 +95,7 @@ test-random: $(RL_STAMP) ## the test suite in a shuffled order (SEED=N repeats a
 test-slow: $(RL_STAMP) ## only the slow tests (the fuzz test of random episodes, ...)
 	$(PY) -m pytest -q -m slow
 
-bench: $(STAMP) ## speed: headline ratios (runs/bench/bench.json), physics, disturbances, allocation
+bench: $(RL_STAMP) ## speed: headline ratios (runs/bench/bench.json), physics, disturbances, allocation
 	$(PY) benchmarks/bench_summary.py
 	$(PY) benchmarks/bench_physics.py
 	$(PY) benchmarks/bench_disturbances.py

@@ -20,8 +20,13 @@ the median over the repeats with the smallest and largest repeat, and all are wr
 - ``batched_physics_hull_steps_per_s`` (N = 256) and ``batched_physics_over_single``: the
   batched physics (:class:`~shipgym.envs.batchphysics.BatchedPhysics`: plant, actuators and
   gusty wind) against the single MuJoCo physics in the same wind, hull-steps per second;
-- ``batched_hull_steps_per_s``, ``batched_over_single``, ``ppo_fps_batched_over_single``: the
-  batched vector env's, ``null`` until it exists (the ``missing`` key says why).
+- ``batched_hull_steps_per_s`` (N = 256, NumPy) and ``batched_over_single``: the native
+  batched ``Tracking`` env (:class:`~shipgym.envs.vector.ShipVectorEnv`: gusty wind, sensors,
+  the KBF observer) in hull-steps per second, and over the single env with the same stack
+  (``shipgym.make(..., observer="kbf")``), interleaved;
+- ``ppo_fps_batched_over_single``: stable-baselines3 PPO's training rate (rollouts and
+  updates, the shipped hyperparameters and KBF + PID-residual stack, 32 envs) on the batched
+  env over the same on ``DummyVecEnv`` of single envs (``null`` without the ``rl`` extra).
 
 Absolute rates are printed too (this machine's); ratios are what compares across machines.
 Run with ``make bench``.
@@ -180,8 +185,8 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
             alloc(q)
         per.append((time.perf_counter() - t0) / len(reqs) * 1e6)
     out["allocation_us_6_thrusters"] = statistics.median(per)
-    # the batched physics (plant, actuators, gusty wind: what exists of the batched env so far)
-    # against the single MuJoCo physics in the same wind, the same hull-steps
+    # the batched physics (plant, actuators, gusty wind) against the single MuJoCo physics in
+    # the same wind, the same hull-steps
     from shipgym.envs.batchphysics import BatchedPhysics
 
     nb, kb = 256, 100
@@ -193,14 +198,87 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
               per_a=nb * kb // 4, per_b=nb * kb)  # fmt: skip
     out["batched_physics_over_single"] = rb
     out["batched_physics_hull_steps_per_s"] = 1.0 / rb["b_s"]
-    for k in ("batched_hull_steps_per_s", "batched_over_single", "ppo_fps_batched_over_single"):
-        out[k] = None
-    out["missing"] = {
-        "batched_hull_steps_per_s, batched_over_single, ppo_fps_batched_over_single": "the "
-        "batched vector env (gusts, sensors, observers, controllers) is not built yet; "
-        "batched_physics_* time its physics alone (plant, actuators, gusty wind)"
-    }
+    out.update(_batched_env(repeats))
     return out
+
+
+#: the training stack the batched figures time: the Tracking task (gusty wind, DGPS and
+#: gyrocompass sensors) with the KBF observer
+BATCHED_STACK = {"observer": "kbf"}
+
+
+def _batched_env(repeats: int, n: int = 256) -> dict[str, Any]:
+    """``batched_hull_steps_per_s`` (N = ``n``) and ``batched_over_single``: the native
+    batched Tracking env with gusts, sensors and the KBF against the single env with the same
+    stack (``shipgym.make(..., observer="kbf")``), hull-steps per second, interleaved; and
+    ``ppo_fps_batched_over_single`` (:func:`_ppo_fps`)."""
+    import gymnasium as gym
+
+    import shipgym
+
+    env_id = "shipgym/BlueLadyTracking-v0"
+    venv = gym.make_vec(env_id, num_envs=n, **BATCHED_STACK)
+    single = shipgym.make(env_id, **BATCHED_STACK)
+    rng = np.random.default_rng(0)
+    k_b, k_s = 20, 100  # batched steps, single steps per timing
+    acts = rng.uniform(-1, 1, (k_b, n, 3)).astype(np.float32)
+    venv.reset(seed=0)
+    single.reset(seed=0)
+    n_sub = venv.unwrapped.n_substeps
+
+    def batched() -> None:
+        for a in acts:
+            venv.step(a)
+
+    def one() -> None:
+        for j in range(k_s):
+            _, _, term, trunc, _ = single.step(acts[j % k_b, 0])
+            if term or trunc:
+                single.reset()
+
+    r = pair(_timed(one), _timed(batched), repeats, per_a=k_s * n_sub, per_b=k_b * n * n_sub)
+    out: dict[str, Any] = {
+        "batched_hull_steps_per_s": 1.0 / r["b_s"],
+        "single_hull_steps_per_s": 1.0 / r["a_s"],
+        "batched_over_single": r,
+        "batched_num_envs": n,
+    }
+    ppo = _ppo_fps(env_id, max(3, repeats // 2))
+    out["ppo_fps_batched_over_single"] = ppo
+    if ppo is not None:
+        out["ppo_fps_batched"] = 1.0 / ppo["b_s"]
+        out["ppo_fps_single"] = 1.0 / ppo["a_s"]
+    else:
+        out["missing"] = {"ppo_fps_batched_over_single": "needs the rl extra (make rl)"}
+    return out
+
+
+def _ppo_fps(env_id: str, repeats: int, n_envs: int = 32, n_steps: int = 32) -> Any:
+    """PPO's training rate (environment steps per second, rollouts and updates together) on
+    the native batched env over the same on SB3's ``DummyVecEnv`` of the single envs: the
+    shipped hyperparameters and stack (KBF, PID residual), ``n_envs`` envs, ``n_steps``
+    steps per rollout, one rollout and update per timing. ``None`` without the rl extra."""
+    try:
+        from stable_baselines3 import PPO
+    except ImportError:
+        return None
+    from shipgym.rl.train import _algo_kwargs, build_vec_env, load_hyperparams
+
+    hp = dict(load_hyperparams("ppo", env_id, residual=True), n_steps=n_steps,
+              batch_size=n_steps * n_envs // 4)  # fmt: skip
+    models = {}
+    for kind in ("dummy", "batched"):
+        venv = build_vec_env(env_id, hp, n_envs, 0, kind)
+        models[kind] = PPO(hp.get("policy", "MlpPolicy"), venv, seed=0, device="cpu",
+                           **_algo_kwargs("ppo", hp))  # fmt: skip
+        models[kind].learn(n_steps * n_envs)  # warm up (first rollout, first update)
+
+    def learn(kind: str) -> Callable[[], Any]:
+        return lambda: models[kind].learn(n_steps * n_envs, reset_num_timesteps=False)
+
+    steps = n_steps * n_envs
+    return pair(_timed(learn("dummy")), _timed(learn("batched")), repeats, per_a=steps,
+                per_b=steps)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -219,6 +297,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     print(f"  {'allocation_us_6_thrusters':28s}: {res['allocation_us_6_thrusters']:8.1f} us")
     print(f"  {'batched physics, N = 256':28s}: {res['batched_physics_hull_steps_per_s']:10,.0f} "
           "hull-steps/s")  # fmt: skip
+    print(f"  {'batched env, N = 256':28s}: {res['batched_hull_steps_per_s']:10,.0f} hull-steps/s")
+    print(f"  {'single env':28s}: {res['single_hull_steps_per_s']:10,.0f} hull-steps/s")
+    if res.get("ppo_fps_batched") is not None:
+        print(f"  {'PPO, batched / DummyVecEnv':28s}: {res['ppo_fps_batched']:10,.0f} / "
+              f"{res['ppo_fps_single']:,.0f} steps/s")  # fmt: skip
     args.json.parent.mkdir(parents=True, exist_ok=True)
     flat = {k: (v["median"] if isinstance(v, dict) and "median" in v else v)
             for k, v in res.items()}  # fmt: skip
