@@ -65,3 +65,33 @@ def test_bench_observers_table_is_the_same_on_ray(ray, capsys):
     on_ray = capsys.readouterr().out
     table = lambda text: [ln for ln in text.splitlines() if ln.startswith("|")]  # noqa: E731
     assert table(plain) and table(plain) == table(on_ray)
+
+
+def _tiny_training(out, executor):
+    from shipgym.rl.train import train_seeds
+
+    return train_seeds("ppo", [3, 4], out=out, executor=executor, workers=2, progress=False,
+                       timesteps=64, n_envs=2, observer="truth", eval_freq=0,
+                       checkpoint_freq=0, overrides={"n_steps": 32, "batch_size": 32,
+                                                     "n_epochs": 1})  # fmt: skip
+
+
+def _weights(path):
+    import zipfile
+
+    with zipfile.ZipFile(path) as z:
+        return z.read("policy.pth")
+
+
+@pytest.mark.slow
+def test_multi_seed_training_on_ray_equals_the_process_pool(ray, tmp_path):
+    """``train_seeds`` (``shipgym train --seeds``): the same models from Ray as from the process
+    pool, and from a rerun (each run's result depends on its seed only)."""
+    pytest.importorskip("stable_baselines3")
+    pool = _tiny_training(tmp_path / "pool", "process")
+    on_ray = _tiny_training(tmp_path / "ray", "ray")
+    assert [r["seed"] for r in pool] == [r["seed"] for r in on_ray] == [3, 4]
+    for a, b in zip(pool, on_ray, strict=True):
+        assert a["model_path"].endswith(f"seed{a['seed']}/model.zip")
+        assert _weights(a["model_path"]) == _weights(b["model_path"])
+    assert _weights(pool[0]["model_path"]) != _weights(pool[1]["model_path"])

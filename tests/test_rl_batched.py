@@ -65,3 +65,14 @@ def test_train_on_the_batched_env(tmp_path):
                 residual=True, vec_env="batched", eval_freq=0, checkpoint_freq=0,
                 overrides={"n_steps": 64, "batch_size": 64, "n_epochs": 1})  # fmt: skip
     assert run.model_path.exists()
+
+
+def test_train_cli_seeds_options_are_checked(capsys):
+    from shipgym.cli import main
+
+    assert main(["train", "ppo", "--workers", "2", "--timesteps", "8"]) == 2
+    assert "go with --seeds" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="distinct"):
+        from shipgym.rl.train import train_seeds
+
+        train_seeds("ppo", [1, 1])

@@ -57,6 +57,18 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--seed", type=seed_int, default=0, help="seed of everything, >= 0 (0)")
     p.add_argument(
+        "--seeds",
+        type=seed_int,
+        nargs="+",
+        default=None,
+        metavar="S",
+        help="train once per seed, in parallel (--workers, --executor); each run in OUT/seed<S>",
+    )
+    p.add_argument(
+        "--workers", type=bounded_int(1, 1024), default=None, help="parallel runs with --seeds"
+    )
+    add_executor_options(p)
+    p.add_argument(
         "--n-envs",
         type=bounded_int(1, 256),
         default=None,
@@ -122,6 +134,10 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     # SIGINT and SIGTERM stop training through shipgym.cli.main (exit 130 / 143); say what stays
     on_interrupt(lambda: _kept_by_train(args.out))
+    if args.seeds is not None:
+        return _train_many(args)
+    if args.workers is not None or args.executor != "process":
+        raise ValueError("--workers and --executor go with --seeds (several training runs)")
     res = train(
         args.algo,
         timesteps=args.timesteps,
@@ -149,6 +165,26 @@ def cmd_train(args: argparse.Namespace) -> int:
             f"  last harbour evaluation: {e['completed']}/{e['runs']} completed, J_c {e['J_c']:.4f}"
         )
     print(f"  command     {res.metadata.command}")
+    return 0
+
+
+def _train_many(args: argparse.Namespace) -> int:
+    """``shipgym train ... --seeds S ...``: :func:`shipgym.rl.train.train_seeds`."""
+    from shipgym.rl.train import train_seeds
+
+    if args.resume is not None:
+        raise ValueError("--resume continues one run; it does not go with --seeds")
+    rows = train_seeds(
+        args.algo, args.seeds, out=args.out, executor=executor_of(args), workers=args.workers,
+        progress=progress_enabled(args.no_progress), timesteps=args.timesteps,
+        n_envs=args.n_envs, residual=args.residual, observer=args.observer,
+        hyperparams=args.hyperparams, eval_freq=args.eval_freq,
+        checkpoint_freq=args.checkpoint_freq, vec_env=args.vec_env,
+        max_minutes=args.max_minutes, verbose=args.verbose,
+    )  # fmt: skip
+    for r in rows:
+        print(f"seed {r['seed']}: {r['num_timesteps']} steps in {r['wall_time_s'] / 60:.1f} min, "
+              f"model {r['model_path']}")  # fmt: skip
     return 0
 
 

@@ -72,6 +72,7 @@ __all__ = [
     "TrainResult",
     "build_env",
     "build_vec_env",
+    "train_seeds",
     "check_hyperparams",
     "hyperparams_path",
     "load_hyperparams",
@@ -928,6 +929,67 @@ def train(
         model=model,
         vec_normalize=venv if isinstance(venv, VecNormalize) else None,
     )
+
+
+def train_seeds(
+    algo: str,
+    seeds: Sequence[int],
+    *,
+    out: str | Path | None = None,
+    executor: Any = None,
+    workers: int | None = None,
+    progress: bool = True,
+    **kwargs: Any,
+) -> list[dict[str, Any]]:
+    """:func:`train` once per seed, in parallel: a process pool or Ray tasks.
+
+    Each run is :func:`train` with that seed (single-threaded and deterministic), written to
+    ``out/seed<S>`` (default: each run's own default folder), so the results depend on the
+    seeds only and every executor gives the same models.
+
+    Args:
+        algo: ``"ppo"`` or ``"sac"``.
+        seeds: distinct seeds (>= 0).
+        out: parent folder of the runs.
+        executor: ``"process"`` (default), ``"ray"`` or a :class:`shipgym.bench.Executor`
+            (Ray: a local instance of ``workers`` CPUs, or a cluster address).
+        workers: parallel runs (default: one per seed, at most the CPUs).
+        progress: a bar over the runs (on a terminal).
+        **kwargs: the other arguments of :func:`train` (not ``seed``, ``out``, ``progress``).
+
+    Returns:
+        One summary per seed, in the order of ``seeds``: ``seed``, ``model_path``,
+        ``out_dir``, ``num_timesteps``, ``wall_time_s``, ``evaluations``.
+    """
+    from shipgym.bench import run_jobs
+
+    seeds = [int(s) for s in seeds]
+    if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
+        raise ValueError(f"seeds must be distinct integers >= 0, got {seeds!r}")
+    bad = sorted({"seed", "out", "progress"} & set(kwargs))
+    if bad:
+        raise TypeError(f"train_seeds takes the seeds and out itself; drop {bad}")
+    jobs = [
+        dict(kwargs, algo=algo, seed=s, out=None if out is None else str(Path(out) / f"seed{s}"))
+        for s in seeds
+    ]
+    return run_jobs(_train_job, jobs, workers=workers, progress=progress, desc="training runs",
+                    executor=executor)  # fmt: skip
+
+
+def _train_job(job: dict[str, Any]) -> dict[str, Any]:
+    """One run of :func:`train_seeds` (module level: picklable for workers and Ray)."""
+    job = dict(job)
+    algo = job.pop("algo")
+    res = train(algo, progress=False, **job)
+    return {
+        "seed": job["seed"],
+        "model_path": str(res.model_path),
+        "out_dir": str(res.out_dir),
+        "num_timesteps": res.num_timesteps,
+        "wall_time_s": res.wall_time_s,
+        "evaluations": res.evaluations,
+    }
 
 
 def _check_train_args(*, seed: Any, n_envs: Any, max_minutes: Any, timesteps: Any) -> None:
