@@ -236,3 +236,22 @@ def test_batched_controller_residuals_equal_the_controller_wrapper(env_id, obser
         assert rejected > 0
     if env_id == "shipgym/Tracking-v0" and observer in (None, "kbf"):
         assert legs > 0  # leg switches turned the controller's frame
+
+
+@pytest.mark.parametrize(
+    ("kw", "error", "match"),
+    [
+        ({"observer": "ekf"}, ValueError, "double-integrator"),
+        ({"observer": "nope"}, ValueError, "unknown observer"),
+        ({"controller": "lq"}, NotImplementedError, "no batched form"),
+        ({"controller": "pid", "vessel": "star-hercules"}, NotImplementedError, "star-hercules"),
+        ({"sensors": None, "observer": "kbf"}, ValueError, "needs sensors"),
+        ({"controller": "pid", "residual_scale": float("nan")}, ValueError, "finite"),
+        ({"autoreset_mode": "sometimes"}, ValueError, "autoreset_mode"),
+        ({"render_mode": "rgb_array"}, ValueError, "does not render"),
+    ],
+)
+def test_what_the_batched_env_does_not_cover_says_so(kw, error, match):
+    kw = {"vessel": "blue-lady", **kw}
+    with pytest.raises(error, match=match):
+        gym.make_vec("shipgym/Tracking-v0", num_envs=2, **kw)

@@ -78,6 +78,15 @@ AUTORESET_MODES = {
 class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
     """``num_envs`` copies of a positioning task stepped together (module docstring).
 
+    Spaces: the single env's, batched: ``observation_space`` ``Box(-inf, inf, (N, 12 + n),
+    float32)`` (the layout of :class:`~shipgym.envs.base.ShipEnv`, ``observation_structure``;
+    with an observer its estimate replaces the truth), ``action_space`` ``Box(-1, 1, (N, n),
+    float32)`` (one normalised command, or with ``controller`` one residual, per channel; out
+    of range is clipped and flagged in ``info["action_clipped"]``, NaN raises). Reward: the
+    single env's terms (``info["reward_*"]``, which sum to it). Episodes end as the single
+    env's: terminated when the plan is complete (Tracking), truncated at
+    ``max_episode_steps``.
+
     Args:
         num_envs: number of envs, >= 1.
         task: the single env's class (:class:`~shipgym.envs.tasks.TrackingEnv`,
@@ -177,14 +186,14 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self._started = False
         lo, hi = self.actuators.lower, self.actuators.upper
         self._lo_tol, self._hi_tol = lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)
+        if not (isinstance(residual_scale, int | float) and math.isfinite(residual_scale)):
+            raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
         self.controller_name = controller
         self.residual_scale = float(residual_scale)
         self.controller = None
         if controller is not None:
             from shipgym.controllers.batch import batched_dp_controller
 
-            if not (isinstance(residual_scale, int | float) and math.isfinite(residual_scale)):
-                raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
             self.controller = batched_dp_controller(controller, self.vessel, n, self.control_period)
         if env_sensors is not None:
             env_sensors = list(env_sensors)
