@@ -624,7 +624,7 @@ class VesselPhysics:
         # actuator gains (k |n|) and azimuth directions, so MuJoCo applies the same force
         tau_of = self.actuators.kernel(m.actuator_gainprm, m.actuator_gear)
         mq, iq, ix = self._m_q, self._i_q, self._i_x
-        accel, wind_at, wind_load = self._accel, self.wind.at, self._wind_load.kernel()
+        accel, wind_at, wind_load = self._accel, self.wind.at_kernel(), self._wind_load.kernel()
         cc = self.current_config
         current_at = None if (cc.is_constant and cc.speed == 0.0) else self.current.at
         drift = None if self.waves is None or not self.wave_config.drift else self.waves.drift_load
@@ -693,7 +693,22 @@ class VesselPhysics:
             u = c * xd + s * yd
             v = c * yd - s * xd
             tx, ty, _k, tn, _mz = tau_of(st)
-            wx, wy, wn, uc, vcb, dx_, dy_, dn_ = loads(t, psi, u, v)
+            # loads() written out (one call less per step)
+            if aero:
+                vw, bw = wind_at(t)
+                wx, wy, wn = wind_load(psi, u, v, vw, bw)
+            else:
+                wx = wy = wn = 0.0
+            if current_at is not None:
+                vc, bc = current_at(t)
+                uc = vc * cos(bc - psi)
+                vcb = vc * sin(bc - psi)
+            else:
+                uc = vcb = 0.0
+            if drift is not None:
+                dx_, dy_, dn_ = drift(t, psi)
+            else:
+                dx_ = dy_ = dn_ = 0.0
             ex, ey, _ek, en = this._external
             if servos:
                 servo(st)
