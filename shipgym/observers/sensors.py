@@ -75,6 +75,7 @@ __all__ = [
 TOMERA2011_HEADING_VARIANCE = 0.1 * (math.pi / 180.0) ** 2
 
 _EPS_T = 1e-9  # relative tolerance on sample instants (s / period)
+_BLOCK = 256  # samples drawn at once by Sensors (the same streams as one draw per sample)
 
 
 @dataclass(frozen=True)
@@ -295,6 +296,7 @@ class Sensors:
         self._rng_outlier: np.random.Generator | None = None
         self._rng_dropout: np.random.Generator | None = None
         self._dropout_until = -math.inf
+        self._k = _BLOCK
 
     def reset(self, rng: np.random.Generator | int) -> None:
         """Restart the random streams from a generator (or an integer seed).
@@ -310,6 +312,7 @@ class Sensors:
             )
         self._rng_noise, self._rng_outlier, self._rng_dropout = _streams(rng)
         self._dropout_until = -math.inf
+        self._k = _BLOCK  # next unused pre-drawn sample (_BLOCK: draw the next block)
 
     def sample_times(self, t0: float, t1: float) -> NDArray[np.float64]:
         """Sample instants ``k * period`` in ``(t0, t1]`` (s), ascending (may be empty)."""
@@ -331,30 +334,40 @@ class Sensors:
         if self._rng_noise is None or self._rng_outlier is None or self._rng_dropout is None:
             raise RuntimeError("Sensors.reset(rng) must be called before measure()")
         eta = np.asarray(eta_true, dtype=float)
-        if eta.shape != (3,) or not all(map(math.isfinite, eta.tolist())):
+        e = eta.tolist() if eta.shape == (3,) else None
+        if e is None or not all(map(math.isfinite, e)):
             raise ValueError(f"eta_true must be 3 finite values [x, y, psi], got {eta_true!r}")
         cfg = self.config
-        # every stream draws the same amount at every sample (common random numbers)
-        noise = self._rng_noise.standard_normal(3) * self._sig
-        u_out, ang = self._rng_outlier.random(2)
-        u_drop = self._rng_dropout.random()
+        # every stream draws the same amount at every sample (common random numbers); the
+        # draws are taken in blocks (a generator's standard_normal((k, 3)) is the stream of k
+        # calls of standard_normal(3), random((k, 2)) that of k calls of random(2))
+        k = self._k
+        if k == _BLOCK:
+            self._noise = (self._rng_noise.standard_normal((_BLOCK, 3)) * self._sig).tolist()
+            self._out = self._rng_outlier.random((_BLOCK, 2)).tolist()
+            self._drop = self._rng_dropout.random(_BLOCK).tolist()
+            k = 0
+        self._k = k + 1
+        n0, n1, n2 = self._noise[k]
+        u_out, ang = self._out[k]
+        u_drop = self._drop[k]
         t = float(t)
         if t < self._dropout_until - _EPS_T * cfg.period:
             return Measurement(t, None, False, False)
         if u_drop < cfg.dropout_probability:
             self._dropout_until = t + cfg.dropout_duration
             return Measurement(t, None, False, False)
-        psi = float(eta[2])
+        x, y, psi = e
         c, s = math.cos(psi), math.sin(psi)
         xa, ya = cfg.antenna_offset
-        z = np.array([eta[0] + c * xa - s * ya, eta[1] + s * xa + c * ya, psi]) + noise
-        outlier = bool(u_out < cfg.outlier_probability)
+        z0 = (x + c * xa - s * ya) + n0
+        z1 = (y + s * xa + c * ya) + n1
+        outlier = u_out < cfg.outlier_probability
         if outlier:
             a = 2.0 * math.pi * ang
-            z[0] += cfg.outlier_magnitude * math.cos(a)
-            z[1] += cfg.outlier_magnitude * math.sin(a)
-        z[2] = wrap_angle(float(z[2]))
-        return Measurement(t, z, True, outlier)
+            z0 += cfg.outlier_magnitude * math.cos(a)
+            z1 += cfg.outlier_magnitude * math.sin(a)
+        return Measurement(t, np.array([z0, z1, wrap_angle(psi + n2)]), True, outlier)
 
 
 class BatchedSensors:
