@@ -422,7 +422,8 @@ class VesselPhysics:
 
     def _qvel_whole(self) -> list[float]:
         """The joint velocity at the whole step (leapfrog, module docstring)."""
-        return (self.data.qvel + 0.5 * self._h * self.data.qacc).tolist()
+        hh = 0.5 * self._h  # plain floats: the same products and sums as the array form
+        return [w + hh * a for w, a in zip(self.data.qvel.tolist(), self.data.qacc.tolist())]
 
     @property
     def eta(self) -> NDArray[np.float64]:
@@ -440,7 +441,7 @@ class VesselPhysics:
         if self.dofs == 4:
             return self.nu_full[[0, 1, 3]]
         xd, yd, r = self._qvel_whole()
-        psi = self.data.qpos[2]
+        psi = self.data.qpos.tolist()[2]
         c, s = math.cos(psi), math.sin(psi)
         return np.array([c * xd + s * yd, -s * xd + c * yd, r])
 
@@ -497,7 +498,11 @@ class VesselPhysics:
         current velocity through the water (the current of the last physics step)."""
         if self._flow_of is None:
             return 0.0, 0.0, 0.0, 0.0
-        u, v, p, r = self.nu_full.tolist() if self.dofs == 4 else (*self.nu[:2], 0.0, self.nu[2])
+        if self.dofs == 4:
+            u, v, p, r = self.nu_full.tolist()
+        else:
+            u, v, r = self.nu.tolist()
+            p = 0.0
         uc, vc = self._loads[6], self._loads[7]
         X, Y, K, N, _l, _s = self._flow_of(st, u - uc, v - vc, p, r)
         return X, Y, K, N
@@ -506,7 +511,12 @@ class VesselPhysics:
     def tau_thrusters(self) -> NDArray[np.float64]:
         """Body-frame actuator force ``[X, Y, N]`` (N, N, N m) at the current actuator states
         (rudders at the current flow)."""
-        return self.tau_actuators[[0, 1, 3]]
+        st = self.data.act.tolist()
+        X, Y, _K, N, _ = self._tau_of(st)
+        if self._flow_of is None:
+            return np.array([X, Y, N])
+        fx, fy, _fk, fn = self._flow_now(st)
+        return np.array([X + fx, Y + fy, N + fn])
 
     @property
     def tau_actuators(self) -> NDArray[np.float64]:
