@@ -882,22 +882,24 @@ class Wind(GridPair):
         if self._spectral:
             self._extend_spectral(j, rng)
             return
+        from scipy.signal import lfilter
+
         while len(self._chunks) <= j:
-            w = rng.standard_normal((2, CHUNK)).tolist()
-            rows = []
+            w = rng.standard_normal((2, CHUNK))
+            rows = np.empty((2, CHUNK + 1))
             new_state = []
-            for x, a, b, m, wk in zip(
-                self._state, self._a, self._b, (self._mean_v, self._mean_b), w, strict=True
+            for r, (x, a, b, m) in enumerate(
+                zip(self._state, self._a, self._b, (self._mean_v, self._mean_b), strict=True)
             ):
-                out = [m + x]
-                app = out.append
-                for e in wk:
-                    x = a * x + b * e
-                    app(m + x)
-                rows.append(out)
-                new_state.append(x)
+                # x_{k+1} = a x_k + b e_k as a first-order filter (y_k = b e_k + a y_{k-1}: the
+                # same products and sum as the loop it replaces, so the same floats)
+                y = lfilter([b], [1.0, -a], w[r], zi=[a * x])[0]
+                rows[r, 0] = x
+                rows[r, 1:] = y
+                rows[r] += m
+                new_state.append(float(y[-1]))
             self._state = (new_state[0], new_state[1])
-            self._chunks.append(np.array(rows, dtype=float))
+            self._chunks.append(rows)
 
     def _extend_spectral(self, j: int, rng: np.random.Generator) -> None:
         """Chunks of a spectral speed gust (harmonic sum) and a Gauss-Markov direction gust."""
