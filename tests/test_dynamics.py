@@ -34,6 +34,29 @@ def test_wrap_angle_interval_and_batch():
     assert isinstance(wrap_angle(1.0), float)
 
 
+def test_wrap_angle_numpy_scalar_is_the_array_formula_bitwise():
+    """A NumPy float64 takes a plain-float path that must give exactly the array formula
+    ``pi - mod(pi - a, 2 pi)`` (NumPy's remainder), not the Python-float formula (which
+    differs in the last bit for many angles)."""
+    rng = np.random.default_rng(3)
+    k = np.arange(-40, 41)
+    a = np.concatenate([
+        rng.uniform(-10.0, 10.0, 20000), rng.uniform(-1e6, 1e6, 2000),
+        rng.normal(0.0, 1e-12, 500), k * np.pi, k * 2.0 * np.pi,
+        np.nextafter(k * np.pi, np.inf), np.nextafter(k * np.pi, -np.inf),
+        [0.0, -0.0, 5e-324, -5e-324, 1e300, -1e300],
+    ])  # fmt: skip
+    ref = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+    got = np.array([wrap_angle(x) for x in a])  # iterating an array gives np.float64
+    assert all(type(wrap_angle(x)) is float for x in a[:10])
+    assert np.array_equal(got, ref) and np.array_equal(np.signbit(got), np.signbit(ref))
+    # the Python-float formula differs for some of these angles: the fast path is not it
+    plain = np.array([wrap_angle(float(x)) for x in a])
+    assert not np.array_equal(plain, ref)
+    with np.errstate(invalid="ignore"):  # non-finite angles take the array path (NaN)
+        assert all(np.isnan(wrap_angle(np.float64(x))) for x in (np.inf, np.nan))
+
+
 def test_rot_is_orthonormal_and_batched():
     psi = np.linspace(-4, 4, 7).reshape(7)
     R = rot(psi)

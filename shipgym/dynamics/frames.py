@@ -25,6 +25,17 @@ def wrap_angle(angle: ArrayLike) -> NDArray[np.float64] | float:
     """
     if type(angle) is float or type(angle) is int:  # fast path for plain numbers
         return _PI - math.fmod(math.fmod(_PI - angle, _TWO_PI) + _TWO_PI, _TWO_PI)
+    if type(angle) is np.float64:  # the array formula below on one float, the same result
+        x = _PI - float(angle)
+        if math.isfinite(x):
+            # np.mod(x, 2 pi): fmod, moved into [0, 2 pi) as NumPy's npy_divmod moves it
+            m = math.fmod(x, _TWO_PI)
+            if m:
+                if m < 0.0:
+                    m += _TWO_PI
+            else:
+                m = 0.0
+            return _PI - m
     a = np.asarray(angle, dtype=float)
     w = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
     return float(w) if w.ndim == 0 else w
