@@ -262,8 +262,11 @@ class LegProfile:
         Each output has shape ``np.shape(t) + (3,)`` with units (m, m, rad), per second, per
         second squared.
         """
-        s, sd, sdd = self.path(t)
         d = self.displacement
+        if type(t) is float and not self.step:  # one instant (every control step): path()'s
+            s, sd, sdd = self._path_scalar(t - self.delay if self.delay else t)  # scalar path
+            return s * d, sd * d, sdd * d
+        s, sd, sdd = self.path(t)
         if np.ndim(s) == 0:
             return s * d, sd * d, sdd * d
         return s[..., None] * d, sd[..., None] * d, sdd[..., None] * d

@@ -48,7 +48,8 @@ def to_r_frame(
     """
     eta_n = np.asarray(eta_n, dtype=float)
     eta_P = np.asarray(eta_P, dtype=float)
-    if eta_n.shape == (3,) and eta_P.shape == (3,) and np.ndim(psi_ref_r) == 0:
+    scalar_ref = psi_ref_r is None or isinstance(psi_ref_r, float) or np.ndim(psi_ref_r) == 0
+    if eta_n.shape == (3,) and eta_P.shape == (3,) and scalar_ref:
         return _to_r_frame_one(eta_n, eta_P, psi_ref_r)  # fast path: one pose
     if eta_n.shape[-1:] != (3,) or eta_P.shape[-1:] != (3,):
         raise ValueError(

@@ -24,6 +24,7 @@ the last leg's end point.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -65,6 +66,24 @@ class Reference:
     t_leg: float = 0.0
     finished: bool = False
 
+    @functools.cached_property
+    def _nu_d(self) -> tuple[float, float, float]:
+        """:attr:`nu_d` as floats, computed once (the reference is immutable)."""
+        psi = self.eta_d_r.tolist()[2]
+        c, s = math.cos(psi), math.sin(psi)
+        v0, v1, v2 = self.eta_dot_d_r.tolist()
+        return (c * v0 + s * v1, -s * v0 + c * v1, v2)
+
+    @functools.cached_property
+    def _nu_dot_d(self) -> tuple[float, float, float]:
+        """:attr:`nu_dot_d` as floats, computed once."""
+        psi = self.eta_d_r.tolist()[2]
+        c, s = math.cos(psi), math.sin(psi)
+        a0, a1, a2 = self.eta_ddot_d_r.tolist()
+        r = self.eta_dot_d_r.tolist()[2]
+        nu0, nu1, _ = self._nu_d
+        return (c * a0 + s * a1 + r * nu1, -s * a0 + c * a1 - r * nu0, a2)
+
     @property
     def eta_dot_d_n(self) -> NDArray[np.float64]:
         """Desired NED velocity ``[x_dot, y_dot, psi_dot]``: ``R(psi_P) eta_dot_d^r``."""
@@ -75,9 +94,7 @@ class Reference:
     @property
     def nu_d(self) -> NDArray[np.float64]:
         """Desired body-frame velocity ``[u, v, r]``: ``R(psi_d^r)^T eta_dot_d^r`` (m/s, rad/s)."""
-        c, s = math.cos(self.eta_d_r[2]), math.sin(self.eta_d_r[2])
-        v = self.eta_dot_d_r
-        return np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1], v[2]])
+        return np.array(self._nu_d)
 
     @property
     def nu_dot_d(self) -> NDArray[np.float64]:
@@ -85,11 +102,7 @@ class Reference:
 
         ``S(r) = [[0, -r, 0], [r, 0, 0], [0, 0, 0]]`` (Fossen 2011, eq. 2.62 differentiated).
         """
-        c, s = math.cos(self.eta_d_r[2]), math.sin(self.eta_d_r[2])
-        a = self.eta_ddot_d_r
-        r = float(self.eta_dot_d_r[2])
-        nu = self.nu_d
-        return np.array([c * a[0] + s * a[1] + r * nu[1], -s * a[0] + c * a[1] - r * nu[0], a[2]])
+        return np.array(self._nu_dot_d)
 
     def to_r(self, eta_n: ArrayLike) -> NDArray[np.float64]:
         """A NED pose (or poses, (..., 3)) in this leg's r-frame, heading unwrapped near psi_d^r.
@@ -233,14 +246,16 @@ class Guidance:
             heading error to K below ``switch_heading``, and the leg's elapsed time at least
             ``switch_min_progress`` times its reference duration.
         """
-        wp = self._require_reset()
+        self._require_reset()
         eta = np.asarray(eta_n, dtype=float)
-        if eta.shape != (3,) or not np.all(np.isfinite(eta)):
+        e = eta.tolist() if eta.shape == (3,) else None
+        if e is None or not all(map(math.isfinite, e)):
             raise ValueError(f"eta_n must be a finite [x, y, psi] (m, m, rad), got {eta!r}")
         i = self._leg
-        K = wp[i + 1]
-        dist = math.hypot(eta[0] - K[0], eta[1] - K[1])
-        head = abs(float(wrap_angle(eta[2] - K[2])))
+        kx, ky, kpsi = self._wp_list[i + 1]
+        dist = math.hypot(e[0] - kx, e[1] - ky)
+        # np.float64: wrap_angle's array formula, as for the array elements this once took
+        head = abs(wrap_angle(np.float64(e[2] - kpsi)))
         t_leg = float(t) - self._starts[i]
         need = self.plan.switch_min_progress * self._profiles[i].total_duration
         return (
