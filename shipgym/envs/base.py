@@ -321,6 +321,8 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         )
         self.actuators = self.vessel.actuators
         self.n_actions = self.actuators.n_channels
+        # (lower, upper, lower + tol, upper - tol) of the saturation test in step()
+        self._sat_bounds: tuple[NDArray[np.float64], ...] | None = None
         self._actuator_names = self.actuators.names
         multi = self.actuators.channel_names != self.actuators.names
         self._channel_names = self.actuators.channel_names if multi else ()
@@ -436,15 +438,20 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 "the episode has ended (terminated) or was never started: call reset() before "
                 "step()"
             )
-        a, _ = self.actuators.as_vector(action, "action")
-        clipped = np.clip(a, -1.0, 1.0)
-        action_clipped = clipped != a
+        a, vals = self.actuators.as_vector(action, "action")
+        # np.clip(a, -1, 1) and its flags in plain floats (the same values)
+        cl = [min(max(v, -1.0), 1.0) for v in vals]
+        clipped = np.array(cl)
+        action_clipped = np.array([c != v for c, v in zip(cl, vals, strict=True)])
         command = self.actuators.action_to_command(clipped)
         clipped_cmd = self.physics.set_command(command)
         # an actuator is saturated when its command sits at a limit of its range
         lo, hi = self.actuators.lower, self.actuators.upper
-        tol = 1e-9 * (hi - lo)
-        saturated = clipped_cmd | (command <= lo + tol) | (command >= hi - tol)
+        if self._sat_bounds is None or self._sat_bounds[0] is not lo or self._sat_bounds[1] is not hi:
+            tol = 1e-9 * (hi - lo)
+            self._sat_bounds = (lo, hi, lo + tol, hi - tol)
+        _, _, lo_tol, hi_tol = self._sat_bounds
+        saturated = clipped_cmd | (command <= lo_tol) | (command >= hi_tol)
         phys = self.physics
         measurements = self._advance(self.n_substeps)
         contacts = phys.contacts() if phys.data.ncon else []
@@ -574,15 +581,22 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         c, s = math.cos(psi), math.sin(psi)
         dx, dy = x - xd, y - yd
         e = [c * dx + s * dy, -s * dx + c * dy, wrap_angle(psi - psid)]
-        parts = (nu, ref.nu_d, ref.nu_dot_d, prev_action)
-        return np.array(e + [v for p in parts for v in p.tolist()], dtype=np.float32)
+        if isinstance(ref, Reference):  # its velocities as floats, computed once per reference
+            vel = [*ref._nu_d, *ref._nu_dot_d]
+        else:
+            vel = ref.nu_d.tolist() + ref.nu_dot_d.tolist()
+        return np.array(e + nu.tolist() + vel + prev_action.tolist(), dtype=np.float32)
 
     def _reward_terms(
         self, s: _Sample, action: NDArray[np.float64], new_contact: bool, switched: bool
     ) -> dict[str, float]:
         w = self.reward_weights
-        ex, ey, epsi = (s.eta_r - s.ref.eta_d_r).tolist()
-        du, dv, dr = (s.nu - s.ref.nu_d).tolist()
+        x, y, psi = s.eta_r.tolist()
+        xd, yd, psid = s.ref.eta_d_r.tolist()
+        ex, ey, epsi = x - xd, y - yd, psi - psid
+        u, v, r = s.nu.tolist()
+        ud, vd, rd = s.ref._nu_d
+        du, dv, dr = u - ud, v - vd, r - rd
         act = action.tolist()
         prev = self._prev_action.tolist()
         # sums from 0 in channel order: for three channels exactly a0^2 + a1^2 + a2^2
