@@ -138,6 +138,16 @@ def _dt_key(dt: float) -> float:
 
 def _inv2(M: NDArray[np.float64]) -> NDArray[np.float64]:
     """Inverses of a stack of 2x2 matrices, (k, 2, 2)."""
+    if M.shape == (3, 2, 2):  # the three DOFs in plain floats: the same operations
+        out3 = []
+        try:
+            for (a, b), (c, d) in M.tolist():
+                det = a * d - b * c
+                out3.append([[d / det, -b / det], [-c / det, a / det]])
+        except ZeroDivisionError:  # a singular block: the array form's inf / nan
+            pass
+        else:
+            return np.array(out3)
     a, b, c, d = M[:, 0, 0], M[:, 0, 1], M[:, 1, 0], M[:, 1, 1]
     det = a * d - b * c
     out = np.empty_like(M)
@@ -293,16 +303,15 @@ class _DoubleIntegratorFilter(Observer):
         """The current estimate (copies); ``P`` in ``[x, y, psi, x_dot, y_dot, psi_dot]``."""
         if self._t is None:
             raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
-        eta = self._s[:, 1].copy()
-        ed = self._s[:, 0]
-        c, s = math.cos(eta[2]), math.sin(eta[2])
-        u = c * ed[0] + s * ed[1]
-        v = -s * ed[0] + c * ed[1]
-        nu = np.array([u, v, ed[2]])
+        (xd, x), (yd, y), (psid, psi) = self._s.tolist()  # per DOF [velocity, position]
+        eta = np.array([x, y, psi])
+        c, s = math.cos(psi), math.sin(psi)
+        u = c * xd + s * yd
+        v = -s * xd + c * yd
+        nu = np.array([u, v, psid])
         P6 = self.P
-        J = np.zeros((3, 6))
-        J[0, 2], J[1, 2] = v, -u
-        J[0, 3], J[0, 4], J[1, 3], J[1, 4], J[2, 5] = c, s, -s, c, 1.0
+        J = np.array([[0.0, 0.0, v, c, s, 0.0], [0.0, 0.0, -u, -s, c, 0.0],
+                      [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])  # fmt: skip
         P_nu = J @ P6 @ J.T
         return Estimate(
             t=self._t,
@@ -322,12 +331,18 @@ class _DoubleIntegratorFilter(Observer):
     @property
     def P(self) -> NDArray[np.float64]:
         """A copy of the (6, 6) covariance of :attr:`x`."""
-        P6 = np.zeros((6, 6))
-        i = np.arange(3)
-        P6[i, i] = self._P[:, 1, 1]
-        P6[i + 3, i + 3] = self._P[:, 0, 0]
-        P6[i, i + 3] = P6[i + 3, i] = self._P[:, 0, 1]
-        return P6
+        # per DOF [[vel-vel, vel-pos], [pos-vel, pos-pos]] (the upper off-diagonal is used)
+        ((xv, xc), (_, xx)), ((yv, yc), (_, yy)), ((pv, pc), (_, pp)) = self._P.tolist()
+        return np.array(
+            [
+                [xx, 0.0, 0.0, xc, 0.0, 0.0],
+                [0.0, yy, 0.0, 0.0, yc, 0.0],
+                [0.0, 0.0, pp, 0.0, 0.0, pc],
+                [xc, 0.0, 0.0, xv, 0.0, 0.0],
+                [0.0, yc, 0.0, 0.0, yv, 0.0],
+                [0.0, 0.0, pc, 0.0, 0.0, pv],
+            ]
+        )
 
     @property
     def t(self) -> float | None:
@@ -343,17 +358,15 @@ class _DoubleIntegratorFilter(Observer):
 
     def _prior(self, dt: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Open-loop prediction ``(F s, F P F^T + Q_k)`` over ``dt`` > 0."""
-        Q = self._cached("Q", dt, lambda: self._process_noise(dt))
-        s = self._s
-        s_bar = np.empty_like(s)
-        s_bar[:, 0] = s[:, 0]
-        s_bar[:, 1] = s[:, 1] + dt * s[:, 0]
-        P = self._P
-        P_bar = np.empty_like(P)
-        P_bar[:, 0, 0] = P[:, 0, 0]
-        P_bar[:, 0, 1] = P_bar[:, 1, 0] = P[:, 0, 1] + dt * P[:, 0, 0]
-        P_bar[:, 1, 1] = P[:, 1, 1] + 2.0 * dt * P[:, 0, 1] + dt * dt * P[:, 0, 0]
-        return s_bar, P_bar + Q
+        Q = self._cached("Q", dt, lambda: self._process_noise(dt)).tolist()
+        # per DOF in plain floats, the same operations as the array form
+        s_bar = [[v, p + dt * v] for v, p in self._s.tolist()]
+        dt2, dtdt = 2.0 * dt, dt * dt
+        P_bar = []
+        for ((a, b), (_, d)), ((q00, q01), (q10, q11)) in zip(self._P.tolist(), Q, strict=True):
+            c = b + dt * a  # the prior's off-diagonal (the upper one of P)
+            P_bar.append([[a + q00, c + q01], [c + q10, d + dt2 * b + dtdt * a + q11]])
+        return np.array(s_bar), np.array(P_bar)
 
     def _process_noise(self, dt: float) -> NDArray[np.float64]:
         return np.stack([discretise(_A, W, dt, method="exact")[1] for W in self._W])
@@ -534,15 +547,19 @@ class KalmanBucyFilter(_DoubleIntegratorFilter):
             self._s = (Phi @ s0[:, :, None])[:, :, 0] + B1 * y0[:, None] + B2 * slope[:, None]
             self._P = _sym(Phi @ P0 @ Phi.transpose(0, 2, 1) + Qcl)
         else:
-            E, I1, I2 = self._cached("tv", dt, lambda: self._hamiltonian_blocks(dt))
-            X = E[:, :2, :2] + E[:, :2, 2:] @ P0
-            Y = E[:, 2:, :2] + E[:, 2:, 2:] @ P0
-            J0 = I1[:, 3, :2] + (I1[:, 3:4, 2:] @ P0)[:, 0, :]  # row "position" of int Y
-            J1 = I2[:, 3, :2] + (I2[:, 3:4, 2:] @ P0)[:, 0, :]  # row "position" of int s Y
+            E11, E21, I1r, I2r, B = self._cached("tvb", dt, lambda: self._tv_blocks(dt))
+            # the products with P0 in one matmul: rows [E12; E22; I1[3, 2:]; I2[3, 2:]] @ P0
+            EP = B @ P0
+            X = E11 + EP[:, 0:2]
+            Y = E21 + EP[:, 2:4]
+            J0 = I1r + EP[:, 4]  # row "position" of int Y
+            J1 = I2r + EP[:, 5]  # row "position" of int s Y
             Xi = _inv2(X)
             rhs = s0 + (J0 * y0[:, None] + J1 * slope[:, None]) / self._Rc[:, None]
-            self._s = (rhs[:, None, :] @ Xi)[:, 0, :]  # X^-T rhs
-            self._P = _sym(Y @ Xi)
+            # X^-T rhs and Y X^-1 in one matmul: rows [rhs; Y] @ X^-1
+            RY = np.concatenate([rhs[:, None, :], Y], axis=1) @ Xi
+            self._s = RY[:, 0, :]
+            self._P = _sym(RY[:, 1:, :])
         self._y_prev = y1
 
     def _steady_blocks(self, dt: float) -> tuple[NDArray[np.float64], ...]:
@@ -562,6 +579,15 @@ class KalmanBucyFilter(_DoubleIntegratorFilter):
             Wcl = self._W[i] + self._Rc[i] * (L @ L.T)
             Qcl.append(discretise(Acl, Wcl, dt, method="exact")[1])
         return np.stack(Phi), np.stack(B1), np.stack(B2), np.stack(Qcl)
+
+    def _tv_blocks(self, dt: float) -> tuple[NDArray[np.float64], ...]:
+        """The blocks of :meth:`_hamiltonian_blocks` the update uses: ``E11``, ``E21`` and the
+        position rows of the integrals' left blocks (contiguous), and their right blocks
+        stacked, ``[E12; E22; I1[3, :2]; I2[3, :2]]`` (3, 6, 2), for one product with P."""
+        E, I1, I2 = self._cached("tv", dt, lambda: self._hamiltonian_blocks(dt))
+        stacked = np.concatenate([E[:, :, 2:], I1[:, 3:4, 2:], I2[:, 3:4, 2:]], axis=1)
+        return (E[:, :2, :2].copy(), E[:, 2:, :2].copy(), I1[:, 3, :2].copy(),
+                I2[:, 3, :2].copy(), stacked)  # fmt: skip
 
     def _hamiltonian_blocks(self, dt: float) -> tuple[NDArray[np.float64], ...]:
         """``exp(H dt)``, ``int_0^dt exp(H s) ds`` and ``int_0^dt s exp(H s) ds`` per DOF."""
