@@ -309,6 +309,11 @@ def _vec3(x: ArrayLike, name: str) -> Vec3:
         if x.shape != (3,):
             raise ValueError(f"{name} must have shape (3,), got an array of shape {x.shape}")
         vals = x.tolist()
+        if x.dtype == np.float64:  # already three Python floats (the per-step case)
+            a, b, c = vals
+            if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
+                raise ValueError(f"{name} contains NaN or infinite values: {x!r}")
+            return a, b, c
     else:
         try:
             vals = list(x)  # type: ignore[arg-type]
@@ -317,7 +322,7 @@ def _vec3(x: ArrayLike, name: str) -> Vec3:
         if len(vals) != 3:
             raise ValueError(f"{name} must have 3 entries, got {len(vals)}: {x!r}")
     try:
-        a, b, c = (float(v) for v in vals)
+        a, b, c = map(float, vals)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must contain 3 real numbers, got {x!r}") from None
     if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
