@@ -437,8 +437,8 @@ class WindLoad:
         """``f(psi, u, v, V_w, beta_w) -> (X, Y, N)`` for plain floats: :meth:`__call__`
         without its argument conversion (the physics step, whose inputs are floats).
 
-        The formulas of :func:`_loads` written out in one closure with the constants bound (a
-        third of the time of the shared float/array form): the same operations in the same
+        The formulas of :func:`_loads` written out in one closure with the constants bound
+        (about half the time of the shared float/array form): the same operations in the same
         order, so the same floats.
         """
         cd_t, cd_pi, cd_jump, half_delta, ratio, arm0, kx, ky, kn = self._k

@@ -447,10 +447,11 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         clipped_cmd = self.physics.set_command(command)
         # an actuator is saturated when its command sits at a limit of its range
         lo, hi = self.actuators.lower, self.actuators.upper
-        if self._sat_bounds is None or self._sat_bounds[0] is not lo or self._sat_bounds[1] is not hi:
+        bounds = self._sat_bounds
+        if bounds is None or bounds[0] is not lo or bounds[1] is not hi:
             tol = 1e-9 * (hi - lo)
-            self._sat_bounds = (lo, hi, lo + tol, hi - tol)
-        _, _, lo_tol, hi_tol = self._sat_bounds
+            bounds = self._sat_bounds = (lo, hi, lo + tol, hi - tol)
+        lo_tol, hi_tol = bounds[2], bounds[3]
         saturated = clipped_cmd | (command <= lo_tol) | (command >= hi_tol)
         phys = self.physics
         measurements = self._advance(self.n_substeps)

@@ -423,7 +423,8 @@ class VesselPhysics:
     def _qvel_whole(self) -> list[float]:
         """The joint velocity at the whole step (leapfrog, module docstring)."""
         hh = 0.5 * self._h  # plain floats: the same products and sums as the array form
-        return [w + hh * a for w, a in zip(self.data.qvel.tolist(), self.data.qacc.tolist())]
+        qvel, qacc = self.data.qvel.tolist(), self.data.qacc.tolist()
+        return [w + hh * a for w, a in zip(qvel, qacc, strict=True)]
 
     @property
     def eta(self) -> NDArray[np.float64]:
