@@ -250,6 +250,48 @@ def test_seeding_reproducible_and_common_random_numbers():
     np.testing.assert_array_equal(np.array([faulty[i].z for i in same]), np.array(a)[same])
 
 
+def test_block_draws_are_one_draw_per_sample():
+    """Sensors draws its streams in blocks; every sample must be what one draw per sample
+    from the same three streams gives (written out here, across several block ends, with
+    outliers, dropouts and an antenna offset)."""
+    from shipgym.dynamics import wrap_angle
+    from shipgym.observers.sensors import _streams
+
+    cfg = SensorConfig(outlier_probability=0.1, dropout_probability=0.02,
+                       antenna_offset=(1.5, -0.4))  # fmt: skip
+    s = Sensors(cfg)
+    s.reset(np.random.default_rng(21))
+    noise, outl, drop = _streams(np.random.default_rng(21))
+    sig = np.array([cfg.position_sigma, cfg.position_sigma, cfg.heading_sigma])
+    until = -math.inf
+    kinds = {"valid": 0, "outlier": 0, "dropout": 0}
+    for k in range(900):
+        t = float(k + 1) * cfg.period
+        eta = (0.01 * k, -0.02 * k, 0.003 * k - 1.0)
+        m = s.measure(t, eta)
+        n = noise.standard_normal(3) * sig
+        u_out, ang = outl.random(2)
+        u_drop = drop.random()
+        if t < until - 1e-9 * cfg.period or u_drop < cfg.dropout_probability:
+            if not t < until - 1e-9 * cfg.period:
+                until = t + cfg.dropout_duration
+            assert m.z is None and not m.valid
+            kinds["dropout"] += 1
+            continue
+        c, sn = math.cos(eta[2]), math.sin(eta[2])
+        xa, ya = cfg.antenna_offset
+        z = np.array([eta[0] + c * xa - sn * ya, eta[1] + sn * xa + c * ya, eta[2]]) + n
+        out = u_out < cfg.outlier_probability
+        if out:
+            z[0] += cfg.outlier_magnitude * math.cos(2.0 * math.pi * ang)
+            z[1] += cfg.outlier_magnitude * math.sin(2.0 * math.pi * ang)
+        z[2] = wrap_angle(float(z[2]))
+        np.testing.assert_array_equal(m.z, z)
+        assert m.valid and m.outlier == out and type(m.outlier) is bool
+        kinds["outlier" if out else "valid"] += 1
+    assert min(kinds.values()) > 10, kinds  # every branch, over three block ends
+
+
 def test_batched_sensors_measure_what_each_env_s_sensors_measure():
     """Four envs, each seeded as a Sensors of its own, with noise, outliers, dropouts and an
     antenna offset; block refills every 7 samples: the same flags, the same fixes (to

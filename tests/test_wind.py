@@ -201,6 +201,16 @@ def test_scalar_path_equals_array_path(
     np.testing.assert_allclose(scalar, wl.array(psi, u, v, V, beta), rtol=1e-12, atol=1e-10)
     # NumPy scalars are accepted on the hot path as well.
     assert wl(np.float64(psi), u, v, V, np.float64(beta)) == scalar
+    # the physics step's written-out kernel gives the same floats as the shared float path
+    assert wl.kernel()(psi, u, v, V, beta) == scalar
+    assert wl.kernel()(psi, u, v, 0.0, beta) == wl(psi, u, v, 0.0, beta)
+
+
+def test_kernel_at_zero_relative_wind_and_at_pi() -> None:
+    k = WL.kernel()
+    assert k(0.3, 0.0, 0.0, 0.0, 1.0) == WL(0.3, 0.0, 0.0, 0.0, 1.0) == (0.0, 0.0, 0.0)
+    for beta in (PI, 0.0, -PI / 2, PI / 2, 1e-300):  # following, head, beam winds
+        assert k(0.0, 0.0, 0.0, 4.0, beta) == WL(0.0, 0.0, 0.0, 4.0, beta)
 
 
 # --------------------------------------------------------------------------------------------
@@ -335,6 +345,40 @@ def test_realisation_independent_of_query_order() -> None:
     # series() gives exactly the values of at().
     V, beta = w2.series(np.array(ts))
     assert list(zip(V.tolist(), beta.tolist(), strict=True)) == in_order
+
+
+def test_gust_chunks_are_the_gauss_markov_recursion() -> None:
+    """Each chunk of a Gauss-Markov gust is ``x_{k+1} = a x_k + b e_k`` from the wind's child
+    stream (written out here as the loop, compared bit for bit over two chunks), and
+    ``at_kernel`` reads the same values as ``at``."""
+    from shipgym.disturbances._grid import CHUNK
+
+    cfg = WindConfig(speed=3.0, direction_from=1.0, gust_std=0.6, direction_std=0.2)
+    w = Wind(cfg, windage=BLUE_LADY_WINDAGE)
+    w.reset(np.random.default_rng(5))
+    w._extend_to(1)
+    child = np.random.default_rng(int(np.random.default_rng(5).integers(2**63)))
+    z = child.standard_normal(2)
+    state = [w._sigma[0] * float(z[0]), w._sigma[1] * float(z[1])]
+    for j in range(2):
+        e = child.standard_normal((2, CHUNK)).tolist()
+        for r, mean in enumerate((cfg.speed, cfg.direction_from)):
+            x, a, b = state[r], w._a[r], w._b[r]
+            row = [mean + x]
+            for ek in e[r]:
+                x = a * x + b * ek
+                row.append(mean + x)
+            state[r] = x
+            assert w._chunks[j][r].tolist() == row
+    assert list(w._state) == state
+    at = w.at_kernel()
+    ts = [0.0371 * i for i in range(30000)]  # across the chunk boundary at 409.6 s
+    assert [at(t) for t in ts] == [w.at(t) for t in ts]
+    steady = WindConfig(speed=2.0, direction_from=0.5, gust_std=0.0, direction_std=0.0)
+    calm = Wind(steady, windage=BLUE_LADY_WINDAGE)
+    assert calm.at_kernel()(12.0) == calm.at(12.0) == (2.0, 0.5)
+    with pytest.raises(ValueError, match="time must be >= 0"):
+        at(-1.0)
 
 
 def test_speed_clipped_at_zero_and_load_uses_gusts() -> None:
