@@ -182,6 +182,32 @@ def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[
     mxg = m * p.x_g
     xg = p.x_g
 
+    if cor == 1.0:  # the Coriolis terms on: the products with cor = 1 (exact) left out
+        mc = p.m
+
+        def accel_c(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
+            ur = u - u_c
+            vr = v - v_c
+            fx = X - (d11 * ur + d12 * vr + d13 * r + q1 * abs(ur) * ur)
+            fy = Y - (d21 * ur + d22 * vr + d23 * r + q2 * abs(vr) * vr)
+            fn = N - (d31 * ur + d32 * vr + d33 * r + q3 * abs(r) * r)
+            w = a22 * vr + a23s * r
+            a11u = a11 * ur
+            fx += mc * (xg * r + v) * r + w * r
+            fy -= mc * u * r + a11u * r
+            fn -= mxg * r * u + w * ur - a11u * vr
+            ay = -r * u_c
+            fx += a11 * (r * v_c)
+            fy += a22 * ay
+            fn += a32 * ay
+            return (
+                i11 * fx + i12 * fy + i13 * fn,
+                i21 * fx + i22 * fy + i23 * fn,
+                i31 * fx + i32 * fy + i33 * fn,
+            )
+
+        return accel_c
+
     def accel(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
         ur = u - u_c
         vr = v - v_c
