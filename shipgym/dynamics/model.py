@@ -177,36 +177,13 @@ def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[
     (d11, d12, d13), (d21, d22, d23), (d31, d32, d33) = p.D_L
     q1, q2, q3 = p.d_quad
     (i11, i12, i13), (i21, i22, i23), (i31, i32, i33) = (tuple(map(float, r)) for r in Mi)
+    # the Coriolis coefficients (zero when the terms are off: products with a switch of 1 left
+    # out, so that the usual case costs nothing)
     cor = 1.0 if p.coriolis else 0.0
     m = p.m * cor
     mxg = m * p.x_g
     xg = p.x_g
-
-    if cor == 1.0:  # the Coriolis terms on: the products with cor = 1 (exact) left out
-        mc = p.m
-
-        def accel_c(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
-            ur = u - u_c
-            vr = v - v_c
-            fx = X - (d11 * ur + d12 * vr + d13 * r + q1 * abs(ur) * ur)
-            fy = Y - (d21 * ur + d22 * vr + d23 * r + q2 * abs(vr) * vr)
-            fn = N - (d31 * ur + d32 * vr + d33 * r + q3 * abs(r) * r)
-            w = a22 * vr + a23s * r
-            a11u = a11 * ur
-            fx += mc * (xg * r + v) * r + w * r
-            fy -= mc * u * r + a11u * r
-            fn -= mxg * r * u + w * ur - a11u * vr
-            ay = -r * u_c
-            fx += a11 * (r * v_c)
-            fy += a22 * ay
-            fn += a32 * ay
-            return (
-                i11 * fx + i12 * fy + i13 * fn,
-                i21 * fx + i22 * fy + i23 * fn,
-                i31 * fx + i32 * fy + i33 * fn,
-            )
-
-        return accel_c
+    a22c, a23c, a11c = a22 * cor, a23s * cor, a11 * cor
 
     def accel(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
         ur = u - u_c
@@ -216,15 +193,14 @@ def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[
         fy = Y - (d21 * ur + d22 * vr + d23 * r + q2 * abs(vr) * vr)
         fn = N - (d31 * ur + d32 * vr + d33 * r + q3 * abs(r) * r)
         # Coriolis-centripetal C_RB(nu) nu + C_A(nu_r) nu_r
-        w = (a22 * vr + a23s * r) * cor
-        a11u = a11 * ur * cor
+        w = a22c * vr + a23c * r
+        a11u = a11c * ur
         fx += m * (xg * r + v) * r + w * r
         fy -= m * u * r + a11u * r
         fn -= mxg * r * u + w * ur - a11u * vr
         # + M_A nu_c_dot, nu_c_dot = [r v_c, -r u_c, 0]
-        ax = r * v_c
         ay = -r * u_c
-        fx += a11 * ax
+        fx += a11 * (r * v_c)
         fy += a22 * ay
         fn += a32 * ay
         return (

@@ -704,22 +704,7 @@ class VesselPhysics:
             u = c * xd + s * yd
             v = c * yd - s * xd
             tx, ty, _k, tn, _mz = tau_of(st)
-            # loads() written out (one call less per step)
-            if aero:
-                vw, bw = wind_at(t)
-                wx, wy, wn = wind_load(psi, u, v, vw, bw)
-            else:
-                wx = wy = wn = 0.0
-            if current_at is not None:
-                vc, bc = current_at(t)
-                uc = vc * cos(bc - psi)
-                vcb = vc * sin(bc - psi)
-            else:
-                uc = vcb = 0.0
-            if drift is not None:
-                dx_, dy_, dn_ = drift(t, psi)
-            else:
-                dx_ = dy_ = dn_ = 0.0
+            wx, wy, wn, uc, vcb, dx_, dy_, dn_ = loads(t, psi, u, v)
             ex, ey, _ek, en = this._external
             if servos:
                 servo(st)
