@@ -45,6 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym.dynamics.vessel import Vessel, load_vessel
 
 from .actuation import fixed3_parameters, make_allocator
+from .allocation.fixed3 import _force_box
 from .pid import SATURATION_TOL, MultivariablePID, PIDGains, vessel_pid
 
 __all__ = [
@@ -493,14 +494,7 @@ class BatchedAllocation:
         self.thrusters = p
         self.n_channels = acts.n_channels
         self._p = p
-        self._box = (
-            -p.k1 * p.n_min * p.n_min,
-            p.k1 * p.n_max * p.n_max,
-            p.k2 * p.p_min,
-            p.k2 * p.p_max,
-            p.k3 * p.p_min,
-            p.k3 * p.p_max,
-        )
+        self._box = _force_box(p)
         lever = p.L2 + p.L3
         self._lever = lever
         self._wY, self._wN = wY, wN = 1.0, 10.0 / (lever * lever)  # default_weights
