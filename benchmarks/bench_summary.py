@@ -259,9 +259,11 @@ def _ppo_fps(env_id: str, repeats: int, n_envs: int = 32, n_steps: int = 32) -> 
     shipped hyperparameters and stack (KBF, PID residual), ``n_envs`` envs, ``n_steps``
     steps per rollout, one rollout and update per timing. ``None`` without the rl extra."""
     try:
+        import torch
         from stable_baselines3 import PPO
     except ImportError:
         return None
+    torch.set_num_threads(1)  # as shipgym train: small networks, one thread is fastest
     from shipgym.rl.train import _algo_kwargs, build_vec_env, load_hyperparams
 
     hp = dict(load_hyperparams("ppo", env_id, residual=True), n_steps=n_steps,
