@@ -106,6 +106,7 @@ class BatchedPhysics:
         self._lag, self._servo, self._integ = lag, servo, integ
         self._any_servo, self._any_integ = bool(servo.any()), bool(integ.any())
         self._bounded = (lag | servo)[col]
+        self._all_bounded = bool(self._bounded.all())
         tc = np.array([c.time_constant if c.dynamics == "lag" else 1.0 for c in chans])
         self._alpha = np.where(lag, 1.0 - np.exp(-self.h / tc), 0.0)[col]
         self._rate = np.array([c.rate if c.dynamics == "servo" else 0.0 for c in chans])[col]
@@ -293,8 +294,7 @@ class BatchedPhysics:
         self, q: Array, qv: Array, qa: Array, act: Array, Vw: Any, bw: Any, vc: Any, bc: Any
     ) -> Array:
         """``qacc*`` (3, n) of a state (steps 1-2 of the module docstring)."""
-        h = 0.5 * self.h
-        w0, w1, r = qv[0] + h * qa[0], qv[1] + h * qa[1], qv[2] + h * qa[2]
+        w0, w1, r = qv + (0.5 * self.h) * qa
         psi = q[2]
         c, s = np.cos(psi), np.sin(psi)
         u = c * w0 + s * w1
@@ -348,7 +348,8 @@ class BatchedPhysics:
                 new = np.where(self._servo[:, None], act + h * wr, new)
             if self._any_integ:
                 new = np.where(self._integ[:, None], act + h * cmd, new)
-            act = np.where(self._bounded, np.clip(new, lo, hi), new)
+            held = np.minimum(np.maximum(new, lo), hi)  # np.clip's values, without its wrapper
+            act = held if self._all_bounded else np.where(self._bounded, held, new)
             self._a = qa
             qv = qv + h * qa
             q = q + h * qv
