@@ -223,6 +223,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             self.observer = BatchedKalman(self.observer_name, n, vessel=self.vessel)
         self._nis = np.full(n, np.nan)
         self._rejected = np.zeros(n, bool)
+        self._cache: dict[str, Any] = {}  # this state's eta, nu (and estimate), read once
         self._ref: Any = None
         self._leg = np.zeros(n, dtype=np.int64)
         self._psi_P = np.zeros(n)
@@ -298,7 +299,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         saturated = held | (command <= self._lo_tol) | (command >= self._hi_tol)
         self._advance(active)
         t = self.physics.t
-        eta = self.physics.eta
+        eta = self._truth()[0]
         switched = self.guidance.update(t, eta)
         ref = self.guidance.reference(t)
         rewards = self._reward_terms(eta, ref, clipped, switched)
@@ -343,11 +344,20 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         return obs, reward, terminated, truncated, info
 
     # ---- internals ------------------------------------------------------------------------
+    def _truth(self) -> tuple[Array, Array]:
+        """The hulls' ``(eta, nu)`` now, read once per state (cached until the next physics
+        step, sample or reset)."""
+        if self._cache.get("truth") is None:
+            self._cache["truth"] = (self.physics.eta, self.physics.nu)
+        return self._cache["truth"]
+
     def _navigation(self) -> tuple[Array, Array]:
         """What the controller and the observation use: the estimate, else the truth."""
-        if self.observer is not None:
-            return self.observer.eta, self.observer.nu
-        return self.physics.eta, self.physics.nu
+        if self.observer is None:
+            return self._truth()
+        if self._cache.get("nav") is None:
+            self._cache["nav"] = (self.observer.eta, self.observer.nu)
+        return self._cache["nav"]
 
     def _control(self, residual: Array) -> tuple[Array, dict[str, Array]]:
         """The DP controller's action plus the residual, as the controller wrapper forms it
@@ -374,6 +384,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
 
     def _reset_envs(self, mask: NDArray[np.bool_]) -> None:
         """Reset the masked envs, each from its generator in the single env's order."""
+        self._cache.clear()
         tmpl = self.template
         idx = np.nonzero(mask)[0].tolist()
         start = tmpl.start_pose
@@ -412,6 +423,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         if self.observer is not None:  # from the first fix, or the leg's start in a dropout
             eta_start = np.where(self._z_valid[:, None], self._last_z, ref.eta_P)
             self.observer.reset(self.physics.t, eta_start, mask=mask)
+            self._cache.clear()
 
     def _sample(self, mask: NDArray[np.bool_], observe: bool = True) -> None:
         """A sensor sample of the masked envs now (the single env's ``_measure``), fed to the
@@ -420,6 +432,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         assert self.sensors is not None
         z, valid, outlier = self.sensors.measure(self.physics.t, self.physics.eta, mask)
         if observe and self.observer is not None:
+            self._cache.pop("nav", None)
             info = self.observer.step(self.physics.t, z, valid & mask)
             self._nis = info.nis
             self._rejected = info.rejected
@@ -443,6 +456,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             else:
                 k = min(left, int((every - self._steps[active] % every).min(initial=every)))
             self.physics.step(k)
+            self._cache.clear()
             self._steps += k
             left -= k
             if every is not None:
@@ -462,7 +476,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
     ) -> dict[str, Array]:
         w = self.template.reward_weights
         e = ref.to_r(eta) - ref.eta_d_r
-        dn = self.physics.nu - ref.nu_d
+        dn = self._truth()[1] - ref.nu_d
         prev = self._prev
         effort = np.zeros(self.num_envs)
         rate = np.zeros(self.num_envs)
@@ -492,7 +506,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
     ) -> dict[str, Any]:
         n, m = self.num_envs, self.n_actions
         g = self.guidance
-        eta, nu = self.physics.eta, self.physics.nu
+        eta, nu = self._truth()
         nav_eta, nav_nu = self._navigation()
         info: dict[str, Any] = {
             "t": self.physics.t.copy(),
