@@ -125,6 +125,8 @@ class GridBatch:
         self._valid = np.zeros(n, dtype=np.int64)  # samples held per env
         self._g0 = np.zeros((n, 2))
         self._g1 = np.zeros((n, 2))
+        self._offsets = self._rows * 2
+        self._any_varying = False
         for i in range(n):
             self.refresh(i)
 
@@ -140,6 +142,7 @@ class GridBatch:
             pad = width - self._g0.shape[1]
             self._g0 = np.concatenate([self._g0, np.repeat(self._g0[:, -1:], pad, 1)], 1)
             self._g1 = np.concatenate([self._g1, np.repeat(self._g1[:, -1:], pad, 1)], 1)
+        self._offsets = self._rows * self._g0.shape[1]
         self._g0[i, :width] = grid[0]
         self._g1[i, :width] = grid[1]
         self._g0[i, width:] = grid[0, -1]
@@ -152,13 +155,18 @@ class GridBatch:
         if p._const is not None:
             self._inv_dt[i] = 0.0
             self._store(i, np.array([[p._const[0]] * 2, [p._const[1]] * 2]))
+            self._any_varying = bool(self._inv_dt.any())
             return
         self._inv_dt[i] = p._inv_dt
         self._store(i, self._grid(i, 0))
+        self._any_varying = bool(self._inv_dt.any())
 
     def at(self, t: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Both channels at the times ``t`` (n,) (s, >= 0), one per env; or (k, n): k times per
         env (the steps of a control period, read at once)."""
+        if not self._any_varying:  # every process constant: a0 + f (a1 - a0) with a1 = a0
+            shape = np.shape(t)
+            return np.broadcast_to(self._g0[:, 0], shape), np.broadcast_to(self._g1[:, 0], shape)
         x = t * self._inv_dt
         k = x.astype(np.int64)  # x >= 0: int() truncation, as the scalar query
         last = k if k.ndim == 1 else k.max(axis=0)
@@ -166,6 +174,8 @@ class GridBatch:
         for i in over.tolist():  # a new chunk (rare): in time order, as the scalar query
             self._store(i, self._grid(i, int(last[i]) // CHUNK))
         f = x - k
-        r = self._rows
-        a0, b0 = self._g0[r, k], self._g1[r, k]
-        return a0 + f * (self._g0[r, k + 1] - a0), b0 + f * (self._g1[r, k + 1] - b0)
+        i = self._offsets + k  # flat indices into the (n, width) rows (faster than [rows, k])
+        g0, g1 = self._g0.ravel(), self._g1.ravel()
+        a0, b0 = g0.take(i), g1.take(i)
+        i += 1
+        return a0 + f * (g0.take(i) - a0), b0 + f * (g1.take(i) - b0)
