@@ -337,7 +337,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         if done.any():  # SAME_STEP: reset now, the last observation and info kept aside
             info["final_obs"] = np.where(done[:, None], obs, np.nan).astype(np.float32)
             info["_final_obs"] = done
-            info["final_info"] = {k: v for k, v in info.items() if not k.startswith("final")}
+            last = {k: v for k, v in info.items() if not k.lstrip("_").startswith("final")}
+            info["final_info"] = last
             info["_final_info"] = done
             self._reset_envs(done)
             obs = np.where(done[:, None], self._observation(), obs)
