@@ -24,10 +24,10 @@ What it prints:
    actions, the trajectories compared).
 
 jax is not a shipgym dependency: without it the script says so and exits 0. Run it in a venv
-of its own, e.g.::
+of its own, e.g. (from the repository root; ``.venv-jax`` is git-ignored like ``.venv``)::
 
-    python -m venv /tmp/jax-venv && /tmp/jax-venv/bin/pip install -r requirements/lock.txt jax
-    PYTHONPATH=. /tmp/jax-venv/bin/python benchmarks/bench_jax.py
+    python -m venv .venv-jax && .venv-jax/bin/pip install -r requirements/lock.txt jax
+    PYTHONPATH=. .venv-jax/bin/python benchmarks/bench_jax.py
 
 XLA's CPU backend may use several threads; ``--threads 1`` pins it to one (NumPy's elementwise
 ops are single-threaded), set before jax is imported.
