@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -754,6 +754,24 @@ def _check_timing(timestep: Any, control_period: Any) -> None:
             f"control_period / timestep = {control_period / timestep:.0f} physics steps per "
             f"control step, more than {MAX_SUBSTEPS}: use a larger timestep"
         )
+
+
+def rudder_action(
+    action: Any, shape: tuple[int, ...], rudders: Sequence[str]
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """A steering env's normalised rudder action: ``(clip(a, -1, 1), |a| > 1)``.
+
+    Raises:
+        ValueError: a wrong shape (naming the rudders) or NaN / infinite values.
+    """
+    a = np.asarray(action, dtype=float)
+    if a.shape != shape:
+        raise ValueError(
+            f"action must have shape {shape} (one per rudder: {', '.join(rudders)}), got {a.shape}"
+        )
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"action contains NaN or infinite values: {a}")
+    return np.clip(a, -1.0, 1.0), np.abs(a) > 1.0
 
 
 def _check_render_mode(render_mode: Any, metadata: Mapping[str, Any]) -> None:

@@ -40,7 +40,13 @@ from shipgym.observers.dgps import (
     velocity_outputs,
 )
 
-from .base import TopCameraRender, _check_render_mode, _check_timing, _whole_multiple
+from .base import (
+    TopCameraRender,
+    _check_render_mode,
+    _check_timing,
+    _whole_multiple,
+    rudder_action,
+)
 from .physics import VesselPhysics
 
 __all__ = [
@@ -428,17 +434,9 @@ class CourseKeepingEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.
         phys = self.physics
         if phys is None or self._receiver is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        a = np.asarray(action, dtype=float)
-        if a.shape != self.action_space.shape:
-            raise ValueError(
-                f"action must have shape {self.action_space.shape} (one per rudder: "
-                f"{', '.join(self.base_vessel.rudders)}), got {a.shape}"
-            )
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"action contains NaN or infinite values: {a}")
-        action_clipped = np.abs(a) > 1.0
+        a, action_clipped = rudder_action(action, self.action_space.shape, self.base_vessel.rudders)
         command = phys.command  # the shafts keep their command
-        command[self._rudder_idx] = np.clip(a, -1.0, 1.0) * self.max_angle
+        command[self._rudder_idx] = a * self.max_angle
         if self._props:  # hold the speed through the water: resistance + a 20 s speed loop
             u_r = float(phys.nu[0]) - float(phys.nu_c[0])
             for j, prop in self._props:

@@ -31,7 +31,13 @@ from shipgym.dynamics.vanderklugt import KDP_LAWS, VAN_DER_KLUGT, seed_vessel
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.observers.sway import R_SWAY, SwayVelocityKF, calm_water_intensities
 
-from .base import TopCameraRender, _check_render_mode, _check_timing, _whole_multiple
+from .base import (
+    TopCameraRender,
+    _check_render_mode,
+    _check_timing,
+    _whole_multiple,
+    rudder_action,
+)
 from .physics import VesselPhysics
 
 __all__ = [
@@ -434,16 +440,8 @@ class RudderRollEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.flo
         phys = self.physics
         if phys is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        a = np.asarray(action, dtype=float)
-        if a.shape != self.action_space.shape:
-            raise ValueError(
-                f"action must have shape {self.action_space.shape} (one per rudder: "
-                f"{', '.join(self.base_vessel.rudders)}), got {a.shape}"
-            )
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"action contains NaN or infinite values: {a}")
-        action_clipped = np.abs(a) > 1.0
-        cmd_angle = np.clip(a, -1.0, 1.0) * self._max_angle
+        a, action_clipped = rudder_action(action, self.action_space.shape, self.base_vessel.rudders)
+        cmd_angle = a * self._max_angle
         t0 = phys.time
         if self.rudder_test:
             cmd_angle = cmd_angle + self.rudder_test_amplitude * math.sin(
