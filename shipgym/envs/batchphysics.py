@@ -103,7 +103,7 @@ class BatchedPhysics:
         self._lo, self._hi = self.lower[col], self.upper[col]
         dyn = np.array([c.dynamics for c in chans])
         lag, servo, integ = dyn == "lag", dyn == "servo", dyn == "integrator"
-        self._lag, self._servo, self._integ = lag, servo, integ
+        self._servo, self._integ = servo, integ
         self._any_servo, self._any_integ = bool(servo.any()), bool(integ.any())
         self._bounded = (lag | servo)[col]
         self._all_bounded = bool(self._bounded.all())
@@ -113,7 +113,6 @@ class BatchedPhysics:
         self._servo_T = np.array(
             [(c.time_constant or self.h) if c.dynamics == "servo" else 1.0 for c in chans]
         )[col]
-        self._flow = v.actuators.flow_dependent
         self._tau = _actuator_kernel(v.actuators)
         self._accel = _plant_kernel(self.plant)
         wind_cfg = WindConfig.coerce(wind, name="wind")
@@ -126,7 +125,6 @@ class BatchedPhysics:
         self.currents = [Current(cc) for _ in range(n)]
         self._aero = np.full(n, wind_cfg is not None)
         self._update_flags()
-        self._zeros = np.zeros(n)
         self.t = np.zeros(n)
         self._q = np.zeros((3, n))
         self._v = np.zeros((3, n))
@@ -211,7 +209,8 @@ class BatchedPhysics:
                          self.initial_actuator_state())  # fmt: skip
         # lagged states and servo angles within their ranges (an integrator's range bounds its
         # command, the rate, not its state)
-        act = np.where(self._lag | self._servo, np.clip(act, self.lower, self.upper), act)
+        bounded = self._bounded[:, 0]
+        act = np.where(bounded, np.clip(act, self.lower, self.upper), act)
         m = np.ones(self.n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
         if m.shape != (self.n,):
             raise ValueError(f"mask must be ({self.n},) booleans, got shape {m.shape}")
@@ -222,7 +221,7 @@ class BatchedPhysics:
         self._q[:, m] = e.T[:, m]
         self._v[:, m] = qvel[:, m]
         self._act[:, m] = act.T[:, m]
-        self._cmd[:, m] = np.where(self._lag | self._servo, act, 0.0).T[:, m]
+        self._cmd[:, m] = np.where(bounded, act, 0.0).T[:, m]
         self.saturated[m] = False
         self.t[m] = 0.0
         for i in np.nonzero(m)[0].tolist():

@@ -431,7 +431,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         observer (every env samples at the same instants: the sensor period divides the
         control period)."""
         assert self.sensors is not None
-        z, valid, outlier = self.sensors.measure(self.physics.t, self.physics.eta, mask)
+        z, valid, outlier = self.sensors.measure(self.physics.t, self._truth()[0], mask)
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
             info = self.observer.step(self.physics.t, z, valid & mask)
