@@ -64,11 +64,12 @@ started from its stationary law ``N(0, f sigma_p^2)``, plus the white part of va
 
 A gyrocompass has a settle-point error besides its noise: the latitude/speed error left after
 the correction and the settle-point error of the sensitive element, a few tenths of a degree
-that change slowly (IMO A.424(XI) (1979): settle-point error within ``+-0.75 deg sec(lat)``
-static; ``+-0.25 deg`` more from repeat settle-points). ``heading_bias_std = s_b > 0`` adds a
-bias drawn per episode from ``N(0, s_b^2)``; it is constant over the episode when
-``heading_bias_correlation_time`` is 0, otherwise a Gauss-Markov process of that correlation
-time (same exact recursion). The white heading noise stays ``heading_variance``.
+that change slowly (IMO A.424(XI) (1979): settle-point error within ``+-0.75 deg sec(lat)``,
+its repeatability from one run-up to another within ``0.25 deg sec(lat)``).
+``heading_bias_std = s_b > 0`` adds a bias drawn per episode from ``N(0, s_b^2)``; it is
+constant over the episode when ``heading_bias_correlation_time`` is 0, otherwise a
+Gauss-Markov process of that correlation time (the same exact recursion). The white heading
+noise stays ``heading_variance``.
 
 :attr:`SensorConfig.covariance` is the white-noise design covariance (the observers' ``R``);
 the correlated parts are what a real sensor adds and a white-noise observer does not model.
@@ -629,7 +630,8 @@ class BatchedSensors:
         if self._corr is not None:  # one exact Gauss-Markov step per sample (Sensors.measure)
             a = self._a
             step = a * self._bias + self._sd * np.sqrt(1.0 - a * a) * self._corr[r, k]
-            self._bias = step if mask is None else np.where(mask[:, None], step, self._bias)
+            on = None if mask is None else np.asarray(mask, dtype=bool)[:, None]
+            self._bias = step if on is None else np.where(on, step, self._bias)
             noise = noise + self._bias
         u_out, ang = self._out[r, k, 0], self._out[r, k, 1]
         u_drop = self._drop[r, k]
