@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import json
+import math
 import multiprocessing
 import os
 import signal
@@ -36,6 +37,11 @@ __all__ = [
     "Executor",
     "RowLog",
     "bench_observers",
+    "bench_scenario_kwargs",
+    "table6_comparison",
+    "velocity_error_evidence",
+    "SCENARIO_WIND",
+    "TABLE6",
     "observer_table",
     "observer_traces",
     "row_log",
@@ -52,11 +58,25 @@ _INDICES = ("x_E", "y_E", "psi_E", "J_c")
 _RMSE = ("u", "v", "r", "x", "y", "psi")
 
 
-def _one(job: tuple[str, int, Any, str]) -> dict[str, Any]:
+#: Tomera (2014) Table 6 (lake Silm), measured indices: x_E, y_E (m), psi_E (printed), J_c
+TABLE6: dict[str, dict[str, float]] = {
+    "dkf": {"x_E": 1.3523, "y_E": 0.4163, "psi_E": 377.0888, "J_c": 5.5395},
+    "kbf": {"x_E": 0.2376, "y_E": 0.2984, "psi_E": 402.5533, "J_c": 4.5615},
+    "ekf": {"x_E": 1.3774, "y_E": 0.4738, "psi_E": 387.4744, "J_c": 5.7259},
+}
+_WIND_DEFAULT = "3@300"  # the bench's wind without a scenario
+SCENARIO_WIND = "scenario"  # bench_observers(wind=...): the scenario's own wind
+
+
+def _one(job: tuple[Any, ...]) -> dict[str, Any]:
     from shipgym.runner import run_episode
 
-    observer, seed, wind, controller = job
-    res = run_episode("harbour", controller=controller, observer=observer, seed=seed, wind=wind)
+    observer, seed, wind, controller = job[:4]
+    env_kwargs = dict(job[4]) if len(job) > 4 and job[4] is not None else None
+    res = run_episode(
+        "harbour", controller=controller, observer=observer, seed=seed, wind=wind,
+        env_kwargs=env_kwargs,
+    )  # fmt: skip
     return {
         "observer": observer,
         "seed": seed,
@@ -395,31 +415,37 @@ def velocity_error_trace(
     seed: int = 0,
     wind: Any = "3@300",
     controller: str = "pid-smooth",
+    env_kwargs: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Velocity estimation errors ``[u, v, r]`` over one harbour episode (for plots).
 
-    ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`.
+    ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`;
+    ``env_kwargs``: further env arguments (a scenario's, :meth:`Scenario.env_kwargs`), they
+    win over ``wind``. Returns ``t`` (s), ``err_nu`` (estimate - truth) and ``nu`` (truth).
     """
     from shipgym.records import step_record
     from shipgym.runner import build_env, step_episode
 
-    env = build_env("harbour", observer=observer, controller=controller, wind=wind)
-    t, err = [], []
+    kw = {"wind": wind, **(env_kwargs or {})}
+    env = build_env("harbour", observer=observer, controller=controller, **kw)
+    t, err, nu = [], [], []
 
     def keep(info: dict[str, Any]) -> None:
         rec = step_record(info)
         t.append(rec.t)
         err.append(rec.nav.nu - rec.truth.nu)
+        nu.append(np.asarray(rec.truth.nu, dtype=float))
 
     try:
         step_episode(env, seed, on_step=keep)
     finally:
         env.close()
-    return {"t": np.array(t), "err_nu": np.array(err)}
+    return {"t": np.array(t), "err_nu": np.array(err), "nu": np.array(nu)}
 
 
-def _trace_job(job: tuple[str, Any, str]) -> tuple[str, dict[str, Any]]:
-    return job[0], velocity_error_trace(job[0], 0, job[1], job[2])
+def _trace_job(job: tuple[Any, ...]) -> tuple[str, dict[str, Any]]:
+    seed = job[4] if len(job) > 4 else 0
+    return job[0], velocity_error_trace(job[0], seed, job[1], job[2], job[3])
 
 
 def observer_traces(
@@ -427,33 +453,95 @@ def observer_traces(
     wind: Any,
     workers: int | None = None,
     controller: str = "pid-smooth",
+    env_kwargs: dict[str, Any] | None = None,
 ) -> dict[str, dict[str, Any]]:
     """:func:`velocity_error_trace` of seed 0 for each observer, in parallel."""
-    jobs = [(o, wind, controller) for o in observers]
+    jobs = [(o, wind, controller, env_kwargs) for o in observers]
     return dict(run_jobs(_trace_job, jobs, workers=workers, progress=False))
+
+
+def velocity_error_evidence(trace: dict[str, Any], short_period: float = 20.0) -> dict[str, Any]:
+    """Noise and lag of an observer's velocity estimate from a :func:`velocity_error_trace`.
+
+    Returns per DOF ``[u, v, r]``: ``rmse`` (m/s, m/s, rad/s), ``hf_fraction`` (-, the share
+    of the error variance at periods below ``short_period`` s, from a periodogram: noise
+    that a controller's derivative term passes on), ``lag`` (s, the shift that maximises the
+    correlation of the estimate with the truth, 0 to 30 s: the estimate's delay) and
+    ``lf_rmse`` (the error's RMSE at periods of ``short_period`` s and longer: lag and bias).
+    """
+    t = np.asarray(trace["t"], dtype=float)
+    err = np.asarray(trace["err_nu"], dtype=float)
+    nu = np.asarray(trace["nu"], dtype=float)
+    if t.size < 8:
+        raise ValueError(f"the trace is too short for spectra ({t.size} samples)")
+    dt = float(np.median(np.diff(t)))
+    est = nu + err
+    out: dict[str, Any] = {"rmse": [], "hf_fraction": [], "lf_rmse": [], "lag": []}
+    f = np.fft.rfftfreq(t.size, dt)
+    for j in range(3):
+        e = err[:, j] - err[:, j].mean()
+        p = np.abs(np.fft.rfft(e)) ** 2
+        hf = f > 1.0 / short_period
+        tot = float(p[1:].sum())
+        out["rmse"].append(float(np.sqrt(np.mean(err[:, j] ** 2))))
+        out["hf_fraction"].append(float(p[hf].sum() / tot) if tot > 0 else 0.0)
+        lo = np.fft.rfft(err[:, j])
+        lo[hf] = 0.0
+        out["lf_rmse"].append(float(np.sqrt(np.mean(np.fft.irfft(lo, t.size) ** 2))))
+        x, y = nu[:, j] - nu[:, j].mean(), est[:, j] - est[:, j].mean()
+        shifts = range(0, min(int(round(30.0 / dt)), t.size // 4) + 1)
+        cc = [float(x[: t.size - s] @ y[s:]) for s in shifts]
+        out["lag"].append(float(int(np.argmax(cc)) * dt))
+    return out
+
+
+def bench_scenario_kwargs(scenario: Any) -> dict[str, Any] | None:
+    """The env arguments of a harbour scenario (a name, file or
+    :class:`~shipgym.scenarios.Scenario`) for the bench, or ``None`` for none."""
+    if scenario is None:
+        return None
+    from shipgym.scenarios import Scenario, load_scenario
+
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    if sc.env != "harbour":
+        raise ValueError(
+            f"the observer bench runs the harbour manoeuvre; scenario {sc.name!r} is for "
+            f"{sc.env!r}: give a harbour scenario (e.g. tomera2014-lake)"
+        )
+    return sc.env_kwargs()
 
 
 def bench_observers(
     observers: Sequence[str] = DEFAULT_OBSERVERS,
     seeds: int = 10,
-    wind: Any = "3@300",
+    wind: Any = SCENARIO_WIND,
     controller: str = "pid-smooth",
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, dict[str, Any]], None] | None = None,
     executor: Executor | str | None = None,
+    scenario: Any = None,
 ) -> list[dict[str, Any]]:
     """Run the manoeuvre for every observer and seed; one row per run, in a fixed order.
 
     ``executor``: where the runs go (:func:`run_jobs`; the process pool by default, or Ray).
 
-    ``wind``: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
-    (``"3@300"``: 3 m/s from 300 deg, the default), checked before any run.
+    ``scenario``: a harbour scenario (name, file or ``Scenario``: ``"tomera2014-lake"``) whose
+    plant, wind, waves, current, sensors, plan and start pose every run uses; ``None``: the
+    harbour env's defaults. ``wind``: any form of :meth:`WindConfig.coerce
+    <shipgym.disturbances.WindConfig.coerce>`, checked before any run; by default
+    (:data:`SCENARIO_WIND`) the scenario's wind, or ``"3@300"`` (3 m/s from 300 deg) without
+    a scenario; given, it replaces the scenario's.
     ``on_row(index, row)`` gets each row as its run finishes (e.g. :meth:`RowLog.add`).
     """
     from shipgym.disturbances import WindConfig
 
+    env_kwargs = bench_scenario_kwargs(scenario)
+    if isinstance(wind, str) and wind == SCENARIO_WIND:
+        wind = env_kwargs["wind"] if env_kwargs is not None else _WIND_DEFAULT
     wind = WindConfig.coerce(wind, name="wind")
+    if env_kwargs is not None:
+        env_kwargs["wind"] = wind
     if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
         raise ValueError(f"seeds must be an int >= 1 (runs seeds 0..seeds-1), got {seeds!r}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
@@ -461,7 +549,7 @@ def bench_observers(
         raise ValueError(f"workers must be None (one per CPU) or an int >= 1, got {workers!r}")
     if isinstance(observers, str) or not observers:
         raise ValueError(f"observers must be a non-empty list of names, got {observers!r}")
-    jobs = [(obs, s, wind, controller) for obs in observers for s in range(seeds)]
+    jobs = [(obs, s, wind, controller, env_kwargs) for obs in observers for s in range(seeds)]
     return run_jobs(
         _one, jobs, workers=workers, progress=progress, desc="observers x seeds",
         on_result=on_row, executor=executor,
@@ -521,6 +609,46 @@ def observer_table(rows: Sequence[dict[str, Any]]) -> str:
             f"| {ms(meas['psi_E'], '.3f')} | {ms(meas['J_c'])} | {ms(truth)} "
             f"| {ms(rm['u'], '.5f')} | {ms(rm['v'], '.5f')} | {ms(rm['r'], '.4f')} |"
         )
+    return "\n".join(lines)
+
+
+def table6_comparison(rows: Sequence[dict[str, Any]]) -> str:
+    """Measured x_E, y_E against Tomera (2014) Table 6 (ratio simulated / lake, mean over
+    the runs with defined indices) and the observer ranking by measured ``x_E + y_E``
+    (best first; J_c is not used: its ``0.01 psi_E`` term is dominated by Table 6's printed
+    psi_E of 377-403, which cannot be a mean heading error in degrees)."""
+    names = list(dict.fromkeys(r["observer"] for r in rows))
+    lines = [
+        "| observer | x_E (m) | Table 6 x_E | ratio | y_E (m) | Table 6 y_E | ratio "
+        "| x_E + y_E (m) | within 3x |",
+        "|" + "---|" * 9,
+    ]
+    score: dict[str, float] = {}
+    for name in names:
+        rs = [r for r in rows if r["observer"] == name]
+        m = {}
+        for k in ("x_E", "y_E"):
+            v = np.array([np.nan if _get(r["measured"], k) is None else _get(r["measured"], k)
+                          for r in rs], dtype=float)  # fmt: skip
+            v = v[np.isfinite(v)]
+            m[k] = float(v.mean()) if v.size else math.nan
+        score[name] = m["x_E"] + m["y_E"]
+        ref = TABLE6.get(name)
+        if ref is None:
+            lines.append(f"| {name} | {m['x_E']:.4f} | - | - | {m['y_E']:.4f} | - | - "
+                         f"| {score[name]:.4f} | - |")  # fmt: skip
+            continue
+        rx, ry = m["x_E"] / ref["x_E"], m["y_E"] / ref["y_E"]
+        ok = all(1.0 / 3.0 <= r <= 3.0 for r in (rx, ry))
+        lines.append(
+            f"| {name} | {m['x_E']:.4f} | {ref['x_E']:.4f} | {rx:.2f} | {m['y_E']:.4f} "
+            f"| {ref['y_E']:.4f} | {ry:.2f} | {score[name]:.4f} | {'yes' if ok else 'no'} |"
+        )
+    finite = {k: v for k, v in score.items() if math.isfinite(v)}
+    ranking = " < ".join(sorted(finite, key=finite.__getitem__))
+    paper = " < ".join(sorted(TABLE6, key=lambda k: TABLE6[k]["x_E"] + TABLE6[k]["y_E"]))
+    lines += ["", f"ranking by measured x_E + y_E (best first): {ranking or 'n/a'}; "
+              f"Tomera (2014) Table 6: {paper}"]  # fmt: skip
     return "\n".join(lines)
 
 

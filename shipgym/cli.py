@@ -250,9 +250,22 @@ def _truth_none(observer: str | None) -> str | None:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from shipgym.bench import bench_observers, observer_table
+    from shipgym.bench import (
+        bench_observers,
+        bench_scenario_kwargs,
+        observer_table,
+        table6_comparison,
+    )
     from shipgym.dynamics.vessel import load_vessel
     from shipgym.observers import make_observer
+
+    env_kwargs = bench_scenario_kwargs(args.scenario)  # a bad scenario fails before any work
+    if args.wind is None:
+        from shipgym.disturbances import WindConfig
+
+        args.wind = WindConfig.coerce(
+            env_kwargs["wind"] if env_kwargs is not None else "3@300", name="wind"
+        )
 
     blue_lady = load_vessel("blue-lady")  # the benchmark's harbour manoeuvre
     for name in args.observers:
@@ -268,13 +281,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     rows = bench_observers(
         args.observers, seeds=args.seeds, wind=args.wind, workers=args.workers,
         progress=progress_enabled(args.no_progress), controller=args.controller,
-        on_row=log.add, executor=executor_of(args),
+        on_row=log.add, executor=executor_of(args), scenario=args.scenario,
     )  # fmt: skip
     wall = time.perf_counter() - t0
-    table = observer_table(rows)
+    table = observer_table(rows) + "\n\n" + table6_comparison(rows)
+    where = "" if args.scenario is None else f", scenario {args.scenario}"
+    wind = "none" if args.wind is None else args.wind.label()
     title = (
-        f"Observers on the harbour manoeuvre ({args.controller} controller, wind "
-        f"{args.wind.label()}, seeds 0-{args.seeds - 1}); indices from the measured "
+        f"Observers on the harbour manoeuvre ({args.controller} controller{where}, wind "
+        f"{wind}, seeds 0-{args.seeds - 1}); indices from the measured "
         "pose as in Tomera (2014) Table 6, J_c truth from the true pose"
     )
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
@@ -284,8 +299,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         from shipgym.viz import write_observer_report
 
         traces = observer_traces(
-            args.observers, args.wind, workers=args.workers, controller=args.controller
-        )
+            args.observers, args.wind, workers=args.workers, controller=args.controller,
+            env_kwargs=None if env_kwargs is None else {**env_kwargs, "wind": args.wind},
+        )  # fmt: skip
         for f in write_observer_report(rows, traces, args.report):
             print(f"wrote {f}")
         from shipgym._io import atomic_write_text
@@ -754,8 +770,12 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument(
         "--controller", default="pid-smooth", help="controller of every run (pid-smooth)"
     )
-    b.add_argument("--wind", type=parse_wind, default="3@300",
-                   metavar="SPEED@FROM_DEG", help="mean wind (3@300)")  # fmt: skip
+    b.add_argument("--wind", type=parse_wind, default=None, metavar="SPEED@FROM_DEG",
+                   help="mean wind (the scenario's; 3@300 without one)")  # fmt: skip
+    b.add_argument("--scenario", default=None, metavar="NAME|FILE",
+                   help="harbour scenario preset or YAML/TOML file: plant, wind, waves, "
+                   "current, sensors (e.g. tomera2014-lake; default: the harbour env's)",
+                   )  # fmt: skip
     _add_bench_outputs(b)
     b.add_argument("--report", type=Path, default=None, metavar="DIR",
                    help="bar chart of the indices and velocity-error plots (PNG)")  # fmt: skip

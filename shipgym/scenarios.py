@@ -14,7 +14,11 @@ assumption) and a JONSWAP gamma 3.3 sea (the JONSWAP mean of
 Hasselmann et al. 1973) with first-order motion and drift.
 
 **Lake** (the project's estimate): :func:`lake_waves`, the fetch-limited sea of Lake Silm (JONSWAP
-``Hs = 0.05 m``, ``Tp = 1 s``, gamma 3.3, drift force on, no first-order motion).
+``Hs = 0.05 m``, ``Tp = 1 s``, gamma 3.3, drift force on, no first-order motion), and
+:func:`lake_current`, the wind-driven drift: 1 % of the wind speed along the wind (DNV-RP-C205
+gives ``k U10`` with ``k = 0.015-0.03`` at the surface; about 1 % averaged over the 0.86 m
+draft, an estimate), a Gauss-Markov speed of std 0.01 m/s and time constant 300 s, and a
+direction std of 10 deg with the same time constant (estimates).
 
 **Scenarios**: a :class:`Scenario` bundles what an episode needs besides the agent: the
 environment (``harbour``, ``station-keeping``, ``tracking``), the plant variant, wind, waves,
@@ -34,6 +38,7 @@ File format (every key optional; unknown keys raise, listing the valid ones)::
     wind: {speed: 3.0, direction_from_deg: 300}    # WindConfig fields, or "3@300"; null: none
     waves: lake                  # a wave preset, or WaveConfig fields; null/false: none
     current: {speed: 0.05, direction_to_deg: 90, std: 0.01, time_constant: 300}  # or "0.05@90"
+                                 # (also direction_std[_deg], direction_time_constant)
     sensors: tomera2014          # a preset, SensorConfig fields, {preset: rtk, ...}; null: none
     plan: tomera2014             # a plan name or a ManoeuvrePlan.from_dict mapping
     start_pose: [0.0, 0.0, 0.0]  # (x m, y m, psi rad), or {x: 0, y: 0, psi_deg: 0}
@@ -70,6 +75,9 @@ __all__ = [
     "SeaState",
     "beaufort",
     "lake_waves",
+    "lake_current",
+    "lake_current_mapping",
+    "LAKE_CURRENT_WIND_FACTOR",
     "WAVE_PRESETS",
     "Scenario",
     "SCENARIOS",
@@ -115,6 +123,48 @@ def lake_waves(direction_from: float = 0.0, **overrides: Any) -> WaveConfig:
     }
     kw.update(overrides)
     return WaveConfig(**kw)
+
+
+#: wind-driven lake current as a fraction of the wind speed (-): DNV-RP-C205 (2010) k U10,
+#: k = 0.015-0.03 at the surface, about 0.01 averaged over Blue Lady's draft (an estimate)
+LAKE_CURRENT_WIND_FACTOR = 0.01
+
+
+def lake_current_mapping(wind_speed: float = 3.0, wind_from_deg: float = 300.0) -> dict:
+    """The scenario-file form of :func:`lake_current` (what ``current:`` of a scenario file
+    holds for it; the packaged ``tomera2014-lake.yaml`` writes it out)."""
+    if not is_real(wind_speed) or not 0.0 <= wind_speed < math.inf:
+        raise ValueError(f"lake_current: wind_speed must be a number >= 0 m/s, got {wind_speed!r}")
+    if not is_real(wind_from_deg) or not math.isfinite(wind_from_deg):
+        raise ValueError(f"lake_current: wind_from_deg must be finite, got {wind_from_deg!r}")
+    return {
+        "speed": round(LAKE_CURRENT_WIND_FACTOR * float(wind_speed), 12),
+        "direction_to_deg": (float(wind_from_deg) + 180.0) % 360.0,
+        "std": 0.01,
+        "time_constant": 300.0,
+        "direction_std_deg": 10.0,
+        "direction_time_constant": 300.0,
+    }
+
+
+def lake_current(
+    wind_speed: float = 3.0, wind_from_deg: float = 300.0, **overrides: Any
+) -> CurrentConfig:
+    """The wind-driven current of Lake Silm for a wind (an estimate of the project).
+
+    Mean speed :data:`LAKE_CURRENT_WIND_FACTOR` times the wind speed (0.03 m/s for the trial's
+    3 m/s), going where the wind goes (``wind_from + 180 deg``); slowly varying: speed std
+    0.01 m/s and direction std 10 deg, both Gauss-Markov with time constant 300 s (Fossen
+    2011 ch. 8.3 form; the numbers are estimates); speed kept >= 0.
+
+    Args:
+        wind_speed: mean wind speed (m/s).
+        wind_from_deg: direction the wind comes from (deg).
+        **overrides: any :class:`CurrentConfig` field (SI units, radians).
+    """
+    cfg = _current(lake_current_mapping(wind_speed, wind_from_deg), None, "lake_current")
+    assert cfg is not None
+    return dataclasses.replace(cfg, **overrides) if overrides else cfg
 
 
 def _calm_waves(direction_from: float = 0.0, **overrides: Any) -> WaveConfig:
@@ -416,8 +466,48 @@ def _current(value: Any, current: CurrentConfig | None, where: str) -> CurrentCo
         if not (is_real(mu) and mu > 0):
             raise ValueError(f"{where}: 'std' needs mu > 0 (or time_constant), got mu = {mu!r}")
         d["sigma"] = std * math.sqrt(2.0 * mu)
+    # the same for the direction: stationary std (rad or deg) and time constant (s)
+    if "direction_time_constant" in d:
+        if "direction_mu" in d:
+            raise ValueError(
+                f"{where}: give either 'direction_mu' (1/s) or 'direction_time_constant' (s), "
+                "not both"
+            )
+        tc = d.pop("direction_time_constant")
+        if not is_real(tc) or not tc > 0 or not math.isfinite(tc):
+            raise ValueError(f"{where}: direction_time_constant must be a number > 0 s, got {tc!r}")
+        d["direction_mu"] = 1.0 / tc
+    if "direction_std_deg" in d:
+        if "direction_std" in d:
+            raise ValueError(f"{where}: give either 'direction_std' (rad) or 'direction_std_deg'")
+        deg = d.pop("direction_std_deg")
+        if not is_real(deg) or not math.isfinite(deg):
+            raise ValueError(f"{where}: direction_std_deg must be a finite number, got {deg!r}")
+        d["direction_std"] = math.radians(deg)
+    if "direction_std" in d:
+        if "direction_sigma" in d:
+            raise ValueError(
+                f"{where}: give either 'direction_sigma' (rad/s^0.5) or 'direction_std' (rad)"
+            )
+        std = d.pop("direction_std")
+        if not is_real(std) or not std >= 0 or not math.isfinite(std):
+            raise ValueError(f"{where}: direction_std must be a number >= 0 rad, got {std!r}")
+        mu = d.get(
+            "direction_mu",
+            current.direction_mu if current is not None else CurrentConfig().direction_mu,
+        )
+        if not (is_real(mu) and mu > 0):
+            raise ValueError(
+                f"{where}: 'direction_std' needs direction_mu > 0 (or direction_time_constant)"
+            )
+        d["direction_sigma"] = std * math.sqrt(2.0 * mu)
     valid = _fields(CurrentConfig)
-    _reject(value, valid + ["direction_to_deg", "std", "time_constant"], where)
+    _reject(
+        value,
+        valid + ["direction_to_deg", "std", "time_constant", "direction_std", "direction_std_deg",
+                 "direction_time_constant"],
+        where,
+    )  # fmt: skip
     return _config(CurrentConfig, d, current, where, ("direction_to",))
 
 
@@ -662,12 +752,15 @@ def _presets() -> dict[str, Scenario]:
         env="harbour",
         wind=WindConfig.from_speed_dir(3.0, 300.0),
         waves=lake_waves(direction_from=d300),
-        sensors="tomera2014",
+        current=lake_current(3.0, 300.0),
+        sensors="tomera2014-lake",
         plan="tomera2014",
         description=(
             "Blue Lady's lake trial (Tomera 2014): the 5-leg harbour manoeuvre on "
             "Lake Silm, wind 3 m/s from 300 deg with Gauss-Markov gusts, small fetch-limited "
-            "JONSWAP waves from the same direction (Hs 0.05 m, Tp 1 s, drift only; estimated)."
+            "JONSWAP waves from the same direction (Hs 0.05 m, Tp 1 s, drift only; estimated), "
+            "a wind-driven current of 0.03 m/s going to 120 deg (slowly varying; estimated), "
+            "DGPS with Gauss-Markov errors and a gyrocompass bias."
         ),
     )
     out["tomera2011-sim"] = Scenario(

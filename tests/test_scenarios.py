@@ -20,6 +20,7 @@ from shipgym.scenarios import (
     Scenario,
     beaufort,
     beaufort_row,
+    lake_current,
     lake_waves,
     load_scenario,
     scenario_files,
@@ -108,7 +109,17 @@ def test_seed_presets() -> None:
     assert lake.wind is not None and lake.wind.speed == 3.0
     assert lake.wind.direction_from == pytest.approx(math.radians(300.0))
     assert lake.waves == lake_waves(direction_from=math.radians(300.0))
-    assert lake.current is None and lake.sensors == "tomera2014"
+    assert lake.sensors == "tomera2014-lake"
+    # the wind-driven current: 1 % of the wind speed, going where the wind goes (to 120 deg),
+    # speed std 0.01 m/s and direction std 10 deg over 300 s
+    c = lake.current
+    assert c is not None and c.speed == pytest.approx(0.03, abs=1e-15)
+    assert math.degrees(c.direction_to) == pytest.approx(120.0)
+    assert c.speed_std == pytest.approx(0.01) and 1.0 / c.mu == pytest.approx(300.0)
+    assert math.degrees(c.direction_std) == pytest.approx(10.0)
+    assert lake.current == lake_current(3.0, 300.0)
+    assert lake_current(5.0, 90.0).speed == pytest.approx(0.05)
+    assert math.degrees(lake_current(5.0, 90.0).direction_to) == pytest.approx(270.0)
     sim = SCENARIOS["tomera2011-sim"]
     assert sim.wind is not None and (sim.wind.speed, sim.wind.direction_from) == (2.0, 0.0)
     assert sim.waves is None
@@ -123,7 +134,7 @@ def test_env_kwargs() -> None:
     kw = SCENARIOS["tomera2014-lake"].env_kwargs()
     assert set(kw) == {"plant", "wind", "waves", "current", "sensors", "plan", "start_pose"}
     assert isinstance(kw["wind"], WindConfig) and isinstance(kw["waves"], WaveConfig)
-    assert kw["current"] is None and kw["plan"] == "tomera2014"
+    assert isinstance(kw["current"], CurrentConfig) and kw["plan"] == "tomera2014"
     assert kw["start_pose"] == (0.0, 0.0, 0.0)
     kw = SCENARIOS["beaufort5"].env_kwargs()
     assert "plan" not in kw  # the environment's own default plan
@@ -348,3 +359,26 @@ def test_scenario_path_that_is_a_folder(tmp_path):
     (tmp_path / "d.yaml").mkdir()
     with pytest.raises(ValueError, match="not a file"):
         load_scenario(tmp_path / "d.yaml")
+
+
+@pytest.mark.parametrize(
+    ("current", "match"),
+    [
+        ({"direction_std_deg": "ten"}, "direction_std_deg must be a finite number"),
+        ({"direction_std": 0.1, "direction_sigma": 0.01}, "either 'direction_sigma'"),
+        ({"direction_time_constant": 0.0}, "direction_time_constant must be a number > 0"),
+        ({"direction_time_constant": 60.0, "direction_mu": 0.1}, "either 'direction_mu'"),
+        ({"direction_std": 0.1, "direction_mu": 0.0}, "needs direction_mu > 0"),
+    ],
+)
+def test_current_direction_std_keys_refuse_bad_values(current, match) -> None:
+    with pytest.raises(ValueError, match=match):
+        scenario_from_dict({"current": {"speed": 0.05, **current}})
+
+
+def test_current_direction_std_keys() -> None:
+    sc = scenario_from_dict(
+        {"current": {"speed": 0.05, "direction_std_deg": 10.0, "direction_time_constant": 200.0}}
+    )
+    assert sc.current is not None and 1.0 / sc.current.direction_mu == pytest.approx(200.0)
+    assert math.degrees(sc.current.direction_std) == pytest.approx(10.0)

@@ -47,7 +47,9 @@ def test_defaults_are_the_seed_values():
 
 
 def test_presets():
-    assert set(SENSOR_PRESETS) == {"default", "dgps", "rtk", "tomera2014", "al-takie1982"}
+    assert set(SENSOR_PRESETS) == {
+        "default", "dgps", "rtk", "tomera2014", "tomera2014-lake", "al-takie1982"
+    }  # fmt: skip
     assert sensor_config("default") == SensorConfig()
     assert sensor_config("tomera2014") == SensorConfig()
     dgps = sensor_config("dgps")  # Artyszuk (2003): sigma 2 m per axis
@@ -261,7 +263,13 @@ def test_block_draws_are_one_draw_per_sample():
                        antenna_offset=(1.5, -0.4))  # fmt: skip
     s = Sensors(cfg)
     s.reset(np.random.default_rng(21))
-    noise, outl, drop = _streams(np.random.default_rng(21))
+    noise, outl, drop, _ = _streams(np.random.default_rng(21))
+    # the first three streams are those of the three-child spawn used before the correlated
+    # errors' fourth stream was added: a white-noise configuration measures as before
+    seq = np.random.SeedSequence(int(np.random.default_rng(21).integers(2**63)))
+    for g, old in zip((noise, outl, drop), seq.spawn(3), strict=True):
+        assert g.bit_generator.seed_seq.spawn_key == old.spawn_key
+        assert g.bit_generator.seed_seq.entropy == old.entropy
     sig = np.array([cfg.position_sigma, cfg.position_sigma, cfg.heading_sigma])
     until = -math.inf
     kinds = {"valid": 0, "outlier": 0, "dropout": 0}

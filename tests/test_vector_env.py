@@ -255,3 +255,33 @@ def test_what_the_batched_env_does_not_cover_says_so(kw, error, match):
     kw = {"vessel": "blue-lady", **kw}
     with pytest.raises(error, match=match):
         gym.make_vec("shipgym/Tracking-v0", num_envs=2, **kw)
+
+
+def test_batched_env_with_time_correlated_sensor_errors_equals_the_single_envs():
+    """The lake sensors (Gauss-Markov DGPS error, gyrocompass bias) plus dropouts in the
+    batched env: the navigation estimate of env i is the single env's (to 1e-6)."""
+    from shipgym.observers.sensors import sensor_config
+
+    env_id, n, steps = "shipgym/StationKeeping-v0", 2, 120
+    sensors = sensor_config("tomera2014-lake", dropout_probability=0.03)
+    kw = {"vessel": "blue-lady", "max_episode_steps": steps, "observer": "kbf",
+          "sensors": sensors}  # fmt: skip
+    venv = gym.make_vec(env_id, num_envs=n, controller="pid", residual_scale=0.3, **kw)
+    singles = [shipgym.make(env_id, controller="pid", residual_scale=0.3, **kw)
+               for _ in range(n)]  # fmt: skip
+    venv.reset(seed=7)
+    for i, s in enumerate(singles):
+        s.reset(seed=7 + i)
+    rng = np.random.default_rng(1)
+    err = 0.0
+    biased = 0.0
+    for _ in range(steps - 1):
+        res = rng.normal(0.0, 0.5, (n, 3)).astype(np.float32)
+        _, _, _, _, info = venv.step(res)
+        for i, s in enumerate(singles):
+            _, _, _, _, inf = s.step(res[i])
+            err = max(err, float(np.abs(info["nav_eta"][i] - inf["nav_eta"]).max()))
+            biased = max(biased, abs(float(s.unwrapped.sensors.correlated_error[2])))
+    assert err < 1e-6, err
+    assert biased > 0  # the bias was on
+    assert venv.unwrapped.sensors.correlated_error.shape == (n, 3)

@@ -29,10 +29,53 @@ Noise defaults
   (equal in north and east directions) of order 2 [m]").
 - ``rtk`` preset: sigma 0.02 m, heading sigma 0.2 deg (typical RTK and gyrocompass
   figures, an assumption).
+- ``tomera2014-lake`` preset: the lake trial's sensors as a real DGPS and gyrocompass give
+  them: the total position variance of Tomera (2011) (0.01 m^2 per axis), 80 % of it a
+  Gauss-Markov error of correlation time 60 s and 20 % white, and a gyrocompass bias constant
+  over the episode, drawn with std ``0.25 deg sec(lat)`` at Lake Silm's latitude 53.6 deg N
+  (0.42 deg: the IMO A.424(XI) (1979) settle-point repeatability between run-ups), on top of
+  the white heading noise of Tomera (2011). Choices: 60 s is within the 10-100 s over which
+  DGPS errors correlate (Farrell & Barth 1999; Groves 2013), the slow part (Bierman 1995 fits
+  a first-order Markov DGPS error with a 3 847 s constant) acting as a bias over one manoeuvre;
+  the 80/20 split is an assumption (receiver noise of a carrier-smoothed code receiver is a
+  few centimetres).
 - ``al-takie1982`` preset: position-reference sigma 1/3 m per axis and gyro sigma 0.02 rad,
   Al-Takie (1982) 2.4.2 (printed, ``R = diag(1e-5, 4e-4)`` p.u.^2 for Wimpey Sealab); no
   faults. The thesis samples every 0.1 per-unit time (App. 3); the DP tasks
   (:mod:`shipgym.envs.offshore`) set ``period`` to their control period.
+
+Time-correlated errors (all off by default: white noise as above)
+------------------------------------------------------------------
+A DGPS position error is not white: the residual errors of the differential corrections
+(satellite orbit and clock, ionosphere and troposphere after the correction, multipath) change
+over tens of seconds to minutes, only the receiver noise is white (Farrell & Barth 1999;
+Groves 2013). With ``position_correlated_fraction = f > 0`` each NED axis carries a
+first-order Gauss-Markov error ``b`` on the sample grid, discretised exactly,
+
+.. math::
+
+    b_{k+1} = a\,b_k + \sqrt{f \sigma_p^2 (1 - a^2)}\, w_k, \qquad
+    a = e^{-T/\tau_p}, \quad w_k \sim N(0, 1),
+
+started from its stationary law ``N(0, f sigma_p^2)``, plus the white part of variance
+``(1 - f) sigma_p^2``: the total per-axis variance stays ``position_variance`` (Tomera 2011's
+``R_x = R_y = 0.01 m^2`` in the lake preset), and the autocorrelation at lag ``k`` samples is
+``f a^k`` (``k >= 1``). ``tau_p`` is ``position_correlation_time``.
+
+A gyrocompass has a settle-point error besides its noise: the latitude/speed error left after
+the correction and the settle-point error of the sensitive element, a few tenths of a degree
+that change slowly (IMO A.424(XI) (1979): settle-point error within ``+-0.75 deg sec(lat)``,
+its repeatability from one run-up to another within ``0.25 deg sec(lat)``).
+``heading_bias_std = s_b > 0`` adds a bias drawn per episode from ``N(0, s_b^2)``; it is
+constant over the episode when ``heading_bias_correlation_time`` is 0, otherwise a
+Gauss-Markov process of that correlation time (the same exact recursion). The white heading
+noise stays ``heading_variance``.
+
+:attr:`SensorConfig.covariance` is the white-noise design covariance (the observers' ``R``);
+the correlated parts are what a real sensor adds and a white-noise observer does not model.
+The correlated errors draw from a fourth child stream (three numbers per sample: x, y, heading,
+always all three, plus three at reset), so the white noise, outliers and dropouts of a
+configuration are the same with or without them; the errors evolve through dropouts.
 
 Faults (all off by default): an *outlier* adds a position error of exactly
 ``outlier_magnitude`` metres in a uniformly random NED direction (heading untouched), with
@@ -62,6 +105,8 @@ from shipgym.dynamics import wrap_angle
 __all__ = [
     "AL_TAKIE1982_HEADING_SIGMA",
     "AL_TAKIE1982_POSITION_SIGMA",
+    "LAKE_HEADING_BIAS_STD",
+    "LAKE_SILM_LATITUDE_DEG",
     "TOMERA2011_HEADING_VARIANCE",
     "SENSOR_PRESETS",
     "Measurement",
@@ -93,6 +138,14 @@ class SensorConfig:
         dropout_probability: probability per sample that a dropout starts (-).
         dropout_duration: length of a dropout (s); samples in ``[t_start, t_start + d)`` are
             missing.
+        position_correlated_fraction: share ``f`` of ``position_variance`` carried by the
+            Gauss-Markov DGPS error (-, in [0, 1]); 0: white (default).
+        position_correlation_time: correlation time ``tau_p`` of the Gauss-Markov DGPS error
+            (s, > 0 when ``f > 0``).
+        heading_bias_std: standard deviation of the gyrocompass bias (rad), drawn per
+            episode; 0: none (default).
+        heading_bias_correlation_time: correlation time of the bias (s); 0: constant over
+            the episode.
     """
 
     period: float = param(1.0, "s", "Tomera (2014): 'sampling time equal 1 (s)'")
@@ -111,6 +164,16 @@ class SensorConfig:
     outlier_magnitude: float = param(20.0, "m", "assumption: a gross DGPS error of 20 m")
     dropout_probability: float = param(0.0, "-", "assumption: no dropouts by default")
     dropout_duration: float = param(10.0, "s", "assumption: a 10 s loss of the DGPS fix")
+    position_correlated_fraction: float = param(
+        0.0, "-", "default: white DGPS noise (Tomera 2011 models it so); see module docstring"
+    )
+    position_correlation_time: float = param(
+        0.0, "s", "unused at f = 0; DGPS errors correlate over 10-100 s (Farrell & Barth 1999)"
+    )
+    heading_bias_std: float = param(0.0, "rad", "default: no gyrocompass bias")
+    heading_bias_correlation_time: float = param(
+        0.0, "s", "0: constant per episode (a settle-point error, IMO A.424(XI) 1979)"
+    )
 
     def __post_init__(self) -> None:
         cls = type(self).__name__
@@ -143,12 +206,31 @@ class SensorConfig:
         for name in ("period", "dropout_duration"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{cls}.{name} must be > 0 s, got {getattr(self, name)!r}")
-        for name in ("position_variance", "heading_variance", "outlier_magnitude"):
+        for name in (
+            "position_variance",
+            "heading_variance",
+            "outlier_magnitude",
+            "position_correlation_time",
+            "heading_bias_std",
+            "heading_bias_correlation_time",
+        ):
             if getattr(self, name) < 0:
                 raise ValueError(
                     f"{cls}.{name} must be >= 0 ({_unit(name)}), got {getattr(self, name)!r}; "
                     "variances are squared standard deviations"
                 )
+        if not 0.0 <= self.position_correlated_fraction <= 1.0:
+            raise ValueError(
+                f"{cls}.position_correlated_fraction is the share of position_variance in the "
+                f"Gauss-Markov error and must lie in [0, 1], got "
+                f"{self.position_correlated_fraction!r}"
+            )
+        if self.position_correlated_fraction > 0 and not self.position_correlation_time > 0:
+            raise ValueError(
+                f"{cls}.position_correlation_time must be > 0 s when "
+                f"position_correlated_fraction > 0 (got {self.position_correlation_time!r}); "
+                "DGPS errors correlate over tens of seconds to minutes"
+            )
         for name in ("outlier_probability", "dropout_probability"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(
@@ -175,9 +257,29 @@ class SensorConfig:
         return np.diag([self.position_variance, self.position_variance, self.heading_variance])
 
     @property
+    def correlated(self) -> bool:
+        """True when a Gauss-Markov DGPS error or a gyrocompass bias is on."""
+        return self.position_correlated_fraction > 0.0 or self.heading_bias_std > 0.0
+
+    def correlated_parameters(self) -> tuple[float, float, float, float]:
+        """``(a_p, sd_p, a_b, sd_b)``: the per-sample factors of the exact recursions
+        ``b_{k+1} = a b_k + q w_k`` (``q = sd sqrt(1 - a^2)``) of the DGPS error (per axis) and
+        of the heading bias, with their stationary standard deviations (m, rad)."""
+        f, T = self.position_correlated_fraction, self.period
+        a_p = math.exp(-T / self.position_correlation_time) if f > 0.0 else 0.0
+        tb = self.heading_bias_correlation_time
+        a_b = 1.0 if tb == 0.0 else math.exp(-T / tb)
+        return a_p, math.sqrt(f * self.position_variance), a_b, self.heading_bias_std
+
+    @property
     def position_sigma(self) -> float:
-        """Standard deviation of the position noise per axis (m)."""
+        """Standard deviation of the position noise per axis (m), white and correlated."""
         return math.sqrt(self.position_variance)
+
+    @property
+    def position_white_sigma(self) -> float:
+        """Standard deviation of the white part of the position noise per axis (m)."""
+        return math.sqrt((1.0 - self.position_correlated_fraction) * self.position_variance)
 
     @property
     def heading_sigma(self) -> float:
@@ -193,6 +295,15 @@ def _unit(name: str) -> str:
 
 
 _RTK_HEADING_SIGMA = math.radians(0.2)
+
+#: Lake Silm (Ilawa, Poland), where Blue Lady's trials were held: latitude (deg N), approx.
+LAKE_SILM_LATITUDE_DEG = 53.6
+#: gyrocompass bias std of the lake preset (rad): IMO A.424(XI) (1979) 4.1.3, settle-point
+#: repeatability from one run-up to another 0.25 deg sec(lat), at Lake Silm
+LAKE_HEADING_BIAS_STD = math.radians(0.25 / math.cos(math.radians(LAKE_SILM_LATITUDE_DEG)))
+#: DGPS Gauss-Markov share of the position variance (-) and correlation time (s), lake preset
+LAKE_DGPS_CORRELATED_FRACTION = 0.8
+LAKE_DGPS_CORRELATION_TIME = 60.0
 
 #: Al-Takie (1982) 2.4.2 [printed]: position-reference sigma 1/3 m per axis (m), from
 #: R = 1e-5 p.u.^2 (sigma 0.0033 Lpp), and gyro sigma 0.02 rad (R = 4e-4 rad^2)
@@ -212,6 +323,16 @@ SENSOR_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
         ),
         # the Blue Lady trials of Tomera (2011, 2014): same as default
         "tomera2014": MappingProxyType({}),
+        # the lake trial with real-sensor errors: Tomera (2011) total variances, Gauss-Markov
+        # DGPS error (80 %, tau 60 s) and a constant gyrocompass bias (IMO A.424(XI) 1979)
+        "tomera2014-lake": MappingProxyType(
+            {
+                "position_correlated_fraction": LAKE_DGPS_CORRELATED_FRACTION,
+                "position_correlation_time": LAKE_DGPS_CORRELATION_TIME,
+                "heading_bias_std": LAKE_HEADING_BIAS_STD,
+                "heading_bias_correlation_time": 0.0,
+            }
+        ),
         # Al-Takie (1982) 2.4.2, Wimpey Sealab: R = diag(1e-5, 4e-4) p.u.^2, i.e. position
         # sigma 1/3 m per axis and gyro sigma 0.02 rad (printed); no faults. Sampled every
         # 0.1 p.u. (App. 3; 0.31 s Wimpey): the DP tasks set the period to their control
@@ -231,7 +352,7 @@ def sensor_config(name: str = "default", **overrides: Any) -> SensorConfig:
 
     Args:
         name: one of :data:`SENSOR_PRESETS` (``default``, ``dgps``, ``rtk``, ``tomera2014``,
-            ``al-takie1982``).
+            ``tomera2014-lake``, ``al-takie1982``).
         **overrides: :class:`SensorConfig` fields to change.
 
     Raises:
@@ -265,10 +386,11 @@ class Measurement:
 
 
 def _streams(rng: np.random.Generator) -> tuple[np.random.Generator, ...]:
-    """The noise, outlier and dropout streams of one sensor set: one ``integers(2**63)`` draw
-    from ``rng`` seeds a sequence that spawns the three."""
+    """The noise, outlier, dropout and correlated-error streams of one sensor set: one
+    ``integers(2**63)`` draw from ``rng`` seeds a sequence that spawns the four (the first
+    three are those of a three-child spawn: adding the fourth changed none of them)."""
     seq = np.random.SeedSequence(int(rng.integers(2**63)))
-    return tuple(np.random.default_rng(s) for s in seq.spawn(3))
+    return tuple(np.random.default_rng(s) for s in seq.spawn(4))
 
 
 class Sensors:
@@ -291,10 +413,13 @@ class Sensors:
         if not isinstance(config, SensorConfig):
             raise TypeError(f"config must be a SensorConfig, got {type(config).__name__}")
         self.config = config
-        self._sig = np.array([config.position_sigma, config.position_sigma, config.heading_sigma])
+        self._sig = _sigmas(config)
+        self._gm = config.correlated_parameters() if config.correlated else None
         self._rng_noise: np.random.Generator | None = None
         self._rng_outlier: np.random.Generator | None = None
         self._rng_dropout: np.random.Generator | None = None
+        self._rng_corr: np.random.Generator | None = None
+        self._bias = [0.0, 0.0, 0.0]  # correlated errors (x m, y m, heading rad)
         self._dropout_until = -math.inf
         self._k = _BLOCK
 
@@ -310,9 +435,19 @@ class Sensors:
             raise TypeError(
                 f"rng must be a numpy.random.Generator or an int seed, got {type(rng).__name__}"
             )
-        self._rng_noise, self._rng_outlier, self._rng_dropout = _streams(rng)
+        self._rng_noise, self._rng_outlier, self._rng_dropout, self._rng_corr = _streams(rng)
         self._dropout_until = -math.inf
         self._k = _BLOCK  # next unused pre-drawn sample (_BLOCK: draw the next block)
+        if self._gm is not None:  # stationary start, b_0 ~ N(0, sd^2)
+            _, sd_p, _, sd_b = self._gm
+            w = self._rng_corr.standard_normal(3).tolist()
+            self._bias = [sd_p * w[0], sd_p * w[1], sd_b * w[2]]
+
+    @property
+    def correlated_error(self) -> NDArray[np.float64]:
+        """The correlated errors of the last sample (or of the reset): DGPS ``[x, y]`` (m)
+        and gyrocompass bias (rad); zeros when they are off (truth, for tests and plots)."""
+        return np.array(self._bias)
 
     def sample_times(self, t0: float, t1: float) -> NDArray[np.float64]:
         """Sample instants ``k * period`` in ``(t0, t1]`` (s), ascending (may be empty)."""
@@ -346,11 +481,24 @@ class Sensors:
             self._noise = (self._rng_noise.standard_normal((_BLOCK, 3)) * self._sig).tolist()
             self._out = self._rng_outlier.random((_BLOCK, 2)).tolist()
             self._drop = self._rng_dropout.random(_BLOCK).tolist()
+            if self._gm is not None and self._rng_corr is not None:
+                self._corr = self._rng_corr.standard_normal((_BLOCK, 3)).tolist()
             k = 0
         self._k = k + 1
         n0, n1, n2 = self._noise[k]
         u_out, ang = self._out[k]
         u_drop = self._drop[k]
+        if self._gm is not None:  # one exact Gauss-Markov step per sample, also in dropouts
+            a_p, sd_p, a_b, sd_b = self._gm
+            q_p, q_b = sd_p * math.sqrt(1.0 - a_p * a_p), sd_b * math.sqrt(1.0 - a_b * a_b)
+            w0, w1, w2 = self._corr[k]
+            b = self._bias
+            b[0] = a_p * b[0] + q_p * w0
+            b[1] = a_p * b[1] + q_p * w1
+            b[2] = a_b * b[2] + q_b * w2
+            n0 += b[0]
+            n1 += b[1]
+            n2 += b[2]
         t = float(t)
         if t < self._dropout_until - _EPS_T * cfg.period:
             return Measurement(t, None, False, False)
@@ -374,8 +522,9 @@ class BatchedSensors:
     """The sensors of ``n`` envs sampled at once: the array form of :class:`Sensors`, each env
     with its own three streams, drawn as :meth:`Sensors.reset` draws them from the env's
     generator, so that env ``i`` measures what a :class:`Sensors` reset with the same
-    generator measures (a test checks it). Draws are taken in blocks (a generator's
-    ``standard_normal((k, 3))`` is the stream of ``k`` calls of ``standard_normal(3)``).
+    generator measures (a test checks it), the Gauss-Markov DGPS error and the gyrocompass
+    bias included. Draws are taken in blocks (a generator's ``standard_normal((k, 3))`` is
+    the stream of ``k`` calls of ``standard_normal(3)``).
 
     Args:
         config: the sensor parameters (shared by the envs).
@@ -392,6 +541,12 @@ class BatchedSensors:
         self.n = n
         self.block = int(block)
         self._sig = np.tile(_sigmas(config), (n, 1))
+        self._corr_on = config.correlated
+        a_p, sd_p, a_b, sd_b = config.correlated_parameters()
+        self._a = np.array([a_p, a_p, a_b])
+        self._sd = np.tile([sd_p, sd_p, sd_b], (n, 1))  # stationary std of the errors
+        self._bias = np.zeros((n, 3))
+        self._corr = np.zeros((n, self.block, 3)) if self._corr_on else None
         self.configs = [config] * n
         self._gens: list[tuple[np.random.Generator, ...] | None] = [None] * n
         self._noise = np.zeros((n, self.block, 3))
@@ -403,8 +558,10 @@ class BatchedSensors:
 
     def set_config(self, i: int, config: SensorConfig) -> None:
         """Env ``i``'s own noise variances (``config`` may differ from the shared one in
-        ``position_variance`` and ``heading_variance`` only: the sample grid, dropouts and
-        outliers are the batch's)."""
+        ``position_variance`` and ``heading_variance`` only: the sample grid, dropouts,
+        outliers and the correlated errors' fraction, times and bias std are the batch's;
+        the Gauss-Markov DGPS error takes its share of env ``i``'s variance). Call it before
+        :meth:`reset` of that env (the reset draws the errors' start from it)."""
         same = config.replace(
             position_variance=self.config.position_variance,
             heading_variance=self.config.heading_variance,
@@ -416,6 +573,8 @@ class BatchedSensors:
             )
         self.configs[i] = config
         self._sig[i] = _sigmas(config)
+        _, sd_p, _, sd_b = config.correlated_parameters()
+        self._sd[i] = (sd_p, sd_p, sd_b)
 
     def reset(self, rngs: list[np.random.Generator], mask: ArrayLike | None = None) -> None:
         """Restart the streams of the envs (all, or those where ``mask`` is True), one
@@ -424,19 +583,29 @@ class BatchedSensors:
             raise ValueError(f"rngs must hold one generator per env ({self.n}), got {len(rngs)}")
         m = np.ones(self.n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
         for i in np.nonzero(m)[0].tolist():
-            self._gens[i] = _streams(rngs[i])
+            self._gens[i] = gens = _streams(rngs[i])
             self._k[i] = self.block
             self._until[i] = -math.inf
+            if self._corr_on:  # stationary start, as Sensors.reset
+                self._bias[i] = self._sd[i] * gens[3].standard_normal(3)
 
     def _refill(self, i: int) -> None:
         gens = self._gens[i]
         if gens is None:
             raise RuntimeError("BatchedSensors.reset(rngs) must be called before measure()")
-        noise, outlier, dropout = gens
+        noise, outlier, dropout, corr = gens
         self._noise[i] = noise.standard_normal((self.block, 3))
         self._out[i] = outlier.random((self.block, 2))
         self._drop[i] = dropout.random(self.block)
+        if self._corr is not None:
+            self._corr[i] = corr.standard_normal((self.block, 3))
         self._k[i] = 0
+
+    @property
+    def correlated_error(self) -> NDArray[np.float64]:
+        """The correlated errors of each env's last sample (n, 3): DGPS ``[x, y]`` (m) and
+        gyrocompass bias (rad); zeros when they are off."""
+        return self._bias.copy()
 
     def measure(
         self, t: ArrayLike, eta_true: ArrayLike, mask: NDArray[np.bool_] | None = None
@@ -458,6 +627,12 @@ class BatchedSensors:
         cfg = self.config
         r, k = self._rows, self._k
         noise = self._noise[r, k] * self._sig
+        if self._corr is not None:  # one exact Gauss-Markov step per sample (Sensors.measure)
+            a = self._a
+            step = a * self._bias + self._sd * np.sqrt(1.0 - a * a) * self._corr[r, k]
+            on = None if mask is None else np.asarray(mask, dtype=bool)[:, None]
+            self._bias = step if on is None else np.where(on, step, self._bias)
+            noise = noise + self._bias
         u_out, ang = self._out[r, k, 0], self._out[r, k, 1]
         u_drop = self._drop[r, k]
         self._k = k + 1 if mask is None else k + mask
@@ -481,5 +656,7 @@ class BatchedSensors:
 
 
 def _sigmas(config: SensorConfig) -> NDArray[np.float64]:
-    """Noise standard deviations ``[x, y, psi]`` (m, m, rad) of a configuration."""
-    return np.array([config.position_sigma, config.position_sigma, config.heading_sigma])
+    """White-noise standard deviations ``[x, y, psi]`` (m, m, rad) of a configuration (the
+    Gauss-Markov share of the position variance excluded)."""
+    w = config.position_white_sigma
+    return np.array([w, w, config.heading_sigma])
