@@ -46,11 +46,16 @@ def test_ekf_bias_converges_to_the_wind_load_when_holding_position():
     env = shipgym.make("station-keeping", observer="ekf", controller="pid", wind=steady,
                        start_noise=(0.0, 0.0, 0.0))  # fmt: skip
     env.reset(seed=0)
-    for _ in range(600):
-        _, _, _, trunc, info = env.step(np.zeros(3, np.float32))
     obs_wrapper = env.env
-    bias = obs_wrapper.observer.estimate().bias
-    load = info["tau_wind"]
+    # the estimate wanders with the measurement noise (yaw: 4 N m RMS about the mean over
+    # 300 s), so the mean over the second half is compared, not one sample
+    bias, load = [], []
+    for k in range(600):
+        _, _, _, trunc, info = env.step(np.zeros(3, np.float32))
+        if k >= 300:
+            bias.append(obs_wrapper.observer.estimate().bias)
+            load.append(info["tau_wind"])
+    bias, load = np.mean(bias, axis=0), np.mean(load, axis=0)
     assert np.hypot(*info["est_error_eta"][:2]) < 0.3
     np.testing.assert_allclose(bias, load, rtol=0.2, atol=0.05 * np.abs(load).max())
 

@@ -251,11 +251,12 @@ def test_non_positive_mass_is_named(tmp_path: Path) -> None:
 
 def test_singular_mass_matrix_is_named(tmp_path: Path) -> None:
     # Y_rdot so large that M_22 M_33 - M_23 M_32 = 0: the sway-yaw block is singular
-    m22 = 22934.4 + 1896.2
+    m22 = 22934.4 + 18962.0  # m - Y_vdot of the [hull]
     c = -math.sqrt(m22 * 455182.1)
     toml = BL_TOML.replace("Y_rdot = { value = -18351.9", f"Y_rdot = {{ value = {c!r}", 1)
     toml = toml.replace("N_vdot = { value = -18351.9", f"N_vdot = {{ value = {c!r}", 1)
-    assert "singular" in _bad(tmp_path, toml)
+    msg = _bad(tmp_path, toml)
+    assert "singular" in msg and ": hull: " in msg  # the [hull], not a plant variant
 
 
 def test_actuator_outside_the_hull_is_named(tmp_path: Path) -> None:

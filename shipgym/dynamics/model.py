@@ -264,7 +264,9 @@ def plant_model(
     """A plant variant by name.
 
     Args:
-        name: ``"default"`` (richer plant) or ``"seed-linear"`` (Tomera 2014 eqs. 49-50 only).
+        name: ``"default"`` (richer plant) or ``"seed-linear"`` (Tomera 2014 eqs. 49-50 only);
+            a vessel package's further variants (the Blue Lady's ``"table2-literal"``) come
+            from :meth:`~shipgym.dynamics.vessel.Vessel.plant`.
         hull: hull parameters, required (e.g. ``load_vessel("blue-lady").hull`` or
             :data:`~shipgym.dynamics.params.BLUE_LADY_HULL`); ``"seed-linear"`` is the Blue
             Lady's model of Tomera (2014) and takes only the mass ``m`` from it.

@@ -88,7 +88,9 @@ BLUE_LADY_HULL = HullParameters(
     I_z=455182.1,  # kg m^2; Tomera (2014) eq. 49: M33 (N_rdot = 0, lumped)
     x_g=0.0,  # m; Tomera (2014) Table 1: nominal x_G = 0
     X_udot=-730.5,  # kg; Tomera (2014) Table 2
-    Y_vdot=-1896.2,  # kg; Tomera (2014) Table 2
+    # kg; Tomera (2014) Table 2 prints -1896.20: read as -18962.0 (a decimal place lost, as
+    # in k1 and k2); Clarke et al. (1983) give -18936
+    Y_vdot=-18962.0,
     Y_rdot=-18351.9,  # kg m; Tomera (2014) Table 2
     # kg m; Tomera (2014) Table 2 prints 0; set equal to Y_rdot because potential-flow added
     # mass is symmetric (Clarke et al. 1983 give -Y_rdot ~ 19 700, -N_vdot ~ 17 000)

@@ -476,14 +476,44 @@ def _read_plants(r: _Reader, data: Mapping[str, Any], hull: Any, plants: dict[st
         if not isinstance(t, Mapping):
             raise r.fail(where, "must be a table")
         family = r.string(t, "family", where)
-        if family != "linear3" or not isinstance(hull, HullParameters):
-            raise r.fail(f"{where}.family", "extra plant variants must be 'linear3' (3 DOF)")
+        if family not in ("linear3", "fossen3") or not isinstance(hull, HullParameters):
+            raise r.fail(
+                f"{where}.family",
+                "extra plant variants must be 'linear3' (M, D_L only) or 'fossen3' (the hull "
+                "with some of its values replaced), 3 DOF with a 'fossen3' hull",
+            )
+        if family == "fossen3":
+            plants[name] = _read_fossen3_variant(r, t, where, name, hull)
+            continue
         r.keys(t, where, {"family", "M", "D_L"})
         M = r.matrix(t, "M", where, 3)
         _check_mass_matrix(r, M, f"{where}.M")
         D = r.matrix(t, "D_L", where, 3)
         M_RB = np.diag([hull.m, hull.m, M[2, 2]])
         plants[name] = PlantModel(name, M_RB, M - M_RB, D, (0.0, 0.0, 0.0), False, hull.m, 0.0)
+
+
+def _read_fossen3_variant(
+    r: _Reader, t: Mapping[str, Any], where: str, name: str, hull: HullParameters
+) -> PlantModel:
+    """A ``fossen3`` plant variant: the default plant of the ``[hull]`` with the hydrodynamic
+    values given here (same keys and units as ``[hull]``) in place of the hull's; the rigid
+    body (``m``, ``I_z``, ``x_g``) and the dimensions stay those of the hull."""
+    rigid = {"name", "m", "I_z", "x_g", "L_oa", "L_pp", "B", "T"}
+    allowed = {k for k in _UNITS_HULL3 if k not in rigid}
+    r.keys(t, where, {"family", *allowed})
+    over = {k: r.number(t, k, where, _UNITS_HULL3[k]) for k in sorted(allowed) if k in t}
+    if not over:
+        raise r.fail(
+            where, f"a 'fossen3' variant replaces at least one of: {', '.join(sorted(allowed))}"
+        )
+    try:
+        plant = dataclasses.replace(plant_model("default", dataclasses.replace(hull, **over)),
+                                    name=name)  # fmt: skip
+    except ValueError as exc:
+        raise r.fail(where, str(exc)) from None
+    _check_mass_matrix(r, plant.mass_matrix(), f"{where} (M = M_RB + M_A)")
+    return plant
 
 
 def _read_actuators(

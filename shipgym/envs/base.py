@@ -200,7 +200,8 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     |---|---|---|
     | ``vessel`` | (required) | vessel name, package path or :class:`Vessel` |
     | ``plan`` | ``"tomera2014"`` | plan name or :class:`ManoeuvrePlan` |
-    | ``plant`` | ``"default"`` | plant variant of the vessel (Blue Lady: ``"seed-linear"`` too) |
+    | ``plant`` | ``"default"`` | plant variant of the vessel (Blue Lady: ``"table2-literal"``, |
+    |  |  | ``"seed-linear"`` too) |
     | ``wind`` | nominal@300 | ``"SPEED@FROM_DEG"`` (m/s, deg the wind comes from; default |
     |  |  | the vessel's nominal wind from 300 deg: ``"3@300"`` for the Blue Lady), |
     |  |  | ``(speed m/s, from deg)``, ``WindConfig``, mapping, or ``None`` (no wind) |
