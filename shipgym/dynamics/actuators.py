@@ -1116,6 +1116,32 @@ class ActuatorSet:
             return None
         laws_t = tuple(laws)
         atan2, exp = math.atan2, math.exp
+        if all(t[0] == 2 for t in laws_t):  # propellers only (the Blue Lady): the same sums
+            props = tuple((t[1], *t[2]) for t in laws_t)
+            no_stall = (False,) * len(props)
+
+            def flow_props(
+                st: list[float], u: float, v: float, p: float, r: float
+            ) -> tuple[float, float, float, float, tuple[float, ...], tuple[bool, ...]]:
+                X = Y = K = N = 0.0
+                au = abs(u)
+                lifts = []
+                for j, kp, kn, quad, kua, dep, iu50, c, s, mn, mk in props:
+                    a = st[j]
+                    g = kp if a >= 0.0 else kn
+                    aa = abs(a)
+                    f = (g * aa if quad else g) * a - kua * aa * u
+                    if dep:
+                        xu = au * iu50
+                        f *= 1.0 - dep * xu * exp(1.0 - xu)
+                    X += c * f
+                    Y += s * f
+                    K += mk * f
+                    N += mn * f
+                    lifts.append(f)
+                return X, Y, K, N, tuple(lifts), no_stall
+
+            return flow_props
 
         def flow_of(
             st: list[float], u: float, v: float, p: float, r: float
