@@ -3,7 +3,8 @@ pays (measure it)").
 
 The Blue Lady's batched physics step of :class:`~shipgym.envs.batchphysics.BatchedPhysics`
 (the default :class:`~shipgym.dynamics.model.PlantModel` in matrix form, the three propellers
-with their first-order lags, the Blendermann (1994) wind load and the current, the leapfrog /
+with their advance-speed and tunnel losses and their rate-limited first-order lags, the
+Blendermann (1994) wind load and the current, the leapfrog /
 Euler update of the module docstring) written as one jitted ``jax.lax.scan`` over the ``k = 20``
 physics steps of a control period, float64 (``jax_enable_x64``). The gusts and the current are
 read as :class:`BatchedPhysics` reads them, once per control period, as ``(k, N)`` arrays
@@ -97,6 +98,12 @@ def make_kernel(
     ahead = [float(a.k_ahead) for a in acts]
     astern = [float(a.k_astern) for a in acts]
     quad = [a.law == "quadratic" for a in acts]
+    # the advance-speed loss k_u (1 - w), the tunnel factor's d and 1/U_50, the rate limits
+    kua = [float(a.advance * (1.0 - a.wake)) for a in acts]  # type: ignore[attr-defined]
+    dep = [float(a.loss_depth) for a in acts]  # type: ignore[attr-defined]
+    iu50 = [1.0 / a.loss_speed for a in acts]  # type: ignore[attr-defined]
+    band, ramp = bp._rl_band[:, 0], bp._rl_step[:, 0]
+    limited = [bool(np.isfinite(b)) for b in band]
     B = acts.configuration_matrix()
     A = np.asarray(p.M_A)
     a11, a22, a32 = A[0, 0], A[1, 1], A[2, 1]
@@ -138,7 +145,13 @@ def make_kernel(
         F = []
         for i, st in enumerate(act):
             kk = jnp.where(st >= 0.0, ahead[i], astern[i])
-            F.append((kk * jnp.abs(st) if quad[i] else kk) * st)
+            f = (kk * jnp.abs(st) if quad[i] else kk) * st
+            if kua[i]:
+                f = f - kua[i] * jnp.abs(st) * ur
+            if dep[i]:
+                x = jnp.abs(ur) * iu50[i]
+                f = f * (1.0 - dep[i] * x * jnp.exp(1.0 - x))
+            F.append(f)
         X, Y, N = mv(B, F)
         wx, wy, wn = _loads(ops, wk, psi, u, v, Vw, bw)
         X, Y, N = X + wx * gate, Y + wy * gate, N + wn * gate
@@ -169,10 +182,18 @@ def make_kernel(
         rows = tuple(tuple(x[i] for i in range(3)) for x in (q, qv, qa, act))
         cm = tuple(cmd[i] for i in range(3))
 
+        def fed(i: int, a: Any) -> Any:
+            """The command the filter is fed (BatchedPhysics.step: the rate limit)."""
+            if not limited[i]:
+                return cm[i]
+            gap = cm[i] - a
+            eff = jnp.where(gap > band[i], jnp.minimum(a + ramp[i], cm[i]), cm[i])
+            return jnp.where(-gap > band[i], jnp.maximum(a - ramp[i], cm[i]), eff)
+
         def body(carry: Any, x: Any) -> Any:
             q, qv, qa, act = carry
             qa = qacc(q, qv, qa, act, *x, gate)
-            act = tuple(jnp.clip(a + alpha[i, 0] * (cm[i] - a), lo[i, 0], hi[i, 0])
+            act = tuple(jnp.clip(a + alpha[i, 0] * (fed(i, a) - a), lo[i, 0], hi[i, 0])
                         for i, a in enumerate(act))  # lags (filterexact)  # fmt: skip
             qv = tuple(a + h * b for a, b in zip(qv, qa, strict=True))
             q = tuple(a + h * b for a, b in zip(q, qv, strict=True))

@@ -145,3 +145,44 @@ def test_each_hull_its_own_wind_and_current():
     np.testing.assert_allclose(bp.nu, [p.nu for p in singles], rtol=0, atol=1e-8)
     with pytest.raises(ValueError, match="coefficients"):
         bp.set_disturbances(0, WindConfig(speed=3.0, coefficients="destroyer"))
+
+
+@pytest.mark.parametrize("plant", ["default", "seed-linear"])
+def test_blue_lady_reversals_at_speed_in_a_current_match_the_single_physics(plant: str) -> None:
+    """Full reversals every 10 s from 1 m/s in a 0.3 m/s current: the advance-speed law (the
+    speed through the water), the tunnel loss and the rate limits (default plant; the
+    seed-linear plant: the bollard laws, no limit) as the single physics, to 1e-6."""
+    current = CurrentConfig.from_std(0.3, 0.5, 0.05, 300.0)
+    n = 2
+    bp = BatchedPhysics("blue-lady", n, plant, current=current)
+    nu0 = np.array([[1.0, 0.0, 0.0], [0.4, 0.05, 0.01]])
+    act0 = np.array([[400.0, 0.5, -0.5], [-150.0, -1.0, 1.0]])
+    bp.reset(nu=nu0, actuators=act0, rngs=[np.random.default_rng(3 + i) for i in range(n)])
+    singles = []
+    for i in range(n):
+        p = VesselPhysics("blue-lady", plant, current=current)
+        p.reset(nu=nu0[i], actuators=act0[i], rng=np.random.default_rng(3 + i))
+        singles.append(p)
+    err, ramp = 0.0, 0.0
+    for k in range(12):
+        s = 1.0 if k % 2 else -1.0
+        cmd = np.array([[s * 480.0, -s, s], [-s * 200.0, s, -s]])
+        bp.set_command(cmd)
+        for i, p in enumerate(singles):
+            p.set_command(cmd[i])
+        before = bp.actuator_state
+        bp.step(20)  # 1 s: a reversal's ramp
+        ramp = max(ramp, float(np.abs(bp.actuator_state[:, 0] - before[:, 0]).max()))
+        bp.step(180)
+        for p in singles:
+            p.step(200)
+        eta = np.array([p.eta for p in singles])
+        nu = np.array([p.nu for p in singles])
+        err = max(err, float(np.abs(eta - bp.eta).max()), float(np.abs(nu - bp.nu).max()))
+        np.testing.assert_allclose(bp.actuator_state, [p.actuator_state for p in singles],
+                                   rtol=0, atol=1e-9)  # fmt: skip
+    assert err < 1e-6, err
+    if plant == "default":  # 100 rpm/s: 1 s of a reversal moves the shaft by 100 rpm
+        assert ramp == pytest.approx(100.0, rel=1e-9)
+    else:  # the plain 2 s lag from nearly settled: up to 680 rpm (1 - e^-0.5) = 268 rpm
+        assert 250.0 < ramp <= 680.0 * (1 - math.exp(-0.5)) + 1e-9

@@ -59,7 +59,7 @@ def _parity_errors(plant, timestep, duration=600.0, wind=GUSTY):
         return phys.wind.load(t, eta[2], nu[0], nu[1])
 
     ref = simulate_reference(
-        phys.plant, t_eval, ct, cmds, thrusters=BLUE_LADY_THRUSTERS, env_load=env_load,
+        phys.plant, t_eval, ct, cmds, actuators=phys.actuators, env_load=env_load,
         breakpoints=np.arange(0.0, duration, wind.sample_period), rtol=1e-10, atol=1e-10,
     )  # fmt: skip
     dist = np.sum(np.hypot(*np.diff(ref.eta[:, :2], axis=0).T))
@@ -68,25 +68,40 @@ def _parity_errors(plant, timestep, duration=600.0, wind=GUSTY):
     return pos_err, psi_err, dist, ref
 
 
-def test_qacc_is_exactly_the_model_acceleration():
-    """After one step, MuJoCo's joint acceleration equals R(psi)(nu_dot + r S nu) of the model."""
-    phys = VesselPhysics("blue-lady", "default", wind=WindConfig(speed=4.0, direction_from=1.0))
+@pytest.mark.parametrize("plant", ["default", "seed-linear"])
+def test_qacc_is_exactly_the_model_acceleration(plant):
+    """After one step, MuJoCo's joint acceleration equals R(psi)(nu_dot + r S nu) of the model.
+
+    The thrust written out: the default plant's main propeller loses k_u (1 - w) |n| u
+    (Blanke 1981) and its tunnels the factor eta(|u|) (MuJoCo's actuators carry no force: the
+    physics applies these flow-dependent ones); the seed-linear plant's are the bollard laws of
+    Tomera (2014) eqs. 8-9, applied by MuJoCo's actuators."""
+    phys = VesselPhysics("blue-lady", plant, wind=WindConfig(speed=4.0, direction_from=1.0))
     phys.reset(eta=[1.0, 2.0, 0.7], nu=[0.4, -0.15, 0.02], actuators=[350.0, 0.6, -0.8])
     eta, nu = phys.eta, phys.nu
-    tau = np.array([1.9589e-3 * 350**2, 44.145 * (0.6 - 0.8), 44.145 * (3.24 * 0.6 + 2.376 * 0.8)])
+    F1, eta_t = 1.9589e-3 * 350**2, 1.0
+    if plant == "default":
+        F1 -= 0.4915 * (1 - 0.363) * 350 * nu[0]
+        x = nu[0] / 0.42
+        eta_t = 1 - 0.5 * x * math.exp(1 - x)
+    tau = np.array([F1, eta_t * 44.145 * (0.6 - 0.8), eta_t * 44.145 * (3.24 * 0.6 + 2.376 * 0.8)])
     tau_w = np.array(phys.wind.load(0.0, eta[2], nu[0], nu[1]))
     nu_dot = phys.plant.nu_dot(nu, tau + tau_w)
     S_nu = np.array([-nu[1], nu[0], 0.0])
     qacc = rot(eta[2]) @ (nu_dot + nu[2] * S_nu)
     phys.step()
     np.testing.assert_allclose(phys.data.qacc, qacc, rtol=1e-9, atol=1e-15)
-    np.testing.assert_allclose(phys.data.qfrc_actuator, rot(eta[2]) @ tau, rtol=1e-9)
+    mujoco_tau = np.zeros(3) if plant == "default" else tau
+    np.testing.assert_allclose(phys.data.qfrc_actuator, rot(eta[2]) @ mujoco_tau, rtol=1e-9,
+                               atol=1e-12)  # fmt: skip
 
 
 @pytest.mark.parametrize("plant", ["default", "sway-added-mass-equal-to-m"])
 def test_parity_with_scipy_reference(plant):
     """600 s, time-varying saturating commands, gusty wind, quadratic damping, Coriolis and
-    sway-yaw added-mass coupling: within 0.5 % of the distance and 0.5 deg; halving dt helps."""
+    sway-yaw added-mass coupling, the vessel's actuators (the advance-speed and tunnel losses,
+    the rate limits, which the commands' reversals hit): within 0.5 % of the distance and
+    0.5 deg; halving dt helps."""
     if plant == "default":
         model = plant_model("default", hull=BLUE_LADY_HULL)
     else:  # sway added mass equal to the rigid-body mass: the lagged scheme is unstable here
@@ -140,18 +155,24 @@ def test_thrust_follows_heading(psi_deg):
     np.testing.assert_allclose(phys.data.qacc, expect, rtol=1e-9)
 
 
-def test_saturation_at_physical_ranges():
-    phys = VesselPhysics("blue-lady")
+@pytest.mark.parametrize("plant", ["default", "seed-linear"])
+def test_saturation_at_physical_ranges(plant):
+    phys = VesselPhysics("blue-lady", plant)
     flags = phys.set_command([900.0, -3.0, 0.5])
     np.testing.assert_array_equal(flags, [True, True, False])
     np.testing.assert_array_equal(phys.command, [480.0, -1.0, 0.5])
     phys.step(round(40 / phys.timestep))
     act = phys.actuator_state
     assert act[0] <= 480.0 and act[1] >= -1.0
-    assert phys.thrust[0] == pytest.approx(1.9589e-3 * 480**2, rel=1e-6)
+    # Blanke (1981): k n^2 - k_u (1 - w) n u, at the last physics step's speed (the speed now
+    # is one step on: 1e-3)
+    u = phys.nu[0] if plant == "default" else 0.0
+    assert phys.thrust[0] == pytest.approx(1.9589e-3 * 480**2 - 0.4915 * 0.637 * 480 * u,
+                                           rel=1e-3 if u else 1e-6)  # fmt: skip
     phys.set_command([-900.0, 3.0, -3.0])
     phys.step(round(40 / phys.timestep))
     assert phys.actuator_state[0] == pytest.approx(-200.0, rel=1e-6)
+    assert np.all(np.abs(phys.thrust[1:]) <= 44.145 + 1e-9)
     assert np.all(np.abs(phys.data.actuator_force[1:]) <= 44.145 + 1e-9)
 
 
@@ -175,7 +196,8 @@ def test_mjcf_thruster_values_agree_with_parameters():
     from shipgym.dynamics.vessel import load_vessel
     from shipgym.envs.scene import build_model
 
-    m = build_model(load_vessel("blue-lady"))
+    v = load_vessel("blue-lady")
+    m = build_model(v, actuators=v.actuators_for("seed-linear"))  # the bollard laws as printed
     p = BLUE_LADY_THRUSTERS
     sites = [m.site_pos[m.actuator_trnid[i, 0]] for i in range(3)]
     np.testing.assert_allclose([s[0] for s in sites], [p.x_main, p.L2, -p.L3])
@@ -187,6 +209,8 @@ def test_mjcf_thruster_values_agree_with_parameters():
     )
     assert m.body("hull").mass[0] == pytest.approx(BLUE_LADY_HULL.m)
     assert m.opt.gravity.tolist() == [0, 0, 0]
+    # the default plant's tunnels lose thrust with speed: the physics applies it (gain 0)
+    np.testing.assert_array_equal(build_model(v).actuator_gainprm[:, 0], [0.0, 0.0, 0.0])
 
 
 def test_bad_input_raises_clear_errors():

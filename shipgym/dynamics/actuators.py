@@ -12,7 +12,10 @@ physics, the allocation and the plots alike:
   thrust along the fixed direction ``alpha`` (0: ahead, 90 deg: to starboard)
   ``F = k_ahead a`` (``a >= 0``) or ``k_astern a`` (``a < 0``) for ``law = "linear"``, and
   ``F = k |a| a`` (``k_ahead``/``k_astern`` by sign) for ``law = "quadratic"`` (Tomera 2014
-  eqs. 8-9; Fossen 2011 eq. 12.? ``T = k |n| n``);
+  eqs. 8-9; Fossen 2011 eq. 12.? ``T = k |n| n``): the bollard law; optionally the loss with
+  the advance speed ``F -= k_u |a| (1 - w) u_r`` (Blanke 1981; Fossen 2021 ch. 9) and a
+  factor ``eta(|u_r|)`` for a tunnel thruster's loss with forward speed (both make the
+  propeller flow-dependent), and a rate limit on its state;
 - :class:`Azimuth` (an azimuth thruster): two channels, the thrust state ``a`` (relative
   thrust, lagged) and the angle ``alpha`` (rad), which integrates a commanded rate limited to
   ``+-max_rate``; ``F = F_max a`` along ``alpha`` (Fossen 2011 ch. 12, azimuth thrusters;
@@ -37,6 +40,7 @@ to the hull's loads itself.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -73,7 +77,9 @@ class Channel:
             rate-limited servo; MuJoCo integrates the rate, :mod:`shipgym.envs.physics`).
         time_constant: lag time constant (s), ``nan`` for an integrator, ``>= 0`` for a servo.
         state_unit: unit of the state (differs from ``unit`` for an integrator).
-        rate: largest rate of a servo's state (state unit per second), ``nan`` otherwise.
+        rate: largest rate of a servo's state (state unit per second); of a lag's state, its
+            rate limit (``state_dot = clip((command - state) / T, -rate, rate)``), ``nan``
+            for none.
     """
 
     name: str
@@ -152,7 +158,27 @@ def _check_position(name: str, position: Any) -> tuple[float, float, float]:
 
 @dataclass(frozen=True)
 class Propeller(Actuator):
-    """A fixed-direction thruster: main propeller (``alpha = 0``) or tunnel (90 deg).
+    r"""A fixed-direction thruster: main propeller (``alpha = 0``) or tunnel (90 deg).
+
+    Thrust of the state ``a`` at the surge speed through the water ``u_r`` (m/s):
+
+    .. math::
+
+        F = \eta(|u_r|)\,\bigl(F_0(a) - k_u |a|\,(1 - w)\,u_r\bigr),\qquad
+        \eta(U) = 1 - d\,\frac{U}{U_{50}}\,e^{1 - U/U_{50}}
+
+    with the bollard law ``F_0`` (``law``), the advance-speed term of Blanke (1981)
+    (Fossen 2021 ch. 9: ``T = T_nn |n| n - T_nu |n| u_a``, ``u_a = (1 - w) u_r``; the linear
+    ``K_T(J)`` of a fixed-pitch propeller, ahead and astern alike) and the tunnel thruster's
+    loss with forward speed ``eta`` (1 at rest, its minimum ``1 - d`` at ``U_50``, back
+    towards 1 at high speed; the curve of the model tests of a tanker's bow thruster, KMW/HyA,
+    International Shipbuilding Progress 1967). ``k_u = 0`` and ``d = 0`` (the defaults) give
+    the bollard law at every speed; either makes the propeller flow-dependent
+    (:attr:`flow_dependent`): its force then comes from :meth:`ActuatorSet.flow_kernel`.
+
+    The state follows its command through a first-order lag whose rate is limited to
+    ``rate_limit`` (state unit per second; ``inf``: none): ``a_dot = clip((c - a) / T,
+    -rate_limit, rate_limit)`` (an engine's or a thruster motor's ramp).
 
     Attributes:
         name: actuator (and MuJoCo actuator) name.
@@ -166,6 +192,11 @@ class Propeller(Actuator):
         time_constant: first-order lag of the state to the command (s).
         colour: plot colour (``#rrggbb``).
         tunnel: a tunnel thruster (a label for listings and plots).
+        advance: ``k_u`` (N per state unit per m/s; 0: no advance-speed loss).
+        wake: wake fraction ``w`` (0 to < 1) of the advance speed ``u_a = (1 - w) u_r``.
+        loss_speed: ``U_50`` (m/s), the surge speed of the largest loss of :math:`\eta`.
+        loss_depth: ``d`` (0 to 1), the largest relative loss (0: none).
+        rate_limit: largest rate of the state (state unit per s, ``inf``: none).
     """
 
     kind: ClassVar[str] = "propeller"
@@ -181,6 +212,11 @@ class Propeller(Actuator):
     time_constant: float = 1.0
     colour: str = "#1f77b4"
     tunnel: bool = False
+    advance: float = 0.0
+    wake: float = 0.0
+    loss_speed: float = 1.0
+    loss_depth: float = 0.0
+    rate_limit: float = math.inf
     _c: float = field(init=False, repr=False, compare=False)
     _s: float = field(init=False, repr=False, compare=False)
 
@@ -201,6 +237,16 @@ class Propeller(Actuator):
             )
         if not math.isfinite(self.alpha):
             raise ValueError(f"actuator {self.name!r}: alpha must be finite")
+        checks = (
+            ("advance", self.advance, lambda v: v >= 0.0 and math.isfinite(v), ">= 0"),
+            ("wake", self.wake, lambda v: 0.0 <= v < 1.0, "from 0 to below 1"),
+            ("loss_speed", self.loss_speed, lambda v: v > 0.0 and math.isfinite(v), "> 0 m/s"),
+            ("loss_depth", self.loss_depth, lambda v: 0.0 <= v <= 1.0, "from 0 to 1"),
+            ("rate_limit", self.rate_limit, lambda v: v > 0.0, "> 0 (inf: none)"),
+        )
+        for k, v, ok, what in checks:
+            if isinstance(v, bool) or not isinstance(v, int | float) or math.isnan(v) or not ok(v):
+                raise ValueError(f"actuator {self.name!r}: {k} must be {what}, got {v!r}")
         object.__setattr__(self, "_c", math.cos(self.alpha))
         object.__setattr__(self, "_s", math.sin(self.alpha))
 
@@ -209,8 +255,34 @@ class Propeller(Actuator):
         return "tunnel" if self.tunnel else "propeller"
 
     @property
+    def flow_dependent(self) -> bool:  # type: ignore[override]
+        """Whether the thrust depends on the speed through the water (advance or loss)."""
+        return self.advance > 0.0 or self.loss_depth > 0.0
+
+    @property
     def channels(self) -> tuple[Channel, ...]:
-        return (Channel(self.name, self.unit, self.lower, self.upper, "lag", self.time_constant),)
+        return (
+            Channel(
+                self.name,
+                self.unit,
+                self.lower,
+                self.upper,
+                "lag",
+                self.time_constant,
+                rate=self.rate_limit if math.isfinite(self.rate_limit) else math.nan,
+            ),
+        )
+
+    def bollard(self) -> Propeller:
+        """This propeller with the bollard law at every speed and no rate limit."""
+        return dataclasses.replace(self, advance=0.0, loss_depth=0.0, rate_limit=math.inf)
+
+    def efficiency(self, u_r: Any) -> Any:
+        """The tunnel factor ``eta(|u_r|)`` (1 without a loss) at the surge speed ``u_r``."""
+        if self.loss_depth == 0.0:
+            return np.ones_like(np.asarray(u_r, dtype=float))
+        x = np.abs(np.asarray(u_r, dtype=float)) / self.loss_speed
+        return 1.0 - self.loss_depth * x * np.exp(1.0 - x)
 
     @property
     def direction(self) -> tuple[float, float]:
@@ -231,20 +303,28 @@ class Propeller(Actuator):
         k = np.where(np.asarray(a) >= 0, self.k_ahead, self.k_astern)
         return k * np.abs(a) if self.law == "quadratic" else k * np.ones_like(np.asarray(a, float))
 
-    def thrust(self, states: NDArray[np.float64]) -> Any:
+    def thrust(self, states: NDArray[np.float64], nu: ArrayLike | None = None) -> Any:
+        """Signed thrust (N) of the states (..., 1) at the body velocity through the water
+        ``nu`` (``[u, v, r]`` or ``[u, v, p, r]``; ``None``: at rest, the bollard law)."""
         a = np.asarray(states, dtype=float)[..., 0]
-        return self.gain(a) * a
+        f = self.gain(a) * a
+        if nu is None or not self.flow_dependent:
+            return f
+        ur = np.asarray(nu, dtype=float)[..., 0]
+        f = f - self.advance * (1.0 - self.wake) * np.abs(a) * ur
+        return self.efficiency(ur) * f
 
     def inverse(self, force: ArrayLike) -> NDArray[np.float64]:
-        """The state (command) that gives the thrust ``force`` (N), unsaturated."""
+        """The state (command) that gives the bollard thrust ``force`` (N), unsaturated (the
+        design model of the allocation: the advance-speed and tunnel losses are left out)."""
         f = np.asarray(force, dtype=float)
         k = np.where(f >= 0, self.k_ahead, self.k_astern)
         if self.law == "quadratic":
             return np.sign(f) * np.sqrt(np.abs(f) / k)
         return f / k
 
-    def force(self, states: NDArray[np.float64]) -> tuple[Any, Any]:
-        f = self.thrust(states)
+    def force(self, states: NDArray[np.float64], nu: ArrayLike | None = None) -> tuple[Any, Any]:
+        f = self.thrust(states, nu)
         c, s = self.direction
         return c * f, s * f
 
@@ -658,6 +738,20 @@ class ActuatorSet:
         kinds = ", ".join(f"{a.name} ({a.label})" for a in self.actuators)
         return f"ActuatorSet({kinds})"
 
+    def bollard(self) -> ActuatorSet:
+        """The same actuators with every :class:`Propeller` on its bollard law at every speed
+        and without a rate limit (:meth:`Propeller.bollard`; the other kinds unchanged): the
+        actuators of a plant that models them as printed (a ``seed-linear`` plant)."""
+        out = [a.bollard() if isinstance(a, Propeller) else a for a in self.actuators]
+        if all(b is a or b == a for a, b in zip(self.actuators, out, strict=True)):
+            return self
+        return ActuatorSet(out, self.dofs)
+
+    @property
+    def rate_limited(self) -> bool:
+        """Whether a lagged channel's rate is limited (:attr:`Channel.rate` finite)."""
+        return any(c.dynamics == "lag" and math.isfinite(c.rate) for c in self.channels)
+
     @property
     def fixed(self) -> bool:
         """Whether every actuator has a fixed direction (no azimuths)."""
@@ -833,10 +927,10 @@ class ActuatorSet:
         laws = []
         i = 0
         for a in self.actuators:
-            if isinstance(a, Propeller):
-                laws.append((i, a.k_ahead, a.k_astern, a.law == "quadratic"))
-            elif a.flow_dependent:  # its force needs the flow: flow_kernel
+            if a.flow_dependent:  # its force needs the flow: flow_kernel
                 laws.append((i, 0.0, 0.0, False))
+            elif isinstance(a, Propeller):
+                laws.append((i, a.k_ahead, a.k_astern, a.law == "quadratic"))
             else:
                 assert isinstance(a, Azimuth)
                 laws.append((i, a.max_thrust_n, a.max_thrust_n, False))
@@ -982,7 +1076,8 @@ class ActuatorSet:
         """``f(states, u, v, p, r) -> (X, Y, K, N, forces, stalled)``, plain floats.
 
         The generalised force (N, N, N m, N m) of every flow-dependent actuator (a
-        :class:`Rudder`, an :class:`MMGPropulsion` unit) at the velocity through the water
+        :class:`Rudder`, an :class:`MMGPropulsion` unit, a :class:`Propeller` with an
+        advance-speed or tunnel loss: its thrust) at the velocity through the water
         ``(u, v, p, r)``, which the physics adds to the hull's loads itself (MuJoCo's
         actuator carries no force for them), with one force (N) per such actuator, in actuator
         order (a rudder's lift, an MMG unit's propeller thrust) and its stall flag (an MMG
@@ -1000,11 +1095,53 @@ class ActuatorSet:
                              a.inflow))  # fmt: skip
             elif isinstance(a, MMGPropulsion):
                 laws.append((1, i, propulsion_kernel(a.params), 0.0, 0.0, 0.0, 0.0, False))
+            elif isinstance(a, Propeller) and a.flow_dependent:
+                c, s = a.direction
+                x, y, z = a.position
+                law = (
+                    a.k_ahead,
+                    a.k_astern,
+                    a.law == "quadratic",
+                    a.advance * (1.0 - a.wake),
+                    a.loss_depth,
+                    1.0 / a.loss_speed,
+                    c,
+                    s,
+                    x * s - y * c,
+                    -z * s,
+                )
+                laws.append((2, i, law, 0.0, 0.0, 0.0, 0.0, False))  # fmt: skip
             i += len(a.channels)
         if not laws:
             return None
         laws_t = tuple(laws)
-        atan2 = math.atan2
+        atan2, exp = math.atan2, math.exp
+        if all(t[0] == 2 for t in laws_t):  # propellers only (the Blue Lady): the same sums
+            props = tuple((t[1], *t[2]) for t in laws_t)
+            no_stall = (False,) * len(props)
+
+            def flow_props(
+                st: list[float], u: float, v: float, p: float, r: float
+            ) -> tuple[float, float, float, float, tuple[float, ...], tuple[bool, ...]]:
+                X = Y = K = N = 0.0
+                au = abs(u)
+                lifts = []
+                for j, kp, kn, quad, kua, dep, iu50, c, s, mn, mk in props:
+                    a = st[j]
+                    g = kp if a >= 0.0 else kn
+                    aa = abs(a)
+                    f = (g * aa if quad else g) * a - kua * aa * u
+                    if dep:
+                        xu = au * iu50
+                        f *= 1.0 - dep * xu * exp(1.0 - xu)
+                    X += c * f
+                    Y += s * f
+                    K += mk * f
+                    N += mn * f
+                    lifts.append(f)
+                return X, Y, K, N, tuple(lifts), no_stall
+
+            return flow_props
 
         def flow_of(
             st: list[float], u: float, v: float, p: float, r: float
@@ -1013,6 +1150,22 @@ class ActuatorSet:
             lifts = []
             stalls = []
             for kind, j, k, x, z, a_s, c_s, inflow in laws_t:
+                if kind == 2:  # a propeller: bollard law, advance-speed loss, tunnel factor
+                    kp, kn, quad, kua, dep, iu50, c, s, mn, mk = k
+                    a = st[j]
+                    g = kp if a >= 0.0 else kn
+                    aa = abs(a)
+                    f = (g * aa if quad else g) * a - kua * aa * u
+                    if dep:
+                        xu = abs(u) * iu50
+                        f *= 1.0 - dep * xu * exp(1.0 - xu)
+                    X += c * f
+                    Y += s * f
+                    K += mk * f
+                    N += mn * f
+                    lifts.append(f)
+                    stalls.append(False)
+                    continue
                 if kind == 1:  # an MMG unit: states [n, delta], the paper's angle is -delta
                     fx, fy, fn, T = k(u, v, r, -st[j + 1], st[j])
                     X += fx

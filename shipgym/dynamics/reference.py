@@ -4,7 +4,8 @@ Integrates ``eta_dot = R(psi) nu`` (3 DOF) or Fossen's 4-DOF kinematics (``x_dot
 - v cos phi sin psi``, ``y_dot = u sin psi + v cos phi cos psi``, ``phi_dot = p``, ``psi_dot
 = r cos phi``), the matrix form ``M nu_dot = tau - C nu - D nu (- g)`` (``nu_dot``, a linear
 solve, not the expanded kernel the physics uses), the actuator states (first-order lags
-``act_dot = (cmd - act) / T``, integrators ``act_dot = cmd`` for azimuth angles) and their
+``act_dot = clip((cmd - act) / T, +-rate)`` with a lag's rate limit, integrators
+``act_dot = cmd`` for azimuth angles) and their
 thrust (:meth:`ActuatorSet.tau <shipgym.dynamics.actuators.ActuatorSet.tau>`, the matrix
 form) with ``scipy.integrate.solve_ivp`` at tight tolerances, segment by segment between the
 instants where the piecewise-constant commands (or any other input) change.
@@ -97,6 +98,9 @@ def simulate_reference(
         tc = np.array([c.time_constant if c.dynamics != "integrator" else 1.0
                        for c in actuators.channels])  # fmt: skip
         rate = np.array([c.rate if c.dynamics == "servo" else np.inf for c in actuators.channels])
+        # a lag's rate limit: act_dot = clip((cmd - act) / T, +-rate)
+        lag_rate = np.array([c.rate if c.dynamics == "lag" and np.isfinite(c.rate) else np.inf
+                             for c in actuators.channels])  # fmt: skip
         flow = actuators.flow_dependent
 
         def tau_of(act: NDArray[np.float64], nu: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -110,6 +114,7 @@ def simulate_reference(
         servo = np.zeros(3, dtype=bool)
         tc = p3.time_constants
         rate = np.full(3, np.inf)
+        lag_rate = np.full(3, np.inf)
         na = 3
 
         def tau_of(act: NDArray[np.float64], nu: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -143,7 +148,7 @@ def simulate_reference(
         if env_load is not None:
             planar = np.asarray(env_load(t, eta, nu), dtype=float)  # [X, Y, N]
             tau = tau + (np.array([planar[0], planar[1], 0.0, planar[2]]) if four else planar)
-        act_dot = np.where(lagged, (cmd - act) / tc_lag, cmd)
+        act_dot = np.where(lagged, np.clip((cmd - act) / tc_lag, -lag_rate, lag_rate), cmd)
         if servo.any():
             w = np.clip((cmd - act) / np.where(ideal, 1.0, tc_lag), -rate, rate)
             act_dot = np.where(servo, np.where(ideal, ideal_rate, w), act_dot)

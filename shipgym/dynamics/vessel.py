@@ -104,6 +104,8 @@ class Vessel:
             ``heading_zeta``); empty when the file has none.
         trials: the sea-trial settings (``[trials]``: ``approach_speed`` m/s, the speed of the
             IMO manoeuvres); empty when the file has none.
+        plant_actuators: the actuators of the plant variants declared with ``actuators =
+            "bollard"`` (:meth:`actuators_for`); the others drive :attr:`actuators`.
     """
 
     name: str
@@ -125,6 +127,17 @@ class Vessel:
     sources: Mapping[str, tuple[str, str]] = field(default_factory=dict, repr=False)
     roll_control: Mapping[str, Any] = field(default_factory=dict, repr=False)
     trials: Mapping[str, float] = field(default_factory=dict, repr=False)
+    plant_actuators: Mapping[str, ActuatorSet] = field(default_factory=dict, repr=False)
+
+    def actuators_for(self, plant: Any = "default") -> ActuatorSet:
+        """The actuators a plant variant drives: :attr:`actuators`, or for a variant declared
+        with ``actuators = "bollard"`` (a model of the paper's simulation as printed) the same
+        channels with every propeller on its bollard law and no rate limit
+        (:meth:`ActuatorSet.bollard`). ``plant``: a variant name or one of :attr:`plants`
+        (another model object: :attr:`actuators`)."""
+        if not isinstance(plant, str):
+            plant = next((k for k, p in self.plants.items() if p is plant), None)
+        return self.plant_actuators.get(plant, self.actuators) if plant else self.actuators
 
     @property
     def body_xml(self) -> Path:
@@ -469,7 +482,12 @@ class _Dims4:
             raise AttributeError(name) from None
 
 
-def _read_plants(r: _Reader, data: Mapping[str, Any], hull: Any, plants: dict[str, Any]) -> None:
+def _read_plants(
+    r: _Reader, data: Mapping[str, Any], hull: Any, plants: dict[str, Any]
+) -> set[str]:
+    """The ``[plants.NAME]`` variants into ``plants``; returns the names of those that drive
+    the bollard actuators (``actuators = "bollard"``)."""
+    bollard: set[str] = set()
     extra = r.table(data, "plants", required=False)
     for name, t in extra.items():
         where = f"plants.{name}"
@@ -485,12 +503,22 @@ def _read_plants(r: _Reader, data: Mapping[str, Any], hull: Any, plants: dict[st
         if family == "fossen3":
             plants[name] = _read_fossen3_variant(r, t, where, name, hull)
             continue
-        r.keys(t, where, {"family", "M", "D_L"})
+        r.keys(t, where, {"family", "M", "D_L", "actuators"})
         M = r.matrix(t, "M", where, 3)
         _check_mass_matrix(r, M, f"{where}.M")
         D = r.matrix(t, "D_L", where, 3)
         M_RB = np.diag([hull.m, hull.m, M[2, 2]])
         plants[name] = PlantModel(name, M_RB, M - M_RB, D, (0.0, 0.0, 0.0), False, hull.m, 0.0)
+        acts = r.string(t, "actuators", where, "vessel")
+        if acts not in ("vessel", "bollard"):
+            raise r.fail(
+                f"{where}.actuators",
+                f"choose 'vessel' (the vessel's actuators) or 'bollard' (every propeller on its "
+                f"bollard law, no rate limits), got {acts!r}",
+            )
+        if acts == "bollard":
+            bollard.add(name)
+    return bollard
 
 
 def _read_fossen3_variant(
@@ -551,7 +579,8 @@ def _read_actuators(
         try:
             if kind in ("propeller", "tunnel"):
                 r.keys(t, where, common | {"law", "k_ahead", "k_astern", "k", "unit", "range",
-                                           "alpha_deg"})  # fmt: skip
+                                           "alpha_deg", "advance", "wake", "loss_speed",
+                                           "loss_depth", "rate_limit"})  # fmt: skip
                 unit = r.string(t, "unit", where, "1")
                 law = r.string(t, "law", where, "linear")
                 ku = {"linear": f"N/{unit}", "quadratic": f"N/{unit}^2"}.get(law, "")
@@ -566,10 +595,33 @@ def _read_actuators(
                 lo, hi = r.vector(t, "range", where, 2, unit, default=(-1.0, 1.0))
                 alpha = r.number(t, "alpha_deg", where, "deg",
                                  default=90.0 if kind == "tunnel" else 0.0)  # fmt: skip
+                # the advance-speed loss (Blanke 1981), the tunnel loss, the rate limit
+                per = "" if unit == "1" else f"{unit} "
+                flow = {
+                    "advance": r.number(t, "advance", where, f"N/({per}m/s)" if per else "N s/m",
+                                        default=0.0),
+                    "wake": r.number(t, "wake", where, "1", default=0.0),
+                    "loss_speed": r.number(t, "loss_speed", where, "m/s", default=1.0),
+                    "loss_depth": r.number(t, "loss_depth", where, "1", default=0.0),
+                    "rate_limit": r.number(t, "rate_limit", where, f"{unit}/s", positive=True)
+                    if "rate_limit" in t else math.inf,
+                }  # fmt: skip
+                if ("loss_depth" in t) != ("loss_speed" in t):
+                    raise r.fail(
+                        f"{where}.loss_speed",
+                        "give both loss_speed (m/s) and "
+                        "loss_depth (1) for a thrust loss with forward speed, or neither",
+                    )
+                if "wake" in t and "advance" not in t:
+                    raise r.fail(
+                        f"{where}.wake",
+                        "a wake fraction needs an advance coefficient "
+                        "(advance: the thrust loss per unit and m/s)",
+                    )
                 out.append(Propeller(
                     name=name, position=pos, alpha=math.radians(alpha), law=law, k_ahead=ka,
                     k_astern=kb, lower=lo, upper=hi, unit=unit, time_constant=tc, colour=colour,
-                    tunnel=kind == "tunnel"))  # fmt: skip
+                    tunnel=kind == "tunnel", **flow))  # fmt: skip
             elif kind == "azimuth":
                 r.keys(t, where, common | {"max_thrust", "reversible", "max_rate_deg",
                                            "angle0_deg"})  # fmt: skip
@@ -708,7 +760,7 @@ def _read(path: Path) -> Vessel:
         rigid = (hull.m, hull.I_x, hull.I_z)
         if not hull.I_x <= 2 * hull.I_z:
             raise r.fail("hull.I_x", "a rigid body needs I_x <= I_y + I_z = 2 I_z")
-    _read_plants(r, data, hull, plants)
+    bollard_plants = _read_plants(r, data, hull, plants)
     d = r.table(data, "design")
     r.keys(d, "design", {"M", "D_L", "source"})
     M = r.matrix(d, "M", "design", 3)
@@ -726,6 +778,7 @@ def _read(path: Path) -> Vessel:
             raise
         raise r.fail("windage", str(exc)) from None
     actuators = _read_actuators(r, data, int(dofs), dims, hull)
+    plant_actuators = {name: actuators.bollard() for name in sorted(bollard_plants)}
     # any subset: shipgym.guidance.limits.vessel_limits derives the others from the capacity
     lim = r.table(data, "limits", required=False)
     r.keys(lim, "limits", set(_LIMIT_KEYS))
@@ -759,6 +812,7 @@ def _read(path: Path) -> Vessel:
         plants=plants, actuators=actuators, windage=windage, design=design, limits=limits,
         control=control, observer=observer, nominal_wind=nominal_wind, rigid_inertia=rigid,
         dimensions=dims, sources=dict(r.sources), roll_control=roll_control, trials=trials,
+        plant_actuators=plant_actuators,
     )  # fmt: skip
 
 

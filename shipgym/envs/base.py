@@ -320,7 +320,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             world=scene,
             timestep=timestep,
         )
-        self.actuators = self.vessel.actuators
+        self.actuators = self.physics.actuators  # the laws of this plant (vessel.actuators_for)
         self.n_actions = self.actuators.n_channels
         # (lower, upper, lower + tol, upper - tol) of the saturation test in step()
         self._sat_bounds: tuple[NDArray[np.float64], ...] | None = None

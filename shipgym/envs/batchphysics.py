@@ -10,7 +10,8 @@ trajectories (to round-off): per physics step ``h``
    (:meth:`ActuatorSet.tau <shipgym.dynamics.actuators.ActuatorSet.tau>`, the flow-dependent
    kinds at ``nu``) and the hull's acceleration ``nu_dot`` (the plant's ``accel`` kernel, which
    takes arrays), ``qacc = R(psi)(nu_dot + r S nu)`` (Tomera (2014) eq. 22);
-3. MuJoCo's Euler update: a lagged state ``a += (c - a)(1 - exp(-h/T))`` (``filterexact``), a
+3. MuJoCo's Euler update: a lagged state ``a += (c - a)(1 - exp(-h/T))`` (``filterexact``;
+   a rate-limited one's ``c`` replaced as in the single physics), a
    servo's angle ``a += h w`` with the rate ``w = clip((c - a)/T_s, +-rate)`` (``T_s`` the
    servo's time constant or ``h``), each clamped to its range; ``qvel += h qacc``; ``qpos += h
    qvel``.
@@ -88,9 +89,10 @@ class BatchedPhysics:
             )
         if not hasattr(self.plant, "nu_dot"):
             raise TypeError(f"plant must be a 3-DOF hull model (nu_dot), got {plant!r}")
-        self.actuators = v.actuators
+        # the actuators this plant drives (a plant of the paper's model: the bollard laws)
+        self.actuators = acts = v.actuators_for(self.plant)
         self.h = check_timestep(timestep)
-        chans = v.actuators.channels
+        chans = acts.channels
         lags = [c.time_constant for c in chans if c.dynamics == "lag"]
         if lags and self.h > 0.5 * min(lags) + 1e-12:
             raise ValueError(
@@ -98,8 +100,8 @@ class BatchedPhysics:
                 f"{v.name!r} ({min(lags):g} s): use timestep <= {0.5 * min(lags):g}"
             )
         col = (slice(None), None)  # per-channel constants as columns, (n_channels, 1)
-        self.lower = v.actuators.lower.copy()
-        self.upper = v.actuators.upper.copy()
+        self.lower = acts.lower.copy()
+        self.upper = acts.upper.copy()
         self._lo, self._hi = self.lower[col], self.upper[col]
         dyn = np.array([c.dynamics for c in chans])
         lag, servo, integ = dyn == "lag", dyn == "servo", dyn == "integrator"
@@ -113,7 +115,15 @@ class BatchedPhysics:
         self._servo_T = np.array(
             [(c.time_constant or self.h) if c.dynamics == "servo" else 1.0 for c in chans]
         )[col]
-        self._tau = _actuator_kernel(v.actuators)
+        # rate-limited lags (as the single physics): past |c - a| = rate T the filter is fed
+        # a +- rate h / (1 - exp(-h/T)), which moves the state by exactly rate h per step
+        rl = np.array([c.dynamics == "lag" and np.isfinite(c.rate) for c in chans])
+        self._any_rl = bool(rl.any())
+        rl_rate = np.where(rl, [c.rate if rl[i] else 0.0 for i, c in enumerate(chans)], 0.0)
+        self._rl = rl[col]
+        self._rl_band = np.where(rl, rl_rate * tc, np.inf)[col]
+        self._rl_step = np.where(rl, rl_rate * self.h / -np.expm1(-self.h / tc), 0.0)[col]
+        self._tau = _actuator_kernel(acts)
         self._accel = _plant_kernel(self.plant)
         wind_cfg = WindConfig.coerce(wind, name="wind")
         cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
@@ -341,7 +351,13 @@ class BatchedPhysics:
         q, qv, act = self._q, self._v, self._act
         for j in range(k):
             qa = self._qacc(q, qv, self._a, act, Vw[j], bw[j], vc[j], bc[j])
-            new = act + alpha * (cmd - act)  # lags (filterexact)
+            if self._any_rl:  # the command of the rate-limited lags this step
+                gap = cmd - act
+                eff = np.where(gap > self._rl_band, np.minimum(act + self._rl_step, cmd), cmd)
+                eff = np.where(-gap > self._rl_band, np.maximum(act - self._rl_step, cmd), eff)
+                new = act + alpha * (eff - act)
+            else:
+                new = act + alpha * (cmd - act)  # lags (filterexact)
             if self._any_servo:
                 wr = np.clip((cmd - act) / self._servo_T, -self._rate, self._rate)
                 new = np.where(self._servo[:, None], act + h * wr, new)
@@ -372,14 +388,25 @@ def _actuator_kernel(acts: ActuatorSet) -> Any:
     :meth:`ActuatorSet.tau <shipgym.dynamics.actuators.ActuatorSet.tau>`.
     """
     if all(type(a) is Propeller for a in acts):
-        ahead = np.array([a.k_ahead for a in acts])[:, None]
-        astern = np.array([a.k_astern for a in acts])[:, None]
-        quad = np.array([a.law == "quadratic" for a in acts])[:, None]
+        props: list[Propeller] = list(acts)  # type: ignore[arg-type]
+        ahead = np.array([a.k_ahead for a in props])[:, None]
+        astern = np.array([a.k_astern for a in props])[:, None]
+        quad = np.array([a.law == "quadratic" for a in props])[:, None]
+        # the advance-speed loss k_u (1 - w) and the tunnel factor's d and 1/U_50
+        kua = np.array([a.advance * (1.0 - a.wake) for a in props])[:, None]
+        dep = np.array([a.loss_depth for a in props])[:, None]
+        iu50 = np.array([1.0 / a.loss_speed for a in props])[:, None]
+        advance, loss = bool(kua.any()), bool(dep.any())
         B = acts.configuration_matrix()
 
         def propellers(st: Array, ur: Array, vr: Array, r: Array) -> tuple[Array, Array, Array]:
             k = np.where(st >= 0.0, ahead, astern)
             F = np.where(quad, k * np.abs(st), k) * st
+            if advance:
+                F = F - kua * np.abs(st) * ur
+            if loss:
+                x = np.abs(ur) * iu50
+                F = F * (1.0 - dep * x * np.exp(1.0 - x))
             X, Y, N = B @ F
             return X, Y, N
 

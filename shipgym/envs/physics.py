@@ -26,7 +26,14 @@ force is ``[c_psi X - s_psi c_phi Y, s_psi X + c_psi c_phi Y, c_phi N + s_phi M_
 Thrust comes from the vessel's :class:`~shipgym.dynamics.actuators.ActuatorSet` (one law per
 actuator kind, :meth:`~shipgym.dynamics.actuators.ActuatorSet.kernel`); the MuJoCo actuators
 carry the same force: state-dependent gains (``k |n|``) and azimuth directions (``gear``) are
-refreshed every step, so ``data.actuator_force`` reads each thrust in newtons.
+refreshed every step, so ``data.actuator_force`` reads each thrust in newtons; a
+flow-dependent actuator's force (a rudder's lift, a propeller's advance-speed or tunnel loss)
+is the physics' own (its MuJoCo gain is 0, :attr:`VesselPhysics.thrust` reads it). A lagged
+actuator with a rate limit follows ``a_dot = clip((c - a) / T, +-rate)``: MuJoCo's exact
+filter is fed, each step, the command that moves the state by exactly ``rate h`` while
+``|c - a| > rate T`` and the command itself below. The actuators are those of the plant
+(:meth:`Vessel.actuators_for <shipgym.dynamics.vessel.Vessel.actuators_for>`: the bollard laws
+for a plant of the paper's model as printed).
 
 MuJoCo's Euler step is the symplectic update ``qvel += h qacc; qpos += h qvel``. Read with
 ``qvel`` as the velocity at the half step (leapfrog), it is second-order accurate, provided the
@@ -180,9 +187,10 @@ class VesselPhysics:
         if dofs != v.dofs:
             raise ValueError(f"plant {plant!r} has {dofs} DOF but vessel {v.name!r} has {v.dofs}")
         self.dofs = dofs
-        self.actuators = v.actuators
-        self._lower = v.actuators.lower.tolist()
-        self._upper = v.actuators.upper.tolist()
+        # the actuators this plant drives (a plant of the paper's model: the bollard laws)
+        self.actuators = acts = v.actuators_for(self.plant)
+        self._lower = acts.lower.tolist()
+        self._upper = acts.upper.tolist()
         self.windage = v.windage if windage is None else windage
         if not isinstance(self.windage, WindageParameters):
             raise TypeError(f"windage must be WindageParameters or None, got {windage!r}")
@@ -201,10 +209,10 @@ class VesselPhysics:
         self.wave_config = waves
         self.waves = Waves(waves, v.hull) if waves is not None else None
         self.world = world
-        self.model = build_model(v, world)
+        self.model = build_model(v, world, acts)
         if timestep is not None:
             self.model.opt.timestep = check_timestep(timestep)
-        lags = [c.time_constant for c in v.actuators.channels if c.dynamics == "lag"]
+        lags = [c.time_constant for c in acts.channels if c.dynamics == "lag"]
         if lags and self.model.opt.timestep > 0.5 * min(lags) + 1e-12:
             raise ValueError(
                 f"timestep {self.model.opt.timestep:g} s is more than half the shortest actuator "
@@ -213,19 +221,27 @@ class VesselPhysics:
         self.data = mujoco.MjData(self.model)
         self._bind_model()
         # plain-float thrust laws for reading (tau_thrusters, thrust): no MuJoCo writes
-        self._tau_of = v.actuators.kernel()
-        self._thrust_of = v.actuators.thrust_kernel()
+        self._tau_of = acts.kernel()
+        self._thrust_of = acts.thrust_kernel()
         # channels whose state lags its command (the others integrate it: azimuth angles)
-        self._lagged = tuple(i for i, c in enumerate(v.actuators.channels) if c.dynamics == "lag")
+        self._lagged = tuple(i for i, c in enumerate(acts.channels) if c.dynamics == "lag")
         # rate-limited servos (rudders): (channel, largest rate rad/s, time constant s or 0)
         self._servos = tuple(
             (i, c.rate, c.time_constant)
-            for i, c in enumerate(v.actuators.channels)
+            for i, c in enumerate(acts.channels)
             if c.dynamics == "servo"
         )
         self._servo_cmd = [0.0] * len(self._servos)
-        self._flow_of = v.actuators.flow_kernel()
-        n_flow = sum(1 for a in v.actuators if a.flow_dependent)
+        # rate-limited lags: (channel, largest rate, time constant); their commands are held
+        # here and MuJoCo's filterexact is fed the rate-limited command of each physics step
+        self._ratelim = tuple(
+            (i, c.rate, c.time_constant)
+            for i, c in enumerate(acts.channels)
+            if c.dynamics == "lag" and math.isfinite(c.rate)
+        )
+        self._rl_cmd = [0.0] * len(self._ratelim)
+        self._flow_of = acts.flow_kernel()
+        n_flow = sum(1 for a in acts if a.flow_dependent)
         #: per servo channel: whether the servo was still running at its rate limit in the last
         #: physics step of the last :meth:`step` (it has not reached its command because of the
         #: rate limit; an ideal servo runs at full rate for every move, and only a move that
@@ -361,6 +377,8 @@ class VesselPhysics:
         for k, (j, _rate, _tc) in enumerate(self._servos):  # a servo's angle within its range
             d.act[j] = min(max(float(act[j]), self._lower[j]), self._upper[j])
             self._servo_cmd[k] = float(d.act[j])
+        for k, (j, _rate, _tc) in enumerate(self._ratelim):
+            self._rl_cmd[k] = float(d.act[j])
         d.ctrl[:] = np.where(lagged, d.act, 0.0)
         self.saturated[:] = False
         self.rate_limited[:] = False
@@ -481,6 +499,8 @@ class VesselPhysics:
         out = self.data.ctrl.copy()
         for k, (j, _rate, _tc) in enumerate(self._servos):
             out[j] = self._servo_cmd[k]
+        for k, (j, _rate, _tc) in enumerate(self._ratelim):
+            out[j] = self._rl_cmd[k]
         return out
 
     @property
@@ -559,6 +579,8 @@ class VesselPhysics:
         ctrl = self.data.ctrl.tolist()
         for i in self._lagged:
             st[i] = ctrl[i]
+        for k, (j, _rate, _tc) in enumerate(self._ratelim):
+            st[j] = self._rl_cmd[k]
         for k, (j, _rate, _tc) in enumerate(self._servos):
             st[j] = self._servo_cmd[k]
         X, Y, _K, N, _ = self._tau_of(st)
@@ -582,6 +604,10 @@ class VesselPhysics:
         if self._servos:  # a servo's command is its angle; prepare() turns it into a rate
             for k, (j, _rate, _tc) in enumerate(self._servos):
                 self._servo_cmd[k] = clipped[j]
+                clipped[j] = float(self.data.ctrl[j])
+        if self._ratelim:  # a rate-limited lag's command: prepare() feeds MuJoCo its ramp
+            for k, (j, _rate, _tc) in enumerate(self._ratelim):
+                self._rl_cmd[k] = clipped[j]
                 clipped[j] = float(self.data.ctrl[j])
         self.data.ctrl[:] = clipped
         return self.saturated.copy()
@@ -647,10 +673,28 @@ class VesselPhysics:
         servo_cmd, hits, ctrl = self._servo_cmd, self._rate_hits, d.ctrl
         flow_of = self._flow_of
         linear_kin = self._linear_kin
+        rl_cmd = self._rl_cmd
         # half the timestep, read once (a MuJoCo option read costs a third of a microsecond);
         # step() and reset() rebuild this closure when model.opt.timestep has changed
         self._h = float(m.opt.timestep)
         hh = 0.5 * self._h
+        # a rate-limited lag a_dot = clip((c - a) / T, +-rate): past |c - a| = rate T MuJoCo's
+        # exact filter is fed a + rate h / (1 - exp(-h/T)), which moves the state by exactly
+        # rate h in the step; below it the command itself (the lag)
+        rlims = tuple(
+            (k, j, rate * tc, rate * self._h / -math.expm1(-self._h / tc))
+            for k, (j, rate, tc) in enumerate(self._ratelim)
+        )
+
+        def ramp(st: list[float]) -> None:
+            """MuJoCo's command of each rate-limited lag this step (above)."""
+            for k, j, band, step in rlims:
+                c_, a_ = rl_cmd[k], st[j]
+                if c_ - a_ > band:
+                    c_ = min(a_ + step, c_)
+                elif a_ - c_ > band:
+                    c_ = max(a_ - step, c_)
+                ctrl[j] = c_
 
         def loads(t: float, psi: float, u: float, v: float) -> tuple[float, ...]:
             """Wind (relative to the ground velocity), current (NED) and wave drift."""
@@ -708,6 +752,8 @@ class VesselPhysics:
             ex, ey, _ek, en = this._external
             if servos:
                 servo(st)
+            if rlims:
+                ramp(st)
             if flow_of is not None:
                 fl = flow_of(st, u - uc, v - vcb, 0.0, r)
                 this._flow = fl
@@ -750,6 +796,8 @@ class VesselPhysics:
             ex, ey, ek, en = this._external
             if servos:
                 servo(st)
+            if rlims:
+                ramp(st)
             if flow_of is not None:
                 fl = flow_of(st, u - uc, v - vcb, p, r)
                 this._flow = fl

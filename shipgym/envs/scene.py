@@ -22,7 +22,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from shipgym.assets import asset_path
-from shipgym.dynamics.actuators import Azimuth, Propeller
+from shipgym.dynamics.actuators import ActuatorSet, Azimuth, Propeller
 from shipgym.dynamics.params import BLUE_LADY_HULL
 from shipgym.dynamics.vessel import Vessel, VesselError
 
@@ -55,8 +55,15 @@ def fits(vessel: Vessel, world: str) -> bool:
     return limit is None or (vessel.L_oa <= limit[0] and vessel.B <= limit[1])
 
 
-def build_model(vessel: Vessel, world: str = "open-water") -> mujoco.MjModel:
+def build_model(
+    vessel: Vessel, world: str = "open-water", actuators: ActuatorSet | None = None
+) -> mujoco.MjModel:
     """The compiled MuJoCo model of ``vessel`` in ``world``.
+
+    ``actuators``: the actuator laws of the MuJoCo actuators (the channels of
+    ``vessel.actuators``, e.g. :meth:`Vessel.actuators_for <shipgym.dynamics.vessel.Vessel.
+    actuators_for>` a plant); ``None``: ``vessel.actuators``. A flow-dependent actuator's gain
+    is 0 (the physics applies its force).
 
     Raises:
         VesselError: ``vessel.xml`` has no body ``hull`` or fails to compile.
@@ -102,7 +109,13 @@ def build_model(vessel: Vessel, world: str = "open-water") -> mujoco.MjModel:
     for name, typ, axis in axes:
         hull.add_joint(name=name, type=typ, axis=list(axis))
     size = 0.009 * vessel.L_oa
-    for a in vessel.actuators:
+    acts = vessel.actuators if actuators is None else actuators
+    if acts.channel_names != vessel.actuators.channel_names:
+        raise ValueError(
+            f"actuators must have the channels of {vessel.name!r}: "
+            f"{vessel.actuators.channel_names}, got {acts.channel_names}"
+        )
+    for a in acts:
         hull.add_site(name=a.name, pos=list(a.position), size=[size, size, size],
                       rgba=[1.0, 0.8, 0.0, 1.0], group=3)  # fmt: skip
         for k, ch in enumerate(a.channels):
@@ -130,8 +143,9 @@ def build_model(vessel: Vessel, world: str = "open-water") -> mujoco.MjModel:
             if isinstance(a, Propeller):
                 c, s = a.direction
                 gear[:2] = [c, s]
-                # the quadratic or asymmetric law's gain is refreshed every physics step
-                gain = a.static_gain or 0.0
+                # the quadratic or asymmetric law's gain is refreshed every physics step; a
+                # flow-dependent one's force is the physics' (gain 0)
+                gain = 0.0 if a.flow_dependent else (a.static_gain or 0.0)
                 act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
                 act.forcerange = [a.force_lower, a.force_upper]
             elif isinstance(a, Azimuth) and k == 0:

@@ -156,7 +156,9 @@ def thruster_positions(actuators: Any) -> NDArray[np.float64]:
     return np.array([a.position[:2] for a in actuators], dtype=float).reshape(-1, 2)
 
 
-def thrust_arrows(actuators: Any, states: ArrayLike, length: float) -> NDArray[np.float64]:
+def thrust_arrows(
+    actuators: Any, states: ArrayLike, length: float, thrust: ArrayLike | None = None
+) -> NDArray[np.float64]:
     """Thrust arrows ``(dx, dy)`` in the body frame (m), shape (..., n_actuators, 2).
 
     Each arrow points along the actuator's force (an azimuth's turns with its angle state)
@@ -166,10 +168,30 @@ def thrust_arrows(actuators: Any, states: ArrayLike, length: float) -> NDArray[n
         actuators: the :class:`~shipgym.dynamics.actuators.ActuatorSet`.
         states: actuator states (..., n_channels) (MuJoCo's ``act``; ``info["actuator_state"]``).
         length: arrow length (m) at full thrust.
+        thrust: the signed thrust (..., n_actuators) (N; ``info["thrust"]``), which includes
+            the flow-dependent laws (a propeller's advance-speed or tunnel loss); ``None``: the
+            thrust of the states at rest (``actuators.forces(states)``).
     """
-    f = actuators.forces(states)
+    from shipgym.dynamics.actuators import Azimuth, Propeller
+
     f_max = np.array([max(float(a.max_thrust), 1e-12) for a in actuators])
-    return length * f / f_max[:, None]
+    if thrust is None:
+        return length * actuators.forces(states) / f_max[:, None]
+    st = np.asarray(states, dtype=float)
+    T = np.asarray(thrust, dtype=float)
+    cols = []
+    for i, (a, sl) in enumerate(zip(actuators, actuators.slices, strict=True)):
+        if isinstance(a, Azimuth):
+            ang = st[..., sl.start + 1]
+            c, s = np.cos(ang), np.sin(ang)
+        elif isinstance(a, Propeller):
+            c, s = a.direction
+        elif a.kind == "rudder":  # a rudder's lift acts athwartships
+            c, s = 0.0, 1.0
+        else:  # an MMG unit's propeller thrust, ahead
+            c, s = 1.0, 0.0
+        cols.append(np.stack(np.broadcast_arrays(c * T[..., i], s * T[..., i]), -1))
+    return length * np.stack(cols, -2) / f_max[:, None]
 
 
 def quay_polygons(model: Any, data: Any) -> tuple[list[str], NDArray[np.float64]]:

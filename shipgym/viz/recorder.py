@@ -302,7 +302,7 @@ class _Episode:
         )
         acts = self.ctx["actuators"]
         n_act = len(acts)
-        vectors = thrust_arrows(acts, v["actuator_state"], self.ctx["arrow_length"])
+        vectors = thrust_arrows(acts, v["actuator_state"], self.ctx["arrow_length"], v["thrust"])
         origins = np.broadcast_to(self.ctx["thrusters"], (n, n_act, 2)).reshape(-1, 2)
         rec.send_columns(
             P.THRUST,
