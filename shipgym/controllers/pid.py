@@ -717,6 +717,4 @@ def vessel_pid(
         bw = np.asarray(vessel.control["bandwidth"], dtype=float) * scale
         gains = PIDGains.from_pole_placement(bw, float(vessel.control["zeta"]))
     T_f = vessel.control.get("velocity_filter", 0.0) if conditioned else 0.0
-    return MultivariablePID(
-        gains, M=d.M, D_L=d.D_L, dt=dt, integral_limit=cap, velocity_filter=T_f
-    )
+    return MultivariablePID(gains, M=d.M, D_L=d.D_L, dt=dt, integral_limit=cap, velocity_filter=T_f)

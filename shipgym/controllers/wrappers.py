@@ -24,8 +24,8 @@ from shipgym.guidance import to_r_frame
 from shipgym.records import ControlData, StepRecord, step_record
 
 from .actuation import make_allocator
-from .conditioning import ReversalHysteresis, reversal_threshold
 from .allocation import Allocation
+from .conditioning import ReversalHysteresis, reversal_threshold
 from .grimble import GrimbleLQController
 from .pid import vessel_pid
 

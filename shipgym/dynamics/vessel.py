@@ -710,7 +710,11 @@ def _read(path: Path) -> Vessel:
         # command conditioning (shipgym.controllers.conditioning): off unless given
         "velocity_filter": r.vector(c, "velocity_filter", "control", 3, "s", default=(0, 0, 0)),
         "reversal_threshold": r.vector(
-            c, "reversal_threshold", "control", len(actuators), "N",
+            c,
+            "reversal_threshold",
+            "control",
+            len(actuators),
+            "N",
             default=(0.0,) * len(actuators),
         ),  # fmt: skip
     }
@@ -719,9 +723,7 @@ def _read(path: Path) -> Vessel:
     if min(control["velocity_filter"]) < 0:
         raise r.fail("control.velocity_filter", "time constants must be >= 0 s (0: no filter)")
     if min(control["reversal_threshold"]) < 0:
-        raise r.fail(
-            "control.reversal_threshold", "must be >= 0 N per actuator (0: no hysteresis)"
-        )
+        raise r.fail("control.reversal_threshold", "must be >= 0 N per actuator (0: no hysteresis)")
     o = r.table(data, "observer", required=False)
     r.keys(o, "observer", {"accel_psd_xy", "accel_psd_psi"})
     observer = {
