@@ -74,6 +74,7 @@ SEED_WEIGHTS: tuple[float, float, float] = (1.0, 1.0, 0.01)
 """``(lambda_1, lambda_2, lambda_3)`` of Tomera (2014) eq. 57 (1/m, 1/m, 1/deg)."""
 
 _TWO_PI = 2.0 * math.pi
+_NAN = float("nan")
 _DEG = 180.0 / math.pi
 
 
@@ -266,15 +267,15 @@ def command_chatter(
       ``a_k > band`` and -1 when ``a_k < -band`` (it keeps its direction inside the band
       ``|a_k| <= band``; unset before the first exit); a reversal is a change of that direction
       from +1 to -1 or back. So a command that dithers inside the band, or leaves it and comes
-      back on the same side, does not count. NaN for channels that are not ``reversible``.
+      back on the same side, does not count. 0 for channels that are not ``reversible``.
     - ``limit_fraction``: fraction of the samples with ``|a_k| >= 1 - limit_tol`` (at a
       command limit).
     - ``hf_variance_fraction``: the share of the variance of the linearly detrended command
       at periods below ``hf_period`` (s): with the one-sided periodogram ``P(f_j)`` of the
       detrended sequence (rectangular window, so that ``sum_j P(f_j) df`` is its variance,
-      Parseval), ``sum_{f_j > 1/hf_period} P(f_j) / sum_{j >= 1} P(f_j)``. NaN for fewer
-      than 4 samples, a constant (after detrending) command, or ``hf_period <= 2 dt`` (no
-      resolved frequency above ``1/hf_period``).
+      Parseval), ``sum_{f_j > 1/hf_period} P(f_j) / sum_{j >= 1} P(f_j)``; 0 for a command
+      without variance after detrending (a constant or a ramp); NaN for fewer than 4 samples
+      or ``hf_period <= 2 dt`` (no resolved frequency above ``1/hf_period``).
     - ``travel_per_min``: ``sum_k |a_k - a_{k-1}| / T`` (normalised units per minute).
 
     Args:
@@ -310,7 +311,7 @@ def command_chatter(
     rev = np.ones(n, bool) if reversible is None else np.asarray(reversible, dtype=bool)
     if rev.shape != (n,):
         raise ValueError(f"reversible must have {n} flags, got shape {rev.shape}")
-    nan = float("nan")
+    nan = _NAN  # one object: two summaries of the same run compare equal
     if k == 0:
         return {key: [nan] * n for key in CHATTER_KEYS}
     minutes = k * dt / 60.0
@@ -327,16 +328,16 @@ def command_chatter(
                         count += 1
                     side = s
             out["reversals_per_min"].append(count / minutes)
-        else:
-            out["reversals_per_min"].append(nan)
+        else:  # it cannot reverse
+            out["reversals_per_min"].append(0.0)
         out["limit_fraction"].append(float(np.mean(np.abs(x) >= 1.0 - limit_tol)))
         out["travel_per_min"].append(float(np.abs(np.diff(x)).sum()) / minutes)
         hf = nan
         if k >= 4 and hf_period > 2.0 * dt:  # else no resolved content below hf_period
             f, p = periodogram(x, fs=1.0 / dt, window="boxcar", detrend="linear")
             total = float(p[1:].sum())
-            if total > 1e-24:
-                hf = float(p[f > 1.0 / hf_period].sum()) / total
+            # no variance left (round-off of a constant or a ramp): no high-frequency content
+            hf = float(p[f > 1.0 / hf_period].sum()) / total if total > 1e-24 else 0.0
         out["hf_variance_fraction"].append(hf)
     return out
 

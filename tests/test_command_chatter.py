@@ -37,6 +37,8 @@ def test_hf_fraction_ignores_a_linear_trend_and_counts_periods_below_20_s():
     assert hf == pytest.approx(0.25 / 1.25, abs=2e-3)
     # not resolved above 1/hf_period at this period: NaN, not a number that means nothing
     assert math.isnan(command_chatter(slow, 15.0)["hf_variance_fraction"][0])
+    # no variance: no high-frequency content
+    assert command_chatter(np.full(50, 0.3), 1.0)["hf_variance_fraction"] == [0.0]
 
 
 def test_white_noise_hf_fraction_is_the_band_share():
@@ -71,7 +73,7 @@ def test_limit_fraction_travel_and_non_reversible_channels():
     assert out["limit_fraction"] == pytest.approx([0.75, 0.0])
     assert out["travel_per_min"] == pytest.approx([0.0 + 2.0 + 1.5, 0.5 + 1.0 + 1.0])
     assert out["reversals_per_min"][0] == pytest.approx(2.0)
-    assert math.isnan(out["reversals_per_min"][1])
+    assert out["reversals_per_min"][1] == 0.0  # it cannot reverse
 
 
 def test_bad_input_is_refused():
