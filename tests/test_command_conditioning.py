@@ -145,10 +145,11 @@ def test_the_filter_does_not_lag_what_the_model_explains():
     err_f, err_lp = 0.0, 0.0
     lp = nu0.copy()
     alpha = -np.expm1(-1.0 / np.array([20.0, 20.0, 30.0]))
+    tau = None
     for k in range(200):
         nu = expm(A * k) @ nu0
-        # the controller's own force is delivered: tau_error = tau (nothing delivered)
-        tau = ctrl([0.0, 0.0, 0.0], nu, [0.0, 0.0, 0.0], saturated=None if k == 0 else tau)
+        # nothing of the controller's force is delivered (tau_error = tau): a free decay
+        tau = ctrl([0.0, 0.0, 0.0], nu, [0.0, 0.0, 0.0], saturated=tau)
         lp = lp + alpha * (nu - lp)
         err_f = max(err_f, float(np.abs(ctrl.filtered_velocity - nu).max()))
         err_lp = max(err_lp, float(np.abs(lp - nu).max()))
