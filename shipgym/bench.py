@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from shipgym._safeload import jsonable
+from shipgym.metrics import CHATTER_KEYS
 
 __all__ = [
     "DEFAULT_OBSERVERS",
@@ -42,6 +43,7 @@ __all__ = [
     "velocity_error_evidence",
     "SCENARIO_WIND",
     "TABLE6",
+    "chatter_table",
     "observer_table",
     "observer_traces",
     "row_log",
@@ -86,6 +88,7 @@ def _one(job: tuple[Any, ...]) -> dict[str, Any]:
         "truth": {k: res[k] for k in _INDICES},
         "measured": res["measured"],
         "rmse": res["rmse"],
+        "chatter": {k: res.get(k) for k in CHATTER_KEYS},
     }
 
 
@@ -609,6 +612,42 @@ def observer_table(rows: Sequence[dict[str, Any]]) -> str:
             f"| {ms(meas['psi_E'], '.3f')} | {ms(meas['J_c'])} | {ms(truth)} "
             f"| {ms(rm['u'], '.5f')} | {ms(rm['v'], '.5f')} | {ms(rm['r'], '.4f')} |"
         )
+    return "\n".join(lines) + "\n\n" + chatter_table(rows)
+
+
+def chatter_table(rows: Sequence[dict[str, Any]]) -> str:
+    """A markdown table of the command chatter (:func:`shipgym.metrics.command_chatter`) per
+    observer: per channel (``a / b / c`` in the vessel's channel order), the mean over the
+    seeds and, in brackets, the worst seed."""
+    names = list(dict.fromkeys(r["observer"] for r in rows))
+    cols = (
+        ("reversals_per_min", "reversals / min", ".2f", 1.0, max),
+        ("limit_fraction", "at a limit (%)", ".1f", 100.0, max),
+        ("hf_variance_fraction", "variance at periods < 20 s (%)", ".1f", 100.0, max),
+        ("travel_per_min", "travel (1/min)", ".2f", 1.0, max),
+    )
+    head = "| observer | " + " | ".join(c[1] for c in cols) + " |"
+    lines = [
+        "Command chatter per channel (mean over seeds [worst seed]):",
+        "",
+        head,
+        "|" + "---|" * (len(cols) + 1),
+    ]
+    for name in names:
+        rs = [(r.get("chatter") or {}) for r in rows if r["observer"] == name]
+        cells = []
+        for key, _, fmt, scale, worst in cols:
+            per = [v.get(key) for v in rs if v.get(key)]
+            if not per:
+                cells.append("n/a")
+                continue
+            x = scale * np.array(per, dtype=float)  # (seeds, channels)
+            parts = []
+            for j in range(x.shape[1]):
+                c = x[:, j][np.isfinite(x[:, j])]
+                parts.append("-" if c.size == 0 else f"{c.mean():{fmt}} [{worst(c):{fmt}}]")
+            cells.append(" / ".join(parts))
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 

@@ -108,6 +108,10 @@ def _header(res: dict[str, Any]) -> str:
     return " | ".join(parts)
 
 
+def _round(v: float, nd: int) -> float | str:
+    return "n/a" if v != v else round(v, nd)
+
+
 def _print_table(res: dict[str, Any]) -> None:
     meas = res.get("measured") or {}
     print(_header(res))
@@ -133,6 +137,15 @@ def _print_table(res: dict[str, Any]) -> None:
     print(f"  leg times (s)    {[round(t, 1) for t in res['leg_times']]}")
     print(f"  mean |thrust| (N) {[round(t, 1) for t in res['thrust_mean_abs']]}")
     print(f"  time saturated   {[round(t, 3) for t in res['saturated_fraction']]} (fraction)")
+    if res.get("reversals_per_min"):
+        print("  command chatter per channel (normalised commands):")
+        for key, label, nd in (
+            ("reversals_per_min", "reversals / min", 2),
+            ("limit_fraction", "at a limit", 3),
+            ("hf_variance_fraction", "var. < 20 s", 3),
+            ("travel_per_min", "travel / min", 2),
+        ):
+            print(f"    {label:16s} {[_round(v, nd) for v in res[key]]}")
     if res.get("rmse"):
         r = res["rmse"]
         print(

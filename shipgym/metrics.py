@@ -31,10 +31,14 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     from shipgym.records import StepRecord
 
 __all__ = [
+    "CHATTER_KEYS",
+    "HF_PERIOD_S",
     "INDEX_KEYS",
     "MIN_SAMPLES",
+    "REVERSAL_BAND",
     "SEED_WEIGHTS",
     "accuracy_indices",
+    "command_chatter",
     "episode_result",
     "honest_indices",
     "indices_note",
@@ -50,10 +54,27 @@ INDEX_KEYS = ("x_E", "y_E", "psi_E", "J_c")
 #: mean of a few near-zero errors at the start would look like a perfect run
 MIN_SAMPLES = 10
 
+#: half-width of the band around zero a command must leave, on the other side, for a sign
+#: change to count as a reversal (normalised command, i.e. 2 % of the full command on
+#: that side; :func:`command_chatter`)
+REVERSAL_BAND = 0.02
+
+#: periods below this (s) count as high-frequency command content (:func:`command_chatter`)
+HF_PERIOD_S = 20.0
+
+#: the per-channel chatter statistics of :func:`command_chatter` (also in the episode summary)
+CHATTER_KEYS = (
+    "reversals_per_min",
+    "limit_fraction",
+    "hf_variance_fraction",
+    "travel_per_min",
+)
+
 SEED_WEIGHTS: tuple[float, float, float] = (1.0, 1.0, 0.01)
 """``(lambda_1, lambda_2, lambda_3)`` of Tomera (2014) eq. 57 (1/m, 1/m, 1/deg)."""
 
 _TWO_PI = 2.0 * math.pi
+_NAN = float("nan")
 _DEG = 180.0 / math.pi
 
 
@@ -201,7 +222,8 @@ def episode_result(
         ``truncated``, the indices of :func:`honest_indices` (``x_E``, ``y_E`` (m), ``psi_E``
         (deg), ``J_c``, ``measured``, ``indices_note``, ``partial_indices``), ``n_samples``,
         ``leg_times`` (s), ``thrust_mean_abs``, ``thrust_total_variation`` (N),
-        ``saturated_fraction`` and ``rmse`` (``None`` without an observer).
+        ``saturated_fraction``, the command chatter per channel (:data:`CHATTER_KEYS`, see
+        :func:`command_chatter`) and ``rmse`` (``None`` without an observer).
     """
     idx = honest_indices(metrics, plan_finite=plan_finite)
     return {
@@ -217,10 +239,107 @@ def episode_result(
         "thrust_mean_abs": list(metrics["thrust_mean_abs"]),
         "thrust_total_variation": list(metrics["thrust_total_variation"]),
         "saturated_fraction": list(metrics["saturated_fraction"]),
+        **{k: list(metrics.get(k, ())) for k in CHATTER_KEYS},
         "rmse": None
         if record is None or record.estimation_rmse is None
         else dict(record.estimation_rmse),
     }
+
+
+def command_chatter(
+    command: ArrayLike,
+    dt: float,
+    *,
+    reversible: ArrayLike | None = None,
+    band: float = REVERSAL_BAND,
+    hf_period: float = HF_PERIOD_S,
+    limit_tol: float = 1e-6,
+) -> dict[str, list[float]]:
+    r"""Chatter statistics of sampled actuator commands, per channel.
+
+    The commands are the normalised actions ``a_k`` in [-1, 1] sent at ``t_k = k dt`` and held
+    for one control period ``dt`` (s), shape (K, n_channels). For a two-sided channel the sign
+    of ``a`` is the sign of the physical command (``c / upper`` ahead, ``c / |lower|``
+    astern). With ``T = K dt / 60`` (min):
+
+    - ``reversals_per_min``: reversals / T. A *reversal* is a change of the command's
+      direction through zero counted with hysteresis: the channel's direction becomes +1 when
+      ``a_k > band`` and -1 when ``a_k < -band`` (it keeps its direction inside the band
+      ``|a_k| <= band``; unset before the first exit); a reversal is a change of that direction
+      from +1 to -1 or back. So a command that dithers inside the band, or leaves it and comes
+      back on the same side, does not count. 0 for channels that are not ``reversible``.
+    - ``limit_fraction``: fraction of the samples with ``|a_k| >= 1 - limit_tol`` (at a
+      command limit).
+    - ``hf_variance_fraction``: the share of the variance of the linearly detrended command
+      at periods below ``hf_period`` (s): with the one-sided periodogram ``P(f_j)`` of the
+      detrended sequence (rectangular window, so that ``sum_j P(f_j) df`` is its variance,
+      Parseval), ``sum_{f_j > 1/hf_period} P(f_j) / sum_{j >= 1} P(f_j)``; 0 for a command
+      without variance after detrending (a constant or a ramp); NaN for fewer than 4 samples
+      or ``hf_period <= 2 dt`` (no resolved frequency above ``1/hf_period``).
+    - ``travel_per_min``: ``sum_k |a_k - a_{k-1}| / T`` (normalised units per minute).
+
+    Args:
+        command: normalised commands, shape (K, n_channels) (or (K,) for one channel).
+        dt: control period (s) > 0.
+        reversible: per channel, whether reversals count (a two-sided channel, e.g. a
+            reversible propeller, a tunnel thruster); default all.
+        band: the reversal band half-width (normalised) in [0, 1).
+        hf_period: the period (s) below which content counts as high frequency.
+        limit_tol: tolerance of the limit test (normalised).
+
+    Returns:
+        ``{key: [value per channel]}`` for the keys of :data:`CHATTER_KEYS`; all NaN for an
+        empty command.
+    """
+    from scipy.signal import periodogram
+
+    a = np.asarray(command, dtype=float)
+    if a.ndim == 1:
+        a = a[:, None]
+    if a.ndim != 2:
+        raise ValueError(f"command must have shape (K, n_channels), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError("command must be finite (normalised actions in [-1, 1])")
+    dt = float(dt)
+    if not (math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a control period > 0 (s), got {dt!r}")
+    if not (0.0 <= band < 1.0):
+        raise ValueError(f"band must be in [0, 1) (normalised command), got {band!r}")
+    if not (math.isfinite(hf_period) and hf_period > 0.0):
+        raise ValueError(f"hf_period must be a period > 0 (s), got {hf_period!r}")
+    k, n = a.shape
+    rev = np.ones(n, bool) if reversible is None else np.asarray(reversible, dtype=bool)
+    if rev.shape != (n,):
+        raise ValueError(f"reversible must have {n} flags, got shape {rev.shape}")
+    nan = _NAN  # one object: two summaries of the same run compare equal
+    if k == 0:
+        return {key: [nan] * n for key in CHATTER_KEYS}
+    minutes = k * dt / 60.0
+    out: dict[str, list[float]] = {key: [] for key in CHATTER_KEYS}
+    for j in range(n):
+        x = a[:, j]
+        if rev[j]:
+            side = 0
+            count = 0
+            for v in x.tolist():
+                s = 1 if v > band else -1 if v < -band else 0
+                if s != 0:
+                    if side != 0 and s != side:
+                        count += 1
+                    side = s
+            out["reversals_per_min"].append(count / minutes)
+        else:  # it cannot reverse
+            out["reversals_per_min"].append(0.0)
+        out["limit_fraction"].append(float(np.mean(np.abs(x) >= 1.0 - limit_tol)))
+        out["travel_per_min"].append(float(np.abs(np.diff(x)).sum()) / minutes)
+        hf = nan
+        if k >= 4 and hf_period > 2.0 * dt:  # else no resolved content below hf_period
+            f, p = periodogram(x, fs=1.0 / dt, window="boxcar", detrend="linear")
+            total = float(p[1:].sum())
+            # no variance left (round-off of a constant or a ramp): no high-frequency content
+            hf = float(p[f > 1.0 / hf_period].sum()) / total if total > 1e-24 else 0.0
+        out["hf_variance_fraction"].append(hf)
+    return out
 
 
 def rmse(a: ArrayLike, b: ArrayLike, angle: bool = False, axis: int | None = 0) -> Any:
@@ -291,6 +410,11 @@ class ManoeuvreMetrics:
         sample_period: sampling time of the indices (s; Tomera 2014: 1 s).
         weights: ``(l1, l2, l3)`` of eq. 57.
         n_actuators: number of thrust channels (3 for the Blue Lady: main, bow, stern).
+        n_channels: number of command channels recorded with ``command`` (default
+            ``n_actuators``; an azimuth has two: thrust and turning rate).
+        control_period: the period (s) of the recorded commands, for the chatter statistics
+            (:func:`command_chatter`); ``None``: the mean spacing of the recorded times.
+        reversible: per channel, whether its reversals count (:func:`command_chatter`).
     """
 
     def __init__(
@@ -298,6 +422,10 @@ class ManoeuvreMetrics:
         sample_period: float = 1.0,
         weights: Sequence[float] = SEED_WEIGHTS,
         n_actuators: int = 3,
+        *,
+        n_channels: int | None = None,
+        control_period: float | None = None,
+        reversible: Sequence[bool] | None = None,
     ) -> None:
         sample_period = float(sample_period)
         if not (math.isfinite(sample_period) and sample_period > 0.0):
@@ -307,6 +435,15 @@ class ManoeuvreMetrics:
         self.sample_period = sample_period
         self.weights = _weights(weights)
         self.n_actuators = int(n_actuators)
+        self.n_channels = self.n_actuators if n_channels is None else int(n_channels)
+        if control_period is not None and not (
+            math.isfinite(float(control_period)) and float(control_period) > 0.0
+        ):
+            raise ValueError(f"control_period must be > 0 s or None, got {control_period!r}")
+        self.control_period = None if control_period is None else float(control_period)
+        if reversible is not None and len(reversible) != self.n_channels:
+            raise ValueError(f"reversible must have {self.n_channels} flags, got {reversible!r}")
+        self.reversible = None if reversible is None else tuple(bool(x) for x in reversible)
         self._tol = 1e-6 * sample_period
         self.reset()
 
@@ -332,6 +469,8 @@ class ManoeuvreMetrics:
         self._leg_times: list[float] = []
         self._leg_completion: list[float] = []
         self._t_first: float | None = None
+        self._commands: list[list[float]] = []
+        self._t_commands: list[float] = []
 
     # -- recording ---------------------------------------------------------------------------
     def record(
@@ -343,6 +482,7 @@ class ManoeuvreMetrics:
         thrust: ArrayLike | None = None,
         saturated: ArrayLike | None = None,
         leg: int | None = None,
+        command: ArrayLike | None = None,
     ) -> bool:
         """Record one control step.
 
@@ -355,6 +495,8 @@ class ManoeuvreMetrics:
             saturated: per-actuator saturation flags, (n_actuators,), or None.
             leg: index of the leg being performed; a change of index marks the previous leg
                 complete at ``t`` (see also :meth:`complete_leg`).
+            command: the normalised command (``n_channels``,) applied over the step that
+                ended at ``t`` (for :func:`command_chatter`), or None.
 
         Returns:
             True when this call was taken as an accuracy sample.
@@ -384,6 +526,12 @@ class ManoeuvreMetrics:
             self._record_thrust(thrust)
         if saturated is not None:
             self._record_saturation(saturated, dt)
+        if command is not None:
+            c = command.tolist() if isinstance(command, np.ndarray) else [float(x) for x in command]
+            if len(c) != self.n_channels:
+                raise ValueError(f"command must have {self.n_channels} elements, got {len(c)}")
+            self._commands.append(c)
+            self._t_commands.append(t)
 
         sampled = t >= self._next_k * self.sample_period - self._tol
         if sampled:
@@ -465,7 +613,10 @@ class ManoeuvreMetrics:
               set), ``saturated_time`` (s): lists per actuator (NaN / 0 if not recorded);
             - ``legs_completed``, ``leg_times`` (duration of each completed leg, s),
               ``leg_completion_times`` (s);
-            - ``per_leg``: ``{leg index: indices dict (with n_samples)}`` from the truth.
+            - ``per_leg``: ``{leg index: indices dict (with n_samples)}`` from the truth;
+            - ``reversals_per_min``, ``limit_fraction``, ``hf_variance_fraction``,
+              ``travel_per_min``: :func:`command_chatter` of the recorded commands, lists per
+              channel (NaN without commands).
         """
         w = self.weights
         nan = float("nan")
@@ -497,4 +648,15 @@ class ManoeuvreMetrics:
             "leg_times": list(self._leg_times),
             "leg_completion_times": list(self._leg_completion),
             "per_leg": per_leg,
+            **self.chatter(),
         }
+
+    def chatter(self) -> dict[str, list[float]]:
+        """:func:`command_chatter` of the commands recorded so far (lists per channel)."""
+        k = len(self._commands)
+        dt = self.control_period
+        if dt is None:
+            ts = self._t_commands
+            dt = (ts[-1] - ts[0]) / (k - 1) if k > 1 and ts[-1] > ts[0] else 1.0
+        a = np.array(self._commands, dtype=float).reshape(k, self.n_channels)
+        return command_chatter(a, dt, reversible=self.reversible)

@@ -22,6 +22,7 @@ from shipgym.controllers.batch import (
     apply_residual,
     batched_dp_controller,
 )
+from shipgym.controllers.conditioning import ReversalHysteresis, reversal_threshold
 from shipgym.controllers.pid import vessel_pid
 from shipgym.controllers.wrappers import CONTROLLERS, controller_spec
 
@@ -106,11 +107,18 @@ def test_batched_controller_equals_the_scalar_one_per_env(vessel_name):
         spec = controller_spec(name)
         scalars = [spec.factory(vessel, dt) for _ in range(n)]
         alloc_s = make_allocator(vessel, spec.allocation, dt)
+        # the wrapper's conditioning after the allocation (none where the vessel sets none)
+        hyst = [
+            ReversalHysteresis(acts, reversal_threshold(vessel)) if spec.conditioned else None
+            for _ in range(n)
+        ]
         batch = batched_dp_controller(name, vessel, n, dt)
         shadow = BatchedPID.from_scalar(scalars[0], n)  # integrates unconditionally
         tau_err = [None] * n
         errs = _Errors(n, seed=list(BATCHED_CONTROLLERS).index(name))
         seen = dict(cut_pos=0, cut_neg=0, windup=0, clamp=0, switch=0, reset=0, edge=0)
+        conditioned = spec.conditioned and hyst[0].active
+        held = 0
         for k in range(steps):
             eta, nu, eta_d, vd, ad = errs.step(k)
             tau_b, al_b, act_b = batch(eta, nu, eta_d, vd, ad)
@@ -119,6 +127,9 @@ def test_batched_controller_equals_the_scalar_one_per_env(vessel_name):
                 row = (None if vd is None else vd[i], None if ad is None else ad[i])
                 tau = scalars[i](eta[i], nu[i], eta_d[i], *row, saturated=tau_err[i])
                 al = alloc_s(tau, np.zeros(acts.n_channels))
+                if hyst[i] is not None:
+                    al_raw, al = al, hyst[i](al)
+                    held += int(al is not al_raw)
                 tau_err[i] = al.tau_error
                 scale = float(np.abs(tau).max()) + 1.0
                 assert _close(tau_b[i], tau, scale), (name, k, i, tau_b[i], tau)
@@ -154,9 +165,12 @@ def test_batched_controller_equals_the_scalar_one_per_env(vessel_name):
                 shadow.reset(m)
                 for i in np.flatnonzero(m):
                     scalars[i].reset()
+                    if hyst[i] is not None:
+                        hyst[i].reset()
                     tau_err[i] = None
                 seen["reset"] += int(m.sum())
         assert all(v > 0 for v in seen.values()), (name, seen)
+        assert held > 0 or not conditioned, (name, "the reversal hysteresis never held")
 
 
 def test_batched_pid_general_model_bool_flags_and_a_zero_integral_gain():
@@ -329,21 +343,23 @@ def test_against_the_controller_wrapper_in_a_tracking_run():
 
 # ---- the factory, and what is not batched ------------------------------------------------------
 def test_factory_mirrors_the_wrappers_pid_entries():
-    for name, (_, _, method) in BATCHED_CONTROLLERS.items():
+    for name, (_, _, method, _) in BATCHED_CONTROLLERS.items():
         assert CONTROLLERS[name].allocation == method, name
     for vname, v in VESSELS.items():
         if v.dofs != 3:
             continue
-        for name, (preset, scale, _) in BATCHED_CONTROLLERS.items():
+        for name, (preset, scale, _, cond) in BATCHED_CONTROLLERS.items():
+            assert CONTROLLERS[name].conditioned == cond, name
             try:
                 ref = CONTROLLERS[name].factory(v, 0.5)
             except ValueError as e:  # the same refusal (pid-seed elsewhere; no capacity)
                 with pytest.raises(ValueError) as mine_e:
-                    vessel_pid(v, preset, scale, 0.5)
+                    vessel_pid(v, preset, scale, 0.5, conditioned=cond)
                 assert str(mine_e.value) == str(e), (vname, name)
                 continue
-            mine = vessel_pid(v, preset, scale, 0.5)
+            mine = vessel_pid(v, preset, scale, 0.5, conditioned=cond)
             assert mine.gains == ref.gains, (vname, name)
+            assert mine.velocity_filter == ref.velocity_filter, (vname, name)
             assert np.array_equal(mine.M, ref.M) and np.array_equal(mine.D_L, ref.D_L)
             assert np.array_equal(mine.integral_limit, ref.integral_limit)
             assert mine.dt == ref.dt

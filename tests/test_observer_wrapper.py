@@ -43,7 +43,7 @@ def test_spec_round_trip_with_observer_and_controller():
 def test_ekf_bias_converges_to_the_wind_load_when_holding_position():
     steady = WindConfig(speed=3.0, direction_from=np.radians(300.0), gust_std=0.0,
                         direction_std=0.0)  # fmt: skip
-    env = shipgym.make("station-keeping", observer="ekf", controller="pid", wind=steady,
+    env = shipgym.make("station-keeping", observer="ekf", controller="pid-raw", wind=steady,
                        start_noise=(0.0, 0.0, 0.0))  # fmt: skip
     env.reset(seed=0)
     obs_wrapper = env.env

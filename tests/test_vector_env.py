@@ -192,15 +192,25 @@ def test_batched_controller_residuals_equal_the_controller_wrapper(env_id, obser
     """``controller="pid"``: the actions are residuals on the batched PID and allocation, as
     ``shipgym.make(..., controller="pid")`` forms them (leg switches turn its frame); with an
     observer, the controller and the observation use its estimate, as under the observer
-    wrapper."""
+    wrapper. ``pid`` is conditioned (velocity filter, reversal hysteresis)."""
+    _residual_parity(env_id, observer, "pid")
+
+
+@pytest.mark.parametrize("controller", ["pid-smooth", "pid-raw", "pid-smooth-raw"])
+def test_batched_conditioned_and_raw_controllers_equal_the_wrapper(controller):
+    """The other PID entries: conditioned (``pid-smooth``) and raw, with the KBF."""
+    _residual_parity("shipgym/StationKeeping-v0", "kbf", controller)
+
+
+def _residual_parity(env_id, observer, controller):
     n, steps, scale = 3, 150, 0.3
     kw = {"vessel": "blue-lady", "max_episode_steps": steps, "observer": observer}
     if observer is not None:  # outliers and dropouts, so the gate and the holds act
         kw["sensors"] = {"outlier_probability": 0.05, "dropout_probability": 0.03}
     if env_id == "shipgym/Tracking-v0":
         kw["max_legs"] = 2
-    venv = gym.make_vec(env_id, num_envs=n, controller="pid", residual_scale=scale, **kw)
-    singles = [shipgym.make(env_id, controller="pid", residual_scale=scale, **kw)
+    venv = gym.make_vec(env_id, num_envs=n, controller=controller, residual_scale=scale, **kw)
+    singles = [shipgym.make(env_id, controller=controller, residual_scale=scale, **kw)
                for _ in range(n)]  # fmt: skip
     venv.reset(seed=50)
     for i, s in enumerate(singles):

@@ -1,7 +1,9 @@
 r"""The DP controller and its thrust allocation for N envs at once (batched forms).
 
 The batched counterparts of what :class:`~shipgym.controllers.wrappers.DPControllerWrapper`
-runs every control period for ``controller="pid"`` (and ``"pid-smooth"``, ``"pid-seed"``):
+runs every control period for ``controller="pid"`` (and ``"pid-smooth"``, ``"pid-raw"``,
+``"pid-smooth-raw"``, ``"pid-seed"``), command conditioning included
+(:mod:`shipgym.controllers.conditioning`):
 
 - :class:`BatchedPID`: :class:`~shipgym.controllers.pid.MultivariablePID` (Tomera 2014 eq. 23
   in the r-frame of the current leg, forward-Euler integral (eq. 17) with conditional
@@ -46,6 +48,7 @@ from shipgym.dynamics.vessel import Vessel, load_vessel
 
 from .actuation import fixed3_parameters, make_allocator
 from .allocation.fixed3 import _force_box
+from .conditioning import BatchedReversalHysteresis, reversal_threshold
 from .pid import SATURATION_TOL, MultivariablePID, PIDGains, vessel_pid
 
 __all__ = [
@@ -214,6 +217,15 @@ class BatchedPID:
         self._R = _Rotation(n)  # at the heading of the call
         self._Rp = _Rotation(n)  # at the heading of the pending increment
         self._buf = np.empty((3, n))
+        # the model-aided velocity filter (scalar _filter): its state, the last tau, who
+        # has started (a call since the reset)
+        self.velocity_filter = s.velocity_filter
+        self._filters = s._filters
+        self._alpha = col(s._alpha)
+        self._pass = self._alpha == 1.0  # DOFs without a filter: the velocity as given
+        self._nu_f = np.zeros((3, n))
+        self._tau_prev = np.zeros((3, n))
+        self._started = np.zeros(n, dtype=bool)
 
     # ---- state -------------------------------------------------------------------------------
     def reset(self, mask: ArrayLike | None = None) -> None:
@@ -227,6 +239,10 @@ class BatchedPID:
             self._xi[:, m] = 0.0
             self._has[m] = False
         self._all_pending = False
+        if m is None:
+            self._started[:] = False
+        else:
+            self._started[m] = False
 
     @property
     def integral(self) -> Array:
@@ -388,8 +404,10 @@ class BatchedPID:
             checks.append(("eta_ddot_d_r", ad))
         _check_finite(checks)
         dirs = self._directions(saturated)
-        self._integrate(dirs)
         eT, wT = e.T, w.T
+        if self._filters:
+            wT = self._filter(wT, saturated)
+        self._integrate(dirs)
         psi = eT[2]
         R = self._R
         R.set(psi)
@@ -424,7 +442,28 @@ class BatchedPID:
         tau += self._D(wT)
         self._has[:] = True
         self._any_pending = self._all_pending = True
+        if self._filters:
+            self._tau_prev[:] = tau
+            self._started[:] = True
         return tau.T
+
+    def _filter(self, wT: Array, saturated: ArrayLike | None) -> Array:
+        """The model-aided velocity filter of every env (scalar ``_filter``), (3, n)."""
+        nf = self._nu_f
+        st = self._started
+        if st.any():
+            td = self._tau_prev
+            if saturated is not None:
+                a = np.asarray(saturated)
+                if a.dtype != np.bool_:
+                    td = td - a.astype(float, copy=False).T
+            q = self._Mi(td - self._D(nf))
+            p = nf + self.dt * q
+            new = np.where(self._pass, wT, p + self._alpha * (wT - p))
+            np.copyto(nf, new, where=st)
+        if not st.all():
+            np.copyto(nf, wT, where=~st)
+        return nf.copy()
 
     def __repr__(self) -> str:
         g = self.gains
@@ -658,12 +697,16 @@ def apply_residual(
 
 
 # ---- the named controllers -------------------------------------------------------------------
-#: the batched controller names: (gain preset, bandwidth scale, allocation), as the PID entries
-#: of :data:`shipgym.controllers.wrappers.CONTROLLERS` (a test checks they agree)
-BATCHED_CONTROLLERS: dict[str, tuple[str, float, str]] = {
-    "pid": ("tuned", 1.0, "constrained"),
-    "pid-smooth": ("smooth", 0.7, "constrained"),
-    "pid-seed": ("seed", 1.0, "inverse"),
+#: the batched controller names: (gain preset, bandwidth scale, allocation, conditioned), as
+#: the PID entries of :data:`shipgym.controllers.wrappers.CONTROLLERS` (a test checks they
+#: agree); conditioned: the vessel's velocity filter and reversal hysteresis
+#: (:mod:`shipgym.controllers.conditioning`)
+BATCHED_CONTROLLERS: dict[str, tuple[str, float, str, bool]] = {
+    "pid": ("tuned", 1.0, "constrained", True),
+    "pid-smooth": ("smooth", 0.7, "constrained", True),
+    "pid-raw": ("tuned", 1.0, "constrained", False),
+    "pid-smooth-raw": ("smooth", 0.7, "constrained", False),
+    "pid-seed": ("seed", 1.0, "inverse", False),
 }
 
 
@@ -678,10 +721,17 @@ class BatchedDPController:
         tau_error: each env's last ``tau_error`` (n, 3) (zeros after a reset: not read then).
     """
 
-    def __init__(self, name: str, pid: BatchedPID, allocation: BatchedAllocation) -> None:
+    def __init__(
+        self,
+        name: str,
+        pid: BatchedPID,
+        allocation: BatchedAllocation,
+        hysteresis: BatchedReversalHysteresis | None = None,
+    ) -> None:
         self.name = name
         self.pid = pid
         self.allocation = allocation
+        self.hysteresis = hysteresis if hysteresis is not None and hysteresis.active else None
         self.n = pid.n
         self.tau_error = np.zeros((pid.n, 3))
 
@@ -689,6 +739,8 @@ class BatchedDPController:
         """Start new episodes: every env, or those where ``mask``."""
         m = _mask(mask, self.n)
         self.pid.reset(m)
+        if self.hysteresis is not None:
+            self.hysteresis.reset(m)
         if m is None:
             self.tau_error[:] = 0.0
         else:
@@ -715,6 +767,11 @@ class BatchedDPController:
         """
         tau = self.pid(eta_r, nu, eta_d_r, eta_dot_d_r, eta_ddot_d_r, saturated=self.tau_error)
         alloc = self.allocation(tau, state)
+        if self.hysteresis is not None:  # what is delivered: the anti-windup sees it
+            cmd, force, t_del, err = self.hysteresis(
+                alloc.command, alloc.force, alloc.tau, alloc.tau_error
+            )
+            alloc = BatchedAllocationResult(cmd, force, t_del, err, alloc.saturated)
         self.tau_error = alloc.tau_error
         return tau, alloc, self.allocation.command_to_action(alloc.command)
 
@@ -744,6 +801,7 @@ def batched_dp_controller(
     v = load_vessel(vessel)
     if v.dofs != 3:
         raise ValueError(f"the batched DP controller is 3-DOF; {v.name!r} has {v.dofs} DOF")
-    preset, scale, method = BATCHED_CONTROLLERS[name]
-    pid = BatchedPID.from_scalar(vessel_pid(v, preset, scale, dt), n)
-    return BatchedDPController(name, pid, BatchedAllocation(v, method, dt))
+    preset, scale, method, conditioned = BATCHED_CONTROLLERS[name]
+    pid = BatchedPID.from_scalar(vessel_pid(v, preset, scale, dt, conditioned=conditioned), n)
+    hyst = BatchedReversalHysteresis(v.actuators, reversal_threshold(v), n) if conditioned else None
+    return BatchedDPController(name, pid, BatchedAllocation(v, method, dt), hyst)

@@ -25,6 +25,7 @@ from shipgym.records import ControlData, StepRecord, step_record
 
 from .actuation import make_allocator
 from .allocation import Allocation
+from .conditioning import ReversalHysteresis, reversal_threshold
 from .grimble import GrimbleLQController
 from .pid import vessel_pid
 
@@ -69,15 +70,21 @@ class ControllerSpec:
     factory: Callable[[Vessel, float], DPController]
     allocation: str
     description: str
+    #: apply the vessel's reversal hysteresis after the allocation
+    #: (:class:`~shipgym.controllers.conditioning.ReversalHysteresis`)
+    conditioned: bool = False
 
 
-def _pid(preset: str, scale: float = 1.0) -> Callable[[Vessel, float], DPController]:
+def _pid(
+    preset: str, scale: float = 1.0, conditioned: bool = False
+) -> Callable[[Vessel, float], DPController]:
     """PID of Tomera (2014) eq. 23 for a vessel: its preset gains where it has them (the
     Blue Lady's tuned gains), else pole placement at the vessel's bandwidth times ``scale``
-    on its design model (:func:`~shipgym.controllers.pid.pid_pole_placement`)."""
+    on its design model (:func:`~shipgym.controllers.pid.pid_pole_placement`); with
+    ``conditioned`` its velocity is low-passed (the vessel's ``velocity_filter``)."""
 
     def make(vessel: Vessel, dt: float) -> DPController:
-        return vessel_pid(vessel, preset, scale, dt)
+        return vessel_pid(vessel, preset, scale, dt, conditioned=conditioned)
 
     return make
 
@@ -95,15 +102,30 @@ def _grimble(variant: str) -> Callable[[Vessel, float], DPController]:
 #: :func:`register_controller`.
 CONTROLLERS: dict[str, ControllerSpec] = {
     "pid": ControllerSpec(
-        _pid("tuned"),
+        _pid("tuned", conditioned=True),
         "constrained",
         "Tomera (2014) eq. 23 PID (Blue Lady: tuned gains; other vessels: pole placement at "
-        "the vessel's bandwidth), constrained allocation",
+        "the vessel's bandwidth), constrained allocation, command conditioning (the vessel's "
+        "velocity filter and reversal hysteresis)",
+        conditioned=True,
     ),
     "pid-smooth": ControllerSpec(
+        _pid("smooth", 0.7, conditioned=True),
+        "constrained",
+        "Tomera (2014) eq. 23 PID, lower bandwidth for observer feedback, constrained "
+        "allocation, command conditioning",
+        conditioned=True,
+    ),
+    "pid-raw": ControllerSpec(
+        _pid("tuned"),
+        "constrained",
+        "'pid' without command conditioning (the unfiltered eq. 23 and the allocation's "
+        "commands as they are)",
+    ),
+    "pid-smooth-raw": ControllerSpec(
         _pid("smooth", 0.7),
         "constrained",
-        "Tomera (2014) eq. 23 PID, lower bandwidth for observer feedback, constrained allocation",
+        "'pid-smooth' without command conditioning",
     ),
     "pid-seed": ControllerSpec(
         _pid("seed"),
@@ -200,6 +222,12 @@ class DPControllerWrapper(
         dt = base.control_period  # type: ignore[attr-defined]
         self.controller = spec.factory(self.vessel, dt)
         self._allocate = make_allocator(self.vessel, spec.allocation, dt)
+        hyst = (
+            ReversalHysteresis(self.actuators, reversal_threshold(self.vessel))
+            if spec.conditioned
+            else None
+        )
+        self._hysteresis = hyst if hyst is not None and hyst.active else None
         self.action_space = spaces.Box(-1.0, 1.0, (self.actuators.n_channels,), np.float32)
         self._record: StepRecord | None = None
         self._leg = 0
@@ -211,6 +239,8 @@ class DPControllerWrapper(
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         self.controller.reset()
+        if self._hysteresis is not None:
+            self._hysteresis.reset()
         rec = step_record(info)
         self._record = rec
         self._leg = rec.reference.leg
@@ -270,4 +300,7 @@ class DPControllerWrapper(
             saturated=self._tau_error,
         )
         # the actuator states of the record (azimuth angles: where the rate limit starts)
-        return tau_c, self._allocate(tau_c, rec.actuators.state)
+        alloc = self._allocate(tau_c, rec.actuators.state)
+        if self._hysteresis is not None:  # what is delivered: the anti-windup sees it
+            alloc = self._hysteresis(alloc)
+        return tau_c, alloc

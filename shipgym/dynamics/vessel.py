@@ -784,14 +784,29 @@ def _read(path: Path) -> Vessel:
     r.keys(lim, "limits", set(_LIMIT_KEYS))
     limits = {k: r.number(lim, k, "limits", _LIMIT_KEYS[k], positive=True) for k in lim}
     c = r.table(data, "control", required=False)
-    r.keys(c, "control", {"bandwidth", "zeta", "pid_presets", "sensors"})
+    r.keys(c, "control", {"bandwidth", "zeta", "pid_presets", "sensors", "velocity_filter",
+                          "reversal_threshold"})  # fmt: skip
     control: dict[str, Any] = {
         "bandwidth": r.vector(c, "bandwidth", "control", 3, "rad/s", default=(0.05, 0.05, 0.05)),
         "zeta": r.number(c, "zeta", "control", "1", 1.0, positive=True),
         "pid_presets": tuple(r.value(c, "pid_presets", "control", None, ())),
+        # command conditioning (shipgym.controllers.conditioning): off unless given
+        "velocity_filter": r.vector(c, "velocity_filter", "control", 3, "s", default=(0, 0, 0)),
+        "reversal_threshold": r.vector(
+            c,
+            "reversal_threshold",
+            "control",
+            len(actuators),
+            "N",
+            default=(0.0,) * len(actuators),
+        ),  # fmt: skip
     }
     if min(control["bandwidth"]) <= 0:
         raise r.fail("control.bandwidth", "must be > 0 rad/s")
+    if min(control["velocity_filter"]) < 0:
+        raise r.fail("control.velocity_filter", "time constants must be >= 0 s (0: no filter)")
+    if min(control["reversal_threshold"]) < 0:
+        raise r.fail("control.reversal_threshold", "must be >= 0 N per actuator (0: no hysteresis)")
     o = r.table(data, "observer", required=False)
     r.keys(o, "observer", {"accel_psd_xy", "accel_psd_psi"})
     observer = {

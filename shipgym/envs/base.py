@@ -329,7 +329,13 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._channel_names = self.actuators.channel_names if multi else ()
         self.limits = vessel_limits(self.vessel)
         self.guidance = Guidance(self.plan, limits=self.limits)
-        self.metrics = ManoeuvreMetrics(sample_period=1.0, n_actuators=len(self.actuators))
+        self.metrics = ManoeuvreMetrics(
+            sample_period=1.0,
+            n_actuators=len(self.actuators),
+            n_channels=self.n_actions,
+            control_period=self.control_period,
+            reversible=(self.actuators.lower < 0.0).tolist(),
+        )
         # per-actuator saturation from the channels' (None: one channel per actuator)
         sl = self.actuators.slices
         self._slices = None if all(x.stop - x.start == 1 for x in sl) else sl
@@ -462,7 +468,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         t = phys.time
         switched = self.guidance.update(t, phys.eta)
         sample = self._observe()
-        self._record_metrics(sample, saturated)
+        self._record_metrics(sample, saturated, clipped)
         rewards = self._reward_terms(sample, clipped, new_contact, switched)
         reward = float(sum(rewards.values()))
         self._prev_action = clipped
@@ -548,7 +554,12 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.reference = ref
         return _Sample(eta, nu, ref, ref.to_r(eta), phys.thrust)
 
-    def _record_metrics(self, s: _Sample, saturated: NDArray[np.bool_] | None = None) -> None:
+    def _record_metrics(
+        self,
+        s: _Sample,
+        saturated: NDArray[np.bool_] | None = None,
+        command: NDArray[np.float64] | None = None,
+    ) -> None:
         z = self._last_measurement
         self.metrics.record(
             self.physics.time,
@@ -560,6 +571,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             if saturated is None or self._slices is None
             else [bool(saturated[sl].any()) for sl in self._slices],
             leg=s.ref.leg,
+            command=command,
         )
 
     @property

@@ -531,9 +531,41 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
             f"| {name} | {_fmt(mean_abs[i], 2)} | {_fmt(tv[i], 1)} | {_fmt(sat_f[i], 3)} | "
             f"{_fmt(sat_t[i], 1)} |"
         )
+    if m.get("reversals_per_min"):
+        ch_names = _channel_labels(run)
+        lines += [
+            "",
+            "## Command chatter",
+            "",
+            "Per channel, from the normalised commands (shipgym.metrics.command_chatter): "
+            "reversals of the command's direction through a band of 2 % around zero, time at a "
+            "command limit, share of the detrended command's variance at periods below 20 s, "
+            "command travel.",
+            "",
+            "| channel | reversals / min | at a limit | variance < 20 s | travel (1/min) |",
+            "|---|---|---|---|---|",
+        ]
+        for j, name in enumerate(ch_names):
+            lines.append(
+                f"| {name} | {_fmt(m['reversals_per_min'][j], 2)} | "
+                f"{_fmt(m['limit_fraction'][j], 3)} | {_fmt(m['hf_variance_fraction'][j], 3)} | "
+                f"{_fmt(m['travel_per_min'][j], 2)} |"
+            )
     lines += ["", "## Figures", ""]
     lines += [f"- [{p.name}]({p.name})" for p in files]
     return "\n".join(lines) + "\n"
+
+
+def _channel_labels(run: Run) -> list[str]:
+    """The run's command channels labelled ``actuator`` (or ``actuator: channel index``)."""
+    acts = run.actuators
+    names = [_label(a) for a in acts["names"]]
+    owner = [int(o) for o in acts["channel_actuator"]]
+    out = []
+    for j, o in enumerate(owner):
+        k = owner[:j].count(o)
+        out.append(names[o] if owner.count(o) == 1 else f"{names[o]} ({k + 1})")
+    return out
 
 
 def _leg_completions(run: Run) -> list[float]:

@@ -1,0 +1,120 @@
+"""Command chatter statistics (shipgym.metrics.command_chatter) on synthetic signals."""
+
+import math
+
+import numpy as np
+import pytest
+
+from shipgym.metrics import CHATTER_KEYS, ManoeuvreMetrics, command_chatter
+
+
+def _two_tones(a_slow: float, a_fast: float, p_slow: float, p_fast: float, k: int, dt: float):
+    t = dt * np.arange(k)
+    return a_slow * np.cos(2 * np.pi * t / p_slow) + a_fast * np.cos(2 * np.pi * t / p_fast)
+
+
+@pytest.mark.parametrize(
+    ("a_slow", "a_fast", "p_slow", "p_fast"),
+    [(1.0, 0.5, 50.0, 10.0), (0.2, 0.6, 40.0, 8.0), (0.5, 0.0, 100.0, 5.0)],
+)
+def test_hf_fraction_of_two_tones_is_their_power_split(a_slow, a_fast, p_slow, p_fast):
+    # a tone of amplitude A carries variance A^2 / 2: the share below 20 s is the fast one's
+    x = _two_tones(a_slow, a_fast, p_slow, p_fast, 2000, 1.0)
+    expected = a_fast**2 / (a_slow**2 + a_fast**2)
+    hf = command_chatter(x, 1.0)["hf_variance_fraction"][0]
+    # linear detrending removes a little of each tone (an integer number of cycles of a cosine
+    # is not orthogonal to t); the leak is below 1e-3 at 2000 samples
+    assert hf == pytest.approx(expected, abs=2e-3)
+
+
+def test_hf_fraction_ignores_a_linear_trend_and_counts_periods_below_20_s():
+    dt = 0.5
+    t = dt * np.arange(4000)
+    slow = np.cos(2 * np.pi * t / 25.0)  # 25 s: low frequency
+    fast = 0.5 * np.cos(2 * np.pi * t / 15.0)  # 15 s: high frequency
+    trend = 0.3 + 1e-4 * t
+    hf = command_chatter(slow + fast + trend, dt)["hf_variance_fraction"][0]
+    assert hf == pytest.approx(0.25 / 1.25, abs=2e-3)
+    # not resolved above 1/hf_period at this period: NaN, not a number that means nothing
+    assert math.isnan(command_chatter(slow, 15.0)["hf_variance_fraction"][0])
+    # no variance: no high-frequency content
+    assert command_chatter(np.full(50, 0.3), 1.0)["hf_variance_fraction"] == [0.0]
+
+
+def test_white_noise_hf_fraction_is_the_band_share():
+    # white noise spreads its variance evenly over 0..1/(2 dt): at dt = 1 s the share of
+    # periods below 20 s is (0.5 - 0.05) / 0.5 = 0.9
+    x = np.random.default_rng(1).normal(size=20000)
+    assert command_chatter(x, 1.0)["hf_variance_fraction"][0] == pytest.approx(0.9, abs=0.01)
+
+
+def test_reversals_count_sign_changes_only_when_the_band_is_left():
+    dt = 1.0
+    # dithering inside +-0.02 is not a reversal; leaving it on the other side is
+    x = [0.5, 0.01, -0.015, 0.02, 0.4, -0.03, -0.5, 0.0, 0.3, 0.0, 0.0, 0.0]
+    out = command_chatter(np.array(x), dt)
+    # +1 (0.5) -> -1 (-0.03): one; -1 -> +1 (0.3): two; 12 samples = 0.2 min
+    assert out["reversals_per_min"][0] == pytest.approx(2 / 0.2)
+    # the band as an argument
+    assert command_chatter(np.array(x), dt, band=0.04)["reversals_per_min"][0] == pytest.approx(
+        2 / 0.2
+    )
+    assert command_chatter(np.array(x), dt, band=0.35)["reversals_per_min"][0] == pytest.approx(
+        1 / 0.2
+    )
+    # a square wave of period 4 s reverses every 2 s: 119 reversals in 240 s (4 min)
+    sq = np.tile([1.0, 1.0, -1.0, -1.0], 60)
+    assert command_chatter(sq, 1.0)["reversals_per_min"][0] == pytest.approx(119 / 4)
+
+
+def test_limit_fraction_travel_and_non_reversible_channels():
+    c = np.array([[1.0, 0.0], [1.0, 0.5], [-1.0, -0.5], [0.5, 0.5]])
+    out = command_chatter(c, 15.0, reversible=[True, False])  # 4 x 15 s = 1 min
+    assert out["limit_fraction"] == pytest.approx([0.75, 0.0])
+    assert out["travel_per_min"] == pytest.approx([0.0 + 2.0 + 1.5, 0.5 + 1.0 + 1.0])
+    assert out["reversals_per_min"][0] == pytest.approx(2.0)
+    assert out["reversals_per_min"][1] == 0.0  # it cannot reverse
+
+
+def test_bad_input_is_refused():
+    with pytest.raises(ValueError, match="finite"):
+        command_chatter([0.0, float("nan")], 1.0)
+    with pytest.raises(ValueError, match="dt"):
+        command_chatter([0.0, 1.0], 0.0)
+    with pytest.raises(ValueError, match="band"):
+        command_chatter([0.0, 1.0], 1.0, band=1.0)
+    with pytest.raises(ValueError, match="reversible"):
+        command_chatter(np.zeros((3, 2)), 1.0, reversible=[True])
+    empty = command_chatter(np.zeros((0, 2)), 1.0)
+    assert set(empty) == set(CHATTER_KEYS) and all(math.isnan(v) for v in empty["limit_fraction"])
+
+
+def test_manoeuvre_metrics_records_commands():
+    m = ManoeuvreMetrics(n_actuators=1, n_channels=2, control_period=1.0, reversible=[True, True])
+    sq = np.tile([1.0, 1.0, -1.0, -1.0], 30)
+    for k, v in enumerate(sq):
+        m.record(float(k), np.zeros(3), np.zeros(3), command=[v, 0.5 * v])
+    s = m.summary()
+    assert s["reversals_per_min"] == pytest.approx([59 / 2] * 2)  # 120 s
+    assert s["limit_fraction"] == pytest.approx([1.0, 0.0])
+    with pytest.raises(ValueError, match="2 elements"):
+        m.record(200.0, np.zeros(3), np.zeros(3), command=[1.0])
+    assert all(math.isnan(v) for v in ManoeuvreMetrics().summary()["reversals_per_min"])
+
+
+def test_chatter_table_gives_mean_and_worst_seed_per_channel():
+    from shipgym.bench import chatter_table
+
+    rows = [
+        {"observer": "kbf", "chatter": {"reversals_per_min": [1.0, 3.0],
+                                        "limit_fraction": [0.1, 0.0],
+                                        "hf_variance_fraction": [0.2, 0.4],
+                                        "travel_per_min": [2.0, 2.0]}},
+        {"observer": "kbf", "chatter": {"reversals_per_min": [3.0, float("nan")],
+                                        "limit_fraction": [0.3, 0.0],
+                                        "hf_variance_fraction": [0.2, 0.2],
+                                        "travel_per_min": [4.0, 2.0]}},
+    ]  # fmt: skip
+    line = chatter_table(rows).splitlines()[-1]
+    assert line.startswith("| kbf | 2.00 [3.00] / 3.00 [3.00] | 20.0 [30.0] / 0.0 [0.0] |")
+    assert "20.0 [20.0] / 30.0 [40.0]" in line and "3.00 [4.00] / 2.00 [2.00]" in line
