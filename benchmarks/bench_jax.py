@@ -149,7 +149,7 @@ def make_kernel(
             if kua[i]:
                 f = f - kua[i] * jnp.abs(st) * ur
             if dep[i]:
-                x = jnp.abs(ur) * iu50[i]
+                x = (ur * iu50[i]) ** 2
                 f = f * (1.0 - dep[i] * x * jnp.exp(1.0 - x))
             F.append(f)
         X, Y, N = mv(B, F)

@@ -82,8 +82,8 @@ def test_qacc_is_exactly_the_model_acceleration(plant):
     F1, eta_t = 1.9589e-3 * 350**2, 1.0
     if plant == "default":
         F1 -= 0.4915 * (1 - 0.363) * 350 * nu[0]
-        x = nu[0] / 0.42
-        eta_t = 1 - 0.5 * x * math.exp(1 - x)
+        x2 = (nu[0] / 0.42) ** 2
+        eta_t = 1 - 0.5 * x2 * math.exp(1 - x2)
     tau = np.array([F1, eta_t * 44.145 * (0.6 - 0.8), eta_t * 44.145 * (3.24 * 0.6 + 2.376 * 0.8)])
     tau_w = np.array(phys.wind.load(0.0, eta[2], nu[0], nu[1]))
     nu_dot = phys.plant.nu_dot(nu, tau + tau_w)

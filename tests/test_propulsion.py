@@ -31,8 +31,8 @@ def _main(n: float, u: float) -> float:
 
 
 def _eta(u: float) -> float:
-    x = abs(u) / U50
-    return 1.0 - DEPTH * x * math.exp(1.0 - x)
+    x2 = (u / U50) ** 2
+    return 1.0 - DEPTH * x2 * math.exp(1.0 - x2)
 
 
 def test_the_vessel_file_gives_the_documented_laws() -> None:
@@ -65,8 +65,8 @@ def test_thrust_laws_against_their_formulas(n: float, u: float) -> None:
 
 
 def test_tunnel_factor_shape() -> None:
-    """1 at rest, the KMW/HyA 50 % at 4 kn (Froude-scaled 0.42 m/s) as its minimum, back to
-    about 0.88 at 15 kn full scale, the same astern."""
+    """1 at rest and flat at low speed, the KMW/HyA 50 % at 4 kn (Froude-scaled 0.42 m/s) as
+    its minimum, back to the zero-speed effect at 15 kn full scale, the same astern."""
     bow = load_vessel("blue-lady").actuators.actuators[1]
     assert bow.efficiency(0.0) == 1.0
     assert bow.efficiency(U50) == pytest.approx(0.5, abs=1e-15)
@@ -74,7 +74,8 @@ def test_tunnel_factor_shape() -> None:
     e = bow.efficiency(u)
     assert u[np.argmin(e)] == pytest.approx(U50, abs=1e-3)
     kn15 = 15 * KN / math.sqrt(24.0)
-    assert bow.efficiency(kn15) == pytest.approx(_eta(kn15)) and 0.85 < _eta(kn15) < 0.9
+    assert bow.efficiency(kn15) == pytest.approx(_eta(kn15)) and _eta(kn15) > 0.999
+    assert bow.efficiency(0.05) > 0.98  # works well at low speed
     np.testing.assert_array_equal(bow.efficiency(-u), e)
 
 
@@ -110,7 +111,7 @@ def test_astern_speed_and_turning_on_the_spot() -> None:
     phys.set_command([0.0, 1.0, -1.0])
     phys.step(round(1200.0 / phys.timestep))
     r = math.degrees(phys.nu[2])
-    assert r == pytest.approx(1.098, abs=1e-3)  # 1.136 with the literal Y_vdot
+    assert r == pytest.approx(1.163, abs=1e-3)
     # the hull drifts slowly while it turns (the Coriolis and Munk terms): the tunnels lose a
     # little of their thrust at that surge speed
     u = phys.nu[0]

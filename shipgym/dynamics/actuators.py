@@ -165,13 +165,13 @@ class Propeller(Actuator):
     .. math::
 
         F = \eta(|u_r|)\,\bigl(F_0(a) - k_u |a|\,(1 - w)\,u_r\bigr),\qquad
-        \eta(U) = 1 - d\,\frac{U}{U_{50}}\,e^{1 - U/U_{50}}
+        \eta(U) = 1 - d\,x^2\,e^{1 - x^2},\quad x = U / U_{50}
 
     with the bollard law ``F_0`` (``law``), the advance-speed term of Blanke (1981)
     (Fossen 2021 ch. 9: ``T = T_nn |n| n - T_nu |n| u_a``, ``u_a = (1 - w) u_r``; the linear
     ``K_T(J)`` of a fixed-pitch propeller, ahead and astern alike) and the tunnel thruster's
     loss with forward speed ``eta`` (1 at rest, its minimum ``1 - d`` at ``U_50``, back
-    towards 1 at high speed; the curve of the model tests of a tanker's bow thruster, KMW/HyA,
+    to 1 at high speed, flat at low speed; the curve of the model tests of a tanker's bow thruster, KMW/HyA,
     International Shipbuilding Progress 1967). ``k_u = 0`` and ``d = 0`` (the defaults) give
     the bollard law at every speed; either makes the propeller flow-dependent
     (:attr:`flow_dependent`): its force then comes from :meth:`ActuatorSet.flow_kernel`.
@@ -281,8 +281,8 @@ class Propeller(Actuator):
         """The tunnel factor ``eta(|u_r|)`` (1 without a loss) at the surge speed ``u_r``."""
         if self.loss_depth == 0.0:
             return np.ones_like(np.asarray(u_r, dtype=float))
-        x = np.abs(np.asarray(u_r, dtype=float)) / self.loss_speed
-        return 1.0 - self.loss_depth * x * np.exp(1.0 - x)
+        x2 = (np.asarray(u_r, dtype=float) / self.loss_speed) ** 2
+        return 1.0 - self.loss_depth * x2 * np.exp(1.0 - x2)
 
     @property
     def direction(self) -> tuple[float, float]:
@@ -1133,6 +1133,7 @@ class ActuatorSet:
                     f = (g * aa if quad else g) * a - kua * aa * u
                     if dep:
                         xu = au * iu50
+                        xu *= xu
                         f *= 1.0 - dep * xu * exp(1.0 - xu)
                     X += c * f
                     Y += s * f
@@ -1157,7 +1158,8 @@ class ActuatorSet:
                     aa = abs(a)
                     f = (g * aa if quad else g) * a - kua * aa * u
                     if dep:
-                        xu = abs(u) * iu50
+                        xu = u * iu50
+                        xu *= xu
                         f *= 1.0 - dep * xu * exp(1.0 - xu)
                     X += c * f
                     Y += s * f

@@ -405,7 +405,8 @@ def _actuator_kernel(acts: ActuatorSet) -> Any:
             if advance:
                 F = F - kua * np.abs(st) * ur
             if loss:
-                x = np.abs(ur) * iu50
+                x = ur * iu50
+                x = x * x
                 F = F * (1.0 - dep * x * np.exp(1.0 - x))
             X, Y, N = B @ F
             return X, Y, N

@@ -134,8 +134,9 @@ BLUE_LADY_LIMITS = Limits(
     sway_speed=0.05,  # m/s; assumed v_max 0.05-0.1 m/s
     sway_accel=0.001,  # m/s^2; capacity: (88 - 25) N / 24 831 kg = 0.0025 m/s^2; chosen 0.001
     yaw_rate=math.radians(1.0),  # rad/s; assumed r_max 1 deg/s
-    # rad/s^2; capacity: (248 - 27) N m / 4.55e5 kg m^2 = 4.9e-4 rad/s^2; chosen: 2.5e-4
-    yaw_accel=2.5e-4,
+    # rad/s^2; capacity: (248 - 27) N m / 4.55e5 kg m^2 = 4.9e-4 rad/s^2 at rest; chosen: 1.5e-4
+    # (2.5e-4 until the hull evidence and the tunnel loss of issue 16 saturated the stern tunnel)
+    yaw_accel=1.5e-4,
 )
 
 
