@@ -56,7 +56,11 @@ def _check(env: str, kwargs: dict | None, controller: str, observer: str | None,
 @pytest.mark.parametrize(("controller", "observer"), STACKS, ids=["pid", "kbf+pid-smooth"])
 def test_harbour_with_the_actuator_physics_still_completes(env, kwargs, controller, observer):
     r = run_episode(
-        env, controller=f"{controller}-raw", observer=observer, seed=0, wind="3@300",
+        env,
+        controller=f"{controller}-raw",
+        observer=observer,
+        seed=0,
+        wind="3@300",
         env_kwargs=kwargs,
     )  # the physics alone: the command conditioning is another change
     want = RECORD[f"{controller}|{observer or 'truth'}|0"]

@@ -170,10 +170,10 @@ class Propeller(Actuator):
     with the bollard law ``F_0`` (``law``), the advance-speed term of Blanke (1981)
     (Fossen 2021 ch. 9: ``T = T_nn |n| n - T_nu |n| u_a``, ``u_a = (1 - w) u_r``; the linear
     ``K_T(J)`` of a fixed-pitch propeller, ahead and astern alike) and the tunnel thruster's
-    loss with forward speed ``eta`` (1 at rest, its minimum ``1 - d`` at ``U_50``, back
-    to 1 at high speed, flat at low speed; the curve of the model tests of a tanker's bow thruster, KMW/HyA,
-    International Shipbuilding Progress 1967). ``k_u = 0`` and ``d = 0`` (the defaults) give
-    the bollard law at every speed; either makes the propeller flow-dependent
+    loss with forward speed ``eta`` (1 at rest and flat at low speed, its minimum ``1 - d`` at
+    ``U_50``, back to 1 at high speed; the curve of the model tests of a tanker's bow
+    thruster, KMW/HyA, International Shipbuilding Progress 1967). ``k_u = 0`` and ``d = 0``
+    (the defaults) give the bollard law at every speed; either makes the propeller flow-dependent
     (:attr:`flow_dependent`): its force then comes from :meth:`ActuatorSet.flow_kernel`.
 
     The state follows its command through a first-order lag whose rate is limited to
