@@ -15,10 +15,12 @@ Hasselmann et al. 1973) with first-order motion and drift.
 
 **Lake** (the project's estimate): :func:`lake_waves`, the fetch-limited sea of Lake Silm (JONSWAP
 ``Hs = 0.05 m``, ``Tp = 1 s``, gamma 3.3, drift force on, no first-order motion), and
-:func:`lake_current`, the wind-driven drift: 1 % of the wind speed along the wind (DNV-RP-C205
-gives ``k U10`` with ``k = 0.015-0.03`` at the surface; about 1 % averaged over the 0.86 m
-draft, an estimate), a Gauss-Markov speed of std 0.01 m/s and time constant 300 s, and a
-direction std of 10 deg with the same time constant (estimates).
+:func:`lake_current`, the wind-driven drift: 1/300 of the wind speed along the wind (DNV-RP-C205
+gives ``k U10`` with ``k = 0.015-0.03`` at the surface, about 1 % averaged over the 0.86 m
+draft; at 1 % the Blue Lady's tunnels cannot hold the manoeuvre, which the real trial
+completed, so the estimate is taken down to 1/300), a Gauss-Markov speed of std 0.01 m/s
+and time constant 300 s, and a direction std of 10 deg with the same time constant
+(estimates).
 
 **Scenarios**: a :class:`Scenario` bundles what an episode needs besides the agent: the
 environment (``harbour``, ``station-keeping``, ``tracking``), the plant variant, wind, waves,
@@ -126,8 +128,11 @@ def lake_waves(direction_from: float = 0.0, **overrides: Any) -> WaveConfig:
 
 
 #: wind-driven lake current as a fraction of the wind speed (-): DNV-RP-C205 (2010) k U10,
-#: k = 0.015-0.03 at the surface, about 0.01 averaged over Blue Lady's draft (an estimate)
-LAKE_CURRENT_WIND_FACTOR = 0.01
+#: k = 0.015-0.03 at the surface, about 0.01 averaged over Blue Lady's draft (an estimate);
+#: chosen 1/300 (0.01 m/s in the trial's 3 m/s wind): with 0.03 m/s the harbour manoeuvre
+#: with the corrected sway added mass completes 2 of 10 runs (the bow tunnel at its limit
+#: ~60 % of the time), 0.015 m/s 9 of 10, 0.01 m/s 10 of 10; the real trial completed
+LAKE_CURRENT_WIND_FACTOR = 1.0 / 300.0
 
 
 def lake_current_mapping(wind_speed: float = 3.0, wind_from_deg: float = 300.0) -> dict:
@@ -152,7 +157,7 @@ def lake_current(
 ) -> CurrentConfig:
     """The wind-driven current of Lake Silm for a wind (an estimate of the project).
 
-    Mean speed :data:`LAKE_CURRENT_WIND_FACTOR` times the wind speed (0.03 m/s for the trial's
+    Mean speed :data:`LAKE_CURRENT_WIND_FACTOR` times the wind speed (0.01 m/s for the trial's
     3 m/s), going where the wind goes (``wind_from + 180 deg``); slowly varying: speed std
     0.01 m/s and direction std 10 deg, both Gauss-Markov with time constant 300 s (Fossen
     2011 ch. 8.3 form; the numbers are estimates); speed kept >= 0.
@@ -759,7 +764,7 @@ def _presets() -> dict[str, Scenario]:
             "Blue Lady's lake trial (Tomera 2014): the 5-leg harbour manoeuvre on "
             "Lake Silm, wind 3 m/s from 300 deg with Gauss-Markov gusts, small fetch-limited "
             "JONSWAP waves from the same direction (Hs 0.05 m, Tp 1 s, drift only; estimated), "
-            "a wind-driven current of 0.03 m/s going to 120 deg (slowly varying; estimated), "
+            "a wind-driven current of 0.01 m/s going to 120 deg (slowly varying; estimated), "
             "DGPS with Gauss-Markov errors and a gyrocompass bias."
         ),
     )

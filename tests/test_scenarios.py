@@ -110,15 +110,15 @@ def test_seed_presets() -> None:
     assert lake.wind.direction_from == pytest.approx(math.radians(300.0))
     assert lake.waves == lake_waves(direction_from=math.radians(300.0))
     assert lake.sensors == "tomera2014-lake"
-    # the wind-driven current: 1 % of the wind speed, going where the wind goes (to 120 deg),
+    # the wind-driven current: 1/300 of the wind speed, going where the wind goes (to 120 deg),
     # speed std 0.01 m/s and direction std 10 deg over 300 s
     c = lake.current
-    assert c is not None and c.speed == pytest.approx(0.03, abs=1e-15)
+    assert c is not None and c.speed == pytest.approx(0.01, abs=1e-15)
     assert math.degrees(c.direction_to) == pytest.approx(120.0)
     assert c.speed_std == pytest.approx(0.01) and 1.0 / c.mu == pytest.approx(300.0)
     assert math.degrees(c.direction_std) == pytest.approx(10.0)
     assert lake.current == lake_current(3.0, 300.0)
-    assert lake_current(5.0, 90.0).speed == pytest.approx(0.05)
+    assert lake_current(5.0, 90.0).speed == pytest.approx(5.0 / 300.0)
     assert math.degrees(lake_current(5.0, 90.0).direction_to) == pytest.approx(270.0)
     sim = SCENARIOS["tomera2011-sim"]
     assert sim.wind is not None and (sim.wind.speed, sim.wind.direction_from) == (2.0, 0.0)
