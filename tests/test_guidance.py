@@ -175,7 +175,7 @@ def test_durations_of_the_seed_legs_match_the_closed_forms():
     assert leg_duration(Leg(sway=-7.0), lim) == pytest.approx(7 / 0.05 + 2 * 0.05 / 0.001)
     assert leg_duration(Leg(surge=38.0), lim) == pytest.approx(38 / 0.2 + 2 * 0.2 / 0.0025)
     assert leg_duration(Leg(yaw=math.pi / 2), lim) == pytest.approx(
-        2 * math.sqrt(2 * (math.pi / 2) / 2.5e-4)
+        2 * math.sqrt(2 * (math.pi / 2) / 1.5e-4)
     )
     assert leg_duration(Leg(surge=-15.0), lim) == pytest.approx(15 / 0.1 + 2 * 0.1 / 0.002)
     assert leg_duration(Leg(sway=-3.0), lim) == pytest.approx(2 * math.sqrt(2 * 3 / 0.001))
@@ -184,7 +184,7 @@ def test_durations_of_the_seed_legs_match_the_closed_forms():
     fast = dataclasses.replace(BLUE_LADY_LIMITS, sway_speed=0.1, sway_accel=0.01)
     assert leg_duration(Leg(sway=-7.0, limits=fast), lim) == pytest.approx(7 / 0.1 + 20.0)
     assert tomera2014_plan().durations(BLUE_LADY_LIMITS) == pytest.approx(
-        [240.0, 350.0, 224.19964865591714, 250.0, 154.91933384829667]
+        [240.0, 350.0, 2 * math.sqrt(2 * (math.pi / 2) / 1.5e-4), 250.0, 154.91933384829667]
     )
 
 
