@@ -300,7 +300,11 @@ def test_against_the_controller_wrapper_in_a_tracking_run():
         for _ in range(n)
     ]
     recs = [e.reset(seed=i)[1]["record"] for i, e in enumerate(envs)]
-    batch = batched_dp_controller("pid", "blue-lady", n, envs[0].unwrapped.control_period)
+    # no observer: the wrapper's velocity is the truth, its velocity filter off
+    assert envs[0].get_wrapper_attr("velocity_source") == "truth"
+    batch = batched_dp_controller(
+        "pid", "blue-lady", n, envs[0].unwrapped.control_period, velocity_source="truth"
+    )
     batch.reset()
     legs = np.array([r.reference.leg for r in recs])
     psi_P = np.array([float(r.reference.eta_P[2]) for r in recs])

@@ -777,7 +777,7 @@ class BatchedDPController:
 
 
 def batched_dp_controller(
-    name: str, vessel: Vessel | str, n: int, dt: float
+    name: str, vessel: Vessel | str, n: int, dt: float, velocity_source: str = "kinematic"
 ) -> BatchedDPController:
     """The named DP controller for ``n`` envs of ``vessel`` at control period ``dt`` (s),
     designed as the controller wrapper's factory designs it (``make(..., controller=name)``).
@@ -787,6 +787,9 @@ def batched_dp_controller(
         vessel: a vessel or a packaged vessel's name.
         n: number of envs.
         dt: control period (s).
+        velocity_source: where the velocity comes from (``"truth"``, ``"kinematic"``,
+            ``"model"``; :func:`~shipgym.controllers.pid.vessel_pid`): sets the velocity
+            filter of a conditioned controller, as the wrapper does.
 
     Raises:
         NotImplementedError: a controller that is not batched (the LQ family), or a vessel
@@ -802,6 +805,9 @@ def batched_dp_controller(
     if v.dofs != 3:
         raise ValueError(f"the batched DP controller is 3-DOF; {v.name!r} has {v.dofs} DOF")
     preset, scale, method, conditioned = BATCHED_CONTROLLERS[name]
-    pid = BatchedPID.from_scalar(vessel_pid(v, preset, scale, dt, conditioned=conditioned), n)
+    pid = BatchedPID.from_scalar(
+        vessel_pid(v, preset, scale, dt, conditioned=conditioned, velocity_source=velocity_source),
+        n,
+    )
     hyst = BatchedReversalHysteresis(v.actuators, reversal_threshold(v), n) if conditioned else None
     return BatchedDPController(name, pid, BatchedAllocation(v, method, dt), hyst)

@@ -152,6 +152,8 @@ __all__ = [
     "TUNED_OMEGA",
     "SMOOTH_OMEGA",
     "SATURATION_TOL",
+    "VELOCITY_SOURCES",
+    "vessel_pid",
 ]
 
 Vec3 = tuple[float, float, float]
@@ -681,8 +683,19 @@ def _saturation_directions(saturated: ArrayLike) -> list[int]:
     return out
 
 
+#: where the DP controller's velocity comes from (:func:`vessel_pid`): the true state, a
+#: kinematic observer (position fixes only) or a model-based one (hull model and thrust)
+VELOCITY_SOURCES = ("truth", "kinematic", "model")
+
+
 def vessel_pid(
-    vessel: Any, preset: str, scale: float, dt: float, *, conditioned: bool = False
+    vessel: Any,
+    preset: str,
+    scale: float,
+    dt: float,
+    *,
+    conditioned: bool = False,
+    velocity_source: str = "kinematic",
 ) -> MultivariablePID:
     """The PID of Tomera (2014) eq. 23 designed for a vessel (the ``pid*`` controllers).
 
@@ -695,14 +708,24 @@ def vessel_pid(
             Tomera (2014), the Blue Lady's only).
         scale: factor on the vessel's bandwidth for pole placement.
         dt: control period (s).
-        conditioned: low-pass the velocity with the vessel's ``[control]``
-            ``velocity_filter`` time constants (the filtered derivative); ``False``: the
-            unfiltered law of Tomera (2014) eq. 23.
+        conditioned: low-pass the velocity (the filtered derivative) with time constants
+            matched to its source; ``False``: the unfiltered law of Tomera (2014) eq. 23.
+        velocity_source: where the velocity comes from (:data:`VELOCITY_SOURCES`):
+            ``"kinematic"`` (a filter of the position fixes alone, e.g. ``kbf``, ``dkf``: the
+            vessel's ``[control] velocity_filter``), ``"model"`` (an observer with a hull model
+            driven by the thrust, e.g. ``ekf``: ``velocity_filter_model_based``) or
+            ``"truth"`` (the true state, noise-free: no filter).
 
     Raises:
-        ValueError: ``"seed"`` for a vessel without those gains.
+        ValueError: ``"seed"`` for a vessel without those gains, or an unknown
+            ``velocity_source``.
     """
     from .actuation import planar_capacity
+
+    if velocity_source not in VELOCITY_SOURCES:
+        raise ValueError(
+            f"velocity_source must be one of {VELOCITY_SOURCES}, got {velocity_source!r}"
+        )
 
     d = vessel.design
     cap = planar_capacity(vessel)
@@ -716,5 +739,8 @@ def vessel_pid(
     else:
         bw = np.asarray(vessel.control["bandwidth"], dtype=float) * scale
         gains = PIDGains.from_pole_placement(bw, float(vessel.control["zeta"]))
-    T_f = vessel.control.get("velocity_filter", 0.0) if conditioned else 0.0
+    T_f: Any = 0.0
+    if conditioned and velocity_source != "truth":
+        key = "velocity_filter" if velocity_source == "kinematic" else "velocity_filter_model_based"
+        T_f = vessel.control.get(key, 0.0)
     return MultivariablePID(gains, M=d.M, D_L=d.D_L, dt=dt, integral_limit=cap, velocity_filter=T_f)

@@ -67,11 +67,13 @@ class ControllerSpec:
     controller does not apply to.
     """
 
-    factory: Callable[[Vessel, float], DPController]
+    factory: Callable[..., DPController]
     allocation: str
     description: str
     #: apply the vessel's reversal hysteresis after the allocation
-    #: (:class:`~shipgym.controllers.conditioning.ReversalHysteresis`)
+    #: (:class:`~shipgym.controllers.conditioning.ReversalHysteresis`), and call the factory
+    #: as ``f(vessel, dt, velocity_source=...)`` (:data:`~shipgym.controllers.pid.
+    #: VELOCITY_SOURCES`: where the controller's velocity comes from, which sets its filter)
     conditioned: bool = False
 
 
@@ -83,8 +85,10 @@ def _pid(
     on its design model (:func:`~shipgym.controllers.pid.pid_pole_placement`); with
     ``conditioned`` its velocity is low-passed (the vessel's ``velocity_filter``)."""
 
-    def make(vessel: Vessel, dt: float) -> DPController:
-        return vessel_pid(vessel, preset, scale, dt, conditioned=conditioned)
+    def make(vessel: Vessel, dt: float, velocity_source: str = "kinematic") -> DPController:
+        return vessel_pid(
+            vessel, preset, scale, dt, conditioned=conditioned, velocity_source=velocity_source
+        )
 
     return make
 
@@ -177,6 +181,19 @@ def controller_spec(name: str) -> ControllerSpec:
         ) from None
 
 
+def velocity_source(env: gym.Env[Any, Any]) -> str:
+    """Where a controller wrapper on ``env`` gets its velocity: ``"truth"`` (no observer below
+    it), ``"model"`` (an observer whose ``model_based`` is true, e.g. the EKF) or
+    ``"kinematic"`` (any other observer, e.g. ``kbf``, ``dkf``)."""
+    e: Any = env
+    while isinstance(e, gym.Wrapper):
+        obs = getattr(e, "observer", None)
+        if obs is not None and hasattr(obs, "estimate"):
+            return "model" if getattr(obs, "model_based", False) else "kinematic"
+        e = e.env
+    return "truth"
+
+
 class DPControllerWrapper(
     gym.Wrapper[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]],
     gym.utils.RecordConstructorArgs,
@@ -220,7 +237,11 @@ class DPControllerWrapper(
         self.vessel: Vessel = base.vessel  # type: ignore[attr-defined]
         self.actuators = self.vessel.actuators
         dt = base.control_period  # type: ignore[attr-defined]
-        self.controller = spec.factory(self.vessel, dt)
+        self.velocity_source = velocity_source(env)
+        if spec.conditioned:
+            self.controller = spec.factory(self.vessel, dt, velocity_source=self.velocity_source)
+        else:
+            self.controller = spec.factory(self.vessel, dt)
         self._allocate = make_allocator(self.vessel, spec.allocation, dt)
         hyst = (
             ReversalHysteresis(self.actuators, reversal_threshold(self.vessel))

@@ -194,7 +194,11 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         if controller is not None:
             from shipgym.controllers.batch import batched_dp_controller
 
-            self.controller = batched_dp_controller(controller, self.vessel, n, self.control_period)
+            # the batched observers are all kinematic (BatchedKalman)
+            src = "truth" if observer in (None, "truth") else "kinematic"
+            self.controller = batched_dp_controller(
+                controller, self.vessel, n, self.control_period, velocity_source=src
+            )
         if env_sensors is not None:
             env_sensors = list(env_sensors)
             if len(env_sensors) != n or not all(isinstance(c, SensorConfig) for c in env_sensors):

@@ -118,10 +118,15 @@ class Observer(ABC):
             steady-state force of the held commands (:attr:`Measurement.tau_command
             <shipgym.records.Measurement.tau_command>`), for filters that model the thruster
             lags themselves (Al-Takie 1982 eq. 3.21).
+        model_based: the estimate comes from a model of the hull driven by the thrust (an
+            EKF, a wave filter), not from the position fixes alone (a kinematic filter): its
+            velocity is much less noisy, and the DP controller's velocity filter is chosen
+            for it (the vessel's ``[control] velocity_filter_model_based``).
     """
 
     name: str = "observer"
     thrust_input: str = "applied"
+    model_based: bool = False
 
     @abstractmethod
     def reset(

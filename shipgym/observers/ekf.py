@@ -376,6 +376,8 @@ class ExtendedKalmanFilter(Observer):
         name: observer name (``"ekf"``, ``"tomera-ekf"``, ...).
     """
 
+    model_based = True  # the hull model and the thrust drive its prediction
+
     def __init__(self, config: EKFConfig | None = None, name: str = "ekf") -> None:
         if config is None:
             config = ekf_config("ekf")

@@ -406,6 +406,7 @@ class WaveFilterObserver(Observer):
     the filter lags itself), except for ``kf12`` (``"applied"``: measured thruster states).
     """
 
+    model_based = True  # the LF model and the thrust drive its prediction
     thrust_input = "command"
 
     def __init__(
