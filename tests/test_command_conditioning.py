@@ -187,3 +187,52 @@ def test_harbour_commands_meet_the_chatter_bound_and_raw_does_not(observer):
     # the unconditioned stack chatters (so the bound is not met by any controller)
     assert raw["reversals_per_min"][0] > 5.0 and max(raw["limit_fraction"]) > 0.2
     assert math.isfinite(res["travel_per_min"][0])
+
+
+# ---- the filter matched to the velocity source ---------------------------------------------------
+def test_negative_model_based_filter_is_refused(tmp_path):
+    import shipgym.assets
+
+    base = __import__("pathlib").Path(shipgym.assets.__file__).parent / "mjcf" / "blue_lady"
+    pkg = tmp_path / "bl"
+    shutil.copytree(base, pkg)
+    text = (pkg / "vessel.toml").read_text()
+    bad = text.replace(
+        "velocity_filter_model_based = { value = [8.0,",
+        "velocity_filter_model_based = { value = [-8.0,",
+    )
+    assert bad != text
+    (pkg / "vessel.toml").write_text(bad)
+    with pytest.raises(VesselError, match="velocity_filter_model_based"):
+        load_vessel(pkg)
+
+
+@pytest.mark.parametrize(
+    ("observer", "source", "key"),
+    [(None, "truth", None), ("kbf", "kinematic", "velocity_filter"),
+     ("dkf", "kinematic", "velocity_filter"), ("ekf", "model", "velocity_filter_model_based")],
+)  # fmt: skip
+def test_the_wrapper_filters_the_velocity_for_its_source(observer, source, key):
+    """The controller wrapper finds the observer below it: no filter on the true state, the
+    kinematic time constants with kbf/dkf, the model-based ones with the EKF; the raw
+    controller never filters."""
+    import shipgym
+
+    env = shipgym.make("harbour", observer=observer, controller="pid-smooth")
+    raw = shipgym.make("harbour", observer=observer, controller="pid-smooth-raw")
+    try:
+        assert env.get_wrapper_attr("velocity_source") == source
+        want = (0.0, 0.0, 0.0) if key is None else tuple(BL.control[key])
+        assert tuple(env.get_wrapper_attr("controller").velocity_filter) == want
+        assert tuple(raw.get_wrapper_attr("controller").velocity_filter) == (0.0, 0.0, 0.0)
+    finally:
+        env.close()
+        raw.close()
+    assert BL.control["velocity_filter"] != BL.control["velocity_filter_model_based"]
+
+
+def test_unknown_velocity_source_is_refused():
+    from shipgym.controllers.pid import vessel_pid
+
+    with pytest.raises(ValueError, match="velocity_source"):
+        vessel_pid(BL, "smooth", 0.7, 1.0, conditioned=True, velocity_source="gps")
