@@ -163,7 +163,10 @@ class Measurement:
         z: measured NED pose, or ``None`` in a dropout.
         valid: whether the receiver flagged the sample valid.
         outlier: whether the sample is an injected outlier.
-        tau: the actuators' generalised force at the sample (body frame, N and N m).
+        tau: the actuators' generalised force at the sample (body frame, N and N m) as the DP
+            system computes it from the actuator states with its thrust model (the bollard
+            laws: :attr:`VesselPhysics.tau_model <shipgym.envs.physics.VesselPhysics.tau_model>`;
+            the plant's advance-speed and tunnel losses are not in it).
         tau_command: the generalised force ``[X, Y, N]`` (N, N, N m, body) that the commands
             held over the interval ending at the sample would give in steady state, at the
             actuators' current angles: the demand a model-based filter with its own thruster

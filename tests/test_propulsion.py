@@ -268,3 +268,20 @@ def test_bad_actuator_options_raise_clear_errors(tmp_path) -> None:
 def test_bollard_set_of_a_set_without_options_is_itself() -> None:
     acts = ActuatorSet([Propeller(name="a"), Propeller(name="b", alpha=math.pi / 2)])
     assert acts.bollard() is acts and not acts.rate_limited
+
+
+def test_the_observers_thrust_is_the_bollard_model_of_the_states() -> None:
+    """What a DP system computes from its shaft-speed and thruster feedback (Measurement.tau,
+    fed to the EKF): Tomera's bollard laws of the actuator states, not the plant's losses;
+    the seed-linear plant's laws are those already."""
+    v = load_vessel("blue-lady")
+    phys = VesselPhysics(v)
+    phys.reset(nu=[0.3, 0.0, 0.0], actuators=[300.0, 0.6, -0.4])
+    st = phys.actuator_state
+    n, p2, p3 = st
+    want = [K1 * n * abs(n), K_T * (p2 + p3), K_T * (3.24 * p2 - 2.376 * p3)]
+    np.testing.assert_allclose(phys.tau_model, want, rtol=1e-12)
+    assert not np.allclose(phys.tau_thrusters, want, rtol=1e-3)  # the plant's losses
+    lin = VesselPhysics(v, plant="seed-linear")
+    lin.reset(nu=[0.3, 0.0, 0.0], actuators=[300.0, 0.6, -0.4])
+    np.testing.assert_array_equal(lin.tau_model, lin.tau_thrusters)

@@ -518,8 +518,10 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return out
 
     def _measure(self) -> dict[str, Any]:
-        """One sensor sample now: measured NED pose (or None in a dropout), applied thrust and
-        the steady-state thrust of the held commands (``tau_command``)."""
+        """One sensor sample now: measured NED pose (or None in a dropout), the thrust the DP
+        system computes from the actuator states (``tau``: its bollard model,
+        :attr:`VesselPhysics.tau_model`) and the steady-state thrust of the held commands
+        (``tau_command``)."""
         assert self.sensors is not None
         phys = self.physics
         eta = phys.eta
@@ -530,7 +532,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "z": None if m.z is None else np.array(m.z),
             "valid": bool(m.valid),
             "outlier": bool(m.outlier),
-            "tau": phys.tau_thrusters,
+            "tau": phys.tau_model,
             "tau_command": phys.tau_command,
         }
         if rec["z"] is not None:

@@ -189,6 +189,10 @@ class VesselPhysics:
         self.dofs = dofs
         # the actuators this plant drives (a plant of the paper's model: the bollard laws)
         self.actuators = acts = v.actuators_for(self.plant)
+        # the thrust model a DP system computes from the actuator states (feedback): the
+        # bollard laws (the advance-speed and tunnel losses are the plant's, not known to it)
+        bollard = acts.bollard()
+        self._model_actuators = None if bollard is acts else bollard
         self._lower = acts.lower.tolist()
         self._upper = acts.upper.tolist()
         self.windage = v.windage if windage is None else windage
@@ -538,6 +542,17 @@ class VesselPhysics:
             return np.array([X, Y, N])
         fx, fy, _fk, fn = self._flow_now(st)
         return np.array([X + fx, Y + fy, N + fn])
+
+    @property
+    def tau_model(self) -> NDArray[np.float64]:
+        """Body-frame actuator force ``[X, Y, N]`` (N, N, N m) that a DP system computes from
+        the current actuator states (its shaft-speed and thruster feedback) with its thrust
+        model: every propeller on its bollard law (:meth:`ActuatorSet.bollard
+        <shipgym.dynamics.actuators.ActuatorSet.bollard>`), without the plant's advance-speed
+        and tunnel losses; :attr:`tau_thrusters` where the two laws are the same."""
+        if self._model_actuators is None:
+            return self.tau_thrusters
+        return self._model_actuators.tau(self.data.act.copy())
 
     @property
     def tau_actuators(self) -> NDArray[np.float64]:
