@@ -193,6 +193,10 @@ class VesselPhysics:
         # bollard laws (the advance-speed and tunnel losses are the plant's, not known to it)
         bollard = acts.bollard()
         self._model_actuators = None if bollard is acts else bollard
+        # its plain-float kernel where every actuator of that set is MuJoCo-applied
+        self._model_tau_of = (
+            bollard.kernel() if bollard is not acts and not bollard.flow_dependent else None
+        )
         self._lower = acts.lower.tolist()
         self._upper = acts.upper.tolist()
         self.windage = v.windage if windage is None else windage
@@ -552,6 +556,9 @@ class VesselPhysics:
         and tunnel losses; :attr:`tau_thrusters` where the two laws are the same."""
         if self._model_actuators is None:
             return self.tau_thrusters
+        if self._model_tau_of is not None:
+            X, Y, _K, N, _ = self._model_tau_of(self.data.act.tolist())
+            return np.array([X, Y, N])
         return self._model_actuators.tau(self.data.act.copy())
 
     @property
@@ -675,6 +682,8 @@ class VesselPhysics:
         # the thrust law of every actuator kind; it also refreshes MuJoCo's state-dependent
         # actuator gains (k |n|) and azimuth directions, so MuJoCo applies the same force
         tau_of = self.actuators.kernel(m.actuator_gainprm, m.actuator_gear)
+        # every actuator flow-dependent (the Blue Lady's default plant): MuJoCo applies none
+        mj_thrust = not all(a.flow_dependent for a in self.actuators)
         mq, iq, ix = self._m_q, self._i_q, self._i_x
         accel, wind_at, wind_load = self._accel, self.wind.at_kernel(), self._wind_load.kernel()
         cc = self.current_config
@@ -762,7 +771,10 @@ class VesselPhysics:
             c, s = cos(psi), sin(psi)
             u = c * xd + s * yd
             v = c * yd - s * xd
-            tx, ty, _k, tn, _mz = tau_of(st)
+            if mj_thrust:
+                tx, ty, _k, tn, _mz = tau_of(st)
+            else:
+                tx = ty = tn = 0.0
             wx, wy, wn, uc, vcb, dx_, dy_, dn_ = loads(t, psi, u, v)
             ex, ey, _ek, en = this._external
             if servos:
