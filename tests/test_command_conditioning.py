@@ -223,8 +223,12 @@ def test_the_wrapper_filters_the_velocity_for_its_source(observer, source, key):
     try:
         assert env.get_wrapper_attr("velocity_source") == source
         want = (0.0, 0.0, 0.0) if key is None else tuple(BL.control[key])
-        assert tuple(env.get_wrapper_attr("controller").velocity_filter) == want
+        ctrl = env.get_wrapper_attr("controller")
+        assert tuple(ctrl.velocity_filter) == want
+        cmd = None if key is None else key.replace("velocity", "command")
+        assert tuple(ctrl.command_filter) == ((0.0,) * 3 if cmd is None else tuple(BL.control[cmd]))
         assert tuple(raw.get_wrapper_attr("controller").velocity_filter) == (0.0, 0.0, 0.0)
+        assert tuple(raw.get_wrapper_attr("controller").command_filter) == (0.0, 0.0, 0.0)
     finally:
         env.close()
         raw.close()
@@ -236,3 +240,26 @@ def test_unknown_velocity_source_is_refused():
 
     with pytest.raises(ValueError, match="velocity_source"):
         vessel_pid(BL, "smooth", 0.7, 1.0, conditioned=True, velocity_source="gps")
+
+
+def test_the_command_filter_is_the_sampled_first_order_low_pass():
+    """A step of the law's output (no integral, no velocity) through the output filter:
+    ``tau_k = c (1 - (1 - b)^k)`` with ``b = 1 - exp(-dt / T_c)``, per DOF; T_c = 0 passes."""
+    from shipgym.controllers.pid import PIDGains
+
+    d = BL.design
+    g = PIDGains(K_P=(0.01, 0.02, 0.03), K_I=0.0, K_D=0.0)
+    T_c = (2.0, 5.0, 0.0)
+    pid = MultivariablePID(g, M=d.M, D_L=d.D_L, dt=1.0, integral_limit=np.inf, command_filter=T_c)
+    law = MultivariablePID(g, M=d.M, D_L=d.D_L, dt=1.0, integral_limit=np.inf)
+    zero = np.zeros(3)
+    np.testing.assert_array_equal(pid(zero, zero, zero), zero)  # starts at the first output
+    step = np.array([1.0, -2.0, 0.1])
+    c = law(step, zero, zero)
+    for k in range(1, 30):
+        out = pid(step, zero, zero)
+        for j, t in enumerate(T_c):
+            want = c[j] if t == 0.0 else c[j] * (1.0 - math.exp(-k / t))
+            assert out[j] == pytest.approx(want, rel=1e-12, abs=1e-12)
+    pid.reset()
+    np.testing.assert_array_equal(pid(step, zero, zero), c)  # restarts at the law

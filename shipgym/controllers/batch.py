@@ -223,6 +223,13 @@ class BatchedPID:
         self._filters = s._filters
         self._alpha = col(s._alpha)
         self._pass = self._alpha == 1.0  # DOFs without a filter: the velocity as given
+        self._velocities = s._velocities
+        # the output low-pass (scalar command_filter): gain per DOF, state
+        self.command_filter = s.command_filter
+        self._commands = s._commands
+        self._beta = col(s._beta)
+        self._cpass = self._beta == 1.0
+        self._tau_f = np.zeros((3, n))
         self._nu_f = np.zeros((3, n))
         self._tau_prev = np.zeros((3, n))
         self._started = np.zeros(n, dtype=bool)
@@ -405,7 +412,7 @@ class BatchedPID:
         _check_finite(checks)
         dirs = self._directions(saturated)
         eT, wT = e.T, w.T
-        if self._filters:
+        if self._velocities:
             wT = self._filter(wT, saturated)
         self._integrate(dirs)
         psi = eT[2]
@@ -442,6 +449,13 @@ class BatchedPID:
         tau += self._D(wT)
         self._has[:] = True
         self._any_pending = self._all_pending = True
+        if self._commands:
+            st = self._started
+            tf = self._tau_f
+            new = np.where(self._cpass, tau, tf + self._beta * (tau - tf))
+            np.copyto(tf, new, where=st)
+            np.copyto(tf, tau, where=~st)
+            tau = tf.copy()
         if self._filters:
             self._tau_prev[:] = tau
             self._started[:] = True

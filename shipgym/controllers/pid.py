@@ -394,6 +394,12 @@ class MultivariablePID:
             model-aided low-pass of the body velocity the law uses (the *filtered
             derivative*, module docstring "Filtered derivative"); 0 (default): the velocity
             as given.
+        command_filter: time constants ``T_c`` (s, >= 0; scalar or X, Y, N) of a first-order
+            low-pass of the output, ``tau_k = tau_{k-1} + (1 - exp(-dt / T_c)) (law_k -
+            tau_{k-1})`` (sampled exactly; it starts at the first output after a reset): it
+            takes the short-period position noise that ``M K_P`` passes out of the thruster
+            commands; 0 (default): none. The allocation's ``tau_error`` (``saturated``) is
+            then relative to the filtered output.
 
     Raises:
         TypeError: ``M``, ``D_L`` or ``integral_limit`` not given (the message says what to
@@ -427,6 +433,7 @@ class MultivariablePID:
         *,
         integral_limit: ArrayLike | None = None,
         velocity_filter: ArrayLike = 0.0,
+        command_filter: ArrayLike = 0.0,
     ) -> None:
         if isinstance(gains, str):
             gains = pid_gains(gains)
@@ -448,13 +455,20 @@ class MultivariablePID:
         if np.any(np.isnan(lim)) or np.any(lim <= 0):
             raise ValueError(f"integral_limit must be > 0 (N, N, N m; inf allowed), got {lim!r}")
         T_f = _gain3(velocity_filter, "velocity_filter (s)")
+        T_c = _gain3(command_filter, "command_filter (s)")
         self.gains = gains
         self.velocity_filter = T_f
         # the correction gain of the filter, alpha = 1 - exp(-dt / T_f) (1: no filter)
         self._alpha = tuple(-math.expm1(-dt / t) if t > 0.0 else 1.0 for t in T_f)
-        self._filters = any(t > 0.0 for t in T_f)
+        self._filters = any(t > 0.0 for t in T_c) or any(t > 0.0 for t in T_f)
         self._nu_f: list[float] | None = None
         self._tau_prev: Vec3 | None = None
+        # the output low-pass, gain 1 - exp(-dt / T_c) per DOF (1: none), and its state
+        self.command_filter = T_c
+        self._beta = tuple(-math.expm1(-dt / t) if t > 0.0 else 1.0 for t in T_c)
+        self._commands = any(t > 0.0 for t in T_c)
+        self._velocities = any(t > 0.0 for t in T_f)
+        self._tau_f: list[float] | None = None
         self.M = Ma.copy()
         self.D_L = Da.copy()
         self.dt = dt
@@ -475,6 +489,7 @@ class MultivariablePID:
         self._pending = None
         self._nu_f = None
         self._tau_prev = None
+        self._tau_f = None
 
     @property
     def filtered_velocity(self) -> NDArray[np.float64] | None:
@@ -602,7 +617,7 @@ class MultivariablePID:
         axd, ayd, ad = (
             (0.0, 0.0, 0.0) if eta_ddot_d_r is None else _vec3(eta_ddot_d_r, "eta_ddot_d_r")
         )
-        if self._filters:
+        if self._velocities:
             u, v, r = self._filter(u, v, r, saturated)
         self._integrate(saturated)
         self._clamp(psi)
@@ -623,6 +638,16 @@ class MultivariablePID:
         Dn = _mv(self._D, u, v, r)
         self._pending = (ex, ey, epsi, psi)
         tau = (Mn[0] + Dn[0], Mn[1] + Dn[1], Mn[2] + Dn[2])
+        if self._commands:
+            tf = self._tau_f
+            if tf is None:
+                tf = self._tau_f = list(tau)
+            else:
+                b0, b1, b2 = self._beta
+                tf[0] = tau[0] if b0 == 1.0 else tf[0] + b0 * (tau[0] - tf[0])
+                tf[1] = tau[1] if b1 == 1.0 else tf[1] + b1 * (tau[1] - tf[1])
+                tf[2] = tau[2] if b2 == 1.0 else tf[2] + b2 * (tau[2] - tf[2])
+            tau = (tf[0], tf[1], tf[2])
         if self._filters:
             self._tau_prev = tau
         return np.array(tau)
@@ -712,8 +737,9 @@ def vessel_pid(
             matched to its source; ``False``: the unfiltered law of Tomera (2014) eq. 23.
         velocity_source: where the velocity comes from (:data:`VELOCITY_SOURCES`):
             ``"kinematic"`` (a filter of the position fixes alone, e.g. ``kbf``, ``dkf``: the
-            vessel's ``[control] velocity_filter``), ``"model"`` (an observer with a hull model
-            driven by the thrust, e.g. ``ekf``: ``velocity_filter_model_based``) or
+            vessel's ``[control] velocity_filter`` and ``command_filter``), ``"model"`` (an
+            observer with a hull model driven by the thrust, e.g. ``ekf``:
+            ``velocity_filter_model_based`` and ``command_filter_model_based``) or
             ``"truth"`` (the true state, noise-free: no filter).
 
     Raises:
@@ -740,7 +766,17 @@ def vessel_pid(
         bw = np.asarray(vessel.control["bandwidth"], dtype=float) * scale
         gains = PIDGains.from_pole_placement(bw, float(vessel.control["zeta"]))
     T_f: Any = 0.0
+    T_c: Any = 0.0
     if conditioned and velocity_source != "truth":
-        key = "velocity_filter" if velocity_source == "kinematic" else "velocity_filter_model_based"
-        T_f = vessel.control.get(key, 0.0)
-    return MultivariablePID(gains, M=d.M, D_L=d.D_L, dt=dt, integral_limit=cap, velocity_filter=T_f)
+        tail = "" if velocity_source == "kinematic" else "_model_based"
+        T_f = vessel.control.get("velocity_filter" + tail, 0.0)
+        T_c = vessel.control.get("command_filter" + tail, 0.0)
+    return MultivariablePID(
+        gains,
+        M=d.M,
+        D_L=d.D_L,
+        dt=dt,
+        integral_limit=cap,
+        velocity_filter=T_f,
+        command_filter=T_c,
+    )

@@ -785,7 +785,8 @@ def _read(path: Path) -> Vessel:
     limits = {k: r.number(lim, k, "limits", _LIMIT_KEYS[k], positive=True) for k in lim}
     c = r.table(data, "control", required=False)
     r.keys(c, "control", {"bandwidth", "zeta", "pid_presets", "sensors", "velocity_filter",
-                          "velocity_filter_model_based", "reversal_threshold"})  # fmt: skip
+                          "velocity_filter_model_based", "command_filter",
+                          "command_filter_model_based", "reversal_threshold"})  # fmt: skip
     control: dict[str, Any] = {
         "bandwidth": r.vector(c, "bandwidth", "control", 3, "rad/s", default=(0.05, 0.05, 0.05)),
         "zeta": r.number(c, "zeta", "control", "1", 1.0, positive=True),
@@ -794,6 +795,10 @@ def _read(path: Path) -> Vessel:
         "velocity_filter": r.vector(c, "velocity_filter", "control", 3, "s", default=(0, 0, 0)),
         "velocity_filter_model_based": r.vector(
             c, "velocity_filter_model_based", "control", 3, "s", default=(0, 0, 0)
+        ),
+        "command_filter": r.vector(c, "command_filter", "control", 3, "s", default=(0, 0, 0)),
+        "command_filter_model_based": r.vector(
+            c, "command_filter_model_based", "control", 3, "s", default=(0, 0, 0)
         ),
         "reversal_threshold": r.vector(
             c,
@@ -806,7 +811,12 @@ def _read(path: Path) -> Vessel:
     }
     if min(control["bandwidth"]) <= 0:
         raise r.fail("control.bandwidth", "must be > 0 rad/s")
-    for key in ("velocity_filter", "velocity_filter_model_based"):
+    for key in (
+        "velocity_filter",
+        "velocity_filter_model_based",
+        "command_filter",
+        "command_filter_model_based",
+    ):
         if min(control[key]) < 0:
             raise r.fail(f"control.{key}", "time constants must be >= 0 s (0: no filter)")
     if min(control["reversal_threshold"]) < 0:
