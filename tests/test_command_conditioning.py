@@ -83,26 +83,34 @@ def test_reversal_hysteresis_refuses_bad_thresholds():
         ReversalHysteresis(BL.actuators, [-1.0, 0.0, 0.0])
 
 
-def test_vessel_package_keys_are_checked(tmp_path):
-    import shipgym.assets
-
-    pkg = tmp_path / "bl"
-
-    base = __import__("pathlib").Path(shipgym.assets.__file__).parent / "mjcf" / "blue_lady"
-    shutil.copytree(base, pkg)
-    text = (pkg / "vessel.toml").read_text()
-    bad = text.replace(
+_BAD_KEYS = [  # (the vessel file's text, its replacement, the key the error names)
+    (
         'reversal_threshold = { value = [40.0, 0.0, 0.0], unit = "N"',
         'reversal_threshold = { value = [40.0, 0.0], unit = "N"',
-    )
+        "reversal_threshold",
+    ),
+    ("velocity_filter = { value = [20.0,", "velocity_filter = { value = [-1.0,", "velocity_filter"),
+    (
+        "velocity_filter_model_based = { value = [8.0,",
+        "velocity_filter_model_based = { value = [-8.0,",
+        "velocity_filter_model_based",
+    ),
+    ("command_filter = { value = [1.0,", "command_filter = { value = [-1.0,", "command_filter"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "key"), _BAD_KEYS, ids=[k for *_, k in _BAD_KEYS])
+def test_vessel_package_keys_are_checked(tmp_path, old, new, key):
+    import shipgym.assets
+
+    base = __import__("pathlib").Path(shipgym.assets.__file__).parent / "mjcf" / "blue_lady"
+    pkg = tmp_path / "bl"
+    shutil.copytree(base, pkg)
+    text = (pkg / "vessel.toml").read_text()
+    bad = text.replace(old, new, 1)
     assert bad != text
     (pkg / "vessel.toml").write_text(bad)
-    with pytest.raises(VesselError, match="reversal_threshold"):
-        load_vessel(pkg)
-    bad = text.replace("velocity_filter = { value = [20.0,", "velocity_filter = { value = [-1.0,")
-    assert bad != text
-    (pkg / "vessel.toml").write_text(bad)
-    with pytest.raises(VesselError, match="velocity_filter"):
+    with pytest.raises(VesselError, match=key):
         load_vessel(pkg)
 
 
@@ -190,23 +198,6 @@ def test_harbour_commands_meet_the_chatter_bound_and_raw_does_not(observer):
 
 
 # ---- the filter matched to the velocity source ---------------------------------------------------
-def test_negative_model_based_filter_is_refused(tmp_path):
-    import shipgym.assets
-
-    base = __import__("pathlib").Path(shipgym.assets.__file__).parent / "mjcf" / "blue_lady"
-    pkg = tmp_path / "bl"
-    shutil.copytree(base, pkg)
-    text = (pkg / "vessel.toml").read_text()
-    bad = text.replace(
-        "velocity_filter_model_based = { value = [8.0,",
-        "velocity_filter_model_based = { value = [-8.0,",
-    )
-    assert bad != text
-    (pkg / "vessel.toml").write_text(bad)
-    with pytest.raises(VesselError, match="velocity_filter_model_based"):
-        load_vessel(pkg)
-
-
 @pytest.mark.parametrize(
     ("observer", "source", "key"),
     [(None, "truth", None), ("kbf", "kinematic", "velocity_filter"),
