@@ -248,6 +248,9 @@ class VesselPhysics:
             if c.dynamics == "lag" and math.isfinite(c.rate)
         )
         self._rl_cmd = [0.0] * len(self._ratelim)
+        # a rate-limited state may be ramping (set by a new command or a reset; cleared by
+        # prepare once every state is within its band of its command, where it stays)
+        self._ramping = True
         self._flow_of = acts.flow_kernel()
         n_flow = sum(1 for a in acts if a.flow_dependent)
         #: per servo channel: whether the servo was still running at its rate limit in the last
@@ -387,6 +390,7 @@ class VesselPhysics:
             self._servo_cmd[k] = float(d.act[j])
         for k, (j, _rate, _tc) in enumerate(self._ratelim):
             self._rl_cmd[k] = float(d.act[j])
+        self._ramping = True
         d.ctrl[:] = np.where(lagged, d.act, 0.0)
         self.saturated[:] = False
         self.rate_limited[:] = False
@@ -631,6 +635,7 @@ class VesselPhysics:
             for k, (j, _rate, _tc) in enumerate(self._ratelim):
                 self._rl_cmd[k] = clipped[j]
                 clipped[j] = float(self.data.ctrl[j])
+            self._ramping = True
         self.data.ctrl[:] = clipped
         return self.saturated.copy()
 
@@ -711,14 +716,22 @@ class VesselPhysics:
         )
 
         def ramp(st: list[float]) -> None:
-            """MuJoCo's command of each rate-limited lag this step (above)."""
+            """MuJoCo's command of each rate-limited lag this step (above). Once every state
+            is within its band, MuJoCo gets the commands themselves and the lags only close
+            in on them (the filter is exact and monotone): nothing to do until the next
+            command."""
+            active = False
             for k, j, band, step in rlims:
                 c_, a_ = rl_cmd[k], st[j]
                 if c_ - a_ > band:
                     c_ = min(a_ + step, c_)
+                    active = True
                 elif a_ - c_ > band:
                     c_ = max(a_ - step, c_)
+                    active = True
                 ctrl[j] = c_
+            if not active:
+                this._ramping = False
 
         def loads(t: float, psi: float, u: float, v: float) -> tuple[float, ...]:
             """Wind (relative to the ground velocity), current (NED) and wave drift."""
@@ -779,7 +792,7 @@ class VesselPhysics:
             ex, ey, _ek, en = this._external
             if servos:
                 servo(st)
-            if rlims:
+            if rlims and this._ramping:
                 ramp(st)
             if flow_of is not None:
                 fl = flow_of(st, u - uc, v - vcb, 0.0, r)
@@ -823,7 +836,7 @@ class VesselPhysics:
             ex, ey, ek, en = this._external
             if servos:
                 servo(st)
-            if rlims:
+            if rlims and this._ramping:
                 ramp(st)
             if flow_of is not None:
                 fl = flow_of(st, u - uc, v - vcb, p, r)
