@@ -76,3 +76,16 @@ def test_installed_versions_equal_the_lock(stamp: str) -> None:
         if got not in SpecifierSet(f"=={version}"):
             wrong.append(f"{name}: locked {version}, installed {got}")
     assert not wrong, f"the venv differs from {LOCKS[stamp]} (run make): " + "; ".join(wrong)
+
+
+@pytest.mark.parametrize("lock", sorted(LOCKS.values()))
+def test_lock_is_from_the_committed_pyproject(lock: str) -> None:
+    """``make lock`` writes pyproject.toml's sha256 into every header: a pyproject changed
+    without a new lock fails here."""
+    import hashlib
+
+    want = hashlib.sha256((ROOT / "pyproject.toml").read_bytes()).hexdigest()[:16]
+    text = (ROOT / lock).read_text()
+    m = re.search(r"^# From pyproject.toml with sha256 ([0-9a-f]{16})", text, re.M)
+    assert m is not None, f"{lock} has no pyproject hash: run make lock"
+    assert m.group(1) == want, f"{lock} is older than pyproject.toml: run make lock"
