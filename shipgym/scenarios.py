@@ -453,35 +453,8 @@ def _current(value: Any, current: CurrentConfig | None, where: str) -> CurrentCo
             f"null or false, got {value!r}"
         )
     d = dict(value)
-    # convenience: stationary std and time constant instead of (mu, sigma)
-    if "time_constant" in d:
-        if "mu" in d:
-            raise ValueError(f"{where}: give either 'mu' (1/s) or 'time_constant' (s), not both")
-        tc = d.pop("time_constant")
-        if not is_real(tc) or not tc > 0 or not math.isfinite(tc):
-            raise ValueError(f"{where}: time_constant must be a number > 0 s, got {tc!r}")
-        d["mu"] = 1.0 / tc
-    if "std" in d:
-        if "sigma" in d:
-            raise ValueError(f"{where}: give either 'sigma' (m/s^1.5) or 'std' (m/s), not both")
-        std = d.pop("std")
-        if not is_real(std) or not std >= 0 or not math.isfinite(std):
-            raise ValueError(f"{where}: std must be a number >= 0 m/s, got {std!r}")
-        mu = d.get("mu", current.mu if current is not None else CurrentConfig().mu)
-        if not (is_real(mu) and mu > 0):
-            raise ValueError(f"{where}: 'std' needs mu > 0 (or time_constant), got mu = {mu!r}")
-        d["sigma"] = std * math.sqrt(2.0 * mu)
-    # the same for the direction: stationary std (rad or deg) and time constant (s)
-    if "direction_time_constant" in d:
-        if "direction_mu" in d:
-            raise ValueError(
-                f"{where}: give either 'direction_mu' (1/s) or 'direction_time_constant' (s), "
-                "not both"
-            )
-        tc = d.pop("direction_time_constant")
-        if not is_real(tc) or not tc > 0 or not math.isfinite(tc):
-            raise ValueError(f"{where}: direction_time_constant must be a number > 0 s, got {tc!r}")
-        d["direction_mu"] = 1.0 / tc
+    # convenience: stationary std and time constant instead of (mu, sigma), for the speed
+    # and for the direction (degrees allowed)
     if "direction_std_deg" in d:
         if "direction_std" in d:
             raise ValueError(f"{where}: give either 'direction_std' (rad) or 'direction_std_deg'")
@@ -489,23 +462,8 @@ def _current(value: Any, current: CurrentConfig | None, where: str) -> CurrentCo
         if not is_real(deg) or not math.isfinite(deg):
             raise ValueError(f"{where}: direction_std_deg must be a finite number, got {deg!r}")
         d["direction_std"] = math.radians(deg)
-    if "direction_std" in d:
-        if "direction_sigma" in d:
-            raise ValueError(
-                f"{where}: give either 'direction_sigma' (rad/s^0.5) or 'direction_std' (rad)"
-            )
-        std = d.pop("direction_std")
-        if not is_real(std) or not std >= 0 or not math.isfinite(std):
-            raise ValueError(f"{where}: direction_std must be a number >= 0 rad, got {std!r}")
-        mu = d.get(
-            "direction_mu",
-            current.direction_mu if current is not None else CurrentConfig().direction_mu,
-        )
-        if not (is_real(mu) and mu > 0):
-            raise ValueError(
-                f"{where}: 'direction_std' needs direction_mu > 0 (or direction_time_constant)"
-            )
-        d["direction_sigma"] = std * math.sqrt(2.0 * mu)
+    for pre, unit, sigma_unit in (("", "m/s", "m/s^1.5"), ("direction_", "rad", "rad/s^0.5")):
+        _gauss_markov_keys(d, where, pre, unit, sigma_unit, current)
     valid = _fields(CurrentConfig)
     _reject(
         value,
@@ -514,6 +472,38 @@ def _current(value: Any, current: CurrentConfig | None, where: str) -> CurrentCo
         where,
     )  # fmt: skip
     return _config(CurrentConfig, d, current, where, ("direction_to",))
+
+
+def _gauss_markov_keys(
+    d: dict[str, Any], where: str, pre: str, unit: str, sigma_unit: str, current: Any
+) -> None:
+    """Turn ``{pre}time_constant`` (s) into ``{pre}mu`` (1/s) and ``{pre}std`` (``unit``) into
+    ``{pre}sigma`` (``sigma_unit``) of a current's Gauss-Markov process, in place: the
+    stationary std of ``x_dot = -mu x + sigma w`` is ``sigma / sqrt(2 mu)``."""
+    mu_key, tc_key, sigma_key, std_key = (pre + k for k in ("mu", "time_constant", "sigma", "std"))
+    if tc_key in d:
+        if mu_key in d:
+            raise ValueError(f"{where}: give either '{mu_key}' (1/s) or '{tc_key}' (s), not both")
+        tc = d.pop(tc_key)
+        if not is_real(tc) or not tc > 0 or not math.isfinite(tc):
+            raise ValueError(f"{where}: {tc_key} must be a number > 0 s, got {tc!r}")
+        d[mu_key] = 1.0 / tc
+    if std_key in d:
+        if sigma_key in d:
+            raise ValueError(
+                f"{where}: give either '{sigma_key}' ({sigma_unit}) or '{std_key}' ({unit}), "
+                "not both"
+            )
+        std = d.pop(std_key)
+        if not is_real(std) or not std >= 0 or not math.isfinite(std):
+            raise ValueError(f"{where}: {std_key} must be a number >= 0 {unit}, got {std!r}")
+        default = getattr(current if current is not None else CurrentConfig(), mu_key)
+        mu = d.get(mu_key, default)
+        if not (is_real(mu) and mu > 0):
+            raise ValueError(
+                f"{where}: '{std_key}' needs {mu_key} > 0 (or {tc_key}), got {mu_key} = {mu!r}"
+            )
+        d[sigma_key] = std * math.sqrt(2.0 * mu)
 
 
 def _sensors(value: Any, where: str) -> Any:
