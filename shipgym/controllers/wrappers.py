@@ -83,7 +83,8 @@ def _pid(
     """PID of Tomera (2014) eq. 23 for a vessel: its preset gains where it has them (the
     Blue Lady's tuned gains), else pole placement at the vessel's bandwidth times ``scale``
     on its design model (:func:`~shipgym.controllers.pid.pid_pole_placement`); with
-    ``conditioned`` its velocity is low-passed (the vessel's ``velocity_filter``)."""
+    ``conditioned`` its velocity and its output are low-passed with the vessel's time
+    constants for the velocity source (:func:`~shipgym.controllers.pid.vessel_pid`)."""
 
     def make(vessel: Vessel, dt: float, velocity_source: str = "kinematic") -> DPController:
         return vessel_pid(
@@ -110,7 +111,7 @@ CONTROLLERS: dict[str, ControllerSpec] = {
         "constrained",
         "Tomera (2014) eq. 23 PID (Blue Lady: tuned gains; other vessels: pole placement at "
         "the vessel's bandwidth), constrained allocation, command conditioning (the vessel's "
-        "velocity filter and reversal hysteresis)",
+        "velocity and output filters and reversal hysteresis)",
         conditioned=True,
     ),
     "pid-smooth": ControllerSpec(
