@@ -45,6 +45,7 @@ __all__ = [
     "RewardWeights",
     "SCENES",
     "ShipEnv",
+    "tracking_penalty",
 ]
 
 #: most physics steps per control step (``control_period / timestep``); bounds the work of
@@ -75,7 +76,15 @@ OBS_LAYOUT = (
 
 @dataclass(frozen=True)
 class RewardWeights:
-    """Weights of the named reward terms (each term is ``-weight * quantity``)."""
+    """Weights of the named reward terms (each term is ``-weight * quantity``).
+
+    The three tracking terms are raw squares by default (``-w q^2``). With a scale ``s``
+    (``position_scale`` m, ``heading_scale`` rad, ``velocity_scale`` m/s) a term saturates:
+    ``-w s^2 (1 - exp(-q^2 / s^2))``, the same as the square for ``q << s`` (the weight keeps
+    its unit and meaning) and bounded by ``w s^2`` however far the ship is off, so one bad
+    episode early in training cannot dominate the returns (the raw squares of a drifting ship
+    reach about -1e6 per episode).
+    """
 
     position: float = param(1.0, "1/m^2", "squared horizontal tracking error")
     heading: float = param(3.0, "1/rad^2", "squared heading error")
@@ -84,12 +93,31 @@ class RewardWeights:
     rate: float = param(0.01, "1", "squared change of the normalised command")
     contact: float = param(100.0, "1", "penalty once, when the hull touches a quay")
     leg_bonus: float = param(10.0, "1", "bonus per completed leg (a positive term)")
+    position_scale: float | None = param(
+        None, "m", "saturation scale of the position term (None: the raw square)"
+    )
+    heading_scale: float | None = param(
+        None, "rad", "saturation scale of the heading term (None: the raw square)"
+    )
+    velocity_scale: float | None = param(
+        None, "m/s", "saturation scale of the velocity term (None: the raw square)"
+    )
 
     def __post_init__(self) -> None:
         # each term is -weight * quantity (+leg_bonus): weights are magnitudes, so a negative
         # or non-finite one would reward errors or make every reward NaN
         for f in dataclasses.fields(self):
             val = getattr(self, f.name)
+            if f.name.endswith("_scale"):
+                if val is None:
+                    continue
+                if not is_real(val) or not (math.isfinite(val) and val > 0):
+                    raise ValueError(
+                        f"reward_weights.{f.name} must be None (the raw square) or a finite "
+                        f"number > 0 ({f.metadata['unit']}), got {val!r}"
+                    )
+                object.__setattr__(self, f.name, float(val))
+                continue
             if not is_real(val):
                 raise TypeError(f"reward_weights.{f.name} must be a number, got {val!r}")
             if not (math.isfinite(val) and val >= 0):
@@ -159,7 +187,10 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     reward_rate + reward_contact + reward_leg`` (each term in ``info``):
     ``-w_p |e_xy|^2``, ``-w_psi e_psi^2``, ``-w_v |nu - nu_d|^2``, ``-w_u |a|^2``,
     ``-w_du |a - a_prev|^2``, ``-w_c`` on quay contact, ``+w_leg`` per completed leg
-    (weights: :class:`RewardWeights`, argument ``reward_weights``).
+    (weights: :class:`RewardWeights`, argument ``reward_weights``). With the weights'
+    ``position_scale``, ``heading_scale``, ``velocity_scale`` the three tracking terms saturate
+    (``-w s^2 (1 - exp(-q^2/s^2))``: the square near the reference, bounded by ``w s^2``), the
+    form the learned baselines train with.
 
     ## Starting State
     At the plan's start pose (default: origin, heading north) at rest, plus uniform noise of
@@ -621,9 +652,11 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             effort += x * x
             rate += (x - y) ** 2
         return {
-            "reward_position": -w.position * (ex * ex + ey * ey),
-            "reward_heading": -w.heading * wrap_angle(epsi) ** 2,
-            "reward_velocity": -w.velocity * (du * du + dv * dv + dr * dr),
+            "reward_position": -tracking_penalty(w.position, ex * ex + ey * ey, w.position_scale),
+            "reward_heading": -tracking_penalty(w.heading, wrap_angle(epsi) ** 2, w.heading_scale),
+            "reward_velocity": -tracking_penalty(
+                w.velocity, du * du + dv * dv + dr * dr, w.velocity_scale
+            ),
             "reward_effort": -w.effort * effort,
             "reward_rate": -w.rate * rate,
             "reward_contact": -w.contact if new_contact else 0.0,
@@ -706,6 +739,17 @@ class BlueLadyEnv(ShipEnv):
     def __init__(self, **kwargs: Any) -> None:
         kwargs.setdefault("vessel", "blue-lady")
         super().__init__(**kwargs)
+
+
+def tracking_penalty(weight: Any, q2: Any, scale: float | None) -> Any:
+    """``weight * q2`` (``scale`` None) or ``weight * s^2 (1 - exp(-q2 / s^2))``: the magnitude
+    of a tracking reward term of :class:`RewardWeights`, for floats or NumPy arrays alike."""
+    if scale is None:
+        return weight * q2
+    s2 = scale * scale
+    if isinstance(q2, float):
+        return weight * s2 * -math.expm1(-q2 / s2)
+    return weight * s2 * -np.expm1(-np.asarray(q2) / s2)
 
 
 def parse_sensors_arg(sensors: Any) -> SensorConfig | None:

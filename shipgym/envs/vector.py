@@ -53,7 +53,7 @@ from shipgym.dynamics.frames import wrap_angle
 from shipgym.guidance.batch import BatchedGuidance
 from shipgym.observers.sensors import BatchedSensors, SensorConfig
 
-from .base import ShipEnv
+from .base import ShipEnv, tracking_penalty
 from .batchphysics import BatchedPhysics
 
 __all__ = [
@@ -490,10 +490,17 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             rate = rate + (action[:, j] - prev[:, j]) ** 2
         zero = np.zeros(self.num_envs)
         return {
-            "reward_position": -w.position * (e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1]),
-            "reward_heading": -w.heading * wrap_angle(e[:, 2]) ** 2,
-            "reward_velocity": -w.velocity
-            * (dn[:, 0] * dn[:, 0] + dn[:, 1] * dn[:, 1] + dn[:, 2] * dn[:, 2]),
+            "reward_position": -tracking_penalty(
+                w.position, e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1], w.position_scale
+            ),
+            "reward_heading": -tracking_penalty(
+                w.heading, wrap_angle(e[:, 2]) ** 2, w.heading_scale
+            ),
+            "reward_velocity": -tracking_penalty(
+                w.velocity,
+                dn[:, 0] * dn[:, 0] + dn[:, 1] * dn[:, 1] + dn[:, 2] * dn[:, 2],
+                w.velocity_scale,
+            ),
             "reward_effort": -w.effort * effort,
             "reward_rate": -w.rate * rate,
             "reward_contact": zero,
