@@ -7,6 +7,7 @@ vessel-neutral ids with that vessel.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -61,14 +62,47 @@ class StationKeepingEnv(ShipEnv):
     300 deg with gusts. Never terminates on reaching the pose; time limit 600 control steps
     (600 s; pass ``max_episode_steps`` to ``gym.make`` for longer). Spaces, reward and info:
     see :class:`ShipEnv`.
+
+    ``random_wind=(low, high)`` (m/s) draws each episode's mean wind speed uniformly in
+    ``[low, high]`` and its direction uniformly from every direction, from the seeded
+    generator (after the plan, before the start perturbation), keeping the gusts and spectrum
+    of ``wind=`` (the training distribution of the learned station-keeping baseline);
+    ``None`` (default) keeps ``wind=`` for every episode and the random stream as without
+    the option.
     """
 
-    def __init__(self, **kwargs: Any) -> None:
+    def __init__(self, random_wind: tuple[float, float] | None = None, **kwargs: Any) -> None:
         kwargs.setdefault("plan", ManoeuvrePlan(legs=(Leg(name="hold"),), name="station-keeping"))
         kwargs.setdefault("scene", "open-water")
         kwargs.setdefault("start_noise", (2.0, 2.0, math.radians(5.0)))
         kwargs.setdefault("terminate_on_finish", False)
+        if random_wind is not None:
+            try:
+                lo, hi = (float(x) for x in random_wind)
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"random_wind must be None or (low, high) mean wind speeds in m/s, got "
+                    f"{random_wind!r}"
+                ) from None
+            if not (0.0 <= lo <= hi <= MAX_WIND_SPEED):
+                raise ValueError(
+                    f"random_wind must satisfy 0 <= low <= high <= {MAX_WIND_SPEED:g} m/s, got "
+                    f"{random_wind!r}"
+                )
+            random_wind = (lo, hi)
+        self.random_wind = random_wind
         super().__init__(**kwargs)
+        if random_wind is not None and self._wind is None:
+            raise ValueError("random_wind needs a wind (its gusts are kept); got wind=None")
+
+    def _episode_wind(self) -> WindConfig | None:
+        given = super()._episode_wind()
+        if self.random_wind is None or given is None:
+            return given
+        rng = self.np_random
+        speed = rng.uniform(*self.random_wind)
+        direction = rng.uniform(0.0, 2.0 * math.pi)
+        return dataclasses.replace(given, speed=speed, direction_from=direction)
 
 
 class TrackingEnv(ShipEnv):

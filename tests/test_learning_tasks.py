@@ -1,7 +1,7 @@
-"""Saturated tracking terms of :class:`RewardWeights` (the form the learned baselines train
-with): the analytic formula from the step's own errors, the raw square for small errors, a
-bound however far off, the same in the batched env as in gymnasium's SyncVectorEnv of the
-single envs, and clear errors for bad scales."""
+"""What the learning tasks add for the learned baselines: the saturated tracking terms of
+:class:`RewardWeights` (the analytic formula from the step's own errors, the raw square for
+small errors, a bound however far off, the same in the batched env as in gymnasium's
+SyncVectorEnv, clear errors for bad scales) and station keeping's per-episode random wind."""
 
 from __future__ import annotations
 
@@ -73,3 +73,36 @@ def test_batched_env_gives_the_single_envs_saturated_rewards():
 def test_bad_scale_is_refused(bad):
     with pytest.raises(ValueError, match="position_scale.*None"):
         RewardWeights(position_scale=bad)
+
+
+def test_station_keeping_random_wind_draws_per_episode_and_keeps_the_gusts():
+    """random_wind: a mean speed in [low, high] and any direction per episode, seeded, the
+    gusts of wind= kept; the batched env draws the same; without it the stream is unchanged."""
+    kw = {"vessel": "star-hercules", "wind": "10@300"}
+    env = gym.make("shipgym/StationKeeping-v0", random_wind=(6, 11), **kw).unwrapped
+    base = gym.make("shipgym/StationKeeping-v0", **kw).unwrapped
+    draws = []
+    for seed in range(40):
+        env.reset(seed=seed)
+        w = env.wind_config
+        assert 6.0 <= w.speed <= 11.0 and 0.0 <= w.direction_from < 2 * math.pi
+        assert w.gust_std == base._wind.gust_std
+        draws.append((w.speed, w.direction_from))
+    d = np.array(draws)
+    assert d[:, 1].max() - d[:, 1].min() > 5.0 and d[:, 0].std() > 1.0  # spread, not fixed
+    env.reset(seed=3)
+    again = (env.wind_config.speed, env.wind_config.direction_from)
+    assert again == draws[3]
+    # the batched env: env i with seed 3 + i has the single env's draw of seed 3 + i
+    venv = gym.make_vec("shipgym/StationKeeping-v0", num_envs=2, random_wind=(6, 11),
+                        vectorization_mode="vector_entry_point", **kw)  # fmt: skip
+    venv.reset(seed=3)
+    got = [(w.speed, w.direction_from) for w in venv.unwrapped.physics.wind_configs]
+    assert got == draws[3:5]
+    # without the option: the given wind, and the start draw as before
+    base.reset(seed=3)
+    assert base.wind_config.speed == 10.0
+    with pytest.raises(ValueError, match="random_wind"):
+        gym.make("shipgym/StationKeeping-v0", random_wind=(5, 1), **kw)
+    with pytest.raises(ValueError, match="random_wind"):
+        gym.make("shipgym/StationKeeping-v0", random_wind="fast", **kw)
