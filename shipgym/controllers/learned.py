@@ -965,7 +965,12 @@ class LearnedControllerWrapper(
                 f"{self.model_metadata.observation_shape}, the environment gives "
                 f"{env.observation_space.shape}"
             )
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
+        if env.action_space.shape != self.model_metadata.action_shape:
+            raise ValueError(
+                f"the model returns actions of shape {self.model_metadata.action_shape}, the "
+                f"environment takes {env.action_space.shape}"
+            )
+        self.action_space = gym.spaces.Box(-1.0, 1.0, env.action_space.shape, np.float32)
         self._obs: NDArray[np.float32] | None = None
 
     def reset(
@@ -979,8 +984,12 @@ class LearnedControllerWrapper(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         residual = np.asarray(action, dtype=np.float64)
-        if residual.shape != (3,) or not np.all(np.isfinite(residual)):
-            raise ValueError(f"residual action must be 3 finite numbers in [-1, 1], got {action!r}")
+        shape = self.action_space.shape
+        if residual.shape != shape or not np.all(np.isfinite(residual)):
+            raise ValueError(
+                f"residual action must be {shape[0]} finite numbers in [-1, 1] (one per "
+                f"actuator channel), got {action!r}"
+            )
         if self._obs is None:
             raise gym.error.ResetNeeded("call reset() before step()")
         a_pol = self.policy(self._obs, deterministic=self.deterministic).astype(np.float64)
