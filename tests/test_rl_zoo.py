@@ -101,6 +101,7 @@ def test_the_bad_keys_of_the_old_layout_are_refused(tmp_path):
     """A key the zoo would hand to the algorithm is refused, naming where it belongs; the
     test list of accepted keys does refuse them (it can fail)."""
     assert "vec_env" not in _zoo_keys("ppo") and "eval_freq" not in _zoo_keys("ppo")
+    assert set(train_mod.ZOO_BLOCK_KEYS) <= ZOO_OWN_KEYS  # what shipgym reads, the zoo reads
     for key, val in (("vec_env", "dummy"), ("observer", "kbf"), ("eval_freq", 0)):
         p = tmp_path / "h.yml"
         p.write_text(yaml.safe_dump({TRACKING: {"n_timesteps": 10, key: val}}))
