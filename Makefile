@@ -28,7 +28,7 @@ define pip_install
 endef
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-random test-slow bench lint venv rl ray lock clean
+.PHONY: help demo test test-random test-slow bench lint venv rl ray zoo lock clean
 
 help: ## this list
 	@echo "make targets (each creates/reuses .venv and installs the locked versions it needs):"
@@ -75,6 +75,18 @@ $(RAY_STAMP): $(DEV_STAMP) $(LOCK_RAY)
 
 ray: $(RAY_STAMP) ## the venv plus the ray extra (sweeps as Ray tasks: --executor ray)
 
+# The zoo extra (rl-zoo3) conflicts with the core pins (python-dateutil, pillow): it goes into
+# .venv-zoo, a venv on top of .venv (a .pth adds .venv's packages after its own), so only what
+# rl-zoo3 adds or needs older is installed there; not locked, not part of `make test`.
+ZOO_VENV := .venv-zoo
+zoo: $(RL_STAMP) ## rl-zoo3 2.9.2 in .venv-zoo on top of .venv (make test-slow then runs it)
+	@test -x $(ZOO_VENV)/bin/python || $(PYTHON) -m venv $(ZOO_VENV)
+	@base=$$($(PY) -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])'); \
+	 own=$$($(ZOO_VENV)/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])'); \
+	 echo "import site; site.addsitedir('$$base')" >"$$own/shipgym-venv.pth"
+	$(ZOO_VENV)/bin/python -m pip install --quiet "rl_zoo3==2.9.2" -c $(LOCK_DEV) -c $(LOCK_RL) 2>&1 | \
+		{ grep -v "^WARNING: Location '.*' is ignored" || true; }
+
 # The harbour manoeuvre of Tomera (2014) in the lake-trial wind, PID + Kalman-Bucy filter:
 # a rerun recording, PNG figures and metrics.md in runs/demo/.
 demo: $(STAMP) ## the harbour manoeuvre: recording, figures and metrics in runs/demo/
@@ -92,8 +104,10 @@ test-random: $(RL_STAMP) ## the test suite in a shuffled order (SEED=N repeats a
 	echo "$(PY) -m pytest -q --random-order-bucket=global --random-order-seed=$$seed"; \
 	$(PY) -m pytest -q --random-order-bucket=global --random-order-seed=$$seed
 
+# With .venv-zoo (make zoo) the slow tests include rl-zoo3 training the shipped files.
 test-slow: $(RL_STAMP) ## only the slow tests (the fuzz test of random episodes, ...)
-	$(PY) -m pytest -q -m slow
+	$(if $(wildcard $(ZOO_VENV)/bin/python),SHIPGYM_ZOO_PYTHON=$(abspath $(ZOO_VENV))/bin/python) \
+		$(PY) -m pytest -q -m slow
 
 bench: $(RL_STAMP) ## speed: headline ratios (runs/bench/bench.json), physics, disturbances, allocation
 	$(PY) benchmarks/bench_summary.py

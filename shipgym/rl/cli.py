@@ -1,8 +1,8 @@
 """Command-line hooks of the RL subcommands, for ``shipgym.cli`` to mount.
 
-- ``shipgym train ppo|sac [--timesteps N] [--seed S] [--n-envs K] [--out DIR] [--resume CKPT]
-  [--residual] [--observer NAME] [--max-minutes M] ...``: :func:`add_train_parser`,
-  :func:`cmd_train`;
+- ``shipgym train ppo|sac [--env ID] [--timesteps N] [--seed S] [--n-envs K] [--out DIR]
+  [--resume CKPT] [--residual] [--observer NAME] [--max-minutes M] ...``:
+  :func:`add_train_parser`, :func:`cmd_train`;
 - ``shipgym bench controllers [--controllers ...] [--seeds 10] [--json PATH]
   [--markdown PATH]``: :func:`add_bench_controllers_parser`, :func:`cmd_bench_controllers`.
 
@@ -44,11 +44,19 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
     p = sub.add_parser(
         "train",
         help="train a learned controller (PPO or SAC) on the tracking task",
-        description="Train PPO or SAC on shipgym/BlueLadyTracking-v0 (hyperparameters: "
-        "shipgym/rl/hyperparams/<algo>.yml). Writes model.zip, best_model.zip, checkpoints, "
-        "evaluations.json, progress.csv, config.yml and command.txt into --out.",
+        description="Train PPO or SAC on shipgym/BlueLadyTracking-v0 or another env id "
+        "(--env; hyperparameters: shipgym/rl/hyperparams/<algo>.yml, rl-zoo3's layout). "
+        "Writes model.zip, best_model.zip, checkpoints, evaluations.json, progress.csv (and "
+        "tb/ for TensorBoard when installed), config.yml and command.txt into --out.",
     )
     p.add_argument("algo", choices=["ppo", "sac"], help="algorithm")
+    p.add_argument(
+        "--env",
+        default=None,
+        metavar="ID",
+        help="training env id: a block of the hyperparameter file "
+        "(default shipgym/BlueLadyTracking-v0; e.g. shipgym/StationKeeping-v0)",
+    )
     p.add_argument(
         "--timesteps",
         type=bounded_int(1, 10**10),
@@ -95,7 +103,11 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--hyperparams", type=Path, default=None, help="another YAML file")
     p.add_argument(
-        "--eval-freq", type=nonneg_int, default=None, help="steps between harbour evals (0: none)"
+        "--eval-freq",
+        type=nonneg_int,
+        default=None,
+        help="steps between periodic evaluations (0: none); harbour manoeuvre or station "
+        "keeping, after the env id",
     )
     p.add_argument(
         "--checkpoint-freq",
@@ -147,6 +159,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         resume=args.resume,
         residual=args.residual,
         observer=args.observer,
+        env_id=_env_id(args),
         hyperparams=args.hyperparams,
         eval_freq=args.eval_freq,
         checkpoint_freq=args.checkpoint_freq,
@@ -161,9 +174,16 @@ def cmd_train(args: argparse.Namespace) -> int:
         print(f"  best model  {res.best_model_path}")
     if res.evaluations:
         e = res.evaluations[-1]
-        print(
-            f"  last harbour evaluation: {e['completed']}/{e['runs']} completed, J_c {e['J_c']:.4f}"
-        )
+        if e.get("evaluation") == "station-keeping":
+            print(
+                f"  last station-keeping evaluation: {e['inside_fraction']:.1%} of the time "
+                f"within {e['radius_m']:g} m, mean return {e['return']:.4g}"
+            )
+        else:
+            print(
+                f"  last harbour evaluation: {e['completed']}/{e['runs']} completed, "
+                f"J_c {e['J_c']:.4f}"
+            )
     print(f"  command     {res.metadata.command}")
     return 0
 
@@ -178,7 +198,7 @@ def _train_many(args: argparse.Namespace) -> int:
         args.algo, args.seeds, out=args.out, executor=executor_of(args), workers=args.workers,
         progress=progress_enabled(args.no_progress), timesteps=args.timesteps,
         n_envs=args.n_envs, residual=args.residual, observer=args.observer,
-        hyperparams=args.hyperparams, eval_freq=args.eval_freq,
+        env_id=_env_id(args), hyperparams=args.hyperparams, eval_freq=args.eval_freq,
         checkpoint_freq=args.checkpoint_freq, vec_env=args.vec_env,
         max_minutes=args.max_minutes, verbose=args.verbose,
     )  # fmt: skip
@@ -186,6 +206,18 @@ def _train_many(args: argparse.Namespace) -> int:
         print(f"seed {r['seed']}: {r['num_timesteps']} steps in {r['wall_time_s'] / 60:.1f} min, "
               f"model {r['model_path']}")  # fmt: skip
     return 0
+
+
+def _env_id(args: argparse.Namespace) -> str:
+    """``--env`` or the default training env id."""
+    from shipgym.rl.train import DEFAULT_ENV_ID
+
+    env = args.env
+    if env is None:
+        return DEFAULT_ENV_ID
+    if args.resume is not None:
+        raise ValueError("--resume continues the checkpoint's own env id; drop --env")
+    return str(env)
 
 
 def _kept_by_train(out: Path | None) -> str:

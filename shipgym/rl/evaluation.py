@@ -2,7 +2,7 @@
 
 Thin on :mod:`shipgym.runner` (which builds and steps every episode), for everything that
 compares controllers: the periodic harbour evaluation during
-training (:class:`shipgym.rl.train.HarbourEvalCallback`) and ``shipgym bench controllers``
+training (:data:`shipgym.rl.train.EVALUATIONS`) and ``shipgym bench controllers``
 (:mod:`shipgym.rl.bench`). A result row carries the same keys as
 :func:`shipgym.runner.run_episode` (``completed``, ``quay_contact``, ``x_E``, ``y_E``,
 ``psi_E``, ``J_c``, ``measured``, ``duration_s``, ``thrust_mean_abs``, ...).

@@ -1,27 +1,35 @@
 """Training of learned controllers: ``shipgym train ppo|sac`` (rl-baselines3-zoo style).
 
-The training task is ``shipgym/BlueLadyTracking-v0`` (randomised leg plans and wind, open
-water) seen through an observer (the Kalman-Bucy filter by default), so the policy gets what
-a real DP controller would get. With ``residual=True`` the policy's action is added to the
-normalised command of a classical controller (the tuned PID) through
-:class:`~shipgym.controllers.wrappers.DPControllerWrapper`: the policy starts as the PID and
-learns corrections.
+The default training task is ``shipgym/BlueLadyTracking-v0`` (randomised leg plans and wind,
+open water; ``env_id=`` / ``--env`` any block of the hyperparameter file, e.g.
+``shipgym/StationKeeping-v0``) seen through an observer (the Kalman-Bucy filter by default),
+so the policy gets what a real DP controller would get. With ``residual=True`` the
+policy's action is added to the normalised command of a classical controller (the tuned PID)
+through :class:`~shipgym.controllers.wrappers.DPControllerWrapper`: the policy starts as
+the PID and learns corrections.
 
 Hyperparameters live in plain YAML files shipped with the package
 (``shipgym/rl/hyperparams/{ppo,sac}.yml``, read as plain data with PyYAML's safe loader,
 libyaml's when present, at most 1 MiB; nothing is evaluated) and are checked against
-limits before anything is allocated (:func:`check_hyperparams`). A run writes into its
-output folder:
+limits before anything is allocated (:func:`check_hyperparams`). The files are rl-zoo3's
+(``python -m rl_zoo3.train --algo ppo --env shipgym/BlueLadyTracking-v0 --gym-packages
+shipgym --conf-file shipgym/rl/hyperparams/ppo.yml`` runs them as they are): each env-id
+block holds only keys the zoo accepts, the observer is the block's ``env_wrapper``
+(:func:`observer_from_env_wrapper`), shipgym's own options are in the top-level ``shipgym``
+section (:data:`SECTION_KEYS`). A run writes into its output folder:
 
 - ``model.zip``: the final model, a shipgym model (SB3 zip + ``shipgym.json`` metadata with
   the ``VecNormalize`` statistics; :mod:`shipgym.controllers.learned`);
-- ``best_model.zip``: the model with the best periodic harbour evaluation;
+- ``best_model.zip``: the model with the best periodic evaluation (:data:`EVALUATIONS`: the
+  harbour manoeuvre for the tracking task, station keeping for a station-keeping task);
 - ``checkpoints/{algo}_{steps}_steps.zip``: periodic checkpoints (``resume=`` continues one,
   without unpickling anything: the algorithm is rebuilt from the hyperparameters in its
   metadata and the weights and optimizer states are read with
   ``torch.load(weights_only=True)``, :func:`restore_model_state`);
-- ``evaluations.json``: the harbour evaluations (completion, J_c per seed, over time);
-- ``progress.csv``: SB3's training log; ``config.yml`` (resolved hyperparameters),
+- ``evaluations.json``: the periodic evaluations (completion and J_c per seed, or the
+  fraction of time inside the watch circle, over time);
+- ``progress.csv``: SB3's training log, and ``tb/`` the same for TensorBoard when the
+  ``tensorboard`` package is installed; ``config.yml`` (resolved hyperparameters),
   ``args.yml`` and ``command.txt`` (the exact command), as the zoo does.
 
 Determinism: with ``deterministic=True`` (default) torch runs single-threaded with
@@ -68,8 +76,16 @@ from .evaluation import check_observer, run_env_episode
 
 __all__ = [
     "DEFAULT_ENV_ID",
+    "EVALUATIONS",
     "EVAL_ENV_ID",
+    "Evaluation",
+    "SECTION",
+    "STATION_RADIUS",
     "TrainResult",
+    "evaluation_for",
+    "observer_from_env_wrapper",
+    "plain_policy_kwargs",
+    "station_keeping_episode",
     "build_env",
     "build_vec_env",
     "train_seeds",
@@ -84,8 +100,41 @@ __all__ = [
 
 #: the training task
 DEFAULT_ENV_ID = "shipgym/BlueLadyTracking-v0"
-#: the periodic evaluation: the 5-leg harbour manoeuvre in its default lake-trial wind
+#: the periodic evaluation of the Blue Lady's tracking task: the 5-leg harbour manoeuvre in its
+#: default lake-trial wind (:data:`EVALUATIONS`)
 EVAL_ENV_ID = "shipgym/BlueLadyHarbour-v0"
+
+#: the top-level key of a hyperparameter file that holds shipgym's own options, per env id;
+#: rl-zoo3 reads only the block of its ``--env`` (``ExperimentManager.read_hyperparameters``)
+SECTION = "shipgym"
+#: keys of an entry of the ``shipgym`` section
+SECTION_KEYS = ("vec_env", "randomize", "eval_freq", "eval_seeds", "checkpoint_freq", "residual")
+#: keys of an env-id block besides the algorithm's arguments: those rl-zoo3 2.9 reads itself
+#: (``ExperimentManager._preprocess_hyperparams``) and shipgym uses
+ZOO_BLOCK_KEYS = (
+    "n_timesteps",
+    "policy",
+    "n_envs",
+    "env_kwargs",
+    "env_wrapper",
+    "normalize",
+    "policy_kwargs",
+)
+#: the wrapper that puts an observer into the loop (``env_wrapper`` in a block)
+OBSERVER_WRAPPER = "shipgym.observers.wrapper.ObserverWrapper"
+#: the activation of each algorithm's policy when ``policy_kwargs`` names none:
+#: stable-baselines3's defaults (``ActorCriticPolicy``: ``nn.Tanh``; SAC's actor and critics:
+#: ``nn.ReLU``); resolved hyperparameters always carry it by name
+DEFAULT_ACTIVATION = {"ppo": "tanh", "sac": "relu"}
+#: torch activation class names of the zoo's string form of ``policy_kwargs``
+_ZOO_ACTIVATIONS = {
+    "Tanh": "tanh",
+    "ReLU": "relu",
+    "ELU": "elu",
+    "LeakyReLU": "leaky_relu",
+    "SiLU": "silu",
+    "GELU": "gelu",
+}
 
 #: keys of a hyperparameter block that shipgym uses (everything else goes to the algorithm)
 SHIPGYM_KEYS = (
@@ -181,13 +230,17 @@ def load_hyperparams(
 ) -> dict[str, Any]:
     """Resolved hyperparameters of ``algo`` for ``env_id`` (plain data).
 
-    Reads the YAML file (``path`` or the shipped one) with ``yaml.safe_load``, takes the
-    block of ``env_id``, applies the ``residual`` overrides when ``residual`` and then
-    ``overrides``. The result has ``residual`` (bool), ``controller`` and ``residual_scale``
-    resolved.
+    Reads the YAML file (``path`` or the shipped one) with ``yaml.safe_load``: the block of
+    ``env_id`` (rl-zoo3's, keys the zoo accepts: :data:`ZOO_BLOCK_KEYS` and the algorithm's
+    arguments) and its entry in the ``shipgym`` section (:data:`SECTION_KEYS`). The block's
+    ``env_wrapper`` gives ``observer`` (:func:`observer_from_env_wrapper`), its
+    ``policy_kwargs`` become plain data with the activation by name
+    (:func:`plain_policy_kwargs`); then the section's options, the ``residual`` overrides when
+    ``residual`` and ``overrides`` are applied. The result has ``residual`` (bool),
+    ``observer``, ``controller`` and ``residual_scale`` resolved.
 
     Raises:
-        ValueError: missing env block, malformed values, unknown algorithm arguments.
+        ValueError: missing env block, malformed values, unknown keys or algorithm arguments.
     """
     from shipgym._safeload import load_config_file
 
@@ -195,16 +248,34 @@ def load_hyperparams(
     if p.suffix.lower() not in (".yml", ".yaml"):
         raise ValueError(f"hyperparameter file {str(p)!r} must be a .yml / .yaml file")
     data = load_config_file(p, "hyperparameter file")
-    if not isinstance(data, dict) or env_id not in data:
-        have = ", ".join(data) if isinstance(data, dict) else "nothing"
-        raise ValueError(f"{p} has no hyperparameters for {env_id!r} (it has: {have})")
+    if not isinstance(data, dict) or env_id == SECTION or env_id not in data:
+        have = ", ".join(k for k in data if k != SECTION) if isinstance(data, dict) else ""
+        raise ValueError(f"{p} has no hyperparameters for {env_id!r} (it has: {have or 'none'})")
     block = data[env_id]
     if not isinstance(block, dict):
         raise ValueError(f"{p}: the block of {env_id!r} must be a mapping")
+    section = data.get(SECTION) or {}
+    if not isinstance(section, dict) or not all(isinstance(v, dict) for v in section.values()):
+        raise ValueError(f"{p}: '{SECTION}' must map env ids to mappings of shipgym options")
+    opts = copy.deepcopy(section.get(env_id) or {})
+    unknown = sorted(set(opts) - set(SECTION_KEYS))
+    if unknown:
+        raise ValueError(
+            f"{p}: {SECTION}.{env_id} has unknown keys {unknown}; valid: {', '.join(SECTION_KEYS)}"
+        )
     hp = copy.deepcopy(block)
-    res_block = hp.pop("residual", None) or {}
+    misplaced = sorted(set(hp) & (set(SECTION_KEYS) | {"observer", "controller", "residual_scale"}))
+    if misplaced:
+        raise ValueError(
+            f"{p}: {misplaced} in the block of {env_id!r} are not rl-zoo3 keys (the zoo hands "
+            f"them to the algorithm, which fails): put them under '{SECTION}: {env_id}:' "
+            f"(the observer goes into env_wrapper: {OBSERVER_WRAPPER})"
+        )
+    hp["observer"] = observer_from_env_wrapper(hp.pop("env_wrapper", None), where=str(p))
+    res_block = opts.pop("residual", None) or {}
     if not isinstance(res_block, dict):
-        raise ValueError(f"{p}: 'residual' must be a mapping of overrides")
+        raise ValueError(f"{p}: '{SECTION}.{env_id}.residual' must be a mapping of overrides")
+    hp.update(opts)
     if residual:
         hp = _merge(hp, res_block)
         hp.setdefault("controller", "pid")
@@ -215,6 +286,8 @@ def load_hyperparams(
     hp["residual"] = bool(residual)
     if overrides:
         hp = _merge(hp, overrides)
+    if "policy_kwargs" in hp:
+        hp["policy_kwargs"] = plain_policy_kwargs(algo, hp["policy_kwargs"], where=str(p))
     for k in _INT_KEYS:
         if k in hp and hp[k] is not None:
             v = hp[k]
@@ -228,6 +301,116 @@ def load_hyperparams(
     _check_algo_args(algo, hp, where=str(p))
     check_hyperparams(algo, hp, where=str(p))
     return hp
+
+
+def observer_from_env_wrapper(spec: Any, where: str = "hyperparameters") -> str | None:
+    """The observer named by a block's ``env_wrapper`` (rl-zoo3's form); ``None``: none.
+
+    rl-zoo3 wraps every env in what ``env_wrapper`` names (``rl_zoo3.utils.get_wrapper_class``):
+    a class path, or a one-entry mapping ``{class path: keyword arguments}``, or a list of
+    these. shipgym takes one entry, :data:`OBSERVER_WRAPPER` (``ObserverWrapper``, the
+    wrapper ``shipgym.make(..., observer=)`` applies), with at most the argument ``observer``
+    (default ``kbf``); so the zoo and ``shipgym train`` put the same observer in the loop.
+
+    Raises:
+        ValueError: any other wrapper or argument, with the form to use.
+    """
+    form = f"env_wrapper: [{{{OBSERVER_WRAPPER}: {{observer: kbf}}}}]"
+    if spec is None:
+        return None
+    entries = spec if isinstance(spec, list) else [spec]
+    if len(entries) != 1:
+        raise ValueError(
+            f"{where}: env_wrapper must name one wrapper, the observer's ({form}); got {spec!r}"
+        )
+    entry = entries[0]
+    kwargs: Any
+    if isinstance(entry, str):
+        name, kwargs = entry, {}
+    elif isinstance(entry, dict) and len(entry) == 1:
+        name, kwargs = next(iter(entry.items()))
+        kwargs = {} if kwargs is None else kwargs
+    else:
+        raise ValueError(f"{where}: env_wrapper entries are a class path or {{path: kwargs}}")
+    if name != OBSERVER_WRAPPER or not isinstance(kwargs, dict):
+        raise ValueError(
+            f"{where}: shipgym train supports one env_wrapper, the observer ({form}); got {name!r}"
+        )
+    unknown = sorted(set(kwargs) - {"observer"})
+    if unknown:
+        raise ValueError(
+            f"{where}: env_wrapper {OBSERVER_WRAPPER} takes only 'observer', got {unknown}"
+        )
+    observer = kwargs.get("observer", "kbf")
+    if not isinstance(observer, str):
+        raise ValueError(f"{where}: env_wrapper observer must be a name, got {observer!r}")
+    return check_observer(observer)
+
+
+def plain_policy_kwargs(algo: str, value: Any, where: str = "hyperparameters") -> dict[str, Any]:
+    """``policy_kwargs`` of a file as plain data, the activation by name.
+
+    A mapping as it is, or rl-zoo3's string form ``"dict(net_arch=[64, 64],
+    activation_fn=nn.ReLU)"``, which the zoo evaluates and shipgym parses instead: a call of
+    ``dict`` with keyword arguments whose values are literals, ``activation_fn`` one of
+    ``nn.Tanh``, ``nn.ReLU``, ``nn.ELU``, ``nn.LeakyReLU``, ``nn.SiLU``, ``nn.GELU``. Without
+    ``activation_fn`` the algorithm's default is filled in (:data:`DEFAULT_ACTIVATION`).
+
+    Raises:
+        ValueError: any other string (nothing is evaluated), or not a mapping.
+    """
+    if isinstance(value, str):
+        value = _parse_zoo_policy_kwargs(value, where)
+    if not isinstance(value, Mapping):
+        raise ValueError(f"{where}: policy_kwargs must be a mapping, got {value!r}")
+    out = copy.deepcopy(dict(value))
+    out.setdefault("activation_fn", DEFAULT_ACTIVATION[algo])
+    return out
+
+
+def _parse_zoo_policy_kwargs(text: str, where: str) -> dict[str, Any]:
+    """``"dict(key=literal, ..., activation_fn=nn.Name)"`` -> plain data (no eval)."""
+    import ast
+
+    form = 'policy_kwargs: "dict(net_arch=[64, 64], activation_fn=nn.ReLU)"'
+    bad = ValueError(
+        f"{where}: policy_kwargs as a string must be rl-zoo3's narrow form {form} (a call of "
+        f"dict with literal keyword values; activation_fn one of "
+        f"{', '.join('nn.' + n for n in _ZOO_ACTIVATIONS)}); shipgym evaluates nothing, so "
+        f"write anything else as a mapping. Got {text[:200]!r}"
+    )
+    if len(text) > 10_000:
+        raise bad
+    try:
+        tree = ast.parse(text.strip(), mode="eval").body
+    except SyntaxError:
+        raise bad from None
+    if not (
+        isinstance(tree, ast.Call)
+        and isinstance(tree.func, ast.Name)
+        and tree.func.id == "dict"
+        and not tree.args
+        and all(kw.arg is not None for kw in tree.keywords)
+    ):
+        raise bad
+    out: dict[str, Any] = {}
+    for kw in tree.keywords:
+        node = kw.value
+        if kw.arg == "activation_fn":
+            if not (
+                isinstance(node, ast.Attribute)
+                and isinstance(node.value, ast.Name)
+                and node.value.id == "nn"
+                and node.attr in _ZOO_ACTIVATIONS
+            ):
+                raise bad
+            out["activation_fn"] = _ZOO_ACTIVATIONS[node.attr]
+            continue
+        try:
+            out[str(kw.arg)] = ast.literal_eval(node)
+        except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
+            raise bad from None
+    return out
 
 
 def check_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparameters") -> None:
@@ -493,9 +676,13 @@ def train_command(
     observer: str | None,
     resume: str | Path | None = None,
     max_minutes: float | None = None,
+    env_id: str = DEFAULT_ENV_ID,
 ) -> str:
     """The ``shipgym train`` command line that reproduces a run (stored in the metadata)."""
-    parts = ["shipgym", "train", algo, "--timesteps", str(timesteps), "--seed", str(seed)]
+    parts = ["shipgym", "train", algo]
+    if env_id != DEFAULT_ENV_ID:
+        parts += ["--env", env_id]
+    parts += ["--timesteps", str(timesteps), "--seed", str(seed)]
     parts += ["--n-envs", str(n_envs), "--out", str(out)]
     if residual:
         parts.append("--residual")
@@ -575,6 +762,35 @@ def _callbacks() -> Any:
     return callbacks
 
 
+# ---- periodic evaluation --------------------------------------------------------------------
+#: the watch circle of the station-keeping evaluation: 2 m, the radius documented for the
+#: generic PID on the offshore vessels (a DP watch circle; Al-Takie (1982) 2.3 asks for 3 % of
+#: the water depth or 7 m)
+STATION_RADIUS = 2.0  # m
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """A periodic evaluation of the policy during training (see :data:`EVALUATIONS`).
+
+    Attributes:
+        name: what it is (``harbour``, ``station-keeping``).
+        build: ``(env_id, hp) -> env``: the evaluation env (observer of ``hp``, no sensor
+            randomisation).
+        episode: ``(env, seed, policy) -> row``: one episode.
+        summarize: ``rows -> (summary, scalars, score)``: the plain-data summary (stored in
+            ``evaluations.json``), the scalars logged as ``eval/<name>`` (progress.csv,
+            TensorBoard) and the score ``best_model.zip`` maximises.
+    """
+
+    name: str
+    build: Callable[[str, Mapping[str, Any]], gym.Env[Any, Any]]
+    episode: Callable[[gym.Env[Any, Any], int, Any], dict[str, Any]]
+    summarize: Callable[
+        [Sequence[Mapping[str, Any]]], tuple[dict[str, Any], dict[str, float], tuple[float, ...]]
+    ]
+
+
 def _score(rows: Sequence[Mapping[str, Any]]) -> tuple[int, float]:
     """(runs completed without quay contact, -mean J_c): larger is better."""
     ok = sum(bool(r["completed"]) and not r["quay_contact"] for r in rows)
@@ -582,21 +798,133 @@ def _score(rows: Sequence[Mapping[str, Any]]) -> tuple[int, float]:
     return ok, -(float(np.mean(jc)) if jc else math.inf)
 
 
+def _harbour_env(env_id: str, hp: Mapping[str, Any]) -> gym.Env[Any, Any]:
+    return build_env(EVAL_ENV_ID, hp, env_kwargs={}, randomize=False)
+
+
+def _harbour_summary(
+    rows: Sequence[Mapping[str, Any]],
+) -> tuple[dict[str, Any], dict[str, float], tuple[float, ...]]:
+    """Completion (without quay contact), J_c (truth and measured), contacts, duration."""
+    ok, neg_jc = _score(rows)
+    meas = [
+        r["measured"]["J_c"]
+        for r in rows
+        if r.get("measured") and math.isfinite(r["measured"]["J_c"])
+    ]
+    summary: dict[str, Any] = {
+        "completed": ok,
+        "runs": len(rows),
+        "J_c": -neg_jc,
+        "J_c_measured": float(np.mean(meas)) if meas else None,
+        "rows": [
+            {k: r[k] for k in ("seed", "completed", "quay_contact", "J_c", "duration_s")}
+            for r in rows
+        ],
+    }
+    scalars: dict[str, float] = {"completed": ok / max(len(rows), 1), "J_c": summary["J_c"]}
+    if meas:
+        scalars["J_c_measured"] = summary["J_c_measured"]
+    scalars["quay_contact"] = float(sum(r["quay_contact"] for r in rows))
+    scalars["duration_s"] = float(np.mean([r["duration_s"] for r in rows]))
+    return summary, scalars, (ok, neg_jc)
+
+
+def _station_env(env_id: str, hp: Mapping[str, Any]) -> gym.Env[Any, Any]:
+    return build_env(env_id, hp, randomize=False)
+
+
+def station_keeping_episode(env: gym.Env[Any, Any], seed: int, policy: Any) -> dict[str, Any]:
+    """One station-keeping episode: the fraction of steps within :data:`STATION_RADIUS` of the
+    set point (true position), the 95th percentile of the distance (m) and the return."""
+    from shipgym.runner import step_episode
+
+    dist: list[float] = []
+
+    def on_step(info: Mapping[str, Any]) -> None:
+        eta, d = info["eta"], info["eta_d"]
+        dist.append(math.hypot(float(eta[0] - d[0]), float(eta[1] - d[1])))
+
+    end = step_episode(env, seed, policy, on_step=on_step)
+    r = np.asarray(dist)
+    return {
+        "seed": int(seed),
+        "inside_fraction": float(np.mean(r <= STATION_RADIUS)) if r.size else 0.0,
+        "r95": float(np.percentile(r, 95)) if r.size else math.inf,
+        "return": float(end.ret),
+        "steps": int(end.steps),
+    }
+
+
+def _station_summary(
+    rows: Sequence[Mapping[str, Any]],
+) -> tuple[dict[str, Any], dict[str, float], tuple[float, ...]]:
+    """Mean fraction of time within the radius, mean r95 and mean return."""
+    inside = float(np.mean([r["inside_fraction"] for r in rows]))
+    ret = float(np.mean([r["return"] for r in rows]))
+    summary: dict[str, Any] = {
+        "inside_fraction": inside,
+        "radius_m": STATION_RADIUS,
+        "return": ret,
+        "runs": len(rows),
+        "rows": [dict(r) for r in rows],
+    }
+    scalars = {
+        "inside_fraction": inside,
+        "r95": float(np.mean([r["r95"] for r in rows])),
+        "return": ret,
+    }
+    return summary, scalars, (inside, ret)
+
+
+HARBOUR = Evaluation("harbour", _harbour_env, run_env_episode, _harbour_summary)
+STATION_KEEPING = Evaluation(
+    "station-keeping", _station_env, station_keeping_episode, _station_summary
+)
+#: the periodic evaluation of each training env id: the Blue Lady's tracking task is judged
+#: on the harbour manoeuvre of Tomera (2014) (completion without quay contact, then J_c),
+#: a station-keeping task on station keeping of the same vessel and wind (the fraction of
+#: time within :data:`STATION_RADIUS`, then the return)
+EVALUATIONS: dict[str, Evaluation] = {
+    "shipgym/BlueLadyTracking-v0": HARBOUR,
+    "shipgym/StationKeeping-v0": STATION_KEEPING,
+    "shipgym/BlueLadyStationKeeping-v0": STATION_KEEPING,
+}
+
+
+def evaluation_for(env_id: str) -> Evaluation:
+    """The periodic evaluation of a training env id (:data:`EVALUATIONS`).
+
+    Raises:
+        ValueError: an id without one (train it with ``eval_freq: 0``).
+    """
+    try:
+        return EVALUATIONS[env_id]
+    except KeyError:
+        raise ValueError(
+            f"no periodic evaluation for {env_id!r} (evaluated ids: {', '.join(EVALUATIONS)}); "
+            "train it with --eval-freq 0 (or eval_freq: 0 in the shipgym section)"
+        ) from None
+
+
 def _make_eval_callback(**kw: Any) -> Any:
     cb = _callbacks()
 
-    class HarbourEvalCallback(cb.BaseCallback):  # type: ignore[misc, name-defined]
-        """Every ``eval_freq`` steps: the harbour manoeuvre with the current policy.
+    class PeriodicEvalCallback(cb.BaseCallback):  # type: ignore[misc, name-defined]
+        """Every ``eval_freq`` steps: the env id's :class:`Evaluation` of the current policy.
 
-        Runs the deterministic policy (current ``VecNormalize`` statistics) on
-        ``shipgym/BlueLadyHarbour-v0`` for each seed, logs ``eval/completed`` (fraction
-        completed without quay contact), ``eval/J_c``, ``eval/J_c_measured``,
-        ``eval/quay_contact``, ``eval/duration_s``, appends to ``evaluations.json`` and saves
-        ``best_model.zip`` on improvement (more runs completed, then lower mean J_c).
+        Runs the deterministic policy (current ``VecNormalize`` statistics) for each seed,
+        logs the evaluation's scalars as ``eval/<name>`` (harbour: ``completed``, the fraction
+        completed without quay contact, ``J_c``, ``J_c_measured``, ``quay_contact``,
+        ``duration_s``; station keeping: ``inside_fraction``, ``r95``, ``return``), appends
+        the summary to ``evaluations.json`` and saves ``best_model.zip`` when the score
+        improves (harbour: more runs completed, then lower mean J_c; station keeping: more
+        time inside the radius, then a higher return).
         """
 
         def __init__(
             self,
+            evaluation: Evaluation,
             env: gym.Env[Any, Any],
             metadata_fn: Callable[[], ModelMetadata],
             save_fn: Callable[[Path], Path],
@@ -605,6 +933,7 @@ def _make_eval_callback(**kw: Any) -> Any:
             out_dir: Path,
         ) -> None:
             super().__init__()
+            self.evaluation = evaluation
             self.env = env
             self.metadata_fn = metadata_fn
             self.save_fn = save_fn
@@ -612,7 +941,7 @@ def _make_eval_callback(**kw: Any) -> Any:
             self.seeds = [int(s) for s in seeds]
             self.out_dir = out_dir
             self.evaluations: list[dict[str, Any]] = []
-            self.best: tuple[int, float] | None = None
+            self.best: tuple[float, ...] | None = None
             self._last = 0
 
         def _on_step(self) -> bool:
@@ -623,40 +952,24 @@ def _make_eval_callback(**kw: Any) -> Any:
 
         def evaluate(self) -> dict[str, Any]:
             policy = LearnedPolicy(self.model.policy, self.metadata_fn())
-            rows = [run_env_episode(self.env, s, policy) for s in self.seeds]
-            ok, neg_jc = _score(rows)
-            meas = [
-                r["measured"]["J_c"]
-                for r in rows
-                if r.get("measured") and math.isfinite(r["measured"]["J_c"])
-            ]
+            rows = [self.evaluation.episode(self.env, s, policy) for s in self.seeds]
+            summary, scalars, score = self.evaluation.summarize(rows)
             summary = {
                 "timesteps": int(self.num_timesteps),
-                "completed": ok,
-                "runs": len(rows),
-                "J_c": -neg_jc,
-                "J_c_measured": float(np.mean(meas)) if meas else None,
-                "rows": [
-                    {k: r[k] for k in ("seed", "completed", "quay_contact", "J_c", "duration_s")}
-                    for r in rows
-                ],
+                "evaluation": self.evaluation.name,
+                **summary,
             }
             self.evaluations.append(summary)
-            self.logger.record("eval/completed", ok / max(len(rows), 1))
-            self.logger.record("eval/J_c", summary["J_c"])
-            if meas:
-                self.logger.record("eval/J_c_measured", summary["J_c_measured"])
-            self.logger.record("eval/quay_contact", sum(r["quay_contact"] for r in rows))
-            self.logger.record("eval/duration_s", float(np.mean([r["duration_s"] for r in rows])))
+            for name, value in scalars.items():
+                self.logger.record(f"eval/{name}", value)
             text = json.dumps(jsonable(self.evaluations), indent=1)
             (self.out_dir / "evaluations.json").write_text(text)
-            score = (ok, neg_jc)
             if self.best is None or score > self.best:
                 self.best = score
                 self.save_fn(self.out_dir / "best_model.zip")
             return summary
 
-    return HarbourEvalCallback(**kw)
+    return PeriodicEvalCallback(**kw)
 
 
 def _make_checkpoint_callback(
@@ -724,6 +1037,44 @@ def _make_progress_callback() -> Any:
     return TqdmProgress()
 
 
+# ---- logging ---------------------------------------------------------------------------------
+#: what ``train`` says once when TensorBoard logging is off because the package is missing
+TENSORBOARD_NOTE = (
+    "shipgym train: the tensorboard package is not installed: training curves go to "
+    "progress.csv only (pip install tensorboard, part of the rl extra, to log to OUT/tb)"
+)
+
+
+def _tensorboard_dir(out_dir: Path, enabled: bool | None) -> Path | None:
+    """``OUT/tb`` when TensorBoard logging is on (``None``: when the package is installed)."""
+    import importlib.util
+    import sys
+
+    if enabled is False:
+        return None
+    if importlib.util.find_spec("tensorboard") is None:
+        if enabled:
+            raise ImportError(
+                "tensorboard=True needs the tensorboard package: pip install tensorboard"
+            )
+        print(TENSORBOARD_NOTE, file=sys.stderr)
+        return None
+    return out_dir / "tb"
+
+
+def _logger(out_dir: Path, tb_dir: Path | None, verbose: int) -> Any:
+    """SB3's logger: ``progress.csv`` in ``out_dir``, TensorBoard events in ``tb_dir``, the
+    console with ``verbose``."""
+    from stable_baselines3.common.logger import Logger, make_output_format
+
+    formats = [make_output_format("csv", str(out_dir))]
+    if tb_dir is not None:
+        formats.append(make_output_format("tensorboard", str(tb_dir)))
+    if verbose:
+        formats.append(make_output_format("stdout", str(out_dir)))
+    return Logger(folder=str(out_dir), output_formats=formats)
+
+
 # ---- training --------------------------------------------------------------------------------
 @dataclass
 class TrainResult:
@@ -731,12 +1082,12 @@ class TrainResult:
 
     Attributes:
         model_path: the final model (``OUT/model.zip``).
-        best_model_path: the best harbour evaluation's model, if evaluation ran.
+        best_model_path: the best periodic evaluation's model, if evaluation ran.
         out_dir: the output folder.
         metadata: the final model's metadata.
         num_timesteps: environment steps trained in total (including a resumed run's).
         wall_time_s: wall-clock time of the training (s).
-        evaluations: the harbour evaluations (see ``evaluations.json``).
+        evaluations: the periodic evaluations (see ``evaluations.json``).
         model: the trained SB3 model (in memory).
         vec_normalize: its ``VecNormalize`` (closed; statistics still readable), or ``None``.
     """
@@ -773,6 +1124,7 @@ def train(
     progress: bool = True,
     deterministic: bool = True,
     verbose: int = 0,
+    tensorboard: bool | None = None,
 ) -> TrainResult:
     """Train a PPO or SAC controller; the function behind ``shipgym train``.
 
@@ -788,11 +1140,13 @@ def train(
             (:func:`restore_model_state`).
         residual: learn a residual on top of the YAML's ``controller`` (the tuned PID).
         observer: ``"truth"``, ``"kbf"``, ... (default: YAML, ``kbf``).
-        env_id: training env id (a block of that name must exist in the YAML).
+        env_id: training env id (a block of that name must exist in the YAML); the periodic
+            evaluation follows it (:data:`EVALUATIONS`: the harbour manoeuvre for the Blue
+            Lady's tracking task, station keeping for a station-keeping task).
         hyperparams: another YAML file in the same layout.
         overrides: hyperparameters replacing the YAML's (plain data, merged).
-        eval_freq: steps between harbour evaluations (default YAML; 0 disables).
-        eval_seeds: harbour seeds of each evaluation (default YAML, ``[100, 101]``).
+        eval_freq: steps between periodic evaluations (default YAML; 0 disables).
+        eval_seeds: episode seeds of each evaluation (default YAML, ``[100, 101]``).
         checkpoint_freq: steps between checkpoints (default YAML; 0 disables).
         vec_env: ``"dummy"``, ``"subproc"`` or ``"batched"`` (the native batched env,
             :mod:`shipgym.rl.vec`) (default YAML).
@@ -800,11 +1154,13 @@ def train(
         progress: show a progress bar.
         deterministic: single thread, deterministic torch algorithms (see module docstring).
         verbose: SB3 verbosity (1 prints the training log).
+        tensorboard: log to ``OUT/tb`` for TensorBoard as well as to ``progress.csv``
+            (the training curves and the evaluation scalars); ``None`` (default): when the
+            ``tensorboard`` package is installed, else a one-line note.
 
     Returns:
         A :class:`TrainResult`.
     """
-    from stable_baselines3.common.logger import configure
     from stable_baselines3.common.vec_env import VecNormalize
 
     cls = algorithm_class(algo)
@@ -851,8 +1207,10 @@ def train(
     out_dir.mkdir(parents=True, exist_ok=True)
     command = train_command(
         algo, timesteps=n_steps, seed=seed, n_envs=n, out=out_dir, residual=residual,
-        observer=hp["observer"], resume=resume, max_minutes=max_minutes,
+        observer=hp["observer"], resume=resume, max_minutes=max_minutes, env_id=env_id,
     )  # fmt: skip
+    evaluation = evaluation_for(env_id) if int(hp.get("eval_freq", 0) or 0) > 0 else None
+    tb_dir = _tensorboard_dir(out_dir, tensorboard)
     if deterministic:
         set_deterministic(seed)
 
@@ -871,8 +1229,7 @@ def train(
     if resume is not None:
         assert resume_meta is not None
         restore_model_state(model, resume, resume_meta)
-    fmt = ["csv"] + (["stdout"] if verbose else [])
-    model.set_logger(configure(str(out_dir), fmt))
+    model.set_logger(_logger(out_dir, tb_dir, verbose))
 
     t_start = time.perf_counter()
 
@@ -885,10 +1242,10 @@ def train(
 
     cbs: list[Any] = []
     eval_cb = None
-    if int(hp.get("eval_freq", 0) or 0) > 0:
-        eval_env = build_env(EVAL_ENV_ID, hp, env_kwargs={}, randomize=False)
+    if evaluation is not None:
         eval_cb = _make_eval_callback(
-            env=eval_env, metadata_fn=metadata_fn, save_fn=save_fn,
+            evaluation=evaluation, env=evaluation.build(env_id, hp), metadata_fn=metadata_fn,
+            save_fn=save_fn,
             eval_freq=int(hp["eval_freq"]), seeds=hp.get("eval_seeds", [100, 101]),
             out_dir=out_dir,
         )  # fmt: skip
@@ -914,6 +1271,7 @@ def train(
     wall = time.perf_counter() - t_start
     if eval_cb is not None and eval_cb._last != model.num_timesteps:
         eval_cb.evaluate()
+        model.logger.dump(model.num_timesteps)  # the final evaluation's scalars
     final = save_model(model, out_dir / "model.zip", metadata_fn({"wall_time_s": wall}))
     best = out_dir / "best_model.zip"
     model.logger.close()  # flushes and closes progress.csv
