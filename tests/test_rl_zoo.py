@@ -219,9 +219,9 @@ def test_policy_kwargs_strings_are_parsed_narrowly_never_evaluated(tmp_path):
 def test_env_wrapper_must_be_the_observer(tmp_path):
     base = {"n_timesteps": 10, "policy": "MlpPolicy"}
     cases = [
-        ("rl_zoo3.wrappers.TimeFeatureWrapper", "supports one env_wrapper"),
+        ("rl_zoo3.wrappers.TimeFeatureWrapper", "supports env_wrapper"),
         ([{train_mod.OBSERVER_WRAPPER: {"observer": "kbf", "options": {}}}], "only 'observer'"),
-        ([train_mod.OBSERVER_WRAPPER, train_mod.OBSERVER_WRAPPER], "one wrapper"),
+        ([train_mod.OBSERVER_WRAPPER, train_mod.OBSERVER_WRAPPER], "supports env_wrapper"),
         ([{train_mod.OBSERVER_WRAPPER: {"observer": "crystal-ball"}}], "not available"),
     ]
     p = tmp_path / "h.yml"

@@ -247,6 +247,8 @@ class ModelMetadata:
         residual: ``True`` if the policy's action was added to a DP controller's command.
         controller: that controller's name (``"pid"``) when ``residual``.
         residual_scale: factor on the policy action in the residual sum (-).
+        error_integral: forgetting time (s) of the error integral appended to the observation
+            (:class:`~shipgym.envs.integral.ErrorIntegralObservation`); ``None``: none.
         normalization: observation statistics, or ``None`` without ``VecNormalize``.
         policy: SB3 policy alias (``"MlpPolicy"``).
         policy_kwargs: SB3 policy arguments as plain data (activation as a name).
@@ -269,6 +271,7 @@ class ModelMetadata:
     residual: bool = False
     controller: str | None = None
     residual_scale: float = 1.0
+    error_integral: float | None = None
     normalization: ObsNormalization | None = None
     policy: str = "MlpPolicy"
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
@@ -299,6 +302,10 @@ class ModelMetadata:
             raise ValueError("a residual model needs the name of its controller (e.g. 'pid')")
         if not (math.isfinite(self.residual_scale) and self.residual_scale >= 0):
             raise ValueError(f"residual_scale must be finite and >= 0, got {self.residual_scale}")
+        if self.error_integral is not None:
+            from shipgym.envs.integral import check_time_constant
+
+            object.__setattr__(self, "error_integral", check_time_constant(self.error_integral))
         if isinstance(self.normalization, Mapping):
             object.__setattr__(self, "normalization", ObsNormalization(**self.normalization))
         for name in ("env_kwargs", "policy_kwargs", "hyperparams", "extra"):
@@ -960,10 +967,17 @@ class LearnedControllerWrapper(
                 "vessel"
             )
         if env.observation_space.shape != self.model_metadata.observation_shape:
+            hint = (
+                f" (the model also sees the error integral: wrap the env in "
+                f"shipgym.envs.integral.ErrorIntegralObservation(env, time_constant="
+                f"{self.model_metadata.error_integral:g}), as make_learned_env does)"
+                if self.model_metadata.error_integral is not None
+                else ""
+            )
             raise ValueError(
                 "the model takes observations of shape "
                 f"{self.model_metadata.observation_shape}, the environment gives "
-                f"{env.observation_space.shape}"
+                f"{env.observation_space.shape}{hint}"
             )
         if env.action_space.shape != self.model_metadata.action_shape:
             raise ValueError(
@@ -1029,6 +1043,14 @@ def _check_stack(env: gym.Env[Any, Any], meta: ModelMetadata) -> None:
             "this model drives the thrusters directly (not residual) but the environment has a "
             "DPControllerWrapper: build the stack with make_learned_env()"
         )
+    integ = [w for w in layers if type(w).__name__ == "ErrorIntegralObservation"]
+    have = getattr(integ[0], "time_constant", None) if integ else None
+    if have != meta.error_integral:
+        raise ValueError(
+            f"the model was trained with the error integral of time constant "
+            f"{meta.error_integral} s appended to its observation; the environment has "
+            f"{have}: build the stack with make_learned_env()"
+        )
     observers = [w for w in layers if type(w).__name__ == "ObserverWrapper"]
     name = getattr(observers[0], "observer_name", None) if observers else None
     if name != meta.observer:
@@ -1080,4 +1102,8 @@ def make_learned_env(
         residual_scale=meta.residual_scale if meta.residual else 1.0,
         **env_kwargs,
     )
+    if meta.error_integral is not None:
+        from shipgym.envs.integral import ErrorIntegralObservation
+
+        env = ErrorIntegralObservation(env, time_constant=meta.error_integral)
     return LearnedControllerWrapper(env, path, deterministic=deterministic)

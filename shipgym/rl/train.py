@@ -122,6 +122,8 @@ ZOO_BLOCK_KEYS = (
 )
 #: the wrapper that puts an observer into the loop (``env_wrapper`` in a block)
 OBSERVER_WRAPPER = "shipgym.observers.wrapper.ObserverWrapper"
+#: the wrapper that appends the leaky integral of the observed errors (after the observer)
+INTEGRAL_WRAPPER = "shipgym.envs.integral.ErrorIntegralObservation"
 #: the activation of each algorithm's policy when ``policy_kwargs`` names none:
 #: stable-baselines3's defaults (``ActorCriticPolicy``: ``nn.Tanh``; SAC's actor and critics:
 #: ``nn.ReLU``); resolved hyperparameters always carry it by name
@@ -152,6 +154,7 @@ SHIPGYM_KEYS = (
     "residual",
     "controller",
     "residual_scale",
+    "error_integral",
 )
 _INT_KEYS = (
     "n_timesteps",
@@ -271,7 +274,9 @@ def load_hyperparams(
             f"them to the algorithm, which fails): put them under '{SECTION}: {env_id}:' "
             f"(the observer goes into env_wrapper: {OBSERVER_WRAPPER})"
         )
-    hp["observer"] = observer_from_env_wrapper(hp.pop("env_wrapper", None), where=str(p))
+    hp["observer"], integral = parse_env_wrapper(hp.pop("env_wrapper", None), where=str(p))
+    if integral is not None:
+        hp["error_integral"] = integral
     res_block = opts.pop("residual", None) or {}
     if not isinstance(res_block, dict):
         raise ValueError(f"{p}: '{SECTION}.{env_id}.residual' must be a mapping of overrides")
@@ -304,38 +309,50 @@ def load_hyperparams(
 
 
 def observer_from_env_wrapper(spec: Any, where: str = "hyperparameters") -> str | None:
-    """The observer named by a block's ``env_wrapper`` (rl-zoo3's form); ``None``: none.
+    """The observer named by a block's ``env_wrapper`` (:func:`parse_env_wrapper`)."""
+    return parse_env_wrapper(spec, where)[0]
 
-    rl-zoo3 wraps every env in what ``env_wrapper`` names (``rl_zoo3.utils.get_wrapper_class``):
-    a class path, or a one-entry mapping ``{class path: keyword arguments}``, or a list of
-    these. shipgym takes one entry, :data:`OBSERVER_WRAPPER` (``ObserverWrapper``, the
-    wrapper ``shipgym.make(..., observer=)`` applies), with at most the argument ``observer``
-    (default ``kbf``); so the zoo and ``shipgym train`` put the same observer in the loop.
+
+def parse_env_wrapper(spec: Any, where: str = "hyperparameters") -> tuple[str | None, float | None]:
+    """``(observer, error_integral)`` from a block's ``env_wrapper`` (rl-zoo3's form).
+
+    rl-zoo3 wraps every env in what ``env_wrapper`` names (``rl_zoo3.utils.get_wrapper_class``),
+    in order: a class path, or a one-entry mapping ``{class path: keyword arguments}``, or a
+    list of these. shipgym takes :data:`OBSERVER_WRAPPER` (``ObserverWrapper``, the wrapper
+    ``shipgym.make(..., observer=)`` applies), with at most the argument ``observer``
+    (default ``kbf``), then optionally :data:`INTEGRAL_WRAPPER` (``ErrorIntegralObservation``,
+    the leaky integral of the observed errors, with at most ``time_constant`` in s); so the
+    zoo and ``shipgym train`` build the same stack. ``None`` / ``None``: the truth, no integral.
 
     Raises:
-        ValueError: any other wrapper or argument, with the form to use.
+        ValueError: any other wrapper, order or argument, with the form to use.
     """
-    form = f"env_wrapper: [{{{OBSERVER_WRAPPER}: {{observer: kbf}}}}]"
+    from shipgym.envs.integral import check_time_constant
+
+    form = (
+        f"env_wrapper: [{{{OBSERVER_WRAPPER}: {{observer: kbf}}}}] optionally followed by "
+        f"{{{INTEGRAL_WRAPPER}: {{time_constant: 100}}}}"
+    )
     if spec is None:
-        return None
+        return None, None
     entries = spec if isinstance(spec, list) else [spec]
-    if len(entries) != 1:
-        raise ValueError(
-            f"{where}: env_wrapper must name one wrapper, the observer's ({form}); got {spec!r}"
-        )
-    entry = entries[0]
-    kwargs: Any
-    if isinstance(entry, str):
-        name, kwargs = entry, {}
-    elif isinstance(entry, dict) and len(entry) == 1:
-        name, kwargs = next(iter(entry.items()))
-        kwargs = {} if kwargs is None else kwargs
-    else:
-        raise ValueError(f"{where}: env_wrapper entries are a class path or {{path: kwargs}}")
-    if name != OBSERVER_WRAPPER or not isinstance(kwargs, dict):
-        raise ValueError(
-            f"{where}: shipgym train supports one env_wrapper, the observer ({form}); got {name!r}"
-        )
+    parsed: list[tuple[str, dict[str, Any]]] = []
+    for entry in entries:
+        kwargs: Any
+        if isinstance(entry, str):
+            name, kwargs = entry, {}
+        elif isinstance(entry, dict) and len(entry) == 1:
+            name, kwargs = next(iter(entry.items()))
+            kwargs = {} if kwargs is None else kwargs
+        else:
+            raise ValueError(f"{where}: env_wrapper entries are a class path or {{path: kwargs}}")
+        if not isinstance(kwargs, dict):
+            raise ValueError(f"{where}: the arguments of env_wrapper {name!r} must be a mapping")
+        parsed.append((name, kwargs))
+    names = [n for n, _ in parsed]
+    if names not in ([OBSERVER_WRAPPER], [OBSERVER_WRAPPER, INTEGRAL_WRAPPER]):
+        raise ValueError(f"{where}: shipgym train supports {form}; got {names!r}")
+    kwargs = parsed[0][1]
     unknown = sorted(set(kwargs) - {"observer"})
     if unknown:
         raise ValueError(
@@ -344,7 +361,19 @@ def observer_from_env_wrapper(spec: Any, where: str = "hyperparameters") -> str 
     observer = kwargs.get("observer", "kbf")
     if not isinstance(observer, str):
         raise ValueError(f"{where}: env_wrapper observer must be a name, got {observer!r}")
-    return check_observer(observer)
+    integral = None
+    if len(parsed) == 2:
+        kw = parsed[1][1]
+        unknown = sorted(set(kw) - {"time_constant"})
+        if unknown:
+            raise ValueError(
+                f"{where}: env_wrapper {INTEGRAL_WRAPPER} takes only 'time_constant', got {unknown}"
+            )
+        try:
+            integral = check_time_constant(kw.get("time_constant", 100.0))
+        except ValueError as exc:
+            raise ValueError(f"{where}: env_wrapper {INTEGRAL_WRAPPER}: {exc}") from None
+    return check_observer(observer), integral
 
 
 def plain_policy_kwargs(algo: str, value: Any, where: str = "hyperparameters") -> dict[str, Any]:
@@ -588,13 +617,18 @@ def build_env(
     if randomize and "sensors" in rnd:
         kwargs["sensors"] = _draw_sensors(rnd["sensors"], seed, rank)
     residual = bool(hp.get("residual"))
-    return make(
+    env = make(
         env_id,
         observer=check_observer(hp.get("observer")),
         controller=hp["controller"] if residual else None,
         residual_scale=float(hp["residual_scale"]) if residual else 1.0,
         **kwargs,
     )
+    if hp.get("error_integral") is not None:
+        from shipgym.envs.integral import ErrorIntegralObservation
+
+        env = ErrorIntegralObservation(env, time_constant=float(hp["error_integral"]))
+    return env
 
 
 def build_vec_env(
@@ -638,7 +672,13 @@ def _batched_vec_env(env_id: str, hp: Mapping[str, Any], n_envs: int, seed: int)
     if hp.get("residual"):
         kwargs["controller"] = hp["controller"]
         kwargs["residual_scale"] = float(hp["residual_scale"])
-    return make_batched_vec_env(env_id, n_envs, **kwargs)
+    venv = make_batched_vec_env(env_id, n_envs, **kwargs)
+    if hp.get("error_integral") is not None:
+        from shipgym.rl.vec import ErrorIntegralVecEnv
+
+        dt = float(venv.venv.template.control_period)
+        return ErrorIntegralVecEnv(venv, dt, float(hp["error_integral"]))
+    return venv
 
 
 @dataclass
@@ -729,6 +769,7 @@ def _metadata(
         residual=bool(hp.get("residual")),
         controller=hp.get("controller") if hp.get("residual") else None,
         residual_scale=float(hp.get("residual_scale", 1.0)) if hp.get("residual") else 1.0,
+        error_integral=hp.get("error_integral"),
         normalization=norm,
         policy=str(hp.get("policy", "MlpPolicy")),
         policy_kwargs=copy.deepcopy(dict(hp.get("policy_kwargs") or {})),

@@ -25,11 +25,12 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from stable_baselines3.common.vec_env import VecEnv
+from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
+from shipgym.envs.integral import ErrorIntegral
 from shipgym.envs.vector import ShipVectorEnv
 
-__all__ = ["BatchedVecEnv", "make_batched_vec_env"]
+__all__ = ["BatchedVecEnv", "ErrorIntegralVecEnv", "make_batched_vec_env"]
 
 
 class BatchedVecEnv(VecEnv):
@@ -115,3 +116,50 @@ def make_batched_vec_env(
     if seed is not None:
         out.seed(seed)
     return out
+
+
+class ErrorIntegralVecEnv(VecEnvWrapper):
+    """:class:`~shipgym.envs.integral.ErrorIntegralObservation` of every env of an SB3
+    ``VecEnv``: the leaky integral of the observed errors appended to each observation (the
+    same arrays as the single wrapper's, step by step; a test checks it).
+
+    An env whose episode ended gets its terminal observation augmented with the integral up
+    to that step (``infos[i]["terminal_observation"]``), then a zero integral for the next
+    episode's first observation.
+
+    Args:
+        venv: a ``VecEnv`` of shipgym positioning envs (unnormalised observations).
+        dt: control period (s).
+        time_constant: forgetting time ``T`` (s).
+    """
+
+    def __init__(self, venv: VecEnv, dt: float, time_constant: float) -> None:
+        space = venv.observation_space
+        assert isinstance(space, gym.spaces.Box) and len(space.shape) == 1
+        n = space.shape[0]
+        super().__init__(
+            venv, observation_space=gym.spaces.Box(-np.inf, np.inf, (n + 3,), np.float32)
+        )
+        self.integral = ErrorIntegral(venv.num_envs, dt, time_constant)
+
+    def reset(self) -> np.ndarray:
+        obs = self.venv.reset()
+        self.integral.reset()
+        return self.integral.augment(obs)
+
+    def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
+        obs, reward, done, infos = self.venv.step_wait()
+        done = np.asarray(done, bool)
+        if done.any():
+            final = np.array(obs, dtype=np.float64)
+            for i in np.nonzero(done)[0].tolist():
+                final[i] = infos[i]["terminal_observation"]
+            value = self.integral.step(final)
+            for i in np.nonzero(done)[0].tolist():
+                aug = self.integral.augment(final[i : i + 1], value[i : i + 1])[0]
+                infos[i]["terminal_observation"] = aug
+            self.integral.reset(done)
+            # the next episodes' first errors are not integrated: zero, as after a reset
+        else:
+            self.integral.step(obs)
+        return self.integral.augment(obs), reward, done, infos
