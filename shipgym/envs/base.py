@@ -181,6 +181,9 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | 12-(11+n) | previous (applied) normalised action | 1 |
 
     ``observation_structure`` maps these names to slices.
+    :class:`~shipgym.envs.integral.ErrorIntegralObservation` (stacked above the observer)
+    appends the leaky integral of the observed errors 0-2 (m s, m s, rad s), what a
+    memoryless learned policy needs to cancel a steady load such as the mean wind.
 
     ## Rewards
     ``reward = reward_position + reward_heading + reward_velocity + reward_effort +
