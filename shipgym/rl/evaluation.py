@@ -18,7 +18,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from shipgym.runner import build_env, describe_wind, episode_summary, step_episode
+from shipgym.runner import ENV_DEFAULT, build_env, describe_wind, episode_summary, step_episode
 
 __all__ = [
     "DEFAULT_WIND",
@@ -77,29 +77,38 @@ def make_controlled_env(
     Args:
         scenario: scenario name or env id (``harbour``, ``tracking``, ...).
         controller: a name in ``shipgym.controllers.wrappers.CONTROLLERS`` or a learned
-            controller (``ppo``: the shipped baseline, ``ppo:PATH``, ``sac:PATH``).
+            controller (a shipped baseline ``ppo``, ``sac``, ``ppo-residual`` for the scenario
+            and ``vessel=``, or ``ppo:PATH``, ``sac:PATH``).
         observer: ``None``/``"truth"`` or an observer name. Learned controllers always get
             the observer given here (pass the model's own to reproduce its training setup).
         wind: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
-            (``"3@300"``, ``(speed m/s, from deg)``, a ``WindConfig``) or ``None`` (calm).
-        **env_kwargs: further environment arguments.
+            (``"3@300"``, ``(speed m/s, from deg)``, a ``WindConfig``), ``None`` (calm) or
+            :data:`shipgym.runner.ENV_DEFAULT` (the env's own: the vessel's nominal wind for
+            station keeping).
+        **env_kwargs: further environment arguments (``vessel=``, ``max_episode_steps=``, ...).
     """
     from shipgym.controllers.learned import is_learned_controller
     from shipgym.disturbances import WindConfig
 
-    wind_cfg = WindConfig.coerce(wind, name="wind")
+    if wind is not ENV_DEFAULT:
+        env_kwargs["wind"] = WindConfig.coerce(wind, name="wind")
     observer = check_observer(observer)
     if observer is None and is_learned_controller(controller):
         observer = "truth"  # build_env's None would mean the model's own observer
-    return build_env(
-        scenario, controller=controller, observer=observer, wind=wind_cfg, **env_kwargs
-    )
+    return build_env(scenario, controller=controller, observer=observer, **env_kwargs)
 
 
 def run_env_episode(
-    env: gym.Env[Any, Any], seed: int, policy: PolicyFn | None = None
+    env: gym.Env[Any, Any],
+    seed: int,
+    policy: PolicyFn | None = None,
+    *,
+    on_step: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     """Run one episode to its end; ``policy(obs) -> action`` or zeros. Returns the result row.
+
+    ``on_step(info)`` is called after every step (a trace, e.g. the station-keeping
+    statistics of ``shipgym bench controllers``).
 
     The row has the keys of :func:`shipgym.runner.run_episode` that describe the run
     (``completed``, ``legs_completed``, ``duration_s``, ``quay_contact``, ``terminated``,
@@ -111,7 +120,7 @@ def run_env_episode(
     (:func:`shipgym.metrics.honest_indices`).
     """
     t0 = time.perf_counter()
-    end = step_episode(env, seed, policy)
+    end = step_episode(env, seed, policy, on_step=on_step)
     result = episode_summary(env, end)
     wall = time.perf_counter() - t0
     return {"seed": int(seed), **result, "return": end.ret, "wall_time_s": wall}
@@ -124,16 +133,18 @@ def run_controlled_episode(
     seed: int = 0,
     observer: str | None = None,
     wind: Any = DEFAULT_WIND,
+    on_step: Callable[[dict[str, Any]], None] | None = None,
     **env_kwargs: Any,
 ) -> dict[str, Any]:
     """One closed-loop episode of a named controller (see :func:`make_controlled_env`).
 
-    Returns the row of :func:`run_env_episode` plus ``scenario``, ``controller`` (the name as
-    given), ``observer`` and ``wind`` (the wind the physics used: speed m/s, from deg).
+    ``on_step(info)`` is called after every step. Returns the row of :func:`run_env_episode`
+    plus ``scenario``, ``controller`` (the name as given), ``observer`` and ``wind`` (the wind
+    the physics used: speed m/s, from deg).
     """
     env = make_controlled_env(scenario, controller, observer=observer, wind=wind, **env_kwargs)
     try:
-        row = run_env_episode(env, seed)
+        row = run_env_episode(env, seed, on_step=on_step)
         wind_used = describe_wind(env.unwrapped.wind_config)  # type: ignore[attr-defined]
     finally:
         env.close()
