@@ -255,6 +255,8 @@ def test_shipped_model_still_loads_and_runs():
 # ---- the CLI ---------------------------------------------------------------------------------
 _RL_CLI = {"train", "controllers"}
 
+_RUN_SK = ["run", "station-keeping"]
+_BENCH_SK = ["bench", "controllers", "--task", "station-keeping"]
 #: (argv, texts the single error line must contain)
 CLI_CASES = [
     (["run", "harbour", "--seed", "-1"], ["--seed", ">= 0"]),
@@ -280,11 +282,12 @@ CLI_CASES = [
     (["run", "--controller", "foo"], ["foo", "pid", "lq", "ppo,", "ppo:PATH", "sac:PATH"]),
     (["run", "--controller", "ppo:"], ["empty model path", "ppo:PATH"]),
     (["run", "--controller", "sac:"], ["empty model path", "sac:PATH"]),
-    (["run", "station-keeping", "--controller", "sac"], ["no shipped baseline", "sac:PATH"]),
-    (["bench", "controllers", "--task", "station-keeping", "--vessel", "wimpey-sealab",
-      "--controllers", "ppo"], ["no shipped baseline", "wimpey-sealab", "star-hercules"]),
-    (["bench", "controllers", "--task", "station-keeping", "--vessel", "kvlcc2-100m"],
-     ["kvlcc2-100m", "positioning vessel"]),
+    ([*_RUN_SK, "--vessel", "wimpey-sealab", "--controller", "sac"], ["no shipped baseline"]),
+    (
+        [*_BENCH_SK, "--vessel", "wimpey-sealab", "--controllers", "ppo"],
+        ["no shipped baseline", "wimpey-sealab", "star-hercules"],
+    ),
+    ([*_BENCH_SK, "--vessel", "kvlcc2-100m"], ["kvlcc2-100m", "positioning vessel"]),
     (["plot", "training", "nosuch", "--out", "fig.png"], ["nosuch", "progress.csv"]),
     (["plot", "training", "folder", "--out", "fig.pdf"], [".png"]),
     (["run", "--controller", "ppo:missing.zip"], ["missing.zip", "does not exist"]),

@@ -121,6 +121,10 @@ def test_baselines_are_found_by_name_task_and_vessel():
         find_baseline("ppo", "station-keeping", "wimpey-sealab")
     with pytest.raises(ValueError, match="no shipped baseline 'sac' for station-keeping"):
         find_baseline("sac", "station-keeping", "star-hercules")
+    # without a station-keeping entry the vessel's harbour (tracking-trained) policy keeps
+    # station, as the residual did before; the task's own entry wins where there is one
+    assert find_baseline("ppo-residual", "station-keeping").file == RESIDUAL.name
+    assert find_baseline("ppo", "station-keeping", "blue-lady").file == "ppo_harbour_kbf.zip"
     with pytest.raises(ValueError, match="no shipped learned baseline runs"):
         find_baseline("ppo", "shipgym/DPSwayStep-v0")
     assert all(is_learned_controller(b.name) for b in BASELINE_MODELS)
@@ -142,6 +146,7 @@ def test_a_missing_shipped_file_says_what_is_shipped(models):
         "sac (sac_harbour_kbf.zip)",
     ]
     assert default_controllers("station-keeping", "star-hercules") == ["pid", "lq"]
+    assert default_controllers("station-keeping", "blue-lady") == ["pid", "lq", "ppo-residual"]
 
 
 def test_ppo_means_the_pure_policy_once_its_file_is_there(models, pure_ppo):

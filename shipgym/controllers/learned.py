@@ -934,6 +934,10 @@ def _shipped_list() -> str:
 def find_baseline(name: str, task: str | None = None, vessel: Any = None) -> BaselineModel:
     """The shipped baseline of a controller name for a task and vessel (:data:`BASELINE_MODELS`).
 
+    The entry of the task itself wins; without one, station keeping takes the vessel's harbour
+    entry (those policies are trained on the tracking task, whose observation and actions every
+    positioning task shares: the Blue Lady's ``ppo-residual`` keeps station as it did before).
+
     Args:
         name: ``ppo``, ``sac`` or ``ppo-residual``.
         task: a baseline task, scenario name or env id (:func:`baseline_task`; default the
@@ -948,9 +952,12 @@ def find_baseline(name: str, task: str | None = None, vessel: Any = None) -> Bas
     kind = baseline_task(task)
     v = "blue-lady" if vessel is None else getattr(vessel, "name", vessel)
     v = Path(str(v)).name
-    for b in BASELINE_MODELS:
-        if b.name == name and b.task == kind and b.vessel == v:
-            return b
+    # a policy of the task itself, else (station keeping) the vessel's harbour policy: trained
+    # on the tracking task, it drives any positioning task of its vessel (same observation)
+    for want in dict.fromkeys((kind, "harbour")):
+        for b in BASELINE_MODELS:
+            if b.name == name and b.task == want and b.vessel == v:
+                return b
     algo = "sac" if name == "sac" else "ppo"
     raise ValueError(
         f"no shipped baseline {name!r} for {kind} with vessel {v!r}; shipped: {_shipped_list()}; "

@@ -105,10 +105,17 @@ def _check_task(task: str) -> None:
 
 
 def _baselines(task: str, vessel: str) -> list[Any]:
-    from shipgym.controllers.learned import BASELINE_MODELS
+    """The baselines that the names resolve to for ``task`` and ``vessel``
+    (:func:`~shipgym.controllers.learned.find_baseline`), in name order."""
+    from shipgym.controllers.learned import BASELINE_NAMES, find_baseline
 
-    v = Path(str(vessel)).name
-    return [b for b in BASELINE_MODELS if b.task == task and b.vessel == v]
+    out = []
+    for name in BASELINE_NAMES:
+        try:
+            out.append(find_baseline(name, task, vessel))
+        except ValueError:
+            continue
+    return out
 
 
 def default_controllers(task: str = "harbour", vessel: str | None = None) -> list[str]:
