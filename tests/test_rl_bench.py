@@ -26,6 +26,7 @@ from shipgym.controllers.learned import (  # noqa: E402
     baseline_model_path,
     find_baseline,
     is_learned_controller,
+    make_learned_env,
     parse_learned_controller,
     read_metadata,
     trained_vessel,
@@ -243,6 +244,24 @@ def test_station_keeping_with_a_learned_policy(models, station_ppo):
                           vessel="wimpey-sealab")  # fmt: skip
     with pytest.raises(ValueError, match="trained for vessel 'star-hercules', not 'blue-lady'"):
         bench_controllers([f"ppo:{station_ppo}"], seeds=1)
+
+
+def test_the_wrapper_takes_the_vessels_action_shape_and_refuses_other_vessels(station_ppo):
+    env = make_learned_env(SK_ID, station_ppo, vessel="star-hercules", max_episode_steps=5)
+    assert env.action_space.shape == (4,) == env.model_metadata.action_shape
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.zeros(4, np.float32))  # the policy alone
+    assert info["policy_action"].shape == (4,)
+    with pytest.raises(ValueError, match="residual action must be 4 finite numbers"):
+        env.step(np.zeros(3, np.float32))
+    env.close()
+    with pytest.raises(ValueError, match="trained on 'star-hercules'.*cannot drive vessel "
+                       "'wimpey-sealab'"):  # fmt: skip
+        make_learned_env(SK_ID, station_ppo, vessel="wimpey-sealab")
+    with pytest.raises(ValueError, match="trained on 'blue-lady'.*cannot drive vessel 'star-h"):
+        make_learned_env("tracking", RESIDUAL, vessel="star-hercules")
+    with pytest.raises(ValueError, match="does not fit the harbour world"):  # before any run
+        bench_controllers(["pid"], seeds=1, vessel="star-hercules")
 
 
 def test_cli_bench_station_keeping(models, station_ppo, tmp_path, capsys):

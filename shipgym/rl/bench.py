@@ -319,6 +319,12 @@ def bench_controllers(
     steps = None
     if task == "station-keeping":
         steps = _station_steps(vessel, duration_s)
+    elif vessel != "blue-lady":
+        import shipgym
+
+        shipgym.make(
+            "harbour", vessel=vessel
+        ).close()  # a vessel the harbour cannot take fails here
     obs = default_observer() if observer == "default" else check_observer(observer)
     if controllers is None:
         controllers = default_controllers(task, vessel)
