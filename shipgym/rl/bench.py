@@ -322,9 +322,8 @@ def bench_controllers(
     elif vessel != "blue-lady":
         import shipgym
 
-        shipgym.make(
-            "harbour", vessel=vessel
-        ).close()  # a vessel the harbour cannot take fails here
+        # a vessel the harbour world cannot take fails here, before any run
+        shipgym.make("harbour", vessel=vessel).close()
     obs = default_observer() if observer == "default" else check_observer(observer)
     if controllers is None:
         controllers = default_controllers(task, vessel)
