@@ -61,12 +61,18 @@ def controller_catalogue(classical: Any = None) -> dict[str, str]:
     """Controller names and descriptions: the classical registry plus the learned names."""
     if classical is None:
         from shipgym.controllers.wrappers import CONTROLLERS as classical
-    from shipgym.controllers.learned import ALGORITHMS, BASELINE_MODELS, BASELINE_NAMES
+    from shipgym.controllers.learned import (
+        ALGORITHMS,
+        BASELINE_MODELS,
+        BASELINE_NAMES,
+        models_dir,
+    )
 
     out = {name: spec.description for name, spec in classical.items()}
     for name in BASELINE_NAMES:
         out[name] = "shipped baseline: " + "; ".join(
-            f"{b.what} ({b.task}, {b.vessel}: shipgym/assets/models/{b.file})"
+            f"{b.what} ({b.task}, {b.vessel}: shipgym/assets/models/{b.file}"
+            f"{'' if (models_dir() / b.file).is_file() else ', not shipped yet'})"
             for b in BASELINE_MODELS
             if b.name == name
         )

@@ -147,6 +147,11 @@ def test_a_missing_shipped_file_says_what_is_shipped(models):
         "sac (sac_harbour_kbf.zip)",
     ]
     assert default_controllers("station-keeping", "star-hercules") == ["pid", "lq"]
+    from shipgym.catalogue import controller_catalogue
+
+    cat = controller_catalogue()  # what 'shipgym list' prints
+    assert "sac_harbour_kbf.zip, not shipped yet" in cat["sac"]
+    assert cat["ppo-residual"].endswith("ppo_residual_pid_kbf.zip)")
     assert default_controllers("station-keeping", "blue-lady") == ["pid", "lq", "ppo-residual"]
 
 
