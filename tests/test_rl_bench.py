@@ -349,6 +349,29 @@ def test_curves_of_a_synthetic_run(tmp_path):
     assert (w, h) == (1000, 700)  # 10 x 7 inches at 100 dpi
 
 
+def test_a_station_keeping_evaluation_is_what_the_curves_read(tmp_path):
+    """:func:`station_keeping_evaluation` (for a training run's evaluations.json) gives the
+    statistics of the direct loop, and the curves read it back as station keeping."""
+    from shipgym.rl.evaluation import station_keeping_evaluation
+
+    env = make(SK_ID, vessel="star-hercules", controller="pid", observer="kbf",
+               max_episode_steps=200)  # fmt: skip
+    evals = [station_keeping_evaluation(env, [3, 4], timesteps=n) for n in (1000, 2000)]
+    env.close()
+    for e in evals:
+        for row in e["rows"]:
+            r, _ = _reference_station_keeping("star-hercules", row["seed"], 200)
+            assert row["inside_fraction"] == float(np.mean(r <= 2.0))
+            assert row["r95"] == pytest.approx(float(np.percentile(r, 95)), rel=1e-12)
+    assert evals[0]["rows"] == evals[1]["rows"]  # same seeds, same controller: same runs
+    run = _synthetic(tmp_path / "sk", evals)
+    c = read_training_run(run)
+    assert c.eval_kind == "station-keeping"
+    np.testing.assert_array_equal(c.eval_steps, [1000, 2000])
+    want = np.mean([row["inside_fraction"] for row in evals[0]["rows"]])
+    np.testing.assert_array_equal(c.eval_score, [want, want])
+
+
 def test_curves_refuse_what_train_does_not_write(tmp_path):
     with pytest.raises(FileNotFoundError, match="no progress.csv"):
         read_training_run(tmp_path)

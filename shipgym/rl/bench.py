@@ -32,7 +32,13 @@ from shipgym.bench import mean_std as _ms
 from shipgym.bench import run_jobs
 from shipgym.runner import ENV_DEFAULT
 
-from .evaluation import DEFAULT_WIND, check_observer, default_observer
+from .evaluation import (
+    DEFAULT_WIND,
+    STATION_RADIUS,
+    StationTrack,
+    check_observer,
+    default_observer,
+)
 
 __all__ = [
     "DEFAULT_CONTROLLERS",
@@ -56,9 +62,6 @@ DEFAULT_CONTROLLERS = ("pid", "lq")
 TASKS = ("harbour", "station-keeping")
 #: length of a station-keeping run (s), as in the station-keeping requirement of the README
 STATION_DURATION_S = 1000.0
-#: the watch circle (m) of the station-keeping requirement documented for the generic PID:
-#: 95 % of the time inside it
-STATION_RADIUS = 2.0
 #: the station-keeping env
 _STATION_ID = "shipgym/StationKeeping-v0"
 
@@ -159,43 +162,6 @@ def controller_labels(controllers: Sequence[str]) -> list[str]:
     if len(set(out)) != len(out):
         raise ValueError(f"controllers must be distinct, got {list(controllers)}")
     return out
-
-
-class StationTrack:
-    """Collects a station-keeping run step by step (``on_step(info)`` of the episode runner).
-
-    ``r`` (m): horizontal distance of the true position from the set point ``eta_d``;
-    ``e`` (deg): heading error, wrapped to [-180, 180).
-    """
-
-    def __init__(self) -> None:
-        self.r: list[float] = []
-        self.e: list[float] = []
-
-    def __call__(self, info: dict[str, Any]) -> None:
-        from shipgym.dynamics import wrap_angle
-
-        eta, d = info["eta"], info["eta_d"]
-        self.r.append(math.hypot(float(eta[0]) - float(d[0]), float(eta[1]) - float(d[1])))
-        self.e.append(math.degrees(float(wrap_angle(float(eta[2]) - float(d[2])))))
-
-    def summary(self, radius: float = STATION_RADIUS) -> dict[str, Any]:
-        """``inside_fraction`` (of the steps with ``r <= radius``), ``r95`` (m, 95th
-        percentile, linear interpolation), ``r_max`` (m), ``heading_rms_deg`` (deg),
-        ``steps``."""
-        r = np.asarray(self.r, float)
-        e = np.asarray(self.e, float)
-        if r.size == 0:
-            nan = math.nan
-            return {"inside_fraction": nan, "r95": nan, "r_max": nan, "heading_rms_deg": nan,
-                    "steps": 0}  # fmt: skip
-        return {
-            "inside_fraction": float(np.mean(r <= radius)),
-            "r95": float(np.percentile(r, 95.0)),
-            "r_max": float(r.max()),
-            "heading_rms_deg": float(np.sqrt(np.mean(e**2))),
-            "steps": int(r.size),
-        }
 
 
 def _learned_threads(controller: str) -> None:
