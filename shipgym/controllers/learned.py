@@ -1165,10 +1165,10 @@ class LearnedControllerWrapper(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         residual = np.asarray(action, dtype=np.float64)
-        n = self.action_space.shape
+        n = tuple(self.action_space.shape or ())
         if residual.shape != n or not np.all(np.isfinite(residual)):
             raise ValueError(
-                f"residual action must be {n[0]} finite numbers in [-1, 1], got {action!r}"
+                f"residual action must be {math.prod(n)} finite numbers in [-1, 1], got {action!r}"
             )
         if self._obs is None:
             raise gym.error.ResetNeeded("call reset() before step()")
