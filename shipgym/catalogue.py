@@ -17,7 +17,8 @@ def catalogue() -> dict[str, Any]:
     Returns:
         A mapping of plain data: ``env_ids``, ``env_scenarios`` (name -> id),
         ``scenario_presets`` (name -> description, the named presets and the packaged files),
-        ``controllers`` (name -> description, including ``ppo``, ``ppo:PATH``, ``sac:PATH``),
+        ``controllers`` (name -> description, including the shipped baselines ``ppo``, ``sac``,
+        ``ppo-residual`` and ``ppo:PATH``, ``sac:PATH``),
         ``observers``, ``sensor_presets``, ``wave_presets``, ``plans``, ``plant_variants``,
         ``wind_models`` and ``actuators``.
     """
@@ -60,22 +61,38 @@ def controller_catalogue(classical: Any = None) -> dict[str, str]:
     """Controller names and descriptions: the classical registry plus the learned names."""
     if classical is None:
         from shipgym.controllers.wrappers import CONTROLLERS as classical
-    from shipgym.controllers.learned import ALGORITHMS, BASELINE_MODELS
+    from shipgym.controllers.learned import (
+        ALGORITHMS,
+        BASELINE_MODELS,
+        BASELINE_NAMES,
+        models_dir,
+    )
 
     out = {name: spec.description for name, spec in classical.items()}
-    for algo, fname in BASELINE_MODELS.items():
-        out[algo] = f"the shipped {algo.upper()} baseline (shipgym/assets/models/{fname})"
+    for name in BASELINE_NAMES:
+        out[name] = "shipped baseline: " + "; ".join(
+            f"{b.what} ({b.task}, {b.vessel}: shipgym/assets/models/{b.file}"
+            f"{'' if (models_dir() / b.file).is_file() else ', not shipped yet'})"
+            for b in BASELINE_MODELS
+            if b.name == name
+        )
     for algo in ALGORITHMS:
         out[f"{algo}:PATH"] = f"a {algo.upper()} model trained with 'shipgym train {algo}'"
     return out
 
 
-def check_controller(name: str) -> None:
-    """Raise ``ValueError`` (listing every valid name) unless ``name`` is a controller name."""
+def check_controller(name: str, *, task: str | None = None, vessel: Any = None) -> None:
+    """Raise ``ValueError`` (listing every valid name) unless ``name`` is a controller name.
+
+    A shipped learned baseline is looked up for ``task`` (scenario or env id; default the
+    harbour manoeuvre) and ``vessel`` (default the Blue Lady); a missing file raises
+    ``FileNotFoundError``.
+    """
     from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
 
     if is_learned_controller(name):
-        parse_learned_controller(name)  # the file exists and is a shipgym model
+        # the file exists and is a shipgym model
+        parse_learned_controller(name, task=task, vessel=vessel)
         return
     names = controller_catalogue()
     if name not in names:

@@ -198,10 +198,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
             "sea trials with 'shipgym trials --vessel NAME', or use gym.make(...) (course "
             "keeping: shipgym.controllers.coursepilot.course_autopilot)"
         )
-    check_controller(args.controller)
     from shipgym.envs.registration import ALIASES
 
     name = env_kwargs.get("vessel", "blue-lady" if env_id in ALIASES else None)
+    check_controller(args.controller, task=env_id, vessel=name)
     vessel = load_vessel(name if name is not None else _no_vessel(env_id))
     vessel.plant(env_kwargs.get("plant", "default"))
     observer = args.observer  # None: truth, or a learned model's own observer
@@ -214,7 +214,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if observer is not None and is_learned_controller(args.controller):
         from shipgym.controllers.learned import read_metadata
 
-        trained = read_metadata(parse_learned_controller(args.controller)[1]).observer
+        model = parse_learned_controller(args.controller, task=env_id, vessel=name)[1]
+        trained = read_metadata(model).observer
         if (trained or "truth") != observer:
             print(
                 f"shipgym: warning: the model was trained on observer {trained or 'truth'!r}; "
@@ -741,7 +742,9 @@ def _parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument(
         "--controller", default="pid",
-        help="pid (default), pid-smooth, pid-seed, lq, ppo (shipped baseline), ppo:PATH, sac:PATH",
+        help="pid (default), pid-smooth, pid-seed, lq, the shipped learned baselines ppo (pure "
+        "PPO), sac (pure SAC), ppo-residual (PPO on the PID) for the scenario and vessel, "
+        "ppo:PATH, sac:PATH",
     )  # fmt: skip
     p.add_argument(
         "--observer", default=None,
@@ -846,10 +849,11 @@ def _parser() -> argparse.ArgumentParser:
                    "per vessel at its design speed (PNG)")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=_cmd_bench_roll)
-    from shipgym.rl.cli import add_bench_controllers_parser, add_train_parser
+    from shipgym.rl.cli import add_bench_controllers_parser, add_plot_parser, add_train_parser
 
     add_bench_controllers_parser(bsub)
     add_train_parser(sub)
+    add_plot_parser(sub)
     p = sub.add_parser(
         "trials", help="IMO sea trials (turning, zig-zag, stops) and the DGPS receiver's bias"
     )

@@ -48,6 +48,9 @@ class _EnvDefault:
     def __repr__(self) -> str:
         return "ENV_DEFAULT"
 
+    def __reduce__(self) -> str:
+        return "ENV_DEFAULT"  # unpickles as the module's one instance (worker processes)
+
 
 #: ``run_episode(wind=...)`` default: pass no wind, so the env uses its own default
 ENV_DEFAULT: Any = _EnvDefault()
@@ -182,7 +185,8 @@ def build_env(
     Args:
         scenario: env scenario (``harbour``, ``station-keeping``, ``tracking``) or env id.
         controller: a classical controller name (``pid``, ``lq``, ...) or a learned one
-            (``ppo``: the shipped baseline, ``ppo:PATH``, ``sac:PATH``).
+            (a shipped baseline ``ppo``, ``sac``, ``ppo-residual``, chosen for the scenario
+            and ``vessel=``; ``ppo:PATH``, ``sac:PATH``).
         observer: ``None``: the truth for a classical controller, the model's own observer
             for a learned one; ``"truth"``: always the truth; or an observer name (a learned
             policy then runs with it, with a warning if it was trained with another).

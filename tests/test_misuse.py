@@ -255,6 +255,8 @@ def test_shipped_model_still_loads_and_runs():
 # ---- the CLI ---------------------------------------------------------------------------------
 _RL_CLI = {"train", "controllers"}
 
+_RUN_SK = ["run", "station-keeping"]
+_BENCH_SK = ["bench", "controllers", "--task", "station-keeping"]
 #: (argv, texts the single error line must contain)
 CLI_CASES = [
     (["run", "harbour", "--seed", "-1"], ["--seed", ">= 0"]),
@@ -280,7 +282,14 @@ CLI_CASES = [
     (["run", "--controller", "foo"], ["foo", "pid", "lq", "ppo,", "ppo:PATH", "sac:PATH"]),
     (["run", "--controller", "ppo:"], ["empty model path", "ppo:PATH"]),
     (["run", "--controller", "sac:"], ["empty model path", "sac:PATH"]),
-    (["run", "--controller", "sac"], ["no shipped baseline", "sac:PATH"]),
+    ([*_RUN_SK, "--vessel", "wimpey-sealab", "--controller", "sac"], ["no shipped baseline"]),
+    (
+        [*_BENCH_SK, "--vessel", "wimpey-sealab", "--controllers", "ppo"],
+        ["no shipped baseline", "wimpey-sealab", "star-hercules"],
+    ),
+    ([*_BENCH_SK, "--vessel", "kvlcc2-100m"], ["kvlcc2-100m", "positioning vessel"]),
+    (["plot", "training", "nosuch", "--out", "fig.png"], ["nosuch", "progress.csv"]),
+    (["plot", "training", "folder", "--out", "fig.pdf"], [".png"]),
     (["run", "--controller", "ppo:missing.zip"], ["missing.zip", "does not exist"]),
     (["run", "--controller", "ppo:folder"], ["folder"]),
     (["demo", "--duration", "inf"], ["--duration", "finite"]),
@@ -361,7 +370,7 @@ def test_list_is_complete_and_json(capsys):
     registries = {
         "env_ids": list(shipgym.ENV_IDS),
         "scenario_presets": [*SCENARIOS, *scenario_files()],
-        "controllers": [*CONTROLLERS, "ppo", "ppo:PATH", "sac:PATH"],
+        "controllers": [*CONTROLLERS, "ppo", "sac", "ppo-residual", "ppo:PATH", "sac:PATH"],
         "observers": ["truth", *observer_names()],
         "sensor_presets": list(SENSOR_PRESETS),
         "wave_presets": list(WAVE_PRESETS),
@@ -430,13 +439,14 @@ def test_failed_or_short_run_does_not_look_perfect(tmp_path, capsys):
 
 @needs_rl
 def test_learned_controller_observer_truth_is_honoured_and_recorded(capsys):
-    res = run_episode("harbour", controller="ppo", observer="truth", env_kwargs={
+    res = run_episode("harbour", controller="ppo-residual", observer="truth", env_kwargs={
         "max_episode_steps": 3})  # fmt: skip
     assert res["observer"] == "truth" and res["model"]["trained_observer"] == "kbf"
     assert res["model"]["trained_on"] == "shipgym/BlueLadyTracking-v0"
-    res = run_episode("harbour", controller="ppo", env_kwargs={"max_episode_steps": 3})
+    res = run_episode("harbour", controller="ppo-residual", env_kwargs={"max_episode_steps": 3})
     assert res["observer"] == "kbf"  # the model's own by default
-    assert main(["run", "--controller", "ppo", "--observer", "truth", "--no-progress"]) == 0
+    rc = main(["run", "--controller", "ppo-residual", "--observer", "truth", "--no-progress"])
+    assert rc == 0
     cap = capsys.readouterr()
     assert "observer truth" in cap.out.splitlines()[0]
     assert "trained on observer 'kbf'" in cap.err

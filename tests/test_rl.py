@@ -209,17 +209,17 @@ def test_controller_names_and_stack_checks(trained):
 
 
 def test_shipped_baseline():
-    path = baseline_model_path("ppo")
+    path = baseline_model_path("ppo-residual")
     assert path.stat().st_size < 1_000_000
     meta = read_metadata(path)
     assert meta.algorithm == "ppo" and meta.command.startswith("shipgym train ppo")
-    assert parse_learned_controller("ppo") == ("ppo", path)
+    assert parse_learned_controller("ppo-residual") == ("ppo", path)
     load_policy(path)
 
 
 def test_learned_wrapper_keeps_the_env_metadata():
     # the model's metadata lives in model_metadata; gymnasium's metadata (render modes) stays
-    env = make_learned_env("harbour", "ppo")
+    env = make_learned_env("harbour", "ppo-residual")
     assert env.metadata["render_modes"] == ["rgb_array"]
     assert isinstance(env.model_metadata, ModelMetadata)
     assert env.model_metadata.algorithm == "ppo"

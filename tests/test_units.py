@@ -175,9 +175,10 @@ def test_cli_wind_argument_is_a_wind_config(argv):
         assert args.wind.speed == 3.0
         assert math.cos(args.wind.direction_from - REF_WIND.direction_from) == pytest.approx(1.0)
     default = parser.parse_args(argv).wind
-    # run and bench observers: None = the scenario's wind (3@300 for bench observers without
-    # a --scenario, resolved when the command runs)
-    if argv[0] == "run" or argv == ["bench", "observers"]:
+    # run and the benches: None = the scenario's wind (3@300 for bench observers without a
+    # --scenario and for the Blue Lady's harbour in bench controllers, the vessel's nominal
+    # wind for its station keeping; resolved when the command runs)
+    if argv[0] == "run" or argv[0] == "bench":
         assert default is None
     else:
         assert default == REF_WIND

@@ -37,8 +37,10 @@ Using a model as a controller:
   ``DPControllerWrapper`` its own action is a residual, zero by default, so
   ``env.step(np.zeros(3))`` runs the learned controller alone.
 - :func:`make_learned_env` builds that whole stack from the metadata.
-- :func:`parse_learned_controller` reads the controller names of the command line:
-  ``ppo`` (the shipped baseline), ``ppo:PATH``, ``sac:PATH``.
+- :func:`parse_learned_controller` reads the controller names of the command line: the
+  shipped baselines ``ppo`` (pure PPO), ``sac`` (pure SAC), ``ppo-residual`` (PPO on the PID),
+  found by task and vessel in :data:`BASELINE_MODELS` (:func:`find_baseline`), and
+  ``ppo:PATH``, ``sac:PATH``.
 
 Torch and stable-baselines3 are imported only when a policy is loaded (``pip install
 shipgym[rl]``).
@@ -64,21 +66,28 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "ALGORITHMS",
     "BASELINE_MODELS",
+    "BASELINE_NAMES",
+    "BASELINE_TASKS",
     "METADATA_NAME",
     "MODEL_FORMAT",
     "LearnedControllerWrapper",
     "LearnedPolicy",
     "ModelMetadata",
     "ObsNormalization",
+    "BaselineModel",
     "baseline_model_path",
+    "baseline_task",
+    "find_baseline",
     "check_policy_spec",
     "is_learned_controller",
     "load_policy",
     "make_learned_env",
+    "models_dir",
     "parse_learned_controller",
     "policy_parameter_count",
     "read_metadata",
     "read_state_dicts",
+    "trained_vessel",
     "write_metadata",
 ]
 
@@ -90,8 +99,69 @@ MODEL_FORMAT_VERSION = 1
 METADATA_NAME = "shipgym.json"
 #: algorithms a shipgym model may hold (lower case, as on the command line)
 ALGORITHMS = ("ppo", "sac")
-#: shipped baseline per algorithm (file names in ``shipgym/assets/models``)
-BASELINE_MODELS: dict[str, str] = {"ppo": "ppo_residual_pid_kbf.zip"}
+
+
+@dataclass(frozen=True)
+class BaselineModel:
+    """One shipped learned policy: a file in ``shipgym/assets/models`` (:data:`BASELINE_MODELS`).
+
+    A baseline is found by its controller name, the task it runs and the vessel it drives
+    (:func:`find_baseline`): ``ppo`` on the harbour manoeuvre is the Blue Lady's pure PPO, ``ppo``
+    on station keeping with ``star-hercules`` is that vessel's station-keeping PPO.
+
+    Attributes:
+        name: the controller name (:data:`BASELINE_NAMES`: ``ppo``, ``sac``, ``ppo-residual``).
+        task: :data:`BASELINE_TASKS`: ``"harbour"`` (trained on the tracking task, evaluated on
+            the harbour manoeuvre; also the tracking task's) or ``"station-keeping"``.
+        vessel: the vessel the policy was trained for (a library name).
+        file: its file name in ``shipgym/assets/models``.
+        algorithm: ``"ppo"`` or ``"sac"`` (what the file's metadata must say).
+        residual: ``True`` for a residual on the PID (the file's metadata must agree).
+        what: one line for ``shipgym list``.
+    """
+
+    name: str
+    task: str
+    vessel: str
+    file: str
+    algorithm: str
+    residual: bool
+    what: str
+
+    def __post_init__(self) -> None:
+        if self.task not in BASELINE_TASKS or self.algorithm not in ALGORITHMS:
+            raise ValueError(f"bad baseline entry {self!r}")
+
+    def label(self) -> str:
+        """``"ppo (harbour, blue-lady)"``."""
+        return f"{self.name} ({self.task}, {self.vessel})"
+
+
+#: tasks a shipped baseline is registered for
+BASELINE_TASKS = ("harbour", "station-keeping")
+#: controller names of the shipped baselines (``ppo``: pure PPO, ``sac``: pure SAC,
+#: ``ppo-residual``: PPO on top of the tuned PID). Until issue 17 ``ppo`` named the residual.
+BASELINE_NAMES = ("ppo", "sac", "ppo-residual")
+#: the shipped learned policies: (name, task, vessel) -> file; a file not (yet) in the package
+#: is refused with a FileNotFoundError that lists those present (:func:`baseline_model_path`)
+BASELINE_MODELS: tuple[BaselineModel, ...] = (
+    BaselineModel(
+        "ppo", "harbour", "blue-lady", "ppo_harbour_kbf.zip", "ppo", False,
+        "pure PPO (no PID underneath), trained on tracking through the KBF",
+    ),
+    BaselineModel(
+        "sac", "harbour", "blue-lady", "sac_harbour_kbf.zip", "sac", False,
+        "pure SAC (no PID underneath), trained on tracking through the KBF",
+    ),
+    BaselineModel(
+        "ppo-residual", "harbour", "blue-lady", "ppo_residual_pid_kbf.zip", "ppo", True,
+        "PPO residual on top of the tuned PID, trained on tracking through the KBF",
+    ),
+    BaselineModel(
+        "ppo", "station-keeping", "star-hercules", "ppo_station_star_hercules_kbf.zip", "ppo",
+        False, "pure PPO station keeping in 10 m/s wind, through the KBF",
+    ),
+)  # fmt: skip
 
 #: activation functions allowed in ``policy_kwargs`` (plain names, no eval)
 ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu", "silu", "gelu")
@@ -826,62 +896,172 @@ def load_policy(path: str | Path, *, device: str = "cpu") -> LearnedPolicy:
 
 
 # ---- controller names ----------------------------------------------------------------------
-def baseline_model_path(algorithm: str = "ppo") -> Path:
-    """Path of the shipped baseline model of an algorithm (``shipgym/assets/models``).
+def models_dir() -> Path:
+    """The folder of the shipped model files (``shipgym/assets/models``)."""
+    return Path(str(resources.files("shipgym") / "assets" / "models"))
+
+
+#: env ids per baseline task (scenario names map through ``shipgym.envs.make.SCENARIOS``)
+_TASK_IDS = {
+    "harbour": (
+        "shipgym/Harbour-v0", "shipgym/BlueLadyHarbour-v0", "shipgym/Tracking-v0",
+        "shipgym/BlueLadyTracking-v0",
+    ),
+    "station-keeping": ("shipgym/StationKeeping-v0", "shipgym/BlueLadyStationKeeping-v0"),
+}  # fmt: skip
+
+
+def baseline_task(scenario: str | None) -> str:
+    """The baseline task (:data:`BASELINE_TASKS`) of a scenario name or env id.
+
+    ``None``, ``harbour``, ``tracking`` and their ids: ``"harbour"`` (the harbour policies are
+    trained on tracking); ``station-keeping`` and its ids: ``"station-keeping"``.
 
     Raises:
-        ValueError: no baseline is shipped for ``algorithm``.
-        FileNotFoundError: the package was installed without its model files.
+        ValueError: a task no shipped baseline is registered for.
     """
-    if algorithm not in BASELINE_MODELS:
-        raise ValueError(
-            f"no shipped baseline for {algorithm!r}; shipped: {', '.join(BASELINE_MODELS)}; "
-            f"pass {algorithm}:PATH to a model trained with 'shipgym train {algorithm}'"
-        )
-    p = Path(str(resources.files("shipgym") / "assets" / "models" / BASELINE_MODELS[algorithm]))
+    if scenario is None or scenario in BASELINE_TASKS:
+        return scenario or "harbour"
+    from shipgym.envs.make import SCENARIOS
+
+    env_id = SCENARIOS.get(scenario, scenario)
+    for task, ids in _TASK_IDS.items():
+        if env_id in ids:
+            return task
+    raise ValueError(
+        f"no shipped learned baseline runs {scenario!r} (baselines exist for: "
+        f"{', '.join(BASELINE_TASKS)}); pass ppo:PATH or sac:PATH to a model trained for it"
+    )
+
+
+def _shipped_list() -> str:
+    return "; ".join(f"{b.label()}: {b.file}" for b in BASELINE_MODELS)
+
+
+def find_baseline(name: str, task: str | None = None, vessel: Any = None) -> BaselineModel:
+    """The shipped baseline of a controller name for a task and vessel (:data:`BASELINE_MODELS`).
+
+    The entry of the task itself wins; without one, station keeping takes the vessel's harbour
+    entry (those policies are trained on the tracking task, whose observation and actions every
+    positioning task shares: the Blue Lady's ``ppo-residual`` keeps station as it did before).
+
+    Args:
+        name: ``ppo``, ``sac`` or ``ppo-residual``.
+        task: a baseline task, scenario name or env id (:func:`baseline_task`; default the
+            harbour manoeuvre).
+        vessel: a vessel name (default ``blue-lady``), a :class:`~shipgym.dynamics.vessel.Vessel`
+            or a package path (matched by its folder name).
+
+    Raises:
+        ValueError: no baseline of that name, task and vessel; the message lists the shipped
+            ones.
+    """
+    kind = baseline_task(task)
+    v = "blue-lady" if vessel is None else getattr(vessel, "name", vessel)
+    v = Path(str(v)).name
+    # a policy of the task itself, else (station keeping) the vessel's harbour policy: trained
+    # on the tracking task, it drives any positioning task of its vessel (same observation)
+    for want in dict.fromkeys((kind, "harbour")):
+        for b in BASELINE_MODELS:
+            if b.name == name and b.task == want and b.vessel == v:
+                return b
+    algo = "sac" if name == "sac" else "ppo"
+    raise ValueError(
+        f"no shipped baseline {name!r} for {kind} with vessel {v!r}; shipped: {_shipped_list()}; "
+        f"pass {algo}:PATH to a model trained with 'shipgym train {algo}'"
+    )
+
+
+def baseline_model_path(name: str = "ppo", task: str | None = None, vessel: Any = None) -> Path:
+    """Path of a shipped baseline (:func:`find_baseline`) in ``shipgym/assets/models``.
+
+    Raises:
+        ValueError: no baseline of that name for the task and vessel.
+        FileNotFoundError: the baseline is registered but its file is not in the package (not
+            added yet, or the package data was not installed); the message names the files
+            that are there.
+    """
+    b = find_baseline(name, task, vessel)
+    folder = models_dir()
+    p = folder / b.file
     if not p.is_file():
+        present = [x.label() for x in BASELINE_MODELS if (folder / x.file).is_file()]
         raise FileNotFoundError(
-            f"the shipped baseline {p} is missing (package data not installed?); "
-            "reinstall shipgym or pass ppo:PATH"
+            f"the shipped baseline {b.label()}, {b.what}, is missing: {p} does not exist "
+            "(not shipped yet, or the package data was not installed); shipped here: "
+            f"{', '.join(present) or 'none'}; pass {b.algorithm}:PATH to a model file instead"
         )
     return p
 
 
 def is_learned_controller(name: str) -> bool:
-    """``True`` for ``ppo``, ``sac``, ``ppo:PATH``, ``sac:PATH`` (learned-controller names)."""
-    algo = str(name).split(":", 1)[0]
-    return algo in ALGORITHMS
+    """``True`` for the baseline names (``ppo``, ``sac``, ``ppo-residual``) and ``ppo:PATH``,
+    ``sac:PATH`` (learned-controller names)."""
+    name = str(name)
+    return name in BASELINE_NAMES or name.split(":", 1)[0] in ALGORITHMS
 
 
-def parse_learned_controller(name: str) -> tuple[str, Path]:
-    """``"ppo"`` -> the shipped baseline; ``"ppo:PATH"`` / ``"sac:PATH"`` -> that file.
+def parse_learned_controller(
+    name: str, *, task: str | None = None, vessel: Any = None
+) -> tuple[str, Path]:
+    """A baseline name -> its shipped file; ``"ppo:PATH"`` / ``"sac:PATH"`` -> that file.
+
+    Args:
+        name: ``ppo``, ``sac``, ``ppo-residual`` (shipped, :data:`BASELINE_MODELS`: chosen by
+            ``task`` and ``vessel``), ``ppo:PATH`` or ``sac:PATH``.
+        task: scenario name or env id the controller will run (default: the harbour
+            manoeuvre); only for the baseline names.
+        vessel: the vessel it will drive (default: the Blue Lady); only for the baseline names.
 
     Returns:
         ``(algorithm, model_path)``; the path is checked to be a shipgym model of that
-        algorithm.
+        algorithm (and, for a baseline, of its residual setup).
 
     Raises:
-        ValueError: not a learned-controller name, or the file's algorithm differs.
-        FileNotFoundError: no such file.
+        ValueError: not a learned-controller name, no such baseline, or the file's algorithm
+            differs.
+        FileNotFoundError: no such file (a baseline not shipped yet included).
     """
-    algo, sep, rest = str(name).partition(":")
-    if algo not in ALGORITHMS:
+    name = str(name)
+    algo, sep, rest = name.partition(":")
+    if not is_learned_controller(name):
         raise ValueError(
-            f"not a learned controller: {name!r}; use ppo (shipped baseline), ppo:PATH or sac:PATH"
+            f"not a learned controller: {name!r}; use {', '.join(BASELINE_NAMES)} (shipped "
+            "baselines), ppo:PATH or sac:PATH"
         )
     if sep and not rest.strip():
         raise ValueError(
             f"empty model path in {name!r}: use {algo}:PATH (a model trained with 'shipgym train "
-            f"{algo}')" + (" or ppo for the shipped baseline" if algo in BASELINE_MODELS else "")
+            f"{algo}') or a shipped baseline ({', '.join(BASELINE_NAMES)})"
         )
-    path = Path(rest).expanduser() if sep else baseline_model_path(algo)
+    base = None
+    if sep:
+        path = Path(rest).expanduser()
+    else:
+        base = find_baseline(name, task, vessel)
+        algo = base.algorithm
+        path = baseline_model_path(name, task, vessel)
     meta = read_metadata(path)
     if meta.algorithm != algo:
         raise ValueError(
             f"{path} holds a {meta.algorithm} model, not {algo}: use {meta.algorithm}:"
         )
+    if base is not None and meta.residual != base.residual:
+        kind = "a residual" if meta.residual else "a pure"
+        raise ValueError(f"{path} holds {kind} policy; the baseline {base.label()} is not")
     check_trained_env(meta, path)
     return algo, path
+
+
+def trained_vessel(meta: ModelMetadata) -> str | None:
+    """The vessel a model was trained for: ``blue-lady`` for the Blue Lady ids, else the
+    ``vessel`` of its ``env_kwargs`` (``None`` if it names none)."""
+    from shipgym.envs.registration import ALIASES
+
+    if meta.env_id in ALIASES:
+        return "blue-lady"
+    v = meta.env_kwargs.get("vessel")
+    return str(v) if isinstance(v, str) else None
 
 
 def check_trained_env(meta: ModelMetadata, path: str | Path) -> None:
@@ -919,10 +1099,11 @@ class LearnedControllerWrapper(
 
     Each step the policy maps the latest observation (the environment's layout: navigation
     data from the observer below, reference, previous action) to a normalised action; the
-    wrapper's own action, a *residual* (``Box(-1, 1, (3,))``, zero: the policy alone) is added
-    and the sum clipped to [-1, 1] (flagged in ``info["learned_clipped"]``). For a residual
-    model the environment below must contain the ``DPControllerWrapper`` it was trained on
-    (same controller and residual scale), whose residual input the policy drives.
+    wrapper's own action, a *residual* (``Box(-1, 1)`` of the environment's action shape; zero:
+    the policy alone) is added and the sum clipped to [-1, 1] (flagged in
+    ``info["learned_clipped"]``). For a residual model the environment below must contain the
+    ``DPControllerWrapper`` it was trained on (same controller and residual scale), whose
+    residual input the policy drives.
 
     Info gains ``policy_action`` (the network's action, before the residual).
 
@@ -952,16 +1133,15 @@ class LearnedControllerWrapper(
         self.model_metadata = self.policy.metadata
         self.deterministic = bool(deterministic)
         _check_stack(env, self.model_metadata)
-        from shipgym.envs.registration import ALIASES
-
         vessel = getattr(env.unwrapped, "vessel", None)
+        trained = trained_vessel(self.model_metadata)
         if (
-            self.model_metadata.env_id in ALIASES
-            and vessel is not None
-            and (vessel.name != "blue-lady")
+            vessel is not None
+            and trained is not None
+            and vessel.name not in (trained, Path(trained).name)
         ):
             raise ValueError(
-                f"{self.model_path.name} was trained on the Blue Lady "
+                f"{self.model_path.name} was trained on {trained!r} "
                 f"({self.model_metadata.env_id}); it cannot drive vessel {vessel.name!r} "
                 f"({vessel.actuators.n_channels} actuator channels): train one for that "
                 "vessel"
@@ -979,12 +1159,13 @@ class LearnedControllerWrapper(
                 f"{self.model_metadata.observation_shape}, the environment gives "
                 f"{env.observation_space.shape}{hint}"
             )
-        if env.action_space.shape != self.model_metadata.action_shape:
+        shape = tuple(env.action_space.shape or ())
+        if shape != self.model_metadata.action_shape:
             raise ValueError(
-                f"the model returns actions of shape {self.model_metadata.action_shape}, the "
-                f"environment takes {env.action_space.shape}"
+                f"the model gives actions of shape {self.model_metadata.action_shape}, the "
+                f"environment takes {shape}"
             )
-        self.action_space = gym.spaces.Box(-1.0, 1.0, env.action_space.shape, np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape, np.float32)
         self._obs: NDArray[np.float32] | None = None
 
     def reset(
@@ -998,11 +1179,10 @@ class LearnedControllerWrapper(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         residual = np.asarray(action, dtype=np.float64)
-        shape = self.action_space.shape
-        if residual.shape != shape or not np.all(np.isfinite(residual)):
+        n = tuple(self.action_space.shape or ())
+        if residual.shape != n or not np.all(np.isfinite(residual)):
             raise ValueError(
-                f"residual action must be {shape[0]} finite numbers in [-1, 1] (one per "
-                f"actuator channel), got {action!r}"
+                f"residual action must be {math.prod(n)} finite numbers in [-1, 1], got {action!r}"
             )
         if self._obs is None:
             raise gym.error.ResetNeeded("call reset() before step()")
@@ -1075,8 +1255,9 @@ def make_learned_env(
 
     Args:
         env_id: a registered id or a scenario name (``harbour``, ``tracking``, ...).
-        model_path: a shipgym model, or a controller name ``ppo`` / ``ppo:PATH`` /
-            ``sac:PATH``.
+        model_path: a shipgym model, or a controller name: a shipped baseline (``ppo``,
+            ``sac``, ``ppo-residual``: the one for ``env_id``'s task and ``vessel=``) or
+            ``ppo:PATH`` / ``sac:PATH``.
         observer: ``"model"`` (default: the model's own observer), ``None``/``"truth"`` or
             an observer name (an experiment with another observer; warns).
         deterministic: mean action (default) or sampled.
@@ -1089,7 +1270,9 @@ def make_learned_env(
 
     path = Path(model_path)
     if not path.is_file() and is_learned_controller(str(model_path)):
-        _, path = parse_learned_controller(str(model_path))
+        _, path = parse_learned_controller(
+            str(model_path), task=env_id, vessel=env_kwargs.get("vessel")
+        )
     meta = read_metadata(path)
     check_trained_env(meta, path)
     obs_name = meta.observer if observer == _USE_MODEL else observer

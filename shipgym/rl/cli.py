@@ -3,10 +3,13 @@
 - ``shipgym train ppo|sac [--env ID] [--timesteps N] [--seed S] [--n-envs K] [--out DIR]
   [--resume CKPT] [--residual] [--observer NAME] [--max-minutes M] ...``:
   :func:`add_train_parser`, :func:`cmd_train`;
-- ``shipgym bench controllers [--controllers ...] [--seeds 10] [--json PATH]
-  [--markdown PATH]``: :func:`add_bench_controllers_parser`, :func:`cmd_bench_controllers`.
+- ``shipgym bench controllers [--task harbour|station-keeping] [--vessel NAME]
+  [--controllers ...] [--seeds 10] [--json PATH] [--markdown PATH]``:
+  :func:`add_bench_controllers_parser`, :func:`cmd_bench_controllers`;
+- ``shipgym plot training RUN_DIR [RUN_DIR ...] --out FIG.png``: :func:`add_plot_parser`,
+  :func:`cmd_plot_training` (learning curves, :mod:`shipgym.viz.training`).
 
-Both commands return an exit status; user mistakes raise ``ValueError`` /
+The commands return an exit status; user mistakes raise ``ValueError`` /
 ``FileNotFoundError`` (and ``ImportError`` without the ``rl`` extra) with a one-line message,
 which ``shipgym.cli.main`` turns into ``shipgym: error: ...``.
 """
@@ -33,8 +36,10 @@ from shipgym._io import check_writable, progress_enabled
 
 __all__ = [
     "add_bench_controllers_parser",
+    "add_plot_parser",
     "add_train_parser",
     "cmd_bench_controllers",
+    "cmd_plot_training",
     "cmd_train",
 ]
 
@@ -230,13 +235,31 @@ def _kept_by_train(out: Path | None) -> str:
 
 def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
     """Add ``controllers`` to the ``shipgym bench`` subparsers."""
-    b = bsub.add_parser("controllers", help="pid vs lq vs learned on the harbour manoeuvre")
+    b = bsub.add_parser(
+        "controllers",
+        help="pid vs lq vs the learned policies on the harbour manoeuvre or station keeping",
+    )
     b.add_argument(
         "--controllers",
         nargs="+",
-        default=["pid", "lq", "ppo"],
+        default=None,
         metavar="NAME",
-        help="pid, pid-seed, lq, ppo (shipped baseline), ppo:PATH, sac:PATH",
+        help="pid, pid-seed, lq, the shipped baselines ppo (pure PPO), sac (pure SAC), "
+        "ppo-residual (PPO on the PID) of the task and vessel, ppo:PATH, sac:PATH (default: "
+        "pid, lq and every shipped baseline of the task and vessel)",
+    )
+    b.add_argument(
+        "--task",
+        choices=["harbour", "station-keeping"],
+        default="harbour",
+        help="the harbour manoeuvre (default) or 1000 s of station keeping "
+        "(shipgym/StationKeeping-v0)",
+    )
+    b.add_argument(
+        "--vessel",
+        default=None,
+        help="vessel name or package path (default: blue-lady for the harbour, star-hercules "
+        "for station keeping)",
     )
     b.add_argument(
         "--seeds",
@@ -250,9 +273,10 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
     b.add_argument(
         "--wind",
         type=parse_wind,
-        default="3@300",
+        default=None,
         metavar="SPEED@FROM_DEG",
-        help="mean wind (3@300)",
+        help="mean wind (default: the task's: 3@300 for the Blue Lady's harbour manoeuvre, the "
+        "vessel's nominal wind from 300 deg for station keeping, 10@300 for star-hercules)",
     )
     b.add_argument(
         "--workers",
@@ -270,11 +294,37 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
 
 def cmd_bench_controllers(args: argparse.Namespace) -> int:
     """Run :func:`shipgym.rl.bench.bench_controllers`; print and write the table / rows."""
-    from shipgym.catalogue import check_controller
-    from shipgym.rl.bench import bench_controllers, bench_title, controller_table
+    import sys
 
-    for name in args.controllers:
-        check_controller(name)  # unknown names and missing model files fail before any work
+    from shipgym.catalogue import check_controller
+    from shipgym.rl.bench import (
+        bench_controllers,
+        bench_title,
+        controller_table,
+        default_controllers,
+        default_vessel,
+        missing_baselines,
+        station_table,
+    )
+    from shipgym.runner import ENV_DEFAULT
+
+    vessel = args.vessel or default_vessel(args.task)
+    if args.vessel is not None:
+        from shipgym.dynamics.vessel import load_vessel
+        from shipgym.envs.make import resolve_env_id
+        from shipgym.envs.registration import task_fits_vessel
+
+        env_id = resolve_env_id(args.task, vessel)
+        if not task_fits_vessel(env_id, load_vessel(vessel)):
+            raise ValueError(
+                f"vessel {vessel!r} cannot do {args.task} (it needs thrust in surge, sway and "
+                "yaw at rest); choose a positioning vessel, e.g. star-hercules or wimpey-sealab"
+            )
+    task_id = "shipgym/StationKeeping-v0" if args.task == "station-keeping" else "harbour"
+    controllers = args.controllers or default_controllers(args.task, vessel)
+    for name in controllers:
+        # unknown names and missing model files fail before any work
+        check_controller(name, task=task_id, vessel=vessel)
     if args.observer not in ("default", "truth"):
         from shipgym.observers import make_observer
 
@@ -284,12 +334,22 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
             check_writable(path)
     from shipgym.bench import row_log, write_bench_outputs
 
-    log = row_log(args.json, args.markdown, len(args.controllers) * max(args.seeds, 0))
+    missing = missing_baselines(args.task, vessel) if args.controllers is None else []
+    if missing:
+        print(
+            f"shipgym: note: baselines registered for {args.task} ({vessel}) but not shipped, "
+            f"left out: {', '.join(missing)}",
+            file=sys.stderr,
+        )
+    log = row_log(args.json, args.markdown, len(controllers) * max(args.seeds, 0))
+    wind = ENV_DEFAULT if args.wind is None else args.wind
     t0 = time.perf_counter()
     rows = bench_controllers(
-        args.controllers,
+        controllers,
         seeds=args.seeds,
-        wind=args.wind,
+        task=args.task,
+        vessel=vessel,
+        wind=wind,
         observer=args.observer,
         workers=args.workers,
         progress=progress_enabled(args.no_progress),
@@ -297,8 +357,49 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
         executor=executor_of(args),
     )
     wall = time.perf_counter() - t0
-    title = bench_title(rows, args.wind)
-    table = controller_table(rows)
+    if args.task == "harbour" and args.wind is None and vessel == "blue-lady":
+        wind = "3@300"
+    title = bench_title(rows, wind, args.task)
+    table = station_table(rows) if args.task == "station-keeping" else controller_table(rows)
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
     log.discard(args.json or args.markdown)
+    return 0
+
+
+def add_plot_parser(sub: Any) -> argparse.ArgumentParser:
+    """Add ``plot`` (with ``plot training``) to the ``shipgym`` subparsers."""
+    p = sub.add_parser("plot", help="figures of finished work: 'plot training' (learning curves)")
+    psub = p.add_subparsers(dest="what", required=True)
+    t = psub.add_parser(
+        "training",
+        help="learning curves of 'shipgym train' runs: return and harbour completion (or "
+        "station-keeping fraction) against steps",
+        description="Reads progress.csv (time/total_timesteps, rollout/ep_rew_mean) and "
+        "evaluations.json of each run folder and draws one line per run.",
+    )
+    t.add_argument("runs", nargs="+", type=Path, metavar="RUN_DIR",
+                   help="output folders of 'shipgym train' (--out)")  # fmt: skip
+    t.add_argument("--out", type=Path, required=True, metavar="FIG.png", help="the figure (PNG)")
+    t.add_argument("--labels", nargs="+", default=None, metavar="NAME",
+                   help="legend names, one per run (default: the folder names)")  # fmt: skip
+    t.set_defaults(func=cmd_plot_training)
+    return p
+
+
+def cmd_plot_training(args: argparse.Namespace) -> int:
+    """Run :func:`shipgym.viz.training.plot_training`; prints what it drew."""
+    from shipgym.viz.training import plot_training, read_training_run
+
+    check_writable(args.out)
+    path = plot_training(args.runs, args.out, labels=args.labels)
+    for d in args.runs:
+        c = read_training_run(d)
+        last = (
+            f"{100 * c.eval_score[-1]:.0f} % at {c.eval_steps[-1]:,.0f}"
+            if c.eval_steps.size
+            else "none"
+        )
+        ret = f"{c.returns[-1]:.4g} at {c.steps[-1]:,.0f}" if c.steps.size else "none"
+        print(f"{d}: return {ret} steps; last {c.eval_kind} evaluation {last} steps")
+    print(f"wrote {path}")
     return 0

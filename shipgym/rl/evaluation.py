@@ -6,10 +6,15 @@ training (:data:`shipgym.rl.train.EVALUATIONS`) and ``shipgym bench controllers`
 (:mod:`shipgym.rl.bench`). A result row carries the same keys as
 :func:`shipgym.runner.run_episode` (``completed``, ``quay_contact``, ``x_E``, ``y_E``,
 ``psi_E``, ``J_c``, ``measured``, ``duration_s``, ``thrust_mean_abs``, ...).
+
+Station keeping: :class:`StationTrack` collects the distance from the set point and the
+heading error step by step (``on_step=``); :func:`station_keeping_evaluation` is a periodic
+station-keeping evaluation in the layout of ``evaluations.json`` (``inside_fraction``).
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from typing import Any
@@ -18,19 +23,26 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from shipgym.runner import build_env, describe_wind, episode_summary, step_episode
+from shipgym.runner import ENV_DEFAULT, build_env, describe_wind, episode_summary, step_episode
 
 __all__ = [
     "DEFAULT_WIND",
+    "STATION_RADIUS",
+    "StationTrack",
     "available_observers",
     "default_observer",
     "make_controlled_env",
     "run_controlled_episode",
     "run_env_episode",
+    "station_keeping_evaluation",
 ]
 
 #: the lake-trial wind of Tomera (2014): 3 m/s from 300 deg ("SPEED@FROM_DEG")
 DEFAULT_WIND = "3@300"
+
+#: the watch circle (m) of the station-keeping requirement documented for the generic PID
+#: (95 % of the time inside it; Al-Takie (1982) 2.3 asks for 3 % of the water depth or 7 m)
+STATION_RADIUS = 2.0
 
 PolicyFn = Callable[[NDArray[np.float32]], NDArray[np.float32]]
 
@@ -77,29 +89,38 @@ def make_controlled_env(
     Args:
         scenario: scenario name or env id (``harbour``, ``tracking``, ...).
         controller: a name in ``shipgym.controllers.wrappers.CONTROLLERS`` or a learned
-            controller (``ppo``: the shipped baseline, ``ppo:PATH``, ``sac:PATH``).
+            controller (a shipped baseline ``ppo``, ``sac``, ``ppo-residual`` for the scenario
+            and ``vessel=``, or ``ppo:PATH``, ``sac:PATH``).
         observer: ``None``/``"truth"`` or an observer name. Learned controllers always get
             the observer given here (pass the model's own to reproduce its training setup).
         wind: any form of :meth:`WindConfig.coerce <shipgym.disturbances.WindConfig.coerce>`
-            (``"3@300"``, ``(speed m/s, from deg)``, a ``WindConfig``) or ``None`` (calm).
-        **env_kwargs: further environment arguments.
+            (``"3@300"``, ``(speed m/s, from deg)``, a ``WindConfig``), ``None`` (calm) or
+            :data:`shipgym.runner.ENV_DEFAULT` (the env's own: the vessel's nominal wind for
+            station keeping).
+        **env_kwargs: further environment arguments (``vessel=``, ``max_episode_steps=``, ...).
     """
     from shipgym.controllers.learned import is_learned_controller
     from shipgym.disturbances import WindConfig
 
-    wind_cfg = WindConfig.coerce(wind, name="wind")
+    if wind is not ENV_DEFAULT:
+        env_kwargs["wind"] = WindConfig.coerce(wind, name="wind")
     observer = check_observer(observer)
     if observer is None and is_learned_controller(controller):
         observer = "truth"  # build_env's None would mean the model's own observer
-    return build_env(
-        scenario, controller=controller, observer=observer, wind=wind_cfg, **env_kwargs
-    )
+    return build_env(scenario, controller=controller, observer=observer, **env_kwargs)
 
 
 def run_env_episode(
-    env: gym.Env[Any, Any], seed: int, policy: PolicyFn | None = None
+    env: gym.Env[Any, Any],
+    seed: int,
+    policy: PolicyFn | None = None,
+    *,
+    on_step: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     """Run one episode to its end; ``policy(obs) -> action`` or zeros. Returns the result row.
+
+    ``on_step(info)`` is called after every step (a trace, e.g. the station-keeping
+    statistics of ``shipgym bench controllers``).
 
     The row has the keys of :func:`shipgym.runner.run_episode` that describe the run
     (``completed``, ``legs_completed``, ``duration_s``, ``quay_contact``, ``terminated``,
@@ -111,7 +132,7 @@ def run_env_episode(
     (:func:`shipgym.metrics.honest_indices`).
     """
     t0 = time.perf_counter()
-    end = step_episode(env, seed, policy)
+    end = step_episode(env, seed, policy, on_step=on_step)
     result = episode_summary(env, end)
     wall = time.perf_counter() - t0
     return {"seed": int(seed), **result, "return": end.ret, "wall_time_s": wall}
@@ -124,16 +145,18 @@ def run_controlled_episode(
     seed: int = 0,
     observer: str | None = None,
     wind: Any = DEFAULT_WIND,
+    on_step: Callable[[dict[str, Any]], None] | None = None,
     **env_kwargs: Any,
 ) -> dict[str, Any]:
     """One closed-loop episode of a named controller (see :func:`make_controlled_env`).
 
-    Returns the row of :func:`run_env_episode` plus ``scenario``, ``controller`` (the name as
-    given), ``observer`` and ``wind`` (the wind the physics used: speed m/s, from deg).
+    ``on_step(info)`` is called after every step. Returns the row of :func:`run_env_episode`
+    plus ``scenario``, ``controller`` (the name as given), ``observer`` and ``wind`` (the wind
+    the physics used: speed m/s, from deg).
     """
     env = make_controlled_env(scenario, controller, observer=observer, wind=wind, **env_kwargs)
     try:
-        row = run_env_episode(env, seed)
+        row = run_env_episode(env, seed, on_step=on_step)
         wind_used = describe_wind(env.unwrapped.wind_config)  # type: ignore[attr-defined]
     finally:
         env.close()
@@ -143,4 +166,76 @@ def run_controlled_episode(
         "observer": observer or "truth",
         "wind": wind_used,
         **row,
+    }
+
+
+class StationTrack:
+    """Collects a station-keeping run step by step (``on_step(info)`` of the episode runner).
+
+    ``r`` (m): horizontal distance of the true position from the set point ``eta_d``;
+    ``e`` (deg): heading error, wrapped to [-180, 180).
+    """
+
+    def __init__(self) -> None:
+        self.r: list[float] = []
+        self.e: list[float] = []
+
+    def __call__(self, info: dict[str, Any]) -> None:
+        from shipgym.dynamics import wrap_angle
+
+        eta, d = info["eta"], info["eta_d"]
+        self.r.append(math.hypot(float(eta[0]) - float(d[0]), float(eta[1]) - float(d[1])))
+        self.e.append(math.degrees(float(wrap_angle(float(eta[2]) - float(d[2])))))
+
+    def summary(self, radius: float = STATION_RADIUS) -> dict[str, Any]:
+        """``inside_fraction`` (of the steps with ``r <= radius``), ``r95`` (m, 95th
+        percentile, linear interpolation), ``r_max`` (m), ``heading_rms_deg`` (deg),
+        ``steps``."""
+        r = np.asarray(self.r, float)
+        e = np.asarray(self.e, float)
+        if r.size == 0:
+            nan = math.nan
+            return {"inside_fraction": nan, "r95": nan, "r_max": nan, "heading_rms_deg": nan,
+                    "steps": 0}  # fmt: skip
+        return {
+            "inside_fraction": float(np.mean(r <= radius)),
+            "r95": float(np.percentile(r, 95.0)),
+            "r_max": float(r.max()),
+            "heading_rms_deg": float(np.sqrt(np.mean(e**2))),
+            "steps": int(r.size),
+        }
+
+
+def station_keeping_evaluation(
+    env: gym.Env[Any, Any],
+    seeds: Any,
+    policy: PolicyFn | None = None,
+    *,
+    radius: float = STATION_RADIUS,
+    timesteps: int = 0,
+) -> dict[str, Any]:
+    """A periodic station-keeping evaluation, in the layout of ``evaluations.json``.
+
+    Runs ``env`` (a station-keeping stack, e.g. ``shipgym/StationKeeping-v0`` through the
+    observer) once per seed with ``policy`` (or zero actions) and returns ``timesteps``,
+    ``runs``, ``inside_fraction`` (mean over the runs of the fraction of time within ``radius``),
+    ``r95`` (m, mean) and ``rows`` (per seed: ``seed``, ``inside_fraction``, ``r95``,
+    ``heading_rms_deg``, ``duration_s``): what :func:`shipgym.viz.training.read_training_run`
+    plots for a station-keeping run.
+    """
+    rows = []
+    for s in seeds:
+        track = StationTrack()
+        res = run_env_episode(env, int(s), policy, on_step=track)
+        st = track.summary(radius)
+        rows.append({"seed": int(s), "inside_fraction": st["inside_fraction"], "r95": st["r95"],
+                     "heading_rms_deg": st["heading_rms_deg"],
+                     "duration_s": res["duration_s"]})  # fmt: skip
+    return {
+        "timesteps": int(timesteps),
+        "runs": len(rows),
+        "inside_fraction": float(np.mean([r["inside_fraction"] for r in rows])),
+        "r95": float(np.mean([r["r95"] for r in rows])),
+        "radius_m": float(radius),
+        "rows": rows,
     }
