@@ -57,8 +57,9 @@ shipgym/StationKeeping-v0:
   n_timesteps: 128
   policy: MlpPolicy
   n_envs: 1
-  vec_env: dummy
-  observer: kbf
+  env_wrapper:
+    - shipgym.observers.wrapper.ObserverWrapper:
+        observer: kbf
   env_kwargs:
     vessel: star-hercules
     max_episode_steps: 32
@@ -70,9 +71,11 @@ shipgym/StationKeeping-v0:
   n_epochs: 1
   policy_kwargs:
     net_arch: [16, 16]
-    activation_fn: tanh
-  eval_freq: 0
-  checkpoint_freq: 0
+shipgym:
+  shipgym/StationKeeping-v0:
+    vec_env: dummy
+    eval_freq: 0
+    checkpoint_freq: 0
 """
 
 
@@ -350,13 +353,18 @@ def test_curves_of_a_synthetic_run(tmp_path):
 
 
 def test_a_station_keeping_evaluation_is_what_the_curves_read(tmp_path):
-    """:func:`station_keeping_evaluation` (for a training run's evaluations.json) gives the
-    statistics of the direct loop, and the curves read it back as station keeping."""
-    from shipgym.rl.evaluation import station_keeping_evaluation
+    """The periodic station-keeping evaluation of ``shipgym train``
+    (:data:`shipgym.rl.train.STATION_KEEPING`) gives the statistics of the direct loop, and
+    the curves read its evaluations.json entries back as station keeping."""
+    from shipgym.rl.train import STATION_KEEPING
 
     env = make(SK_ID, vessel="star-hercules", controller="pid", observer="kbf",
                max_episode_steps=200)  # fmt: skip
-    evals = [station_keeping_evaluation(env, [3, 4], timesteps=n) for n in (1000, 2000)]
+    evals = []
+    for n in (1000, 2000):  # as the callback stores them: the timesteps, then the summary
+        summary, _, _ = STATION_KEEPING.summarize([STATION_KEEPING.episode(env, s, None)
+                                                   for s in (3, 4)])  # fmt: skip
+        evals.append({"timesteps": n, **summary})
     env.close()
     for e in evals:
         for row in e["rows"]:

@@ -8,8 +8,9 @@ training (:data:`shipgym.rl.train.EVALUATIONS`) and ``shipgym bench controllers`
 ``psi_E``, ``J_c``, ``measured``, ``duration_s``, ``thrust_mean_abs``, ...).
 
 Station keeping: :class:`StationTrack` collects the distance from the set point and the
-heading error step by step (``on_step=``); :func:`station_keeping_evaluation` is a periodic
-station-keeping evaluation in the layout of ``evaluations.json`` (``inside_fraction``).
+heading error step by step (``on_step=``), for ``shipgym bench controllers --task
+station-keeping`` and the periodic evaluation of training
+(:data:`shipgym.rl.train.STATION_KEEPING`).
 """
 
 from __future__ import annotations
@@ -34,7 +35,6 @@ __all__ = [
     "make_controlled_env",
     "run_controlled_episode",
     "run_env_episode",
-    "station_keeping_evaluation",
 ]
 
 #: the lake-trial wind of Tomera (2014): 3 m/s from 300 deg ("SPEED@FROM_DEG")
@@ -204,38 +204,3 @@ class StationTrack:
             "heading_rms_deg": float(np.sqrt(np.mean(e**2))),
             "steps": int(r.size),
         }
-
-
-def station_keeping_evaluation(
-    env: gym.Env[Any, Any],
-    seeds: Any,
-    policy: PolicyFn | None = None,
-    *,
-    radius: float = STATION_RADIUS,
-    timesteps: int = 0,
-) -> dict[str, Any]:
-    """A periodic station-keeping evaluation, in the layout of ``evaluations.json``.
-
-    Runs ``env`` (a station-keeping stack, e.g. ``shipgym/StationKeeping-v0`` through the
-    observer) once per seed with ``policy`` (or zero actions) and returns ``timesteps``,
-    ``runs``, ``inside_fraction`` (mean over the runs of the fraction of time within ``radius``),
-    ``r95`` (m, mean) and ``rows`` (per seed: ``seed``, ``inside_fraction``, ``r95``,
-    ``heading_rms_deg``, ``duration_s``): what :func:`shipgym.viz.training.read_training_run`
-    plots for a station-keeping run.
-    """
-    rows = []
-    for s in seeds:
-        track = StationTrack()
-        res = run_env_episode(env, int(s), policy, on_step=track)
-        st = track.summary(radius)
-        rows.append({"seed": int(s), "inside_fraction": st["inside_fraction"], "r95": st["r95"],
-                     "heading_rms_deg": st["heading_rms_deg"],
-                     "duration_s": res["duration_s"]})  # fmt: skip
-    return {
-        "timesteps": int(timesteps),
-        "runs": len(rows),
-        "inside_fraction": float(np.mean([r["inside_fraction"] for r in rows])),
-        "r95": float(np.mean([r["r95"] for r in rows])),
-        "radius_m": float(radius),
-        "rows": rows,
-    }

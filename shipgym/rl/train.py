@@ -72,7 +72,7 @@ from shipgym.controllers.learned import (
     write_metadata,
 )
 
-from .evaluation import check_observer, run_env_episode
+from .evaluation import STATION_RADIUS, StationTrack, check_observer, run_env_episode
 
 __all__ = [
     "DEFAULT_ENV_ID",
@@ -804,10 +804,6 @@ def _callbacks() -> Any:
 
 
 # ---- periodic evaluation --------------------------------------------------------------------
-#: the watch circle of the station-keeping evaluation: 2 m, the radius documented for the
-#: generic PID on the offshore vessels (a DP watch circle; Al-Takie (1982) 2.3 asks for 3 % of
-#: the water depth or 7 m)
-STATION_RADIUS = 2.0  # m
 
 
 @dataclass(frozen=True)
@@ -877,23 +873,18 @@ def _station_env(env_id: str, hp: Mapping[str, Any]) -> gym.Env[Any, Any]:
 
 def station_keeping_episode(env: gym.Env[Any, Any], seed: int, policy: Any) -> dict[str, Any]:
     """One station-keeping episode: the fraction of steps within :data:`STATION_RADIUS` of the
-    set point (true position), the 95th percentile of the distance (m) and the return."""
-    from shipgym.runner import step_episode
-
-    dist: list[float] = []
-
-    def on_step(info: Mapping[str, Any]) -> None:
-        eta, d = info["eta"], info["eta_d"]
-        dist.append(math.hypot(float(eta[0] - d[0]), float(eta[1] - d[1])))
-
-    end = step_episode(env, seed, policy, on_step=on_step)
-    r = np.asarray(dist)
+    set point (true position), the 95th percentile of the distance (m), the heading error RMS
+    (deg) and the return (:class:`~shipgym.rl.evaluation.StationTrack`)."""
+    track = StationTrack()
+    row = run_env_episode(env, seed, policy, on_step=track)
+    st = track.summary(STATION_RADIUS)
     return {
         "seed": int(seed),
-        "inside_fraction": float(np.mean(r <= STATION_RADIUS)) if r.size else 0.0,
-        "r95": float(np.percentile(r, 95)) if r.size else math.inf,
-        "return": float(end.ret),
-        "steps": int(end.steps),
+        "inside_fraction": st["inside_fraction"] if st["steps"] else 0.0,
+        "r95": st["r95"] if st["steps"] else math.inf,
+        "heading_rms_deg": st["heading_rms_deg"],
+        "return": float(row["return"]),
+        "steps": int(st["steps"]),
     }
 
 
