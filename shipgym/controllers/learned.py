@@ -76,6 +76,7 @@ __all__ = [
     "ObsNormalization",
     "BaselineModel",
     "baseline_model_path",
+    "policy_fingerprint",
     "baseline_task",
     "find_baseline",
     "check_policy_spec",
@@ -746,6 +747,26 @@ def read_state_dicts(path: str | Path, *, device: str = "cpu") -> dict[str, Any]
         if not isinstance(val, dict):
             raise ValueError(f"{p}: member '{name}.pth' does not hold a state dict")
     return out
+
+
+def policy_fingerprint(path: str | Path) -> str:
+    """SHA-256 (hex) of a model's policy weights, tensor by tensor in key order.
+
+    Two models with the same fingerprint hold bit-identical policy networks; what the
+    reproducibility checks of the shipped baselines compare (a documented training command
+    re-run with the same seed gives the same fingerprint at a checkpoint, on the same CPU and
+    software versions).
+    """
+    import hashlib
+
+    state = read_state_dicts(path)["policy"]
+    h = hashlib.sha256()
+    for key in sorted(state):
+        t = state[key].detach().cpu().contiguous()
+        h.update(key.encode())
+        h.update(str(tuple(t.shape)).encode())
+        h.update(t.numpy().tobytes())
+    return h.hexdigest()
 
 
 def write_metadata(path: str | Path, meta: ModelMetadata) -> None:

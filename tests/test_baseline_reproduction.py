@@ -1,0 +1,67 @@
+"""The shipped learned baselines are reproducible: re-running each one's documented training
+command (the shipped hyperparameter file, its seed) up to the checkpoint recorded in its
+metadata gives bit-identical policy weights (``policy_fingerprint``), on the CPU model the
+fingerprint was taken on (torch's kernels differ between CPU families, so elsewhere the test
+says so and skips). Slow: each re-run trains about a million steps (a few minutes)."""
+
+from __future__ import annotations
+
+import platform
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("stable_baselines3")
+pytest.importorskip("torch")
+
+import shipgym.controllers.learned as learned  # noqa: E402
+from shipgym.controllers.learned import policy_fingerprint, read_metadata  # noqa: E402
+
+
+def _cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def _reproducible() -> list[str]:
+    out = []
+    for b in learned.BASELINE_MODELS:
+        p = learned.models_dir() / b.file
+        if p.is_file() and "reproduce" in read_metadata(p).extra and b.file not in out:
+            out.append(b.file)
+    return out
+
+
+def test_every_pure_baseline_records_how_to_reproduce_it():
+    """Not vacuous: the pure baselines that are shipped carry a fingerprint."""
+    shipped = [b.file for b in learned.BASELINE_MODELS
+               if not b.residual and (learned.models_dir() / b.file).is_file()]  # fmt: skip
+    assert shipped and set(shipped) <= set(_reproducible())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("file", _reproducible())
+def test_documented_command_gives_the_same_weights(file, tmp_path):
+    from shipgym.rl.train import train
+
+    meta = read_metadata(learned.models_dir() / file)
+    rep = meta.extra["reproduce"]
+    if _cpu_model() != rep["cpu"]:
+        pytest.skip(
+            f"the fingerprint of {file} was taken on {rep['cpu']!r}, this is "
+            f"{_cpu_model()!r}: bit-identical weights hold on the same CPU model only"
+        )
+    steps = int(rep["checkpoint_steps"])
+    assert f"--seed {meta.seed}" in meta.command and meta.command.startswith(
+        f"shipgym train {meta.algorithm}"
+    )
+    train(meta.algorithm, env_id=meta.env_id, seed=int(meta.seed), timesteps=steps,
+          residual=meta.residual, out=tmp_path, eval_freq=0, checkpoint_freq=steps,
+          progress=False)  # fmt: skip
+    ckpt = tmp_path / "checkpoints" / f"{meta.algorithm}_{steps}_steps.zip"
+    assert policy_fingerprint(ckpt) == rep["policy_sha256"]
