@@ -339,7 +339,9 @@ def test_curves_of_a_synthetic_run(tmp_path):
     assert s.eval_kind == "station-keeping"
     np.testing.assert_array_equal(s.eval_score, [0.4, 0.75])
     fig = training_figure([c, s])
-    ax_r, ax_e = fig.axes
+    ax_r, ax_e, ax_j = fig.axes  # the J_c panel: the harbour run has a finite J_c
+    assert [ln.get_label() for ln in ax_j.lines] == ["ppo_a"]
+    np.testing.assert_array_equal(ax_j.lines[0].get_ydata(), c.eval_jc)
     assert [ln.get_label() for ln in ax_r.lines] == ["ppo_a", "sk"]
     np.testing.assert_array_equal(ax_r.lines[0].get_xdata(), c.steps)
     np.testing.assert_array_equal(ax_r.lines[0].get_ydata(), c.returns)
@@ -349,7 +351,8 @@ def test_curves_of_a_synthetic_run(tmp_path):
     head = png.read_bytes()[:24]
     assert head[:8] == b"\x89PNG\r\n\x1a\n"
     w, h = struct.unpack(">II", head[16:24])
-    assert (w, h) == (1000, 700)  # 10 x 7 inches at 100 dpi
+    assert (w, h) == (1000, 980)  # 10 x 9.8 inches at 100 dpi: three panels
+    assert len(training_figure([s]).axes) == 2  # station keeping only: no J_c panel
 
 
 def test_a_station_keeping_evaluation_is_what_the_curves_read(tmp_path):

@@ -199,21 +199,31 @@ def _labels(dirs: Sequence[Path]) -> list[str]:
 
 
 def training_figure(curves: Sequence[TrainingCurves]) -> Any:
-    """A matplotlib figure: the training return (top) and the evaluation (bottom: harbour
-    completion or station-keeping fraction, in %) against environment steps, one line per run
-    (same colour in both panels)."""
+    """A matplotlib figure: the training return (top), the evaluation (harbour completion or
+    station-keeping fraction, in %) and, for harbour evaluations, the mean J_c of the completed
+    runs (log scale) against environment steps, one line per run (same colour in every
+    panel)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=TRAINING_SIZE, dpi=DPI, layout="constrained")
+    kinds = {c.eval_kind for c in curves} - {"none"}
+    with_jc = any(np.isfinite(c.eval_jc).any() for c in curves)
+    size = (TRAINING_SIZE[0], TRAINING_SIZE[1] * (1.4 if with_jc else 1.0))
+    fig = Figure(figsize=size, dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
-    ax_r, ax_e = fig.subplots(2, 1, sharex=True)
+    axes = fig.subplots(3 if with_jc else 2, 1, sharex=True)
+    ax_r, ax_e = axes[0], axes[1]
     for i, c in enumerate(curves):
         color = f"C{i % 10}"
         ax_r.plot(c.steps, c.returns, color=color, label=c.label)
         if c.eval_steps.size:
             ax_e.plot(c.eval_steps, 100.0 * c.eval_score, "o-", color=color, label=c.label)
-    kinds = {c.eval_kind for c in curves} - {"none"}
+        if with_jc and np.isfinite(c.eval_jc).any():
+            axes[2].plot(c.eval_steps, c.eval_jc, "o-", color=color, label=c.label)
+    if with_jc:
+        axes[2].set_ylabel("harbour J_c of the\ncompleted runs (Tomera 2014 eq. 57)")
+        axes[2].set_yscale("log")
+        axes[2].grid(True, alpha=0.3, which="both")
     what = {
         frozenset({"harbour"}): "harbour runs completed,\nno quay contact (%)",
         frozenset({"station-keeping"}): "station keeping: time\ninside the radius (%)",
@@ -222,7 +232,7 @@ def training_figure(curves: Sequence[TrainingCurves]) -> Any:
     ax_r.set_title("Learning curves")
     ax_e.set_ylabel(what)
     ax_e.set_ylim(-5.0, 105.0)
-    ax_e.set_xlabel("environment steps")
+    axes[-1].set_xlabel("environment steps")
     for ax in (ax_r, ax_e):
         ax.grid(True, alpha=0.3)
     if curves:
