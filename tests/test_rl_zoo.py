@@ -128,15 +128,27 @@ def test_resolution_merges_block_and_section(algo, residual):
         if not (residual and k in res):
             assert hp[k] == v, k
     for k, v in opts.items():
-        assert hp[k] == v, k
+        if not (residual and k in res):
+            assert hp[k] == v, k
+    if residual:  # the residual's own overrides win, merged into mappings
+        for k, v in res.items():
+            if not isinstance(v, dict):
+                assert hp[k] == v, k
     assert hp["observer"] == block["env_wrapper"][0][train_mod.OBSERVER_WRAPPER]["observer"]
+    wrappers = [next(iter(w)) for w in block["env_wrapper"]]
+    integral = train_mod.INTEGRAL_WRAPPER in wrappers
+    if integral and not (residual and "error_integral" in res):
+        time_constant = block["env_wrapper"][1][train_mod.INTEGRAL_WRAPPER]["time_constant"]
+        assert hp["error_integral"] == time_constant
     pk = res["policy_kwargs"] if residual and "policy_kwargs" in res else block["policy_kwargs"]
     assert hp["policy_kwargs"] == {**pk, "activation_fn": DEFAULT_ACTIVATION[algo]}
     if residual:
         assert hp["controller"] == res["controller"]
         assert hp["residual_scale"] == res["residual_scale"]
-    extra = set(hp) - set(block) - set(opts) - {"residual", "controller", "residual_scale"}
-    assert extra == {"observer"}
+    extra = set(hp) - set(block) - set(opts) - set(res if residual else {})
+    assert extra - {"residual", "controller", "residual_scale"} == (
+        {"observer", "error_integral"} if integral else {"observer"}
+    )
 
 
 def test_the_old_layout_and_the_zoo_layout_resolve_alike(tmp_path):
