@@ -233,7 +233,8 @@ def test_sac_smoke(tmp_path):
         progress=False,
     )  # fmt: skip
     policy = load_policy(res.model_path)
-    a = policy(np.zeros(15, np.float32))
+    assert policy.metadata.error_integral == 100.0  # sac.yml's env_wrapper: 15 + 3 entries
+    a = policy(np.zeros(18, np.float32))
     assert a.shape == (3,) and np.all(np.abs(a) <= 1)
 
 
