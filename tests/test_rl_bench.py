@@ -432,3 +432,17 @@ def test_shipped_station_keeping_policy_meets_the_requirement():
                              workers=1, progress=False)  # fmt: skip
     inside = [r["inside_fraction"] for r in rows]
     assert len(rows) == 5 and min(inside) >= 0.95, inside
+
+
+@pytest.mark.slow
+def test_shipped_pure_ppo_completes_the_harbour_manoeuvre():
+    """Issue 17's acceptance: the shipped pure PPO (no PID underneath), harbour manoeuvre
+    through the KBF in 3 m/s from 300 deg, seeds 0-9: at least 8/10 complete without quay
+    contact, mean J_c at most 1.5x the tuned PID's on the same seeds."""
+    assert (learned.models_dir() / "ppo_harbour_kbf.zip").is_file()
+    rows = bench_controllers(["pid", "ppo"], seeds=10, workers=1, progress=False)
+    by = {c: [r for r in rows if r["controller"] == c] for c in ("pid", "ppo")}
+    ok = [r for r in by["ppo"] if r["completed"] and not r["quay_contact"]]
+    assert len(ok) >= 8, [(r["seed"], r["quay_contact"]) for r in by["ppo"]]
+    jc = {c: float(np.mean([r["J_c"] for r in by[c]])) for c in by}
+    assert jc["ppo"] <= 1.5 * jc["pid"], jc
