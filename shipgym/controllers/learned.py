@@ -1168,17 +1168,10 @@ class LearnedControllerWrapper(
                 "vessel"
             )
         if env.observation_space.shape != self.model_metadata.observation_shape:
-            hint = (
-                f" (the model also sees the error integral: wrap the env in "
-                f"shipgym.envs.integral.ErrorIntegralObservation(env, time_constant="
-                f"{self.model_metadata.error_integral:g}), as make_learned_env does)"
-                if self.model_metadata.error_integral is not None
-                else ""
-            )
             raise ValueError(
                 "the model takes observations of shape "
                 f"{self.model_metadata.observation_shape}, the environment gives "
-                f"{env.observation_space.shape}{hint}"
+                f"{env.observation_space.shape}"
             )
         shape = tuple(env.action_space.shape or ())
         if shape != self.model_metadata.action_shape:
@@ -1247,10 +1240,16 @@ def _check_stack(env: gym.Env[Any, Any], meta: ModelMetadata) -> None:
     integ = [w for w in layers if type(w).__name__ == "ErrorIntegralObservation"]
     have = getattr(integ[0], "time_constant", None) if integ else None
     if have != meta.error_integral:
+        fix = (
+            "no ErrorIntegralObservation"
+            if meta.error_integral is None
+            else f"shipgym.envs.integral.ErrorIntegralObservation(env, time_constant="
+            f"{meta.error_integral:g}) on top"
+        )
         raise ValueError(
             f"the model was trained with the error integral of time constant "
             f"{meta.error_integral} s appended to its observation; the environment has "
-            f"{have}: build the stack with make_learned_env()"
+            f"{have}: build the stack with make_learned_env(), or give the env {fix}"
         )
     observers = [w for w in layers if type(w).__name__ == "ObserverWrapper"]
     name = getattr(observers[0], "observer_name", None) if observers else None

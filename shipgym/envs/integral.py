@@ -32,10 +32,12 @@ from numpy.typing import NDArray
 
 from shipgym._config import is_real
 
-__all__ = ["ERROR_INTEGRAL_NAMES", "ErrorIntegral", "ErrorIntegralObservation"]
+__all__ = [
+    "ErrorIntegral",
+    "ErrorIntegralObservation",
+    "check_time_constant",
+]
 
-#: names of the appended entries (``observation_structure`` key ``error_integral``)
-ERROR_INTEGRAL_NAMES = ("int_e_x", "int_e_y", "int_e_psi")
 #: bounds of the forgetting time (s): at least one control period, at most a day
 _T_MIN, _T_MAX = 1e-3, 86_400.0
 
@@ -125,5 +127,6 @@ class ErrorIntegralObservation(
 
     def step(self, action: Any) -> tuple[NDArray[np.float32], Any, bool, bool, dict[str, Any]]:
         obs, reward, terminated, truncated, info = self.env.step(action)
-        self.integral.step(np.asarray(obs)[None])
-        return self.integral.augment(np.asarray(obs)[None])[0], reward, terminated, truncated, info
+        row = np.asarray(obs)[None]
+        self.integral.step(row)
+        return self.integral.augment(row)[0], reward, terminated, truncated, info

@@ -15,7 +15,7 @@ limits before anything is allocated (:func:`check_hyperparams`). The files are r
 (``python -m rl_zoo3.train --algo ppo --env shipgym/BlueLadyTracking-v0 --gym-packages
 shipgym --conf-file shipgym/rl/hyperparams/ppo.yml`` runs them as they are): each env-id
 block holds only keys the zoo accepts, the observer is the block's ``env_wrapper``
-(:func:`observer_from_env_wrapper`), shipgym's own options are in the top-level ``shipgym``
+(:func:`parse_env_wrapper`), shipgym's own options are in the top-level ``shipgym``
 section (:data:`SECTION_KEYS`). A run writes into its output folder:
 
 - ``model.zip``: the final model, a shipgym model (SB3 zip + ``shipgym.json`` metadata with
@@ -83,7 +83,7 @@ __all__ = [
     "STATION_RADIUS",
     "TrainResult",
     "evaluation_for",
-    "observer_from_env_wrapper",
+    "parse_env_wrapper",
     "plain_policy_kwargs",
     "station_keeping_episode",
     "build_env",
@@ -236,7 +236,7 @@ def load_hyperparams(
     Reads the YAML file (``path`` or the shipped one) with ``yaml.safe_load``: the block of
     ``env_id`` (rl-zoo3's, keys the zoo accepts: :data:`ZOO_BLOCK_KEYS` and the algorithm's
     arguments) and its entry in the ``shipgym`` section (:data:`SECTION_KEYS`). The block's
-    ``env_wrapper`` gives ``observer`` (:func:`observer_from_env_wrapper`), its
+    ``env_wrapper`` gives ``observer`` and ``error_integral`` (:func:`parse_env_wrapper`), its
     ``policy_kwargs`` become plain data with the activation by name
     (:func:`plain_policy_kwargs`); then the section's options, the ``residual`` overrides when
     ``residual`` and ``overrides`` are applied. The result has ``residual`` (bool),
@@ -306,11 +306,6 @@ def load_hyperparams(
     _check_algo_args(algo, hp, where=str(p))
     check_hyperparams(algo, hp, where=str(p))
     return hp
-
-
-def observer_from_env_wrapper(spec: Any, where: str = "hyperparameters") -> str | None:
-    """The observer named by a block's ``env_wrapper`` (:func:`parse_env_wrapper`)."""
-    return parse_env_wrapper(spec, where)[0]
 
 
 def parse_env_wrapper(spec: Any, where: str = "hyperparameters") -> tuple[str | None, float | None]:
