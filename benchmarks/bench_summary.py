@@ -29,6 +29,8 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   env over the same on ``DummyVecEnv`` of single envs (``null`` without the ``rl`` extra).
 
 Absolute rates are printed too (this machine's); ratios are what compares across machines.
+``physics_step`` says whether the compiled physics step (:mod:`shipgym.envs._native`, Numba)
+or the Python one ran (``SHIPGYM_NATIVE=0 make bench`` times the Python one).
 Run with ``make bench``.
 """
 
@@ -130,6 +132,13 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
                         current=CurrentConfig.from_std(0.1, 0.5, 0.02, 300.0))  # fmt: skip
     sea.reset(rng=np.random.default_rng(0))
     sea.set_command([300.0, 0.5, -0.5])
+    # which physics step runs (compiled or Python), and a first step of each outside the
+    # timings (the compiled step's first call loads it from Numba's cache, or compiles it)
+    from shipgym.envs import _native
+
+    out["physics_step"] = _native.status()
+    phys.step(1)
+    sea.step(1)
     bare = _bare(model, steps)
     r = pair(bare, _timed(lambda: phys.step(steps)), repeats)
     out["physics_over_bare"] = r
@@ -290,6 +299,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--json", type=Path, default=Path("runs/bench/bench.json"))
     args = ap.parse_args(argv)
     res = measure(args.repeats, args.steps)
+    print(res["physics_step"])
     print(f"ratios: median [min, max] over {args.repeats} interleaved repeats")
     for k, v in res.items():
         if isinstance(v, dict) and "median" in v:

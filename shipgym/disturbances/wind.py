@@ -433,6 +433,16 @@ class WindLoad:
         """
         return _loads(_MATH, self._k, float(psi), float(u), float(v), float(V_w), float(beta_w))
 
+    def kernel_constants(self) -> tuple[float, ...]:
+        """The 12 constants of :meth:`kernel`'s formulas, in its order: ``CD_t, CD_lAF(pi),
+        CD_lAF(0), delta/2, the area ratio, the moment arm at 90 deg, the X, Y, N factors,
+        pi, pi/2`` and the moment arm's slope (the compiled physics step,
+        :mod:`shipgym.envs._native`, evaluates them the same way)."""
+        cd_t, cd_pi, cd_jump, half_delta, ratio, arm0, kx, ky, kn = self._k
+        cd_0 = cd_pi + cd_jump  # CD_lAF on the bow side, cd_pi + cd_jump * True in _coefficients
+        return (float(cd_t), float(cd_pi), float(cd_0), float(half_delta), float(ratio),
+                float(arm0), float(kx), float(ky), float(kn), _PI, _HALF_PI, _CN_SLOPE)  # fmt: skip
+
     def kernel(self) -> Callable[[float, float, float, float, float], tuple[float, float, float]]:
         """``f(psi, u, v, V_w, beta_w) -> (X, Y, N)`` for plain floats: :meth:`__call__`
         without its argument conversion (the physics step, whose inputs are floats).
@@ -441,10 +451,10 @@ class WindLoad:
         (about half the time of the shared float/array form): the same operations in the same
         order, so the same floats.
         """
-        cd_t, cd_pi, cd_jump, half_delta, ratio, arm0, kx, ky, kn = self._k
-        cd_0 = cd_pi + cd_jump  # CD_lAF on the bow side, cd_pi + cd_jump * True in _coefficients
+        cd_t, cd_pi, cd_0, half_delta, ratio, arm0, kx, ky, kn, pi, half_pi, slope = (
+            self.kernel_constants()
+        )
         cos, sin, sqrt, atan2 = math.cos, math.sin, math.sqrt, math.atan2
-        pi, half_pi, slope = _PI, _HALF_PI, _CN_SLOPE
 
         def load(psi: float, u: float, v: float, V_w: float, beta_w: float) -> tuple[float, ...]:
             ang = beta_w - pi - psi

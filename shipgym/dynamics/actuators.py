@@ -947,22 +947,11 @@ class ActuatorSet:
 
         return thrust_of
 
-    def kernel(
-        self, gain: Any = None, gear: Any = None
-    ) -> Callable[[list[float]], tuple[float, float, float, float, float]]:
-        """``f(states) -> (X, Y, K, N, M_z)`` on plain floats (the physics step).
-
-        ``M_z = sum z_i F_x,i`` is the moment about the body y axis of the thrusts, which a
-        rolled hull's yaw hinge feels (:mod:`shipgym.envs.physics`); ``K`` and ``M_z`` are
-        returned as 0 for a 3-DOF set. The force of every actuator MuJoCo applies through its
-        actuators: flow-dependent kinds (rudders) are left out (:meth:`flow_kernel`).
-
-        Args:
-            gain: optional (n_channels, >=1) array; ``gain[i, 0]`` receives ``F / a`` of every
-                channel whose gain depends on its state (MuJoCo's ``actuator_gainprm``).
-            gear: optional (n_channels, >=2) array; ``gear[i, :2]`` receives the force
-                direction of every azimuth's thrust channel (MuJoCo's ``actuator_gear``).
-        """
+    def _thrust_tables(self) -> tuple[tuple[tuple[Any, ...], ...], ...]:
+        """The MuJoCo-applied actuators of :meth:`kernel` as rows of constants: ``(varying,
+        static, azimuths)``; a varying propeller ``(channel, k_ahead, k_astern, quadratic,
+        cos, sin, arm_N, arm_K, arm_Mz)``, a static one ``(channel, k, cos, sin, arm_N, arm_K,
+        arm_Mz)``, an azimuth ``(channel, F_max, x, y, z)``."""
         static = []  # linear law, one constant: MuJoCo's gain is fixed
         varying = []  # quadratic law or different ahead/astern constants: gain refreshed
         azim = []
@@ -983,7 +972,39 @@ class ActuatorSet:
                 assert isinstance(a, Azimuth)
                 azim.append((i, a.max_thrust_n, x, y, z))
             i += len(a.channels)
-        static_t, varying_t, azim_t = tuple(static), tuple(varying), tuple(azim)
+        return tuple(varying), tuple(static), tuple(azim)
+
+    def thrust_tables3(self) -> tuple[tuple[tuple[Any, ...], ...], ...]:
+        """The 3-DOF rows of :meth:`kernel`, in the order it sums them: ``(varying, lateral,
+        static, azimuths)``; varying ``(channel, k_ahead, k_astern, quadratic, cos, sin,
+        arm_N)``, lateral (constant gain, athwartships: nothing in X) ``(channel, k, sin,
+        arm_N)``, static ``(channel, k, cos, sin, arm_N)``, azimuth ``(channel, F_max, x, y)``.
+        The compiled physics step (:mod:`shipgym.envs._native`) sums the same rows."""
+        varying_t, static_t, azim_t = self._thrust_tables()
+        v3 = tuple(t[:7] for t in varying_t)
+        # constant-gain thrusters pointing athwartships (tunnels: cos alpha = 0) add nothing to X
+        lat = tuple((t[0], t[1], t[3], t[4]) for t in static_t if t[2] == 0.0)
+        s3 = tuple(t[:5] for t in static_t if t[2] != 0.0)
+        a3 = tuple(t[:4] for t in azim_t)
+        return v3, lat, s3, a3
+
+    def kernel(
+        self, gain: Any = None, gear: Any = None
+    ) -> Callable[[list[float]], tuple[float, float, float, float, float]]:
+        """``f(states) -> (X, Y, K, N, M_z)`` on plain floats (the physics step).
+
+        ``M_z = sum z_i F_x,i`` is the moment about the body y axis of the thrusts, which a
+        rolled hull's yaw hinge feels (:mod:`shipgym.envs.physics`); ``K`` and ``M_z`` are
+        returned as 0 for a 3-DOF set. The force of every actuator MuJoCo applies through its
+        actuators: flow-dependent kinds (rudders) are left out (:meth:`flow_kernel`).
+
+        Args:
+            gain: optional (n_channels, >=1) array; ``gain[i, 0]`` receives ``F / a`` of every
+                channel whose gain depends on its state (MuJoCo's ``actuator_gainprm``).
+            gear: optional (n_channels, >=2) array; ``gear[i, :2]`` receives the force
+                direction of every azimuth's thrust channel (MuJoCo's ``actuator_gear``).
+        """
+        varying_t, static_t, azim_t = self._thrust_tables()
         cos, sin = math.cos, math.sin
         four = self.dofs == 4
         write = gain is not None
@@ -1027,12 +1048,7 @@ class ActuatorSet:
 
         if four:
             return tau_of
-        # 3 DOF: the same sums without K and M_z (the hot path of every planar vessel)
-        v3 = tuple(t[:7] for t in varying_t)
-        # constant-gain thrusters pointing athwartships (tunnels: cos alpha = 0) add nothing to X
-        lat = tuple((t[0], t[1], t[3], t[4]) for t in static_t if t[2] == 0.0)
-        s3 = tuple(t[:5] for t in static_t if t[2] != 0.0)
-        a3 = tuple(t[:4] for t in azim_t)
+        v3, lat, s3, a3 = self.thrust_tables3()
 
         def tau_of3(st: list[float]) -> tuple[float, float, float, float, float]:
             X = Y = N = 0.0
@@ -1070,20 +1086,10 @@ class ActuatorSet:
 
         return tau_of3
 
-    def flow_kernel(
-        self,
-    ) -> Callable[[list[float], float, float, float, float], tuple[Any, ...]] | None:
-        """``f(states, u, v, p, r) -> (X, Y, K, N, forces, stalled)``, plain floats.
-
-        The generalised force (N, N, N m, N m) of every flow-dependent actuator (a
-        :class:`Rudder`, an :class:`MMGPropulsion` unit, a :class:`Propeller` with an
-        advance-speed or tunnel loss: its thrust) at the velocity through the water
-        ``(u, v, p, r)``, which the physics adds to the hull's loads itself (MuJoCo's
-        actuator carries no force for them), with one force (N) per such actuator, in actuator
-        order (a rudder's lift, an MMG unit's propeller thrust) and its stall flag (an MMG
-        unit's is False); ``None`` when the set has none. The array forms
-        (:meth:`Rudder.lift`, :meth:`MMGPropulsion.generalised`) are checked against it.
-        """
+    def _flow_laws(self) -> tuple[tuple[Any, ...], ...]:
+        """The flow-dependent actuators of :meth:`flow_kernel` as ``(kind, channel, law, x, z,
+        stall angle, post-stall angle, inflow)`` rows (kind 0 rudder, 1 MMG unit, 2
+        propeller with its law's constants)."""
         from .mmg import propulsion_kernel
 
         laws = []
@@ -1112,12 +1118,38 @@ class ActuatorSet:
                 )
                 laws.append((2, i, law, 0.0, 0.0, 0.0, 0.0, False))  # fmt: skip
             i += len(a.channels)
-        if not laws:
+        return tuple(laws)
+
+    def propeller_flow_table(self) -> tuple[tuple[Any, ...], ...] | None:
+        """Where every flow-dependent actuator is a propeller (advance-speed or tunnel loss):
+        one row each, ``(channel, k_ahead, k_astern, quadratic, k_u (1 - w), loss depth,
+        1/U_50, cos, sin, arm_N, arm_K)``, in the order :meth:`flow_kernel` sums them (the
+        compiled physics step sums the same rows); ``None`` otherwise (also with none)."""
+        laws = self._flow_laws()
+        if not laws or not all(t[0] == 2 for t in laws):
             return None
-        laws_t = tuple(laws)
+        return tuple((t[1], *t[2]) for t in laws)
+
+    def flow_kernel(
+        self,
+    ) -> Callable[[list[float], float, float, float, float], tuple[Any, ...]] | None:
+        """``f(states, u, v, p, r) -> (X, Y, K, N, forces, stalled)``, plain floats.
+
+        The generalised force (N, N, N m, N m) of every flow-dependent actuator (a
+        :class:`Rudder`, an :class:`MMGPropulsion` unit, a :class:`Propeller` with an
+        advance-speed or tunnel loss: its thrust) at the velocity through the water
+        ``(u, v, p, r)``, which the physics adds to the hull's loads itself (MuJoCo's
+        actuator carries no force for them), with one force (N) per such actuator, in actuator
+        order (a rudder's lift, an MMG unit's propeller thrust) and its stall flag (an MMG
+        unit's is False); ``None`` when the set has none. The array forms
+        (:meth:`Rudder.lift`, :meth:`MMGPropulsion.generalised`) are checked against it.
+        """
+        laws_t = self._flow_laws()
+        if not laws_t:
+            return None
         atan2, exp = math.atan2, math.exp
-        if all(t[0] == 2 for t in laws_t):  # propellers only (the Blue Lady): the same sums
-            props = tuple((t[1], *t[2]) for t in laws_t)
+        props = self.propeller_flow_table()
+        if props is not None:  # propellers only (the Blue Lady): the same sums
             no_stall = (False,) * len(props)
 
             def flow_props(

@@ -169,21 +169,37 @@ class PlantModel:
         return replace(self, **changes)
 
 
-def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any]]:
-    """Expanded component form of :meth:`PlantModel.nu_dot`, constants bound in a closure."""
+def kernel_constants(p: PlantModel) -> tuple[float, ...]:
+    """The 30 constants of :meth:`PlantModel.accel`'s expanded form, in its order: ``a11,
+    a22, a32``, ``D_L`` by rows, ``d_quad``, ``M^-1`` by rows, then the Coriolis coefficients
+    ``m, m x_g, x_g, a22, a23, a11`` (each times the Coriolis switch). The compiled physics
+    step (:mod:`shipgym.envs._native`) evaluates the same expressions with them."""
+    return p._kc  # type: ignore[attr-defined, no-any-return]
+
+
+def _constants(p: PlantModel, Mi: NDArray[np.float64]) -> tuple[float, ...]:
     A = p.M_A
     a11, a22, a32 = A[0][0], A[1][1], A[2][1]
     a23s = 0.5 * (A[1][2] + A[2][1])
-    (d11, d12, d13), (d21, d22, d23), (d31, d32, d33) = p.D_L
-    q1, q2, q3 = p.d_quad
-    (i11, i12, i13), (i21, i22, i23), (i31, i32, i33) = (tuple(map(float, r)) for r in Mi)
     # the Coriolis coefficients (zero when the terms are off: products with a switch of 1 left
     # out, so that the usual case costs nothing)
     cor = 1.0 if p.coriolis else 0.0
     m = p.m * cor
-    mxg = m * p.x_g
-    xg = p.x_g
-    a22c, a23c, a11c = a22 * cor, a23s * cor, a11 * cor
+    rows = [float(x) for row in p.D_L for x in row]
+    inv = [float(x) for row in Mi for x in row]
+    return tuple(float(x) for x in (a11, a22, a32, *rows, *p.d_quad, *inv, m, m * p.x_g,
+                                    p.x_g, a22 * cor, a23s * cor, a11 * cor))  # fmt: skip
+
+
+def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any]]:
+    """Expanded component form of :meth:`PlantModel.nu_dot`, constants bound in a closure."""
+    k = _constants(p, Mi)
+    object.__setattr__(p, "_kc", k)
+    a11, a22, a32 = k[0:3]
+    d11, d12, d13, d21, d22, d23, d31, d32, d33 = k[3:12]
+    q1, q2, q3 = k[12:15]
+    i11, i12, i13, i21, i22, i23, i31, i32, i33 = k[15:24]
+    m, mxg, xg, a22c, a23c, a11c = k[24:30]
 
     def accel(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
         ur = u - u_c

@@ -129,6 +129,7 @@ class BatchedPhysics:
         cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
         self._coeffs = (wind_cfg.coefficients if wind_cfg else None) or v.windage.coefficients
         self._wind_load = WindLoad(blendermann(self._coeffs), v.windage).array_kernel()
+        self._native = self._make_native()
         self.wind_configs: list[WindConfig | None] = [wind_cfg] * n
         self.current_configs: list[CurrentConfig] = [cc] * n
         self.winds = [Wind(wind_cfg or WindConfig(), v.windage) for _ in range(n)]
@@ -347,6 +348,11 @@ class BatchedPhysics:
         for j in range(1, k):
             ts[j] = ts[j - 1] + h
         Vw, bw, vc, bc = self._disturbances(ts)
+        if self._native is not None:
+            self._native(k, Vw, bw, vc, bc)
+            self.t = ts[-1] + h
+            self._check()
+            return
         alpha, cmd, lo, hi = self._alpha, self._cmd, self._lo, self._hi
         q, qv, act = self._q, self._v, self._act
         for j in range(k):
@@ -370,6 +376,11 @@ class BatchedPhysics:
             q = q + h * qv
         self._q, self._v, self._act = q, qv, act
         self.t = ts[-1] + h
+        self._check()
+
+    def _check(self) -> None:
+        """Raise :class:`SimulationDiverged` for a non-finite or absurd state."""
+        qv = self._v
         if not np.all(np.isfinite(self._a)):
             bad = np.nonzero(~np.all(np.isfinite(self._a), axis=0))[0]
             raise SimulationDiverged(
@@ -378,6 +389,64 @@ class BatchedPhysics:
             )
         if not np.all(np.abs(qv) < 1e3):
             raise SimulationDiverged("simulation diverged: a hull passed 1 km/s")
+
+    def _make_native(self) -> Any:
+        """The compiled step (:func:`shipgym.envs._native.run_batched3`) as ``run(k, V_w,
+        beta_w, V_c, beta_c)``, or ``None`` where it does not cover this batch (a plant other
+        than a :class:`PlantModel`, rudders or MMG units, no Numba): then :meth:`step` runs
+        the NumPy form."""
+        import shipgym.envs._native as nat
+
+        acts = self.actuators
+        props = acts.propeller_flow_table()
+        if (
+            not nat.available()
+            or not isinstance(self.plant, PlantModel)
+            or not all(isinstance(a, Propeller | Azimuth) for a in acts)
+            or (acts.flow_dependent and props is None)
+        ):
+            return None
+        from shipgym.dynamics.model import kernel_constants
+
+        def table(rows: Any, width: int) -> Array:
+            return np.array(rows, dtype=np.float64).reshape(len(rows), width)
+
+        varying, lateral, static, azim = (table(r, w) for r, w in zip(
+            acts.thrust_tables3(), (7, 4, 5, 4), strict=True))  # fmt: skip
+        t_props = table(props or (), 11)
+        fp = np.zeros(nat._FP_SIZE)
+        fp[nat._FP_PLANT : nat._FP_WIND] = kernel_constants(self.plant)
+        fp[nat._FP_WIND : nat._FP] = WindLoad(blendermann(self._coeffs),
+                                              self.vessel.windage).kernel_constants()  # fmt: skip
+        fp[nat._FP : nat._FP + 2] = (0.5 * self.h, self.h)
+        col = (slice(None), 0)
+        chan = {
+            "lo": self.lower.astype(np.float64), "hi": self.upper.astype(np.float64),
+            "alpha": self._alpha[col].copy(), "rl_band": self._rl_band[col].copy(),
+            "rl_step": self._rl_step[col].copy(), "servo": self._servo.copy(),
+            "rate": self._rate[col].copy(), "servo_t": self._servo_T[col].copy(),
+            "integ": self._integ.copy(), "bounded": self._bounded[col].copy(),
+        }  # fmt: skip
+        run_batched3 = nat.run_batched3
+
+        def run(k: int, Vw: Array, bw: Array, vc: Array, bc: Array) -> None:
+            fp[nat._FP + 9] = 1.0 if self._has_current else 0.0
+            aero = self._aero.astype(np.float64)
+            for name in ("_q", "_v", "_a", "_act", "_cmd"):  # in place, contiguous
+                a = getattr(self, name)
+                if not a.flags.c_contiguous or not a.flags.writeable:
+                    setattr(self, name, np.ascontiguousarray(a).copy())
+            z = np.zeros_like(Vw)
+            run_batched3(
+                k, fp, self._q, self._v, self._a, self._act, self._cmd, chan["lo"], chan["hi"],
+                chan["alpha"], chan["rl_band"], chan["rl_step"], chan["servo"], chan["rate"],
+                chan["servo_t"], chan["integ"], chan["bounded"], varying, lateral, static, azim,
+                t_props, aero, np.ascontiguousarray(Vw), np.ascontiguousarray(bw),
+                np.ascontiguousarray(vc if self._has_current else z),
+                np.ascontiguousarray(bc if self._has_current else z),
+            )  # fmt: skip
+
+        return run
 
 
 def _actuator_kernel(acts: ActuatorSet) -> Any:

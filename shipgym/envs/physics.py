@@ -270,6 +270,7 @@ class VesselPhysics:
         self._accel = self.plant.accel
         self._loads = (0.0,) * 8
         self.saturated = np.zeros(v.actuators.n_channels, dtype=bool)
+        self._native: Any = None
         self._prepare = self._make_prepare()
         self.reset()
 
@@ -654,6 +655,8 @@ class VesselPhysics:
         """
         if self.model.opt.timestep != self._h:
             self._prepare = self._make_prepare()
+        if self._native is not None:
+            return self._native(n, stop_on_contact)
         prepare, mj_step, m, d = self._prepare, mujoco.mj_step, self.model, self.data
         hits = self._rate_hits
         taken = n
@@ -867,4 +870,121 @@ class VesselPhysics:
             qfrc[3] = ix * pd - tk
             this._loads = (wx, wy, wn, dx_, dy_, dn_, uc, vcb)
 
+        self._native = None if four else self._make_native(drift is not None)
         return prepare4 if four else prepare3
+
+    def _make_native(self, drift: bool) -> Any:
+        """The compiled form of ``prepare3`` and the stepping loop (:mod:`shipgym.envs._native`)
+        as ``run(n, stop_on_contact) -> steps taken``, or ``None`` where it does not cover this
+        physics (then :meth:`step` runs the Python closure)."""
+        import shipgym.envs._native as nat
+
+        acts = self.actuators
+        props = acts.propeller_flow_table()
+        if (
+            not nat.available()
+            or not isinstance(self.plant, PlantModel)
+            or drift
+            or (self._flow_of is not None and props is None)
+        ):
+            return None
+        from shipgym.dynamics.model import kernel_constants
+
+        m, d = self.model, self.data
+
+        def table(rows: Any, width: int) -> NDArray[np.float64]:
+            return np.array(rows, dtype=np.float64).reshape(len(rows), width)
+
+        varying, lateral, static, azim = acts.thrust_tables3()
+        t_var, t_lat = table(varying, 7), table(lateral, 4)
+        t_sta, t_azi = table(static, 5), table(azim, 4)
+        t_props = table(props or (), 11)
+        h = self._h
+        servos = table([(k, j, rate, tc) for k, (j, rate, tc) in enumerate(self._servos)], 4)
+        rlims = table(
+            [(k, j, rate * tc, rate * h / -math.expm1(-h / tc))
+             for k, (j, rate, tc) in enumerate(self._ratelim)], 4
+        )  # fmt: skip
+        fp = np.zeros(nat._FP_SIZE)
+        fp[nat._FP_PLANT : nat._FP_WIND] = kernel_constants(self.plant)
+        fp[nat._FP_WIND : nat._FP] = self._wind_load.kernel_constants()
+        wind, cur = self.wind, self.current
+        w_mode = -1.0 if not self.aerodynamics else (0.0 if wind._const is not None else 1.0)
+        cc = self.current_config
+        c_mode = 0.0 if (cc.is_constant and cc.speed == 0.0) else (
+            1.0 if cur._const is not None else 2.0)  # fmt: skip
+        F = nat._FP
+        fp[F : F + 4] = (0.5 * h, h, self._m_q, self._i_q)
+        fp[F + 4 : F + 9] = (w_mode, *(wind._const or (0.0, 0.0)), wind._inv_dt, 0.0)
+        fp[F + 9 : F + 14] = (c_mode, *(cur._const or (0.0, 0.0)), cur._inv_dt, 0.0)
+        fp[F + 17] = 0.0 if all(a.flow_dependent for a in acts) else 1.0
+        n_flow = len(props or ())
+        out = np.zeros(12 + n_flow)
+        state = np.zeros(3, dtype=np.int64)
+        no_chunk = np.zeros((2, 2))
+        ncon = nat.ncon_view(m, d)
+        hits = np.zeros(len(self._servos), dtype=np.int64)
+        no_stall = (False,) * n_flow
+        run3, mj_step = nat.run3, nat.mj_step_address()
+        mp, dp = m._address, d._address
+        qpos, qvel, qacc, act, ctrl, qfrc = d.qpos, d.qvel, d.qacc, d.act, d.ctrl, d.qfrc_applied
+        gain, gear = m.actuator_gainprm, m.actuator_gear
+        this = self
+
+        def chunk(proc: Any, mode: float, j: int, at: int) -> NDArray[np.float64]:
+            """The process's chunk ``j`` (made as the Python step makes it), its first sample
+            index into ``fp[at]``."""
+            if mode != (1.0 if proc is wind else 2.0):
+                return no_chunk
+            if proc._j != j:
+                proc._select(j)
+            fp[at] = j * nat.CHUNK
+            return proc._chunks[j]
+
+        def run(n: int, stop_on_contact: bool) -> int:
+            ex, ey, _ek, en = this._external
+            fp[F + 14 : F + 17] = (ex, ey, en)
+            state[0] = 1 if this._ramping else 0
+            s_cmd = np.array(this._servo_cmd, dtype=np.float64)
+            r_cmd = np.array(this._rl_cmd, dtype=np.float64)
+            taken, left = 0, n
+            t = d.time
+            jw = int(t * wind._inv_dt) // nat.CHUNK
+            jc = int(t * cur._inv_dt) // nat.CHUNK
+            while True:
+                wc = chunk(wind, w_mode, jw, F + 8)
+                ck = chunk(cur, c_mode, jc, F + 13)
+                code = run3(
+                    mj_step, mp, dp, left, stop_on_contact, d.time, ncon,
+                    qpos, qvel, qacc, act, ctrl, qfrc, gain, gear,
+                    fp, t_var, t_lat, t_sta, t_azi, t_props, servos, s_cmd, hits, rlims, r_cmd,
+                    wc, ck, state, out,
+                )  # fmt: skip
+                k = int(state[1])
+                taken += k
+                left -= k
+                if code == nat.NEED_WIND:
+                    jw = int(state[2])
+                elif code == nat.NEED_CURRENT:
+                    jc = int(state[2])
+                else:
+                    break
+            this._ramping = bool(state[0])
+            if len(hits):
+                this._rate_hits[:] = hits.tolist()
+                this.rate_limited[:] = hits > 0
+            if taken:
+                this._loads = tuple(out[:8].tolist())
+                if n_flow:
+                    vals = out.tolist()
+                    this._flow = (*vals[8:12], tuple(vals[12:]), no_stall)
+            if code == nat.DIVERGED:
+                t_, u, v, r, ud, vd, rd = out[:7].tolist()
+                raise SimulationDiverged(
+                    f"simulation diverged at t = {t_:.3f} s: nu = ({u:.4g}, {v:.4g}, {r:.4g}), "
+                    f"nu_dot = ({ud:.4g}, {vd:.4g}, {rd:.4g}); check the plant parameters, the "
+                    "timestep and the applied forces"
+                )
+            return taken
+
+        return run
