@@ -161,6 +161,21 @@ class GridBatch:
         self._store(i, self._grid(i, 0))
         self._any_varying = bool(self._inv_dt.any())
 
+    def _hold(self, last: NDArray[np.int64]) -> None:
+        """Make each env's rows hold its samples up to index ``last + 1``."""
+        over = np.nonzero(last + 1 >= self._valid)[0]
+        for i in over.tolist():  # a new chunk (rare): in time order, as the scalar query
+            self._store(i, self._grid(i, int(last[i]) // CHUNK))
+
+    def rows_until(self, t: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+        """``(inv_dt, channel 0, channel 1)``: each env's 1/dt (0 for a constant process) and
+        its samples as ``(n, width)`` rows, holding every sample up to the times ``t`` (n,)
+        (for reading the process at times up to ``t`` as :meth:`at` reads it: the compiled
+        batched physics interpolates in them itself)."""
+        if self._any_varying:
+            self._hold((t * self._inv_dt).astype(np.int64))
+        return self._inv_dt, self._g0, self._g1
+
     def at(self, t: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Both channels at the times ``t`` (n,) (s, >= 0), one per env; or (k, n): k times per
         env (the steps of a control period, read at once)."""
@@ -169,10 +184,7 @@ class GridBatch:
             return np.broadcast_to(self._g0[:, 0], shape), np.broadcast_to(self._g1[:, 0], shape)
         x = t * self._inv_dt
         k = x.astype(np.int64)  # x >= 0: int() truncation, as the scalar query
-        last = k if k.ndim == 1 else k.max(axis=0)
-        over = np.nonzero(last + 1 >= self._valid)[0]
-        for i in over.tolist():  # a new chunk (rare): in time order, as the scalar query
-            self._store(i, self._grid(i, int(last[i]) // CHUNK))
+        self._hold(k if k.ndim == 1 else k.max(axis=0))
         f = x - k
         i = self._offsets + k  # flat indices into the (n, width) rows (faster than [rows, k])
         g0, g1 = self._g0.ravel(), self._g1.ravel()

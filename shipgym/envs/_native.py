@@ -345,6 +345,16 @@ def grid_at(t, inv_dt, k0, chunk, clamp):  # type: ignore[no-untyped-def]
     return True, speed, b0 + f * (chunk[1, i + 1] - b0)
 
 
+@njit(cache=True, inline="always")
+def _row_at(t, inv_dt, g0, g1, i):  # type: ignore[no-untyped-def]
+    """Env ``i``'s process at ``t`` from its sample rows (``GridBatch.at``, one env)."""
+    x = t * inv_dt
+    k = int(x)
+    f = x - k
+    a0, b0 = g0[i, k], g1[i, k]
+    return a0 + f * (g0[i, k + 1] - a0), b0 + f * (g1[i, k + 1] - b0)
+
+
 # ---- the loop ------------------------------------------------------------------------------
 #: layout of run3's float parameters ``fp`` (after the plant's 30 and the wind load's 12)
 _FP_PLANT, _FP_WIND = 0, 30
@@ -482,13 +492,15 @@ def run3(  # type: ignore[no-untyped-def]
 @njit(cache=True)
 def run_batched3(  # type: ignore[no-untyped-def]
     k, fp, q, qv, qa, act, cmd, lo, hi, alpha, rl_band, rl_step, servo, rate, servo_t, integ,
-    bounded, varying, lateral, static, azim, props, aero, Vw, bw, vc, bc,
+    bounded, varying, lateral, static, azim, props, aero, t, w_inv, w0, w1, c_inv, c0, c1,
 ):  # fmt: skip
     """``k`` steps of :class:`~shipgym.envs.batchphysics.BatchedPhysics` (its module
     docstring), hull by hull with the kernels of :func:`run3`: the accelerations as the single
     physics' ``prepare3`` computes them, then the batched physics' Euler update of the
-    actuator states, ``qvel`` and ``qpos`` (in place). ``Vw, bw, vc, bc`` are ``(k, n)``;
-    ``aero`` gates each hull's wind load; ``fp[_FP + 9] > 0`` says there is a current."""
+    actuator states, ``qvel`` and ``qpos`` (in place). Each hull's wind and current come from
+    its rows of samples (``GridBatch.rows_until``: 1/dt, two channels) at its time ``t``
+    (advanced in place, ``t += h`` per step), interpolated as ``GridBatch.at`` does; ``aero``
+    gates each hull's wind load; ``fp[_FP + 9] > 0`` says there is a current."""
     kp = fp[_FP_PLANT:_FP_WIND]
     kw = fp[_FP_WIND:_FP]
     hh, h = fp[_FP], fp[_FP + 1]
@@ -497,8 +509,9 @@ def run_batched3(  # type: ignore[no-untyped-def]
     nc = act.shape[0]
     lifts = np.empty(props.shape[0])
     no_gain = np.zeros((1, 2))  # thrust3 writes no MuJoCo gains here
-    for j in range(k):
+    for _j in range(k):
         for i in range(n):
+            ti = t[i]
             st = act[:, i]
             psi = q[2, i]
             xd, yd, r = qv[0, i] + hh * qa[0, i], qv[1, i] + hh * qa[1, i], qv[2, i] + hh * qa[2, i]
@@ -506,14 +519,17 @@ def run_batched3(  # type: ignore[no-untyped-def]
             u = c * xd + s * yd
             v = c * yd - s * xd
             if current:
-                d = bc[j, i] - psi
-                uc = vc[j, i] * math.cos(d)
-                vcb = vc[j, i] * math.sin(d)
+                vc, bc = _row_at(ti, c_inv[i], c0, c1, i)
+                d = bc - psi
+                uc = vc * math.cos(d)
+                vcb = vc * math.sin(d)
             else:
                 uc = vcb = 0.0
             tx, ty, tn = thrust3(st, varying, lateral, static, azim, no_gain, no_gain, False)
             if aero[i] != 0.0:
-                wx, wy, wn = wind_load(kw, psi, u, v, Vw[j, i], bw[j, i])
+                vw, bw = _row_at(ti, w_inv[i], w0, w1, i)
+                vw = vw if vw > 0.0 else 0.0  # np.maximum(V_w, 0)
+                wx, wy, wn = wind_load(kw, psi, u, v, vw, bw)
             else:
                 wx = wy = wn = 0.0
             ex = ey = en = 0.0
@@ -558,3 +574,4 @@ def run_batched3(  # type: ignore[no-untyped-def]
             q[0, i] += h * qv[0, i]
             q[1, i] += h * qv[1, i]
             q[2, i] += h * qv[2, i]
+            t[i] = ti + h

@@ -347,12 +347,11 @@ class BatchedPhysics:
         ts[0] = self.t
         for j in range(1, k):
             ts[j] = ts[j - 1] + h
-        Vw, bw, vc, bc = self._disturbances(ts)
         if self._native is not None:
-            self._native(k, Vw, bw, vc, bc)
-            self.t = ts[-1] + h
+            self._native(k, ts[-1])
             self._check()
             return
+        Vw, bw, vc, bc = self._disturbances(ts)
         alpha, cmd, lo, hi = self._alpha, self._cmd, self._lo, self._hi
         q, qv, act = self._q, self._v, self._act
         for j in range(k):
@@ -428,22 +427,24 @@ class BatchedPhysics:
             "integ": self._integ.copy(), "bounded": self._bounded[col].copy(),
         }  # fmt: skip
         run_batched3 = nat.run_batched3
+        none = (np.zeros(self.n), np.zeros((self.n, 2)), np.zeros((self.n, 2)))  # no process
 
-        def run(k: int, Vw: Array, bw: Array, vc: Array, bc: Array) -> None:
+        def run(k: int, t_last: Array) -> None:
+            """``k`` steps; ``t_last`` each hull's time at the last of them."""
             fp[nat._FP + 9] = 1.0 if self._has_current else 0.0
             aero = self._aero.astype(np.float64)
-            for name in ("_q", "_v", "_a", "_act", "_cmd"):  # in place, contiguous
+            for name in ("_q", "_v", "_a", "_act", "_cmd", "t"):  # in place, contiguous
                 a = getattr(self, name)
                 if not a.flags.c_contiguous or not a.flags.writeable:
                     setattr(self, name, np.ascontiguousarray(a).copy())
-            z = np.zeros_like(Vw)
+            assert self._wind_at is not None and self._current_at is not None
+            wind = self._wind_at.rows_until(t_last) if self.aerodynamics else none
+            cur = self._current_at.rows_until(t_last) if self._has_current else none
             run_batched3(
                 k, fp, self._q, self._v, self._a, self._act, self._cmd, chan["lo"], chan["hi"],
                 chan["alpha"], chan["rl_band"], chan["rl_step"], chan["servo"], chan["rate"],
                 chan["servo_t"], chan["integ"], chan["bounded"], varying, lateral, static, azim,
-                t_props, aero, np.ascontiguousarray(Vw), np.ascontiguousarray(bw),
-                np.ascontiguousarray(vc if self._has_current else z),
-                np.ascontiguousarray(bc if self._has_current else z),
+                t_props, aero, self.t, *wind, *cur,
             )  # fmt: skip
 
         return run
