@@ -7,6 +7,7 @@ the median over the repeats with the smallest and largest repeat, and all are wr
 
 - ``physics_over_bare``: physics steps per second of the Blue Lady's full plant (thrusters,
   gusty wind, hydrodynamics) over bare ``mujoco.mj_step`` on the same model (higher is better);
+  ``physics_python_over_bare`` the same on the Python step (``shipgym.envs._native`` off);
 - ``waves_over_no_waves``: the full plant with 100 wave components, drift and a Gauss-Markov
   current over the plain full plant (higher is better);
 - ``episode_pid_over_bare``, ``episode_kbf_pid_over_bare``: the wall time of a whole
@@ -144,6 +145,11 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
     out["physics_over_bare"] = r
     out["bare_steps_per_s"] = steps / r["a_s"]
     out["physics_steps_per_s"] = steps / r["b_s"]
+    with _native.disabled():  # the same plant on the Python step, for comparison
+        slow = VesselPhysics("blue-lady", wind=wind)
+    slow.reset(rng=np.random.default_rng(0))
+    slow.set_command([300.0, 0.5, -0.5])
+    out["physics_python_over_bare"] = pair(bare, _timed(lambda: slow.step(steps)), repeats)
     out["waves_over_no_waves"] = pair(
         _timed(lambda: phys.step(steps)), _timed(lambda: sea.step(steps)), repeats
     )
