@@ -20,9 +20,10 @@ against its Python form bit for bit, and whole trajectories of every vessel it c
 
 Covered: 3-DOF hulls with a :class:`~shipgym.dynamics.model.PlantModel`, MuJoCo-applied
 propellers and azimuths, flow-dependent propellers (advance-speed and tunnel losses), servos,
-rate-limited lags, wind (gusts on their sample grid) and current (constant or Gauss-Markov on
-its grid). Anything else (4-DOF hulls, MMG hulls and units, rudders, wave drift) steps in
-Python. ``SHIPGYM_NATIVE=0`` turns the compiled step off (:func:`status` says why it is off).
+rate-limited lags, wind (gusts on their sample grid), current (constant or Gauss-Markov on
+its grid) and the second-order wave drift (on its grid). Anything else (4-DOF hulls, MMG
+hulls and units, rudders) steps in Python. ``SHIPGYM_NATIVE=0`` turns the compiled step off
+(:func:`status` says why it is off).
 
 The compiled code is cached on disk by Numba (``cache=True``), so only the first process on a
 machine compiles it (a few seconds).
@@ -55,9 +56,10 @@ __all__ = [
     "run_batched3",
 ]
 
-#: return codes of :func:`run3`: all steps taken (or a contact), the next wind or current
-#: chunk is needed (the caller extends the process and calls again), the state diverged
-OK, NEED_WIND, NEED_CURRENT, DIVERGED = 0, 1, 2, 3
+#: return codes of :func:`run3`: all steps taken (or a contact), the next wind, current or
+#: wave-drift chunk is needed (the caller extends the process and calls again), the state
+#: diverged
+OK, NEED_WIND, NEED_CURRENT, DIVERGED, NEED_DRIFT = 0, 1, 2, 3, 4
 
 _why_off: str | None = None
 _mj_step: Any = None
@@ -360,8 +362,8 @@ def _row_at(t, inv_dt, g0, g1, i):  # type: ignore[no-untyped-def]
 _FP_PLANT, _FP_WIND = 0, 30
 _FP = 42
 #: hh, h, m_q, I_q, wind mode/V/beta/1/dt/k0, current mode/V/beta/1/dt/k0, external X/Y/N,
-#: mj_thrust
-_FP_SIZE = _FP + 18
+#: mj_thrust, wave drift on/1/dt/k0/beta_p/k_x/k_y/k_n
+_FP_SIZE = _FP + 25
 
 
 @njit(cache=True)
@@ -369,7 +371,7 @@ def run3(  # type: ignore[no-untyped-def]
     mj_step, mp, dp, n, stop_on_contact, t0, ncon,
     qpos, qvel, qacc, act, ctrl, qfrc, gain, gear,
     fp, varying, lateral, static, azim, props, servos, servo_cmd, hits, rlims, rl_cmd,
-    wind_chunk, current_chunk, state, out,
+    wind_chunk, current_chunk, drift_chunk, state, out,
 ):  # fmt: skip
     """``n`` physics steps of the ``prepare3`` closure and ``mj_step`` (module docstring).
 
@@ -385,6 +387,10 @@ def run3(  # type: ignore[no-untyped-def]
         fp[_FP + 9], fp[_FP + 10], fp[_FP + 11], fp[_FP + 12], fp[_FP + 13]
     )  # fmt: skip
     ex0, ey0, en0, mj_thrust = fp[_FP + 14], fp[_FP + 15], fp[_FP + 16], fp[_FP + 17] != 0.0
+    d_on, d_inv, d_k0, d_beta, d_kx, d_ky, d_kn = (
+        fp[_FP + 18] != 0.0, fp[_FP + 19], int(fp[_FP + 20]), fp[_FP + 21], fp[_FP + 22],
+        fp[_FP + 23], fp[_FP + 24],
+    )  # fmt: skip
     n_flow = props.shape[0]
     lifts = out[12 : 12 + n_flow]
     t = t0
@@ -413,6 +419,14 @@ def run3(  # type: ignore[no-untyped-def]
                 return NEED_CURRENT
         else:
             vc, bc = c_V, c_b
+        if d_on:  # the drift energy E(t) on its grid (Waves.drift_load)
+            ok, e, _ = grid_at(t, d_inv, d_k0, drift_chunk, False)
+            if not ok:
+                state[1] = i
+                state[2] = int(t * d_inv) // CHUNK
+                return NEED_DRIFT
+        else:
+            e = 0.0
         if mj_thrust:
             tx, ty, tn = thrust3(act, varying, lateral, static, azim, gain, gear, True)
         else:
@@ -426,6 +440,14 @@ def run3(  # type: ignore[no-untyped-def]
             vcb = vc * math.sin(bc - psi)
         else:
             uc = vcb = 0.0
+        if d_on:
+            b = d_beta - psi
+            cb, sb = math.cos(b), math.sin(b)
+            dy_ = d_ky * sb * abs(sb) * e
+            dx_ = d_kx * cb * abs(cb) * e
+            dn_ = d_kn * cb * dy_
+        else:
+            dx_ = dy_ = dn_ = 0.0
         ex, ey, en = ex0, ey0, en0
         for row in range(servos.shape[0]):  # each servo's rate, towards its command, limited
             k = int(servos[row, 0])
@@ -466,7 +488,7 @@ def run3(  # type: ignore[no-untyped-def]
             en += fl3
             out[8], out[9], out[10], out[11] = fl0, fl1, fl2, fl3
         ud, vd, rd = accel3(
-            kp, u, v, r, tx + (wx + 0.0 + ex), ty + (wy + 0.0 + ey), tn + (wn + 0.0 + en), uc, vcb
+            kp, u, v, r, tx + (wx + dx_ + ex), ty + (wy + dy_ + ey), tn + (wn + dn_ + en), uc, vcb
         )
         if not (math.isfinite(ud + vd + rd) and abs(u) + abs(v) < 50.0 and abs(r) < 10.0):
             out[0], out[1], out[2], out[3] = t, u, v, r
@@ -478,8 +500,8 @@ def run3(  # type: ignore[no-untyped-def]
         qfrc[0] = mq * (c * bx - s * by) - (c * tx - s * ty)
         qfrc[1] = mq * (s * bx + c * by) - (s * tx + c * ty)
         qfrc[2] = iq * rd - tn
-        out[0], out[1], out[2], out[3] = wx, wy, wn, 0.0
-        out[4], out[5], out[6], out[7] = 0.0, 0.0, uc, vcb
+        out[0], out[1], out[2], out[3] = wx, wy, wn, dx_
+        out[4], out[5], out[6], out[7] = dy_, dn_, uc, vcb
         _call(mj_step, mp, dp)
         t += h
         if stop_on_contact and ncon[0] != 0:

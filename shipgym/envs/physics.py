@@ -870,10 +870,10 @@ class VesselPhysics:
             qfrc[3] = ix * pd - tk
             this._loads = (wx, wy, wn, dx_, dy_, dn_, uc, vcb)
 
-        self._native = None if four else self._make_native(drift is not None)
+        self._native = None if four else self._make_native()
         return prepare4 if four else prepare3
 
-    def _make_native(self, drift: bool) -> Any:
+    def _make_native(self) -> Any:
         """The compiled form of ``prepare3`` and the stepping loop (:mod:`shipgym.envs._native`)
         as ``run(n, stop_on_contact) -> steps taken``, or ``None`` where it does not cover this
         physics (then :meth:`step` runs the Python closure)."""
@@ -884,7 +884,6 @@ class VesselPhysics:
         if (
             not nat.available()
             or not isinstance(self.plant, PlantModel)
-            or drift
             or (self._flow_of is not None and props is None)
         ):
             return None
@@ -918,6 +917,13 @@ class VesselPhysics:
         fp[F + 4 : F + 9] = (w_mode, *(wind._const or (0.0, 0.0)), wind._inv_dt, 0.0)
         fp[F + 9 : F + 14] = (c_mode, *(cur._const or (0.0, 0.0)), cur._inv_dt, 0.0)
         fp[F + 17] = 0.0 if all(a.flow_dependent for a in acts) else 1.0
+        waves = self.waves if self.wave_config is not None and self.wave_config.drift else None
+        if waves is not None and waves._drift_on:
+            from shipgym.disturbances.waves import _CHUNK
+
+            assert _CHUNK == nat.CHUNK, "the compiled step reads wave chunks of the grid's size"
+            fp[F + 18 : F + 25] = (1.0, waves._inv_dt, 0.0, waves._beta_p, waves._kx,
+                                   waves._ky, waves._kn)  # fmt: skip
         n_flow = len(props or ())
         out = np.zeros(12 + n_flow)
         state = np.zeros(3, dtype=np.int64)
@@ -933,8 +939,8 @@ class VesselPhysics:
 
         def chunk(proc: Any, mode: float, j: int, at: int) -> NDArray[np.float64]:
             """The process's chunk ``j`` (made as the Python step makes it), its first sample
-            index into ``fp[at]``."""
-            if mode != (1.0 if proc is wind else 2.0):
+            index into ``fp[at]``; a dummy where ``mode`` says it is not on a grid."""
+            if mode != 1.0:
                 return no_chunk
             if proc._j != j:
                 proc._select(j)
@@ -951,14 +957,16 @@ class VesselPhysics:
             t = d.time
             jw = int(t * wind._inv_dt) // nat.CHUNK
             jc = int(t * cur._inv_dt) // nat.CHUNK
+            jd = int(t * fp[F + 19]) // nat.CHUNK
             while True:
                 wc = chunk(wind, w_mode, jw, F + 8)
-                ck = chunk(cur, c_mode, jc, F + 13)
+                ck = chunk(cur, c_mode - 1.0, jc, F + 13)
+                dc = chunk(waves, fp[F + 18], jd, F + 20)
                 code = run3(
                     mj_step, mp, dp, left, stop_on_contact, d.time, ncon,
                     qpos, qvel, qacc, act, ctrl, qfrc, gain, gear,
                     fp, t_var, t_lat, t_sta, t_azi, t_props, servos, s_cmd, hits, rlims, r_cmd,
-                    wc, ck, state, out,
+                    wc, ck, dc, state, out,
                 )  # fmt: skip
                 k = int(state[1])
                 taken += k
@@ -967,6 +975,8 @@ class VesselPhysics:
                     jw = int(state[2])
                 elif code == nat.NEED_CURRENT:
                     jc = int(state[2])
+                elif code == nat.NEED_DRIFT:
+                    jd = int(state[2])
                 else:
                     break
             this._ramping = bool(state[0])
