@@ -937,48 +937,59 @@ class VesselPhysics:
         gain, gear = m.actuator_gainprm, m.actuator_gear
         this = self
 
-        def chunk(proc: Any, mode: float, j: int, at: int) -> NDArray[np.float64]:
-            """The process's chunk ``j`` (made as the Python step makes it), its first sample
-            index into ``fp[at]``; a dummy where ``mode`` says it is not on a grid."""
-            if mode != 1.0:
-                return no_chunk
+        # the processes read on a grid: (process, its 1/dt, where fp holds its chunk's start)
+        grids = tuple(
+            (proc, proc._inv_dt, at)
+            for proc, on, at in (
+                (wind, w_mode == 1.0, F + 8),
+                (cur, c_mode == 2.0, F + 13),
+                (waves, fp[F + 18] == 1.0, F + 20),
+            )  # fmt: skip
+            if on
+        )
+        chunks = [no_chunk, no_chunk, no_chunk]
+        slot = {id(wind): 0, id(cur): 1, id(waves): 2}
+        need = {nat.NEED_WIND: 0, nat.NEED_CURRENT: 1, nat.NEED_DRIFT: 2}
+        s_cmd = np.zeros(len(self._servos))
+        r_cmd = np.zeros(len(self._ratelim))
+        last_ext: list[Any] = [None]
+
+        def select(proc: Any, j: int, at: int) -> None:
+            """The process's chunk ``j``, made as the Python step makes it."""
             if proc._j != j:
                 proc._select(j)
             fp[at] = j * nat.CHUNK
-            return proc._chunks[j]
+            chunks[slot[id(proc)]] = proc._chunks[j]
 
         def run(n: int, stop_on_contact: bool) -> int:
-            ex, ey, _ek, en = this._external
-            fp[F + 14 : F + 17] = (ex, ey, en)
-            state[0] = 1 if this._ramping else 0
-            s_cmd = np.array(this._servo_cmd, dtype=np.float64)
-            r_cmd = np.array(this._rl_cmd, dtype=np.float64)
-            taken, left = 0, n
+            ext = this._external
+            if ext is not last_ext[0]:
+                fp[F + 14 : F + 17] = (ext[0], ext[1], ext[3])
+                last_ext[0] = ext
+            state[0] = this._ramping
+            if len(s_cmd):
+                s_cmd[:] = this._servo_cmd
+            if len(r_cmd):
+                r_cmd[:] = this._rl_cmd
             t = d.time
-            jw = int(t * wind._inv_dt) // nat.CHUNK
-            jc = int(t * cur._inv_dt) // nat.CHUNK
-            jd = int(t * fp[F + 19]) // nat.CHUNK
+            for proc, inv, at in grids:
+                select(proc, int(t * inv) // nat.CHUNK, at)
+            taken, left = 0, n
             while True:
-                wc = chunk(wind, w_mode, jw, F + 8)
-                ck = chunk(cur, c_mode - 1.0, jc, F + 13)
-                dc = chunk(waves, fp[F + 18], jd, F + 20)
                 code = run3(
-                    mj_step, mp, dp, left, stop_on_contact, d.time, ncon,
+                    mj_step, mp, dp, left, stop_on_contact, t, ncon,
                     qpos, qvel, qacc, act, ctrl, qfrc, gain, gear,
                     fp, t_var, t_lat, t_sta, t_azi, t_props, servos, s_cmd, hits, rlims, r_cmd,
-                    wc, ck, dc, state, out,
+                    chunks[0], chunks[1], chunks[2], state, out,
                 )  # fmt: skip
                 k = int(state[1])
                 taken += k
                 left -= k
-                if code == nat.NEED_WIND:
-                    jw = int(state[2])
-                elif code == nat.NEED_CURRENT:
-                    jc = int(state[2])
-                elif code == nat.NEED_DRIFT:
-                    jd = int(state[2])
-                else:
+                if code not in need:
                     break
+                proc, _inv, at = next(g for g in grids if slot[id(g[0])] == need[code])
+                select(proc, int(state[2]), at)
+                t = d.time
             this._ramping = bool(state[0])
             if len(hits):
                 this._rate_hits[:] = hits.tolist()
