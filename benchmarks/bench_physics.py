@@ -43,8 +43,9 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         pv.set_command(v.actuators.action_to_command(np.full(v.actuators.n_channels, 0.5)))
         r = pair(_bare(build_model(v), n), _timed(lambda pv=pv: pv.step(n)), rep)
         out[f"ratio_{name}"] = r["median"]
+        kind = "compiled" if pv._native is not None else "Python"  # shipgym.envs._native
         print(f"{name:18s} full plant / bare mj_step     : {_fmt(r)}   ({n / r['b_s']:,.0f} "
-              "steps/s)")  # fmt: skip
+              f"steps/s, {kind} step)")  # fmt: skip
     # a rudder-roll episode (seed model at 12 m/s, its waves, the seed's rudder test, the sway
     # filter in the observation) and a sea trial (the 100 m tanker's 35 deg turn with the DGPS
     # receiver) against bare mj_step for the same number of physics steps
