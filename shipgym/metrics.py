@@ -364,10 +364,8 @@ def rmse(a: ArrayLike, b: ArrayLike, angle: bool = False, axis: int | None = 0) 
 
 
 def _floats3(v: Any, what: str) -> tuple[float, float, float]:
-    if isinstance(v, np.ndarray):
-        x = v.tolist()
-    else:
-        x = [float(e) for e in v]
+    # map: the per-element float() of a comprehension without its frame (every control step)
+    x = v.tolist() if isinstance(v, np.ndarray) else list(map(float, v))
     if len(x) != 3:
         raise ValueError(f"{what} must have 3 elements, got {len(x)}")
     a, b, c = x
@@ -386,9 +384,12 @@ class _Acc:
         self.n = 0
 
     def add(self, a: tuple[float, float, float], d: tuple[float, float, float]) -> None:
-        self.sx += abs(d[0] - a[0])
-        self.sy += abs(d[1] - a[1])
-        self.sp += abs(_wrap(d[2] - a[2]))
+        self.add_errors(abs(d[0] - a[0]), abs(d[1] - a[1]), abs(_wrap(d[2] - a[2])))
+
+    def add_errors(self, ex: float, ey: float, epsi: float) -> None:
+        self.sx += ex
+        self.sy += ey
+        self.sp += epsi
         self.n += 1
 
     def result(self, w: tuple[float, float, float]) -> dict[str, float] | None:
@@ -502,13 +503,17 @@ class ManoeuvreMetrics:
             True when this call was taken as an accuracy sample.
         """
         t = float(t)
+        t_last = self._t_last
         if not math.isfinite(t):
             raise ValueError(f"t must be finite, got {t!r}")
-        if self._t_last is not None and t < self._t_last:
+        if t_last is None:
+            dt = 0.0
+        elif t < t_last:
             raise ValueError(
-                f"time went backwards ({t} s < {self._t_last} s); call reset() for a new run"
+                f"time went backwards ({t} s < {t_last} s); call reset() for a new run"
             )
-        dt = 0.0 if self._t_last is None else t - self._t_last
+        else:
+            dt = t - t_last
         if self._t_first is None:
             self._t_first = t
             self._next_k = max(0, math.ceil((t - self._tol) / self.sample_period))
@@ -537,14 +542,16 @@ class ManoeuvreMetrics:
         if sampled:
             a = _floats3(eta_r, "eta_r")
             d = _floats3(eta_d_r, "eta_d_r")
-            self._truth.add(a, d)
+            # the true errors once, for the run and for its leg
+            ex, ey, epsi = abs(d[0] - a[0]), abs(d[1] - a[1]), abs(_wrap(d[2] - a[2]))
+            self._truth.add_errors(ex, ey, epsi)
             if eta_meas_r is not None:
                 self._meas.add(_floats3(eta_meas_r, "eta_meas_r"), d)
             if self._leg is not None:
                 acc = self._per_leg.get(self._leg)
                 if acc is None:
                     acc = self._per_leg[self._leg] = _Acc()
-                acc.add(a, d)
+                acc.add_errors(ex, ey, epsi)
             self._next_k = math.floor((t + self._tol) / self.sample_period) + 1
         return sampled
 
@@ -553,14 +560,18 @@ class ManoeuvreMetrics:
         n = self.n_actuators
         if len(f) != n:
             raise ValueError(f"thrust must have {n} elements, got {len(f)}")
+        # one test of the sum (every control step), of the elements only when it fails
+        if not math.isfinite(sum(f)) and not all(map(math.isfinite, f)):
+            raise ValueError(f"thrust must be finite, got {f}")
         prev = self._f_prev
-        fa, tv = self._f_abs, self._f_tv
-        for i in range(n):
-            fi = f[i]
-            if not math.isfinite(fi):
-                raise ValueError(f"thrust must be finite, got {f}")
-            fa[i] += abs(fi)
-            if prev is not None:
+        fa = self._f_abs
+        if prev is None:
+            for i, fi in enumerate(f):
+                fa[i] += abs(fi)
+        else:
+            tv = self._f_tv
+            for i, fi in enumerate(f):
+                fa[i] += abs(fi)
                 tv[i] += abs(fi - prev[i])
         self._f_prev = f
         self._n_thrust += 1
@@ -570,13 +581,18 @@ class ManoeuvreMetrics:
         n = self.n_actuators
         if len(s) != n:
             raise ValueError(f"saturated must have {n} flags, got {len(s)}")
+        if any(s):  # (the loops only when a flag is set: rarely, every control step)
+            count = self._sat_count
+            for i, x in enumerate(s):
+                if x:
+                    count[i] += 1
         prev = self._sat_prev
-        for i in range(n):
-            if s[i]:
-                self._sat_count[i] += 1
-            if prev is not None and prev[i]:
-                self._sat_time[i] += dt  # zero-order hold of the previous step's flag
-        self._sat_prev = [bool(x) for x in s]
+        if prev is not None and any(prev):
+            held = self._sat_time
+            for i, x in enumerate(prev):
+                if x:
+                    held[i] += dt  # zero-order hold of the previous step's flag
+        self._sat_prev = list(map(bool, s))
         self._n_sat += 1
 
     def complete_leg(self, t: float, next_leg: int | None = None) -> None:
