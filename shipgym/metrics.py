@@ -364,8 +364,12 @@ def rmse(a: ArrayLike, b: ArrayLike, angle: bool = False, axis: int | None = 0) 
 
 
 def _floats3(v: Any, what: str) -> tuple[float, float, float]:
-    # map: the per-element float() of a comprehension without its frame (every control step)
-    x = v.tolist() if isinstance(v, np.ndarray) else list(map(float, v))
+    if isinstance(v, np.ndarray):
+        x = v.tolist()
+    elif type(v) is tuple and len(v) == 3 and type(v[0]) is type(v[1]) is type(v[2]) is float:
+        x = v  # the environment's measured pose (every control step): floats already
+    else:
+        x = [float(e) for e in v]
     if len(x) != 3:
         raise ValueError(f"{what} must have 3 elements, got {len(x)}")
     a, b, c = x
@@ -384,12 +388,9 @@ class _Acc:
         self.n = 0
 
     def add(self, a: tuple[float, float, float], d: tuple[float, float, float]) -> None:
-        self.add_errors(abs(d[0] - a[0]), abs(d[1] - a[1]), abs(_wrap(d[2] - a[2])))
-
-    def add_errors(self, ex: float, ey: float, epsi: float) -> None:
-        self.sx += ex
-        self.sy += ey
-        self.sp += epsi
+        self.sx += abs(d[0] - a[0])
+        self.sy += abs(d[1] - a[1])
+        self.sp += abs(_wrap(d[2] - a[2]))
         self.n += 1
 
     def result(self, w: tuple[float, float, float]) -> dict[str, float] | None:
@@ -542,16 +543,14 @@ class ManoeuvreMetrics:
         if sampled:
             a = _floats3(eta_r, "eta_r")
             d = _floats3(eta_d_r, "eta_d_r")
-            # the true errors once, for the run and for its leg
-            ex, ey, epsi = abs(d[0] - a[0]), abs(d[1] - a[1]), abs(_wrap(d[2] - a[2]))
-            self._truth.add_errors(ex, ey, epsi)
+            self._truth.add(a, d)
             if eta_meas_r is not None:
                 self._meas.add(_floats3(eta_meas_r, "eta_meas_r"), d)
             if self._leg is not None:
                 acc = self._per_leg.get(self._leg)
                 if acc is None:
                     acc = self._per_leg[self._leg] = _Acc()
-                acc.add_errors(ex, ey, epsi)
+                acc.add(a, d)
             self._next_k = math.floor((t + self._tol) / self.sample_period) + 1
         return sampled
 

@@ -635,10 +635,11 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ) -> None:
         z = self._last_z
         ref = s.ref
+        # the arrays where they exist (their tolist() is cheaper than checking floats)
         self.metrics.record(
             s.t,
-            s.pose_r,
-            s.ref_r,
+            s.eta_r,
+            ref.eta_d_r,
             eta_meas_r=None
             if z is None
             else to_r_frame_pose(z[0], z[1], z[2], ref.eta_P.tolist(), s.ref_r[2]),
