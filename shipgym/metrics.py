@@ -503,7 +503,8 @@ class ManoeuvreMetrics:
         Returns:
             True when this call was taken as an accuracy sample.
         """
-        t = float(t)
+        if type(t) is not float:  # (a float already every control step: no call)
+            t = float(t)
         t_last = self._t_last
         if not math.isfinite(t):
             raise ValueError(f"t must be finite, got {t!r}")
@@ -522,7 +523,8 @@ class ManoeuvreMetrics:
         self._n_steps += 1
 
         if leg is not None:
-            leg = int(leg)
+            if type(leg) is not int:
+                leg = int(leg)
             if self._leg is None:
                 self._leg, self._leg_start = leg, t
             elif leg != self._leg:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, NamedTuple
@@ -498,10 +499,11 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         # comparisons and products as the array forms), and each physics value read once
         acts, phys = self.actuators, self.physics
         _, vals = acts.as_vector(action, "action")
-        # np.clip(a, -1, 1) and its flags
-        cl = [min(max(v, -1.0), 1.0) for v in vals]
+        # np.clip(a, -1, 1) and its flags (comparisons: min() and max() of two numbers are
+        # slow calls)
+        cl = [-1.0 if v < -1.0 else 1.0 if v > 1.0 else v for v in vals]
         clipped = np.array(cl, float)
-        action_clipped = [c != v for c, v in zip(cl, vals, strict=True)]
+        action_clipped = list(map(operator.ne, cl, vals))  # (map: same lengths, no zip)
         command = acts.action_to_command(clipped)
         clipped_cmd = phys.set_command(command).tolist()
         # an actuator is saturated when its command sits at a limit of its range
@@ -529,7 +531,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._prev_action = clipped
         finished = self.guidance.finished
         terminated = self._contact or (finished and self.terminate_on_finish)
-        flags = np.array([a or b for a, b in zip(saturated, action_clipped, strict=True)], bool)
+        flags = np.array(list(map(operator.or_, saturated, action_clipped)), bool)
         info = self._info(
             sample, command, flags, np.array(action_clipped, bool), finished, rewards, contacts
         )
@@ -570,7 +572,9 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         out: list[dict[str, Any]] = []
         every = self._sensor_steps
         while n > 0:
-            k = n if every is None else min(n, every - self._steps % every)
+            k = n if every is None else every - self._steps % every
+            if k > n:  # (a comparison, not min(): two-argument min() is a slow call)
+                k = n
             taken = phys.step(k, stop_on_contact=stop)
             self._steps += taken
             n -= taken
