@@ -40,6 +40,8 @@ from .rframe import to_r_frame
 
 __all__ = ["Guidance", "Reference"]
 
+_F64 = np.dtype(np.float64)
+
 
 @dataclass(frozen=True, eq=False)
 class Reference:
@@ -305,8 +307,12 @@ class Guidance:
             heading error to K below ``switch_heading``, and the leg's elapsed time at least
             ``switch_min_progress`` times its reference duration.
         """
-        self._require_reset()
-        eta = np.asarray(eta_n, dtype=float)
+        if self._waypoints is None:
+            self._require_reset()
+        # the env's pose array as it is (every control step: asarray's keyword call is slow)
+        eta = (
+            eta_n if type(eta_n) is np.ndarray and eta_n.dtype == _F64 else np.asarray(eta_n, float)
+        )
         e = eta.tolist() if eta.shape == (3,) else None
         if e is None or not all(map(math.isfinite, e)):
             raise ValueError(f"eta_n must be a finite [x, y, psi] (m, m, rad), got {eta!r}")
@@ -331,7 +337,8 @@ class Guidance:
             or the plan is finished after the last leg); False otherwise, and always once
             finished.
         """
-        self._require_reset()
+        if self._waypoints is None:
+            self._require_reset()
         if self._finished:
             return False
         t = float(t)
