@@ -366,6 +366,8 @@ def rmse(a: ArrayLike, b: ArrayLike, angle: bool = False, axis: int | None = 0) 
 def _floats3(v: Any, what: str) -> tuple[float, float, float]:
     if isinstance(v, np.ndarray):
         x = v.tolist()
+    elif type(v) is tuple and len(v) == 3 and type(v[0]) is type(v[1]) is type(v[2]) is float:
+        x = v  # the environment's measured pose (every control step): floats already
     else:
         x = [float(e) for e in v]
     if len(x) != 3:
@@ -501,14 +503,19 @@ class ManoeuvreMetrics:
         Returns:
             True when this call was taken as an accuracy sample.
         """
-        t = float(t)
+        if type(t) is not float:  # (a float already every control step: no call)
+            t = float(t)
+        t_last = self._t_last
         if not math.isfinite(t):
             raise ValueError(f"t must be finite, got {t!r}")
-        if self._t_last is not None and t < self._t_last:
+        if t_last is None:
+            dt = 0.0
+        elif t < t_last:
             raise ValueError(
-                f"time went backwards ({t} s < {self._t_last} s); call reset() for a new run"
+                f"time went backwards ({t} s < {t_last} s); call reset() for a new run"
             )
-        dt = 0.0 if self._t_last is None else t - self._t_last
+        else:
+            dt = t - t_last
         if self._t_first is None:
             self._t_first = t
             self._next_k = max(0, math.ceil((t - self._tol) / self.sample_period))
@@ -516,7 +523,8 @@ class ManoeuvreMetrics:
         self._n_steps += 1
 
         if leg is not None:
-            leg = int(leg)
+            if type(leg) is not int:
+                leg = int(leg)
             if self._leg is None:
                 self._leg, self._leg_start = leg, t
             elif leg != self._leg:
@@ -553,14 +561,18 @@ class ManoeuvreMetrics:
         n = self.n_actuators
         if len(f) != n:
             raise ValueError(f"thrust must have {n} elements, got {len(f)}")
+        # one test of the sum (every control step), of the elements only when it fails
+        if not math.isfinite(sum(f)) and not all(map(math.isfinite, f)):
+            raise ValueError(f"thrust must be finite, got {f}")
         prev = self._f_prev
-        fa, tv = self._f_abs, self._f_tv
-        for i in range(n):
-            fi = f[i]
-            if not math.isfinite(fi):
-                raise ValueError(f"thrust must be finite, got {f}")
-            fa[i] += abs(fi)
-            if prev is not None:
+        fa = self._f_abs
+        if prev is None:
+            for i, fi in enumerate(f):
+                fa[i] += abs(fi)
+        else:
+            tv = self._f_tv
+            for i, fi in enumerate(f):
+                fa[i] += abs(fi)
                 tv[i] += abs(fi - prev[i])
         self._f_prev = f
         self._n_thrust += 1
@@ -570,13 +582,18 @@ class ManoeuvreMetrics:
         n = self.n_actuators
         if len(s) != n:
             raise ValueError(f"saturated must have {n} flags, got {len(s)}")
+        if any(s):  # (the loops only when a flag is set: rarely, every control step)
+            count = self._sat_count
+            for i, x in enumerate(s):
+                if x:
+                    count[i] += 1
         prev = self._sat_prev
-        for i in range(n):
-            if s[i]:
-                self._sat_count[i] += 1
-            if prev is not None and prev[i]:
-                self._sat_time[i] += dt  # zero-order hold of the previous step's flag
-        self._sat_prev = [bool(x) for x in s]
+        if prev is not None and any(prev):
+            held = self._sat_time
+            for i, x in enumerate(prev):
+                if x:
+                    held[i] += dt  # zero-order hold of the previous step's flag
+        self._sat_prev = list(map(bool, s))
         self._n_sat += 1
 
     def complete_leg(self, t: float, next_leg: int | None = None) -> None:

@@ -430,3 +430,49 @@ def test_body_frame_reference_velocity_and_its_derivative():
         np.testing.assert_allclose(ref.nu_dot_d, fd, atol=1e-9)
         fd_n = (g.reference(t + h).eta_d_n - g.reference(t - h).eta_d_n) / (2 * h)
         np.testing.assert_allclose(ref.eta_dot_d_n, fd_n, atol=1e-9)
+
+
+def test_per_step_float_forms_equal_the_array_forms():
+    # the guidance builds its per-step reference from floats (LegProfile.evaluate_one,
+    # Reference._build, to_r_frame_pose): the same numbers as the array forms, and the body
+    # velocities as R(psi)^T eta_dot (Fossen 2011 eq. 2.62) from a rotation matrix
+    from shipgym.dynamics.frames import rot
+    from shipgym.guidance import Reference
+    from shipgym.guidance.rframe import to_r_frame_pose
+
+    legs = (
+        Leg(surge=10.0, sway=3.0, yaw=1.2),
+        Leg(sway=-4.0, delay=5.0),
+        Leg(yaw=-2.0, step=True, delay=3.0),
+    )
+    g = Guidance(ManoeuvrePlan(legs=legs), limits=BLUE_LADY_LIMITS)
+    g.reset([1.0, 2.0, 3.0])
+    for i, leg in enumerate(legs):
+        prof = leg_profile(leg, BLUE_LADY_LIMITS)
+        T = prof.total_duration
+        ts = np.linspace(-1.0, T + 5.0, 23)
+        p_arr, v_arr, a_arr = prof.evaluate(ts)
+        for k, t in enumerate(ts.tolist()):
+            p, v, a = prof.evaluate_one(t)
+            np.testing.assert_allclose(p, p_arr[k], rtol=1e-12, atol=1e-15)
+            np.testing.assert_allclose(v, v_arr[k], rtol=1e-12, atol=1e-15)
+            np.testing.assert_allclose(a, a_arr[k], rtol=1e-12, atol=1e-15)
+        for t in np.linspace(0.0, T + 2.0, 9).tolist():
+            ref = g.reference(float(g.leg_start_times[-1] + t))
+            assert ref.leg == i
+            # every field set, equal to the dataclass built from the same values, whose
+            # cached body velocities are computed on first use
+            plain = Reference(**{f.name: getattr(ref, f.name) for f in dataclasses.fields(ref)})
+            assert {f.name for f in dataclasses.fields(ref)} <= set(vars(ref))
+            assert ref._nu_d == plain._nu_d and ref._nu_dot_d == plain._nu_dot_d
+            R = rot(ref.eta_d_r[2])
+            np.testing.assert_allclose(ref.nu_d, R.T @ ref.eta_dot_d_r, atol=1e-15)
+            eta = ref.eta_d_n + [0.3, -0.2, 7.0]  # a heading many turns off: unwrapped near psi_d
+            want = to_r_frame(eta[None, :], ref.eta_P[None, :], ref.eta_d_r[2:3])[0]
+            got = to_r_frame_pose(*eta.tolist(), ref.eta_P.tolist(), float(ref.eta_d_r[2]))
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+            np.testing.assert_array_equal(ref.to_r(eta), got)
+        # complete the leg on its end point
+        K = g.waypoints[i + 1]
+        assert g.update(g.leg_start_times[-1] + T + 1.0, K)
+    assert g.finished and g.legs_completed == len(legs) == len(g.leg_completion_times)

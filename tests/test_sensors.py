@@ -370,3 +370,28 @@ def test_batched_sensors_per_env_noise_and_masked_samples():
     assert seen.min() > 50
     with pytest.raises(ValueError, match="differ only"):
         batched.set_config(0, base.replace(period=2.0))
+
+
+def test_measure_pose_is_measure_in_floats():
+    # the environment's float form draws the same streams and gives the same samples
+    kw = dict(
+        dropout_probability=0.2, dropout_duration=2.0, outlier_probability=0.2,
+        position_correlated_fraction=0.5, position_correlation_time=30.0, heading_bias_std=0.01,
+        antenna_offset=(1.0, -0.5),
+    )  # fmt: skip
+    a, b = _sensors(4, **kw), _sensors(4, **kw)
+    rng = np.random.default_rng(1)
+    for k in range(600):  # past the 256-sample blocks
+        eta = rng.uniform(-50.0, 50.0, 3)
+        m = a.measure(float(k + 1), eta)
+        t, z, valid, outlier = b.measure_pose(float(k + 1), *eta.tolist())
+        assert (t, valid, outlier) == (m.t, m.valid, m.outlier)
+        if m.z is None:
+            assert z is None
+        else:
+            assert all(type(v) is float for v in z)
+            np.testing.assert_array_equal(np.array(z), m.z)
+    with pytest.raises(ValueError, match="finite"):
+        b.measure_pose(1.0, 0.0, math.nan, 0.0)
+    with pytest.raises(RuntimeError, match="reset"):
+        Sensors().measure_pose(1.0, 0.0, 0.0, 0.0)

@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
@@ -29,6 +30,7 @@ from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
 from shipgym.guidance import plan as named_plan
 from shipgym.guidance.limits import vessel_limits
+from shipgym.guidance.rframe import to_r_frame_pose
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
 from shipgym.records import StepRecord, step_record_of_env
@@ -128,15 +130,25 @@ class RewardWeights:
             object.__setattr__(self, f.name, float(val))
 
 
-@dataclass(frozen=True)
-class _Sample:
-    """What a step produced, before it is turned into observation and info."""
+class _Sample(NamedTuple):
+    """What a step produced, before it is turned into observation and info.
 
+    The arrays go into ``info``; the reward, the metrics and the observation read the same
+    values as floats (``pose``, ``vel``, ``pose_r``, ``ref_r``), made once per step. A tuple,
+    not a frozen dataclass: built every control step, and a frozen dataclass costs a
+    microsecond more to build.
+    """
+
+    t: float
     eta: NDArray[np.float64]
     nu: NDArray[np.float64]
     ref: Reference
     eta_r: NDArray[np.float64]
     thrust: NDArray[np.float64]  # of every actuator (N), read once per step
+    pose: list[float]  # eta
+    vel: list[float]  # nu
+    pose_r: tuple[float, float, float]  # eta_r
+    ref_r: list[float]  # ref.eta_d_r
 
 
 class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
@@ -343,7 +355,8 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         )
         self._steps = 0
         self._episode_over = True  # until the first reset
-        self._last_measurement: NDArray[np.float64] | None = None
+        # the last measured pose (floats; None before the first valid sample)
+        self._last_z: tuple[float, float, float] | None = None
         self.wave_config = parse_waves_arg(waves)
         self.physics = VesselPhysics(
             self.vessel,
@@ -356,8 +369,9 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         )
         self.actuators = self.physics.actuators  # the laws of this plant (vessel.actuators_for)
         self.n_actions = self.actuators.n_channels
-        # (lower, upper, lower + tol, upper - tol) of the saturation test in step()
-        self._sat_bounds: tuple[NDArray[np.float64], ...] | None = None
+        # (lower, upper, lower + tol, upper - tol) of the saturation test in step(), the
+        # last two as lists of floats
+        self._sat_bounds: tuple[Any, ...] | None = None
         self._actuator_names = self.actuators.names
         multi = self.actuators.channel_names != self.actuators.names
         self._channel_names = self.actuators.channel_names if multi else ()
@@ -386,7 +400,6 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._harbour_body = self._find_body("harbour")
         self._prev_action = np.zeros(n)
         self._contact = False
-        self._sample: _Sample | None = None
 
     # ---- what the episode uses (read from the physics and sensors: always honest) ----------
     @property
@@ -450,7 +463,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             self.sensors.reset(rng)
         self._steps = 0
         self._episode_over = False
-        self._last_measurement = None
+        self._last_z = None
         self.guidance.reset(start, t0=0.0)
         self.metrics.reset()
         self._prev_action = np.zeros(self.n_actions)
@@ -459,10 +472,13 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         sample = self._observe()
         self._record_metrics(sample)
         n = self.n_actions
-        info = self._info(sample, self.physics.command, np.zeros(n, bool), False, {}, [])
+        command = self.physics.command
+        info = self._info(sample, command, np.zeros(n, bool), np.zeros(n, bool), False, {}, [])
         info["measurements"] = measurements
         info["record"] = self._record(info, sample)
-        return self._obs(sample), info
+        return _observation_of(
+            sample.pose, sample.vel, sample.ref, self._prev_action.tolist()
+        ), info
 
     def step(
         self, action: NDArray[np.float32]
@@ -479,43 +495,58 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 "the episode has ended (terminated) or was never started: call reset() before "
                 "step()"
             )
-        a, vals = self.actuators.as_vector(action, "action")
-        # np.clip(a, -1, 1) and its flags in plain floats (the same values)
-        cl = [min(max(v, -1.0), 1.0) for v in vals]
-        clipped = np.array(cl)
-        action_clipped = np.array([c != v for c, v in zip(cl, vals, strict=True)])
-        command = self.actuators.action_to_command(clipped)
-        clipped_cmd = self.physics.set_command(command)
+        # the control step in plain floats where the values only pass through (the same
+        # comparisons and products as the array forms), and each physics value read once
+        acts, phys = self.actuators, self.physics
+        _, vals = acts.as_vector(action, "action")
+        # np.clip(a, -1, 1) and its flags (comparisons: min() and max() of two numbers are
+        # slow calls)
+        cl = [-1.0 if v < -1.0 else 1.0 if v > 1.0 else v for v in vals]
+        clipped = np.array(cl, float)
+        action_clipped = list(map(operator.ne, cl, vals))  # (map: same lengths, no zip)
+        command = acts.action_to_command(clipped)
+        clipped_cmd = phys.set_command(command).tolist()
         # an actuator is saturated when its command sits at a limit of its range
-        lo, hi = self.actuators.lower, self.actuators.upper
+        lo, hi = acts.lower, acts.upper
         bounds = self._sat_bounds
         if bounds is None or bounds[0] is not lo or bounds[1] is not hi:
             tol = 1e-9 * (hi - lo)
-            bounds = self._sat_bounds = (lo, hi, lo + tol, hi - tol)
-        lo_tol, hi_tol = bounds[2], bounds[3]
-        saturated = clipped_cmd | (command <= lo_tol) | (command >= hi_tol)
-        phys = self.physics
+            bounds = self._sat_bounds = (lo, hi, (lo + tol).tolist(), (hi - tol).tolist())
+        saturated = [
+            k or c <= lt or c >= ht
+            for k, c, lt, ht in zip(
+                clipped_cmd, command.tolist(), bounds[2], bounds[3], strict=True
+            )
+        ]
         measurements = self._advance(self.n_substeps)
         contacts = phys.contacts() if phys.data.ncon else []
         new_contact = bool(contacts) and not self._contact
         self._contact = self._contact or bool(contacts)
-        t = phys.time
-        switched = self.guidance.update(t, phys.eta)
-        sample = self._observe()
+        t, eta = phys.time, phys.eta
+        switched = self.guidance.update(t, eta)
+        sample = self._observe(t, eta)
         self._record_metrics(sample, saturated, clipped)
-        rewards = self._reward_terms(sample, clipped, new_contact, switched)
+        rewards = self._reward_terms(sample, cl, new_contact, switched)
         reward = float(sum(rewards.values()))
         self._prev_action = clipped
         finished = self.guidance.finished
         terminated = self._contact or (finished and self.terminate_on_finish)
-        info = self._info(sample, command, saturated | action_clipped, finished, rewards, contacts)
-        info["action_clipped"] = action_clipped
+        flags = np.array(list(map(operator.or_, saturated, action_clipped)), bool)
+        info = self._info(
+            sample, command, flags, np.array(action_clipped, bool), finished, rewards, contacts
+        )
         info["measurements"] = measurements
         info["record"] = self._record(info, sample)
         if terminated:  # a time-limit truncation is seen by the EpisodeEnd wrapper
             self._episode_over = True
             info["episode_metrics"] = self.episode_metrics()
-        return self._obs(sample), reward, terminated, False, info
+        return (
+            _observation_of(sample.pose, sample.vel, sample.ref, cl),
+            reward,
+            terminated,
+            False,
+            info,
+        )
 
     def render(self) -> NDArray[np.uint8] | None:
         """An RGB frame (H, W, 3) of the map camera; needs ``render_mode="rgb_array"``."""
@@ -541,7 +572,9 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         out: list[dict[str, Any]] = []
         every = self._sensor_steps
         while n > 0:
-            k = n if every is None else min(n, every - self._steps % every)
+            k = n if every is None else every - self._steps % every
+            if k > n:  # (a comparison, not min(): two-argument min() is a slow call)
+                k = n
             taken = phys.step(k, stop_on_contact=stop)
             self._steps += taken
             n -= taken
@@ -558,20 +591,20 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         (``tau_command``)."""
         assert self.sensors is not None
         phys = self.physics
-        eta = phys.eta
+        x, y, psi = phys.eta.tolist()
         dx, dy, dpsi = phys.wave_motion()  # first-order wave motion is seen, not lived
-        m = self.sensors.measure(phys.time, eta + (dx, dy, dpsi))
-        rec = {
-            "t": phys.time,
-            "z": None if m.z is None else np.array(m.z),
-            "valid": bool(m.valid),
-            "outlier": bool(m.outlier),
+        t = phys.time
+        _, z, valid, outlier = self.sensors.measure_pose(t, x + dx, y + dy, psi + dpsi)
+        if z is not None:
+            self._last_z = z
+        return {
+            "t": t,
+            "z": None if z is None else np.array(z, float),
+            "valid": valid,
+            "outlier": outlier,
             "tau": phys.tau_model,
             "tau_command": phys.tau_command,
         }
-        if rec["z"] is not None:
-            self._last_measurement = rec["z"]
-        return rec
 
     def episode_metrics(self) -> dict[str, Any]:
         """Accuracy indices (Tomera 2014 eqs. 54-57), thruster usage, legs and contact so far."""
@@ -583,30 +616,42 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         out["duration_s"] = float(self.physics.time)
         return out
 
-    def _observe(self) -> _Sample:
+    def _observe(self, t: float | None = None, eta: NDArray[np.float64] | None = None) -> _Sample:
+        """The sample now (``t``, ``eta``: the time and pose, when already read)."""
         phys = self.physics
-        eta, nu = phys.eta, phys.nu
-        ref = self.guidance.reference(phys.time)
+        if t is None or eta is None:
+            t, eta = phys.time, phys.eta
+        nu = phys.nu
+        ref = self.guidance.reference(t)
         self.reference = ref
-        return _Sample(eta, nu, ref, ref.to_r(eta), phys.thrust)
+        pose = eta.tolist()
+        ref_r = ref.eta_d_r.tolist()
+        pose_r = to_r_frame_pose(pose[0], pose[1], pose[2], ref.eta_P.tolist(), ref_r[2])
+        return _Sample(
+            t, eta, nu, ref, np.array(pose_r, float), phys.thrust, pose, nu.tolist(), pose_r, ref_r
+        )
 
     def _record_metrics(
         self,
         s: _Sample,
-        saturated: NDArray[np.bool_] | None = None,
+        saturated: list[bool] | None = None,
         command: NDArray[np.float64] | None = None,
     ) -> None:
-        z = self._last_measurement
+        z = self._last_z
+        ref = s.ref
+        # the arrays where they exist (their tolist() is cheaper than checking floats)
         self.metrics.record(
-            self.physics.time,
+            s.t,
             s.eta_r,
-            s.ref.eta_d_r,
-            eta_meas_r=None if z is None else s.ref.to_r(z),
+            ref.eta_d_r,
+            eta_meas_r=None
+            if z is None
+            else to_r_frame_pose(z[0], z[1], z[2], ref.eta_P.tolist(), s.ref_r[2]),
             thrust=s.thrust,
             saturated=saturated
             if saturated is None or self._slices is None
-            else [bool(saturated[sl].any()) for sl in self._slices],
-            leg=s.ref.leg,
+            else [any(saturated[sl]) for sl in self._slices],
+            leg=ref.leg,
             command=command,
         )
 
@@ -614,9 +659,6 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def prev_action(self) -> NDArray[np.float64]:
         """The normalised action applied in the last step (zeros after a reset)."""
         return self._prev_action.copy()
-
-    def _obs(self, s: _Sample) -> NDArray[np.float32]:
-        return self.navigation_observation(s.eta, s.nu, s.ref, self._prev_action)
 
     @staticmethod
     def navigation_observation(
@@ -626,32 +668,22 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         prev_action: NDArray[np.float64],
     ) -> NDArray[np.float32]:
         """The observation vector (layout in the class docstring) from navigation data."""
-        x, y, psi = eta.tolist()
-        xd, yd, psid = ref.eta_d_n.tolist()
-        c, s = math.cos(psi), math.sin(psi)
-        dx, dy = x - xd, y - yd
-        e = [c * dx + s * dy, -s * dx + c * dy, wrap_angle(psi - psid)]
-        if isinstance(ref, Reference):  # its velocities as floats, computed once per reference
-            vel = [*ref._nu_d, *ref._nu_dot_d]
-        else:
-            vel = ref.nu_d.tolist() + ref.nu_dot_d.tolist()
-        return np.array(e + nu.tolist() + vel + prev_action.tolist(), dtype=np.float32)
+        return _observation_of(eta.tolist(), nu.tolist(), ref, prev_action.tolist())
 
     def _reward_terms(
-        self, s: _Sample, action: NDArray[np.float64], new_contact: bool, switched: bool
+        self, s: _Sample, action: list[float], new_contact: bool, switched: bool
     ) -> dict[str, float]:
         w = self.reward_weights
-        x, y, psi = s.eta_r.tolist()
-        xd, yd, psid = s.ref.eta_d_r.tolist()
+        x, y, psi = s.pose_r
+        xd, yd, psid = s.ref_r
         ex, ey, epsi = x - xd, y - yd, psi - psid
-        u, v, r = s.nu.tolist()
+        u, v, r = s.vel
         ud, vd, rd = s.ref._nu_d
         du, dv, dr = u - ud, v - vd, r - rd
-        act = action.tolist()
         prev = self._prev_action.tolist()
         # sums from 0 in channel order: for three channels exactly a0^2 + a1^2 + a2^2
         effort = rate = 0.0
-        for x, y in zip(act, prev, strict=True):
+        for x, y in zip(action, prev, strict=True):
             effort += x * x
             rate += (x - y) ** 2
         return {
@@ -671,35 +703,37 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         s: _Sample,
         command: NDArray[np.float64],
         saturated: NDArray[np.bool_],
+        action_clipped: NDArray[np.bool_],
         finished: bool,
         rewards: Mapping[str, float],
         contacts: list[tuple[str, str]],
     ) -> dict[str, Any]:
         phys = self.physics
         ref = s.ref
+        # copies of the reference's arrays: info is the caller's to keep and change
         info: dict[str, Any] = {
-            "t": phys.time,
+            "t": s.t,
             "eta": s.eta,
             "nu": s.nu,
             "nav_eta": s.eta,
             "nav_nu": s.nu,
-            "eta_d": np.array(ref.eta_d_n),
-            "eta_d_r": np.array(ref.eta_d_r),
-            "eta_dot_d_r": np.array(ref.eta_dot_d_r),
-            "eta_ddot_d_r": np.array(ref.eta_ddot_d_r),
-            "eta_P": np.array(ref.eta_P),
+            "eta_d": ref.eta_d_n.copy(),
+            "eta_d_r": ref.eta_d_r.copy(),
+            "eta_dot_d_r": ref.eta_dot_d_r.copy(),
+            "eta_ddot_d_r": ref.eta_ddot_d_r.copy(),
+            "eta_P": ref.eta_P.copy(),
             "eta_r": s.eta_r,
             "leg": ref.leg,
-            "legs_completed": len(self.guidance.leg_completion_times),
+            "legs_completed": self.guidance.legs_completed,
             "finished": finished,
             "command": np.asarray(command, dtype=float),
             "thrust": s.thrust,
             "actuator_state": phys.actuator_state,
-            "saturated": np.asarray(saturated, dtype=bool),
-            "action_clipped": np.zeros(self.n_actions, dtype=bool),
-            "tau_wind": np.array(phys.tau_wind),
-            "tau_waves": np.array(phys.tau_waves),
-            "current_body": np.array([*phys.nu_c, 0.0]),
+            "saturated": saturated,
+            "action_clipped": action_clipped,
+            "tau_wind": np.array(phys.tau_wind, float),
+            "tau_waves": np.array(phys.tau_waves, float),
+            "current_body": np.array([*phys.nu_c, 0.0], float),
             "wave_elevation": phys.wave_elevation(),
             "quay_contact": self._contact,
             "contacts": contacts,
@@ -742,6 +776,22 @@ class BlueLadyEnv(ShipEnv):
     def __init__(self, **kwargs: Any) -> None:
         kwargs.setdefault("vessel", "blue-lady")
         super().__init__(**kwargs)
+
+
+def _observation_of(
+    pose: list[float], vel: list[float], ref: Reference, prev_action: list[float]
+) -> NDArray[np.float32]:
+    """:meth:`ShipEnv.navigation_observation` of floats (pose, body velocity, action)."""
+    x, y, psi = pose
+    xd, yd, psid = ref.eta_d_n.tolist()
+    c, s = math.cos(psi), math.sin(psi)
+    dx, dy = x - xd, y - yd
+    e = [c * dx + s * dy, -s * dx + c * dy, wrap_angle(psi - psid)]
+    if isinstance(ref, Reference):  # its velocities as floats, computed once per reference
+        ref_vel = [*ref._nu_d, *ref._nu_dot_d]
+    else:
+        ref_vel = ref.nu_d.tolist() + ref.nu_dot_d.tolist()
+    return np.array(e + vel + ref_vel + prev_action, dtype=np.float32)
 
 
 def tracking_penalty(weight: Any, q2: Any, scale: float | None) -> Any:

@@ -263,14 +263,28 @@ class LegProfile:
         Each output has shape ``np.shape(t) + (3,)`` with units (m, m, rad), per second, per
         second squared.
         """
+        if type(t) is float and not self.step:  # one instant (every control step)
+            p, v, a = self.evaluate_one(t)
+            return np.array(p), np.array(v), np.array(a)
         d = self.displacement
-        if type(t) is float and not self.step:  # one instant (every control step): path()'s
-            s, sd, sdd = self._path_scalar(t - self.delay if self.delay else t)  # scalar path
-            return s * d, sd * d, sdd * d
         s, sd, sdd = self.path(t)
         if np.ndim(s) == 0:
             return s * d, sd * d, sdd * d
         return s[..., None] * d, sd[..., None] * d, sdd[..., None] * d
+
+    def evaluate_one(self, t: float) -> tuple[list[float], list[float], list[float]]:
+        """:meth:`evaluate` at one instant ``t`` (s, a float), as lists of floats.
+
+        The guidance calls it every control step: plain floats (a float times the
+        displacement's elements, the products of the array form) save three small arrays
+        that the caller would only turn back into floats.
+        """
+        if self.step:
+            s, sd, sdd = self.path(t)
+        else:
+            s, sd, sdd = self._path_scalar(t - self.delay if self.delay else t)
+        d0, d1, d2 = self.displacement.tolist()
+        return [s * d0, s * d1, s * d2], [sd * d0, sd * d1, sd * d2], [sdd * d0, sdd * d1, sdd * d2]
 
 
 def _effective_limits(leg: Leg, limits: Limits | None) -> Limits:

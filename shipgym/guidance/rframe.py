@@ -20,13 +20,14 @@ Both functions accept a leading batch axis on either argument.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym.dynamics.frames import wrap_angle
 
-__all__ = ["to_r_frame", "from_r_frame"]
+__all__ = ["to_r_frame", "to_r_frame_pose", "from_r_frame"]
 
 
 def to_r_frame(
@@ -76,17 +77,26 @@ def to_r_frame(
 def _to_r_frame_one(
     eta_n: NDArray[np.float64], eta_P: NDArray[np.float64], psi_ref_r: ArrayLike | None
 ) -> NDArray[np.float64]:
-    """:func:`to_r_frame` for a single pose, in plain floats (called every control step)."""
+    """:func:`to_r_frame` for a single pose (called every control step)."""
     x, y, psi = eta_n.tolist()
-    xp, yp, psip = eta_P.tolist()
+    ref = None if psi_ref_r is None else float(psi_ref_r)  # type: ignore[arg-type]
+    return np.array(to_r_frame_pose(x, y, psi, eta_P.tolist(), ref))
+
+
+def to_r_frame_pose(
+    x: float, y: float, psi: float, eta_P: Sequence[float], psi_ref_r: float | None = None
+) -> tuple[float, float, float]:
+    """:func:`to_r_frame` of one NED pose ``(x, y, psi)`` in plain floats (``eta_P`` three
+    floats, ``psi_ref_r`` a float or ``None``): the environment's per-step form, which keeps
+    its poses as floats."""
+    xp, yp, psip = eta_P
     c, s = math.cos(psip), math.sin(psip)
     dx, dy, dpsi = x - xp, y - yp, psi - psip
     if psi_ref_r is None:
         psi_r = wrap_angle(dpsi)
     else:
-        ref = float(psi_ref_r)  # type: ignore[arg-type]
-        psi_r = ref + wrap_angle(dpsi - ref)
-    return np.array([c * dx + s * dy, -s * dx + c * dy, psi_r])
+        psi_r = psi_ref_r + wrap_angle(dpsi - psi_ref_r)
+    return (c * dx + s * dy, -s * dx + c * dy, psi_r)
 
 
 def from_r_frame(eta_r: ArrayLike, eta_P: ArrayLike) -> NDArray[np.float64]:

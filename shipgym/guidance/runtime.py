@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,6 +39,8 @@ from .reference import LegProfile, Limits, leg_profile
 from .rframe import to_r_frame
 
 __all__ = ["Guidance", "Reference"]
+
+_F64 = np.dtype(np.float64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,20 +72,53 @@ class Reference:
     @functools.cached_property
     def _nu_d(self) -> tuple[float, float, float]:
         """:attr:`nu_d` as floats, computed once (the reference is immutable)."""
-        psi = self.eta_d_r.tolist()[2]
-        c, s = math.cos(psi), math.sin(psi)
-        v0, v1, v2 = self.eta_dot_d_r.tolist()
-        return (c * v0 + s * v1, -s * v0 + c * v1, v2)
+        return _body_velocities(self.eta_d_r.tolist()[2], self.eta_dot_d_r.tolist(), None)[0]
 
     @functools.cached_property
     def _nu_dot_d(self) -> tuple[float, float, float]:
         """:attr:`nu_dot_d` as floats, computed once."""
-        psi = self.eta_d_r.tolist()[2]
-        c, s = math.cos(psi), math.sin(psi)
-        a0, a1, a2 = self.eta_ddot_d_r.tolist()
-        r = self.eta_dot_d_r.tolist()[2]
-        nu0, nu1, _ = self._nu_d
-        return (c * a0 + s * a1 + r * nu1, -s * a0 + c * a1 - r * nu0, a2)
+        out = _body_velocities(
+            self.eta_d_r.tolist()[2], self.eta_dot_d_r.tolist(), self.eta_ddot_d_r.tolist()
+        )
+        return out[1]  # type: ignore[return-value]
+
+    @classmethod
+    def _build(
+        cls,
+        eta_d_r: NDArray[np.float64],
+        eta_dot_d_r: NDArray[np.float64],
+        eta_ddot_d_r: NDArray[np.float64],
+        eta_P: NDArray[np.float64],
+        leg: int,
+        eta_d_n: NDArray[np.float64],
+        eta_K: NDArray[np.float64],
+        t_leg: float,
+        finished: bool,
+        nu_d: tuple[float, float, float],
+        nu_dot_d: tuple[float, float, float],
+    ) -> Reference:
+        """The guidance's constructor (one reference per control step), with :attr:`_nu_d`
+        and :attr:`_nu_dot_d` already computed (:func:`_body_velocities` of the same floats).
+
+        A frozen dataclass's ``__init__`` sets its fields one by one through
+        ``object.__setattr__``, three times the cost of filling the instance dict at once;
+        a test checks that the result equals ``Reference(...)`` field by field.
+        """
+        ref = object.__new__(cls)
+        ref.__dict__.update(
+            eta_d_r=eta_d_r,
+            eta_dot_d_r=eta_dot_d_r,
+            eta_ddot_d_r=eta_ddot_d_r,
+            eta_P=eta_P,
+            leg=leg,
+            eta_d_n=eta_d_n,
+            eta_K=eta_K,
+            t_leg=t_leg,
+            finished=finished,
+            _nu_d=nu_d,
+            _nu_dot_d=nu_dot_d,
+        )
+        return ref
 
     @property
     def eta_dot_d_n(self) -> NDArray[np.float64]:
@@ -111,6 +147,21 @@ class Reference:
         ``eta_d_r - ref.to_r(eta_n)`` without any 2 pi jump (Tomera 2014 eq. 1).
         """
         return to_r_frame(eta_n, self.eta_P, psi_ref_r=self.eta_d_r[2])
+
+
+def _body_velocities(
+    psi: float, v: Sequence[float], a: Sequence[float] | None
+) -> tuple[tuple[float, float, float], tuple[float, float, float] | None]:
+    """``(nu_d, nu_dot_d)`` in floats from the r-frame heading ``psi_d^r``, ``eta_dot_d^r``
+    and ``eta_ddot_d^r`` (``a`` None: ``nu_dot_d`` None): ``nu_d = R(psi)^T eta_dot``,
+    ``nu_dot_d = R(psi)^T eta_ddot - S(r_d) nu_d`` (:attr:`Reference.nu_d`, ``nu_dot_d``)."""
+    c, s = math.cos(psi), math.sin(psi)
+    v0, v1, r = v
+    nu0, nu1 = c * v0 + s * v1, -s * v0 + c * v1
+    if a is None:
+        return (nu0, nu1, r), None
+    a0, a1, a2 = a
+    return (nu0, nu1, r), (c * a0 + s * a1 + r * nu1, -s * a0 + c * a1 - r * nu0, a2)
 
 
 class Guidance:
@@ -202,6 +253,11 @@ class Guidance:
         return tuple(self._completions)
 
     @property
+    def legs_completed(self) -> int:
+        """Number of legs completed so far (``len(leg_completion_times)``)."""
+        return len(self._completions)
+
+    @property
     def leg_durations(self) -> tuple[float, ...]:
         """Actual durations (s) of the completed legs: completion minus start."""
         return tuple(c - s for s, c in zip(self._starts, self._completions, strict=False))
@@ -217,25 +273,30 @@ class Guidance:
 
         Times before the current leg's start give the reference at rest at P.
         """
-        wp = self._require_reset()
+        wp = self._waypoints
+        if wp is None:
+            wp = self._require_reset()
         i = self._leg
         t_leg = float(t) - self._starts[i]
-        eta_d, eta_dot, eta_ddot = self._profiles[i].evaluate(t_leg)
-        eta_P = wp[i]
+        # plain floats, and the reference's body velocities computed here from the same
+        # floats (every control step: the hot path)
+        eta_d, eta_dot, eta_ddot = self._profiles[i].evaluate_one(t_leg)
         xP, yP, psiP = self._wp_list[i]
         c, s = self._cs[i]
-        xr, yr, pr = eta_d.tolist()
-        eta_d_n = np.array([xP + c * xr - s * yr, yP + s * xr + c * yr, psiP + pr])
-        return Reference(
-            eta_d_r=eta_d,
-            eta_dot_d_r=eta_dot,
-            eta_ddot_d_r=eta_ddot,
-            eta_P=eta_P,
-            leg=i,
-            eta_d_n=eta_d_n,
-            eta_K=wp[i + 1],
-            t_leg=t_leg,
-            finished=self._finished,
+        xr, yr, pr = eta_d
+        nu_d, nu_dot_d = _body_velocities(pr, eta_dot, eta_ddot)
+        return Reference._build(
+            np.array(eta_d, float),
+            np.array(eta_dot, float),
+            np.array(eta_ddot, float),
+            wp[i],
+            i,
+            np.array([xP + c * xr - s * yr, yP + s * xr + c * yr, psiP + pr], float),
+            wp[i + 1],
+            t_leg,
+            self._finished,
+            nu_d,
+            nu_dot_d,  # type: ignore[arg-type]
         )
 
     def switch_conditions(self, t: float, eta_n: ArrayLike) -> tuple[bool, bool, bool]:
@@ -246,8 +307,12 @@ class Guidance:
             heading error to K below ``switch_heading``, and the leg's elapsed time at least
             ``switch_min_progress`` times its reference duration.
         """
-        self._require_reset()
-        eta = np.asarray(eta_n, dtype=float)
+        if self._waypoints is None:
+            self._require_reset()
+        # the env's pose array as it is (every control step: asarray's keyword call is slow)
+        eta = (
+            eta_n if type(eta_n) is np.ndarray and eta_n.dtype == _F64 else np.asarray(eta_n, float)
+        )
         e = eta.tolist() if eta.shape == (3,) else None
         if e is None or not all(map(math.isfinite, e)):
             raise ValueError(f"eta_n must be a finite [x, y, psi] (m, m, rad), got {eta!r}")
@@ -272,7 +337,8 @@ class Guidance:
             or the plan is finished after the last leg); False otherwise, and always once
             finished.
         """
-        self._require_reset()
+        if self._waypoints is None:
+            self._require_reset()
         if self._finished:
             return False
         t = float(t)

@@ -466,18 +466,42 @@ class Sensors:
             RuntimeError: :meth:`reset` was not called.
             ValueError: ``eta_true`` is not 3 finite values.
         """
-        if self._rng_noise is None or self._rng_outlier is None or self._rng_dropout is None:
-            raise RuntimeError("Sensors.reset(rng) must be called before measure()")
+        self._require_reset()
         eta = np.asarray(eta_true, dtype=float)
         e = eta.tolist() if eta.shape == (3,) else None
         if e is None or not all(map(math.isfinite, e)):
             raise ValueError(f"eta_true must be 3 finite values [x, y, psi], got {eta_true!r}")
+        t, z, valid, outlier = self.measure_pose(t, e[0], e[1], e[2])
+        return Measurement(t, None if z is None else np.array(z), valid, outlier)
+
+    def _require_reset(self) -> None:
+        if self._rng_noise is None or self._rng_outlier is None or self._rng_dropout is None:
+            raise RuntimeError("Sensors.reset(rng) must be called before measure()")
+
+    def measure_pose(
+        self, t: float, x: float, y: float, psi: float
+    ) -> tuple[float, tuple[float, float, float] | None, bool, bool]:
+        """:meth:`measure` of the true pose ``(x, y, psi)`` (floats) in plain floats: ``(t,
+        z, valid, outlier)`` with ``z`` the measured pose as three floats or ``None`` (the
+        environment's per-step form: it keeps its poses as floats).
+
+        Raises:
+            RuntimeError: :meth:`reset` was not called.
+            ValueError: a non-finite pose.
+        """
+        self._require_reset()
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(psi)):
+            raise ValueError(
+                f"the true pose must be 3 finite values [x, y, psi], got {[x, y, psi]}"
+            )
         cfg = self.config
         # every stream draws the same amount at every sample (common random numbers); the
         # draws are taken in blocks (a generator's standard_normal((k, 3)) is the stream of k
         # calls of standard_normal(3), random((k, 2)) that of k calls of random(2))
         k = self._k
         if k == _BLOCK:
+            assert self._rng_noise is not None and self._rng_outlier is not None
+            assert self._rng_dropout is not None
             self._noise = (self._rng_noise.standard_normal((_BLOCK, 3)) * self._sig).tolist()
             self._out = self._rng_outlier.random((_BLOCK, 2)).tolist()
             self._drop = self._rng_dropout.random(_BLOCK).tolist()
@@ -501,11 +525,10 @@ class Sensors:
             n2 += b[2]
         t = float(t)
         if t < self._dropout_until - _EPS_T * cfg.period:
-            return Measurement(t, None, False, False)
+            return t, None, False, False
         if u_drop < cfg.dropout_probability:
             self._dropout_until = t + cfg.dropout_duration
-            return Measurement(t, None, False, False)
-        x, y, psi = e
+            return t, None, False, False
         c, s = math.cos(psi), math.sin(psi)
         xa, ya = cfg.antenna_offset
         z0 = (x + c * xa - s * ya) + n0
@@ -515,7 +538,7 @@ class Sensors:
             a = 2.0 * math.pi * ang
             z0 += cfg.outlier_magnitude * math.cos(a)
             z1 += cfg.outlier_magnitude * math.sin(a)
-        return Measurement(t, np.array([z0, z1, wrap_angle(psi + n2)]), True, outlier)
+        return t, (z0, z1, wrap_angle(psi + n2)), True, outlier
 
 
 class BatchedSensors:
