@@ -21,8 +21,8 @@ pytest.importorskip("stable_baselines3")
 pytest.importorskip("torch")
 
 import shipgym.controllers.learned as learned  # noqa: E402
-from shipgym.envs import _native  # noqa: E402
 from shipgym.controllers.learned import policy_fingerprint, read_metadata  # noqa: E402
+from shipgym.envs import _native  # noqa: E402
 
 
 def _cpu_model() -> str:

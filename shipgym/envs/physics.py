@@ -48,6 +48,7 @@ against ``qacc*`` and the trajectory against :func:`shipgym.dynamics.simulate_re
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -112,6 +113,11 @@ MIN_TIMESTEP = 1e-4
 #: the tunnel thrusters), where MuJoCo's semi-implicit Euler still tracks the lags; a vessel
 #: with faster actuators needs a smaller step (checked against its lags when it is built).
 MAX_TIMESTEP = 0.5
+
+
+def _clip(c: float, lo: float, hi: float) -> float:
+    """``min(max(c, lo), hi)`` for a finite ``c``, as two comparisons."""
+    return hi if c > hi else (lo if c < lo else c)
 
 
 def check_timestep(timestep: Any) -> float:
@@ -231,6 +237,7 @@ class VesselPhysics:
         # plain-float thrust laws for reading (tau_thrusters, thrust): no MuJoCo writes
         self._tau_of = acts.kernel()
         self._thrust_of = acts.thrust_kernel()
+        self._flow_mask = tuple(a.flow_dependent for a in acts)
         # channels whose state lags its command (the others integrate it: azimuth angles)
         self._lagged = tuple(i for i, c in enumerate(acts.channels) if c.dynamics == "lag")
         # rate-limited servos (rudders): (channel, largest rate rad/s, time constant s or 0)
@@ -472,10 +479,17 @@ class VesselPhysics:
         """Body velocity ``[u (m/s), v (m/s), r (rad/s)]``."""
         if self.dofs == 4:
             return self.nu_full[[0, 1, 3]]
-        xd, yd, r = self._qvel_whole()
+        return np.array(self._nu3())
+
+    def _nu3(self) -> tuple[float, float, float]:
+        """``(u, v, r)`` of a 3-DOF hull as floats (:attr:`nu`)."""
+        hh = 0.5 * self._h
+        w0, w1, w2 = self.data.qvel.tolist()
+        a0, a1, a2 = self.data.qacc.tolist()
+        xd, yd = w0 + hh * a0, w1 + hh * a1
         psi = self.data.qpos.tolist()[2]
         c, s = math.cos(psi), math.sin(psi)
-        return np.array([c * xd + s * yd, -s * xd + c * yd, r])
+        return c * xd + s * yd, -s * xd + c * yd, w2 + hh * a2
 
     @property
     def p(self) -> float:
@@ -523,8 +537,7 @@ class VesselPhysics:
         out = self._thrust_of(self.data.act.tolist())
         if self._flow_of is not None:
             lifts = iter(self._flow[4])
-            out = [next(lifts) if a.flow_dependent else f
-                   for a, f in zip(self.actuators, out, strict=True)]  # fmt: skip
+            out = [next(lifts) if flow else f for flow, f in zip(self._flow_mask, out, strict=True)]
         return np.array(out)
 
     def _flow_now(self, st: list[float]) -> tuple[float, float, float, float]:
@@ -535,7 +548,7 @@ class VesselPhysics:
         if self.dofs == 4:
             u, v, p, r = self.nu_full.tolist()
         else:
-            u, v, r = self.nu.tolist()
+            u, v, r = self._nu3()
             p = 0.0
         uc, vc = self._loads[6], self._loads[7]
         X, Y, K, N, _l, _s = self._flow_of(st, u - uc, v - vc, p, r)
@@ -625,18 +638,22 @@ class VesselPhysics:
             ValueError: wrong shape, NaN or infinite values.
         """
         _, vals = self.actuators.as_vector(command, "command")
-        lo, hi = self._lower, self._upper
-        clipped = [min(max(c, a), b) for c, a, b in zip(vals, lo, hi, strict=True)]
-        self.saturated = np.array([c != x for c, x in zip(clipped, vals, strict=True)])
-        if self._servos:  # a servo's command is its angle; prepare() turns it into a rate
+        # min(max(c, lo), hi) per channel, as comparisons (vals are finite: as_vector)
+        # (map: the lengths are equal by construction, as_vector checked the command's)
+        clipped = list(map(_clip, vals, self._lower, self._upper))
+        self.saturated = np.array(list(map(operator.ne, clipped, vals)))
+        if self._servos or self._ratelim:
+            held = self.data.ctrl.tolist()
             for k, (j, _rate, _tc) in enumerate(self._servos):
+                # a servo's command is its angle; prepare() turns it into a rate
                 self._servo_cmd[k] = clipped[j]
-                clipped[j] = float(self.data.ctrl[j])
-        if self._ratelim:  # a rate-limited lag's command: prepare() feeds MuJoCo its ramp
+                clipped[j] = held[j]
             for k, (j, _rate, _tc) in enumerate(self._ratelim):
+                # a rate-limited lag's command: prepare() feeds MuJoCo its ramp
                 self._rl_cmd[k] = clipped[j]
-                clipped[j] = float(self.data.ctrl[j])
-            self._ramping = True
+                clipped[j] = held[j]
+            if self._ratelim:
+                self._ramping = True
         self.data.ctrl[:] = clipped
         return self.saturated.copy()
 
