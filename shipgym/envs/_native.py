@@ -180,6 +180,33 @@ else:
         raise RuntimeError(_why_off)
 
 
+def table(rows: Any, width: int) -> np.ndarray:
+    """Rows of constants as a ``(len(rows), width)`` float array (``(0, width)`` for none)."""
+    return np.array(rows, dtype=np.float64).reshape(len(rows), width)
+
+
+def actuator_tables(acts: Any) -> tuple[np.ndarray, ...]:
+    """The rows :func:`thrust3` and :func:`propeller_flow` sum, as arrays: ``(varying,
+    lateral, static, azimuths, flow propellers)`` of an ``ActuatorSet``
+    (:meth:`~shipgym.dynamics.actuators.ActuatorSet.thrust_tables3`,
+    :meth:`~shipgym.dynamics.actuators.ActuatorSet.propeller_flow_table`)."""
+    rows = acts.thrust_tables3()
+    widths = (7, 4, 5, 4)
+    out = tuple(table(r, w) for r, w in zip(rows, widths, strict=True))
+    return (*out, table(acts.propeller_flow_table() or (), 11))
+
+
+def parameters(plant: Any, wind_load: Any) -> np.ndarray:
+    """A zeroed parameter vector of :func:`run3` / :func:`run_batched3` holding the plant's
+    constants (``kernel_constants``) and the wind load's (``WindLoad.kernel_constants``)."""
+    from shipgym.dynamics.model import kernel_constants
+
+    fp = np.zeros(_FP_SIZE)
+    fp[_FP_PLANT:_FP_WIND] = kernel_constants(plant)
+    fp[_FP_WIND:_FP] = wind_load.kernel_constants()
+    return fp
+
+
 # ---- the kernels ---------------------------------------------------------------------------
 @njit(cache=True, inline="always")
 def accel3(k, u, v, r, X, Y, N, u_c, v_c):  # type: ignore[no-untyped-def]

@@ -390,8 +390,8 @@ class BatchedPhysics:
             raise SimulationDiverged("simulation diverged: a hull passed 1 km/s")
 
     def _make_native(self) -> Any:
-        """The compiled step (:func:`shipgym.envs._native.run_batched3`) as ``run(k, V_w,
-        beta_w, V_c, beta_c)``, or ``None`` where it does not cover this batch (a plant other
+        """The compiled step (:func:`shipgym.envs._native.run_batched3`) as ``run(k,
+        t_last)``, or ``None`` where it does not cover this batch (a plant other
         than a :class:`PlantModel`, rudders or MMG units, no Numba): then :meth:`step` runs
         the NumPy form."""
         import shipgym.envs._native as nat
@@ -405,18 +405,8 @@ class BatchedPhysics:
             or (acts.flow_dependent and props is None)
         ):
             return None
-        from shipgym.dynamics.model import kernel_constants
-
-        def table(rows: Any, width: int) -> Array:
-            return np.array(rows, dtype=np.float64).reshape(len(rows), width)
-
-        varying, lateral, static, azim = (table(r, w) for r, w in zip(
-            acts.thrust_tables3(), (7, 4, 5, 4), strict=True))  # fmt: skip
-        t_props = table(props or (), 11)
-        fp = np.zeros(nat._FP_SIZE)
-        fp[nat._FP_PLANT : nat._FP_WIND] = kernel_constants(self.plant)
-        fp[nat._FP_WIND : nat._FP] = WindLoad(blendermann(self._coeffs),
-                                              self.vessel.windage).kernel_constants()  # fmt: skip
+        varying, lateral, static, azim, t_props = nat.actuator_tables(acts)
+        fp = nat.parameters(self.plant, WindLoad(blendermann(self._coeffs), self.vessel.windage))
         fp[nat._FP : nat._FP + 2] = (0.5 * self.h, self.h)
         col = (slice(None), 0)
         chan = {

@@ -120,6 +120,15 @@ def _clip(c: float, lo: float, hi: float) -> float:
     return hi if c > hi else (lo if c < lo else c)
 
 
+def diverged(t: float, nu: Any, nud: Any) -> None:
+    """Raise :class:`SimulationDiverged` for the state ``nu``, ``nu_dot`` at time ``t``."""
+    raise SimulationDiverged(
+        f"simulation diverged at t = {t:.3f} s: nu = ({', '.join(f'{x:.4g}' for x in nu)})"
+        f", nu_dot = ({', '.join(f'{x:.4g}' for x in nud)}); check the plant parameters, "
+        "the timestep and the applied forces"
+    )
+
+
 def check_timestep(timestep: Any) -> float:
     """The physics timestep (s) as a float; ``TypeError``/``ValueError`` outside the bounds."""
     if not is_real(timestep):
@@ -786,13 +795,6 @@ class VesselPhysics:
                     hits[k] = 0
                 ctrl[j] = w
 
-        def diverged(t: float, nu: tuple[float, ...], nud: tuple[float, ...]) -> None:
-            raise SimulationDiverged(
-                f"simulation diverged at t = {t:.3f} s: nu = ({', '.join(f'{x:.4g}' for x in nu)})"
-                f", nu_dot = ({', '.join(f'{x:.4g}' for x in nud)}); check the plant parameters, "
-                "the timestep and the applied forces"
-            )
-
         def prepare3() -> None:
             psi = qpos.tolist()[2]
             t = d.time
@@ -904,26 +906,16 @@ class VesselPhysics:
             or (self._flow_of is not None and props is None)
         ):
             return None
-        from shipgym.dynamics.model import kernel_constants
-
         m, d = self.model, self.data
-
-        def table(rows: Any, width: int) -> NDArray[np.float64]:
-            return np.array(rows, dtype=np.float64).reshape(len(rows), width)
-
-        varying, lateral, static, azim = acts.thrust_tables3()
-        t_var, t_lat = table(varying, 7), table(lateral, 4)
-        t_sta, t_azi = table(static, 5), table(azim, 4)
-        t_props = table(props or (), 11)
+        t_var, t_lat, t_sta, t_azi, t_props = nat.actuator_tables(acts)
         h = self._h
+        table = nat.table
         servos = table([(k, j, rate, tc) for k, (j, rate, tc) in enumerate(self._servos)], 4)
         rlims = table(
             [(k, j, rate * tc, rate * h / -math.expm1(-h / tc))
              for k, (j, rate, tc) in enumerate(self._ratelim)], 4
         )  # fmt: skip
-        fp = np.zeros(nat._FP_SIZE)
-        fp[nat._FP_PLANT : nat._FP_WIND] = kernel_constants(self.plant)
-        fp[nat._FP_WIND : nat._FP] = self._wind_load.kernel_constants()
+        fp = nat.parameters(self.plant, self._wind_load)
         wind, cur = self.wind, self.current
         w_mode = -1.0 if not self.aerodynamics else (0.0 if wind._const is not None else 1.0)
         cc = self.current_config
@@ -954,29 +946,30 @@ class VesselPhysics:
         gain, gear = m.actuator_gainprm, m.actuator_gear
         this = self
 
-        # the processes read on a grid: (process, its 1/dt, where fp holds its chunk's start)
-        grids = tuple(
-            (proc, proc._inv_dt, at)
-            for proc, on, at in (
-                (wind, w_mode == 1.0, F + 8),
-                (cur, c_mode == 2.0, F + 13),
-                (waves, fp[F + 18] == 1.0, F + 20),
+        # the processes read on a grid, by run3's code for "chunk needed": (slot in chunks,
+        # the process, its 1/dt, where fp holds its chunk's first sample)
+        grids = {
+            code: (i, proc, proc._inv_dt, at)
+            for i, (code, proc, on, at) in enumerate(
+                (
+                    (nat.NEED_WIND, wind, w_mode == 1.0, F + 8),
+                    (nat.NEED_CURRENT, cur, c_mode == 2.0, F + 13),
+                    (nat.NEED_DRIFT, waves, fp[F + 18] == 1.0, F + 20),
+                )
             )  # fmt: skip
             if on
-        )
+        }
         chunks = [no_chunk, no_chunk, no_chunk]
-        slot = {id(wind): 0, id(cur): 1, id(waves): 2}
-        need = {nat.NEED_WIND: 0, nat.NEED_CURRENT: 1, nat.NEED_DRIFT: 2}
         s_cmd = np.zeros(len(self._servos))
         r_cmd = np.zeros(len(self._ratelim))
         last_ext: list[Any] = [None]
 
-        def select(proc: Any, j: int, at: int) -> None:
-            """The process's chunk ``j``, made as the Python step makes it."""
+        def select(i: int, proc: Any, j: int, at: int) -> None:
+            """The process's chunk ``j`` into ``chunks[i]``, made as the Python step makes it."""
             if proc._j != j:
                 proc._select(j)
             fp[at] = j * nat.CHUNK
-            chunks[slot[id(proc)]] = proc._chunks[j]
+            chunks[i] = proc._chunks[j]
 
         def run(n: int, stop_on_contact: bool) -> int:
             ext = this._external
@@ -989,8 +982,8 @@ class VesselPhysics:
             if len(r_cmd):
                 r_cmd[:] = this._rl_cmd
             t = d.time
-            for proc, inv, at in grids:
-                select(proc, int(t * inv) // nat.CHUNK, at)
+            for i, proc, inv, at in grids.values():
+                select(i, proc, int(t * inv) // nat.CHUNK, at)
             taken, left = 0, n
             while True:
                 code = run3(
@@ -1002,10 +995,10 @@ class VesselPhysics:
                 k = int(state[1])
                 taken += k
                 left -= k
-                if code not in need:
+                if code not in grids:
                     break
-                proc, _inv, at = next(g for g in grids if slot[id(g[0])] == need[code])
-                select(proc, int(state[2]), at)
+                i, proc, _inv, at = grids[code]
+                select(i, proc, int(state[2]), at)
                 t = d.time
             this._ramping = bool(state[0])
             if len(hits):
@@ -1017,12 +1010,8 @@ class VesselPhysics:
                     vals = out.tolist()
                     this._flow = (*vals[8:12], tuple(vals[12:]), no_stall)
             if code == nat.DIVERGED:
-                t_, u, v, r, ud, vd, rd = out[:7].tolist()
-                raise SimulationDiverged(
-                    f"simulation diverged at t = {t_:.3f} s: nu = ({u:.4g}, {v:.4g}, {r:.4g}), "
-                    f"nu_dot = ({ud:.4g}, {vd:.4g}, {rd:.4g}); check the plant parameters, the "
-                    "timestep and the applied forces"
-                )
+                vals = out[:7].tolist()
+                diverged(vals[0], vals[1:4], vals[4:7])
             return taken
 
         return run
