@@ -7,7 +7,8 @@ the median over the repeats with the smallest and largest repeat, and all are wr
 
 - ``physics_over_bare``: physics steps per second of the Blue Lady's full plant (thrusters,
   gusty wind, hydrodynamics) over bare ``mujoco.mj_step`` on the same model (higher is better);
-  ``physics_python_over_bare`` the same on the Python step (``shipgym.envs._native`` off);
+  ``physics_period_over_bare`` the same called as an env calls it, one control period (20
+  steps) per call;
 - ``waves_over_no_waves``: the full plant with 100 wave components, drift and a Gauss-Markov
   current over the plain full plant (higher is better);
 - ``episode_pid_over_bare``, ``episode_kbf_pid_over_bare``: the wall time of a whole
@@ -30,8 +31,7 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   env over the same on ``DummyVecEnv`` of single envs (``null`` without the ``rl`` extra).
 
 Absolute rates are printed too (this machine's); ratios are what compares across machines.
-``physics_step`` says whether the compiled physics step (:mod:`shipgym.envs._native`, Numba)
-or the Python one ran (``SHIPGYM_NATIVE=0 make bench`` times the Python one).
+``physics_step`` names the physics step that ran (:mod:`shipgym.sim.step`, compiled by Numba).
 Run with ``make bench``.
 """
 
@@ -133,11 +133,9 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
                         current=CurrentConfig.from_std(0.1, 0.5, 0.02, 300.0))  # fmt: skip
     sea.reset(rng=np.random.default_rng(0))
     sea.set_command([300.0, 0.5, -0.5])
-    # which physics step runs (compiled or Python), and a first step of each outside the
-    # timings (the compiled step's first call loads it from Numba's cache, or compiles it)
-    from shipgym.envs import _native
-
-    out["physics_step"] = _native.status()
+    # a first step of each outside the timings (the compiled step's first call loads it from
+    # Numba's cache, or compiles it)
+    out["physics_step"] = "compiled (shipgym.sim.step)"
     phys.step(1)
     sea.step(1)
     bare = _bare(model, steps)
@@ -145,11 +143,9 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
     out["physics_over_bare"] = r
     out["bare_steps_per_s"] = steps / r["a_s"]
     out["physics_steps_per_s"] = steps / r["b_s"]
-    with _native.disabled():  # the same plant on the Python step, for comparison
-        slow = VesselPhysics("blue-lady", wind=wind)
-    slow.reset(rng=np.random.default_rng(0))
-    slow.set_command([300.0, 0.5, -0.5])
-    out["physics_python_over_bare"] = pair(bare, _timed(lambda: slow.step(steps)), repeats)
+    # as an env calls it: one control period (20 physics steps) per call
+    period = _timed(lambda: [phys.step(20) for _ in range(steps // 20)])
+    out["physics_period_over_bare"] = pair(bare, period, repeats)
     out["waves_over_no_waves"] = pair(
         _timed(lambda: phys.step(steps)), _timed(lambda: sea.step(steps)), repeats
     )

@@ -83,3 +83,18 @@ def read_rrd(path):
             else:
                 rows[ent][name].extend(col.to_pylist())
     return static, rows
+
+
+def compiled_forces(acts, st, u, v, p, r):  # type: ignore[no-untyped-def]
+    """``(X, Y, K, N, forces, stalled)`` of an actuator set by its compiled laws (the physics
+    step's, :func:`shipgym.dynamics.actuators.tau_of_table`) at the states ``st`` and the
+    velocity through the water ``(u, v, p, r)``."""
+    import numpy as np
+
+    from shipgym.dynamics.actuators import tau_of_table
+
+    table, laws, kinds = acts.law_table()
+    forces, flags = np.zeros(len(kinds)), np.zeros(len(kinds))
+    st = np.ascontiguousarray(st, dtype=np.float64)
+    X, Y, K, N = tau_of_table(table, laws, kinds, st, u, v, p, r, forces, flags)
+    return X, Y, K, N, forces, flags > 0

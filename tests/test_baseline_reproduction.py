@@ -4,11 +4,12 @@ metadata gives bit-identical policy weights (``policy_fingerprint``), on the CPU
 fingerprint was taken on (torch's kernels differ between CPU families, so elsewhere the test
 says so and skips). Slow: each re-run trains about a million steps (a few minutes).
 
-The shipped models were trained before the compiled physics step (``shipgym.envs._native``):
-on the NumPy form of the batched physics, which the compiled form matches to 1e-14 m but not
-bit for bit, and training turns the last bits into other weights. So the re-runs use the
-NumPy form, as ``SHIPGYM_NATIVE=0 shipgym train ...`` does (the single physics' compiled step
-is bit-identical to its Python one, either way)."""
+The shipped models were trained on the NumPy form of the batched physics, which the one
+compiled physics step (:mod:`shipgym.sim.step`) replaced: it agrees with that form to round-off,
+not bit for bit, and training turns the last bits into other weights. Until the fingerprints
+are re-recorded on the one physics (its re-runs, a few minutes each on the recording CPU), the
+re-run is expected to give other weights (``xfail``, strict: a match would say the
+fingerprints are current again)."""
 
 from __future__ import annotations
 
@@ -22,7 +23,6 @@ pytest.importorskip("torch")
 
 import shipgym.controllers.learned as learned  # noqa: E402
 from shipgym.controllers.learned import policy_fingerprint, read_metadata  # noqa: E402
-from shipgym.envs import _native  # noqa: E402
 
 
 def _cpu_model() -> str:
@@ -52,6 +52,11 @@ def test_every_pure_baseline_records_how_to_reproduce_it():
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="fingerprints recorded on the NumPy batched physics, which the one compiled physics "
+    "replaced; re-record them (issue 'One physics for every vessel', item 6)",
+)
 @pytest.mark.parametrize("file", _reproducible())
 def test_documented_command_gives_the_same_weights(file, tmp_path):
     from shipgym.rl.train import train
@@ -67,9 +72,8 @@ def test_documented_command_gives_the_same_weights(file, tmp_path):
     assert f"--seed {meta.seed}" in meta.command and meta.command.startswith(
         f"shipgym train {meta.algorithm}"
     )
-    with _native.disabled():  # the physics the shipped models were trained on
-        train(meta.algorithm, env_id=meta.env_id, seed=int(meta.seed), timesteps=steps,
-              residual=meta.residual, out=tmp_path, eval_freq=0, checkpoint_freq=steps,
-              progress=False)  # fmt: skip
+    train(meta.algorithm, env_id=meta.env_id, seed=int(meta.seed), timesteps=steps,
+          residual=meta.residual, out=tmp_path, eval_freq=0, checkpoint_freq=steps,
+          progress=False)  # fmt: skip
     ckpt = tmp_path / "checkpoints" / f"{meta.algorithm}_{steps}_steps.zip"
     assert policy_fingerprint(ckpt) == rep["policy_sha256"]

@@ -149,8 +149,8 @@ def test_the_graph_sees_the_package():
     assert "shipgym.rl.cli" in GRAPH["shipgym.cli"]  # a function-level import
     assert "shipgym.bench" in GRAPH["shipgym.rl.bench"]
     assert "shipgym.rl.evaluation" in GRAPH["shipgym.rl.bench"]  # a relative import
-    assert "mujoco" in EXTERNAL["shipgym.envs._mujoco"]
-    assert "shipgym.envs._mujoco" in GRAPH["shipgym.envs.physics"]
+    assert "mujoco" in EXTERNAL["shipgym.sim._mujoco"]
+    assert "shipgym.sim._mujoco" in GRAPH["shipgym.sim.step"]
 
 
 def test_the_cycle_finder_finds_cycles():

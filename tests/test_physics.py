@@ -75,7 +75,7 @@ def test_qacc_is_exactly_the_model_acceleration(plant):
     The thrust written out: the default plant's main propeller loses k_u (1 - w) |n| u
     (Blanke 1981) and its tunnels the factor eta(|u|) (MuJoCo's actuators carry no force: the
     physics applies these flow-dependent ones); the seed-linear plant's are the bollard laws of
-    Tomera (2014) eqs. 8-9, applied by MuJoCo's actuators."""
+    Tomera (2014) eqs. 8-9. MuJoCo's actuators carry no force: the physics applies all."""
     phys = VesselPhysics("blue-lady", plant, wind=WindConfig(speed=4.0, direction_from=1.0))
     phys.reset(eta=[1.0, 2.0, 0.7], nu=[0.4, -0.15, 0.02], actuators=[350.0, 0.6, -0.8])
     eta, nu = phys.eta, phys.nu
@@ -91,9 +91,7 @@ def test_qacc_is_exactly_the_model_acceleration(plant):
     qacc = rot(eta[2]) @ (nu_dot + nu[2] * S_nu)
     phys.step()
     np.testing.assert_allclose(phys.data.qacc, qacc, rtol=1e-9, atol=1e-15)
-    mujoco_tau = np.zeros(3) if plant == "default" else tau
-    np.testing.assert_allclose(phys.data.qfrc_actuator, rot(eta[2]) @ mujoco_tau, rtol=1e-9,
-                               atol=1e-12)  # fmt: skip
+    np.testing.assert_array_equal(phys.data.qfrc_actuator, np.zeros(3))
 
 
 @pytest.mark.parametrize("plant", ["default", "sway-added-mass-equal-to-m"])
@@ -148,7 +146,7 @@ def test_thrust_follows_heading(psi_deg):
     phys.set_command([300.0, 1.0, 0.0])
     phys.step()
     tau_b = np.array([1.9589e-3 * 300**2, 44.145, 3.24 * 44.145])
-    np.testing.assert_allclose(phys.data.qfrc_actuator, rot(psi) @ tau_b, rtol=1e-9)
+    np.testing.assert_allclose(phys.tau_thrusters, tau_b, rtol=1e-9)
     # the hull accelerates along R(psi) M^-1 tau
     M = plant_model("seed-linear", hull=BLUE_LADY_HULL).mass_matrix()
     expect = rot(psi) @ np.linalg.solve(M, tau_b)
@@ -173,7 +171,6 @@ def test_saturation_at_physical_ranges(plant):
     phys.step(round(40 / phys.timestep))
     assert phys.actuator_state[0] == pytest.approx(-200.0, rel=1e-6)
     assert np.all(np.abs(phys.thrust[1:]) <= 44.145 + 1e-9)
-    assert np.all(np.abs(phys.data.actuator_force[1:]) <= 44.145 + 1e-9)
 
 
 @pytest.mark.parametrize("idx,cmd,T", [(0, 400.0, 2.0), (1, 1.0, 1.0), (2, -1.0, 1.0)])
@@ -201,16 +198,16 @@ def test_mjcf_thruster_values_agree_with_parameters():
     p = BLUE_LADY_THRUSTERS
     sites = [m.site_pos[m.actuator_trnid[i, 0]] for i in range(3)]
     np.testing.assert_allclose([s[0] for s in sites], [p.x_main, p.L2, -p.L3])
-    np.testing.assert_allclose(m.actuator_ctrlrange, np.c_[p.lower, p.upper])
-    np.testing.assert_allclose(m.actuator_dynprm[:, 0], p.time_constants)
-    np.testing.assert_allclose(m.actuator_gainprm[1:, 0], [p.k2, p.k3])
-    np.testing.assert_allclose(
-        m.actuator_forcerange, np.c_[p.force_lower, p.force_upper], rtol=1e-4
-    )
+    acts = v.actuators_for("seed-linear")
+    np.testing.assert_allclose(np.c_[acts.lower, acts.upper], np.c_[p.lower, p.upper])
+    np.testing.assert_allclose([c.time_constant for c in acts.channels], p.time_constants)
+    np.testing.assert_allclose(acts.thrust(np.c_[p.lower, p.upper].T), np.c_[
+        p.force_lower, p.force_upper].T, rtol=1e-4)  # fmt: skip
     assert m.body("hull").mass[0] == pytest.approx(BLUE_LADY_HULL.m)
     assert m.opt.gravity.tolist() == [0, 0, 0]
-    # the default plant's tunnels lose thrust with speed: the physics applies it (gain 0)
+    # MuJoCo's actuators name the channels; the physics applies every force (gain 0, no state)
     np.testing.assert_array_equal(build_model(v).actuator_gainprm[:, 0], [0.0, 0.0, 0.0])
+    assert m.na == 0
 
 
 def test_bad_input_raises_clear_errors():

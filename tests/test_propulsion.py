@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from _helpers import compiled_forces
 from scipy.optimize import brentq
 
 from shipgym.dynamics import BLUE_LADY_THRUSTERS, simulate_reference, wrap_angle
@@ -55,7 +56,7 @@ def test_thrust_laws_against_their_formulas(n: float, u: float) -> None:
     nu = np.array([u, 0.03, -0.01])
     want = [_main(n, u), K_T * p * _eta(u), -K_T * p * _eta(u)]
     np.testing.assert_allclose(acts.thrust(st, nu), want, rtol=1e-12, atol=1e-12)
-    X, Y, _K, N, thrusts, _stalled = acts.flow_kernel()(st.tolist(), u, 0.03, 0.0, -0.01)
+    X, Y, _K, N, thrusts, _stalled = compiled_forces(acts, st, u, 0.03, 0.0, -0.01)
     np.testing.assert_allclose(thrusts, want, rtol=1e-12, atol=1e-12)
     tau = acts.tau(st, nu)
     np.testing.assert_allclose(

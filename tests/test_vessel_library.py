@@ -132,21 +132,15 @@ def test_packaged_vessels_are_listed_and_load() -> None:
 
 @pytest.mark.parametrize("name", VESSELS)
 def test_model_built_from_the_vessel_file(name: str) -> None:
-    """Sites, ranges, lags and inertia of the MuJoCo model come from the vessel file."""
+    """Channels, sites and inertia of the MuJoCo model come from the vessel file (its
+    actuators name the channels: the physics applies their forces and dynamics)."""
     v = load_vessel(name)
     m = build_model(v)
     acts = v.actuators
-    assert m.nu == acts.n_channels and m.na == acts.n_channels and m.nv == v.dofs
+    assert m.nu == acts.n_channels and m.na == 0 and m.nv == v.dofs
     for i, ch in enumerate(acts.channels):
         assert m.actuator(i).name == ch.name
-        if ch.dynamics == "servo":  # MuJoCo integrates the servo's rate; the angle is limited
-            np.testing.assert_array_equal(m.actuator_ctrlrange[i], [-ch.rate, ch.rate])
-            np.testing.assert_array_equal(m.actuator_actrange[i], [ch.lower, ch.upper])
-            assert m.actuator_actlimited[i] and m.actuator_gainprm[i, 0] == 0.0
-        else:
-            np.testing.assert_array_equal(m.actuator_ctrlrange[i], [ch.lower, ch.upper])
-        if ch.dynamics == "lag":
-            assert m.actuator_dynprm[i, 0] == ch.time_constant
+        assert m.actuator_gainprm[i, 0] == 0.0
     for a in acts:
         np.testing.assert_array_equal(m.site(a.name).pos, a.position)
     assert m.body("hull").mass[0] == v.rigid_inertia[0]

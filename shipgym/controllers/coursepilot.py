@@ -23,7 +23,7 @@ such as the KVLCC2 (a real pole at +1.7e-4 rad/s at 7 m/s, L = 100 m) the fit ha
 1/s^2`` is the rudder's yaw acceleration once the sway has followed; the placement formulas
 hold for it unchanged. The linear model (:func:`steering_model`) is
 
-- for a 3-DOF hull, ``x = [v, r, psi]``: the hull's plain-float kernel (``plant.accel``) and
+- for a 3-DOF hull, ``x = [v, r, psi]``: the hull family's compiled acceleration and
   the flow-dependent actuators' forces (:meth:`~shipgym.dynamics.actuators.ActuatorSet.
   flow_kernel`, an MMG unit's propeller at its self-propulsion point) differentiated by
   central differences about straight running at ``u = U`` (the surge held);
@@ -47,6 +47,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym.dynamics.actuators import tau_of_table
 from shipgym.dynamics.frames import wrap_angle
 
 from .rollcontrol import HeadingPIDGains, heading_pid_gains
@@ -145,17 +146,17 @@ def steering_model(vessel: Any, U: float, *, rudder: str | None = None) -> Any:
         return roll_model_of(vessel, float(U), rudder=name)
     U = float(U)
     hull = vessel.plant()
-    flow = vessel.actuators.flow_kernel()
-    tau_of = vessel.actuators.kernel()
+    accel, k = type(hull).accel_kernel, hull.kernel_constants()
+    table, laws, kinds = vessel.actuators.law_table()
+    out = np.zeros(len(kinds)), np.zeros(len(kinds))
     j = vessel.actuators.channel_names.index(name)
-    st0 = _operating_states(vessel, U)
+    st0 = np.asarray(_operating_states(vessel, U), dtype=np.float64)
 
     def f(v: float, r: float, delta: float) -> Array:
-        st = list(st0)
+        st = st0.copy()
         st[j] = delta
-        X, Y, _K, N, _f, _s = flow(st, U, v, 0.0, r) if flow is not None else (0.0,) * 6
-        tx, ty, _tk, tn, _mz = tau_of(st)
-        _ud, vd, rd = hull.accel(U, v, r, X + tx, Y + ty, N + tn)
+        X, Y, _K, N = tau_of_table(table, laws, kinds, st, U, v, 0.0, r, *out)
+        _ud, vd, _pd, rd = accel(k, U, v, 0.0, r, 0.0, X, Y, 0.0, N, 0.0, 0.0)
         return np.array([vd, rd])
 
     # central differences with small steps (a v|v| term differences to h, not 0)

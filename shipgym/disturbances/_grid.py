@@ -49,6 +49,25 @@ class GridPair:
         self._rng = np.random.default_rng(int(rng.integers(2**63)))
         return self._rng
 
+    @property
+    def constant(self) -> tuple[float, float] | None:
+        """``(speed m/s, direction rad)`` of a constant process, ``None`` for a varying one."""
+        return self._const
+
+    @property
+    def sample_rate(self) -> float:
+        """Samples per second of the grid (1/s)."""
+        return self._inv_dt
+
+    def chunk(self, j: int) -> NDArray[np.float64]:
+        """Chunk ``j`` of the grid, ``(2, CHUNK + 1)``: the samples ``k = j CHUNK ... (j + 1)
+        CHUNK`` (times ``k / sample_rate``) of both channels, generated in time order on first
+        use (the same realisation whatever the order of the queries). Read only."""
+        if self._const is not None:
+            raise ValueError(f"a constant {type(self).__name__} has no grid: read .constant")
+        self._extend_to(j)
+        return self._chunks[j]
+
     def _clear(self) -> None:
         self._chunks: list[NDArray[np.float64]] = []
         self._cache: dict[int, tuple[list[float], list[float]]] = {}

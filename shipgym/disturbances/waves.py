@@ -632,6 +632,28 @@ class Waves:
 
     # -- per-step queries (plain floats) -----------------------------------------------------
 
+    @property
+    def drift_constants(self) -> tuple[float, float, float, float] | None:
+        """``(beta_p rad, k_x, k_y, k_n m)`` of :meth:`drift_load` (``X = k_x cos b |cos b|
+        E``, ``Y = k_y sin b |sin b| E``, ``N = k_n cos b Y``, ``b = beta_p - psi``, ``E`` the
+        drift energy on the grid, :meth:`chunk` row 0), or ``None`` where there is no drift
+        (calm water, ``drift`` off)."""
+        if not self._drift_on:
+            return None
+        return (self._beta_p, self._kx, self._ky, self._kn)
+
+    @property
+    def sample_rate(self) -> float:
+        """Samples per second of the wave grid (1/s)."""
+        return self._inv_dt
+
+    def chunk(self, j: int) -> NDArray[np.float64]:
+        """Chunk ``j`` of the wave grid, ``(3, CHUNK + 1)``: the samples ``k = j CHUNK ... (j +
+        1) CHUNK`` of the drift energy ``E`` and the first-order motion's two channels,
+        generated in time order on first use. Read only."""
+        self._extend_to(j)
+        return self._chunks[j]
+
     def drift_load(self, t: float, psi: float) -> tuple[float, float, float]:
         """Mean + slowly varying second-order drift loads on the hull at time ``t``.
 

@@ -57,6 +57,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, param, require_finite, require_positive
+from shipgym._jit import njit
 from shipgym.dynamics.params import WindageParameters
 
 from ._boundary import coerce_config, parse_config
@@ -387,6 +388,34 @@ def wind_load(
     return WindLoad(coeffs, windage).array(psi, u, v, V_w, beta_w)
 
 
+@njit
+def blendermann_load(k, psi, u, v, V_w, beta_w):  # type: ignore[no-untyped-def]
+    """The Blendermann (1994) load ``(X, Y, N)`` (N, N, N m, body) on a hull with heading
+    ``psi`` (rad) moving at ``(u, v)`` (m/s, over ground) in a true wind of speed ``V_w`` (m/s)
+    from ``beta_w`` (rad), with the constants ``k`` of :meth:`WindLoad.kernel_constants`: the
+    run-time form (compiled) of :func:`_loads`, which stays the array form and the oracle."""
+    cd_t, cd_pi, cd_0, half_delta, ratio, arm0 = k[0], k[1], k[2], k[3], k[4], k[5]
+    kx, ky, kn, pi, half_pi, slope = k[6], k[7], k[8], k[9], k[10], k[11]
+    ang = beta_w - pi - psi
+    u_rw = u - V_w * math.cos(ang)
+    v_rw = v - V_w * math.sin(ang)
+    v2 = u_rw * u_rw + v_rw * v_rw
+    vr = math.sqrt(v2)
+    g = math.atan2(abs(v_rw), u_rw)
+    inv = 1.0 / vr if vr != 0.0 else 1.0
+    c = u_rw * inv
+    s = -v_rw * inv
+    cd_laf = cd_0 if g <= half_pi else cd_pi
+    cs = c * s
+    den = 1.0 - half_delta * (1.0 - cd_laf * ratio) * (4.0 * cs * cs)
+    cy = cd_t * s / den
+    return (
+        kx * v2 * (-cd_laf * c / den),
+        ky * v2 * cy,
+        kn * v2 * ((arm0 - slope * (g - half_pi)) * cy),
+    )
+
+
 class WindLoad:
     """Blendermann wind loads for one vessel, with a fast scalar path for the physics.
 
@@ -437,7 +466,7 @@ class WindLoad:
         """The 12 constants of :meth:`kernel`'s formulas, in its order: ``CD_t, CD_lAF(pi),
         CD_lAF(0), delta/2, the area ratio, the moment arm at 90 deg, the X, Y, N factors,
         pi, pi/2`` and the moment arm's slope (the compiled physics step,
-        :mod:`shipgym.envs._native`, evaluates them the same way)."""
+        :func:`blendermann_load`, evaluates them)."""
         cd_t, cd_pi, cd_jump, half_delta, ratio, arm0, kx, ky, kn = self._k
         cd_0 = cd_pi + cd_jump  # CD_lAF on the bow side, cd_pi + cd_jump * True in _coefficients
         return (float(cd_t), float(cd_pi), float(cd_0), float(half_delta), float(ratio),

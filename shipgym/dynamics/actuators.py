@@ -28,26 +28,32 @@ physics, the allocation and the plots alike:
 Generalised force of a force ``(F_x, F_y)`` applied at ``(x, y, z)`` (body frame, z down):
 ``X = F_x``, ``Y = F_y``, ``K = -z F_y``, ``N = x F_y - y F_x`` (Fossen 2011 eq. 12.?).
 
-The protocol (:class:`Actuator`) is what a new kind implements: its channels (any number of
-MuJoCo actuators, each a lag or an integrator: a rudder's angle with its rate limit is an
-integrator channel like an azimuth's), the force from its states, its force capacity, and a
-branch in :meth:`ActuatorSet.kernel` (the plain-float law of the physics step). A kind whose
-force also depends on the flow (the rudder's lift from the speed through the water) takes the
-body velocity in ``force`` and has its plain-float law in :meth:`ActuatorSet.flow_kernel`;
-MuJoCo's actuator for it carries no force (gain 0), the physics adds the flow-dependent force
-to the hull's loads itself.
+The protocol (:class:`Actuator`) is what a new kind implements: its channels (any number,
+each a lag, a servo or an integrator), the force from its states (the array form, the design
+model and the oracle), its force capacity, and its compiled force law (``force_law``,
+``law_row``), which the physics step calls (:meth:`ActuatorSet.law_table`): every force, the
+flow-dependent ones (a rudder's lift, a propeller's advance-speed and tunnel losses) included,
+is the physics' own; MuJoCo's actuators only name the channels.
+
+Every kind also has one compiled force law (:data:`shipgym._jit.LAW_SIG`: ``law_propeller``,
+``law_azimuth``, ``law_rudder``, ``law_mmg``), its class's ``force_law``, with ``law_row``
+its constants; :meth:`ActuatorSet.law_table` collects them for the compiled step and
+:func:`tau_of_table` sums them (checked against the array forms in
+``tests/test_actuator_laws.py``). A new kind defines its own ``force_law`` and ``law_row``.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from .._jit import LAW_SIG, address, law_at, njit
 
 __all__ = [
     "ACTUATOR_KINDS",
@@ -58,6 +64,11 @@ __all__ = [
     "MMGPropulsion",
     "Propeller",
     "Rudder",
+    "law_azimuth",
+    "law_mmg",
+    "law_propeller",
+    "law_rudder",
+    "tau_of_table",
 ]
 
 
@@ -115,8 +126,13 @@ class Actuator:
 
     kind: ClassVar[str] = ""
     #: whether the force depends on the flow past the hull (``force(states, nu)``); MuJoCo's
-    #: actuator then carries no force and the physics adds it (:meth:`ActuatorSet.flow_kernel`)
+    #: actuator then carries no force and the physics adds it (:meth:`ActuatorSet.law_table`)
     flow_dependent: ClassVar[bool] = False
+    #: the kind's compiled force law (:data:`shipgym._jit.LAW_SIG`; a ``staticmethod`` of a
+    #: module-level :func:`~shipgym._jit.njit` function), with :meth:`law_row` its constants
+    #: (:meth:`ActuatorSet.law_table`). Named ``force_law``: a :class:`Propeller`'s ``law`` is
+    #: its thrust law's name (``"linear"``, ``"quadratic"``).
+    force_law: ClassVar[Any] = None
     name: str
     position: tuple[float, float, float]
     colour: str
@@ -125,6 +141,11 @@ class Actuator:
     def label(self) -> str:
         """The kind as a vessel file names it (``propeller``, ``tunnel``, ``azimuth``)."""
         return self.kind
+
+    def law_row(self, channel: int) -> tuple[float, ...]:  # pragma: no cover - protocol
+        """The row of :attr:`force_law`: ``channel`` (the index of this actuator's first
+        channel in the state vector, as a float) first, then the law's constants."""
+        raise NotImplementedError
 
     @property
     def channels(self) -> tuple[Channel, ...]:  # pragma: no cover - protocol
@@ -156,6 +177,150 @@ def _check_position(name: str, position: Any) -> tuple[float, float, float]:
     return p  # type: ignore[return-value]
 
 
+# ---- compiled force laws ---------------------------------------------------------------------
+# One law per kind, of the signature shipgym._jit.LAW_SIG: ``law(row, st, u, v, p, r) -> (X, Y,
+# K, N, F, flag)``, ``row[0]`` the index of the actuator's first channel in ``st``, the rest its
+# constants (each kind's ``law_row``), ``(u, v, p, r)`` the body velocity through the water.
+# Plain float arithmetic on the same expressions, in the same order, as the kinds' array forms
+# (Propeller.thrust, Azimuth.force, Rudder.lift, MMGModel.propulsion_forces), which the tests
+# compare them with.
+
+
+@njit
+def law_propeller(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
+    """A :class:`Propeller` (or tunnel): the bollard law ``g a`` (linear) or ``g |a| a``
+    (quadratic), ``g`` = ``k_ahead`` for ``a >= 0`` else ``k_astern``; minus the advance-speed
+    term ``k_u (1 - w) |a| u``; times the tunnel factor ``1 - d x^2 exp(1 - x^2)``, ``x = u /
+    U_50``; along ``(cos alpha, sin alpha)`` at ``(x, y, z)`` (row: :meth:`Propeller.law_row`)."""
+    a = st[int(row[0])]
+    g = row[1] if a >= 0.0 else row[2]
+    aa = abs(a)
+    if row[3] != 0.0:  # quadratic: (k |a|) a
+        g = g * aa
+    f = g * a
+    if row[4] != 0.0:  # advance-speed loss
+        f = f - row[4] * aa * u
+    if row[5] != 0.0:  # tunnel loss with forward speed
+        xu = u / row[6]
+        x2 = xu * xu
+        f = (1.0 - row[5] * x2 * math.exp(1.0 - x2)) * f
+    fx = row[7] * f
+    fy = row[8] * f
+    return fx, fy, -row[11] * fy, row[9] * fy - row[10] * fx, f, 0.0
+
+
+@njit
+def law_azimuth(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
+    """An :class:`Azimuth`: ``F = F_max a`` along the angle state ``alpha`` (channels ``[a,
+    alpha]``), at ``(x, y, z)`` (row: :meth:`Azimuth.law_row`)."""
+    j = int(row[0])
+    f = row[1] * st[j]
+    alpha = st[j + 1]
+    fx = f * math.cos(alpha)
+    fy = f * math.sin(alpha)
+    return fx, fy, -row[4] * fy, row[2] * fy - row[3] * fx, f, 0.0
+
+
+@njit
+def law_rudder(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
+    """A :class:`Rudder`: lift ``F = k_L q C(alpha_e)`` (:meth:`Rudder.flow`,
+    :meth:`Rudder.lift`; ``q = sign(u) (u^2 + v_R^2)`` with inflow, ``u |u|`` without), ``Y =
+    F``, ``K = -z F``, ``N = x F``; ``flag`` 1 where stalled (row: :meth:`Rudder.law_row`)."""
+    delta = st[int(row[0])]
+    x = row[2]
+    z = row[3]
+    if row[6] != 0.0:  # the hull's motion changes the inflow
+        vr = v + x * r - z * p
+        sg = 1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0)  # numpy's sign(u)
+        q = sg * (u * u + vr * vr)
+        alpha = delta - math.atan2(vr, abs(u))
+    else:
+        q = u * abs(u)
+        alpha = delta
+    flag = 0.0
+    c = alpha
+    if abs(alpha) > row[4]:  # stalled (never with an infinite stall angle)
+        flag = 1.0
+        c = row[5] if alpha > 0.0 else -row[5]
+    f = row[1] * q * c
+    return 0.0, f, -z * f, x * f, f, flag
+
+
+@njit
+def law_mmg(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
+    """An :class:`MMGPropulsion` unit (channels ``[n, delta]``, the paper's rudder angle
+    ``-delta``): :meth:`~shipgym.dynamics.mmg.MMGModel.propulsion_forces` (``propulsion_kernel``)
+    on plain floats; ``K = 0`` (planar), ``F`` the propeller thrust ``T`` (row:
+    :meth:`MMGPropulsion.law_row`)."""
+    j = int(row[0])
+    n = st[j]
+    delta = -st[j + 1]
+    L, rho, D, D4 = row[1], row[2], row[3], row[4]
+    k0, k1, k2 = row[5], row[6], row[7]
+    w0, C1, C2p, C2n, xP = row[8], row[9], row[10], row[11], row[12]
+    tP, cy, xPL = row[13], row[14], row[15]
+    tR, aH, arm = row[16], row[17], row[18]
+    eta, kap, eps, gn, gp, lR = row[19], row[20], row[21], row[22], row[23], row[24]
+    hA, fa = row[25], row[26]
+    U = math.hypot(u, v)
+    Us = U if U > 1e-9 else 1e-9
+    rp = r * L / Us
+    beta = math.atan2(-v, u)
+    # propeller: K_T(J_P) with the wake 1 - w_P(beta_P); astern K_T and side force
+    bP = beta - xP * rp
+    one_w = w0 * (1.0 + (1.0 - math.exp(-C1 * abs(bP))) * ((C2p if bP > 0.0 else C2n) - 1.0))
+    na = abs(n)
+    J = u * one_w / ((na if na > 1e-9 else 1e-9) * D)
+    ahead = n > 0.0
+    if ahead:
+        KT = k0 + k1 * J + k2 * (J * J)
+    else:
+        KT = -(0.2 + 0.25 * J)
+    T = rho * (n * n) * D4 * KT
+    XP = (1.0 - tP) * T
+    YP = -cy * abs(XP) if n < 0.0 else 0.0
+    NP = xPL * YP
+    # rudder: inflow with the propeller's slipstream (ahead only), flow straightening
+    uR = eps * u * one_w
+    if ahead:
+        Js = J if abs(J) > 1e-9 else 1e-9
+        race = 1.0 + 8.0 * KT / (math.pi * (Js * Js))
+        race = math.sqrt(race) if race > 0.0 else 0.0
+        sq = 1.0 + kap * (race - 1.0)
+        uR = uR * math.sqrt(eta * (sq * sq) + 1.0 - eta)
+    bR = beta - lR * rp
+    vR = U * (gn if bR < 0.0 else gp) * bR
+    FN = hA * (uR * uR + vR * vR) * fa * math.sin(delta - math.atan2(vR, uR))
+    cd = math.cos(delta)
+    XR = -(1.0 - tR) * FN * math.sin(delta)
+    YR = -(1.0 + aH) * FN * cd
+    NR = -arm * FN * cd
+    return XP + XR, YP + YR, 0.0, NP + NR, T, 0.0
+
+
+@njit
+def tau_of_table(table, laws, kind_index, st, u, v, p, r, forces, flags):  # type: ignore[no-untyped-def]
+    """The generalised force ``(X, Y, K, N)`` (N, N, N m, N m) of every actuator of a
+    :meth:`ActuatorSet.law_table` at the actuator states ``st`` and the body velocity through
+    the water ``(u, v, p, r)``, summed in actuator order; actuator ``a``'s own force ``F`` (N)
+    is written to ``forces[a]`` and its stall flag (1.0 or 0.0) to ``flags[a]``. ``laws``:
+    the addresses of the compiled laws (int64, :func:`shipgym._jit.address`)."""
+    X = 0.0
+    Y = 0.0
+    K = 0.0
+    N = 0.0
+    for a in range(table.shape[0]):
+        law = law_at(laws[kind_index[a]])
+        fx, fy, fk, fn, fa, fl = law(table[a], st, u, v, p, r)
+        X += fx
+        Y += fy
+        K += fk
+        N += fn
+        forces[a] = fa
+        flags[a] = fl
+    return X, Y, K, N
+
+
 @dataclass(frozen=True)
 class Propeller(Actuator):
     r"""A fixed-direction thruster: main propeller (``alpha = 0``) or tunnel (90 deg).
@@ -174,7 +339,7 @@ class Propeller(Actuator):
     ``U_50``, back to 1 at high speed; the curve of the model tests of a tanker's bow
     thruster, KMW/HyA, International Shipbuilding Progress 1967). ``k_u = 0`` and ``d = 0``
     (the defaults) give the bollard law at every speed; either makes the propeller flow-dependent
-    (:attr:`flow_dependent`): its force then comes from :meth:`ActuatorSet.flow_kernel`.
+    (:attr:`flow_dependent`): its force then comes from :meth:`ActuatorSet.law_table`.
 
     The state follows its command through a first-order lag whose rate is limited to
     ``rate_limit`` (state unit per second; ``inf``: none): ``a_dot = clip((c - a) / T,
@@ -200,6 +365,7 @@ class Propeller(Actuator):
     """
 
     kind: ClassVar[str] = "propeller"
+    force_law: ClassVar[Any] = staticmethod(law_propeller)
     name: str = ""
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     alpha: float = 0.0
@@ -342,6 +508,20 @@ class Propeller(Actuator):
     def max_thrust(self) -> float:
         return max(self.force_upper, -self.force_lower)
 
+    def law_row(self, channel: int) -> tuple[float, ...]:
+        """The row of :func:`law_propeller` (12 values): ``channel``, ``k_ahead``,
+        ``k_astern`` (N per state unit, or per unit^2), ``quadratic`` (1.0 for ``k |a| a``,
+        0.0 linear), ``k_u (1 - w)`` (N per state unit per m/s; 0: no advance-speed loss),
+        ``d`` (1; 0: no tunnel loss), ``U_50`` (m/s), ``cos alpha``, ``sin alpha``
+        (:attr:`direction`), ``x``, ``y``, ``z`` (m, body frame, z down)."""
+        c, s = self.direction
+        x, y, z = self.position
+        return (
+            float(channel), float(self.k_ahead), float(self.k_astern),
+            1.0 if self.law == "quadratic" else 0.0, self.advance * (1.0 - self.wake),
+            float(self.loss_depth), float(self.loss_speed), c, s, x, y, z,
+        )  # fmt: skip
+
 
 @dataclass(frozen=True)
 class Azimuth(Actuator):
@@ -363,6 +543,7 @@ class Azimuth(Actuator):
     """
 
     kind: ClassVar[str] = "azimuth"
+    force_law: ClassVar[Any] = staticmethod(law_azimuth)
     name: str = ""
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     max_thrust_n: float = 1.0
@@ -412,6 +593,13 @@ class Azimuth(Actuator):
     def max_thrust(self) -> float:
         return float(self.max_thrust_n)
 
+    def law_row(self, channel: int) -> tuple[float, ...]:
+        """The row of :func:`law_azimuth` (5 values): ``channel`` (the thrust channel; the
+        angle is the next), ``max_thrust_n`` (N), ``x``, ``y``, ``z`` (m, body frame, z
+        down)."""
+        x, y, z = self.position
+        return (float(channel), float(self.max_thrust_n), x, y, z)
+
 
 @dataclass(frozen=True)
 class Rudder(Actuator):
@@ -456,6 +644,7 @@ class Rudder(Actuator):
 
     kind: ClassVar[str] = "rudder"
     flow_dependent: ClassVar[bool] = True
+    force_law: ClassVar[Any] = staticmethod(law_rudder)
     name: str = ""
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     lift_gain: float = 1.0
@@ -541,6 +730,16 @@ class Rudder(Actuator):
         """0: a rudder's force has no bound without a flow speed (:meth:`lift`)."""
         return 0.0
 
+    def law_row(self, channel: int) -> tuple[float, ...]:
+        """The row of :func:`law_rudder` (7 values): ``channel``, ``lift_gain`` (N per rad
+        per (m/s)^2), ``x``, ``z`` (m, the centre of pressure, z down), ``stall_angle`` (rad,
+        ``inf``: none), the post-stall value ``post_stall * stall_angle`` (rad; 0 without a
+        stall), ``inflow`` (1.0 or 0.0)."""
+        x, _y, z = self.position
+        a_s = float(self.stall_angle)
+        c_s = self.post_stall * a_s if math.isfinite(a_s) else 0.0
+        return (float(channel), float(self.lift_gain), x, z, a_s, c_s, 1.0 if self.inflow else 0.0)
+
 
 @dataclass(frozen=True)
 class MMGPropulsion(Actuator):
@@ -576,6 +775,7 @@ class MMGPropulsion(Actuator):
 
     kind: ClassVar[str] = "mmg"
     flow_dependent: ClassVar[bool] = True
+    force_law: ClassVar[Any] = staticmethod(law_mmg)
     name: str = ""
     params: Any = None
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -648,6 +848,22 @@ class MMGPropulsion(Actuator):
         """The bollard-pull surge force ``(1 - t_P) rho n_max^2 D_P^4 k_0`` (N)."""
         p = self.params
         return (1 - p.t_P) * p.rho * self.max_rps**2 * p.D_P**4 * p.k0
+
+    def law_row(self, channel: int) -> tuple[float, ...]:
+        """The row of :func:`law_mmg` (27 values, from :attr:`params`): ``channel`` (the
+        propeller speed's; the rudder angle is the next), ``L`` (m), ``rho`` (kg/m^3),
+        ``D_P`` (m), ``D_P^4`` (m^4), ``k0``, ``k1``, ``k2``, ``1 - w_P0``, ``C1``,
+        ``C2_pos``, ``C2_neg``, ``x_P`` (1; of ``L``), ``t_P``, ``c_y``, ``x_P L`` (m),
+        ``t_R``, ``a_H``, ``x_R L + a_H x_H L`` (m), ``eta = D_P / H_R``, ``kappa``,
+        ``eps``, ``gamma_neg``, ``gamma_pos``, ``l_R`` (1), ``rho A_R / 2`` (kg/m),
+        ``f_alpha`` (1)."""
+        p = self.params
+        return tuple(float(c) for c in (
+            channel, p.L, p.rho, p.D_P, p.D_P**4, p.k0, p.k1, p.k2, 1 - p.w_P0, p.C1,
+            p.C2_pos, p.C2_neg, p.x_P, p.t_P, p.c_y, p.x_P * p.L, p.t_R, p.a_H,
+            p.x_R * p.L + p.a_H * p.x_H * p.L, p.D_P / p.H_R, p.kappa, p.eps, p.gamma_neg,
+            p.gamma_pos, p.l_R, 0.5 * p.rho * p.A_R, p.f_alpha,
+        ))  # fmt: skip
 
 
 #: actuator kinds by the name used in vessel files (``kind = "..."``)
@@ -919,312 +1135,59 @@ class ActuatorSet:
         two = np.where(c >= 0.0, c / hi, c / np.where(lo < 0, -lo, 1.0))
         return np.where(lo < 0.0, two, 2.0 * (c - lo) / (hi - lo) - 1.0)
 
-    # ---- hot path --------------------------------------------------------------------------
-    def thrust_kernel(self) -> Callable[[list[float]], list[float]]:
-        """``f(states) -> thrusts`` (N, one per actuator) on plain floats: :meth:`thrust`
-        without array overhead (every control step). A rudder reads 0 here: its lift depends
-        on the flow (:meth:`flow_kernel`)."""
-        laws = []
-        i = 0
-        for a in self.actuators:
-            if a.flow_dependent:  # its force needs the flow: flow_kernel
-                laws.append((i, 0.0, 0.0, False))
-            elif isinstance(a, Propeller):
-                laws.append((i, a.k_ahead, a.k_astern, a.law == "quadratic"))
-            else:
-                assert isinstance(a, Azimuth)
-                laws.append((i, a.max_thrust_n, a.max_thrust_n, False))
-            i += len(a.channels)
-        laws_t = tuple(laws)
+    # ---- run time ------------------------------------------------------------------------
+    def law_table(self) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+        """``(table, laws, kind_index)``: every actuator's compiled force law and its row.
 
-        def thrust_of(st: list[float]) -> list[float]:
-            out = []
-            for j, kp, kn, quad in laws_t:
-                a = st[j]
-                g = kp if a >= 0.0 else kn
-                out.append(g * abs(a) * a if quad else g * a)
-            return out
+        - ``table``: float64, C-contiguous, (n_actuators, W): actuator ``a``'s
+          :meth:`~Actuator.law_row` (its first channel's index first), zero-padded to the
+          widest row ``W``;
+        - ``laws``: the addresses (int64) of the distinct compiled laws of the set's kinds
+          (each kind's ``force_law``, in order of first use, compiled for
+          :data:`shipgym._jit.LAW_SIG`), so that a compiled loop calls
+          ``law_at(laws[kind_index[a]])(table[a], st, u, v, p, r)`` (:func:`tau_of_table`);
+        - ``kind_index``: int64 (n_actuators,), each actuator's law in ``laws``.
 
-        return thrust_of
-
-    def _thrust_tables(self) -> tuple[tuple[tuple[Any, ...], ...], ...]:
-        """The MuJoCo-applied actuators of :meth:`kernel` as rows of constants: ``(varying,
-        static, azimuths)``; a varying propeller ``(channel, k_ahead, k_astern, quadratic,
-        cos, sin, arm_N, arm_K, arm_Mz)``, a static one ``(channel, k, cos, sin, arm_N, arm_K,
-        arm_Mz)``, an azimuth ``(channel, F_max, x, y, z)``."""
-        static = []  # linear law, one constant: MuJoCo's gain is fixed
-        varying = []  # quadratic law or different ahead/astern constants: gain refreshed
-        azim = []
-        i = 0
-        for a in self.actuators:
-            x, y, z = a.position
-            if a.flow_dependent:  # not a MuJoCo-applied force: flow_kernel
-                i += len(a.channels)
-                continue
-            if isinstance(a, Propeller):
-                c, s = a.direction
-                arms = (c, s, x * s - y * c, -z * s, z * c)
-                if a.static_gain is not None:
-                    static.append((i, a.k_ahead, *arms))
-                else:
-                    varying.append((i, a.k_ahead, a.k_astern, a.law == "quadratic", *arms))
-            else:
-                assert isinstance(a, Azimuth)
-                azim.append((i, a.max_thrust_n, x, y, z))
-            i += len(a.channels)
-        return tuple(varying), tuple(static), tuple(azim)
-
-    def thrust_tables3(self) -> tuple[tuple[tuple[Any, ...], ...], ...]:
-        """The 3-DOF rows of :meth:`kernel`, in the order it sums them: ``(varying, lateral,
-        static, azimuths)``; varying ``(channel, k_ahead, k_astern, quadratic, cos, sin,
-        arm_N)``, lateral (constant gain, athwartships: nothing in X) ``(channel, k, sin,
-        arm_N)``, static ``(channel, k, cos, sin, arm_N)``, azimuth ``(channel, F_max, x, y)``.
-        The compiled physics step (:mod:`shipgym.envs._native`) sums the same rows."""
-        varying_t, static_t, azim_t = self._thrust_tables()
-        v3 = tuple(t[:7] for t in varying_t)
-        # constant-gain thrusters pointing athwartships (tunnels: cos alpha = 0) add nothing to X
-        lat = tuple((t[0], t[1], t[3], t[4]) for t in static_t if t[2] == 0.0)
-        s3 = tuple(t[:5] for t in static_t if t[2] != 0.0)
-        a3 = tuple(t[:4] for t in azim_t)
-        return v3, lat, s3, a3
-
-    def kernel(
-        self, gain: Any = None, gear: Any = None
-    ) -> Callable[[list[float]], tuple[float, float, float, float, float]]:
-        """``f(states) -> (X, Y, K, N, M_z)`` on plain floats (the physics step).
-
-        ``M_z = sum z_i F_x,i`` is the moment about the body y axis of the thrusts, which a
-        rolled hull's yaw hinge feels (:mod:`shipgym.envs.physics`); ``K`` and ``M_z`` are
-        returned as 0 for a 3-DOF set. The force of every actuator MuJoCo applies through its
-        actuators: flow-dependent kinds (rudders) are left out (:meth:`flow_kernel`).
-
-        Args:
-            gain: optional (n_channels, >=1) array; ``gain[i, 0]`` receives ``F / a`` of every
-                channel whose gain depends on its state (MuJoCo's ``actuator_gainprm``).
-            gear: optional (n_channels, >=2) array; ``gear[i, :2]`` receives the force
-                direction of every azimuth's thrust channel (MuJoCo's ``actuator_gear``).
+        Built once per set and cached (the arrays are shared: do not modify them). A kind
+        takes part through its class's ``force_law`` and ``law_row`` alone.
         """
-        varying_t, static_t, azim_t = self._thrust_tables()
-        cos, sin = math.cos, math.sin
-        four = self.dofs == 4
-        write = gain is not None
-        turn = gear is not None
-
-        def tau_of(st: list[float]) -> tuple[float, float, float, float, float]:
-            X = Y = K = N = Mz = 0.0
-            for j, kp, kn, quad, c, s, mn, mk, mz in varying_t:
-                a = st[j]
-                g = kp if a >= 0.0 else kn
-                if quad:  # k |a| a, rounded as (k |a|) a (Tomera 2014 eq. 8)
-                    g *= abs(a)
-                f = g * a
-                if write:
-                    gain[j, 0] = g
-                X += c * f
-                Y += s * f
-                N += mn * f
-                K += mk * f
-                Mz += mz * f
-            for j, k, c, s, mn, mk, mz in static_t:
-                f = k * st[j]
-                X += c * f
-                Y += s * f
-                N += mn * f
-                K += mk * f
-                Mz += mz * f
-            for j, fm, x, y, z in azim_t:
-                f = fm * st[j]
-                ca, sa = cos(st[j + 1]), sin(st[j + 1])
-                if turn:
-                    gear[j, 0] = ca
-                    gear[j, 1] = sa
-                fx, fy = f * ca, f * sa
-                X += fx
-                Y += fy
-                N += x * fy - y * fx
-                K -= z * fy
-                Mz += z * fx
-            return X, Y, K, N, Mz
-
-        if four:
-            return tau_of
-        v3, lat, s3, a3 = self.thrust_tables3()
-
-        def tau_of3(st: list[float]) -> tuple[float, float, float, float, float]:
-            X = Y = N = 0.0
-            for j, kp, kn, quad, c, s, mn in v3:
-                a = st[j]
-                g = kp if a >= 0.0 else kn
-                if quad:
-                    g *= abs(a)
-                f = g * a
-                if write:
-                    gain[j, 0] = g
-                X += c * f
-                Y += s * f
-                N += mn * f
-            for j, k, s, mn in lat:
-                f = k * st[j]
-                Y += s * f
-                N += mn * f
-            for j, k, c, s, mn in s3:
-                f = k * st[j]
-                X += c * f
-                Y += s * f
-                N += mn * f
-            for j, fm, x, y in a3:
-                f = fm * st[j]
-                ca, sa = cos(st[j + 1]), sin(st[j + 1])
-                if turn:
-                    gear[j, 0] = ca
-                    gear[j, 1] = sa
-                fx, fy = f * ca, f * sa
-                X += fx
-                Y += fy
-                N += x * fy - y * fx
-            return X, Y, 0.0, N, 0.0
-
-        return tau_of3
-
-    def _flow_laws(self) -> tuple[tuple[Any, ...], ...]:
-        """The flow-dependent actuators of :meth:`flow_kernel` as ``(kind, channel, law, x, z,
-        stall angle, post-stall angle, inflow)`` rows (kind 0 rudder, 1 MMG unit, 2
-        propeller with its law's constants)."""
-        from .mmg import propulsion_kernel
-
-        laws = []
-        i = 0
-        for a in self.actuators:
-            if isinstance(a, Rudder):
-                x, _y, z = a.position
-                laws.append((0, i, a.lift_gain, x, z, a.stall_angle, a.post_stall * a.stall_angle,
-                             a.inflow))  # fmt: skip
-            elif isinstance(a, MMGPropulsion):
-                laws.append((1, i, propulsion_kernel(a.params), 0.0, 0.0, 0.0, 0.0, False))
-            elif isinstance(a, Propeller) and a.flow_dependent:
-                c, s = a.direction
-                x, y, z = a.position
-                law = (
-                    a.k_ahead,
-                    a.k_astern,
-                    a.law == "quadratic",
-                    a.advance * (1.0 - a.wake),
-                    a.loss_depth,
-                    1.0 / a.loss_speed,
-                    c,
-                    s,
-                    x * s - y * c,
-                    -z * s,
+        cached = self.__dict__.get("_law_table")
+        if cached is not None:
+            return cached  # type: ignore[no-any-return]
+        rows: list[tuple[float, ...]] = []
+        fns: list[Any] = []
+        index: list[int] = []
+        for a, sl in zip(self.actuators, self.slices, strict=True):
+            fn = getattr(type(a), "force_law", None)
+            if fn is None or not callable(getattr(a, "law_row", None)):
+                raise TypeError(
+                    f"actuator {a.name!r} ({type(a).__name__}) has no compiled force law: its "
+                    "kind needs a force_law ClassVar (shipgym._jit.LAW_SIG) and law_row()"
                 )
-                laws.append((2, i, law, 0.0, 0.0, 0.0, 0.0, False))  # fmt: skip
-            i += len(a.channels)
-        return tuple(laws)
+            row = tuple(float(c) for c in a.law_row(sl.start))
+            if not row or row[0] != sl.start:
+                raise ValueError(
+                    f"actuator {a.name!r}: law_row must start with its channel {sl.start}, "
+                    f"got {row[:1]}"
+                )
+            k = next((i for i, f in enumerate(fns) if f is fn), -1)
+            if k < 0:
+                fns.append(fn)
+                k = len(fns) - 1
+            rows.append(row)
+            index.append(k)
+        table = np.zeros((len(rows), max(len(r) for r in rows)))
+        for i, row in enumerate(rows):
+            table[i, : len(row)] = row
+        out = (
+            np.ascontiguousarray(table),
+            np.array([address(f, LAW_SIG) for f in fns], dtype=np.int64),
+            np.array(index, dtype=np.int64),
+        )
+        self._law_table = out
+        return out
 
-    def propeller_flow_table(self) -> tuple[tuple[Any, ...], ...] | None:
-        """Where every flow-dependent actuator is a propeller (advance-speed or tunnel loss):
-        one row each, ``(channel, k_ahead, k_astern, quadratic, k_u (1 - w), loss depth,
-        1/U_50, cos, sin, arm_N, arm_K)``, in the order :meth:`flow_kernel` sums them (the
-        compiled physics step sums the same rows); ``None`` otherwise (also with none)."""
-        laws = self._flow_laws()
-        if not laws or not all(t[0] == 2 for t in laws):
-            return None
-        return tuple((t[1], *t[2]) for t in laws)
-
-    def flow_kernel(
-        self,
-    ) -> Callable[[list[float], float, float, float, float], tuple[Any, ...]] | None:
-        """``f(states, u, v, p, r) -> (X, Y, K, N, forces, stalled)``, plain floats.
-
-        The generalised force (N, N, N m, N m) of every flow-dependent actuator (a
-        :class:`Rudder`, an :class:`MMGPropulsion` unit, a :class:`Propeller` with an
-        advance-speed or tunnel loss: its thrust) at the velocity through the water
-        ``(u, v, p, r)``, which the physics adds to the hull's loads itself (MuJoCo's
-        actuator carries no force for them), with one force (N) per such actuator, in actuator
-        order (a rudder's lift, an MMG unit's propeller thrust) and its stall flag (an MMG
-        unit's is False); ``None`` when the set has none. The array forms
-        (:meth:`Rudder.lift`, :meth:`MMGPropulsion.generalised`) are checked against it.
-        """
-        laws_t = self._flow_laws()
-        if not laws_t:
-            return None
-        atan2, exp = math.atan2, math.exp
-        props = self.propeller_flow_table()
-        if props is not None:  # propellers only (the Blue Lady): the same sums
-            no_stall = (False,) * len(props)
-
-            def flow_props(
-                st: list[float], u: float, v: float, p: float, r: float
-            ) -> tuple[float, float, float, float, tuple[float, ...], tuple[bool, ...]]:
-                X = Y = K = N = 0.0
-                au = abs(u)
-                lifts = []
-                for j, kp, kn, quad, kua, dep, iu50, c, s, mn, mk in props:
-                    a = st[j]
-                    g = kp if a >= 0.0 else kn
-                    aa = abs(a)
-                    f = (g * aa if quad else g) * a - kua * aa * u
-                    if dep:
-                        xu = au * iu50
-                        xu *= xu
-                        f *= 1.0 - dep * xu * exp(1.0 - xu)
-                    X += c * f
-                    Y += s * f
-                    K += mk * f
-                    N += mn * f
-                    lifts.append(f)
-                return X, Y, K, N, tuple(lifts), no_stall
-
-            return flow_props
-
-        def flow_of(
-            st: list[float], u: float, v: float, p: float, r: float
-        ) -> tuple[float, float, float, float, tuple[float, ...], tuple[bool, ...]]:
-            X = Y = K = N = 0.0
-            lifts = []
-            stalls = []
-            for kind, j, k, x, z, a_s, c_s, inflow in laws_t:
-                if kind == 2:  # a propeller: bollard law, advance-speed loss, tunnel factor
-                    kp, kn, quad, kua, dep, iu50, c, s, mn, mk = k
-                    a = st[j]
-                    g = kp if a >= 0.0 else kn
-                    aa = abs(a)
-                    f = (g * aa if quad else g) * a - kua * aa * u
-                    if dep:
-                        xu = u * iu50
-                        xu *= xu
-                        f *= 1.0 - dep * xu * exp(1.0 - xu)
-                    X += c * f
-                    Y += s * f
-                    K += mk * f
-                    N += mn * f
-                    lifts.append(f)
-                    stalls.append(False)
-                    continue
-                if kind == 1:  # an MMG unit: states [n, delta], the paper's angle is -delta
-                    fx, fy, fn, T = k(u, v, r, -st[j + 1], st[j])
-                    X += fx
-                    Y += fy
-                    N += fn
-                    lifts.append(T)
-                    stalls.append(False)
-                    continue
-                if inflow:
-                    vr = v + x * r - z * p
-                    q = u * u + vr * vr
-                    if u < 0.0:
-                        q = -q
-                    alpha = st[j] - atan2(vr, abs(u))
-                else:
-                    q = u * abs(u)
-                    alpha = st[j]
-                stalled = abs(alpha) > a_s
-                c = (c_s if alpha > 0.0 else -c_s) if stalled else alpha
-                f = k * q * c
-                Y += f
-                K -= z * f
-                N += x * f
-                lifts.append(f)
-                stalls.append(stalled)
-            return X, Y, K, N, tuple(lifts), tuple(stalls)
-
-        return flow_of
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state.pop("_law_table", None)  # compiled functions: rebuilt on demand
+        return state

@@ -55,6 +55,10 @@ The model has no rudder; :func:`linear_roll_model` and :func:`roll_rhs` take the
 force ``Y = lift_gain U^2 delta`` at ``(rudder_x, 0, rudder_z)`` (``K = -z Y``, ``N = x Y``),
 and the seed's 5-state order ``x = [v, r, psi, p, phi]`` (Radhakrishnan (n.d.) eq. 9) of the
 roll controllers and Kalman filters. Full entries of the sources: ``docs/references.md``.
+
+The family's compiled kernel is :func:`accel_blanke4` (:data:`~shipgym._jit.ACCEL_SIG`,
+constants from :meth:`Blanke4Hull.kernel_constants`), checked against
+:meth:`Blanke4Hull.nu_dot` in ``tests/test_hull_kernels.py``.
 """
 
 from __future__ import annotations
@@ -62,12 +66,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import require_positive, required_param
+from shipgym._jit import njit
 
 __all__ = [
     "Blanke4Hull",
@@ -79,10 +84,58 @@ __all__ = [
     "roll_rhs",
     "surge_thrust",
     "SEED_STATE",
+    "accel_blanke4",
 ]
 
 #: the seed's state order of :func:`linear_roll_model` and :func:`roll_rhs`
 SEED_STATE = ("v", "r", "psi", "p", "phi")
+
+
+@njit
+def accel_blanke4(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c):  # type: ignore[no-untyped-def]
+    r"""The ``blanke4`` family's compiled acceleration (:data:`~shipgym._jit.ACCEL_SIG`).
+
+    :meth:`Blanke4Hull.nu_dot` written out (the equations of the module docstring, Blanke &
+    Christensen 1993 with the data layout of ``navalvessel.m``; the same sums as
+    :attr:`Blanke4Hull.accel`): ``M nu_dot = tau + f_h(nu_r, p, r, phi) + f_c(nu, phi)``.
+
+    Args:
+        k: the 53 constants of :meth:`Blanke4Hull.kernel_constants` (float64, C-contiguous).
+        u, v, p, r: body velocity over ground (m/s, m/s, rad/s, rad/s).
+        phi: roll angle (rad).
+        X, Y, K, N: total external generalised force (N, N, N m, N m).
+        u_c, v_c: body-frame current (m/s).
+
+    Returns:
+        ``(u_dot, v_dot, p_dot, r_dot)`` (m/s^2, m/s^2, rad/s^2, rad/s^2).
+    """
+    m = k[16]
+    xg = k[17]
+    zg = k[18]
+    ur = u - u_c
+    vr = v - v_c
+    au = abs(ur)
+    av = abs(vr)
+    ar = abs(r)
+    auv = abs(ur * vr)
+    aur = au * ar
+    f1 = X + k[20] * ur * au + k[21] * vr * r + m * (v * r + xg * r * r - zg * p * r)
+    f2 = (Y + k[22] * au * vr + k[23] * ur * r + k[24] * vr * av + k[25] * r * ar
+          + k[26] * vr * ar + k[27] * r * av
+          + phi * (k[28] * auv + k[29] * aur + k[30] * ur * ur) - m * u * r)  # fmt: skip
+    f3 = (K + k[31] * au * vr + k[32] * ur * r + k[33] * vr * av + k[34] * r * ar
+          + k[35] * vr * ar + k[36] * r * av
+          + phi * (k[37] * auv + k[38] * aur + k[39] * ur * ur - k[19] + k[43] * phi * phi)
+          + (k[40] * au + k[41] * abs(p) + k[42]) * p + m * zg * u * r)  # fmt: skip
+    f4 = (N + k[44] * au * vr + k[45] * au * r + k[46] * vr * av + k[47] * r * ar
+          + k[48] * vr * ar + k[49] * r * av - m * xg * u * r
+          + phi * (k[50] * auv + k[51] * ur * ar + k[52] * ur * au))  # fmt: skip
+    return (
+        k[0] * f1 + k[1] * f2 + k[2] * f3 + k[3] * f4,
+        k[4] * f1 + k[5] * f2 + k[6] * f3 + k[7] * f4,
+        k[8] * f1 + k[9] * f2 + k[10] * f3 + k[11] * f4,
+        k[12] * f1 + k[13] * f2 + k[14] * f3 + k[15] * f4,
+    )
 
 
 @dataclass(frozen=True)
@@ -96,7 +149,15 @@ class Blanke4Hull:
 
     Derived attributes: ``m = rho nabla`` (kg), ``K_phi = rho g nabla GM`` (N m/rad, the
     linear roll restoring), ``dofs = 4``.
+
+    The family's compiled kernel is :attr:`accel_kernel` (:func:`accel_blanke4`) with the
+    constant vector of :meth:`kernel_constants` (53 values, layout there).
     """
+
+    #: the hull family (``[hull] family`` of a vessel package)
+    family: ClassVar[str] = "blanke4"
+    #: the family's compiled acceleration, :func:`accel_blanke4` (``ACCEL_SIG``)
+    accel_kernel = staticmethod(accel_blanke4)
 
     name: str = required_param("-", "the hull's name")
     source: str = required_param("-", "where the numbers come from")
@@ -273,6 +334,34 @@ class Blanke4Hull:
         Plain-float kernel of :meth:`nu_dot` (precomputed inverse mass matrix; SI units).
         """
         return self._k
+
+    def kernel_constants(self) -> NDArray[np.float64]:
+        """The constant vector ``k`` of :func:`accel_blanke4` (a new float64, C-contiguous
+        array of 53; units of each derivative in its field's metadata):
+
+        - ``k[0:16]``: ``M^-1`` by rows, order ``(u, v, p, r)`` (1/kg, 1/(kg m), 1/(kg m^2));
+        - ``k[16:20]``: ``m`` (kg), ``x_G``, ``z_G`` (m), ``K_phi = rho g nabla GM`` (N m/rad);
+        - ``k[20:22]``: ``X_uau, X_vr``;
+        - ``k[22:31]``: ``Y_auv, Y_ur, Y_vav, Y_rar, Y_var, Y_rav, Y_phauv, Y_phaur, Y_phuu``;
+        - ``k[31:44]``: ``K_auv, K_ur, K_vav, K_rar, K_var, K_rav, K_phauv, K_phaur, K_phuu,
+          K_aup, K_pap, K_p, K_phphph``;
+        - ``k[44:53]``: ``N_auv, N_aur, N_vav, N_rar, N_var, N_rav, N_phauv, N_phuar,
+          N_phuau``.
+        """
+        h = self
+        rest = (
+            h.m, h.x_G, h.z_G, h.K_phi,
+            h.X_uau, h.X_vr,
+            h.Y_auv, h.Y_ur, h.Y_vav, h.Y_rar, h.Y_var, h.Y_rav, h.Y_phauv, h.Y_phaur, h.Y_phuu,
+            h.K_auv, h.K_ur, h.K_vav, h.K_rar, h.K_var, h.K_rav, h.K_phauv, h.K_phaur, h.K_phuu,
+            h.K_aup, h.K_pap, h.K_p, h.K_phphph,
+            h.N_auv, h.N_aur, h.N_vav, h.N_rar, h.N_var, h.N_rav, h.N_phauv, h.N_phuar,
+            h.N_phuau,
+        )  # fmt: skip
+        return np.ascontiguousarray(
+            np.concatenate([np.asarray(self._Mi, dtype=np.float64).ravel(), rest]),
+            dtype=np.float64,
+        )
 
 
 def _kernel(h: Blanke4Hull, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any, Any]]:

@@ -28,19 +28,24 @@ linearised about a forward speed, where those terms are already in ``D_L``.
 
 As for :class:`~shipgym.dynamics.model.PlantModel`, a batched matrix form (:meth:`nu_dot`)
 serves the reference integrator and tests, and an expanded scalar kernel (:attr:`accel`) the
-physics step; a test checks one against the other.
+physics step; a test checks one against the other. The family's compiled kernel is
+:func:`accel_linear4` (:data:`~shipgym._jit.ACCEL_SIG`, constants from
+:meth:`Hull4.kernel_constants`), checked against :meth:`Hull4.nu_dot` in
+``tests/test_hull_kernels.py``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["KINEMATICS", "Hull4", "is_hull4"]
+from shipgym._jit import njit
+
+__all__ = ["KINEMATICS", "Hull4", "is_hull4", "accel_linear4"]
 
 #: the kinematics a 4-DOF hull can use (module docstring)
 KINEMATICS = ("fossen", "linear")
@@ -53,6 +58,49 @@ def _mat4(name: str, a: ArrayLike) -> Mat4:
     if arr.shape != (4, 4) or not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be a finite 4x4 matrix, got shape {arr.shape}")
     return tuple(tuple(float(x) for x in row) for row in arr)
+
+
+@njit
+def accel_linear4(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c):  # type: ignore[no-untyped-def]
+    r"""The ``linear4`` family's compiled acceleration (:data:`~shipgym._jit.ACCEL_SIG`).
+
+    :meth:`Hull4.nu_dot` written out (the equations of :attr:`Hull4.accel`, module
+    docstring): ``M nu_dot = tau - (D_L + |u_r| D_u) nu_r - diag(d_quad) |nu_r| nu_r - g phi``
+    with ``g = [0, Y_phi, K_phi, N_phi]``, ``nu_r = [u - u_c, v - v_c, p, r]`` (Fossen 2011
+    4-DOF form; Van der Klugt 1987, Blanke & Christensen 1993 linearised hulls). The
+    ``|u_r| D_u`` terms are evaluated only where the flag ``k[55]`` is not 0.
+
+    Args:
+        k: the 56 constants of :meth:`Hull4.kernel_constants` (float64, C-contiguous).
+        u, v, p, r: body velocity over ground (m/s, m/s, rad/s, rad/s).
+        phi: roll angle (rad).
+        X, Y, K, N: total external generalised force (N, N, N m, N m).
+        u_c, v_c: body-frame current (m/s).
+
+    Returns:
+        ``(u_dot, v_dot, p_dot, r_dot)`` (m/s^2, m/s^2, rad/s^2, rad/s^2).
+    """
+    ur = u - u_c
+    vr = v - v_c
+    a = abs(ur)
+    f1 = X - (k[16] * ur + k[17] * vr + k[18] * p + k[19] * r + k[48] * a * ur)
+    f2 = Y - (k[20] * ur + k[21] * vr + k[22] * p + k[23] * r + k[49] * abs(vr) * vr)
+    f2 -= k[53] * phi
+    f3 = K - (k[24] * ur + k[25] * vr + k[26] * p + k[27] * r + k[50] * abs(p) * p)
+    f3 -= k[52] * phi
+    f4 = N - (k[28] * ur + k[29] * vr + k[30] * p + k[31] * r + k[51] * abs(r) * r)
+    f4 -= k[54] * phi
+    if k[55] != 0.0:
+        f1 -= a * (k[32] * ur + k[33] * vr + k[34] * p + k[35] * r)
+        f2 -= a * (k[36] * ur + k[37] * vr + k[38] * p + k[39] * r)
+        f3 -= a * (k[40] * ur + k[41] * vr + k[42] * p + k[43] * r)
+        f4 -= a * (k[44] * ur + k[45] * vr + k[46] * p + k[47] * r)
+    return (
+        k[0] * f1 + k[1] * f2 + k[2] * f3 + k[3] * f4,
+        k[4] * f1 + k[5] * f2 + k[6] * f3 + k[7] * f4,
+        k[8] * f1 + k[9] * f2 + k[10] * f3 + k[11] * f4,
+        k[12] * f1 + k[13] * f2 + k[14] * f3 + k[15] * f4,
+    )
 
 
 @dataclass(frozen=True)
@@ -74,7 +122,15 @@ class Hull4:
         nabla: displaced volume (m^3), 0 when the model has none (a per-unit model); the wave
             moments of :mod:`shipgym.disturbances.rollwaves` need it.
         rho: water density (kg/m^3).
+
+    The family's compiled kernel is :attr:`accel_kernel` (:func:`accel_linear4`) with the
+    constant vector of :meth:`kernel_constants` (56 values, layout there).
     """
+
+    #: the hull family (``[hull] family`` of a vessel package)
+    family: ClassVar[str] = "linear4"
+    #: the family's compiled acceleration, :func:`accel_linear4` (``ACCEL_SIG``)
+    accel_kernel = staticmethod(accel_linear4)
 
     name: str
     M: Mat4
@@ -160,6 +216,29 @@ class Hull4:
     def accel(self) -> Callable[..., tuple[Any, Any, Any, Any]]:
         """``accel(u, v, p, r, phi, X, Y, K, N, u_c=0, v_c=0) -> (u_dot, v_dot, p_dot, r_dot)``."""
         return self._k
+
+    def kernel_constants(self) -> NDArray[np.float64]:
+        """The constant vector ``k`` of :func:`accel_linear4` (a new float64, C-contiguous
+        array of 56), order of the DOFs ``(u, v, p, r)``:
+
+        - ``k[0:16]``: ``M^-1`` by rows (1/kg, 1/(kg m), 1/(kg m^2));
+        - ``k[16:32]``: ``D_L`` by rows (N s/m, N s, N m s);
+        - ``k[32:48]``: ``D_u`` by rows (N s^2/m^2, N s^2/m, N m s^2/m);
+        - ``k[48:52]``: ``d_quad`` (N s^2/m^2, N s^2/m^2, N m s^2, N m s^2);
+        - ``k[52:55]``: ``K_phi`` (N m/rad), ``Y_phi`` (N/rad), ``N_phi`` (N m/rad);
+        - ``k[55]``: 1.0 where ``D_u`` has a non-zero entry, else 0.0 (its terms skipped).
+        """
+        E = np.asarray(self.D_u, dtype=np.float64)
+        return np.ascontiguousarray(
+            np.concatenate([
+                np.linalg.inv(np.asarray(self.M, dtype=np.float64)).ravel(),
+                np.asarray(self.D_L, dtype=np.float64).ravel(),
+                E.ravel(),
+                self.d_quad,
+                (self.K_phi, *self.phi_coupling, 1.0 if np.any(E != 0.0) else 0.0),
+            ]),
+            dtype=np.float64,
+        )  # fmt: skip
 
 
 def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any, Any]]:

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .actuators import Rudder
+from .actuators import Rudder, tau_of_table
 from .hull4 import is_hull4
 from .vanderklugt import OUTPUT_NAMES, STATE_NAMES, RollModel
 
@@ -133,7 +133,7 @@ def roll_rhs_of(vessel: Any, U: float, *, rudder: str | None = None, plant: str 
 
     ``f(x, delta, w=None) -> x_dot`` with ``x = [v, r, psi, p, phi]`` (the seed's order),
     ``delta`` the rudder angle (rad), ``w = [K_w, N_w]`` optional moments (N m): the hull's
-    plain-float kernel (``plant.accel``) and the rudder's lift (stall included) with ``u = U``
+    compiled acceleration and the rudder's lift (stall included) with ``u = U``
     held and the kinematics ``psi_dot = r cos(phi)`` (``r`` for ``kinematics = "linear"``).
     The model :func:`roll_model_of` linearises; the EKF variant of the seed's filter
     (:class:`~shipgym.observers.sway.SwayVelocityEKF`) propagates it.
@@ -144,20 +144,21 @@ def roll_rhs_of(vessel: Any, U: float, *, rudder: str | None = None, plant: str 
     hull, rud = _hull_and_rudder(vessel, U, rudder, plant)
     acts = vessel.actuators
     j = acts.channel_names.index(rud.name)
-    flow_of = acts.flow_kernel()
-    accel = hull.accel
+    accel, k = type(hull).accel_kernel, hull.kernel_constants()
+    table, laws, kinds = acts.law_table()
+    out = np.zeros(len(kinds)), np.zeros(len(kinds))
     linear = getattr(hull, "kinematics", "fossen") == "linear"
-    st = [0.0] * acts.n_channels
+    st = np.zeros(acts.n_channels)
     Uf = float(U)
 
     def f(x: Any, delta: float, w: Any = None) -> NDArray[np.float64]:
         v, r, _psi, p, phi = (float(c) for c in x)
         st[j] = float(delta)
-        _X, Y, K, N, _l, _s = flow_of(st, Uf, v, p, r)
+        _X, Y, K, N = tau_of_table(table, laws, kinds, st, Uf, v, p, r, *out)
         if w is not None:
             K += float(w[0])
             N += float(w[1])
-        _ud, vd, pd, rd = accel(Uf, v, p, r, phi, 0.0, Y, K, N)
+        _ud, vd, pd, rd = accel(k, Uf, v, p, r, phi, 0.0, Y, K, N, 0.0, 0.0)
         psid = r if linear else r * math.cos(phi)
         return np.array([vd, rd, psid, pd, p])
 

@@ -31,7 +31,10 @@ D_P)``; ``Y_P = -c_y |X_P|`` at ``x_P`` when ``n < 0``.
 Two bugs of open implementations are absent (tests): the wake fraction's bracket (``1 -
 exp(-C1|beta_P|)`` multiplies ``(C2 - 1)``, not the other way round) and ``x_R = x'_R L``.
 
-Pure NumPy; :meth:`MMGModel.nu_dot` accepts a leading batch axis.
+Pure NumPy; :meth:`MMGModel.nu_dot` accepts a leading batch axis. The hull's compiled
+acceleration (the ``mmg`` family's :data:`~shipgym._jit.ACCEL_SIG` kernel) is
+:func:`accel_mmg`, constants from :meth:`MMGHull.kernel_constants`; it is checked against
+:meth:`MMGHull.nu_dot` in ``tests/test_hull_kernels.py``.
 """
 
 from __future__ import annotations
@@ -40,11 +43,15 @@ import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import njit
+
 __all__ = [
+    "accel_mmg",
     "KVLCC2_L7",
     "MMGHull",
     "MMGModel",
@@ -371,6 +378,53 @@ def propulsion_kernel(
     return propulsion
 
 
+@njit
+def accel_mmg(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c):  # type: ignore[no-untyped-def]
+    r"""The ``mmg`` family's compiled acceleration (:data:`~shipgym._jit.ACCEL_SIG`).
+
+    :meth:`MMGHull.nu_dot` written out (the equations of :class:`MMGHull` and
+    :attr:`MMGHull.accel`): the bare hull's forces of Yasukawa & Yoshimura (2015) eqs. 9-11 at
+    ``nu_r = [u - u_c, v - v_c, r]`` (:func:`hull_kernel`), the inertia of their eq. 4 with the
+    current's terms, ``X``, ``Y``, ``N`` the actuators' and the environment's force.
+
+    Args:
+        k: the 29 constants of :meth:`MMGHull.kernel_constants` (float64, C-contiguous).
+        u, v, p, r: body velocity over ground (m/s, m/s, rad/s, rad/s); ``p`` is ignored.
+        phi: roll angle (rad), ignored (3 DOF).
+        X, Y, K, N: total external generalised force (N, N, N m, N m); ``K`` is ignored.
+        u_c, v_c: body-frame current (m/s), constant in NED.
+
+    Returns:
+        ``(u_dot, v_dot, 0.0, r_dot)`` (m/s^2, m/s^2, rad/s^2, rad/s^2).
+    """
+    L = k[1]
+    m = k[19]
+    mx = k[20]
+    my = k[21]
+    xg = k[22]
+    ur = u - u_c
+    vr = v - v_c
+    # bare hull (Yasukawa & Yoshimura 2015 eqs. 9-11) at nu_r
+    U2 = ur * ur + vr * vr
+    U = math.sqrt(U2)
+    Us = U if U > 1e-9 else 1e-9
+    vp = vr / Us
+    rp = r * L / Us
+    q = k[0] * U2
+    v2 = vp * vp
+    r2 = rp * rp
+    XH = q * (-k[2] + k[3] * v2 + k[4] * vp * rp + k[5] * r2 + k[6] * v2 * v2)
+    YH = q * (k[7] * vp + k[8] * rp + k[9] * v2 * vp + k[10] * v2 * rp + k[11] * vp * r2
+              + k[12] * r2 * rp)  # fmt: skip
+    NH = q * L * (k[13] * vp + k[14] * rp + k[15] * v2 * vp + k[16] * v2 * rp
+                  + k[17] * vp * r2 + k[18] * r2 * rp)  # fmt: skip
+    # inertia (eq. 4) with the current's terms
+    fx = XH + X + m * (v * r + xg * r * r) + my * vr * r + mx * r * v_c
+    fy = YH + Y - m * u * r - mx * ur * r - my * r * u_c
+    fn = NH + N - k[23] * u * r
+    return k[24] * fx, k[25] * fy + k[26] * fn, 0.0, k[27] * fy + k[28] * fn
+
+
 class MMGHull:
     r"""The MMG hull as a shipgym plant (3 DOF, midship origin): the bare hull's forces
     (:meth:`MMGModel.hull_forces`) and the inertia of the MMG equations, with the propeller
@@ -390,12 +444,19 @@ class MMGHull:
     Yoshimura (2015) eq. 4 (the paper's yaw equation has no Munk moment of the added masses:
     it is in ``N'_v``).
 
+    The family's compiled kernel is :attr:`accel_kernel` (:func:`accel_mmg`) with the constant
+    vector of :meth:`kernel_constants` (29 values, layout there).
+
     Args:
         p: the parameters.
         name: the plant variant's name.
     """
 
     dofs = 3
+    #: the hull family (``[hull] family`` of a vessel package)
+    family: ClassVar[str] = "mmg"
+    #: the family's compiled acceleration, :func:`accel_mmg` (``ACCEL_SIG``)
+    accel_kernel = staticmethod(accel_mmg)
 
     def __init__(self, p: MMGParameters, name: str = "default") -> None:
         if not isinstance(p, MMGParameters):
@@ -447,6 +508,30 @@ class MMGHull:
         :meth:`nu_dot` written out for the physics step (a test checks one against the
         other)."""
         return self._k
+
+    def kernel_constants(self) -> Array:
+        """The constant vector ``k`` of :func:`accel_mmg` (a new float64, C-contiguous array
+        of 29; the hull coefficients nondimensional, Yasukawa & Yoshimura 2015 Table 2):
+
+        - ``k[0]``: ``rho/2 L d`` (kg/m, the force base per ``U^2``); ``k[1]``: ``L`` (m);
+        - ``k[2:7]``: ``R'_0, X'_vv, X'_vr, X'_rr, X'_vvvv``;
+        - ``k[7:13]``: ``Y'_v, Y'_r, Y'_vvv, Y'_vvr, Y'_vrr, Y'_rrr``;
+        - ``k[13:19]``: ``N'_v, N'_r, N'_vvv, N'_vvr, N'_vrr, N'_rrr``;
+        - ``k[19:24]``: ``m, m_x, m_y`` (kg), ``x_G`` (m), ``m x_G`` (kg m);
+        - ``k[24]``: ``1/(m + m_x)`` (1/kg); ``k[25:29]``: the sway-yaw block of ``M^-1`` by
+          rows, ``i22, i23, i32, i33`` (1/kg, 1/(kg m), 1/(kg m), 1/(kg m^2)).
+        """
+        p, md = self.p, self.model
+        Mi = np.linalg.inv(self.mass_matrix())
+        k = (
+            0.5 * p.rho * p.L * p.d, p.L,
+            p.R0, p.X_vv, p.X_vr, p.X_rr, p.X_vvvv,
+            p.Y_v, p.Y_r, p.Y_vvv, p.Y_vvr, p.Y_vrr, p.Y_rrr,
+            p.N_v, p.N_r, p.N_vvv, p.N_vvr, p.N_vrr, p.N_rrr,
+            md.m, md.mx, md.my, p.x_G, md.m * p.x_G,
+            1.0 / (md.m + md.mx), Mi[1, 1], Mi[1, 2], Mi[2, 1], Mi[2, 2],
+        )  # fmt: skip
+        return np.ascontiguousarray(k, dtype=np.float64)
 
     def _make_kernel(self):  # type: ignore[no-untyped-def]
         md = self.model

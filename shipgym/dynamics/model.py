@@ -16,21 +16,32 @@ Two formulations of the same equations live here on purpose:
   :meth:`~PlantModel.coriolis_a`, :meth:`~PlantModel.damping`, :meth:`~PlantModel.nu_dot`),
   batched over a leading axis and used by the reference integrator, observers and tests;
 - the expanded scalar kernel :meth:`PlantModel.accel` used on the physics hot path (plain
-  Python floats or NumPy arrays; no per-call array overhead). Tests check one against the other.
+  Python floats or NumPy arrays; no per-call array overhead). Tests check one against the other;
+- the same expanded form compiled, :func:`accel_fossen3` (the family's
+  :data:`~shipgym._jit.ACCEL_SIG` kernel, constants from :meth:`PlantModel.kernel_constants`),
+  checked against the matrix form in ``tests/test_hull_kernels.py``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import njit
+
 from .params import HullParameters
 
-__all__ = ["PlantModel", "plant_model", "PLANT_VARIANTS", "seed_linear_matrices"]
+__all__ = [
+    "PlantModel",
+    "plant_model",
+    "PLANT_VARIANTS",
+    "seed_linear_matrices",
+    "accel_fossen3",
+]
 
 Mat3 = tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]
 
@@ -40,6 +51,70 @@ def _mat(a: ArrayLike) -> Mat3:
     if arr.shape != (3, 3) or not np.all(np.isfinite(arr)):
         raise ValueError(f"expected a finite 3x3 matrix, got shape {arr.shape}: {arr!r}")
     return tuple(tuple(float(x) for x in row) for row in arr)  # type: ignore[return-value]
+
+
+@njit
+def accel_fossen3(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c):  # type: ignore[no-untyped-def]
+    r"""The ``fossen3`` family's compiled acceleration (:data:`~shipgym._jit.ACCEL_SIG`).
+
+    :meth:`PlantModel.nu_dot` (Fossen 2011 ch. 6-7, Tomera 2014 eqs. 3-7) written out component
+    by component, the equations of :meth:`PlantModel.accel`:
+    ``M nu_dot = tau - C_RB(nu) nu - C_A(nu_r) nu_r - D(nu_r) nu_r + M_A nu_c_dot``.
+
+    Args:
+        k: the 30 constants of :meth:`PlantModel.kernel_constants` (float64, C-contiguous).
+        u, v, p, r: body velocity over ground (m/s, m/s, rad/s, rad/s); ``p`` is ignored.
+        phi: roll angle (rad), ignored (3 DOF).
+        X, Y, K, N: total external generalised force (N, N, N m, N m); ``K`` is ignored.
+        u_c, v_c: body-frame current (m/s), constant in NED.
+
+    Returns:
+        ``(u_dot, v_dot, 0.0, r_dot)`` (m/s^2, m/s^2, rad/s^2, rad/s^2).
+    """
+    a11 = k[0]
+    a22 = k[1]
+    a32 = k[2]
+    d11 = k[3]
+    d12 = k[4]
+    d13 = k[5]
+    d21 = k[6]
+    d22 = k[7]
+    d23 = k[8]
+    d31 = k[9]
+    d32 = k[10]
+    d33 = k[11]
+    q1 = k[12]
+    q2 = k[13]
+    q3 = k[14]
+    m = k[24]
+    mxg = k[25]
+    xg = k[26]
+    a22c = k[27]
+    a23c = k[28]
+    a11c = k[29]
+    ur = u - u_c
+    vr = v - v_c
+    # damping D(nu_r) nu_r
+    fx = X - (d11 * ur + d12 * vr + d13 * r + q1 * abs(ur) * ur)
+    fy = Y - (d21 * ur + d22 * vr + d23 * r + q2 * abs(vr) * vr)
+    fn = N - (d31 * ur + d32 * vr + d33 * r + q3 * abs(r) * r)
+    # Coriolis-centripetal C_RB(nu) nu + C_A(nu_r) nu_r
+    w = a22c * vr + a23c * r
+    a11u = a11c * ur
+    fx += m * (xg * r + v) * r + w * r
+    fy -= m * u * r + a11u * r
+    fn -= mxg * r * u + w * ur - a11u * vr
+    # + M_A nu_c_dot, nu_c_dot = [r v_c, -r u_c, 0]
+    ay = -r * u_c
+    fx += a11 * (r * v_c)
+    fy += a22 * ay
+    fn += a32 * ay
+    return (
+        k[15] * fx + k[16] * fy + k[17] * fn,
+        k[18] * fx + k[19] * fy + k[20] * fn,
+        0.0,
+        k[21] * fx + k[22] * fy + k[23] * fn,
+    )
 
 
 @dataclass(frozen=True)
@@ -56,7 +131,16 @@ class PlantModel:
             N m s^2), all >= 0.
         coriolis: include C_RB(nu) and C_A(nu_r) (Fossen 2011 eqs. 6.43, 6.54).
         m, x_g: rigid-body mass (kg) and longitudinal CG (m), used by C_RB.
+
+    The family's compiled kernel is :attr:`accel_kernel` (:func:`accel_fossen3`) with the
+    constant vector of :meth:`kernel_constants` (30 values, layout there).
     """
+
+    #: the hull family (``[hull] family`` of a vessel package)
+    family: ClassVar[str] = "fossen3"
+    dofs: ClassVar[int] = 3
+    #: the family's compiled acceleration, :func:`accel_fossen3` (``ACCEL_SIG``)
+    accel_kernel = staticmethod(accel_fossen3)
 
     name: str
     M_RB: Mat3
@@ -164,6 +248,20 @@ class PlantModel:
         """
         return self._k
 
+    def kernel_constants(self) -> NDArray[np.float64]:
+        """The constant vector ``k`` of :func:`accel_fossen3` (a new float64, C-contiguous
+        array of 30; the content of the module function :func:`kernel_constants`):
+
+        - ``k[0:3]``: ``a11, a22, a32`` of ``M_A`` (kg, kg, kg m) for ``M_A nu_c_dot``;
+        - ``k[3:12]``: ``D_L`` by rows (N s/m, N s, N m s);
+        - ``k[12:15]``: ``d_quad`` (N s^2/m^2, N s^2/m^2, N m s^2);
+        - ``k[15:24]``: ``M^-1`` by rows (1/kg, 1/(kg m), 1/(kg m^2));
+        - ``k[24:30]``: the Coriolis coefficients ``m`` (kg), ``m x_g`` (kg m), ``x_g`` (m),
+          ``a22`` (kg), ``(a23 + a32)/2`` (kg m, the symmetric part), ``a11`` (kg), each times
+          the Coriolis switch (0 when ``coriolis=False``).
+        """
+        return np.ascontiguousarray(kernel_constants(self), dtype=np.float64)
+
     def with_(self, **changes: Any) -> PlantModel:
         """A copy with some fields changed (frozen-dataclass ``replace``)."""
         return replace(self, **changes)
@@ -173,7 +271,7 @@ def kernel_constants(p: PlantModel) -> tuple[float, ...]:
     """The 30 constants of :meth:`PlantModel.accel`'s expanded form, in its order: ``a11,
     a22, a32``, ``D_L`` by rows, ``d_quad``, ``M^-1`` by rows, then the Coriolis coefficients
     ``m, m x_g, x_g, a22, a23, a11`` (each times the Coriolis switch). The compiled physics
-    step (:mod:`shipgym.envs._native`) evaluates the same expressions with them."""
+    step (:func:`accel_fossen3`) evaluates the same expressions with them."""
     return p._kc  # type: ignore[attr-defined, no-any-return]
 
 

@@ -11,10 +11,9 @@ world and generates from ``vessel.toml`` what must exist once:
   any roll angle, with no velocity-dependent bias force, which the exact force injection of
   :mod:`shipgym.envs.physics` relies on; a check there verifies it);
 - one site per actuator at its position and one MuJoCo actuator per control channel
-  (:class:`~shipgym.dynamics.actuators.Channel`): ``filterexact`` for lagged states,
-  ``integrator`` for an azimuth angle and a rudder servo (its rate, with the angle limited by
-  ``actrange``); force direction (``gear``) and gain from the actuator (0 for a rudder, whose
-  flow-dependent force the physics applies).
+  (:class:`~shipgym.dynamics.actuators.Channel`), which names the channel; it carries no force
+  and no state: the actuators' forces and dynamics are the physics' own
+  (:mod:`shipgym.sim.step`).
 """
 
 from __future__ import annotations
@@ -22,7 +21,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from shipgym.assets import asset_path
-from shipgym.dynamics.actuators import ActuatorSet, Azimuth, Propeller
+from shipgym.dynamics.actuators import ActuatorSet
 from shipgym.dynamics.params import BLUE_LADY_HULL
 from shipgym.dynamics.vessel import Vessel, VesselError
 
@@ -118,41 +117,16 @@ def build_model(
     for a in acts:
         hull.add_site(name=a.name, pos=list(a.position), size=[size, size, size],
                       rgba=[1.0, 0.8, 0.0, 1.0], group=3)  # fmt: skip
-        for k, ch in enumerate(a.channels):
+        for ch in a.channels:
+            # a named channel at the actuator's site; its force and dynamics are the physics'
+            # (shipgym.sim.step), so MuJoCo's actuator has no gain and no state
             act = spec.add_actuator(name=ch.name, target=a.name)
             act.trntype = mujoco.mjtTrn.mjTRN_SITE
-            act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
-            if ch.dynamics == "servo":  # MuJoCo integrates the rate the physics commands
-                act.ctrlrange = [-ch.rate, ch.rate]
-            else:
-                act.ctrlrange = [ch.lower, ch.upper]
             act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
             act.biastype = mujoco.mjtBias.mjBIAS_NONE
-            gain = 0.0
-            gear = [0.0] * 6
-            if ch.dynamics == "lag":
-                act.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
-                act.dynprm[0] = ch.time_constant
-                act.actlimited = mujoco.mjtLimited.mjLIMITED_TRUE
-                act.actrange = [ch.lower, ch.upper]
-            else:
-                act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
-                if ch.dynamics == "servo":  # an angle that cannot pass its limits
-                    act.actlimited = mujoco.mjtLimited.mjLIMITED_TRUE
-                    act.actrange = [ch.lower, ch.upper]
-            if isinstance(a, Propeller):
-                c, s = a.direction
-                gear[:2] = [c, s]
-                # the quadratic or asymmetric law's gain is refreshed every physics step; a
-                # flow-dependent one's force is the physics' (gain 0)
-                gain = 0.0 if a.flow_dependent else (a.static_gain or 0.0)
-                act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-                act.forcerange = [a.force_lower, a.force_upper]
-            elif isinstance(a, Azimuth) and k == 0:
-                gear[:2] = [1.0, 0.0]  # turned with the angle every physics step
-                gain = a.max_thrust_n
-            act.gear = gear
-            act.gainprm[0] = gain
+            act.dyntype = mujoco.mjtDyn.mjDYN_NONE
+            act.gear = [0.0] * 6
+            act.gainprm[0] = 0.0
     if world == "open-water":
         water = spec.geom("water")
         half = max(200.0, 15.0 * vessel.L_oa)

@@ -1,0 +1,144 @@
+"""Numba for the run-time laws: the decorator, the two kernel signatures, kernel compilation.
+
+Every run-time law of the physics is one compiled function with one of two fixed signatures,
+so that the one stepping loop (:mod:`shipgym.sim.step`) takes any hull family's acceleration
+and any actuator kind's force law as a first-class function argument: the loop is compiled
+once (and cached on disk by Numba), a new family or kind compiles only its own small law.
+
+- :data:`ACCEL_SIG`: ``accel(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c) -> (u_dot, v_dot,
+  p_dot, r_dot)``: a hull family's body acceleration (m/s^2, rad/s^2) from its constant vector
+  ``k`` (float64, C-contiguous), the body velocity over ground ``(u, v, p, r)`` (m/s, rad/s),
+  the roll angle ``phi`` (rad), the total generalised force on the hull besides its own water
+  forces ``(X, Y, K, N)`` (N, N m) and the body-frame current ``(u_c, v_c)`` (m/s). A 3-DOF
+  family ignores ``p``, ``phi`` and ``K`` and returns ``p_dot = 0``.
+- :data:`LAW_SIG`: ``law(row, st, u, v, p, r) -> (X, Y, K, N, F, flag)``: one actuator's
+  generalised force (N, N m) from its row of constants ``row`` (``row[0]``: the index of its
+  first channel in ``st``), the hull's actuator states ``st`` and the body velocity through
+  the water ``(u_r, v_r, p, r)``; ``F`` (N) is the actuator's own thrust reading (a
+  propeller's thrust, a rudder's lift, an MMG unit's propeller thrust) and ``flag`` 1.0 where
+  it is stalled (0.0 otherwise).
+
+Running without compilation (Numba's ``NUMBA_DISABLE_JIT=1``) runs the same source in Python,
+for debugging.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numba
+from numba import njit as _njit
+from numba import types
+from numba.core.errors import NumbaExperimentalFeatureWarning
+
+__all__ = ["ACCEL_SIG", "LAW_SIG", "njit", "kernel", "entry"]
+
+# first-class function arguments are "experimental" in Numba; the loop relies on them
+warnings.filterwarnings("ignore", category=NumbaExperimentalFeatureWarning)
+
+_f8 = types.float64
+_vec = types.float64[::1]
+
+#: hull family acceleration: (k, u, v, p, r, phi, X, Y, K, N, u_c, v_c) -> 4 floats
+ACCEL_SIG = types.UniTuple(_f8, 4)(_vec, *([_f8] * 11))
+#: actuator force law: (row, st, u_r, v_r, p, r) -> (X, Y, K, N, F, flag)
+LAW_SIG = types.UniTuple(_f8, 6)(_vec, _vec, _f8, _f8, _f8, _f8)
+
+_DISABLED = bool(numba.config.DISABLE_JIT)
+
+
+def njit(*args: Any, **kwargs: Any) -> Any:
+    """``numba.njit`` with ``cache=True`` by default (compiled code cached on disk), or
+    without the cache for a function Numba cannot cache (one defined in an interactive
+    session: no file to locate the cache by)."""
+    if args and callable(args[0]):
+        return njit(**kwargs)(args[0])
+    kwargs.setdefault("cache", True)
+
+    def wrap(fn: Any) -> Any:
+        try:
+            return _njit(*args, **kwargs)(fn)
+        except RuntimeError as exc:  # "cannot cache function ...: no locator available"
+            if "no locator" not in str(exc):
+                raise
+            return _njit(*args, **{**kwargs, "cache": False})(fn)
+
+    return wrap
+
+
+def kernel(fn: Any, sig: Any) -> Any:
+    """``fn`` (an :func:`njit` function) compiled for ``sig`` (:data:`ACCEL_SIG` or
+    :data:`LAW_SIG`) and for nothing else, so that the loop takes it as a first-class function
+    (Numba types a dispatcher that cannot compile more as a function type: one compiled loop
+    for every law of that signature); the function itself where compilation is off."""
+    if _DISABLED or not hasattr(fn, "compile"):
+        return fn
+    if not fn.signatures:
+        fn.compile(sig)
+    fn.disable_compile()
+    return fn
+
+
+def entry(dispatcher: Any, args: tuple[Any, ...]) -> Any:
+    """The compiled entry point of ``dispatcher`` for arguments like ``args`` (compiled if
+    needed): calling it skips Numba's per-call type resolution, which costs tens of
+    microseconds for first-class function arguments. The function itself where compilation
+    is off."""
+    if _DISABLED or not hasattr(dispatcher, "overloads"):
+        return dispatcher
+    sig = tuple(dispatcher.typeof_pyval(a) for a in args)
+    dispatcher.compile(sig)
+    return dispatcher.overloads[sig].entry_point
+
+
+# ---- laws by address ------------------------------------------------------------------------
+# The loop receives each law as the address of its compiled code (an int): an int argument
+# costs nothing to pass, where Numba's first-class function arguments cost microseconds per
+# call to unbox, and a loop over ints and arrays is compiled once and cached on disk.
+_PY_FUNCS: dict[int, Any] = {}  # compilation off: the "address" is a key of the function
+
+
+def address(fn: Any, sig: Any) -> int:
+    """The address of ``fn``'s compiled code for ``sig`` (:func:`kernel`), to pass to the loop;
+    where compilation is off, a key under which the loop finds the Python function."""
+    if _DISABLED or not hasattr(fn, "overloads"):
+        _PY_FUNCS[id(fn)] = fn
+        return id(fn)
+    from numba.experimental.function_type import _get_jit_address
+
+    kernel(fn, sig)
+    return int(_get_jit_address(fn, sig))
+
+
+def _function_at(sig: Any) -> Any:
+    """An intrinsic ``f(addr) -> function`` that makes a first-class function of ``sig`` from
+    the address of its compiled code (Numba's calling convention, :func:`address`)."""
+    if _DISABLED:
+        return lambda addr: _PY_FUNCS[addr]
+    from llvmlite import ir
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    fty = types.FunctionType(sig)
+
+    @intrinsic
+    def function_at(typingctx, addr):  # type: ignore[no-untyped-def]
+        def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+            sfunc = cgutils.create_struct_proxy(fty)(context, builder)
+            ptr = builder.inttoptr(args[0], ir.IntType(8).as_pointer())
+            null = ir.Constant(ir.IntType(8).as_pointer(), None)
+            sfunc.c_addr = null
+            sfunc.py_addr = null
+            sfunc.jit_addr = ptr
+            return sfunc._getvalue()
+
+        return fty(types.int64), codegen
+
+    return function_at
+
+
+#: ``accel_at(addr)``: the hull acceleration compiled at ``addr`` (:data:`ACCEL_SIG`)
+accel_at = _function_at(ACCEL_SIG)
+#: ``law_at(addr)``: the actuator law compiled at ``addr`` (:data:`LAW_SIG`)
+law_at = _function_at(LAW_SIG)

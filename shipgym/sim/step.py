@@ -1,0 +1,659 @@
+r"""The one physics step of shipgym: N >= 1 hulls of one vessel, compiled once.
+
+Per hull and physics step ``h`` (:func:`run`):
+
+1. the velocity at the whole step from the half-step joint velocity, ``v_k = qvel + h/2
+   qacc_prev`` (the leapfrog reading of the symplectic Euler step, second-order accurate), and
+   the body velocity ``nu = J(q)^-1 v_k`` (3 DOF: ``R(psi)^T``; 4 DOF: Fossen's kinematics,
+   ``x_dot = u cos psi - v cos phi sin psi``, ``y_dot = u sin psi + v cos phi cos psi``,
+   ``psi_dot = r cos phi``, ``phi_dot = p``, or their linear form);
+2. the loads at this instant: wind (the Blendermann (1994) load on the velocity over ground,
+   :func:`shipgym.disturbances.wind.blendermann_load`), current (through the velocity through
+   the water ``nu_r = nu - nu_c``), the second-order wave drift, a held external load, and
+   every actuator's force by its kind's law (:data:`shipgym._jit.LAW_SIG`) at ``nu_r``;
+3. the hull family's acceleration ``nu_dot`` (:data:`shipgym._jit.ACCEL_SIG`) and the joint
+   acceleration ``qacc = J nu_dot + J_dot nu`` (Tomera (2014) eq. 22 for 3 DOF);
+4. the actuator states by their dynamics (a first-order lag, exact over the step, with an
+   optional rate limit; a rate-limited servo; an integrator), each within its range;
+5. the integration, by one of two integrators that apply the same forces:
+
+   - ``mujoco`` (one hull, its own ``mjData``): ``qfrc_applied = M_q qacc`` and MuJoCo's C
+     ``mj_step`` (called by its address from the compiled loop), so quay contact, the
+     harbour and rendering work; MuJoCo's Euler step is ``qvel += h qacc; qpos += h qvel``;
+   - ``leapfrog`` (any number of hulls, open water): the same update without MuJoCo.
+
+Wind, current and drift are read from each hull's window of samples of its process
+(:meth:`~shipgym.disturbances._grid.GridPair.chunk`); when a hull's time passes its window the
+loop returns :data:`NEED` with the hull, the process and the chunk it needs, the caller loads
+it and calls again (:class:`HullBatch` does this). Hull ``i`` of N and a single hull with the
+same inputs follow the same code, so the same trajectory to the last bit.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from shipgym._jit import ACCEL_SIG, accel_at, address, entry, law_at, njit
+from shipgym.disturbances._grid import CHUNK
+from shipgym.disturbances.wind import blendermann_load
+from shipgym.sim._mujoco import mujoco
+
+__all__ = [
+    "run",
+    "HullBatch",
+    "SimulationDiverged",
+    "OK",
+    "NEED",
+    "DIVERGED",
+    "MUJOCO",
+    "LEAPFROG",
+    "EVALUATE",
+    "mj_step_address",
+]
+
+#: return codes of :func:`run`
+OK, NEED, DIVERGED = 0, 1, 2
+#: integrators (and EVALUATE: the joint acceleration of the state, nothing stepped)
+MUJOCO, LEAPFROG, EVALUATE = 0, 1, 2
+#: process slots: wind, current, wave drift
+WIND, CURRENT, DRIFT = 0, 1, 2
+#: process modes: none, constant, sampled on a grid
+OFF, CONSTANT, SAMPLED = 0, 1, 2
+#: actuator channel dynamics codes (columns of the channel table, :meth:`HullBatch.channels`)
+LAG, SERVO, INTEGRATOR = 0, 1, 2
+
+#: bounds beyond which the simulation is declared diverged (m/s, rad/s, rad): far above
+#: anything a displacement ship reaches (the Blue Lady: 1.6 m/s; a tanker: 8 m/s).
+MAX_SPEED = 50.0
+MAX_RATE = 10.0
+MAX_ROLL = 1.2
+
+
+class SimulationDiverged(RuntimeError):
+    """The simulation produced a non-finite or physically absurd state; it was stopped."""
+
+
+def diverged(t: float, nu: Any, nud: Any) -> None:
+    """Raise :class:`SimulationDiverged` for the state ``nu``, ``nu_dot`` at time ``t``."""
+    raise SimulationDiverged(
+        f"simulation diverged at t = {t:.3f} s: nu = ({', '.join(f'{x:.4g}' for x in nu)})"
+        f", nu_dot = ({', '.join(f'{x:.4g}' for x in nud)}); check the plant parameters, "
+        "the timestep and the applied forces"
+    )
+
+
+_NCON_OFFSET: int | None = None
+
+
+def ncon_view(model: Any, data: Any) -> np.ndarray:
+    """A one-element int32 array on ``data.ncon`` (MuJoCo's contact count), for the compiled
+    loop's contact stop. The field's offset in ``mjData`` is found once, by writing two
+    values through the bindings and finding the one place both appear."""
+    global _NCON_OFFSET
+    if _NCON_OFFSET is None:
+        d = mujoco.MjData(model)  # a probe, not the caller's data
+        hits = []
+        for value in (0x5A17C0DE, 0x0BADF00D):
+            d.ncon = value
+            raw = np.frombuffer(ctypes.string_at(d._address, 1 << 18), dtype=np.int32)
+            hits.append(set(np.nonzero(raw == value)[0].tolist()))
+        d.ncon = 0
+        both = hits[0] & hits[1]
+        if len(both) != 1:
+            raise RuntimeError("cannot locate mjData.ncon for the compiled physics step")
+        _NCON_OFFSET = 4 * both.pop()
+    view = (ctypes.c_int32 * 1).from_address(data._address + _NCON_OFFSET)
+    arr = np.ctypeslib.as_array(view)
+    if int(arr[0]) != int(data.ncon):
+        raise RuntimeError("mjData.ncon is not where the compiled physics step looked")
+    return arr
+
+
+def _load_mj_step() -> Any:
+    here = Path(mujoco.__file__).parent
+    libs = sorted(here.glob("libmujoco.so*")) + sorted(here.glob("libmujoco*.dylib"))
+    if not libs:
+        raise OSError(f"no libmujoco shared library next to {here}")
+    f = ctypes.CDLL(str(libs[0])).mj_step
+    f.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+    f.restype = None
+    return f
+
+
+_MJ_STEP = _load_mj_step()
+
+
+def mj_step_address() -> int:
+    """The address of MuJoCo's C ``mj_step`` in the library the ``mujoco`` package loaded (an
+    int argument keeps the compiled loop cacheable across processes)."""
+    return int(ctypes.cast(_MJ_STEP, ctypes.c_void_p).value or 0)
+
+
+try:
+    from llvmlite import ir
+    from numba import types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def _call(typingctx, fn, m, d):  # type: ignore[no-untyped-def]
+        """``fn(m, d)``: call the C function at address ``fn`` with two pointers."""
+        sig = types.void(types.intp, types.intp, types.intp)
+
+        def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+            f, mp, dp = args
+            ptr = ir.IntType(8).as_pointer()
+            fnty = ir.FunctionType(ir.VoidType(), [ptr, ptr])
+            target = builder.inttoptr(f, fnty.as_pointer())
+            builder.call(target, [builder.inttoptr(mp, ptr), builder.inttoptr(dp, ptr)])
+            return context.get_dummy_value()
+
+        return sig, codegen
+
+except ImportError:  # pragma: no cover - numba is a core dependency
+    raise
+
+
+@njit(inline="always")
+def grid_at(t, inv_dt, k0, win, i):  # type: ignore[no-untyped-def]
+    """Hull ``i``'s process at time ``t`` from its window ``win[i]`` of samples starting at
+    sample ``k0`` (linear interpolation between the samples ``t_k = k / inv_dt``); ``ok``
+    False where ``t`` lies past the window."""
+    x = t * inv_dt
+    k = int(x)
+    j = k - k0
+    if j < 0 or j >= win.shape[2] - 1:
+        return False, 0.0, 0.0
+    f = x - k
+    a0, b0 = win[i, 0, j], win[i, 1, j]
+    return True, a0 + f * (win[i, 0, j + 1] - a0), b0 + f * (win[i, 1, j + 1] - b0)
+
+
+@njit
+def run(  # type: ignore[no-untyped-def]
+    integrator, mj_step, mp, dp, ncon, stop_on_contact,
+    dofs, linear_kin, h, inertia,
+    accel, kh, laws, table, kind_index, chan, kw,
+    q, qv, qa, qfrc, act, cmd, t, left, external,
+    mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
+    loads, forces, flags, hits, status,
+):  # fmt: skip
+    """Advance each hull ``i`` by ``left[i]`` physics steps (module docstring).
+
+    Args (all arrays C-contiguous float64 unless said; N hulls, nv joints, nc channels, na
+    actuators):
+        integrator: :data:`MUJOCO` (N = 1, the arrays ``q``... views on its ``mjData``),
+            :data:`LEAPFROG`, or :data:`EVALUATE` (only ``qa`` and the read-outs of the state
+            written: the start of a run).
+        mj_step, mp, dp: the address of MuJoCo's ``mj_step``, of the ``mjModel`` and of the
+            ``mjData`` (``mujoco`` only; else 0).
+        ncon: int32 (1,) view on ``mjData.ncon``; stop_on_contact: stop a hull after the step
+            in which MuJoCo finds a contact.
+        dofs: 3 or 4; linear_kin: the 4-DOF hull's linear kinematics (``cos phi = 1``).
+        h: the step (s); inertia: MuJoCo's joint-space inertia ``(m, m, I_z, I_x)``.
+        accel: the address of the hull family's compiled acceleration
+            (:func:`shipgym._jit.address`); kh: its constants.
+        laws, table, kind_index: the addresses of the actuator force laws (int64), one row of
+            constants per actuator, each row's law
+            (:meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`).
+        chan: (nc, 9) channel dynamics: code, lower, upper, alpha = 1 - exp(-h/T), rate-limit
+            band, rate-limit step, servo rate, servo time constant, bounded.
+        kw: the wind load's constants (:meth:`~shipgym.disturbances.wind.WindLoad.
+            kernel_constants`).
+        q, qv, qa, qfrc: (N, nv) joint positions, half-step velocities, accelerations, and
+            the applied force written for MuJoCo.
+        act, cmd: (N, nc) actuator states and commands.
+        t: (N,) each hull's time (s); left: (N,) int64 steps still to take, counted down.
+        external: (N, 4) a held external load ``[X, Y, K, N]`` (N, N m).
+        mode: (N, 3) int64 process modes (wind, current, drift: ``OFF``, ``CONSTANT``,
+            ``SAMPLED``); const: (N, 3, 2) constant values (speed, direction); inv_dt,
+            k0: (N, 3) sample rate (1/s) and the first sample of each window (int64);
+            win_w, win_c, win_d: (N, 2, W) the windows of samples.
+        drift_k: (N, 4) the drift's ``beta_p`` (rad), ``k_x``, ``k_y``, ``k_n``.
+        loads: (N, 8) out: the last step's wind X, Y, N, drift X, Y, N, current u_c, v_c.
+        forces, flags: (N, na) out: each actuator's force reading (N) and stall flag.
+        hits: (N, nc) int64 out: 1 where a servo ran at its rate limit in the last step.
+        status: (4,) int64 out: the hull, the process and the chunk needed (``NEED``), or
+            the hull that diverged (``DIVERGED``; its t, nu, nu_dot in ``loads[i]``).
+
+    Returns:
+        ``OK``, ``NEED`` or ``DIVERGED``.
+    """
+    n_hulls = q.shape[0]
+    n_act = table.shape[0]
+    n_ch = chan.shape[0]
+    hh = 0.5 * h
+    mq, iq, ix = inertia[0], inertia[2], inertia[3]
+    acc = accel_at(accel)
+    four = dofs == 4
+    for i in range(n_hulls):
+        st = act[i]
+        ti = t[i]
+        m_w, m_c, m_d = mode[i, 0], mode[i, 1], mode[i, 2]
+        while left[i] > 0:
+            # 1. the velocity at the whole step
+            psi = q[i, 2]
+            c, s = math.cos(psi), math.sin(psi)
+            xd = qv[i, 0] + hh * qa[i, 0]
+            yd = qv[i, 1] + hh * qa[i, 1]
+            psid = qv[i, 2] + hh * qa[i, 2]
+            if four:
+                phi = q[i, 3]
+                phid = qv[i, 3] + hh * qa[i, 3]
+                cphi, sphi = (1.0, 0.0) if linear_kin else (math.cos(phi), math.sin(phi))
+            else:
+                phi = 0.0
+                phid = 0.0
+                cphi, sphi = 1.0, 0.0
+            u = c * xd + s * yd
+            v = (c * yd - s * xd) / cphi
+            r = psid / cphi
+            p = phid
+            # 2. the loads; a missing window returns before anything is written
+            if m_w == SAMPLED:
+                ok, vw, bw = grid_at(ti, inv_dt[i, 0], k0[i, 0], win_w, i)
+                if not ok:
+                    status[0], status[1], status[2] = i, WIND, int(ti * inv_dt[i, 0]) // CHUNK
+                    t[i] = ti
+                    return NEED
+                vw = vw if vw > 0.0 else 0.0
+            else:
+                vw, bw = const[i, 0, 0], const[i, 0, 1]
+            if m_c == SAMPLED:
+                ok, vc, bc = grid_at(ti, inv_dt[i, 1], k0[i, 1], win_c, i)
+                if not ok:
+                    status[0], status[1], status[2] = i, CURRENT, int(ti * inv_dt[i, 1]) // CHUNK
+                    t[i] = ti
+                    return NEED
+            else:
+                vc, bc = const[i, 1, 0], const[i, 1, 1]
+            if m_d == SAMPLED:
+                ok, e, _unused = grid_at(ti, inv_dt[i, 2], k0[i, 2], win_d, i)
+                if not ok:
+                    status[0], status[1], status[2] = i, DRIFT, int(ti * inv_dt[i, 2]) // CHUNK
+                    t[i] = ti
+                    return NEED
+            else:
+                e = 0.0
+            if m_w != OFF:
+                wx, wy, wn = blendermann_load(kw, psi, u, v, vw, bw)
+            else:
+                wx = wy = wn = 0.0
+            if m_c != OFF:
+                uc = vc * math.cos(bc - psi)
+                vcb = vc * math.sin(bc - psi)
+            else:
+                uc = vcb = 0.0
+            if m_d == SAMPLED:
+                b = drift_k[i, 0] - psi
+                cb, sb = math.cos(b), math.sin(b)
+                dy_ = drift_k[i, 2] * sb * abs(sb) * e
+                dx_ = drift_k[i, 1] * cb * abs(cb) * e
+                dn_ = drift_k[i, 3] * cb * dy_
+            else:
+                dx_ = dy_ = dn_ = 0.0
+            ur = u - uc
+            vr = v - vcb
+            tx = ty = tk = tn = 0.0
+            for a in range(n_act):
+                law = law_at(laws[kind_index[a]])
+                fx, fy, fk, fn, fa, fl = law(table[a], st, ur, vr, p, r)
+                tx += fx
+                ty += fy
+                tk += fk
+                tn += fn
+                forces[i, a] = fa
+                flags[i, a] = fl
+            # 3. the hull's acceleration
+            ud, vd, pd, rd = acc(
+                kh, u, v, p, r, phi,
+                tx + wx + dx_ + external[i, 0], ty + wy + dy_ + external[i, 1],
+                tk + external[i, 2], tn + wn + dn_ + external[i, 3], uc, vcb,
+            )  # fmt: skip
+            if not (
+                math.isfinite(ud + vd + pd + rd)
+                and abs(u) + abs(v) < MAX_SPEED
+                and abs(r) + abs(p) < MAX_RATE
+                and abs(phi) < MAX_ROLL
+            ):
+                status[0] = i
+                lo = loads[i]
+                lo[0], lo[1], lo[2], lo[3], lo[4] = ti, u, v, p, r
+                lo[5], lo[6], lo[7] = ud, vd, rd
+                t[i] = ti
+                return DIVERGED
+            if four:  # qacc = J nu_dot + J_dot nu (Fossen's 4-DOF kinematics)
+                sv, cv = s * v, c * v
+                a0 = c * ud - s * cphi * vd - s * u * psid - cphi * cv * psid + sphi * sv * phid
+                a1 = s * ud + c * cphi * vd + c * u * psid - cphi * sv * psid - sphi * cv * phid
+                a2 = cphi * rd - sphi * r * phid
+            else:  # qacc = R(psi)(nu_dot + r S nu), S nu = [-v, u, 0]
+                bx = ud - r * v
+                by = vd + r * u
+                a0 = c * bx - s * by
+                a1 = s * bx + c * by
+                a2 = rd
+            lo = loads[i]
+            lo[0], lo[1], lo[2], lo[3] = wx, wy, wn, dx_
+            lo[4], lo[5], lo[6], lo[7] = dy_, dn_, uc, vcb
+            if integrator == EVALUATE:
+                qa[i, 0], qa[i, 1], qa[i, 2] = a0, a1, a2
+                if four:
+                    qa[i, 3] = pd
+                left[i] = 0
+                break
+            # 4. the actuator states
+            for ch in range(n_ch):
+                a_, c_ = st[ch], cmd[i, ch]
+                code = chan[ch, 0]
+                if code == LAG:
+                    eff = c_
+                    if c_ - a_ > chan[ch, 4]:
+                        x_ = a_ + chan[ch, 5]
+                        eff = x_ if x_ < c_ else c_
+                    elif a_ - c_ > chan[ch, 4]:
+                        x_ = a_ - chan[ch, 5]
+                        eff = x_ if x_ > c_ else c_
+                    new = a_ + chan[ch, 3] * (eff - a_)
+                elif code == SERVO:
+                    rate = chan[ch, 6]
+                    w = (c_ - a_) / chan[ch, 7]
+                    if w > rate:
+                        w = rate
+                        hits[i, ch] = 1
+                    elif w < -rate:
+                        w = -rate
+                        hits[i, ch] = 1
+                    else:
+                        hits[i, ch] = 0
+                    new = a_ + h * w
+                else:
+                    new = a_ + h * c_
+                if chan[ch, 8] != 0.0:
+                    lo_, hi_ = chan[ch, 1], chan[ch, 2]
+                    new = hi_ if new > hi_ else (lo_ if new < lo_ else new)
+                st[ch] = new
+            # 5. the integration
+            left[i] -= 1
+            ti += h
+            if integrator == MUJOCO:
+                qfrc[i, 0] = mq * a0
+                qfrc[i, 1] = mq * a1
+                qfrc[i, 2] = iq * a2
+                if four:
+                    qfrc[i, 3] = ix * pd
+                _call(mj_step, mp, dp)
+                if stop_on_contact and ncon[0] != 0:
+                    status[3] = left[i]
+                    left[i] = 0
+            else:
+                qa[i, 0], qa[i, 1], qa[i, 2] = a0, a1, a2
+                if four:
+                    qa[i, 3] = pd
+                for k in range(q.shape[1]):
+                    qv[i, k] += h * qa[i, k]
+                    q[i, k] += h * qv[i, k]
+        t[i] = ti
+    return OK
+
+
+def channel_table(actuators: Any, h: float) -> np.ndarray:
+    """The channel dynamics of :func:`run` ``(nc, 9)`` for the step ``h`` (s): code, lower,
+    upper, ``alpha = 1 - exp(-h/T)``, rate-limit band ``rate T`` (inf: none), rate-limit step
+    ``rate h / (1 - exp(-h/T))`` (the filter's input that moves the state by exactly ``rate h``
+    in one step), servo rate, servo time constant (``h`` for an ideal servo), bounded (1.0)."""
+    rows = []
+    for c in actuators.channels:
+        if c.dynamics == "lag":
+            tc = c.time_constant
+            alpha = -math.expm1(-h / tc)
+            limited = math.isfinite(c.rate)
+            band = c.rate * tc if limited else math.inf
+            step = c.rate * h / alpha if limited else 0.0
+            rows.append((LAG, c.lower, c.upper, alpha, band, step, 0.0, 1.0, 1.0))
+        elif c.dynamics == "servo":
+            rows.append((SERVO, c.lower, c.upper, 0.0, math.inf, 0.0, c.rate,
+                         c.time_constant or h, 1.0))  # fmt: skip
+        elif c.dynamics == "integrator":
+            rows.append((INTEGRATOR, c.lower, c.upper, 0.0, math.inf, 0.0, 0.0, 1.0, 0.0))
+        else:  # pragma: no cover - Channel checks its dynamics
+            raise ValueError(f"channel {c.name!r}: unknown dynamics {c.dynamics!r}")
+    return np.array(rows, dtype=np.float64).reshape(len(rows), 9)
+
+
+def hull_kernel(plant: Any) -> tuple[int, np.ndarray]:
+    """``(accel, constants)`` of a hull model: the address of its family's compiled
+    acceleration (:data:`~shipgym._jit.ACCEL_SIG`) and its constant vector."""
+    fn = getattr(type(plant), "accel_kernel", None)
+    if fn is None or not callable(getattr(plant, "kernel_constants", None)):
+        raise TypeError(
+            f"{type(plant).__name__} is not a hull family model: it needs an accel_kernel "
+            "(a compiled function of shipgym._jit.ACCEL_SIG) and kernel_constants()"
+        )
+    k = np.ascontiguousarray(plant.kernel_constants(), dtype=np.float64)
+    return address(fn, ACCEL_SIG), k
+
+
+class HullBatch:
+    """The state of N hulls of one vessel and the constants of :func:`run`; :meth:`advance`
+    steps them, loading each process's samples as the loop asks for them.
+
+    Args:
+        plant: the hull model (a hull family's model: :func:`hull_kernel`).
+        actuators: the :class:`~shipgym.dynamics.actuators.ActuatorSet` the plant drives.
+        wind_constants: the wind load's constants
+            (:meth:`~shipgym.disturbances.wind.WindLoad.kernel_constants`).
+        n: number of hulls.
+        h: the physics step (s).
+        inertia: MuJoCo's joint-space inertia ``(m, m, I_z, I_x)`` (kg, kg, kg m^2, kg m^2).
+        integrator: ``"mujoco"`` (``n = 1``: ``model``, ``data`` the hull's) or ``"leapfrog"``.
+    """
+
+    def __init__(
+        self,
+        plant: Any,
+        actuators: Any,
+        wind_constants: Any,
+        n: int,
+        h: float,
+        inertia: tuple[float, float, float, float],
+        *,
+        integrator: str = "leapfrog",
+        model: Any = None,
+        data: Any = None,
+    ) -> None:
+        if integrator not in ("mujoco", "leapfrog"):
+            raise ValueError(f"integrator must be 'mujoco' or 'leapfrog', got {integrator!r}")
+        self.dofs = dofs = int(getattr(plant, "dofs", 3))
+        self.n = n
+        self.h = float(h)
+        self.integrator = integrator
+        self.accel, self.kh = hull_kernel(plant)
+        self.linear_kin = getattr(plant, "kinematics", "fossen") == "linear"
+        self.table, self.laws, self.kind_index = actuators.law_table()
+        self.chan = channel_table(actuators, self.h)
+        self.kw = np.ascontiguousarray(wind_constants, dtype=np.float64)
+        self.inertia = np.asarray(inertia, dtype=np.float64)
+        nc, na = actuators.n_channels, len(actuators)
+        if integrator == "mujoco":
+            if n != 1 or model is None or data is None:
+                raise ValueError("the mujoco integrator steps one hull, with its model and data")
+            self._mj = (mj_step_address(), model._address, data._address)
+            self.q = data.qpos.reshape(1, -1)
+            self.qv = data.qvel.reshape(1, -1)
+            self.qa = data.qacc.reshape(1, -1)
+            self.qfrc = data.qfrc_applied.reshape(1, -1)
+            self._ncon = ncon_view(model, data)
+        else:
+            self._mj = (0, 0, 0)
+            self.q = np.zeros((n, dofs))
+            self.qv = np.zeros((n, dofs))
+            self.qa = np.zeros((n, dofs))
+            self.qfrc = np.zeros((n, dofs))
+            self._ncon = np.zeros(1, dtype=np.int32)
+        self._data = data
+        self.act = np.zeros((n, nc))
+        self.cmd = np.zeros((n, nc))
+        self.t = np.zeros(n)
+        self.left = np.zeros(n, dtype=np.int64)
+        self.external = np.zeros((n, 4))
+        self.mode = np.zeros((n, 3), dtype=np.int64)
+        self.const = np.zeros((n, 3, 2))
+        self.inv_dt = np.zeros((n, 3))
+        self.k0 = np.zeros((n, 3), dtype=np.int64)
+        self.windows = [np.zeros((n, 2, 2)) for _ in range(3)]
+        self.drift_k = np.zeros((n, 4))
+        self.processes: list[list[Any]] = [[None] * n for _ in range(3)]
+        self.loads = np.zeros((n, 8))
+        self.forces = np.zeros((n, na))
+        self.flags = np.zeros((n, na))
+        self.hits = np.zeros((n, nc), dtype=np.int64)
+        self.status = np.zeros(4, dtype=np.int64)
+        self._entry: Any = None  # run's compiled entry point for these arguments' types
+
+    # ---- disturbances ----------------------------------------------------------------------
+    def set_processes(self, i: int, wind: Any, current: Any, waves: Any) -> None:
+        """Hull ``i``'s wind (a :class:`~shipgym.disturbances.Wind` or ``None``: no
+        aerodynamic load), current (a :class:`~shipgym.disturbances.Current` or ``None``) and
+        wave drift (a :class:`~shipgym.disturbances.Waves` or ``None``), each already reset:
+        their grids are read from the hull's time on."""
+        for slot, proc in ((WIND, wind), (CURRENT, current)):
+            self.processes[slot][i] = None
+            self.inv_dt[i, slot] = 0.0
+            if proc is None:
+                self.mode[i, slot] = OFF
+                self.const[i, slot] = 0.0
+                continue
+            const = proc.constant
+            if const is not None:
+                off = slot == CURRENT and const[0] == 0.0
+                self.mode[i, slot] = OFF if off else CONSTANT
+                self.const[i, slot] = const
+                continue
+            self.mode[i, slot] = SAMPLED
+            self.processes[slot][i] = proc
+            self.inv_dt[i, slot] = proc.sample_rate
+            self._load(i, slot, int(self.t[i] * proc.sample_rate) // CHUNK)
+        drift = None if waves is None else waves.drift_constants
+        self.processes[DRIFT][i] = None
+        if drift is None:
+            self.mode[i, DRIFT] = OFF
+            self.drift_k[i] = 0.0
+        else:
+            self.mode[i, DRIFT] = SAMPLED
+            self.processes[DRIFT][i] = waves
+            self.drift_k[i] = drift
+            self.inv_dt[i, DRIFT] = waves.sample_rate
+            self._load(i, DRIFT, int(self.t[i] * waves.sample_rate) // CHUNK)
+
+    def _load(self, i: int, slot: int, j: int) -> None:
+        """Chunk ``j`` of hull ``i``'s process ``slot`` into its window."""
+        chunk = self.processes[slot][i].chunk(j)[:2]
+        win = self.windows[slot]
+        if win.shape[2] != chunk.shape[1]:
+            win = np.zeros((self.n, 2, chunk.shape[1]))
+            win[:] = self.windows[slot][:, :, :1]
+            self.windows[slot] = win
+        win[i] = chunk
+        self.k0[i, slot] = j * CHUNK
+
+    # ---- state ---------------------------------------------------------------------------
+    @property
+    def law_table(self) -> tuple[Any, Any, Any]:
+        """``(table, laws, kind_index)`` of the actuators
+        (:meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`)."""
+        return self.table, self.laws, self.kind_index
+
+    def set_pose(self, i: int, eta: Any, nu: Any) -> None:
+        """Hull ``i`` at the pose ``eta`` and body velocity ``nu`` (3 DOF: ``[x, y, psi]``,
+        ``[u, v, r]``; 4 DOF: Fossen's ``[x, y, phi, psi]``, ``[u, v, p, r]``), at rest in
+        acceleration: call :meth:`start` once its processes are set."""
+        c, s = math.cos(eta[-1]), math.sin(eta[-1])
+        if self.dofs == 3:
+            u, v, r = (float(x) for x in nu)
+            self.q[i] = eta
+            self.qv[i] = (c * u - s * v, s * u + c * v, r)
+        else:
+            x, y, phi, psi = (float(a) for a in eta)
+            u, v, p, r = (float(a) for a in nu)
+            cf = 1.0 if self.linear_kin else math.cos(phi)
+            self.q[i] = (x, y, psi, phi)
+            self.qv[i] = (c * u - s * cf * v, s * u + c * cf * v, r * cf, p)
+        self.qa[i] = 0.0
+
+    def start(self, i: int) -> None:
+        """Start hull ``i``'s leapfrog: ``qacc = a_0`` of its state (:data:`EVALUATE`), then
+        ``qvel = v_{-1/2} = v_0 - h/2 a_0``."""
+        self.qa[i] = 0.0
+        self._advance(EVALUATE, 1, i)
+        self.qv[i] -= 0.5 * self.h * self.qa[i]
+
+    def body_velocities(self) -> np.ndarray:
+        """Every hull's ``(u, v, p, r)`` (m/s, rad/s) at the whole step, (N, 4) (``p = 0`` for
+        3 DOF): ``nu = J(q)^-1 (qvel + h/2 qacc)`` (step 1 of :func:`run`)."""
+        w = self.qv + (0.5 * self.h) * self.qa
+        psi = self.q[:, 2]
+        c, s = np.cos(psi), np.sin(psi)
+        out = np.zeros((self.n, 4))
+        out[:, 0] = c * w[:, 0] + s * w[:, 1]
+        out[:, 1] = c * w[:, 1] - s * w[:, 0]
+        out[:, 3] = w[:, 2]
+        if self.dofs == 4:
+            if not self.linear_kin:
+                cf = np.cos(self.q[:, 3])
+                out[:, 1] /= cf
+                out[:, 3] /= cf
+            out[:, 2] = w[:, 3]
+        return out
+
+    def body_velocity(self, i: int) -> tuple[float, float, float, float]:
+        """Hull ``i``'s ``(u, v, p, r)`` as floats (:meth:`body_velocities`)."""
+        u, v, p, r = self.body_velocities()[i].tolist()
+        return u, v, p, r
+
+    # ---- stepping --------------------------------------------------------------------------
+    def advance(self, n: int, *, stop_on_contact: bool = False) -> int:
+        """``n`` physics steps of every hull; returns the steps taken (fewer than ``n`` only
+        where a contact stopped the hull, ``mujoco`` integrator).
+
+        Raises:
+            SimulationDiverged: a hull's state became non-finite or absurd (its state before
+                that step is kept).
+        """
+        if self.integrator == "mujoco":
+            self.t[0] = self._data.time
+        integ = MUJOCO if self.integrator == "mujoco" else LEAPFROG
+        return self._advance(integ, n, None, stop_on_contact)
+
+    def _advance(self, integ: int, n: int, only: int | None, stop_on_contact: bool = False) -> int:
+        if only is None:
+            self.left[:] = n
+        else:
+            self.left[:] = 0
+            self.left[only] = n
+        self.status[3] = 0
+        mj, mp, dp = self._mj
+        while True:
+            args = (
+                integ, mj, mp, dp, self._ncon, stop_on_contact,
+                self.dofs, self.linear_kin, self.h, self.inertia,
+                self.accel, self.kh, self.laws, self.table, self.kind_index, self.chan, self.kw,
+                self.q, self.qv, self.qa, self.qfrc, self.act, self.cmd, self.t, self.left,
+                self.external, self.mode, self.const, self.inv_dt, self.k0, *self.windows,
+                self.drift_k, self.loads, self.forces, self.flags, self.hits, self.status,
+            )  # fmt: skip
+            if self._entry is None:
+                self._entry = entry(run, args)
+            code = self._entry(*args)
+            if code == OK:
+                return n - int(self.status[3])
+            i, slot, j = (int(x) for x in self.status[:3])
+            if code == DIVERGED:
+                lo = self.loads[i].tolist()
+                nu = lo[1:5] if self.dofs == 4 else (lo[1], lo[2], lo[4])
+                diverged(lo[0], nu, lo[5:8])
+            self._load(i, slot, j)
