@@ -98,3 +98,25 @@ def compiled_forces(acts, st, u, v, p, r):  # type: ignore[no-untyped-def]
     st = np.ascontiguousarray(st, dtype=np.float64)
     X, Y, K, N = tau_of_table(table, laws, kinds, st, u, v, p, r, forces, flags)
     return X, Y, K, N, forces, flags > 0
+
+
+def accel_of(plant):  # type: ignore[no-untyped-def]
+    """The hull family's compiled acceleration of ``plant`` (its ``accel_kernel`` with its
+    constants) as a plain function: ``f(u, v, r, X, Y, N, u_c=0, v_c=0) -> (u_dot, v_dot,
+    r_dot)`` for 3 DOF, ``f(u, v, p, r, phi, X, Y, K, N, u_c=0, v_c=0) -> (u_dot, v_dot,
+    p_dot, r_dot)`` for 4 DOF."""
+    fn, k = type(plant).accel_kernel, plant.kernel_constants()
+    if getattr(plant, "dofs", 3) == 4:
+
+        def accel4(u, v, p, r, phi, X, Y, K, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
+            args = (u, v, p, r, phi, X, Y, K, N, u_c, v_c)
+            return fn(k, *(float(a) for a in args))
+
+        return accel4
+
+    def accel3(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
+        ud, vd, _pd, rd = fn(k, float(u), float(v), 0.0, float(r), 0.0, float(X), float(Y),
+                             0.0, float(N), float(u_c), float(v_c))  # fmt: skip
+        return ud, vd, rd
+
+    return accel3

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from shipgym.disturbances import Current, CurrentConfig, WaveConfig, Wind, WindConfig
-from shipgym.disturbances._grid import CHUNK, GridBatch
+from shipgym.disturbances._grid import CHUNK
 from shipgym.dynamics.mmg import MMGHull
 from shipgym.dynamics.vessel import load_vessel, vessel_names
 from shipgym.envs.batchphysics import BatchedPhysics
@@ -104,10 +104,12 @@ def test_bad_input_is_named():
         bp.set_command([np.nan, 0.0, 0.0])
 
 
-def test_grid_batch_reads_what_each_process_reads():
-    """Gusts and a Gauss-Markov current of five seeds, read at different times per env (past a
-    chunk's end too): the same values as each process's scalar query."""
+def test_the_loops_grid_lookup_reads_what_each_process_reads():
+    """Gusts and a Gauss-Markov current of five seeds, read by the physics loop's lookup from
+    each process's public grid (``chunk(j)``) at times past a chunk's end too: the same values
+    as each process's own scalar query."""
     from shipgym.dynamics import BLUE_LADY_WINDAGE
+    from shipgym.sim.step import grid_at
 
     winds = [Wind(GUSTY, BLUE_LADY_WINDAGE) for _ in range(5)]
     currents = [Current(GM_CURRENT) for _ in range(5)]
@@ -115,16 +117,15 @@ def test_grid_batch_reads_what_each_process_reads():
         g = np.random.default_rng(i)
         w.reset(g)
         c.reset(g)
-    wb, cb = GridBatch(winds), GridBatch(currents)
     rng = np.random.default_rng(3)
     for top in (100.0, CHUNK * 1.0 + 50.0, 3 * CHUNK * 1.0):
-        t = rng.uniform(0.0, top, 5)
-        v, b = wb.at(t)
-        for i in range(5):
-            assert (max(v[i], 0.0), b[i]) == winds[i].at(float(t[i]))
-        cv, cd = cb.at(t)
-        for i in range(5):
-            assert (cv[i], cd[i]) == currents[i].at(float(t[i]))
+        for t in rng.uniform(0.0, top, 5).tolist():
+            for proc, clamp in [(w, True) for w in winds] + [(c, False) for c in currents]:
+                j = int(t * proc.sample_rate) // CHUNK
+                win = np.ascontiguousarray(proc.chunk(j)[None])
+                ok, a, b = grid_at(t, proc.sample_rate, j * CHUNK, win, 0)
+                assert ok and ((max(a, 0.0) if clamp else a), b) == proc.at(t)
+                assert not grid_at(t, proc.sample_rate, (j + 1) * CHUNK, win, 0)[0]
 
 
 def test_each_hull_its_own_wind_and_current():

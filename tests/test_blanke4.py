@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from _helpers import accel_of
 from scipy.integrate import solve_ivp
 
 from shipgym.dynamics.blanke4 import (
@@ -59,14 +60,14 @@ def test_kernel_equals_matrix_form_on_random_states():
     phi = rng.normal(size=n) * 0.2
     ref = H.nu_dot(nu, tau, nc, phi)
     for i in range(n):
-        got = H.accel(*nu[i].tolist(), float(phi[i]), *tau[i].tolist(), *nc[i].tolist())
+        got = accel_of(H)(*nu[i].tolist(), float(phi[i]), *tau[i].tolist(), *nc[i].tolist())
         assert all(type(g) is float for g in got)
         np.testing.assert_allclose(got, ref[i], rtol=1e-12, atol=1e-12 * np.abs(ref[i]).max())
     # without current, a single state, and the 4-vector current form
     one = H.nu_dot(nu[0], tau[0], np.r_[nc[0], 0, 0], phi[0])
     np.testing.assert_allclose(one, ref[0], rtol=1e-14)
     np.testing.assert_allclose(
-        H.accel(*nu[1], phi[1], *tau[1]), H.nu_dot(nu[1], tau[1], phi=phi[1]), rtol=1e-12
+        accel_of(H)(*nu[1], phi[1], *tau[1]), H.nu_dot(nu[1], tau[1], phi=phi[1]), rtol=1e-12
     )
 
 
@@ -136,7 +137,7 @@ def _decay_reference(phi0: float, U: float, t_end: float) -> tuple[np.ndarray, n
 
 
 def _decay_rk4(phi0: float, U: float, t_end: float, dt: float) -> np.ndarray:
-    acc = H.accel
+    acc = accel_of(H)
 
     def f(y):
         v, p, r, phi, _ = y

@@ -4,6 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from _helpers import accel_of
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -113,16 +114,7 @@ def test_kernel_equals_matrix_form(nu, tau, cur, name):
     tau = np.array(tau) * [400.0, 80.0, 250.0]
     nu_c = np.array([cur[0] * 0.2, cur[1] * 0.2, 0.0])
     a = p.nu_dot(nu, tau, nu_c)
-    b = p.accel(*nu, *tau, nu_c[0], nu_c[1])
-    np.testing.assert_allclose(b, a, rtol=1e-10, atol=1e-14)
-
-
-def test_kernel_accepts_batches():
-    p = plant_model(hull=BLUE_LADY_HULL)
-    rng = np.random.default_rng(3)
-    nu, tau = rng.normal(size=(4, 5, 3)) * 0.2, rng.normal(size=(4, 5, 3)) * 50
-    a = p.nu_dot(nu, tau)
-    b = np.stack(p.accel(*np.moveaxis(nu, -1, 0), *np.moveaxis(tau, -1, 0)), -1)
+    b = accel_of(p)(*nu, *tau, nu_c[0], nu_c[1])
     np.testing.assert_allclose(b, a, rtol=1e-10, atol=1e-14)
 
 

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from _helpers import compiled_forces
+from _helpers import accel_of, compiled_forces
 from scipy.integrate import solve_ivp
 
 from shipgym.dynamics.mmg import KVLCC2_L7, MMGModel, MMGParameters, kvlcc2
@@ -123,22 +123,26 @@ def test_batched_and_astern():
         MMGParameters(L=7.0, B=1.27, d=0.46, nabla=3.27, x_G=0.25, D_P=0.2, H_R=0.3, A_R=0.05)
 
 
-# ---- the MMG hull and unit in shipgym: plain-float kernels against the array forms --------
+# ---- the MMG hull and unit in shipgym: compiled laws against the array forms --------------
 def test_kernels_equal_the_array_forms():
-    """hull_kernel, propulsion_kernel and MMGHull.accel against hull_forces,
-    propulsion_forces and MMGHull.nu_dot (random states, ahead and astern, with current)."""
-    from shipgym.dynamics.mmg import MMGHull, hull_kernel, propulsion_kernel
+    """The unit's compiled force law (law_mmg) and the hull's compiled acceleration
+    (accel_mmg) against propulsion_forces and MMGHull.nu_dot (random states, ahead and astern,
+    with current)."""
+    from shipgym.dynamics.actuators import ActuatorSet, MMGPropulsion
+    from shipgym.dynamics.mmg import MMGHull
 
     p = dataclasses.replace(kvlcc2(100.0), c_y=0.1)
     m, hull = MMGModel(p), MMGHull(p)
-    hk, pk, acc = hull_kernel(p), propulsion_kernel(p), hull.accel
+    unit = ActuatorSet([MMGPropulsion("prop", p, max_rps=10.0, min_rps=-10.0)])
+    acc = accel_of(hull)
     rng = np.random.default_rng(3)
     for _ in range(300):
         nu = np.array([rng.uniform(-1, 8), rng.normal(0, 1), rng.normal(0, 0.02)])
         delta, n = rng.uniform(-0.6, 0.6), rng.uniform(-6, 6)
-        np.testing.assert_allclose(hk(*nu), m.hull_forces(nu), rtol=1e-12, atol=1e-6)
         X, Y, N, parts = m.propulsion_forces(nu, delta, n)
-        np.testing.assert_allclose(pk(*nu, delta, n), (X, Y, N, parts["T"]), rtol=1e-12,
+        # the unit's states [n, delta]: shipgym's rudder angle is the paper's -delta
+        gx, gy, _gk, gn, T, _ = compiled_forces(unit, [n, -delta], nu[0], nu[1], 0.0, nu[2])
+        np.testing.assert_allclose((gx, gy, gn, T[0]), (X, Y, N, parts["T"]), rtol=1e-12,
                                    atol=1e-6)  # fmt: skip
         tau = rng.normal(0, 1e5, 3)
         nc = np.array([rng.normal(0, 0.3), rng.normal(0, 0.3), 0.0])

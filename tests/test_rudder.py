@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _helpers import compiled_forces
+from _helpers import accel_of, compiled_forces
 
 from shipgym.dynamics.actuators import ActuatorSet, Rudder
 from shipgym.dynamics.blanke4 import NAVAL_VESSEL, linear_roll_model
@@ -98,7 +98,7 @@ def test_hull4_speed_damping_and_roll_coupling_kernel_equals_the_matrix_form():
         tau = rng.normal(0, 1e5, 4)
         phi, uc, vc = rng.normal(0, 0.1), rng.normal(0, 0.3), rng.normal(0, 0.3)
         ref = h.nu_dot(nu, tau, [uc, vc], phi)
-        got = h.accel(*nu, phi, *tau, uc, vc)
+        got = accel_of(h)(*nu, phi, *tau, uc, vc)
         np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-12)
     with pytest.raises(ValueError, match="kinematics"):
         Hull4("t", M, np.eye(4), 1.0, kinematics="euler")

@@ -20,6 +20,7 @@ from shipgym.disturbances import (
     relative_wind,
     wind_load,
 )
+from shipgym.disturbances.wind import blendermann_load
 from shipgym.dynamics.params import BLUE_LADY_WINDAGE, WindageParameters
 
 PI = math.pi
@@ -201,16 +202,24 @@ def test_scalar_path_equals_array_path(
     np.testing.assert_allclose(scalar, wl.array(psi, u, v, V, beta), rtol=1e-12, atol=1e-10)
     # NumPy scalars are accepted on the hot path as well.
     assert wl(np.float64(psi), u, v, V, np.float64(beta)) == scalar
-    # the physics step's written-out kernel gives the same floats as the shared float path
-    assert wl.kernel()(psi, u, v, V, beta) == scalar
-    assert wl.kernel()(psi, u, v, 0.0, beta) == wl(psi, u, v, 0.0, beta)
+    # the physics step's compiled law gives the same loads as the shared float path
+    k = np.array(wl.kernel_constants())
+    np.testing.assert_allclose(blendermann_load(k, psi, u, v, V, beta), scalar, rtol=1e-12,
+                               atol=1e-10)  # fmt: skip
+    np.testing.assert_allclose(blendermann_load(k, psi, u, v, 0.0, beta),
+                               wl(psi, u, v, 0.0, beta), rtol=1e-12, atol=1e-10)  # fmt: skip
 
 
 def test_kernel_at_zero_relative_wind_and_at_pi() -> None:
-    k = WL.kernel()
+    kc = np.array(WL.kernel_constants())
+
+    def k(*a: float) -> tuple[float, float, float]:
+        return blendermann_load(kc, *a)
+
     assert k(0.3, 0.0, 0.0, 0.0, 1.0) == WL(0.3, 0.0, 0.0, 0.0, 1.0) == (0.0, 0.0, 0.0)
     for beta in (PI, 0.0, -PI / 2, PI / 2, 1e-300):  # following, head, beam winds
-        assert k(0.0, 0.0, 0.0, 4.0, beta) == WL(0.0, 0.0, 0.0, 4.0, beta)
+        np.testing.assert_allclose(k(0.0, 0.0, 0.0, 4.0, beta), WL(0.0, 0.0, 0.0, 4.0, beta),
+                                   rtol=1e-12, atol=1e-10)  # fmt: skip
 
 
 # --------------------------------------------------------------------------------------------
@@ -349,8 +358,8 @@ def test_realisation_independent_of_query_order() -> None:
 
 def test_gust_chunks_are_the_gauss_markov_recursion() -> None:
     """Each chunk of a Gauss-Markov gust is ``x_{k+1} = a x_k + b e_k`` from the wind's child
-    stream (written out here as the loop, compared bit for bit over two chunks), and
-    ``at_kernel`` reads the same values as ``at``."""
+    stream (written out here as the loop, compared bit for bit over two chunks), and ``at``
+    reads them across the chunk boundary as ``series`` does."""
     from shipgym.disturbances._grid import CHUNK
 
     cfg = WindConfig(speed=3.0, direction_from=1.0, gust_std=0.6, direction_std=0.2)
@@ -371,14 +380,15 @@ def test_gust_chunks_are_the_gauss_markov_recursion() -> None:
             state[r] = x
             assert w._chunks[j][r].tolist() == row
     assert list(w._state) == state
-    at = w.at_kernel()
     ts = [0.0371 * i for i in range(30000)]  # across the chunk boundary at 409.6 s
-    assert [at(t) for t in ts] == [w.at(t) for t in ts]
+    V, beta = w.series(np.array(ts))
+    assert [w.at(t) for t in ts] == list(zip(np.maximum(V, 0.0).tolist(), beta.tolist(),
+                                             strict=True))  # fmt: skip
     steady = WindConfig(speed=2.0, direction_from=0.5, gust_std=0.0, direction_std=0.0)
     calm = Wind(steady, windage=BLUE_LADY_WINDAGE)
-    assert calm.at_kernel()(12.0) == calm.at(12.0) == (2.0, 0.5)
+    assert calm.at(12.0) == (2.0, 0.5)
     with pytest.raises(ValueError, match="time must be >= 0"):
-        at(-1.0)
+        w.at(-1.0)
 
 
 def test_speed_clipped_at_zero_and_load_uses_gusts() -> None:

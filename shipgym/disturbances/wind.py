@@ -49,7 +49,7 @@ from __future__ import annotations
 import functools
 import math
 import numbers
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -417,7 +417,8 @@ def blendermann_load(k, psi, u, v, V_w, beta_w):  # type: ignore[no-untyped-def]
 
 
 class WindLoad:
-    """Blendermann wind loads for one vessel, with a fast scalar path for the physics.
+    """Blendermann wind loads for one vessel (the physics step evaluates them compiled:
+    :func:`blendermann_load` with :meth:`kernel_constants`).
 
     Args:
         coeffs: A :class:`BlendermannCoefficients` row or its name in :data:`BLENDERMANN`;
@@ -463,54 +464,13 @@ class WindLoad:
         return _loads(_MATH, self._k, float(psi), float(u), float(v), float(V_w), float(beta_w))
 
     def kernel_constants(self) -> tuple[float, ...]:
-        """The 12 constants of :meth:`kernel`'s formulas, in its order: ``CD_t, CD_lAF(pi),
+        """The 12 constants of :func:`blendermann_load`, in its order: ``CD_t, CD_lAF(pi),
         CD_lAF(0), delta/2, the area ratio, the moment arm at 90 deg, the X, Y, N factors,
-        pi, pi/2`` and the moment arm's slope (the compiled physics step,
-        :func:`blendermann_load`, evaluates them)."""
+        pi, pi/2`` and the moment arm's slope."""
         cd_t, cd_pi, cd_jump, half_delta, ratio, arm0, kx, ky, kn = self._k
         cd_0 = cd_pi + cd_jump  # CD_lAF on the bow side, cd_pi + cd_jump * True in _coefficients
         return (float(cd_t), float(cd_pi), float(cd_0), float(half_delta), float(ratio),
                 float(arm0), float(kx), float(ky), float(kn), _PI, _HALF_PI, _CN_SLOPE)  # fmt: skip
-
-    def kernel(self) -> Callable[[float, float, float, float, float], tuple[float, float, float]]:
-        """``f(psi, u, v, V_w, beta_w) -> (X, Y, N)`` for plain floats: :meth:`__call__`
-        without its argument conversion (the physics step, whose inputs are floats).
-
-        The formulas of :func:`_loads` written out in one closure with the constants bound
-        (about half the time of the shared float/array form): the same operations in the same
-        order, so the same floats.
-        """
-        cd_t, cd_pi, cd_0, half_delta, ratio, arm0, kx, ky, kn, pi, half_pi, slope = (
-            self.kernel_constants()
-        )
-        cos, sin, sqrt, atan2 = math.cos, math.sin, math.sqrt, math.atan2
-
-        def load(psi: float, u: float, v: float, V_w: float, beta_w: float) -> tuple[float, ...]:
-            ang = beta_w - pi - psi
-            u_rw = u - V_w * cos(ang)
-            v_rw = v - V_w * sin(ang)
-            v2 = u_rw * u_rw + v_rw * v_rw
-            vr = sqrt(v2)
-            g = atan2(abs(v_rw), u_rw)
-            inv = 1.0 / vr if vr != 0.0 else 1.0
-            c = u_rw * inv
-            s = -v_rw * inv
-            cd_laf = cd_0 if g <= half_pi else cd_pi
-            cs = c * s
-            den = 1.0 - half_delta * (1.0 - cd_laf * ratio) * (4.0 * cs * cs)
-            cy = cd_t * s / den
-            return (
-                kx * v2 * (-cd_laf * c / den),
-                ky * v2 * cy,
-                kn * v2 * ((arm0 - slope * (g - half_pi)) * cy),
-            )
-
-        return load
-
-    def array_kernel(self) -> Callable[[Any, Any, Any, Any, Any], tuple[Any, Any, Any]]:
-        """``f(psi, u, v, V_w, beta_w) -> (X, Y, N)`` for NumPy arrays of one shape: :meth:`array`
-        without its conversion and stacking (the batched physics step)."""
-        return functools.partial(_loads, _NUMPY, self._k)
 
     def array(
         self, psi: ArrayLike, u: ArrayLike, v: ArrayLike, V_w: ArrayLike, beta_w: ArrayLike
@@ -975,31 +935,6 @@ class Wind(GridPair):
             return self._const
         speed, beta = self._interp(t)
         return (speed if speed > 0.0 else 0.0), beta
-
-    def at_kernel(self) -> Callable[[float], tuple[float, float]]:
-        """``f(t) -> (V_w, beta_w)``: :meth:`at` for a float time as one closure (the physics
-        step), the same values; valid across :meth:`reset` (it reads the current chunk)."""
-        if self._const is not None:
-            const = self._const
-            return lambda t: const
-        w, inv_dt = self, self._inv_dt
-
-        def at(t: float) -> tuple[float, float]:
-            x = t * inv_dt
-            if not x >= 0.0:
-                raise ValueError(f"{type(w).__name__}: time must be >= 0 s, got {t!r}")
-            k = int(x)
-            j = k // CHUNK
-            if j != w._j:
-                w._select(j)
-            f = x - k
-            i = k - w._k0
-            c0, c1 = w._c0, w._c1
-            a0, b0 = c0[i], c1[i]
-            speed = a0 + f * (c0[i + 1] - a0)
-            return (speed if speed > 0.0 else 0.0), b0 + f * (c1[i + 1] - b0)
-
-        return at
 
     def load(self, t: float, psi: float, u: float, v: float) -> tuple[float, float, float]:
         """Wind loads on the body axes at time ``t`` (Blendermann, relative wind).

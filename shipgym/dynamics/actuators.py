@@ -147,6 +147,11 @@ class Actuator:
         channel in the state vector, as a float) first, then the law's constants."""
         raise NotImplementedError
 
+    def rest_state(self) -> tuple[float, ...]:
+        """Its channels' states after a reset: no force (zeros; a kind with another rest
+        state, such as an azimuth's angle, says so)."""
+        return (0.0,) * len(self.channels)
+
     @property
     def channels(self) -> tuple[Channel, ...]:  # pragma: no cover - protocol
         raise NotImplementedError
@@ -249,7 +254,7 @@ def law_rudder(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
 @njit
 def law_mmg(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
     """An :class:`MMGPropulsion` unit (channels ``[n, delta]``, the paper's rudder angle
-    ``-delta``): :meth:`~shipgym.dynamics.mmg.MMGModel.propulsion_forces` (``propulsion_kernel``)
+    ``-delta``): :meth:`~shipgym.dynamics.mmg.MMGModel.propulsion_forces`
     on plain floats; ``K = 0`` (planar), ``F`` the propeller thrust ``T`` (row:
     :meth:`MMGPropulsion.law_row`)."""
     j = int(row[0])
@@ -565,6 +570,10 @@ class Azimuth(Actuator):
             )
         if not math.isfinite(self.angle0):
             raise ValueError(f"actuator {self.name!r}: angle0 must be finite")
+
+    def rest_state(self) -> tuple[float, ...]:
+        """No thrust, the angle at rest (:attr:`angle0`, rad)."""
+        return (0.0, self.angle0)
 
     @property
     def reversible(self) -> bool:
@@ -918,6 +927,10 @@ class ActuatorSet:
             arr.setflags(write=False)
         self._lo = tuple(self.lower.tolist())
         self._hi = tuple(self.upper.tolist())
+        #: per channel: whether its command is the state it moves to (a lag, a servo), not a
+        #: rate (an integrator: an azimuth's angle)
+        self.holds_state = np.array([c.dynamics in ("lag", "servo") for c in self.channels])
+        self.holds_state.setflags(write=False)
 
     # ---- description -----------------------------------------------------------------------
     @property
@@ -1064,6 +1077,11 @@ class ActuatorSet:
                 col = [1.0, 1.0, r] if self.dofs == 3 else [1.0, 1.0, abs(z), r]
                 out += F * np.asarray(col)
         return out
+
+    def initial_state(self) -> NDArray[np.float64]:
+        """The actuator states after a reset (n_channels,): each kind's :meth:`~Actuator.
+        rest_state` (no force; azimuths at their rest angle)."""
+        return np.array([x for a in self.actuators for x in a.rest_state()], dtype=np.float64)
 
     # ---- commands and actions --------------------------------------------------------------
     def check_states(self, states: ArrayLike, what: str = "actuator states") -> NDArray[Any]:

@@ -96,8 +96,8 @@ def accel_blanke4(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c):  # type: ignore[no-
     r"""The ``blanke4`` family's compiled acceleration (:data:`~shipgym._jit.ACCEL_SIG`).
 
     :meth:`Blanke4Hull.nu_dot` written out (the equations of the module docstring, Blanke &
-    Christensen 1993 with the data layout of ``navalvessel.m``; the same sums as
-    :attr:`Blanke4Hull.accel`): ``M nu_dot = tau + f_h(nu_r, p, r, phi) + f_c(nu, phi)``.
+    Christensen 1993 with the data layout of ``navalvessel.m``):
+    ``M nu_dot = tau + f_h(nu_r, p, r, phi) + f_c(nu, phi)``.
 
     Args:
         k: the 53 constants of :meth:`Blanke4Hull.kernel_constants` (float64, C-contiguous).
@@ -219,7 +219,6 @@ class Blanke4Hull:
     K_phi: float = field(init=False, metadata={"unit": "N m/rad", "meaning": "rho g nabla GM"})
     dofs: int = field(default=4, init=False)
     _Mi: Any = field(init=False, repr=False, compare=False)
-    _k: Any = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -246,7 +245,6 @@ class Blanke4Hull:
             )
         Mi = np.linalg.inv(M)
         object.__setattr__(self, "_Mi", Mi)
-        object.__setattr__(self, "_k", _kernel(self, Mi))
 
     def mass_matrix(self) -> NDArray[np.float64]:
         """``M = M_RB + M_A`` (4, 4), order ``u, v, p, r`` (kg, kg m, kg m^2)."""
@@ -327,14 +325,6 @@ class Blanke4Hull:
         rhs = np.asarray(tau, dtype=float) + self.forces(nu, nu_c, phi)
         return np.linalg.solve(self.mass_matrix(), rhs[..., None])[..., 0]
 
-    @property
-    def accel(self) -> Callable[..., tuple[Any, Any, Any, Any]]:
-        """``accel(u, v, p, r, phi, X, Y, K, N, u_c=0, v_c=0) -> (u_dot, v_dot, p_dot, r_dot)``.
-
-        Plain-float kernel of :meth:`nu_dot` (precomputed inverse mass matrix; SI units).
-        """
-        return self._k
-
     def kernel_constants(self) -> NDArray[np.float64]:
         """The constant vector ``k`` of :func:`accel_blanke4` (a new float64, C-contiguous
         array of 53; units of each derivative in its field's metadata):
@@ -362,49 +352,6 @@ class Blanke4Hull:
             np.concatenate([np.asarray(self._Mi, dtype=np.float64).ravel(), rest]),
             dtype=np.float64,
         )
-
-
-def _kernel(h: Blanke4Hull, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any, Any]]:
-    (i11, i12, i13, i14), (i21, i22, i23, i24), (i31, i32, i33, i34), (i41, i42, i43, i44) = (
-        tuple(map(float, row)) for row in Mi
-    )
-    m, xg, zg, kphi = h.m, h.x_G, h.z_G, h.K_phi
-    Xuau, Xvr = h.X_uau, h.X_vr
-    Yauv, Yur, Yvav, Yrar, Yvar, Yrav = h.Y_auv, h.Y_ur, h.Y_vav, h.Y_rar, h.Y_var, h.Y_rav
-    Ybauv, Ybaur, Ybuu = h.Y_phauv, h.Y_phaur, h.Y_phuu
-    Kauv, Kur, Kvav, Krar, Kvar, Krav = h.K_auv, h.K_ur, h.K_vav, h.K_rar, h.K_var, h.K_rav
-    Kbauv, Kbaur, Kbuu = h.K_phauv, h.K_phaur, h.K_phuu
-    Kaup, Kpap, Kp, Kbbb = h.K_aup, h.K_pap, h.K_p, h.K_phphph
-    Nauv, Naur, Nvav, Nrar, Nvar, Nrav = h.N_auv, h.N_aur, h.N_vav, h.N_rar, h.N_var, h.N_rav
-    Nbauv, Nbuar, Nbuau = h.N_phauv, h.N_phuar, h.N_phuau
-
-    def accel(u, v, p, r, phi, X, Y, K, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
-        ur = u - u_c
-        vr = v - v_c
-        au = abs(ur)
-        av = abs(vr)
-        ar = abs(r)
-        auv = abs(ur * vr)
-        aur = au * ar
-        f1 = X + Xuau * ur * au + Xvr * vr * r + m * (v * r + xg * r * r - zg * p * r)
-        f2 = (Y + Yauv * au * vr + Yur * ur * r + Yvav * vr * av + Yrar * r * ar
-              + Yvar * vr * ar + Yrav * r * av
-              + phi * (Ybauv * auv + Ybaur * aur + Ybuu * ur * ur) - m * u * r)  # fmt: skip
-        f3 = (K + Kauv * au * vr + Kur * ur * r + Kvav * vr * av + Krar * r * ar
-              + Kvar * vr * ar + Krav * r * av
-              + phi * (Kbauv * auv + Kbaur * aur + Kbuu * ur * ur - kphi + Kbbb * phi * phi)
-              + (Kaup * au + Kpap * abs(p) + Kp) * p + m * zg * u * r)  # fmt: skip
-        f4 = (N + Nauv * au * vr + Naur * au * r + Nvav * vr * av + Nrar * r * ar
-              + Nvar * vr * ar + Nrav * r * av - m * xg * u * r
-              + phi * (Nbauv * auv + Nbuar * ur * ar + Nbuau * ur * au))  # fmt: skip
-        return (
-            i11 * f1 + i12 * f2 + i13 * f3 + i14 * f4,
-            i21 * f1 + i22 * f2 + i23 * f3 + i24 * f4,
-            i31 * f1 + i32 * f2 + i33 * f3 + i34 * f4,
-            i41 * f1 + i42 * f2 + i43 * f3 + i44 * f4,
-        )
-
-    return accel
 
 
 _MSS = "published: MSS CRAFT/SHIP/models/navalvessel.m (Fossen & Perez 2004)"

@@ -27,8 +27,7 @@ Christensen 1993). No Coriolis terms (``coriolis=False``): the models of this fa
 linearised about a forward speed, where those terms are already in ``D_L``.
 
 As for :class:`~shipgym.dynamics.model.PlantModel`, a batched matrix form (:meth:`nu_dot`)
-serves the reference integrator and tests, and an expanded scalar kernel (:attr:`accel`) the
-physics step; a test checks one against the other. The family's compiled kernel is
+serves the reference integrator, design and tests; the family's run-time law, compiled, is
 :func:`accel_linear4` (:data:`~shipgym._jit.ACCEL_SIG`, constants from
 :meth:`Hull4.kernel_constants`), checked against :meth:`Hull4.nu_dot` in
 ``tests/test_hull_kernels.py``.
@@ -36,7 +35,6 @@ physics step; a test checks one against the other. The family's compiled kernel 
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -64,9 +62,9 @@ def _mat4(name: str, a: ArrayLike) -> Mat4:
 def accel_linear4(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c):  # type: ignore[no-untyped-def]
     r"""The ``linear4`` family's compiled acceleration (:data:`~shipgym._jit.ACCEL_SIG`).
 
-    :meth:`Hull4.nu_dot` written out (the equations of :attr:`Hull4.accel`, module
-    docstring): ``M nu_dot = tau - (D_L + |u_r| D_u) nu_r - diag(d_quad) |nu_r| nu_r - g phi``
-    with ``g = [0, Y_phi, K_phi, N_phi]``, ``nu_r = [u - u_c, v - v_c, p, r]`` (Fossen 2011
+    :meth:`Hull4.nu_dot` written out (the equations of the module docstring):
+    ``M nu_dot = tau - (D_L + |u_r| D_u) nu_r - diag(d_quad) |nu_r| nu_r - g phi`` with
+    ``g = [0, Y_phi, K_phi, N_phi]``, ``nu_r = [u - u_c, v - v_c, p, r]`` (Fossen 2011
     4-DOF form; Van der Klugt 1987, Blanke & Christensen 1993 linearised hulls). The
     ``|u_r| D_u`` terms are evaluated only where the flag ``k[55]`` is not 0.
 
@@ -144,7 +142,6 @@ class Hull4:
     nabla: float = 0.0
     rho: float = 1025.0
     dofs: int = field(default=4, init=False)
-    _k: Any = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "M", _mat4("M", self.M))
@@ -173,7 +170,6 @@ class Hull4:
             raise ValueError(f"hull {self.name!r}: the diagonal of M must be > 0: {M}")
         if not np.linalg.cond(M) < 1e12:
             raise ValueError(f"hull {self.name!r}: M is singular: {M}")
-        object.__setattr__(self, "_k", _kernel(self, np.linalg.inv(M)))
 
     def mass_matrix(self) -> NDArray[np.float64]:
         """``M`` (4, 4)."""
@@ -212,11 +208,6 @@ class Hull4:
         rhs = tau - damp - g
         return np.linalg.solve(np.asarray(self.M), rhs[..., None])[..., 0]
 
-    @property
-    def accel(self) -> Callable[..., tuple[Any, Any, Any, Any]]:
-        """``accel(u, v, p, r, phi, X, Y, K, N, u_c=0, v_c=0) -> (u_dot, v_dot, p_dot, r_dot)``."""
-        return self._k
-
     def kernel_constants(self) -> NDArray[np.float64]:
         """The constant vector ``k`` of :func:`accel_linear4` (a new float64, C-contiguous
         array of 56), order of the DOFs ``(u, v, p, r)``:
@@ -241,61 +232,7 @@ class Hull4:
         )  # fmt: skip
 
 
-def _kernel(h: Hull4, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any, Any]]:
-    D = h.D_L
-    E = h.D_u
-    speed = any(x != 0.0 for row in E for x in row)
-    q1, q2, q3, q4 = h.d_quad
-    kphi = h.K_phi
-    yphi, nphi = h.phi_coupling
-    (i11, i12, i13, i14), (i21, i22, i23, i24), (i31, i32, i33, i34), (i41, i42, i43, i44) = (
-        tuple(map(float, r)) for r in Mi
-    )
-    (d11, d12, d13, d14), (d21, d22, d23, d24), (d31, d32, d33, d34), (d41, d42, d43, d44) = D
-    (e11, e12, e13, e14), (e21, e22, e23, e24), (e31, e32, e33, e34), (e41, e42, e43, e44) = E
-
-    def accel_u(u, v, p, r, phi, X, Y, K, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
-        ur = u - u_c
-        vr = v - v_c
-        a = abs(ur)
-        f1 = X - (d11 * ur + d12 * vr + d13 * p + d14 * r + q1 * a * ur)
-        f1 -= a * (e11 * ur + e12 * vr + e13 * p + e14 * r)
-        f2 = Y - (d21 * ur + d22 * vr + d23 * p + d24 * r + q2 * abs(vr) * vr) - yphi * phi
-        f2 -= a * (e21 * ur + e22 * vr + e23 * p + e24 * r)
-        f3 = K - (d31 * ur + d32 * vr + d33 * p + d34 * r + q3 * abs(p) * p) - kphi * phi
-        f3 -= a * (e31 * ur + e32 * vr + e33 * p + e34 * r)
-        f4 = N - (d41 * ur + d42 * vr + d43 * p + d44 * r + q4 * abs(r) * r) - nphi * phi
-        f4 -= a * (e41 * ur + e42 * vr + e43 * p + e44 * r)
-        return (
-            i11 * f1 + i12 * f2 + i13 * f3 + i14 * f4,
-            i21 * f1 + i22 * f2 + i23 * f3 + i24 * f4,
-            i31 * f1 + i32 * f2 + i33 * f3 + i34 * f4,
-            i41 * f1 + i42 * f2 + i43 * f3 + i44 * f4,
-        )
-
-    def accel(u, v, p, r, phi, X, Y, K, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
-        ur = u - u_c
-        vr = v - v_c
-        f1 = X - (d11 * ur + d12 * vr + d13 * p + d14 * r + q1 * abs(ur) * ur)
-        f2 = Y - (d21 * ur + d22 * vr + d23 * p + d24 * r + q2 * abs(vr) * vr) - yphi * phi
-        f3 = K - (d31 * ur + d32 * vr + d33 * p + d34 * r + q3 * abs(p) * p) - kphi * phi
-        f4 = N - (d41 * ur + d42 * vr + d43 * p + d44 * r + q4 * abs(r) * r) - nphi * phi
-        return (
-            i11 * f1 + i12 * f2 + i13 * f3 + i14 * f4,
-            i21 * f1 + i22 * f2 + i23 * f3 + i24 * f4,
-            i31 * f1 + i32 * f2 + i33 * f3 + i34 * f4,
-            i41 * f1 + i42 * f2 + i43 * f3 + i44 * f4,
-        )
-
-    return accel_u if speed else accel
-
-
 def is_hull4(plant: Any) -> bool:
-    """Whether ``plant`` is a 4-DOF hull model: a :class:`Hull4` or any model with ``dofs ==
-    4``, a plain-float ``accel(u, v, p, r, phi, X, Y, K, N, u_c, v_c)`` kernel and a batched
-    ``nu_dot(nu, tau, nu_c, phi)`` (the nonlinear
-    :class:`~shipgym.dynamics.blanke4.Blanke4Hull`)."""
-    return isinstance(plant, Hull4) or (
-        getattr(plant, "dofs", None) == 4 and callable(getattr(plant, "nu_dot", None))
-        and callable(getattr(plant, "accel", None))
-    )  # fmt: skip
+    """Whether ``plant`` is a 4-DOF hull model: ``dofs == 4`` and a batched ``nu_dot(nu, tau,
+    nu_c, phi)`` (a :class:`Hull4`, a :class:`~shipgym.dynamics.blanke4.Blanke4Hull`, ...)."""
+    return getattr(plant, "dofs", None) == 4 and callable(getattr(plant, "nu_dot", None))

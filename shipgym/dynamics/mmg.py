@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -56,9 +55,7 @@ __all__ = [
     "MMGHull",
     "MMGModel",
     "MMGParameters",
-    "hull_kernel",
     "kvlcc2",
-    "propulsion_kernel",
 ]
 
 Array = NDArray[np.float64]
@@ -297,94 +294,13 @@ class MMGModel:
         return float(brentq(lambda n: self.nu_dot([U, 0.0, 0.0], 0.0, n)[0], 1e-3, 1e3))
 
 
-def hull_kernel(p: MMGParameters) -> Callable[[float, float, float], tuple[float, float, float]]:
-    """``f(u, v, r) -> (X_H, Y_H, N_H)`` on plain floats: :meth:`MMGModel.hull_forces` for
-    the physics step (a test checks one against the other)."""
-    h = 0.5 * p.rho * p.L * p.d
-    L = p.L
-    R0, Xvv, Xvr, Xrr, Xvvvv = p.R0, p.X_vv, p.X_vr, p.X_rr, p.X_vvvv
-    Yv, Yr, Yvvv, Yvvr, Yvrr, Yrrr = p.Y_v, p.Y_r, p.Y_vvv, p.Y_vvr, p.Y_vrr, p.Y_rrr
-    Nv, Nr, Nvvv, Nvvr, Nvrr, Nrrr = p.N_v, p.N_r, p.N_vvv, p.N_vvr, p.N_vrr, p.N_rrr
-    sqrt = math.sqrt
-
-    def hull(u: float, v: float, r: float) -> tuple[float, float, float]:
-        U2 = u * u + v * v
-        U = sqrt(U2)
-        Us = U if U > 1e-9 else 1e-9
-        vp = v / Us
-        rp = r * L / Us
-        q = h * U2
-        v2 = vp * vp
-        r2 = rp * rp
-        X = q * (-R0 + Xvv * v2 + Xvr * vp * rp + Xrr * r2 + Xvvvv * v2 * v2)
-        Y = q * (Yv * vp + Yr * rp + Yvvv * v2 * vp + Yvvr * v2 * rp + Yvrr * vp * r2
-                 + Yrrr * r2 * rp)  # fmt: skip
-        N = q * L * (Nv * vp + Nr * rp + Nvvv * v2 * vp + Nvvr * v2 * rp + Nvrr * vp * r2
-                     + Nrrr * r2 * rp)  # fmt: skip
-        return X, Y, N
-
-    return hull
-
-
-def propulsion_kernel(
-    p: MMGParameters,
-) -> Callable[[float, float, float, float, float], tuple[float, float, float, float]]:
-    """``f(u, v, r, delta, n) -> (X, Y, N, T)`` on plain floats: the propeller's and rudder's
-    force (:meth:`MMGModel.propulsion_forces`; ``delta`` with the paper's sign) and the
-    propeller thrust ``T`` (N), for the physics step (a test checks one against the other)."""
-    L, rho, D = p.L, p.rho, p.D_P
-    D4 = D**4
-    k0, k1, k2 = p.k0, p.k1, p.k2
-    w0, C1, C2p, C2n, xP = 1 - p.w_P0, p.C1, p.C2_pos, p.C2_neg, p.x_P
-    tP, tR, aH = p.t_P, p.t_R, p.a_H
-    arm = p.x_R * L + p.a_H * p.x_H * L
-    xPL, cy = p.x_P * L, p.c_y
-    eta = D / p.H_R
-    kap, eps, gn, gp, lR = p.kappa, p.eps, p.gamma_neg, p.gamma_pos, p.l_R
-    fa = 0.5 * rho * p.A_R * p.f_alpha
-    sqrt, exp, atan2, sin, cos, pi = math.sqrt, math.exp, math.atan2, math.sin, math.cos, math.pi
-
-    def propulsion(u: float, v: float, r: float, delta: float, n: float):  # type: ignore[no-untyped-def]
-        U = sqrt(u * u + v * v)
-        Us = U if U > 1e-9 else 1e-9
-        rp = r * L / Us
-        beta = atan2(-v, u)
-        bP = beta - xP * rp
-        one_w = w0 * (1 + (1 - exp(-C1 * abs(bP))) * ((C2p if bP > 0 else C2n) - 1))
-        na = abs(n)
-        J = u * one_w / ((na if na > 1e-9 else 1e-9) * D)
-        ahead = n > 0
-        KT = k0 + k1 * J + k2 * J * J if ahead else -(0.2 + 0.25 * J)
-        T = rho * n * n * D4 * KT
-        XP = (1 - tP) * T
-        YP = -cy * abs(XP) if n < 0 else 0.0
-        uR = eps * u * one_w
-        if ahead:
-            Js = J if abs(J) > 1e-9 else 1e-9
-            race = 1 + 8 * KT / (pi * Js * Js)
-            race = sqrt(race) if race > 0.0 else 0.0
-            uR *= sqrt(eta * (1 + kap * (race - 1)) ** 2 + 1 - eta)
-        bR = beta - lR * rp
-        vR = U * (gn if bR < 0 else gp) * bR
-        FN = fa * (uR * uR + vR * vR) * sin(delta - atan2(vR, uR))
-        cd = cos(delta)
-        return (
-            XP - (1 - tR) * FN * sin(delta),
-            YP - (1 + aH) * FN * cd,
-            xPL * YP - arm * FN * cd,
-            T,
-        )
-
-    return propulsion
-
-
 @njit
 def accel_mmg(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c):  # type: ignore[no-untyped-def]
     r"""The ``mmg`` family's compiled acceleration (:data:`~shipgym._jit.ACCEL_SIG`).
 
-    :meth:`MMGHull.nu_dot` written out (the equations of :class:`MMGHull` and
-    :attr:`MMGHull.accel`): the bare hull's forces of Yasukawa & Yoshimura (2015) eqs. 9-11 at
-    ``nu_r = [u - u_c, v - v_c, r]`` (:func:`hull_kernel`), the inertia of their eq. 4 with the
+    :meth:`MMGHull.nu_dot` written out (the equations of :class:`MMGHull`): the bare hull's
+    forces of Yasukawa & Yoshimura (2015) eqs. 9-11 at ``nu_r = [u - u_c, v - v_c, r]``
+    (:meth:`MMGModel.hull_forces`), the inertia of their eq. 4 with the
     current's terms, ``X``, ``Y``, ``N`` the actuators' and the environment's force.
 
     Args:
@@ -465,7 +381,6 @@ class MMGHull:
         self.name = name
         self.model = MMGModel(p)
         self.m = self.model.m
-        self._k = self._make_kernel()
 
     def __repr__(self) -> str:
         return f"MMGHull({self.name!r}, L = {self.p.L:g} m)"
@@ -502,13 +417,6 @@ class MMGHull:
         ), -1)  # fmt: skip
         return np.linalg.solve(self.mass_matrix(), rhs[..., None])[..., 0]
 
-    @property
-    def accel(self) -> Callable[..., tuple[float, float, float]]:
-        """``accel(u, v, r, X, Y, N, u_c=0, v_c=0) -> (u_dot, v_dot, r_dot)`` on plain floats:
-        :meth:`nu_dot` written out for the physics step (a test checks one against the
-        other)."""
-        return self._k
-
     def kernel_constants(self) -> Array:
         """The constant vector ``k`` of :func:`accel_mmg` (a new float64, C-contiguous array
         of 29; the hull coefficients nondimensional, Yasukawa & Yoshimura 2015 Table 2):
@@ -532,23 +440,3 @@ class MMGHull:
             1.0 / (md.m + md.mx), Mi[1, 1], Mi[1, 2], Mi[2, 1], Mi[2, 2],
         )  # fmt: skip
         return np.ascontiguousarray(k, dtype=np.float64)
-
-    def _make_kernel(self):  # type: ignore[no-untyped-def]
-        md = self.model
-        hull = hull_kernel(self.p)
-        m, mx, my, xg = md.m, md.mx, md.my, self.p.x_G
-        mxg = m * xg
-        Mi = np.linalg.inv(self.mass_matrix())
-        iu = 1.0 / (m + mx)
-        (_a, _b, _c), (_d, i22, i23), (_e, i32, i33) = Mi.tolist()
-
-        def accel(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
-            ur = u - u_c
-            vr = v - v_c
-            XH, YH, NH = hull(ur, vr, r)
-            fx = XH + X + m * (v * r + xg * r * r) + my * vr * r + mx * r * v_c
-            fy = YH + Y - m * u * r - mx * ur * r - my * r * u_c
-            fn = NH + N - mxg * u * r
-            return iu * fx, i22 * fy + i23 * fn, i32 * fy + i33 * fn
-
-        return accel

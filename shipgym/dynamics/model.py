@@ -14,11 +14,10 @@ Two formulations of the same equations live here on purpose:
 
 - the matrix form (:meth:`PlantModel.mass_matrix`, :meth:`~PlantModel.coriolis_rb`,
   :meth:`~PlantModel.coriolis_a`, :meth:`~PlantModel.damping`, :meth:`~PlantModel.nu_dot`),
-  batched over a leading axis and used by the reference integrator, observers and tests;
-- the expanded scalar kernel :meth:`PlantModel.accel` used on the physics hot path (plain
-  Python floats or NumPy arrays; no per-call array overhead). Tests check one against the other;
-- the same expanded form compiled, :func:`accel_fossen3` (the family's
-  :data:`~shipgym._jit.ACCEL_SIG` kernel, constants from :meth:`PlantModel.kernel_constants`),
+  batched over a leading axis: the design form, used by the reference integrator, observers
+  and tests, and the oracle;
+- the expanded form compiled, :func:`accel_fossen3` (the family's run-time law,
+  :data:`~shipgym._jit.ACCEL_SIG`, constants from :meth:`PlantModel.kernel_constants`),
   checked against the matrix form in ``tests/test_hull_kernels.py``.
 """
 
@@ -58,7 +57,7 @@ def accel_fossen3(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c):  # type: ignore[no-
     r"""The ``fossen3`` family's compiled acceleration (:data:`~shipgym._jit.ACCEL_SIG`).
 
     :meth:`PlantModel.nu_dot` (Fossen 2011 ch. 6-7, Tomera 2014 eqs. 3-7) written out component
-    by component, the equations of :meth:`PlantModel.accel`:
+    by component:
     ``M nu_dot = tau - C_RB(nu) nu - C_A(nu_r) nu_r - D(nu_r) nu_r + M_A nu_c_dot``.
 
     Args:
@@ -168,8 +167,7 @@ class PlantModel:
             raise ValueError(f"plant {self.name!r}: M = M_RB + M_A is singular: {M}")
         if self.coriolis and not self.m > 0:
             raise ValueError(f"plant {self.name!r}: m must be > 0 when coriolis=True")
-        Mi = np.linalg.inv(M)
-        object.__setattr__(self, "_k", _make_kernel(self, Mi))
+        object.__setattr__(self, "_k", _constants(self, np.linalg.inv(M)))
 
     # ---- matrix form (batched) -------------------------------------------------------------
     def mass_matrix(self) -> NDArray[np.float64]:
@@ -237,20 +235,10 @@ class PlantModel:
         M = self.mass_matrix()
         return np.linalg.solve(M, rhs[..., None])[..., 0]
 
-    # ---- expanded kernel (hot path) --------------------------------------------------------
-    @property
-    def accel(self) -> Callable[..., tuple[Any, Any, Any]]:
-        """``accel(u, v, r, X, Y, N, u_c=0, v_c=0) -> (u_dot, v_dot, r_dot)``.
-
-        The same equations as :meth:`nu_dot`, written out component by component so that it
-        runs on plain floats (one physics step) or on NumPy arrays of any shape (a batch)
-        without per-call array overhead.
-        """
-        return self._k
-
+    # ---- the compiled law's constants ----------------------------------------------------
     def kernel_constants(self) -> NDArray[np.float64]:
         """The constant vector ``k`` of :func:`accel_fossen3` (a new float64, C-contiguous
-        array of 30; the content of the module function :func:`kernel_constants`):
+        array of 30):
 
         - ``k[0:3]``: ``a11, a22, a32`` of ``M_A`` (kg, kg, kg m) for ``M_A nu_c_dot``;
         - ``k[3:12]``: ``D_L`` by rows (N s/m, N s, N m s);
@@ -260,19 +248,11 @@ class PlantModel:
           ``a22`` (kg), ``(a23 + a32)/2`` (kg m, the symmetric part), ``a11`` (kg), each times
           the Coriolis switch (0 when ``coriolis=False``).
         """
-        return np.ascontiguousarray(kernel_constants(self), dtype=np.float64)
+        return np.array(self._k, dtype=np.float64)
 
     def with_(self, **changes: Any) -> PlantModel:
         """A copy with some fields changed (frozen-dataclass ``replace``)."""
         return replace(self, **changes)
-
-
-def kernel_constants(p: PlantModel) -> tuple[float, ...]:
-    """The 30 constants of :meth:`PlantModel.accel`'s expanded form, in its order: ``a11,
-    a22, a32``, ``D_L`` by rows, ``d_quad``, ``M^-1`` by rows, then the Coriolis coefficients
-    ``m, m x_g, x_g, a22, a23, a11`` (each times the Coriolis switch). The compiled physics
-    step (:func:`accel_fossen3`) evaluates the same expressions with them."""
-    return p._kc  # type: ignore[attr-defined, no-any-return]
 
 
 def _constants(p: PlantModel, Mi: NDArray[np.float64]) -> tuple[float, ...]:
@@ -287,43 +267,6 @@ def _constants(p: PlantModel, Mi: NDArray[np.float64]) -> tuple[float, ...]:
     inv = [float(x) for row in Mi for x in row]
     return tuple(float(x) for x in (a11, a22, a32, *rows, *p.d_quad, *inv, m, m * p.x_g,
                                     p.x_g, a22 * cor, a23s * cor, a11 * cor))  # fmt: skip
-
-
-def _make_kernel(p: PlantModel, Mi: NDArray[np.float64]) -> Callable[..., tuple[Any, Any, Any]]:
-    """Expanded component form of :meth:`PlantModel.nu_dot`, constants bound in a closure."""
-    k = _constants(p, Mi)
-    object.__setattr__(p, "_kc", k)
-    a11, a22, a32 = k[0:3]
-    d11, d12, d13, d21, d22, d23, d31, d32, d33 = k[3:12]
-    q1, q2, q3 = k[12:15]
-    i11, i12, i13, i21, i22, i23, i31, i32, i33 = k[15:24]
-    m, mxg, xg, a22c, a23c, a11c = k[24:30]
-
-    def accel(u, v, r, X, Y, N, u_c=0.0, v_c=0.0):  # type: ignore[no-untyped-def]
-        ur = u - u_c
-        vr = v - v_c
-        # damping D(nu_r) nu_r
-        fx = X - (d11 * ur + d12 * vr + d13 * r + q1 * abs(ur) * ur)
-        fy = Y - (d21 * ur + d22 * vr + d23 * r + q2 * abs(vr) * vr)
-        fn = N - (d31 * ur + d32 * vr + d33 * r + q3 * abs(r) * r)
-        # Coriolis-centripetal C_RB(nu) nu + C_A(nu_r) nu_r
-        w = a22c * vr + a23c * r
-        a11u = a11c * ur
-        fx += m * (xg * r + v) * r + w * r
-        fy -= m * u * r + a11u * r
-        fn -= mxg * r * u + w * ur - a11u * vr
-        # + M_A nu_c_dot, nu_c_dot = [r v_c, -r u_c, 0]
-        ay = -r * u_c
-        fx += a11 * (r * v_c)
-        fy += a22 * ay
-        fn += a32 * ay
-        return (
-            i11 * fx + i12 * fy + i13 * fn,
-            i21 * fx + i22 * fy + i23 * fn,
-            i31 * fx + i32 * fy + i33 * fn,
-        )
-
-    return accel
 
 
 def seed_linear_matrices() -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -32,7 +32,6 @@ from shipgym.disturbances import (
     WindLoad,
     blendermann,
 )
-from shipgym.dynamics.actuators import Azimuth
 from shipgym.dynamics.vessel import Vessel, load_vessel
 
 from .physics import check_timestep
@@ -99,8 +98,7 @@ class BatchedPhysics:
             raise ValueError(f"waves must be a WaveConfig or None, got {waves!r}")
         self.lower = acts.lower.copy()
         self.upper = acts.upper.copy()
-        # channels whose command is the state they move to (lags, servos; not integrators)
-        self._holds = np.array([c.dynamics in ("lag", "servo") for c in acts.channels])
+        self._holds = acts.holds_state
         wind_cfg = WindConfig.coerce(wind, name="wind")
         cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
         self._coeffs = (wind_cfg.coefficients if wind_cfg else None) or v.windage.coefficients
@@ -161,10 +159,7 @@ class BatchedPhysics:
 
     def initial_actuator_state(self) -> Array:
         """Actuator states after a reset, (n, n_channels): those of the single physics."""
-        out = np.zeros(self.actuators.n_channels)
-        for a, sl in zip(self.actuators, self.actuators.slices, strict=True):
-            if isinstance(a, Azimuth):
-                out[sl.start + 1] = a.angle0
+        out = self.actuators.initial_state()
         return np.broadcast_to(out, (self.n, out.size)).copy()
 
     def reset(

@@ -46,7 +46,6 @@ from shipgym.disturbances import (
     blendermann,
 )
 from shipgym.dynamics import PlantModel, WindageParameters
-from shipgym.dynamics.actuators import Azimuth
 from shipgym.dynamics.hull4 import Hull4
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.envs._mujoco import mujoco
@@ -209,16 +208,7 @@ class VesselPhysics:
         self.wind = Wind(self.wind_config, self.windage)
         self._servo_channels = [i for i, c in enumerate(acts.channels) if c.dynamics == "servo"]
         self._flow_actuators = [i for i, a in enumerate(acts) if a.flow_dependent]
-        # channels whose command is the state they move to (lags, servos; not integrators)
-        self._holds = np.array([c.dynamics in ("lag", "servo") for c in acts.channels])
-        #: per servo channel: whether the servo was still running at its rate limit in the last
-        #: physics step of the last :meth:`step` (it has not reached its command because of the
-        #: rate limit; an ideal servo runs at full rate for every move, and only a move that
-        #: outlasts the call counts)
-        self.rate_limited = np.zeros(len(self._servo_channels), dtype=bool)
-        #: per flow-dependent actuator (rudders, MMG units, propellers with an advance-speed or
-        #: tunnel loss): whether its effective angle was past the stall angle at the last step
-        self.stalled = np.zeros(len(self._flow_actuators), dtype=bool)
+        self._holds = acts.holds_state
         self.saturated = np.zeros(v.actuators.n_channels, dtype=bool)
         self._build()
         self.reset()
@@ -302,11 +292,7 @@ class VesselPhysics:
 
     def initial_actuator_state(self) -> NDArray[np.float64]:
         """Actuator states after a reset: zero thrust, azimuths at their rest angle."""
-        out = np.zeros(self.actuators.n_channels)
-        for a, sl in zip(self.actuators, self.actuators.slices, strict=True):
-            if isinstance(a, Azimuth):
-                out[sl.start + 1] = a.angle0
-        return out
+        return self.actuators.initial_state()
 
     def reset(
         self,
@@ -348,7 +334,6 @@ class VesselPhysics:
         hb.external[0] = 0.0
         hb.t[0] = 0.0
         self.saturated[:] = False
-        self.rate_limited[:] = False
         rng = rng if rng is not None else np.random.default_rng(0)
         # fixed order, one draw each: the same seed gives the same disturbances
         self.wind.reset(rng)
@@ -360,6 +345,8 @@ class VesselPhysics:
         self._sync()
         mujoco.mj_forward(self.model, self.data)  # positions, contacts (qacc: set by start)
         hb.start(0)
+        hb.hits[0] = 0  # nothing stepped yet: no rate limit hit, no stall
+        hb.flags[0] = 0.0
 
     def _sync(self) -> None:
         """MuJoCo's pose and clock from the leapfrog state (rendering, contacts)."""
@@ -581,12 +568,24 @@ class VesselPhysics:
             hb.set_processes(0, self.wind if self.aerodynamics else None, self.current, drift)
         hb = self._hulls
         taken = hb.advance(n, stop_on_contact=stop_on_contact)
-        self._sync()
-        if self._servo_channels:
-            self.rate_limited[:] = hb.hits[0, self._servo_channels] > 0
-        if self._flow_actuators:
-            self.stalled[:] = hb.flags[0, self._flow_actuators] > 0
+        if self.integrator == "leapfrog":
+            self._sync()
         return taken
+
+    @property
+    def rate_limited(self) -> NDArray[np.bool_]:
+        """Per servo channel: whether the servo was still running at its rate limit in the last
+        physics step of the last :meth:`step` (it has not reached its command because of the
+        rate limit; an ideal servo runs at full rate for every move, and only a move that
+        outlasts the call counts)."""
+        return self._hulls.hits[0, self._servo_channels] > 0
+
+    @property
+    def stalled(self) -> NDArray[np.bool_]:
+        """Per flow-dependent actuator (rudders, MMG units, propellers with an advance-speed
+        or tunnel loss): whether its effective angle was past the stall angle at the last
+        step."""
+        return self._hulls.flags[0, self._flow_actuators] > 0
 
     def contacts(self) -> list[tuple[str, str]]:
         """Pairs of geom names in contact now (the hull's geom first when it is involved)."""

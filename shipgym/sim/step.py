@@ -38,9 +38,10 @@ from typing import Any
 
 import numpy as np
 
-from shipgym._jit import ACCEL_SIG, accel_at, address, entry, law_at, njit
+from shipgym._jit import ACCEL_SIG, accel_at, address, entry, njit
 from shipgym.disturbances._grid import CHUNK
 from shipgym.disturbances.wind import blendermann_load
+from shipgym.dynamics.actuators import tau_of_table
 from shipgym.sim._mujoco import mujoco
 
 __all__ = [
@@ -173,6 +174,15 @@ def grid_at(t, inv_dt, k0, win, i):  # type: ignore[no-untyped-def]
     return True, a0 + f * (win[i, 0, j + 1] - a0), b0 + f * (win[i, 1, j + 1] - b0)
 
 
+@njit(inline="always")
+def process_at(mode, t, i, slot, inv_dt, k0, win, const):  # type: ignore[no-untyped-def]
+    """Hull ``i``'s process ``slot`` at time ``t``: its constant (``CONSTANT``; zeros for
+    ``OFF``) or the interpolation in its window (``SAMPLED``, :func:`grid_at`)."""
+    if mode == SAMPLED:
+        return grid_at(t, inv_dt[i, slot], k0[i, slot], win, i)
+    return True, const[i, slot, 0], const[i, slot, 1]
+
+
 @njit
 def run(  # type: ignore[no-untyped-def]
     integrator, mj_step, mp, dp, ncon, stop_on_contact,
@@ -224,7 +234,6 @@ def run(  # type: ignore[no-untyped-def]
         ``OK``, ``NEED`` or ``DIVERGED``.
     """
     n_hulls = q.shape[0]
-    n_act = table.shape[0]
     n_ch = chan.shape[0]
     hh = 0.5 * h
     mq, iq, ix = inertia[0], inertia[2], inertia[3]
@@ -254,31 +263,15 @@ def run(  # type: ignore[no-untyped-def]
             r = psid / cphi
             p = phid
             # 2. the loads; a missing window returns before anything is written
-            if m_w == SAMPLED:
-                ok, vw, bw = grid_at(ti, inv_dt[i, 0], k0[i, 0], win_w, i)
-                if not ok:
-                    status[0], status[1], status[2] = i, WIND, int(ti * inv_dt[i, 0]) // CHUNK
-                    t[i] = ti
-                    return NEED
-                vw = vw if vw > 0.0 else 0.0
-            else:
-                vw, bw = const[i, 0, 0], const[i, 0, 1]
-            if m_c == SAMPLED:
-                ok, vc, bc = grid_at(ti, inv_dt[i, 1], k0[i, 1], win_c, i)
-                if not ok:
-                    status[0], status[1], status[2] = i, CURRENT, int(ti * inv_dt[i, 1]) // CHUNK
-                    t[i] = ti
-                    return NEED
-            else:
-                vc, bc = const[i, 1, 0], const[i, 1, 1]
-            if m_d == SAMPLED:
-                ok, e, _unused = grid_at(ti, inv_dt[i, 2], k0[i, 2], win_d, i)
-                if not ok:
-                    status[0], status[1], status[2] = i, DRIFT, int(ti * inv_dt[i, 2]) // CHUNK
-                    t[i] = ti
-                    return NEED
-            else:
-                e = 0.0
+            ok_w, vw, bw = process_at(m_w, ti, i, WIND, inv_dt, k0, win_w, const)
+            ok_c, vc, bc = process_at(m_c, ti, i, CURRENT, inv_dt, k0, win_c, const)
+            ok_d, e, _unused = process_at(m_d, ti, i, DRIFT, inv_dt, k0, win_d, const)
+            if not (ok_w and ok_c and ok_d):
+                slot = WIND if not ok_w else (CURRENT if not ok_c else DRIFT)
+                status[0], status[1], status[2] = i, slot, int(ti * inv_dt[i, slot]) // CHUNK
+                t[i] = ti
+                return NEED
+            vw = vw if vw > 0.0 else 0.0  # a gust's speed never below 0
             if m_w != OFF:
                 wx, wy, wn = blendermann_load(kw, psi, u, v, vw, bw)
             else:
@@ -298,16 +291,8 @@ def run(  # type: ignore[no-untyped-def]
                 dx_ = dy_ = dn_ = 0.0
             ur = u - uc
             vr = v - vcb
-            tx = ty = tk = tn = 0.0
-            for a in range(n_act):
-                law = law_at(laws[kind_index[a]])
-                fx, fy, fk, fn, fa, fl = law(table[a], st, ur, vr, p, r)
-                tx += fx
-                ty += fy
-                tk += fk
-                tn += fn
-                forces[i, a] = fa
-                flags[i, a] = fl
+            tx, ty, tk, tn = tau_of_table(table, laws, kind_index, st, ur, vr, p, r, forces[i],
+                                          flags[i])  # fmt: skip
             # 3. the hull's acceleration
             ud, vd, pd, rd = acc(
                 kh, u, v, p, r, phi,
@@ -514,6 +499,7 @@ class HullBatch:
         self.hits = np.zeros((n, nc), dtype=np.int64)
         self.status = np.zeros(4, dtype=np.int64)
         self._entry: Any = None  # run's compiled entry point for these arguments' types
+        self._args: tuple[Any, ...] | None = None
 
     # ---- disturbances ----------------------------------------------------------------------
     def set_processes(self, i: int, wind: Any, current: Any, waves: Any) -> None:
@@ -558,6 +544,7 @@ class HullBatch:
             win = np.zeros((self.n, 2, chunk.shape[1]))
             win[:] = self.windows[slot][:, :, :1]
             self.windows[slot] = win
+            self._args = None
         win[i] = chunk
         self.k0[i, slot] = j * CHUNK
 
@@ -631,24 +618,25 @@ class HullBatch:
 
     def _advance(self, integ: int, n: int, only: int | None, stop_on_contact: bool = False) -> int:
         if only is None:
-            self.left[:] = n
+            self.left.fill(n)
         else:
-            self.left[:] = 0
+            self.left.fill(0)
             self.left[only] = n
         self.status[3] = 0
-        mj, mp, dp = self._mj
         while True:
-            args = (
-                integ, mj, mp, dp, self._ncon, stop_on_contact,
-                self.dofs, self.linear_kin, self.h, self.inertia,
-                self.accel, self.kh, self.laws, self.table, self.kind_index, self.chan, self.kw,
-                self.q, self.qv, self.qa, self.qfrc, self.act, self.cmd, self.t, self.left,
-                self.external, self.mode, self.const, self.inv_dt, self.k0, *self.windows,
-                self.drift_k, self.loads, self.forces, self.flags, self.hits, self.status,
-            )  # fmt: skip
+            if self._args is None:  # the arrays of run (built again when a window grows)
+                self._args = (
+                    self.dofs, self.linear_kin, self.h, self.inertia,
+                    self.accel, self.kh, self.laws, self.table, self.kind_index, self.chan,
+                    self.kw, self.q, self.qv, self.qa, self.qfrc, self.act, self.cmd, self.t,
+                    self.left, self.external, self.mode, self.const, self.inv_dt, self.k0,
+                    *self.windows, self.drift_k, self.loads, self.forces, self.flags, self.hits,
+                    self.status,
+                )  # fmt: skip
             if self._entry is None:
-                self._entry = entry(run, args)
-            code = self._entry(*args)
+                self._entry = entry(run, (integ, *self._mj, self._ncon, stop_on_contact,
+                                          *self._args))  # fmt: skip
+            code = self._entry(integ, *self._mj, self._ncon, stop_on_contact, *self._args)
             if code == OK:
                 return n - int(self.status[3])
             i, slot, j = (int(x) for x in self.status[:3])
