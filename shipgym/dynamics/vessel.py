@@ -14,6 +14,11 @@ user's package anywhere on disk loads with ``load_vessel(path)`` (or ``vessel=PA
 environments). Validation happens on load: unknown keys, missing values, wrong units,
 non-positive masses, a singular mass matrix, actuators outside the hull: each raises
 :class:`VesselError` naming the file and the key. This module never imports MuJoCo.
+
+Hull families and actuator kinds are registries (:data:`HULL_FAMILIES`,
+:data:`ACTUATOR_READERS`): a new family (its model with a compiled acceleration) or kind (its
+actuator with a compiled force law) is one module that registers its reader
+(:func:`register_hull_family`, :func:`register_actuator_kind`); no file here changes.
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
 from pathlib import Path
@@ -30,16 +35,24 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .actuators import ActuatorSet, Azimuth, MMGPropulsion, Propeller, Rudder
+from .actuators import Actuator, ActuatorSet, Azimuth, MMGPropulsion, Propeller, Rudder
 from .hull4 import KINEMATICS, Hull4
 from .model import PlantModel, plant_model
 from .params import HullParameters, WindageParameters
 
 __all__ = [
+    "ACTUATOR_READERS",
+    "COMMON_ACTUATOR_KEYS",
+    "HULL_FAMILIES",
+    "ActuatorSite",
     "DesignModel",
+    "HullFamily",
     "Vessel",
     "VesselError",
+    "VesselReader",
     "load_vessel",
+    "register_actuator_kind",
+    "register_hull_family",
     "vessel_names",
     "vessels",
 ]
@@ -239,7 +252,7 @@ _UNITS_HULL3 = {f.name: f.metadata.get("unit", "") for f in fields(HullParameter
 _UNITS_WINDAGE = {f.name: f.metadata.get("unit", "") for f in fields(WindageParameters)}
 
 
-class _Reader:
+class VesselReader:
     """Reads values from the TOML tables, recording units and sources; errors name the key."""
 
     def __init__(self, path: Path) -> None:
@@ -322,77 +335,109 @@ class _Reader:
         return v
 
 
-def _check_mass_matrix(r: _Reader, M: NDArray, key: str) -> None:
+def _check_mass_matrix(r: VesselReader, M: NDArray, key: str) -> None:
     if not np.all(np.diag(M) > 0):
         raise r.fail(key, f"the mass matrix needs a positive diagonal, got {np.diag(M).tolist()}")
     if not np.linalg.cond(M) < 1e12:
         raise r.fail(key, f"the mass matrix is singular: {M.tolist()}")
 
 
-def _read_hull(r: _Reader, data: Mapping[str, Any], dofs: int) -> tuple[Any, dict[str, Any]]:
+@dataclass(frozen=True)
+class HullFamily:
+    """A hull model family a vessel file names (``[hull] family = "..."``).
+
+    Attributes:
+        dofs: the degrees of freedom of its hulls (3: surge, sway, yaw; 4: and roll).
+        read: ``read(reader, data, table) -> (hull, plants)``: the family's ``[hull]`` table
+            read with a :class:`VesselReader` (``data`` the whole file), giving the vessel's
+            ``hull`` (its dimensions and rigid inertia as attributes ``m``, ``I_x`` (4 DOF),
+            ``I_z``, ``L_oa``, ``L_pp``, ``B``, ``T``) and its plant variants (``{"default":
+            model}``), each a hull model with a compiled ``accel_kernel``
+            (:data:`shipgym._jit.ACCEL_SIG`), ``kernel_constants()`` and ``nu_dot``.
+    """
+
+    dofs: int
+    read: Callable[..., tuple[Any, dict[str, Any]]]
+
+
+#: the hull families by the name vessel files use (:func:`register_hull_family`)
+HULL_FAMILIES: dict[str, HullFamily] = {}
+
+
+def register_hull_family(name: str, family: HullFamily) -> None:
+    """Make ``family`` readable from vessel files as ``[hull] family = name``."""
+    if not isinstance(family, HullFamily) or family.dofs not in (3, 4):
+        raise ValueError(f"hull family {name!r}: need a HullFamily of 3 or 4 DOF, got {family!r}")
+    HULL_FAMILIES[name] = family
+
+
+def _read_hull(r: VesselReader, data: Mapping[str, Any], dofs: int) -> tuple[Any, dict[str, Any]]:
     t = r.table(data, "hull")
-    family = r.string(t, "family", "hull")
-    if family == "fossen3":
-        if dofs != 3:
-            raise r.fail("hull.family", "'fossen3' is a 3-DOF family; use 'linear4' for 4 DOF")
-        r.keys(t, "hull", {"family", *_UNITS_HULL3})
-        vals: dict[str, Any] = {
-            "name": str(data.get("vessel", {}).get("title", r.path.parent.name))
-        }
-        for k, unit in _UNITS_HULL3.items():
-            if k == "name":
-                continue
-            vals[k] = r.number(t, k, "hull", unit)
-        for k in ("m", "I_z", "L_oa", "L_pp", "B", "T"):
-            if not vals[k] > 0:
-                raise r.fail(f"hull.{k}", f"must be > 0 ({_UNITS_HULL3[k]}), got {vals[k]!r}")
-        try:
-            hull = HullParameters(**vals)
-            default = plant_model("default", hull)
-        except ValueError as exc:
-            raise r.fail("hull", str(exc)) from None
-        _check_mass_matrix(r, default.mass_matrix(), "hull (M = M_RB + M_A)")
-        return hull, {"default": default}
-    if family == "linear4":
-        if dofs != 4:
-            raise r.fail("hull.family", "'linear4' is a 4-DOF family: set vessel.dofs = 4")
-        keys = {"family", "M", "D_L", "D_u", "kinematics", "K_phi", "phi_coupling", "d_quad", "m",
-                "I_x", "I_z", "nabla", "rho",
-                "L_oa", "L_pp", "B", "T"}  # fmt: skip
-        r.keys(t, "hull", keys)
-        M = r.matrix(t, "M", "hull", 4)
-        _check_mass_matrix(r, M, "hull.M")
-        D = r.matrix(t, "D_L", "hull", 4)
-        Du = r.matrix(t, "D_u", "hull", 4) if "D_u" in t else np.zeros((4, 4))
-        kin = r.string(t, "kinematics", "hull", "fossen")
-        if kin not in KINEMATICS:
-            raise r.fail("hull.kinematics", f"choose one of {', '.join(KINEMATICS)}, got {kin!r}")
-        vals = {k: r.number(t, k, "hull", u, positive=True) for k, u in (
-            ("K_phi", "N m/rad"), ("m", "kg"), ("I_x", "kg m^2"), ("I_z", "kg m^2"),
-            ("L_oa", "m"), ("L_pp", "m"), ("B", "m"), ("T", "m"))}  # fmt: skip
-        dq = r.vector(t, "d_quad", "hull", 4, default=(0.0, 0.0, 0.0, 0.0))
-        if min(dq) < 0:
-            raise r.fail("hull.d_quad", f"must be >= 0, got {dq}")
-        pc = r.vector(t, "phi_coupling", "hull", 2, default=(0.0, 0.0))
-        nabla = r.number(t, "nabla", "hull", "m^3", default=0.0)
-        rho = r.number(t, "rho", "hull", "kg/m^3", default=1025.0, positive=True)
-        if nabla < 0:
-            raise r.fail("hull.nabla", f"must be >= 0 m^3 (0: none), got {nabla!r}")
-        hull = Hull4("default", M, D, vals["K_phi"], dq, vals["m"], Du, kin, pc, nabla, rho)
-        hull_info = dict(vals)
-        return _Dims4(hull_info), {"default": hull}
-    if family == "blanke4":
-        if dofs != 4:
-            raise r.fail("hull.family", "'blanke4' is a 4-DOF family: set vessel.dofs = 4")
-        return _read_blanke4(r, data, t)
-    if family == "mmg":
-        if dofs != 3:
-            raise r.fail("hull.family", "'mmg' is a 3-DOF family (surge, sway, yaw): dofs = 3")
-        return _read_mmg(r, data, t)
-    raise r.fail(
-        "hull.family",
-        f"unknown hull family {family!r}; choose 'fossen3', 'linear4', 'blanke4' or 'mmg'",
-    )
+    name = r.string(t, "family", "hull")
+    family = HULL_FAMILIES.get(name)
+    if family is None:
+        raise r.fail(
+            "hull.family",
+            f"unknown hull family {name!r}; choose one of {', '.join(sorted(HULL_FAMILIES))}",
+        )
+    if family.dofs != dofs:
+        raise r.fail("hull.family", f"{name!r} is a {family.dofs}-DOF family, the vessel has "
+                                    f"dofs = {dofs}")  # fmt: skip
+    return family.read(r, data, t)
+
+
+def _read_fossen3(
+    r: VesselReader, data: Mapping[str, Any], t: Mapping[str, Any]
+) -> tuple[Any, dict[str, Any]]:
+    """A ``fossen3`` hull: :class:`~shipgym.dynamics.params.HullParameters` (Tomera 2014
+    Table 2 names) and its default plant."""
+    r.keys(t, "hull", {"family", *_UNITS_HULL3})
+    vals: dict[str, Any] = {"name": str(data.get("vessel", {}).get("title", r.path.parent.name))}
+    for k, unit in _UNITS_HULL3.items():
+        if k == "name":
+            continue
+        vals[k] = r.number(t, k, "hull", unit)
+    for k in ("m", "I_z", "L_oa", "L_pp", "B", "T"):
+        if not vals[k] > 0:
+            raise r.fail(f"hull.{k}", f"must be > 0 ({_UNITS_HULL3[k]}), got {vals[k]!r}")
+    try:
+        hull = HullParameters(**vals)
+        default = plant_model("default", hull)
+    except ValueError as exc:
+        raise r.fail("hull", str(exc)) from None
+    _check_mass_matrix(r, default.mass_matrix(), "hull (M = M_RB + M_A)")
+    return hull, {"default": default}
+
+
+def _read_linear4(
+    r: VesselReader, data: Mapping[str, Any], t: Mapping[str, Any]
+) -> tuple[Any, dict[str, Any]]:
+    """A ``linear4`` hull: :class:`~shipgym.dynamics.hull4.Hull4` matrices and dimensions."""
+    keys = {"family", "M", "D_L", "D_u", "kinematics", "K_phi", "phi_coupling", "d_quad", "m",
+            "I_x", "I_z", "nabla", "rho",
+            "L_oa", "L_pp", "B", "T"}  # fmt: skip
+    r.keys(t, "hull", keys)
+    M = r.matrix(t, "M", "hull", 4)
+    _check_mass_matrix(r, M, "hull.M")
+    D = r.matrix(t, "D_L", "hull", 4)
+    Du = r.matrix(t, "D_u", "hull", 4) if "D_u" in t else np.zeros((4, 4))
+    kin = r.string(t, "kinematics", "hull", "fossen")
+    if kin not in KINEMATICS:
+        raise r.fail("hull.kinematics", f"choose one of {', '.join(KINEMATICS)}, got {kin!r}")
+    vals = {k: r.number(t, k, "hull", u, positive=True) for k, u in (
+        ("K_phi", "N m/rad"), ("m", "kg"), ("I_x", "kg m^2"), ("I_z", "kg m^2"),
+        ("L_oa", "m"), ("L_pp", "m"), ("B", "m"), ("T", "m"))}  # fmt: skip
+    dq = r.vector(t, "d_quad", "hull", 4, default=(0.0, 0.0, 0.0, 0.0))
+    if min(dq) < 0:
+        raise r.fail("hull.d_quad", f"must be >= 0, got {dq}")
+    pc = r.vector(t, "phi_coupling", "hull", 2, default=(0.0, 0.0))
+    nabla = r.number(t, "nabla", "hull", "m^3", default=0.0)
+    rho = r.number(t, "rho", "hull", "kg/m^3", default=1025.0, positive=True)
+    if nabla < 0:
+        raise r.fail("hull.nabla", f"must be >= 0 m^3 (0: none), got {nabla!r}")
+    hull = Hull4("default", M, D, vals["K_phi"], dq, vals["m"], Du, kin, pc, nabla, rho)
+    hull_info = dict(vals)
+    return _Dims4(hull_info), {"default": hull}
 
 
 #: units of the MMG parameters in a vessel file (the rest are nondimensional: "1")
@@ -401,7 +446,7 @@ _UNITS_MMG = {"L": "m", "B": "m", "d": "m", "nabla": "m^3", "x_G": "m", "D_P": "
 
 
 def _read_mmg(
-    r: _Reader, data: Mapping[str, Any], t: Mapping[str, Any]
+    r: VesselReader, data: Mapping[str, Any], t: Mapping[str, Any]
 ) -> tuple[Any, dict[str, Any]]:
     """An ``mmg`` hull: one key per :class:`~shipgym.dynamics.mmg.MMGParameters` field (the
     published values), an optional ``scale_to`` (m: the same hull geometrically scaled to
@@ -433,7 +478,7 @@ def _read_mmg(
 
 
 def _read_blanke4(
-    r: _Reader, data: Mapping[str, Any], t: Mapping[str, Any]
+    r: VesselReader, data: Mapping[str, Any], t: Mapping[str, Any]
 ) -> tuple[Any, dict[str, Any]]:
     """A ``blanke4`` hull: one key per :class:`~shipgym.dynamics.blanke4.Blanke4Hull` field.
 
@@ -469,6 +514,15 @@ def _read_blanke4(
     return _Dims4(info), {"default": hull}
 
 
+for _name, _family in (
+    ("fossen3", HullFamily(3, _read_fossen3)),
+    ("linear4", HullFamily(4, _read_linear4)),
+    ("blanke4", HullFamily(4, _read_blanke4)),
+    ("mmg", HullFamily(3, _read_mmg)),
+):
+    register_hull_family(_name, _family)
+
+
 @dataclass(frozen=True)
 class _Dims4:
     """The dimensions and rigid inertia of a 4-DOF hull package (``hull`` of a ``linear4``)."""
@@ -483,7 +537,7 @@ class _Dims4:
 
 
 def _read_plants(
-    r: _Reader, data: Mapping[str, Any], hull: Any, plants: dict[str, Any]
+    r: VesselReader, data: Mapping[str, Any], hull: Any, plants: dict[str, Any]
 ) -> set[str]:
     """The ``[plants.NAME]`` variants into ``plants``; returns the names of those that drive
     the bollard actuators (``actuators = "bollard"``)."""
@@ -522,7 +576,7 @@ def _read_plants(
 
 
 def _read_fossen3_variant(
-    r: _Reader, t: Mapping[str, Any], where: str, name: str, hull: HullParameters
+    r: VesselReader, t: Mapping[str, Any], where: str, name: str, hull: HullParameters
 ) -> PlantModel:
     """A ``fossen3`` plant variant: the default plant of the ``[hull]`` with the hydrodynamic
     values given here (same keys and units as ``[hull]``) in place of the hull's; the rigid
@@ -544,20 +598,47 @@ def _read_fossen3_variant(
     return plant
 
 
+@dataclass(frozen=True)
+class ActuatorSite:
+    """What every ``[[actuator]]`` table gives, read before its kind's reader runs."""
+
+    name: str
+    where: str
+    position: tuple[float, float, float]
+    colour: str
+    hull: Any  # the vessel's hull (its dimensions; an ``mmg`` hull's parameters)
+
+
+#: the readers of the actuator kinds vessel files name (``kind = "..."``):
+#: ``read(reader, table, site) -> Actuator`` (:func:`register_actuator_kind`)
+ACTUATOR_READERS: dict[str, Callable[..., Actuator]] = {}
+
+#: the keys every actuator table may hold, whatever its kind
+COMMON_ACTUATOR_KEYS = frozenset({"name", "kind", "position", "time_constant", "colour"})
+
+
+def register_actuator_kind(kind: str, read: Callable[..., Actuator]) -> None:
+    """Make an actuator kind readable from vessel files as ``kind = ...``: ``read(reader,
+    table, site)`` (a :class:`VesselReader`, the ``[[actuator]]`` table, its
+    :class:`ActuatorSite`) returns the actuator, whose class has a compiled force law
+    (``force_law``, ``law_row``: :meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`)."""
+    if not callable(read):
+        raise ValueError(f"actuator kind {kind!r}: read must be callable, got {read!r}")
+    ACTUATOR_READERS[kind] = read
+
+
 def _read_actuators(
-    r: _Reader,
+    r: VesselReader,
     data: Mapping[str, Any],
     dofs: int,
     dims: tuple[float, float, float, float],
     hull: Any = None,
 ) -> ActuatorSet:
     items = data.get("actuator")
-    mmg = getattr(hull, "values", {}).get("params")
     if not isinstance(items, list) or not items:
         raise r.fail("actuator", "missing: give one [[actuator]] table per actuator")
     L_oa, _, B, T = dims
     out = []
-    common = {"name", "kind", "position", "time_constant", "colour"}
     for i, t in enumerate(items):
         where = f"actuator[{i}]"
         if not isinstance(t, Mapping):
@@ -573,81 +654,15 @@ def _read_actuators(
                 f"[{x:g}, {y:g}, {z:g}] m lies outside the hull (|x| <= L_oa/2 = {0.5 * L_oa:g}, "
                 f"|y| <= B/2 = {0.5 * B:g}, |z| <= 2 T = {2 * T:g} m from the centre of gravity)",
             )
-        if kind not in ("rudder", "mmg"):
-            tc = r.number(t, "time_constant", where, "s", positive=True)
-        colour = r.string(t, "colour", where, "#1f77b4")
+        read = ACTUATOR_READERS.get(kind)
+        if read is None:
+            raise r.fail(
+                f"{where}.kind",
+                f"unknown actuator kind {kind!r}; choose {', '.join(ACTUATOR_READERS)}",
+            )
+        site = ActuatorSite(name, where, (x, y, z), r.string(t, "colour", where, "#1f77b4"), hull)
         try:
-            if kind in ("propeller", "tunnel"):
-                r.keys(t, where, common | {"law", "k_ahead", "k_astern", "k", "unit", "range",
-                                           "alpha_deg", "advance", "wake", "loss_speed",
-                                           "loss_depth", "rate_limit"})  # fmt: skip
-                unit = r.string(t, "unit", where, "1")
-                law = r.string(t, "law", where, "linear")
-                ku = {"linear": f"N/{unit}", "quadratic": f"N/{unit}^2"}.get(law, "")
-                if unit == "1":
-                    ku = "N"
-                if "k" in t:
-                    k = r.number(t, "k", where, ku, positive=True)
-                    ka = kb = k
-                else:
-                    ka = r.number(t, "k_ahead", where, ku, positive=True)
-                    kb = r.number(t, "k_astern", where, ku, positive=True)
-                lo, hi = r.vector(t, "range", where, 2, unit, default=(-1.0, 1.0))
-                alpha = r.number(t, "alpha_deg", where, "deg",
-                                 default=90.0 if kind == "tunnel" else 0.0)  # fmt: skip
-                # the advance-speed loss (Blanke 1981), the tunnel loss, the rate limit
-                per = "" if unit == "1" else f"{unit} "
-                flow = {
-                    "advance": r.number(t, "advance", where, f"N/({per}m/s)" if per else "N s/m",
-                                        default=0.0),
-                    "wake": r.number(t, "wake", where, "1", default=0.0),
-                    "loss_speed": r.number(t, "loss_speed", where, "m/s", default=1.0),
-                    "loss_depth": r.number(t, "loss_depth", where, "1", default=0.0),
-                    "rate_limit": r.number(t, "rate_limit", where, f"{unit}/s", positive=True)
-                    if "rate_limit" in t else math.inf,
-                }  # fmt: skip
-                if ("loss_depth" in t) != ("loss_speed" in t):
-                    raise r.fail(
-                        f"{where}.loss_speed",
-                        "give both loss_speed (m/s) and "
-                        "loss_depth (1) for a thrust loss with forward speed, or neither",
-                    )
-                if "wake" in t and "advance" not in t:
-                    raise r.fail(
-                        f"{where}.wake",
-                        "a wake fraction needs an advance coefficient "
-                        "(advance: the thrust loss per unit and m/s)",
-                    )
-                out.append(Propeller(
-                    name=name, position=pos, alpha=math.radians(alpha), law=law, k_ahead=ka,
-                    k_astern=kb, lower=lo, upper=hi, unit=unit, time_constant=tc, colour=colour,
-                    tunnel=kind == "tunnel", **flow))  # fmt: skip
-            elif kind == "azimuth":
-                r.keys(t, where, common | {"max_thrust", "reversible", "max_rate_deg",
-                                           "angle0_deg"})  # fmt: skip
-                rev = r.value(t, "reversible", where, None, True)
-                if not isinstance(rev, bool):
-                    raise r.fail(f"{where}.reversible", f"must be true or false, got {rev!r}")
-                out.append(Azimuth(
-                    name=name, position=pos,
-                    max_thrust_n=r.number(t, "max_thrust", where, "N", positive=True),
-                    lower=-1.0 if rev else 0.0, time_constant=tc,
-                    max_rate=math.radians(r.number(t, "max_rate_deg", where, "deg/s",
-                                                   positive=True)),
-                    angle0=math.radians(r.number(t, "angle0_deg", where, "deg", default=0.0)),
-                    colour=colour))  # fmt: skip
-            elif kind == "rudder":
-                out.append(_read_rudder(r, t, where, name, pos, colour))
-            elif kind == "mmg":
-                if mmg is None:
-                    raise r.fail(f"{where}.kind", "an 'mmg' unit needs an 'mmg' hull family")
-                out.append(_read_mmg_unit(r, t, where, name, pos, colour, mmg))
-            else:
-                raise r.fail(
-                    f"{where}.kind",
-                    f"unknown actuator kind {kind!r}; choose propeller, tunnel, azimuth, rudder, "
-                    "mmg",
-                )
+            out.append(read(r, t, site))
         except ValueError as exc:
             if isinstance(exc, VesselError):
                 raise
@@ -658,14 +673,81 @@ def _read_actuators(
         raise r.fail("actuator", str(exc)) from None
 
 
+def _read_propeller(r: VesselReader, t: Mapping[str, Any], site: ActuatorSite) -> Actuator:
+    """A ``propeller`` or ``tunnel`` table (:class:`~shipgym.dynamics.actuators.Propeller`)."""
+    where = site.where
+    kind = t["kind"]
+    r.keys(t, where, COMMON_ACTUATOR_KEYS | {
+        "law", "k_ahead", "k_astern", "k", "unit", "range", "alpha_deg", "advance", "wake",
+        "loss_speed", "loss_depth", "rate_limit"})  # fmt: skip
+    tc = r.number(t, "time_constant", where, "s", positive=True)
+    unit = r.string(t, "unit", where, "1")
+    law = r.string(t, "law", where, "linear")
+    ku = {"linear": f"N/{unit}", "quadratic": f"N/{unit}^2"}.get(law, "")
+    if unit == "1":
+        ku = "N"
+    if "k" in t:
+        k = r.number(t, "k", where, ku, positive=True)
+        ka = kb = k
+    else:
+        ka = r.number(t, "k_ahead", where, ku, positive=True)
+        kb = r.number(t, "k_astern", where, ku, positive=True)
+    lo, hi = r.vector(t, "range", where, 2, unit, default=(-1.0, 1.0))
+    alpha = r.number(t, "alpha_deg", where, "deg", default=90.0 if kind == "tunnel" else 0.0)
+    # the advance-speed loss (Blanke 1981), the tunnel loss, the rate limit
+    per = "" if unit == "1" else f"{unit} "
+    flow = {
+        "advance": r.number(t, "advance", where, f"N/({per}m/s)" if per else "N s/m",
+                            default=0.0),
+        "wake": r.number(t, "wake", where, "1", default=0.0),
+        "loss_speed": r.number(t, "loss_speed", where, "m/s", default=1.0),
+        "loss_depth": r.number(t, "loss_depth", where, "1", default=0.0),
+        "rate_limit": r.number(t, "rate_limit", where, f"{unit}/s", positive=True)
+        if "rate_limit" in t else math.inf,
+    }  # fmt: skip
+    if ("loss_depth" in t) != ("loss_speed" in t):
+        raise r.fail(
+            f"{where}.loss_speed",
+            "give both loss_speed (m/s) and "
+            "loss_depth (1) for a thrust loss with forward speed, or neither",
+        )
+    if "wake" in t and "advance" not in t:
+        raise r.fail(
+            f"{where}.wake",
+            "a wake fraction needs an advance coefficient "
+            "(advance: the thrust loss per unit and m/s)",
+        )
+    return Propeller(
+        name=site.name, position=site.position, alpha=math.radians(alpha), law=law, k_ahead=ka,
+        k_astern=kb, lower=lo, upper=hi, unit=unit, time_constant=tc, colour=site.colour,
+        tunnel=kind == "tunnel", **flow)  # fmt: skip
+
+
+def _read_azimuth(r: VesselReader, t: Mapping[str, Any], site: ActuatorSite) -> Actuator:
+    """An ``azimuth`` table (:class:`~shipgym.dynamics.actuators.Azimuth`)."""
+    where = site.where
+    r.keys(t, where, COMMON_ACTUATOR_KEYS | {"max_thrust", "reversible", "max_rate_deg",
+                                             "angle0_deg"})  # fmt: skip
+    tc = r.number(t, "time_constant", where, "s", positive=True)
+    rev = r.value(t, "reversible", where, None, True)
+    if not isinstance(rev, bool):
+        raise r.fail(f"{where}.reversible", f"must be true or false, got {rev!r}")
+    return Azimuth(
+        name=site.name, position=site.position,
+        max_thrust_n=r.number(t, "max_thrust", where, "N", positive=True),
+        lower=-1.0 if rev else 0.0, time_constant=tc,
+        max_rate=math.radians(r.number(t, "max_rate_deg", where, "deg/s", positive=True)),
+        angle0=math.radians(r.number(t, "angle0_deg", where, "deg", default=0.0)),
+        colour=site.colour)  # fmt: skip
+
+
 #: the unit of a rudder's lift gain k_L = rho A dC_L/dalpha / 2
 LIFT_GAIN_UNIT = "N s^2/(m^2 rad)"
 
 
-def _read_rudder(
-    r: _Reader, t: Mapping[str, Any], where: str, name: str, pos: tuple[float, ...], colour: str
-) -> Rudder:
+def _read_rudder(r: VesselReader, t: Mapping[str, Any], site: ActuatorSite) -> Rudder:
     """A ``kind = "rudder"`` table: the lift gain directly or from area, slope and density."""
+    where, name, pos, colour = site.where, site.name, site.position, site.colour
     r.keys(t, where, {"name", "kind", "position", "colour", "lift_gain", "area", "lift_slope",
                       "rho", "stall_angle_deg", "post_stall", "max_angle_deg", "max_rate_deg",
                       "servo_time_constant", "inflow"})  # fmt: skip
@@ -700,12 +782,13 @@ def _read_rudder(
     )  # fmt: skip
 
 
-def _read_mmg_unit(
-    r: _Reader, t: Mapping[str, Any], where: str, name: str, pos: tuple[float, ...],
-    colour: str, params: Any,
-) -> MMGPropulsion:  # fmt: skip
+def _read_mmg_unit(r: VesselReader, t: Mapping[str, Any], site: ActuatorSite) -> MMGPropulsion:
     """A ``kind = "mmg"`` table: the propeller and rudder of the ``mmg`` hull (its law's
     parameters are the hull's), their ranges, rates and servos."""
+    where, name, pos, colour = site.where, site.name, site.position, site.colour
+    params = getattr(site.hull, "values", {}).get("params")
+    if params is None:
+        raise r.fail(f"{where}.kind", "an 'mmg' unit needs an 'mmg' hull family")
     r.keys(t, where, {"name", "kind", "position", "colour", "max_rps", "min_rps", "shaft_rate",
                       "shaft_time_constant", "max_angle_deg", "max_rate_deg",
                       "servo_time_constant", "rudder_name"})  # fmt: skip
@@ -722,6 +805,16 @@ def _read_mmg_unit(
     )  # fmt: skip
 
 
+for _kind, _read_kind in (
+    ("propeller", _read_propeller),
+    ("tunnel", _read_propeller),
+    ("azimuth", _read_azimuth),
+    ("rudder", _read_rudder),
+    ("mmg", _read_mmg_unit),
+):
+    register_actuator_kind(_kind, _read_kind)
+
+
 _LIMIT_KEYS = {
     "surge_speed": "m/s", "surge_accel": "m/s^2", "surge_astern_speed": "m/s",
     "surge_astern_accel": "m/s^2", "sway_speed": "m/s", "sway_accel": "m/s^2",
@@ -731,7 +824,7 @@ _LIMIT_KEYS = {
 
 def _read(path: Path) -> Vessel:
     toml_path = path / "vessel.toml"
-    r = _Reader(toml_path)
+    r = VesselReader(toml_path)
     if not toml_path.is_file():
         raise VesselError(f"{path}: not a vessel package (no vessel.toml)")
     try:
@@ -754,7 +847,7 @@ def _read(path: Path) -> Vessel:
     nominal_wind = r.number(v, "nominal_wind", "vessel", "m/s", positive=True)
     hull, plants = _read_hull(r, data, int(dofs))
     dims = (hull.L_oa, hull.L_pp, hull.B, hull.T)
-    if isinstance(hull, HullParameters):
+    if dofs == 3:  # a planar hull body: I_x = I_z (scene.build_model)
         rigid = (hull.m, hull.I_z, hull.I_z)
     else:
         rigid = (hull.m, hull.I_x, hull.I_z)
@@ -846,7 +939,7 @@ def _read(path: Path) -> Vessel:
 
 
 def _read_roll_control(
-    r: _Reader, data: Mapping[str, Any], dofs: int, actuators: ActuatorSet
+    r: VesselReader, data: Mapping[str, Any], dofs: int, actuators: ActuatorSet
 ) -> dict[str, Any]:
     """The optional ``[roll_control]`` table: the rudder-roll design of a 4-DOF rudder vessel."""
     t = r.table(data, "roll_control", required=False)
