@@ -208,9 +208,9 @@ def test_hull_i_of_the_batch_is_the_single_leapfrog_physics_bit_for_bit(name: st
     leapfrog integrator, seeded and commanded alike, run the same code: the same floats. The
     single physics with MuJoCo's integrator applies the same forces: within 1e-9 m and rad."""
     n = 3
-    # Van der Klugt's hull is per unit mass: its task applies the waves' roll and yaw moments
-    # itself (a held external load), not the drift of a sea in newtons
-    waves = None if name == "van-der-klugt" else WAVES
+    # a hull written per unit inertia (Van der Klugt's): its task applies the waves' roll and
+    # yaw moments itself (a held external load), not the drift of a sea in newtons
+    waves = None if load_vessel(name).hull.m == 1.0 else WAVES
     bp = BatchedPhysics(name, n, wind=GUSTY, current=GM_CURRENT, waves=waves)
     nu0, act0, n0 = _start(bp)
     nu0 = nu0 if bp.dofs == 3 else np.insert(nu0, 2, 0.0, axis=1)

@@ -303,7 +303,7 @@ def law_mmg(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
     return XP + XR, YP + YR, 0.0, NP + NR, T, 0.0
 
 
-@njit
+@njit(inline="always")
 def tau_of_table(table, laws, kind_index, st, u, v, p, r, forces, flags):  # type: ignore[no-untyped-def]
     """The generalised force ``(X, Y, K, N)`` (N, N, N m, N m) of every actuator of a
     :meth:`ActuatorSet.law_table` at the actuator states ``st`` and the body velocity through

@@ -210,6 +210,9 @@ class VesselPhysics:
         self._flow_actuators = [i for i, a in enumerate(acts) if a.flow_dependent]
         self._holds = acts.holds_state
         self.saturated = np.zeros(v.actuators.n_channels, dtype=bool)
+        self._flags = np.zeros(len(acts))  # the read-outs' stall flags (not reported)
+        self._tau_entry: Any = None  # tau_of_table's compiled entry point
+        self._at: Any = None  # _now(): the actuators' read-out at the current state
         self._build()
         self.reset()
 
@@ -326,6 +329,7 @@ class VesselPhysics:
             self._check_lags(float(self.model.opt.timestep))
             self._build()
         mujoco.mj_resetData(self.model, self.data)
+        self._at = None
         hb = self._hulls
         hb.set_pose(0, eta_a, nu_a)
         act = np.where(self._holds, np.clip(act, self.actuators.lower, self.actuators.upper), act)
@@ -450,29 +454,39 @@ class VesselPhysics:
     def _tau(self, st: NDArray[np.float64], table: Any = None) -> tuple[list[float], Any]:
         """``([X, Y, K, N], forces)`` of the actuators (``table``: the plant's, or another
         :meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`) at the states ``st`` and the
-        current velocity through the water (the current of the last physics step)."""
-        from shipgym.dynamics.actuators import tau_of_table
-
+        current velocity through the water (the current of the last physics step): their
+        compiled laws (:func:`~shipgym.dynamics.actuators.tau_of_table`)."""
         u, v, p, r = self._hulls.body_velocity(0)
-        uc, vc = self._loads[6:8]
+        lo = self._hulls.loads[0]
         tab, laws, kinds = self._hulls.law_table if table is None else table
         forces = np.zeros(len(kinds))
-        flags = np.zeros(len(kinds))
         st = np.ascontiguousarray(st, dtype=np.float64)
-        X, Y, K, N = tau_of_table(tab, laws, kinds, st, u - uc, v - vc, p, r, forces, flags)
+        args = (tab, laws, kinds, st, u - lo[6], v - lo[7], p, r, forces, self._flags)
+        if self._tau_entry is None:
+            from shipgym._jit import entry
+            from shipgym.dynamics.actuators import tau_of_table
+
+            self._tau_entry = entry(tau_of_table, args)
+        X, Y, K, N = self._tau_entry(*args)
         return [X, Y, K, N], forces
+
+    def _now(self) -> tuple[list[float], Any]:
+        """:meth:`_tau` at the current actuator states, kept until the state changes."""
+        if self._at is None:
+            self._at = self._tau(self._hulls.act[0])
+        return self._at
 
     @property
     def thrust(self) -> NDArray[np.float64]:
         """Signed thrust of every actuator (N) at the current states and flow (a rudder: its
         lift, an MMG unit: its propeller thrust)."""
-        return self._tau(self._hulls.act[0])[1]
+        return self._now()[1].copy()
 
     @property
     def tau_thrusters(self) -> NDArray[np.float64]:
         """Body-frame actuator force ``[X, Y, N]`` (N, N, N m) at the current actuator states
         (rudders at the current flow)."""
-        X, Y, _K, N = self._tau(self._hulls.act[0])[0]
+        X, Y, _K, N = self._now()[0]
         return np.array([X, Y, N])
 
     @property
@@ -482,6 +496,8 @@ class VesselPhysics:
         model: every propeller on its bollard law (:meth:`ActuatorSet.bollard
         <shipgym.dynamics.actuators.ActuatorSet.bollard>`), without the plant's advance-speed
         and tunnel losses; :attr:`tau_thrusters` where the two laws are the same."""
+        if self._model_actuators is self.actuators:
+            return self.tau_thrusters
         X, Y, _K, N = self._tau(self._hulls.act[0], self._model_table)[0]
         return np.array([X, Y, N])
 
@@ -489,7 +505,7 @@ class VesselPhysics:
     def tau_actuators(self) -> NDArray[np.float64]:
         """Body-frame actuator force ``[X, Y, K, N]`` (N, N, N m, N m) at the current actuator
         states and flow (``K`` is 0 for a 3-DOF vessel)."""
-        return np.array(self._tau(self._hulls.act[0])[0])
+        return np.array(self._now()[0])
 
     @property
     def external_force(self) -> tuple[float, float, float, float]:
@@ -567,6 +583,7 @@ class VesselPhysics:
             drift = self.waves if self.wave_config is not None and self.wave_config.drift else None
             hb.set_processes(0, self.wind if self.aerodynamics else None, self.current, drift)
         hb = self._hulls
+        self._at = None
         taken = hb.advance(n, stop_on_contact=stop_on_contact)
         if self.integrator == "leapfrog":
             self._sync()

@@ -175,6 +175,40 @@ def grid_at(t, inv_dt, k0, win, i):  # type: ignore[no-untyped-def]
 
 
 @njit(inline="always")
+def kinematics(q, qv, qa, i, hh, four, linear_kin):  # type: ignore[no-untyped-def]
+    """Hull ``i``'s body velocity at the whole step ``(u, v, p, r)`` (step 1 of :func:`run`),
+    with what the joint acceleration needs: ``phi``, ``cos psi``, ``sin psi``, ``cos phi``,
+    ``sin phi`` (1, 0 for 3 DOF or linear kinematics), ``psi_dot``, ``phi_dot``."""
+    psi = q[i, 2]
+    c, s = math.cos(psi), math.sin(psi)
+    xd = qv[i, 0] + hh * qa[i, 0]
+    yd = qv[i, 1] + hh * qa[i, 1]
+    psid = qv[i, 2] + hh * qa[i, 2]
+    if four:
+        phi = q[i, 3]
+        phid = qv[i, 3] + hh * qa[i, 3]
+        cphi, sphi = (1.0, 0.0) if linear_kin else (math.cos(phi), math.sin(phi))
+    else:
+        phi = 0.0
+        phid = 0.0
+        cphi, sphi = 1.0, 0.0
+    u = c * xd + s * yd
+    v = (c * yd - s * xd) / cphi
+    return u, v, phid, psid / cphi, phi, c, s, cphi, sphi, psid, phid
+
+
+@njit
+def body_velocities(q, qv, qa, h, four, linear_kin, out):  # type: ignore[no-untyped-def]
+    """Every hull's ``(u, v, p, r)`` at the whole step into ``out`` (N, 4) (step 1 of
+    :func:`run`, the same code)."""
+    for i in range(q.shape[0]):
+        u, v, p, r, _phi, _c, _s, _cf, _sf, _psid, _phid = kinematics(
+            q, qv, qa, i, 0.5 * h, four, linear_kin
+        )
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = u, v, p, r
+
+
+@njit(inline="always")
 def process_at(mode, t, i, slot, inv_dt, k0, win, const):  # type: ignore[no-untyped-def]
     """Hull ``i``'s process ``slot`` at time ``t``: its constant (``CONSTANT``; zeros for
     ``OFF``) or the interpolation in its window (``SAMPLED``, :func:`grid_at`)."""
@@ -245,23 +279,10 @@ def run(  # type: ignore[no-untyped-def]
         m_w, m_c, m_d = mode[i, 0], mode[i, 1], mode[i, 2]
         while left[i] > 0:
             # 1. the velocity at the whole step
+            u, v, p, r, phi, c, s, cphi, sphi, psid, phid = kinematics(
+                q, qv, qa, i, hh, four, linear_kin
+            )
             psi = q[i, 2]
-            c, s = math.cos(psi), math.sin(psi)
-            xd = qv[i, 0] + hh * qa[i, 0]
-            yd = qv[i, 1] + hh * qa[i, 1]
-            psid = qv[i, 2] + hh * qa[i, 2]
-            if four:
-                phi = q[i, 3]
-                phid = qv[i, 3] + hh * qa[i, 3]
-                cphi, sphi = (1.0, 0.0) if linear_kin else (math.cos(phi), math.sin(phi))
-            else:
-                phi = 0.0
-                phid = 0.0
-                cphi, sphi = 1.0, 0.0
-            u = c * xd + s * yd
-            v = (c * yd - s * xd) / cphi
-            r = psid / cphi
-            p = phid
             # 2. the loads; a missing window returns before anything is written
             ok_w, vw, bw = process_at(m_w, ti, i, WIND, inv_dt, k0, win_w, const)
             ok_c, vc, bc = process_at(m_c, ti, i, CURRENT, inv_dt, k0, win_c, const)
@@ -500,6 +521,8 @@ class HullBatch:
         self.status = np.zeros(4, dtype=np.int64)
         self._entry: Any = None  # run's compiled entry point for these arguments' types
         self._args: tuple[Any, ...] | None = None
+        self._nu = np.zeros((n, 4))  # body_velocities' output
+        self._nu_entry: Any = None
 
     # ---- disturbances ----------------------------------------------------------------------
     def set_processes(self, i: int, wind: Any, current: Any, waves: Any) -> None:
@@ -581,21 +604,12 @@ class HullBatch:
 
     def body_velocities(self) -> np.ndarray:
         """Every hull's ``(u, v, p, r)`` (m/s, rad/s) at the whole step, (N, 4) (``p = 0`` for
-        3 DOF): ``nu = J(q)^-1 (qvel + h/2 qacc)`` (step 1 of :func:`run`)."""
-        w = self.qv + (0.5 * self.h) * self.qa
-        psi = self.q[:, 2]
-        c, s = np.cos(psi), np.sin(psi)
-        out = np.zeros((self.n, 4))
-        out[:, 0] = c * w[:, 0] + s * w[:, 1]
-        out[:, 1] = c * w[:, 1] - s * w[:, 0]
-        out[:, 3] = w[:, 2]
-        if self.dofs == 4:
-            if not self.linear_kin:
-                cf = np.cos(self.q[:, 3])
-                out[:, 1] /= cf
-                out[:, 3] /= cf
-            out[:, 2] = w[:, 3]
-        return out
+        3 DOF): step 1 of :func:`run` (:func:`body_velocities`)."""
+        args = (self.q, self.qv, self.qa, self.h, self.dofs == 4, self.linear_kin, self._nu)
+        if self._nu_entry is None:
+            self._nu_entry = entry(body_velocities, args)
+        self._nu_entry(*args)
+        return self._nu.copy()
 
     def body_velocity(self, i: int) -> tuple[float, float, float, float]:
         """Hull ``i``'s ``(u, v, p, r)`` as floats (:meth:`body_velocities`)."""
