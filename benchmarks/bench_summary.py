@@ -22,7 +22,7 @@ the median over the repeats with the smallest and largest repeat, and all are wr
 - ``batched_physics_hull_steps_per_s`` (N = 256) and ``batched_physics_over_single``: the
   batched physics (:class:`~shipgym.envs.batchphysics.BatchedPhysics`: plant, actuators and
   gusty wind) against the single MuJoCo physics in the same wind, hull-steps per second;
-- ``batched_hull_steps_per_s`` (N = 256, NumPy) and ``batched_over_single``: the native
+- ``batched_hull_steps_per_s`` (N = 256) and ``batched_over_single``: the native
   batched ``Tracking`` env (:class:`~shipgym.envs.vector.ShipVectorEnv`: gusty wind, sensors,
   the KBF observer) in hull-steps per second, and over the single env with the same stack
   (``shipgym.make(..., observer="kbf")``), interleaved;

@@ -204,7 +204,7 @@ def _commands(acts, n: int, k: int, seed: int) -> np.ndarray:
 @pytest.mark.parametrize("name", vessel_names())
 def test_hull_i_of_the_batch_is_the_single_leapfrog_physics_bit_for_bit(name: str) -> None:
     """Every vessel (3 and 4 DOF, every hull family and actuator kind), gusts, a Gauss-Markov
-    current and the wave drift, 200 s: hull i of a batch of three and a single physics with the
+    current and the wave drift, 600 s: hull i of a batch of three and a single physics with the
     leapfrog integrator, seeded and commanded alike, run the same code: the same floats. The
     single physics with MuJoCo's integrator applies the same forces: within 1e-9 m and rad."""
     n = 3
@@ -221,7 +221,7 @@ def test_hull_i_of_the_batch_is_the_single_leapfrog_physics_bit_for_bit(name: st
         p = VesselPhysics(name, wind=GUSTY, current=GM_CURRENT, waves=waves, integrator=integ)
         p.reset(nu=nu0[i], actuators=act0[i], rng=np.random.default_rng(20 + i))
         single[integ] = p
-    cmds = _commands(bp.actuators, n, 20, seed=3)
+    cmds = _commands(bp.actuators, n, 60, seed=3)  # 60 x 10 s
     if n0:
         cmds[..., 0] = n0 * (0.85 + 0.15 * np.clip(cmds[..., 0] / bp.actuators.upper[0], -1, 1))
     gap = 0.0
