@@ -5,11 +5,11 @@ fingerprint was taken on (torch's kernels differ between CPU families, so elsewh
 says so and skips). Slow: each re-run trains about a million steps (a few minutes).
 
 The shipped models were trained on the NumPy form of the batched physics, which the one
-compiled physics step (:mod:`shipgym.sim.step`) replaced: it agrees with that form to round-off,
-not bit for bit, and training turns the last bits into other weights. Until the fingerprints
-are re-recorded on the one physics (its re-runs, a few minutes each on the recording CPU), the
-re-run is expected to give other weights (``xfail``, strict: a match would say the
-fingerprints are current again)."""
+compiled physics step (:mod:`shipgym.sim.step`) replaced; it agrees with that form to round-off,
+not bit for bit, and training turns the last bits into other weights: the fingerprints were
+re-recorded on the one physics (``reproduce.physics`` in each file's metadata). The shipped
+weights themselves are those trained then; their acceptance figures hold on the one physics
+(``tests/test_rl_bench.py``, slow)."""
 
 from __future__ import annotations
 
@@ -52,11 +52,6 @@ def test_every_pure_baseline_records_how_to_reproduce_it():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="fingerprints recorded on the NumPy batched physics, which the one compiled physics "
-    "replaced; re-record them (issue 'One physics for every vessel', item 6)",
-)
 @pytest.mark.parametrize("file", _reproducible())
 def test_documented_command_gives_the_same_weights(file, tmp_path):
     from shipgym.rl.train import train
