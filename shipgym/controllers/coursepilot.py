@@ -24,8 +24,8 @@ such as the KVLCC2 (a real pole at +1.7e-4 rad/s at 7 m/s, L = 100 m) the fit ha
 hold for it unchanged. The linear model (:func:`steering_model`) is
 
 - for a 3-DOF hull, ``x = [v, r, psi]``: the hull family's compiled acceleration and
-  the flow-dependent actuators' forces (:meth:`~shipgym.dynamics.actuators.ActuatorSet.
-  flow_kernel`, an MMG unit's propeller at its self-propulsion point) differentiated by
+  the actuators' compiled force laws (:meth:`~shipgym.dynamics.actuators.ActuatorSet.
+  law_table`, an MMG unit's propeller at its self-propulsion point) differentiated by
   central differences about straight running at ``u = U`` (the surge held);
 - for a 4-DOF hull :func:`~shipgym.dynamics.linearise.roll_model_of` (``x = [v, r, psi, p,
   phi]``).
