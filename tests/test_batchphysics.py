@@ -239,3 +239,59 @@ def test_hull_i_of_the_batch_is_the_single_leapfrog_physics_bit_for_bit(name: st
     assert np.abs(bp.eta[:, :2]).max() > 5.0  # the hulls moved
     assert not np.array_equal(bp.eta[0], bp.eta[1])  # each its own commands and weather
     assert gap < 1e-9, gap
+
+
+@pytest.mark.parametrize("name", ["blue-lady", "naval-vessel"])
+def test_hull_i_of_a_mujoco_batch_is_the_single_mujoco_physics_bit_for_bit(name: str) -> None:
+    """The ``mujoco`` integrator per hull: hull i of a batch of three (each its own mjModel and
+    mjData) and a single MuJoCo physics, seeded and commanded alike, give the same floats over
+    300 s in gusts and a Gauss-Markov current (the same code: the loop calls ``mj_step`` on
+    each hull's data)."""
+    n = 3
+    bp = BatchedPhysics(name, n, wind=GUSTY, current=GM_CURRENT, integrator="mujoco")
+    bp.reset(rngs=[np.random.default_rng(20 + i) for i in range(n)])
+    singles = []
+    for i in range(n):
+        p = VesselPhysics(name, wind=GUSTY, current=GM_CURRENT)
+        p.reset(rng=np.random.default_rng(20 + i))
+        singles.append(p)
+    for cmd in _commands(bp.actuators, n, 30, seed=5):
+        bp.set_command(cmd)
+        assert bp.step(200).tolist() == [200] * n
+        for i, p in enumerate(singles):
+            p.set_command(cmd[i])
+            p.step(200)
+            np.testing.assert_array_equal(p.eta_full, bp.eta_full[i])
+            np.testing.assert_array_equal(p.nu_full, bp.nu_full[i])
+            np.testing.assert_array_equal(p.actuator_state, bp.actuator_state[i])
+    assert not np.array_equal(bp.eta[0], bp.eta[1])  # each its own commands and weather
+
+
+def test_a_mujoco_batch_in_the_harbour_stops_each_hull_at_its_own_quay_contact() -> None:
+    """The Blue Lady in the harbour, three hulls pushed to starboard (towards the quay beside
+    berth A) at different thrusts: each stops after the step in which it touches the quay, as
+    the single physics with ``stop_on_contact`` does, the others go on."""
+    n = 3
+    bp = BatchedPhysics("blue-lady", n, integrator="mujoco", world="harbour")
+    bp.reset()
+    singles = [VesselPhysics("blue-lady", world="harbour") for _ in range(n)]
+    for p in singles:
+        p.reset()
+    acts = bp.actuators
+    cmd = acts.action_to_command(np.array([[0.0, s, s] for s in (1.0, 0.6, -0.3)]))
+    bp.set_command(cmd)
+    for i, p in enumerate(singles):
+        p.set_command(cmd[i])
+    taken_all = np.zeros(n, dtype=np.int64)
+    for _ in range(100):  # 100 x 10 s
+        taken = bp.step(200, stop_on_contact=True)
+        taken_all += taken
+        for i, p in enumerate(singles):
+            k = p.step(200, stop_on_contact=True)
+            assert k == taken[i]
+            np.testing.assert_array_equal(p.eta_full, bp.eta_full[i])
+        if (bp.contact_counts > 0).all() or (taken < 200).sum() >= 2:
+            break
+    counts = bp.contact_counts
+    assert counts[0] > 0 and counts[2] == 0, counts  # pushed to starboard: the quay; to port: not
+    assert (taken_all < taken_all.max()).any()  # the hulls stopped at different steps

@@ -3,9 +3,11 @@ r"""N hulls of one vessel stepped together: the batched form of
 
 Both run the same compiled loop (:func:`shipgym.sim.step.run`, whose docstring has the
 equations): every hull family (3 and 4 DOF), every actuator kind, gusty wind, current and the
-second-order wave drift, with the ``leapfrog`` integrator (open water, no contacts). Hull
-``i`` seeded and commanded as a single ``VesselPhysics(..., integrator="leapfrog")`` follows
-the same trajectory to the last bit.
+second-order wave drift, with either integrator: ``leapfrog`` (open water, no contacts; the
+default) or ``mujoco`` (each hull its own ``mjModel`` and ``mjData`` of the ``world``, so quay
+contact works: the harbour). Hull ``i`` seeded and commanded as a single
+``VesselPhysics(..., integrator=...)`` of the same world follows the same trajectory to the
+last bit.
 
 Each hull has its own wind, current and wave realisation (drawn as the single physics draws
 it from its generator) and its own clock (a reset restarts it). Poses ``eta`` and velocities
@@ -16,6 +18,7 @@ n_channels)``, clipped to the channels' ranges (:attr:`saturated` flags).
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 from typing import Any
 
@@ -33,8 +36,10 @@ from shipgym.disturbances import (
     blendermann,
 )
 from shipgym.dynamics.vessel import Vessel, load_vessel
+from shipgym.sim._mujoco import mujoco
 
-from .physics import check_timestep
+from .physics import INTEGRATORS, check_timestep, joint_inertia
+from .scene import build_model
 
 __all__ = ["BatchedPhysics"]
 
@@ -57,6 +62,11 @@ class BatchedPhysics:
         waves: a :class:`~shipgym.disturbances.WaveConfig` (the second-order drift acts on
             the hulls) or ``None``.
         timestep: physics step (s), at most half the shortest actuator lag.
+        integrator: ``"leapfrog"`` (open water) or ``"mujoco"`` (MuJoCo's ``mj_step`` per
+            hull, in ``world``).
+        world: the world of the ``mujoco`` integrator (:data:`~shipgym.envs.scene.WORLDS`;
+            default ``"open-water"``); each hull has its own model (:attr:`models`), so a
+            world's layout may be placed per hull.
     """
 
     def __init__(
@@ -69,6 +79,8 @@ class BatchedPhysics:
         current: Any = None,
         waves: WaveConfig | None = None,
         timestep: float = DEFAULT_TIMESTEP,
+        integrator: str = "leapfrog",
+        world: str | None = None,
     ) -> None:
         from shipgym.sim.step import HullBatch
 
@@ -103,10 +115,28 @@ class BatchedPhysics:
         cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
         self._coeffs = (wind_cfg.coefficients if wind_cfg else None) or v.windage.coefficients
         wind_load = WindLoad(blendermann(self._coeffs), v.windage)
-        # MuJoCo's joint-space inertia of the hull body (scene.build_model: diag(m, m, I_z,
-        # I_x)); the leapfrog integrator does not use it
+        if integrator not in INTEGRATORS:
+            raise ValueError(
+                f"integrator must be one of {', '.join(INTEGRATORS)}, got {integrator!r}"
+            )
+        if world is not None and integrator != "mujoco":
+            raise ValueError(
+                "world= needs integrator='mujoco' (the leapfrog hulls are in open water)"
+            )
+        self.integrator = integrator
+        self.models: list[Any] = []
+        self.datas: list[Any] = []
+        inertia = (0.0, 0.0, 0.0, 0.0)  # the leapfrog integrator does not use it
+        if integrator == "mujoco":
+            model = build_model(v, world or "open-water", acts)
+            model.opt.timestep = self.h
+            self.models = [model] + [copy.deepcopy(model) for _ in range(n - 1)]
+            self.datas = [mujoco.MjData(m) for m in self.models]
+            m_q, i_q, i_x = joint_inertia(model, acts, self.dofs)
+            inertia = (m_q, m_q, i_q, i_x)
         self._hulls = HullBatch(self.plant, acts, wind_load.kernel_constants(), n, self.h,
-                                (0.0, 0.0, 0.0, 0.0))  # fmt: skip
+                                inertia, integrator=integrator, model=self.models or None,
+                                data=self.datas or None)  # fmt: skip
         self.wind_configs: list[WindConfig | None] = [wind_cfg] * n
         self.current_configs: list[CurrentConfig] = [cc] * n
         self.wave_config = waves
@@ -212,6 +242,12 @@ class BatchedPhysics:
                 wv.reset(g)
             wind = self.winds[i] if self.wind_configs[i] is not None else None
             hb.set_processes(i, wind, self.currents[i], wv if drift else None)
+            if self.datas:  # MuJoCo's state of the hull: positions, contacts
+                m, d = self.models[i], self.datas[i]
+                mujoco.mj_resetData(m, d)
+                d.qpos[:] = hb.q[i]
+                d.qvel[:] = hb.qv[i]
+                mujoco.mj_forward(m, d)
             hb.start(i)
 
     @property
@@ -256,10 +292,19 @@ class BatchedPhysics:
         self._hulls.cmd[:] = clipped
         return self.saturated.copy()
 
-    def step(self, k: int = 1) -> None:
-        """Advance every hull ``k`` physics steps.
+    def step(self, k: int = 1, *, stop_on_contact: bool = False) -> NDArray[np.int64]:
+        """Advance every hull ``k`` physics steps; returns the steps each hull took, (n,)
+        (fewer than ``k`` only where ``stop_on_contact`` stopped a hull of the ``mujoco``
+        integrator after the step in which it touched something).
 
         Raises:
             SimulationDiverged: a non-finite or absurd state (naming the time and the state).
         """
-        self._hulls.advance(k)
+        hb = self._hulls
+        hb.advance(k, stop_on_contact=stop_on_contact)
+        return k - hb.stopped
+
+    @property
+    def contact_counts(self) -> NDArray[np.int64]:
+        """MuJoCo's number of contacts of each hull now, (n,) (zeros for ``leapfrog``)."""
+        return np.array([d.ncon for d in self.datas] or [0] * self.n, dtype=np.int64)

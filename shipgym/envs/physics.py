@@ -60,6 +60,7 @@ __all__ = [
     "MAX_TIMESTEP",
     "MIN_TIMESTEP",
     "check_timestep",
+    "joint_inertia",
 ]
 
 #: bounds beyond which the simulation is declared diverged (m/s, rad/s, rad): far above
@@ -92,6 +93,40 @@ MAX_TIMESTEP = 0.5
 def _clip(c: float, lo: float, hi: float) -> float:
     """``min(max(c, lo), hi)`` for a finite ``c``, as two comparisons."""
     return hi if c > hi else (lo if c < lo else c)
+
+
+def joint_inertia(model: Any, actuators: Any, dofs: int) -> tuple[float, float, float]:
+    """MuJoCo's joint-space inertia ``(m, I_z, I_x)`` (kg, kg m^2, kg m^2; ``I_x = 0`` for 3
+    DOF) of a vessel model built by :func:`~shipgym.envs.scene.build_model`, after checking
+    the model's layout: the joints ``x, y, psi[, phi]`` in this order, the actuators the
+    channels in order, a constant diagonal inertia ``diag(m, m, I_z[, I_x])`` and no bias
+    force (what the compiled step's ``qfrc_applied = M_q qacc`` relies on)."""
+    m = model
+    names = ("x", "y", "psi", "phi")[:dofs]
+    jids = [m.joint(n).id for n in names]
+    act_ids = [m.actuator(n).id for n in actuators.channel_names]
+    if jids != list(range(dofs)) or m.nv != dofs:
+        raise ValueError(f"the hull must have exactly the joints {names}, in this order")
+    if act_ids != list(range(m.nu)) or m.nu != actuators.n_channels:
+        raise ValueError("MuJoCo actuators must be the vessel's channels, in order")
+    d = mujoco.MjData(m)
+    if dofs == 4:  # a rolled, moving state: the inertia must not depend on it
+        d.qpos[3] = 0.3
+        d.qvel[:] = (0.4, -0.2, 0.05, 0.1)
+    mujoco.mj_forward(m, d)
+    Mq = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, Mq)
+    diag = np.diag(Mq)
+    scale = float(np.max(np.abs(Mq)))
+    if (
+        np.any(np.abs(Mq - np.diag(diag)) > 1e-9 * scale)
+        or abs(diag[0] - diag[1]) > 1e-12 * diag[0]
+        or np.any(np.abs(d.qfrc_bias) > 1e-9 * scale)
+    ):
+        raise ValueError(
+            f"unexpected joint-space inertia (need a constant diag(m, m, I_z[, I_x])): {Mq}"
+        )
+    return float(Mq[0, 0]), float(Mq[2, 2]), float(Mq[3, 3]) if dofs == 4 else 0.0
 
 
 def check_timestep(timestep: Any) -> float:
@@ -240,34 +275,8 @@ class VesselPhysics:
         self._model_table = self._model_actuators.law_table()
 
     def _bind_model(self) -> None:
-        m = self.model
-        names = ("x", "y", "psi", "phi")[: self.dofs]
-        jids = [m.joint(n).id for n in names]
-        self.hull_body = m.body("hull").id
-        act_ids = [m.actuator(n).id for n in self.actuators.channel_names]
-        if jids != list(range(self.dofs)) or m.nv != self.dofs:
-            raise ValueError(f"the hull must have exactly the joints {names}, in this order")
-        if act_ids != list(range(m.nu)) or m.nu != self.actuators.n_channels:
-            raise ValueError("MuJoCo actuators must be the vessel's channels, in order")
-        d = mujoco.MjData(m)
-        if self.dofs == 4:  # a rolled, moving state: the inertia must not depend on it
-            d.qpos[3] = 0.3
-            d.qvel[:] = (0.4, -0.2, 0.05, 0.1)
-        mujoco.mj_forward(m, d)
-        Mq = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(m, d, Mq)
-        diag = np.diag(Mq)
-        scale = float(np.max(np.abs(Mq)))
-        if (
-            np.any(np.abs(Mq - np.diag(diag)) > 1e-9 * scale)
-            or abs(diag[0] - diag[1]) > 1e-12 * diag[0]
-            or np.any(np.abs(d.qfrc_bias) > 1e-9 * scale)
-        ):
-            raise ValueError(
-                f"unexpected joint-space inertia (need a constant diag(m, m, I_z[, I_x])): {Mq}"
-            )
-        self._m_q, self._i_q = float(Mq[0, 0]), float(Mq[2, 2])
-        self._i_x = float(Mq[3, 3]) if self.dofs == 4 else 0.0
+        self.hull_body = self.model.body("hull").id
+        self._m_q, self._i_q, self._i_x = joint_inertia(self.model, self.actuators, self.dofs)
 
     def set_current(
         self, current: CurrentConfig | str | tuple[float, float] | Mapping[str, Any] | None

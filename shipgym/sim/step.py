@@ -17,7 +17,7 @@ Per hull and physics step ``h`` (:func:`run`):
    optional rate limit; a rate-limited servo; an integrator), each within its range;
 5. the integration, by one of two integrators that apply the same forces:
 
-   - ``mujoco`` (one hull, its own ``mjData``): ``qfrc_applied = M_q qacc`` and MuJoCo's C
+   - ``mujoco`` (each hull its own ``mjData``): ``qfrc_applied = M_q qacc`` and MuJoCo's C
      ``mj_step`` (called by its address from the compiled loop), so quay contact, the
      harbour and rendering work; MuJoCo's Euler step is ``qvel += h qacc; qpos += h qvel``;
    - ``leapfrog`` (any number of hulls, open water): the same update without MuJoCo.
@@ -155,6 +155,40 @@ try:
 
         return sig, codegen
 
+    @intrinsic
+    def _load(typingctx, addr, k):  # type: ignore[no-untyped-def]
+        """The float64 at ``addr + 8 k`` (a field of an ``mjData``)."""
+        sig = types.float64(types.intp, types.intp)
+
+        def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+            ptr = builder.inttoptr(args[0], ir.DoubleType().as_pointer())
+            return builder.load(builder.gep(ptr, [args[1]]))
+
+        return sig, codegen
+
+    @intrinsic
+    def _store(typingctx, addr, k, value):  # type: ignore[no-untyped-def]
+        """Write ``value`` to the float64 at ``addr + 8 k``."""
+        sig = types.void(types.intp, types.intp, types.float64)
+
+        def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+            ptr = builder.inttoptr(args[0], ir.DoubleType().as_pointer())
+            builder.store(args[2], builder.gep(ptr, [args[1]]))
+            return context.get_dummy_value()
+
+        return sig, codegen
+
+    @intrinsic
+    def _load_i32(typingctx, addr):  # type: ignore[no-untyped-def]
+        """The int32 at ``addr`` (``mjData.ncon``), as an int64."""
+        sig = types.int64(types.intp)
+
+        def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+            ptr = builder.inttoptr(args[0], ir.IntType(32).as_pointer())
+            return builder.sext(builder.load(ptr), ir.IntType(64))
+
+        return sig, codegen
+
 except ImportError:  # pragma: no cover - numba is a core dependency
     raise
 
@@ -219,24 +253,28 @@ def process_at(mode, t, i, slot, inv_dt, k0, win, const):  # type: ignore[no-unt
 
 @njit
 def run(  # type: ignore[no-untyped-def]
-    integrator, mj_step, mp, dp, ncon, stop_on_contact,
+    integrator, mj_step, mps, dps, fields, stop_on_contact,
     dofs, linear_kin, h, inertia,
     accel, kh, laws, table, kind_index, chan, kw,
     q, qv, qa, qfrc, act, cmd, t, left, external,
     mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
-    loads, forces, flags, hits, status,
+    loads, forces, flags, hits, stopped, status,
 ):  # fmt: skip
     """Advance each hull ``i`` by ``left[i]`` physics steps (module docstring).
 
     Args (all arrays C-contiguous float64 unless said; N hulls, nv joints, nc channels, na
     actuators):
-        integrator: :data:`MUJOCO` (N = 1, the arrays ``q``... views on its ``mjData``),
-            :data:`LEAPFROG`, or :data:`EVALUATE` (only ``qa`` and the read-outs of the state
-            written: the start of a run).
-        mj_step, mp, dp: the address of MuJoCo's ``mj_step``, of the ``mjModel`` and of the
-            ``mjData`` (``mujoco`` only; else 0).
-        ncon: int32 (1,) view on ``mjData.ncon``; stop_on_contact: stop a hull after the step
-            in which MuJoCo finds a contact.
+        integrator: :data:`MUJOCO` (each hull its own ``mjData``), :data:`LEAPFROG`, or
+            :data:`EVALUATE` (only ``qa`` and the read-outs of the state written: the start
+            of a run).
+        mj_step, mps, dps: the address of MuJoCo's ``mj_step``; (N,) int64 the addresses of
+            each hull's ``mjModel`` and ``mjData`` (``mujoco`` only).
+        fields: (N, 5) int64 the addresses of each hull's ``qpos``, ``qvel``, ``qacc``,
+            ``qfrc_applied`` and ``ncon`` in its ``mjData`` (``mujoco`` only): the loop
+            writes ``q``, ``qv`` and ``qfrc`` there before ``mj_step`` and reads ``q``, ``qv``
+            and ``qa`` back after it (a no-op where the arrays are views on the ``mjData``,
+            as for :class:`~shipgym.envs.physics.VesselPhysics`);
+        stop_on_contact: stop a hull after the step in which MuJoCo finds a contact.
         dofs: 3 or 4; linear_kin: the 4-DOF hull's linear kinematics (``cos phi = 1``).
         h: the step (s); inertia: MuJoCo's joint-space inertia ``(m, m, I_z, I_x)``.
         accel: the address of the hull family's compiled acceleration
@@ -261,13 +299,15 @@ def run(  # type: ignore[no-untyped-def]
         loads: (N, 8) out: the last step's wind X, Y, N, drift X, Y, N, current u_c, v_c.
         forces, flags: (N, na) out: each actuator's force reading (N) and stall flag.
         hits: (N, nc) int64 out: 1 where a servo ran at its rate limit in the last step.
-        status: (4,) int64 out: the hull, the process and the chunk needed (``NEED``), or
+        stopped: (N,) int64 out: the steps a contact stop left untaken (``mujoco``).
+        status: (3,) int64 out: the hull, the process and the chunk needed (``NEED``), or
             the hull that diverged (``DIVERGED``; its t, nu, nu_dot in ``loads[i]``).
 
     Returns:
         ``OK``, ``NEED`` or ``DIVERGED``.
     """
     n_hulls = q.shape[0]
+    nq = q.shape[1]
     n_ch = chan.shape[0]
     hh = 0.5 * h
     mq, iq, ix = inertia[0], inertia[2], inertia[3]
@@ -392,9 +432,18 @@ def run(  # type: ignore[no-untyped-def]
                 qfrc[i, 2] = iq * a2
                 if four:
                     qfrc[i, 3] = ix * pd
-                _call(mj_step, mp, dp)
-                if stop_on_contact and ncon[0] != 0:
-                    status[3] = left[i]
+                fp, fv, fa, ff = fields[i, 0], fields[i, 1], fields[i, 2], fields[i, 3]
+                for k in range(nq):
+                    _store(fp, k, q[i, k])
+                    _store(fv, k, qv[i, k])
+                    _store(ff, k, qfrc[i, k])
+                _call(mj_step, mps[i], dps[i])
+                for k in range(nq):
+                    q[i, k] = _load(fp, k)
+                    qv[i, k] = _load(fv, k)
+                    qa[i, k] = _load(fa, k)
+                if stop_on_contact and _load_i32(fields[i, 4]) != 0:
+                    stopped[i] = left[i]
                     left[i] = 0
             else:
                 qa[i, 0], qa[i, 1], qa[i, 2] = a0, a1, a2
@@ -456,7 +505,9 @@ class HullBatch:
         n: number of hulls.
         h: the physics step (s).
         inertia: MuJoCo's joint-space inertia ``(m, m, I_z, I_x)`` (kg, kg, kg m^2, kg m^2).
-        integrator: ``"mujoco"`` (``n = 1``: ``model``, ``data`` the hull's) or ``"leapfrog"``.
+        integrator: ``"mujoco"`` (each hull its own ``mjData``: ``model`` and ``data`` one
+            ``mjModel``/``mjData`` for ``n = 1``, whose arrays become the state's, or
+            sequences of ``n``) or ``"leapfrog"``.
     """
 
     def __init__(
@@ -485,23 +536,37 @@ class HullBatch:
         self.kw = np.ascontiguousarray(wind_constants, dtype=np.float64)
         self.inertia = np.asarray(inertia, dtype=np.float64)
         nc, na = actuators.n_channels, len(actuators)
+        self._mj_step = 0
+        self.mps = np.zeros(n, dtype=np.int64)
+        self.dps = np.zeros(n, dtype=np.int64)
+        self.fields = np.zeros((n, 5), dtype=np.int64)
+        self.datas: list[Any] = []
         if integrator == "mujoco":
-            if n != 1 or model is None or data is None:
-                raise ValueError("the mujoco integrator steps one hull, with its model and data")
-            self._mj = (mj_step_address(), model._address, data._address)
-            self.q = data.qpos.reshape(1, -1)
-            self.qv = data.qvel.reshape(1, -1)
-            self.qa = data.qacc.reshape(1, -1)
-            self.qfrc = data.qfrc_applied.reshape(1, -1)
-            self._ncon = ncon_view(model, data)
+            models = list(model) if isinstance(model, (list, tuple)) else [model] * n
+            datas = list(data) if isinstance(data, (list, tuple)) else [data]
+            if len(datas) != n or len(models) != n or None in models or None in datas:
+                raise ValueError(
+                    f"the mujoco integrator needs each hull's mjModel and mjData ({n} of each)"
+                )
+            self.datas = datas
+            self._mj_step = mj_step_address()
+            for i, (m, d) in enumerate(zip(models, datas, strict=True)):
+                self.mps[i], self.dps[i] = m._address, d._address
+                self.fields[i, :4] = [
+                    a.ctypes.data for a in (d.qpos, d.qvel, d.qacc, d.qfrc_applied)
+                ]
+                self.fields[i, 4] = ncon_view(m, d).ctypes.data
+        if integrator == "mujoco" and n == 1:  # the hull's own arrays: MuJoCo's state
+            d = self.datas[0]
+            self.q = d.qpos.reshape(1, -1)
+            self.qv = d.qvel.reshape(1, -1)
+            self.qa = d.qacc.reshape(1, -1)
+            self.qfrc = d.qfrc_applied.reshape(1, -1)
         else:
-            self._mj = (0, 0, 0)
             self.q = np.zeros((n, dofs))
             self.qv = np.zeros((n, dofs))
             self.qa = np.zeros((n, dofs))
             self.qfrc = np.zeros((n, dofs))
-            self._ncon = np.zeros(1, dtype=np.int32)
-        self._data = data
         self.act = np.zeros((n, nc))
         self.cmd = np.zeros((n, nc))
         self.t = np.zeros(n)
@@ -518,7 +583,8 @@ class HullBatch:
         self.forces = np.zeros((n, na))
         self.flags = np.zeros((n, na))
         self.hits = np.zeros((n, nc), dtype=np.int64)
-        self.status = np.zeros(4, dtype=np.int64)
+        self.stopped = np.zeros(n, dtype=np.int64)
+        self.status = np.zeros(3, dtype=np.int64)
         self._entry: Any = None  # run's compiled entry point for these arguments' types
         self._args: tuple[Any, ...] | None = None
         self._nu = np.zeros((n, 4))  # body_velocities' output
@@ -618,15 +684,16 @@ class HullBatch:
 
     # ---- stepping --------------------------------------------------------------------------
     def advance(self, n: int, *, stop_on_contact: bool = False) -> int:
-        """``n`` physics steps of every hull; returns the steps taken (fewer than ``n`` only
-        where a contact stopped the hull, ``mujoco`` integrator).
+        """``n`` physics steps of every hull; returns the fewest steps a hull took (fewer than
+        ``n`` only where a contact stopped a hull, ``mujoco`` integrator: :attr:`stopped`
+        holds each hull's untaken steps).
 
         Raises:
             SimulationDiverged: a hull's state became non-finite or absurd (its state before
                 that step is kept).
         """
-        if self.integrator == "mujoco":
-            self.t[0] = self._data.time
+        if self.integrator == "mujoco" and self.n == 1:
+            self.t[0] = self.datas[0].time
         integ = MUJOCO if self.integrator == "mujoco" else LEAPFROG
         return self._advance(integ, n, None, stop_on_contact)
 
@@ -636,7 +703,7 @@ class HullBatch:
         else:
             self.left.fill(0)
             self.left[only] = n
-        self.status[3] = 0
+        self.stopped.fill(0)
         while True:
             if self._args is None:  # the arrays of run (built again when a window grows)
                 self._args = (
@@ -645,14 +712,15 @@ class HullBatch:
                     self.kw, self.q, self.qv, self.qa, self.qfrc, self.act, self.cmd, self.t,
                     self.left, self.external, self.mode, self.const, self.inv_dt, self.k0,
                     *self.windows, self.drift_k, self.loads, self.forces, self.flags, self.hits,
-                    self.status,
+                    self.stopped, self.status,
                 )  # fmt: skip
             if self._entry is None:
-                self._entry = entry(run, (integ, *self._mj, self._ncon, stop_on_contact,
-                                          *self._args))  # fmt: skip
-            code = self._entry(integ, *self._mj, self._ncon, stop_on_contact, *self._args)
+                self._entry = entry(run, (integ, self._mj_step, self.mps, self.dps, self.fields,
+                                          stop_on_contact, *self._args))  # fmt: skip
+            code = self._entry(integ, self._mj_step, self.mps, self.dps, self.fields,
+                               stop_on_contact, *self._args)  # fmt: skip
             if code == OK:
-                return n - int(self.status[3])
+                return n - int(self.stopped.max())
             i, slot, j = (int(x) for x in self.status[:3])
             if code == DIVERGED:
                 lo = self.loads[i].tolist()
