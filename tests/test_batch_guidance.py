@@ -27,14 +27,14 @@ DERIVED = ("nu_d", "nu_dot_d", "eta_dot_d_n")
 
 @pytest.fixture(scope="module")
 def draw_plan():
-    """``TrackingEnv(vessel="blue-lady")._episode_plan`` from a seeded generator."""
-    from shipgym.envs.tasks import TrackingEnv
+    """The plans of ``TrackingTask(vessel="blue-lady")`` from a seeded generator."""
+    from shipgym.envs.task import TrackingTask
+    from shipgym.guidance.limits import vessel_limits
 
-    env = TrackingEnv(vessel="blue-lady")
-    assert env.limits == LIM
-    env.np_random = np.random.default_rng(2024)
-    yield env._episode_plan
-    env.close()
+    task = TrackingTask("blue-lady")
+    assert vessel_limits(task.vessel) == LIM
+    rng = np.random.default_rng(2024)
+    yield lambda: task.episode_plan(rng)
 
 
 def _special_plans() -> list[ManoeuvrePlan]:

@@ -86,7 +86,7 @@ def test_station_keeping_random_wind_draws_per_episode_and_keeps_the_gusts():
         env.reset(seed=seed)
         w = env.wind_config
         assert 6.0 <= w.speed <= 11.0 and 0.0 <= w.direction_from < 2 * math.pi
-        assert w.gust_std == base._wind.gust_std
+        assert w.gust_std == base.task.wind.gust_std
         draws.append((w.speed, w.direction_from))
     d = np.array(draws)
     assert d[:, 1].max() - d[:, 1].min() > 5.0 and d[:, 0].std() > 1.0  # spread, not fixed

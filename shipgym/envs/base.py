@@ -11,11 +11,9 @@ disturbances and time limit.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import operator
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import gymnasium as gym
@@ -23,19 +21,29 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from shipgym._config import is_real, param
+from shipgym._config import is_real
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
-from shipgym.dynamics import wrap_angle
-from shipgym.dynamics.vessel import Vessel, load_vessel
+from shipgym.dynamics.vessel import Vessel
 from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
-from shipgym.guidance import plan as named_plan
 from shipgym.guidance.limits import vessel_limits
 from shipgym.guidance.rframe import to_r_frame_pose
 from shipgym.metrics import ManoeuvreMetrics
-from shipgym.observers.sensors import SensorConfig, Sensors, sensor_config
+from shipgym.observers.sensors import SensorConfig, Sensors
 from shipgym.records import StepRecord, step_record_of_env
 
 from .physics import MAX_TIMESTEP, MIN_TIMESTEP, NO_CURRENT, VesselPhysics, check_timestep
+from .task import (
+    MAX_START_OFFSET,
+    OBS_LAYOUT,
+    REWARD_TERMS,
+    SCENES,
+    PlanTask,
+    RewardWeights,
+    _vec3,
+    parse_sensors_arg,
+    parse_waves_arg,
+    tracking_penalty,
+)
 
 __all__ = [
     "MAX_CONTROL_PERIOD",
@@ -47,6 +55,8 @@ __all__ = [
     "RewardWeights",
     "SCENES",
     "ShipEnv",
+    "parse_sensors_arg",
+    "parse_waves_arg",
     "tracking_penalty",
 ]
 
@@ -55,79 +65,6 @@ __all__ = [
 MAX_SUBSTEPS = 10_000
 #: longest control period (s): a DP controller acts every second or so (Tomera 2014: 1 s)
 MAX_CONTROL_PERIOD = 10.0
-#: largest |x|, |y| of a start pose (m) and of its noise, and largest |psi| (rad): 1000 km,
-#: far beyond any harbour or trial area and far below the 1e10 at which MuJoCo declares a
-#: position invalid and silently resets the state to the origin; float64 positions there
-#: still resolve 1e-10 m.
-MAX_START_OFFSET = 1e6
-
-#: the scenes (worlds without a ship, :data:`shipgym.envs.scene.WORLDS`)
-SCENES: tuple[str, ...] = ("harbour", "open-water")
-
-#: observation blocks before the previous action (whose length is the number of channels)
-#: the default wind: the vessel's nominal wind from 300 deg
-_NOMINAL: Any = type("_Nominal", (), {"__repr__": lambda self: "<the vessel's nominal wind>"})()
-
-OBS_LAYOUT = (
-    ("pos_error_body", 3),
-    ("nu", 3),
-    ("nu_ref", 3),
-    ("nu_dot_ref", 3),
-)
-
-
-@dataclass(frozen=True)
-class RewardWeights:
-    """Weights of the named reward terms (each term is ``-weight * quantity``).
-
-    The three tracking terms are raw squares by default (``-w q^2``). With a scale ``s``
-    (``position_scale`` m, ``heading_scale`` rad, ``velocity_scale`` m/s) a term saturates:
-    ``-w s^2 (1 - exp(-q^2 / s^2))``, the same as the square for ``q << s`` (the weight keeps
-    its unit and meaning) and bounded by ``w s^2`` however far the ship is off, so one bad
-    episode early in training cannot dominate the returns (the raw squares of a drifting ship
-    reach about -1e6 per episode).
-    """
-
-    position: float = param(1.0, "1/m^2", "squared horizontal tracking error")
-    heading: float = param(3.0, "1/rad^2", "squared heading error")
-    velocity: float = param(10.0, "s^2/m^2", "squared body-velocity error vs the reference")
-    effort: float = param(0.01, "1", "squared normalised command")
-    rate: float = param(0.01, "1", "squared change of the normalised command")
-    contact: float = param(100.0, "1", "penalty once, when the hull touches a quay")
-    leg_bonus: float = param(10.0, "1", "bonus per completed leg (a positive term)")
-    position_scale: float | None = param(
-        None, "m", "saturation scale of the position term (None: the raw square)"
-    )
-    heading_scale: float | None = param(
-        None, "rad", "saturation scale of the heading term (None: the raw square)"
-    )
-    velocity_scale: float | None = param(
-        None, "m/s", "saturation scale of the velocity term (None: the raw square)"
-    )
-
-    def __post_init__(self) -> None:
-        # each term is -weight * quantity (+leg_bonus): weights are magnitudes, so a negative
-        # or non-finite one would reward errors or make every reward NaN
-        for f in dataclasses.fields(self):
-            val = getattr(self, f.name)
-            if f.name.endswith("_scale"):
-                if val is None:
-                    continue
-                if not is_real(val) or not (math.isfinite(val) and val > 0):
-                    raise ValueError(
-                        f"reward_weights.{f.name} must be None (the raw square) or a finite "
-                        f"number > 0 ({f.metadata['unit']}), got {val!r}"
-                    )
-                object.__setattr__(self, f.name, float(val))
-                continue
-            if not is_real(val):
-                raise TypeError(f"reward_weights.{f.name} must be a number, got {val!r}")
-            if not (math.isfinite(val) and val >= 0):
-                raise ValueError(
-                    f"reward_weights.{f.name} must be finite and >= 0 (the sign is in the "
-                    f"reward term), got {val!r}"
-                )
-            object.__setattr__(self, f.name, float(val))
 
 
 class _Sample(NamedTuple):
@@ -279,93 +216,61 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
 
+    #: the task of this env class (the registered tasks set their own)
+    task_class: type[PlanTask] = PlanTask
+    #: the one vessel of an alias id (``shipgym/BlueLady*-v0``: ``"blue-lady"``), else None
+    fixed_vessel: str | None = None
+
+    @classmethod
+    def make_task(cls, vessel: Any = None, **task_args: Any) -> PlanTask:
+        """This env class's task for ``vessel`` and the task arguments (the single env and
+        the vector env of the class make it alike)."""
+        if cls.fixed_vessel is not None:
+            vessel = cls.fixed_vessel if vessel is None else vessel
+            if vessel != cls.fixed_vessel:
+                base = cls.__mro__[1].__name__
+                raise ValueError(
+                    f"{cls.__name__} is the task of vessel {cls.fixed_vessel!r}; for "
+                    f"vessel={vessel!r} use the vessel-neutral {base} (gym.make('shipgym/"
+                    f"{base[:-3]}-v0', vessel=...))"
+                )
+        return cls.task_class(vessel, owner=cls.__name__, **task_args)
+
     def __init__(
         self,
         vessel: Vessel | str | None = None,
-        plan: str | ManoeuvrePlan = "tomera2014",
+        *,
         plant: str = "default",
-        wind: Any = _NOMINAL,
-        sensors: Any = "default",
-        waves: Any = None,
-        current: Any = None,
-        scene: str = "harbour",
-        start_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
-        start_noise: tuple[float, float, float] = (0.0, 0.0, 0.0),
         timestep: float = 0.05,
         control_period: float = 1.0,
-        terminate_on_finish: bool = True,
-        reward_weights: RewardWeights | Mapping[str, float] | None = None,
         render_mode: str | None = None,
+        **task_args: Any,
     ) -> None:
-        if vessel is None:
-            from shipgym.dynamics.vessel import vessel_names
-
-            raise TypeError(
-                f"{type(self).__name__} needs vessel=NAME or a package path; packaged vessels: "
-                f"{', '.join(vessel_names())} (the shipgym/BlueLady* ids pass vessel='blue-lady')"
-            )
-        self.vessel = load_vessel(vessel)
-        if not self.vessel.can_position:
-            raise ValueError(
-                f"{type(self).__name__} is a positioning task: vessel {self.vessel.name!r} cannot "
-                f"push itself in surge, sway and yaw at zero speed (actuators: "
-                f"{', '.join(a.label for a in self.vessel.actuators)}); steer it in "
-                + ("shipgym/RudderRollStabilisation-v0, shipgym/CourseKeeping-v0 or "
-                   "shipgym/SeaTrial-v0" if self.vessel.dofs == 4
-                   else "shipgym/CourseKeeping-v0 or shipgym/SeaTrial-v0")
-            )  # fmt: skip
-        if wind is _NOMINAL:
-            wind = f"{self.vessel.nominal_wind:g}@300"
-        self.plan = named_plan(plan) if isinstance(plan, str) else plan
-        if not isinstance(self.plan, ManoeuvrePlan):
-            raise ValueError(f"plan must be a plan name or a ManoeuvrePlan, got {plan!r}")
-        if scene not in SCENES:
-            raise ValueError(f"unknown scene {scene!r}; choose one of: {', '.join(SCENES)}")
+        # the task's arguments (plan, wind, sensors, waves, current, scene, start, reward)
+        self.task = task = self.make_task(vessel, **task_args)
+        self.vessel = task.vessel
         _check_render_mode(render_mode, self.metadata)
         _check_timing(timestep, control_period)
         self.n_substeps = _whole_multiple(control_period, timestep)
         self.control_period = float(control_period)
-        self.start_pose = _vec3(start_pose, "start_pose")
-        self.start_noise = _vec3(start_noise, "start_noise")
-        if np.any(self.start_noise < 0):
-            raise ValueError(f"start_noise must be >= 0, got {start_noise!r}")
-        if reward_weights is None:
-            reward_weights = RewardWeights()
-        elif isinstance(reward_weights, Mapping):
-            from shipgym._config import from_mapping
-
-            reward_weights = from_mapping(RewardWeights, reward_weights, where="reward_weights")
-        elif not isinstance(reward_weights, RewardWeights):
-            raise TypeError(
-                f"reward_weights must be None, a RewardWeights or a mapping, got {reward_weights!r}"
-            )
-        self.reward_weights = reward_weights
-        self.terminate_on_finish = bool(terminate_on_finish)
-        self.scene = scene
-        # the settings given (the tasks' defaults when not given); what an episode uses is
-        # reported by wind_config / current_config / sensor_config (read from the physics)
-        self._wind = WindConfig.coerce(wind, name="wind")
-        self._current = CurrentConfig.coerce(current, name="current")
-        self._sensor_setting = parse_sensors_arg(sensors)
-        self.sensors = None if self._sensor_setting is None else Sensors(self._sensor_setting)
+        self.sensors = None if task.sensors is None else Sensors(task.sensors)
         self._sensor_steps = (
-            None
-            if self._sensor_setting is None
-            else _whole_multiple(self._sensor_setting.period, timestep)
+            None if task.sensors is None else _whole_multiple(task.sensors.period, timestep)
         )
         self._steps = 0
         self._episode_over = True  # until the first reset
         # the last measured pose (floats; None before the first valid sample)
         self._last_z: tuple[float, float, float] | None = None
-        self.wave_config = parse_waves_arg(waves)
         self.physics = VesselPhysics(
             self.vessel,
             plant,
-            wind=self._wind,
-            waves=self.wave_config,
-            current=self._current,
-            world=scene,
+            wind=task.wind,
+            waves=task.waves,
+            current=task.current,
+            world=task.scene,
             timestep=timestep,
+            # MuJoCo's step where there are quays; the same forces without MuJoCo in open water
+            integrator="mujoco" if task.scene == "harbour" else "leapfrog",
         )
         self.actuators = self.physics.actuators  # the laws of this plant (vessel.actuators_for)
         self.n_actions = self.actuators.n_channels
@@ -376,7 +281,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         multi = self.actuators.channel_names != self.actuators.names
         self._channel_names = self.actuators.channel_names if multi else ()
         self.limits = vessel_limits(self.vessel)
-        self.guidance = Guidance(self.plan, limits=self.limits)
+        self.guidance = Guidance(task.plan, limits=self.limits)
         self.metrics = ManoeuvreMetrics(
             sample_period=1.0,
             n_actuators=len(self.actuators),
@@ -391,15 +296,45 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._renderer: Any = None
         n = self.n_actions
         self.action_space = spaces.Box(-1.0, 1.0, (n,), np.float32)
-        self.observation_structure: dict[str, slice] = {}
-        i = 0
-        for name, k in (*OBS_LAYOUT, ("prev_action", n)):
-            self.observation_structure[name] = slice(i, i + k)
-            i += k
+        self.observation_structure, i = observation_structure(n)
         self.observation_space = spaces.Box(-np.inf, np.inf, (i,), np.float32)
-        self._harbour_body = self._find_body("harbour")
-        self._prev_action = np.zeros(n)
+        self._harbour_body = harbour_body(self.physics.model)
+        self._prev_action = np.zeros((1, n))
         self._contact = False
+        # the task's outputs of N = 1: observation and reward terms; the inputs it reads
+        self._obs = np.zeros((1, i), np.float32)
+        self._rew = np.zeros((1, len(REWARD_TERMS)))
+        self._flags = np.zeros((2, 1), bool)  # switched, new contact
+
+    # ---- the task's settings ----------------------------------------------------------------
+    @property
+    def plan(self) -> ManoeuvrePlan:
+        """The plan given (a drawing task's default)."""
+        return self.task.plan
+
+    @property
+    def scene(self) -> str:
+        return self.task.scene
+
+    @property
+    def start_pose(self) -> NDArray[np.float64]:
+        return self.task.start_pose
+
+    @property
+    def start_noise(self) -> NDArray[np.float64]:
+        return self.task.start_noise
+
+    @property
+    def reward_weights(self) -> RewardWeights:
+        return self.task.reward_weights
+
+    @property
+    def terminate_on_finish(self) -> bool:
+        return self.task.terminate_on_finish
+
+    @property
+    def wave_config(self) -> WaveConfig | None:
+        return self.task.waves
 
     # ---- what the episode uses (read from the physics and sensors: always honest) ----------
     @property
@@ -417,23 +352,6 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         """The sensor configuration the sensors use now (``None``: no sensors); set at reset."""
         return None if self.sensors is None else self.sensors.config
 
-    # ---- task hooks (overridden by the registered tasks) ------------------------------------
-    def _episode_plan(self) -> ManoeuvrePlan:
-        """The plan of the next episode (randomised tasks draw it from ``self.np_random``)."""
-        return self.plan
-
-    def _episode_wind(self) -> WindConfig | None:
-        """The wind of the next episode (``None``: no aerodynamic loads)."""
-        return self._wind
-
-    def _episode_current(self) -> CurrentConfig | None:
-        """The current of the next episode (``None``: no current)."""
-        return self._current
-
-    def _episode_sensors(self) -> SensorConfig | None:
-        """The sensor configuration of the next episode (ignored without sensors)."""
-        return self._sensor_setting
-
     # ---- gym API ---------------------------------------------------------------------------
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -441,24 +359,23 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         """Start an episode; ``options`` may hold ``start_pose`` (m, m, rad)."""
         super().reset(seed=seed)
         rng = self.np_random
-        start = self.start_pose
+        start = None
         if options and "start_pose" in options:
             start = _vec3(options["start_pose"], "options['start_pose']")
-        plan = self._episode_plan()
-        if plan is not self.guidance.plan:
-            self.guidance = Guidance(plan, limits=self.limits)
-        wind = self._episode_wind()
-        if wind is not self.wind_config:
-            self.physics.set_wind(wind)
-        current = self._episode_current()
+        ep = self.task.initialize_episode(rng, start)
+        if ep.plan is not self.guidance.plan:
+            self.guidance = Guidance(ep.plan, limits=self.limits)
+        if ep.wind is not self.wind_config:
+            self.physics.set_wind(ep.wind)
+        current = ep.current
         if (NO_CURRENT if current is None else current) is not self.physics.current_config:
             self.physics.set_current(current)
-        sensors = self._episode_sensors()
+        sensors = ep.sensors
         if sensors is not None and self.sensors is not None and sensors is not self.sensors.config:
             self.sensors = Sensors(sensors)
+        start = ep.start
         self._place_harbour(start)
-        noise = rng.uniform(-1.0, 1.0, 3) * self.start_noise
-        self.physics.reset(eta=start + noise, rng=rng)
+        self.physics.reset(eta=ep.eta0, rng=rng)
         if self.sensors is not None:
             self.sensors.reset(rng)
         self._steps = 0
@@ -466,19 +383,19 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._last_z = None
         self.guidance.reset(start, t0=0.0)
         self.metrics.reset()
-        self._prev_action = np.zeros(self.n_actions)
+        self._prev_action = np.zeros((1, self.n_actions))
         self._contact = False
         measurements = [self._measure()] if self.sensors is not None else []
         sample = self._observe()
         self._record_metrics(sample)
         n = self.n_actions
         command = self.physics.command
+        self._flags[:] = False
+        self._terms(sample, self._prev_action)
         info = self._info(sample, command, np.zeros(n, bool), np.zeros(n, bool), False, {}, [])
         info["measurements"] = measurements
         info["record"] = self._record(info, sample)
-        return _observation_of(
-            sample.pose, sample.vel, sample.ref, self._prev_action.tolist()
-        ), info
+        return self._obs[0].copy(), info
 
     def step(
         self, action: NDArray[np.float32]
@@ -526,9 +443,11 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         switched = self.guidance.update(t, eta)
         sample = self._observe(t, eta)
         self._record_metrics(sample, saturated, clipped)
-        rewards = self._reward_terms(sample, cl, new_contact, switched)
+        flags = self._flags
+        flags[0, 0], flags[1, 0] = switched, new_contact
+        rewards = self._terms(sample, clipped.reshape(1, -1))
         reward = float(sum(rewards.values()))
-        self._prev_action = clipped
+        self._prev_action = clipped.reshape(1, -1)
         finished = self.guidance.finished
         terminated = self._contact or (finished and self.terminate_on_finish)
         flags = np.array(list(map(operator.or_, saturated, action_clipped)), bool)
@@ -540,13 +459,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         if terminated:  # a time-limit truncation is seen by the EpisodeEnd wrapper
             self._episode_over = True
             info["episode_metrics"] = self.episode_metrics()
-        return (
-            _observation_of(sample.pose, sample.vel, sample.ref, cl),
-            reward,
-            terminated,
-            False,
-            info,
-        )
+        return self._obs[0].copy(), reward, terminated, False, info
 
     def render(self) -> NDArray[np.uint8] | None:
         """An RGB frame (H, W, 3) of the map camera; needs ``render_mode="rgb_array"``."""
@@ -658,45 +571,33 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     @property
     def prev_action(self) -> NDArray[np.float64]:
         """The normalised action applied in the last step (zeros after a reset)."""
-        return self._prev_action.copy()
+        return self._prev_action[0].copy()
 
-    @staticmethod
     def navigation_observation(
+        self,
         eta: NDArray[np.float64],
         nu: NDArray[np.float64],
         ref: Reference,
         prev_action: NDArray[np.float64],
     ) -> NDArray[np.float32]:
-        """The observation vector (layout in the class docstring) from navigation data."""
-        return _observation_of(eta.tolist(), nu.tolist(), ref, prev_action.tolist())
+        """The observation vector (layout in the class docstring) from navigation data (the
+        task's observation of N = 1, as an observer wrapper forms it from its estimate)."""
+        obs = np.zeros((1, self.observation_space.shape[0]), np.float32)
+        rew = np.zeros((1, len(REWARD_TERMS)))
+        e, w = np.reshape(eta, (1, 3)), np.reshape(nu, (1, 3))
+        prev = np.reshape(prev_action, (1, -1)).astype(float)
+        self.task.terms(e, w, e, w, _Row(ref), prev, prev, self._flags[0], self._flags[1], obs,
+                        rew)  # fmt: skip
+        return obs[0]
 
-    def _reward_terms(
-        self, s: _Sample, action: list[float], new_contact: bool, switched: bool
-    ) -> dict[str, float]:
-        w = self.reward_weights
-        x, y, psi = s.pose_r
-        xd, yd, psid = s.ref_r
-        ex, ey, epsi = x - xd, y - yd, psi - psid
-        u, v, r = s.vel
-        ud, vd, rd = s.ref._nu_d
-        du, dv, dr = u - ud, v - vd, r - rd
-        prev = self._prev_action.tolist()
-        # sums from 0 in channel order: for three channels exactly a0^2 + a1^2 + a2^2
-        effort = rate = 0.0
-        for x, y in zip(action, prev, strict=True):
-            effort += x * x
-            rate += (x - y) ** 2
-        return {
-            "reward_position": -tracking_penalty(w.position, ex * ex + ey * ey, w.position_scale),
-            "reward_heading": -tracking_penalty(w.heading, wrap_angle(epsi) ** 2, w.heading_scale),
-            "reward_velocity": -tracking_penalty(
-                w.velocity, du * du + dv * dv + dr * dr, w.velocity_scale
-            ),
-            "reward_effort": -w.effort * effort,
-            "reward_rate": -w.rate * rate,
-            "reward_contact": -w.contact if new_contact else 0.0,
-            "reward_leg": w.leg_bonus if switched else 0.0,
-        }
+    def _terms(self, s: _Sample, action: NDArray[np.float64]) -> dict[str, float]:
+        """The task's observation (into ``_obs``) and reward terms of this step."""
+        nu = s.nu.reshape(1, 3)
+        eta = s.eta.reshape(1, 3)
+        self.task.terms(s.eta_r.reshape(1, 3), nu, eta, nu, _Row(s.ref), action,
+                        self._prev_action, self._flags[0], self._flags[1], self._obs,
+                        self._rew)  # fmt: skip
+        return dict(zip(REWARD_TERMS, self._rew[0].tolist(), strict=True))
 
     def _info(
         self,
@@ -747,23 +648,12 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     def _record(self, info: Mapping[str, Any], s: _Sample) -> StepRecord:
         """The typed record of a step (``info["record"]``), holding the same arrays as ``info``."""
         return step_record_of_env(
-            info, s.ref, self._prev_action, self._actuator_names, self._channel_names
+            info, s.ref, self._prev_action[0], self._actuator_names, self._channel_names
         )
-
-    def _find_body(self, name: str) -> int | None:
-        try:
-            return int(self.physics.model.body(name).id)
-        except KeyError:
-            return None
 
     def _place_harbour(self, start: NDArray[np.float64]) -> None:
         """Put the static harbour body at the start pose (the layout turns with the start)."""
-        if self._harbour_body is None:
-            return
-        m = self.physics.model
-        m.body_pos[self._harbour_body] = (start[0], start[1], 0.0)
-        h = 0.5 * start[2]
-        m.body_quat[self._harbour_body] = (math.cos(h), 0.0, 0.0, math.sin(h))
+        place_harbour(self.physics.model, self._harbour_body, start)
 
     def command_to_action(self, command: NDArray[np.float64]) -> NDArray[np.float64]:
         """Physical command (channel order, each in its unit) to the normalised action."""
@@ -778,78 +668,46 @@ class BlueLadyEnv(ShipEnv):
         super().__init__(**kwargs)
 
 
-def _observation_of(
-    pose: list[float], vel: list[float], ref: Reference, prev_action: list[float]
-) -> NDArray[np.float32]:
-    """:meth:`ShipEnv.navigation_observation` of floats (pose, body velocity, action)."""
-    x, y, psi = pose
-    xd, yd, psid = ref.eta_d_n.tolist()
-    c, s = math.cos(psi), math.sin(psi)
-    dx, dy = x - xd, y - yd
-    e = [c * dx + s * dy, -s * dx + c * dy, wrap_angle(psi - psid)]
-    if isinstance(ref, Reference):  # its velocities as floats, computed once per reference
-        ref_vel = [*ref._nu_d, *ref._nu_dot_d]
-    else:
-        ref_vel = ref.nu_d.tolist() + ref.nu_dot_d.tolist()
-    return np.array(e + vel + ref_vel + prev_action, dtype=np.float32)
+def observation_structure(n_actions: int) -> tuple[dict[str, slice], int]:
+    """The observation's blocks (:data:`OBS_LAYOUT` and the previous action) by name, and
+    its length."""
+    out: dict[str, slice] = {}
+    i = 0
+    for name, k in (*OBS_LAYOUT, ("prev_action", n_actions)):
+        out[name] = slice(i, i + k)
+        i += k
+    return out, i
 
 
-def tracking_penalty(weight: Any, q2: Any, scale: float | None) -> Any:
-    """``weight * q2`` (``scale`` None) or ``weight * s^2 (1 - exp(-q2 / s^2))``: the magnitude
-    of a tracking reward term of :class:`RewardWeights`, for floats or NumPy arrays alike."""
-    if scale is None:
-        return weight * q2
-    s2 = scale * scale
-    if isinstance(q2, float):
-        return weight * s2 * -math.expm1(-q2 / s2)
-    return weight * s2 * -np.expm1(-np.asarray(q2) / s2)
-
-
-def parse_sensors_arg(sensors: Any) -> SensorConfig | None:
-    """Accept ``None`` (no sensors), a preset name, a :class:`SensorConfig` or a mapping."""
-    if sensors is None or isinstance(sensors, SensorConfig):
-        return sensors
-    if isinstance(sensors, str):
-        return sensor_config(sensors)
-    if isinstance(sensors, Mapping):
-        return SensorConfig.from_dict(sensors)
-    raise ValueError(
-        f"sensors must be None, a preset name, a SensorConfig or a mapping, got {sensors!r}"
-    )
-
-
-def parse_waves_arg(waves: Any) -> WaveConfig | None:
-    """Accept ``None``, a :class:`WaveConfig`, a preset name (``WAVE_PRESETS``) or a mapping."""
-    if waves is None or isinstance(waves, WaveConfig):
-        return waves
-    if isinstance(waves, str):
-        from shipgym.scenarios import WAVE_PRESETS
-
-        if waves not in WAVE_PRESETS:
-            raise ValueError(
-                f"unknown wave preset {waves!r}; choose one of: {', '.join(WAVE_PRESETS)}"
-            )
-        preset = WAVE_PRESETS[waves]
-        return preset() if callable(preset) else preset
-    if isinstance(waves, Mapping):
-        return WaveConfig.from_dict(waves)
-    raise ValueError(f"waves must be None, a WaveConfig, a preset name or a mapping: {waves!r}")
-
-
-def _vec3(x: Any, name: str) -> NDArray[np.float64]:
-    """A pose-like triple (m, m, rad): finite, each |component| <= :data:`MAX_START_OFFSET`."""
+def harbour_body(model: Any) -> int | None:
+    """The id of a world's static harbour body (``None`` in open water)."""
     try:
-        a = np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be three finite numbers (m, m, rad), got {x!r}") from None
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be three finite numbers (m, m, rad), got {x!r}")
-    if np.any(np.abs(a) > MAX_START_OFFSET):
-        raise ValueError(
-            f"{name} must be within +-{MAX_START_OFFSET:g} (m, m, rad), got {x!r}: MuJoCo resets "
-            "positions beyond 1e10 to the origin, and nothing shipgym models is that far out"
-        )
-    return a
+        return int(model.body("harbour").id)
+    except KeyError:
+        return None
+
+
+def place_harbour(model: Any, body: int | None, start: NDArray[np.float64]) -> None:
+    """Put the static harbour ``body`` of ``model`` at the start pose ``start`` (m, m, rad):
+    the layout turns with the start (nothing in open water, ``body`` None)."""
+    if body is None:
+        return
+    model.body_pos[body] = (start[0], start[1], 0.0)
+    h = 0.5 * start[2]
+    model.body_quat[body] = (math.cos(h), 0.0, 0.0, math.sin(h))
+
+
+class _Row:
+    """A one-env reference as the task reads it: ``eta_d_n``, ``eta_d_r``, ``nu_d``,
+    ``nu_dot_d`` as (1, 3) arrays."""
+
+    __slots__ = ("eta_d_n", "eta_d_r", "nu_d", "nu_dot_d")
+
+    def __init__(self, ref: Reference) -> None:
+        self.eta_d_n = np.reshape(ref.eta_d_n, (1, 3))
+        self.eta_d_r = np.reshape(ref.eta_d_r, (1, 3))
+        self.nu_d = np.reshape(ref.nu_d, (1, 3))
+        self.nu_dot_d = np.reshape(ref.nu_dot_d, (1, 3))
 
 
 def _check_timing(timestep: Any, control_period: Any) -> None:

@@ -292,17 +292,33 @@ class BatchedPhysics:
         self._hulls.cmd[:] = clipped
         return self.saturated.copy()
 
-    def step(self, k: int = 1, *, stop_on_contact: bool = False) -> NDArray[np.int64]:
-        """Advance every hull ``k`` physics steps; returns the steps each hull took, (n,)
-        (fewer than ``k`` only where ``stop_on_contact`` stopped a hull of the ``mujoco``
-        integrator after the step in which it touched something).
+    def step(
+        self, k: int = 1, *, stop_on_contact: bool = False, mask: ArrayLike | None = None
+    ) -> NDArray[np.int64]:
+        """Advance every hull (or those where ``mask`` is True) ``k`` physics steps; returns
+        the steps each hull took, (n,) (fewer than ``k`` only where ``stop_on_contact``
+        stopped a hull of the ``mujoco`` integrator after the step in which it touched
+        something; 0 for the hulls outside ``mask``).
 
         Raises:
             SimulationDiverged: a non-finite or absurd state (naming the time and the state).
         """
         hb = self._hulls
-        hb.advance(k, stop_on_contact=stop_on_contact)
-        return k - hb.stopped
+        m = None if mask is None else np.asarray(mask, dtype=bool)
+        hb.advance(k, stop_on_contact=stop_on_contact, mask=m)
+        taken = k - hb.stopped
+        return taken if m is None else np.where(m, taken, 0)
+
+    def wave_motion(self) -> Array:
+        """Each hull's first-order wave-frequency motion ``(dx m, dy m, dpsi rad)`` (NED) now,
+        (n, 3), what its sensors see (zeros without first-order waves), as
+        :meth:`VesselPhysics.wave_motion <shipgym.envs.physics.VesselPhysics.wave_motion>`."""
+        out = np.zeros((self.n, 3))
+        if self.wave_config is None or not self.wave_config.first_order:
+            return out
+        for i, (wv, t) in enumerate(zip(self.waves, self.t.tolist(), strict=True)):
+            out[i] = wv.wf_motion(t)
+        return out
 
     @property
     def contact_counts(self) -> NDArray[np.int64]:

@@ -7,19 +7,8 @@ vessel-neutral ids with that vessel.
 
 from __future__ import annotations
 
-import dataclasses
-import math
-from typing import Any
-
-from shipgym._config import is_real
-from shipgym.disturbances import CurrentConfig, WindConfig
-from shipgym.disturbances.current import MAX_CURRENT_SPEED
-from shipgym.disturbances.wind import MAX_WIND_SPEED
-from shipgym.dynamics.params import BLUE_LADY_HULL
-from shipgym.guidance import Leg, ManoeuvrePlan
-from shipgym.observers.sensors import SensorConfig
-
 from .base import ShipEnv
+from .task import HarbourTask, StationKeepingTask, TrackingTask
 
 __all__ = [
     "BlueLadyHarbourEnv",
@@ -45,10 +34,7 @@ class HarbourEnv(ShipEnv):
     2000 control steps (2000 s). Spaces, reward and info: see :class:`ShipEnv`.
     """
 
-    def __init__(self, **kwargs: Any) -> None:
-        kwargs.setdefault("plan", "tomera2014")
-        kwargs.setdefault("scene", "harbour")
-        super().__init__(**kwargs)
+    task_class = HarbourTask
 
 
 class StationKeepingEnv(ShipEnv):
@@ -71,38 +57,12 @@ class StationKeepingEnv(ShipEnv):
     the option.
     """
 
-    def __init__(self, random_wind: tuple[float, float] | None = None, **kwargs: Any) -> None:
-        kwargs.setdefault("plan", ManoeuvrePlan(legs=(Leg(name="hold"),), name="station-keeping"))
-        kwargs.setdefault("scene", "open-water")
-        kwargs.setdefault("start_noise", (2.0, 2.0, math.radians(5.0)))
-        kwargs.setdefault("terminate_on_finish", False)
-        if random_wind is not None:
-            try:
-                lo, hi = (float(x) for x in random_wind)
-            except (TypeError, ValueError):
-                raise ValueError(
-                    f"random_wind must be None or (low, high) mean wind speeds in m/s, got "
-                    f"{random_wind!r}"
-                ) from None
-            if not (0.0 <= lo <= hi <= MAX_WIND_SPEED):
-                raise ValueError(
-                    f"random_wind must satisfy 0 <= low <= high <= {MAX_WIND_SPEED:g} m/s, got "
-                    f"{random_wind!r}"
-                )
-            random_wind = (lo, hi)
-        self.random_wind = random_wind
-        super().__init__(**kwargs)
-        if random_wind is not None and self._wind is None:
-            raise ValueError("random_wind needs a wind (its gusts are kept); got wind=None")
+    task_class = StationKeepingTask
 
-    def _episode_wind(self) -> WindConfig | None:
-        given = super()._episode_wind()
-        if self.random_wind is None or given is None:
-            return given
-        rng = self.np_random
-        speed = rng.uniform(*self.random_wind)
-        direction = rng.uniform(0.0, 2.0 * math.pi)
-        return dataclasses.replace(given, speed=speed, direction_from=direction)
+    @property
+    def random_wind(self) -> tuple[float, float] | None:
+        """The range of the drawn mean wind speed (m/s; ``None``: the given wind)."""
+        return self.task.random_wind
 
 
 class TrackingEnv(ShipEnv):
@@ -147,130 +107,28 @@ class TrackingEnv(ShipEnv):
     info: see :class:`ShipEnv`.
     """
 
-    def __init__(
-        self,
-        max_legs: int = 3,
-        max_wind_speed: float | None = None,
-        max_current_speed: float | None = None,
-        randomize_sensors: bool | None = None,
-        **kwargs: Any,
-    ) -> None:
-        from shipgym.dynamics.vessel import load_vessel
+    task_class = TrackingTask
 
-        vessel = load_vessel(kwargs["vessel"]) if kwargs.get("vessel") is not None else None
-        nominal = vessel.nominal_wind if vessel is not None else 3.0
-        if max_wind_speed is None:
-            max_wind_speed = 3.5 * nominal / 3.0
-        if max_current_speed is None:
-            max_current_speed = 0.01 * nominal
-        # distances with sqrt(L): at Froude-scaled reference speeds (sqrt(L), the vessels'
-        # [limits]) an episode takes about as long as the Blue Lady's and fits the time limit
-        self._leg_scale = 1.0 if vessel is None else math.sqrt(vessel.L_oa / BLUE_LADY_HULL.L_oa)
-        if not (isinstance(max_legs, int) and max_legs >= 1):
-            raise ValueError(f"max_legs must be an int >= 1, got {max_legs!r}")
-        if not (_finite_real(max_wind_speed) and 0 <= max_wind_speed <= MAX_WIND_SPEED):
-            raise ValueError(
-                f"max_wind_speed must be in [0, {MAX_WIND_SPEED:g}] m/s, got {max_wind_speed!r}"
-            )
-        if not (_finite_real(max_current_speed) and 0 <= max_current_speed <= MAX_CURRENT_SPEED):
-            raise ValueError(
-                f"max_current_speed must be in [0, {MAX_CURRENT_SPEED:g}] m/s, "
-                f"got {max_current_speed!r}"
-            )
-        if randomize_sensors is not None and not isinstance(randomize_sensors, bool):
-            raise ValueError(
-                f"randomize_sensors must be True, False or None, got {randomize_sensors!r}"
-            )
-        self.max_legs = max_legs
-        self.max_wind_speed = float(max_wind_speed)
-        self.max_current_speed = float(max_current_speed)
-        # an argument that is passed fixes its quantity; the draw is the default only
-        self._draw_plan = "plan" not in kwargs
-        self._draw_wind = "wind" not in kwargs
-        self._draw_current = "current" not in kwargs
-        # the sensor draw is made unless switched off explicitly, and used unless fixed
-        self._sensor_draw = randomize_sensors is not False
-        self.randomize_sensors = (
-            "sensors" not in kwargs if randomize_sensors is None else randomize_sensors
-        )
-        kwargs.setdefault("scene", "open-water")
-        kwargs.setdefault(
-            "plan", ManoeuvrePlan(legs=(Leg(surge=10.0 * self._leg_scale),), name="tracking")
-        )
-        super().__init__(**kwargs)
+    @property
+    def max_legs(self) -> int:
+        return self.task.max_legs
 
-    def _episode_plan(self) -> ManoeuvrePlan:
-        rng = self.np_random
-        k = self._leg_scale
-        legs = []
-        for i in range(int(rng.integers(1, self.max_legs + 1))):
-            kind = int(rng.integers(4))
-            side = 1.0 if rng.random() < 0.5 else -1.0
-            if kind == 0:
-                leg = Leg(sway=side * rng.uniform(2.0, 8.0) * k, name=f"{i + 1}: lateral")
-            elif kind == 1:
-                dist = rng.uniform(5.0, 30.0) if side > 0 else -rng.uniform(3.0, 15.0)
-                leg = Leg(surge=dist * k, name=f"{i + 1}: longitudinal")
-            elif kind == 2:
-                yaw = side * math.radians(rng.uniform(30.0, 120.0))
-                leg = Leg(yaw=yaw, name=f"{i + 1}: rotation")
-            else:
-                leg = Leg(
-                    surge=rng.uniform(3.0, 15.0) * k, sway=side * rng.uniform(2.0, 5.0) * k,
-                    name=f"{i + 1}: combined",
-                )  # fmt: skip
-            legs.append(leg)
-        if not self._draw_plan:  # drawn all the same (same stream), then discarded
-            return super()._episode_plan()
-        return ManoeuvrePlan(legs=tuple(legs), name="tracking")
+    @property
+    def max_wind_speed(self) -> float:
+        return self.task.max_wind_speed
 
-    def _episode_wind(self) -> WindConfig | None:
-        rng = self.np_random
-        speed = rng.uniform(0.0, self.max_wind_speed)  # drawn even when fixed (same stream)
-        direction = rng.uniform(0.0, 2.0 * math.pi)
-        if not self._draw_wind:
-            return super()._episode_wind()
-        return WindConfig(speed=speed, direction_from=direction)
+    @property
+    def max_current_speed(self) -> float:
+        return self.task.max_current_speed
 
-    def _episode_current(self) -> CurrentConfig | None:
-        if self.max_current_speed == 0.0:  # no draw: the random stream stays as without current
-            return super()._episode_current()
-        rng = self.np_random
-        speed = rng.uniform(0.0, self.max_current_speed)
-        direction = rng.uniform(0.0, 2.0 * math.pi)
-        if not self._draw_current:
-            return super()._episode_current()
-        return CurrentConfig(speed=speed, direction_to=direction)
-
-    def _episode_sensors(self) -> SensorConfig | None:
-        given = super()._episode_sensors()
-        if given is None or not self._sensor_draw:  # no sensors, or no draw: as given
-            return given
-        rng = self.np_random
-        pos = rng.uniform(0.07, 0.15)  # drawn even when fixed (same stream)
-        psi = math.radians(rng.uniform(0.2, 0.45))
-        if not self.randomize_sensors:
-            return given
-        return given.replace(position_variance=pos * pos, heading_variance=psi * psi)
-
-
-def _finite_real(x: Any) -> bool:
-    return is_real(x) and math.isfinite(x)
+    @property
+    def randomize_sensors(self) -> bool:
+        return self.task.randomize_sensors
 
 
 def _blue_lady(cls: type[ShipEnv], name: str, doc: str) -> type[ShipEnv]:
     """The Blue Lady alias of a task class (``vessel="blue-lady"``, the same episodes)."""
-
-    def __init__(self: Any, **kwargs: Any) -> None:
-        vessel = kwargs.setdefault("vessel", "blue-lady")
-        if vessel != "blue-lady":
-            raise ValueError(
-                f"{name} is the Blue Lady's task; for vessel={vessel!r} use the vessel-neutral "
-                f"{cls.__name__} (gym.make('shipgym/{cls.__name__[:-3]}-v0', vessel=...))"
-            )
-        cls.__init__(self, **kwargs)
-
-    return type(name, (cls,), {"__init__": __init__, "__doc__": doc, "__module__": __name__})
+    return type(name, (cls,), {"fixed_vessel": "blue-lady", "__doc__": doc, "__module__": __name__})
 
 
 BlueLadyHarbourEnv = _blue_lady(

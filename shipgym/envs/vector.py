@@ -1,39 +1,39 @@
-r"""A native batched ``gymnasium.vector.VectorEnv`` of the open-water positioning tasks.
+r"""The native batched ``gymnasium.vector.VectorEnv`` of the plan tasks.
 
-:class:`ShipVectorEnv` steps ``num_envs`` copies of ``shipgym/Tracking-v0`` or
-``shipgym/StationKeeping-v0`` (any vessel that can position itself, 3 DOF) in one array
-computation per step: the physics of every hull (:class:`~shipgym.envs.batchphysics.
-BatchedPhysics`: plant, actuator lags, gusty wind and current), the sensors
-(:class:`~shipgym.observers.sensors.BatchedSensors`), the guidance
-(:class:`~shipgym.guidance.batch.BatchedGuidance`), the observation, the reward terms, and,
-when asked, the Kalman observer and the DP controller of the training stack. It is made by
-``gymnasium.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")`` (the default
-mode for these ids).
+:class:`ShipVectorEnv` steps ``num_envs`` envs of ``shipgym/Harbour-v0``,
+``shipgym/StationKeeping-v0`` or ``shipgym/Tracking-v0`` (and their Blue Lady ids) in one
+array computation per step: the physics of every hull (:class:`~shipgym.envs.batchphysics.
+BatchedPhysics`: plant, actuators, gusty wind, current, wave drift; MuJoCo's integrator per hull
+in the harbour, for its quays), the sensors (:class:`~shipgym.observers.sensors.
+BatchedSensors`), the guidance (:class:`~shipgym.guidance.batch.BatchedGuidance`), the task's
+observation and reward terms (:class:`~shipgym.envs.task.PlanTask`, the same compiled law as
+the single env's) and, when asked, the Kalman observer and the DP controller of the training
+stack. It is made by ``gymnasium.make_vec(id, num_envs=N)`` (the ``vector_entry_point`` mode,
+the default for these ids).
 
 Env ``i`` is the single env of the same id and arguments, reset with seed ``seed + i``
-(gymnasium's convention): the same draws (plan, wind, current, sensor noise, start
-perturbation, gusts and sensor streams, from the env's own generator in the single env's
-order) and, with the same actions, the same trajectory within 1e-6 m and 1e-6 rad over whole
-episodes (the same integration scheme; a test checks each task and vessel). The MuJoCo single
-env stays the reference and the only form of the harbour task (quays need contacts).
+(gymnasium's convention): the same draws (the task's plan, wind, current, sensor noise and
+start perturbation, then gusts and sensor streams, from the env's own generator in the single
+env's order), the same physics (the single env integrates open water with the same leapfrog
+step and the harbour with MuJoCo's), and with the same actions the same trajectory (a test
+checks each task and positioning vessel over whole episodes with autoresets).
 
 What differs from the single env:
 
 * ``info`` holds arrays (one row per env, gymnasium's vector convention with ``_key`` masks):
   ``t``, ``eta``, ``nu``, ``nav_eta``, ``nav_nu``, ``leg``, ``legs_completed``, ``finished``,
-  ``command``, ``saturated``, ``action_clipped``, the ``reward_*`` terms, the step's last sensor
-  sample ``z``, ``z_valid``, ``z_outlier`` (``z`` is NaN where none was taken or in a dropout),
-  and ``episode_summary`` (``return``, ``length`` in control steps, ``duration_s``,
-  ``legs_completed``, ``completed``) where an episode ended.
-  There is no ``record`` and no ``episode_metrics`` (the Tomera indices need every sample of
-  the episode; evaluate with the single env).
+  ``command``, ``saturated``, ``action_clipped``, ``quay_contact``, the ``reward_*`` terms,
+  the step's last sensor sample ``z``, ``z_valid``, ``z_outlier`` (``z`` is NaN where none
+  was taken or in a dropout), and ``episode_summary`` (``return``, ``length`` in control
+  steps, ``duration_s``, ``legs_completed``, ``completed``) where an episode ended. There is
+  no ``record`` and no ``episode_metrics`` (the Tomera indices need every sample of the
+  episode; evaluate with the single env).
 * Autoreset: Gymnasium 1.x's ``NEXT_STEP`` mode by default (the step after an episode's end
   resets that env and ignores its action); ``autoreset_mode="same-step"`` resets in the step
   that ends the episode and puts the last observation and info under ``final_obs`` and
   ``final_info`` (the mode stable-baselines3 expects: :mod:`shipgym.rl.vec`).
 * The time limit is the env's own (``max_episode_steps``: the registered one by default).
-
-Backends: NumPy. Waves, the harbour, 4-DOF hulls and rendering are the single env's only.
+* No rendering (the single env renders).
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
@@ -51,15 +52,24 @@ from numpy.typing import NDArray
 
 from shipgym.dynamics.frames import wrap_angle
 from shipgym.guidance.batch import BatchedGuidance
+from shipgym.guidance.limits import vessel_limits
 from shipgym.observers.sensors import BatchedSensors, SensorConfig
 
-from .base import ShipEnv, tracking_penalty
+from .base import (
+    ShipEnv,
+    _check_timing,
+    _whole_multiple,
+    harbour_body,
+    observation_structure,
+    place_harbour,
+)
 from .batchphysics import BatchedPhysics
+from .task import REWARD_TERMS
 
 __all__ = [
     "AUTORESET_MODES",
     "ShipVectorEnv",
-    "navigation_observations",
+    "harbour_vector_env",
     "station_keeping_vector_env",
     "tracking_vector_env",
 ]
@@ -76,7 +86,7 @@ AUTORESET_MODES = {
 
 
 class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
-    """``num_envs`` copies of a positioning task stepped together (module docstring).
+    """``num_envs`` envs of a plan task stepped together (module docstring).
 
     Spaces: the single env's, batched: ``observation_space`` ``Box(-inf, inf, (N, 12 + n),
     float32)`` (the layout of :class:`~shipgym.envs.base.ShipEnv`, ``observation_structure``;
@@ -107,8 +117,10 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             observer=)``).
         env_sensors: one sensor configuration per env, each as the ``sensors=`` of env ``i``
             (the training stack's per-env noise); they may differ only in their variances.
-        **kwargs: the single env's arguments (``vessel=``, ``wind=``, ``max_legs=``, ...); the
-            scene must be open water, without waves.
+        vessel, plant, timestep, control_period: as the single env's.
+        render_mode: must be ``None``.
+        **task_args: the task's arguments, as the single env's (``wind=``, ``max_legs=``,
+            ``waves=``, ...).
 
     Raises:
         ValueError: a task, vessel or argument the batched form does not cover, naming it.
@@ -127,7 +139,12 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         residual_scale: float = 1.0,
         observer: str | None = None,
         env_sensors: Sequence[SensorConfig] | None = None,
-        **kwargs: Any,
+        vessel: Any = None,
+        plant: str = "default",
+        timestep: float = 0.05,
+        control_period: float = 1.0,
+        render_mode: str | None = None,
+        **task_args: Any,
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
@@ -144,39 +161,41 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             raise ValueError(
                 f"autoreset_mode must be 'next-step' or 'same-step', got {autoreset_mode!r}"
             )
-        if kwargs.get("render_mode") is not None:
+        if render_mode is not None:
             raise ValueError("the batched env does not render; use the single env (gym.make)")
-        # the single env of these arguments: its configuration and its per-episode draws
-        self.template = tmpl = cls(**kwargs)
-        if tmpl.scene != "open-water" or tmpl.wave_config is not None:
-            raise ValueError(
-                "the batched env covers open water without waves (the Tracking and "
-                f"StationKeeping tasks); got scene={tmpl.scene!r}, waves={tmpl.wave_config!r}: "
-                "use gym.make for the single env"
-            )
+        # the task of these arguments: its configuration and each env's per-episode draws
+        self.task = task = cls.make_task(vessel, **task_args)
         self.num_envs = n = num_envs
         self.max_episode_steps = max_episode_steps
         self.autoreset_mode = AUTORESET_MODES[autoreset_mode]
         self.metadata = dict(self.metadata, autoreset_mode=self.autoreset_mode)
-        self.vessel = tmpl.vessel
-        self.actuators = tmpl.actuators
-        self.n_actions = tmpl.n_actions
-        phys = tmpl.physics
+        self.vessel = task.vessel
+        _check_timing(timestep, control_period)
+        self.n_substeps = _whole_multiple(control_period, timestep)
+        self.control_period = float(control_period)
+        harbour = task.scene == "harbour"
         self.physics = BatchedPhysics(
-            self.vessel, n, phys.plant, wind=tmpl._wind, current=tmpl._current,
-            timestep=phys.timestep,
+            self.vessel, n, plant, wind=task.wind, current=task.current, waves=task.waves,
+            timestep=timestep, integrator="mujoco" if harbour else "leapfrog",
+            world=task.scene if harbour else None,
         )  # fmt: skip
-        self.n_substeps = tmpl.n_substeps
-        self.control_period = tmpl.control_period
-        cfg = tmpl._sensor_setting
+        self.actuators = self.physics.actuators
+        self.n_actions = self.actuators.n_channels
+        cfg = task.sensors
         self.sensors = None if cfg is None else BatchedSensors(cfg, n)
-        self._sensor_steps = tmpl._sensor_steps
-        self.guidance = BatchedGuidance(n, limits=tmpl.limits)
-        self.single_observation_space = tmpl.observation_space
-        self.single_action_space = tmpl.action_space
+        self._sensor_steps = None if cfg is None else _whole_multiple(cfg.period, timestep)
+        self.limits = vessel_limits(self.vessel)
+        self.guidance = BatchedGuidance(n, limits=self.limits)
+        self.observation_structure, size = observation_structure(self.n_actions)
+        self.single_observation_space = spaces.Box(-np.inf, np.inf, (size,), np.float32)
+        self.single_action_space = spaces.Box(-1.0, 1.0, (self.n_actions,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
-        self.observation_structure = dict(tmpl.observation_structure)
+        self._obs = np.zeros((n, size), np.float32)
+        self._rew = np.zeros((n, len(REWARD_TERMS)))
+        self._harbour = [harbour_body(m) for m in self.physics.models] if harbour else []
+        self._contact = np.zeros(n, dtype=bool)
+        self._stop = harbour  # stop a hull after the physics step in which it touches a quay
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._steps = np.zeros(n, dtype=np.int64)  # physics steps since reset
         self._elapsed = np.zeros(n, dtype=np.int64)  # control steps since reset
@@ -306,7 +325,10 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         eta = self._truth()[0]
         switched = self.guidance.update(t, eta)
         ref = self.guidance.reference(t)
-        rewards = self._reward_terms(eta, ref, clipped, switched)
+        touched = (self.physics.contact_counts > 0) & active
+        new_contact = touched & ~self._contact
+        self._contact |= touched
+        rewards = self._terms(ref, clipped, switched, new_contact)
         self._ref = ref
         if self.controller is not None:  # a leg switch turns the controller's r-frame
             moved = ref.leg != self._leg
@@ -315,10 +337,10 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
                 self.controller.change_frame(wrap_angle(psi_P - self._psi_P), moved)
                 self._leg = np.where(moved, ref.leg, self._leg)
                 self._psi_P = np.where(moved, psi_P, self._psi_P)
-        reward = sum(rewards.values())
+        reward = self._rew.sum(axis=1)
         self._prev = clipped
         self._elapsed += 1
-        terminated = self.guidance.finished & self.template.terminate_on_finish
+        terminated = (self.guidance.finished & self.task.terminate_on_finish) | self._contact
         truncated = self._elapsed >= self.max_episode_steps
         done = (terminated | truncated) & active
         self._return += reward
@@ -326,7 +348,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         for k, v in control.items():
             info[k], info["_" + k] = v, np.ones(n, bool)
         if self.autoreset_mode == AutoresetMode.NEXT_STEP:
-            obs = self._observation(ref)
+            obs = self._obs.copy()
             if resetting.any():
                 self._reset_envs(resetting)
                 obs[resetting] = self._observation()[resetting]
@@ -337,7 +359,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
                                          resetting)  # fmt: skip
             self._ended = done
             return obs, reward, terminated, truncated, info
-        obs = self._observation(ref)
+        obs = self._obs.copy()
         if done.any():  # SAME_STEP: reset now, the last observation and info kept aside
             info["final_obs"] = np.where(done[:, None], obs, np.nan).astype(np.float32)
             info["_final_obs"] = done
@@ -390,31 +412,34 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
     def _reset_envs(self, mask: NDArray[np.bool_]) -> None:
         """Reset the masked envs, each from its generator in the single env's order."""
         self._cache.clear()
-        tmpl = self.template
+        task = self.task
         idx = np.nonzero(mask)[0].tolist()
-        start = tmpl.start_pose
-        eta0 = np.broadcast_to(start, (self.num_envs, 3)).copy()
+        eta0 = np.zeros((self.num_envs, 3))
+        start = np.zeros((self.num_envs, 3))
         plans = []
         for i in idx:
             rng = self._rngs[i]
             assert rng is not None
-            tmpl.np_random = rng  # the task's draws come from env i's generator
-            plans.append(tmpl._episode_plan())
-            wind, current = tmpl._episode_wind(), tmpl._episode_current()
-            self.physics.set_disturbances(i, wind, current)
-            if self._env_sensors is not None:  # env i as made with sensors=env_sensors[i]
-                tmpl._sensor_setting = self._env_sensors[i]
-            sensors = tmpl._episode_sensors()
+            # the task's draws from env i's generator; env i as made with sensors=env_sensors[i]
+            own = None if self._env_sensors is None else self._env_sensors[i]
+            ep = task.initialize_episode(rng, sensors=own)
+            plans.append(ep.plan)
+            self.physics.set_disturbances(i, ep.wind, ep.current)
+            sensors = ep.sensors
             if sensors is not None and self.sensors is not None:
                 self.sensors.set_config(i, sensors)
-            eta0[i] = start + rng.uniform(-1.0, 1.0, 3) * tmpl.start_noise
+            eta0[i] = ep.eta0
+            start[i] = ep.start
+            if self._harbour:
+                place_harbour(self.physics.models[i], self._harbour[i], ep.start)
         rngs = self._rngs
         self.physics.reset(eta=eta0, mask=mask, rngs=rngs)  # type: ignore[arg-type]
         self._steps[mask] = 0
         self._elapsed[mask] = 0
         self._return[mask] = 0.0
         self._prev[mask] = 0.0
-        self.guidance.reset(plans, np.broadcast_to(start, (self.num_envs, 3)), 0.0, mask=mask)
+        self._contact[mask] = False
+        self.guidance.reset(plans, start, 0.0, mask=mask)
         ref = self.guidance.reference(self.physics.t)
         # the reset envs' rows of the reference the next step's controller reads
         self._ref = ref if self._ref is None else _rows_from(self._ref, ref, mask)
@@ -435,7 +460,9 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         observer (every env samples at the same instants: the sensor period divides the
         control period)."""
         assert self.sensors is not None
-        z, valid, outlier = self.sensors.measure(self.physics.t, self._truth()[0], mask)
+        # first-order wave motion is seen, not lived
+        seen = self._truth()[0] + self.physics.wave_motion()
+        z, valid, outlier = self.sensors.measure(self.physics.t, seen, mask)
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
             info = self.observer.step(self.physics.t, z, valid & mask)
@@ -460,52 +487,33 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
                 k = left
             else:
                 k = min(left, int((every - self._steps[active] % every).min(initial=every)))
-            self.physics.step(k)
+            taken = self.physics.step(k, stop_on_contact=self._stop, mask=active)
             self._cache.clear()
-            self._steps += k
+            self._steps += np.where(active, taken, 0)
             left -= k
             if every is not None:
                 hit = active & (self._steps % every == 0)
                 if hit.any():
                     self._sample(hit)
+            if self._stop:  # a hull that touched a quay stops (the episode ends with it)
+                active = active & (taken == k)
 
-    def _observation(self, ref: Any = None) -> NDArray[np.float32]:
-        """The single env's observation (its class docstring) of every env, from the truth."""
-        if ref is None:
-            ref = self.guidance.reference(self.physics.t)
-        eta, nu = self._navigation()
-        return navigation_observations(eta, nu, ref, self._prev)
-
-    def _reward_terms(
-        self, eta: Array, ref: Any, action: Array, switched: NDArray[np.bool_]
+    def _terms(
+        self, ref: Any, action: Array, switched: NDArray[np.bool_], new_contact: NDArray[np.bool_]
     ) -> dict[str, Array]:
-        w = self.template.reward_weights
-        e = ref.to_r(eta) - ref.eta_d_r
-        dn = self._truth()[1] - ref.nu_d
-        prev = self._prev
-        effort = np.zeros(self.num_envs)
-        rate = np.zeros(self.num_envs)
-        for j in range(self.n_actions):  # from 0 in channel order, as the single env sums
-            effort = effort + action[:, j] * action[:, j]
-            rate = rate + (action[:, j] - prev[:, j]) ** 2
-        zero = np.zeros(self.num_envs)
-        return {
-            "reward_position": -tracking_penalty(
-                w.position, e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1], w.position_scale
-            ),
-            "reward_heading": -tracking_penalty(
-                w.heading, wrap_angle(e[:, 2]) ** 2, w.heading_scale
-            ),
-            "reward_velocity": -tracking_penalty(
-                w.velocity,
-                dn[:, 0] * dn[:, 0] + dn[:, 1] * dn[:, 1] + dn[:, 2] * dn[:, 2],
-                w.velocity_scale,
-            ),
-            "reward_effort": -w.effort * effort,
-            "reward_rate": -w.rate * rate,
-            "reward_contact": zero,
-            "reward_leg": np.where(switched, w.leg_bonus, 0.0),
-        }
+        """The task's observation (``_obs``, from the navigation data) and reward terms
+        (``_rew``, from the truth) of every env."""
+        eta, nu = self._truth()
+        nav_eta, nav_nu = self._navigation()
+        self.task.terms(ref.to_r(eta), nu, nav_eta, nav_nu, ref, action, self._prev, switched,
+                        new_contact, self._obs, self._rew)  # fmt: skip
+        return {k: self._rew[:, j].copy() for j, k in enumerate(REWARD_TERMS)}
+
+    def _observation(self) -> NDArray[np.float32]:
+        """The observation of every env now (after a reset: its previous action is zero)."""
+        no = np.zeros(self.num_envs, dtype=bool)
+        self._terms(self.guidance.reference(self.physics.t), self._prev, no, no)
+        return self._obs.copy()
 
     def _info(
         self,
@@ -532,6 +540,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             "command": self.physics.command if command is None else command,
             "saturated": np.zeros((n, m), bool) if saturated is None else saturated,
             "action_clipped": np.zeros((n, m), bool) if action_clipped is None else action_clipped,
+            "quay_contact": self._contact.copy(),
         }
         if self.observer is not None:
             e = nav_eta - eta
@@ -558,27 +567,6 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             }
             info["_episode_summary"] = done
         return info
-
-
-def navigation_observations(
-    eta: Array, nu: Array, ref: Any, prev_action: Array
-) -> NDArray[np.float32]:
-    """:meth:`ShipEnv.navigation_observation <shipgym.envs.base.ShipEnv.navigation_observation>`
-    of N envs: poses and velocities (N, 3), a batched reference, previous actions (N, n)."""
-    psi = eta[:, 2]
-    c, s = np.cos(psi), np.sin(psi)
-    d = ref.eta_d_n
-    dx, dy = eta[:, 0] - d[:, 0], eta[:, 1] - d[:, 1]
-    n = eta.shape[0]
-    out = np.empty((n, 12 + prev_action.shape[1]), dtype=np.float32)
-    out[:, 0] = c * dx + s * dy
-    out[:, 1] = c * dy - s * dx
-    out[:, 2] = wrap_angle(psi - d[:, 2])
-    out[:, 3:6] = nu
-    out[:, 6:9] = ref.nu_d
-    out[:, 9:12] = ref.nu_dot_d
-    out[:, 12:] = prev_action
-    return out
 
 
 def _rows_from(old: Any, new: Any, mask: NDArray[np.bool_]) -> Any:
@@ -630,6 +618,16 @@ def _task_class(task: type[ShipEnv] | str) -> tuple[type[ShipEnv], int | None]:
         if entry == f"{task.__module__}:{task.__qualname__}":
             return task, steps
     return task, None
+
+
+def harbour_vector_env(num_envs: int, **kwargs: Any) -> ShipVectorEnv:
+    """``shipgym/Harbour-v0``'s vector entry point (``vessel=`` required)."""
+    return ShipVectorEnv(num_envs, "shipgym/Harbour-v0", **kwargs)
+
+
+def blue_lady_harbour_vector_env(num_envs: int, **kwargs: Any) -> ShipVectorEnv:
+    """``shipgym/BlueLadyHarbour-v0``'s vector entry point."""
+    return ShipVectorEnv(num_envs, "shipgym/BlueLadyHarbour-v0", **kwargs)
 
 
 def tracking_vector_env(num_envs: int, **kwargs: Any) -> ShipVectorEnv:

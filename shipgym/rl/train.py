@@ -671,7 +671,7 @@ def _batched_vec_env(env_id: str, hp: Mapping[str, Any], n_envs: int, seed: int)
     if hp.get("error_integral") is not None:
         from shipgym.rl.vec import ErrorIntegralVecEnv
 
-        dt = float(venv.venv.template.control_period)
+        dt = float(venv.venv.control_period)
         return ErrorIntegralVecEnv(venv, dt, float(hp["error_integral"]))
     return venv
 

@@ -82,8 +82,18 @@ class BatchedVecEnv(VecEnv):
     def close(self) -> None:
         self.venv.close()
 
+    def _shared(self, name: str) -> Any:
+        """An attribute every env shares: the vector env's, else its task's."""
+        venv = self.venv
+        if hasattr(venv, name):
+            return getattr(venv, name)
+        if hasattr(venv.task, name):
+            return getattr(venv.task, name)
+        raise AttributeError(f"the batched env and its task have no attribute {name!r}")
+
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-        return [getattr(self.venv.template, attr_name) for _ in self._get_indices(indices)]
+        value = self._shared(attr_name)
+        return [value for _ in self._get_indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
         raise AttributeError(
@@ -93,7 +103,7 @@ class BatchedVecEnv(VecEnv):
     def env_method(
         self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any
     ) -> list[Any]:
-        fn = getattr(self.venv.template, method_name)
+        fn = self._shared(method_name)
         return [fn(*method_args, **method_kwargs) for _ in self._get_indices(indices)]
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: Any = None) -> list[bool]:

@@ -683,10 +683,12 @@ class HullBatch:
         return u, v, p, r
 
     # ---- stepping --------------------------------------------------------------------------
-    def advance(self, n: int, *, stop_on_contact: bool = False) -> int:
+    def advance(
+        self, n: int, *, stop_on_contact: bool = False, mask: np.ndarray | None = None
+    ) -> int:
         """``n`` physics steps of every hull; returns the fewest steps a hull took (fewer than
         ``n`` only where a contact stopped a hull, ``mujoco`` integrator: :attr:`stopped`
-        holds each hull's untaken steps).
+        holds each hull's untaken steps). ``mask``: step only the hulls where it is True.
 
         Raises:
             SimulationDiverged: a hull's state became non-finite or absurd (its state before
@@ -695,11 +697,20 @@ class HullBatch:
         if self.integrator == "mujoco" and self.n == 1:
             self.t[0] = self.datas[0].time
         integ = MUJOCO if self.integrator == "mujoco" else LEAPFROG
-        return self._advance(integ, n, None, stop_on_contact)
+        return self._advance(integ, n, None, stop_on_contact, mask)
 
-    def _advance(self, integ: int, n: int, only: int | None, stop_on_contact: bool = False) -> int:
+    def _advance(
+        self,
+        integ: int,
+        n: int,
+        only: int | None,
+        stop_on_contact: bool = False,
+        mask: np.ndarray | None = None,
+    ) -> int:
         if only is None:
             self.left.fill(n)
+            if mask is not None:
+                self.left[~mask] = 0
         else:
             self.left.fill(0)
             self.left[only] = n
