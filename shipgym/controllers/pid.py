@@ -118,6 +118,10 @@ into the direction in which the allocation has just cut it is removed, and the r
 back. Then the integral force ``M R^T(psi) K_I xi`` is clamped to ``integral_limit`` per body
 DOF (required: the vessel's force capacity,
 :func:`~shipgym.controllers.actuation.planar_capacity`, or ``inf``).
+
+All of this is one compiled law over a leading axis of N envs (:func:`pid_law`, run by
+:class:`BatchedPID`); :class:`MultivariablePID` is its N = 1 adapter, so the single env and
+env i of the vector env run the same operations in the same order.
 """
 
 from __future__ import annotations
