@@ -104,11 +104,6 @@ class BatchedAllocation:
         self.n_channels = acts.n_channels
         self._P = law_parameters(p)
         self._inverse = method == "inverse"
-        lo = acts.lower
-        hi = acts.upper
-        self._lo, self._hi = lo, hi
-        self._two_sided = bool((lo < 0.0).all())
-        self._neg_lo = np.where(lo < 0, -lo, 1.0)
 
     def __call__(self, tau: ArrayLike, state: ArrayLike | None = None) -> BatchedAllocationResult:
         """Allocate ``tau`` (n, 3) (N, N, N m) of every env; ``state``: the actuator states
@@ -124,15 +119,10 @@ class BatchedAllocation:
         return BatchedAllocationResult(*run_law(self._P, t, self._inverse))
 
     def command_to_action(self, command: ArrayLike) -> Array:
-        """Physical commands (n, n_channels) -> normalised actions, as
-        :meth:`ActuatorSet.command_to_action <shipgym.dynamics.actuators.ActuatorSet.
-        command_to_action>` (``c / upper`` for ``c >= 0``, ``c / |lower|`` below)."""
-        c = np.asarray(command, dtype=float)
-        two = np.where(c >= 0.0, c / self._hi, c / self._neg_lo)
-        if self._two_sided:
-            return two
-        lo, hi = self._lo, self._hi
-        return np.where(lo < 0.0, two, 2.0 * (c - lo) / (hi - lo) - 1.0)
+        """Physical commands (n, n_channels) -> normalised actions
+        (:meth:`ActuatorSet.command_to_action <shipgym.dynamics.actuators.ActuatorSet.
+        command_to_action>` over the leading env axis)."""
+        return self.actuators.command_to_action(command)
 
 
 def apply_residual(
