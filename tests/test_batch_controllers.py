@@ -1,20 +1,27 @@
-"""The batched DP controller (shipgym.controllers.batch) against the scalar one, env by env.
+"""The DP controller's laws over N envs: row i of a batch equals the law at N = 1, bit for bit.
 
-Reference: :class:`~shipgym.controllers.pid.MultivariablePID`, the scalar allocators of
-:func:`~shipgym.controllers.actuation.make_allocator` and the controller wrapper's factories,
-each run once per env on the same inputs. Every run asserts that the branches it is meant to
-cover (allocation saturation in both directions, conditional integration, the integral clamp,
-frame changes, partial resets) did occur.
+The PID (Tomera 2014 eq. 23), the closed-form allocation (eqs. 12, 25-27) and the reversal
+hysteresis are each one compiled law over a leading axis of envs; the single env's controller
+wrapper runs them at N = 1 (:class:`~shipgym.controllers.pid.MultivariablePID`,
+:func:`~shipgym.controllers.actuation.make_allocator`,
+:class:`~shipgym.controllers.conditioning.ReversalHysteresis`). Each test runs a batch with
+different inputs per row, masks, leg switches and resets against one N = 1 law per row on
+that row's inputs (``np.array_equal``), and asserts that the branches it is meant to cover
+(allocation saturation in both directions, conditional integration, the integral clamp, frame
+changes, partial resets, held reversals) did occur. Independent references of the laws:
+tests/test_pid.py (python-control), tests/test_allocation.py (SciPy's lsq_linear).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.optimize import lsq_linear
 
 import shipgym
 from shipgym.controllers import MultivariablePID, PIDGains, allocate, allocate_inverse
 from shipgym.controllers.actuation import fixed3_parameters, make_allocator
+from shipgym.controllers.allocation import default_weights
 from shipgym.controllers.batch import (
     BATCHED_CONTROLLERS,
     BatchedAllocation,
@@ -26,14 +33,12 @@ from shipgym.controllers.conditioning import ReversalHysteresis, reversal_thresh
 from shipgym.controllers.pid import vessel_pid
 from shipgym.controllers.wrappers import CONTROLLERS, controller_spec
 
-TOL = 1e-10
 VESSELS = shipgym.vessels()
 
 
-def _close(a, b, scale=1.0):
-    """``|a - b| <= 1e-10 (scale + |b|)`` elementwise (relative, with an absolute floor)."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    return bool(np.all(np.abs(a - b) <= TOL * (scale + np.abs(b))))
+def _same(a, b, scale=None):
+    """Bit for bit (``np.array_equal``; ``scale`` is ignored)."""
+    return np.array_equal(np.asarray(a, float), np.asarray(b, float))
 
 
 def _unsupported(vessel):
@@ -94,9 +99,9 @@ def _names(vessel):
     ]
 
 
-# ---- the controller and its allocation, env by env, against the wrapper's scalar stack -------
+# ---- the controller and its allocation, env by env, against the wrapper's N = 1 stack --------
 @pytest.mark.parametrize("vessel_name", sorted(VESSELS))
-def test_batched_controller_equals_the_scalar_one_per_env(vessel_name):
+def test_row_i_of_the_batched_stack_is_the_n1_stack(vessel_name):
     vessel = VESSELS[vessel_name]
     why = _unsupported(vessel)
     if why:
@@ -132,15 +137,15 @@ def test_batched_controller_equals_the_scalar_one_per_env(vessel_name):
                     held += int(al is not al_raw)
                 tau_err[i] = al.tau_error
                 scale = float(np.abs(tau).max()) + 1.0
-                assert _close(tau_b[i], tau, scale), (name, k, i, tau_b[i], tau)
-                assert _close(al_b.command[i], al.command), (name, k, i)
-                assert _close(al_b.force[i], al.force, scale), (name, k, i)
-                assert _close(al_b.tau[i], al.tau, scale), (name, k, i)
-                assert _close(al_b.tau_error[i], al.tau_error, scale), (name, k, i)
+                assert _same(tau_b[i], tau, scale), (name, k, i, tau_b[i], tau)
+                assert _same(al_b.command[i], al.command), (name, k, i)
+                assert _same(al_b.force[i], al.force, scale), (name, k, i)
+                assert _same(al_b.tau[i], al.tau, scale), (name, k, i)
+                assert _same(al_b.tau_error[i], al.tau_error, scale), (name, k, i)
                 assert np.array_equal(al_b.saturated[i], al.saturated), (name, k, i)
-                assert _close(act_b[i], acts.command_to_action(al.command)), (name, k, i)
+                assert _same(act_b[i], acts.command_to_action(al.command)), (name, k, i)
             xi_s = np.array([c.integral for c in scalars])
-            assert _close(batch.pid.integral, xi_s, 1.0 + float(np.abs(xi_s).max()))
+            assert _same(batch.pid.integral, xi_s, 1.0 + float(np.abs(xi_s).max()))
             # branches
             te = al_b.tau_error
             seen["cut_pos"] += int((te > 1e-6).sum())
@@ -173,9 +178,9 @@ def test_batched_controller_equals_the_scalar_one_per_env(vessel_name):
         assert held > 0 or not conditioned, (name, "the reversal hysteresis never held")
 
 
-def test_batched_pid_general_model_bool_flags_and_a_zero_integral_gain():
-    """A full M and D_L, K_I = 0 in surge (the scalar's ``kI > 0`` branches and the unit
-    rotation scale of change_frame), saturation given as floats, booleans or None."""
+def test_batched_pid_rows_general_model_bool_flags_and_a_zero_integral_gain():
+    """Rows against N = 1 with a full M and D_L, K_I = 0 in surge (the ``kI > 0`` branches and
+    the unit rotation scale of change_frame), saturation as floats, booleans or None."""
     rng = np.random.default_rng(7)
     M = np.array([[2.0e4, 0.0, 0.0], [0.0, 2.5e4, 1.8e4], [0.0, 1.8e4, 4.5e5]])
     D = np.array([[20.0, 1.0, 0.0], [0.0, 260.0, -855.0], [3.0, -855.0, 6130.0]])
@@ -202,9 +207,9 @@ def test_batched_pid_general_model_bool_flags_and_a_zero_integral_gain():
             row = (None if vd is None else vd[i], None if ad is None else ad[i])
             s_i = None if sat is None else sat[i]
             tau = scalars[i](eta[i], nu[i], eta_d[i], *row, saturated=s_i)
-            assert _close(tau_b[i], tau, 1.0 + float(np.abs(tau).max())), (k, i)
+            assert _same(tau_b[i], tau, 1.0 + float(np.abs(tau).max())), (k, i)
         xi_s = np.array([c.integral for c in scalars])
-        assert _close(batch.integral, xi_s, 1.0 + float(np.abs(xi_s).max()))
+        assert _same(batch.integral, xi_s, 1.0 + float(np.abs(xi_s).max()))
         dropped += int(not np.array_equal(shadow.integral, batch.integral))
         f = _integral_force(batch, batch.integral, eta[:, 2])
         clamped += int((f >= np.asarray(lim) * (1.0 - 1e-9)).any(axis=1).sum())
@@ -236,7 +241,7 @@ def test_change_frame_of_all_envs_and_a_scalar_dpsi():
         tau_b = batch(eta, nu, eta_d, vd, ad)
         for i in range(n):
             row = (None if vd is None else vd[i], None if ad is None else ad[i])
-            assert _close(tau_b[i], scalars[i](eta[i], nu[i], eta_d[i], *row), 1e3)
+            assert _same(tau_b[i], scalars[i](eta[i], nu[i], eta_d[i], *row), 1e3)
         if k % 10 == 9:
             batch.change_frame(0.7)  # every env (mask None), one angle
             for c in scalars:
@@ -246,7 +251,7 @@ def test_change_frame_of_all_envs_and_a_scalar_dpsi():
 
 # ---- the allocation alone, on requests spread over the whole box -------------------------------
 @pytest.mark.parametrize("method", ["constrained", "inverse"])
-def test_batched_allocation_equals_the_closed_forms(method):
+def test_batched_allocation_rows_are_the_n1_law(method):
     v = VESSELS["blue-lady"]
     p = fixed3_parameters(v.actuators)
     rng = np.random.default_rng(5)
@@ -260,20 +265,32 @@ def test_batched_allocation_equals_the_closed_forms(method):
     scalar = allocate if method == "constrained" else allocate_inverse
     patterns = set()
     for i in range(n):
-        a = scalar(tau[i], p)
+        a = scalar(tau[i], p)  # the law at N = 1
         scale = float(np.abs(tau[i]).max()) + 1.0
-        assert _close(res.command[i], a.command), i
-        assert _close(res.force[i], a.force, scale), i
-        assert _close(res.tau[i], a.tau, scale), i
-        assert _close(res.tau_error[i], a.tau_error, scale), i
+        assert _same(res.command[i], a.command), i
+        assert _same(res.force[i], a.force, scale), i
+        assert _same(res.tau[i], a.tau, scale), i
+        assert _same(res.tau_error[i], a.tau_error, scale), i
         assert np.array_equal(res.saturated[i], a.saturated), i
         patterns.add(tuple(a.saturated.tolist()))
     assert np.all(res.command[:50, 0] == 0.0)
     # every combination of saturated actuators occurs (inside, each edge, corners)
     assert len(patterns) == 8, patterns
+    if method == "constrained":  # the batch's rows against SciPy's bounded least squares
+        wY, wN = default_weights(p)[1:]
+        A = np.array([[1.0, 1.0], [p.L2, -p.L3]]) * np.sqrt([[wY], [wN]])
+        box = ([p.k2 * p.p_min, p.k3 * p.p_min], [p.k2 * p.p_max, p.k3 * p.p_max])
+
+        def J(F, t):
+            return float(np.sum((A @ F - np.sqrt([wY, wN]) * t[1:]) ** 2))
+
+        for i in range(0, n, 23):
+            b = np.sqrt([wY, wN]) * tau[i, 1:]
+            ref = lsq_linear(A, b, bounds=box, method="bvls", tol=1e-14).x
+            assert J(res.force[i, 1:], tau[i]) <= J(ref, tau[i]) * (1 + 1e-9) + 1e-9, i
     act = batch.command_to_action(res.command)
     for i in range(0, n, 97):
-        assert _close(act[i], v.actuators.command_to_action(res.command[i]))
+        assert _same(act[i], v.actuators.command_to_action(res.command[i]))
 
 
 def test_apply_residual_is_the_wrappers_sum_and_clip():
@@ -326,9 +343,9 @@ def test_against_the_controller_wrapper_in_a_tracking_run():
         applied, res_clipped = apply_residual(act_b, residual, scale)
         for i, e in enumerate(envs):
             info = e.step(residual[i])[4]
-            assert _close(tau_b[i], info["tau_c"], 1e3)
-            assert _close(act_b[i], info["controller_action"])
-            assert _close(al_b.tau_error[i], info["tau_error"], 1e3)
+            assert _same(tau_b[i], info["tau_c"], 1e3)
+            assert _same(act_b[i], info["controller_action"])
+            assert _same(al_b.tau_error[i], info["tau_error"], 1e3)
             assert np.array_equal(al_b.saturated[i], info["allocation_saturated"])
             assert np.array_equal(res_clipped[i], info["residual_clipped"])
             recs[i] = info["record"]

@@ -109,6 +109,34 @@ def test_seed_gains_unstable_at_1s_sampling_and_tuned_stable():
     assert max(abs(error_loop(1.0, 0.01, 100.0, 0.015)[1])) < 1.0
 
 
+@pytest.mark.parametrize("name", ["tuned", "smooth"])
+@pytest.mark.parametrize("dt", [0.5, 1.0])
+def test_the_run_time_law_follows_the_sampled_design_loop(name, dt):
+    """MultivariablePID (the compiled law at N = 1) on its exact model: a diagonal M, no
+    damping, heading held at 0 and one DOF displaced at a time, the plant a zero-order-held
+    double integrator in each DOF. Its error ``[e, e_dot, xi]`` must follow the sampled loop
+    built with python-control (``Phi^k x_0``), whose eigenvalues are the designed poles."""
+    g = pid_gains(name)
+    m = np.array([2.37e4, 2.48e4, 4.55e5])
+    ctrl = MultivariablePID(g, M=np.diag(m), D_L=np.zeros((3, 3)), dt=dt, integral_limit=np.inf)
+    for dof, e0 in ((0, 1.5), (1, -2.0), (2, 0.08)):
+        k = (g.K_P[dof], g.K_I[dof], g.K_D[dof])
+        Phi = sampled_error_loop(*k, dt)
+        assert_same_eigenvalues(np.linalg.eigvals(Phi), error_loop(*k, dt)[1], rtol=1e-6)
+        ctrl.reset()
+        x = np.array([e0, 0.0, 0.0])  # e, e_dot, xi of the design loop
+        pos, vel = e0, 0.0
+        for _ in range(int(200 / dt)):
+            eta = np.zeros(3)
+            nu = np.zeros(3)
+            eta[dof], nu[dof] = pos, vel
+            a = ctrl(eta, nu, Z)[dof] / m[dof]  # the commanded acceleration
+            np.testing.assert_allclose([pos, vel], x[:2], rtol=1e-9, atol=1e-12 * abs(e0))
+            pos, vel = pos + dt * vel + 0.5 * dt * dt * a, vel + dt * a
+            x = Phi @ x
+        assert abs(pos) < 0.2 * abs(e0)  # and it settles, as the poles say
+
+
 # ---- the control law -------------------------------------------------------------------------
 def test_zero_error_at_rest_gives_zero_tau():
     for name in GAIN_PRESETS:

@@ -4,7 +4,8 @@
 
 - the Blue Lady pattern (a main propeller on the centre line and two tunnel thrusters,
   Tomera 2014 eq. 12): the exact closed forms of :mod:`shipgym.controllers.allocation`
-  (``"constrained"``, or the paper's ``"inverse"``), the fast path and test oracle;
+  (``"constrained"``, or the paper's ``"inverse"``): a
+  :class:`~shipgym.controllers.allocation.fixed3.Fixed3Allocator`;
 - any set of fixed-direction thrusters: box-constrained weighted least squares
   (:func:`~shipgym.controllers.allocation.allocate_wls`);
 - azimuth thrusters (with or without fixed ones): the extended-thrust QP with magnitude and
@@ -28,7 +29,8 @@ from shipgym.dynamics.actuators import ActuatorSet, Azimuth, Propeller
 from shipgym.dynamics.thrusters import ThrusterParameters
 from shipgym.dynamics.vessel import Vessel
 
-from .allocation import Allocation, allocate, allocate_inverse, force_capacity
+from .allocation import Allocation, force_capacity
+from .allocation.fixed3 import Fixed3Allocator
 
 __all__ = ["Allocator", "fixed3_parameters", "make_allocator", "planar_capacity"]
 
@@ -99,8 +101,7 @@ def make_allocator(vessel: Vessel, method: str = "constrained", dt: float = 1.0)
     acts = vessel.actuators
     p3 = fixed3_parameters(acts)
     if p3 is not None:
-        fn = allocate if method == "constrained" else allocate_inverse
-        return lambda tau, state: fn(tau, p3)
+        return Fixed3Allocator(p3, inverse=method == "inverse")
     if method == "inverse":
         raise ValueError(
             f"allocation 'inverse' (Tomera 2014 eq. 25) needs the Blue Lady's three-thruster "

@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import entry, njit
 from shipgym.dynamics.actuators import ActuatorSet, Propeller
 
 from .allocation import Allocation
@@ -65,7 +66,10 @@ def reversal_threshold(vessel: Any) -> tuple[float, ...]:
 
 
 class _Units:
-    """The hysteresis units of an actuator set: index, channel, thresholds (N), planar column."""
+    """The hysteresis units of an actuator set, as the arrays the compiled laws read: per
+    conditioned propeller ``I[k] = (actuator index, command channel)`` and
+    ``H[k] = (F_h ahead (N), F_h astern (N), its planar or 4-DOF column of the thrust
+    configuration)``."""
 
     def __init__(self, actuators: ActuatorSet, threshold: Sequence[float]) -> None:
         h = [float(x) for x in threshold]
@@ -77,23 +81,84 @@ class _Units:
         if not all(math.isfinite(x) and x >= 0.0 for x in h):
             raise ValueError(f"thresholds must be finite forces >= 0 (N; 0: off), got {h!r}")
         planar = actuators.dofs == 3
-        self.units: list[tuple[int, int, float, float, tuple[float, ...]]] = []
+        idx, rows = [], []
         for i, a in enumerate(actuators.actuators):
             if h[i] == 0.0 or not isinstance(a, Propeller):
                 continue  # azimuths turn instead of reversing; 0: off
             c, s = a.direction
             x, y, _ = a.position
             col = (c, s, x * s - y * c) if planar else (c, s, 0.0, x * s - y * c)
-            ch = actuators.slices[i].start
+            idx.append((i, actuators.slices[i].start))
             # thrust (N) the request must exceed on the new side: ahead, astern (> 0)
-            self.units.append((i, ch, h[i], h[i], col))
+            rows.append((h[i], h[i], *col))
+        self.I = np.array(idx, dtype=np.int64).reshape(-1, 2)
+        self.H = np.array(rows, dtype=float).reshape(len(idx), 2 + (3 if planar else 4))
 
 
-class ReversalHysteresis:
-    """Zero-thrust deadband with hysteresis for propeller reversals (module docstring).
+@njit
+def reversal_law(I: Any, H: Any, dirs: Any, force: Any, hold: Any) -> int:
+    """The running directions ``dirs`` (n, units) after the allocated thrusts ``force``
+    (n, actuators) (N), and which units are held at zero ``hold`` (n, units); returns how
+    many are held (:class:`ReversalHysteresis`)."""
+    held = 0
+    for e in range(force.shape[0]):
+        for k in range(I.shape[0]):
+            f = force[e, I[k, 0]]
+            d = dirs[e, k]
+            hold[e, k] = False
+            if d == 0.0 or f * d >= 0.0:  # same side (or not yet set): passed
+                if f != 0.0:
+                    dirs[e, k] = 1.0 if f > 0.0 else -1.0
+            elif (f > H[k, 0]) if f > 0.0 else (-f > H[k, 1]):  # a reversal
+                dirs[e, k] = -d
+            else:
+                hold[e, k] = True
+                held += 1
+    return held
+
+
+@njit
+def reversal_hold(I: Any, H: Any, hold: Any, command: Any, force: Any, tau: Any,
+                  err: Any) -> None:  # fmt: skip
+    """Set the held units' thrust and command to zero and correct ``tau`` and ``tau_error``
+    (n, dofs) by the thrust held back (``tau -= b F``, ``tau_error += b F``)."""
+    for e in range(force.shape[0]):
+        for k in range(I.shape[0]):
+            if not hold[e, k]:
+                continue
+            i = I[k, 0]
+            f = force[e, i]
+            command[e, I[k, 1]] = 0.0
+            force[e, i] = 0.0
+            for j in range(H.shape[1] - 2):
+                b = H[k, 2 + j]
+                if b != 0.0:
+                    bf = b * f
+                    tau[e, j] -= bf
+                    err[e, j] += bf
+
+
+_ENTRIES: dict[str, Any] = {}
+
+
+def _run(name: str, fn: Any, *args: Any) -> int:
+    e = _ENTRIES.get(name)
+    if e is None:
+        e = _ENTRIES[name] = entry(fn, args)
+    return e(*args)  # type: ignore[no-any-return]
+
+
+def _c2(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a`` as a C-contiguous float (n, k) array (a copy: the laws write into it)."""
+    return np.array(a, dtype=float, order="C", ndmin=2)
+
+
+class BatchedReversalHysteresis:
+    """Zero-thrust deadband with hysteresis for propeller reversals, ``n`` envs at once: the
+    one run-time form (:class:`ReversalHysteresis` is its ``n = 1`` adapter).
 
     Per conditioned propeller (a :class:`~shipgym.dynamics.actuators.Propeller` whose
-    threshold ``F_h > 0``) the state is its running direction ``d`` (+1 ahead, -1
+    threshold ``F_h > 0``) and env the state is its running direction ``d`` (+1 ahead, -1
     astern, 0 not yet set). For an allocated thrust ``F`` (N):
 
     - ``d = 0`` or ``F d >= 0`` (same side, or zero): ``F`` is passed; ``d = sign(F)`` if
@@ -107,81 +172,31 @@ class ReversalHysteresis:
         actuators: the vessel's actuator set.
         threshold: per actuator, the thrust ``F_h`` (N, >= 0) a request in the other
             direction must exceed (0: off; non-propeller actuators are never conditioned).
+        n: number of envs, >= 1.
     """
 
-    def __init__(self, actuators: ActuatorSet, threshold: Sequence[float]) -> None:
+    def __init__(self, actuators: ActuatorSet, threshold: Sequence[float], n: int = 1) -> None:
         self.actuators = actuators
         self.threshold = tuple(float(x) for x in threshold)
-        self._units = _Units(actuators, threshold).units
-        self._dir = [0] * len(self._units)
+        u = _Units(actuators, threshold)
+        self._I, self._H = u.I, u.H
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+            raise ValueError(f"n must be an int >= 1 (the number of envs), got {n!r}")
+        self.n = int(n)
+        self._dir = np.zeros((self.n, len(u.I)))
+        self._hold = np.zeros((self.n, len(u.I)), dtype=np.bool_)
 
     @property
     def active(self) -> bool:
         """Whether any actuator is conditioned (else calls return the allocation unchanged)."""
-        return bool(self._units)
-
-    def reset(self) -> None:
-        """Forget the running directions (start of an episode)."""
-        self._dir = [0] * len(self._units)
-
-    def __call__(self, alloc: Allocation) -> Allocation:
-        """The allocation with the reversal hysteresis applied (a new one if it changed)."""
-        if not self._units:
-            return alloc
-        command = force = tau = err = None
-        for k, (i, ch, h_ahead, h_astern, col) in enumerate(self._units):
-            f = float(alloc.force[i])
-            d = self._dir[k]
-            if d == 0 or f * d >= 0.0:
-                if f != 0.0:
-                    self._dir[k] = 1 if f > 0.0 else -1
-                continue
-            if (f > h_ahead) if f > 0.0 else (-f > h_astern):
-                self._dir[k] = -d
-                continue
-            if command is None:
-                command, force = alloc.command.copy(), alloc.force.copy()
-                tau, err = alloc.tau.copy(), alloc.tau_error.copy()
-            assert force is not None and tau is not None and err is not None
-            command[ch] = 0.0
-            force[i] = 0.0
-            for j, b in enumerate(col):
-                if b != 0.0:
-                    bf = b * f
-                    tau[j] -= bf
-                    err[j] += bf
-        if command is None:
-            return alloc
-        return Allocation(command, force, tau, err, alloc.saturated)  # type: ignore[arg-type]
-
-    def __repr__(self) -> str:
-        return f"ReversalHysteresis(threshold={self.threshold})"
-
-
-class BatchedReversalHysteresis:
-    """:class:`ReversalHysteresis` for ``n`` envs at once, the same operations per env.
-
-    Works on (n, k) arrays (commands, forces, tau, tau_error) and keeps one running direction
-    per env and conditioned propeller.
-    """
-
-    def __init__(self, actuators: ActuatorSet, threshold: Sequence[float], n: int) -> None:
-        self.actuators = actuators
-        self.threshold = tuple(float(x) for x in threshold)
-        self._units = _Units(actuators, threshold).units
-        self.n = int(n)
-        self._dir = np.zeros((len(self._units), self.n))
-
-    @property
-    def active(self) -> bool:
-        return bool(self._units)
+        return bool(len(self._I))
 
     def reset(self, mask: ArrayLike | None = None) -> None:
         """Forget the running directions of every env, or of those where ``mask``."""
         if mask is None:
             self._dir[:] = 0.0
         else:
-            self._dir[:, np.asarray(mask, dtype=bool)] = 0.0
+            self._dir[np.asarray(mask, dtype=bool)] = 0.0
 
     def __call__(
         self, command: NDArray[np.float64], force: NDArray[np.float64], tau: NDArray[np.float64],
@@ -189,31 +204,50 @@ class BatchedReversalHysteresis:
     ) -> tuple[NDArray[np.float64], ...]:  # fmt: skip
         """``(command, force, tau, tau_error)`` (each (n, k)) after the hysteresis (copies
         where anything changed, else the inputs)."""
-        if not self._units:
+        if not len(self._I):
             return command, force, tau, tau_error
-        copied = False
-        for k, (i, ch, h_ahead, h_astern, col) in enumerate(self._units):
-            f = force[:, i]
-            d = self._dir[k]
-            same = (d == 0.0) | (f * d >= 0.0)
-            big = np.where(f > 0.0, f > h_ahead, -f > h_astern)
-            hold = ~same & ~big
-            sign = np.where(f > 0.0, 1.0, -1.0)
-            # same side: the sign of a non-zero thrust; a reversal: the new side
-            np.copyto(d, sign, where=(same & (f != 0.0)) | (~same & big))
-            if not hold.any():
-                continue
-            if not copied:
-                command, force = command.copy(), force.copy()
-                tau, tau_error = tau.copy(), tau_error.copy()
-                copied = True
-                f = force[:, i]
-            fh = np.where(hold, f, 0.0)
-            for j, b in enumerate(col):
-                if b != 0.0:
-                    bf = b * fh
-                    np.subtract(tau[:, j], bf, out=tau[:, j], where=hold)
-                    np.add(tau_error[:, j], bf, out=tau_error[:, j], where=hold)
-            command[hold, ch] = 0.0
-            force[hold, i] = 0.0
-        return command, force, tau, tau_error
+        f = force if force.flags.c_contiguous and force.dtype == np.float64 else _c2(force)
+        if not _run("law", reversal_law, self._I, self._H, self._dir, f, self._hold):
+            return command, force, tau, tau_error
+        out = (_c2(command), _c2(force), _c2(tau), _c2(tau_error))
+        _run("hold", reversal_hold, self._I, self._H, self._hold, *out)
+        return out
+
+    def __repr__(self) -> str:
+        return f"BatchedReversalHysteresis(n={self.n}, threshold={self.threshold})"
+
+
+class ReversalHysteresis:
+    """:class:`BatchedReversalHysteresis` for one env, on an
+    :class:`~shipgym.controllers.allocation.Allocation`.
+
+    Args:
+        actuators: the vessel's actuator set.
+        threshold: per actuator, the thrust ``F_h`` (N, >= 0) a request in the other
+            direction must exceed (0: off; non-propeller actuators are never conditioned).
+    """
+
+    def __init__(self, actuators: ActuatorSet, threshold: Sequence[float]) -> None:
+        self._law = BatchedReversalHysteresis(actuators, threshold, 1)
+        self.actuators = actuators
+        self.threshold = self._law.threshold
+
+    @property
+    def active(self) -> bool:
+        """Whether any actuator is conditioned (else calls return the allocation unchanged)."""
+        return self._law.active
+
+    def reset(self) -> None:
+        """Forget the running directions (start of an episode)."""
+        self._law.reset()
+
+    def __call__(self, alloc: Allocation) -> Allocation:
+        """The allocation with the reversal hysteresis applied (a new one if it changed)."""
+        f = alloc.force[None]
+        out = self._law(alloc.command[None], f, alloc.tau[None], alloc.tau_error[None])
+        if out[1] is f:
+            return alloc
+        return Allocation(out[0][0], out[1][0], out[2][0], out[3][0], alloc.saturated)
+
+    def __repr__(self) -> str:
+        return f"ReversalHysteresis(threshold={self.threshold})"

@@ -118,6 +118,10 @@ into the direction in which the allocation has just cut it is removed, and the r
 back. Then the integral force ``M R^T(psi) K_I xi`` is clamped to ``integral_limit`` per body
 DOF (required: the vessel's force capacity,
 :func:`~shipgym.controllers.actuation.planar_capacity`, or ``inf``).
+
+All of this is one compiled law over a leading axis of N envs (:func:`pid_law`, run by
+:class:`BatchedPID`); :class:`MultivariablePID` is its N = 1 adapter, so the single env and
+env i of the vector env run the same operations in the same order.
 """
 
 from __future__ import annotations
@@ -132,6 +136,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import require_given
+from shipgym._jit import entry, njit
 
 _DESIGN_HINT = (
     "pass the vessel's design model, e.g. M=v.design.M, D_L=v.design.D_L with "
@@ -148,6 +153,7 @@ __all__ = [
     "pid_gains",
     "pid_pole_placement",
     "error_loop",
+    "BatchedPID",
     "MultivariablePID",
     "TUNED_OMEGA",
     "SMOOTH_OMEGA",
@@ -327,34 +333,7 @@ def pid_gains(name: str) -> PIDGains:
         ) from None
 
 
-# ---- the online controller -------------------------------------------------------------------
-def _vec3(x: ArrayLike, name: str) -> Vec3:
-    """Three finite floats from a shape-(3,) input, or a clear ``ValueError``."""
-    if isinstance(x, np.ndarray):
-        if x.shape != (3,):
-            raise ValueError(f"{name} must have shape (3,), got an array of shape {x.shape}")
-        vals = x.tolist()
-        if x.dtype == np.float64:  # already three Python floats (the per-step case)
-            a, b, c = vals
-            if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
-                raise ValueError(f"{name} contains NaN or infinite values: {x!r}")
-            return a, b, c
-    else:
-        try:
-            vals = list(x)  # type: ignore[arg-type]
-        except TypeError:
-            raise ValueError(f"{name} must be a sequence of 3 numbers, got {x!r}") from None
-        if len(vals) != 3:
-            raise ValueError(f"{name} must have 3 entries, got {len(vals)}: {x!r}")
-    try:
-        a, b, c = map(float, vals)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must contain 3 real numbers, got {x!r}") from None
-    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
-        raise ValueError(f"{name} contains NaN or infinite values: {x!r}")
-    return a, b, c
-
-
+# ---- the online controller: one compiled law over N envs ------------------------------------
 def _mat3(x: ArrayLike, name: str) -> NDArray[np.float64]:
     a = np.asarray(x, dtype=float)
     if a.shape != (3, 3) or not np.all(np.isfinite(a)):
@@ -362,17 +341,470 @@ def _mat3(x: ArrayLike, name: str) -> NDArray[np.float64]:
     return a
 
 
-def _tup(a: NDArray[Any]) -> tuple[Vec3, Vec3, Vec3]:
-    return tuple(tuple(float(v) for v in row) for row in a)  # type: ignore[return-value]
+# Rows of the design matrix ``G`` (float64, (17, 3)) that the compiled law reads: the control
+# model, the gains, the limits, the filters' gains, then (dt, s_x, s_y) and the switches.
+_GM, _GMI, _GD = 0, 3, 6  # M (kg, kg m^2), M^-1, D_L (N s/m, N s, N m s): 3 rows each
+_GKP, _GKI, _GKD, _GLIM, _GALPHA, _GBETA = 9, 10, 11, 12, 13, 14
+_GMISC = 15  # (dt (s), s_x, s_y): the period and change_frame's scale of the x-y integral
+_GFLAGS = 16  # (velocity filter on, command filter on, either on) as 1.0 / 0.0
+# Columns of the state ``S`` (float64, (n, 18)), one row per env; zeros: the reset state.
+_SXI = 0  # xi (m s, m s, rad s)
+_SPEND = 3  # the pending increment's (e_x (m), e_y (m), e_psi (rad), psi (rad))
+_SHAS = 7  # 1.0 while an increment is pending
+_SSTART = 8  # 1.0 after the first call since the reset (the filters' start)
+_SNUF = 9  # nu_f (m/s, m/s, rad/s)
+_STP = 12  # the last output tau (N, N, N m)
+_STF = 15  # the command filter's state (N, N, N m)
+_S_COLS = 18
+#: what ``saturated`` holds: nothing, a ``tau_error`` (N, N, N m), or 0/1 flags
+_SAT_NONE, _SAT_ERROR, _SAT_FLAGS = 0, 1, 2
+_BAD_INPUT = ("", "eta_r", "nu", "eta_d_r", "eta_dot_d_r", "eta_ddot_d_r", "saturated")
 
 
-def _mv(A: tuple[Vec3, Vec3, Vec3], x0: float, x1: float, x2: float) -> Vec3:
-    a, b, c = A
+@njit
+def _mv(G: Any, k: int, x0: float, x1: float, x2: float) -> tuple[float, float, float]:
+    """``A x`` for the 3x3 ``A = G[k:k + 3]``, each row summed left to right."""
     return (
-        a[0] * x0 + a[1] * x1 + a[2] * x2,
-        b[0] * x0 + b[1] * x1 + b[2] * x2,
-        c[0] * x0 + c[1] * x1 + c[2] * x2,
+        G[k, 0] * x0 + G[k, 1] * x1 + G[k, 2] * x2,
+        G[k + 1, 0] * x0 + G[k + 1, 1] * x1 + G[k + 1, 2] * x2,
+        G[k + 2, 0] * x0 + G[k + 2, 1] * x1 + G[k + 2, 2] * x2,
     )
+
+
+@njit
+def _direction(x: float, kind: int) -> int:
+    """+1 / -1 (cut while pushing +/-), 2 (flagged, direction unknown) or 0 (free)."""
+    if kind == _SAT_FLAGS:
+        return 2 if x != 0.0 else 0
+    return 1 if x > SATURATION_TOL else -1 if x < -SATURATION_TOL else 0
+
+
+@njit
+def _drops(d: int, f: float) -> bool:
+    """Whether a body-force increment ``f`` (tau changes by ``-f``) pushes into a cut."""
+    return (d == 2 and f != 0.0) or (d != 2 and d * -f > 0.0)
+
+
+@njit
+def _pid_env(G: Any, s: Any, e: Any, w: Any, ed: Any, vd: Any, ad: Any, sat: Any, kind: int,
+             out: Any) -> None:  # fmt: skip
+    """One env's control period (module docstring): filter, integral, clamp, eq. 23."""
+    h = G[_GMISC, 0]
+    x, y, psi = e[0], e[1], e[2]
+    u, v, r = w[0], w[1], w[2]
+    started = s[_SSTART] != 0.0
+    kIx, kIy, kIz = G[_GKI, 0], G[_GKI, 1], G[_GKI, 2]
+    if G[_GFLAGS, 0] != 0.0:  # the model-aided velocity filter
+        if started:
+            t0, t1, t2 = s[_STP], s[_STP + 1], s[_STP + 2]
+            if kind == _SAT_ERROR:  # delivered = requested - tau_error
+                t0, t1, t2 = t0 - sat[0], t1 - sat[1], t2 - sat[2]
+            f0, f1, f2 = s[_SNUF], s[_SNUF + 1], s[_SNUF + 2]
+            d0, d1, d2 = _mv(G, _GD, f0, f1, f2)
+            q0, q1, q2 = _mv(G, _GMI, t0 - d0, t1 - d1, t2 - d2)
+            p0, p1, p2 = f0 + h * q0, f1 + h * q1, f2 + h * q2
+            a0, a1, a2 = G[_GALPHA, 0], G[_GALPHA, 1], G[_GALPHA, 2]
+            u = u if a0 == 1.0 else p0 + a0 * (u - p0)
+            v = v if a1 == 1.0 else p1 + a1 * (v - p1)
+            r = r if a2 == 1.0 else p2 + a2 * (r - p2)
+        s[_SNUF], s[_SNUF + 1], s[_SNUF + 2] = u, v, r
+    # the pending increment h e_{k-1} (eq. 17) with conditional integration
+    if s[_SHAS] != 0.0:
+        dx, dy, dz = h * s[_SPEND], h * s[_SPEND + 1], h * s[_SPEND + 2]
+        if kind != _SAT_NONE:
+            j0, j1 = _direction(sat[0], kind), _direction(sat[1], kind)
+            j2 = _direction(sat[2], kind)
+            if j0 != 0 or j1 != 0 or j2 != 0:
+                qx, qy, qz = kIx * dx, kIy * dy, kIz * dz  # r-frame acceleration
+                c, sn = math.cos(s[_SPEND + 3]), math.sin(s[_SPEND + 3])
+                f0, f1, f2 = _mv(G, _GM, c * qx + sn * qy, -sn * qx + c * qy, qz)  # body force
+                changed = False
+                if _drops(j0, f0):
+                    f0, changed = 0.0, True
+                if _drops(j1, f1):
+                    f1, changed = 0.0, True
+                if _drops(j2, f2):
+                    f2, changed = 0.0, True
+                if changed:
+                    bx, by, bz = _mv(G, _GMI, f0, f1, f2)
+                    if kIx > 0:
+                        dx = (c * bx - sn * by) / kIx
+                    if kIy > 0:
+                        dy = (sn * bx + c * by) / kIy
+                    if kIz > 0:
+                        dz = bz / kIz
+        s[_SXI] += dx
+        s[_SXI + 1] += dy
+        s[_SXI + 2] += dz
+        s[_SHAS] = 0.0
+    # the clamp of the integral force |M R^T K_I xi| <= integral_limit per body DOF
+    c, sn = math.cos(psi), math.sin(psi)
+    qx, qy, qz = kIx * s[_SXI], kIy * s[_SXI + 1], kIz * s[_SXI + 2]
+    f0, f1, f2 = _mv(G, _GM, c * qx + sn * qy, -sn * qx + c * qy, qz)
+    l0, l1, l2 = G[_GLIM, 0], G[_GLIM, 1], G[_GLIM, 2]
+    if not (abs(f0) <= l0 and abs(f1) <= l1 and abs(f2) <= l2):
+        bx, by, bz = _mv(G, _GMI, max(-l0, min(l0, f0)), max(-l1, min(l1, f1)),
+                         max(-l2, min(l2, f2)))  # fmt: skip
+        if kIx > 0:
+            s[_SXI] = (c * bx - sn * by) / kIx
+        if kIy > 0:
+            s[_SXI + 1] = (sn * bx + c * by) / kIy
+        if kIz > 0:
+            s[_SXI + 2] = bz / kIz
+    ex, ey = x - ed[0], y - ed[1]
+    epsi = math.pi - (math.pi - (psi - ed[2])) % (2.0 * math.pi)  # wrap to (-pi, pi]
+    # eq. 19 in the r-frame; r-frame velocity R(psi) nu (eq. 3)
+    a0 = ad[0] - G[_GKD, 0] * (c * u - sn * v - vd[0]) - G[_GKP, 0] * ex - kIx * s[_SXI]
+    a1 = ad[1] - G[_GKD, 1] * (sn * u + c * v - vd[1]) - G[_GKP, 1] * ey - kIy * s[_SXI + 1]
+    a2 = ad[2] - G[_GKD, 2] * (r - vd[2]) - G[_GKP, 2] * epsi - kIz * s[_SXI + 2]
+    # eqs. 21-22: nu_dot = R^T a - r S nu; eq. 20: tau = M nu_dot + D_L nu
+    m0, m1, m2 = _mv(G, _GM, c * a0 + sn * a1 + r * v, -sn * a0 + c * a1 - r * u, a2)
+    d0, d1, d2 = _mv(G, _GD, u, v, r)
+    s[_SPEND], s[_SPEND + 1], s[_SPEND + 2], s[_SPEND + 3] = ex, ey, epsi, psi
+    s[_SHAS] = 1.0
+    t0, t1, t2 = m0 + d0, m1 + d1, m2 + d2
+    if G[_GFLAGS, 1] != 0.0:  # the output low-pass
+        if started:
+            b0, b1, b2 = G[_GBETA, 0], G[_GBETA, 1], G[_GBETA, 2]
+            s0, s1, s2 = s[_STF], s[_STF + 1], s[_STF + 2]
+            t0 = t0 if b0 == 1.0 else s0 + b0 * (t0 - s0)
+            t1 = t1 if b1 == 1.0 else s1 + b1 * (t1 - s1)
+            t2 = t2 if b2 == 1.0 else s2 + b2 * (t2 - s2)
+        s[_STF], s[_STF + 1], s[_STF + 2] = t0, t1, t2
+    if G[_GFLAGS, 2] != 0.0:
+        s[_STP], s[_STP + 1], s[_STP + 2] = t0, t1, t2
+        s[_SSTART] = 1.0
+    out[0], out[1], out[2] = t0, t1, t2
+
+
+@njit
+def pid_law(G: Any, S: Any, eta: Any, nu: Any, eta_d: Any, eta_dot_d: Any, eta_ddot_d: Any,
+            sat: Any, kind: int, tau: Any) -> int:  # fmt: skip
+    """The PID of Tomera (2014) eq. 23 for every env (row) of ``S``: writes ``tau`` (n, 3)
+    (N, N, N m) and advances the state. Returns 0, or the index in ``_BAD_INPUT`` of the first
+    input that is not finite (the state is then left as it was)."""
+    n = S.shape[0]
+    for i in range(n):
+        for j in range(3):
+            if not math.isfinite(eta[i, j]):
+                return 1
+            if not math.isfinite(nu[i, j]):
+                return 2
+            if not math.isfinite(eta_d[i, j]):
+                return 3
+            if not math.isfinite(eta_dot_d[i, j]):
+                return 4
+            if not math.isfinite(eta_ddot_d[i, j]):
+                return 5
+            if not math.isfinite(sat[i, j]):
+                return 6
+    for i in range(n):
+        _pid_env(G, S[i], eta[i], nu[i], eta_d[i], eta_dot_d[i], eta_ddot_d[i], sat[i], kind,
+                 tau[i])  # fmt: skip
+    return 0
+
+
+@njit
+def pid_change_frame(G: Any, S: Any, dpsi: Any, mask: Any) -> int:
+    """Rotate the integral (and a pending increment) of the masked envs by ``dpsi`` (rad):
+    ``K_I xi_new = R^T(dpsi) K_I xi_old`` in x-y. Returns 1 (nothing changed) for a
+    non-finite ``dpsi`` of a masked env, else 0."""
+    n = S.shape[0]
+    for i in range(n):
+        if mask[i] and not math.isfinite(dpsi[i]):
+            return 1
+    sx, sy = G[_GMISC, 1], G[_GMISC, 2]
+    for i in range(n):
+        if not mask[i]:
+            continue
+        c, s = math.cos(dpsi[i]), math.sin(dpsi[i])
+        for k in (_SXI, _SPEND):
+            if k == _SPEND and S[i, _SHAS] == 0.0:
+                continue
+            ax, ay = sx * S[i, k], sy * S[i, k + 1]
+            S[i, k] = (c * ax + s * ay) / sx
+            S[i, k + 1] = (-s * ax + c * ay) / sy
+        if S[i, _SHAS] != 0.0:
+            S[i, _SPEND + 3] = S[i, _SPEND + 3] - dpsi[i]
+    return 0
+
+
+@dataclass(frozen=True, eq=False)
+class _PIDDesign:
+    """The validated design of a PID (constructor arguments of :class:`MultivariablePID`) and
+    the matrix ``G`` the compiled law reads."""
+
+    gains: PIDGains
+    M: NDArray[np.float64]
+    D_L: NDArray[np.float64]
+    dt: float
+    integral_limit: NDArray[np.float64]
+    velocity_filter: Vec3
+    command_filter: Vec3
+    G: NDArray[np.float64]
+
+    @classmethod
+    def build(cls, who: str, gains: PIDGains | str, M: ArrayLike | None, D_L: ArrayLike | None,
+              dt: float, integral_limit: ArrayLike | None, velocity_filter: ArrayLike,
+              command_filter: ArrayLike) -> _PIDDesign:  # fmt: skip
+        if isinstance(gains, str):
+            gains = pid_gains(gains)
+        if not isinstance(gains, PIDGains):
+            raise ValueError(f"gains must be PIDGains or a preset name, got {type(gains).__name__}")
+        require_given(who, _DESIGN_HINT, M=M, D_L=D_L)
+        require_given(who, _LIMIT_HINT, integral_limit=integral_limit)
+        Ma = _mat3(M, "M")
+        Da = _mat3(D_L, "D_L")
+        if not np.linalg.cond(Ma) < 1e12:
+            raise ValueError(f"M must be invertible, got {Ma!r}")
+        try:
+            dt = float(dt)
+        except (TypeError, ValueError):
+            raise ValueError(f"dt must be a control period in seconds, got {dt!r}") from None
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a finite control period > 0 (s), got {dt!r}")
+        lim = np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
+        if np.any(np.isnan(lim)) or np.any(lim <= 0):
+            raise ValueError(f"integral_limit must be > 0 (N, N, N m; inf allowed), got {lim!r}")
+        T_f = _gain3(velocity_filter, "velocity_filter (s)")
+        T_c = _gain3(command_filter, "command_filter (s)")
+        kx, ky = gains.K_I[0], gains.K_I[1]
+        sx, sy = (kx, ky) if kx > 0 and ky > 0 else (1.0, 1.0)
+        vel, cmd = any(t > 0.0 for t in T_f), any(t > 0.0 for t in T_c)
+        G = np.vstack(
+            [
+                Ma,
+                np.linalg.inv(Ma),
+                Da,
+                [gains.K_P, gains.K_I, gains.K_D, lim],
+                # the filters' gains 1 - exp(-dt / T) per DOF (1: no filter)
+                [[-math.expm1(-dt / t) if t > 0.0 else 1.0 for t in T] for T in (T_f, T_c)],
+                [[dt, sx, sy], [float(vel), float(cmd), float(vel or cmd)]],
+            ]
+        )
+        arrays = [a.copy() for a in (Ma, Da, lim, G)]
+        for a in arrays:
+            a.setflags(write=False)  # the controller works on private copies
+        Ma, Da, lim, G = arrays
+        return cls(gains, Ma, Da, dt, lim, T_f, T_c, G)
+
+
+#: the compiled entry points of the laws (one signature each)
+_ENTRIES: dict[str, Any] = {}
+_F2 = np.zeros((1, 3))
+
+
+def _pid_entry() -> Any:
+    """:func:`pid_law`'s compiled entry point (no per-call type resolution)."""
+    e = _ENTRIES.get("pid")
+    if e is None:
+        e = _ENTRIES["pid"] = entry(pid_law, (*[np.zeros((17, 3))] * 7, _F2, 0, _F2))
+    return e
+
+
+def _frame_entry() -> Any:
+    """:func:`pid_change_frame`'s compiled entry point."""
+    e = _ENTRIES.get("frame")
+    if e is None:
+        b = np.zeros(1, dtype=np.bool_)
+        e = _ENTRIES["frame"] = entry(pid_change_frame, (_F2, _F2, np.zeros(1), b))
+    return e
+
+
+def _one(x: ArrayLike, name: str) -> NDArray[np.float64]:
+    """One env's 3 values as a (1, 3) array (:func:`_rows` for ``n = 1``, fast for a float
+    (3,) array)."""
+    if type(x) is np.ndarray and x.shape == (3,) and x.dtype == np.float64 and x.strides == (8,):
+        return x.reshape(1, 3)
+    return _rows(x, name, 1)
+
+
+def _rows(x: ArrayLike, name: str, n: int) -> NDArray[np.float64]:
+    """``x`` as a C-contiguous float (n, 3) array (a (3,) one when ``n == 1``), or a clear
+    ``ValueError``."""
+    if type(x) is np.ndarray and x.dtype == np.float64:
+        a = x
+    else:
+        try:
+            a = np.asarray(x, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must be 3 real numbers per env, got {x!r}") from None
+    if a.shape != (n, 3):
+        if n != 1 or a.shape != (3,):
+            want = "(3,)" if n == 1 else f"({n}, 3)"
+            raise ValueError(f"{name} must have shape {want}, got an array of shape {a.shape}")
+        a = a.reshape(1, 3)
+    return a if a.flags.c_contiguous else np.ascontiguousarray(a)
+
+
+class BatchedPID:
+    """The PID-type DP controller of Tomera (2014) eq. 23 for ``n`` envs: the one run-time form
+    (:class:`MultivariablePID` is its ``n = 1`` adapter).
+
+    Same gains and model for every env, one integral state, pending increment and filter
+    state per env. Each env's row depends on that env's inputs alone: row ``i`` of a call
+    equals the same call at ``n = 1`` on row ``i``'s inputs, bit for bit.
+
+    Args:
+        n: number of envs, >= 1.
+        gains, M, D_L, dt, integral_limit, velocity_filter, command_filter: as
+            :class:`MultivariablePID`.
+    """
+
+    def __init__(
+        self,
+        n: int,
+        gains: PIDGains | str = "tuned",
+        M: ArrayLike | None = None,
+        D_L: ArrayLike | None = None,
+        dt: float = 1.0,
+        *,
+        integral_limit: ArrayLike | None = None,
+        velocity_filter: ArrayLike = 0.0,
+        command_filter: ArrayLike = 0.0,
+    ) -> None:
+        design = _PIDDesign.build(
+            "BatchedPID()", gains, M, D_L, dt, integral_limit, velocity_filter, command_filter
+        )
+        self._setup(n, design)
+
+    @classmethod
+    def from_scalar(cls, controller: MultivariablePID, n: int) -> BatchedPID:
+        """``n`` envs of a controller's design (its gains, model, period, limit and filters;
+        the states start at zero)."""
+        if not isinstance(controller, MultivariablePID):
+            raise TypeError(f"controller must be a MultivariablePID, got {controller!r}")
+        self = cls.__new__(cls)
+        self._setup(n, controller._law._design)
+        return self
+
+    def _setup(self, n: int, design: _PIDDesign) -> None:
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+            raise ValueError(f"n must be an int >= 1 (the number of envs), got {n!r}")
+        self.n = n = int(n)
+        self._design = d = design
+        self.gains, self.M, self.D_L, self.dt = d.gains, d.M, d.D_L, d.dt
+        self.integral_limit = d.integral_limit
+        self.velocity_filter, self.command_filter = d.velocity_filter, d.command_filter
+        self._G = d.G
+        self._S = np.zeros((n, _S_COLS))
+        self._zeros = np.zeros((n, 3))
+        self._zeros.setflags(write=False)
+
+    # ---- state -------------------------------------------------------------------------------
+    def reset(self, mask: ArrayLike | None = None) -> None:
+        """Clear the state (integral, pending increment, filters) of every env, or of those
+        where ``mask`` (``(n,)`` bool)."""
+        m = _mask(mask, self.n)
+        if m is None:
+            self._S[:] = 0.0
+        else:
+            self._S[m] = 0.0
+
+    @property
+    def integral(self) -> NDArray[np.float64]:
+        """The integral states ``xi`` (m s, m s, rad s), shape (n, 3) (a copy)."""
+        return self._S[:, _SXI : _SXI + 3].copy()
+
+    @property
+    def filtered_velocity(self) -> NDArray[np.float64] | None:
+        """The low-passed body velocities ``nu_f`` (m/s, m/s, rad/s) the last call used,
+        (n, 3); ``None`` without a velocity filter (rows of envs not yet called since their
+        reset are zeros)."""
+        if self._G[_GFLAGS, 0] == 0.0:
+            return None
+        return self._S[:, _SNUF : _SNUF + 3].copy()
+
+    def change_frame(self, dpsi: ArrayLike, mask: ArrayLike | None = None) -> None:
+        """Re-express the integral states in the next leg's r-frame, rotated by ``dpsi`` (rad).
+
+        The new frame's x axis is the old one turned by ``dpsi`` (clockwise positive, like the
+        heading); its origin may move anywhere (the integral holds no position). The integral
+        acts like a slowly varying force (wind, current), so its x-y *acceleration*
+        ``K_I xi`` is rotated: ``K_I xi_new = R^T(dpsi) K_I xi_old``; the yaw part is unchanged.
+
+        Args:
+            dpsi: rotation of the frame (rad), shape (n,) or a scalar.
+            mask: ``(n,)`` bool, the envs that switched leg (``None``: all); the others are
+                left exactly as they are (their ``dpsi`` is not read).
+
+        Raises:
+            ValueError: a non-finite ``dpsi`` of a switching env, a wrong shape.
+        """
+        n = self.n
+        m = _mask(mask, n)
+        try:
+            d = np.ascontiguousarray(np.broadcast_to(np.asarray(dpsi, dtype=float), (n,)))
+        except (TypeError, ValueError):
+            raise ValueError(f"dpsi must be a rotation (rad), scalar or ({n},)") from None
+        m = np.ones(n, dtype=bool) if m is None else np.ascontiguousarray(m)
+        if _frame_entry()(self._G, self._S, d, m):
+            raise ValueError(f"dpsi must be finite (rad), got {dpsi!r}")
+
+    # ---- control law -------------------------------------------------------------------------
+    def _saturated(self, saturated: ArrayLike | None) -> tuple[int, NDArray[np.float64]]:
+        if saturated is None:
+            return _SAT_NONE, self._zeros
+        a = np.asarray(saturated)
+        if a.dtype == np.bool_:
+            return _SAT_FLAGS, _rows(a.astype(float), "saturated", self.n)
+        return _SAT_ERROR, _rows(a, "saturated", self.n)
+
+    def __call__(
+        self,
+        eta_r: ArrayLike,
+        nu: ArrayLike,
+        eta_d_r: ArrayLike,
+        eta_dot_d_r: ArrayLike | None = None,
+        eta_ddot_d_r: ArrayLike | None = None,
+        *,
+        saturated: ArrayLike | None = None,
+    ) -> NDArray[np.float64]:
+        """Body-frame control forces ``tau = [X, Y, N]`` (N, N, N m) of every env, eq. 23.
+
+        Args:
+            eta_r: poses ``[x, y, psi]`` (m, m, rad) in the r-frames, shape (n, 3).
+            nu: body velocities ``[u, v, r]`` (m/s, m/s, rad/s), shape (n, 3).
+            eta_d_r: reference poses (m, m, rad), shape (n, 3).
+            eta_dot_d_r: reference velocities (m/s, m/s, rad/s), (n, 3); default zero.
+            eta_ddot_d_r: reference accelerations (m/s^2, m/s^2, rad/s^2), (n, 3); default zero.
+            saturated: the allocation's ``tau_error`` of every env's previous ``tau`` (n, 3)
+                (N, N, N m), or (n, 3) booleans, or ``None`` (integrate unconditionally), as
+                :class:`MultivariablePID`'s ``saturated``.
+
+        Returns:
+            ``tau``, shape (n, 3) (a new array).
+
+        Raises:
+            ValueError: an input of the wrong shape or not finite (the state is unchanged).
+        """
+        n, z = self.n, self._zeros
+        kind, sat = self._saturated(saturated)
+        tau = np.empty((n, 3))
+        code = _pid_entry()(
+            self._G, self._S, _rows(eta_r, "eta_r", n), _rows(nu, "nu", n),
+            _rows(eta_d_r, "eta_d_r", n),
+            z if eta_dot_d_r is None else _rows(eta_dot_d_r, "eta_dot_d_r", n),
+            z if eta_ddot_d_r is None else _rows(eta_ddot_d_r, "eta_ddot_d_r", n),
+            sat, kind, tau,
+        )  # fmt: skip
+        if code:
+            raise ValueError(f"{_BAD_INPUT[code]} contains NaN or infinite values")
+        return tau
+
+    def __repr__(self) -> str:
+        g = self.gains
+        return f"BatchedPID(n={self.n}, K_P={g.K_P}, K_I={g.K_I}, K_D={g.K_D}, dt={self.dt})"
+
+
+def _mask(mask: ArrayLike | None, n: int) -> NDArray[np.bool_] | None:
+    """``None`` (all envs) or a ``(n,)`` boolean mask; ``ValueError`` on a wrong shape."""
+    if mask is None:
+        return None
+    m = np.asarray(mask, dtype=bool)
+    if m.shape != (n,):
+        raise ValueError(f"mask must be ({n},) booleans, got shape {m.shape}")
+    return m
 
 
 class MultivariablePID:
@@ -435,67 +867,28 @@ class MultivariablePID:
         velocity_filter: ArrayLike = 0.0,
         command_filter: ArrayLike = 0.0,
     ) -> None:
-        if isinstance(gains, str):
-            gains = pid_gains(gains)
-        if not isinstance(gains, PIDGains):
-            raise ValueError(f"gains must be PIDGains or a preset name, got {type(gains).__name__}")
-        require_given("MultivariablePID()", _DESIGN_HINT, M=M, D_L=D_L)
-        require_given("MultivariablePID()", _LIMIT_HINT, integral_limit=integral_limit)
-        Ma = _mat3(M, "M")
-        Da = _mat3(D_L, "D_L")
-        if not np.linalg.cond(Ma) < 1e12:
-            raise ValueError(f"M must be invertible, got {Ma!r}")
-        try:
-            dt = float(dt)
-        except (TypeError, ValueError):
-            raise ValueError(f"dt must be a control period in seconds, got {dt!r}") from None
-        if not (math.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be a finite control period > 0 (s), got {dt!r}")
-        lim = np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
-        if np.any(np.isnan(lim)) or np.any(lim <= 0):
-            raise ValueError(f"integral_limit must be > 0 (N, N, N m; inf allowed), got {lim!r}")
-        T_f = _gain3(velocity_filter, "velocity_filter (s)")
-        T_c = _gain3(command_filter, "command_filter (s)")
-        self.gains = gains
-        self.velocity_filter = T_f
-        # the correction gain of the filter, alpha = 1 - exp(-dt / T_f) (1: no filter)
-        self._alpha = tuple(-math.expm1(-dt / t) if t > 0.0 else 1.0 for t in T_f)
-        self._filters = any(t > 0.0 for t in T_c) or any(t > 0.0 for t in T_f)
-        self._nu_f: list[float] | None = None
-        self._tau_prev: Vec3 | None = None
-        # the output low-pass, gain 1 - exp(-dt / T_c) per DOF (1: none), and its state
-        self.command_filter = T_c
-        self._beta = tuple(-math.expm1(-dt / t) if t > 0.0 else 1.0 for t in T_c)
-        self._commands = any(t > 0.0 for t in T_c)
-        self._velocities = any(t > 0.0 for t in T_f)
-        self._tau_f: list[float] | None = None
-        self.M = Ma.copy()
-        self.D_L = Da.copy()
-        self.dt = dt
-        self.integral_limit = lim.copy()
-        for arr in (self.M, self.D_L, self.integral_limit):
-            arr.setflags(write=False)  # the controller works on private copies
-        self._M = _tup(Ma)
-        self._Mi = _tup(np.linalg.inv(Ma))
-        self._D = _tup(Da)
-        self._lim = tuple(float(v) for v in lim)
-        self._xi = [0.0, 0.0, 0.0]
-        self._pending: tuple[float, float, float, float] | None = None
+        design = _PIDDesign.build(
+            "MultivariablePID()", gains, M, D_L, dt, integral_limit, velocity_filter,
+            command_filter,
+        )  # fmt: skip
+        self._law = law = BatchedPID.__new__(BatchedPID)
+        law._setup(1, design)
+        self.gains, self.M, self.D_L, self.dt = design.gains, design.M, design.D_L, design.dt
+        self.integral_limit = design.integral_limit
+        self.velocity_filter, self.command_filter = design.velocity_filter, design.command_filter
 
-    # ---- state -------------------------------------------------------------------------------
     def reset(self) -> None:
-        """Clear the integral state (start of an episode)."""
-        self._xi = [0.0, 0.0, 0.0]
-        self._pending = None
-        self._nu_f = None
-        self._tau_prev = None
-        self._tau_f = None
+        """Clear the integral state and the filters (start of an episode)."""
+        self._law.reset()
 
     @property
     def filtered_velocity(self) -> NDArray[np.float64] | None:
         """The low-passed body velocity ``nu_f`` (m/s, m/s, rad/s) the last call used, or
-        ``None`` before the first call after a reset (without a filter: the velocity given)."""
-        return None if self._nu_f is None else np.array(self._nu_f)
+        ``None`` before the first call after a reset and without a velocity filter."""
+        law = self._law
+        if law._G[_GFLAGS, 0] == 0.0 or law._S[0, _SSTART] == 0.0:
+            return None
+        return law._S[0, _SNUF : _SNUF + 3].copy()
 
     @property
     def integral(self) -> NDArray[np.float64]:
@@ -504,83 +897,16 @@ class MultivariablePID:
         It is the sum used by the most recent call; that call's own error is added at the next
         call (when its allocation is known, see the module docstring).
         """
-        return np.array(self._xi)
+        return self._law._S[0, _SXI : _SXI + 3].copy()
 
     def change_frame(self, dpsi: float) -> None:
-        """Re-express the integral state in the next leg's r-frame, rotated by ``dpsi`` (rad).
-
-        The new frame's x axis is the old one turned by ``dpsi`` (clockwise positive, like the
-        heading); its origin may move anywhere (the integral holds no position). The integral
-        acts like a slowly varying force (wind, current), so its x-y *acceleration*
-        ``K_I xi`` is rotated: ``K_I xi_new = R^T(dpsi) K_I xi_old``; the yaw part is unchanged.
-        """
+        """Re-express the integral state in the next leg's r-frame, rotated by ``dpsi`` (rad)
+        (:meth:`BatchedPID.change_frame`)."""
         dpsi = float(dpsi)
         if not math.isfinite(dpsi):
             raise ValueError(f"dpsi must be finite (rad), got {dpsi!r}")
-        c, s = math.cos(dpsi), math.sin(dpsi)
-        kx, ky = self.gains.K_I[0], self.gains.K_I[1]
-        sx, sy = (kx, ky) if kx > 0 and ky > 0 else (1.0, 1.0)
+        self._law.change_frame(dpsi)
 
-        def rotate(x: float, y: float) -> tuple[float, float]:
-            ax, ay = sx * x, sy * y
-            return (c * ax + s * ay) / sx, (-s * ax + c * ay) / sy
-
-        self._xi[0], self._xi[1] = rotate(self._xi[0], self._xi[1])
-        if self._pending is not None:
-            ex, ey, epsi, psi = self._pending
-            ex, ey = rotate(ex, ey)
-            self._pending = (ex, ey, epsi, psi - dpsi)
-
-    # ---- integral update with anti-windup ----------------------------------------------------
-    def _integrate(self, saturated: ArrayLike | None) -> None:
-        dirs = None if saturated is None else _saturation_directions(saturated)
-        if self._pending is None:
-            return
-        ex, ey, epsi, psi = self._pending
-        h = self.dt
-        dx, dy, dz = h * ex, h * ey, h * epsi
-        if dirs is not None:
-            if any(dirs):
-                kI = self.gains.K_I
-                qx, qy, qz = kI[0] * dx, kI[1] * dy, kI[2] * dz  # r-frame acceleration
-                c, s = math.cos(psi), math.sin(psi)
-                f = list(_mv(self._M, c * qx + s * qy, -s * qx + c * qy, qz))  # body force
-                changed = False
-                for j in range(3):
-                    d = dirs[j]
-                    # tau changes by -f[j]; drop it if it pushes further into the cut direction
-                    if (d == 2 and f[j] != 0.0) or (d != 2 and d * -f[j] > 0.0):
-                        f[j] = 0.0
-                        changed = True
-                if changed:
-                    bx, by, bz = _mv(self._Mi, *f)
-                    q = (c * bx - s * by, s * bx + c * by, bz)
-                    dx, dy, dz = (
-                        q[i] / kI[i] if kI[i] > 0 else d0 for i, d0 in enumerate((dx, dy, dz))
-                    )
-        xi = self._xi
-        xi[0] += dx
-        xi[1] += dy
-        xi[2] += dz
-        self._pending = None
-
-    def _clamp(self, psi: float) -> None:
-        lim = self._lim
-        kI = self.gains.K_I
-        xi = self._xi
-        qx, qy, qz = kI[0] * xi[0], kI[1] * xi[1], kI[2] * xi[2]
-        c, s = math.cos(psi), math.sin(psi)
-        f = _mv(self._M, c * qx + s * qy, -s * qx + c * qy, qz)
-        if abs(f[0]) <= lim[0] and abs(f[1]) <= lim[1] and abs(f[2]) <= lim[2]:
-            return
-        fc = [max(-lim[j], min(lim[j], f[j])) for j in range(3)]
-        bx, by, bz = _mv(self._Mi, *fc)
-        q = (c * bx - s * by, s * bx + c * by, bz)
-        for i in range(3):
-            if kI[i] > 0:
-                xi[i] = q[i] / kI[i]
-
-    # ---- control law -------------------------------------------------------------------------
     def __call__(
         self,
         eta_r: ArrayLike,
@@ -608,81 +934,62 @@ class MultivariablePID:
             ``tau`` (3,), to be allocated to the thrusters.
 
         Raises:
-            ValueError: an input is not 3 finite numbers.
+            ValueError: an input is not 3 finite numbers (the state is unchanged).
         """
-        x, y, psi = _vec3(eta_r, "eta_r")
-        u, v, r = _vec3(nu, "nu")
-        xd, yd, psid = _vec3(eta_d_r, "eta_d_r")
-        vxd, vyd, rd = (0.0, 0.0, 0.0) if eta_dot_d_r is None else _vec3(eta_dot_d_r, "eta_dot_d_r")
-        axd, ayd, ad = (
-            (0.0, 0.0, 0.0) if eta_ddot_d_r is None else _vec3(eta_ddot_d_r, "eta_ddot_d_r")
-        )
-        if self._velocities:
-            u, v, r = self._filter(u, v, r, saturated)
-        self._integrate(saturated)
-        self._clamp(psi)
-        ex, ey = x - xd, y - yd
-        epsi = math.pi - (math.pi - (psi - psid)) % (2.0 * math.pi)  # wrap to (-pi, pi]
-        c, s = math.cos(psi), math.sin(psi)
-        g = self.gains
-        kP, kI, kD = g.K_P, g.K_I, g.K_D
-        xi = self._xi
-        # eq. 19 in the r-frame; r-frame velocity R(psi) nu (eq. 3)
-        a0 = axd - kD[0] * (c * u - s * v - vxd) - kP[0] * ex - kI[0] * xi[0]
-        a1 = ayd - kD[1] * (s * u + c * v - vyd) - kP[1] * ey - kI[1] * xi[1]
-        a2 = ad - kD[2] * (r - rd) - kP[2] * epsi - kI[2] * xi[2]
-        # eqs. 21-22: nu_dot = R^T a - r S nu
-        n0 = c * a0 + s * a1 + r * v
-        n1 = -s * a0 + c * a1 - r * u
-        Mn = _mv(self._M, n0, n1, a2)
-        Dn = _mv(self._D, u, v, r)
-        self._pending = (ex, ey, epsi, psi)
-        tau = (Mn[0] + Dn[0], Mn[1] + Dn[1], Mn[2] + Dn[2])
-        if self._commands:
-            tf = self._tau_f
-            if tf is None:
-                tf = self._tau_f = list(tau)
-            else:
-                b0, b1, b2 = self._beta
-                tf[0] = tau[0] if b0 == 1.0 else tf[0] + b0 * (tau[0] - tf[0])
-                tf[1] = tau[1] if b1 == 1.0 else tf[1] + b1 * (tau[1] - tf[1])
-                tf[2] = tau[2] if b2 == 1.0 else tf[2] + b2 * (tau[2] - tf[2])
-            tau = (tf[0], tf[1], tf[2])
-        if self._filters:
-            self._tau_prev = tau
-        return np.array(tau)
-
-    def _filter(self, u: float, v: float, r: float, saturated: ArrayLike | None) -> Vec3:
-        """One step of the model-aided velocity filter (module docstring); the first call
-        after a reset starts at ``nu``."""
-        nf = self._nu_f
-        tp = self._tau_prev
-        if nf is None or tp is None:
-            self._nu_f = [u, v, r]
-            return u, v, r
-        # delivered = requested - tau_error of the previous call (booleans / None: requested)
-        t0, t1, t2 = tp
-        if saturated is not None:
-            err = np.asarray(saturated)
-            if err.dtype != np.bool_:
-                e0, e1, e2 = _vec3(np.asarray(err, dtype=float), "saturated")
-                t0, t1, t2 = t0 - e0, t1 - e1, t2 - e2
-        d0, d1, d2 = _mv(self._D, nf[0], nf[1], nf[2])
-        q0, q1, q2 = _mv(self._Mi, t0 - d0, t1 - d1, t2 - d2)
-        h = self.dt
-        p0, p1, p2 = nf[0] + h * q0, nf[1] + h * q1, nf[2] + h * q2
-        a0, a1, a2 = self._alpha
-        nf[0] = u if a0 == 1.0 else p0 + a0 * (u - p0)
-        nf[1] = v if a1 == 1.0 else p1 + a1 * (v - p1)
-        nf[2] = r if a2 == 1.0 else p2 + a2 * (r - p2)
-        return nf[0], nf[1], nf[2]
+        law = self._law
+        z = law._zeros
+        if saturated is None:
+            kind, sat = _SAT_NONE, z
+        elif type(saturated) is np.ndarray and saturated.dtype == np.float64:
+            kind, sat = _SAT_ERROR, _one(saturated, "saturated")
+        else:
+            kind, sat = law._saturated(saturated)
+        tau = np.empty((1, 3))
+        code = _pid_entry()(
+            law._G, law._S, _one(eta_r, "eta_r"), _one(nu, "nu"), _one(eta_d_r, "eta_d_r"),
+            z if eta_dot_d_r is None else _one(eta_dot_d_r, "eta_dot_d_r"),
+            z if eta_ddot_d_r is None else _one(eta_ddot_d_r, "eta_ddot_d_r"),
+            sat, kind, tau,
+        )  # fmt: skip
+        if code:
+            raise ValueError(f"{_BAD_INPUT[code]} contains NaN or infinite values")
+        return tau[0]
 
     def __repr__(self) -> str:
         g = self.gains
+        xi = self.integral
         return (
             f"MultivariablePID(K_P={g.K_P}, K_I={g.K_I}, K_D={g.K_D}, dt={self.dt}, "
-            f"integral={tuple(round(v, 6) for v in self._xi)})"
+            f"integral={tuple(round(float(v), 6) for v in xi)})"
         )
+
+
+# ---- input helpers shared with the LQ controller (shipgym.controllers.lq) -----------------
+def _vec3(x: ArrayLike, name: str) -> Vec3:
+    """Three finite floats from a shape-(3,) input, or a clear ``ValueError``."""
+    if isinstance(x, np.ndarray):
+        if x.shape != (3,):
+            raise ValueError(f"{name} must have shape (3,), got an array of shape {x.shape}")
+        vals = x.tolist()
+        if x.dtype == np.float64:  # already three Python floats (the per-step case)
+            a, b, c = vals
+            if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
+                raise ValueError(f"{name} contains NaN or infinite values: {x!r}")
+            return a, b, c
+    else:
+        try:
+            vals = list(x)  # type: ignore[arg-type]
+        except TypeError:
+            raise ValueError(f"{name} must be a sequence of 3 numbers, got {x!r}") from None
+        if len(vals) != 3:
+            raise ValueError(f"{name} must have 3 entries, got {len(vals)}: {x!r}")
+    try:
+        a, b, c = map(float, vals)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must contain 3 real numbers, got {x!r}") from None
+    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
+        raise ValueError(f"{name} contains NaN or infinite values: {x!r}")
+    return a, b, c
 
 
 def _saturation_directions(saturated: ArrayLike) -> list[int]:

@@ -303,7 +303,8 @@ class DPControllerWrapper(
         ref = rec.reference
         if ref.leg != self._leg:
             psi_P = float(ref.eta_P[2])
-            self.controller.change_frame(float(wrap_angle(psi_P - self._psi_P)))
+            # wrapped as the vector env wraps its array of angles (the same bits)
+            self.controller.change_frame(float(wrap_angle(np.float64(psi_P - self._psi_P))))
             self._leg, self._psi_P = ref.leg, psi_P
         self._record = rec
         return obs, reward, terminated, truncated, info

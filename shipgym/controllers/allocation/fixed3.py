@@ -32,22 +32,27 @@ allocators are provided:
 Both return an :class:`Allocation`. :func:`command_to_action` and :func:`action_to_command`
 map physical commands to the normalised ``[-1, 1]^3`` actions of the environments.
 
-Everything here runs on plain Python floats (no per-call array algebra); a call of
-:func:`allocate` takes a few microseconds.
+Both are one compiled law over N requests (:func:`fixed3_law`): the free functions, the
+allocator object of the envs (:class:`Fixed3Allocator`) and the batched allocation of the
+vector env (:class:`~shipgym.controllers.batch.BatchedAllocation`) all call it.
 """
 
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import entry, njit
 from shipgym.dynamics.thrusters import ThrusterParameters
 
 __all__ = [
     "Allocation",
+    "Fixed3Allocator",
+    "fixed3_law",
+    "law_parameters",
     "allocate",
     "allocate_inverse",
     "default_weights",
@@ -129,50 +134,171 @@ def _force_box(p: ThrusterParameters) -> tuple[float, float, float, float, float
     )
 
 
+# ---- the one run-time law: N requests, compiled ------------------------------------------------
+@njit
 def _clip(x: float, lo: float, hi: float) -> float:
     return lo if x < lo else hi if x > hi else x
 
 
+@njit
 def _inside(x: float, lo: float, hi: float) -> bool:
     tol = _ROUND_OFF_RTOL * (hi - lo)
     return lo - tol <= x <= hi + tol
 
 
+@njit
 def _at_limit(x: float, lo: float, hi: float) -> bool:
     tol = _AT_LIMIT_RTOL * (hi - lo)
     return x <= lo + tol or x >= hi - tol
 
 
-def _command(F1: float, F2: float, F3: float, p: ThrusterParameters) -> list[float]:
-    """Inverse thruster characteristics, eqs. 26-27 (with ``|F1|``), clipped for round-off."""
-    n1 = math.copysign(math.sqrt(abs(F1) / p.k1), F1) if F1 != 0.0 else 0.0
-    return [
-        _clip(n1, p.n_min, p.n_max),
-        _clip(F2 / p.k2, p.p_min, p.p_max),
-        _clip(F3 / p.k3, p.p_min, p.p_max),
-    ]
+@njit
+def fixed3_law(P: Any, tau: Any, inverse: bool, cmd: Any, F: Any, tdel: Any, err: Any,
+               sat: Any) -> int:  # fmt: skip
+    """:func:`allocate` (or, with ``inverse``, :func:`allocate_inverse`) of every row of
+    ``tau`` (n, 3) (N, N, N m), written to ``cmd``, ``F``, ``tdel``, ``err``, ``sat`` (the
+    :class:`Allocation` fields, one row per request). ``P``: :func:`law_parameters`.
+    Returns 1 (nothing written) when ``tau`` is not finite, else 0."""
+    n = tau.shape[0]
+    for i in range(n):
+        for j in range(3):
+            if not math.isfinite(tau[i, j]):
+                return 1
+    k1, k2, k3, L2, L3 = P[0], P[1], P[2], P[3], P[4]
+    n_min, n_max, p_min, p_max, wY, wN = P[5], P[6], P[7], P[8], P[9], P[10]
+    f1lo, f1hi = -k1 * n_min * n_min, k1 * n_max * n_max
+    f2lo, f2hi, f3lo, f3hi = k2 * p_min, k2 * p_max, k3 * p_min, k3 * p_max
+    lever = L2 + L3
+    d3 = wY + wN * L3 * L3  # curvature along F3 (F2 fixed)
+    d2 = wY + wN * L2 * L2  # curvature along F2 (F3 fixed)
+    for i in range(n):
+        X, Y, N = tau[i, 0], tau[i, 1], tau[i, 2]
+        F1 = _clip(X, f1lo, f1hi)
+        F2 = (L3 * Y + N) / lever  # T^-1 tau, eq. 25
+        F3 = (L2 * Y - N) / lever
+        if inverse:
+            b2, b3 = _clip(F2, f2lo, f2hi), _clip(F3, f3lo, f3hi)
+            s2, s3 = not _inside(F2, f2lo, f2hi), not _inside(F3, f3lo, f3hi)
+        elif _inside(F2, f2lo, f2hi) and _inside(F3, f3lo, f3hi):
+            b2, b3 = _clip(F2, f2lo, f2hi), _clip(F3, f3lo, f3hi)
+            s2 = s3 = False
+        else:  # the optimum is on the boundary: best of the four edges, each in closed form
+            best = math.inf
+            b2 = b3 = 0.0
+            for edge in (f2lo, f2hi):  # F2 = edge, minimise over F3
+                f3 = _clip((wY * (Y - edge) + wN * L3 * (L2 * edge - N)) / d3, f3lo, f3hi)
+                eY = edge + f3 - Y
+                eN = L2 * edge - L3 * f3 - N
+                J = wY * eY * eY + wN * eN * eN
+                if J < best:
+                    best, b2, b3 = J, edge, f3
+            for edge in (f3lo, f3hi):  # F3 = edge, minimise over F2
+                f2 = _clip((wY * (Y - edge) + wN * L2 * (N + L3 * edge)) / d2, f2lo, f2hi)
+                eY = f2 + edge - Y
+                eN = L2 * f2 - L3 * edge - N
+                J = wY * eY * eY + wN * eN * eN
+                if J < best:
+                    best, b2, b3 = J, f2, edge
+            s2, s3 = _at_limit(b2, f2lo, f2hi), _at_limit(b3, f3lo, f3hi)
+        Yd, Nd = Y, N  # F2, F3 = T^-1 (Y, N) exactly: tau_error exactly zero
+        if s2 or s3:
+            Yd, Nd = b2 + b3, L2 * b2 - L3 * b3
+        # inverse thruster characteristics, eqs. 26-27 (with |F1|), clipped for round-off
+        n1 = math.copysign(math.sqrt(abs(F1) / k1), F1) if F1 != 0.0 else 0.0
+        cmd[i, 0] = _clip(n1, n_min, n_max)
+        cmd[i, 1] = _clip(b2 / k2, p_min, p_max)
+        cmd[i, 2] = _clip(b3 / k3, p_min, p_max)
+        F[i, 0], F[i, 1], F[i, 2] = F1, b2, b3
+        tdel[i, 0], tdel[i, 1], tdel[i, 2] = F1, Yd, Nd
+        err[i, 0], err[i, 1], err[i, 2] = X - F1, Y - Yd, N - Nd
+        sat[i, 0], sat[i, 1], sat[i, 2] = F1 != X, s2, s3
+    return 0
 
 
-def _result(
-    req: tuple[float, float, float],
-    F: tuple[float, float, float],
-    sat: tuple[bool, bool, bool],
-    p: ThrusterParameters,
-) -> Allocation:
-    F1, F2, F3 = F
-    X = F1
-    if sat[1] or sat[2]:
-        Y = F2 + F3
-        N = p.L2 * F2 - p.L3 * F3
-    else:  # F2, F3 = T^-1 (Y, N) exactly: report the request, so tau_error is exactly zero
-        Y, N = req[1], req[2]
-    return Allocation(
-        np.array(_command(F1, F2, F3, p)),
-        np.array(F),
-        np.array((X, Y, N)),
-        np.array((req[0] - X, req[1] - Y, req[2] - N)),
-        np.array(sat),
-    )
+def law_parameters(
+    thrusters: ThrusterParameters, weights: tuple[float, float, float] | None = None
+) -> NDArray[np.float64]:
+    """The constants :func:`fixed3_law` reads: ``(k1, k2, k3, L2, L3, n_min, n_max, p_min,
+    p_max, w_Y, w_N)`` (``weights``: as :func:`allocate`; ``None``: :func:`default_weights`).
+
+    Raises:
+        ValueError: ``thrusters`` of the wrong type, non-positive or non-finite weights.
+    """
+    _check_thrusters(thrusters)
+    p = thrusters
+    if weights is None:
+        lever = p.L2 + p.L3
+        wY, wN = 1.0, 10.0 / (lever * lever)
+    else:
+        try:
+            wX, wY, wN = (float(w) for w in weights)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"weights must be three numbers (w_X, w_Y, w_N), got {weights!r}"
+            ) from None
+        if not all(math.isfinite(w) and w > 0 for w in (wX, wY, wN)):
+            raise ValueError(f"weights must be finite and > 0, got {weights!r}")
+    return np.array([p.k1, p.k2, p.k3, p.L2, p.L3, p.n_min, p.n_max, p.p_min, p.p_max, wY, wN])
+
+
+_ENTRY: list[Any] = []
+
+
+def run_law(
+    P: NDArray[np.float64], tau: NDArray[np.float64], inverse: bool
+) -> tuple[NDArray[np.float64], ...]:
+    """:func:`fixed3_law` on ``tau`` (n, 3) (C-contiguous float64) through its compiled entry
+    point: ``(command, force, tau, tau_error, saturated)``, each (n, 3).
+
+    Raises:
+        ValueError: ``tau`` contains NaN or infinite values.
+    """
+    n = tau.shape[0]
+    out = np.empty((4, n, 3))
+    sat = np.empty((n, 3), dtype=np.bool_)
+    args = (P, tau, inverse, out[0], out[1], out[2], out[3], sat)
+    if not _ENTRY:
+        _ENTRY.append(entry(fixed3_law, args))
+    if _ENTRY[0](*args):
+        raise ValueError(f"tau contains NaN or infinite values: {tau!r} (check the controller)")
+    return out[0], out[1], out[2], out[3], sat
+
+
+class Fixed3Allocator:
+    """The allocation of one three-thruster set as an allocator object, ``alloc(tau, state)
+    -> Allocation`` (what :func:`~shipgym.controllers.actuation.make_allocator` returns for
+    the pattern): :func:`allocate` (``inverse=False``) or :func:`allocate_inverse`, with the
+    constants prepared once.
+
+    Args:
+        thrusters: thruster constants, lever arms and ranges.
+        inverse: the paper's ``T^-1`` (eq. 25) instead of the constrained least squares.
+        weights: as :func:`allocate` (ignored with ``inverse``).
+    """
+
+    def __init__(
+        self,
+        thrusters: ThrusterParameters,
+        inverse: bool = False,
+        weights: tuple[float, float, float] | None = None,
+    ) -> None:
+        self.thrusters = thrusters
+        self.inverse = bool(inverse)
+        self._P = law_parameters(thrusters, None if inverse else weights)
+
+    def __call__(self, tau: ArrayLike, state: ArrayLike | None = None) -> Allocation:
+        """Allocate ``tau = [X, Y, N]`` (N, N, N m); ``state`` is unused (the closed form has
+        no rate limits)."""
+        if type(tau) is np.ndarray and tau.shape == (3,) and tau.dtype == np.float64:
+            t = tau.reshape(1, 3)
+            t = t if t.flags.c_contiguous else np.ascontiguousarray(t)
+        else:
+            t = np.array([_tau3(tau)])
+        c, f, d, e, s = run_law(self._P, t, self.inverse)
+        return Allocation(c[0], f[0], d[0], e[0], s[0])
+
+    def __repr__(self) -> str:
+        return f"Fixed3Allocator({'inverse' if self.inverse else 'constrained'})"
 
 
 def force_capacity(thrusters: ThrusterParameters) -> NDArray[np.float64]:
@@ -224,16 +350,9 @@ def allocate_inverse(tau: ArrayLike, thrusters: ThrusterParameters) -> Allocatio
     Raises:
         ValueError: ``tau`` is not three finite numbers, or ``thrusters`` has the wrong type.
     """
-    X, Y, N = _tau3(tau)
-    _check_thrusters(thrusters)
-    p = thrusters
-    f1lo, f1hi, f2lo, f2hi, f3lo, f3hi = _force_box(p)
-    lever = p.L2 + p.L3
-    F2 = (p.L3 * Y + N) / lever
-    F3 = (p.L2 * Y - N) / lever
-    F = (_clip(X, f1lo, f1hi), _clip(F2, f2lo, f2hi), _clip(F3, f3lo, f3hi))
-    sat = (F[0] != X, not _inside(F2, f2lo, f2hi), not _inside(F3, f3lo, f3hi))
-    return _result((X, Y, N), F, sat, p)
+    t = np.array([_tau3(tau)])
+    c, f, d, e, s = run_law(law_parameters(thrusters), t, True)
+    return Allocation(c[0], f[0], d[0], e[0], s[0])
 
 
 def allocate(
@@ -262,53 +381,9 @@ def allocate(
         ValueError: ``tau`` is not three finite numbers, non-positive or non-finite weights,
             or ``thrusters`` of the wrong type.
     """
-    X, Y, N = _tau3(tau)
-    _check_thrusters(thrusters)
-    p = thrusters
-    if weights is None:
-        lever = p.L2 + p.L3
-        wY, wN = 1.0, 10.0 / (lever * lever)
-    else:
-        try:
-            wX, wY, wN = (float(w) for w in weights)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"weights must be three numbers (w_X, w_Y, w_N), got {weights!r}"
-            ) from None
-        if not all(math.isfinite(w) and w > 0 for w in (wX, wY, wN)):
-            raise ValueError(f"weights must be finite and > 0, got {weights!r}")
-    f1lo, f1hi, f2lo, f2hi, f3lo, f3hi = _force_box(p)
-    L2, L3 = p.L2, p.L3
-    F1 = _clip(X, f1lo, f1hi)
-    sat1 = F1 != X
-    lever = L2 + L3
-    F2 = (L3 * Y + N) / lever
-    F3 = (L2 * Y - N) / lever
-    if _inside(F2, f2lo, f2hi) and _inside(F3, f3lo, f3hi):
-        F = (F1, _clip(F2, f2lo, f2hi), _clip(F3, f3lo, f3hi))
-        return _result((X, Y, N), F, (sat1, False, False), p)
-
-    # the optimum is on the boundary: best of the four edges, each solved in closed form
-    d3 = wY + wN * L3 * L3  # curvature along F3 (F2 fixed)
-    d2 = wY + wN * L2 * L2  # curvature along F2 (F3 fixed)
-    best = math.inf
-    b2 = b3 = 0.0
-    for edge in (f2lo, f2hi):  # F2 = edge, minimise over F3
-        f3 = _clip((wY * (Y - edge) + wN * L3 * (L2 * edge - N)) / d3, f3lo, f3hi)
-        eY = edge + f3 - Y
-        eN = L2 * edge - L3 * f3 - N
-        J = wY * eY * eY + wN * eN * eN
-        if J < best:
-            best, b2, b3 = J, edge, f3
-    for edge in (f3lo, f3hi):  # F3 = edge, minimise over F2
-        f2 = _clip((wY * (Y - edge) + wN * L2 * (N + L3 * edge)) / d2, f2lo, f2hi)
-        eY = f2 + edge - Y
-        eN = L2 * f2 - L3 * edge - N
-        J = wY * eY * eY + wN * eN * eN
-        if J < best:
-            best, b2, b3 = J, f2, edge
-    sat = (sat1, _at_limit(b2, f2lo, f2hi), _at_limit(b3, f3lo, f3hi))
-    return _result((X, Y, N), (F1, b2, b3), sat, p)
+    t = np.array([_tau3(tau)])
+    c, f, d, e, s = run_law(law_parameters(thrusters, weights), t, False)
+    return Allocation(c[0], f[0], d[0], e[0], s[0])
 
 
 # ---- normalised actions ----------------------------------------------------------------------
