@@ -183,3 +183,35 @@ def test_reset_keeps_the_other_envs_and_accepts_nu0() -> None:
     ref = make_observer("dkf")
     ref.reset(5.0, np.ones(3), nu0=[1.0, 0.0, 0.0])
     np.testing.assert_allclose(b.P[1], ref.P)
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_reset_with_p0_and_nu0_per_env_is_the_law_at_n_1(name: str) -> None:
+    """Per-env ``P0`` and ``nu0`` at a masked reset: row i equals the N = 1 filter reset with
+    row i's arguments, bit for bit, through the next samples."""
+    n = 3
+    rng = np.random.default_rng(8)
+    b = BatchedKalman(name, n)
+    b.reset(0.0, np.zeros((n, 3)))
+    single = [make_observer(name) for _ in range(n)]
+    for f in single:
+        f.reset(0.0, np.zeros(3))
+    G = rng.normal(size=(n, 6, 6)) * 0.1
+    P0 = G @ G.transpose(0, 2, 1) + 1e-3 * np.eye(6)
+    nu0 = rng.normal(0.0, 0.2, (n, 3))
+    eta0 = rng.normal(0.0, 5.0, (n, 3))
+    m = np.array([True, False, True])
+    b.reset(0.0, eta0, mask=m, nu0=nu0, P0=P0)
+    for i in np.nonzero(m)[0]:
+        single[i].reset(0.0, eta0[i], nu0=nu0[i], P0=P0[i])
+    for k in range(1, 6):
+        z = eta0 + rng.normal(0.0, 0.1, (n, 3))
+        info = b.step(float(k), z)
+        for i, f in enumerate(single):
+            si = f.step(float(k), z[i])
+            np.testing.assert_array_equal(info.innovation[i], si.innovation)
+            np.testing.assert_array_equal(b.x[i], f.x)
+            np.testing.assert_array_equal(b.P[i], f.P)
+            np.testing.assert_array_equal(b.P_nu[i], f.estimate().P_nu)
+    with pytest.raises(ValueError, match="symmetric"):
+        b.reset(0.0, eta0, P0=np.triu(np.ones((6, 6))))
