@@ -120,7 +120,7 @@ __all__ = [
 class _DoubleIntegratorFilter(Observer):
     """The :class:`~shipgym.observers.base.Observer` interface of one env of
     :class:`~shipgym.observers.batch.BatchedKalman` (``n = 1``), which holds the state and runs
-    the law."""
+    the law (the outlier gate's count included: :attr:`gate` gives its settings)."""
 
     _continuous = False
 
