@@ -302,8 +302,8 @@ def test_block_draws_are_one_draw_per_sample():
 
 def test_batched_sensors_measure_what_each_env_s_sensors_measure():
     """Four envs, each seeded as a Sensors of its own, with noise, outliers, dropouts and an
-    antenna offset; block refills every 7 samples: the same flags, the same fixes (to
-    round-off: the batched form uses NumPy's cos/sin)."""
+    antenna offset; block refills every 7 samples: the same flags, the same fixes, bit for bit
+    (row i of the law over N is the law at N = 1 on row i's inputs)."""
     import dataclasses
 
     from shipgym.observers.sensors import BatchedSensors
@@ -325,7 +325,7 @@ def test_batched_sensors_measure_what_each_env_s_sensors_measure():
             m = s.measure(float(k), eta[i])
             assert (m.valid, m.outlier) == (bool(valid[i]), bool(outlier[i])), (k, i)
             if m.valid:
-                np.testing.assert_allclose(z[i], m.z, rtol=0, atol=1e-12)
+                np.testing.assert_array_equal(z[i], m.z)  # bit for bit: one law
             else:
                 assert np.all(np.isnan(z[i]))
         counts["valid"] += int(valid.sum())
@@ -338,7 +338,7 @@ def test_batched_sensors_measure_what_each_env_s_sensors_measure():
 
 def test_batched_sensors_per_env_noise_and_masked_samples():
     """Each env its own variances (set_config) and its own sample instants (a mask): env i
-    measures what a Sensors of its configuration measures at its own instants."""
+    measures bit for bit what a Sensors of its configuration measures at its own instants."""
     import dataclasses
 
     from shipgym.observers.sensors import BatchedSensors
@@ -365,7 +365,7 @@ def test_batched_sensors_per_env_noise_and_masked_samples():
             m = single[i].measure(float(k), eta[i])
             assert m.valid == bool(valid[i])
             if m.valid:
-                np.testing.assert_allclose(z[i], m.z, rtol=0, atol=1e-12)
+                np.testing.assert_array_equal(z[i], m.z)  # bit for bit: one law
             seen[i] += 1
     assert seen.min() > 50
     with pytest.raises(ValueError, match="differ only"):

@@ -16,6 +16,10 @@ are ``[x, y, psi, x_dot, y_dot, psi_dot]`` (m, m, rad, m/s, m/s, rad/s); cross-D
 are zero. The heading is unwrapped internally (continuous through north); heading innovations
 are wrapped to ``(-pi, pi]``.
 
+Run time: the law is written once, over ``N`` envs, in
+:class:`~shipgym.observers.batch.BatchedKalman` (compiled); the two classes here are its
+``N = 1`` adapters with the :class:`~shipgym.observers.base.Observer` interface.
+
 Filters
 -------
 :class:`DiscreteKalmanFilter` (Tomera 2014 Table 3; Tomera 2011 eqs. 14-24): ``F`` and ``Q_k`` are
@@ -88,10 +92,8 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-from ..dynamics import wrap_angle
 from .base import (
     OBSERVERS,
     Estimate,
@@ -104,15 +106,8 @@ from .base import (
     no_measurement,
     register_observer,
 )
-from .design import (
-    DKF_DESIGN,
-    KBF_DESIGN,
-    TOMERA_DKF,
-    TOMERA_KBF,
-    KalmanDesign,
-    discretise,
-    double_integrator,
-)
+from .batch import DEFAULT_INITIAL_VELOCITY_STD, BatchedKalman
+from .design import DKF_DESIGN, KBF_DESIGN, TOMERA_DKF, TOMERA_KBF, KalmanDesign
 
 __all__ = [
     "OBSERVERS",
@@ -121,55 +116,20 @@ __all__ = [
     "make_observer",
 ]
 
-_A, _C = double_integrator()
-_EYE2 = np.eye(2)
-_CACHE_SIZE = 16
-_SHARED_CACHE_SIZE = 512
-_SHARED: dict[tuple[Any, ...], Any] = {}
-"""Design- and interval-dependent matrices shared by all filters (designs are frozen)."""
-DEFAULT_INITIAL_VELOCITY_STD = (0.3, 0.3, math.radians(2.0))
-"""Default initial std of ``[x_dot, y_dot, psi_dot]`` (m/s, m/s, rad/s) when ``P0`` is None:
-the speeds of the harbour manoeuvre (up to 0.2 m/s, 1 deg/s) with a margin."""
-
-
-def _dt_key(dt: float) -> float:
-    return round(dt, 12)
-
-
-def _inv2(M: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Inverses of a stack of 2x2 matrices, (k, 2, 2)."""
-    if M.shape == (3, 2, 2):  # the three DOFs in plain floats: the same operations
-        out3 = []
-        try:
-            for (a, b), (c, d) in M.tolist():
-                det = a * d - b * c
-                out3.append([[d / det, -b / det], [-c / det, a / det]])
-        except ZeroDivisionError:  # a singular block: the array form's inf / nan
-            pass
-        else:
-            return np.array(out3)
-    a, b, c, d = M[:, 0, 0], M[:, 0, 1], M[:, 1, 0], M[:, 1, 1]
-    det = a * d - b * c
-    out = np.empty_like(M)
-    out[:, 0, 0] = d / det
-    out[:, 0, 1] = -b / det
-    out[:, 1, 0] = -c / det
-    out[:, 1, 1] = a / det
-    return out
-
-
-def _sym(P: NDArray[np.float64]) -> NDArray[np.float64]:
-    return 0.5 * (P + P.transpose(0, 2, 1))
-
 
 class _DoubleIntegratorFilter(Observer):
-    """Shared state, reset, gate, step skeleton and estimate of the per-DOF filters."""
+    """The :class:`~shipgym.observers.base.Observer` interface of one env of
+    :class:`~shipgym.observers.batch.BatchedKalman` (``n = 1``), which holds the state and runs
+    the law (the outlier gate's count included: :attr:`gate` gives its settings)."""
+
+    _continuous = False
 
     def __init__(
         self,
         design: KalmanDesign | Mapping[str, Any],
         *,
         name: str,
+        constant_gain: bool,
         gate_probability: float | None = 0.9999,
         max_rejections: int = 5,
         initial_velocity_std: ArrayLike = DEFAULT_INITIAL_VELOCITY_STD,
@@ -188,12 +148,31 @@ class _DoubleIntegratorFilter(Observer):
         self.design = design
         self.gate = OutlierGate(gate_probability, dof=3, max_rejections=max_rejections)
         self.initial_velocity_std = std
-        self._R = design.variance()
-        self._W = design.intensity()
-        self._cache: dict[tuple[str, float], Any] = {}
-        self._t: float | None = None
-        self._s = np.zeros((3, 2))  # per DOF [velocity, position] (Tomera 2011 eq. 59)
-        self._P = np.zeros((3, 2, 2))
+        self._b = BatchedKalman.from_design(
+            design,
+            1,
+            continuous=self._continuous,
+            constant_gain=constant_gain,
+            name=self.name,
+            gate_probability=gate_probability,
+            max_rejections=max_rejections,
+            initial_velocity_std=std,
+        )
+        self._t1 = np.zeros(1)
+        self._z1 = np.zeros((1, 3))
+        self._valid1 = np.ones(1, dtype=bool)
+
+    def _batch_settings(self) -> dict[str, Any]:
+        """What :class:`~shipgym.observers.batch.BatchedKalman` needs to batch this filter."""
+        b = self._b
+        return {
+            "design": self.design,
+            "continuous": b.continuous,
+            "constant_gain": b.constant_gain,
+            "name": self.name,
+            "gate": self.gate,
+            "initial_velocity_std": self.initial_velocity_std,
+        }
 
     # ---- interface ---------------------------------------------------------------------------
     def reset(
@@ -222,32 +201,10 @@ class _DoubleIntegratorFilter(Observer):
         if not math.isfinite(t0):
             raise ValueError(f"t0 must be finite, got {t0!r}")
         eta = as_pose(eta0, "eta0")
-        if nu0 is None:
-            eta_dot = np.zeros(3)
-        else:
-            nu = as_pose(nu0, "nu0", "[u, v, r] (m/s, m/s, rad/s)")
-            c, s = math.cos(eta[2]), math.sin(eta[2])
-            eta_dot = np.array([c * nu[0] - s * nu[1], s * nu[0] + c * nu[1], nu[2]])
-        Pb = np.zeros((3, 2, 2))
-        if P0 is None:
-            Pb[:, 0, 0] = self.initial_velocity_std**2
-            Pb[:, 1, 1] = self._R
-        else:
-            P6 = np.asarray(P0, dtype=float)
-            if P6.shape != (6, 6) or not np.isfinite(P6).all():
-                raise ValueError(f"P0 must be a finite 6x6 matrix, got shape {P6.shape}")
-            if not np.allclose(P6, P6.T, rtol=1e-9, atol=1e-12):
-                raise ValueError("P0 must be symmetric")
-            if np.linalg.eigvalsh(0.5 * (P6 + P6.T))[0] < -1e-12 * max(np.abs(P6).max(), 1e-300):
-                raise ValueError("P0 must be positive semi-definite")
-            for i in range(3):
-                Pb[i] = P6[np.ix_((3 + i, i), (3 + i, i))]
-            Pb = _sym(Pb)
-        self._s = np.stack([eta_dot, eta], axis=1)
-        self._P = Pb
-        self._t = t0
-        self.gate.reset()
-        self._after_reset()
+        nu = None if nu0 is None else as_pose(nu0, "nu0", "[u, v, r] (m/s, m/s, rad/s)")
+        if P0 is not None and np.shape(P0) != (6, 6):
+            raise ValueError(f"P0 must be a finite 6x6 matrix, got shape {np.shape(P0)}")
+        self._b.reset(t0, eta, nu0=nu, P0=P0)
 
     def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
         """Propagate to ``t`` and update with the measured pose ``z`` (``None``: coast).
@@ -264,141 +221,56 @@ class _DoubleIntegratorFilter(Observer):
             RuntimeError: :meth:`reset` was not called.
             ValueError: time going backwards, ``z`` or ``tau`` not 3 finite values.
         """
-        if self._t is None:
+        b = self._b
+        if not b._all_started:
             raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
-        t = float(t)
-        dt = t - self._t
-        if not dt >= 0.0:
-            if dt >= -1e-9:  # rounding of the caller's clock
-                dt, t = 0.0, self._t
-            else:
-                raise ValueError(
-                    f"{self.name}: time must not go backwards (previous {self._t}, got {t!r})"
-                )
-        as_tau(tau)
+        if tau is not None:
+            as_tau(tau)
+        self._t1[0] = t
         if z is None:
-            if dt > 0.0:
-                self._s, self._P = self._prior(dt)
-            self._after_coast()
-            self._t = t
+            b._advance(self._t1, b._z0, b._none)
             return no_measurement()
-        z = as_pose(z)
-        s_bar, P_bar = self._prior(dt) if dt > 0.0 else (self._s, self._P)
-        innov = z - s_bar[:, 1]
-        innov[2] = wrap_angle(float(innov[2]))
-        S = P_bar[:, 1, 1] + self._R
-        nis = float(np.dot(innov * innov, 1.0 / S))
-        decision = self.gate.check(nis)
-        if decision == "reject":
-            self._s, self._P = s_bar, P_bar
-            self._after_coast()
-            self._t = t
-            return StepInfo(innov, nis, True)
-        forced = decision == "force"
-        self._correct(dt, s_bar, P_bar, innov, forced)
-        self._t = t
-        return StepInfo(innov, nis, False, forced)
+        self._z1[0] = as_pose(z)
+        b._advance(self._t1, self._z1, self._valid1)
+        return StepInfo(b._innov[0].copy(), float(b._nis[0]), bool(b._rej[0]), bool(b._forced[0]))
 
     def estimate(self) -> Estimate:
         """The current estimate (copies); ``P`` in ``[x, y, psi, x_dot, y_dot, psi_dot]``."""
-        if self._t is None:
+        b = self._b
+        if not b._all_started:
             raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
-        (xd, x), (yd, y), (psid, psi) = self._s.tolist()  # per DOF [velocity, position]
-        eta = np.array([x, y, psi])
-        c, s = math.cos(psi), math.sin(psi)
-        u = c * xd + s * yd
-        v = -s * xd + c * yd
-        nu = np.array([u, v, psid])
-        P6 = self.P
-        J = np.array([[0.0, 0.0, v, c, s, 0.0], [0.0, 0.0, -u, -s, c, 0.0],
-                      [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])  # fmt: skip
-        P_nu = J @ P6 @ J.T
+        eta, nu, P, P_nu = b._readouts()
         return Estimate(
-            t=self._t,
-            eta=eta,
-            nu=nu,
-            P=P6,
-            P_eta=P6[:3, :3].copy(),
-            P_nu=0.5 * (P_nu + P_nu.T),
+            t=float(b._t[0]),
+            eta=eta[0].copy(),
+            nu=nu[0].copy(),
+            P=P[0].copy(),
+            P_eta=P[0, :3, :3].copy(),
+            P_nu=P_nu[0].copy(),
         )
 
     # ---- extras ------------------------------------------------------------------------------
     @property
     def x(self) -> NDArray[np.float64]:
         """A copy of the state ``[x, y, psi, x_dot, y_dot, psi_dot]`` (NED, heading continuous)."""
-        return np.concatenate([self._s[:, 1], self._s[:, 0]])
+        return self._b.x[0]
 
     @property
     def P(self) -> NDArray[np.float64]:
         """A copy of the (6, 6) covariance of :attr:`x`."""
-        # per DOF [[vel-vel, vel-pos], [pos-vel, pos-pos]] (the upper off-diagonal is used)
-        ((xv, xc), (_, xx)), ((yv, yc), (_, yy)), ((pv, pc), (_, pp)) = self._P.tolist()
-        return np.array(
-            [
-                [xx, 0.0, 0.0, xc, 0.0, 0.0],
-                [0.0, yy, 0.0, 0.0, yc, 0.0],
-                [0.0, 0.0, pp, 0.0, 0.0, pc],
-                [xc, 0.0, 0.0, xv, 0.0, 0.0],
-                [0.0, yc, 0.0, 0.0, yv, 0.0],
-                [0.0, 0.0, pc, 0.0, 0.0, pv],
-            ]
-        )
+        return self._b._readouts()[2][0].copy()
 
     @property
     def t(self) -> float | None:
         """Time of the current estimate (s), ``None`` before :meth:`reset`."""
-        return self._t
+        return float(self._b._t[0]) if self._b._all_started else None
 
-    # ---- hooks -------------------------------------------------------------------------------
-    def _after_reset(self) -> None:
-        """Clear subclass state at reset."""
-
-    def _after_coast(self) -> None:
-        """Called after a step without an accepted measurement."""
-
-    def _prior(self, dt: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Open-loop prediction ``(F s, F P F^T + Q_k)`` over ``dt`` > 0."""
-        Q = self._cached("Q", dt, lambda: self._process_noise(dt)).tolist()
-        # per DOF in plain floats, the same operations as the array form
-        s_bar = [[v, p + dt * v] for v, p in self._s.tolist()]
-        dt2, dtdt = 2.0 * dt, dt * dt
-        P_bar = []
-        for ((a, b), (_, d)), ((q00, q01), (q10, q11)) in zip(self._P.tolist(), Q, strict=True):
-            c = b + dt * a  # the prior's off-diagonal (the upper one of P)
-            P_bar.append([[a + q00, c + q01], [c + q10, d + dt2 * b + dtdt * a + q11]])
-        return np.array(s_bar), np.array(P_bar)
-
-    def _process_noise(self, dt: float) -> NDArray[np.float64]:
-        return np.stack([discretise(_A, W, dt, method="exact")[1] for W in self._W])
-
-    def _cached(self, kind: str, dt: float, make: Callable[[], Any]) -> Any:
-        """Matrices for ``(kind, dt)``: per instance, then shared by filters of one design."""
-        key = (kind, _dt_key(dt))
-        val = self._cache.get(key)
-        if val is None:
-            shared_key = (type(self).__name__, self.design, *key)
-            val = _SHARED.get(shared_key)
-            if val is None:
-                val = make()
-                for a in val if isinstance(val, tuple) else (val,):
-                    a.setflags(write=False)
-                if len(_SHARED) >= _SHARED_CACHE_SIZE:
-                    _SHARED.clear()
-                _SHARED[shared_key] = val
-            if len(self._cache) >= _CACHE_SIZE:
-                self._cache.clear()
-            self._cache[key] = val
-        return val
-
-    def _correct(
-        self,
-        dt: float,
-        s_bar: NDArray[np.float64],
-        P_bar: NDArray[np.float64],
-        innov: NDArray[np.float64],
-        forced: bool,
-    ) -> None:
-        raise NotImplementedError
+    @property
+    def steady_state_gain(self) -> NDArray[np.float64]:
+        """Steady-state gain at the design period ``T``, (3, 2), seed order ``[velocity,
+        position]`` per DOF: the DKF's filter form (Tomera 2014 eq. 30), the KBF's ``L = P C^T
+        R_c^-1`` (Tomera 2014 eq. 35)."""
+        return self._b._steady_gain(self.design.R).copy()
 
 
 class DiscreteKalmanFilter(_DoubleIntegratorFilter):
@@ -432,45 +304,22 @@ class DiscreteKalmanFilter(_DoubleIntegratorFilter):
         super().__init__(
             design,
             name=name,
+            constant_gain=bool(constant_gain),
             gate_probability=gate_probability,
             max_rejections=max_rejections,
             initial_velocity_std=initial_velocity_std,
         )
         self.constant_gain = bool(constant_gain)
-        self.last_gain: NDArray[np.float64] | None = None
-        """Gain of the last update, (3, 2), seed order ``[velocity, position]`` per DOF."""
 
     @property
-    def steady_state_gain(self) -> NDArray[np.float64]:
-        """Steady-state filter-form gain at the design period ``T``, (3, 2), seed order
-        ``[velocity, position]`` per DOF (Tomera 2014 eq. 30)."""
-        return self.design.dkf_gains(form="filter")[0]
-
-    def _process_noise(self, dt: float) -> NDArray[np.float64]:
-        return self.design.sampled(dt)[1]
-
-    def _correct(
-        self,
-        dt: float,
-        s_bar: NDArray[np.float64],
-        P_bar: NDArray[np.float64],
-        innov: NDArray[np.float64],
-        forced: bool,
-    ) -> None:
-        if forced:
-            P_bar = P_bar.copy()
-            P_bar[:, 1, 1] += innov * innov
-        R = self._R
+    def last_gain(self) -> NDArray[np.float64]:
+        """Gain of the last update, (3, 2), seed order ``[velocity, position]`` per DOF: the
+        constant gain, or the time-varying one from the updated covariance, ``K = P^+ H^T R^-1``
+        (equal to ``P^- H^T S^-1`` to round-off)."""
+        b = self._b
         if self.constant_gain:
-            K = self._cached("K", 0.0, lambda: self.design.dkf_gains(form="filter")[0])
-        else:
-            K = P_bar[:, :, 1] / (P_bar[:, 1, 1] + R)[:, None]  # Tomera (2011) eq. 23
-        self.last_gain = K
-        self._s = s_bar + K * innov[:, None]  # Tomera (2011) eq. 14
-        IKH = np.broadcast_to(_EYE2, (3, 2, 2)).copy()
-        IKH[:, :, 1] -= K
-        KK = K[:, :, None] * K[:, None, :]
-        self._P = _sym(IKH @ P_bar @ IKH.transpose(0, 2, 1) + R[:, None, None] * KK)  # Joseph
+            return b._gain[:, :, 0].T.copy()
+        return (b._X[3:5, :, 0] / b._R[:, 0]).T.copy()
 
 
 class KalmanBucyFilter(_DoubleIntegratorFilter):
@@ -490,6 +339,8 @@ class KalmanBucyFilter(_DoubleIntegratorFilter):
             (m/s, m/s, rad/s).
     """
 
+    _continuous = True
+
     def __init__(
         self,
         design: KalmanDesign | Mapping[str, Any] = KBF_DESIGN,
@@ -503,110 +354,12 @@ class KalmanBucyFilter(_DoubleIntegratorFilter):
         super().__init__(
             design,
             name=name,
+            constant_gain=bool(steady_state),
             gate_probability=gate_probability,
             max_rejections=max_rejections,
             initial_velocity_std=initial_velocity_std,
         )
         self.steady_state = bool(steady_state)
-        self._Rc = self._R * self.design.T
-        self._L = self._cached("L", 0.0, lambda: self.design.kbf_gains()[0])
-        self._y_prev: NDArray[np.float64] | None = None
-
-    @property
-    def steady_state_gain(self) -> NDArray[np.float64]:
-        """Steady-state gain ``L = P C^T R_c^-1``, (3, 2), seed order ``[velocity, position]``
-        per DOF (Tomera 2014 eq. 35)."""
-        return self._L.copy()
-
-    def _after_reset(self) -> None:
-        self._y_prev = None
-
-    def _after_coast(self) -> None:
-        self._y_prev = None
-
-    def _correct(
-        self,
-        dt: float,
-        s_bar: NDArray[np.float64],
-        P_bar: NDArray[np.float64],
-        innov: NDArray[np.float64],
-        forced: bool,
-    ) -> None:
-        y1 = s_bar[:, 1] + innov  # the sample, unwrapped next to the prediction
-        if dt <= 0.0:
-            self._y_prev = y1
-            return
-        s0, P0 = self._s, self._P
-        if forced:
-            P0 = P0.copy()
-            P0[:, 1, 1] += innov * innov
-        y0 = y1 if (forced or self._y_prev is None) else self._y_prev
-        slope = (y1 - y0) / dt
-        if self.steady_state:
-            Phi, B1, B2, Qcl = self._cached("ss", dt, lambda: self._steady_blocks(dt))
-            self._s = (Phi @ s0[:, :, None])[:, :, 0] + B1 * y0[:, None] + B2 * slope[:, None]
-            self._P = _sym(Phi @ P0 @ Phi.transpose(0, 2, 1) + Qcl)
-        else:
-            E11, E21, I1r, I2r, B = self._cached("tvb", dt, lambda: self._tv_blocks(dt))
-            # the products with P0 in one matmul: rows [E12; E22; I1[3, 2:]; I2[3, 2:]] @ P0
-            EP = B @ P0
-            X = E11 + EP[:, 0:2]
-            Y = E21 + EP[:, 2:4]
-            J0 = I1r + EP[:, 4]  # row "position" of int Y
-            J1 = I2r + EP[:, 5]  # row "position" of int s Y
-            Xi = _inv2(X)
-            rhs = s0 + (J0 * y0[:, None] + J1 * slope[:, None]) / self._Rc[:, None]
-            # X^-T rhs and Y X^-1 in one matmul: rows [rhs; Y] @ X^-1
-            RY = np.concatenate([rhs[:, None, :], Y], axis=1) @ Xi
-            self._s = RY[:, 0, :]
-            self._P = _sym(RY[:, 1:, :])
-        self._y_prev = y1
-
-    def _steady_blocks(self, dt: float) -> tuple[NDArray[np.float64], ...]:
-        """``exp(A_cl dt)``, the first-order-hold input matrices and the Lyapunov increment."""
-        Phi, B1, B2, Qcl = [], [], [], []
-        for i in range(3):
-            L = self._L[i][:, None]
-            Acl = _A - L @ _C
-            M = np.zeros((4, 4))
-            M[:2, :2] = Acl
-            M[:2, 2:3] = L
-            M[2, 3] = 1.0
-            Ed = scipy.linalg.expm(M * dt)
-            Phi.append(Ed[:2, :2])
-            B1.append(Ed[:2, 2])  # int_0^dt exp(Acl (dt - s)) L ds
-            B2.append(Ed[:2, 3])  # int_0^dt exp(Acl (dt - s)) L s ds
-            Wcl = self._W[i] + self._Rc[i] * (L @ L.T)
-            Qcl.append(discretise(Acl, Wcl, dt, method="exact")[1])
-        return np.stack(Phi), np.stack(B1), np.stack(B2), np.stack(Qcl)
-
-    def _tv_blocks(self, dt: float) -> tuple[NDArray[np.float64], ...]:
-        """The blocks of :meth:`_hamiltonian_blocks` the update uses: ``E11``, ``E21`` and the
-        position rows of the integrals' left blocks (contiguous), and their right blocks
-        stacked, ``[E12; E22; I1[3, :2]; I2[3, :2]]`` (3, 6, 2), for one product with P."""
-        E, I1, I2 = self._cached("tv", dt, lambda: self._hamiltonian_blocks(dt))
-        stacked = np.concatenate([E[:, :, 2:], I1[:, 3:4, 2:], I2[:, 3:4, 2:]], axis=1)
-        return (E[:, :2, :2].copy(), E[:, 2:, :2].copy(), I1[:, 3, :2].copy(),
-                I2[:, 3, :2].copy(), stacked)  # fmt: skip
-
-    def _hamiltonian_blocks(self, dt: float) -> tuple[NDArray[np.float64], ...]:
-        """``exp(H dt)``, ``int_0^dt exp(H s) ds`` and ``int_0^dt s exp(H s) ds`` per DOF."""
-        E, I1, I2 = [], [], []
-        for i in range(3):
-            Ham = np.zeros((4, 4))
-            Ham[:2, :2] = -_A.T
-            Ham[:2, 2:] = _C.T @ _C / self._Rc[i]
-            Ham[2:, :2] = self._W[i]
-            Ham[2:, 2:] = _A
-            M = np.zeros((12, 12))
-            M[:4, :4] = Ham
-            M[:4, 4:8] = np.eye(4)
-            M[4:8, 8:12] = np.eye(4)
-            Ed = scipy.linalg.expm(M * dt)
-            E.append(Ed[:4, :4])
-            I1.append(Ed[:4, 4:8])
-            I2.append(dt * Ed[:4, 4:8] - Ed[:4, 8:12])
-        return np.stack(E), np.stack(I1), np.stack(I2)
 
 
 # --------------------------------------------------------------------------------------------

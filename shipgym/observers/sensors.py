@@ -85,6 +85,9 @@ dropout_duration)``. Gaussian noise, outliers and dropouts draw from three indep
 streams of the generator given to :meth:`Sensors.reset`, and every stream draws the same numbers
 at every sample whether or not a fault happens, so switching one fault on never changes the
 noise of the other samples (common random numbers across experiments).
+
+Run time: the measurement law is written once, over ``N`` envs (:class:`BatchedSensors`,
+compiled); :class:`Sensors` is its ``N = 1`` adapter and draws what it drew before.
 """
 
 from __future__ import annotations
@@ -100,7 +103,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, param
-from shipgym.dynamics import wrap_angle
+from shipgym._jit import entry, njit
 
 __all__ = [
     "AL_TAKIE1982_HEADING_SIGMA",
@@ -120,7 +123,7 @@ __all__ = [
 TOMERA2011_HEADING_VARIANCE = 0.1 * (math.pi / 180.0) ** 2
 
 _EPS_T = 1e-9  # relative tolerance on sample instants (s / period)
-_BLOCK = 256  # samples drawn at once by Sensors (the same streams as one draw per sample)
+_BLOCK = 256  # samples drawn at once (the same streams as one draw per sample)
 
 
 @dataclass(frozen=True)
@@ -393,8 +396,200 @@ def _streams(rng: np.random.Generator) -> tuple[np.random.Generator, ...]:
     return tuple(np.random.default_rng(s) for s in seq.spawn(4))
 
 
+@njit
+def _sense(mask, t, eta, k, draws, st, cf, par, out):
+    """The measurement law of every env ``j`` with ``mask[j]`` at its time ``t[j]`` (s) and
+    true pose ``eta[j]`` (m, m, rad), in place.
+
+    ``draws[j, k[j]]``: the env's next pre-drawn numbers, 3 standard normals (white noise),
+    2 uniforms (outlier, its direction), 1 uniform (dropout), 3 standard normals (correlated
+    errors); ``st[j]``: the correlated errors ``[b_x, b_y, b_psi]`` (m, m, rad) and the end of
+    the dropout (s); ``cf[j]``: the white sigmas ``[x, y, psi]`` (m, m, rad) and the
+    Gauss-Markov steps ``q = sd sqrt(1 - a^2)``; ``par``: ``a_p, a_p, a_b`` (-), dropout
+    probability (-) and duration (s), outlier probability (-) and size (m), antenna ``x_a,
+    y_a`` (m), the instant tolerance (s), correlated errors on (1.0). ``out[j]``: the measured
+    pose ``[x, y, psi]`` (NaN in a dropout), valid (1.0/0.0), outlier (1.0/0.0). Returns
+    ``-1``, or (doing nothing) the first env whose pre-drawn numbers are used up.
+    """
+    for j in range(t.shape[0]):
+        if mask[j] and k[j] >= draws.shape[1]:
+            return j
+    pi, two_pi = math.pi, 2.0 * math.pi
+    for j in range(t.shape[0]):
+        if not mask[j]:
+            continue
+        d = draws[j, k[j]]
+        k[j] += 1
+        n0, n1, n2 = d[0] * cf[j, 0], d[1] * cf[j, 1], d[2] * cf[j, 2]
+        if par[10] > 0.0:  # one exact Gauss-Markov step per sample, also in dropouts
+            for i in range(3):
+                st[j, i] = par[i] * st[j, i] + cf[j, 3 + i] * d[6 + i]
+            n0 += st[j, 0]
+            n1 += st[j, 1]
+            n2 += st[j, 2]
+        tj = t[j]
+        if tj < st[j, 3] - par[9] or d[5] < par[3]:
+            if not tj < st[j, 3] - par[9]:  # a dropout starts
+                st[j, 3] = tj + par[4]
+            out[j, 0] = out[j, 1] = out[j, 2] = np.nan
+            out[j, 3] = out[j, 4] = 0.0
+            continue
+        psi = eta[j, 2]
+        c, s = math.cos(psi), math.sin(psi)
+        z0 = (eta[j, 0] + c * par[7] - s * par[8]) + n0
+        z1 = (eta[j, 1] + s * par[7] + c * par[8]) + n1
+        outlier = d[3] < par[5]
+        if outlier:  # a jump of par[6] m in a uniformly random direction
+            a = two_pi * d[4]
+            z0 += par[6] * math.cos(a)
+            z1 += par[6] * math.sin(a)
+        out[j, 0], out[j, 1] = z0, z1
+        out[j, 2] = pi - np.fmod(np.fmod(pi - (psi + n2), two_pi) + two_pi, two_pi)
+        out[j, 3] = 1.0
+        out[j, 4] = 1.0 if outlier else 0.0
+    return -1
+
+
+_SENSE: list[Any] = []  # _sense's compiled entry point (its argument types never change)
+
+
+class BatchedSensors:
+    """The sensors of ``n`` envs, the one run-time form of the measurement law (compiled,
+    :func:`_sense`): each env with its own streams, drawn as :meth:`reset` draws them from the
+    env's generator, so that env ``i`` measures bit for bit what the same law at ``n = 1``
+    (:class:`Sensors`) reset with the same generator measures, the Gauss-Markov DGPS error and
+    the gyrocompass bias included. Draws are taken in blocks (a generator's
+    ``standard_normal((k, 3))`` is the stream of ``k`` calls of ``standard_normal(3)``).
+
+    Args:
+        config: the sensor parameters (shared by the envs).
+        n: number of envs.
+        block: samples drawn per refill.
+    """
+
+    def __init__(self, config: SensorConfig, n: int, block: int = 256) -> None:
+        if not isinstance(config, SensorConfig):
+            raise TypeError(f"config must be a SensorConfig, got {type(config).__name__}")
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise ValueError(f"n must be an int >= 1, got {n!r}")
+        self.config = config
+        self.n = n
+        self.block = int(block)
+        self._corr_on = config.correlated
+        a_p, _, a_b, _ = config.correlated_parameters()
+        c = config
+        self._par = np.array(
+            [a_p, a_p, a_b, c.dropout_probability, c.dropout_duration, c.outlier_probability,
+             c.outlier_magnitude, *c.antenna_offset, _EPS_T * c.period, float(self._corr_on)]
+        )  # fmt: skip
+        self._cf = np.zeros((n, 6))
+        self._sd = np.zeros((n, 3))  # stationary std of the correlated errors
+        self.configs = [config] * n
+        for i in range(n):
+            self._set_coefficients(i, config)
+        self._st = np.zeros((n, 4))
+        self._st[:, 3] = -math.inf
+        self._gens: list[tuple[np.random.Generator, ...] | None] = [None] * n
+        self._draws = np.zeros((n, self.block, 9))
+        self._k = np.full(n, self.block, dtype=np.int64)  # next unused draw (block: refill)
+        self._all = np.ones(n, dtype=bool)
+        self._t = np.zeros(n)
+        self._out = np.zeros((n, 5))
+
+    def _set_coefficients(self, i: int, config: SensorConfig) -> None:
+        a_p, sd_p, a_b, sd_b = config.correlated_parameters()
+        self._cf[i, :3] = _sigmas(config)
+        self._sd[i] = (sd_p, sd_p, sd_b)
+        self._cf[i, 3:] = (sd_p * math.sqrt(1.0 - a_p * a_p),) * 2 + (
+            sd_b * math.sqrt(1.0 - a_b * a_b),
+        )
+
+    def set_config(self, i: int, config: SensorConfig) -> None:
+        """Env ``i``'s own noise variances (``config`` may differ from the shared one in
+        ``position_variance`` and ``heading_variance`` only: the sample grid, dropouts,
+        outliers and the correlated errors' fraction, times and bias std are the batch's;
+        the Gauss-Markov DGPS error takes its share of env ``i``'s variance). Call it before
+        :meth:`reset` of that env (the reset draws the errors' start from it)."""
+        same = config.replace(
+            position_variance=self.config.position_variance,
+            heading_variance=self.config.heading_variance,
+        )
+        if same != self.config:
+            raise ValueError(
+                "a batched env's sensors may differ only in position_variance and "
+                f"heading_variance; got {config!r} against {self.config!r}"
+            )
+        self.configs[i] = config
+        self._set_coefficients(i, config)
+
+    def reset(self, rngs: list[np.random.Generator], mask: ArrayLike | None = None) -> None:
+        """Restart the streams of the envs (all, or those where ``mask`` is True), one
+        generator per env (the reset ones are used): one child seed drawn from each (see
+        :meth:`Sensors.reset`)."""
+        if len(rngs) != self.n:
+            raise ValueError(f"rngs must hold one generator per env ({self.n}), got {len(rngs)}")
+        m = self._all if mask is None else np.asarray(mask, dtype=bool)
+        for i in np.nonzero(m)[0].tolist():
+            self._gens[i] = gens = _streams(rngs[i])
+            self._k[i] = self.block
+            self._st[i, 3] = -math.inf
+            if self._corr_on:  # stationary start, b_0 ~ N(0, sd^2)
+                self._st[i, :3] = self._sd[i] * gens[3].standard_normal(3)
+
+    def _refill(self, i: int) -> None:
+        gens = self._gens[i]
+        if gens is None:
+            raise RuntimeError("Sensors.reset(rng) must be called before measure()")
+        noise, outlier, dropout, corr = gens
+        d = self._draws[i]
+        d[:, 0:3] = noise.standard_normal((self.block, 3))
+        d[:, 3:5] = outlier.random((self.block, 2))
+        d[:, 5] = dropout.random(self.block)
+        if self._corr_on:
+            d[:, 6:9] = corr.standard_normal((self.block, 3))
+        self._k[i] = 0
+
+    @property
+    def correlated_error(self) -> NDArray[np.float64]:
+        """The correlated errors of each env's last sample (n, 3): DGPS ``[x, y]`` (m) and
+        gyrocompass bias (rad); zeros when they are off."""
+        return self._st[:, :3].copy()
+
+    def _call(self, args: tuple[Any, ...]) -> None:
+        """:func:`_sense` on ``args``, refilling the envs whose draws are used up."""
+        if not _SENSE:
+            _SENSE.append(entry(_sense, args))
+        i = _SENSE[0](*args)
+        while i >= 0:
+            self._refill(i)
+            i = _SENSE[0](*args)
+
+    def measure(
+        self, t: ArrayLike, eta_true: ArrayLike, mask: NDArray[np.bool_] | None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
+        """Sample every env (or those where ``mask`` is True: only their streams advance) at
+        its time ``t`` (n,) for its true pose ``eta_true`` (n, 3).
+
+        Returns:
+            ``(z, valid, outlier)``: the measured poses (n, 3) (``nan`` rows during a
+            dropout and for the envs not sampled; heading in ``(-pi, pi]``), whether each is
+            available, and the outlier truth flags.
+        """
+        eta = np.array(eta_true, dtype=float)
+        if eta.shape != (self.n, 3) or not np.all(np.isfinite(eta)):
+            raise ValueError(f"eta_true must be ({self.n}, 3) finite values, got {eta.shape}")
+        self._t[:] = np.broadcast_to(np.asarray(t, dtype=float), (self.n,))
+        m = self._all if mask is None else np.array(mask, dtype=bool)
+        out = self._out
+        out[:, :3] = np.nan
+        out[:, 3:] = 0.0
+        self._call((m, self._t, eta, self._k, self._draws, self._st, self._cf, self._par, out))
+        return out[:, :3].copy(), out[:, 3] > 0.0, out[:, 4] > 0.0
+
+
 class Sensors:
-    """Runtime DGPS + gyrocompass model drawing its noise from a seeded generator.
+    """Runtime DGPS + gyrocompass model drawing its noise from a seeded generator: the
+    ``n = 1`` adapter of :class:`BatchedSensors` (one law).
 
     Usage::
 
@@ -413,15 +608,10 @@ class Sensors:
         if not isinstance(config, SensorConfig):
             raise TypeError(f"config must be a SensorConfig, got {type(config).__name__}")
         self.config = config
-        self._sig = _sigmas(config)
-        self._gm = config.correlated_parameters() if config.correlated else None
-        self._rng_noise: np.random.Generator | None = None
-        self._rng_outlier: np.random.Generator | None = None
-        self._rng_dropout: np.random.Generator | None = None
-        self._rng_corr: np.random.Generator | None = None
-        self._bias = [0.0, 0.0, 0.0]  # correlated errors (x m, y m, heading rad)
-        self._dropout_until = -math.inf
-        self._k = _BLOCK
+        self._b = b = BatchedSensors(config, 1, _BLOCK)
+        self._t1 = np.zeros(1)
+        self._eta1 = np.zeros((1, 3))
+        self._args = (b._all, self._t1, self._eta1, b._k, b._draws, b._st, b._cf, b._par, b._out)
 
     def reset(self, rng: np.random.Generator | int) -> None:
         """Restart the random streams from a generator (or an integer seed).
@@ -435,19 +625,13 @@ class Sensors:
             raise TypeError(
                 f"rng must be a numpy.random.Generator or an int seed, got {type(rng).__name__}"
             )
-        self._rng_noise, self._rng_outlier, self._rng_dropout, self._rng_corr = _streams(rng)
-        self._dropout_until = -math.inf
-        self._k = _BLOCK  # next unused pre-drawn sample (_BLOCK: draw the next block)
-        if self._gm is not None:  # stationary start, b_0 ~ N(0, sd^2)
-            _, sd_p, _, sd_b = self._gm
-            w = self._rng_corr.standard_normal(3).tolist()
-            self._bias = [sd_p * w[0], sd_p * w[1], sd_b * w[2]]
+        self._b.reset([rng])
 
     @property
     def correlated_error(self) -> NDArray[np.float64]:
         """The correlated errors of the last sample (or of the reset): DGPS ``[x, y]`` (m)
         and gyrocompass bias (rad); zeros when they are off (truth, for tests and plots)."""
-        return np.array(self._bias)
+        return self._b._st[0, :3].copy()
 
     def sample_times(self, t0: float, t1: float) -> NDArray[np.float64]:
         """Sample instants ``k * period`` in ``(t0, t1]`` (s), ascending (may be empty)."""
@@ -466,17 +650,12 @@ class Sensors:
             RuntimeError: :meth:`reset` was not called.
             ValueError: ``eta_true`` is not 3 finite values.
         """
-        self._require_reset()
         eta = np.asarray(eta_true, dtype=float)
         e = eta.tolist() if eta.shape == (3,) else None
         if e is None or not all(map(math.isfinite, e)):
             raise ValueError(f"eta_true must be 3 finite values [x, y, psi], got {eta_true!r}")
         t, z, valid, outlier = self.measure_pose(t, e[0], e[1], e[2])
         return Measurement(t, None if z is None else np.array(z), valid, outlier)
-
-    def _require_reset(self) -> None:
-        if self._rng_noise is None or self._rng_outlier is None or self._rng_dropout is None:
-            raise RuntimeError("Sensors.reset(rng) must be called before measure()")
 
     def measure_pose(
         self, t: float, x: float, y: float, psi: float
@@ -489,193 +668,22 @@ class Sensors:
             RuntimeError: :meth:`reset` was not called.
             ValueError: a non-finite pose.
         """
-        self._require_reset()
+        b = self._b
+        if b._gens[0] is None:
+            raise RuntimeError("Sensors.reset(rng) must be called before measure()")
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(psi)):
             raise ValueError(
                 f"the true pose must be 3 finite values [x, y, psi], got {[x, y, psi]}"
             )
-        cfg = self.config
-        # every stream draws the same amount at every sample (common random numbers); the
-        # draws are taken in blocks (a generator's standard_normal((k, 3)) is the stream of k
-        # calls of standard_normal(3), random((k, 2)) that of k calls of random(2))
-        k = self._k
-        if k == _BLOCK:
-            assert self._rng_noise is not None and self._rng_outlier is not None
-            assert self._rng_dropout is not None
-            self._noise = (self._rng_noise.standard_normal((_BLOCK, 3)) * self._sig).tolist()
-            self._out = self._rng_outlier.random((_BLOCK, 2)).tolist()
-            self._drop = self._rng_dropout.random(_BLOCK).tolist()
-            if self._gm is not None and self._rng_corr is not None:
-                self._corr = self._rng_corr.standard_normal((_BLOCK, 3)).tolist()
-            k = 0
-        self._k = k + 1
-        n0, n1, n2 = self._noise[k]
-        u_out, ang = self._out[k]
-        u_drop = self._drop[k]
-        if self._gm is not None:  # one exact Gauss-Markov step per sample, also in dropouts
-            a_p, sd_p, a_b, sd_b = self._gm
-            q_p, q_b = sd_p * math.sqrt(1.0 - a_p * a_p), sd_b * math.sqrt(1.0 - a_b * a_b)
-            w0, w1, w2 = self._corr[k]
-            b = self._bias
-            b[0] = a_p * b[0] + q_p * w0
-            b[1] = a_p * b[1] + q_p * w1
-            b[2] = a_b * b[2] + q_b * w2
-            n0 += b[0]
-            n1 += b[1]
-            n2 += b[2]
         t = float(t)
-        if t < self._dropout_until - _EPS_T * cfg.period:
+        self._t1[0] = t
+        e = self._eta1
+        e[0, 0], e[0, 1], e[0, 2] = x, y, psi
+        b._call(self._args)
+        z0, z1, z2, valid, outlier = b._out[0].tolist()
+        if not valid:
             return t, None, False, False
-        if u_drop < cfg.dropout_probability:
-            self._dropout_until = t + cfg.dropout_duration
-            return t, None, False, False
-        c, s = math.cos(psi), math.sin(psi)
-        xa, ya = cfg.antenna_offset
-        z0 = (x + c * xa - s * ya) + n0
-        z1 = (y + s * xa + c * ya) + n1
-        outlier = u_out < cfg.outlier_probability
-        if outlier:
-            a = 2.0 * math.pi * ang
-            z0 += cfg.outlier_magnitude * math.cos(a)
-            z1 += cfg.outlier_magnitude * math.sin(a)
-        return t, (z0, z1, wrap_angle(psi + n2)), True, outlier
-
-
-class BatchedSensors:
-    """The sensors of ``n`` envs sampled at once: the array form of :class:`Sensors`, each env
-    with its own three streams, drawn as :meth:`Sensors.reset` draws them from the env's
-    generator, so that env ``i`` measures what a :class:`Sensors` reset with the same
-    generator measures (a test checks it), the Gauss-Markov DGPS error and the gyrocompass
-    bias included. Draws are taken in blocks (a generator's ``standard_normal((k, 3))`` is
-    the stream of ``k`` calls of ``standard_normal(3)``).
-
-    Args:
-        config: the sensor parameters (shared by the envs).
-        n: number of envs.
-        block: samples drawn per refill.
-    """
-
-    def __init__(self, config: SensorConfig, n: int, block: int = 256) -> None:
-        if not isinstance(config, SensorConfig):
-            raise TypeError(f"config must be a SensorConfig, got {type(config).__name__}")
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ValueError(f"n must be an int >= 1, got {n!r}")
-        self.config = config
-        self.n = n
-        self.block = int(block)
-        self._sig = np.tile(_sigmas(config), (n, 1))
-        self._corr_on = config.correlated
-        a_p, sd_p, a_b, sd_b = config.correlated_parameters()
-        self._a = np.array([a_p, a_p, a_b])
-        self._sd = np.tile([sd_p, sd_p, sd_b], (n, 1))  # stationary std of the errors
-        self._bias = np.zeros((n, 3))
-        self._corr = np.zeros((n, self.block, 3)) if self._corr_on else None
-        self.configs = [config] * n
-        self._gens: list[tuple[np.random.Generator, ...] | None] = [None] * n
-        self._noise = np.zeros((n, self.block, 3))
-        self._out = np.zeros((n, self.block, 2))
-        self._drop = np.zeros((n, self.block))
-        self._k = np.full(n, self.block)  # next unused draw per env (block: refill)
-        self._until = np.full(n, -math.inf)
-        self._rows = np.arange(n)
-
-    def set_config(self, i: int, config: SensorConfig) -> None:
-        """Env ``i``'s own noise variances (``config`` may differ from the shared one in
-        ``position_variance`` and ``heading_variance`` only: the sample grid, dropouts,
-        outliers and the correlated errors' fraction, times and bias std are the batch's;
-        the Gauss-Markov DGPS error takes its share of env ``i``'s variance). Call it before
-        :meth:`reset` of that env (the reset draws the errors' start from it)."""
-        same = config.replace(
-            position_variance=self.config.position_variance,
-            heading_variance=self.config.heading_variance,
-        )
-        if same != self.config:
-            raise ValueError(
-                "a batched env's sensors may differ only in position_variance and "
-                f"heading_variance; got {config!r} against {self.config!r}"
-            )
-        self.configs[i] = config
-        self._sig[i] = _sigmas(config)
-        _, sd_p, _, sd_b = config.correlated_parameters()
-        self._sd[i] = (sd_p, sd_p, sd_b)
-
-    def reset(self, rngs: list[np.random.Generator], mask: ArrayLike | None = None) -> None:
-        """Restart the streams of the envs (all, or those where ``mask`` is True), one
-        generator per env (the reset ones are used)."""
-        if len(rngs) != self.n:
-            raise ValueError(f"rngs must hold one generator per env ({self.n}), got {len(rngs)}")
-        m = np.ones(self.n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
-        for i in np.nonzero(m)[0].tolist():
-            self._gens[i] = gens = _streams(rngs[i])
-            self._k[i] = self.block
-            self._until[i] = -math.inf
-            if self._corr_on:  # stationary start, as Sensors.reset
-                self._bias[i] = self._sd[i] * gens[3].standard_normal(3)
-
-    def _refill(self, i: int) -> None:
-        gens = self._gens[i]
-        if gens is None:
-            raise RuntimeError("BatchedSensors.reset(rngs) must be called before measure()")
-        noise, outlier, dropout, corr = gens
-        self._noise[i] = noise.standard_normal((self.block, 3))
-        self._out[i] = outlier.random((self.block, 2))
-        self._drop[i] = dropout.random(self.block)
-        if self._corr is not None:
-            self._corr[i] = corr.standard_normal((self.block, 3))
-        self._k[i] = 0
-
-    @property
-    def correlated_error(self) -> NDArray[np.float64]:
-        """The correlated errors of each env's last sample (n, 3): DGPS ``[x, y]`` (m) and
-        gyrocompass bias (rad); zeros when they are off."""
-        return self._bias.copy()
-
-    def measure(
-        self, t: ArrayLike, eta_true: ArrayLike, mask: NDArray[np.bool_] | None = None
-    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
-        """Sample every env (or those where ``mask`` is True: only their streams advance) at
-        its time ``t`` (n,) for its true pose ``eta_true`` (n, 3).
-
-        Returns:
-            ``(z, valid, outlier)``: the measured poses (n, 3) (``nan`` rows during a
-            dropout; heading in ``(-pi, pi]``), whether each is available, and the outlier
-            truth flags.
-        """
-        eta = np.asarray(eta_true, dtype=float)
-        tt = np.broadcast_to(np.asarray(t, dtype=float), (self.n,))
-        if eta.shape != (self.n, 3) or not np.all(np.isfinite(eta)):
-            raise ValueError(f"eta_true must be ({self.n}, 3) finite values, got {eta.shape}")
-        for i in np.nonzero(self._k >= self.block)[0].tolist():
-            self._refill(i)
-        cfg = self.config
-        r, k = self._rows, self._k
-        noise = self._noise[r, k] * self._sig
-        if self._corr is not None:  # one exact Gauss-Markov step per sample (Sensors.measure)
-            a = self._a
-            step = a * self._bias + self._sd * np.sqrt(1.0 - a * a) * self._corr[r, k]
-            on = None if mask is None else np.asarray(mask, dtype=bool)[:, None]
-            self._bias = step if on is None else np.where(on, step, self._bias)
-            noise = noise + self._bias
-        u_out, ang = self._out[r, k, 0], self._out[r, k, 1]
-        u_drop = self._drop[r, k]
-        self._k = k + 1 if mask is None else k + mask
-        held = tt < self._until - _EPS_T * cfg.period
-        start = ~held & (u_drop < cfg.dropout_probability)
-        self._until = np.where(
-            start if mask is None else start & mask, tt + cfg.dropout_duration, self._until
-        )
-        valid = ~(held | start)
-        psi = eta[:, 2]
-        c, s = np.cos(psi), np.sin(psi)
-        xa, ya = cfg.antenna_offset
-        z = np.stack([eta[:, 0] + c * xa - s * ya, eta[:, 1] + s * xa + c * ya, psi], -1) + noise
-        outlier = valid & (u_out < cfg.outlier_probability)
-        a = 2.0 * math.pi * ang
-        z[:, 0] += np.where(outlier, cfg.outlier_magnitude * np.cos(a), 0.0)
-        z[:, 1] += np.where(outlier, cfg.outlier_magnitude * np.sin(a), 0.0)
-        z[:, 2] = np.asarray(wrap_angle(z[:, 2]))
-        z[~valid] = np.nan
-        return z, valid, outlier
+        return t, (z0, z1, z2), True, outlier > 0.0
 
 
 def _sigmas(config: SensorConfig) -> NDArray[np.float64]:
