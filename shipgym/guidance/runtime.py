@@ -33,7 +33,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._jit import entry
 
-from . import batch as _b
+from .batch import _ETA_DOT_N, _NU, _NU_DOT, _TSTART, BatchedGuidance, _derived, _reference
+from .batch import _update as _update_kernel
 from .plan import ManoeuvrePlan
 from .reference import LegProfile, Limits, leg_profile
 from .rframe import to_r_frame
@@ -78,18 +79,18 @@ class Reference:
             np.ascontiguousarray(a, dtype=float).reshape(1, 3)
             for a in (self.eta_d_r, self.eta_dot_d_r, self.eta_ddot_d_r, self.eta_P)
         ]
-        return _b._derived(*f)[0]
+        return _derived(*f)[0]
 
     @functools.cached_property
     def _nu_d(self) -> tuple[float, float, float]:
         """:attr:`nu_d` as floats, computed once (the reference is immutable)."""
-        u, v, r = self._buf[_b._NU].tolist()
+        u, v, r = self._buf[_NU].tolist()
         return u, v, r
 
     @functools.cached_property
     def _nu_dot_d(self) -> tuple[float, float, float]:
         """:attr:`nu_dot_d` as floats, computed once."""
-        u, v, r = self._buf[_b._NU_DOT].tolist()
+        u, v, r = self._buf[_NU_DOT].tolist()
         return u, v, r
 
     @classmethod
@@ -119,12 +120,12 @@ class Reference:
     @property
     def eta_dot_d_n(self) -> NDArray[np.float64]:
         """Desired NED velocity ``[x_dot, y_dot, psi_dot]``: ``R(psi_P) eta_dot_d^r``."""
-        return self._buf[_b._ETA_DOT_N]
+        return self._buf[_ETA_DOT_N]
 
     @property
     def nu_d(self) -> NDArray[np.float64]:
         """Desired body-frame velocity ``[u, v, r]``: ``R(psi_d^r)^T eta_dot_d^r`` (m/s, rad/s)."""
-        return self._buf[_b._NU]
+        return self._buf[_NU]
 
     @property
     def nu_dot_d(self) -> NDArray[np.float64]:
@@ -132,7 +133,7 @@ class Reference:
 
         ``S(r) = [[0, -r, 0], [r, 0, 0], [0, 0, 0]]`` (Fossen 2011, eq. 2.62 differentiated).
         """
-        return self._buf[_b._NU_DOT]
+        return self._buf[_NU_DOT]
 
     def to_r(self, eta_n: ArrayLike) -> NDArray[np.float64]:
         """A NED pose (or poses, (..., 3)) in this leg's r-frame, heading unwrapped near psi_d^r.
@@ -169,7 +170,7 @@ class Guidance:
         self._profiles: tuple[LegProfile, ...] = tuple(
             leg_profile(leg, self.limits) for leg in plan.legs
         )
-        self._g = _b.BatchedGuidance(1, limits=self.limits)
+        self._g = BatchedGuidance(1, limits=self.limits)
         self._waypoints: NDArray[np.float64] | None = None
         self._t = np.zeros(1)  # the time of a call (s)
         self._eta = np.zeros((1, 3))  # the pose of a call (m, m, rad)
@@ -178,8 +179,8 @@ class Guidance:
         self._finished = False
         self._t_start = 0.0
         args = (self._t, self._eta, self._g._tab, self._g._st, self._g._comp, self._sw)
-        self._upd = entry(_b._update, args)
-        self._ref = entry(_b._reference, (self._t, self._g._tab, self._g._st))
+        self._upd = entry(_update_kernel, args)
+        self._ref = entry(_reference, (self._t, self._g._tab, self._g._st))
 
     # -- state -------------------------------------------------------------------------------
     def reset(self, eta_start: ArrayLike, t0: float = 0.0) -> None:
@@ -310,5 +311,5 @@ class Guidance:
         g._refresh()
         self._leg = int(g._leg[0])
         self._finished = bool(g._finished[0])
-        self._t_start = float(g._st[0, _b._TSTART])
+        self._t_start = float(g._st[0, _TSTART])
         return True
