@@ -401,6 +401,7 @@ class BatchedGuidance:
         mask: ArrayLike | None = None,
         *,
         _profiles: Sequence[Sequence[LegProfile]] | None = None,
+        _waypoints: Sequence[Array] | None = None,
     ) -> None:
         """Start the plans of the envs (all, or those where ``mask`` is True).
 
@@ -445,9 +446,11 @@ class BatchedGuidance:
                  for leg in p.legs]
                 for p in chosen
             ]  # fmt: skip
+        if _waypoints is None:
+            _waypoints = [p.waypoints(e) for p, e in zip(chosen, starts, strict=True)]
         rows = [
-            _leg_table(p, prof, p.waypoints(e))
-            for p, prof, e in zip(chosen, _profiles, starts, strict=True)
+            _leg_table(p, prof, wp)
+            for p, prof, wp in zip(chosen, _profiles, _waypoints, strict=True)
         ]
         L = max([self._tab.shape[1], *(p.n_legs for p in chosen)])
         if L > self._tab.shape[1]:  # a longer plan: pad the tables

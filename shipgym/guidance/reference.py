@@ -28,6 +28,9 @@ profile at all: its reference jumps from P to K at ``delay`` (zero velocity and 
 before and after; the step input of a DP test, Al-Takie 1982 ch. 5). Its duration is
 ``delay``.
 
+The law is written once, compiled (:func:`path_law`): :class:`LegProfile` (design time:
+plots, durations) and the run-time guidance (:mod:`shipgym.guidance.batch`) both call it.
+
 The per-DOF limits :class:`Limits` apply to the r-frame coordinates (along and across the
 ship's heading at P, and the heading); for the single-DOF legs of the paper's manoeuvre they
 are body-frame limits.

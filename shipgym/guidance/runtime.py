@@ -27,13 +27,14 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._jit import entry
 
-from .batch import _ETA_DOT_N, _NU, _NU_DOT, _TSTART, BatchedGuidance, _derived, _reference
+from .batch import _ETA_DOT_N, _NU, _NU_DOT, _R, _S, _TSTART, BatchedGuidance, _derived, _reference
 from .batch import _update as _update_kernel
 from .plan import ManoeuvrePlan
 from .reference import LegProfile, Limits, leg_profile
@@ -144,6 +145,15 @@ class Reference:
         return to_r_frame(eta_n, self.eta_P, psi_ref_r=self.eta_d_r[2])
 
 
+@functools.cache
+def _entries() -> tuple[Any, Any]:
+    """The compiled entry points of the update and reference kernels for one env's arrays
+    (:func:`shipgym._jit.entry`: no per-call type resolution)."""
+    t, tab, st = np.zeros(1), np.zeros((1, 1, _R)), np.zeros((1, _S))
+    upd = entry(_update_kernel, (t, np.zeros((1, 3)), tab, st, np.zeros((1, 1)), np.zeros(1, bool)))
+    return upd, entry(_reference, (t, tab, st))
+
+
 class Guidance:
     """Leg-by-leg guidance through a manoeuvre plan (Tomera 2014 Figs. 2-3 and 7).
 
@@ -178,9 +188,7 @@ class Guidance:
         self._leg = 0
         self._finished = False
         self._t_start = 0.0
-        args = (self._t, self._eta, self._g._tab, self._g._st, self._g._comp, self._sw)
-        self._upd = entry(_update_kernel, args)
-        self._ref = entry(_reference, (self._t, self._g._tab, self._g._st))
+        self._upd, self._ref = _entries()
 
     # -- state -------------------------------------------------------------------------------
     def reset(self, eta_start: ArrayLike, t0: float = 0.0) -> None:
@@ -189,7 +197,7 @@ class Guidance:
         if not math.isfinite(t0):
             raise ValueError(f"t0 must be finite, got {t0!r}")
         wp = self.plan.waypoints(eta_start)  # checks the pose
-        self._g.reset([self.plan], wp[0], t0, _profiles=[self._profiles])
+        self._g.reset([self.plan], wp[0], t0, _profiles=[self._profiles], _waypoints=[wp])
         wp.setflags(write=False)
         self._waypoints = wp
         self._leg, self._finished, self._t_start = 0, False, t0
