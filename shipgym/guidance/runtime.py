@@ -104,6 +104,7 @@ class Reference:
         a test checks that the result equals ``Reference(...)`` field by field.
         """
         ref = object.__new__(cls)
+        nu, nu_dot = o[_NU : _NU_DOT + 1].tolist()  # the env reads them as floats
         ref.__dict__.update(
             eta_d_r=o[0],
             eta_dot_d_r=o[1],
@@ -115,6 +116,8 @@ class Reference:
             t_leg=t_leg,
             finished=finished,
             _buf=o,
+            _nu_d=(*nu,),
+            _nu_dot_d=(*nu_dot,),
         )
         return ref
 
