@@ -317,3 +317,18 @@ def test_a_longer_plan_at_a_reset_pads_the_tables() -> None:
     assert err["to_r"] <= 1e-10, err
     assert g.finished.all() and np.array_equal(g.legs_completed, [5, 1])
     assert g.leg_completion_times() == [list(s.leg_completion_times) for s in singles]
+
+
+def test_a_guidance_pickles_and_goes_on_where_it_was() -> None:
+    """A Guidance (an env's part) pickles with its state; the copy and the original then
+    give the same outputs."""
+    import pickle
+
+    g = Guidance(tomera2014_plan(switch_min_progress=0.0), limits=LIM)
+    g.reset(np.zeros(3), t0=2.0)
+    assert g.update(3.0, g.waypoints[1])
+    h = pickle.loads(pickle.dumps(g))
+    assert h.leg_index == g.leg_index == 1 and h.leg_start_times == g.leg_start_times
+    for t in (3.0, 50.0, 400.0):
+        assert np.array_equal(h.reference(t).eta_d_n, g.reference(t).eta_d_n)
+        assert h.update(t, g.waypoints[2]) == g.update(t, g.waypoints[2])

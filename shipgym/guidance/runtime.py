@@ -193,6 +193,14 @@ class Guidance:
         self._t_start = 0.0
         self._upd, self._ref = _entries()
 
+    def __getstate__(self) -> dict[str, Any]:
+        """The state without the compiled entry points (they do not pickle)."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("_upd", "_ref")}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._upd, self._ref = _entries()
+
     # -- state -------------------------------------------------------------------------------
     def reset(self, eta_start: ArrayLike, t0: float = 0.0) -> None:
         """Start the plan from the NED pose ``eta_start`` (m, m, rad) at time ``t0`` (s)."""
