@@ -19,7 +19,8 @@ instant, when all of these hold:
 4. conditions 1-3 have held continuously for ``settle_time`` seconds (default 0).
 
 After the last leg completes, :attr:`Guidance.finished` is True and the reference stays at
-the last leg's end point.
+the last leg's end point. The laws are compiled once, over N envs
+(:mod:`shipgym.guidance.batch`); :class:`Guidance` runs them for one.
 """
 
 from __future__ import annotations
