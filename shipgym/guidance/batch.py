@@ -243,8 +243,9 @@ class BatchedReference:
     def _of(cls, buf: Array, leg: NDArray[np.intp], finished: NDArray[np.bool_]) -> Any:
         """The reference of a buffer of :func:`_reference` (made read-only)."""
         buf.setflags(write=False)
-        rows = [buf[:, k] for k in range(6)]
-        return cls(*rows, leg, buf[:, _TLEG, 0], finished, buf)
+        b = buf
+        return cls(b[:, 0], b[:, 1], b[:, 2], b[:, 3], b[:, 4], b[:, 5], leg, b[:, _TLEG, 0],
+                   finished, b)  # fmt: skip
 
     @property
     def n(self) -> int:
