@@ -182,18 +182,6 @@ def _update(t: Array, eta: Array, tab: Array, st: Array, comp: Array, sw: Any) -
     return count
 
 
-@njit
-def _switch_conditions(t: Array, eta: Array, tab: Array, st: Array) -> Any:
-    """:func:`_conditions` of every env, (n, 3) bool."""
-    n = t.shape[0]
-    out = np.zeros((n, 3), dtype=np.bool_)
-    for i in range(n):
-        sti = st[i]
-        c = _conditions(tab[i, int(sti[_LEG])], sti, t[i], eta[i, 0], eta[i, 1], eta[i, 2])
-        out[i, 0], out[i, 1], out[i, 2] = c
-    return out
-
-
 # ---- the reference --------------------------------------------------------------------------
 class BatchedReference:
     """The guidance output of ``n`` envs at one instant (the reference of
@@ -548,19 +536,6 @@ class BatchedGuidance:
         return tuple((tab[:, _DELAY] + tab[:, _T]).tolist())
 
     # -- per step ----------------------------------------------------------------------------
-    def switch_conditions(self, t: ArrayLike, eta_n: ArrayLike) -> NDArray[np.bool_]:
-        """The three instantaneous switching conditions of every env on its current leg,
-        (n, 3) bool: ``near`` (distance to K below ``switch_distance``), ``aligned``
-        (wrapped heading error to K below ``switch_heading``), ``progressed`` (elapsed leg
-        time at least ``switch_min_progress`` of its reference duration).
-
-        Raises:
-            ValueError: wrong shapes. RuntimeError: an env never reset.
-        """
-        self._require_reset()
-        t, eta = self._times(t), self._poses(eta_n)
-        return _switch_conditions(t, eta, self._tab, self._st)
-
     def update(self, t: ArrayLike, eta_n: ArrayLike) -> NDArray[np.bool_]:
         """Check the switching rule of every env (:meth:`Guidance.update
         <shipgym.guidance.runtime.Guidance.update>` per env).

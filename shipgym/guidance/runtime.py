@@ -35,7 +35,18 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._jit import entry
 
-from .batch import _ETA_DOT_N, _NU, _NU_DOT, _R, _S, _TSTART, BatchedGuidance, _derived, _reference
+from .batch import (
+    _ETA_DOT_N,
+    _NU,
+    _NU_DOT,
+    _R,
+    _S,
+    _TSTART,
+    BatchedGuidance,
+    _conditions,
+    _derived,
+    _reference,
+)
 from .batch import _update as _update_kernel
 from .plan import ManoeuvrePlan
 from .reference import LegProfile, Limits, leg_profile
@@ -303,8 +314,9 @@ class Guidance:
         self._pose(eta_n)
         if not np.all(np.isfinite(self._eta)):
             raise ValueError(f"eta_n must be a finite [x, y, psi] (m, m, rad), got {eta_n!r}")
-        near, aligned, progressed = self._g.switch_conditions(float(t), self._eta)[0].tolist()
-        return near, aligned, progressed
+        g, (x, y, psi) = self._g, self._eta[0].tolist()
+        near, aligned, progressed = _conditions(g._tab[0, self._leg], g._st[0], float(t), x, y, psi)
+        return bool(near), bool(aligned), bool(progressed)
 
     def update(self, t: float, eta_n: ArrayLike) -> bool:
         """Check the switching rule at time ``t`` (s) for the ship at NED pose ``eta_n``.
