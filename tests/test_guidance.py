@@ -146,12 +146,40 @@ def test_reference_limits_and_endpoints(leg):
         pe, ve, ae = leg_reference(leg, lim, tt)
         assert np.array_equal(pe, leg.displacement)
         assert np.array_equal(ve, np.zeros(3)) and np.array_equal(ae, np.zeros(3))
-    # scalar and array evaluation agree
+    # a scalar time gives the array's row (one compiled law)
     for k in (1, 5000, 17777, 33333, 49999):
         for s_arr, s_sc in zip(
             (p[k], v[k], a[k]), leg_reference(leg, lim, float(t[k])), strict=True
         ):
-            np.testing.assert_allclose(s_arr, s_sc, rtol=1e-12, atol=1e-15)
+            assert np.array_equal(s_arr, s_sc)
+
+
+@pytest.mark.parametrize("leg", [Leg(surge=38.0), Leg(sway=-3.0), Leg(yaw=math.pi / 2)])
+def test_profile_is_the_raised_cosine_trapezoid_in_closed_form(leg):
+    # Tomera (2014) Fig. 3 as this package shapes it: s_ddot = (A/2)(1 - cos(2 pi t / T_a))
+    # while accelerating, s_dot = V cruising, the mirror image braking; the integral of the
+    # speed is the displacement (SciPy's Simpson rule, independent of the closed forms)
+    from scipy.integrate import simpson
+
+    prof = leg_profile(leg, BLUE_LADY_LIMITS)
+    A, V, Ta, T = prof.accel, prof.speed, prof.t_accel, prof.duration
+    assert V == pytest.approx(0.5 * A * Ta, rel=1e-12)
+    d = leg.displacement
+    t = np.linspace(0.0, Ta, 401)[1:-1]
+    _, v, a = prof.evaluate(t)
+    want_a = (0.5 * A * (1.0 - np.cos(2.0 * math.pi * t / Ta)))[:, None] * d
+    np.testing.assert_allclose(a, want_a, rtol=1e-12, atol=1e-18)
+    want_v = (0.5 * A * (t - Ta / (2.0 * math.pi) * np.sin(2.0 * math.pi * t / Ta)))[:, None] * d
+    np.testing.assert_allclose(v, want_v, rtol=1e-12, atol=1e-18)
+    _, v_end, a_end = prof.evaluate(T - t)  # braking: the mirror image
+    np.testing.assert_allclose(a_end, -want_a, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(v_end, want_v, rtol=1e-9, atol=1e-15)
+    if prof.t_cruise > 0.0:
+        _, v_c, a_c = prof.evaluate(np.linspace(Ta, T - Ta, 7))
+        assert np.array_equal(v_c, np.tile(V * d, (7, 1))) and not np.any(a_c)
+    tt = np.linspace(0.0, T, 20001)
+    _, v_all, _ = prof.evaluate(tt)
+    np.testing.assert_allclose(simpson(v_all, x=tt, axis=0), d, rtol=1e-9, atol=1e-12)
 
 
 def test_combined_leg_is_synchronised_on_a_straight_line():
@@ -432,10 +460,10 @@ def test_body_frame_reference_velocity_and_its_derivative():
         np.testing.assert_allclose(ref.eta_dot_d_n, fd_n, atol=1e-9)
 
 
-def test_per_step_float_forms_equal_the_array_forms():
-    # the guidance builds its per-step reference from floats (LegProfile.evaluate_one,
-    # Reference._build, to_r_frame_pose): the same numbers as the array forms, and the body
-    # velocities as R(psi)^T eta_dot (Fossen 2011 eq. 2.62) from a rotation matrix
+def test_guidance_reference_is_the_profile_and_the_body_velocities_rotate():
+    # the guidance's reference is the leg's profile (one compiled law) at the leg's time, a
+    # Reference equal field by field to the dataclass built from the same values, and the
+    # body velocities R(psi)^T eta_dot (Fossen 2011 eq. 2.62) of a rotation matrix
     from shipgym.dynamics.frames import rot
     from shipgym.guidance import Reference
     from shipgym.guidance.rframe import to_r_frame_pose
@@ -450,13 +478,12 @@ def test_per_step_float_forms_equal_the_array_forms():
     for i, leg in enumerate(legs):
         prof = leg_profile(leg, BLUE_LADY_LIMITS)
         T = prof.total_duration
-        ts = np.linspace(-1.0, T + 5.0, 23)
-        p_arr, v_arr, a_arr = prof.evaluate(ts)
-        for k, t in enumerate(ts.tolist()):
-            p, v, a = prof.evaluate_one(t)
-            np.testing.assert_allclose(p, p_arr[k], rtol=1e-12, atol=1e-15)
-            np.testing.assert_allclose(v, v_arr[k], rtol=1e-12, atol=1e-15)
-            np.testing.assert_allclose(a, a_arr[k], rtol=1e-12, atol=1e-15)
+        t_start = g.leg_start_times[-1]
+        for t_leg in np.linspace(-1.0, T + 5.0, 23).tolist():
+            ref = g.reference(t_start + t_leg)
+            want = prof.evaluate(np.array([ref.t_leg]))
+            for got, w in zip((ref.eta_d_r, ref.eta_dot_d_r, ref.eta_ddot_d_r), want, strict=True):
+                np.testing.assert_array_equal(got, w[0])
         for t in np.linspace(0.0, T + 2.0, 9).tolist():
             ref = g.reference(float(g.leg_start_times[-1] + t))
             assert ref.leg == i
@@ -465,6 +492,7 @@ def test_per_step_float_forms_equal_the_array_forms():
             plain = Reference(**{f.name: getattr(ref, f.name) for f in dataclasses.fields(ref)})
             assert {f.name for f in dataclasses.fields(ref)} <= set(vars(ref))
             assert ref._nu_d == plain._nu_d and ref._nu_dot_d == plain._nu_dot_d
+            np.testing.assert_array_equal(ref.eta_dot_d_n, plain.eta_dot_d_n)
             R = rot(ref.eta_d_r[2])
             np.testing.assert_allclose(ref.nu_d, R.T @ ref.eta_dot_d_r, atol=1e-15)
             eta = ref.eta_d_n + [0.3, -0.2, 7.0]  # a heading many turns off: unwrapped near psi_d

@@ -1,4 +1,4 @@
-"""Guidance for harbour manoeuvres (Tomera 2014 Figs. 2-3 and 7). Pure NumPy.
+"""Guidance for harbour manoeuvres (Tomera 2014 Figs. 2-3 and 7).
 
 - :mod:`~shipgym.guidance.rframe`: the leg's r-frame (Tomera 2014 eqs. 1-2), ``to_r_frame`` and
   ``from_r_frame``;
@@ -6,9 +6,10 @@
   (raised-cosine-acceleration trapezoid, DOFs synchronised on a straight r-frame line);
 - :mod:`~shipgym.guidance.plan`: :class:`Leg`, :class:`ManoeuvrePlan`, the paper's 5-leg plan
   and the plan registry;
-- :mod:`~shipgym.guidance.runtime`: :class:`Guidance` (current leg, reference, switching);
-- :mod:`~shipgym.guidance.batch`: :class:`BatchedGuidance`, the guidance of N envs at once
-  (each its own plan), per env exactly :class:`Guidance`.
+- :mod:`~shipgym.guidance.batch`: :class:`BatchedGuidance`, the run-time guidance of N >= 1
+  envs (each its own plan), compiled once: the reference and the switching rule;
+- :mod:`~shipgym.guidance.runtime`: :class:`Guidance` (current leg, reference, switching),
+  the same compiled guidance for one env.
 """
 
 from .batch import BatchedGuidance, BatchedReference

@@ -1,33 +1,18 @@
-"""Guidance of N envs at once: the batched form of :class:`~shipgym.guidance.runtime.Guidance`.
+"""The run-time guidance of N >= 1 envs: compiled reference and leg switching (Tomera 2014).
 
-Each env walks through its own :class:`~shipgym.guidance.plan.ManoeuvrePlan` (its own number
-of legs, leg kinds, ``delay``/``step`` legs, switching rule and limits), exactly as a
-:class:`~shipgym.guidance.runtime.Guidance` per env would (a test runs one per env and
-compares every output to 1e-10, the switch instants exactly):
+Each env walks through its own :class:`~shipgym.guidance.plan.ManoeuvrePlan` (its own legs,
+``delay``/``step`` legs, switching rule and limits). Every run-time law is written once, per
+env row of ``(n, ...)`` arrays, and compiled: the reference of the current leg
+(:func:`~shipgym.guidance.reference.path_law`, Tomera (2014) Fig. 3, mapped to NED with
+Tomera (2014) eq. 2 and to the body frame, Fossen (2011) eq. 2.62) and the switching rule
+(distance and heading error to K, Tomera (2014); progress and ``settle_time``, ours; see
+:mod:`shipgym.guidance.runtime`). :class:`~shipgym.guidance.runtime.Guidance`, the single
+env's guidance, is this code at ``n = 1``.
 
-- the reference of the current leg is the smooth straight-line profile of
-  :mod:`shipgym.guidance.reference` (raised-cosine acceleration, trapezoidal or triangular
-  speed, Tomera (2014) Fig. 3), its phases chosen per env with ``np.where`` and a clipped
-  ramp time: the ramp runs on the time since the start (acceleration) or to the end
-  (deceleration), clipped to ``[0, T_a]``, so that 0 gives the rest at P (before the start,
-  during the ``delay``) and at K (from ``T`` on; a ``step`` leg, ``T = 0``, jumps at its
-  ``delay``), and ``T_a`` the cruise, written ``1 - ramp(T_a) - V (T - T_a - t)`` (equal to
-  the scalar ``V T_a / 2 + V (t - T_a)`` to round-off, as ``2 ramp(T_a) + V T_c = 1``);
-- the switching rule of :meth:`Guidance.update <shipgym.guidance.runtime.Guidance.update>`
-  (distance to K and heading error to K, Tomera (2014); progress and ``settle_time``, ours).
-
-At :meth:`BatchedGuidance.reset` (a Python loop over the reset envs, once per episode) every
-leg's profile parameters, planned poses P and K and switching threshold are written to a
-table padded to the longest plan, shape ``(K, n, max_legs)``; the current leg's column of
-each env is copied to a ``(K, n)`` array when the env starts a leg, so that
-:meth:`~BatchedGuidance.update` and :meth:`~BatchedGuidance.reference` are a fixed number of
-NumPy operations on ``(n,)`` and ``(3, n)`` arrays (no loop over envs). Arrays handed out are
-never written afterwards (a leg switch or a reset makes new ones), so a
-:class:`BatchedReference` keeps its values.
-
-Poses and velocities come and go as ``(n, 3)`` arrays ``[x, y, psi]`` (m, m, rad) per env
-(NED, or the current leg's r-frame, Tomera (2014) eqs. 1-2); times as ``(n,)`` arrays (s),
-each env on its own clock (a reset restarts it at ``t0``).
+At :meth:`BatchedGuidance.reset` (Python, once per episode) every leg's profile parameters,
+planned poses P and K and progress threshold go into a table ``(n, max_legs, _R)``; the
+per-step :meth:`~BatchedGuidance.update` and :meth:`~BatchedGuidance.reference` are one
+compiled call each. Arrays handed out are never written afterwards.
 """
 
 from __future__ import annotations
@@ -39,8 +24,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import njit
+
 from .plan import ManoeuvrePlan
-from .reference import Limits, leg_profile
+from .reference import LegProfile, Limits, leg_profile, path_law
+from .rframe import to_r_frame
 
 __all__ = ["BatchedGuidance", "BatchedReference"]
 
@@ -49,22 +37,155 @@ Array = NDArray[np.float64]
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
 
-# rows of the per-leg table (and of the current-leg array)
-_D = slice(0, 3)  # r-frame displacement [surge, sway, yaw] (m, m, rad)
-_DN = slice(3, 6)  # its NED image R(psi_P) [surge, sway] and yaw: K - P (m, m, rad)
-_P = slice(6, 9)  # planned start pose P (NED)
-_CP, _SP = 9, 10  # cos and sin of psi_P
-_K = slice(11, 14)  # planned end pose K (NED)
-_KX, _KY, _KPSI = 11, 12, 13
-# profile: V, T_a, T (s), delay (s), T - T_a, A, A/2, A/4, A/w^2, A/(2 w), w, w/2 (w = 2 pi/T_a)
-_V, _TA, _T, _DELAY, _TMTA, _A, _H, _HH, _HQ, _HW, _W, _W2 = range(14, 26)
-_NEED = 26  # switch_min_progress * (delay + T) - 1e-9 (s); inf once the plan is finished
-_ROWS = 27
+# columns of the per-leg table: displacement [surge, sway, yaw] (m, m, rad), P and K (NED, m,
+# m, rad), cos and sin of psi_P, the profile (V 1/s, A 1/s^2, T_a, T_c, T, delay s) and the
+# progress threshold switch_min_progress * (delay + T) - 1e-9 (s)
+_D, _P, _CP, _SP, _K = 0, 3, 6, 7, 8
+_V, _A, _TA, _TC, _T, _DELAY, _NEED = 11, 12, 13, 14, 15, 16, 17
+_R = 18
+# columns of the per-env state: current leg, finished (1.0), its start time (s), since when
+# the switching conditions hold (s, nan: they do not), the clock at reset (s), number of
+# legs, switch distance (m), switch heading (rad), settle time (s)
+_LEG, _FIN, _TSTART, _HOLD, _T0, _NLEGS, _SD, _SH, _SETTLE = range(9)
+_S = 9
+# rows of a reference's (n, 10, 3) buffer
+_ROWS = ("eta_d_r", "eta_dot_d_r", "eta_ddot_d_r", "eta_P", "eta_d_n", "eta_K")
+_NU, _NU_DOT, _ETA_DOT_N, _TLEG = 6, 7, 8, 9
 
 
+# ---- the compiled laws ----------------------------------------------------------------------
+@njit
+def _kinematics(o: Array) -> None:
+    """Rows 6-8 of one env's reference buffer ``o`` (10, 3) from rows 0-3: the body-frame
+    velocity ``nu_d = R(psi_d^r)^T eta_dot_d^r``, its derivative ``nu_dot_d = R^T
+    eta_ddot_d^r - S(r_d) nu_d`` (Fossen 2011 eq. 2.62, ``S(r) = [[0, -r, 0], [r, 0, 0],
+    [0, 0, 0]]``) and the NED velocity ``R(psi_P) eta_dot_d^r``."""
+    c, s = math.cos(o[0, 2]), math.sin(o[0, 2])
+    v0, v1, r = o[1, 0], o[1, 1], o[1, 2]
+    a0, a1 = o[2, 0], o[2, 1]
+    nu0 = c * v0 + s * v1
+    nu1 = -s * v0 + c * v1
+    o[_NU, 0], o[_NU, 1], o[_NU, 2] = nu0, nu1, r
+    o[_NU_DOT, 0] = c * a0 + s * a1 + r * nu1
+    o[_NU_DOT, 1] = -s * a0 + c * a1 - r * nu0
+    o[_NU_DOT, 2] = o[2, 2]
+    cp, sp = math.cos(o[3, 2]), math.sin(o[3, 2])
+    o[_ETA_DOT_N, 0] = cp * v0 - sp * v1
+    o[_ETA_DOT_N, 1] = sp * v0 + cp * v1
+    o[_ETA_DOT_N, 2] = r
+
+
+@njit
+def _reference(t: Array, tab: Array, st: Array) -> Array:
+    """The reference of every env at its time ``t[i]`` (s): a new buffer (n, 10, 3) of
+    rows ``eta_d_r, eta_dot_d_r, eta_ddot_d_r, eta_P, eta_d_n, eta_K, nu_d, nu_dot_d,
+    eta_dot_d_n`` and ``[t_leg, 0, 0]``. ``eta_d^r = s(t_leg - delay) Delta`` and
+    ``eta_d^n = P + R(psi_P) eta_d^r`` (Tomera 2014 eq. 2, heading not wrapped)."""
+    n = t.shape[0]
+    out = np.empty((n, 10, 3))
+    for i in range(n):
+        if not math.isfinite(t[i]):
+            raise ValueError("the guidance's times t must be finite (s)")
+        row = tab[i, int(st[i, _LEG])]
+        t_leg = t[i] - st[i, _TSTART]
+        s, sd, sdd = path_law(row[_V], row[_A], row[_TA], row[_TC], row[_T], t_leg - row[_DELAY])
+        o = out[i]
+        for k in range(3):
+            d = row[_D + k]
+            o[0, k] = s * d
+            o[1, k] = sd * d
+            o[2, k] = sdd * d
+            o[3, k] = row[_P + k]
+            o[5, k] = row[_K + k]
+        c, sn = row[_CP], row[_SP]
+        xr, yr = o[0, 0], o[0, 1]
+        o[4, 0] = row[_P] + c * xr - sn * yr
+        o[4, 1] = row[_P + 1] + sn * xr + c * yr
+        o[4, 2] = row[_P + 2] + o[0, 2]
+        _kinematics(o)
+        o[_TLEG, 0], o[_TLEG, 1], o[_TLEG, 2] = t_leg, 0.0, 0.0
+    return out
+
+
+@njit
+def _derived(eta_d_r: Array, eta_dot_d_r: Array, eta_ddot_d_r: Array, eta_P: Array) -> Array:
+    """Reference buffers (n, 10, 3) of given rows 0-3 (each (n, 3)) with rows 6-8 filled
+    (:func:`_kinematics`): the velocities of a reference built from its fields."""
+    n = eta_d_r.shape[0]
+    out = np.zeros((n, 10, 3))
+    for i in range(n):
+        o = out[i]
+        for k in range(3):
+            o[0, k], o[1, k] = eta_d_r[i, k], eta_dot_d_r[i, k]
+            o[2, k], o[3, k] = eta_ddot_d_r[i, k], eta_P[i, k]
+        _kinematics(o)
+    return out
+
+
+@njit
+def _conditions(row: Array, sti: Array, t: float, x: float, y: float, psi: float) -> tuple:
+    """The three instantaneous switching conditions of one env on its current leg ``row``:
+    distance to K below ``switch_distance`` and ``|wrap(psi - psi_K)|`` below
+    ``switch_heading`` (Tomera 2014), elapsed leg time at least ``switch_min_progress`` of
+    the leg's reference duration (ours)."""
+    near = math.hypot(x - row[_K], y - row[_K + 1]) < sti[_SD]
+    wrapped = _PI - (_PI - (psi - row[_K + 2])) % _TWO_PI  # in (-pi, pi]
+    return near, abs(wrapped) < sti[_SH], t - sti[_TSTART] >= row[_NEED]
+
+
+@njit
+def _bad_row(t: Array, eta: Array, st: Array) -> int:
+    """The first unfinished env with a non-finite time or pose, -1 if none."""
+    for i in range(t.shape[0]):
+        if st[i, _FIN] == 0.0:
+            ok = math.isfinite(t[i]) and math.isfinite(eta[i, 0])
+            if not (ok and math.isfinite(eta[i, 1]) and math.isfinite(eta[i, 2])):
+                return i
+    return -1
+
+
+@njit
+def _update(t: Array, eta: Array, tab: Array, st: Array, comp: Array, sw: Any) -> int:
+    """The switching rule of every env at its time ``t[i]`` (s) and pose ``eta[i]`` (m, m,
+    rad): ``sw[i]`` True where the current leg completes (the conditions of
+    :func:`_conditions` held for ``settle_time``); the next leg starts at ``t[i]``, or the
+    plan is finished. Returns the number of switches, or ``-1 - i`` for a non-finite time or
+    pose of the unfinished env ``i`` (then nothing changes)."""
+    bad = _bad_row(t, eta, st)
+    if bad >= 0:
+        return -1 - bad
+    count = 0
+    for i in range(t.shape[0]):
+        sw[i] = False
+        sti = st[i]
+        if sti[_FIN] != 0.0:
+            continue
+        j = int(sti[_LEG])
+        ti = t[i]
+        near, aligned, progressed = _conditions(tab[i, j], sti, ti, eta[i, 0], eta[i, 1], eta[i, 2])
+        if not (near and aligned and progressed):
+            sti[_HOLD] = np.nan
+            continue
+        if math.isnan(sti[_HOLD]):
+            sti[_HOLD] = ti
+        if ti - sti[_HOLD] < sti[_SETTLE]:
+            continue
+        sti[_HOLD] = np.nan
+        comp[i, j] = ti
+        if j + 1 < sti[_NLEGS]:
+            sti[_LEG] = j + 1
+            sti[_TSTART] = ti
+        else:
+            sti[_FIN] = 1.0
+        sw[i] = True
+        count += 1
+    return count
+
+
+# ---- the reference --------------------------------------------------------------------------
 class BatchedReference:
-    """The guidance output of ``n`` envs at one instant (the batched
-    :class:`~shipgym.guidance.runtime.Reference`; every formula is the scalar one per env).
+    """The guidance output of ``n`` envs at one instant (the reference of
+    :class:`~shipgym.guidance.runtime.Reference` per env).
 
     Attributes:
         eta_d_r: desired poses in each env's current leg's r-frame (m, m, rad), (n, 3).
@@ -77,23 +198,10 @@ class BatchedReference:
         t_leg: time since each env's current leg started (s), (n,).
         finished: True where every leg of the env's plan is complete, (n,).
 
-    The ``(n, 3)`` arrays are views of ``(3, n)`` arrays; those that show the guidance's state
-    (``eta_P``, ``eta_K``, ``leg``, ``finished``) are read-only and never change afterwards.
+    The guidance's references are read-only views of one buffer and never change afterwards.
     """
 
-    __slots__ = (
-        "eta_d_r",
-        "eta_dot_d_r",
-        "eta_ddot_d_r",
-        "eta_P",
-        "eta_d_n",
-        "eta_K",
-        "leg",
-        "t_leg",
-        "finished",
-        "_cur",
-        "_cs",
-    )
+    __slots__ = (*_ROWS, "leg", "t_leg", "finished", "_buf")
 
     def __init__(
         self,
@@ -106,7 +214,7 @@ class BatchedReference:
         leg: NDArray[np.intp],
         t_leg: Array,
         finished: NDArray[np.bool_],
-        _cur: Array | None = None,
+        _buf: Array | None = None,
     ) -> None:
         self.eta_d_r = eta_d_r
         self.eta_dot_d_r = eta_dot_d_r
@@ -117,68 +225,47 @@ class BatchedReference:
         self.leg = leg
         self.t_leg = t_leg
         self.finished = finished
-        self._cur = _cur
-        self._cs: tuple[Array, Array] | None = None
+        self._buf = _buf
+
+    @classmethod
+    def _of(cls, buf: Array, leg: NDArray[np.intp], finished: NDArray[np.bool_]) -> Any:
+        """The reference of a buffer of :func:`_reference` (made read-only)."""
+        buf.setflags(write=False)
+        b = buf
+        return cls(b[:, 0], b[:, 1], b[:, 2], b[:, 3], b[:, 4], b[:, 5], leg, b[:, _TLEG, 0],
+                   finished, b)  # fmt: skip
 
     @property
     def n(self) -> int:
         """Number of envs."""
         return int(self.t_leg.shape[0])
 
-    def _cos_sin_d(self) -> tuple[Array, Array]:
-        if self._cs is None:
-            psi = self.eta_d_r[:, 2]
-            self._cs = (np.cos(psi), np.sin(psi))
-        return self._cs
+    def _row(self, k: int) -> Array:
+        if self._buf is None:  # built from its fields: the velocities from them
+            f = [np.ascontiguousarray(a, dtype=float) for a in (
+                self.eta_d_r, self.eta_dot_d_r, self.eta_ddot_d_r, self.eta_P)]  # fmt: skip
+            self._buf = _derived(*f)
+        return self._buf[:, k]
 
     @property
     def eta_dot_d_n(self) -> Array:
         """Desired NED velocities ``R(psi_P) eta_dot_d^r`` (m/s, m/s, rad/s), (n, 3)."""
-        if self._cur is not None:
-            c, s = self._cur[_CP], self._cur[_SP]
-        else:
-            c, s = np.cos(self.eta_P[:, 2]), np.sin(self.eta_P[:, 2])
-        v = self.eta_dot_d_r
-        out = np.empty((3, v.shape[0]))
-        out[0] = c * v[:, 0] - s * v[:, 1]
-        out[1] = s * v[:, 0] + c * v[:, 1]
-        out[2] = v[:, 2]
-        return out.T
+        return self._row(_ETA_DOT_N)
 
     @property
     def nu_d(self) -> Array:
         """Desired body-frame velocities ``R(psi_d^r)^T eta_dot_d^r`` (m/s, m/s, rad/s), (n, 3)."""
-        c, s = self._cos_sin_d()
-        v = self.eta_dot_d_r
-        v0, v1 = v[:, 0], v[:, 1]
-        out = np.empty((3, v.shape[0]))
-        out[0] = c * v0 + s * v1
-        out[1] = -s * v0 + c * v1
-        out[2] = v[:, 2]
-        return out.T
+        return self._row(_NU)
 
     @property
     def nu_dot_d(self) -> Array:
         """Time derivative of :attr:`nu_d`: ``R^T eta_ddot_d^r - S(r_d) nu_d`` (m/s^2,
-        m/s^2, rad/s^2), (n, 3); ``S(r) = [[0, -r, 0], [r, 0, 0], [0, 0, 0]]`` (Fossen 2011,
-        eq. 2.62 differentiated)."""
-        c, s = self._cos_sin_d()
-        a = self.eta_ddot_d_r
-        a0, a1 = a[:, 0], a[:, 1]
-        v = self.eta_dot_d_r
-        v0, v1, r = v[:, 0], v[:, 1], v[:, 2]
-        nu0 = c * v0 + s * v1
-        nu1 = -s * v0 + c * v1
-        out = np.empty((3, a.shape[0]))
-        out[0] = c * a0 + s * a1 + r * nu1
-        out[1] = -s * a0 + c * a1 - r * nu0
-        out[2] = a[:, 2]
-        return out.T
+        m/s^2, rad/s^2), (n, 3) (Fossen 2011 eq. 2.62 differentiated)."""
+        return self._row(_NU_DOT)
 
     def to_r(self, eta_n: ArrayLike) -> Array:
         """NED poses (n, 3) in each env's current leg's r-frame, heading unwrapped near
-        ``psi_d^r`` (Tomera 2014 eq. 1; the scalar :meth:`Reference.to_r
-        <shipgym.guidance.runtime.Reference.to_r>` per env).
+        ``psi_d^r`` (Tomera 2014 eq. 1, :func:`~shipgym.guidance.rframe.to_r_frame`).
 
         Args:
             eta_n: the ships' (true or measured) NED poses ``[x, y, psi]`` (m, m, rad), (n, 3).
@@ -196,57 +283,30 @@ class BatchedReference:
             raise ValueError(
                 f"eta_n must have shape ({n}, 3) ([x, y, psi] per env), got {eta.shape}"
             )
-        P = self.eta_P
-        if self._cur is not None:
-            c, s = self._cur[_CP], self._cur[_SP]
-        else:
-            c, s = np.cos(P[:, 2]), np.sin(P[:, 2])
-        dx = eta[:, 0] - P[:, 0]
-        dy = eta[:, 1] - P[:, 1]
-        ref = self.eta_d_r[:, 2]
-        out = np.empty((3, n))
-        out[0] = c * dx + s * dy
-        out[1] = -s * dx + c * dy
-        # psi^r = ref + wrap(psi - psi_P - ref), wrap(a) = pi - mod(pi - a, 2 pi)
-        out[2] = ref + (_PI - np.mod(_PI - (eta[:, 2] - P[:, 2] - ref), _TWO_PI))
-        return out.T
+        return to_r_frame(eta, self.eta_P, psi_ref_r=self.eta_d_r[:, 2])
 
 
-def _profile_rows(plan: ManoeuvrePlan, limits: Limits | None, wp: Array) -> Array:
-    """The table columns (_ROWS, n_legs) of one plan started at the waypoints ``wp``."""
-    out = np.zeros((_ROWS, plan.n_legs))
-    for j, leg in enumerate(plan.legs):
-        p = leg_profile(leg, limits)
-        xp, yp, psip = wp[j].tolist()
-        c, s = math.cos(psip), math.sin(psip)
-        d0, d1, d2 = p.displacement.tolist()
-        Ta, A = p.t_accel, p.accel
-        w = 2.0 * math.pi / Ta if Ta > 0.0 else 1.0  # unused where T_a = 0 (no profile)
-        col = out[:, j]
-        col[_D] = (d0, d1, d2)
-        col[_DN] = (c * d0 - s * d1, s * d0 + c * d1, d2)
-        col[_P] = (xp, yp, psip)
-        col[_CP], col[_SP] = c, s
-        col[_K] = wp[j + 1]
-        col[_V] = p.speed
-        col[_TA] = Ta
-        col[_T] = p.duration
-        col[_DELAY] = p.delay
-        col[_TMTA] = p.duration - Ta
-        col[_A] = A
-        col[_H] = 0.5 * A
-        col[_HH] = 0.25 * A
-        col[_HQ] = A / (w * w)
-        col[_HW] = 0.5 * A / w
-        col[_W] = w
-        col[_W2] = 0.5 * w
-        col[_NEED] = plan.switch_min_progress * p.total_duration - 1e-9
+# ---- the guidance ---------------------------------------------------------------------------
+def _leg_table(plan: ManoeuvrePlan, profiles: Sequence[LegProfile], wp: Array) -> Array:
+    """The table rows (n_legs, _R) of one plan with its leg profiles, started at the planned
+    poses ``wp`` (n_legs + 1, 3)."""
+    out = np.zeros((plan.n_legs, _R))
+    for j, p in enumerate(profiles):
+        row = out[j]
+        row[_D : _D + 3] = p.displacement
+        row[_P : _P + 3] = wp[j]
+        psip = float(wp[j, 2])
+        row[_CP], row[_SP] = math.cos(psip), math.sin(psip)
+        row[_K : _K + 3] = wp[j + 1]
+        row[_V], row[_A], row[_TA] = p.speed, p.accel, p.t_accel
+        row[_TC], row[_T], row[_DELAY] = p.t_cruise, p.duration, p.delay
+        row[_NEED] = plan.switch_min_progress * p.total_duration - 1e-9
     return out
 
 
 class BatchedGuidance:
     """Leg-by-leg guidance of ``n`` envs, each through its own manoeuvre plan (module
-    docstring; per env exactly :class:`~shipgym.guidance.runtime.Guidance`).
+    docstring; :class:`~shipgym.guidance.runtime.Guidance` is its ``n = 1`` case).
 
     Usage::
 
@@ -272,30 +332,25 @@ class BatchedGuidance:
         self.n = n
         self.limits = limits
         self.plans: list[ManoeuvrePlan | None] = [None] * n
-        self._L = 1  # legs of the table (the longest plan so far)
-        self._tab = np.zeros((_ROWS, n, 1))
-        self._tab[_W] = self._tab[_W2] = 1.0
-        self._cur = self._tab[:, :, 0].copy()
-        self._cur.setflags(write=False)
-        self._n_legs = np.ones(n, dtype=np.intp)
-        self._sd = np.ones(n)  # switch distance (m)
-        self._sh = np.ones(n)  # switch heading (rad)
-        self._settle = np.zeros(n)  # settle time (s)
+        self._tab = np.zeros((n, 1, _R))
+        self._st = np.zeros((n, _S))
+        self._st[:, _HOLD] = np.nan
+        self._st[:, _NLEGS] = 1.0
+        self._comp = np.full((n, 1), np.nan)  # completion time of each leg (s)
         self._leg = self._frozen(np.zeros(n, dtype=np.intp))
         self._finished = self._frozen(np.zeros(n, dtype=bool))
-        self._active = np.ones(n, dtype=bool)  # ~finished
-        self._t_start = np.zeros(n)  # start time of the current leg (s)
-        self._t0 = np.zeros(n)
-        self._hold = np.full(n, np.nan)  # since when the conditions hold (nan: they do not)
-        self._comp = np.full((n, 1), np.nan)  # completion time of each leg (s)
         self._ready = np.zeros(n, dtype=bool)
         self._all_ready = False
-        self._rows = np.arange(n)
 
     @staticmethod
     def _frozen(a: NDArray[Any]) -> NDArray[Any]:
         a.setflags(write=False)
         return a
+
+    def _refresh(self) -> None:
+        """New read-only ``leg`` and ``finished`` arrays after a switch or a reset."""
+        self._leg = self._frozen(self._st[:, _LEG].astype(np.intp))
+        self._finished = self._frozen(self._st[:, _FIN] != 0.0)
 
     # -- state -------------------------------------------------------------------------------
     def _mask(self, mask: ArrayLike | None) -> NDArray[np.bool_]:
@@ -333,6 +388,9 @@ class BatchedGuidance:
         eta_start: ArrayLike,
         t0: ArrayLike = 0.0,
         mask: ArrayLike | None = None,
+        *,
+        _profiles: Sequence[Sequence[LegProfile]] | None = None,
+        _waypoints: Sequence[Array] | None = None,
     ) -> None:
         """Start the plans of the envs (all, or those where ``mask`` is True).
 
@@ -371,40 +429,37 @@ class BatchedGuidance:
         starts = self._per_env(eta_start, idx, "eta_start", (3,))
         t0s = self._per_env(t0, idx, "t0", ())
         # everything computed before any state changes (a failing reset changes nothing)
-        cols = []
-        for p, e in zip(chosen, starts, strict=True):
-            lim = p.limits if p.limits is not None else self.limits
-            cols.append(_profile_rows(p, lim, p.waypoints(e)))
-        L = max([self._L, *(p.n_legs for p in chosen)])
-        if L > self._L:  # a longer plan: pad the tables
-            tab = np.zeros((_ROWS, self.n, L))
-            tab[_W] = tab[_W2] = 1.0
-            tab[:, :, : self._L] = self._tab
+        if _profiles is None:
+            _profiles = [
+                [leg_profile(leg, p.limits if p.limits is not None else self.limits)
+                 for leg in p.legs]
+                for p in chosen
+            ]  # fmt: skip
+        if _waypoints is None:
+            _waypoints = [p.waypoints(e) for p, e in zip(chosen, starts, strict=True)]
+        rows = [
+            _leg_table(p, prof, wp)
+            for p, prof, wp in zip(chosen, _profiles, _waypoints, strict=True)
+        ]
+        L = max([self._tab.shape[1], *(p.n_legs for p in chosen)])
+        if L > self._tab.shape[1]:  # a longer plan: pad the tables
+            tab = np.zeros((self.n, L, _R))
+            tab[:, : self._tab.shape[1]] = self._tab
             comp = np.full((self.n, L), np.nan)
-            comp[:, : self._L] = self._comp
-            self._tab, self._comp, self._L = tab, comp, L
-        for i, p, col in zip(idx.tolist(), chosen, cols, strict=True):
-            nl = p.n_legs
-            self._tab[:, i, :nl] = col
-            self._n_legs[i] = nl
-            self._sd[i] = p.switch_distance
-            self._sh[i] = p.switch_heading
-            self._settle[i] = p.settle_time
+            comp[:, : self._comp.shape[1]] = self._comp
+            self._tab, self._comp = tab, comp
+        st = self._st
+        for i, p, r, t_0 in zip(idx.tolist(), chosen, rows, t0s.tolist(), strict=True):
+            self._tab[i, : p.n_legs] = r
+            st[i] = 0.0
+            st[i, _HOLD] = np.nan
+            st[i, _TSTART] = st[i, _T0] = t_0
+            st[i, _NLEGS] = p.n_legs
+            st[i, _SD], st[i, _SH] = p.switch_distance, p.switch_heading
+            st[i, _SETTLE] = p.settle_time
             self.plans[i] = p
         self._comp[idx] = np.nan
-        self._t0[idx] = t0s
-        self._t_start[idx] = t0s
-        self._hold[idx] = np.nan
-        leg = self._leg.copy()
-        leg[idx] = 0
-        self._leg = self._frozen(leg)
-        fin = self._finished.copy()
-        fin[idx] = False
-        self._finished = self._frozen(fin)
-        self._active[idx] = True
-        cur = self._cur.copy()
-        cur[:, idx] = self._tab[:, idx, 0]
-        self._cur = self._frozen(cur)
+        self._refresh()
         self._ready[idx] = True
         self._all_ready = bool(self._ready.all())
 
@@ -426,6 +481,14 @@ class BatchedGuidance:
             tt = np.full(self.n, float(tt))
         return tt
 
+    def _poses(self, eta_n: ArrayLike) -> Array:
+        eta = np.asarray(eta_n, dtype=float)
+        if eta.shape != (self.n, 3):
+            raise ValueError(
+                f"eta_n must have shape ({self.n}, 3) ([x, y, psi] per env), got {eta.shape}"
+            )
+        return eta
+
     # -- read-outs ---------------------------------------------------------------------------
     @property
     def leg(self) -> NDArray[np.intp]:
@@ -440,7 +503,7 @@ class BatchedGuidance:
     @property
     def n_legs(self) -> NDArray[np.intp]:
         """Number of legs of each env's plan, (n,)."""
-        return self._n_legs.copy()
+        return self._st[:, _NLEGS].astype(np.intp)
 
     @property
     def legs_completed(self) -> NDArray[np.intp]:
@@ -457,20 +520,20 @@ class BatchedGuidance:
 
     def leg_start_times(self, i: int) -> tuple[float, ...]:
         """Start times (s) of the legs env ``i`` has started so far."""
-        return (float(self._t0[i]), *self._comp[i, : self._leg[i]].tolist())
+        return (float(self._st[i, _T0]), *self._comp[i, : self._leg[i]].tolist())
 
     def waypoints(self, i: int) -> Array:
         """Planned NED poses ``[P_0, K_0, ..., K_{n-1}]`` of env ``i``, (n_legs + 1, 3)."""
-        nl = int(self._n_legs[i])
+        nl = int(self._st[i, _NLEGS])
         out = np.empty((nl + 1, 3))
-        out[:nl] = self._tab[_P, i, :nl].T
-        out[nl] = self._tab[_K, i, nl - 1]
+        out[:nl] = self._tab[i, :nl, _P : _P + 3]
+        out[nl] = self._tab[i, nl - 1, _K : _K + 3]
         return out
 
     def reference_durations(self, i: int) -> tuple[float, ...]:
         """Planned reference duration (s) of every leg of env ``i`` (``delay`` included)."""
-        nl = int(self._n_legs[i])
-        return tuple((self._tab[_DELAY, i, :nl] + self._tab[_T, i, :nl]).tolist())
+        tab = self._tab[i, : int(self._st[i, _NLEGS])]
+        return tuple((tab[:, _DELAY] + tab[:, _T]).tolist())
 
     # -- per step ----------------------------------------------------------------------------
     def update(self, t: ArrayLike, eta_n: ArrayLike) -> NDArray[np.bool_]:
@@ -490,58 +553,17 @@ class BatchedGuidance:
             RuntimeError: an env never reset.
         """
         self._require_reset()
-        t = self._times(t)
-        eta = np.asarray(eta_n, dtype=float)
-        if eta.shape != (self.n, 3):
+        t, eta = self._times(t), self._poses(eta_n)
+        switched = np.empty(self.n, dtype=bool)
+        count = _update(t, eta, self._tab, self._st, self._comp, switched)
+        if count < 0:
+            i = -1 - count
             raise ValueError(
-                f"eta_n must have shape ({self.n}, 3) ([x, y, psi] per env), got {eta.shape}"
+                f"t and eta_n must be finite: env {i} has t={t[i]!r}, eta_n={eta[i]!r}"
             )
-        if not math.isfinite(float(t.sum() + eta.sum())):
-            bad = ~(np.isfinite(t) & np.isfinite(eta).all(axis=1)) & self._active
-            if bad.any():
-                i = int(np.nonzero(bad)[0][0])
-                raise ValueError(
-                    f"t and eta_n must be finite: env {i} has t={t[i]!r}, eta_n={eta[i]!r}"
-                )
-        cur = self._cur  # finished envs: _NEED is inf (never switch again)
-        # 1. distance to K below switch_distance; 2. |wrap(psi - psi_K)| below switch_heading
-        near = np.hypot(eta[:, 0] - cur[_KX], eta[:, 1] - cur[_KY]) < self._sd
-        a = eta[:, 2] - cur[_KPSI]
-        near &= np.abs(_PI - np.mod(_PI - a, _TWO_PI)) < self._sh
-        # 3. progress: the leg's time at least switch_min_progress of its duration
-        near &= t - self._t_start >= cur[_NEED]
-        # 4. held continuously for settle_time
-        hold = np.where(near, np.where(np.isnan(self._hold), t, self._hold), np.nan)
-        switched = t - hold >= self._settle
-        self._hold = hold
-        if switched.any():
-            self._switch(switched, t)
+        if count:
+            self._refresh()
         return switched
-
-    def _switch(self, switched: NDArray[np.bool_], t: Array) -> None:
-        """Complete the current legs of the ``switched`` envs at their times ``t``."""
-        idx = np.nonzero(switched)[0]
-        legs = self._leg[idx]
-        self._comp[idx, legs] = t[idx]
-        self._hold[idx] = np.nan
-        nxt = legs + 1
-        last = nxt >= self._n_legs[idx]
-        done = idx[last]
-        adv = idx[~last]
-        cur = self._cur.copy()
-        if done.shape[0]:  # the plan is finished: the reference stays at the last K
-            fin = self._finished.copy()
-            fin[done] = True
-            self._finished = self._frozen(fin)
-            self._active[done] = False
-            cur[_NEED, done] = np.inf
-        if adv.shape[0]:  # the next leg starts now, at rest at its P
-            leg = self._leg.copy()
-            leg[adv] = nxt[~last]
-            self._leg = self._frozen(leg)
-            self._t_start[adv] = t[adv]
-            cur[:, adv] = self._tab[:, adv, leg[adv]]
-        self._cur = self._frozen(cur)
 
     def reference(self, t: ArrayLike) -> BatchedReference:
         """The reference of every env at its time ``t`` (s), (n,), for its current leg
@@ -549,42 +571,9 @@ class BatchedGuidance:
         at rest at P before the leg's start and during its ``delay``, at rest at K after).
 
         Raises:
-            ValueError: ``t`` of the wrong shape.
+            ValueError: ``t`` of the wrong shape or not finite.
             RuntimeError: an env never reset.
         """
         self._require_reset()
-        t = self._times(t)
-        cur = self._cur
-        t_leg = t - self._t_start
-        tt = t_leg - cur[_DELAY]  # the profile's time
-        acc = tt < cur[_TA]
-        # the ramp's time: since the start (acceleration), else to the end (deceleration),
-        # clipped to [0, T_a]: 0 gives rest (s = 0 before the start and during the delay, 1
-        # from T on; a step or zero leg has T_a = T = 0), T_a the cruise
-        u = np.where(acc, tt, cur[_T] - tt)
-        np.minimum(u, cur[_TA], out=u)
-        np.maximum(u, 0.0, out=u)
-        # the raised-cosine ramp (reference.LegProfile._ramp): s_ddot = (A/2)(1 - cos(w u))
-        sh = np.sin(cur[_W2] * u)
-        q = sh * sh
-        p = cur[_HH] * (u * u) - cur[_HQ] * q
-        sd = cur[_H] * u - cur[_HW] * np.sin(cur[_W] * u)
-        a = cur[_A] * q
-        # deceleration (and cruise, rest at K): 1 - ramp(T - t) - V (T - T_a - t)^+
-        s = np.where(acc, p, 1.0 - p - cur[_V] * np.maximum(cur[_TMTA] - tt, 0.0))
-        sdd = np.where(acc, a, -a)
-        D = cur[_D]
-        eta_d_r = s * D
-        eta_d_n = cur[_P] + s * cur[_DN]
-        return BatchedReference(
-            eta_d_r.T,
-            (sd * D).T,
-            (sdd * D).T,
-            cur[_P].T,
-            eta_d_n.T,
-            cur[_K].T,
-            self._leg,
-            t_leg,
-            self._finished,
-            cur,
-        )
+        buf = _reference(self._times(t), self._tab, self._st)
+        return BatchedReference._of(buf, self._leg, self._finished)

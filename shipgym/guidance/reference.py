@@ -28,6 +28,9 @@ profile at all: its reference jumps from P to K at ``delay`` (zero velocity and 
 before and after; the step input of a DP test, Al-Takie 1982 ch. 5). Its duration is
 ``delay``.
 
+The law is written once, compiled (:func:`path_law`): :class:`LegProfile` (design time:
+plots, durations) and the run-time guidance (:mod:`shipgym.guidance.batch`) both call it.
+
 The per-DOF limits :class:`Limits` apply to the r-frame coordinates (along and across the
 ship's heading at P, and the heading); for the single-DOF legs of the paper's manoeuvre they
 are body-frame limits.
@@ -43,6 +46,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, require_finite, require_positive, required_param
+from shipgym._jit import njit
 
 if TYPE_CHECKING:  # pragma: no cover - typing only (plan.py imports this module)
     from .plan import Leg
@@ -54,6 +58,7 @@ __all__ = [
     "leg_profile",
     "leg_reference",
     "leg_duration",
+    "path_law",
 ]
 
 
@@ -140,6 +145,52 @@ BLUE_LADY_LIMITS = Limits(
 )
 
 
+@njit
+def _ramp(A: float, Ta: float, t: float) -> tuple[float, float, float]:
+    """The acceleration phase at ``t`` (s) in ``[0, T_a]``: ``s_ddot = (A/2)(1 - cos(w t))``,
+    ``w = 2 pi / T_a`` (1/s), and its exact integrals ``s_dot`` (1/s) and ``s``."""
+    h = 0.5 * A
+    w = 2.0 * math.pi / Ta
+    wt = w * t
+    sh = math.sin(0.5 * wt)
+    return (
+        h * (0.5 * t * t - 2.0 * sh * sh / (w * w)),
+        h * (t - math.sin(wt) / w),
+        h * 2.0 * sh * sh,
+    )
+
+
+@njit
+def path_law(
+    V: float, A: float, Ta: float, Tc: float, T: float, tau: float
+) -> tuple[float, float, float]:
+    """``(s, s_dot, s_ddot)`` of the profile (module docstring) at ``tau`` (s) since the
+    profile's start (the leg's time less its ``delay``): 0 for ``tau <= 0``, exactly 1 from
+    ``tau = T`` on; ``T = 0`` (a step, or a zero leg) jumps to 1 at ``tau = 0``. The one
+    form of the law: :class:`LegProfile` and the run-time guidance both call it."""
+    if tau <= 0.0 or T == 0.0:
+        return (1.0 if (T == 0.0 and tau >= 0.0) else 0.0), 0.0, 0.0
+    if tau >= T:
+        return 1.0, 0.0, 0.0
+    if tau < Ta:
+        return _ramp(A, Ta, tau)
+    if tau <= Ta + Tc:
+        return 0.5 * V * Ta + V * (tau - Ta), V, 0.0
+    p, v, a = _ramp(A, Ta, T - tau)
+    return 1.0 - p, v, -a
+
+
+@njit
+def _path_many(
+    V: float, A: float, Ta: float, Tc: float, T: float, delay: float, t: NDArray
+) -> NDArray:
+    """:func:`path_law` at the leg times ``t`` (s), shape (m,): rows ``s, s_dot, s_ddot``."""
+    out = np.empty((3, t.shape[0]))
+    for k in range(t.shape[0]):
+        out[0, k], out[1, k], out[2, k] = path_law(V, A, Ta, Tc, T, t[k] - delay)
+    return out
+
+
 @dataclass(frozen=True)
 class LegProfile:
     """The smooth straight-line profile of one leg: ``eta_d^r(t) = s(t) * displacement``.
@@ -178,84 +229,19 @@ class LegProfile:
 
         Scalar ``t`` gives Python floats, array ``t`` arrays of its shape. ``s = 0`` before
         the start and ``s = 1`` (exactly) from ``t = total_duration`` on; a step has
-        ``s = 1`` from ``t = delay`` on.
+        ``s = 1`` from ``t = delay`` on (:func:`path_law`).
         """
-        if self.step:
-            tt = np.asarray(t, dtype=float)
-            if not np.all(np.isfinite(tt)):
-                raise ValueError(f"time must be finite, got {t!r}")
-            s = np.where(tt >= self.delay, 1.0, 0.0)
-            if np.ndim(t) == 0:
-                return float(s), 0.0, 0.0
-            return s, np.zeros_like(s), np.zeros_like(s)
-        if self.delay:
-            t = np.asarray(t, dtype=float) - self.delay if np.ndim(t) else float(t) - self.delay
-        if np.ndim(t) == 0:
-            return self._path_scalar(float(np.asarray(t)))
-        return self._path_array(np.asarray(t, dtype=float))
-
-    def _path_scalar(self, t: float) -> tuple[float, float, float]:
-        if not math.isfinite(t):
-            raise ValueError(f"time must be finite, got {t!r}")
-        T = self.duration
-        if t <= 0.0 or T == 0.0:
-            return (1.0, 0.0, 0.0) if (T == 0.0 and t >= 0.0) else (0.0, 0.0, 0.0)
-        if t >= T:
-            return 1.0, 0.0, 0.0
-        Ta, V = self.t_accel, self.speed
-        if t < Ta:
-            return self._ramp(t)
-        if t <= Ta + self.t_cruise:
-            return 0.5 * V * Ta + V * (t - Ta), V, 0.0
-        p, v, a = self._ramp(T - t)
-        return 1.0 - p, v, -a
-
-    def _ramp(self, t: float) -> tuple[float, float, float]:
-        # acceleration phase: s_ddot = (A/2)(1 - cos(w t)), w = 2 pi / T_a
-        h = 0.5 * self.accel
-        w = 2.0 * math.pi / self.t_accel
-        wt = w * t
-        sh = math.sin(0.5 * wt)
-        return (
-            h * (0.5 * t * t - 2.0 * sh * sh / (w * w)),
-            h * (t - math.sin(wt) / w),
-            h * 2.0 * sh * sh,
-        )
-
-    def _path_array(self, t: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-        if not np.all(np.isfinite(t)):
-            raise ValueError("times must be finite")
-        T = self.duration
-        s = np.zeros_like(t)
-        sd = np.zeros_like(t)
-        sdd = np.zeros_like(t)
-        if T == 0.0:
-            s[t >= 0.0] = 1.0
+        tt = np.asarray(t, dtype=float)
+        if not np.all(np.isfinite(tt)):
+            raise ValueError(f"time must be finite (s), got {t!r}")
+        out = _path_many(
+            self.speed, self.accel, self.t_accel, self.t_cruise, self.duration, self.delay,
+            np.ascontiguousarray(tt.reshape(-1)),
+        )  # fmt: skip
+        if tt.ndim == 0:
+            s, sd, sdd = out[:, 0].tolist()
             return s, sd, sdd
-        Ta, Tc, V = self.t_accel, self.t_cruise, self.speed
-        h = 0.5 * self.accel
-        w = 2.0 * math.pi / Ta
-
-        def ramp(tt: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-            sh = np.sin(0.5 * w * tt)
-            return (
-                h * (0.5 * tt * tt - 2.0 * sh * sh / (w * w)),
-                h * (tt - np.sin(w * tt) / w),
-                h * 2.0 * sh * sh,
-            )
-
-        m1 = (t > 0.0) & (t < Ta)
-        m2 = (t >= Ta) & (t <= Ta + Tc) & (t < T)
-        m3 = (t > Ta + Tc) & (t < T)
-        m4 = t >= T
-        p, v, a = ramp(t[m1])
-        s[m1], sd[m1], sdd[m1] = p, v, a
-        s[m2] = 0.5 * V * Ta + V * (t[m2] - Ta)
-        sd[m2] = V
-        p, v, a = ramp(T - t[m3])
-        s[m3], sd[m3], sdd[m3] = 1.0 - p, v, -a
-        s[m4] = 1.0
-        return s, sd, sdd
+        return out[0].reshape(tt.shape), out[1].reshape(tt.shape), out[2].reshape(tt.shape)
 
     def evaluate(self, t: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
         """Reference ``(eta_d^r, eta_dot_d^r, eta_ddot_d^r)`` at ``t`` (s) since the leg start.
@@ -263,28 +249,11 @@ class LegProfile:
         Each output has shape ``np.shape(t) + (3,)`` with units (m, m, rad), per second, per
         second squared.
         """
-        if type(t) is float and not self.step:  # one instant (every control step)
-            p, v, a = self.evaluate_one(t)
-            return np.array(p), np.array(v), np.array(a)
         d = self.displacement
         s, sd, sdd = self.path(t)
         if np.ndim(s) == 0:
             return s * d, sd * d, sdd * d
         return s[..., None] * d, sd[..., None] * d, sdd[..., None] * d
-
-    def evaluate_one(self, t: float) -> tuple[list[float], list[float], list[float]]:
-        """:meth:`evaluate` at one instant ``t`` (s, a float), as lists of floats.
-
-        The guidance calls it every control step: plain floats (a float times the
-        displacement's elements, the products of the array form) save three small arrays
-        that the caller would only turn back into floats.
-        """
-        if self.step:
-            s, sd, sdd = self.path(t)
-        else:
-            s, sd, sdd = self._path_scalar(t - self.delay if self.delay else t)
-        d0, d1, d2 = self.displacement.tolist()
-        return [s * d0, s * d1, s * d2], [sd * d0, sd * d1, sd * d2], [sdd * d0, sdd * d1, sdd * d2]
 
 
 def _effective_limits(leg: Leg, limits: Limits | None) -> Limits:

@@ -19,28 +19,40 @@ instant, when all of these hold:
 4. conditions 1-3 have held continuously for ``settle_time`` seconds (default 0).
 
 After the last leg completes, :attr:`Guidance.finished` is True and the reference stays at
-the last leg's end point.
+the last leg's end point. The laws are compiled once, over N envs
+(:mod:`shipgym.guidance.batch`); :class:`Guidance` runs them for one.
 """
 
 from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym.dynamics.frames import wrap_angle
+from shipgym._jit import entry
 
+from .batch import (
+    _ETA_DOT_N,
+    _NU,
+    _NU_DOT,
+    _R,
+    _S,
+    _TSTART,
+    BatchedGuidance,
+    _conditions,
+    _derived,
+    _reference,
+)
+from .batch import _update as _update_kernel
 from .plan import ManoeuvrePlan
 from .reference import LegProfile, Limits, leg_profile
 from .rframe import to_r_frame
 
 __all__ = ["Guidance", "Reference"]
-
-_F64 = np.dtype(np.float64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,6 +69,9 @@ class Reference:
         eta_K: NED planned end point K of the current leg (m, m, rad), (3,).
         t_leg: time since the current leg started (s).
         finished: True once every leg is complete.
+
+    The guidance's references are read-only views of one buffer of the compiled reference
+    (:mod:`shipgym.guidance.batch`), which also holds the velocities below.
     """
 
     eta_d_r: NDArray[np.float64]
@@ -70,67 +85,63 @@ class Reference:
     finished: bool = False
 
     @functools.cached_property
+    def _buf(self) -> NDArray[np.float64]:
+        """The (10, 3) buffer of the compiled reference (built from the fields where the
+        reference was not made by the guidance)."""
+        f = [
+            np.ascontiguousarray(a, dtype=float).reshape(1, 3)
+            for a in (self.eta_d_r, self.eta_dot_d_r, self.eta_ddot_d_r, self.eta_P)
+        ]
+        return _derived(*f)[0]
+
+    @functools.cached_property
     def _nu_d(self) -> tuple[float, float, float]:
         """:attr:`nu_d` as floats, computed once (the reference is immutable)."""
-        return _body_velocities(self.eta_d_r.tolist()[2], self.eta_dot_d_r.tolist(), None)[0]
+        u, v, r = self._buf[_NU].tolist()
+        return u, v, r
 
     @functools.cached_property
     def _nu_dot_d(self) -> tuple[float, float, float]:
         """:attr:`nu_dot_d` as floats, computed once."""
-        out = _body_velocities(
-            self.eta_d_r.tolist()[2], self.eta_dot_d_r.tolist(), self.eta_ddot_d_r.tolist()
-        )
-        return out[1]  # type: ignore[return-value]
+        u, v, r = self._buf[_NU_DOT].tolist()
+        return u, v, r
 
     @classmethod
-    def _build(
-        cls,
-        eta_d_r: NDArray[np.float64],
-        eta_dot_d_r: NDArray[np.float64],
-        eta_ddot_d_r: NDArray[np.float64],
-        eta_P: NDArray[np.float64],
-        leg: int,
-        eta_d_n: NDArray[np.float64],
-        eta_K: NDArray[np.float64],
-        t_leg: float,
-        finished: bool,
-        nu_d: tuple[float, float, float],
-        nu_dot_d: tuple[float, float, float],
-    ) -> Reference:
-        """The guidance's constructor (one reference per control step), with :attr:`_nu_d`
-        and :attr:`_nu_dot_d` already computed (:func:`_body_velocities` of the same floats).
+    def _build(cls, o: NDArray[np.float64], leg: int, t_leg: float, finished: bool) -> Reference:
+        """The guidance's constructor (one reference per control step) from one env's
+        read-only buffer ``o`` (10, 3) of the compiled reference.
 
         A frozen dataclass's ``__init__`` sets its fields one by one through
         ``object.__setattr__``, three times the cost of filling the instance dict at once;
         a test checks that the result equals ``Reference(...)`` field by field.
         """
         ref = object.__new__(cls)
+        nu, nu_dot = o[_NU : _NU_DOT + 1].tolist()  # the env reads them as floats
         ref.__dict__.update(
-            eta_d_r=eta_d_r,
-            eta_dot_d_r=eta_dot_d_r,
-            eta_ddot_d_r=eta_ddot_d_r,
-            eta_P=eta_P,
+            eta_d_r=o[0],
+            eta_dot_d_r=o[1],
+            eta_ddot_d_r=o[2],
+            eta_P=o[3],
             leg=leg,
-            eta_d_n=eta_d_n,
-            eta_K=eta_K,
+            eta_d_n=o[4],
+            eta_K=o[5],
             t_leg=t_leg,
             finished=finished,
-            _nu_d=nu_d,
-            _nu_dot_d=nu_dot_d,
+            _buf=o,
+            _nu_d=(*nu,),
+            _nu_dot_d=(*nu_dot,),
         )
         return ref
 
     @property
     def eta_dot_d_n(self) -> NDArray[np.float64]:
         """Desired NED velocity ``[x_dot, y_dot, psi_dot]``: ``R(psi_P) eta_dot_d^r``."""
-        c, s = math.cos(self.eta_P[2]), math.sin(self.eta_P[2])
-        v = self.eta_dot_d_r
-        return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]])
+        return self._buf[_ETA_DOT_N]
 
     @property
     def nu_d(self) -> NDArray[np.float64]:
         """Desired body-frame velocity ``[u, v, r]``: ``R(psi_d^r)^T eta_dot_d^r`` (m/s, rad/s)."""
-        return np.array(self._nu_d)
+        return self._buf[_NU]
 
     @property
     def nu_dot_d(self) -> NDArray[np.float64]:
@@ -138,7 +149,7 @@ class Reference:
 
         ``S(r) = [[0, -r, 0], [r, 0, 0], [0, 0, 0]]`` (Fossen 2011, eq. 2.62 differentiated).
         """
-        return np.array(self._nu_dot_d)
+        return self._buf[_NU_DOT]
 
     def to_r(self, eta_n: ArrayLike) -> NDArray[np.float64]:
         """A NED pose (or poses, (..., 3)) in this leg's r-frame, heading unwrapped near psi_d^r.
@@ -149,19 +160,13 @@ class Reference:
         return to_r_frame(eta_n, self.eta_P, psi_ref_r=self.eta_d_r[2])
 
 
-def _body_velocities(
-    psi: float, v: Sequence[float], a: Sequence[float] | None
-) -> tuple[tuple[float, float, float], tuple[float, float, float] | None]:
-    """``(nu_d, nu_dot_d)`` in floats from the r-frame heading ``psi_d^r``, ``eta_dot_d^r``
-    and ``eta_ddot_d^r`` (``a`` None: ``nu_dot_d`` None): ``nu_d = R(psi)^T eta_dot``,
-    ``nu_dot_d = R(psi)^T eta_ddot - S(r_d) nu_d`` (:attr:`Reference.nu_d`, ``nu_dot_d``)."""
-    c, s = math.cos(psi), math.sin(psi)
-    v0, v1, r = v
-    nu0, nu1 = c * v0 + s * v1, -s * v0 + c * v1
-    if a is None:
-        return (nu0, nu1, r), None
-    a0, a1, a2 = a
-    return (nu0, nu1, r), (c * a0 + s * a1 + r * nu1, -s * a0 + c * a1 - r * nu0, a2)
+@functools.cache
+def _entries() -> tuple[Any, Any]:
+    """The compiled entry points of the update and reference kernels for one env's arrays
+    (:func:`shipgym._jit.entry`: no per-call type resolution)."""
+    t, tab, st = np.zeros(1), np.zeros((1, 1, _R)), np.zeros((1, _S))
+    upd = entry(_update_kernel, (t, np.zeros((1, 3)), tab, st, np.zeros((1, 1)), np.zeros(1, bool)))
+    return upd, entry(_reference, (t, tab, st))
 
 
 class Guidance:
@@ -176,7 +181,7 @@ class Guidance:
             ref = g.reference(t)        # desired pose/velocity/acceleration
 
     Times are absolute (s since ``reset``'s ``t0`` clock); each leg's own clock starts at
-    its start time.
+    its start time. The compiled guidance of :mod:`shipgym.guidance.batch` for one env.
     """
 
     def __init__(self, plan: ManoeuvrePlan, limits: Limits | None = None) -> None:
@@ -190,14 +195,23 @@ class Guidance:
         self._profiles: tuple[LegProfile, ...] = tuple(
             leg_profile(leg, self.limits) for leg in plan.legs
         )
+        self._g = BatchedGuidance(1, limits=self.limits)
         self._waypoints: NDArray[np.float64] | None = None
-        self._wp_list: list[list[float]] = []
-        self._cs: list[tuple[float, float]] = []
+        self._t = np.zeros(1)  # the time of a call (s)
+        self._eta = np.zeros((1, 3))  # the pose of a call (m, m, rad)
+        self._sw = np.zeros(1, dtype=bool)
         self._leg = 0
         self._finished = False
-        self._starts: list[float] = []
-        self._completions: list[float] = []
-        self._hold_since: float | None = None
+        self._t_start = 0.0
+        self._upd, self._ref = _entries()
+
+    def __getstate__(self) -> dict[str, Any]:
+        """The state without the compiled entry points (they do not pickle)."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("_upd", "_ref")}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._upd, self._ref = _entries()
 
     # -- state -------------------------------------------------------------------------------
     def reset(self, eta_start: ArrayLike, t0: float = 0.0) -> None:
@@ -205,17 +219,11 @@ class Guidance:
         t0 = float(t0)
         if not math.isfinite(t0):
             raise ValueError(f"t0 must be finite, got {t0!r}")
-        wp = self.plan.waypoints(eta_start)
+        wp = self.plan.waypoints(eta_start)  # checks the pose
+        self._g.reset([self.plan], wp[0], t0, _profiles=[self._profiles], _waypoints=[wp])
         wp.setflags(write=False)
         self._waypoints = wp
-        # scalar copies for the per-step fast path (same arithmetic as from_r_frame)
-        self._wp_list = wp.tolist()
-        self._cs = [(math.cos(p[2]), math.sin(p[2])) for p in self._wp_list]
-        self._leg = 0
-        self._finished = False
-        self._starts = [t0]
-        self._completions = []
-        self._hold_since = None
+        self._leg, self._finished, self._t_start = 0, False, t0
 
     def _require_reset(self) -> NDArray[np.float64]:
         if self._waypoints is None:
@@ -245,22 +253,26 @@ class Guidance:
     @property
     def leg_start_times(self) -> tuple[float, ...]:
         """Start time (s) of every leg started so far."""
-        return tuple(self._starts)
+        self._require_reset()
+        return self._g.leg_start_times(0)
 
     @property
     def leg_completion_times(self) -> tuple[float, ...]:
         """Completion (switch) time (s) of every leg completed so far."""
-        return tuple(self._completions)
+        if self._waypoints is None:
+            return ()
+        return self._g.leg_completion_times(0)  # type: ignore[no-any-return]
 
     @property
     def legs_completed(self) -> int:
         """Number of legs completed so far (``len(leg_completion_times)``)."""
-        return len(self._completions)
+        return self._leg + self._finished
 
     @property
     def leg_durations(self) -> tuple[float, ...]:
         """Actual durations (s) of the completed legs: completion minus start."""
-        return tuple(c - s for s, c in zip(self._starts, self._completions, strict=False))
+        starts, ends = self.leg_start_times, self.leg_completion_times
+        return tuple(c - s for s, c in zip(starts, ends, strict=False))
 
     @property
     def reference_durations(self) -> tuple[float, ...]:
@@ -273,31 +285,22 @@ class Guidance:
 
         Times before the current leg's start give the reference at rest at P.
         """
-        wp = self._waypoints
-        if wp is None:
-            wp = self._require_reset()
-        i = self._leg
-        t_leg = float(t) - self._starts[i]
-        # plain floats, and the reference's body velocities computed here from the same
-        # floats (every control step: the hot path)
-        eta_d, eta_dot, eta_ddot = self._profiles[i].evaluate_one(t_leg)
-        xP, yP, psiP = self._wp_list[i]
-        c, s = self._cs[i]
-        xr, yr, pr = eta_d
-        nu_d, nu_dot_d = _body_velocities(pr, eta_dot, eta_ddot)
-        return Reference._build(
-            np.array(eta_d, float),
-            np.array(eta_dot, float),
-            np.array(eta_ddot, float),
-            wp[i],
-            i,
-            np.array([xP + c * xr - s * yr, yP + s * xr + c * yr, psiP + pr], float),
-            wp[i + 1],
-            t_leg,
-            self._finished,
-            nu_d,
-            nu_dot_d,  # type: ignore[arg-type]
-        )
+        if self._waypoints is None:
+            self._require_reset()
+        t = float(t)
+        if not math.isfinite(t):
+            raise ValueError(f"time must be finite (s), got {t!r}")
+        self._t[0] = t
+        buf = self._ref(self._t, self._g._tab, self._g._st)
+        buf.setflags(write=False)
+        return Reference._build(buf[0], self._leg, t - self._t_start, self._finished)
+
+    def _pose(self, eta_n: ArrayLike) -> None:
+        """Check the pose ``eta_n`` (m, m, rad) of a call and copy it to the kernel's input."""
+        eta = eta_n if type(eta_n) is np.ndarray else np.asarray(eta_n, dtype=float)
+        if eta.shape != (3,):
+            raise ValueError(f"eta_n must be a finite [x, y, psi] (m, m, rad), got {eta!r}")
+        self._eta[0] = eta
 
     def switch_conditions(self, t: float, eta_n: ArrayLike) -> tuple[bool, bool, bool]:
         """The three instantaneous switching conditions for the current leg.
@@ -307,27 +310,13 @@ class Guidance:
             heading error to K below ``switch_heading``, and the leg's elapsed time at least
             ``switch_min_progress`` times its reference duration.
         """
-        if self._waypoints is None:
-            self._require_reset()
-        # the env's pose array as it is (every control step: asarray's keyword call is slow)
-        eta = (
-            eta_n if type(eta_n) is np.ndarray and eta_n.dtype == _F64 else np.asarray(eta_n, float)
-        )
-        e = eta.tolist() if eta.shape == (3,) else None
-        if e is None or not all(map(math.isfinite, e)):
-            raise ValueError(f"eta_n must be a finite [x, y, psi] (m, m, rad), got {eta!r}")
-        i = self._leg
-        kx, ky, kpsi = self._wp_list[i + 1]
-        dist = math.hypot(e[0] - kx, e[1] - ky)
-        # np.float64: wrap_angle's array formula, as for the array elements this once took
-        head = abs(wrap_angle(np.float64(e[2] - kpsi)))
-        t_leg = float(t) - self._starts[i]
-        need = self.plan.switch_min_progress * self._profiles[i].total_duration
-        return (
-            dist < self.plan.switch_distance,
-            head < self.plan.switch_heading,
-            t_leg >= need - 1e-9,
-        )
+        self._require_reset()
+        self._pose(eta_n)
+        if not np.all(np.isfinite(self._eta)):
+            raise ValueError(f"eta_n must be a finite [x, y, psi] (m, m, rad), got {eta_n!r}")
+        g, (x, y, psi) = self._g, self._eta[0].tolist()
+        near, aligned, progressed = _conditions(g._tab[0, self._leg], g._st[0], float(t), x, y, psi)
+        return bool(near), bool(aligned), bool(progressed)
 
     def update(self, t: float, eta_n: ArrayLike) -> bool:
         """Check the switching rule at time ``t`` (s) for the ship at NED pose ``eta_n``.
@@ -341,21 +330,18 @@ class Guidance:
             self._require_reset()
         if self._finished:
             return False
-        t = float(t)
-        if not math.isfinite(t):
-            raise ValueError(f"t must be finite, got {t!r}")
-        if not all(self.switch_conditions(t, eta_n)):
-            self._hold_since = None
+        self._t[0] = t
+        self._pose(eta_n)
+        g = self._g
+        count = self._upd(self._t, self._eta, g._tab, g._st, g._comp, self._sw)
+        if not count:
             return False
-        if self._hold_since is None:
-            self._hold_since = t
-        if t - self._hold_since < self.plan.settle_time:
-            return False
-        self._hold_since = None
-        self._completions.append(t)
-        if self._leg + 1 < self.n_legs:
-            self._leg += 1
-            self._starts.append(t)
-        else:
-            self._finished = True
+        if count < 0:
+            if not math.isfinite(self._t[0]):
+                raise ValueError(f"t must be finite, got {t!r}")
+            raise ValueError(f"eta_n must be a finite [x, y, psi] (m, m, rad), got {eta_n!r}")
+        g._refresh()
+        self._leg = int(g._leg[0])
+        self._finished = bool(g._finished[0])
+        self._t_start = float(g._st[0, _TSTART])
         return True
