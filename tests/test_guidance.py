@@ -466,7 +466,6 @@ def test_guidance_reference_is_the_profile_and_the_body_velocities_rotate():
     # body velocities R(psi)^T eta_dot (Fossen 2011 eq. 2.62) of a rotation matrix
     from shipgym.dynamics.frames import rot
     from shipgym.guidance import Reference
-    from shipgym.guidance.rframe import to_r_frame_pose
 
     legs = (
         Leg(surge=10.0, sway=3.0, yaw=1.2),
@@ -496,10 +495,17 @@ def test_guidance_reference_is_the_profile_and_the_body_velocities_rotate():
             R = rot(ref.eta_d_r[2])
             np.testing.assert_allclose(ref.nu_d, R.T @ ref.eta_dot_d_r, atol=1e-15)
             eta = ref.eta_d_n + [0.3, -0.2, 7.0]  # a heading many turns off: unwrapped near psi_d
-            want = to_r_frame(eta[None, :], ref.eta_P[None, :], ref.eta_d_r[2:3])[0]
-            got = to_r_frame_pose(*eta.tolist(), ref.eta_P.tolist(), float(ref.eta_d_r[2]))
-            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+            got = to_r_frame(eta, ref.eta_P, float(ref.eta_d_r[2]))
+            # Tomera (2014) eq. 1 written out: R(psi_P)^T (p - p_P), the heading on the
+            # branch within pi of psi_d^r
+            want_xy = rot(ref.eta_P[2])[:2, :2].T @ (eta[:2] - ref.eta_P[:2])
+            np.testing.assert_allclose(got[:2], want_xy, rtol=0, atol=1e-12)
+            assert -math.pi < got[2] - ref.eta_d_r[2] <= math.pi
+            turns = (got[2] - (eta[2] - ref.eta_P[2])) / (2 * math.pi)
+            assert abs(turns - round(turns)) < 1e-12
             np.testing.assert_array_equal(ref.to_r(eta), got)
+            many = to_r_frame(eta[None, :], ref.eta_P[None, :], ref.eta_d_r[2:3])[0]
+            np.testing.assert_array_equal(many, got)  # one law for one pose or many
         # complete the leg on its end point
         K = g.waypoints[i + 1]
         assert g.update(g.leg_start_times[-1] + T + 1.0, K)

@@ -24,19 +24,19 @@ def test_batched_vec_env_gives_dummy_vec_envs_transitions():
     for venv in (batched, dummy):
         venv.seed(21)
     o1, o2 = batched.reset(), dummy.reset()
-    np.testing.assert_allclose(o1, o2, rtol=0, atol=1e-6)
+    np.testing.assert_array_equal(o1, o2)
     rng = np.random.default_rng(1)
     dones = 0
     for _ in range(14):
         a = rng.uniform(-1, 1, (n, 3)).astype(np.float32)
         o1, r1, d1, i1 = batched.step(a)
         o2, r2, d2, i2 = dummy.step(a)
-        np.testing.assert_allclose(o1, o2, rtol=1e-5, atol=1e-5)
-        np.testing.assert_allclose(r1, r2, rtol=1e-6, atol=1e-6)
+        np.testing.assert_array_equal(o1, o2)
+        np.testing.assert_array_equal(r1, r2)
         np.testing.assert_array_equal(d1, d2)
         for i in np.nonzero(d1)[0]:
             t1, t2 = i1[i]["terminal_observation"], i2[i]["terminal_observation"]
-            np.testing.assert_allclose(t1, t2, rtol=1e-5, atol=1e-5)
+            np.testing.assert_array_equal(t1, t2)
             assert i1[i]["TimeLimit.truncated"] == i2[i]["TimeLimit.truncated"]
             dones += 1
     assert dones >= 2 * n  # two autoresets per env

@@ -11,7 +11,9 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["rot", "wrap_angle", "body_to_ned", "ned_to_body"]
+from shipgym._jit import njit
+
+__all__ = ["rot", "wrap_angle", "wrap", "body_to_ned", "ned_to_body"]
 
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
@@ -39,6 +41,13 @@ def wrap_angle(angle: ArrayLike) -> NDArray[np.float64] | float:
     a = np.asarray(angle, dtype=float)
     w = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
     return float(w) if w.ndim == 0 else w
+
+
+@njit(inline="always")
+def wrap(a):  # type: ignore[no-untyped-def]
+    """:func:`wrap_angle` of one float in compiled code: ``pi - ((pi - a) mod 2 pi)`` with
+    Python's (and NumPy's) floor modulo, the same bits."""
+    return _PI - (_PI - a) % _TWO_PI
 
 
 def rot(psi: ArrayLike) -> NDArray[np.float64]:

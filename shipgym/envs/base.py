@@ -26,7 +26,7 @@ from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
 from shipgym.dynamics.vessel import Vessel
 from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
 from shipgym.guidance.limits import vessel_limits
-from shipgym.guidance.rframe import to_r_frame_pose
+from shipgym.guidance.rframe import to_r_frame
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.observers.sensors import SensorConfig, Sensors
 from shipgym.records import StepRecord, step_record_of_env
@@ -70,9 +70,8 @@ MAX_CONTROL_PERIOD = 10.0
 class _Sample(NamedTuple):
     """What a step produced, before it is turned into observation and info.
 
-    The arrays go into ``info``; the reward, the metrics and the observation read the same
-    values as floats (``pose``, ``vel``, ``pose_r``, ``ref_r``), made once per step. A tuple,
-    not a frozen dataclass: built every control step, and a frozen dataclass costs a
+    The arrays go into ``info``; the task's terms and the metrics read the same values. A
+    tuple, not a frozen dataclass: built every control step, and a frozen dataclass costs a
     microsecond more to build.
     """
 
@@ -82,9 +81,6 @@ class _Sample(NamedTuple):
     ref: Reference
     eta_r: NDArray[np.float64]
     thrust: NDArray[np.float64]  # of every actuator (N), read once per step
-    pose: list[float]  # eta
-    vel: list[float]  # nu
-    pose_r: tuple[float, float, float]  # eta_r
     ref_r: list[float]  # ref.eta_d_r
 
 
@@ -537,12 +533,9 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         nu = phys.nu
         ref = self.guidance.reference(t)
         self.reference = ref
-        pose = eta.tolist()
         ref_r = ref.eta_d_r.tolist()
-        pose_r = to_r_frame_pose(pose[0], pose[1], pose[2], ref.eta_P.tolist(), ref_r[2])
-        return _Sample(
-            t, eta, nu, ref, np.array(pose_r, float), phys.thrust, pose, nu.tolist(), pose_r, ref_r
-        )
+        eta_r = to_r_frame(eta, ref.eta_P, ref_r[2])
+        return _Sample(t, eta, nu, ref, eta_r, phys.thrust, ref_r)
 
     def _record_metrics(
         self,
@@ -559,7 +552,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             ref.eta_d_r,
             eta_meas_r=None
             if z is None
-            else to_r_frame_pose(z[0], z[1], z[2], ref.eta_P.tolist(), s.ref_r[2]),
+            else to_r_frame(z, ref.eta_P, s.ref_r[2]),
             thrust=s.thrust,
             saturated=saturated
             if saturated is None or self._slices is None

@@ -31,6 +31,7 @@ from shipgym._jit import njit
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
 from shipgym.disturbances.current import MAX_CURRENT_SPEED
 from shipgym.disturbances.wind import MAX_WIND_SPEED
+from shipgym.dynamics.frames import wrap
 from shipgym.dynamics.params import BLUE_LADY_HULL
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.guidance import Leg, ManoeuvrePlan
@@ -180,12 +181,6 @@ def tracking_penalty(weight: Any, q2: Any, scale: float | None) -> Any:
 
 # ---- the plan tasks' run-time law ------------------------------------------------------------
 @njit(inline="always")
-def _wrap(a):  # type: ignore[no-untyped-def]
-    """``a`` (rad) wrapped to (-pi, pi], as :func:`shipgym.dynamics.frames.wrap_angle`."""
-    return math.pi - (math.pi - a) % (2.0 * math.pi)
-
-
-@njit(inline="always")
 def _penalty(w, q2, s):  # type: ignore[no-untyped-def]
     """:func:`tracking_penalty` (``s = 0``: the raw square)."""
     if s == 0.0:
@@ -226,7 +221,7 @@ def plan_terms(  # type: ignore[no-untyped-def]
         dy = nav_eta[i, 1] - eta_d_n[i, 1]
         obs[i, 0] = c * dx + s * dy
         obs[i, 1] = c * dy - s * dx
-        obs[i, 2] = _wrap(psi - eta_d_n[i, 2])
+        obs[i, 2] = wrap(psi - eta_d_n[i, 2])
         for k in range(3):
             obs[i, 3 + k] = nav_nu[i, k]
             obs[i, 6 + k] = nu_d[i, k]
@@ -234,7 +229,7 @@ def plan_terms(  # type: ignore[no-untyped-def]
         # the reward, from the truth
         ex = eta_r[i, 0] - eta_d_r[i, 0]
         ey = eta_r[i, 1] - eta_d_r[i, 1]
-        ep = _wrap(eta_r[i, 2] - eta_d_r[i, 2])
+        ep = wrap(eta_r[i, 2] - eta_d_r[i, 2])
         du = nu[i, 0] - nu_d[i, 0]
         dv = nu[i, 1] - nu_d[i, 1]
         dr = nu[i, 2] - nu_d[i, 2]

@@ -14,20 +14,42 @@ text: "the direction of the x^r axis changes ... shifted to the initial point P 
 current trajectory segment"); a frame that rotated with the ship would make the r-frame
 coordinates body-frame errors instead.
 
-Both functions accept a leading batch axis on either argument.
+Both functions accept a leading batch axis on either argument; :func:`to_r_frame` is one
+compiled law for one pose or many.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym.dynamics.frames import wrap_angle
+from shipgym._jit import entry, njit
+from shipgym.dynamics.frames import wrap
 
-__all__ = ["to_r_frame", "to_r_frame_pose", "from_r_frame"]
+__all__ = ["to_r_frame", "r_frame_poses", "from_r_frame"]
+
+
+@njit
+def r_frame_poses(eta, eta_P, psi_ref, has_ref, out):  # type: ignore[no-untyped-def]
+    """The compiled map of :func:`to_r_frame` over N poses: ``eta`` and ``eta_P`` (N, 3),
+    ``psi_ref`` (N,) (read where ``has_ref``), into ``out`` (N, 3)."""
+    for i in range(eta.shape[0]):
+        c, s = math.cos(eta_P[i, 2]), math.sin(eta_P[i, 2])
+        dx = eta[i, 0] - eta_P[i, 0]
+        dy = eta[i, 1] - eta_P[i, 1]
+        dpsi = eta[i, 2] - eta_P[i, 2]
+        out[i, 0] = c * dx + s * dy
+        out[i, 1] = -s * dx + c * dy
+        if has_ref:
+            out[i, 2] = psi_ref[i] + wrap(dpsi - psi_ref[i])
+        else:
+            out[i, 2] = wrap(dpsi)
+
+
+_ENTRY: list[Any] = []
 
 
 def to_r_frame(
@@ -45,58 +67,30 @@ def to_r_frame(
             Without it the heading is ``wrap(psi - psi_P)`` in (-pi, pi].
 
     Returns:
-        r-frame poses ``[x^r, y^r, psi^r]`` (m, m, rad), shape broadcast of the inputs.
+        r-frame poses ``[x^r, y^r, psi^r]`` (m, m, rad), shape broadcast of the inputs: one
+        compiled law (:func:`r_frame_poses`) for one pose or many.
     """
     eta_n = np.asarray(eta_n, dtype=float)
     eta_P = np.asarray(eta_P, dtype=float)
-    scalar_ref = psi_ref_r is None or isinstance(psi_ref_r, float) or np.ndim(psi_ref_r) == 0
-    if eta_n.shape == (3,) and eta_P.shape == (3,) and scalar_ref:
-        return _to_r_frame_one(eta_n, eta_P, psi_ref_r)  # fast path: one pose
     if eta_n.shape[-1:] != (3,) or eta_P.shape[-1:] != (3,):
         raise ValueError(
             f"eta_n and eta_P must have a last axis of length 3 ([x, y, psi]), got shapes "
             f"{eta_n.shape} and {eta_P.shape}"
         )
-    dx = eta_n[..., 0] - eta_P[..., 0]
-    dy = eta_n[..., 1] - eta_P[..., 1]
-    c = np.cos(eta_P[..., 2])
-    s = np.sin(eta_P[..., 2])
-    dpsi = eta_n[..., 2] - eta_P[..., 2]
-    if psi_ref_r is None:
-        psi_r = wrap_angle(dpsi)
-    else:
-        ref = np.asarray(psi_ref_r, dtype=float)
-        psi_r = ref + wrap_angle(dpsi - ref)
-    out = np.empty(np.broadcast_shapes(eta_n.shape, eta_P.shape))
-    out[..., 0] = c * dx + s * dy
-    out[..., 1] = -s * dx + c * dy
-    out[..., 2] = psi_r
-    return out
-
-
-def _to_r_frame_one(
-    eta_n: NDArray[np.float64], eta_P: NDArray[np.float64], psi_ref_r: ArrayLike | None
-) -> NDArray[np.float64]:
-    """:func:`to_r_frame` for a single pose (called every control step)."""
-    x, y, psi = eta_n.tolist()
-    ref = None if psi_ref_r is None else float(psi_ref_r)  # type: ignore[arg-type]
-    return np.array(to_r_frame_pose(x, y, psi, eta_P.tolist(), ref))
-
-
-def to_r_frame_pose(
-    x: float, y: float, psi: float, eta_P: Sequence[float], psi_ref_r: float | None = None
-) -> tuple[float, float, float]:
-    """:func:`to_r_frame` of one NED pose ``(x, y, psi)`` in plain floats (``eta_P`` three
-    floats, ``psi_ref_r`` a float or ``None``): the environment's per-step form, which keeps
-    its poses as floats."""
-    xp, yp, psip = eta_P
-    c, s = math.cos(psip), math.sin(psip)
-    dx, dy, dpsi = x - xp, y - yp, psi - psip
-    if psi_ref_r is None:
-        psi_r = wrap_angle(dpsi)
-    else:
-        psi_r = psi_ref_r + wrap_angle(dpsi - psi_ref_r)
-    return (c * dx + s * dy, -s * dx + c * dy, psi_r)
+    lead = np.broadcast_shapes(eta_n.shape[:-1], eta_P.shape[:-1])
+    if psi_ref_r is not None:
+        lead = np.broadcast_shapes(lead, np.shape(psi_ref_r))
+    e = np.ascontiguousarray(np.broadcast_to(eta_n, (*lead, 3)).reshape(-1, 3))
+    p = np.ascontiguousarray(np.broadcast_to(eta_P, (*lead, 3)).reshape(-1, 3))
+    ref = np.zeros(e.shape[0]) if psi_ref_r is None else np.ascontiguousarray(
+        np.broadcast_to(np.asarray(psi_ref_r, dtype=float), lead).reshape(-1)
+    )
+    out = np.empty_like(e)
+    args = (e, p, ref, psi_ref_r is not None, out)
+    if not _ENTRY:
+        _ENTRY.append(entry(r_frame_poses, args))
+    _ENTRY[0](*args)
+    return out.reshape(*lead, 3)
 
 
 def from_r_frame(eta_r: ArrayLike, eta_P: ArrayLike) -> NDArray[np.float64]:
