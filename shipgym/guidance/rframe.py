@@ -77,14 +77,21 @@ def to_r_frame(
             f"eta_n and eta_P must have a last axis of length 3 ([x, y, psi]), got shapes "
             f"{eta_n.shape} and {eta_P.shape}"
         )
-    lead = np.broadcast_shapes(eta_n.shape[:-1], eta_P.shape[:-1])
-    if psi_ref_r is not None:
-        lead = np.broadcast_shapes(lead, np.shape(psi_ref_r))
-    e = np.ascontiguousarray(np.broadcast_to(eta_n, (*lead, 3)).reshape(-1, 3))
-    p = np.ascontiguousarray(np.broadcast_to(eta_P, (*lead, 3)).reshape(-1, 3))
-    ref = np.zeros(e.shape[0]) if psi_ref_r is None else np.ascontiguousarray(
-        np.broadcast_to(np.asarray(psi_ref_r, dtype=float), lead).reshape(-1)
-    )
+    one = eta_n.shape == eta_P.shape == (3,)
+    if one and (psi_ref_r is None or np.ndim(psi_ref_r) == 0):  # one pose (every step)
+        lead: tuple[int, ...] = ()
+        e = np.ascontiguousarray(eta_n).reshape(1, 3)
+        p = np.ascontiguousarray(eta_P).reshape(1, 3)
+        ref = np.array([0.0 if psi_ref_r is None else psi_ref_r], dtype=float)
+    else:
+        lead = np.broadcast_shapes(eta_n.shape[:-1], eta_P.shape[:-1])
+        if psi_ref_r is not None:
+            lead = np.broadcast_shapes(lead, np.shape(psi_ref_r))
+        e = np.ascontiguousarray(np.broadcast_to(eta_n, (*lead, 3)).reshape(-1, 3))
+        p = np.ascontiguousarray(np.broadcast_to(eta_P, (*lead, 3)).reshape(-1, 3))
+        ref = np.zeros(e.shape[0]) if psi_ref_r is None else np.ascontiguousarray(
+            np.broadcast_to(np.asarray(psi_ref_r, dtype=float), lead).reshape(-1)
+        )
     out = np.empty_like(e)
     args = (e, p, ref, psi_ref_r is not None, out)
     if not _ENTRY:
