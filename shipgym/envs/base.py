@@ -301,6 +301,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._obs = np.zeros((1, i), np.float32)
         self._rew = np.zeros((1, len(REWARD_TERMS)))
         self._flags = np.zeros((2, 1), bool)  # switched, new contact
+        self._eta_r = np.zeros((1, 3))
 
     # ---- the task's settings ----------------------------------------------------------------
     @property
@@ -382,12 +383,11 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._prev_action = np.zeros((1, self.n_actions))
         self._contact = False
         measurements = [self._measure()] if self.sensors is not None else []
-        sample = self._observe()
+        self._flags[:] = False
+        sample = self._observe(self._prev_action)
         self._record_metrics(sample)
         n = self.n_actions
         command = self.physics.command
-        self._flags[:] = False
-        self._terms(sample, self._prev_action)
         info = self._info(sample, command, np.zeros(n, bool), np.zeros(n, bool), False, {}, [])
         info["measurements"] = measurements
         info["record"] = self._record(info, sample)
@@ -437,11 +437,11 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._contact = self._contact or bool(contacts)
         t, eta = phys.time, phys.eta
         switched = self.guidance.update(t, eta)
-        sample = self._observe(t, eta)
-        self._record_metrics(sample, saturated, clipped)
         flags = self._flags
         flags[0, 0], flags[1, 0] = switched, new_contact
-        rewards = self._terms(sample, clipped.reshape(1, -1))
+        sample = self._observe(clipped.reshape(1, -1), t, eta)
+        self._record_metrics(sample, saturated, clipped)
+        rewards = dict(zip(REWARD_TERMS, self._rew[0].tolist(), strict=True))
         reward = float(sum(rewards.values()))
         self._prev_action = clipped.reshape(1, -1)
         finished = self.guidance.finished
@@ -525,17 +525,25 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         out["duration_s"] = float(self.physics.time)
         return out
 
-    def _observe(self, t: float | None = None, eta: NDArray[np.float64] | None = None) -> _Sample:
-        """The sample now (``t``, ``eta``: the time and pose, when already read)."""
+    def _observe(
+        self,
+        action: NDArray[np.float64],
+        t: float | None = None,
+        eta: NDArray[np.float64] | None = None,
+    ) -> _Sample:
+        """The sample now and the task's observation (``_obs``) and reward terms (``_rew``)
+        of the applied ``action`` (1, n) (``t``, ``eta``: the time and pose, when already
+        read)."""
         phys = self.physics
         if t is None or eta is None:
             t, eta = phys.time, phys.eta
         nu = phys.nu
         ref = self.guidance.reference(t)
         self.reference = ref
-        ref_r = ref.eta_d_r.tolist()
-        eta_r = to_r_frame(eta, ref.eta_P, ref_r[2])
-        return _Sample(t, eta, nu, ref, eta_r, phys.thrust, ref_r)
+        e, w = eta.reshape(1, 3), nu.reshape(1, 3)
+        self.task.terms(e, w, e, w, ref.buffer, action, self._prev_action, self._flags[0],
+                        self._flags[1], self._obs, self._rew, self._eta_r)  # fmt: skip
+        return _Sample(t, eta, nu, ref, self._eta_r[0].copy(), phys.thrust, ref.eta_d_r.tolist())
 
     def _record_metrics(
         self,
@@ -550,9 +558,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             s.t,
             s.eta_r,
             ref.eta_d_r,
-            eta_meas_r=None
-            if z is None
-            else to_r_frame(z, ref.eta_P, s.ref_r[2]),
+            eta_meas_r=None if z is None else to_r_frame(z, ref.eta_P, s.ref_r[2]),
             thrust=s.thrust,
             saturated=saturated
             if saturated is None or self._slices is None
@@ -576,21 +582,11 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         """The observation vector (layout in the class docstring) from navigation data (the
         task's observation of N = 1, as an observer wrapper forms it from its estimate)."""
         obs = np.zeros((1, self.observation_space.shape[0]), np.float32)
-        rew = np.zeros((1, len(REWARD_TERMS)))
         e, w = np.reshape(eta, (1, 3)), np.reshape(nu, (1, 3))
         prev = np.reshape(prev_action, (1, -1)).astype(float)
-        self.task.terms(e, w, e, w, _Row(ref), prev, prev, self._flags[0], self._flags[1], obs,
-                        rew)  # fmt: skip
+        self.task.terms(e, w, e, w, ref.buffer, prev, prev, self._flags[0], self._flags[1], obs,
+                        np.zeros((1, len(REWARD_TERMS))), np.zeros((1, 3)))  # fmt: skip
         return obs[0]
-
-    def _terms(self, s: _Sample, action: NDArray[np.float64]) -> dict[str, float]:
-        """The task's observation (into ``_obs``) and reward terms of this step."""
-        nu = s.nu.reshape(1, 3)
-        eta = s.eta.reshape(1, 3)
-        self.task.terms(s.eta_r.reshape(1, 3), nu, eta, nu, _Row(s.ref), action,
-                        self._prev_action, self._flags[0], self._flags[1], self._obs,
-                        self._rew)  # fmt: skip
-        return dict(zip(REWARD_TERMS, self._rew[0].tolist(), strict=True))
 
     def _info(
         self,
@@ -688,19 +684,6 @@ def place_harbour(model: Any, body: int | None, start: NDArray[np.float64]) -> N
     model.body_pos[body] = (start[0], start[1], 0.0)
     h = 0.5 * start[2]
     model.body_quat[body] = (math.cos(h), 0.0, 0.0, math.sin(h))
-
-
-class _Row:
-    """A one-env reference as the task reads it: ``eta_d_n``, ``eta_d_r``, ``nu_d``,
-    ``nu_dot_d`` as (1, 3) arrays."""
-
-    __slots__ = ("eta_d_n", "eta_d_r", "nu_d", "nu_dot_d")
-
-    def __init__(self, ref: Reference) -> None:
-        self.eta_d_n = np.reshape(ref.eta_d_n, (1, 3))
-        self.eta_d_r = np.reshape(ref.eta_d_r, (1, 3))
-        self.nu_d = np.reshape(ref.nu_d, (1, 3))
-        self.nu_dot_d = np.reshape(ref.nu_dot_d, (1, 3))
 
 
 def _check_timing(timestep: Any, control_period: Any) -> None:

@@ -248,6 +248,7 @@ class VesselPhysics:
         self._flags = np.zeros(len(acts))  # the read-outs' stall flags (not reported)
         self._tau_entry: Any = None  # tau_of_table's compiled entry point
         self._at: Any = None  # _now(): the actuators' read-out at the current state
+        self._vel: tuple[float, float, float, float] | None = None  # _velocity()
         self._build()
         self.reset()
 
@@ -338,7 +339,7 @@ class VesselPhysics:
             self._check_lags(float(self.model.opt.timestep))
             self._build()
         mujoco.mj_resetData(self.model, self.data)
-        self._at = None
+        self._at = self._vel = None
         hb = self._hulls
         hb.set_pose(0, eta_a, nu_a)
         act = np.where(self._holds, np.clip(act, self.actuators.lower, self.actuators.upper), act)
@@ -425,18 +426,18 @@ class VesselPhysics:
     @property
     def nu(self) -> NDArray[np.float64]:
         """Body velocity ``[u (m/s), v (m/s), r (rad/s)]``."""
-        u, v, _p, r = self._hulls.body_velocity(0)
+        u, v, _p, r = self._velocity()
         return np.array([u, v, r])
 
     def _nu3(self) -> tuple[float, float, float]:
         """``(u, v, r)`` as floats (:attr:`nu`)."""
-        u, v, _p, r = self._hulls.body_velocity(0)
+        u, v, _p, r = self._velocity()
         return u, v, r
 
     @property
     def p(self) -> float:
         """Roll rate (rad/s), 0 for a 3-DOF vessel."""
-        return self._hulls.body_velocity(0)[2]
+        return self._velocity()[2]
 
     @property
     def eta_full(self) -> NDArray[np.float64]:
@@ -447,7 +448,7 @@ class VesselPhysics:
     @property
     def nu_full(self) -> NDArray[np.float64]:
         """``[u, v, r]`` (3 DOF) or Fossen's ``[u, v, p, r]`` (4 DOF)."""
-        u, v, p, r = self._hulls.body_velocity(0)
+        u, v, p, r = self._velocity()
         return np.array([u, v, r]) if self.dofs == 3 else np.array([u, v, p, r])
 
     @property
@@ -465,7 +466,7 @@ class VesselPhysics:
         :meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`) at the states ``st`` and the
         current velocity through the water (the current of the last physics step): their
         compiled laws (:func:`~shipgym.dynamics.actuators.tau_of_table`)."""
-        u, v, p, r = self._hulls.body_velocity(0)
+        u, v, p, r = self._velocity()
         lo = self._hulls.loads[0]
         tab, laws, kinds = self._hulls.law_table if table is None else table
         forces = np.zeros(len(kinds))
@@ -478,6 +479,12 @@ class VesselPhysics:
             self._tau_entry = entry(tau_of_table, args)
         X, Y, K, N = self._tau_entry(*args)
         return [X, Y, K, N], forces
+
+    def _velocity(self) -> tuple[float, float, float, float]:
+        """``(u, v, p, r)`` at the current state, computed once per state (as :meth:`_now`)."""
+        if self._vel is None:
+            self._vel = self._hulls.body_velocity(0)
+        return self._vel
 
     def _now(self) -> tuple[list[float], Any]:
         """:meth:`_tau` at the current actuator states, kept until the state changes."""
@@ -592,7 +599,7 @@ class VesselPhysics:
             drift = self.waves if self.wave_config is not None and self.wave_config.drift else None
             hb.set_processes(0, self.wind if self.aerodynamics else None, self.current, drift)
         hb = self._hulls
-        self._at = None
+        self._at = self._vel = None
         taken = hb.advance(n, stop_on_contact=stop_on_contact)
         if self.integrator == "leapfrog":
             self._sync()

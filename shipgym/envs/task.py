@@ -36,6 +36,7 @@ from shipgym.dynamics.params import BLUE_LADY_HULL
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.guidance import Leg, ManoeuvrePlan
 from shipgym.guidance import plan as named_plan
+from shipgym.guidance.rframe import r_pose
 from shipgym.observers.sensors import SensorConfig, sensor_config
 
 __all__ = [
@@ -191,18 +192,16 @@ def _penalty(w, q2, s):  # type: ignore[no-untyped-def]
 
 @njit
 def plan_terms(  # type: ignore[no-untyped-def]
-    eta_r, nu, nav_eta, nav_nu, eta_d_n, eta_d_r, nu_d, nu_dot_d,
-    action, prev, switched, new_contact, w, obs, rew,
+    eta, nu, nav_eta, nav_nu, ref, action, prev, switched, new_contact, w, obs, rew, eta_r,
 ):  # fmt: skip
     """The observation and reward terms of N envs of a plan task (one law for every N).
 
     Args:
-        eta_r: (N, 3) the true poses in the current legs' r-frames (m, m, rad; Tomera (2014)
-            eq. 1, the heading on the branch of the desired one).
-        nu: (N, 3) the true body velocities ``[u, v, r]`` (m/s, m/s, rad/s).
+        eta, nu: (N, 3) the true NED poses ``[x, y, psi]`` (m, m, rad) and body velocities
+            ``[u, v, r]`` (m/s, m/s, rad/s).
         nav_eta, nav_nu: (N, 3) the navigation data (the truth, or an observer's estimate).
-        eta_d_n, eta_d_r: (N, 3) the desired poses, NED and r-frame (m, m, rad).
-        nu_d, nu_dot_d: (N, 3) the reference body velocity and acceleration.
+        ref: (N, 10, 3) the guidance's reference
+            (:attr:`BatchedReference.buffer <shipgym.guidance.batch.BatchedReference.buffer>`).
         action, prev: (N, m) the applied (clipped) normalised action and the previous one.
         switched, new_contact: (N,) booleans: a leg completed, a first quay contact.
         w: the weights (:meth:`RewardWeights.vector`).
@@ -211,28 +210,34 @@ def plan_terms(  # type: ignore[no-untyped-def]
             ship's body frame (m), the wrapped heading error (rad), ``nav_nu``, ``nu_d``,
             ``nu_dot_d`` and the action just applied (the next step's previous action).
         rew: (N, 7) out: the reward terms in the order of :data:`REWARD_TERMS`.
+        eta_r: (N, 3) out: the true poses in the current legs' r-frames (Tomera (2014) eq. 1,
+            the heading on the branch of the desired one).
     """
     n, m = action.shape
     for i in range(n):
+        r = ref[i]
         # the observation, from navigation data (what a controller may know)
         psi = nav_eta[i, 2]
         c, s = math.cos(psi), math.sin(psi)
-        dx = nav_eta[i, 0] - eta_d_n[i, 0]
-        dy = nav_eta[i, 1] - eta_d_n[i, 1]
+        dx = nav_eta[i, 0] - r[4, 0]
+        dy = nav_eta[i, 1] - r[4, 1]
         obs[i, 0] = c * dx + s * dy
         obs[i, 1] = c * dy - s * dx
-        obs[i, 2] = wrap(psi - eta_d_n[i, 2])
+        obs[i, 2] = wrap(psi - r[4, 2])
         for k in range(3):
             obs[i, 3 + k] = nav_nu[i, k]
-            obs[i, 6 + k] = nu_d[i, k]
-            obs[i, 9 + k] = nu_dot_d[i, k]
-        # the reward, from the truth
-        ex = eta_r[i, 0] - eta_d_r[i, 0]
-        ey = eta_r[i, 1] - eta_d_r[i, 1]
-        ep = wrap(eta_r[i, 2] - eta_d_r[i, 2])
-        du = nu[i, 0] - nu_d[i, 0]
-        dv = nu[i, 1] - nu_d[i, 1]
-        dr = nu[i, 2] - nu_d[i, 2]
+            obs[i, 6 + k] = r[6, k]
+            obs[i, 9 + k] = r[7, k]
+        # the reward, from the truth in the leg's r-frame
+        xr, yr, pr = r_pose(eta[i, 0], eta[i, 1], eta[i, 2], r[3, 0], r[3, 1], r[3, 2],
+                            r[0, 2], True)  # fmt: skip
+        eta_r[i, 0], eta_r[i, 1], eta_r[i, 2] = xr, yr, pr
+        ex = xr - r[0, 0]
+        ey = yr - r[0, 1]
+        ep = wrap(pr - r[0, 2])
+        du = nu[i, 0] - r[6, 0]
+        dv = nu[i, 1] - r[6, 1]
+        dr = nu[i, 2] - r[6, 2]
         effort = 0.0
         rate = 0.0
         for j in range(m):
@@ -294,9 +299,9 @@ class Task(Protocol):
     def observation_size(self, n_actions: int) -> int: ...  # pragma: no cover - protocol
 
     def terms(
-        self, eta_r: Array, nu: Array, nav_eta: Array, nav_nu: Array, ref: Any, action: Array,
+        self, eta: Array, nu: Array, nav_eta: Array, nav_nu: Array, ref: Array, action: Array,
         prev: Array, switched: NDArray[np.bool_], new_contact: NDArray[np.bool_],
-        obs: NDArray[np.float32], rew: Array,
+        obs: NDArray[np.float32], rew: Array, eta_r: Array,
     ) -> None: ...  # pragma: no cover - protocol  # fmt: skip
 
 
@@ -436,16 +441,16 @@ class PlanTask:
         return sum(k for _, k in OBS_LAYOUT) + n_actions
 
     def terms(
-        self, eta_r: Array, nu: Array, nav_eta: Array, nav_nu: Array, ref: Any, action: Array,
+        self, eta: Array, nu: Array, nav_eta: Array, nav_nu: Array, ref: Array, action: Array,
         prev: Array, switched: NDArray[np.bool_], new_contact: NDArray[np.bool_],
-        obs: NDArray[np.float32], rew: Array,
+        obs: NDArray[np.float32], rew: Array, eta_r: Array,
     ) -> None:  # fmt: skip
-        """The observation (into ``obs``) and the reward terms (into ``rew``, the columns of
-        :data:`REWARD_TERMS`) of N envs: :func:`plan_terms` with this task's weights, the
-        reference ``ref`` giving ``eta_d_n``, ``eta_d_r``, ``nu_d``, ``nu_dot_d`` as (N, 3)
-        arrays."""
-        args = (eta_r, nu, nav_eta, nav_nu, ref.eta_d_n, ref.eta_d_r, ref.nu_d, ref.nu_dot_d,
-                action, prev, switched, new_contact, self._w, obs, rew)  # fmt: skip
+        """The observation (into ``obs``), the reward terms (into ``rew``, the columns of
+        :data:`REWARD_TERMS`) and the true r-frame poses (into ``eta_r``) of N envs:
+        :func:`plan_terms` with this task's weights; ``ref`` the reference's (N, 10, 3)
+        buffer."""
+        args = (eta, nu, nav_eta, nav_nu, ref, action, prev, switched, new_contact, self._w,
+                obs, rew, eta_r)  # fmt: skip
         if self._terms_entry is None:
             from shipgym._jit import entry
 

@@ -193,6 +193,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self.action_space = batch_space(self.single_action_space, n)
         self._obs = np.zeros((n, size), np.float32)
         self._rew = np.zeros((n, len(REWARD_TERMS)))
+        self._eta_r = np.zeros((n, 3))
         self._harbour = [harbour_body(m) for m in self.physics.models] if harbour else []
         self._contact = np.zeros(n, dtype=bool)
         self._stop = harbour  # stop a hull after the physics step in which it touches a quay
@@ -505,8 +506,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         (``_rew``, from the truth) of every env."""
         eta, nu = self._truth()
         nav_eta, nav_nu = self._navigation()
-        self.task.terms(ref.to_r(eta), nu, nav_eta, nav_nu, ref, action, self._prev, switched,
-                        new_contact, self._obs, self._rew)  # fmt: skip
+        self.task.terms(eta, nu, nav_eta, nav_nu, ref.buffer, action, self._prev, switched,
+                        new_contact, self._obs, self._rew, self._eta_r)  # fmt: skip
         return {k: self._rew[:, j].copy() for j, k in enumerate(REWARD_TERMS)}
 
     def _observation(self) -> NDArray[np.float32]:

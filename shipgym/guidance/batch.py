@@ -241,11 +241,21 @@ class BatchedReference:
         return int(self.t_leg.shape[0])
 
     def _row(self, k: int) -> Array:
+        return self.buffer[:, k]
+
+    @property
+    def buffer(self) -> Array:
+        """The reference as one (n, 10, 3) array, rows ``eta_d_r``, ``eta_dot_d_r``,
+        ``eta_ddot_d_r``, ``eta_P``, ``eta_d_n``, ``eta_K``, ``nu_d``, ``nu_dot_d``,
+        ``eta_dot_d_n`` and ``[t_leg, 0, 0]`` (what compiled consumers read)."""
         if self._buf is None:  # built from its fields: the velocities from them
             f = [np.ascontiguousarray(a, dtype=float) for a in (
                 self.eta_d_r, self.eta_dot_d_r, self.eta_ddot_d_r, self.eta_P)]  # fmt: skip
-            self._buf = _derived(*f)
-        return self._buf[:, k]
+            buf = _derived(*f)
+            buf[:, 4], buf[:, 5], buf[:, _TLEG, 0] = self.eta_d_n, self.eta_K, self.t_leg
+            buf.setflags(write=False)
+            self._buf = buf
+        return self._buf
 
     @property
     def eta_dot_d_n(self) -> Array:

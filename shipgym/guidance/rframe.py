@@ -29,7 +29,18 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._jit import entry, njit
 from shipgym.dynamics.frames import wrap
 
-__all__ = ["to_r_frame", "r_frame_poses", "from_r_frame"]
+__all__ = ["to_r_frame", "r_frame_poses", "r_pose", "from_r_frame"]
+
+
+@njit(inline="always")
+def r_pose(x, y, psi, xp, yp, psip, psi_ref, has_ref):  # type: ignore[no-untyped-def]
+    """One NED pose ``(x, y, psi)`` in the r-frame of a leg starting at ``(xp, yp, psip)``
+    (Tomera 2014 eq. 1), the heading on the branch within pi of ``psi_ref`` where
+    ``has_ref``: the one r-frame law, inlined where compiled code needs it."""
+    c, s = math.cos(psip), math.sin(psip)
+    dx, dy, dpsi = x - xp, y - yp, psi - psip
+    psi_r = psi_ref + wrap(dpsi - psi_ref) if has_ref else wrap(dpsi)
+    return c * dx + s * dy, -s * dx + c * dy, psi_r
 
 
 @njit
@@ -37,16 +48,10 @@ def r_frame_poses(eta, eta_P, psi_ref, has_ref, out):  # type: ignore[no-untyped
     """The compiled map of :func:`to_r_frame` over N poses: ``eta`` and ``eta_P`` (N, 3),
     ``psi_ref`` (N,) (read where ``has_ref``), into ``out`` (N, 3)."""
     for i in range(eta.shape[0]):
-        c, s = math.cos(eta_P[i, 2]), math.sin(eta_P[i, 2])
-        dx = eta[i, 0] - eta_P[i, 0]
-        dy = eta[i, 1] - eta_P[i, 1]
-        dpsi = eta[i, 2] - eta_P[i, 2]
-        out[i, 0] = c * dx + s * dy
-        out[i, 1] = -s * dx + c * dy
-        if has_ref:
-            out[i, 2] = psi_ref[i] + wrap(dpsi - psi_ref[i])
-        else:
-            out[i, 2] = wrap(dpsi)
+        out[i, 0], out[i, 1], out[i, 2] = r_pose(
+            eta[i, 0], eta[i, 1], eta[i, 2], eta_P[i, 0], eta_P[i, 1], eta_P[i, 2], psi_ref[i],
+            has_ref,
+        )  # fmt: skip
 
 
 _ENTRY: list[Any] = []
@@ -89,8 +94,12 @@ def to_r_frame(
             lead = np.broadcast_shapes(lead, np.shape(psi_ref_r))
         e = np.ascontiguousarray(np.broadcast_to(eta_n, (*lead, 3)).reshape(-1, 3))
         p = np.ascontiguousarray(np.broadcast_to(eta_P, (*lead, 3)).reshape(-1, 3))
-        ref = np.zeros(e.shape[0]) if psi_ref_r is None else np.ascontiguousarray(
-            np.broadcast_to(np.asarray(psi_ref_r, dtype=float), lead).reshape(-1)
+        ref = (
+            np.zeros(e.shape[0])
+            if psi_ref_r is None
+            else np.ascontiguousarray(
+                np.broadcast_to(np.asarray(psi_ref_r, dtype=float), lead).reshape(-1)
+            )
         )
     out = np.empty_like(e)
     args = (e, p, ref, psi_ref_r is not None, out)

@@ -41,6 +41,7 @@ from .batch import (
     _NU_DOT,
     _R,
     _S,
+    _TLEG,
     _TSTART,
     BatchedGuidance,
     _conditions,
@@ -92,7 +93,16 @@ class Reference:
             np.ascontiguousarray(a, dtype=float).reshape(1, 3)
             for a in (self.eta_d_r, self.eta_dot_d_r, self.eta_ddot_d_r, self.eta_P)
         ]
-        return _derived(*f)[0]
+        buf = _derived(*f)[0]
+        buf[4], buf[5], buf[_TLEG, 0] = self.eta_d_n, self.eta_K, self.t_leg
+        buf.setflags(write=False)
+        return buf
+
+    @property
+    def buffer(self) -> NDArray[np.float64]:
+        """The reference as one (1, 10, 3) array (the layout of
+        :attr:`BatchedReference.buffer <shipgym.guidance.batch.BatchedReference.buffer>`)."""
+        return self._buf[None]
 
     @functools.cached_property
     def _nu_d(self) -> tuple[float, float, float]:
