@@ -28,6 +28,7 @@ import warnings
 from typing import Any
 
 import numba
+import numpy as np
 from numba import njit as _njit
 from numba import types
 from numba.core.errors import NumbaExperimentalFeatureWarning
@@ -80,23 +81,44 @@ def kernel(fn: Any, sig: Any) -> Any:
     return fn
 
 
+_ENTRIES: dict[tuple[Any, ...], Any] = {}
+
+
+def _type_key(a: Any) -> Any:
+    """What Numba's type of ``a`` depends on, cheaply: an array's dtype, dimensions, layout
+    and flags; a Python number's type; else Numba's type itself."""
+    if isinstance(a, np.ndarray):
+        f = a.flags
+        return (a.dtype.str, a.ndim, f.c_contiguous, f.f_contiguous, f.writeable, f.aligned)
+    if type(a) in (bool, int, float):
+        return type(a)
+    return numba.typeof(a)
+
+
 def entry(dispatcher: Any, args: tuple[Any, ...]) -> Any:
     """The compiled entry point of ``dispatcher`` for arguments like ``args`` (compiled if
     needed): calling it skips Numba's per-call type resolution, which costs tens of
-    microseconds for first-class function arguments. The function itself where compilation
-    is off."""
+    microseconds for first-class function arguments. Entry points are kept per dispatcher
+    and argument types, so a new object with arguments of the same types (an episode's new
+    physics) gets its entry point without resolving the types again. The function itself
+    where compilation is off."""
     if _DISABLED or not hasattr(dispatcher, "overloads"):
         return dispatcher
-    sig = tuple(dispatcher.typeof_pyval(a) for a in args)
-    dispatcher.compile(sig)
-    return dispatcher.overloads[sig].entry_point
+    key = (dispatcher, *map(_type_key, args))
+    found = _ENTRIES.get(key)
+    if found is None:
+        sig = tuple(dispatcher.typeof_pyval(a) for a in args)
+        dispatcher.compile(sig)
+        found = _ENTRIES[key] = dispatcher.overloads[sig].entry_point
+    return found
 
 
 # ---- laws by address ------------------------------------------------------------------------
 # The loop receives each law as the address of its compiled code (an int): an int argument
 # costs nothing to pass, where Numba's first-class function arguments cost microseconds per
 # call to unbox, and a loop over ints and arrays is compiled once and cached on disk.
-_PY_FUNCS: dict[int, Any] = {}  # compilation off: the "address" is a key of the function
+_PY_FUNCS: dict[int, Any] = {}
+_ADDRESSES: dict[tuple[Any, Any], int] = {}  # (function, signature) -> its code's address  # compilation off: the "address" is a key of the function
 
 
 def address(fn: Any, sig: Any) -> int:
@@ -105,10 +127,13 @@ def address(fn: Any, sig: Any) -> int:
     if _DISABLED or not hasattr(fn, "overloads"):
         _PY_FUNCS[id(fn)] = fn
         return id(fn)
-    from numba.experimental.function_type import _get_jit_address
+    found = _ADDRESSES.get((fn, sig))
+    if found is None:
+        from numba.experimental.function_type import _get_jit_address
 
-    kernel(fn, sig)
-    return int(_get_jit_address(fn, sig))
+        kernel(fn, sig)
+        found = _ADDRESSES[fn, sig] = int(_get_jit_address(fn, sig))
+    return found
 
 
 def _function_at(sig: Any) -> Any:
