@@ -118,7 +118,9 @@ def entry(dispatcher: Any, args: tuple[Any, ...]) -> Any:
 # costs nothing to pass, where Numba's first-class function arguments cost microseconds per
 # call to unbox, and a loop over ints and arrays is compiled once and cached on disk.
 _PY_FUNCS: dict[int, Any] = {}
-_ADDRESSES: dict[tuple[Any, Any], int] = {}  # (function, signature) -> its code's address  # compilation off: the "address" is a key of the function
+_ADDRESSES: dict[
+    tuple[Any, Any], int
+] = {}  # (function, signature) -> its code's address  # compilation off: the "address" is a key of the function
 
 
 def address(fn: Any, sig: Any) -> int:

@@ -8,14 +8,14 @@ What :class:`~shipgym.controllers.wrappers.DPControllerWrapper` runs every contr
 (:class:`~shipgym.controllers.conditioning.BatchedReversalHysteresis`). Each is the one
 compiled run-time form of its law, which the single env's controller wrapper runs at N = 1, so
 env i of a batch equals the single env bit for bit. The iterative allocations (active-set
-weighted least squares, the azimuth QP) have no batched form: :class:`BatchedAllocation`
-raises ``NotImplementedError`` naming the vessel and the method. Inputs and outputs are
+weighted least squares, the azimuth QP) run per env inside the step, each env with the
+single env's allocator. Inputs and outputs are
 ``(N, 3)`` arrays (``(N, n_channels)`` for commands).
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -61,53 +61,45 @@ class BatchedAllocationResult(NamedTuple):
 
 
 class BatchedAllocation:
-    """The thrust allocation of ``vessel`` for N envs, where it is a closed form.
+    """The thrust allocation of ``vessel`` for N envs.
 
-    Supported: the Blue Lady pattern
-    (:func:`~shipgym.controllers.actuation.fixed3_parameters`) with ``"constrained"``
-    (:func:`~shipgym.controllers.allocation.allocate`, default weights, as
-    :func:`~shipgym.controllers.actuation.make_allocator` uses it) or ``"inverse"``
-    (:func:`~shipgym.controllers.allocation.allocate_inverse`).
+    The closed form of the Blue Lady pattern
+    (:func:`~shipgym.controllers.actuation.fixed3_parameters`: ``"constrained"``,
+    :func:`~shipgym.controllers.allocation.allocate`, or ``"inverse"``,
+    :func:`~shipgym.controllers.allocation.allocate_inverse`) runs as one compiled law over the
+    envs; the iterative allocations (the active-set weighted least squares of other fixed
+    thruster sets, the azimuth QP) run per env, each env with its own allocator of
+    :func:`~shipgym.controllers.actuation.make_allocator` (what the single env's controller
+    wrapper calls), so env ``i`` gets the single env's allocation.
 
     Args:
         vessel: a vessel, a packaged vessel's name or a package path.
         method: ``"constrained"`` or ``"inverse"``.
-        dt: control period (s) (the azimuth rate limits; kept for the scalar's signature).
+        dt: control period (s): how far an azimuth may turn per call.
 
     Raises:
         ValueError: what :func:`~shipgym.controllers.actuation.make_allocator` raises (an
             unknown method, ``"inverse"`` for another layout, a set it cannot allocate).
-        NotImplementedError: an iterative allocation (weighted least squares by active set,
-            the azimuth QP): the message names the vessel and the method.
     """
 
     def __init__(self, vessel: Vessel | str, method: str = "constrained", dt: float = 1.0) -> None:
         v = load_vessel(vessel)
         make_allocator(v, method, dt)  # the scalar's checks and errors
         acts = v.actuators
-        p = fixed3_parameters(acts)
-        if p is None:
-            kind = (
-                "box-constrained weighted least squares (active-set, iterative)"
-                if acts.fixed
-                else "extended-thrust azimuth QP (iterative)"
-            )
-            raise NotImplementedError(
-                f"BatchedAllocation: vessel {v.name!r} allocates by {kind} "
-                f"({acts!r}); only the closed form of the Blue Lady pattern (a main propeller "
-                f"and two tunnel thrusters, Tomera 2014 eqs. 24-27) is batched"
-            )
         self.vessel = v
         self.actuators = acts
         self.method = method
-        self.thrusters = p
+        self.dt = dt
         self.n_channels = acts.n_channels
-        self._P = law_parameters(p)
+        self.thrusters = p = fixed3_parameters(acts)
+        self._P = None if p is None else law_parameters(p)
         self._inverse = method == "inverse"
+        self._each: list[Any] = []  # the per-env allocators of an iterative allocation
 
     def __call__(self, tau: ArrayLike, state: ArrayLike | None = None) -> BatchedAllocationResult:
         """Allocate ``tau`` (n, 3) (N, N, N m) of every env; ``state``: the actuator states
-        (n, n_channels), unused by the closed forms (the scalar allocator's signature).
+        (n, n_channels) (the azimuth angles an iterative allocation starts from; unused by
+        the closed form).
 
         Returns:
             The :class:`BatchedAllocationResult` (new arrays).
@@ -115,8 +107,20 @@ class BatchedAllocation:
         t = np.asarray(tau, dtype=float)
         if t.ndim != 2 or t.shape[1] != 3:
             raise ValueError(f"tau must have shape (n, 3) ([X N, Y N, N N m]), got {t.shape}")
-        t = t if t.flags.c_contiguous else np.ascontiguousarray(t)
-        return BatchedAllocationResult(*run_law(self._P, t, self._inverse))
+        if self._P is not None:
+            t = t if t.flags.c_contiguous else np.ascontiguousarray(t)
+            return BatchedAllocationResult(*run_law(self._P, t, self._inverse))
+        n = t.shape[0]
+        if state is None:
+            raise ValueError(
+                f"the allocation of {self.vessel.name!r} is iterative and starts from the "
+                "actuator states: pass state= (n, n_channels)"
+            )
+        if len(self._each) != n:
+            self._each = [make_allocator(self.vessel, self.method, self.dt) for _ in range(n)]
+        st = None if state is None else np.asarray(state, dtype=float)
+        rows = [alloc(t[i], None if st is None else st[i]) for i, alloc in enumerate(self._each)]
+        return BatchedAllocationResult(*(np.array(field) for field in zip(*rows, strict=True)))
 
     def command_to_action(self, command: ArrayLike) -> Array:
         """Physical commands (n, n_channels) -> normalised actions
