@@ -117,10 +117,10 @@ def entry(dispatcher: Any, args: tuple[Any, ...]) -> Any:
 # The loop receives each law as the address of its compiled code (an int): an int argument
 # costs nothing to pass, where Numba's first-class function arguments cost microseconds per
 # call to unbox, and a loop over ints and arrays is compiled once and cached on disk.
+#: compilation off: the "address" is a key of the function
 _PY_FUNCS: dict[int, Any] = {}
-_ADDRESSES: dict[
-    tuple[Any, Any], int
-] = {}  # (function, signature) -> its code's address  # compilation off: the "address" is a key of the function
+#: (function, signature) -> the address of its compiled code
+_ADDRESSES: dict[tuple[Any, Any], int] = {}
 
 
 def address(fn: Any, sig: Any) -> int:

@@ -34,8 +34,6 @@ from shipgym.records import StepRecord, step_record_of_env
 from .physics import MAX_TIMESTEP, MIN_TIMESTEP, NO_CURRENT, VesselPhysics, check_timestep
 from .task import (
     MAX_START_OFFSET,
-    OBS_LAYOUT,
-    REWARD_TERMS,
     SCENES,
     PlanTask,
     RewardWeights,
@@ -292,14 +290,14 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._renderer: Any = None
         n = self.n_actions
         self.action_space = spaces.Box(-1.0, 1.0, (n,), np.float32)
-        self.observation_structure, i = observation_structure(n)
+        self.observation_structure, i = task.observation_structure(n)
         self.observation_space = spaces.Box(-np.inf, np.inf, (i,), np.float32)
         self._harbour_body = harbour_body(self.physics.model)
         self._prev_action = np.zeros((1, n))
         self._contact = False
         # the task's outputs of N = 1: observation and reward terms; the inputs it reads
         self._obs = np.zeros((1, i), np.float32)
-        self._rew = np.zeros((1, len(REWARD_TERMS)))
+        self._rew = np.zeros((1, len(task.reward_terms)))
         self._flags = np.zeros((2, 1), bool)  # switched, new contact
         self._eta_r = np.zeros((1, 3))
 
@@ -441,7 +439,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         flags[0, 0], flags[1, 0] = switched, new_contact
         sample = self._observe(clipped.reshape(1, -1), t, eta)
         self._record_metrics(sample, saturated, clipped)
-        rewards = dict(zip(REWARD_TERMS, self._rew[0].tolist(), strict=True))
+        rewards = dict(zip(self.task.reward_terms, self._rew[0].tolist(), strict=True))
         reward = float(sum(rewards.values()))
         self._prev_action = clipped.reshape(1, -1)
         finished = self.guidance.finished
@@ -585,7 +583,7 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         e, w = np.reshape(eta, (1, 3)), np.reshape(nu, (1, 3))
         prev = np.reshape(prev_action, (1, -1)).astype(float)
         self.task.terms(e, w, e, w, ref.buffer, prev, prev, self._flags[0], self._flags[1], obs,
-                        np.zeros((1, len(REWARD_TERMS))), np.zeros((1, 3)))  # fmt: skip
+                        np.zeros((1, len(self.task.reward_terms))), np.zeros((1, 3)))  # fmt: skip
         return obs[0]
 
     def _info(
@@ -655,17 +653,6 @@ class BlueLadyEnv(ShipEnv):
     def __init__(self, **kwargs: Any) -> None:
         kwargs.setdefault("vessel", "blue-lady")
         super().__init__(**kwargs)
-
-
-def observation_structure(n_actions: int) -> tuple[dict[str, slice], int]:
-    """The observation's blocks (:data:`OBS_LAYOUT` and the previous action) by name, and
-    its length."""
-    out: dict[str, slice] = {}
-    i = 0
-    for name, k in (*OBS_LAYOUT, ("prev_action", n_actions)):
-        out[name] = slice(i, i + k)
-        i += k
-    return out, i
 
 
 def harbour_body(model: Any) -> int | None:

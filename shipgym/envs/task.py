@@ -291,12 +291,18 @@ class Task(Protocol):
     scene: str
     waves: WaveConfig | None
     terminate_on_finish: bool
+    reward_terms: tuple[str, ...]
 
     def initialize_episode(
-        self, rng: np.random.Generator, start: Array | None = None
+        self,
+        rng: np.random.Generator,
+        start: Array | None = None,
+        sensors: SensorConfig | None = None,
     ) -> Episode: ...  # pragma: no cover - protocol
 
-    def observation_size(self, n_actions: int) -> int: ...  # pragma: no cover - protocol
+    def observation_structure(
+        self, n_actions: int
+    ) -> tuple[dict[str, slice], int]: ...  # pragma: no cover - protocol
 
     def terms(
         self, eta: Array, nu: Array, nav_eta: Array, nav_nu: Array, ref: Array, action: Array,
@@ -326,6 +332,11 @@ class PlanTask:
         terminate_on_finish: end the episode when the plan is complete.
         reward_weights: :class:`RewardWeights`, a mapping of its fields or ``None``.
 
+    A new task of this family overrides what differs: the draws (``episode_plan``,
+    ``episode_wind``, ...), and for its own observation and reward :attr:`reward_terms`,
+    :meth:`observation_structure` and :meth:`terms` (one function over N envs: the single
+    env and the vector env both run it).
+
     Raises:
         TypeError, ValueError: a missing vessel, a vessel that cannot position itself, or a
             bad argument, each naming what to pass instead.
@@ -334,6 +345,8 @@ class PlanTask:
     needs: ClassVar[str] = "positioning"
     default_plan: ClassVar[Any] = "tomera2014"
     default_scene: ClassVar[str] = "harbour"
+    #: the names of the reward terms, in the order of :meth:`terms`' ``rew`` columns
+    reward_terms: ClassVar[tuple[str, ...]] = REWARD_TERMS
 
     def __init__(
         self,
@@ -436,9 +449,15 @@ class PlanTask:
         return Episode(plan, wind, current, sensors, start, eta0)
 
     # ---- what the envs compute with it ------------------------------------------------------
-    def observation_size(self, n_actions: int) -> int:
-        """The length of the observation vector (:data:`OBS_LAYOUT` and the previous action)."""
-        return sum(k for _, k in OBS_LAYOUT) + n_actions
+    def observation_structure(self, n_actions: int) -> tuple[dict[str, slice], int]:
+        """The observation's blocks by name (:data:`OBS_LAYOUT` and the previous action) and
+        its length."""
+        out: dict[str, slice] = {}
+        i = 0
+        for name, k in (*OBS_LAYOUT, ("prev_action", n_actions)):
+            out[name] = slice(i, i + k)
+            i += k
+        return out, i
 
     def terms(
         self, eta: Array, nu: Array, nav_eta: Array, nav_nu: Array, ref: Array, action: Array,

@@ -60,11 +60,9 @@ from .base import (
     _check_timing,
     _whole_multiple,
     harbour_body,
-    observation_structure,
     place_harbour,
 )
 from .batchphysics import BatchedPhysics
-from .task import REWARD_TERMS
 
 __all__ = [
     "AUTORESET_MODES",
@@ -186,13 +184,13 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self._sensor_steps = None if cfg is None else _whole_multiple(cfg.period, timestep)
         self.limits = vessel_limits(self.vessel)
         self.guidance = BatchedGuidance(n, limits=self.limits)
-        self.observation_structure, size = observation_structure(self.n_actions)
+        self.observation_structure, size = task.observation_structure(self.n_actions)
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (size,), np.float32)
         self.single_action_space = spaces.Box(-1.0, 1.0, (self.n_actions,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
         self._obs = np.zeros((n, size), np.float32)
-        self._rew = np.zeros((n, len(REWARD_TERMS)))
+        self._rew = np.zeros((n, len(task.reward_terms)))
         self._eta_r = np.zeros((n, 3))
         self._harbour = [harbour_body(m) for m in self.physics.models] if harbour else []
         self._contact = np.zeros(n, dtype=bool)
@@ -508,7 +506,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         nav_eta, nav_nu = self._navigation()
         self.task.terms(eta, nu, nav_eta, nav_nu, ref.buffer, action, self._prev, switched,
                         new_contact, self._obs, self._rew, self._eta_r)  # fmt: skip
-        return {k: self._rew[:, j].copy() for j, k in enumerate(REWARD_TERMS)}
+        return {k: self._rew[:, j].copy() for j, k in enumerate(self.task.reward_terms)}
 
     def _observation(self) -> NDArray[np.float32]:
         """The observation of every env now (after a reset: its previous action is zero)."""
