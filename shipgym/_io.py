@@ -1,33 +1,9 @@
 """Result files that are never half-written, and interrupts that say what they kept.
 
-Files: every result file (recordings, run and bench JSON, reports) is written under a name
-that says it is partial, in the folder of the final file, and renamed onto the final name
-(``os.replace``, atomic on one file system) only when it is complete. A process killed at any
-moment therefore leaves the earlier file intact, plus at most a file whose name contains
-``.partial``:
+Public names: ``Interrupted``, ``WriteFailed``, ``atomic_path``, ``atomic_write_text``,
+``check_writable``, ``progress_enabled``, ``handle_signals``, ``interrupt_message``, ...
 
-- :func:`partial_path`: the user-facing partial name of a file, ``run.rrd`` ->
-  ``run.partial.rrd`` (the suffix is kept, so ``rerun run.partial.rrd`` still opens it);
-- :func:`atomic_path`: a context manager yielding a temporary path (``run.partial-<pid>.json``)
-  renamed onto the destination when the block ends without an exception, removed otherwise;
-- :func:`atomic_write_text`: write a text file that way;
-- :func:`write_partial_text` and :func:`replace_together`: write files under their partial
-  names, then rename them onto their final names at once, with SIGINT and SIGTERM held back,
-  removing the old destinations first so that a new file never ends up next to a stale
-  partner of an earlier run (``shipgym run --record X.rrd --json X.json``);
-- :class:`WriteFailed`: a result file that could not be written, carrying the results so that
-  the command line can print them instead of losing them.
-
-A destination that exists but is not a regular file (``/dev/stdout``, ``/dev/full``, a FIFO) is
-written directly: a device cannot be replaced by a rename.
-
-Interrupts: :func:`handle_signals` makes SIGTERM raise :class:`Interrupted` (a
-``KeyboardInterrupt``) like SIGINT does, so the same clean-up runs for both; a command says
-beforehand what an interrupt would keep with :func:`on_interrupt`, and the command line reports
-it in one line (:func:`interrupt_message`) and exits with ``128 + signal number`` (130, 143).
-
-Terminal: :func:`progress_enabled` tells whether a progress bar may be drawn (stderr is a
-terminal), so pipes and log files get no ``\r`` frames.
+Design notes: docs/design/_io.md.
 """
 
 from __future__ import annotations

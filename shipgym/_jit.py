@@ -5,21 +5,9 @@ so that the one stepping loop (:mod:`shipgym.sim.step`) takes any hull family's 
 and any actuator kind's force law as a first-class function argument: the loop is compiled
 once (and cached on disk by Numba), a new family or kind compiles only its own small law.
 
-- :data:`ACCEL_SIG`: ``accel(k, u, v, p, r, phi, X, Y, K, N, u_c, v_c) -> (u_dot, v_dot,
-  p_dot, r_dot)``: a hull family's body acceleration (m/s^2, rad/s^2) from its constant vector
-  ``k`` (float64, C-contiguous), the body velocity over ground ``(u, v, p, r)`` (m/s, rad/s),
-  the roll angle ``phi`` (rad), the total generalised force on the hull besides its own water
-  forces ``(X, Y, K, N)`` (N, N m) and the body-frame current ``(u_c, v_c)`` (m/s). A 3-DOF
-  family ignores ``p``, ``phi`` and ``K`` and returns ``p_dot = 0``.
-- :data:`LAW_SIG`: ``law(row, st, u, v, p, r) -> (X, Y, K, N, F, flag)``: one actuator's
-  generalised force (N, N m) from its row of constants ``row`` (``row[0]``: the index of its
-  first channel in ``st``), the hull's actuator states ``st`` and the body velocity through
-  the water ``(u_r, v_r, p, r)``; ``F`` (N) is the actuator's own thrust reading (a
-  propeller's thrust, a rudder's lift, an MMG unit's propeller thrust) and ``flag`` 1.0 where
-  it is stalled (0.0 otherwise).
+Public names: ``ACCEL_SIG``, ``LAW_SIG``, ``njit``, ``kernel``, ``entry``.
 
-Running without compilation (Numba's ``NUMBA_DISABLE_JIT=1``) runs the same source in Python,
-for debugging.
+Design notes: docs/design/_jit.md.
 """
 
 from __future__ import annotations

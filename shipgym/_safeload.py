@@ -1,18 +1,9 @@
 """Bounded, code-free reading of the configuration files users give (YAML, TOML).
 
-Scenario files (:func:`shipgym.scenarios.load_scenario`) and hyperparameter files
-(:func:`shipgym.rl.train.load_hyperparams`) are read here:
+Public names: ``MAX_CONFIG_BYTES``, ``MAX_NODES``, ``jsonable``, ``load_config_file``,
+``read_bounded``, ``yaml_loader``.
 
-- at most :data:`MAX_CONFIG_BYTES` bytes (the size is checked before reading; a scenario or
-  hyperparameter file is a few kB, so 1 MiB is generous and parses in well under a second);
-- YAML with libyaml's ``CSafeLoader`` when PyYAML was built with it (``SafeLoader``, the
-  pure-Python one, otherwise): plain data only, no Python objects;
-- TOML with ``tomllib``;
-- at most :data:`MAX_NODES` values after expanding YAML aliases (an alias "bomb" or a
-  self-referencing structure is refused, not walked).
-
-Every failure is one ``ValueError`` line naming the file (``FileNotFoundError`` for a
-missing one). :func:`jsonable` is the other direction: results as strict JSON (NaN -> null).
+Design notes: docs/design/_safeload.md.
 """
 
 from __future__ import annotations

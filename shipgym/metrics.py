@@ -1,19 +1,9 @@
 """Accuracy indices and run statistics (Tomera 2014 eqs. 54-57). Pure NumPy.
 
-Tomera (2014) assesses the accuracy of the position control of the harbour manoeuvre with
+Public names: ``CHATTER_KEYS``, ``HF_PERIOD_S``, ``INDEX_KEYS``, ``MIN_SAMPLES``,
+``REVERSAL_BAND``, ``SEED_WEIGHTS``, ``accuracy_indices``, ``command_chatter``, ...
 
-``x_E = (1/N) sum_k |x_d^r(k) - x^r(k)|`` (eq. 54), ``y_E`` likewise (eq. 55),
-``psi_E = (1/N) sum_k |psi_d^r(k) - psi^r(k)|`` (eq. 56, in degrees) and
-``J_c = l1 x_E + l2 y_E + l3 psi_E`` with ``(l1, l2, l3) = (1, 1, 0.01)`` (eq. 57),
-
-sampled every 1 s in the r-frame of the leg being performed, from the *measured* pose (DGPS
-and gyro-compass). Here heading differences are wrapped to (-pi, pi] before the absolute
-value, and the indices are computed both from the truth and from the measurements.
-
-Note on the seed's numbers: Table 6 satisfies eq. 57 exactly (e.g. Kalman-Bucy:
-0.2376 + 0.2984 + 0.01 * 402.5533 = 4.5615), but its psi_E values of 377-403 "deg" cannot be
-mean absolute heading errors of a manoeuvre that completed; they are reproduced as published
-(eq. 57 only), not as a target for psi_E.
+Design notes: docs/design/metrics.md.
 """
 
 from __future__ import annotations

@@ -1,23 +1,9 @@
 """Typed records passed up a wrapper stack: env -> observer -> controller -> recorder.
 
-The environment attaches a :class:`StepRecord` to every ``info`` (``info["record"]``, also
-after ``reset``); each wrapper above it reads what it needs from the record and hands on a
-new one with its own part filled in (:meth:`StepRecord.with_nav` for an observer,
-:meth:`StepRecord.with_control` for a DP controller). Readers (the wrappers, the recorder,
-the runner and the metrics) use these fields instead of raw ``info`` keys or the internals
-of ``env.unwrapped``. The ``info`` keys stay, with the same values: the record holds the
-same arrays, not copies.
+Public names: ``POSE_3DOF``, ``VELOCITY_3DOF``, ``ActuatorData``, ``ControlData``, ``Measurement``,
+``NavigationData``, ``StepRecord``, ``step_record``, ...
 
-Records are read-only by convention, not frozen: they hold the step's arrays (shared with
-``info``), so freezing would protect only the outer layer, and a frozen dataclass costs six
-times as much to build (a few microseconds per control step, the largest part of the stack's
-overhead). They are slotted (no attribute can be added) and unhashable; a wrapper that
-changes a part builds a new record (:meth:`StepRecord.with_nav`, :meth:`~StepRecord.with_control`).
-
-Nothing here fixes the number of actuators or of degrees of freedom: actuator vectors have
-the length of the vessel's actuator set and carry its names (:class:`ActuatorData`), and pose
-and velocity come with the names of their components (:class:`NavigationData`; today
-``x, y, psi`` and ``u, v, r``, a roll component may join them). Pure Python and NumPy.
+Design notes: docs/design/records.md.
 """
 
 from __future__ import annotations

@@ -1,19 +1,10 @@
 """Run closed-loop episodes: the one runner behind ``shipgym run``, the benchmarks and the RL
 evaluation.
 
-- :func:`build_env`: the wrapper stack of a named controller (classical or learned) and
-  observer;
-- :func:`step_episode`: reset and step a stack to the end of one episode (zero residual
-  actions, or a policy's);
-- :func:`episode_summary`: the plain-data result of the finished episode
-  (:func:`shipgym.metrics.episode_result`);
-- :func:`run_episode`: all three, with an optional recording and report, as plain data; with
-  ``json_path`` it writes them, renamed onto the name together with the recording
-  (:mod:`shipgym._io`).
+Public names: ``ENV_DEFAULT``, ``EpisodeEnd``, ``build_env``, ``describe_wind``,
+``episode_summary``, ``run_episode``, ``step_episode``.
 
-``shipgym bench observers`` (:mod:`shipgym.bench`), ``shipgym bench controllers`` and the
-training's harbour evaluation (:mod:`shipgym.rl.evaluation`) use these functions; none of
-them assembles or steps an episode of its own.
+Design notes: docs/design/runner.md.
 """
 
 from __future__ import annotations

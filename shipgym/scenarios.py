@@ -4,55 +4,10 @@ Sources: WMO (1998), Price & Bishop (1974) and NORSOK N-003 (Beaufort table), Ha
 et al. (1973) (JONSWAP), ISO 19901-1 (2015) (NPD gusts), DNV-RP-C205 (2010) (current);
 the lake values are the project's own estimates. Full entries: ``docs/references.md``.
 
-**Beaufort table** (WMO 1998): mean wind ``U10`` = middle of the WMO band (0 for BF0),
-``Hs`` = WMO "probable wave height" (also Fossen 2011 ch. 8 and Price & Bishop 1974), ``Tp``
-from the NORSOK relation ``4.883 + 2.68 Hs^0.54`` (MSS ``Wave_init.m``), all at full scale.
-:func:`beaufort` Froude-scales them to a model at ``1:scale`` (``Hs / scale``,
-``Tp / sqrt(scale)``, ``U / sqrt(scale)``: BF5 at 1:24 is ``Hs = 0.083 m``, ``Tp = 1.79 s``,
-``U = 1.91 m/s``), with an NPD gust spectrum evaluated at full scale (the project's offshore
-assumption) and a JONSWAP gamma 3.3 sea (the JONSWAP mean of
-Hasselmann et al. 1973) with first-order motion and drift.
+Public names: ``ENV_SCENARIOS``, ``BeaufortRow``, ``BEAUFORT_TABLE``, ``beaufort_row``,
+``SeaState``, ``beaufort``, ``lake_waves``, ``lake_current``, ...
 
-**Lake** (the project's estimate): :func:`lake_waves`, the fetch-limited sea of Lake Silm (JONSWAP
-``Hs = 0.05 m``, ``Tp = 1 s``, gamma 3.3, drift force on, no first-order motion), and
-:func:`lake_current`, the wind-driven drift: 1/300 of the wind speed along the wind (DNV-RP-C205
-gives ``k U10`` with ``k = 0.015-0.03`` at the surface, about 1 % averaged over the 0.86 m
-draft; at 1 % the Blue Lady's tunnels cannot hold the manoeuvre, which the real trial
-completed, so the estimate is taken down to 1/300), a Gauss-Markov speed of std 0.01 m/s
-and time constant 300 s, and a direction std of 10 deg with the same time constant
-(estimates).
-
-**Scenarios**: a :class:`Scenario` bundles what an episode needs besides the agent: the
-environment (``harbour``, ``station-keeping``, ``tracking``), the plant variant, wind, waves,
-current, sensors, manoeuvre plan and start pose. :data:`SCENARIOS` holds the named presets
-(``calm``, ``tomera2014-lake``, ``tomera2011-sim``, ``beaufort0`` ... ``beaufort9``);
-:func:`load_scenario` also reads YAML or TOML files (the examples are packaged in
-``shipgym/assets/scenarios/`` and load by their stem, e.g. ``"beaufort5-offshore"``).
-
-File format (every key optional; unknown keys raise, listing the valid ones)::
-
-    name: my-scenario            # default: the file stem
-    description: free text
-    base: tomera2014-lake        # start from a named scenario, then override
-    env: harbour                 # harbour | station-keeping | tracking
-    plant: default               # a key of shipgym.dynamics.model.PLANT_VARIANTS
-    beaufort: 5                  # or {number: 5, scale: 24, direction_from_deg: 30, ...}
-    wind: {speed: 3.0, direction_from_deg: 300}    # WindConfig fields, or "3@300"; null: none
-    waves: lake                  # a wave preset, or WaveConfig fields; null/false: none
-    current: {speed: 0.05, direction_to_deg: 90, std: 0.01, time_constant: 300}  # or "0.05@90"
-                                 # (also direction_std[_deg], direction_time_constant)
-    sensors: tomera2014          # a preset, SensorConfig fields, {preset: rtk, ...}; null: none
-    plan: tomera2014             # a plan name or a ManoeuvrePlan.from_dict mapping
-    start_pose: [0.0, 0.0, 0.0]  # (x m, y m, psi rad), or {x: 0, y: 0, psi_deg: 0}
-
-Angles are radians; every angle field also accepts a ``*_deg`` twin (``direction_from_deg``,
-``direction_std_deg``, ``direction_to_deg``, ``wf_heading_std_deg``, ``psi_deg``). A
-``wind``/``waves``/``current`` mapping is applied on top of what ``base`` or ``beaufort``
-already set (or on top of the config defaults); a ``"SPEED@DEG"`` string (wind: m/s and
-degrees it comes from, ``WindConfig.parse``, default gusts; current: m/s and degrees it goes
-to, ``CurrentConfig.parse``, constant) replaces it. Files are parsed as plain data only, with
-PyYAML's safe loader (libyaml's ``CSafeLoader`` when present) or ``tomllib``, and are at most
-1 MiB (:mod:`shipgym._safeload`; TOML has no null: use ``false`` to switch a disturbance off).
+Design notes: docs/design/scenarios.md.
 """
 
 from __future__ import annotations

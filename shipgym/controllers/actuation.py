@@ -1,19 +1,9 @@
 """Thrust allocation for any vessel: from a requested ``tau`` to actuator commands.
 
-:func:`make_allocator` picks the method from the vessel's actuator set:
+Public names: ``Allocator``, ``fixed3_parameters``, ``make_allocator``, ``planar_capacity``.
+Sources: Tomera (2014).
 
-- the Blue Lady pattern (a main propeller on the centre line and two tunnel thrusters,
-  Tomera 2014 eq. 12): the exact closed forms of :mod:`shipgym.controllers.allocation`
-  (``"constrained"``, or the paper's ``"inverse"``): a
-  :class:`~shipgym.controllers.allocation.fixed3.Fixed3Allocator`;
-- any set of fixed-direction thrusters: box-constrained weighted least squares
-  (:func:`~shipgym.controllers.allocation.allocate_wls`);
-- azimuth thrusters (with or without fixed ones): the extended-thrust QP with magnitude and
-  angle-rate limits (:func:`~shipgym.controllers.allocation.allocate_azimuth`).
-
-Every allocator returns an :class:`~shipgym.controllers.allocation.Allocation` whose
-``command`` and ``saturated`` follow the vessel's channel order and whose ``force`` holds one
-thrust per actuator; the planar ``tau = [X, Y, N]`` is what the DP controllers request.
+Design notes: docs/design/controllers.actuation.md.
 """
 
 from __future__ import annotations

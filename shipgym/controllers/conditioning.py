@@ -1,31 +1,6 @@
 r"""Command conditioning of the DP stack: the controller-design parts (not physics).
 
-A DP system does not send the raw output of its control law to the thrusters. Between the
-navigation data and the actuators a DP engineer puts, as controller *design* choices:
-
-- a **filtered derivative**: the velocity the PID's ``K_D`` term (and its damping and
-  Coriolis feed-forward) uses is a first-order low-pass of the estimated velocity,
-  ``T_f nu_f_dot + nu_f = nu`` per body DOF (sampled exactly:
-  ``nu_f <- nu_f + (1 - exp(-dt / T_f)) (nu - nu_f)``), so that the observer's velocity noise
-  times ``M K_D`` does not reach the thrusters
-  (:class:`~shipgym.controllers.pid.MultivariablePID` ``velocity_filter``; the vessel's
-  ``[control] velocity_filter``, s);
-- a **zero-thrust deadband with hysteresis for propeller reversals** (:class:`ReversalHysteresis`,
-  after the allocation): a reversible fixed-direction propeller that runs in one direction and
-  is asked for thrust in the other is held at zero thrust until the request exceeds a
-  threshold ``F_h`` (N) (the vessel's ``[control] reversal_threshold``, one per actuator;
-  0: no hysteresis). Requests on
-  the side it already runs are passed unchanged, so the fine control about a working point is
-  kept, and only the sign changes are filtered: a shaft is not reversed for a few newtons of
-  noise.
-
-The integral anti-windup of the PID sees what is delivered after the conditioning: the
-hysteresis updates the allocation's ``tau`` and ``tau_error`` (requested - delivered) by the
-thrust it holds back, so a DOF held at zero counts as cut in the requested direction.
-
-What is *physics*, not conditioning: the actuators' own lags and rate limits (the vessel
-package's actuator tables; enforced by the simulator, the controller cannot exceed them).
-
+Design notes: docs/design/controllers.conditioning.md.
 Example (the state is per episode: call :meth:`ReversalHysteresis.reset` at its start):
 
     >>> from shipgym.dynamics.vessel import load_vessel

@@ -1,42 +1,14 @@
 r"""The classical course-keeping autopilot: a PID on the gyro heading and the rate gyro.
 
-The baseline of :class:`~shipgym.envs.coursekeeping.CourseKeepingEnv`: the rudder command
+``delta_c = -(k_p e + k_i int e dt + k_d r_hat)``, ``e = wrap(psi_g - psi_d)``, tuned on
+Nomoto's ``r/delta = K/(1 + T s)`` (Fossen 1995).
 
-.. math::
+Public names: ``COURSE_BANDWIDTH_PRIME``, ``COURSE_INTEGRAL_RATIO``, ``INTEGRAL_BAND``,
+``RATE_FILTER_PRIME``, ``CoursePilot``, ``SteeringModel``, ``closed_loop_poles``,
+``course_autopilot``, ...
+Sources: Fossen (1995).
 
-    \delta_c = -(k_p e + k_i \textstyle\int e\,dt + k_d \hat r),\qquad e = \mathrm{wrap}(\psi_g
-    - \psi_d),
-
-on the measured (gyro) heading ``psi_g`` and the rate gyro's yaw rate passed through a
-first-order low-pass (time constant ``rate_filter``, so that the gyro noise times ``k_d`` does
-not keep the 2.32 deg/s steering gear at its rate limit), with the conditional-integration
-anti-windup of :class:`~shipgym.controllers.rollcontrol.HeadingAutopilot`, which holds the PID
-itself. It uses neither the DGPS velocity nor the drift angle: the learner's observation holds
-more than the baseline needs.
-
-Gains (:func:`course_pilot_gains`): pole placement on the first-order Nomoto model
-``r/delta = K/(1 + T s)`` (Nomoto's model, Fossen (1995)) fitted to the vessel's linear
-sway-yaw(-roll) model at the approach speed in value and slope at ``s = 0``
-(:func:`~shipgym.controllers.rollcontrol.nomoto_first_order`). For a course-unstable hull
-such as the KVLCC2 (a real pole at +1.7e-4 rad/s at 7 m/s, L = 100 m) the fit has ``T < 0``
-(``K = 13.0 1/s``, ``T = -5777 s``): an unstable first-order plant whose ``b = K/T = -2.25e-3
-1/s^2`` is the rudder's yaw acceleration once the sway has followed; the placement formulas
-hold for it unchanged. The linear model (:func:`steering_model`) is
-
-- for a 3-DOF hull, ``x = [v, r, psi]``: the hull family's compiled acceleration and
-  the actuators' compiled force laws (:meth:`~shipgym.dynamics.actuators.ActuatorSet.
-  law_table`, an MMG unit's propeller at its self-propulsion point) differentiated by
-  central differences about straight running at ``u = U`` (the surge held);
-- for a 4-DOF hull :func:`~shipgym.dynamics.linearise.roll_model_of` (``x = [v, r, psi, p,
-  phi]``).
-
-The bandwidth: the vessel's ``[roll_control]`` ``heading_bandwidth`` / ``heading_zeta`` when
-it has one (4-DOF rudder vessels), else :data:`COURSE_BANDWIDTH_PRIME` ``U / L`` with
-``zeta = 1`` [chosen]. :func:`closed_loop_poles` gives the loop's poles on the linear model
-(a test checks they are stable for every steering vessel).
-
-Pure NumPy/SciPy; nothing here imports the simulator (:func:`course_autopilot` reads an
-environment's attributes only).
+Design notes: docs/design/controllers.coursepilot.md.
 """
 
 from __future__ import annotations

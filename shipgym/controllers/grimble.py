@@ -1,28 +1,9 @@
 r"""Grimble's LQ weights and the LQ gains of Al-Takie (1982) ch. 4 on the LF sway-yaw model.
 
-Design (Al-Takie 1982 4.3, after Grimble's multivariable root-locus rules): for the square
-system ``(A, B, C)`` whose first ``k`` Markov parameters ``C A^i B`` (``i < k``) are singular
-and ``C A^k B`` is not,
+Public names: ``PRINTED_GAINS``, ``VARIANTS``, ``GrimbleLQController``, ``grimble_lq``,
+``grimble_weights``, ``markov_order``.
 
-.. math::
-
-    Q_y = ((C A^k B N)^T)^{-1} (C A^k B N)^{-1}, \quad Q = C^T Q_y C, \quad
-    R = f\,(N^T)^{-1} \Lambda_{k+1} N^{-1}, \quad
-    \Lambda_{k+1} = (-1)^k \operatorname{diag}((1/\lambda_i)^{2(k+1)}),
-
-with ``N`` the asymptotic closed-loop eigenvectors (``I``) and ``lambda_i`` the asymptotic
-eigenvalue ratios. For Wimpey Sealab ``CB = CAB = 0``, so ``k = 2`` and
-``C A^2 B = [[0.84243, 0.4216], [5.0654, -2.5327]]`` [printed]. The gain is the CARE solution
-``K = R^-1 B^T S`` with ``u = -K x`` (python-control's convention); the thesis prints
-``-K`` (its ``u = K x``), :data:`PRINTED_GAINS` keeps the printed sign.
-
-Cases (Wimpey Sealab, ``f = 1``):
-
-- ``"a"``: ``lambda_1 = 1.5 lambda_2`` (sway 1.5 x faster), ``R = f diag((1/1.5)^6, 1)``;
-- ``"b"``: ``lambda_1 = lambda_2 = 1``, ``R = f I``: the selected design.
-
-The Star Hercules gain printed in 4.5 is not re-derivable from the stated weights (its own
-``C A^2 B`` is diagonal); it is used as printed (:data:`PRINTED_GAINS`).
+Design notes: docs/design/controllers.grimble.md.
 """
 
 from __future__ import annotations

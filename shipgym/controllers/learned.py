@@ -1,49 +1,9 @@
 """Learned controllers: stable-baselines3 policies saved as shipgym models.
 
-A *shipgym model* is the zip archive that stable-baselines3's ``model.save`` writes, with one
-extra member, ``shipgym.json``: the metadata needed to use the policy as a controller without
-guessing (:class:`ModelMetadata`): algorithm, shipgym version, training env id and kwargs,
-observer, residual flag, controller and residual scale, the observation-normalisation
-statistics of ``VecNormalize`` (as plain numbers), the policy architecture as plain data, and
-the training command and seed.
+Public names: ``ALGORITHMS``, ``BASELINE_MODELS``, ``BASELINE_NAMES``, ``BASELINE_TASKS``,
+``METADATA_NAME``, ``MODEL_FORMAT``, ``LearnedControllerWrapper``, ``LearnedPolicy``, ...
 
-Loading never unpickles and is bounded (:func:`read_metadata`, :func:`load_policy`,
-:func:`read_state_dicts`):
-
-- the zip's directory is checked first, before any member is read: at most
-  :data:`MAX_MEMBERS` members, only the names stable-baselines3 and shipgym write, each member's
-  uncompressed size (from its ``ZipInfo``) at most :data:`MAX_MEMBER_BYTES`
-  (:data:`MAX_METADATA_BYTES` for ``shipgym.json``), all together at most
-  :data:`MAX_TOTAL_BYTES`, and no member above 1 MiB compressed more than
-  :data:`MAX_COMPRESSION_RATIO` times (a zip bomb is refused from its directory);
-- ``shipgym.json`` is plain JSON; its policy must be ``MlpPolicy`` with plain-data
-  ``policy_kwargs`` (:data:`POLICY_KWARGS`: no classes, no ``optimizer_class``), layers at most
-  :data:`MAX_LAYER_WIDTH` wide and :data:`MAX_LAYERS` deep and at most
-  :data:`MAX_PARAMETERS` parameters in all (:func:`policy_parameter_count`), all checked
-  before torch allocates anything;
-- ``data`` must be a JSON object (its pickled ``:serialized:`` entries are never decoded);
-- every ``.pth`` member is read with ``torch.load(weights_only=True)`` (tensors and plain
-  containers only); anything else ends in one ``ValueError`` line.
-
-The policy network is rebuilt from the metadata; resuming training
-(:func:`shipgym.rl.train.train` with ``resume=``) rebuilds the whole algorithm from the
-hyperparameters in the metadata and loads the weights and optimizer states the same way.
-
-Using a model as a controller:
-
-- :class:`LearnedControllerWrapper` puts the policy on top of an environment stack that
-  matches the model (observer wrapper; for residual models the
-  :class:`~shipgym.controllers.wrappers.DPControllerWrapper` it was trained on). Like
-  ``DPControllerWrapper`` its own action is a residual, zero by default, so
-  ``env.step(np.zeros(3))`` runs the learned controller alone.
-- :func:`make_learned_env` builds that whole stack from the metadata.
-- :func:`parse_learned_controller` reads the controller names of the command line: the
-  shipped baselines ``ppo`` (pure PPO), ``sac`` (pure SAC), ``ppo-residual`` (PPO on the PID),
-  found by task and vessel in :data:`BASELINE_MODELS` (:func:`find_baseline`), and
-  ``ppo:PATH``, ``sac:PATH``.
-
-Torch and stable-baselines3 are imported only when a policy is loaded (``pip install
-shipgym[rl]``).
+Design notes: docs/design/controllers.learned.md.
 """
 
 from __future__ import annotations

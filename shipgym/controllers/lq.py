@@ -1,69 +1,13 @@
 r"""LQ optimal DP control with integral action (Al-Takie 1982 ch. 4).
 
-Design model
-------------
-The control model of Tomera (2014) (eqs. 49-50), ``M nu_dot + D_L nu = tau``, written for the
-tracking errors of the current leg. With the pose and the reference in the r-frame of the leg
-(``psi`` the r-frame heading):
+Design model ``x = [e, e_nu, xi_b]``, ``x_dot = A x + B u``; law ``tau = tau_ff - K x``,
+``K = R^-1 B^T S`` from the Riccati equation (Al-Takie 1982 eqs. 4.3, 4.7-4.8).
 
-- position error in the body frame ``e = [R^T(psi)(p - p_d), wrap(psi - psi_d)]`` (m, m, rad);
-- body velocity error ``e_nu = nu - nu_d``, ``nu_d = R^T(psi) eta_dot_d^r`` (m/s, m/s, rad/s);
-- integral of the error ``xi`` (m s, m s, rad s), accumulated in the (stationary) r-frame and
-  used in the body frame as ``xi_b = [R^T(psi) xi_xy, xi_psi]``.
+Public names: ``LQ_PRESETS``, ``LQController``, ``LQDesign``, ``LQWeights``, ``dlqr``,
+``lq_design``, ``lq_model``, ``lqr``, ...
+Sources: Al-Takie (1982); Tomera (2014).
 
-For small heading errors ``e_dot = e_nu``, and the model gives
-``M e_nu_dot = -D_L e_nu + u`` with ``u = tau - tau_ff`` and the reference feedforward
-``tau_ff = M nu_dot_d + D_L nu_d``, ``nu_dot_d = R^T(psi) eta_ddot_d^r + r [v_d, -u_d, 0]``.
-The design model is thus linear and time invariant with the 9-state ``x = [e, e_nu, xi_b]``:
-
-.. math::
-
-    \dot x = A x + B u, \quad
-    A = \begin{bmatrix} 0 & I & 0 \\ 0 & -M^{-1} D_L & 0 \\ I & 0 & 0 \end{bmatrix}, \quad
-    B = \begin{bmatrix} 0 \\ M^{-1} \\ 0 \end{bmatrix},
-
-and the law is ``tau = tau_ff - K x`` with ``K`` minimising
-``J = int (x^T Q x + u^T R u) dt`` (Al-Takie 1982 eqs. 4.3, 4.7-4.8: ``K = R^-1 B^T S`` from the
-algebraic Riccati equation). As in Al-Takie (1982) the gain acts on estimates when an observer is
-stacked below (separation principle). Unlike Al-Takie (1982) (no integral action; wind feedforward),
-the integral states remove steady wind and current offsets.
-
-The controller runs sampled at the control period ``h`` with a zero-order hold, so the default
-design is *discrete* (:func:`dlqr`) on the exact ZOH discretisation of the ``[e, e_nu]`` part
-and the forward-Euler integral ``xi_{k+1} = xi_k + h e_k`` that the implementation uses, with
-the continuous weights scaled by ``h`` (``Q_d = h Q``, ``R_d = h R``). ``method="continuous"``
-uses :func:`lqr` on ``(A, B)`` instead; at ``h = 1`` s the two gains differ by a few percent.
-
-Weights (Bryson's rule; :class:`LQWeights`)
------------------------------------------
-``Q = diag(1/e_max^2, 1/v_max^2, 1/xi_max^2)``, ``R = diag(1/tau_max^2)``. The ``"tuned"``
-preset: ``e_max = (0.5 m, 0.5 m, 2 deg)``, ``v_max = (0.05 m/s, 0.05 m/s, 0.5 deg/s)``,
-``xi_max = (15 m s, 15 m s, 60 deg s)``, ``tau_max = (80 N, 80 N, 250 N m)``. Why:
-
-- ``tau_max`` is the worst-case capacity of each DOF: 78 N astern (the main propeller's
-  weak side; 451 N ahead), 88 N of sway, 248 N m of yaw (``force_capacity``). Surge and sway
-  get the same force weight *and* the same error weights, so the x/y gains are almost equal
-  (the models differ only in ``M`` by 5 % and ``D_L``), which keeps the body-frame law nearly
-  invariant to how the stored r-frame integral is rotated into the body frame while the ship
-  turns (leg 3 turns it by 90 deg), as for the PID (``pid.py`` docstring).
-- The resulting closed-loop poles (discrete design mapped to ``log(z)/h``) lie between 0.03
-  and 0.13 rad/s, the PID's bandwidth range (``w = 0.06`` x/y, ``0.1`` yaw): faster would turn
-  DGPS noise (0.1 m) into thruster chatter and saturate the 78 N astern thrust.
-- The integral weight places the three slowest (real) poles at about 0.034 rad/s, a time
-  constant of ~30 s: the wind of the lake trial (3 m/s, ~10-40 N) is taken out well within a
-  leg. The other poles are pairs at 0.08 rad/s (x, y; damping ~0.8) and 0.125 rad/s (yaw).
-
-The harbour manoeuvre (Tomera 2014, 5 legs, wind 3 m/s from 300 deg) completes without quay
-contact for seeds 0-9, with the true state (J_c 0.035 +- 0.004; the tuned PID 0.032) and
-through the Kalman-Bucy filter (J_c 0.188 +- 0.015; PID 0.261), see ``shipgym bench
-controllers``; ``tests/test_lq.py`` runs one seed.
-
-Anti-windup
------------
-As in :class:`~shipgym.controllers.pid.MultivariablePID`: the integral increment ``h e`` of
-the previous call is added once the allocation of the previous ``tau`` is known; if it would
-push a body DOF further into the direction in which the allocation cut it, the increment is
-dropped; the integral force ``|K_xi xi_b|`` is clamped to ``integral_limit`` per DOF.
+Design notes: docs/design/controllers.lq.md.
 """
 
 from __future__ import annotations

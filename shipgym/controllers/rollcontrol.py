@@ -1,28 +1,10 @@
 r"""Rudder-roll stabilisation (RRS) on the Van der Klugt (1987) model: LQR design, margins, PID.
 
-Radhakrishnan (n.d.) feeds the Kalman-filtered sway velocity back to the rudder but prints
-neither the control law nor its gains, so its claim ("up to 13 m/s the roll is reduced to
-one-tenth of that without sway velocity feedback ... for U = 15 m/s onwards it becomes
-oscillatory") cannot be reproduced uniquely. This module gives the project's substitute
-[chosen]: a full-state LQR on the reconstructed model
-(:func:`~shipgym.dynamics.vanderklugt.roll_model`) designed at 8 m/s with
-:data:`RRS_WEIGHTS`, used at every speed, with the rudder input ``u = delta_sin - K x``.
+Public names: ``RRS_WEIGHTS``, ``NOMOTO_FITS``, ``GainSchedule``, ``HeadingAutopilot``,
+``HeadingPIDGains``, ``Onset``, ``RollDampingController``, ``closed_loop``, ...
+Sources: Van der Klugt (1987); Radhakrishnan (n.d.).
 
-What it shows (tests/test_rollcontrol.py):
-
-- the fixed gain keeps the loop stable for every ``U`` in [2, 30] m/s and reduces the roll of
-  the seed's 10 deg / 0.43 rad/s rudder to 0.172 / 0.076 / 0.059 of the open loop at 8 / 13 /
-  15 m/s (the rudder's roll authority grows with ``U^2``);
-- without the sway term (``sway_scale=0``) the loop goes unstable above 8.75 m/s through a slow
-  oscillatory heading-sway mode (about 0.075 rad/s, an 84 s period); with a fifth of it above
-  15.7 m/s. That is the paper's narrative (sway feedback keeps the heading loop stable; not
-  enough of it and the high-speed loop oscillates), not its numbers.
-
-Functions follow python-control's conventions (``u = -K x``; ``K, S, E`` as ``control.lqr``);
-everything is pure NumPy/SciPy. The controllers (:class:`HeadingAutopilot`,
-:class:`RollDampingController`) are small stateful callables returning the rudder command in
-rad; :func:`heading_pid_gains` designs the autopilot by pole placement on the Nomoto part of
-the model.
+Design notes: docs/design/controllers.rollcontrol.md.
 """
 
 from __future__ import annotations

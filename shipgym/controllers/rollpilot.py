@@ -1,20 +1,9 @@
 r"""The classical rudder-roll pilot: the sway-velocity filter and a heading or roll controller.
 
-:class:`RollPilot` closes the loop of :class:`~shipgym.envs.rollstab.RudderRollEnv` (or any
-plant measured as ``y = [r, psi, p, phi]``): the seed's Kalman filter (Radhakrishnan (n.d.)
-eqs. 1-4, :class:`~shipgym.observers.sway.SwayVelocityKF`) estimates the sway velocity, and
-either
+Public names: ``PILOT_MODES``, ``RollPilot``, ``roll_pilot``.
+Sources: Radhakrishnan (n.d.).
 
-- ``mode="autopilot"``: a PID heading autopilot (:class:`~shipgym.controllers.rollcontrol.
-  HeadingAutopilot`, gains by :func:`~shipgym.controllers.rollcontrol.heading_pid_gains`) on
-  the filtered heading and yaw rate, the baseline that does not damp the roll, or
-- ``mode="rrs"``: the full-state roll-damping LQR (:class:`~shipgym.controllers.rollcontrol.
-  RollDampingController`) on the estimate, with the sway-velocity feedback scaled by
-  ``sway_scale`` (1 full, 0.2 scaled, 0 none: the seed's question) and optional gain
-  scheduling with the speed.
-
-The design model is the vessel's linear model at a speed (:class:`~shipgym.dynamics.
-vanderklugt.RollModel`); nothing here imports the simulator.
+Design notes: docs/design/controllers.rollpilot.md.
 """
 
 from __future__ import annotations

@@ -1,21 +1,8 @@
 """Wind and current settings at the public boundary: the forms a user may give, one coercion.
 
-Inside the code every direction is in radians (:class:`~shipgym.disturbances.WindConfig`,
-:class:`~shipgym.disturbances.CurrentConfig` fields). Where a user gives a direction as a
-plain number it is in DEGREES, everywhere (env arguments, :class:`VesselPhysics`,
-``shipgym.make``, the CLI, benchmarks, scenario files):
+Public names: ``coerce_config``, ``parse_config``, ``parse_speed_at``.
 
-* a config object (used as is);
-* the string ``"SPEED@DEG"``, e.g. ``"3@300"``: speed in m/s, direction in degrees clockwise
-  from north (wind: where it comes FROM; current: where it goes TO);
-* a pair ``(speed m/s, direction deg)`` with the same meaning;
-* a mapping of config fields (SI units, radians, as in the dataclass), where every angle field
-  also accepts a ``*_deg`` twin (``direction_from_deg``, ``direction_to_deg``, ...);
-* ``None`` (no wind / no current).
-
-Each config class owns its parser (``WindConfig.parse``) and its one coercion function
-(``WindConfig.coerce``), both thin wrappers of the helpers here, so that every entry point
-accepts exactly the same forms with the same meaning.
+Design notes: docs/design/disturbances._boundary.md.
 """
 
 from __future__ import annotations

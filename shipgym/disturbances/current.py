@@ -1,32 +1,14 @@
 r"""Ocean / lake current: constant or slowly varying (Gauss-Markov) speed and direction.
 
+``u_c = V_c cos(beta_c - psi)``, ``v_c = V_c sin(beta_c - psi)`` (Fossen 2011 ch. 8.3);
+``V_c_dot = -mu (V_c - speed) + w`` sampled exactly.
+
 Sources: Fossen (2011) ch. 8.3; DNV-RP-C205 (2010) for the wind-driven current; the
 defaults are the project's assumptions. Full entries: ``docs/references.md``.
 
-Conventions (as in Fossen 2011): the current direction ``beta_c`` is where the water goes *to*
-(oceanographic), clockwise from north (rad); this differs from wind and waves. The current acts
-through the relative velocity ``nu_r = nu - nu_c`` with the body-frame current velocity::
+Public names: ``CurrentConfig``, ``Current``, ``current_body_velocity``, ``MAX_CURRENT_SPEED``.
 
-    u_c = V_c cos(beta_c - psi),   v_c = V_c sin(beta_c - psi)      (Fossen 2011 ch. 8.3)
-
-(:func:`current_body_velocity`). The current is irrotational and, on the time scale of a step,
-constant in NED, so ``nu_c_dot = [r v_c, -r u_c, 0]`` (Fossen 2011 ch. 8.3).
-
-Slowly varying current (Fossen 2011 ch. 8.3): a first-order Gauss-Markov process about the mean
-speed, saturated to ``[V_min, V_max]``::
-
-    V_c_dot = -mu (V_c - speed) + w,   E[w(t) w(s)] = sigma^2 delta(t - s)
-
-(``mu = 0``: a random walk, kept inside the bounds by the saturation). Its stationary standard
-deviation is ``sigma / sqrt(2 mu)``: the assumed lake default ``std(V_c) ~ 0.01 m/s`` with
-``mu = 1/300 s^-1`` is ``sigma = 0.01 sqrt(2/300) = 8.2e-4 m/s^1.5``
-(:meth:`CurrentConfig.from_std`). The direction can vary the same way (``direction_mu``,
-``direction_sigma``; a "random walk on beta_c" is ``direction_mu = 0``).
-
-Sampled exactly (``a = exp(-mu h)``, noise std ``sigma sqrt((1 - a^2) / (2 mu))``, ``sigma
-sqrt(h)`` for ``mu = 0``) on a grid ``t_k = k * sample_period``, saturated after every step,
-started from the stationary distribution (clipped) when ``mu > 0`` and from the mean otherwise,
-generated lazily in chunks and linearly interpolated by :meth:`Current.at`, like the wind gusts.
+Design notes: docs/design/disturbances.current.md.
 """
 
 from __future__ import annotations

@@ -1,31 +1,9 @@
 r"""Wave roll and yaw moments in beam and quartering seas (long-wave Froude-Krylov).
 
-For a ship whose length and beam are small against the wave length, the wave's pressure field
-tilts the hull's "effective gravity" by the local wave slope, so the first-order roll moment
-is the roll restoring times the effective wave slope (the Froude-Krylov long-wave
-approximation, as in Perez (2005) for rudder-roll damping; Fossen (2011) ch. 8)::
+Public names: ``RollWaveConfig``, ``RollWaves``.
+Sources: Perez (2005); Fossen (2011).
 
-    K(t) = K_phi alpha_eff(t),   alpha_eff(t) = sin(chi) sum_i k_i a_i sin(w_e,i t + eps_i)
-
-with ``K_phi = rho g nabla GM`` (N m/rad), deep-water wave numbers ``k_i = w_i^2 / g``, the
-component amplitudes ``a_i = sqrt(2 int_bin S dw)`` of a JONSWAP or Pierson-Moskowitz spectrum
-(:func:`~shipgym.disturbances.spectra.harmonic_components`), random phases ``eps_i`` and the
-encounter frequencies ``w_e,i = w_i - k_i U cos(chi)``.
-
-Encounter angle ``chi`` (Perez 2005 convention): 0 = following sea, 90 deg = beam sea (waves
-from port, travelling to starboard), 180 deg = head sea. No roll moment at 0 or 180 deg.
-
-The yaw moment comes from the same components: the lateral Froude-Krylov force per unit
-length of a slender wall-sided hull is ``rho g A_s`` times the local slope across the hull
-(``A_s = nabla / L`` the mean section area), with the wave's phase ``-k_i x cos(chi)`` along
-the hull; integrated over ``-L/2 <= x <= L/2`` (the project's derivation under the same
-long-wave assumption)::
-
-    N(t) = -rho g (nabla / L) sin(chi) sum_i k_i a_i G(k_i cos(chi)) cos(w_e,i t + eps_i),
-    G(kappa) = 2 (sin(kappa L/2) - (kappa L/2) cos(kappa L/2)) / kappa^2   (-> kappa L^3/12)
-
-which vanishes in beam seas (``cos chi = 0``) and in head and following seas (``sin chi =
-0``). Full entries of the sources: ``docs/references.md``.
+Design notes: docs/design/disturbances.rollwaves.md.
 """
 
 from __future__ import annotations

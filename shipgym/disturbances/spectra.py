@@ -1,47 +1,15 @@
 r"""Wave and wind-gust spectra, shaping-filter fits and Froude scaling (pure NumPy/SciPy).
 
+``S_PM(w) = (5/16) Hs^2 w_p^4 w^-5 exp(-1.25 (w_p/w)^4)``, JONSWAP ``S_J = (1 - 0.287 ln
+gamma) S_PM gamma^...``; NPD/ISO 19901-1 gust spectrum.
+
 Every spectrum is one-sided. Full entries of the sources: ``docs/references.md``.
 
-Wave spectra (Fossen 2011 ch. 8.2; DNV-RP-C205 sec. 3.5.5; MSS ``waveSpectrum.m``),
-``S(w)`` in m^2 s/rad for the angular frequency ``w`` in rad/s, normalised so that
-``m0 = int S dw = Hs^2 / 16``:
+Public names: ``G``, ``RHO_WATER``, ``pierson_moskowitz``, ``jonswap``, ``wave_spectrum``,
+``dnv_gamma``, ``norsok_peak_period``, ``spectral_moment``, ...
+Sources: Fossen (2011).
 
-* Pierson-Moskowitz (modified, ITTC / Bretschneider with ``Hs``, ``Tp``)::
-
-      S_PM(w) = (5/16) Hs^2 w_p^4 w^-5 exp(-1.25 (w_p/w)^4),   w_p = 2 pi / Tp
-
-  (= ``487 Hs^2/T0^4 w^-5 exp(-1949/T0^4 w^-4)`` (ITTC modal form) with ``T0 = Tp``).
-* JONSWAP (DNV-RP-C205 form)::
-
-      S_J(w) = (1 - 0.287 ln gamma) S_PM(w) gamma^exp(-(w - w_p)^2 / (2 sigma^2 w_p^2)),
-      sigma = 0.07 (w <= w_p), 0.09 (w > w_p)
-
-  whose ``4 sqrt(m0)`` is within 1 % of ``Hs`` for ``1 <= gamma <= 7`` (checked numerically).
-
-Wind-gust spectra, ``S(f)`` in (m/s)^2/Hz for the frequency ``f`` in Hz, of the
-longitudinal gust about the mean speed ``U10`` at 10 m (full scale):
-
-* NPD / ISO 19901-1 (Andersen & Lovseth)::
-
-      S(f) = 320 (U10/10)^2 (z/10)^0.45 / (1 + ft^n)^(5/(3n)),
-      ft = 172 f (z/10)^(2/3) (U10/10)^(-3/4),   n = 0.468
-
-* Harris (DNV)::
-
-      S(f) = 4 kappa L U10 / (2 + x^2)^(5/6),   x = L f / U10,   kappa = 0.0026, L = 1800 m
-
-* First-order Gauss-Markov (Ornstein-Uhlenbeck) gust of std ``sigma`` and correlation time
-  ``T`` (the default gust of :mod:`shipgym.disturbances.wind`), for reference::
-
-      S(f) = 4 sigma^2 T / (1 + (2 pi f T)^2)
-
-Conversions: ``S_w(w) = S_f(w / 2 pi) / (2 pi)``.
-
-Froude scaling (ITTC 7.5-02-07-04.1): a model at scale ``1:lambda`` sees length,
-area and volume times ``1/lambda``, ``1/lambda^2``, ``1/lambda^3``; time and velocity times
-``1/sqrt(lambda)``; frequency times ``sqrt(lambda)``; force and mass times
-``(rho_m/rho_s) / lambda^3``; moment times ``(rho_m/rho_s) / lambda^4``; power times
-``(rho_m/rho_s) / lambda^3.5``; angles and accelerations unchanged.
+Design notes: docs/design/disturbances.spectra.md.
 """
 
 from __future__ import annotations

@@ -1,74 +1,17 @@
 r"""Irregular long-crested waves: elevation, first-order (WF) motion and second-order drift.
 
+``zeta(t) = sum_j A_j cos(w_j t + eps_j)``, ``A_j = sqrt(2 S(w_j) dw)`` (Fossen 2011
+ch. 8.2); drift by Newman's (1974) approximation.
+
 Sources: Pierson & Moskowitz (1964), Hasselmann et al. (1973), Fossen (2011) ch. 8.2,
 Faltinsen (1990) ch. 5, Newman (1974); ``thesis`` = Al-Takie (1982), its high-frequency
 model (ch. 2-3, App. 2). Full entries: ``docs/references.md``.
 
-Conventions (as in Fossen 2011): NED earth frame, heading ``psi`` clockwise from north (rad),
-body x forward, y starboard. ``direction_from`` is where the waves come *from* (like wind);
-they propagate towards ``beta_p = direction_from + pi``. The angle of the propagation direction
-relative to the bow is ``beta = beta_p - psi`` (``beta = 0``: following sea, ``pi``: head sea,
-``pi/2``: waves from port pushing to starboard).
+Public names: ``WAVE_SPECTRA``, ``WF_MODELS``, ``AL_TAKIE_HF_POLYNOMIALS``,
+``al_takie_hf_peak_frequency``, ``al_takie_hf_polynomial``, ``WaveConfig``, ``Waves``,
+``drift_coefficients``.
 
-**Realisation** (Fossen 2011 ch. 8.2). ``N`` components on equal bins of width ``dw`` over
-``[w_min, w_max]`` (default ``[0.5, 3.5] w_p``), each at a random frequency inside its bin
-(so the record never repeats within an episode, unlike bin centres, which repeat after
-``2 pi / dw``) with a random phase::
-
-    zeta(t) = sum_j A_j cos(w_j t + eps_j),   A_j = sqrt(2 S(w_j) dw),   eps_j ~ U[0, 2 pi)
-
-at the ship (no spatial phase; at DP speeds the encounter frequency equals ``w``).
-
-**Second-order drift on the hull** (Newman 1974). Newman's approximation with the geometric mean
-``T_jk = sqrt(T_jj T_kk)`` collapses the double sum exactly to (Standing / OrcaFlex)::
-
-    F_sv(t) = T(beta) E(t),   E(t) = | sum_j A_j sqrt(R_j) exp(i (w_j t + eps_j)) |^2
-
-whose time mean is ``T(beta) sum_j A_j^2 R_j`` (mean drift, :meth:`Waves.mean_drift_load`).
-Blue Lady's simple wall-sided coefficients (Faltinsen 1990 ch. 5 asymptote; a
-modelling assumption), with ``rho g / 2`` per unit amplitude squared::
-
-    T_x(beta) = (rho g / 2) (2/3) B cos^2(beta) sign(cos beta)   (bow/stern half-cylinders R=B/2)
-    T_y(beta) = (rho g / 2) L_s sin^2(beta) sign(sin beta)       (flat side, L_s = 0.8 L_pp)
-    T_n(beta) = -l_N cos(beta) T_y(beta)                          (yaw lever, default 0.05 L_pp)
-
-The yaw lever moves the lateral drift force towards the end the waves hit first (``l_N > 0``
-turns the ship beam-on to the waves, as drifting ships do); the project only assumes "a small
-lever ~0.05 L". ``R_j`` is the reflection factor: ``min(1, k_j T / 2)^2`` (``"kT"``, default,
-``k_j = w_j^2 / g``, ``T`` the draught), 1 (``"full"``) or a constant.
-
-The envelope ``E(t)`` does not depend on the heading, so it is precomputed on a fixed time grid
-``t_k = k * sample_period`` in chunks of 4096 samples (vectorised NumPy over time x components)
-and :meth:`Waves.drift_load` only interpolates it linearly and multiplies by ``T(beta(psi))``
-in plain Python floats (about 1 us per call).
-
-**First-order wave-frequency (WF) motion** (Fossen 2011 ch. 8.2), added to the *measured* position
-and heading only, never to the hull: along the propagation direction (the horizontal orbit of a
-long-crested sea) with std ``wf_position_std`` and in heading with std ``wf_heading_std``::
-
-    (dx, dy) = d(t) (cos beta_p, sin beta_p),   dpsi = h(t)
-
-Models (``wf_model``):
-
-* ``"fossen"`` (default): Fossen's linear shaping filter ``h(s) = K s / (s^2 + 2 lambda w0 s +
-  w0^2)``, ``w0 = w_p``, ``lambda`` least-squares fitted to the spectrum (0.257 PM, 0.102
-  JONSWAP gamma 3.3; :func:`~shipgym.disturbances.spectra.fit_shaping_filter_lambda`), driven
-  by white noise, one independent filter per DOF, gain set from the stationary Lyapunov
-  variance so the std is exactly the target. It is the model a DP observer assumes.
-* ``"al-takie"``: the 4th-order filter ``K s^2 / (s^4 + c1 s^3 + c2 s^2 + c3 s + c4)`` of the
-  thesis (Appendix 2, Wimpey Sealab Table 1 divided by ``Tb = 3.104 s``; the same polynomial
-  for both thesis ships) for ``wf_beaufort`` 5-9, with frequencies rescaled so that its peak
-  ``|G(jw)|`` falls on ``w_p`` (the thesis poles are full scale for a 95 m ship), or on
-  ``wf_peak_frequency`` when given.
-* ``"rao"``: RAO-like constant gains on the wave components (coherent with the elevation):
-  ``d = g_d sum A_j sin(w_j t + eps_j)`` (surface particle displacement) and
-  ``h = g_h sum k_j A_j sin(w_j t + eps_j)`` (wave slope), gains set to the target stds.
-
-The filters are simulated exactly (zero-order-hold transition ``expm(A h)`` and noise
-covariance ``P - Phi P Phi^T`` from the stationary Lyapunov solution ``P``), started in the
-stationary distribution, on the same grid as the envelope. All three are zero-mean and purely
-wave-frequency: the filters' PSD vanishes like ``w^2`` (fossen) or ``w^4`` (al-takie) at
-``w = 0``, the component sums have no energy below ``w_min``.
+Design notes: docs/design/disturbances.waves.md.
 """
 
 from __future__ import annotations

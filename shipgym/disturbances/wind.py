@@ -1,47 +1,15 @@
 r"""Wind: relative wind, Blendermann (1994) loads and Gauss-Markov gusts.
 
+Relative wind (Fossen 2011 ch. 8.1); ``X = q CX(gamma) A_F``, ``Y = q CY(gamma) A_L``,
+``N = q CN(gamma) A_L L_oa``, ``q = 0.5 rho_a V_rw^2`` (Blendermann 1994).
+
 Sources: Fossen (2011) ch. 8.1 (relative wind), Blendermann (1994) (loads), Harris (1971)
 and ISO 19901-1 (2015) (gust spectra). Full entries: ``docs/references.md``.
 
-Conventions (as in Fossen 2011): NED earth frame, heading ``psi`` clockwise from north (rad), body
-x forward, y starboard. The wind direction ``beta_w`` is where the wind comes *from*
-(meteorological), in radians.
+Public names: ``BlendermannCoefficients``, ``BLENDERMANN``, ``blendermann``,
+``blendermann_coefficients``, ``relative_wind``, ``wind_load``, ``WindLoad``, ``WindConfig``, ...
 
-Relative wind (Fossen 2011, ch. 8.1), with ``beta_Vw = beta_w - pi`` the direction
-the air moves to::
-
-    u_w = V_w cos(beta_w - pi - psi),   v_w = V_w sin(beta_w - pi - psi)
-    u_rw = u - u_w,   v_rw = v - v_w,   V_rw = sqrt(u_rw^2 + v_rw^2)
-    gamma_rw = -atan2(v_rw, u_rw)        (0 = head wind, -pi/2 = wind from starboard)
-
-Loads (body frame, N, N, N m)::
-
-    q = 0.5 rho_a V_rw^2
-    X = q CX(gamma) A_F,   Y = q CY(gamma) A_L,   N = q CN(gamma) A_L L_oa
-
-Blendermann (1994) coefficients for ``g = |gamma|`` in ``[0, pi]`` (MSS
-``blendermann94.m``)::
-
-    CD_lAF = CD_lAF(0) if g <= pi/2 else CD_lAF(pi),   CD_l = CD_lAF A_F / A_L
-    den = 1 - (delta/2) (1 - CD_l/CD_t) sin^2(2g)
-    CX = -CD_lAF cos(g) / den,   CY = CD_t sin(g) / den,   CN = (s_L/L_oa - 0.18 (g - pi/2)) CY
-
-folded to port-side angles by symmetry: CX is even in gamma, CY and CN are odd (MSS
-``blendermann94.m`` does not fold, so its CN is wrong for negative gamma). The fold is done
-without a sign function: ``sin(gamma)`` is odd and everything else depends on ``|gamma|`` only,
-so a following wind (``gamma = pi``) gives ``CY = CN = 0`` with no sign ambiguity.
-
-The formulas are written once (:func:`_coefficients`, :func:`_relative`, :func:`_loads`) and
-evaluated either with the :mod:`math` module on plain floats (the physics hot path,
-:class:`WindLoad`) or with NumPy on arrays of any broadcastable shape (:func:`wind_load`,
-:func:`blendermann_coefficients`, :func:`relative_wind`).
-
-Gusts (default "lake" model, a modelling assumption of the project): the speed and the
-direction are each a mean plus a first-order Gauss-Markov (Ornstein-Uhlenbeck) process, see
-:class:`WindConfig` and :class:`Wind`. Options: a speed gust synthesised from
-the NPD / ISO 19901-1 or Harris spectrum (:mod:`shipgym.disturbances.spectra`) by harmonic
-superposition, optionally Froude-scaled from full scale (``spectrum_scale``); the direction gust
-stays Gauss-Markov.
+Design notes: docs/design/disturbances.wind.md.
 """
 
 from __future__ import annotations

@@ -1,31 +1,9 @@
 r"""``shipgym bench dp``: the wave filters of Al-Takie (1982) in closed loop, Beaufort 5-9.
 
-Each run is one episode of ``shipgym/DPStationKeeping-v0`` (the vessel at its set-point in the
-Beaufort preset's wind, waves with first-order motion on the measurements, current; sensors
-of the thesis sampled every 0.1 per-unit time) with one estimator + controller pair:
+Public names: ``METHODS``, ``bench_dp``, ``dp_gain_history``, ``dp_run``, ``dp_table``,
+``dp_trace``, ``TASKS``, ``thesis_controller``.
 
-=====================  ==================  =============  ===========================
-method                 observer            controller     note
-=====================  ==================  =============  ===========================
-``kf14``               ``alt-kf14``        thesis LQ      14-state KF + the thesis's LQ
-``kf16``               ``alt-kf16``        thesis LQ      + two bias states (16)
-``kf12``               ``alt-kf12``        thesis LQ      reduced filter
-``semiconstant``       ``alt-semiconstant``  thesis LQ    gain frozen once settled
-``ekf``                ``alt-ekf``         ``alt-sdre``   saturating thrusters, SDRE
-``notch-pid``          ``notch``           ``pid``        three notches + PID
-``raw-lq``             ``alt-raw``         thesis LQ      LQ on raw measurements
-``kbf-pid``            ``kbf``             ``pid``        the vessel library's generic DP
-``kf14-bf5``           ``alt-kf14`` (Bf 5) thesis LQ      robustness: filter for Bf 5
-``kf14-noise100``      ``alt-kf14``        thesis LQ      robustness: plant noise x100
-=====================  ==================  =============  ===========================
-
-"thesis LQ" is the printed gain where the thesis prints one for the vessel (``alt-lq-printed``:
-Wimpey Sealab case b, Star Hercules), else Grimble's case b re-solved (``alt-lq``). The
-``alt-*`` filters are designed for the run's Beaufort number (``kf14-bf5``: for 5,
-whatever the sea). Metrics: :func:`~shipgym.dp.metrics.dp_metrics` on the true pose against the
-set-point, the controller's command ``tau_c``, the allocation's saturation flags, the estimation
-error of the pose, the observers' NIS; the cost per filter step is the wall time of the
-observer's ``step`` calls.
+Design notes: docs/design/dp.bench.md.
 """
 
 from __future__ import annotations

@@ -1,21 +1,9 @@
 r"""Metrics of a dynamic-positioning run (Al-Takie 1982 2.3, 3.1). Pure NumPy/SciPy.
 
-:func:`dp_metrics` summarises one station-keeping record sampled at uniform times ``t``:
+Public names: ``DP_RADIUS_MAX``, ``dp_metrics``, ``dp_radius``, ``step_metrics``,
+``wave_band_ratio``.
 
-- position: the radial error ``rho = sqrt(e_x^2 + e_y^2)`` of ``eta - eta_d`` (NED, m): its RMS,
-  its maximum and the percentage of time with ``rho <= radius``; the DP requirement of the
-  thesis is a radius of 3 % of the water depth or 7 m, whichever is smaller [printed,
-  Al-Takie (1982) 2.3], :func:`dp_radius`;
-- heading: RMS of the heading error wrapped to ``(-pi, pi]`` (deg);
-- thrust: the mean of ``|tau_c_i| / capacity_i`` per DOF and its mean over the DOFs (-);
-  the percentage of samples with a saturated actuator (if ``saturated`` is given);
-- wave-band thrust ratio (:func:`wave_band_ratio`): the power of the capacity-normalised
-  thrust command in the HF band 0.05-0.25 Hz over that in the LF band 0-0.04 Hz [bands
-  printed, Al-Takie (1982) 3.1], summed over the DOFs: how much of the controller's effort
-  follows the first-order wave motion that a wave filter should keep out of the thrusters;
-- estimation: the RMS of the LF estimation error per component (if ``lf_error`` is given);
-  the normalised innovation squared (if ``nis`` is given): its mean (``nis_dof`` for a
-  consistent filter) and the percentage inside the two-sided 95 % chi-square interval.
+Design notes: docs/design/dp.metrics.md.
 """
 
 from __future__ import annotations

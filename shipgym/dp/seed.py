@@ -1,20 +1,8 @@
 r"""The thesis's simulation in per-unit time (``seed-per-unit``): Al-Takie (1982) ch. 5-7.
 
-The plant is the printed LF model of a thesis ship with the HF model of a Beaufort number
-(:func:`~shipgym.dynamics.altakie.wave_filter_model`), both in per-unit time, sampled at the
-filter interval ``dt = 0.1`` p.u. (exact zero-order-hold discretisation; the noise enters as
-``Gamma w_k``, ``E{w_k w_k^T} = Q / dt``, App. 3). Disturbances: 4e-6 p.u. sway force and
-9e-8 p.u. yaw moment variances [printed 5.3.2, read as the variances of ``w``]; HF noise of
-unit intensity through the reconstructed ``D_h``; measurement noise ``R`` (printed) times
-``noise_scale`` (6.5: x100 with the filter unchanged). A Kalman filter estimates the state and
-the LQ gain acts on the LF estimates: ``u = -K (x_LF - x_ref)`` with the set-point
-``x_ref = [0, step, 0, step_yaw, 0, 0]`` (the thesis's test input: a 0.02 p.u. step into
-sway).
+Public names: ``FILTERS``, ``SeedRun``, ``PLANT_NOISE``, ``simulate_seed``.
 
-With ``saturate=True`` the plant's thruster outputs act through
-``psi(x) = F1 sign(x) (1 - e^{-F2 |x|})`` (ch. 7); the EKF then predicts through it and the
-controller re-solves the CARE on the model linearised at the estimate every
-``relinearise_every`` steps (the "SDRE" of 7.2.3).
+Design notes: docs/design/dp.seed.md.
 """
 
 from __future__ import annotations

@@ -1,45 +1,14 @@
 r"""Actuator kinds and the :class:`ActuatorSet` of a vessel: one thrust law per kind.
 
-Every actuator is one or more MuJoCo actuators on the hull (built from the vessel file by
-:mod:`shipgym.envs.scene`); each of those is a *control channel* with a command range, a unit
-and its dynamics (a first-order lag, ``dyntype="filterexact"``, or an integrator for an angle
-that turns at a limited rate). The channel's MuJoCo *activation* is the actuator state. From
-the states each kind computes its force in the body frame, written once here and used by the
-physics, the allocation and the plots alike:
+Thrust laws ``F = k a`` or ``F = k |a| a`` (Tomera 2014 eqs. 8-9); ``X = F_x``, ``Y = F_y``,
+``K = -z F_y``, ``N = x F_y - y F_x``.
 
-- :class:`Propeller` (a fixed propeller or a tunnel thruster, the only difference being the
-  mounting angle): state ``a`` (shaft speed in rpm, relative revolutions or relative thrust),
-  thrust along the fixed direction ``alpha`` (0: ahead, 90 deg: to starboard)
-  ``F = k_ahead a`` (``a >= 0``) or ``k_astern a`` (``a < 0``) for ``law = "linear"``, and
-  ``F = k |a| a`` (``k_ahead``/``k_astern`` by sign) for ``law = "quadratic"`` (Tomera 2014
-  eqs. 8-9; Fossen 2011 eq. 12.? ``T = k |n| n``): the bollard law; optionally the loss with
-  the advance speed ``F -= k_u |a| (1 - w) u_r`` (Blanke 1981; Fossen 2021 ch. 9) and a
-  factor ``eta(|u_r|)`` for a tunnel thruster's loss with forward speed (both make the
-  propeller flow-dependent), and a rate limit on its state;
-- :class:`Azimuth` (an azimuth thruster): two channels, the thrust state ``a`` (relative
-  thrust, lagged) and the angle ``alpha`` (rad), which integrates a commanded rate limited to
-  ``+-max_rate``; ``F = F_max a`` along ``alpha`` (Fossen 2011 ch. 12, azimuth thrusters;
-  Johansen & Fossen 2013);
-- :class:`Rudder`: one channel, the commanded angle, which the state follows through a
-  rate-limited servo; lift ``k_L U_R |U_R| C(alpha_e)`` from the flow speed at the rudder,
-  capped (or dropping) past the stall angle (Fossen 2011 ch. 9; Blanke & Christensen 1993
-  for the naval vessel's rudder data).
+Public names: ``ACTUATOR_KINDS``, ``Actuator``, ``ActuatorSet``, ``Azimuth``, ``Channel``,
+``MMGPropulsion``, ``Propeller``, ``Rudder``, ...
+Sources: Tomera (2014); Fossen (2011); Blanke (1981); Fossen (2021); Johansen & Fossen (2013);
+Blanke & Christensen (1993).
 
-Generalised force of a force ``(F_x, F_y)`` applied at ``(x, y, z)`` (body frame, z down):
-``X = F_x``, ``Y = F_y``, ``K = -z F_y``, ``N = x F_y - y F_x`` (Fossen 2011 eq. 12.?).
-
-The protocol (:class:`Actuator`) is what a new kind implements: its channels (any number,
-each a lag, a servo or an integrator), the force from its states (the array form, the design
-model and the oracle), its force capacity, and its compiled force law (``force_law``,
-``law_row``), which the physics step calls (:meth:`ActuatorSet.law_table`): every force, the
-flow-dependent ones (a rudder's lift, a propeller's advance-speed and tunnel losses) included,
-is the physics' own; MuJoCo's actuators only name the channels.
-
-Every kind also has one compiled force law (:data:`shipgym._jit.LAW_SIG`: ``law_propeller``,
-``law_azimuth``, ``law_rudder``, ``law_mmg``), its class's ``force_law``, with ``law_row``
-its constants; :meth:`ActuatorSet.law_table` collects them for the compiled step and
-:func:`tau_of_table` sums them (checked against the array forms in
-``tests/test_actuator_laws.py``). A new kind defines its own ``force_law`` and ``law_row``.
+Design notes: docs/design/dynamics.actuators.md.
 """
 
 from __future__ import annotations

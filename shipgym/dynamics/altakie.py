@@ -4,37 +4,10 @@ Everything here is in the thesis's per-unit system (:class:`~shipgym.dynamics.pe
 bases ``m``, ``L_pp``, ``g``; time ``t' = t / sqrt(L/g)``), as printed, so the thesis's
 matrices can be checked entry by entry; :meth:`PerUnit.model_to_si` converts.
 
-LF model (Al-Takie 1982 eqs. 3.21-3.26, 3.30-3.32)
----------------------------------------------------
-States ``x = [v, y, r, psi, f_1, f_2]`` (sway velocity, sway position, yaw rate, yaw angle and
-two first-order thruster outputs), inputs ``u = [u_1, u_2]`` (thruster demands), surge
-decoupled::
+Public names: ``BEAUFORT_NUMBERS``, ``D_H_RECONSTRUCTED``, ``HF_ALPHA``, ``LF_STATES``,
+``Q_L_PRINTED``, ``R_PRINTED``, ``THESIS_LF``, ``THESIS_PER_UNIT``, ...
 
-    dx/dt' = A x + B u + D w,    y = C x = [y, psi],    E{w w^T} = Q_l delta
-
-with ``a15 = B_1 Y_1``, ``a16 = B_1 Y_2``, ``a35 = B_2 Y_3``, ``a36 = B_2 Y_4``
-(``B_1 = 1/(m - Y_vdot)'``, ``B_2 = 1/(I_z - N_rdot)'``) and the thruster pole ``b = T_b/T``
-(2 s lag: 1.55 Wimpey, 1.364 Star Hercules). The printed matrices of both ships are in
-:data:`THESIS_LF`. Wimpey Sealab's inputs are its two lumped units (fore at 90 deg, aft at
-30 deg, lever ``L/3``: ``Y = [[1, 0.5], [1/3, -1/6]]``, reconstructed from the printed
-``a15 .. a36``); Star Hercules's are a lumped sway force and yaw moment (``Y = I``).
-:func:`lf_model_from_vessel` builds the same model for any vessel package from its design
-``M``, ``D_L`` and thruster time constant, with generalised-force inputs (``Y = I``).
-
-HF model (App. 2, ch. 7)
-------------------------
-Per DOF a 4-state companion form ``A_hs = [[0, T_b, 0, 0], [0, 0, T_b, 0], [0, 0, 0, T_b],
-[-a4, -a3, -a2, -a1]]`` whose 3rd state is the first-order wave motion; the alphas of
-App. 2 Table 1 (Wimpey, Beaufort 5-9) and Table 2 (Star Hercules, 5 and 8) are
-:data:`HF_ALPHA`. Divided by ``T_b`` they give one real-time polynomial for both ships
-(:data:`~shipgym.disturbances.waves.AL_TAKIE_HF_POLYNOMIALS`), which :func:`hf_alpha` uses for
-the rows the thesis does not print. The HF noise enters the 4th state, ``D_h = [0, 0, 0, d]``
-with ``Q_h = 1`` (printed); ``d`` is not printed: :data:`D_H_RECONSTRUCTED`.
-
-Combined model (ch. 5)
-----------------------
-``x = [LF(6); HF sway(4); HF yaw(4)]``, ``H = [C_l, C_h]``: ``z = [x2 + x9, x4 + x13] + v``
-(:func:`wave_filter_model`).
+Design notes: docs/design/dynamics.altakie.md.
 """
 
 from __future__ import annotations

@@ -1,64 +1,14 @@
 r"""The nonlinear 4-DOF naval vessel of Blanke & Christensen (1993) (surge, sway, roll, yaw).
 
-The model of the multipurpose naval vessel that Blanke & Christensen (1993) use for rudder-roll
-damping, with the data of MSS ``CRAFT/SHIP/models/navalvessel.m`` (Fossen & Perez 2004; DMI PMM
-tests, adapted by T. Perez to an ADI design). The numbers are taken from that file; the
-equations below are written here from the structure of the model (every hydrodynamic force is a
-sum of the listed derivative terms), no code is copied.
+``M nu_dot = f_h(nu_r, p, r, phi) + f_c(nu, phi) + tau``, ``nu = [u, v, p, r]``, about
+the waterline origin (Blanke & Christensen 1993).
 
-Body frame: the PMM reference frame of the tests (x forward, y starboard, z down), origin on the
-waterline; the centre of gravity lies at ``(x_G, 0, z_G)`` with ``x_G = -3.38 m`` and ``z_G =
--(VCG - T) = -1.06 m`` (1.06 m above the waterline). Every force and moment, the actuators' too,
-is taken about this origin. State ``nu = [u, v, p, r]``, roll ``phi``; ``tau = [X, Y, K, N]``.
+Public names: ``Blanke4Hull``, ``NAVAL_VESSEL``, ``NAVAL_VESSEL_SOURCE``,
+``roll_natural_frequency``, ``roll_damping_ratio``, ``linear_roll_model``, ``roll_rhs``,
+``surge_thrust``, ...
+Sources: Blanke & Christensen (1993); Fossen & Perez (2004); Radhakrishnan (n.d.).
 
-.. math::
-
-    M \dot\nu = f_h(\nu_r, p, r, \phi) + f_c(\nu, \phi) + \tau
-
-with ``M`` (:meth:`Blanke4Hull.mass_matrix`, rows and columns ``u, v, p, r``)::
-
-    [[m - X_udot, 0,                   0,                 0              ],
-     [0,          m - Y_vdot,          -(m z_G + Y_pdot), m x_G - Y_rdot ],
-     [0,          -(m z_G + K_vdot),   I_xx - K_pdot,     -K_rdot        ],
-     [0,          m x_G - N_vdot,      -N_pdot,           I_zz - N_rdot  ]]
-
-the hydrodynamic terms (``a`` marks an absolute value, ``ph`` the roll angle; ``u`` and ``v``
-below are the velocities relative to the water, ``u_r = u - u_c``, ``v_r = v - v_c``; the
-current is irrotational, so ``p`` and ``r`` are unchanged)::
-
-    X_h = X_uau u|u| + X_vr v r
-    Y_h = Y_auv |u| v + Y_ur u r + Y_vav v|v| + Y_rar r|r| + Y_var v|r| + Y_rav r|v|
-          + Y_phauv ph|u v| + Y_phaur ph|u r| + Y_phuu ph u^2
-    K_h = K_auv |u| v + K_ur u r + K_vav v|v| + K_rar r|r| + K_var v|r| + K_rav r|v|
-          + K_phauv ph|u v| + K_phaur ph|u r| + K_phuu ph u^2 + K_aup |u| p + K_pap p|p|
-          + K_p p + K_phphph ph^3 - rho g nabla GM ph
-    N_h = N_auv |u| v + N_aur |u| r + N_vav v|v| + N_rar r|r| + N_var v|r| + N_rav r|v|
-          + N_phauv ph|u v| + N_phuar ph u|r| + N_phuau ph u|u|
-
-and the rigid-body centripetal terms of the model (absolute velocities)::
-
-    X_c = m (v r + x_G r^2 - z_G p r),  Y_c = -m u r,  K_c = m z_G u r,  N_c = -m x_G u r.
-
-Notes on the data (all visible in ``navalvessel.m``):
-
-- the roll restoring is ``-rho g nabla GM phi + K_phphph phi^3`` with ``GM = 1.1 m``; the file
-  also defines ``K_phi = 0.776 m g`` (an older DMI value) but does not use it, nor do we;
-- ``Y_rar``, ``K_rar``, ``K_rdot``, ``N_vav``, ``N_var``, ``N_pdot`` are 0 in the data; they
-  are kept in the sums so that the form is complete;
-- ``navalvessel.m`` multiplies ``N_phauv`` by ``ph |u ph|`` instead of the ``ph |u v|`` that
-  its name and the sway and roll equations have; we use ``ph |u v|`` (second order: the
-  linearisation is unaffected);
-- the added mass acts on ``nu_dot`` (as in :class:`~shipgym.dynamics.hull4.Hull4`): the
-  rate of change of a constant current on the body axes, ``O(r V_c)``, is neglected.
-
-The model has no rudder; :func:`linear_roll_model` and :func:`roll_rhs` take the rudder's sway
-force ``Y = lift_gain U^2 delta`` at ``(rudder_x, 0, rudder_z)`` (``K = -z Y``, ``N = x Y``),
-and the seed's 5-state order ``x = [v, r, psi, p, phi]`` (Radhakrishnan (n.d.) eq. 9) of the
-roll controllers and Kalman filters. Full entries of the sources: ``docs/references.md``.
-
-The family's compiled kernel is :func:`accel_blanke4` (:data:`~shipgym._jit.ACCEL_SIG`,
-constants from :meth:`Blanke4Hull.kernel_constants`), checked against
-:meth:`Blanke4Hull.nu_dot` in ``tests/test_hull_kernels.py``.
+Design notes: docs/design/dynamics.blanke4.md.
 """
 
 from __future__ import annotations

@@ -1,36 +1,13 @@
 r"""A 4-DOF (surge, sway, roll, yaw) hull: ``M nu_dot + D(nu_r) nu_r + g(eta) = tau``.
 
-State in Fossen (2011, ch. 7.? "4-DOF models") notation: ``eta = [x, y, phi, psi]``,
-``nu = [u, v, p, r]``; kinematics (pitch and heave neglected)
+Kinematics ``x_dot = u cos(psi) - v cos(phi) sin(psi)``, ..., ``psi_dot = r cos(phi)``;
+restoring ``g_K = K_phi phi``, ``K_phi = rho g nabla GM_T`` (Fossen 2011 ch. 7).
 
-.. math::
+Public names: ``KINEMATICS``, ``Hull4``, ``is_hull4``, ``accel_linear4``.
+Sources: Fossen (2011); Son & Nomoto (1982); Blanke & Christensen (1993); Van der Klugt (1987);
+Radhakrishnan (n.d.); Christensen (1993).
 
-    \dot x = u\cos\psi - v\cos\phi\sin\psi,\quad
-    \dot y = u\sin\psi + v\cos\phi\cos\psi,\quad
-    \dot\phi = p,\quad \dot\psi = r\cos\phi,
-
-restoring moment in roll ``g_K = K_phi phi`` (``K_phi = rho g nabla GM_T``, N m/rad, the small-
-angle form) and, for a linearised model that has them, the roll's sway force and yaw moment
-``g_Y = Y_phi phi``, ``g_N = N_phi phi`` (``phi_coupling``; Son & Nomoto 1982), damping
-``D(nu_r) = D_L + |u_r| D_u + diag(d_quad |nu_r|)``, ``nu_r = nu - nu_c`` with ``nu_c = [u_c,
-v_c, 0, 0]``. The speed-proportional part ``|u_r| D_u`` holds the derivatives of the form
-``Y_|u|v`` (Blanke & Christensen 1993) and every coefficient of a model written at a forward
-speed ``U`` as ``a + b U`` (Van der Klugt 1987: ``T_v = 78/U``), so that one hull serves every
-speed.
-
-``kinematics = "linear"`` replaces the kinematics by their small-roll form ``psi_dot = r``,
-``x_dot = u cos psi - v sin psi``, ``y_dot = u sin psi + v cos psi``: the form of a linear
-state-space model (Radhakrishnan (n.d.) eq. 10), which the MuJoCo hull then reproduces
-exactly. Linear in everything but the quadratic damping: the family of the
-Van der Klugt (1987) sway-roll-yaw models and of linearised naval hulls (Blanke &
-Christensen 1993). No Coriolis terms (``coriolis=False``): the models of this family are
-linearised about a forward speed, where those terms are already in ``D_L``.
-
-As for :class:`~shipgym.dynamics.model.PlantModel`, a batched matrix form (:meth:`nu_dot`)
-serves the reference integrator, design and tests; the family's run-time law, compiled, is
-:func:`accel_linear4` (:data:`~shipgym._jit.ACCEL_SIG`, constants from
-:meth:`Hull4.kernel_constants`), checked against :meth:`Hull4.nu_dot` in
-``tests/test_hull_kernels.py``.
+Design notes: docs/design/dynamics.hull4.md.
 """
 
 from __future__ import annotations

@@ -1,20 +1,9 @@
 r"""The linear sway-yaw-roll model of any 4-DOF vessel with a rudder, about straight running.
 
-:func:`roll_model_of` linearises a vessel's hull (any 4-DOF plant: the linear
-:class:`~shipgym.dynamics.hull4.Hull4`, the nonlinear
-:class:`~shipgym.dynamics.blanke4.Blanke4Hull`) and its rudder's lift about ``u = U``,
-``v = p = r = phi = 0``, with the surge held at ``U``, into the
-:class:`~shipgym.dynamics.vanderklugt.RollModel` of Radhakrishnan (n.d.) eq. 8: state ``x =
-[v, r, psi, p, phi]`` (eq. 9), rudder input ``delta``, disturbance input ``w = [K_w, N_w]``
-(a roll and a yaw moment, N m), outputs ``[r, psi, p, phi]``. The roll controllers and sway
-filters (:mod:`shipgym.controllers.rollcontrol`, :mod:`shipgym.observers.sway`) are designed
-on it, for every vessel alike.
+Public names: ``roll_model_of``, ``roll_rhs_of``, ``rudder_of``.
+Sources: Radhakrishnan (n.d.); Blanke & Christensen (1993).
 
-It differentiates the model the physics integrates (``plant.nu_dot`` and
-:meth:`~shipgym.dynamics.actuators.Rudder.lift`) by central differences; the tests compare it
-with the seed's state space written from the paper (``van-der-klugt``) and with the naval
-vessel's analytic linearisation (Blanke & Christensen 1993). The kinematics linearise to
-``psi_dot = r`` for either kinematics of a 4-DOF hull.
+Design notes: docs/design/dynamics.linearise.md.
 """
 
 from __future__ import annotations

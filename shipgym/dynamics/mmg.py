@@ -1,40 +1,12 @@
 r"""The MMG standard manoeuvring model (Yasukawa & Yoshimura 2015) of a single-screw ship.
 
-Surge, sway and yaw about the midship point (``x_G != 0``), with the hull, propeller and
-rudder forces of the MMG standard method (Yasukawa & Yoshimura 2015, eqs. 4-8 and the
-propeller and rudder models of its §2.4-2.5):
+``(m + m_x) u_dot - (m + m_y) v r - x_G m r^2 = X_H + X_R + X_P`` and sway, yaw likewise
+(Yasukawa & Yoshimura 2015 eqs. 4-8).
 
-.. math::
+Public names: ``accel_mmg``, ``KVLCC2_L7``, ``MMGHull``, ``MMGModel``, ``MMGParameters``,
+``kvlcc2``.
 
-    (m + m_x)\dot u - (m + m_y) v r - x_G m r^2 = X_H + X_R + X_P \\
-    (m + m_y)\dot v + x_G m \dot r + (m + m_x) u r = Y_H + Y_R \\
-    (I_{zG} + x_G^2 m + J_z)\dot r + x_G m (\dot v + u r) = N_H + N_R
-
-- hull: ``X_H = rho/2 L d U^2 X'_H(v', r')`` with ``X'_H = -R'_0 + X'_vv v'^2 + X'_vr v'r' +
-  X'_rr r'^2 + X'_vvvv v'^4``, ``Y_H``, ``N_H = rho/2 L^2 d U^2 N'_H`` likewise (third-order
-  polynomials), ``v' = v/U``, ``r' = r L/U``;
-- propeller: ``X_P = (1 - t_P) rho n^2 D_P^4 K_T(J_P)``, ``K_T = k0 + k1 J + k2 J^2``,
-  ``J_P = u (1 - w_P)/(n D_P)``, ``1 - w_P = (1 - w_P0)[1 + (1 - exp(-C1 |beta_P|))(C2 -
-  1)]``, ``beta_P = beta - x'_P r'``;
-- rudder: ``F_N = rho/2 A_R U_R^2 f_alpha sin(alpha_R)``, ``alpha_R = delta - atan2(v_R,
-  u_R)``, ``u_R = eps u (1 - w_P) sqrt(eta [1 + kappa (sqrt(1 + 8 K_T/(pi J^2)) - 1)]^2 +
-  1 - eta)``, ``v_R = U gamma_R beta_R``, ``beta_R = beta - l'_R r'``; ``X_R = -(1 - t_R)
-  F_N sin(delta)``, ``Y_R = -(1 + a_H) F_N cos(delta)``, ``N_R = -(x_R + a_H x_H) F_N
-  cos(delta)``.
-
-Signs are the paper's: ``beta = atan2(-v, u)``, and a positive rudder angle turns the ship
-to starboard (``r > 0``). The extensions a stopping manoeuvre needs (astern thrust for
-``n < 0``, no slipstream on the rudder for ``n <= 0``, an optional astern side force) are
-the notes' [chosen] ones: ``K_T = -(0.2 + 0.25 J)`` astern with ``J = u(1 - w_P)/(|n|
-D_P)``; ``Y_P = -c_y |X_P|`` at ``x_P`` when ``n < 0``.
-
-Two bugs of open implementations are absent (tests): the wake fraction's bracket (``1 -
-exp(-C1|beta_P|)`` multiplies ``(C2 - 1)``, not the other way round) and ``x_R = x'_R L``.
-
-Pure NumPy; :meth:`MMGModel.nu_dot` accepts a leading batch axis. The hull's compiled
-acceleration (the ``mmg`` family's :data:`~shipgym._jit.ACCEL_SIG` kernel) is
-:func:`accel_mmg`, constants from :meth:`MMGHull.kernel_constants`; it is checked against
-:meth:`MMGHull.nu_dot` in ``tests/test_hull_kernels.py``.
+Design notes: docs/design/dynamics.mmg.md.
 """
 
 from __future__ import annotations

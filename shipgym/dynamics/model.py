@@ -1,24 +1,9 @@
 r"""The 3-DOF manoeuvring model (Fossen 2011, ch. 6-7; Tomera 2014 eqs. 3-7).
 
-.. math::
+Public names: ``PlantModel``, ``plant_model``, ``PLANT_VARIANTS``, ``seed_linear_matrices``,
+``accel_fossen3``.
 
-    \dot\eta = R(\psi)\,\nu, \qquad
-    M_{RB}\dot\nu + C_{RB}(\nu)\nu + M_A\dot\nu_r + C_A(\nu_r)\nu_r + D(\nu_r)\nu_r = \tau
-
-with ``nu_r = nu - nu_c`` (body-frame velocity relative to a current that is constant in
-NED, so ``nu_c_dot = [r v_c, -r u_c, 0]``), ``D(nu_r) = D_L + diag(-X_uu|u_r|, -Y_vv|v_r|,
--N_rr|r|)``. A :class:`PlantModel` is immutable; its variants are chosen by name with
-:func:`plant_model` (``"default"`` and ``"seed-linear"``).
-
-Two formulations of the same equations live here on purpose:
-
-- the matrix form (:meth:`PlantModel.mass_matrix`, :meth:`~PlantModel.coriolis_rb`,
-  :meth:`~PlantModel.coriolis_a`, :meth:`~PlantModel.damping`, :meth:`~PlantModel.nu_dot`),
-  batched over a leading axis: the design form, used by the reference integrator, observers
-  and tests, and the oracle;
-- the expanded form compiled, :func:`accel_fossen3` (the family's run-time law,
-  :data:`~shipgym._jit.ACCEL_SIG`, constants from :meth:`PlantModel.kernel_constants`),
-  checked against the matrix form in ``tests/test_hull_kernels.py``.
+Design notes: docs/design/dynamics.model.md.
 """
 
 from __future__ import annotations

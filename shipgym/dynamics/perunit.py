@@ -1,29 +1,9 @@
 r"""The per-unit ("bis", prime-II) system of Al-Takie (1982): bases from ``m``, ``L_pp`` and ``g``.
 
-Al-Takie (1982) App. 1 and 3.2.2 (after Norrbin's bis system, Fossen 2011 ch. 7.2.1): mass
-``m``, length ``L = L_pp`` and gravity ``g`` are the units, so that
+Public names: ``KINDS``, ``PerUnit``.
+Sources: Al-Takie (1982); Fossen (2011).
 
-============================  =================  =========================================
-quantity                      base               Wimpey Sealab (m = 5670 t, L = 94.49 m)
-============================  =================  =========================================
-time ``t' = t / T_b``         ``sqrt(L / g)``    3.104 s [printed]
-length (positions)            ``L``              94.49 m ("amplitude scaling factor 95 m")
-velocity                      ``sqrt(g L)``      30.44 m/s [printed]
-angular velocity              ``sqrt(g / L)``    0.3222 rad/s [printed]
-acceleration                  ``g``
-angular acceleration          ``g / L``
-force ``X' = X / (m g)``      ``m g``            55 620 kN [printed]
-moment ``N' = N / (m g L)``   ``m g L``          5 256 000 kN m [printed]
-mass / inertia                ``m`` / ``m L^2``
-angle                         1 (rad)
-============================  =================  =========================================
-
-A real-time model ``x_dot = A x + B u`` whose states and inputs are already per-unit becomes
-the per-unit-time model ``dx/dt' = T_b (A x + B u)`` (Al-Takie 1982 App. 1); with SI states
-and inputs, scale them as well (:meth:`PerUnit.model_from_si` / :meth:`PerUnit.model_to_si`).
-
-``g = 9.81 m/s^2`` reproduces every printed base to 4 digits (Wimpey: ``mg = 55 622 kN``,
-printed 55 620 kN; ``T_b = 3.1036 s``, printed 3.104 s).
+Design notes: docs/design/dynamics.perunit.md.
 """
 
 from __future__ import annotations

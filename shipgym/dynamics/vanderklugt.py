@@ -1,34 +1,10 @@
 r"""The linear sway-roll-yaw model of Van der Klugt (1987) as used by Radhakrishnan (n.d.).
 
-Radhakrishnan (n.d.) cites the Van der Klugt (1987) rudder-roll model through Fossen (1995) as
-three transfer functions from the rudder angle ``delta`` (rad) (eqs. 5-7)::
+Public names: ``KDP_LAWS``, ``OUTPUT_NAMES``, ``STATE_NAMES``, ``VAN_DER_KLUGT``, ``VARIANTS``,
+``RollModel``, ``RollParameters``, ``VanDerKlugtParameters``, ...
+Sources: Van der Klugt (1987); Radhakrishnan (n.d.); Fossen (1995).
 
-    v     = K_dv delta / (1 + T_v s)
-    phi   = w_n^2 [K_dp delta + K_vp v + w_phi] / (s^2 + 2 xi w_n s + w_n^2)
-    psi   = [K_dr delta + K_vr v + w_psi] / ((1 + T_r s) s)
-
-and the state space ``x_dot = A x + B delta + G w`` (eqs. 8-12) with the state
-``x = [v, r, psi, p, phi]`` (eq. 9: sway velocity m/s, yaw rate rad/s, heading rad, roll rate
-rad/s, roll angle rad), ``w = [w_phi, w_psi]`` the wave disturbance. The parameters are laws in
-the forward speed ``U`` (m/s), :class:`VanDerKlugtParameters`.
-
-Two variants (:data:`VARIANTS`):
-
-- ``"reconstructed"`` (the default): the state space rebuilt from eqs. 5-7, so that it has
-  exactly their transfer functions (the four fixes are listed in :func:`roll_model`);
-- ``"seed-printed"``: eqs. 10-11 exactly as printed. It has two unstable modes at every speed
-  (``+U/78`` and ``-xi w_n + sqrt((xi w_n)^2 + w_n^2)``, about +0.57 rad/s), so it is kept only
-  to document the typos.
-
-Two laws for the direct rudder-roll gain (:data:`KDP_LAWS`): ``"U2"`` (``K_dp = -0.0014 U^2``,
-reconstructed: a rudder roll moment scales with ``U^2``) and ``"printed"``
-(``K_dp = -0.0014 / U^2``, as printed, which makes the direct rudder-roll path 1e-4 to 1e-5 of
-the sway path and rudder roll stabilisation through it impossible).
-
-Signs follow the paper: a positive rudder angle gives ``K_dr delta < 0`` yaw rate and, with
-``K_dp < 0``, an initial roll of the opposite sign to the final (sway-driven) heel: the
-non-minimum-phase roll response, a right-half-plane zero at ``+U/156`` rad/s with the ``"U2"``
-law (:func:`roll_rudder_zero`).
+Design notes: docs/design/dynamics.vanderklugt.md.
 """
 
 from __future__ import annotations

@@ -1,24 +1,9 @@
 """Vessels as data packages: :class:`Vessel`, :func:`load_vessel` and the registry.
 
-A vessel package is a folder (as a robot in MuJoCo Menagerie) holding
+Public names: ``ACTUATOR_READERS``, ``COMMON_ACTUATOR_KEYS``, ``HULL_FAMILIES``, ``ActuatorSite``,
+``DesignModel``, ``HullFamily``, ``Vessel``, ``VesselError``, ...
 
-- ``vessel.toml``: hull model family and matrices, windage, actuators, the design model for
-  control and observers, guidance limits, model scale; every number either plain or as
-  ``{ value = ..., unit = "...", source = "..." }`` (the unit is checked against the key's);
-- ``vessel.xml``: the MJCF hull body (geometry only: the inertia, joints, thruster sites and
-  actuators are generated from ``vessel.toml`` when the scene is built, so they exist once);
-- ``README.md``: the source of every number.
-
-The packaged vessels live in ``shipgym/assets/mjcf/<name>/`` (:func:`vessels` lists them); a
-user's package anywhere on disk loads with ``load_vessel(path)`` (or ``vessel=PATH`` in the
-environments). Validation happens on load: unknown keys, missing values, wrong units,
-non-positive masses, a singular mass matrix, actuators outside the hull: each raises
-:class:`VesselError` naming the file and the key. This module never imports MuJoCo.
-
-Hull families and actuator kinds are registries (:data:`HULL_FAMILIES`,
-:data:`ACTUATOR_READERS`): a new family (its model with a compiled acceleration) or kind (its
-actuator with a compiled force law) is one module that registers its reader
-(:func:`register_hull_family`, :func:`register_actuator_kind`); no file here changes.
+Design notes: docs/design/dynamics.vessel.md.
 """
 
 from __future__ import annotations

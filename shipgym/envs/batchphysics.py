@@ -1,19 +1,9 @@
 r"""N hulls of one vessel stepped together: the batched form of
 :class:`~shipgym.envs.physics.VesselPhysics`.
 
-Both run the same compiled loop (:func:`shipgym.sim.step.run`, whose docstring has the
-equations): every hull family (3 and 4 DOF), every actuator kind, gusty wind, current and the
-second-order wave drift, with either integrator: ``leapfrog`` (open water, no contacts; the
-default) or ``mujoco`` (each hull its own ``mjModel`` and ``mjData`` of the ``world``, so quay
-contact works: the harbour). Hull ``i`` seeded and commanded as a single
-``VesselPhysics(..., integrator=...)`` of the same world follows the same trajectory to the
-last bit.
+Public names: ``BatchedPhysics``.
 
-Each hull has its own wind, current and wave realisation (drawn as the single physics draws
-it from its generator) and its own clock (a reset restarts it). Poses ``eta`` and velocities
-``nu`` are ``(N, 3)`` arrays (``[x, y, psi]``, ``[u, v, r]``; a 4-DOF vessel adds
-:attr:`BatchedPhysics.eta_full`, :attr:`BatchedPhysics.nu_full`); commands ``(N,
-n_channels)``, clipped to the channels' ranges (:attr:`saturated` flags).
+Design notes: docs/design/envs.batchphysics.md.
 """
 
 from __future__ import annotations

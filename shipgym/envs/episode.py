@@ -1,23 +1,8 @@
 """The end of an episode, the same for every shipgym env however it ends.
 
-``gym.make`` puts its ``TimeLimit`` around the env, so the env itself cannot see a time-limit
-truncation (``gym.make(id, max_episode_steps=5)`` does not tell the env). :class:`EpisodeEnd`
-is registered as an additional wrapper of every shipgym id, so ``gym.make`` applies it right
-outside the ``TimeLimit``; it sees every episode end (termination or truncation) and
+Public names: ``EpisodeEnd``, ``EPISODE_END_ENTRY_POINT``.
 
-* puts ``info["episode_metrics"]`` (:meth:`BlueLadyEnv.episode_metrics
-  <shipgym.envs.base.BlueLadyEnv.episode_metrics>`) into the last ``info`` when the env did not
-  already (the env does on termination), and
-* refuses :meth:`step` after the end with ``gymnasium.error.ResetNeeded`` until :meth:`reset`,
-  instead of silently stepping on (and changing the metrics).
-
-The ids with a native batched form (:data:`~shipgym.envs.registration.VECTOR_IDS`) cannot
-carry it (Gymnasium refuses a vector entry point next to additional wrappers): for them
-``shipgym.make`` applies it, and a bare ``gym.make`` gives Gymnasium's plain ``TimeLimit``
-(the env still reports ``episode_metrics`` and refuses steps when it terminates).
-
-Gymnasium's own vector envs and stable-baselines3's ``VecEnv`` reset a finished env instead
-of stepping it, so they never hit the error.
+Design notes: docs/design/envs.episode.md.
 """
 
 from __future__ import annotations

@@ -5,20 +5,10 @@ wind: it settles where its proportional action balances the load, off the refere
 controller removes that offset with integral action (Fossen 2011, sec. 12.2); this module
 gives a learned policy the same information, the integral of the errors it sees.
 
-With the observation's first three entries the body-frame errors
-``e = (e_x, e_y, e_psi)`` (m, m, rad; :class:`~shipgym.envs.base.ShipEnv`, or an observer's
-estimate when an observer wrapper is stacked), after each control step of period ``dt``
+Public names: ``ErrorIntegral``, ``ErrorIntegralObservation``, ``check_time_constant``.
+Sources: Fossen (2011).
 
-    ``i_k = lambda i_{k-1} + dt e_k``,  ``lambda = exp(-dt / T)``,  ``i = 0`` at reset
-
-(m s, m s, rad s): the integral of the errors with a forgetting time ``T`` (s), so a constant
-error ``e`` gives ``i -> dt e / (1 - lambda) ~ T e`` instead of growing without bound. The
-three values are appended after the observation's last entry.
-
-:class:`ErrorIntegralObservation` is the wrapper of one env (rl-zoo3 names it in
-``env_wrapper``, after the observer); :class:`ErrorIntegral` is the state of N envs, which
-the single wrapper and the SB3 adapter of the batched env
-(:class:`shipgym.rl.vec.ErrorIntegralVecEnv`) both use.
+Design notes: docs/design/envs.integral.md.
 """
 
 from __future__ import annotations

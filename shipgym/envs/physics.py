@@ -1,26 +1,9 @@
 r"""The physics of one hull: MuJoCo's rigid body moved exactly as the hull's model says.
 
-MuJoCo gives a body one scalar mass, so anisotropic and coupled added mass cannot live in the
-body's inertia. Every physics step therefore evaluates the hull family's full acceleration
-``nu_dot`` from the actuators, wind, waves and current at this instant, converts it to the
-joint acceleration ``qacc = J(q) nu_dot + J_dot nu`` and writes ``qfrc_applied = M_q qacc``
-(``M_q``: MuJoCo's own joint-space inertia, the constant ``diag(m, m, I_z[, I_x])`` of the hull
-body, checked when the model is bound), so that MuJoCo's rigid body produces exactly that
-acceleration; MuJoCo's actuators carry no force (they name the channels and hold the sites).
+Public names: ``INTEGRATORS``, ``VesselPhysics``, ``SimulationDiverged``, ``MAX_TIMESTEP``,
+``MIN_TIMESTEP``, ``check_timestep``, ``joint_inertia``.
 
-The step itself is :func:`shipgym.sim.step.run`, the one compiled loop of every vessel and of
-the batched physics (its docstring has the equations): :class:`VesselPhysics` is its batch of
-one hull, with the integrator ``mujoco`` (MuJoCo's own ``mj_step`` on this hull's ``mjData``:
-quay contact, the harbour, rendering; the default) or ``leapfrog`` (the same update without
-MuJoCo, as :class:`~shipgym.envs.batchphysics.BatchedPhysics` steps its hulls).
-
-MuJoCo's Euler step is the symplectic update ``qvel += h qacc; qpos += h qvel``. Read with
-``qvel`` as the velocity at the half step (leapfrog), it is second-order accurate, provided the
-acceleration is evaluated with the velocity at the whole step, ``v_k = qvel + h/2 qacc_prev``.
-The loop does exactly that, and :attr:`VesselPhysics.nu` reports ``v_k``, so the trajectory
-error falls with ``h^2`` at no extra cost. No force is lagged, so any invertible M works
-(added mass larger than the rigid-body mass included). The tests check the trajectory of every
-vessel against :func:`shipgym.dynamics.simulate_reference` (SciPy).
+Design notes: docs/design/envs.physics.md.
 """
 
 from __future__ import annotations

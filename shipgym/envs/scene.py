@@ -1,19 +1,8 @@
 """Build a MuJoCo model from a world and a vessel package (``mujoco.MjSpec``).
 
-Worlds (``shipgym/assets/mjcf/worlds/``: ``open_water.xml``, ``harbour.xml``) hold no ship.
-:func:`build_model` attaches the vessel's hull body (``vessel.xml``, geometry only) to the
-world and generates from ``vessel.toml`` what must exist once:
+Public names: ``WORLDS``, ``build_model``, ``fits``, ``world_path``.
 
-- the joints: slide ``x``, slide ``y``, hinge ``psi`` (z) and, for a 4-DOF vessel, hinge
-  ``phi`` about the yawed x axis, in this order (``qpos = [x, y, psi(, phi)]``);
-- the rigid-body inertia at the body origin (mass ``m``; ``diag(I_x, I_z, I_z)``: with
-  ``I_y = I_z`` MuJoCo's joint-space inertia is the constant ``diag(m, m, I_z(, I_x))`` for
-  any roll angle, with no velocity-dependent bias force, which the exact force injection of
-  :mod:`shipgym.envs.physics` relies on; a check there verifies it);
-- one site per actuator at its position and one MuJoCo actuator per control channel
-  (:class:`~shipgym.dynamics.actuators.Channel`), which names the channel; it carries no force
-  and no state: the actuators' forces and dynamics are the physics' own
-  (:mod:`shipgym.sim.step`).
+Design notes: docs/design/envs.scene.md.
 """
 
 from __future__ import annotations

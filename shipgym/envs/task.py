@@ -1,18 +1,10 @@
 r"""Tasks: what an episode is, for N >= 1 envs at once (dm_control's Task, batched).
 
-A task says what it needs of the vessel (:attr:`Task.needs`) and where it runs (its scene,
-disturbances and sensors), draws each env's episode from that env's generator
-(:meth:`Task.initialize_episode`) and computes, for N envs at once from ``(N, ...)`` arrays,
-the observation, the named reward terms (which sum to the reward) and the termination. The
-envs run the physics, the sensors and the guidance and ask the task: the single env
-(:class:`~shipgym.envs.base.ShipEnv`) with N = 1, the vector env
-(:class:`~shipgym.envs.vector.ShipVectorEnv`) with N, through the same code, so env ``i`` of a
-batch and a single env seeded alike get the same observation and reward to the last bit.
+Public names: ``MAX_START_OFFSET``, ``OBS_LAYOUT``, ``REWARD_TERMS``, ``SCENES``, ``Episode``,
+``HarbourTask``, ``PlanTask``, ``RewardWeights``, ...
+Sources: Tomera (2014).
 
-:class:`PlanTask` is the family of the manoeuvre plans of Tomera (2014) (the harbour
-manoeuvre :class:`HarbourTask`, :class:`StationKeepingTask`, :class:`TrackingTask`): the ship
-follows the reference of a :class:`~shipgym.guidance.ManoeuvrePlan`; its observation and
-reward terms are one compiled function (:func:`plan_terms`).
+Design notes: docs/design/envs.task.md.
 """
 
 from __future__ import annotations

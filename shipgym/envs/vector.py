@@ -1,39 +1,9 @@
 r"""The native batched ``gymnasium.vector.VectorEnv`` of the plan tasks.
 
-:class:`ShipVectorEnv` steps ``num_envs`` envs of ``shipgym/Harbour-v0``,
-``shipgym/StationKeeping-v0`` or ``shipgym/Tracking-v0`` (and their Blue Lady ids) in one
-array computation per step: the physics of every hull (:class:`~shipgym.envs.batchphysics.
-BatchedPhysics`: plant, actuators, gusty wind, current, wave drift; MuJoCo's integrator per hull
-in the harbour, for its quays), the sensors (:class:`~shipgym.observers.sensors.
-BatchedSensors`), the guidance (:class:`~shipgym.guidance.batch.BatchedGuidance`), the task's
-observation and reward terms (:class:`~shipgym.envs.task.PlanTask`, the same compiled law as
-the single env's) and, when asked, the Kalman observer and the DP controller of the training
-stack. It is made by ``gymnasium.make_vec(id, num_envs=N)`` (the ``vector_entry_point`` mode,
-the default for these ids).
+Public names: ``AUTORESET_MODES``, ``ShipVectorEnv``, ``harbour_vector_env``,
+``station_keeping_vector_env``, ``tracking_vector_env``.
 
-Env ``i`` is the single env of the same id and arguments, reset with seed ``seed + i``
-(gymnasium's convention): the same draws (the task's plan, wind, current, sensor noise and
-start perturbation, then gusts and sensor streams, from the env's own generator in the single
-env's order), the same physics (the single env integrates open water with the same leapfrog
-step and the harbour with MuJoCo's), and with the same actions the same trajectory (a test
-checks each task and positioning vessel over whole episodes with autoresets).
-
-What differs from the single env:
-
-* ``info`` holds arrays (one row per env, gymnasium's vector convention with ``_key`` masks):
-  ``t``, ``eta``, ``nu``, ``nav_eta``, ``nav_nu``, ``leg``, ``legs_completed``, ``finished``,
-  ``command``, ``saturated``, ``action_clipped``, ``quay_contact``, the ``reward_*`` terms,
-  the step's last sensor sample ``z``, ``z_valid``, ``z_outlier`` (``z`` is NaN where none
-  was taken or in a dropout), and ``episode_summary`` (``return``, ``length`` in control
-  steps, ``duration_s``, ``legs_completed``, ``completed``) where an episode ended. There is
-  no ``record`` and no ``episode_metrics`` (the Tomera indices need every sample of the
-  episode; evaluate with the single env).
-* Autoreset: Gymnasium 1.x's ``NEXT_STEP`` mode by default (the step after an episode's end
-  resets that env and ignores its action); ``autoreset_mode="same-step"`` resets in the step
-  that ends the episode and puts the last observation and info under ``final_obs`` and
-  ``final_info`` (the mode stable-baselines3 expects: :mod:`shipgym.rl.vec`).
-* The time limit is the env's own (``max_episode_steps``: the registered one by default).
-* No rendering (the single env renders).
+Design notes: docs/design/envs.vector.md.
 """
 
 from __future__ import annotations

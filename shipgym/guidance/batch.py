@@ -1,18 +1,9 @@
 """The run-time guidance of N >= 1 envs: compiled reference and leg switching (Tomera 2014).
 
-Each env walks through its own :class:`~shipgym.guidance.plan.ManoeuvrePlan` (its own legs,
-``delay``/``step`` legs, switching rule and limits). Every run-time law is written once, per
-env row of ``(n, ...)`` arrays, and compiled: the reference of the current leg
-(:func:`~shipgym.guidance.reference.path_law`, Tomera (2014) Fig. 3, mapped to NED with
-Tomera (2014) eq. 2 and to the body frame, Fossen (2011) eq. 2.62) and the switching rule
-(distance and heading error to K, Tomera (2014); progress and ``settle_time``, ours; see
-:mod:`shipgym.guidance.runtime`). :class:`~shipgym.guidance.runtime.Guidance`, the single
-env's guidance, is this code at ``n = 1``.
+Public names: ``BatchedGuidance``, ``BatchedReference``.
+Sources: Tomera (2014); Fossen (2011).
 
-At :meth:`BatchedGuidance.reset` (Python, once per episode) every leg's profile parameters,
-planned poses P and K and progress threshold go into a table ``(n, max_legs, _R)``; the
-per-step :meth:`~BatchedGuidance.update` and :meth:`~BatchedGuidance.reference` are one
-compiled call each. Arrays handed out are never written afterwards.
+Design notes: docs/design/guidance.batch.md.
 """
 
 from __future__ import annotations

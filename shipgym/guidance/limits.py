@@ -1,18 +1,8 @@
 """Guidance limits of a vessel: its ``[limits]`` table, completed from its force capacity.
 
-A vessel file may give every :class:`~shipgym.guidance.reference.Limits` field (the Blue
-Lady's are chosen from its thruster capacity and a 3 m/s lake wind; Star Hercules' and Wimpey
-Sealab's from theirs). Fields it leaves out are derived here, so a user's package without a
-``[limits]`` table still gets a reference its thrusters can follow:
+Public names: ``vessel_limits``.
 
-- accelerations: one sixth of the capacity per DOF over the design inertia
-  (``a_i = C_i / (6 M_ii)``, ``C`` from :meth:`ActuatorSet.capacity`), the margin the
-  packaged vessels leave for wind and feedback (the Blue Lady's surge: (451 N / 6) / 23 665 kg
-  = 0.0032 m/s^2 against its chosen 0.0025);
-- speeds: the Blue Lady's (0.2 m/s surge, 0.1 m/s astern, 0.05 m/s sway, 1 deg/s yaw) scaled
-  with the length by Froude similarity (speeds with ``sqrt(L)``, the yaw rate with
-  ``1/sqrt(L)``), the length ratio taken to the Blue Lady's 13.78 m;
-- astern surge acceleration: 0.8 of the ahead one.
+Design notes: docs/design/guidance.limits.md.
 """
 
 from __future__ import annotations

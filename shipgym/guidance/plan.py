@@ -1,29 +1,8 @@
 """Manoeuvre plans: legs, switching rule and limits as data (Tomera 2014 Fig. 7).
 
-A plan is a sequence of :class:`Leg` s, each a displacement ``[surge, sway, yaw]`` expressed in
-the r-frame of the leg's start point P (origin at P, x along the ship's heading at P, y to
-starboard, yaw clockwise positive). The planned end point of a leg is
-``K_i = from_r_frame(displacement_i, P_i)`` and the next leg starts from it,
-``P_{i+1} = K_i``: legs chain on *planned* poses, so tracking errors never accumulate into the
-plan.
+Public names: ``Leg``, ``ManoeuvrePlan``, ``tomera2014_plan``, ``PLANS``, ``plan``.
 
-The paper's harbour manoeuvre (:func:`tomera2014_plan`, Tomera (2014) Fig. 7):
-
-1. lateral movement to port by 7 m (``sway = -7``);
-2. longitudinal movement forward by 38 m (``surge = 38``);
-3. rotation by 90 deg (``yaw = +pi/2``);
-4. longitudinal movement backward by 15 m (``surge = -15``);
-5. lateral movement to port by 3 m (``sway = -3``).
-
-The paper gives no sign for the rotation; it is taken clockwise (to starboard, ``+pi/2``):
-this is a choice, documented here and configurable (``Leg(yaw=-pi/2)`` turns to port). Started
-at the origin heading north, the planned poses are (0, 0, 0) -> (0, -7, 0) -> (38, -7, 0) ->
-(38, -7, 90 deg) -> (38, -22, 90 deg) -> (41, -22, 90 deg).
-
-The switching rule (Tomera 2014: "the change of the performed manoeuvre was done when the ship
-was at a distance of 1 m from the turning point and the course difference was smaller than
-5 degrees") is ``switch_distance`` and ``switch_heading``; :class:`~shipgym.guidance.Guidance`
-adds two guards, ``switch_min_progress`` and ``settle_time`` (see there).
+Design notes: docs/design/guidance.plan.md.
 """
 
 from __future__ import annotations

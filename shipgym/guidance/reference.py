@@ -1,39 +1,10 @@
 """Smooth reference trajectories of a manoeuvre leg (Tomera 2014 Fig. 3).
 
-The reference generator of Tomera (2014) (Fig. 3) gives the position ``eta_d^r(t)``, velocity
-``eta_dot_d^r(t)`` and acceleration ``eta_ddot_d^r(t)`` of a virtual ship moving from the
-leg's start point P to its end point K in the leg's r-frame. The paper does not print the
-generator; this module uses a smooth velocity profile (notes section 6, "trapezoidal velocity
-profile") with a raised-cosine acceleration so that the acceleration is continuous:
+Public names: ``BLUE_LADY_LIMITS``, ``Limits``, ``LegProfile``, ``leg_profile``, ``leg_reference``,
+``leg_duration``, ``path_law``.
+Sources: Tomera (2014); Al-Takie (1982).
 
-* The virtual ship moves along the straight r-frame line from P to K:
-  ``eta_d^r(t) = s(t) * Delta`` where ``Delta = [surge, sway, yaw]`` is the leg's
-  displacement and ``s`` a normalised path parameter from 0 to 1. All DOFs therefore start
-  and finish together (the DOFs that could go faster are scaled down), and a combined leg
-  follows a straight line in the r-frame.
-* ``s`` has three phases: acceleration for ``T_a`` with
-  ``s_ddot = A sin^2(pi t / T_a)`` (peak ``A``, zero at both ends), cruise at ``V`` for
-  ``T_c``, and the mirror-image deceleration. ``V = A T_a / 2``. When the distance is too
-  short to reach the speed limit the cruise vanishes (triangular profile) and
-  ``V = sqrt(A / 2)``.
-* ``V = min_i v_max,i / |Delta_i|`` and ``A = min_i a_max,i / |Delta_i|`` over the moving
-  DOFs, so ``|eta_dot_d,i| <= v_max,i`` and ``|eta_ddot_d,i| <= a_max,i`` for every DOF.
-  Duration (trapezoid): ``T = 1/V + 2 V/A``; (triangle): ``T = 2 sqrt(2/A)``.
-* Position, velocity and acceleration are the exact analytic integrals of each other: the
-  acceleration is continuous, the jerk is bounded (``pi A / T_a``) and continuous, and the
-  profile starts at rest at 0 and ends at rest exactly at ``Delta``.
-
-A leg may wait ``delay`` seconds at P before its profile starts, and a ``step`` leg has no
-profile at all: its reference jumps from P to K at ``delay`` (zero velocity and acceleration
-before and after; the step input of a DP test, Al-Takie 1982 ch. 5). Its duration is
-``delay``.
-
-The law is written once, compiled (:func:`path_law`): :class:`LegProfile` (design time:
-plots, durations) and the run-time guidance (:mod:`shipgym.guidance.batch`) both call it.
-
-The per-DOF limits :class:`Limits` apply to the r-frame coordinates (along and across the
-ship's heading at P, and the heading); for the single-DOF legs of the paper's manoeuvre they
-are body-frame limits.
+Design notes: docs/design/guidance.reference.md.
 """
 
 from __future__ import annotations

@@ -1,21 +1,8 @@
 """The reference frame r of a manoeuvre leg (Tomera 2014 eqs. 1-2, Fig. 2).
 
-The r-frame of a leg has its origin at the leg's start point P and its x axis along the
-ship's heading at P (y to starboard of that heading, heading measured clockwise from the
-x^r axis). It is the n-frame (NED) translated to P and rotated by ``psi_P``:
+Public names: ``to_r_frame``, ``r_frame_poses``, ``r_pose``, ``from_r_frame``.
 
-``p^r = R(psi_P)^T (p^n - p_P^n)``,  ``psi^r = psi^n - psi_P`` (differenced, hence wrapped).
-
-Tomera (2014) writes this as ``eta^r_k = (eta^n_k - eta^n_P) . R(psi^n_{k-1})`` (eq. 1) with the
-matrix of eq. 2, ``[[c, s, 0], [-s, c, 0], [0, 0, 1]]``, which is ``R(psi)^T``; read as a
-matrix times a column vector that is exactly the map above. The paper's angle argument
-``psi_{k-1}`` is read as the heading that defines the r-frame, i.e. the heading at P (the
-text: "the direction of the x^r axis changes ... shifted to the initial point P of the
-current trajectory segment"); a frame that rotated with the ship would make the r-frame
-coordinates body-frame errors instead.
-
-Both functions accept a leading batch axis on either argument; :func:`to_r_frame` is one
-compiled law for one pose or many.
+Design notes: docs/design/guidance.rframe.md.
 """
 
 from __future__ import annotations

@@ -5,22 +5,9 @@ reference starts at rest at the leg's planned start point P when the leg starts 
 or at the switch from the previous leg) and follows the smooth profile of
 :mod:`shipgym.guidance.reference` to the planned end point K.
 
-Switching rule (:meth:`Guidance.update`): leg i is complete, and the next leg starts at that
-instant, when all of these hold:
+Public names: ``Guidance``, ``Reference``.
 
-1. the ship is closer than ``switch_distance`` to K_i (NED distance, m) - Tomera (2014);
-2. ``|wrap(psi - psi_K)| < switch_heading`` - Tomera (2014) ("course difference < 5 deg");
-3. at least ``switch_min_progress`` of the leg's reference duration has elapsed (default 1:
-   the reference has reached K). Without it, a rotation leg would still be safe (the ship
-   starts at K's position but 90 deg off its heading), but any leg shorter than 1 m, or a
-   rotation below 5 deg, would switch immediately, and a long leg would switch while the
-   ship is still moving at speed 1 m before K, so that the next leg's reference would start
-   at rest while the ship is not;
-4. conditions 1-3 have held continuously for ``settle_time`` seconds (default 0).
-
-After the last leg completes, :attr:`Guidance.finished` is True and the reference stays at
-the last leg's end point. The laws are compiled once, over N envs
-(:mod:`shipgym.guidance.batch`); :class:`Guidance` runs them for one.
+Design notes: docs/design/guidance.runtime.md.
 """
 
 from __future__ import annotations

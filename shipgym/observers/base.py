@@ -1,26 +1,10 @@
 """The observer interface shared by every state observer, and its registry.
 
-An observer turns sampled measurements of the NED pose ``z = [x, y, psi]`` (DGPS position,
-gyrocompass heading; Tomera 2014 "Case of study") and, where its model needs it, the applied body
-thrust ``tau = [X, Y, N]`` into estimates of the pose ``eta = [x, y, psi]`` and of the body
-velocity ``nu = [u, v, r]`` (Tomera 2011 eq. 60: ``nu = R^T(psi) eta_dot``)::
+Public names: ``OBSERVERS``, ``Estimate``, ``Observer``, ``OutlierGate``, ``StepInfo``,
+``as_pose``, ``as_tau``, ``make_observer``, ...
+Sources: Tomera (2014); Tomera (2011).
 
-    obs = make_observer("kbf")
-    obs.reset(t0, z0)                      # z0: first measured pose
-    info = obs.step(t1, z1, tau)           # propagate to t1, then update with z1 (or None)
-    est = obs.estimate()                   # est.eta, est.nu, est.P_eta, est.P_nu, ...
-
-Conventions: SI units, NED earth frame (x north, y east, psi clockwise from north, rad), body
-frame x forward, y starboard. Heading innovations are wrapped to ``(-pi, pi]``, and the
-estimated heading is continuous (unwrapped), so a ship turning through north never makes an
-estimate jump. Measured headings may come in any branch (e.g. wrapped to ``(-pi, pi]``).
-
-Outlier gate (:class:`OutlierGate`): a measurement whose normalised innovation squared
-``NIS = nu^T S^-1 nu`` (3 dof) exceeds the chi-square quantile of ``gate_probability``
-(default 99.99 %: 21.11) is rejected and the observer coasts, but never more than
-``max_rejections`` times in a row: the next one is then accepted ("forced") and the gate stays
-open until a measurement passes it again, so that the filter follows a real jump of the
-position (e.g. a DGPS reference change) instead of rejecting it for ever.
+Design notes: docs/design/observers.base.md.
 """
 
 from __future__ import annotations

@@ -1,18 +1,8 @@
 r"""The double-integrator Kalman filters (DKF, KBF) written once, over ``N >= 1`` envs.
 
-:class:`BatchedKalman` is the one run-time form of :mod:`shipgym.observers.kalman` (Tomera
-(2011) eqs. 53-60; the model, first-order hold, Joseph update and outlier gate are described
-there), whose two filter classes are its ``N = 1`` adapters::
+Public names: ``BatchedKalman``, ``BatchedStepInfo``.
 
-    f = BatchedKalman("kbf", n, vessel=vessel)
-    f.reset(t0, eta0)                          # t0 (n,) or a number, eta0 (n, 3)
-    info = f.step(t, z, valid)                 # t (n,), z (n, 3), valid (n,) bool
-    f.eta, f.nu, f.P_eta, f.P_nu               # (n, 3), (n, 3), (n, 3, 3), (n, 3, 3)
-
-The state is one array ``(5, 3, n)``: per DOF (``x, y, psi``) and env the NED rate, the pose and
-``P_vv, P_vp, P_pp`` of ``[velocity, position]`` (cross-DOF covariances are zero). The step is
-one compiled loop over the envs (:func:`_kalman_step`), so env ``i`` is bit for bit the filter
-run alone; the matrices of ``R`` and ``dt`` (SciPy's ``expm``) are cached and shared.
+Design notes: docs/design/observers.batch.md.
 """
 
 from __future__ import annotations

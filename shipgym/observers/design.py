@@ -1,85 +1,13 @@
 r"""Steady-state Kalman gain design (python-control style) and the observers' design data.
 
-Pure functions with textbook names and fixed return tuples, built on
-:func:`scipy.linalg.solve_continuous_are` and :func:`scipy.linalg.solve_discrete_are`:
+``lqe`` (Tomera 2014 eqs. 33-34), ``dlqe`` (Tomera 2014 Table 3, eq. 30) and the per-DOF
+double-integrator ``KalmanDesign`` of Tomera (2011) eqs. 56-59.
 
-- ``L, P, E = lqe(A, G, C, Q, R)``: the continuous Kalman-Bucy gain (Tomera 2014 eqs. 33-34;
-  Tomera (2011) eqs. 39, 45), same meaning and return as python-control's ``lqe``;
-- ``L, P, E = dlqe(F, G, H, Q, R, form="predictor" | "filter")``: the discrete gain
-  (Tomera 2014 Table 3; Tomera 2011 eqs. 19, 23-24); ``"predictor"`` is python-control's ``dlqe``,
-  ``"filter"`` the measurement-update gain in which Tomera (2014) prints its gains (eq. 30);
-- :class:`KalmanDesign`: per-DOF design matrices ``(G, Q, R, T)`` of the double-integrator
-  model of Tomera (2011) eqs. 56-59, with the presets :data:`TOMERA_DKF`, :data:`TOMERA_KBF`
-  (they reproduce Tomera (2014) eqs. 30 and 35) and the tuned :data:`DKF_DESIGN`,
-  :data:`KBF_DESIGN`.
+Public names: ``DKF_DESIGN``, ``HEADING_VARIANCE_TOMERA2011``, ``KBF_DESIGN``, ``KalmanDesign``,
+``POSITION_VARIANCE_TOMERA2011``, ``TOMERA_DKF``, ``TOMERA_KBF``, ``discretise``, ...
+Sources: Tomera (2014); Tomera (2011).
 
-The per-DOF model (Tomera 2011 eqs. 56-59, in the paper's state order)
-----------------------------------------------------------------------
-Each DOF ``p`` in ``{x, y, psi}`` (NED) is a double integrator with state
-``s = [p_dot, p]`` (velocity first, Tomera (2011) eq. 59) driven by white noise::
-
-    s_dot = A s + G w,   A = [[0, 0], [1, 0]],   E{w w^T} = Q delta(t)     (Tomera 2011 eqs. 1, 27)
-    y     = C s + v,     C = [0, 1]                                       (Tomera 2011 eqs. 26, 58)
-
-Sampled with period ``T``, ``F = exp(A T) = I + A T`` (Tomera 2011 eq. 5, exact here since
-``A^2 = 0``) and either ``Q_k = G Q G^T T`` (``discretisation="euler"``, Tomera 2011 eq. 31) or
-the exact ``Q_k = int_0^T exp(A s) G Q G^T exp(A^T s) ds`` (``"exact"``, Van Loan). ``R`` of a
-:class:`KalmanDesign` is the variance of one sampled measurement (``R_k`` of Table 3); the
-continuous filter uses the equivalent intensity ``R_c = R T`` (Tomera 2011 eq. 35,
-``R_k = R / Delta t``). Gains are printed in the paper's order ``[velocity, position]``.
-
-Reproducing Tomera (2014) eqs. 30 and 35 from design matrices
--------------------------------------------------------------
-Tomera (2014) uses one gain for all three DOFs: ``L = [0.07945, 0.36868]`` (discrete, eq. 30) and
-``L = [0.1, 0.45826]`` (continuous, eq. 35). For the continuous double integrator with
-``G Q G^T = diag(q_v, q_p)`` and measurement intensity ``r`` the algebraic Riccati equation
-(Tomera 2014 eq. 34) has the closed form::
-
-    L = [sqrt(q_v / r), sqrt(2 sqrt(q_v / r) + q_p / r)]
-
-so ``L_v = 0.1`` gives ``q_v / r = 0.01`` and ``L_p^2 = 0.21 = 0.2 + q_p / r`` gives
-``q_p / r = 0.01``: the design is ``G Q G^T = 0.01 r I`` (white noise of equal intensity on the
-velocity *and* on the position; the ``+0.01`` is the "extra term" of the position noise). With
-``T = 1 s`` ("sampling time equal 1 (s)", Tomera (2014)), ``Q_k = G Q G^T T`` (eq. 31) and
-``R_k = R`` the same matrices give the discrete filter-form gain ``[0.0794553, 0.3686863]``:
-eq. 30 to a relative 7e-5 and 2e-5. The printed digits look truncated rather than rounded
-(0.0794553 -> 0.07945, 0.3686863 -> 0.36868, whereas eq. 35's 0.4582576 -> 0.45826 is
-rounded); fitting both gains of eq. 30 with a free ``diag(q_v, q_p)`` returns
-``q_v / R = 0.0099986``, ``q_p / R = 0.0100053``, i.e. 0.01 to 4 digits. So one set of
-matrices, in the spirit of Tomera (2011) eqs. 61-62 (``G``, ``Q``, ``R`` per DOF), reproduces both::
-
-    G = I_2,   Q = 0.01 R I_2,   R = (0.01 m^2, 0.01 m^2, R_psi),   T = 1 s
-
-with the measurement variances ``R_x = R_y = 0.01`` and ``R_psi = 0.1`` of Tomera (2011) (section 5;
-see :data:`HEADING_VARIANCE_TOMERA2011` for the unit of ``R_psi``). Only the ratio ``Q / R``
-matters for the gains; using the sensors' real variances for ``R`` keeps the covariance
-``P`` (and with it NIS gating) calibrated.
-
-What does *not* reproduce them: the design values printed in Tomera (2011) eqs. 61-62 themselves.
-``G_x Q_x G_x^T = diag(0.1, 2e-5)`` with ``R_x = 0.01`` gives ``L = [3.162, 2.515]`` and
-``G_psi Q_psi G_psi^T = diag(0.04, 1e-4)`` with ``R_psi = 0.1`` gives ``[0.632, 1.125]``;
-Tomera (2014) moreover uses one gain for all DOFs. The predictor-form gain (python-control's
-``dlqe``; MATLAB ``dlqr`` on the dual system, which Tomera (2014) says it used) of the design above
-is ``[0.07946, 0.44814]``, and no diagonal ``Q`` brings the predictor form closer to eq. 30
-than 9 % / 13 %. The exact discretisation of the same continuous design gives
-``[0.07953, 0.36755]`` (0.3 % off in the position gain); eq. 30 needs the first-order
-``Q_k = G Q G^T T`` of Tomera (2011) eq. 31. Tomera's (2014) gains are the filter (innovation) form,
-which is what MATLAB's ``dlqe`` returns (``M``), so "dlqr"/"lqr" in Tomera (2014) are read as
-``dlqe``/``lqe``.
-
-Conventions for :func:`dlqe`
-----------------------------
-Both forms solve the same discrete algebraic Riccati equation for the *predicted* (a priori)
-steady-state covariance ``P = P_bar`` (Tomera 2011 eq. 19 with eq. 24 inserted)::
-
-    P = F P F^T - F P H^T (H P H^T + R)^-1 H P F^T + G Q G^T
-
-``form="predictor"``: ``L = F P H^T (H P H^T + R)^-1`` for
-``x_bar[k+1] = F x_bar[k] + L (y[k] - H x_bar[k])`` (python-control ``dlqe``).
-``form="filter"``: ``L = P H^T (H P H^T + R)^-1`` for ``x_hat[k] = x_bar[k] + L (y[k] -
-H x_bar[k])`` (Tomera 2011 eqs. 14, 23; Tomera 2014 Table 3); the a posteriori covariance is then
-``(I - L H) P`` (Tomera 2011 eq. 25). ``E`` is the same in both forms:
-``eig(F - L_pred H) = eig(F (I - L_filt H)) = eig((I - L_filt H) F)``.
+Design notes: docs/design/observers.design.md.
 """
 
 from __future__ import annotations

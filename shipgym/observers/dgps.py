@@ -1,36 +1,9 @@
 r"""A DGPS receiver's position-velocity Kalman filter (Artyszuk 2003), and what it does to trials.
 
-The receiver estimates the ship's ground velocity from 1 Hz positions with a 4-state
-position-velocity (PV) filter, Artyszuk (2003) eqs. 2-5:
+Public names: ``DGPS_DT``, ``DGPS_SIGMA``, ``S_P_OPTIMAL``, ``DGPSOutput``, ``DGPSPVFilter``,
+``DGPSReceiver``, ``PVModel``, ``antenna_motion``, ...
 
-.. math::
-
-    x = [v_{NS}, v_{EW}, x, y],\quad
-    \Phi = \begin{bmatrix}1&0&0&0\\0&1&0&0\\\Delta t&0&1&0\\0&\Delta t&0&1\end{bmatrix},\quad
-    H = \begin{bmatrix}0&0&1&0\\0&0&0&1\end{bmatrix},
-
-``R = diag(sigma^2, sigma^2)`` (``sigma = 2`` m, printed ``R = diag(4, 4)``) and the random-walk
-velocity noise ``Q = S_p [[dt, 0, dt^2/2, 0], [0, dt, 0, dt^2/2], [dt^2/2, 0, dt^3/3, 0], [0,
-dt^2/2, 0, dt^3/3]]`` (eq. 4), ``dt = 1`` s. The gain converges in "< 30 cycles"; the receiver
-then runs the steady form (eq. 5) ``x_{k+1} = Phi x_k + K_inf (z_{k+1} - H Phi x_k)``.
-
-The velocity estimate behaves as a second-order low-pass of the true velocity: it lags a
-turn's direction by about ``r tau`` and a speed loss by ``tau |U_dot|`` (``tau`` 5.85 s for
-``S_p = 0.01``, :func:`pv_lag`), which is the bias of the drift angle and speed the seed
-finds in manoeuvring trials. Outputs (:func:`velocity_outputs`): the track speed ``v_xy``,
-the course ``chi = atan2(v_EW, v_NS)`` and, with the gyro heading ``psi``, the drift angle
-``beta_A = psi - chi`` (Artyszuk 2003 §2; positive when the bow points inside a starboard
-turn). The seed's recommendation, differentiating the raw positions, is
-:func:`raw_velocity`; its current correction (§1) is :func:`water_velocity`.
-
-:class:`DGPSReceiver` is the receiver of a simulated trial: antenna positions (with an offset
-from midship), noise, the filter started at the truth, and its outputs, in a batch
-(:meth:`DGPSReceiver.run`) and a streaming form (:meth:`DGPSReceiver.reset`,
-:meth:`DGPSReceiver.update`) for an environment sampling at 1 Hz; :func:`pv_filter_batch` runs
-the steady filter over many noise series at once (the Monte Carlo of
-:func:`shipgym.trials.bias.receiver_bias`).
-
-Pure NumPy/SciPy; the sensor noise of a simulation comes from its own seeded generator.
+Design notes: docs/design/observers.dgps.md.
 """
 
 from __future__ import annotations

@@ -1,80 +1,13 @@
 r"""Discrete extended Kalman filter on the 9-state DP model (Tomera 2014 eqs. 36-53, Table 5).
 
-Model
------
-State ``x = [eta, nu, b]`` (9): NED pose ``eta = [x, y, psi]`` (m, m, rad), body velocity
-``nu = [u, v, r]`` (m/s, m/s, rad/s) and a slowly varying bias force ``b = [b_X, b_Y, b_N]``
-(N, N, N m) that lumps everything the linear model misses (wind, current, drift forces,
-unmodelled hydrodynamics):
+Model ``eta_dot = R(psi) nu``, ``nu_dot = M^-1 (tau - D_L nu + b) + w``, ``b_dot = -T_b^-1 b
++ E_b w_b``, ``y = H x + v`` (Tomera 2014 eqs. 36-40).
 
-.. math::
+Public names: ``EKF_PRESETS``, ``EKFConfig``, ``ExtendedKalmanFilter``, ``default_ekf``,
+``ekf_config``, ``tomera_ekf``.
+Sources: Tomera (2014); Fossen (2011).
 
-    \dot\eta &= R(\psi)\,\nu, \\
-    \dot\nu &= M^{-1}\,(\tau - D_L\nu + b) + w_\nu, \\
-    \dot b &= -T_b^{-1} b + E_b w_b, \\
-    y &= H x + v, \qquad H = [I_3\; 0\; 0] \quad (\text{eq. 40}),
-
-with the vessel's design model ``M``, ``D_L`` (required in :class:`EKFConfig`; the Blue
-Lady's presets ``ekf`` and ``tomera-ekf`` hold those of Tomera (2014) eqs. 49-50,
-:func:`shipgym.dynamics.seed_linear_matrices`),
-``T_b = diag(1000, 1000, 1000)`` s (eq. 51), the applied thrust ``tau`` (N, N, N m) held
-between calls, ``w_b`` of intensity ``Q`` (eq. 52) and ``v`` of covariance ``R`` (eq. 53).
-
-Reading of eq. 38 and the bias frame
-------------------------------------
-The printed vector field (eq. 38) is garbled: its second row reads
-``-M^-1 D_L v(t) + M^-1 R^T(eta(t))`` -- a rotation matrix of the whole pose with nothing to
-rotate and no thrust -- and its third row ``-T_b^-1`` lacks the ``b`` it multiplies. The
-structure is that of Fossen's DP observer model (Fossen 2011 ch. 11),
-``M nu_dot = -D nu + R^T(psi) b + tau``, ``b_dot = -T_b^-1 b + w_b``, where the bias ``b`` is an
-*NED* force rotated into the body frame by ``R^T(psi)``; the lost symbols are
-``b`` (after ``R^T(psi)``, whose argument was misprinted as ``eta``), the thrust ``tau``
-(which a DP observer needs: the controller's thrust is known, and without it the slow bias
-would have to absorb every thrust change) and the ``b`` of the third row.
-
-This module uses the body-frame bias by default (``bias_frame="body"``):
-``nu_dot = M^-1 (tau - D_L nu + b)``. Both forms describe the same instantaneous force
-(``b_body = R^T(psi) b_ned``) but not the same filter, because the bias model
-``b_dot = -T_b^-1 b + w_b`` says which of the two is (nearly) constant: a body-frame bias is
-constant for loads that turn with the ship (model errors, thrust offsets, a trim error),
-whereas an NED bias is constant for loads that keep their direction in the earth frame
-(current, the mean of a wind from a fixed direction) and is then the better model when the
-ship turns a lot. A body-frame bias must re-converge (time scale set by ``Q``) when the heading
-changes; the NED form needs an extra Jacobian column in ``psi``. Fossen's NED form is
-available with ``bias_frame="ned"``; on a closed-loop manoeuvre with a 90 deg turn in a wind
-of fixed direction the two gave velocity errors within 10 % of each other.
-
-Discretisation (Table 5, eqs. 43-45)
-------------------------------------
-Forward Euler with the period ``T`` taken from the call times:
-``x_{k+1} = x_k + T f(x_k, tau_k)`` (eq. 43), ``F_k = I + T df/dx|x_k`` (eq. 44, analytic
-Jacobian :meth:`ExtendedKalmanFilter.jacobian`), ``G_k = T E`` (eq. 45). The paper's discrete
-``Q_k`` is read as the discrete equivalent ``Q / T`` of a continuous white-noise intensity
-``Q``, so ``G_k Q_k G_k^T = T E Q E^T``: identical to the paper at its ``T = 1`` s and
-independent of the call rate otherwise (units: ``Q`` in N^2/s, N^2/s, N^2 m^2/s). A call
-spanning more than ``max_substep`` (default 1 s, the paper's sampling time; e.g. after a
-dropout) is split into equal Euler sub-steps. The covariance update uses the Joseph form.
-Heading innovations are wrapped to ``(-pi, pi]``, so the heading state stays continuous
-(unwrapped) across north.
-
-Outliers (:class:`~shipgym.observers.base.OutlierGate`): a measurement whose normalised
-innovation squared (NIS, 3 dof) exceeds the chi-square quantile ``gate_probability`` (default
-99.99 %: 21.1) is rejected, at most ``max_rejections`` (default 5) times in a row; the next
-one is "forced" in after inflating the predicted pose covariance by the squared innovation
-(``P_eta += diag(innovation^2)``), so that the filter re-anchors on a real jump within one
-sample instead of creeping towards it.
-
-Interface: :class:`~shipgym.observers.base.Observer` (``reset``, ``step``, ``estimate``,
-``name``). ``Estimate.P`` is the 9x9 covariance of ``[eta, nu, b]``; ``Estimate.bias`` is ``b``
-(in the frame of ``bias_frame``). Importing this module registers ``ekf`` and ``tomera-ekf``
-with :func:`~shipgym.observers.base.register_observer`.
-
-Presets
--------
-- ``tomera-ekf`` (:func:`tomera_ekf`): the paper's design matrices, ``Q = diag(0.1, 0.1, 0.1)``
-  (eq. 52), ``R = diag(0.1, 0.1, 0.1)`` (eq. 53, read in m^2, m^2, rad^2), ``E_b = I``,
-  ``T_b`` of eq. 51, no velocity process noise.
-- ``ekf`` (:func:`default_ekf`): tuned; see :data:`EKF_PRESETS` and :func:`default_ekf`.
+Design notes: docs/design/observers.ekf.md.
 """
 
 from __future__ import annotations

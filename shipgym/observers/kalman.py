@@ -1,87 +1,12 @@
 r"""Discrete Kalman filter and Kalman-Bucy filter per DOF on a double integrator (Tomera 2011,
 2014).
 
-Model (Tomera 2011 eqs. 53-59)
-------------------------------
-Each NED DOF ``p`` in ``{x, y, psi}`` is an independent double integrator with state
-``[p_dot, p]`` (Tomera's order: velocity first), ``A = [[0, 0], [1, 0]]``, ``C = [0, 1]``, driven by
-white noise of intensity ``G Q G^T`` (:class:`~shipgym.observers.design.KalmanDesign`). The
-filters are kinematic: Tomera (2011) (section 6) "does not take into account the model of ship
-dynamics", so the thrust ``tau`` is accepted (and checked) but not used. The body velocity
-follows from the NED rates by Tomera (2011) eq. 60, ``nu = R^T(psi) eta_dot``, with its covariance
-``P_nu = J P J^T`` (``J`` the Jacobian of that map, including ``d nu / d psi = [v, -u, 0]``).
+Per DOF ``s = [p_dot, p]``, ``A = [[0, 0], [1, 0]]``, ``C = [0, 1]`` (Tomera 2011 eqs.
+53-59); DKF: Tomera (2014) Table 3; KBF: Tomera (2014) eqs. 33-35; ``nu = R^T(psi) eta_dot``.
 
-State and covariance layout: :attr:`x` and :attr:`Estimate.P <shipgym.observers.base.Estimate>`
-are ``[x, y, psi, x_dot, y_dot, psi_dot]`` (m, m, rad, m/s, m/s, rad/s); cross-DOF covariances
-are zero. The heading is unwrapped internally (continuous through north); heading innovations
-are wrapped to ``(-pi, pi]``.
+Public names: ``OBSERVERS``, ``DiscreteKalmanFilter``, ``KalmanBucyFilter``, ``make_observer``.
 
-Run time: the law is written once, over ``N`` envs, in
-:class:`~shipgym.observers.batch.BatchedKalman` (compiled); the two classes here are its
-``N = 1`` adapters with the :class:`~shipgym.observers.base.Observer` interface.
-
-Filters
--------
-:class:`DiscreteKalmanFilter` (Tomera 2014 Table 3; Tomera 2011 eqs. 14-24): ``F`` and ``Q_k`` are
-rebuilt for the actual interval between calls (``F = I + A dt``, Tomera (2011) eq. 5, exact here;
-``Q_k`` per the design's discretisation). Time-varying covariance (default) or, with
-``constant_gain=True``, the steady-state filter-form gain of
-:func:`~shipgym.observers.design.dlqe` at the design period ``T``, used whatever the interval
-(as Tomera (2014) did with eq. 30); the constant-gain filter still propagates its true error
-covariance (Joseph form with the fixed gain), so ``P``, NIS and the outlier gate stay honest.
-
-:class:`KalmanBucyFilter` (Tomera 2014 Table 4; Tomera 2011 eqs. 39, 45, 52) in a sampled-data
-implementation. The measurement between two samples is reconstructed by *first-order hold*:
-``y(t)`` is the straight line from the previous accepted sample ``y_{k-1}`` at ``t_{k-1}`` to
-the new one ``y_k`` at ``t_k``, and the filter ODEs are integrated *exactly* over the interval:
-
-- time-varying (default): the Riccati ODE ``P_dot = A P + P A^T + G Q G^T - P C^T R_c^-1 C P``
-  and ``x_hat_dot = A x_hat + P C^T R_c^-1 (y - C x_hat)`` are solved together in closed form
-  through the Hamiltonian ``H = [[-A^T, C^T R_c^-1 C], [G Q G^T, A]]``: with
-  ``[X; Y](s) = exp(H s) [I; P0]``, ``P(s) = Y X^-1`` and, because ``d/ds X^-T = (A - P C^T
-  R_c^-1 C) X^-T`` and ``X^T P = Y^T``, ``x_hat(dt) = X(dt)^-T (x_hat0 + int_0^dt Y(s)^T C^T
-  R_c^-1 y(s) ds)``. The integrals come from one matrix exponential per DOF and ``dt``
-  (cached), so the step is exact for any stiffness and as cheap as a discrete filter;
-- steady state (``steady_state=True``, Tomera (2014) eqs. 33-35): ``L`` of
-  :func:`~shipgym.observers.design.lqe`, ``x_hat_dot = (A - L C) x_hat + L y`` solved exactly;
-  ``P`` follows the closed-loop Lyapunov equation (so it stays ``P_inf`` while measuring and
-  grows during dropouts).
-
-Why first-order hold: a ship at constant speed ``V`` produces a ramp; holding ``y_k`` (or
-``y_{k-1}``) over the interval biases the position estimate by about ``V dt / 2`` (0.1 m at
-0.2 m/s, as large as the DGPS noise), whereas the continuous filter, a type-2 loop, tracks the
-ramp of the first-order hold without error. The measurement intensity is ``R_c = R T`` (Tomera 2011
-eq. 35), ``R`` the sample variance. Without a previous accepted sample (after a reset, a
-dropout or a rejection) and after a forced acceptance (see below; a jump has no ramp) the new
-sample is held over the whole interval instead, the averaged-measurement reading of Tomera (2011)
-eq. 32 (starting the line from the filter's own estimate would feed the filter its own
-output as if it were a measurement and make ``P`` optimistic). ``P`` is the
-continuous filter's covariance: for the sampled data at ``T = 1 s`` and the designs here
-(bandwidths 0.32-0.43 rad/s) it is 5-8 % conservative (mean NEES 0.92-0.95 of its 6 dof,
-NIS 0.94-0.96 of 3); it is exact as ``T -> 0``. Compared with the discrete filter of the same
-design the continuous filter lags a little more (about 10 % more velocity error under a
-constant acceleration): the last sample enters only through the end of the hold. A measurement at
-the same time as the previous call (``dt = 0``) only becomes the next hold's start.
-
-Without a measurement (``z=None``) or for a rejected one, every filter coasts: ``x = F x``,
-``P = F P F^T + Q_k`` (the continuous filter with the exact ``Q_k``).
-
-Outliers: :class:`~shipgym.observers.base.OutlierGate` (99.99 %, at most 5 rejections in a
-row). A forced acceptance also inflates the position variances of the prior by the squared
-innovation, so the time-varying filters re-anchor on a real jump within one sample; the
-constant-gain filters re-converge at their bandwidth.
-
-Presets (:data:`~shipgym.observers.base.OBSERVERS`)
----------------------------------------------------
-- ``tomera-dkf``: :data:`~shipgym.observers.design.TOMERA_DKF`, constant gain (eq. 30);
-- ``tomera-kbf``: :data:`~shipgym.observers.design.TOMERA_KBF`, steady state (eqs. 33-35);
-- ``dkf``: :data:`~shipgym.observers.design.DKF_DESIGN`, time-varying covariance;
-- ``kbf``: :data:`~shipgym.observers.design.KBF_DESIGN`, time-varying Riccati.
-
-Overrides: any :class:`~shipgym.observers.design.KalmanDesign` field (``G``, ``Q``, ``R``,
-``T``, ``discretisation``), ``position_variance`` / ``heading_variance`` (set ``R``),
-and the constructor's keywords (``gate_probability``, ``max_rejections``,
-``initial_velocity_std``, ``constant_gain`` / ``steady_state``); the name is the preset's.
+Design notes: docs/design/observers.kalman.md.
 """
 
 from __future__ import annotations

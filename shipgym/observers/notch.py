@@ -1,80 +1,17 @@
 r"""Notch-filter wave filtering of the measured pose (Al-Takie 1982 section 1.2, eq. 1.1).
 
+Section (Al-Takie 1982 eq. 1.1): ``H(s) = (s^2 + (b d / k) s + w0^2) / (s^2 + (b / k) s
++ w0^2)``, ``k = sqrt(1 - 2 d^2)``; three sections on the wave band.
+
 The classical DP wave filter that the thesis compares its Kalman filters with: the measured pose
 ``[x, y, psi]`` passes through a cascade of notch filters centred on the first-order wave band,
 so that the controller sees the low-frequency (LF) motion only.
 
-Section (Al-Takie 1982 eq. 1.1)
--------------------------------
-``H(s) = (s^2 + (b d / k) s + w0^2) / (s^2 + (b / k) s + w0^2)``, ``k = sqrt(1 - 2 d^2)``, with
-``w0`` the centre (rad/s), ``b`` the 3-dB bandwidth (rad/s) and ``d`` the gain at the centre,
-``0 < d < 1/sqrt(2)``. What eq. 1.1 gives exactly (derived here, tested):
+Public names: ``NotchCascade``, ``NotchDesign``, ``NotchObserver``,
+``MEASUREMENT_VARIANCE_ALTAKIE``, ``notch_section``.
+Sources: Al-Takie (1982); Fossen (2011).
 
-- ``H(0) = H(j inf) = 1`` and ``H(j w0) = d`` (real, no phase at the centre);
-- ``|H(j w)|^2 = 1/2`` where ``(w0^2 - w^2)^2 + d^2 Y^2 = ((w0^2 - w^2)^2 + Y^2) / 2`` with
-  ``Y = b w / k``, i.e. ``|w0^2 - w^2| = b w``: at ``w_pm = sqrt(w0^2 + b^2/4) pm b/2``. The
-  two 3-dB edges are exactly ``b`` apart and geometrically symmetric (``w_+ w_- = w0^2``); they
-  are ``w0 pm b/2`` only to first order in ``b / w0`` (for ``b = 0.3 w0`` they sit 1.1 % of
-  ``w0`` above those points). The factor ``1/k`` is what makes ``b`` the exact 3-dB width;
-- the low-frequency group delay is ``b (1 - d) / (k w0^2)`` (s) per section (the ``s`` term of
-  ``H`` at ``s -> 0``), so a ramp of slope ``V`` is followed with a lag ``V sum_i b_i (1 - d) /
-  (k w0_i^2)``.
-
-Design (:class:`NotchDesign`, all at full scale)
-------------------------------------------------
-Three sections [printed: "three cascaded sections", centres in 0.06-0.12 Hz for Beaufort 9-5,
-Al-Takie (1982) 1.2]; centres 0.069, 0.083 and 0.128 Hz [chosen: the lightly damped HF poles of
-the thesis's Beaufort 9, 8 and 5 wave models, Al-Takie (1982) App. 2], ``b = 0.3 w0``
-[chosen], ``d = 0.1`` [chosen]. Note that the cascade leaves a gap between the 0.083 and
-0.128 Hz notches: the Beaufort 6 and 7 peaks (0.100 and 0.088 Hz) are attenuated only to
-0.62 and 0.30 (-4 and -11 dB), while the cascade's gain at each centre is 0.074-0.092
-(-21 to -23 dB).
-
-Discretisation (:class:`NotchCascade`)
---------------------------------------
-Each section is discretised with the bilinear transform prewarped at its own centre,
-``s = (w0 / tan(w0 dt / 2)) (z - 1) / (z + 1)``, so that the discrete notch is exactly at
-``w0`` with exactly the gain ``d``; ``s = 0`` maps to ``z = 1`` (DC gain exactly 1). The sections
-run as second-order sections in transposed direct form II (the state convention of
-``scipy.signal.sosfilt``), vectorised over channels. A centre must be below the Nyquist
-frequency ``1 / (2 dt)``.
-
-Observer (:class:`NotchObserver`, preset ``notch``)
----------------------------------------------------
-- pose: the measured pose (heading unwrapped next to the prediction, so the estimate is
-  continuous through north) filtered by the cascade;
-- velocity: the derivative of the filtered pose by a first-order filtered difference,
-  ``eta_dot_k = a eta_dot_{k-1} + (1 - a) (eta_k - eta_{k-1}) / dt``, ``a = exp(-dt / T_v)``
-  (``T_v`` = 3 s at full scale [chosen]: it attenuates the residual wave motion at 0.1 Hz
-  about twofold more and the differentiated position noise, while its lag stays small next
-  to the DP closed-loop time scales of about 50-100 s), rotated into the body frame
-  ``nu = R^T(psi) eta_dot`` (Fossen 2011 eq. 2.40);
-- dropouts (``z`` is ``None``): the estimate is predicted with the held velocity,
-  ``eta += eta_dot dt``, and the cascade keeps running on the predicted measurement,
-  ``eta + eta_dot tau_g`` (``tau_g`` its DC group delay, the lag of a ramp), so that on a
-  steady ramp the return of the measurements does not step its state;
-- sampling interval: the discretisation needs a fixed ``dt``; it is the first interval between
-  :meth:`~NotchObserver.reset` / :meth:`~NotchObserver.step` calls (or the constructor's
-  ``dt``), and a later interval that differs by more than 1e-6 relative raises ``ValueError``;
-- covariance: the filter has no statistical model; :attr:`Estimate.P
-  <shipgym.observers.base.Estimate>` (layout ``[x, y, psi, x_dot, y_dot, psi_dot]``) is the
-  stationary covariance of the estimate's error caused by white measurement noise of
-  variance ``measurement_variance`` alone, the variance pushed through the linear chain
-  (cascade, filtered difference): ``R sum_k h_k^2`` for the pose (``0.935 R`` for the
-  default design at ``dt`` = 0.31 s: the DC gain is 1 and the notches remove a little of the
-  white noise), and likewise for the rates and the pose-rate covariance. It leaves out the
-  ramp lag and the residual wave motion, so it is a lower bound, not a consistent filter
-  covariance. Before the
-  first interval is known the pose block is ``R`` (the estimate is one measurement) and
-  the rate block is ``inf`` (unknown), with ``P_nu = None``;
-- :class:`~shipgym.observers.base.StepInfo`: the innovation is ``z`` minus the one-step
-  prediction ``eta + eta_dot dt`` (heading wrapped), including the wave motion; there is no
-  NIS (``None``: the residual is not a white Gaussian innovation) and no outlier gate.
-
-For a model-scale vessel the preset's adapter Froude-scales the design (frequencies times
-``sqrt(scale)``, times divided by it): ``f_model = f_full sqrt(vessel.scale)`` (1:24 Blue Lady:
-0.338, 0.407 and 0.627 Hz, the last above the 0.5 Hz Nyquist frequency of its 1 s sensors,
-so it needs ``dt < 0.797 s`` or other ``centres_hz``).
+Design notes: docs/design/observers.notch.md.
 """
 
 from __future__ import annotations

@@ -1,93 +1,15 @@
 r"""Position and heading sensors: DGPS + gyrocompass (Tomera 2011, 2014; Artyszuk 2003).
 
-The navigation sensors of the Blue Lady trials (Tomera 2014, "Case of study"): the position
-``(x, y)`` is measured by a DGPS receiver, the heading ``psi`` by a gyrocompass, both sampled
-"with sampling time equal 1 (s)" (Tomera 2014, text before Table 6). The measurement is
+``z_k = [p_k + R_2(psi_k) [x_a, y_a]^T, psi_k] + v_k``; noise Tomera (2011) eqs. 61-62
+(``R_psi`` read as 0.1 deg^2), DGPS bias and heading bias models.
 
-.. math::
+Public names: ``AL_TAKIE1982_HEADING_SIGMA``, ``AL_TAKIE1982_POSITION_SIGMA``,
+``LAKE_HEADING_BIAS_STD``, ``LAKE_SILM_LATITUDE_DEG``, ``TOMERA2011_HEADING_VARIANCE``,
+``SENSOR_PRESETS``, ``Measurement``, ``SensorConfig``, ...
+Sources: Tomera (2011); Artyszuk (2003); Tomera (2014); Farrell & Barth (1999); Groves (2013);
+Bierman (1995).
 
-    z_k = \begin{bmatrix} p_k + R_2(\psi_k)\,[x_a, y_a]^T \\ \psi_k \end{bmatrix} + v_k,
-    \qquad v_k \sim N(0, \mathrm{diag}(\sigma_p^2, \sigma_p^2, \sigma_\psi^2)),
-
-where ``p = [x, y]`` is the NED position of the centre of gravity, ``R_2(psi)`` the planar
-rotation (body -> NED) and ``[x_a, y_a]`` the antenna position in the body frame (x forward,
-y starboard). The heading is returned wrapped to ``(-pi, pi]`` as a gyrocompass gives it
-(observers must unwrap, i.e. wrap their heading innovations).
-
-Noise defaults
---------------
-- Position: Tomera (2011) eq. 61, ``R_x = R_y = 0.01`` (m^2, sigma 0.1 m), "determined based on the
-  experimental tests done on the training ship Blue Lady" (Tomera 2011, text after eq. 62).
-- Heading: Tomera (2011) eq. 62, ``R_psi = 0.1`` -- printed without a unit. Read in rad^2 it would
-  be a gyrocompass sigma of 18 deg, which no gyrocompass has (typical 0.1-0.3 deg) and which
-  would swamp every heading plot of the paper. Tomera states and plots headings in degrees
-  (Tomera 2014 Table 6, eq. 57: ``psi_E`` in deg), so the project reads it as ``0.1 deg^2``
-  (sigma 0.316 deg):
-  :data:`TOMERA2011_HEADING_VARIANCE` ``= 0.1 (pi/180)^2 = 3.046e-5 rad^2``. Pass
-  ``heading_variance=0.1`` for the literal rad^2 reading.
-- ``dgps`` preset: sigma 2 m per axis, the plain DGPS of Artyszuk (2003) ("standard deviation
-  (equal in north and east directions) of order 2 [m]").
-- ``rtk`` preset: sigma 0.02 m, heading sigma 0.2 deg (typical RTK and gyrocompass
-  figures, an assumption).
-- ``tomera2014-lake`` preset: the lake trial's sensors as a real DGPS and gyrocompass give
-  them: the total position variance of Tomera (2011) (0.01 m^2 per axis), 80 % of it a
-  Gauss-Markov error of correlation time 60 s and 20 % white, and a gyrocompass bias constant
-  over the episode, drawn with std ``0.25 deg sec(lat)`` at Lake Silm's latitude 53.6 deg N
-  (0.42 deg: the IMO A.424(XI) (1979) settle-point repeatability between run-ups), on top of
-  the white heading noise of Tomera (2011). Choices: 60 s is within the 10-100 s over which
-  DGPS errors correlate (Farrell & Barth 1999; Groves 2013), the slow part (Bierman 1995 fits
-  a first-order Markov DGPS error with a 3 847 s constant) acting as a bias over one manoeuvre;
-  the 80/20 split is an assumption (receiver noise of a carrier-smoothed code receiver is a
-  few centimetres).
-- ``al-takie1982`` preset: position-reference sigma 1/3 m per axis and gyro sigma 0.02 rad,
-  Al-Takie (1982) 2.4.2 (printed, ``R = diag(1e-5, 4e-4)`` p.u.^2 for Wimpey Sealab); no
-  faults. The thesis samples every 0.1 per-unit time (App. 3); the DP tasks
-  (:mod:`shipgym.envs.offshore`) set ``period`` to their control period.
-
-Time-correlated errors (all off by default: white noise as above)
-------------------------------------------------------------------
-A DGPS position error is not white: the residual errors of the differential corrections
-(satellite orbit and clock, ionosphere and troposphere after the correction, multipath) change
-over tens of seconds to minutes, only the receiver noise is white (Farrell & Barth 1999;
-Groves 2013). With ``position_correlated_fraction = f > 0`` each NED axis carries a
-first-order Gauss-Markov error ``b`` on the sample grid, discretised exactly,
-
-.. math::
-
-    b_{k+1} = a\,b_k + \sqrt{f \sigma_p^2 (1 - a^2)}\, w_k, \qquad
-    a = e^{-T/\tau_p}, \quad w_k \sim N(0, 1),
-
-started from its stationary law ``N(0, f sigma_p^2)``, plus the white part of variance
-``(1 - f) sigma_p^2``: the total per-axis variance stays ``position_variance`` (Tomera 2011's
-``R_x = R_y = 0.01 m^2`` in the lake preset), and the autocorrelation at lag ``k`` samples is
-``f a^k`` (``k >= 1``). ``tau_p`` is ``position_correlation_time``.
-
-A gyrocompass has a settle-point error besides its noise: the latitude/speed error left after
-the correction and the settle-point error of the sensitive element, a few tenths of a degree
-that change slowly (IMO A.424(XI) (1979): settle-point error within ``+-0.75 deg sec(lat)``,
-its repeatability from one run-up to another within ``0.25 deg sec(lat)``).
-``heading_bias_std = s_b > 0`` adds a bias drawn per episode from ``N(0, s_b^2)``; it is
-constant over the episode when ``heading_bias_correlation_time`` is 0, otherwise a
-Gauss-Markov process of that correlation time (the same exact recursion). The white heading
-noise stays ``heading_variance``.
-
-:attr:`SensorConfig.covariance` is the white-noise design covariance (the observers' ``R``);
-the correlated parts are what a real sensor adds and a white-noise observer does not model.
-The correlated errors draw from a fourth child stream (three numbers per sample: x, y, heading,
-always all three, plus three at reset), so the white noise, outliers and dropouts of a
-configuration are the same with or without them; the errors evolve through dropouts.
-
-Faults (all off by default): an *outlier* adds a position error of exactly
-``outlier_magnitude`` metres in a uniformly random NED direction (heading untouched), with
-probability ``outlier_probability`` per sample; a *dropout* starts with probability
-``dropout_probability`` at a sample and removes every sample in ``[t_start, t_start +
-dropout_duration)``. Gaussian noise, outliers and dropouts draw from three independent child
-streams of the generator given to :meth:`Sensors.reset`, and every stream draws the same numbers
-at every sample whether or not a fault happens, so switching one fault on never changes the
-noise of the other samples (common random numbers across experiments).
-
-Run time: the measurement law is written once, over ``N`` envs (:class:`BatchedSensors`,
-compiled); :class:`Sensors` is its ``N = 1`` adapter and draws what it drew before.
+Design notes: docs/design/observers.sensors.md.
 """
 
 from __future__ import annotations

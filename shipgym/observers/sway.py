@@ -1,48 +1,14 @@
 r"""Sway-velocity estimation for rudder roll stabilisation: the KF of Radhakrishnan (n.d.) and an
 EKF.
 
-The sway velocity ``v`` of the Van der Klugt (1987) model
-(:mod:`~shipgym.dynamics.vanderklugt`) is not measured; the yaw rate, heading, roll rate and
-roll angle are (rate gyros and gyros): ``y = [r, psi, p, phi]`` (rad/s, rad, rad/s, rad).
+KF of Radhakrishnan (n.d.) eqs. 1-4 on the zero-order-hold model (``A_d = exp(A dt)``),
+``y = [r, psi, p, phi]``.
 
-:class:`SwayVelocityKF` is the discrete Kalman filter of Radhakrishnan (n.d.) eqs. 1-4 on the
-zero-order-hold discretisation of the model (``A_d = exp(A dt)``, ``B_d = int_0^dt exp(A s) ds
-B`` from one matrix exponential of the augmented matrix ``[[A, B], [0, 0]]``)::
+Public names: ``DT``, ``P0_SWAY``, ``Q_V``, ``R_SWAY``, ``SwayKFResult``, ``SwayVelocityEKF``,
+``SwayVelocityKF``, ``process_noise``, ...
+Sources: Radhakrishnan (n.d.); Van der Klugt (1987); Van Loan (1978).
 
-    x^-  = A_d x + B_d delta                      (eq. 3, with the rudder held over the step)
-    P^-  = A_d P A_d^T + Q_W
-    S    = [C P^- C^T + R_v]^-1,   G(k) = P^- C^T S
-    x    = x^- + G(k) (y - C x^-)                 (eq. 4; L = y - C x^- the innovation)
-    P    = [I - G(k) C] P^-
-
-The paper prints the covariance update as ``P(k, k) = [I - G(k) C(k) P(k, k-1)]``: the
-closing bracket is misplaced (that expression is not even a covariance); it is read as
-``[I - G C] P^-`` above. The paper prints neither ``Q_W``, ``R_v``, the sample time nor the
-noise input; the design here is [chosen] (notes on seed 003):
-
-- ``dt = 0.1`` s (:data:`DT`);
-- ``Q_W = (G dt) diag(q) / dt (G dt)^T + 1e-8 e_v e_v^T`` (:func:`process_noise`), the wave
-  disturbance ``w = [w_phi, w_psi]`` of intensity ``q = (q_phi, q_psi)`` through the model's
-  ``G`` (the first-order approximation of the exact sampled covariance of Van Loan (1978)), plus a
-  little noise on ``v`` (:data:`Q_V`) so the filter never stops listening for the sway;
-- ``R_v = diag((0.05 deg/s)^2, (0.1 deg)^2, (0.05 deg/s)^2, (0.1 deg)^2)`` in rad
-  (:data:`R_SWAY`): a rate gyro and a vertical/heading gyro;
-- ``P0 = diag((0.01 m/s)^2, (0.1 deg/s)^2, (1 deg)^2, (0.1 deg/s)^2, (1 deg)^2)``
-  (:data:`P0_SWAY`), ``x0 = 0``.
-
-The heading innovation is wrapped to ``(-pi, pi]`` (a gyrocompass reading); for the seed's
-small heading oscillations this changes nothing.
-
-:class:`SwayVelocityEKF` runs the same measurements on a nonlinear continuous model
-``x_dot = f(x, delta)`` in the seed's state order (e.g. the linearisable 4-DOF naval vessel):
-the prediction is RK4 over ``dt`` (``substeps`` steps, the rudder held), the transition
-Jacobian the central finite difference of that RK4 map. On a linear ``f`` it is the KF (to
-about 1e-9: RK4 with 4 substeps matches ``exp(A dt)`` to ~1e-11 per step).
-
-:func:`simulate_sway_kf` reproduces the seed's experiment: the true reconstructed plant sampled
-exactly (ZOH, the wave noise with its exact sampled covariance), the 10 deg / 0.43 rad/s
-sinusoidal rudder, measurement noise with ``R_v``, the KF in the loop (open loop: the rudder is
-the test input).
+Design notes: docs/design/observers.sway.md.
 """
 
 from __future__ import annotations

@@ -1,40 +1,17 @@
 r"""Wave-filtering Kalman filters of Al-Takie (1982): 14-state, reduced, semi-constant, EKF.
 
+Discrete KF ``x- = Phi x + Delta u``, ``K = P- H^T (H P- H^T + R)^-1``, Joseph update
+(Al-Takie 1982 eqs. 5.4-5.12, App. 3).
+
 The filters separate the slow (LF) ship motion from the first-order wave (HF) motion in the
 position and heading measurements, on the combined model of
 :func:`~shipgym.dynamics.altakie.wave_filter_model` (per unit, ``x = [v, y, r, psi, f_Y, f_N,
 HF sway(4), HF yaw(4)]``, ``z = [x2 + x9, x4 + x13] + v``).
 
-Core filters (per unit, NumPy arrays; Al-Takie 1982 eqs. 5.4-5.12, App. 3)
--------------------------------------------------------------------------
-- :class:`DiscreteKF`: ``Phi = e^{A dt}``, ``Delta = int Phi B``, ``Gamma = int Phi G``,
-  ``Q_D = Q / dt``; predict ``x- = Phi x + Delta u``, ``P- = Phi P Phi^T + Gamma Q_D Gamma^T``;
-  gain ``K = P- H^T (H P- H^T + R)^-1``; update ``x = x- + K (z - H x-)`` with the Joseph form
-  ``P = (I - K H) P- (I - K H)^T + K R K^T``; ``P(0|0) = 0`` [printed]. Time-varying; with
-  ``freeze_after`` steps it becomes the **semi-constant-gain** filter of 6.3 (gain computed on
-  line, frozen from then on: no more covariance propagation).
-- :class:`ReducedKF`: the 12-state filter of 6.2: the thruster states ``x5, x6`` are
-  measured without noise, so the filter keeps the 4 LF + 8 HF states and takes the thruster
-  states at both ends of each interval as inputs (the lag between them fixes the demand); with
-  exact thruster states it reproduces the 14-state filter's LF estimates (the thrusters carry no
-  noise, so their covariance rows stay zero in the 14-state filter).
-- :class:`WaveFilterEKF`: ch. 7: the thruster outputs pass through the saturation
-  ``psi(x) = F1 sign(x)(1 - e^{-F2 |x|})`` before they act on the hull; the state is predicted
-  through the nonlinear model (RK4) and ``Phi`` re-linearised at the estimate every
-  ``relinearise_every`` steps (2 printed; 5 "no loss of accuracy").
+Public names: ``BIAS_Q``, ``NOISE_DESIGNS``, ``DiscreteKF``, ``ReducedKF``, ``WaveFilterEKF``,
+``WaveFilterObserver``, ``gain_settling_steps``, ``hf_gain_for_std``.
 
-The sampling interval is ``dt = 0.1`` per-unit time [printed, App. 3; the unit reconstructed:
-0.31 s Wimpey Sealab, 0.27 s Star Hercules].
-
-Observers for the simulated vessels (SI, NED; :class:`WaveFilterObserver`)
---------------------------------------------------------------------------
-The presets ``alt-kf14``, ``alt-kf12``, ``alt-semiconstant`` and ``alt-ekf`` (and
-``alt-lf6``: the LF model alone, no wave model, the "no wave filtering" reference) wrap a core
-filter for a vessel: the LF model from the vessel's design (:func:`lf_model_from_vessel`), per
-unit on its own ``m``, ``L_pp``; surge, decoupled in the thesis, gets its own filter of the
-same structure (``[u, x, f_X]`` + 4 HF states). Positions are taken in the frame of the heading
-at :meth:`~WaveFilterObserver.reset` (the DP set-point heading: the linear model is valid
-for small heading changes, as in the thesis).
+Design notes: docs/design/observers.wavefilter.md.
 """
 
 from __future__ import annotations

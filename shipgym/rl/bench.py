@@ -1,22 +1,10 @@
 """``shipgym bench controllers``: classical and learned controllers on the same runs.
 
-Two tasks (:data:`TASKS`), every controller on the same seeds, wind and observer; the runs go
-to worker processes in parallel (with a progress bar) and come back as one row per controller
-and seed (:func:`bench_controllers`):
+Public names: ``DEFAULT_CONTROLLERS``, ``STATION_DURATION_S``, ``STATION_RADIUS``, ``TASKS``,
+``StationTrack``, ``bench_controllers``, ``bench_title``, ``controller_labels``, ...
+Sources: Tomera (2014); Al-Takie (1982).
 
-- ``harbour``: the 5-leg harbour manoeuvre of Tomera (2014) (the Blue Lady by default),
-  summarised by :func:`controller_table`: completion, quay contact, J_c (truth and measured,
-  and relative to the PID), time, thruster usage;
-- ``station-keeping``: ``shipgym/StationKeeping-v0`` for :data:`STATION_DURATION_S` = 1000 s
-  from a start up to 2 m and 5 deg off the set point, in the vessel's nominal gusty wind
-  (Star Hercules: 10 m/s from 300 deg) by default, summarised by :func:`station_table`: the
-  fraction of the time within :data:`STATION_RADIUS` = 2 m of the set point (the watch circle
-  documented for the generic PID; Al-Takie (1982) 2.3 asks for 3 % of the water depth or
-  7 m), the 95th percentile of the distance, the heading error RMS and the mean |thrust| per
-  actuator.
-
-By default the controllers are ``pid``, ``lq`` and every shipped learned baseline of the task
-and vessel whose file is present (:func:`default_controllers`).
+Design notes: docs/design/rl.bench.md.
 """
 
 from __future__ import annotations

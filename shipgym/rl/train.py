@@ -1,41 +1,9 @@
 """Training of learned controllers: ``shipgym train ppo|sac`` (rl-baselines3-zoo style).
 
-The default training task is ``shipgym/BlueLadyTracking-v0`` (randomised leg plans and wind,
-open water; ``env_id=`` / ``--env`` any block of the hyperparameter file, e.g.
-``shipgym/StationKeeping-v0``) seen through an observer (the Kalman-Bucy filter by default),
-so the policy gets what a real DP controller would get. With ``residual=True`` the
-policy's action is added to the normalised command of a classical controller (the tuned PID)
-through :class:`~shipgym.controllers.wrappers.DPControllerWrapper`: the policy starts as
-the PID and learns corrections.
+Public names: ``DEFAULT_ENV_ID``, ``EVALUATIONS``, ``EVAL_ENV_ID``, ``Evaluation``, ``SECTION``,
+``STATION_RADIUS``, ``TrainResult``, ``evaluation_for``, ...
 
-Hyperparameters live in plain YAML files shipped with the package
-(``shipgym/rl/hyperparams/{ppo,sac}.yml``, read as plain data with PyYAML's safe loader,
-libyaml's when present, at most 1 MiB; nothing is evaluated) and are checked against
-limits before anything is allocated (:func:`check_hyperparams`). The files are rl-zoo3's
-(``python -m rl_zoo3.train --algo ppo --env shipgym/BlueLadyTracking-v0 --gym-packages
-shipgym --conf-file shipgym/rl/hyperparams/ppo.yml`` runs them as they are): each env-id
-block holds only keys the zoo accepts, the observer is the block's ``env_wrapper``
-(:func:`parse_env_wrapper`), shipgym's own options are in the top-level ``shipgym``
-section (:data:`SECTION_KEYS`). A run writes into its output folder:
-
-- ``model.zip``: the final model, a shipgym model (SB3 zip + ``shipgym.json`` metadata with
-  the ``VecNormalize`` statistics; :mod:`shipgym.controllers.learned`);
-- ``best_model.zip``: the model with the best periodic evaluation (:data:`EVALUATIONS`: the
-  harbour manoeuvre for the tracking task, station keeping for a station-keeping task);
-- ``checkpoints/{algo}_{steps}_steps.zip``: periodic checkpoints (``resume=`` continues one,
-  without unpickling anything: the algorithm is rebuilt from the hyperparameters in its
-  metadata and the weights and optimizer states are read with
-  ``torch.load(weights_only=True)``, :func:`restore_model_state`);
-- ``evaluations.json``: the periodic evaluations (completion and J_c per seed, or the
-  fraction of time inside the watch circle, over time);
-- ``progress.csv``: SB3's training log, and ``tb/`` the same for TensorBoard when the
-  ``tensorboard`` package is installed; ``config.yml`` (resolved hyperparameters),
-  ``args.yml`` and ``command.txt`` (the exact command), as the zoo does.
-
-Determinism: with ``deterministic=True`` (default) torch runs single-threaded with
-``torch.use_deterministic_algorithms(True)``, every random generator is seeded
-(``set_random_seed``, env ``i`` gets ``seed + i``, sensor randomisation its own stream), so
-the same seed gives the same training curve on the same CPU and software versions.
+Design notes: docs/design/rl.train.md.
 """
 
 from __future__ import annotations

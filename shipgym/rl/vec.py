@@ -1,21 +1,8 @@
 """stable-baselines3's ``VecEnv`` over shipgym's native batched env.
 
-:class:`BatchedVecEnv` adapts a :class:`~shipgym.envs.vector.ShipVectorEnv` (in its
-``"same-step"`` autoreset mode, the one SB3 expects) to
-:class:`stable_baselines3.common.vec_env.VecEnv`: ``step_wait`` returns the next episode's
-first observation for an env whose episode ended, with the last one under
-``infos[i]["terminal_observation"]`` and ``infos[i]["TimeLimit.truncated"]`` for a time-limit
-end, as ``DummyVecEnv`` does. Seeding follows ``DummyVecEnv``: ``seed(s)`` gives env ``i`` the
-seed ``s + i`` at the next :meth:`reset`, later episodes go on with each env's generator; so
-the same seed gives the same episodes as a ``DummyVecEnv`` of the single envs (a test checks
-it). Usage::
+Public names: ``BatchedVecEnv``, ``ErrorIntegralVecEnv``, ``make_batched_vec_env``.
 
-    from shipgym.rl.vec import make_batched_vec_env
-    venv = make_batched_vec_env("shipgym/BlueLadyTracking-v0", n_envs=64, controller="pid")
-    model = stable_baselines3.PPO("MlpPolicy", VecMonitor(venv)).learn(100_000)
-
-``shipgym train ... --vec-env batched`` (or ``vec_env: batched`` in the hyperparameter file)
-trains on it.
+Design notes: docs/design/rl.vec.md.
 """
 
 from __future__ import annotations

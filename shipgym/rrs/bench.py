@@ -1,34 +1,10 @@
 r"""``shipgym bench roll``: rudder-roll stabilisation across speeds, with and without sway feedback.
 
-Each run is one episode of :class:`~shipgym.envs.rollstab.RudderRollEnv` at a fixed speed with
-one pilot (:func:`~shipgym.controllers.rollpilot.roll_pilot`: the seed's sway-velocity Kalman
-filter and a controller):
+Public names: ``METHODS``, ``SEED_CLAIM``, ``TASKS``, ``bench_roll``, ``default_task``,
+``roll_analysis``, ``roll_run``, ``roll_table``, ...
+Sources: Radhakrishnan (n.d.).
 
-=================  =====================================================================
-method             controller
-=================  =====================================================================
-``autopilot``      PID heading autopilot only: the baseline of the roll reduction
-``rrs``            roll-damping LQR, the fixed gain of the vessel's design speed
-``rrs-sway0.2``    the same with the sway-velocity gain x 0.2
-``rrs-nosway``     the same without sway-velocity feedback
-``rrs-scheduled``  the LQR redesigned at the run's speed (gain scheduling)
-=================  =====================================================================
-
-Tasks (:data:`TASKS`): ``seed-test``, the seed's experiment (Radhakrishnan (n.d.) section 4:
-the sinusoidal 10 deg / 0.43 rad/s rudder added to the command, calm water), the default of
-the ``van-der-klugt`` model; ``beam-sea``, the naval task's beam sea
-(:data:`~shipgym.envs.rollstab.BEAM_SEA`), the default of a hull with a displacement. The
-metrics skip the first ``settle`` seconds (the transient): RMS of roll, heading error,
-rudder and rudder rate, the fraction of control steps that end with the rudder rate-limited,
-the RMS error of the filter's ``v_hat``, ``trace(P)`` at the end; the roll reduction ratio
-``RRR = 1 - roll_rms / roll_rms(autopilot)`` of the same vessel, speed and seed. The linear
-analysis (:func:`roll_analysis`) adds the closed-loop stability margin ``max Re(lambda)`` of
-the design model at each speed, the roll ratio of the sinusoid and the speeds at which the
-fixed gain goes unstable without (enough) sway feedback.
-
-What the seed claims and what is shown instead: "up to 13 m/s the roll is reduced to
-one-tenth of that without sway velocity feedback ... for U = 15 m/s onwards it becomes
-oscillatory" needs the unprinted gain and is not reproducible (:data:`SEED_CLAIM`).
+Design notes: docs/design/rrs.bench.md.
 """
 
 from __future__ import annotations

@@ -1,32 +1,10 @@
 r"""The one physics step of shipgym: N >= 1 hulls of one vessel, compiled once.
 
-Per hull and physics step ``h`` (:func:`run`):
+Public names: ``run``, ``HullBatch``, ``SimulationDiverged``, ``OK``, ``NEED``, ``DIVERGED``,
+``MUJOCO``, ``LEAPFROG``, ...
+Sources: Blendermann (1994); Tomera (2014).
 
-1. the velocity at the whole step from the half-step joint velocity, ``v_k = qvel + h/2
-   qacc_prev`` (the leapfrog reading of the symplectic Euler step, second-order accurate), and
-   the body velocity ``nu = J(q)^-1 v_k`` (3 DOF: ``R(psi)^T``; 4 DOF: Fossen's kinematics,
-   ``x_dot = u cos psi - v cos phi sin psi``, ``y_dot = u sin psi + v cos phi cos psi``,
-   ``psi_dot = r cos phi``, ``phi_dot = p``, or their linear form);
-2. the loads at this instant: wind (the Blendermann (1994) load on the velocity over ground,
-   :func:`shipgym.disturbances.wind.blendermann_load`), current (through the velocity through
-   the water ``nu_r = nu - nu_c``), the second-order wave drift, a held external load, and
-   every actuator's force by its kind's law (:data:`shipgym._jit.LAW_SIG`) at ``nu_r``;
-3. the hull family's acceleration ``nu_dot`` (:data:`shipgym._jit.ACCEL_SIG`) and the joint
-   acceleration ``qacc = J nu_dot + J_dot nu`` (Tomera (2014) eq. 22 for 3 DOF);
-4. the actuator states by their dynamics (a first-order lag, exact over the step, with an
-   optional rate limit; a rate-limited servo; an integrator), each within its range;
-5. the integration, by one of two integrators that apply the same forces:
-
-   - ``mujoco`` (each hull its own ``mjData``): ``qfrc_applied = M_q qacc`` and MuJoCo's C
-     ``mj_step`` (called by its address from the compiled loop), so quay contact, the
-     harbour and rendering work; MuJoCo's Euler step is ``qvel += h qacc; qpos += h qvel``;
-   - ``leapfrog`` (any number of hulls, open water): the same update without MuJoCo.
-
-Wind, current and drift are read from each hull's window of samples of its process
-(:meth:`~shipgym.disturbances._grid.GridPair.chunk`); when a hull's time passes its window the
-loop returns :data:`NEED` with the hull, the process and the chunk it needs, the caller loads
-it and calls again (:class:`HullBatch` does this). Hull ``i`` of N and a single hull with the
-same inputs follow the same code, so the same trajectory to the last bit.
+Design notes: docs/design/sim.step.md.
 """
 
 from __future__ import annotations

@@ -1,30 +1,8 @@
 r"""The DGPS receiver's bias on a manoeuvring trial (Artyszuk 2003 §2-3, the notes' study).
 
-:func:`receiver_bias` samples a true trial at the receiver's rate, runs the receiver's PV
-filter (:mod:`shipgym.observers.dgps`, eq. 5, started at the truth) on the antenna positions
-and compares its velocity outputs with the truth:
+Public names: ``METHODS``, ``ReceiverBias``, ``receiver_bias``, ``resample``.
 
-- the **bias** from the noise-free run (``sigma = 0``): the speed error ``v_xy_hat - v_xy``
-  (its largest positive excursion ``speed_bias_max``, its minimum and its RMS), the drift-angle
-  error ``beta_A_hat - beta_A`` (rad, wrapped; max, min, RMS) and the position error
-  ``|p_hat - p|`` (max, RMS), over the whole record;
-- the **noise**: ``runs`` Monte-Carlo runs with ``N(0, sigma^2)`` per axis, all at once
-  through the (linear) steady filter (:func:`~shipgym.observers.dgps.pv_filter_batch`);
-  ``sigma_v`` and ``sigma_beta`` are the RMS over runs and time of the estimate minus the
-  noise-free estimate, pooled over the samples after the first ``transient`` seconds
-  (30 s [chosen]: the filter starts at the truth without noise and its noise settles in
-  about 20 cycles, notes 3.2).
-
-The truth is the ground-referenced motion (``eta``, ``nu`` are what the ship does over
-ground, any current included): ``v_xy = |ground velocity|``, ``beta_A = psi - chi`` with the
-course over ground ``chi``, at the antenna (:func:`~shipgym.observers.dgps.antenna_motion`).
-With ``correct=True`` both the estimate and the truth are corrected for the ``current`` by the
-seed's formula (:func:`~shipgym.observers.dgps.water_velocity`, §1): the estimate's body
-velocity ``R(psi)^T [v_NS, v_EW]`` minus the current, against the truth's water-referenced
-velocity (``nu`` minus the current), and ``beta_A = atan2(-v_y, v_x)`` of each (eq. 7).
-
-The record is linearly interpolated to the receiver's samples ``t[0] + k dt`` (``psi``
-unwrapped); the first sample is the filter's initial state (the truth).
+Design notes: docs/design/trials.bias.md.
 """
 
 from __future__ import annotations

@@ -1,33 +1,9 @@
 r"""The IMO manoeuvres of a sea trial as scripts (IMO MSC.137(76) (2002); Artyszuk 2003 §3).
 
-Each manoeuvre is a frozen dataclass in :data:`MANOEUVRES` (``manoeuvre(name)``):
+Public names: ``MANOEUVRES``, ``ConstantScript``, ``InitialTurning``, ``Stop``, ``TurningCircle``,
+``ZigZag``, ``ZigZagScript``, ``manoeuvre``, ...
 
-- ``turning35_stbd`` / ``turning35_port``: the turning circle, rudder 35 deg to starboard /
-  port at ``t = 0``, shaft at the approach speed (the advance and tactical diameter of IMO
-  MSC.137(76) Annex 5.3.1);
-- ``zigzag10`` / ``zigzag20``: the 10/10 and 20/20 zig-zag tests, the first rudder order to
-  starboard; the rudder is reversed each time the heading change from the approach heading
-  reaches the angle (to starboard, then to port, ...); the overshoots of Annex 5.3.3;
-- ``initial_turning``: 10 deg rudder to starboard; the trial's figure is the distance run when
-  the heading has changed by 10 deg (Annex 5.3.2);
-- ``crash_stop``: rudder amidships, the shaft command to full astern (``-1``) at ``t = 0``
-  (the full astern stopping test, its track reach Annex 5.3.4);
-- ``coasting_stop``: rudder amidships, shaft stopped (``0``) at ``t = 0`` (Artyszuk 2003 §3,
-  "zero pitch"; not an IMO criterion).
-
-Signs: shipgym's rudder angle is Fossen's, a positive angle turns the ship to PORT, so a
-starboard rudder is a negative command (the MMG paper's ``delta`` is the opposite). The shaft
-command is a fraction of the approach shaft speed ``n0`` (``1`` = ``n0``, ``-1`` = ``-n0``,
-``0`` = stop). A script only commands: the rudder's rate limit and the shaft's ramp are the
-actuators' business.
-
-``duration(L, U0)`` (s) is a fixed multiple of the time scale ``L/U0`` [chosen], long enough
-for the trial's metrics on a ship that meets the IMO criteria: turning 36 ``L/U0`` (on the
-seed's 100 m tanker at 7 m/s 514 s, about 570 deg of heading change: 360 deg at 261 s and a
-last full circle in the steady turn); zig-zag 40 ``L/U0`` (the three overshoots and the third
-execute); initial turning 6 ``L/U0`` (10 deg at 1.9 ``L/U0`` there); crash stop 30 ``L/U0``
-(``u <= 0`` at 11 ``L/U0`` there; 30 covers a track reach of 15 L at half the approach speed);
-coasting stop 80 ``L/U0`` (the speed 2 m/s at 36 ``L/U0`` there).
+Design notes: docs/design/trials.manoeuvres.md.
 """
 
 from __future__ import annotations

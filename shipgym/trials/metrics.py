@@ -1,36 +1,8 @@
 r"""The numbers of a manoeuvring trial, and the IMO criteria (IMO MSC.137(76) (2002)).
 
-:func:`trial_metrics` reads a recorded trial (time, pose ``eta = [x, y, psi]`` in NED, body
-velocity ``nu = [u, v, r]``, midship point) and returns a :class:`TrialMetrics` with what
-applies to the manoeuvre (``None`` where a figure does not apply or was not reached):
+Public names: ``TrialMetrics``, ``imo_criteria``, ``trial_metrics``, ``zigzag_limits``.
 
-- turning: advance (along the approach heading) and transfer
-  (perpendicular to it) when the heading has changed by 90 deg; the tactical diameter, the
-  transfer when it has changed by 180 deg; times to 90, 180 and 360 deg; the steady turning
-  diameter, twice the radius of a least-squares circle (Kasa fit) through the track of the
-  last full circle (the last 360 deg of heading change; needs 360 deg or more, and the run
-  should be long enough for that circle to be steady); the steady speed (mean of
-  ``sqrt(u^2 + v^2)`` over that circle) and its ratio to ``U0``;
-- zig-zag: the executes (rudder reversals) where the heading change from the approach
-  heading reaches the angle, alternately to the first side and the other; the n-th overshoot
-  is the heading change beyond the angle after the n-th execute until the heading turns back
-  (IMO MSC.137(76) 5.3.3: the "first overshoot" follows the reversal IMO calls the second
-  execute, its first being the order at ``t = 0``); ``time_first_execute`` is the time of
-  the first reversal, ``period`` the time from the first to the third reversal (one full
-  rudder cycle);
-- initial turning: the distance run along the track and the time when the heading has changed
-  by the manoeuvre's heading change (10 deg);
-- stop: the time to stop (first ``u <= 0``; for a manoeuvre with ``end_speed > 0``, the
-  coasting stop, the first ``sqrt(u^2 + v^2) <= end_speed``), the head reach (along the
-  approach heading), the track reach (path length) and the lateral deviation (perpendicular
-  to the approach heading, positive to starboard) at that time, the heading change there,
-  and the time and track length to half the approach speed.
-
-Heading changes are measured as ``|psi - psi0|`` with ``psi`` unwrapped, so that port and
-starboard turns give the same figures (transfer and tactical diameter are positive towards
-the turn). Crossing times are linearly interpolated between samples.
-
-:func:`imo_criteria` applies the IMO MSC.137(76) Annex 5.3 criteria.
+Design notes: docs/design/trials.metrics.md.
 """
 
 from __future__ import annotations

@@ -1,21 +1,8 @@
 """Headless rerun recording of shipgym episodes: the :class:`RecordEpisode` wrapper.
 
-Each episode goes to its own ``.rrd`` file, with no viewer and no display needed (a viewer is
-spawned alongside only on request). Per-step values are buffered in Python lists and written
-in columns (``send_columns``) every ``flush_every`` steps, at the end of the episode, on
-``close()`` and when the wrapper is garbage collected, so recording is cheap and an
-interrupted episode still leaves a readable file. What is logged and where:
-:mod:`shipgym.viz.run`.
+Public names: ``RecordEpisode``, ``episode_path``.
 
-Files are never half-replaced: an episode records to ``<stem>.partial.rrd`` next to the
-destination (:func:`shipgym._io.partial_path`) and the file is renamed onto ``<stem>.rrd``
-(with its JSON run file) only when the episode has ended (terminated or truncated) and the
-file is finalised. An episode stopped before its end (``close()``, a ``reset`` in mid-episode,
-an interrupt, the end of the interpreter) keeps its finalised, readable file under the
-``.partial.rrd`` name; a killed process leaves at most that file, truncated, and the earlier
-recording under the final name untouched. The last metadata document of every file says
-whether the episode was recorded to its end (``metadata["recording"]``, read back by
-:func:`~shipgym.viz.run.recording_problem`).
+Design notes: docs/design/viz.recorder.md.
 """
 
 from __future__ import annotations

@@ -1,24 +1,8 @@
 """PNG and Markdown reports of a recorded run (Tomera 2014 Figs. 8-11), headless.
 
-:func:`write_report` draws with matplotlib's Agg canvas (no display, no pyplot state) at fixed
-figure sizes and resolution (:data:`FIGURE_SIZES`, :data:`DPI`):
+Public names: ``DPI``, ``FIGURE_SIZES``, ``pixel_size``, ``report_paths``, ``write_report``.
 
-- ``trajectory.png``: map, north up, east right, in metres: quays (in a harbour), desired and
-  true path, hull outlines every ``hull_every`` seconds, start and end poses, wind arrow
-  (Fig. 8);
-- ``positions.png``: x^r, y^r, psi^r in the leg's r-frame, desired (dashed) vs measured
-  (solid) and true (Figs. 9-11, left columns), and the roll angle of a 4-DOF vessel;
-- ``velocities.png``: u, v, r, desired (dashed) vs estimated (solid) and true (right columns),
-  and the roll rate of a 4-DOF vessel;
-- ``thrusters.png``: one row per actuator of the vessel: its channel commands (left) and its
-  thrust (right; an azimuth's angle on a second axis), in the vessel's colours, saturation
-  shaded;
-- ``metrics.md``: accuracy indices (eqs. 54-57) from the truth and the measurements, leg
-  times, thruster usage; a run whose recording is incomplete
-  (:func:`~shipgym.viz.run.recording_problem`) says so in a line starting with
-  ``**INCOMPLETE RECORDING**`` under the title.
-
-Every file is written under a temporary name and renamed when complete.
+Design notes: docs/design/viz.report.md.
 """
 
 from __future__ import annotations

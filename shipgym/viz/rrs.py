@@ -1,20 +1,9 @@
 """Figures of the rudder-roll stabilisation benchmark (``shipgym bench roll --figures DIR``).
 
-From the bench's plain rows, linear analyses and time series (this module never imports the
-bench, :mod:`shipgym.rrs`; the command line runs it and passes the results in):
+Public names: ``ROLL_SIZES``, ``write_roll_figures``.
+Sources: Radhakrishnan (n.d.).
 
-- ``roll_reduction.png``: the roll reduction ratio ``RRR = 1 - roll_rms / roll_rms(autopilot)``
-  against speed, one line per roll-damping method, one panel per vessel;
-- ``heading_rudder.png``: heading-error, rudder and rudder-rate RMS against speed, per method
-  and vessel, with the rudder's rate limit dashed;
-- ``stability_margin.png``: the linear analysis, ``max Re(lambda)`` of the closed loop of the
-  design-speed gain with the sway gain x 1, 0.2, 0 and of the scheduled gain, against speed,
-  with the onset speeds of instability marked;
-- ``estimates_<vessel>.png``: one episode at the design speed as in Radhakrishnan (n.d.)
-  Fig. 2: roll and rudder angle, heading error, the true sway velocity and the Kalman filter's
-  ``v_hat``, and ``trace(P)``, against time.
-
-Angles are plotted in degrees; the inputs are in SI units (rad, rad/s, m/s, s).
+Design notes: docs/design/viz.rrs.md.
 """
 
 from __future__ import annotations

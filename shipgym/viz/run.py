@@ -5,50 +5,11 @@
 (with ``rerun.chunk.RrdReader``; no viewer) or from a JSON run file written by
 :func:`save_run_json`.
 
-Entity paths of the ``.rrd`` files (the map is drawn in NED metres under ``map/ned``, which
-carries a static rotation so that north is up and east is right in rerun's 2-D view):
+Public names: ``P``, ``Run``, ``actuator_description``, ``command_path``, ``indices_warning``,
+``load_run``, ``recording_problem``, ``save_run_json``.
+Sources: Tomera (2014).
 
-=========================== ======================================================
-``map/ned/quays``           quay and pier outlines (static line strips)
-``map/ned/plan``            planned path through the leg end points (static)
-``map/ned/waypoints``       leg end points ``P, 1, ..., n`` (static points)
-``map/ned/ship``            true pose every control step (Transform3D, float32)
-``map/ned/ship/hull``       hull outline in the body frame (static)
-``map/ned/ship/thrust``     one thrust arrow per actuator at its position, along its force
-                            (body frame; full thrust = 0.29 L_oa, 4 m on the Blue Lady)
-``map/ned/target``          end point of the current leg
-``map/ned/track/truth``     true position (x, y) every step (float32)
-``map/ned/track/reference`` desired position every step
-``map/ned/track/estimate``  navigation (observer) position, when it differs from the truth
-``map/ned/dgps``            measured positions (DGPS), ``map/ned/dgps_outliers``
-``map/ned/hull_trace``      hull outlines every ``hull_every`` s (NED)
-``map/ned/wind``            wind arrow (where the wind goes; 2 m per m/s on a 13.78 m hull,
-                            scaled with L_oa)
-``plots/position/{x,y,psi}`` r-frame pose: desired, true, estimate (m, m, deg) and
-                            ``.../measured`` (DGPS and gyro-compass)
-``plots/velocity/{u,v,r}``  body velocity: desired, true, estimate (m/s, m/s, deg/s)
-``plots/thrust``            thrust of every actuator (N), one series per actuator
-``plots/command/<unit>``    channel commands grouped by unit (:func:`command_path`: ``rpm``,
-                            ``1`` -> ``relative``, ``rad/s`` -> ``rad_per_s``)
-``plots/roll``              roll angle and rate (deg, deg/s), 4-DOF vessels only
-``plots/accuracy/truth``    running x_E, y_E (m), psi_E (deg), J_c (Tomera 2014 eqs. 54-57)
-``plots/accuracy/measured`` the same from the measured pose
-``data/*``                  raw float64 vectors for tools that read the file back;
-                            ``data/static``: geometry and the actuators' names, channels,
-                            units and colours
-``metadata/summary``        run description (markdown), ``metadata/json`` (machine-readable)
-=========================== ======================================================
-
-Timelines: ``sim_time`` (simulation time, s) and ``step`` (control step; 0 is the state after
-``reset``, ``k`` the state after the k-th ``step``).
-
-Completeness: the recorder logs ``metadata["recording"] = {"complete": false, ...}`` when an
-episode starts and ``{"complete": true, "ended": "terminated" | "truncated", "steps": n}`` as
-the last document once the episode has ended; rerun writes the file's footer (manifest) when the
-file is finalised. :func:`load_run` puts what it found into ``Run.metadata["recording"]``
-(``footer``: whether the footer is there) and :func:`recording_problem` says, in words, why a
-run is incomplete (``None`` when it is complete). A file cut short (a killed process) has no
-footer and usually an undecodable last frame, which :func:`load_run` reports as a ValueError.
+Design notes: docs/design/viz.run.md.
 """
 
 from __future__ import annotations

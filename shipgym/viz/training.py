@@ -1,21 +1,9 @@
 """Learning curves of ``shipgym train`` runs (``shipgym plot training RUN_DIR ... --out FIG``).
 
-A run folder written by :func:`shipgym.rl.train.train` holds
+Public names: ``MAX_EVALUATIONS_BYTES``, ``MAX_PROGRESS_BYTES``, ``TRAINING_SIZE``,
+``TrainingCurves``, ``plot_training``, ``read_training_run``, ``training_figure``.
 
-- ``progress.csv``: stable-baselines3's CSV log, one line per rollout (PPO) or log interval
-  (SAC); the curves use ``time/total_timesteps`` (environment steps, all envs together) and
-  ``rollout/ep_rew_mean`` (mean return of the last 100 finished training episodes; empty
-  until an episode has finished);
-- ``evaluations.json``: the periodic evaluations, a list of objects with ``timesteps`` and
-  either the harbour manoeuvre's ``completed`` (runs completed without quay contact) of
-  ``runs`` and ``J_c`` (mean over the completed runs, ``null`` when none), or a station-keeping
-  evaluation's ``inside_fraction`` (fraction of the time within the watch circle, mean over
-  the runs; or per run in ``rows``).
-
-:func:`read_training_run` reads both into :class:`TrainingCurves` (plain arrays, no
-matplotlib); :func:`training_figure` draws the return and the evaluation (harbour completion
-or station-keeping fraction) against steps, one line per run; :func:`plot_training` writes it
-as a PNG (matplotlib's Agg canvas, headless).
+Design notes: docs/design/viz.training.md.
 """
 
 from __future__ import annotations

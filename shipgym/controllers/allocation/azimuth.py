@@ -1,56 +1,13 @@
 r"""Azimuth-thruster allocation by the extended-thrust formulation, with angle-rate limits.
 
-An azimuth thruster ``j`` at ``(x_j, y_j)`` m (and ``z_j`` m below the centre of gravity, for
-roll) delivers a force of magnitude ``|T_j|`` in the direction ``alpha_j`` it points in. Its
-body-frame components ``fx_j = T_j cos(alpha_j)``, ``fy_j = T_j sin(alpha_j)`` enter ``tau``
-linearly (the extended thrust of Fossen 2011 sec. 12.3 and Johansen & Fossen 2013):
+``fx_j = T_j cos(alpha_j)``, ``fy_j = T_j sin(alpha_j)``: a QP in the extended thrusts
+with polygon magnitude limits and angle-rate sectors.
 
-.. math::
+Public names: ``AzimuthAllocation``, ``AzimuthAllocator``, ``Azimuths``, ``allocate_azimuth``,
+``extended_thrust_matrix``.
+Sources: Fossen (2011); Johansen & Fossen (2013); Bemporad & Axehill (2022).
 
-    \begin{bmatrix} X \\ Y \\ N \end{bmatrix} \mathrel{+}=
-    \begin{bmatrix} 1 & 0 \\ 0 & 1 \\ -y_j & x_j \end{bmatrix}
-    \begin{bmatrix} f_{x,j} \\ f_{y,j} \end{bmatrix},
-    \qquad K \mathrel{+}= -z_j f_{y,j} \ \text{(4 DOF, rows X, Y, K, N)}.
-
-So with the fixed-direction thrusters ``f`` (configuration ``B_fixed``) the allocation is a
-quadratic program in ``u = (f, fx_1, fy_1, ..., fx_M, fy_M)``,
-
-.. math::
-
-    \min_u \; (B u - \tau)^T W (B u - \tau) + u^T H u
-
-subject to
-
-- fixed thrusters: ``f_min <= f <= f_max`` (``0`` inside the range);
-- magnitude: ``|(fx_j, fy_j)| <= F_max_j``, replaced by the inscribed regular polygon of
-  ``n_sides`` sides (its vertices on the circle, one of them at the previous angle), so the
-  answer never exceeds ``F_max``; its apothem is ``F_max cos(pi / n_sides)`` (98 % for 16);
-- angle rate: the new direction within ``+-max_dangle_j`` of the previous angle ``alpha_j``
-  (``max_dangle`` = slew rate (rad/s) x control period (s), below 90 deg). The sector
-  ``|angle(f_j) - alpha_j| <= max_dangle`` with its apex at the origin is convex for
-  ``max_dangle < 90 deg``: two half-planes through the origin (Johansen & Fossen 2013
-  on rate constraints). Only the polygon's facets that meet the sector are kept.
-
-A reversible unit (variable pitch: thrust in ``[-F_max, F_max]`` along its axis) may also point
-within ``+-max_dangle`` of the reversed direction. The union of the two sectors is not convex,
-so one branch is chosen before the QP, by a first QP on its convex relaxation: the double
-sector replaced by its convex hull (the whole polygon and ``|cross(e_j, f_j)| <= F_max_j
-sin(max_dangle_j)``, a strip along the axis ``e_j``). The branch is the sector that contains
-the projection, onto the unit's previous axis, of the relaxed optimum; a tie keeps the forward
-sector. Where the relaxed optimum lies in the double sectors it is also the exact optimum of
-the non-convex problem (the relaxation contains every feasible force). A unit whose relaxed
-force lies in neither of its sectors has an ambiguous branch: both are solved and the better
-kept (for up to three such units, 2^3 QPs at most; any further ones keep the projection's
-branch). The answer is always the exact optimum of the branches it reports. Units without a
-rate limit need no branch (the polygon alone is convex). Zero force lies in every branch and
-so is always feasible.
-
-The QP is solved by DAQP (Arnström, Bemporad & Axehill 2022), a dual active-set method:
-exact to round-off for a problem this small. The reported forces are then made exactly
-consistent with the limits (the angle change clamped to ``max_dangle``, the magnitude to
-``F_max``; both move the solver's answer by its tolerance, 1e-10 of ``F_max``, only) and ``tau``
-is recomputed from them. :class:`AzimuthAllocator` prepares everything that does not depend on
-the angles once, for a control loop.
+Design notes: docs/design/controllers.allocation.azimuth.md.
 """
 
 from __future__ import annotations

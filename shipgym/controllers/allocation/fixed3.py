@@ -1,40 +1,12 @@
 r"""Thrust allocation for the three-thruster pattern of the Blue Lady (Tomera 2014 eqs. 24-27).
 
-The three actuators (main propeller, bow and stern tunnel thrusters, in this order) act on the
-hull through the configuration matrix of Tomera (2014) eq. 12,
+``tau = T F`` (Tomera 2014 eq. 12), ``T = [[1, 0, 0], [0, 1, 1], [0, L_2, -L_3]]``;
+``allocate_inverse``: ``F = T^-1 tau`` (eq. 25) and clipping.
 
-.. math::
+Public names: ``Allocation``, ``Fixed3Allocator``, ``fixed3_law``, ``law_parameters``,
+``allocate``, ``allocate_inverse``, ``default_weights``, ``force_capacity``, ...
 
-    \tau = T F, \qquad
-    T = \begin{bmatrix} 1 & 0 & 0 \\ 0 & 1 & 1 \\ 0 & L_2 & -L_3 \end{bmatrix},
-
-with ``F = [F1, F2, F3]`` (N) and ``tau = [X, Y, N]`` (N, N, N m). ``T`` is square and
-invertible (``det T = -(L2 + L3)``), so an unsaturated request has exactly one solution. Two
-allocators are provided:
-
-- :func:`allocate_inverse` is the paper's method: ``F = T^-1 tau`` (eq. 25), the inverse thruster
-  characteristics (eqs. 26-27) and a clip of each command to its range. When a tunnel thruster
-  saturates, the clip throws away whatever that thruster owed to *both* sway and yaw.
-- :func:`allocate` is a constrained least-squares allocation. Surge is decoupled (only F1
-  acts in X), so ``F1 = clip(X)``. Sway and yaw share the tunnels; it solves exactly
-
-  .. math::
-
-      \min_{F_2, F_3} \; w_Y (F_2 + F_3 - Y)^2 + w_N (L_2 F_2 - L_3 F_3 - N)^2
-      \quad \text{s.t.} \quad F_{i,\min} \le F_i \le F_{i,\max}
-
-  The objective is strictly convex, so: if the unconstrained minimiser (``T^-1 tau``) lies in
-  the box it is the answer; otherwise the optimum lies on the box boundary, and on each of
-  the four edges the one-dimensional minimiser is the clipped closed-form stationary point.
-  The best of the four is the exact optimum. The default weights keep the yaw moment in
-  preference to the sway force (heading keeps the tunnels effective; domain notes section 7).
-
-Both return an :class:`Allocation`. :func:`command_to_action` and :func:`action_to_command`
-map physical commands to the normalised ``[-1, 1]^3`` actions of the environments.
-
-Both are one compiled law over N requests (:func:`fixed3_law`): the free functions, the
-allocator object of the envs (:class:`Fixed3Allocator`) and the batched allocation of the
-vector env (:class:`~shipgym.controllers.batch.BatchedAllocation`) all call it.
+Design notes: docs/design/controllers.allocation.fixed3.md.
 """
 
 from __future__ import annotations

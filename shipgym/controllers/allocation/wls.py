@@ -1,35 +1,12 @@
 r"""Box-constrained weighted least-squares allocation for N fixed-direction thrusters.
 
-A set of N thrusters whose force directions are fixed in the body frame (propellers, tunnel
-thrusters, a rudder at a fixed angle, an azimuth held at its angle) acts on the hull through
-the configuration matrix ``B`` (Fossen 2011 sec. 12.3),
+``tau = B f``; ``min_f (B f - tau)^T W (B f - tau) + f^T H f`` s.t. ``f_min <= f <= f_max``
+(Fossen 2011 sec. 12.3), an active-set solution.
 
-.. math::
+Public names: ``DEFAULT_H_REL``, ``WLSAllocation``, ``WLSAllocator``, ``allocate_wls``.
+Sources: Fossen (2011); Johansen & Fossen (2013); Nocedal & Wright (2006).
 
-    \tau = B f, \qquad B \in \mathbb{R}^{n \times N},
-
-with ``f`` the N thrusts (N) and ``tau`` the ``n`` generalised forces: ``n = 3`` for
-``[X, Y, N]`` (N, N, N m), ``n = 4`` for ``[X, Y, K, N]``; nothing here assumes either.
-:func:`allocate_wls` solves exactly
-
-.. math::
-
-    \min_f \; (B f - \tau)^T W (B f - \tau) + f^T H f
-    \quad \text{s.t.} \quad f_{\min} \le f \le f_{\max},
-
-the weighted least-squares allocation with thrust limits of Fossen (2011) sec. 12.3 and
-Johansen & Fossen (2013). ``W`` weighs the error of each DOF; the small diagonal ``H``
-makes the answer unique when ``B`` has more columns than rank (a redundant set: many thrust
-combinations give the same ``tau``; then the one of least weighted thrust is chosen).
-
-The method is a primal active-set method on the bounds (Nocedal & Wright 2006 ch. 16.5): start
-from the unconstrained minimiser clipped into the box; repeatedly solve the equality-
-constrained problem on the free thrusts with the others held at their bounds, step towards it
-until a bound blocks, and release the bound whose Lagrange multiplier has the wrong sign until
-none has. For a strictly convex objective (``B^T W B + H`` positive definite) it ends at the
-exact optimum in finitely many steps; for the few thrusters of a ship it takes a handful of
-6x6 solves. Everything runs in scaled variables ``f_j / s_j`` (``s_j`` the thruster's largest
-``|f|``), so the tolerances are relative.
+Design notes: docs/design/controllers.allocation.wls.md.
 """
 
 from __future__ import annotations
