@@ -78,9 +78,10 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
         observer: ``None`` / ``"truth"`` (the observation and the controller use the true
-            state) or a Kalman observer (``"kbf"``, ``"dkf"``, ``"tomera-kbf"``,
-            ``"tomera-dkf"``: :class:`~shipgym.observers.batch.BatchedKalman`) fed every sensor
-            sample, whose estimate they use instead, as under
+            state), a Kalman observer (``"kbf"``, ``"dkf"``, ``"tomera-kbf"``,
+            ``"tomera-dkf"``: :class:`~shipgym.observers.batch.BatchedKalman`) or an observer
+            registered with :func:`~shipgym.observers.batch.register_batched_observer`, fed
+            every sensor sample, whose estimate they use instead, as under
             :class:`~shipgym.observers.wrapper.ObserverWrapper` (``shipgym.make(...,
             observer=)``).
         env_sensors: one sensor configuration per env, each as the ``sensors=`` of env ``i``
@@ -178,15 +179,6 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
         self.controller_name = controller
         self.residual_scale = float(residual_scale)
-        self.controller = None
-        if controller is not None:
-            from shipgym.controllers.batch import batched_dp_controller
-
-            # the batched observers are all kinematic (BatchedKalman)
-            src = "truth" if observer in (None, "truth") else "kinematic"
-            self.controller = batched_dp_controller(
-                controller, self.vessel, n, self.control_period, velocity_source=src
-            )
         if env_sensors is not None:
             env_sensors = list(env_sensors)
             if len(env_sensors) != n or not all(isinstance(c, SensorConfig) for c in env_sensors):
@@ -197,7 +189,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self.observer_name = None if observer in (None, "truth") else observer
         self.observer = None
         if self.observer_name is not None:
-            from shipgym.observers.batch import BatchedKalman
+            from shipgym.observers.batch import make_batched_observer
 
             every = self._sensor_steps
             if self.sensors is None or every is None:
@@ -212,7 +204,20 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
                     "use the single env (shipgym.make) for it"
                 )
             # the design noise of the vessel, as the observer wrapper's make_observer
-            self.observer = BatchedKalman(self.observer_name, n, vessel=self.vessel)
+            self.observer = make_batched_observer(self.observer_name, n, self.vessel)
+        self.controller = None
+        if controller is not None:
+            from shipgym.controllers.batch import batched_dp_controller
+
+            # the velocity filter for the observer's kind (as the controller wrapper chooses)
+            src = (
+                "truth"
+                if self.observer is None
+                else ("model" if getattr(self.observer, "model_based", False) else "kinematic")
+            )
+            self.controller = batched_dp_controller(
+                controller, self.vessel, n, self.control_period, velocity_source=src
+            )
         self._nis = np.full(n, np.nan)
         self._rejected = np.zeros(n, bool)
         self._cache: dict[str, Any] = {}  # this state's eta, nu (and estimate), read once

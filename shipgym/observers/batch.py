@@ -1,6 +1,8 @@
 r"""The double-integrator Kalman filters (DKF, KBF) written once, over ``N >= 1`` envs.
 
-Public names: ``BatchedKalman``, ``BatchedStepInfo``.
+Public names: ``BatchedKalman``, ``BatchedStepInfo``; the registry of observers written once
+over N envs (``BATCHED_OBSERVERS``, ``register_batched_observer``, ``make_batched_observer``)
+and their N = 1 adapter ``OneOfBatch`` for the single env.
 
 Design notes: docs/design/observers.batch.md.
 """
@@ -17,10 +19,25 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._jit import entry, njit
 
-from .base import OutlierGate, make_observer
+from .base import (
+    Estimate,
+    Observer,
+    OutlierGate,
+    StepInfo,
+    as_pose,
+    make_observer,
+    no_measurement,
+)
 from .design import KalmanDesign, discretise, double_integrator
 
-__all__ = ["BatchedKalman", "BatchedStepInfo"]
+__all__ = [
+    "BATCHED_OBSERVERS",
+    "BatchedKalman",
+    "BatchedStepInfo",
+    "OneOfBatch",
+    "make_batched_observer",
+    "register_batched_observer",
+]
 
 Array = NDArray[np.float64]
 _A, _C = double_integrator()
@@ -685,7 +702,10 @@ class BatchedKalman:
         for key in keys:
             key = float(key)
             sel = self._all if len(keys) == 1 else np.round(dt, 12) == key
-            Q, blk = self._interval(key, float(dt[np.argmax(sel)]))
+            # the interval's matrices from the key itself (dt rounded to 1e-12 s), not from the
+            # first env's dt: what a filter gets depends on its own dt only, never on which
+            # env, filter or test computed the shared entry first
+            Q, blk = self._interval(key, key)
             bad = _call(
                 "step", _kalman_step, self._mode, self.threshold, self.max_rejections, sel, dt,
                 self._X, self._count, self._open, self._yprev, self._has_prev, self._R,
@@ -749,3 +769,106 @@ class BatchedKalman:
     def x(self) -> Array:
         """States (n, 6) ``[x, y, psi, x_dot, y_dot, psi_dot]``."""
         return np.concatenate([self._X[1].T, self._X[0].T], axis=1)
+
+
+# ---- observers written once: the batched registry and its N = 1 adapter --------------------
+#: batched observers by name: ``factory(n, vessel)`` returns an observer of ``n`` envs with
+#: ``reset(t0, eta0, mask=None)`` (``t0`` (n,) s, ``eta0`` (n, 3) m, m, rad), ``step(t, z,
+#: valid) -> BatchedStepInfo`` (``z`` (n, 3) with NaN rows where ``valid`` is False) and the
+#: estimates ``eta``, ``nu`` ((n, 3) arrays); ``model_based`` (optional, default False) as
+#: :attr:`Observer.model_based <shipgym.observers.base.Observer.model_based>`. The vector env
+#: runs it for N envs, the single env's observer wrapper through :class:`OneOfBatch`
+#: (``shipgym.make(..., observer=name)``): one implementation for both.
+BATCHED_OBSERVERS: dict[str, Callable[[int, Any], Any]] = {}
+
+
+def register_batched_observer(name: str, factory: Callable[[int, Any], Any]) -> None:
+    """Register an observer written once over N envs under ``name``, for the vector env
+    (:data:`BATCHED_OBSERVERS`) and, at N = 1, for the single env (the observer registry of
+    :func:`~shipgym.observers.base.make_observer`)."""
+    from .base import register_observer
+
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"an observer name must be a non-empty string, got {name!r}")
+    BATCHED_OBSERVERS[name] = factory
+
+    def one(vessel: Any = None, **overrides: Any) -> Observer:
+        if overrides:
+            raise TypeError(
+                f"observer {name!r} (batched) takes no options, got {sorted(overrides)}"
+            )
+        return OneOfBatch(factory(1, vessel), name)
+
+    register_observer(name, one, vessel_overrides=lambda vessel: {"vessel": vessel})
+
+
+def make_batched_observer(name: str, n: int, vessel: Any) -> Any:
+    """The observer ``name`` of ``n`` envs: a registered batched observer
+    (:data:`BATCHED_OBSERVERS`), else a double-integrator Kalman preset
+    (:class:`BatchedKalman`, whose error names the valid ones)."""
+    factory = BATCHED_OBSERVERS.get(name)
+    if factory is not None:
+        return factory(n, vessel)
+    return BatchedKalman(name, n, vessel=vessel)
+
+
+class OneOfBatch(Observer):
+    """A batched observer (:data:`BATCHED_OBSERVERS`) as the single env's
+    :class:`~shipgym.observers.base.Observer`: the same code at N = 1.
+
+    Its estimate has the pose and velocity only (``P`` and ``P_eta`` NaN, ``P_nu`` None)
+    unless the batched observer has ``P_eta`` ((n, 3, 3)).
+    """
+
+    def __init__(self, batch: Any, name: str) -> None:
+        self._b = batch
+        self.name = name
+        self.model_based = bool(getattr(batch, "model_based", False))
+        self._t = np.zeros(1)
+        self._z = np.zeros((1, 3))
+        self._valid = np.zeros(1, dtype=bool)
+        self._started = False
+
+    def reset(
+        self, t0: float, eta0: ArrayLike, *, nu0: ArrayLike | None = None, P0: Any = None
+    ) -> None:
+        if nu0 is not None or P0 is not None:
+            raise ValueError(f"observer {self.name!r} starts from a pose only (no nu0, P0)")
+        t0 = float(t0)
+        if not math.isfinite(t0):
+            raise ValueError(f"t0 must be finite, got {t0!r}")
+        self._t[0] = t0
+        self._b.reset(self._t.copy(), as_pose(eta0, "eta0").reshape(1, 3))
+        self._started = True
+
+    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
+        if not self._started:
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
+        self._t[0] = float(t)
+        valid = z is not None
+        self._z[0] = as_pose(z) if valid else np.nan
+        self._valid[0] = valid
+        info = self._b.step(self._t.copy(), self._z.copy(), self._valid.copy())
+        if not valid:
+            return no_measurement()
+        nis = float(info.nis[0])
+        return StepInfo(
+            np.asarray(info.innovation, dtype=float)[0].copy(),
+            None if math.isnan(nis) else nis,
+            bool(info.rejected[0]),
+            bool(info.forced[0]),
+        )
+
+    def estimate(self) -> Estimate:
+        if not self._started:
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
+        p = getattr(self._b, "P_eta", None)
+        P_eta = np.full((3, 3), np.nan) if p is None else np.array(p[0], dtype=float)
+        return Estimate(
+            t=float(self._t[0]),
+            eta=np.array(self._b.eta[0], dtype=float),
+            nu=np.array(self._b.nu[0], dtype=float),
+            P=np.full((6, 6), np.nan),
+            P_eta=P_eta,
+            P_nu=None,
+        )
