@@ -298,3 +298,43 @@ def test_batched_env_with_time_correlated_sensor_errors_equals_the_single_envs()
     assert err < 1e-6, err
     assert biased > 0  # the bias was on
     assert venv.unwrapped.sensors.correlated_error.shape == (n, 3)
+
+
+@pytest.mark.parametrize(
+    ("env_id", "vessel"),
+    [("shipgym/DPStationKeeping-v0", "wimpey-sealab"), ("shipgym/DPSwayStep-v0", "star-hercules")],
+)
+def test_batched_dp_tasks_equal_the_single_envs(env_id, vessel):
+    """The offshore DP tasks batched (Beaufort 7 sea with first-order motion in the fixes and
+    drift on the hulls, the DP timing of the vessel, its iterative allocation under the PID,
+    the KBF): env i is the single env seeded seed + i to the last bit, truncated at the same
+    episode duration, then autoreset."""
+    n = 2
+    kw = {"vessel": vessel, "beaufort": 7, "episode_duration": 12.0, "controller": "pid",
+          "observer": "kbf"}  # fmt: skip
+    if env_id == "shipgym/DPSwayStep-v0":
+        kw["step_time"] = 3.0
+    venv = gym.make_vec(env_id, num_envs=n, **kw)
+    singles = [shipgym.make(env_id, **kw) for _ in range(n)]
+    obs, _ = venv.reset(seed=5)
+    for i, s in enumerate(singles):
+        np.testing.assert_array_equal(obs[i], s.reset(seed=5 + i)[0])
+    assert venv.unwrapped.control_period == singles[0].unwrapped.control_period < 0.5
+    rng = np.random.default_rng(0)
+    pending = np.zeros(n, bool)
+    ends = 0
+    for _ in range(2 * round(12.0 / venv.unwrapped.control_period) + 3):
+        a = rng.normal(0.0, 0.3, (n, venv.single_action_space.shape[0])).astype(np.float32)
+        obs, rew, term, trunc, info = venv.step(a)
+        for i, s in enumerate(singles):
+            if pending[i]:
+                o, _ = s.reset()
+            else:
+                o, r, te, tr, inf = s.step(a[i])
+                assert (te, tr) == (bool(term[i]), bool(trunc[i])) and r == rew[i]
+                np.testing.assert_array_equal(info["eta"][i], inf["eta"])
+                np.testing.assert_array_equal(info["nav_eta"][i], inf["nav_eta"])
+            np.testing.assert_array_equal(obs[i], o)
+        ends += int(trunc.sum())
+        pending = term | trunc
+    assert ends >= n  # every env reached the episode's duration and was reset

@@ -215,6 +215,17 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     #: the one vessel of an alias id (``shipgym/BlueLady*-v0``: ``"blue-lady"``), else None
     fixed_vessel: str | None = None
 
+    #: the episode length (s) after which the env truncates itself (with
+    #: ``info["episode_metrics"]``); ``None``: the registered time limit only
+    episode_duration: float | None = None
+
+    @classmethod
+    def configure(cls, kwargs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+        """The env's arguments with a task's own defaults filled in (timing, sea, ...), and
+        the settings the env keeps (``episode_duration``, ...): what the single env and the
+        vector env of the class both start from (here: as given)."""
+        return dict(kwargs), {}
+
     @classmethod
     def make_task(cls, vessel: Any = None, **task_args: Any) -> PlanTask:
         """This env class's task for ``vessel`` and the task arguments (the single env and
@@ -444,16 +455,22 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._prev_action = clipped.reshape(1, -1)
         finished = self.guidance.finished
         terminated = self._contact or (finished and self.terminate_on_finish)
+        truncated = not terminated and self._past_duration(t)
         flags = np.array(list(map(operator.or_, saturated, action_clipped)), bool)
         info = self._info(
             sample, command, flags, np.array(action_clipped, bool), finished, rewards, contacts
         )
         info["measurements"] = measurements
         info["record"] = self._record(info, sample)
-        if terminated:  # a time-limit truncation is seen by the EpisodeEnd wrapper
+        if terminated or truncated:  # a time-limit truncation is seen by EpisodeEnd
             self._episode_over = True
             info["episode_metrics"] = self.episode_metrics()
-        return self._obs[0].copy(), reward, terminated, False, info
+        return self._obs[0].copy(), reward, terminated, truncated, info
+
+    def _past_duration(self, t: float) -> bool:
+        """Whether the time ``t`` (s) reached :attr:`episode_duration` (to half a step)."""
+        d = self.episode_duration
+        return d is not None and t >= d - 0.5 * self.physics.timestep
 
     def render(self) -> NDArray[np.uint8] | None:
         """An RGB frame (H, W, 3) of the map camera; needs ``render_mode="rgb_array"``."""

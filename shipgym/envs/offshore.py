@@ -22,9 +22,6 @@ from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
-import numpy as np
-from numpy.typing import NDArray
-
 from shipgym.disturbances import CurrentConfig
 from shipgym.disturbances.spectra import G
 from shipgym.disturbances.waves import WF_MODELS, al_takie_hf_peak_frequency
@@ -206,34 +203,48 @@ class OffshoreDPEnv(StationKeepingEnv):
     * v0: initial version.
     """
 
-    def __init__(
-        self,
-        beaufort: int = 5,
-        wave_motion: str = "al-takie",
-        direction_from_deg: float = 45.0,
-        current_direction_to_deg: float = DP_CURRENT["direction_to_deg"],
-        episode_duration: float = 2000.0,
-        **kwargs: Any,
-    ) -> None:
+    #: the default episode length (s)
+    default_duration = 2000.0
+
+    def __init__(self, **kwargs: Any) -> None:
+        kwargs, extras = self.configure(kwargs)
+        for name, value in extras.items():
+            setattr(self, name, value)
+        super().__init__(**kwargs)
+
+    @classmethod
+    def configure(cls, kwargs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+        """The env's arguments with the DP task's defaults (timing, sea, current, sensors,
+        plan) filled in, and its own settings (``beaufort``, ``wave_motion``,
+        ``direction_from_deg``, ``episode_duration``): what the single env and the vector env
+        of this class both start from."""
+        kwargs = dict(kwargs)
+        beaufort = kwargs.pop("beaufort", 5)
+        wave_motion = kwargs.pop("wave_motion", "al-takie")
+        direction_from_deg = kwargs.pop("direction_from_deg", 45.0)
+        current_to_deg = kwargs.pop("current_direction_to_deg", DP_CURRENT["direction_to_deg"])
+        duration = kwargs.pop("episode_duration", cls.default_duration)
         _check_beaufort(beaufort)
         if not isinstance(wave_motion, str) or wave_motion not in WF_MODELS:
             raise ValueError(
                 f"wave_motion must be one of {', '.join(map(repr, WF_MODELS))}, got {wave_motion!r}"
             )
         direction = _check_number(direction_from_deg, "direction_from_deg", "deg")
-        current_to = _check_number(current_direction_to_deg, "current_direction_to_deg", "deg")
-        duration = _check_number(episode_duration, "episode_duration", "s")
+        current_to = _check_number(current_to_deg, "current_direction_to_deg", "deg")
+        duration = _check_number(duration, "episode_duration", "s")
         if not duration > 0:
-            raise ValueError(f"episode_duration must be > 0 s, got {episode_duration!r}")
+            raise ValueError(f"episode_duration must be > 0 s, got {duration!r}")
+        extras = {
+            "beaufort": int(beaufort),
+            "wave_motion": wave_motion,
+            "direction_from_deg": direction,
+            "episode_duration": duration,
+        }
         if kwargs.get("vessel") is None:
-            super().__init__(**kwargs)  # the base class explains that a vessel is needed
+            return kwargs, extras  # the task explains that a vessel is needed
         vessel = load_vessel(kwargs["vessel"])
         kwargs["vessel"] = vessel
         scale = float(vessel.scale)
-        self.beaufort = int(beaufort)
-        self.wave_motion = wave_motion
-        self.direction_from_deg = direction
-        self.episode_duration = duration
         # timing: 0.1 p.u. control period, whole physics steps of <= 0.05 s
         if "control_period" not in kwargs:
             kwargs["control_period"] = dp_control_period(vessel.hull.L_pp)
@@ -242,7 +253,7 @@ class OffshoreDPEnv(StationKeepingEnv):
             if isinstance(cp, numbers.Real) and not isinstance(cp, bool) and float(cp) > 0:
                 kwargs["timestep"] = dp_timing(float(cp))[0]
         # wind and waves: the Beaufort preset, Al-Takie's printed Beaufort 8 wind
-        sea = beaufort_sea(self.beaufort, scale, math.radians(direction), wave_motion)
+        sea = beaufort_sea(int(beaufort), scale, math.radians(direction), wave_motion)
         kwargs.setdefault("wind", sea.wind)
         kwargs.setdefault("waves", sea.waves)
         if "current" not in kwargs:
@@ -258,20 +269,7 @@ class OffshoreDPEnv(StationKeepingEnv):
         kwargs["sensors"] = sensors
         kwargs.setdefault("start_noise", (0.0, 0.0, 0.0))
         kwargs.setdefault("plan", ManoeuvrePlan(legs=(Leg(name="hold"),), name="dp-hold"))
-        super().__init__(**kwargs)
-
-    def step(
-        self, action: NDArray[np.float32]
-    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        """:meth:`ShipEnv.step <shipgym.envs.base.ShipEnv.step>`, truncated at
-        ``episode_duration`` (with ``info["episode_metrics"]``)."""
-        obs, reward, terminated, truncated, info = super().step(action)
-        end = self.episode_duration - 0.5 * self.physics.timestep
-        if not terminated and self.physics.time >= end:
-            truncated = True
-            self._episode_over = True
-            info["episode_metrics"] = self.episode_metrics()
-        return obs, reward, terminated, truncated, info
+        return kwargs, extras
 
 
 class SwayStepEnv(OffshoreDPEnv):
@@ -309,21 +307,21 @@ class SwayStepEnv(OffshoreDPEnv):
     #: the step in per-unit length (Al-Takie 1982 ch. 5, printed: 0.02 p.u. into sway)
     STEP_PU = 0.02
 
-    def __init__(
-        self,
-        step_time: float = 100.0,
-        step: float | None = None,
-        episode_duration: float = 400.0,
-        **kwargs: Any,
-    ) -> None:
-        t_step = _check_number(step_time, "step_time", "s", lo=0.0)
+    default_duration = 400.0
+
+    @classmethod
+    def configure(cls, kwargs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+        """:meth:`OffshoreDPEnv.configure` with the sway-step plan (``step_time``, ``step``)."""
+        kwargs = dict(kwargs)
+        t_step = _check_number(kwargs.pop("step_time", 100.0), "step_time", "s", lo=0.0)
+        step = kwargs.pop("step", None)
         if step is not None:
             step = _check_number(step, "step", "m")
         if kwargs.get("vessel") is not None:
             vessel = load_vessel(kwargs["vessel"])
             kwargs["vessel"] = vessel
             if step is None:
-                step = self.STEP_PU * float(vessel.hull.L_pp)
+                step = cls.STEP_PU * float(vessel.hull.L_pp)
             kwargs.setdefault(
                 "plan",
                 ManoeuvrePlan(
@@ -331,9 +329,8 @@ class SwayStepEnv(OffshoreDPEnv):
                     name="sway-step",
                 ),
             )
-        self.step_time = t_step
-        self.step_size = step
-        super().__init__(episode_duration=episode_duration, **kwargs)
+        kwargs, extras = super().configure(kwargs)
+        return kwargs, {**extras, "step_time": t_step, "step_size": step}
 
 
 def beaufort_sea(n: int, scale: float, direction_from: float, wave_motion: str) -> Any:

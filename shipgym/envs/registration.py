@@ -35,6 +35,8 @@ ENV_IDS: dict[str, tuple[str, int | None]] = {
 #: truncation, no step after the end); the env itself reports its metrics when it terminates.
 VECTOR_IDS: dict[str, str] = {
     "shipgym/Harbour-v0": "shipgym.envs.vector:harbour_vector_env",
+    "shipgym/DPStationKeeping-v0": "shipgym.envs.vector:dp_station_keeping_vector_env",
+    "shipgym/DPSwayStep-v0": "shipgym.envs.vector:dp_sway_step_vector_env",
     "shipgym/BlueLadyHarbour-v0": "shipgym.envs.vector:blue_lady_harbour_vector_env",
     "shipgym/Tracking-v0": "shipgym.envs.vector:tracking_vector_env",
     "shipgym/StationKeeping-v0": "shipgym.envs.vector:station_keeping_vector_env",

@@ -1,7 +1,11 @@
 r"""The native batched ``gymnasium.vector.VectorEnv`` of the plan tasks.
 
-Public names: ``AUTORESET_MODES``, ``ShipVectorEnv``, ``harbour_vector_env``,
-``station_keeping_vector_env``, ``tracking_vector_env``.
+``ShipVectorEnv`` steps N envs of a plan task (harbour, station keeping, tracking, the
+offshore DP tasks) at once; env ``i`` is the single env seeded ``seed + i``, bit for bit.
+
+Public names: ``AUTORESET_MODES``, ``ShipVectorEnv``, and the vector entry points
+``harbour_vector_env``, ``station_keeping_vector_env``, ``tracking_vector_env``,
+``dp_station_keeping_vector_env``, ``dp_sway_step_vector_env``.
 
 Design notes: docs/design/envs.vector.md.
 """
@@ -9,6 +13,7 @@ Design notes: docs/design/envs.vector.md.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Sequence
 from typing import Any
 
@@ -37,6 +42,8 @@ from .batchphysics import BatchedPhysics
 __all__ = [
     "AUTORESET_MODES",
     "ShipVectorEnv",
+    "dp_station_keeping_vector_env",
+    "dp_sway_step_vector_env",
     "harbour_vector_env",
     "station_keeping_vector_env",
     "tracking_vector_env",
@@ -108,16 +115,22 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         residual_scale: float = 1.0,
         observer: str | None = None,
         env_sensors: Sequence[SensorConfig] | None = None,
-        vessel: Any = None,
-        plant: str = "default",
-        timestep: float = 0.05,
-        control_period: float = 1.0,
-        render_mode: str | None = None,
-        **task_args: Any,
+        **kwargs: Any,
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
         cls, steps = _task_class(task)
+        # the class's own defaults (the DP tasks' timing and sea), as its single env takes them
+        task_args, extras = cls.configure(kwargs)
+        vessel = task_args.pop("vessel", None)
+        plant = task_args.pop("plant", "default")
+        timestep = task_args.pop("timestep", 0.05)
+        control_period = task_args.pop("control_period", 1.0)
+        render_mode = task_args.pop("render_mode", None)
+        #: the episode length (s) after which an env truncates (``None``: the step limit only)
+        self.episode_duration: float | None = extras.get("episode_duration")
+        if max_episode_steps is None and self.episode_duration is not None and steps is None:
+            steps = sys.maxsize  # the time limit is the episode's duration
         if max_episode_steps is None:
             if steps is None:
                 raise ValueError(
@@ -316,6 +329,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self._elapsed += 1
         terminated = (self.guidance.finished & self.task.terminate_on_finish) | self._contact
         truncated = self._elapsed >= self.max_episode_steps
+        if self.episode_duration is not None:  # as the single env: to half a physics step
+            truncated |= (t >= self.episode_duration - 0.5 * self.physics.h) & ~terminated
         done = (terminated | truncated) & active
         self._return += reward
         info = self._info(np.ones(n, bool), saturated, action_clipped, command, rewards, done=done)
@@ -602,6 +617,16 @@ def harbour_vector_env(num_envs: int, **kwargs: Any) -> ShipVectorEnv:
 def blue_lady_harbour_vector_env(num_envs: int, **kwargs: Any) -> ShipVectorEnv:
     """``shipgym/BlueLadyHarbour-v0``'s vector entry point."""
     return ShipVectorEnv(num_envs, "shipgym/BlueLadyHarbour-v0", **kwargs)
+
+
+def dp_station_keeping_vector_env(num_envs: int, **kwargs: Any) -> ShipVectorEnv:
+    """``shipgym/DPStationKeeping-v0``'s vector entry point (``vessel=`` required)."""
+    return ShipVectorEnv(num_envs, "shipgym/DPStationKeeping-v0", **kwargs)
+
+
+def dp_sway_step_vector_env(num_envs: int, **kwargs: Any) -> ShipVectorEnv:
+    """``shipgym/DPSwayStep-v0``'s vector entry point (``vessel=`` required)."""
+    return ShipVectorEnv(num_envs, "shipgym/DPSwayStep-v0", **kwargs)
 
 
 def tracking_vector_env(num_envs: int, **kwargs: Any) -> ShipVectorEnv:
