@@ -12,7 +12,7 @@ from gymnasium.utils.env_checker import check_env
 
 import shipgym
 from shipgym.dynamics.vessel import load_vessel, vessel_names
-from shipgym.envs.registration import ALIASES, NEEDS, task_fits_vessel
+from shipgym.envs.registration import ALIASES, NEEDS, VECTOR_IDS, task_fits_vessel
 from shipgym.envs.scene import fits
 
 TASKS = [i for i in shipgym.ENV_IDS if i not in ALIASES]
@@ -149,3 +149,48 @@ def test_vessel_neutral_ids_need_a_vessel() -> None:
 def test_harbour_refuses_a_vessel_that_does_not_fit() -> None:
     with pytest.raises(ValueError, match="does not fit the harbour world"):
         gym.make("shipgym/Harbour-v0", vessel="wimpey-sealab")
+
+
+VECTOR_CASES = [(t, v) for t, v in CASES if t in VECTOR_IDS]
+
+
+@pytest.mark.parametrize(("task", "vessel"), VECTOR_CASES,
+                         ids=[f"{t.split('/')[1]}-{v}" for t, v in VECTOR_CASES])  # fmt: skip
+def test_every_batched_id_and_vessel(task: str, vessel: str) -> None:
+    """Every id with a vector entry point x every vessel that fits it: gymnasium's vector
+    conventions (batched spaces, info arrays with masks, reward terms summing to the reward,
+    seeding), stable-baselines3's ``VecEnv`` use (``shipgym.rl.vec``), and env i of
+    ``make_vec(id, N)`` equal to the single env seeded ``seed + i`` over random actions."""
+    n = 2
+    kw = {"vessel": vessel, "episode_duration": 4.0} if "DP" in task else {"vessel": vessel}
+    venv = gym.make_vec(task, num_envs=n, **kw)
+    u = venv.unwrapped
+    assert isinstance(u, gym.vector.VectorEnv)
+    assert venv.single_observation_space == gym.make(task, **kw).observation_space
+    obs, info = venv.reset(seed=3)
+    assert venv.observation_space.contains(obs) and info["_eta"].all()
+    singles = [gym.make(task, **kw) for _ in range(n)]
+    for i, s in enumerate(singles):
+        np.testing.assert_array_equal(obs[i], s.reset(seed=3 + i)[0])
+    venv.action_space.seed(1)
+    for _ in range(6):
+        a = venv.action_space.sample()
+        obs, r, term, trunc, info = venv.step(a)
+        terms = [k for k in info if k.startswith("reward_")]
+        np.testing.assert_allclose(sum(info[k] for k in terms), r)
+        for i, s in enumerate(singles):
+            o, ri, te, tr, _ = s.step(a[i])
+            np.testing.assert_array_equal(obs[i], o)
+            assert ri == r[i] and (te, tr) == (term[i], trunc[i])
+        if (term | trunc).any():
+            break
+    from stable_baselines3.common.vec_env import VecEnv
+
+    from shipgym.rl.vec import make_batched_vec_env
+
+    sb3 = make_batched_vec_env(task, n, seed=0, **kw)
+    assert isinstance(sb3, VecEnv)
+    o = sb3.reset()
+    o, r, d, infos = sb3.step(np.zeros((n, *sb3.action_space.shape), np.float32))
+    assert o.shape == (n, *sb3.observation_space.shape) and r.shape == d.shape == (n,)
+    assert len(infos) == n
