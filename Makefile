@@ -28,7 +28,7 @@ define pip_install
 endef
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-random test-slow bench lint venv rl ray zoo lock clean
+.PHONY: help demo test test-random test-slow bench rerecord lint venv rl ray zoo lock clean
 
 help: ## this list
 	@echo "make targets (each creates/reuses .venv and installs the locked versions it needs):"
@@ -115,9 +115,12 @@ bench: $(RL_STAMP) ## speed: headline ratios (runs/bench/bench.json), physics, d
 	$(PY) benchmarks/bench_disturbances.py
 	$(PY) benchmarks/bench_allocation.py
 
+rerecord: $(RL_STAMP) ## re-record the shipped baselines' reproduction fingerprints (tools/)
+	$(PY) tools/rerecord_baselines.py
+
 lint: $(DEV_STAMP) ## ruff check and format check
-	$(VENV)/bin/ruff check shipgym tests benchmarks
-	$(VENV)/bin/ruff format --check shipgym tests benchmarks
+	$(VENV)/bin/ruff check shipgym tests benchmarks tools
+	$(VENV)/bin/ruff format --check shipgym tests benchmarks tools
 
 lock: ## regenerate requirements/lock*.txt from the ranges in pyproject.toml
 	PYTHON=$(PYTHON) bash requirements/lock.sh

@@ -28,7 +28,7 @@ from shipgym.disturbances import (
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.sim._mujoco import mujoco
 
-from .physics import INTEGRATORS, check_timestep, joint_inertia
+from .physics import INTEGRATORS, check_lags, check_timestep, joint_inertia
 from .scene import build_model
 
 __all__ = ["BatchedPhysics"]
@@ -90,12 +90,7 @@ class BatchedPhysics:
         # the actuators this plant drives (a plant of the paper's model: the bollard laws)
         self.actuators = acts = v.actuators_for(self.plant)
         self.h = check_timestep(timestep)
-        lags = [c.time_constant for c in acts.channels if c.dynamics == "lag"]
-        if lags and self.h > 0.5 * min(lags) + 1e-12:
-            raise ValueError(
-                f"timestep {self.h:g} s is more than half the shortest actuator lag of "
-                f"{v.name!r} ({min(lags):g} s): use timestep <= {0.5 * min(lags):g}"
-            )
+        check_lags(acts, self.h, v.name)
         if waves is not None and not isinstance(waves, WaveConfig):
             raise ValueError(f"waves must be a WaveConfig or None, got {waves!r}")
         self.lower = acts.lower.copy()
@@ -219,26 +214,13 @@ class BatchedPhysics:
         hb = self._hulls
         drift = self.wave_config is not None and self.wave_config.drift
         for i in np.nonzero(m)[0].tolist():
-            hb.set_pose(i, e[i], w[i])
-            hb.act[i] = act[i]
-            hb.cmd[i] = np.where(self._holds, act[i], 0.0)
-            hb.t[i] = 0.0
             self.saturated[i] = False
-            g = rngs[i] if rngs is not None else np.random.default_rng(0)
-            self.winds[i].reset(g)
-            self.currents[i].reset(g)
-            wv = self.waves[i]
-            if wv is not None:
-                wv.reset(g)
-            wind = self.winds[i] if self.wind_configs[i] is not None else None
-            hb.set_processes(i, wind, self.currents[i], wv if drift else None)
-            if self.datas:  # MuJoCo's state of the hull: positions, contacts
-                m, d = self.models[i], self.datas[i]
-                mujoco.mj_resetData(m, d)
-                d.qpos[:] = hb.q[i]
-                d.qvel[:] = hb.qv[i]
-                mujoco.mj_forward(m, d)
-            hb.start(i)
+            hb.reset_hull(
+                i, e[i], w[i], act[i], self._holds,
+                rngs[i] if rngs is not None else np.random.default_rng(0),
+                self.winds[i], self.currents[i], self.waves[i],
+                aerodynamics=self.wind_configs[i] is not None, drift=bool(drift),
+            )  # fmt: skip
 
     @property
     def eta(self) -> Array:

@@ -42,6 +42,7 @@ __all__ = [
     "SimulationDiverged",
     "MAX_TIMESTEP",
     "MIN_TIMESTEP",
+    "check_lags",
     "check_timestep",
     "joint_inertia",
 ]
@@ -110,6 +111,17 @@ def joint_inertia(model: Any, actuators: Any, dofs: int) -> tuple[float, float, 
             f"unexpected joint-space inertia (need a constant diag(m, m, I_z[, I_x])): {Mq}"
         )
     return float(Mq[0, 0]), float(Mq[2, 2]), float(Mq[3, 3]) if dofs == 4 else 0.0
+
+
+def check_lags(actuators: Any, h: float, name: str) -> None:
+    """``ValueError`` where the physics step ``h`` (s) is more than half the shortest
+    actuator lag of the vessel ``name`` (the bound both physics classes set on their step)."""
+    lags = [c.time_constant for c in actuators.channels if c.dynamics == "lag"]
+    if lags and h > 0.5 * min(lags) + 1e-12:
+        raise ValueError(
+            f"timestep {h:g} s is more than half the shortest actuator lag of "
+            f"{name!r} ({min(lags):g} s): use timestep <= {0.5 * min(lags):g}"
+        )
 
 
 def check_timestep(timestep: Any) -> float:
@@ -237,12 +249,7 @@ class VesselPhysics:
 
     # ---- set-up ----------------------------------------------------------------------------
     def _check_lags(self, h: float) -> None:
-        lags = [c.time_constant for c in self.actuators.channels if c.dynamics == "lag"]
-        if lags and h > 0.5 * min(lags) + 1e-12:
-            raise ValueError(
-                f"timestep {h:g} s is more than half the shortest actuator lag of "
-                f"{self.vessel.name!r} ({min(lags):g} s): use timestep <= {0.5 * min(lags):g}"
-            )
+        check_lags(self.actuators, h, self.vessel.name)
 
     def _build(self) -> None:
         """The hull batch of one (:class:`~shipgym.sim.step.HullBatch`) for the current step."""
@@ -321,29 +328,18 @@ class VesselPhysics:
         if self.model.opt.timestep != self._h:
             self._check_lags(float(self.model.opt.timestep))
             self._build()
-        mujoco.mj_resetData(self.model, self.data)
         self._at = self._vel = None
-        hb = self._hulls
-        hb.set_pose(0, eta_a, nu_a)
-        act = np.where(self._holds, np.clip(act, self.actuators.lower, self.actuators.upper), act)
-        hb.act[0] = act
-        hb.cmd[0] = np.where(self._holds, act, 0.0)
-        hb.external[0] = 0.0
-        hb.t[0] = 0.0
         self.saturated[:] = False
-        rng = rng if rng is not None else np.random.default_rng(0)
-        # fixed order, one draw each: the same seed gives the same disturbances
-        self.wind.reset(rng)
-        self.current.reset(rng)
-        if self.waves is not None:
-            self.waves.reset(rng)
-        drift = self.waves if self.wave_config is not None and self.wave_config.drift else None
-        hb.set_processes(0, self.wind if self.aerodynamics else None, self.current, drift)
-        self._sync()
-        mujoco.mj_forward(self.model, self.data)  # positions, contacts (qacc: set by start)
-        hb.start(0)
-        hb.hits[0] = 0  # nothing stepped yet: no rate limit hit, no stall
-        hb.flags[0] = 0.0
+        act = np.where(self._holds, np.clip(act, self.actuators.lower, self.actuators.upper), act)
+        drift = self.wave_config is not None and self.wave_config.drift
+        self._hulls.reset_hull(
+            0, eta_a, nu_a, act, self._holds, rng if rng is not None else np.random.default_rng(0),
+            self.wind, self.current, self.waves, aerodynamics=self.aerodynamics, drift=drift,
+        )  # fmt: skip
+        if self.integrator == "leapfrog":  # MuJoCo's pose for rendering
+            mujoco.mj_resetData(self.model, self.data)
+            self._sync()
+            mujoco.mj_forward(self.model, self.data)
 
     def _sync(self) -> None:
         """MuJoCo's pose and clock from the leapfrog state (rendering, contacts)."""

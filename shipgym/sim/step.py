@@ -518,6 +518,7 @@ class HullBatch:
         self.mps = np.zeros(n, dtype=np.int64)
         self.dps = np.zeros(n, dtype=np.int64)
         self.fields = np.zeros((n, 5), dtype=np.int64)
+        self.models: list[Any] = []
         self.datas: list[Any] = []
         if integrator == "mujoco":
             models = list(model) if isinstance(model, (list, tuple)) else [model] * n
@@ -526,7 +527,7 @@ class HullBatch:
                 raise ValueError(
                     f"the mujoco integrator needs each hull's mjModel and mjData ({n} of each)"
                 )
-            self.datas = datas
+            self.models, self.datas = models, datas
             self._mj_step = mj_step_address()
             for i, (m, d) in enumerate(zip(models, datas, strict=True)):
                 self.mps[i], self.dps[i] = m._address, d._address
@@ -638,6 +639,40 @@ class HullBatch:
             self.q[i] = (x, y, psi, phi)
             self.qv[i] = (c * u - s * cf * v, s * u + c * cf * v, r * cf, p)
         self.qa[i] = 0.0
+
+    def reset_hull(
+        self, i: int, eta: Any, nu: Any, act: Any, hold: Any, rng: np.random.Generator,
+        wind: Any, current: Any, waves: Any, *, aerodynamics: bool, drift: bool,
+    ) -> None:  # fmt: skip
+        """Start hull ``i`` of an episode: the pose ``eta`` and body velocity ``nu``
+        (:meth:`set_pose`), the actuator states ``act`` (the channels in ``hold`` commanded to
+        hold them, the others to zero), its clock at 0 and its disturbances reset from
+        ``rng`` in a fixed order, one draw each (the wind, the current, the waves: the same
+        seed gives the same episode), the wind's load on where ``aerodynamics``, the waves'
+        drift where ``drift``; then its leapfrog started (:meth:`start`). The one reset of
+        a hull, for the single and the batched physics."""
+        if self.datas:
+            mujoco.mj_resetData(self.models[i], self.datas[i])
+        self.set_pose(i, eta, nu)
+        self.act[i] = act
+        self.cmd[i] = np.where(hold, act, 0.0)
+        self.external[i] = 0.0
+        self.t[i] = 0.0
+        wind.reset(rng)
+        current.reset(rng)
+        if waves is not None:
+            waves.reset(rng)
+        self.set_processes(
+            i, wind if aerodynamics else None, current, waves if drift else None
+        )
+        if self.datas:  # MuJoCo's positions and contacts of the start (qacc: set by start)
+            d = self.datas[i]
+            d.qpos[:] = self.q[i]
+            d.qvel[:] = self.qv[i]
+            mujoco.mj_forward(self.models[i], d)
+        self.start(i)
+        self.hits[i] = 0  # nothing stepped yet: no rate limit hit, no stall
+        self.flags[i] = 0.0
 
     def start(self, i: int) -> None:
         """Start hull ``i``'s leapfrog: ``qacc = a_0`` of its state (:data:`EVALUATE`), then
