@@ -662,9 +662,7 @@ class HullBatch:
         current.reset(rng)
         if waves is not None:
             waves.reset(rng)
-        self.set_processes(
-            i, wind if aerodynamics else None, current, waves if drift else None
-        )
+        self.set_processes(i, wind if aerodynamics else None, current, waves if drift else None)
         if self.datas:  # MuJoCo's positions and contacts of the start (qacc: set by start)
             d = self.datas[i]
             d.qpos[:] = self.q[i]
