@@ -65,6 +65,16 @@ MAX_SUBSTEPS = 10_000
 MAX_CONTROL_PERIOD = 10.0
 
 
+#: the env's own arguments (not the task's) and their defaults
+ENV_ARGS: dict[str, Any] = {
+    "vessel": None,
+    "plant": "default",
+    "timestep": 0.05,
+    "control_period": 1.0,
+    "render_mode": None,
+}
+
+
 class _Sample(NamedTuple):
     """What a step produced, before it is turned into observation and info.
 
@@ -227,6 +237,17 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return dict(kwargs), {}
 
     @classmethod
+    def split_args(
+        cls, kwargs: dict[str, Any]
+    ) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
+        """``(env, task, extras)``: the env's own arguments (:data:`ENV_ARGS`, defaults filled
+        in), the task's arguments and the class's settings, after :meth:`configure` (the
+        single env and the vector env of the class split alike)."""
+        kwargs, extras = cls.configure(kwargs)
+        env = {k: kwargs.pop(k, default) for k, default in ENV_ARGS.items()}
+        return env, kwargs, extras
+
+    @classmethod
     def make_task(cls, vessel: Any = None, **task_args: Any) -> PlanTask:
         """This env class's task for ``vessel`` and the task arguments (the single env and
         the vector env of the class make it alike)."""
@@ -241,18 +262,20 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 )
         return cls.task_class(vessel, owner=cls.__name__, **task_args)
 
-    def __init__(
-        self,
-        vessel: Vessel | str | None = None,
-        *,
-        plant: str = "default",
-        timestep: float = 0.05,
-        control_period: float = 1.0,
-        render_mode: str | None = None,
-        **task_args: Any,
-    ) -> None:
-        # the task's arguments (plan, wind, sensors, waves, current, scene, start, reward)
-        self.task = task = self.make_task(vessel, **task_args)
+    def __init__(self, vessel: Vessel | str | None = None, **kwargs: Any) -> None:
+        # the env's own arguments (plant, timestep, control_period, render_mode: ENV_ARGS),
+        # the task's (plan, wind, sensors, waves, current, scene, start, reward), and the
+        # settings the class keeps (episode_duration, ...), as the vector env splits them
+        env, task_args, extras = self.split_args({"vessel": vessel, **kwargs})
+        for name, value in extras.items():
+            setattr(self, name, value)
+        plant, timestep, control_period, render_mode = (
+            env["plant"],
+            env["timestep"],
+            env["control_period"],
+            env["render_mode"],
+        )
+        self.task = task = self.make_task(env["vessel"], **task_args)
         self.vessel = task.vessel
         _check_render_mode(render_mode, self.metadata)
         _check_timing(timestep, control_period)

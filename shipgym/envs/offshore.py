@@ -206,12 +206,6 @@ class OffshoreDPEnv(StationKeepingEnv):
     #: the default episode length (s)
     default_duration = 2000.0
 
-    def __init__(self, **kwargs: Any) -> None:
-        kwargs, extras = self.configure(kwargs)
-        for name, value in extras.items():
-            setattr(self, name, value)
-        super().__init__(**kwargs)
-
     @classmethod
     def configure(cls, kwargs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
         """The env's arguments with the DP task's defaults (timing, sea, current, sensors,

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shipgym._config import is_real, param
-from shipgym._jit import njit
+from shipgym._jit import entry, njit
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
 from shipgym.disturbances.current import MAX_CURRENT_SPEED
 from shipgym.disturbances.wind import MAX_WIND_SPEED
@@ -463,8 +463,6 @@ class PlanTask:
         args = (eta, nu, nav_eta, nav_nu, ref, action, prev, switched, new_contact, self._w,
                 obs, rew, eta_r)  # fmt: skip
         if self._terms_entry is None:
-            from shipgym._jit import entry
-
             self._terms_entry = entry(plan_terms, args)
         self._terms_entry(*args)
 

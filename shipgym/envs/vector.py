@@ -93,10 +93,11 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             observer=)``).
         env_sensors: one sensor configuration per env, each as the ``sensors=`` of env ``i``
             (the training stack's per-env noise); they may differ only in their variances.
-        vessel, plant, timestep, control_period: as the single env's.
-        render_mode: must be ``None``.
-        **task_args: the task's arguments, as the single env's (``wind=``, ``max_legs=``,
-            ``waves=``, ...).
+        **kwargs: the single env's arguments (``vessel=``, ``plant=``, ``timestep=``,
+            ``control_period=``, the task's ``wind=``, ``max_legs=``, ``waves=``, ...,
+            and the class's own, such as the DP tasks' ``beaufort=``), split as the single
+            env splits them (:meth:`ShipEnv.split_args
+            <shipgym.envs.base.ShipEnv.split_args>`); ``render_mode`` must be ``None``.
 
     Raises:
         ValueError: a task, vessel or argument the batched form does not cover, naming it.
@@ -121,12 +122,9 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
         cls, steps = _task_class(task)
         # the class's own defaults (the DP tasks' timing and sea), as its single env takes them
-        task_args, extras = cls.configure(kwargs)
-        vessel = task_args.pop("vessel", None)
-        plant = task_args.pop("plant", "default")
-        timestep = task_args.pop("timestep", 0.05)
-        control_period = task_args.pop("control_period", 1.0)
-        render_mode = task_args.pop("render_mode", None)
+        env, task_args, extras = cls.split_args(kwargs)
+        vessel, plant, render_mode = env["vessel"], env["plant"], env["render_mode"]
+        timestep, control_period = env["timestep"], env["control_period"]
         #: the episode length (s) after which an env truncates (``None``: the step limit only)
         self.episode_duration: float | None = extras.get("episode_duration")
         if max_episode_steps is None and self.episode_duration is not None and steps is None:
@@ -176,7 +174,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self._obs = np.zeros((n, size), np.float32)
         self._rew = np.zeros((n, len(task.reward_terms)))
         self._eta_r = np.zeros((n, 3))
-        self._harbour = [harbour_body(m) for m in self.physics.models] if harbour else []
+        # the harbour body (the same id in every hull's copy of the world), None in open water
+        self._harbour = harbour_body(self.physics.models[0]) if harbour else None
         self._contact = np.zeros(n, dtype=bool)
         self._stop = harbour  # stop a hull after the physics step in which it touches a quay
         self._rngs: list[np.random.Generator | None] = [None] * n
@@ -419,8 +418,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
                 self.sensors.set_config(i, sensors)
             eta0[i] = ep.eta0
             start[i] = ep.start
-            if self._harbour:
-                place_harbour(self.physics.models[i], self._harbour[i], ep.start)
+            if self._harbour is not None:
+                place_harbour(self.physics.models[i], self._harbour, ep.start)
         rngs = self._rngs
         self.physics.reset(eta=eta0, mask=mask, rngs=rngs)  # type: ignore[arg-type]
         self._steps[mask] = 0

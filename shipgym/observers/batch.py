@@ -516,8 +516,12 @@ class BatchedKalman:
         return self._gain.transpose(2, 1, 0).copy()
 
     # ---- cached interval matrices --------------------------------------------------------------
-    def _interval(self, key: float, dt: float) -> tuple[Array, Array]:
-        """``Q_k(dt)`` (3, 3) ``[Q_vv, Q_vp, Q_pp]`` per DOF and the per-env blocks."""
+    def _interval(self, dt: float) -> tuple[Array, Array]:
+        """``Q_k(dt)`` (3, 3) ``[Q_vv, Q_vp, Q_pp]`` per DOF and the per-env blocks of the
+        interval ``dt`` (s), already rounded to its key (:func:`_dt_key`): what a filter
+        gets depends on its own interval only, never on which env, filter or test computed
+        a shared entry first."""
+        key = dt
         val = self._blocks.get(key)
         if val is not None:
             return val
@@ -702,10 +706,7 @@ class BatchedKalman:
         for key in keys:
             key = float(key)
             sel = self._all if len(keys) == 1 else np.round(dt, 12) == key
-            # the interval's matrices from the key itself (dt rounded to 1e-12 s), not from the
-            # first env's dt: what a filter gets depends on its own dt only, never on which
-            # env, filter or test computed the shared entry first
-            Q, blk = self._interval(key, key)
+            Q, blk = self._interval(key)  # from the key itself, not the first env's dt
             bad = _call(
                 "step", _kalman_step, self._mode, self.threshold, self.max_rejections, sel, dt,
                 self._X, self._count, self._open, self._yprev, self._has_prev, self._R,
