@@ -131,6 +131,10 @@ class BatchedPhysics:
         self.saturated = np.zeros((n, acts.n_channels), dtype=bool)
         self.reset()
 
+    def qpos(self, i: int) -> Array:
+        """Hull ``i``'s MuJoCo joint positions (its world's ``qpos``: rendering)."""
+        return self._hulls.q[i].copy()
+
     @property
     def aerodynamics(self) -> bool:
         """Whether any hull feels a wind load."""
