@@ -183,7 +183,9 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
         if done.any():  # SAME_STEP: reset now, the last observation and info kept aside
             info["final_obs"] = _where_rows(done, obs, np.full_like(obs, np.nan))
             info["_final_obs"] = done
-            info["final_info"] = {k: v for k, v in info.items() if not k.startswith("final")}
+            info["final_info"] = {
+                k: v for k, v in info.items() if not k.lstrip("_").startswith("final")
+            }
             info["_final_info"] = done
             self._reset_envs(done)
             obs = _where_rows(done, self._observation(), obs)
