@@ -199,14 +199,15 @@ def _where_rows(mask: Bools, a: Any, b: Any) -> Any:
 
 
 def _masked(info: dict[str, Any], mask: Bools) -> dict[str, Any]:
-    """``info`` with Gymnasium's ``_key`` mask beside every key (nested dicts too)."""
-    out: dict[str, Any] = {}
+    """``info`` with Gymnasium's ``_key`` mask beside every key that has none (nested dicts
+    too)."""
+    out = dict(info)
     for k, v in info.items():
-        if k.startswith("_"):
-            out[k] = v
-            continue
-        out[k] = _masked(v, mask) if isinstance(v, dict) else v
-        out.setdefault("_" + k, mask)
+        if k[:1] != "_":
+            if "_" + k not in info:
+                out["_" + k] = mask
+            if type(v) is dict:
+                out[k] = _masked(v, mask)
     return out
 
 
