@@ -37,6 +37,6 @@ def make(env_id: str, *, observer=None, controller=None, **kwargs):  # type: ign
             ``pid-seed``).
         **kwargs: environment arguments (``vessel=`` a name of :func:`vessels` or a path).
     """
-    from shipgym.envs.make import make as _make
+    from shipgym.stacks import make as _make
 
     return _make(env_id, observer=observer, controller=controller, **kwargs)

@@ -27,7 +27,7 @@ def catalogue() -> dict[str, Any]:
     from shipgym.disturbances import BLENDERMANN
     from shipgym.dynamics import ACTUATOR_NAMES, PLANT_VARIANTS
     from shipgym.dynamics.vessel import vessels
-    from shipgym.envs.make import SCENARIOS
+    from shipgym.envs.registration import SCENARIOS
     from shipgym.guidance.plan import PLANS
     from shipgym.observers import observer_names
     from shipgym.observers.sensors import SENSOR_PRESETS

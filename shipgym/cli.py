@@ -164,7 +164,7 @@ def _no_vessel(env_id: str) -> str:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from shipgym.dynamics.vessel import load_vessel
-    from shipgym.envs.make import resolve_env_id
+    from shipgym.envs.registration import resolve_env_id
 
     env_kwargs: dict[str, Any] = {}
     scenario_name = args.scenario

@@ -186,7 +186,7 @@ def build_env(
     from shipgym.controllers.learned import is_learned_controller
 
     if is_learned_controller(controller):
-        from shipgym.controllers.learned import make_learned_env
+        from shipgym.stacks import make_learned_env
 
         obs_kw: dict[str, Any] = {} if observer is None else {"observer": observer}
         return make_learned_env(scenario, controller, **obs_kw, **env_kwargs)

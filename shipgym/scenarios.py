@@ -23,6 +23,7 @@ from shipgym._config import is_real
 from shipgym.disturbances.current import CurrentConfig
 from shipgym.disturbances.waves import WaveConfig
 from shipgym.disturbances.wind import WindConfig
+from shipgym.envs.registration import SCENARIOS as ENV_SCENARIOS  # the env scenario names
 
 __all__ = [
     "ENV_SCENARIOS",
@@ -42,13 +43,6 @@ __all__ = [
     "load_scenario",
     "scenario_files",
 ]
-
-#: Environment scenario names accepted by ``shipgym.make`` (``shipgym.envs.make.SCENARIOS``).
-ENV_SCENARIOS: dict[str, str] = {
-    "harbour": "shipgym/BlueLadyHarbour-v0",
-    "station-keeping": "shipgym/BlueLadyStationKeeping-v0",
-    "tracking": "shipgym/BlueLadyTracking-v0",
-}
 
 from shipgym.disturbances.seastate import (  # noqa: E402 - re-exported
     BEAUFORT_TABLE,

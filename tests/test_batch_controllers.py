@@ -316,8 +316,8 @@ def test_against_the_controller_wrapper_in_a_tracking_run():
     wrapper reads it (to_r_frame, the tau_error of the previous step, change_frame on a leg
     switch), gives the wrapper's tau_c, controller action, allocation and residual clip."""
     from shipgym.dynamics import wrap_angle
-    from shipgym.envs.make import make
     from shipgym.guidance import to_r_frame
+    from shipgym.stacks import make
 
     n, scale = 3, 0.4
     envs = [

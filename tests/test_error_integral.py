@@ -118,10 +118,9 @@ def test_zoo_form_env_wrapper_is_parsed_in_order_only():
 def test_a_model_with_the_integral_runs_through_the_loader(tmp_path):
     from shipgym.controllers.learned import (
         LearnedControllerWrapper,
-        make_learned_env,
         read_metadata,
     )
-    from shipgym.envs.make import make
+    from shipgym.stacks import make, make_learned_env
 
     run = train("ppo", timesteps=128, seed=0, n_envs=2, out=tmp_path, vec_env="batched",
                 eval_freq=0, checkpoint_freq=0, overrides={"n_steps": 64, "batch_size": 64,

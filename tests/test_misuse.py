@@ -178,7 +178,7 @@ CRAFTED = {
 @needs_rl
 @pytest.mark.parametrize("case", sorted(CRAFTED))
 def test_crafted_model_refused_in_one_line(case, tmp_path, capsys):
-    from shipgym.controllers.learned import make_learned_env
+    from shipgym.stacks import make_learned_env
 
     build, needle = CRAFTED[case]
     path = build(tmp_path)
@@ -238,7 +238,8 @@ def test_crafted_models_refused_fast_and_small(tmp_path):
 
 @needs_rl
 def test_shipped_model_still_loads_and_runs():
-    from shipgym.controllers.learned import load_policy, make_learned_env
+    from shipgym.controllers.learned import load_policy
+    from shipgym.stacks import make_learned_env
 
     policy = load_policy(BASELINE)
     a = policy(np.zeros(15, np.float32))

@@ -20,12 +20,12 @@ from shipgym.controllers.learned import (  # noqa: E402
     baseline_model_path,
     is_learned_controller,
     load_policy,
-    make_learned_env,
     parse_learned_controller,
     read_metadata,
 )
 from shipgym.controllers.wrappers import DPControllerWrapper  # noqa: E402
 from shipgym.rl.train import hyperparams_path, load_hyperparams, train  # noqa: E402
+from shipgym.stacks import make_learned_env  # noqa: E402
 
 #: a few hundred steps of a tiny PPO: seconds
 SMALL = {"n_steps": 64, "batch_size": 64, "n_epochs": 2}

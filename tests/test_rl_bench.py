@@ -26,13 +26,11 @@ from shipgym.controllers.learned import (  # noqa: E402
     baseline_model_path,
     find_baseline,
     is_learned_controller,
-    make_learned_env,
     parse_learned_controller,
     read_metadata,
     trained_vessel,
 )
 from shipgym.dynamics import wrap_angle  # noqa: E402
-from shipgym.envs.make import make  # noqa: E402
 from shipgym.rl.bench import (  # noqa: E402
     bench_controllers,
     bench_title,
@@ -42,6 +40,7 @@ from shipgym.rl.bench import (  # noqa: E402
     station_table,
 )
 from shipgym.rl.train import train  # noqa: E402
+from shipgym.stacks import make, make_learned_env  # noqa: E402
 from shipgym.viz.training import (  # noqa: E402
     plot_training,
     read_training_run,

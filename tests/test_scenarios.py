@@ -13,7 +13,6 @@ from shipgym.disturbances import CurrentConfig, WaveConfig, Waves, WindConfig
 from shipgym.dynamics import BLUE_LADY_HULL
 from shipgym.scenarios import (
     BEAUFORT_TABLE,
-    ENV_SCENARIOS,
     SCENARIO_KEYS,
     SCENARIOS,
     WAVE_PRESETS,
@@ -139,12 +138,6 @@ def test_env_kwargs() -> None:
     kw = SCENARIOS["beaufort5"].env_kwargs()
     assert "plan" not in kw  # the environment's own default plan
     assert SCENARIOS["beaufort5"].env_id == "shipgym/BlueLadyStationKeeping-v0"
-
-
-def test_env_names_match_the_registered_scenarios() -> None:
-    from shipgym.envs.make import SCENARIOS as ENV_NAMES
-
-    assert ENV_SCENARIOS == ENV_NAMES
 
 
 # ---------------------------------------------------------------------------------------------

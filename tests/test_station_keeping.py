@@ -20,7 +20,7 @@ import pytest
 
 from shipgym.dynamics import wrap_angle
 from shipgym.dynamics.actuators import Azimuth
-from shipgym.envs.make import make
+from shipgym.stacks import make
 
 RADIUS = 2.0  # m (measured r95: 0.5-0.8 m)
 HEADING_RMS = 2.0  # deg

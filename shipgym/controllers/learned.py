@@ -42,7 +42,6 @@ __all__ = [
     "check_policy_spec",
     "is_learned_controller",
     "load_policy",
-    "make_learned_env",
     "models_dir",
     "parse_learned_controller",
     "policy_parameter_count",
@@ -127,7 +126,6 @@ BASELINE_MODELS: tuple[BaselineModel, ...] = (
 #: activation functions allowed in ``policy_kwargs`` (plain names, no eval)
 ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu", "silu", "gelu")
 
-_USE_MODEL = "model"  # sentinel: take the observer from the metadata
 
 # ---- limits of a model file (refused from the zip directory / metadata, before allocation) --
 _MIB = 1 << 20
@@ -882,7 +880,7 @@ def models_dir() -> Path:
     return Path(str(resources.files("shipgym") / "assets" / "models"))
 
 
-#: env ids per baseline task (scenario names map through ``shipgym.envs.make.SCENARIOS``)
+#: env ids per baseline task (scenario names map through ``shipgym.envs.registration.SCENARIOS``)
 _TASK_IDS = {
     "harbour": (
         "shipgym/Harbour-v0", "shipgym/BlueLadyHarbour-v0", "shipgym/Tracking-v0",
@@ -903,7 +901,7 @@ def baseline_task(scenario: str | None) -> str:
     """
     if scenario is None or scenario in BASELINE_TASKS:
         return scenario or "harbour"
-    from shipgym.envs.make import SCENARIOS
+    from shipgym.envs.registration import SCENARIOS
 
     env_id = SCENARIOS.get(scenario, scenario)
     for task, ids in _TASK_IDS.items():
@@ -1089,7 +1087,7 @@ class LearnedControllerWrapper(
     Info gains ``policy_action`` (the network's action, before the residual).
 
     Args:
-        env: the environment stack the model expects (see :func:`make_learned_env`).
+        env: the environment stack the model expects (see :func:`shipgym.stacks.make_learned_env`).
         model_path: a shipgym model file (``shipgym train``).
         deterministic: use the policy's mean action (default) or sample it.
 
@@ -1218,55 +1216,3 @@ def _check_stack(env: gym.Env[Any, Any], meta: ModelMetadata) -> None:
             f"the model was trained with observer {meta.observer or 'truth'!r}; the environment "
             f"uses {name or 'truth'!r}"
         )
-
-
-def make_learned_env(
-    env_id: str,
-    model_path: str | Path,
-    *,
-    observer: str | None = _USE_MODEL,
-    deterministic: bool = True,
-    **env_kwargs: Any,
-) -> gym.Env[Any, Any]:
-    """An environment driven by a learned controller: env -> observer -> [DP controller] -> policy.
-
-    The observer, the residual controller and its scale come from the model's metadata;
-    ``env_kwargs`` are passed to the environment (e.g. ``wind=``, ``plant=``).
-
-    Args:
-        env_id: a registered id or a scenario name (``harbour``, ``tracking``, ...).
-        model_path: a shipgym model, or a controller name: a shipped baseline (``ppo``,
-            ``sac``, ``ppo-residual``: the one for ``env_id``'s task and ``vessel=``) or
-            ``ppo:PATH`` / ``sac:PATH``.
-        observer: ``"model"`` (default: the model's own observer), ``None``/``"truth"`` or
-            an observer name (an experiment with another observer; warns).
-        deterministic: mean action (default) or sampled.
-        **env_kwargs: environment arguments.
-
-    Returns:
-        The wrapped environment; ``env.step(np.zeros(3))`` runs the learned controller.
-    """
-    from shipgym.envs.make import make
-
-    path = Path(model_path)
-    if not path.is_file() and is_learned_controller(str(model_path)):
-        _, path = parse_learned_controller(
-            str(model_path), task=env_id, vessel=env_kwargs.get("vessel")
-        )
-    meta = read_metadata(path)
-    check_trained_env(meta, path)
-    obs_name = meta.observer if observer == _USE_MODEL else observer
-    if obs_name == "truth":
-        obs_name = None
-    env = make(
-        env_id,
-        observer=obs_name,
-        controller=str(meta.controller) if meta.residual else None,
-        residual_scale=meta.residual_scale if meta.residual else 1.0,
-        **env_kwargs,
-    )
-    if meta.error_integral is not None:
-        from shipgym.envs.integral import ErrorIntegralObservation
-
-        env = ErrorIntegralObservation(env, time_constant=meta.error_integral)
-    return LearnedControllerWrapper(env, path, deterministic=deterministic)

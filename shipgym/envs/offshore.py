@@ -23,12 +23,12 @@ from types import MappingProxyType
 from typing import Any
 
 from shipgym.disturbances import CurrentConfig
+from shipgym.disturbances.seastate import BEAUFORT_TABLE, beaufort
 from shipgym.disturbances.spectra import G
 from shipgym.disturbances.waves import WF_MODELS, al_takie_hf_peak_frequency
 from shipgym.dynamics.vessel import load_vessel
 from shipgym.guidance import Leg, ManoeuvrePlan
 from shipgym.observers.sensors import sensor_config
-from shipgym.scenarios import BEAUFORT_TABLE, beaufort
 
 from .tasks import StationKeepingEnv
 

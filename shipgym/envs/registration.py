@@ -9,7 +9,16 @@ from gymnasium.envs.registration import WrapperSpec
 
 from .episode import EPISODE_END_ENTRY_POINT
 
-__all__ = ["ALIASES", "ENV_IDS", "NEEDS", "VECTOR_IDS", "register_envs", "task_fits_vessel"]
+__all__ = [
+    "ALIASES",
+    "ENV_IDS",
+    "NEEDS",
+    "SCENARIOS",
+    "VECTOR_IDS",
+    "register_envs",
+    "resolve_env_id",
+    "task_fits_vessel",
+]
 
 #: env id -> (entry point, max_episode_steps); ``None``: the env truncates itself after its
 #: ``episode_duration`` (the DP tasks, whose number of steps depends on the vessel)
@@ -50,6 +59,34 @@ ALIASES: dict[str, str] = {
     "shipgym/BlueLadyStationKeeping-v0": "shipgym/StationKeeping-v0",
     "shipgym/BlueLadyTracking-v0": "shipgym/Tracking-v0",
 }
+
+
+#: short scenario names accepted by ``shipgym run`` and ``shipgym.make``: the Blue Lady's
+#: ids; with ``vessel=`` another vessel, the vessel-neutral id of the same task.
+SCENARIOS: dict[str, str] = {
+    "harbour": "shipgym/BlueLadyHarbour-v0",
+    "station-keeping": "shipgym/BlueLadyStationKeeping-v0",
+    "tracking": "shipgym/BlueLadyTracking-v0",
+}
+
+
+def resolve_env_id(name: str, vessel: Any = None) -> str:
+    """A registered env id from an id or a scenario name; unknown names list the valid ones.
+
+    A scenario name means the Blue Lady's id, or with a ``vessel`` other than the Blue Lady
+    the vessel-neutral id of the same task (``"harbour"`` -> ``shipgym/Harbour-v0``).
+    """
+    if name in ENV_IDS:
+        return name
+    if name in SCENARIOS:
+        env_id = SCENARIOS[name]
+        if vessel is not None and vessel != "blue-lady":
+            return ALIASES[env_id]
+        return env_id
+    raise ValueError(
+        f"unknown scenario or env id {name!r}; choose a scenario ({', '.join(SCENARIOS)}) "
+        f"or an id ({', '.join(ENV_IDS)})"
+    )
 
 
 #: what an id needs of its vessel: ``"positioning"`` (thrust in surge, sway and yaw at rest:

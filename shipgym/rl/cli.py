@@ -311,8 +311,7 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
     vessel = args.vessel or default_vessel(args.task)
     if args.vessel is not None:
         from shipgym.dynamics.vessel import load_vessel
-        from shipgym.envs.make import resolve_env_id
-        from shipgym.envs.registration import task_fits_vessel
+        from shipgym.envs.registration import resolve_env_id, task_fits_vessel
 
         env_id = resolve_env_id(args.task, vessel)
         if not task_fits_vessel(env_id, load_vessel(vessel)):

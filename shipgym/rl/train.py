@@ -570,7 +570,7 @@ def build_env(
         randomize: apply ``hp["randomize"]``.
     """
     import shipgym  # noqa: F401  (registers the ids in worker processes)
-    from shipgym.envs.make import make
+    from shipgym.stacks import make
 
     kwargs = dict(hp.get("env_kwargs") or {}) if env_kwargs is None else dict(env_kwargs)
     rnd = hp.get("randomize") or {}

@@ -825,7 +825,7 @@ class RecordEpisode(
         import rerun as rr
 
         import shipgym
-        from shipgym.envs.make import SCENARIOS
+        from shipgym.envs.registration import SCENARIOS
 
         spec = self.env.spec
         env_id = spec.id if spec is not None else type(base).__name__
