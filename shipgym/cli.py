@@ -5,7 +5,8 @@
 ``shipgym demo``          open-loop turn of the Blue Lady in gusty wind, with a short summary;
 ``shipgym list``          env ids, scenarios, controllers, plant variants, wind models.
 
-User mistakes end with a one-line error and exit status 2, never with a traceback.
+User mistakes end with a one-line error and exit status 2, never with a traceback; a
+simulation that diverges (a plant or setting that does not simulate) with one and status 3.
 """
 
 from __future__ import annotations
@@ -919,6 +920,7 @@ def main(argv: list[str] | None = None) -> int:
     130 (SIGINT) or 143 (SIGTERM). A second signal stops the clean-up itself.
     """
     from shipgym._io import WriteFailed, handle_signals, interrupt_message, interrupt_status
+    from shipgym.sim.step import SimulationDiverged
 
     try:
         args = _parser().parse_args(argv)
@@ -936,6 +938,9 @@ def main(argv: list[str] | None = None) -> int:
         except (ValueError, FileNotFoundError, ImportError) as exc:
             print(f"shipgym: error: {exc}", file=sys.stderr)
             return 2
+        except SimulationDiverged as exc:  # a plant or setting that does not simulate
+            print(f"shipgym: error: {exc}", file=sys.stderr)
+            return 3
         except KeyboardInterrupt as exc:
             print(interrupt_message(exc), file=sys.stderr, flush=True)
             return interrupt_status(exc)

@@ -53,6 +53,15 @@ MAX_RATE = 10.0
 MAX_ROLL = 1.2
 
 
+#: the most physics steps one call may take (5.8 days at 0.05 s): a larger request is a
+#: mistake, not a simulation (it would hold the process for hours)
+MAX_STEPS = 10_000_000
+
+_BADQACC = int(mujoco.mjtWarning.mjWARN_BADQACC)
+_BADQVEL = int(mujoco.mjtWarning.mjWARN_BADQVEL)
+_BADQPOS = int(mujoco.mjtWarning.mjWARN_BADQPOS)
+
+
 class SimulationDiverged(RuntimeError):
     """The simulation produced a non-finite or physically absurd state; it was stopped."""
 
@@ -705,10 +714,23 @@ class HullBatch:
             SimulationDiverged: a hull's state became non-finite or absurd (its state before
                 that step is kept).
         """
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or not 0 <= n <= MAX_STEPS:
+            raise ValueError(
+                f"the number of physics steps must be an int in [0, {MAX_STEPS}], got {n!r}"
+            )
         if self.integrator == "mujoco" and self.n == 1:
             self.t[0] = self.datas[0].time
         integ = MUJOCO if self.integrator == "mujoco" else LEAPFROG
-        return self._advance(integ, n, None, stop_on_contact, mask)
+        taken = self._advance(integ, int(n), None, stop_on_contact, mask)
+        for i, d in enumerate(self.datas):  # MuJoCo resets an unstable state and warns: fail
+            w = d.warning
+            if w[_BADQACC].number or w[_BADQVEL].number or w[_BADQPOS].number:
+                raise SimulationDiverged(
+                    f"simulation diverged by t = {self.t[i]:.3f} s (hull {i}): MuJoCo found a "
+                    "NaN, infinite or huge value in the state or its acceleration and reset the "
+                    "state; check the plant parameters, the timestep and the applied forces"
+                )
+        return taken
 
     def _advance(
         self,

@@ -1,0 +1,72 @@
+"""Physics health: an instability is an error, never a silently reset state (MuJoCo resets an
+unstable state to the model's default pose and only warns), and the number of steps per call
+is checked."""
+
+from __future__ import annotations
+
+import re
+import shutil
+from importlib import resources
+
+import numpy as np
+import pytest
+
+import shipgym
+from shipgym.cli import main
+from shipgym.envs.batchphysics import BatchedPhysics
+from shipgym.envs.physics import VesselPhysics
+from shipgym.sim.step import MAX_STEPS, SimulationDiverged
+
+
+@pytest.fixture(scope="module")
+def absurd_vessel(tmp_path_factory):
+    """The Blue Lady with an absurd yaw damping (N_rr = -1e300 N m s^2)."""
+    src = resources.files("shipgym") / "assets" / "mjcf" / "blue_lady"
+    dst = tmp_path_factory.mktemp("absurd") / "blue_lady"
+    shutil.copytree(str(src), dst)
+    toml = dst / "vessel.toml"
+    text, n = re.subn(r"^N_rr = \{ value = [^,]*,", "N_rr = { value = -1e300,",
+                      toml.read_text(), flags=re.M)  # fmt: skip
+    assert n == 1
+    toml.write_text(text)
+    return str(dst)
+
+
+@pytest.mark.parametrize("integrator", ["mujoco", "leapfrog"])
+def test_an_unstable_plant_raises_and_is_not_teleported(absurd_vessel, integrator):
+    p = VesselPhysics(absurd_vessel, integrator=integrator)
+    p.reset(eta=(5.0, 3.0, 0.1), nu=(0.5, 0.0, 0.05))
+    with pytest.raises(SimulationDiverged, match="diverged"):
+        p.step(50)
+
+
+def test_the_batched_mujoco_physics_names_the_hull(absurd_vessel):
+    bp = BatchedPhysics(absurd_vessel, 2, integrator="mujoco")
+    bp.reset(eta=[[5.0, 3.0, 0.1], [0.0, 0.0, 0.0]], nu=[[0.5, 0.0, 0.05], [0.5, 0.0, 0.05]])
+    with pytest.raises(SimulationDiverged, match=r"hull \d"):
+        bp.step(50)
+
+
+def test_the_harbour_env_ends_with_the_divergence_error(absurd_vessel):
+    env = shipgym.make("harbour", vessel=absurd_vessel, controller="pid")
+    env.reset(seed=0)
+    with pytest.raises(SimulationDiverged):
+        for _ in range(100):
+            env.step(np.zeros(3, np.float32))
+
+
+def test_the_cli_reports_a_divergence_in_one_line(absurd_vessel, capsys):
+    assert main(["run", "station-keeping", "--vessel", absurd_vessel, "--no-progress"]) == 3
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("shipgym: error: simulation diverged")
+
+
+@pytest.mark.parametrize("bad", [-1, 2.5, True, MAX_STEPS + 1, "3"])
+def test_the_number_of_steps_is_checked(bad):
+    p = VesselPhysics("blue-lady")
+    with pytest.raises(ValueError, match="number of physics steps"):
+        p.step(bad)
+    bp = BatchedPhysics("blue-lady", 2)
+    with pytest.raises(ValueError, match="number of physics steps"):
+        bp.step(bad)
+    assert p.step(0) == 0 and p.time == 0.0
