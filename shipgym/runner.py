@@ -135,6 +135,8 @@ def run_episode(
         result = episode_summary(env, end)
         waves_out = _describe_waves(env.unwrapped.physics.wave_config)  # type: ignore[attr-defined]
         current_out = _describe_current(env.unwrapped.physics.current_config)  # type: ignore[attr-defined]
+        # what ran, read from the built physics (not the argument: env_kwargs may name another)
+        plant_out = getattr(env.unwrapped.physics.plant, "name", plant)  # type: ignore[attr-defined]
     finally:
         bar.close()
         env.close()
@@ -154,7 +156,7 @@ def run_episode(
         "controller": controller,
         "observer": step_record(end.info).nav.source,  # "truth" or the observer's name
         "seed": seed,
-        "plant": plant,
+        "plant": plant_out,
         "wind": wind_out,
         "waves": waves_out,
         "current": current_out,

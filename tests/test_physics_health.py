@@ -70,3 +70,25 @@ def test_the_number_of_steps_is_checked(bad):
     with pytest.raises(ValueError, match="number of physics steps"):
         bp.step(bad)
     assert p.step(0) == 0 and p.time == 0.0
+
+
+# ---- results record what ran; options are checked (issue 33 item 3) ---------------------------
+def test_a_run_records_the_plant_that_ran(tmp_path, capsys):
+    import json
+
+    out = tmp_path / "a.json"
+    assert main(["run", "harbour", "--plant", "table2-literal", "--json", str(out),
+                 "--no-progress"]) == 0  # fmt: skip
+    assert json.loads(out.read_text())["plant"] == "table2-literal"
+    assert "plant table2-literal" in capsys.readouterr().out
+
+
+def test_flags_must_be_booleans_and_reset_options_known():
+    import gymnasium as gym
+
+    with pytest.raises(TypeError, match="terminate_on_finish must be True or False"):
+        gym.make("shipgym/BlueLadyTracking-v0", terminate_on_finish="no")
+    env = gym.make("shipgym/BlueLadyTracking-v0")
+    with pytest.raises(ValueError, match="unknown reset options"):
+        env.reset(seed=0, options={"start_pos": (0.0, 0.0, 0.0)})
+    env.reset(seed=0, options={"start_pose": (1.0, 2.0, 0.0)})  # the valid one still works

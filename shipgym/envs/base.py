@@ -389,6 +389,9 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         super().reset(seed=seed)
         rng = self.np_random
         start = None
+        unknown = sorted(set(options or {}) - {"start_pose"})
+        if unknown:
+            raise ValueError(f"unknown reset options {unknown}; valid: ['start_pose']")
         if options and "start_pose" in options:
             start = _vec3(options["start_pose"], "options['start_pose']")
         ep = self.task.initialize_episode(rng, start)

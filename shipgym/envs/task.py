@@ -390,6 +390,10 @@ class PlanTask:
             raise ValueError(f"start_noise must be >= 0, got {start_noise!r}")
         self.reward_weights = RewardWeights.coerce(reward_weights)
         self._w = self.reward_weights.vector()
+        if not isinstance(terminate_on_finish, bool | np.bool_):
+            raise TypeError(
+                f"terminate_on_finish must be True or False, got {terminate_on_finish!r}"
+            )
         self.terminate_on_finish = bool(terminate_on_finish)
         # the settings given (the defaults of an episode; drawing tasks may replace them)
         self.wind = WindConfig.coerce(wind, name="wind")
