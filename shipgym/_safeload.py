@@ -1,7 +1,7 @@
 """Bounded, code-free reading of the configuration files users give (YAML, TOML).
 
-Public names: ``MAX_CONFIG_BYTES``, ``MAX_NODES``, ``jsonable``, ``load_config_file``,
-``read_bounded``, ``yaml_loader``.
+Public names: ``MAX_CONFIG_BYTES``, ``MAX_DEPTH``, ``MAX_NODES``, ``jsonable``,
+``load_config_file``, ``parse``, ``read_bounded``, ``yaml_loader``.
 
 Design notes: docs/design/_safeload.md.
 """
@@ -14,9 +14,11 @@ from typing import Any
 
 __all__ = [
     "MAX_CONFIG_BYTES",
+    "MAX_DEPTH",
     "MAX_NODES",
     "jsonable",
     "load_config_file",
+    "parse",
     "read_bounded",
     "yaml_loader",
 ]
@@ -25,6 +27,8 @@ __all__ = [
 MAX_CONFIG_BYTES = 1 << 20
 #: most values (mappings, lists and scalars, aliases expanded) in one configuration file
 MAX_NODES = 100_000
+#: deepest nesting of mappings and lists in any file shipgym reads (its own files use < 8)
+MAX_DEPTH = 32
 
 
 def jsonable(x: Any) -> Any:
@@ -68,20 +72,64 @@ def read_bounded(path: str | Path, what: str, max_bytes: int = MAX_CONFIG_BYTES)
 
 
 def _check_nodes(obj: Any, where: str, limit: int = MAX_NODES) -> None:
-    stack = [obj]
+    stack = [(obj, 0)]
     n = 0
     while stack:
-        x = stack.pop()
+        x, depth = stack.pop()
         n += 1
         if n > limit:
             raise ValueError(
                 f"{where} holds more than {limit:,} values (YAML aliases expanded): refused"
             )
+        if depth > MAX_DEPTH:
+            raise ValueError(f"{where} is nested more than {MAX_DEPTH} levels deep: refused")
         if isinstance(x, dict):
-            stack.extend(x.keys())
-            stack.extend(x.values())
+            stack.extend((k, depth + 1) for k in x)
+            stack.extend((v, depth + 1) for v in x.values())
         elif isinstance(x, list | tuple):
-            stack.extend(x)
+            stack.extend((v, depth + 1) for v in x)
+
+
+def parse(text: str, fmt: str, where: str, limit: int = MAX_NODES) -> Any:
+    """Plain data from TOML, YAML (a safe loader: no code) or JSON ``text``, within the limits
+    (``MAX_DEPTH`` levels, ``limit`` values): every failure is a ``ValueError`` naming
+    ``where`` (a parser's ``RecursionError`` on a deeply nested file included).
+
+    Args:
+        text: the file's text.
+        fmt: ``"toml"``, ``"yaml"`` or ``"json"``.
+        where: the file, as the messages name it.
+        limit: the most values (mappings, lists and scalars).
+    """
+    try:
+        if fmt == "toml":
+            import tomllib
+
+            try:
+                data: Any = tomllib.loads(text)
+            except tomllib.TOMLDecodeError as exc:
+                raise ValueError(f"{where} is not valid TOML: {exc}") from None
+        elif fmt == "json":
+            import json
+
+            try:
+                data = json.loads(text)
+            except json.JSONDecodeError as exc:
+                raise ValueError(f"{where} is not valid JSON: {exc}") from None
+        elif fmt == "yaml":
+            import yaml
+
+            try:
+                data = yaml.load(text, Loader=yaml_loader())  # noqa: S506 - a safe loader
+            except yaml.YAMLError as exc:
+                msg = " ".join(str(exc).split())
+                raise ValueError(f"{where} is not valid YAML: {msg}") from None
+        else:
+            raise ValueError(f"unknown format {fmt!r}; use 'toml', 'yaml' or 'json'")
+    except RecursionError:
+        raise ValueError(f"{where} is nested too deeply (more than {MAX_DEPTH} levels)") from None
+    _check_nodes(data, where, limit)
+    return data
 
 
 def load_config_file(
@@ -102,22 +150,4 @@ def load_config_file(
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ValueError(f"{what} {str(p)!r} is not UTF-8 text ({exc.reason})") from None
-    if suffix == ".toml":
-        import tomllib
-
-        try:
-            data: Any = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"{what} {str(p)!r} is not valid TOML: {exc}") from None
-    else:
-        import yaml
-
-        try:
-            data = yaml.load(text, Loader=yaml_loader())  # noqa: S506 - a safe loader
-        except yaml.YAMLError as exc:
-            msg = " ".join(str(exc).split())
-            raise ValueError(f"{what} {str(p)!r} is not valid YAML: {msg}") from None
-        except RecursionError:
-            raise ValueError(f"{what} {str(p)!r} is nested too deeply") from None
-    _check_nodes(data, f"{what} {str(p)!r}")
-    return data
+    return parse(text, "toml" if suffix == ".toml" else "yaml", f"{what} {str(p)!r}")

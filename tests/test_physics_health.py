@@ -92,3 +92,40 @@ def test_flags_must_be_booleans_and_reset_options_known():
     with pytest.raises(ValueError, match="unknown reset options"):
         env.reset(seed=0, options={"start_pos": (0.0, 0.0, 0.0)})
     env.reset(seed=0, options={"start_pose": (1.0, 2.0, 0.0)})  # the valid one still works
+
+
+# ---- bounded loading (issue 33 item 4) -----------------------------------------------------------
+DEEP = 100_000
+
+
+@pytest.mark.parametrize("fmt", ["toml", "yaml", "json"])
+def test_a_deeply_nested_file_is_a_one_line_error(fmt):
+    from shipgym._safeload import parse
+
+    text = {"toml": "a = " + "[" * DEEP + "]" * DEEP, "yaml": "a: " + "[" * DEEP + "]" * DEEP,
+            "json": "[" * DEEP + "]" * DEEP}[fmt]  # fmt: skip
+    with pytest.raises(ValueError, match="nest"):  # YAML: "maximum nesting depth"
+        parse(text, fmt, "f")
+    # 40 levels parse but are refused by the depth limit
+    with pytest.raises(ValueError, match="nested more than"):
+        parse("[" * 40 + "]" * 40 if fmt == "json" else "a: " + "[" * 40 + "]" * 40, fmt
+              if fmt != "toml" else "yaml", "f")  # fmt: skip
+
+
+def test_deep_vessel_run_and_model_files_are_refused(tmp_path, absurd_vessel):
+    from shipgym.controllers.learned import ModelMetadata
+    from shipgym.dynamics.vessel import VesselError, load_vessel
+    from shipgym.viz.run import load_run
+
+    pkg = tmp_path / "deep"
+    shutil.copytree(absurd_vessel, pkg)
+    (pkg / "vessel.toml").write_text("x = " + "[" * DEEP + "]" * DEEP)
+    with pytest.raises(VesselError, match="nested"):
+        load_vessel(str(pkg))
+    run = tmp_path / "run.json"
+    run.write_text("[" * DEEP + "]" * DEEP)
+    with pytest.raises(ValueError, match="nested"):
+        load_run(run)
+    with pytest.raises(ValueError, match="nested"):
+        ModelMetadata.from_json("[" * DEEP + "]" * DEEP)
+    assert main(["report", str(run), "--out", str(tmp_path / "rep")]) == 2

@@ -23,6 +23,8 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._safeload import parse
+
 __all__ = [
     "ALGORITHMS",
     "BASELINE_MODELS",
@@ -358,10 +360,7 @@ class ModelMetadata:
     @classmethod
     def from_json(cls, text: str, *, where: str = "shipgym.json") -> ModelMetadata:
         """Parse ``shipgym.json``; raises ``ValueError`` naming what is wrong."""
-        try:
-            d = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{where} is not valid JSON: {exc}") from None
+        d = parse(text, "json", where)
         if not isinstance(d, dict) or d.get("format") != MODEL_FORMAT:
             raise ValueError(
                 f"{where} does not describe a shipgym model (format != {MODEL_FORMAT})"
@@ -668,8 +667,8 @@ def _check_sb3_members(zf: zipfile.ZipFile, members: dict[str, zipfile.ZipInfo],
         if name not in members:
             raise ValueError(f"{p} is not a complete model: it has no {name!r}")
     try:
-        data = json.loads(_read_member(zf, members["data"], p).decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError):
+        data = parse(_read_member(zf, members["data"], p).decode("utf-8"), "json", "")
+    except (UnicodeDecodeError, ValueError):
         raise ValueError(f"{p}: member 'data' is not the JSON stable-baselines3 writes") from None
     if not isinstance(data, dict):
         raise ValueError(f"{p}: member 'data' is not a JSON object")

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
@@ -812,11 +811,13 @@ def _read(path: Path) -> Vessel:
     r = VesselReader(toml_path)
     if not toml_path.is_file():
         raise VesselError(f"{path}: not a vessel package (no vessel.toml)")
+    from shipgym._safeload import parse, read_bounded
+
     try:
-        with toml_path.open("rb") as fh:
-            data = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise VesselError(f"{toml_path}: not valid TOML: {exc}") from None
+        raw = read_bounded(toml_path, "vessel file")
+        data = parse(raw.decode("utf-8"), "toml", str(toml_path))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise VesselError(str(exc)) from None
     top = {"vessel", "hull", "plants", "design", "windage", "actuator", "limits", "control",
            "roll_control", "trials",
            "observer"}  # fmt: skip

@@ -368,11 +368,18 @@ def _as_array(name: str, value: Any) -> NDArray[Any]:
     return a
 
 
+#: largest JSON run file read (bytes)
+MAX_RUN_JSON_BYTES = 1 << 30
+
+
 def _load_json(path: Path) -> Run:
-    try:
-        doc = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"cannot read the run file {path}: {exc}") from exc
+    from shipgym._safeload import parse, read_bounded
+
+    try:  # a run of days at 1 s is a few hundred MB of JSON
+        raw = read_bounded(path, "run file", MAX_RUN_JSON_BYTES)
+        doc = parse(raw.decode("utf-8"), "json", f"run file {path}", limit=1 << 27)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ValueError(f"cannot read the run file {path}: {exc}") from None
     if not isinstance(doc, dict) or doc.get("format") != JSON_FORMAT:
         raise ValueError(
             f"{path} is not a shipgym run file (expected a JSON object with "

@@ -9,7 +9,6 @@ Design notes: docs/design/viz.training.md.
 from __future__ import annotations
 
 import csv
-import json
 import math
 import os
 from collections.abc import Sequence
@@ -116,10 +115,9 @@ def _read_evaluations(path: Path) -> _Evals:
     if not path.is_file():
         return "none", empty, empty, empty
     text = _read_text(path, MAX_EVALUATIONS_BYTES, "evaluations.json")
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path} is not valid JSON: {exc}") from None
+    from shipgym._safeload import parse
+
+    data = parse(text, "json", str(path), limit=1 << 24)
     if not isinstance(data, list):
         raise ValueError(f"{path} must hold a list of evaluations, got {type(data).__name__}")
     kinds, steps, score, jc = set(), [], [], []
