@@ -42,6 +42,7 @@ VECTOR_IDS: dict[str, str] = {
     "shipgym/StationKeeping-v0": "shipgym.envs.vector:station_keeping_vector_env",
     "shipgym/BlueLadyTracking-v0": "shipgym.envs.vector:blue_lady_tracking_vector_env",
     "shipgym/BlueLadyStationKeeping-v0": "shipgym.envs.vector:blue_lady_station_keeping_vector_env",
+    "shipgym/SeaTrial-v0": "shipgym.envs.seatrial:sea_trial_vector_env",
 }
 
 #: the Blue Lady aliases: id -> the vessel-neutral id they equal with ``vessel="blue-lady"``
