@@ -236,7 +236,7 @@ class SeaTrialVectorEnv(BatchedEnv):
         self.antenna = tuple(float(a) for a in np.asarray(antenna, dtype=float).reshape(2))
         self.receiver_sigma = float(receiver_sigma)
         self._max_angle = float(acts.upper[self._rudder])
-        self._servo = np.array([c.dynamics == "servo" for c in acts.channels])
+        self._servo = [j for j, c in enumerate(acts.channels) if c.dynamics == "servo"]
         self._names = np.array([m.name for m in self.manoeuvres])
         self.scripts = Scripts(self.manoeuvres)
         n = num_envs
@@ -316,10 +316,10 @@ class SeaTrialVectorEnv(BatchedEnv):
         phys = self.physics
         keep = ~active[:, None]
         if self.override:
-            self._clipped = np.any(np.abs(actions) > 1.0, axis=1)
+            self._clipped = (np.abs(actions) > 1.0).any(axis=1)
             cmd = phys.actuators.action_to_command(np.clip(actions, -1.0, 1.0))
         else:
-            if np.any(actions != 0):
+            if (actions != 0).any():
                 raise ValueError(f"action must be 0 (the script acts), got {actions!r}")
             rud, frac = self.scripts.command(self._state()[:, 3])
             cmd = self._command.copy()
@@ -327,7 +327,7 @@ class SeaTrialVectorEnv(BatchedEnv):
             if self._shaft is not None:
                 cmd[:, self._shaft] = frac * self.n0
         cmd = np.where(keep, self._command, cmd)
-        if not np.array_equal(cmd, self._command):  # (a held command is held)
+        if not (cmd == self._command).all():  # (a held command is held)
             self._command = cmd
             phys.set_command(cmd)
         phys.step(self.n_sub, mask=active)
@@ -372,7 +372,7 @@ class SeaTrialVectorEnv(BatchedEnv):
             "rudder_command": phys.command[:, self._rudder],
             "shaft": row[:, 8].copy(),
             # (BatchedPhysics has no rate_limited: its hull batch's servo hits, read here)
-            "rate_limited": np.any(phys._hulls.hits[:, self._servo] > 0, axis=1),
+            "rate_limited": (phys._hulls.hits[:, self._servo] > 0).any(axis=1),
             "saturated": phys.saturated.any(axis=1),
             "clipped": self._clipped.copy(),
             "reward_terms": {},
