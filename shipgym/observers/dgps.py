@@ -23,6 +23,7 @@ __all__ = [
     "S_P_OPTIMAL",
     "DGPSOutput",
     "DGPSReceiver",
+    "NormalStreams",
     "PVModel",
     "antenna_motion",
     "apply_current",
@@ -246,6 +247,44 @@ def antenna_motion(eta: ArrayLike, nu: ArrayLike, antenna: ArrayLike) -> tuple[A
     return pos, np.stack([c * ub - s * vb, s * ub + c * vb], -1)
 
 
+class NormalStreams:
+    """Standard normal draws of ``n`` envs, ``width`` per draw, each env from its own
+    generator, drawn in blocks of ``block`` draws and refilled when used up (a generator's
+    ``standard_normal((k, width))`` is the stream of ``k`` calls of
+    ``standard_normal(width)``, so env ``i`` draws bit for bit what one call per draw from
+    its generator would draw, whatever ``n``).
+
+    Args:
+        n: number of envs; width: values per draw; block: draws per refill.
+        rng: each env's generator: a ``numpy.random.Generator``, a seed or ``None`` (seed 0),
+            or a sequence of ``n`` of them.
+    """
+
+    def __init__(self, n: int, width: int, block: int = 64, rng: Any = None) -> None:
+        self.n, self.width, self.block = n, int(width), int(block)
+        rngs = list(rng) if isinstance(rng, list | tuple) else [rng] * n
+        if len(rngs) != n:
+            raise ValueError(f"rng must be one generator or seed, or {n} of them; got {rng!r}")
+        self.rngs = [_generator(r) for r in rngs]
+        self._draws = np.zeros((n, self.block, self.width))
+        self._k = np.full(n, self.block, dtype=np.int64)  # next unused draw (block: refill)
+        self._rows = np.arange(n)
+
+    def seed(self, i: int, rng: Any) -> None:
+        """Env ``i`` draws from ``rng`` (a generator or a seed) from now on."""
+        self.rngs[i] = _generator(rng)
+        self._k[i] = self.block
+
+    def draw(self, mask: NDArray[np.bool_]) -> Array:
+        """The next draw (n, width) of the envs of ``mask`` (zeros elsewhere)."""
+        for i in np.nonzero(mask & (self._k >= self.block))[0].tolist():
+            self._draws[i] = self.rngs[i].standard_normal((self.block, self.width))
+            self._k[i] = 0
+        k = np.minimum(self._k, self.block - 1)
+        self._k += mask
+        return np.where(mask[:, None], self._draws[self._rows, k], 0.0)
+
+
 def _generator(rng: Any) -> np.random.Generator:
     return rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
 
@@ -315,12 +354,7 @@ class DGPSReceiver:
         self.antenna = a
         self.steady = bool(steady)
         self.block = int(block)
-        rngs = list(rng) if isinstance(rng, list | tuple) else [rng] * n
-        if len(rngs) != n:
-            raise ValueError(f"rng must be one generator or seed, or {n} of them; got {rng!r}")
-        self.rngs = [_generator(r) for r in rngs]
-        self._draws = np.zeros((n, self.block, 2))
-        self._k = np.full(n, self.block, dtype=np.int64)  # next unused draw (block: refill)
+        self.noise = NormalStreams(n, 2, self.block, rng)
         self.x = np.zeros((n, 4))  # the estimates [v_N, v_E, x, y]
         self.z = np.zeros((n, 2))  # the last measured antenna positions
         self.psi = np.zeros(n)  # the gyro headings of the last samples (rad)
@@ -328,6 +362,11 @@ class DGPSReceiver:
         self.K = np.broadcast_to(self.K_inf, (n, 4, 2)).copy()  # the last gain
         self._all = np.ones(n, dtype=bool)
         self._started = False
+
+    @property
+    def rngs(self) -> list[np.random.Generator]:
+        """Each receiver's noise generator."""
+        return self.noise.rngs
 
     def _rows(self, x: ArrayLike, what: str) -> tuple[Array, bool]:
         a = np.asarray(x, dtype=float)
@@ -358,8 +397,7 @@ class DGPSReceiver:
         if rngs is not None and len(rngs) != self.n:
             raise ValueError(f"rngs must hold one generator per receiver ({self.n})")
         for i in np.nonzero(m)[0].tolist() if rngs is not None else ():
-            self.rngs[i] = _generator(rngs[i])
-            self._k[i] = self.block
+            self.noise.seed(i, rngs[i])
         p, v = antenna_motion(eta, nu, self.antenna)
         mc = m[:, None]
         self.x = np.where(mc, np.concatenate([v, p], 1), self.x)
@@ -370,16 +408,6 @@ class DGPSReceiver:
         self._started = True
         return self._outputs(one)
 
-    def _noise(self, m: NDArray[np.bool_]) -> Array:
-        """The next draws (n, 2) of the receivers of ``m`` (zeros elsewhere)."""
-        for i in np.nonzero(m & (self._k >= self.block))[0].tolist():
-            self._draws[i] = self.rngs[i].standard_normal((self.block, 2))
-            self._k[i] = 0
-        rows = np.arange(self.n)
-        out = np.where(m[:, None], self._draws[rows, np.minimum(self._k, self.block - 1)], 0.0)
-        self._k += m
-        return out
-
     def update(self, eta: ArrayLike, *, mask: ArrayLike | None = None) -> DGPSOutput:
         """One sample ``dt`` after the last, of the receivers of ``mask`` (default all; the
         others keep their state and draws): measure the antenna at the true poses ``eta``,
@@ -389,7 +417,7 @@ class DGPSReceiver:
         e, one = self._rows(eta, "eta")
         m = self._all if mask is None else np.asarray(mask, dtype=bool)
         pos, _ = antenna_motion(e, np.zeros_like(e), self.antenna)
-        z = pos if self.sigma == 0 else pos + self.sigma * self._noise(m)
+        z = pos if self.sigma == 0 else pos + self.sigma * self.noise.draw(m)
         if self.steady:
             x = _steady_step(self.x, z, self.K_inf, self.dt)
         else:  # the recursion, each receiver's 4x4 matrices (stacked products)
