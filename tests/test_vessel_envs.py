@@ -176,10 +176,10 @@ def test_every_batched_id_and_vessel(task: str, vessel: str) -> None:
     for _ in range(6):
         a = venv.action_space.sample()
         obs, r, term, trunc, info = venv.step(a)
-        nested = info.get("reward_terms", {})  # the steering families' terms, in a dict
-        terms = [v for k, v in info.items() if k.startswith("reward_") and k != "reward_terms"]
-        terms += [v for k, v in nested.items() if not k.startswith("_")]
-        np.testing.assert_allclose(sum(terms, np.zeros(n)), r)
+        terms = [info[k] for k in info if k.startswith("reward_")]  # flat or one dict
+        terms = [v for t in terms for k, v in (t.items() if isinstance(t, dict) else [("", t)])
+                 if not k.startswith("_")]  # fmt: skip
+        np.testing.assert_allclose(sum(terms), r)
         for i, s in enumerate(singles):
             o, ri, te, tr, _ = s.step(a[i])
             np.testing.assert_array_equal(obs[i], o)

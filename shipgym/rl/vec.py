@@ -22,11 +22,11 @@ __all__ = ["BatchedVecEnv", "ErrorIntegralVecEnv", "make_batched_vec_env"]
 
 
 class BatchedVecEnv(VecEnv):
-    """An SB3 ``VecEnv`` of a native batched env (module docstring).
+    """An SB3 ``VecEnv`` of a :class:`ShipVectorEnv` or a family's
+    :class:`~shipgym.envs.batched.BatchedEnv` (module docstring).
 
     Args:
-        venv: a ``ShipVectorEnv`` or a :class:`~shipgym.envs.batched.BatchedEnv` in
-            ``autoreset_mode="same-step"``.
+        venv: a ``ShipVectorEnv`` or ``BatchedEnv`` in ``autoreset_mode="same-step"``.
     """
 
     def __init__(self, venv: ShipVectorEnv | BatchedEnv) -> None:
@@ -78,8 +78,9 @@ class BatchedVecEnv(VecEnv):
         venv = self.venv
         if hasattr(venv, name):
             return getattr(venv, name)
-        if hasattr(getattr(venv, "task", None), name):
-            return getattr(venv.task, name)
+        task = getattr(venv, "task", None)
+        if task is not None and hasattr(task, name):
+            return getattr(task, name)
         raise AttributeError(f"the batched env and its task have no attribute {name!r}")
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
