@@ -30,7 +30,7 @@ from shipgym._config import is_real
 from shipgym.disturbances import CurrentConfig
 from shipgym.dynamics.mmg import MMGHull
 from shipgym.dynamics.vessel import Vessel, load_vessel
-from shipgym.observers.dgps import S_P_OPTIMAL, DGPSReceiver
+from shipgym.observers.dgps import S_P_OPTIMAL, DGPSOutput, DGPSReceiver
 from shipgym.trials.manoeuvres import Scripts, manoeuvre, manoeuvre_names
 from shipgym.trials.metrics import TrialMetrics, imo_criteria, trial_metrics
 
@@ -59,8 +59,10 @@ RECEIVERS = (None, "dgps-pv")
 OBSERVATION = ("x/L", "y/L", "sin psi", "cos psi", "u/U0", "v/U0", "r L/U0", "rudder/max",
                "shaft/n0", "v_xy_hat/U0", "beta_A_hat", "x_hat/L", "y_hat/L")  # fmt: skip
 
-#: the receiver's outputs in ``info["receiver"]``
-_RX_KEYS = ("v_ns", "v_ew", "x", "y", "v_xy", "chi", "beta_A")
+#: ``info["receiver"]``'s keys: the receiver's outputs (:class:`~shipgym.observers.dgps.
+#: DGPSOutput` fields)
+_RX_KEYS = {"v_ns": "v_ns", "v_ew": "v_ew", "x": "x_hat", "y": "y_hat", "v_xy": "v_xy",
+            "chi": "chi", "beta_A": "beta_A"}  # fmt: skip
 
 
 def approach_command(physics: BatchedPhysics, shaft: int, U0: float) -> float:
@@ -253,9 +255,9 @@ class SeaTrialVectorEnv(BatchedEnv):
         self._obs_from = [1, 2, 4, 5, 6, 7] + ([8] if has_shaft else [])
         self._obs_scale = np.array([1 / L, 1 / L, 1 / U0, 1 / U0, L / U0, 1 / self._max_angle]
                                    + ([1 / self.n0] if has_shaft else []))  # fmt: skip
-        self._rx_scale = np.array([1 / U0, 1.0, 1 / L, 1 / L])
-        self._rx: list[Any] = [None] * n  # TEMPORARY: the scalar receiver of each env
-        self._rx_out = np.zeros((n, 7))  # v_ns, v_ew, x_hat, y_hat, v_xy, chi, beta_A
+        self.receiver = DGPSReceiver(self.S_p, n=n, sigma=self.receiver_sigma,
+                                     antenna=self.antenna)  # fmt: skip
+        self._rx_out: DGPSOutput | None = None  # the receiver's outputs, held between samples
         self._results: list[Any] = [None] * n  # (metrics, criteria) of each env's last end
         self._now = False  # whether _row holds the state now
 
@@ -281,10 +283,10 @@ class SeaTrialVectorEnv(BatchedEnv):
         phys = self.physics
         idx = np.nonzero(mask)[0].tolist()
         rngs: list[Any] = [None] * self.num_envs
-        rx_seeds = {}
-        for i in idx:  # env i's generator: the physics', then the receiver's seed
+        rx_rngs: list[Any] = [None] * self.num_envs
+        for i in idx:  # env i's generator: the physics' seed, then the receiver's
             ss = self._rngs[i].bit_generator.random_raw(2)  # type: ignore[union-attr]
-            rngs[i], rx_seeds[i] = np.random.default_rng(int(ss[0])), int(ss[1])
+            rngs[i], rx_rngs[i] = (np.random.default_rng(int(s)) for s in ss)
         act = phys.initial_actuator_state()
         if self._shaft is not None:
             act[:, self._shaft] = self.n0
@@ -297,12 +299,8 @@ class SeaTrialVectorEnv(BatchedEnv):
         self._clipped[mask] = False
         self._k[mask] = 0
         if self.receiver_name is not None:
-            eta = phys.eta
-            for i in idx:  # TEMPORARY: the scalar receiver per env, until the batched one
-                self._rx[i] = DGPSReceiver(self.S_p, sigma=self.receiver_sigma,
-                                           antenna=self.antenna,
-                                           rng=np.random.default_rng(rx_seeds[i]))  # fmt: skip
-                self._rx_out[i] = self._rx[i].reset(eta[i], nu0)[:7]
+            nu = np.broadcast_to(nu0, (self.num_envs, 3))
+            self._rx_out = self.receiver.reset(self._state()[:, 1:4], nu, rngs=rx_rngs, mask=mask)
         self._record(mask)
 
     def _record(self, mask: NDArray[np.bool_]) -> None:
@@ -335,9 +333,8 @@ class SeaTrialVectorEnv(BatchedEnv):
         self._k += active
         if self.receiver_name is not None:
             sample = active & (self._k % self._rx_every == 0)
-            eta = phys.eta
-            for i in np.nonzero(sample)[0].tolist():  # TEMPORARY: the scalar receiver per env
-                self._rx_out[i] = self._rx[i].update(eta[i])[:7]
+            if sample.any():
+                self._rx_out = self.receiver.update(self._state()[:, 1:4], mask=sample)
         self._record(active)
         terminated = self._k >= self.max_steps
         for i in np.nonzero(terminated & active)[0].tolist():  # the trial's analysis, once
@@ -351,8 +348,10 @@ class SeaTrialVectorEnv(BatchedEnv):
         obs = np.zeros((self.num_envs, self.single_observation_space.shape[0]), np.float32)
         obs[:, self._obs_to] = row[:, self._obs_from] * self._obs_scale
         obs[:, 2], obs[:, 3] = np.sin(row[:, 3]), np.cos(row[:, 3])
-        if self.receiver_name is not None:  # v_xy/U0, beta_A, x_hat/L, y_hat/L
-            obs[:, 9:] = self._rx_out[:, [4, 6, 2, 3]] * self._rx_scale
+        o = self._rx_out
+        if o is not None:  # v_xy/U0, beta_A, x_hat/L, y_hat/L
+            obs[:, 9], obs[:, 10] = o.v_xy / self.U0, o.beta_A
+            obs[:, 11], obs[:, 12] = o.x_hat / self.L, o.y_hat / self.L
         return obs
 
     def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
@@ -377,9 +376,8 @@ class SeaTrialVectorEnv(BatchedEnv):
             "clipped": self._clipped.copy(),
             "reward_terms": {},
         }
-        if self.receiver_name is not None:
-            o = self._rx_out.T
-            info["receiver"] = {k: o[j].copy() for j, k in enumerate(_RX_KEYS)}
+        if self._rx_out is not None:
+            info["receiver"] = {k: getattr(self._rx_out, f).copy() for k, f in _RX_KEYS.items()}
         return info
 
     def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
