@@ -511,11 +511,15 @@ class SeaTrialEnv(SingleEnv):
                          antenna=antenna, receiver_sigma=receiver_sigma, override=override,
                          timestep=timestep, control_period=control_period)  # fmt: skip
         b = self.batch
-        self.base_vessel, self.physics, self.n0, self.L, self.U0 = (
-            b.base_vessel, b.physics, b.n0, b.L, b.U0)  # fmt: skip
         self.manoeuvre = b.manoeuvres[0]
         self.duration, self.max_steps = float(b.duration[0]), int(b.max_steps[0])
-        self.override, self.current = b.override, b.current
+
+    def __getattr__(self, name: str) -> Any:
+        """The batch's configuration (``physics``, ``base_vessel``, ``n0``, ``L``, ``U0``,
+        ``control_period``, ``receiver``, ...)."""
+        if name.startswith("_") or name == "batch":
+            raise AttributeError(name)
+        return getattr(self.batch, name)
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
