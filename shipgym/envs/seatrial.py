@@ -258,7 +258,6 @@ class SeaTrialVectorEnv(BatchedEnv):
         self.receiver = DGPSReceiver(self.S_p, n=n, sigma=self.receiver_sigma,
                                      antenna=self.antenna)  # fmt: skip
         self._rx_out: DGPSOutput | None = None  # the receiver's outputs, held between samples
-        self._results: list[Any] = [None] * n  # (metrics, criteria) of each env's last end
         self._now = False  # whether _row holds the state now
 
     # ---- episode ---------------------------------------------------------------------------
@@ -336,12 +335,8 @@ class SeaTrialVectorEnv(BatchedEnv):
             if sample.any():
                 self._rx_out = self.receiver.update(self._state()[:, 1:4], mask=sample)
         self._record(active)
-        terminated = self._k >= self.max_steps
-        for i in np.nonzero(terminated & active)[0].tolist():  # the trial's analysis, once
-            m = self.record(i).metrics()
-            self._results[i] = (m, imo_criteria(m, self.L, self.U0))
         n = self.num_envs
-        return np.zeros(n), terminated, np.zeros(n, dtype=bool), self._info()
+        return np.zeros(n), self._k >= self.max_steps, np.zeros(n, dtype=bool), self._info()
 
     def _observation(self) -> NDArray[np.float32]:
         row = self._state()
@@ -382,10 +377,9 @@ class SeaTrialVectorEnv(BatchedEnv):
 
     def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
         n = self.num_envs
-        rows = {i: self.summary(i) for i in np.nonzero(done)[0].tolist()}
         out: dict[str, Any] = {"overshoots": np.full((n, 3), np.nan)}
-        for i, row in rows.items():
-            for k, val in row.items():
+        for i in np.nonzero(done)[0].tolist():  # the trial's analysis, at its end
+            for k, val in _summary(*self.result(i)).items():
                 if k == "overshoots":
                     out[k][i, : len(val)] = val
                 elif isinstance(val, str):
@@ -396,8 +390,6 @@ class SeaTrialVectorEnv(BatchedEnv):
 
     def record(self, i: int = 0) -> TrialRecord:
         """Env ``i``'s true motion recorded so far in its episode (every control step)."""
-        if not self._started:
-            raise RuntimeError("call reset() first")
         h = self._hist[: self._k[i] + 1, i]
         return TrialRecord(
             vessel=self.base_vessel.name, manoeuvre=self.manoeuvres[i].name, L=self.L,
@@ -407,18 +399,15 @@ class SeaTrialVectorEnv(BatchedEnv):
         )  # fmt: skip
 
     def result(self, i: int = 0) -> tuple[TrialMetrics, list[tuple[str, float, float, bool]]]:
-        """Env ``i``'s trial figures and IMO criteria: of its last finished episode, else of
-        its record so far."""
-        if self._results[i] is not None and self._k[i] >= self.max_steps[i]:
-            return self._results[i]  # type: ignore[no-any-return]
+        """Env ``i``'s trial figures and IMO criteria, from its record so far."""
         m = self.record(i).metrics()
         return m, imo_criteria(m, self.L, self.U0)
 
-    def summary(self, i: int = 0) -> dict[str, Any]:
-        """Env ``i``'s figures (SI) and whether every IMO criterion passed (``None``: none
-        applies), as the single env's ``episode_metrics()``."""
-        m, crit = self.result(i)
-        return {**m.as_dict(), "imo_pass": all(c[3] for c in crit) if crit else None}
+
+def _summary(m: TrialMetrics, crit: list[tuple[str, float, float, bool]]) -> dict[str, Any]:
+    """A trial's figures (SI) and whether every IMO criterion passed (``None``: none applies):
+    the single env's ``episode_metrics()``."""
+    return {**m.as_dict(), "imo_pass": all(c[3] for c in crit) if crit else None}
 
 
 class SeaTrialEnv(SingleEnv):
@@ -492,24 +481,12 @@ class SeaTrialEnv(SingleEnv):
         vessel: str | Vessel | Any,
         manoeuvre: str = "turning35_stbd",
         *,
-        speed: float | None = None,
-        current: Any = None,
-        wind: Any = None,
-        receiver: str | None = None,
-        S_p: float = S_P_OPTIMAL,
-        antenna: Any = (0.0, 0.0),
-        receiver_sigma: float = 2.0,
-        override: bool = False,
-        timestep: float = 0.05,
-        control_period: float = 1.0,
         render_mode: str | None = None,
+        **kwargs: Any,
     ) -> None:
         if not isinstance(manoeuvre, str):
             raise ValueError(f"manoeuvre must be a name, one of {', '.join(manoeuvre_names())}")
-        super().__init__(render_mode, vessel=vessel, manoeuvre=manoeuvre, speed=speed,
-                         current=current, wind=wind, receiver=receiver, S_p=S_p,
-                         antenna=antenna, receiver_sigma=receiver_sigma, override=override,
-                         timestep=timestep, control_period=control_period)  # fmt: skip
+        super().__init__(render_mode, vessel=vessel, manoeuvre=manoeuvre, **kwargs)
         b = self.batch
         self.manoeuvre = b.manoeuvres[0]
         self.duration, self.max_steps = float(b.duration[0]), int(b.max_steps[0])
@@ -541,13 +518,11 @@ class SeaTrialEnv(SingleEnv):
         info = self._scalar(info)
         if terminated:
             m, crit = self.batch.result(0)
-            info["trial"], info["imo"] = m.as_dict(), crit
-            info["episode_metrics"] = self.episode_metrics()
+            info.update(trial=m.as_dict(), imo=crit, episode_metrics=_summary(m, crit))
         return obs, reward, terminated, truncated, info
 
     def _scalar(self, info: dict[str, Any]) -> dict[str, Any]:
-        info["manoeuvre"] = str(info["manoeuvre"])
-        if self.batch._shaft is None:
+        if self.batch._shaft is None:  # the single env's shaft without one: None
             info["shaft"] = None
         return info
 
@@ -557,7 +532,7 @@ class SeaTrialEnv(SingleEnv):
 
     def episode_metrics(self) -> dict[str, Any]:
         """The trial's figures so far (SI) and whether every IMO criterion passed."""
-        return self.batch.summary(0)
+        return _summary(*self.batch.result(0))
 
 
 class TankerSeaTrialEnv(SeaTrialEnv):
