@@ -137,21 +137,12 @@ class TrialRecord:
 
 
 class SeaTrialVectorEnv(BatchedEnv):
-    r"""N sea trials stepped together (the batched form of :class:`SeaTrialEnv`, whose
-    docstring is the spec): env ``i`` is the single env seeded ``seed + i``.
-
-    Args:
-        num_envs: number of envs, >= 1.
-        vessel, speed, current, wind, receiver, S_p, antenna, receiver_sigma, override,
-            timestep, control_period: as :class:`SeaTrialEnv`.
-        manoeuvre: one manoeuvre's name for every env, or ``num_envs`` names (one per env:
-            :func:`run_trials` flies several manoeuvres as one batch).
-        autoreset_mode: ``"next-step"`` (default) or ``"same-step"``.
-
-    ``info["episode_metrics"]`` holds the trial's figures as arrays: ``(N,)`` floats (NaN
-    where a figure does not apply), ``overshoots`` ``(N, 3)``, ``manoeuvre`` and ``kind``
-    strings, ``imo_pass`` 1.0 / 0.0 (NaN: no criterion applies).
-    """
+    r"""``num_envs`` sea trials stepped together: the batched form of :class:`SeaTrialEnv`
+    (its docstring is the spec; env ``i`` is it seeded ``seed + i``), with ``autoreset_mode``
+    (``"next-step"`` or ``"same-step"``) and ``manoeuvre`` a name or ``num_envs`` names (one
+    per env). ``info["episode_metrics"]``: the figures as arrays, ``(N,)`` floats (NaN where
+    one does not apply), ``overshoots`` ``(N, 3)``, ``manoeuvre`` and ``kind`` strings,
+    ``imo_pass`` 1.0 / 0.0 (NaN: no criterion applies)."""
 
     def __init__(
         self,
@@ -261,11 +252,6 @@ class SeaTrialVectorEnv(BatchedEnv):
         self._now = False  # whether _row holds the state now
 
     # ---- episode ---------------------------------------------------------------------------
-    def _initial_nu(self) -> NDArray[np.float64]:
-        """Straight running at ``U0`` through the water: over ground plus the current."""
-        vc, bc = self.current
-        return np.array([self.U0 + vc * math.cos(bc), vc * math.sin(bc), 0.0])
-
     def _state(self) -> NDArray[np.float64]:
         """Every env's ``t, x, y, psi, u, v, r, rudder, shaft`` now (N, 9) (the record's row;
         the shaft NaN without one), read once per state."""
@@ -289,7 +275,8 @@ class SeaTrialVectorEnv(BatchedEnv):
         act = phys.initial_actuator_state()
         if self._shaft is not None:
             act[:, self._shaft] = self.n0
-        nu0 = self._initial_nu()
+        vc, bc = self.current  # straight running at U0 through the water, over ground
+        nu0 = np.array([self.U0 + vc * math.cos(bc), vc * math.sin(bc), 0.0])
         phys.reset(eta=(0.0, 0.0, 0.0), nu=nu0, actuators=act, mask=mask, rngs=rngs)
         self._command[mask] = act[mask]
         phys.set_command(self._command)
