@@ -182,3 +182,28 @@ def test_bad_input_is_named():
     venv.reset(seed=0)
     with pytest.raises(ValueError, match="action must be 0"):
         venv.step(np.array([0, 1]))
+
+
+def test_a_masked_reset_restarts_only_its_envs():
+    """``reset_mask``: env 1 restarts as the single env's unseeded reset (its generator goes
+    on), envs 0 and 2 go on with their episodes."""
+    kw = {"vessel": "naval-vessel", **KW}
+    venv = gym.make_vec(ID, num_envs=3, **kw)
+    singles = [gym.make(ID, **kw) for _ in range(3)]
+    venv.reset(seed=1)
+    for i, s in enumerate(singles):
+        s.reset(seed=1 + i)
+    a = np.zeros(3, dtype=np.int64)
+    for _ in range(5):
+        venv.step(a)
+        for s in singles:
+            s.step(0)
+    obs, info = venv.reset(options={"reset_mask": np.array([False, True, False])})
+    assert info["_t"].tolist() == [False, True, False]
+    o1, _ = singles[1].reset()
+    assert np.array_equal(obs[1], o1)
+    for _ in range(5):
+        obs, *_ = venv.step(a)
+        for i, s in enumerate(singles):
+            assert np.array_equal(obs[i], s.step(0)[0])
+    assert singles[0].unwrapped.episode_metrics()["manoeuvre"] == "initial_turning"
