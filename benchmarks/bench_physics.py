@@ -147,8 +147,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         ("trial_episode_ratio", tenv, 0, "sea trial (35 deg turn)"),
     ):
         ep, steps = _episode(env, action)
-        r = pair(ep, _bare(key, env.physics.model, steps), rep)
-        sim = steps * env.physics.timestep
+        phys = env.physics  # a batch of one has no MuJoCo model of its own: the same world's
+        model = getattr(phys, "model", None) or build_model(phys.vessel, "open-water",
+                                                            phys.actuators)  # fmt: skip
+        r = pair(ep, _bare(key, model, steps), rep)
+        sim = steps * getattr(phys, "timestep", getattr(phys, "h", None))
         out[key] = r
         print(f"{label:24s} / bare mj_step      : {_fmt(r)}   ({sim / r['a_s']:,.0f}x real time)")
     args.json.parent.mkdir(parents=True, exist_ok=True)

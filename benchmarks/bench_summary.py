@@ -133,7 +133,8 @@ def _episode(env: Any, action: Any) -> tuple[Timed, int]:
 
     run()
     u = env.unwrapped
-    return run, box["steps"] * round(u.control_period / u.physics.timestep)
+    h = getattr(u.physics, "timestep", None) or u.physics.h  # (a batch of one: h)
+    return run, box["steps"] * round(u.control_period / h)
 
 
 def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:

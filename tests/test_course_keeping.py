@@ -87,7 +87,7 @@ def test_same_seed_same_episode_and_the_draws_are_independent():
     # fixing the wind leaves the current's and the set-points' draws of the seed unchanged
     _, ud = run(5, wind="10@45")
     assert ud.current_config == ua.current_config
-    np.testing.assert_array_equal(ud._targets, ua._targets)
+    np.testing.assert_array_equal(ud.batch.targets[0], ua.batch.targets[0])
     assert ud.wind_config.speed == 10.0 and ud.wind_config.direction_from == pytest.approx(45 * D)
 
 
@@ -133,7 +133,7 @@ def test_start_at_the_approach_speed_through_the_water_with_the_shaft_held():
     shaft = env.physics.actuators.channel_names.index("propeller")
     for _ in range(100):
         env.step(np.array([-1.0], dtype=np.float32))
-        assert env.physics.actuator_state[shaft] == pytest.approx(4.926, abs=1e-3)
+        assert env.physics.actuator_state[0, shaft] == pytest.approx(4.926, abs=1e-3)
 
 
 @pytest.mark.parametrize("side", [-1.0, 1.0])

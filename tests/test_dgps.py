@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from shipgym.observers.dgps import (
-    DGPSPVFilter,
     DGPSReceiver,
     antenna_motion,
     apply_current,
@@ -48,15 +47,13 @@ def test_C3_lag_and_noise_and_a_monte_carlo_check():
     assert tau == pytest.approx(5.85, abs=1e-2) and lag_x == pytest.approx(17.1, abs=0.05)
     assert sigma_v == pytest.approx(0.1255, abs=1e-3)
     # the filter under a constant acceleration: its velocity lags by a tau
-    f = DGPSPVFilter(0.01, x0=np.zeros(4))
     a = 0.02
-    for k in range(1, 400):
-        x = f.step([0.5 * a * k**2, 0.0])
+    k = np.arange(400.0)
+    x = pv_filter_batch(np.c_[0.5 * a * k**2, 0 * k], np.zeros(4), 0.01)[-1]
     assert (a * 399 - x[0]) / a == pytest.approx(tau, rel=1e-3)
     # noise only: the velocity's spread
     rng = np.random.default_rng(0)
-    f = DGPSPVFilter(0.01, x0=np.zeros(4))
-    v = [f.step(2.0 * rng.standard_normal(2))[0] for _ in range(20000)]
+    v = pv_filter_batch(2.0 * rng.standard_normal((20001, 2)), np.zeros(4), 0.01)[1:, 0]
     assert np.std(v[100:]) == pytest.approx(sigma_v, rel=0.05)
 
 
@@ -64,15 +61,18 @@ def test_the_recursion_is_the_printed_one_and_tends_to_the_steady_filter():
     m = pv_model(0.01)
     rng = np.random.default_rng(1)
     z = np.cumsum(rng.normal(0, 1, (60, 2)), 0)
-    f = DGPSPVFilter(0.01, steady=False, x0=np.zeros(4), P0=np.zeros((4, 4)))
+    rx = DGPSReceiver(0.01, steady=False, sigma=0.0)  # the receiver's recursion, from P0 = 0
+    rx.reset(np.zeros(3), np.zeros(3))
+    rx.P[:] = 0.0
     x, P = np.zeros(4), np.zeros((4, 4))
     for zk in z:  # eqs. of Artyszuk (2003) §2, written out
         Pm = m.Phi @ P @ m.Phi.T + m.Q
         K = Pm @ m.H.T @ np.linalg.inv(m.H @ Pm @ m.H.T + m.R)
         x = m.Phi @ x + K @ (zk - m.H @ m.Phi @ x)
         P = (np.eye(4) - K @ m.H) @ Pm
-        np.testing.assert_allclose(f.step(zk), x, atol=1e-12)
-    np.testing.assert_allclose(f.K, pv_steady_gain(0.01)[0], rtol=1e-3)
+        o = rx.update([zk[0], zk[1], 0.0])
+        np.testing.assert_allclose([o.v_ns, o.v_ew, o.x_hat, o.y_hat], x, atol=1e-12)
+    np.testing.assert_allclose(rx.K[0], pv_steady_gain(0.01)[0], rtol=1e-3)
 
 
 def test_outputs_raw_velocity_and_the_current_correction_round_trip():
@@ -94,8 +94,8 @@ def test_outputs_raw_velocity_and_the_current_correction_round_trip():
     np.testing.assert_allclose(raw_velocity(p)[1:-1], np.c_[3 * np.ones(48), 0.2 * t[1:-1]])
     with pytest.raises(ValueError, match="S_p"):
         pv_model(0.0)
-    with pytest.raises(ValueError, match="position"):
-        DGPSPVFilter().step([np.nan, 0.0])
+    with pytest.raises(ValueError, match="finite"):
+        DGPSReceiver().reset([np.nan, 0.0, 0.0], np.zeros(3))
 
 
 def _track(n=120):
@@ -121,8 +121,11 @@ def test_receiver_streaming_and_batch_agree_exactly():
             np.testing.assert_array_equal(got, getattr(batch, name), err_msg=name)
         # and against the printed filter (matrix form) on the same measurements
         x0 = np.r_[batch.v_ns[0], batch.v_ew[0], batch.x_hat[0], batch.y_hat[0]]
-        f = DGPSPVFilter(kw.get("S_p", 0.01), x0=x0)
-        ref = np.array([x0] + [f.step(z) for z in batch.z[1:]])
+        m = pv_model(kw.get("S_p", 0.01))
+        ref = [x0]
+        for z in batch.z[1:]:  # eq. 5 in the printed matrix form
+            xp = m.Phi @ ref[-1]
+            ref.append(xp + rec.K_inf @ (z - m.H @ xp))
         np.testing.assert_allclose(np.c_[batch.v_ns, batch.v_ew, batch.x_hat, batch.y_hat], ref,
                                    atol=1e-9)  # fmt: skip
         np.testing.assert_array_equal(pv_filter_batch(batch.z, x0, kw.get("S_p", 0.01))[:, 0],
@@ -161,3 +164,41 @@ def test_receiver_starts_at_the_truth_and_an_antenna_in_a_pure_rotation():
     e2 = DGPSReceiver(rng=3).run(eta, nu[0]).z - eta[:, :2]
     np.testing.assert_array_equal(e1, e2)
     assert np.std(e1[1:]) == pytest.approx(2.0, rel=0.2)
+
+
+def test_receiver_i_of_a_batch_is_the_single_receiver_with_its_generator():
+    """n receivers, each with its own generator, updated under masks (the others wait): row
+    i is bit for bit the single receiver with that generator, updated when its mask is set;
+    blocks of draws smaller than the episode (refills) change nothing."""
+    eta, nu = _track(150)
+    tracks = np.stack([eta, eta + [5.0, -3.0, 0.2], eta[::-1]])
+    nus = np.stack([nu[0], nu[0] * 0.5, nu[-1]])
+    kw = {"antenna": (-40.0, 1.5), "S_p": 0.02}
+    batch = DGPSReceiver(n=3, rng=[7, 8, 9], block=16, **kw)
+    singles = [DGPSReceiver(rng=s, **kw) for s in (7, 8, 9)]
+    out = batch.reset(tracks[:, 0], nus)
+    ones = [s.reset(tracks[i, 0], nus[i]) for i, s in enumerate(singles)]
+    masks = np.random.default_rng(0).random((149, 3)) < 0.8
+    for k in range(1, 150):
+        out = batch.update(tracks[:, k], mask=masks[k - 1])
+        for i, s in enumerate(singles):
+            if masks[k - 1, i]:
+                ones[i] = s.update(tracks[i, k])
+            for name in out._fields:
+                np.testing.assert_array_equal(getattr(out, name)[i], getattr(ones[i], name))
+    # a reset with new generators restarts the draws of the reset receivers only
+    batch.reset(tracks[:, 0], nus, rngs=[1, 2, 3], mask=[True, False, False])
+    s = DGPSReceiver(rng=1, **kw)
+    s.reset(tracks[0, 0], nus[0])
+    np.testing.assert_array_equal(batch.update(tracks[:, 1]).z[0], s.update(tracks[0, 1]).z)
+    # the offline run over n tracks at once, rows as the single runs
+    many = DGPSReceiver(n=3, rng=[7, 8, 9], **kw).run(tracks, nus)
+    assert many.v_xy.shape == (3, 150) and many.z.shape == (3, 150, 2)
+    for i in range(3):
+        one = DGPSReceiver(rng=7 + i, **kw).run(tracks[i], nus[i])
+        for name in one._fields:
+            np.testing.assert_array_equal(getattr(many, name)[i], getattr(one, name))
+    with pytest.raises(ValueError, match="n must be"):
+        DGPSReceiver(n=0)
+    with pytest.raises(ValueError, match=r"\(3, 3\)"):
+        batch.update(eta[0])

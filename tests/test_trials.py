@@ -21,7 +21,7 @@ from shipgym.trials import (
     zigzag_limits,
 )
 from shipgym.trials.bias import receiver_bias, resample
-from shipgym.trials.manoeuvres import ZigZag
+from shipgym.trials.manoeuvres import Scripts, ZigZag
 from shipgym.trials.metrics import TrialMetrics
 
 D = math.pi / 180.0
@@ -33,9 +33,7 @@ SHAFT_RATE = 0.1  # n0 per second: +n0 -> -n0 in 20 s, n0 -> 0 in 10 s (notes 3.
 def _simulate(model, n0, names, T, h=0.05):
     """The scripts driving MMGModel, RK4 at ``h``, the rate limits applied here; a batch of
     manoeuvres at once. shipgym's rudder is the MMG paper's with the sign reversed."""
-    scripts = [manoeuvre(nm).script() for nm in names]
-    for s in scripts:
-        s.reset(0.0)
+    scripts = Scripts([manoeuvre(nm) for nm in names])
     k = len(names)
     x = np.zeros((k, 6))  # u, v, r, x, y, psi
     x[:, 0] = U0
@@ -50,9 +48,9 @@ def _simulate(model, n0, names, T, h=0.05):
         return np.c_[nd, s[:, 0] * c - s[:, 1] * sn, s[:, 0] * sn + s[:, 1] * c, s[:, 2]]
 
     for i in range(N):
-        cmd = np.array([sc.command(i * h, x[j, 5], x[j, 0]) for j, sc in enumerate(scripts)])
-        d += np.clip(cmd[:, 0] - d, -RATE * h, RATE * h)
-        nf += np.clip(cmd[:, 1] - nf, -SHAFT_RATE * h, SHAFT_RATE * h)
+        rudder, shaft = scripts.command(x[:, 5])
+        d += np.clip(rudder - d, -RATE * h, RATE * h)
+        nf += np.clip(shaft - nf, -SHAFT_RATE * h, SHAFT_RATE * h)
         dm, n = -d, nf * n0
         k1 = f(x, dm, n)
         k2 = f(x + 0.5 * h * k1, dm, n)
@@ -87,16 +85,14 @@ def test_registry_and_scripts():
                                "crash_stop", "coasting_stop", "initial_turning"}  # fmt: skip
     with pytest.raises(ValueError, match="turning35_stbd.*initial_turning"):
         manoeuvre("williamson")
-    # shipgym's rudder is Fossen's: a starboard rudder is negative
-    s = manoeuvre("turning35_stbd").script()
-    s.reset(0.3)
-    assert s.command(0.0, 0.3, 7.0) == pytest.approx((-35 * D, 1.0))
-    assert manoeuvre("turning35_port").script().command(5.0, 0.0, 7.0) == pytest.approx((35 * D, 1))
-    assert manoeuvre("initial_turning").script().command(0.0, 0.0, 7.0) == pytest.approx(
-        (-10 * D, 1)
-    )
-    assert manoeuvre("crash_stop").script().command(0.0, 0.0, 7.0) == (0.0, -1.0)
-    assert manoeuvre("coasting_stop").script().command(0.0, 0.0, 7.0) == (0.0, 0.0)
+    # shipgym's rudder is Fossen's: a starboard rudder is negative; one law for N envs
+    names = ["turning35_stbd", "turning35_port", "initial_turning", "crash_stop",
+             "coasting_stop"]  # fmt: skip
+    s = Scripts([manoeuvre(nm) for nm in names])
+    s.reset(np.full(5, 0.3))
+    rudder, shaft = s.command(np.full(5, 0.3))
+    np.testing.assert_allclose(rudder, np.array([-35, 35, -10, 0, 0]) * D, rtol=1e-15)
+    np.testing.assert_array_equal(shaft, [1, 1, 1, -1, 0])
     for m in MANOEUVRES.values():  # durations in units of L/U0
         assert m.duration(200.0, 7.0) == pytest.approx(2 * m.duration(100.0, 7.0))
     assert manoeuvre("turning35_stbd").duration(L, U0) == pytest.approx(36 * L / U0)
@@ -105,14 +101,14 @@ def test_registry_and_scripts():
 
 
 def test_zigzag_script_reverses_at_the_heading_angle():
-    z = manoeuvre("zigzag10").script()
-    z.reset(1.0)  # approach heading 1 rad
+    z = Scripts([manoeuvre("zigzag10"), manoeuvre("turning35_stbd")])
+    z.reset(np.array([1.0, 1.0]))  # approach heading 1 rad
     heading = [0.0, 5.0, 9.9, 10.001, 15.0, 0.0, -9.9, -10.001, -3.0, 10.1]  # change, deg
-    cmds = [z.command(float(i), 1.0 + h * D, 7.0)[0] / D for i, h in enumerate(heading)]
-    assert cmds == pytest.approx([-10, -10, -10, 10, 10, 10, 10, -10, -10, 10])
-    assert z.executes == [3.0, 7.0, 9.0]
-    z.reset(-3.1)  # across +-pi: the heading change is wrapped
-    assert z.command(0.0, 3.1, 7.0)[0] == pytest.approx(-10 * D)
+    cmds = [z.command(1.0 + np.full(2, h * D))[0] / D for h in heading]
+    np.testing.assert_allclose([c[0] for c in cmds], [-10, -10, -10, 10, 10, 10, 10, -10, -10, 10])
+    np.testing.assert_allclose([c[1] for c in cmds], -35.0)  # the turn's rudder holds
+    z.reset(np.array([-3.1, 0.0]), mask=np.array([True, False]))  # across +-pi: wrapped
+    assert z.command(np.array([3.1, 0.0]))[0][0] == pytest.approx(-10 * D)
 
 
 # --- metrics on analytic tracks --------------------------------------------------------------

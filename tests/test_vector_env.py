@@ -137,7 +137,7 @@ def test_bad_input_is_refused_clearly():
     with pytest.raises(ValueError, match="no batched form"):
         from shipgym.envs.vector import ShipVectorEnv
 
-        ShipVectorEnv(2, "shipgym/SeaTrial-v0")
+        ShipVectorEnv(2, "shipgym/NoSuchTask-v0")
 
 
 @pytest.mark.parametrize("env_id", TASKS)

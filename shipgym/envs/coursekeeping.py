@@ -21,7 +21,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
@@ -36,29 +35,27 @@ from shipgym.observers.dgps import (
     S_P_OPTIMAL,
     DGPSOutput,
     DGPSReceiver,
+    NormalStreams,
     antenna_motion,
     velocity_outputs,
 )
 
-from .base import (
-    TopCameraRender,
-    _check_render_mode,
-    _check_timing,
-    _whole_multiple,
-    rudder_action,
-)
-from .physics import VesselPhysics
+from .base import _check_timing, _whole_multiple
+from .batched import BatchedEnv, SingleEnv
+from .batchphysics import BatchedPhysics
 
 __all__ = [
     "AUTO",
     "AUTO_CURRENT_SPEED",
     "COURSE_OBSERVATION",
     "CourseKeepingEnv",
+    "CourseKeepingVectorEnv",
     "CourseRewardWeights",
     "GYRO_STD",
     "RATE_GYRO_STD",
     "RECEIVERS",
     "TankerCourseKeepingEnv",
+    "course_keeping_vector_env",
 ]
 
 #: the velocity sources of the observation: the receiver's PV filter, the truth, the raw
@@ -108,12 +105,349 @@ def _finite(x: Any) -> bool:
     return is_real(x) and math.isfinite(x)
 
 
-class CourseKeepingEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+def _disturbance(value: Any, cls: Any, name: str) -> Any:
+    if isinstance(value, str) and value in (AUTO, *_NONE):
+        return None if value in _NONE else AUTO
+    return cls.coerce(value, name=name)
+
+
+class CourseKeepingVectorEnv(BatchedEnv):
+    """``num_envs`` course-keeping envs stepped together: the task written once over N >= 1
+    envs (:class:`CourseKeepingEnv`, its batch of one, is the spec). Env ``i`` reset with
+    seed ``s + i`` is the single env reset with that seed, bit for bit.
+
+    Args:
+        num_envs: number of envs, >= 1.
+        autoreset_mode: ``"next-step"`` or ``"same-step"``.
+        **kwargs: the arguments of :class:`CourseKeepingEnv` (``vessel=`` required), but
+            ``render_mode``.
+    """
+
+    def __init__(
+        self,
+        num_envs: int,
+        *,
+        autoreset_mode: str = "next-step",
+        vessel: Vessel | str | None = None,
+        speed: float | None = None,
+        heading: float = 0.0,
+        wind: Any = AUTO,
+        current: Any = AUTO,
+        receiver: str = "dgps-pv",
+        S_p: float = S_P_OPTIMAL,
+        dgps_sigma: float = DGPS_SIGMA,
+        antenna: tuple[float, float] = (0.0, 0.0),
+        sensor_noise: bool = True,
+        setpoint_period: float | None = 150.0,
+        max_heading_change: float = math.radians(30.0),
+        reward_weights: CourseRewardWeights | Mapping[str, float] | None = None,
+        episode_duration: float = 600.0,
+        timestep: float = 0.05,
+        control_period: float = 1.0,
+    ) -> None:
+        if vessel is None:
+            raise TypeError(
+                "CourseKeepingEnv needs vessel=NAME (a vessel with a rudder: 'kvlcc2-100m', "
+                "'kvlcc2-l7', 'naval-vessel', 'container-ship', 'van-der-klugt') or a package path"
+            )
+        self.base_vessel = load_vessel(vessel)
+        v = self.base_vessel
+        if not v.rudders:
+            raise ValueError(
+                f"CourseKeepingEnv steers with a rudder; {v.name!r} has none (actuators: "
+                f"{', '.join(a.label for a in v.actuators)})"
+            )
+        if speed is None:
+            speed = v.approach_speed
+            if speed is None:
+                raise ValueError(
+                    f"vessel {v.name!r} has no approach speed ([trials] approach_speed or "
+                    "[roll_control] design_speed in its vessel.toml): pass speed= (m/s)"
+                )
+        if not (_finite(speed) and 0 < speed <= 30.0):
+            raise ValueError(f"speed must be in (0, 30] m/s, got {speed!r}")
+        self.U = float(speed)
+        if not _finite(heading):
+            raise ValueError(f"heading must be a finite angle (rad), got {heading!r}")
+        self.heading = float(heading)
+        if receiver not in RECEIVERS:
+            raise ValueError(
+                f"unknown receiver {receiver!r}; choose one of: {', '.join(RECEIVERS)}"
+            )
+        self.receiver = receiver
+        if not (_finite(S_p) and S_p > 0):
+            raise ValueError(f"S_p must be > 0 m^2/s^3, got {S_p!r}")
+        self.S_p = float(S_p)
+        if not (_finite(dgps_sigma) and dgps_sigma >= 0):
+            raise ValueError(f"dgps_sigma must be >= 0 m, got {dgps_sigma!r}")
+        self.dgps_sigma = float(dgps_sigma)
+        ant = np.asarray(antenna, dtype=float).reshape(-1)
+        if ant.shape != (2,) or not np.all(np.isfinite(ant)):
+            raise ValueError(f"antenna must be a finite [x, y] (m), got {antenna!r}")
+        self.antenna = (float(ant[0]), float(ant[1]))
+        self.sensor_noise = bool(sensor_noise)
+        if setpoint_period is not None and not (_finite(setpoint_period) and setpoint_period > 0):
+            raise ValueError(f"setpoint_period must be > 0 s or None, got {setpoint_period!r}")
+        self.setpoint_period = None if setpoint_period is None else float(setpoint_period)
+        if not (_finite(max_heading_change) and 0 <= max_heading_change <= math.pi):
+            raise ValueError(
+                f"max_heading_change must be in [0, pi] rad, got {max_heading_change!r}"
+            )
+        self.max_heading_change = float(max_heading_change)
+        if reward_weights is None:
+            reward_weights = CourseRewardWeights()
+        elif isinstance(reward_weights, Mapping):
+            reward_weights = from_mapping(CourseRewardWeights, reward_weights,
+                                          where="reward_weights")  # fmt: skip
+        elif not isinstance(reward_weights, CourseRewardWeights):
+            raise TypeError(f"reward_weights must be a CourseRewardWeights or a mapping, got "
+                            f"{reward_weights!r}")  # fmt: skip
+        self.reward_weights = reward_weights
+        if not (_finite(episode_duration) and episode_duration > 0):
+            raise ValueError(f"episode_duration must be > 0 s, got {episode_duration!r}")
+        self.episode_duration = float(episode_duration)
+        _check_timing(timestep, control_period)
+        self.n_substeps = _whole_multiple(control_period, timestep)
+        self.timestep = float(timestep)
+        self.control_period = float(control_period)
+        self._wind_arg = _disturbance(wind, WindConfig, "wind")
+        self._current_arg = _disturbance(current, CurrentConfig, "current")
+        acts = v.actuators
+        chans = acts.channel_names
+        self._rudder_idx = [chans.index(name) for name in v.rudders]
+        lim = {}
+        shafts: list[int] = []  # MMG propellers held at the self-propulsion point
+        self._props: list[tuple[int, Propeller]] = []  # fixed propellers in the speed loop
+        for a, sl in zip(acts, acts.slices, strict=True):
+            if isinstance(a, MMGPropulsion):
+                lim[a.rudder_name] = a.max_angle
+                shafts.append(sl.start)
+            elif a.name in v.rudders:
+                lim[a.name] = a.max_angle
+            elif isinstance(a, Propeller) and a.alpha == 0 and not a.tunnel:
+                self._props.append((sl.start, a))
+        #: each rudder's angle limit (rad)
+        self.max_angle = np.array([lim[name] for name in v.rudders])
+        n_r = len(self._rudder_idx)
+        lo = [-math.pi, -2.0, *(-self.max_angle), 0.0, -math.pi]
+        hi = [math.pi, 2.0, *self.max_angle, 100.0, math.pi]
+        obs_space = spaces.Box(
+            np.array(lo, dtype=np.float32), np.array(hi, dtype=np.float32), dtype=np.float32
+        )
+        self._setup(num_envs, obs_space, spaces.Box(-1.0, 1.0, (n_r,), dtype=np.float32),
+                    autoreset_mode)  # fmt: skip
+        n = num_envs
+        fixed_wind = None if self._wind_arg == AUTO else self._wind_arg
+        self.physics = BatchedPhysics(v, n, wind=fixed_wind, timestep=self.timestep)
+        # the actuators' start: shafts at the self-propulsion point, propellers at the thrust
+        # that balances the resistance at U (split evenly), the rest at rest
+        st0 = self.physics.actuators.initial_state()
+        hull = self.physics.plant
+        for j in shafts:
+            st0[j] = float(hull.model.self_propulsion(self.U))
+        self._thrust0 = self._m11 = 0.0
+        if self._props:
+            M = hull.mass_matrix()
+            nu0 = np.zeros(M.shape[0])
+            nu0[0] = self.U
+            nd0 = np.asarray(hull.nu_dot(nu0, np.zeros(M.shape[0])))
+            self._thrust0 = float(-(M @ nd0)[0]) / len(self._props)
+            self._m11 = float(M[0, 0]) / len(self._props)
+            for j, prop in self._props:
+                st0[j] = float(np.clip(prop.inverse(self._thrust0), prop.lower, prop.upper))
+        self._st0 = st0
+        self._n_changes = (
+            0 if self.setpoint_period is None
+            else int(math.ceil(self.episode_duration / self.setpoint_period))
+        )  # fmt: skip
+        self.targets = np.full((n, max(self._n_changes, 1)), self.heading)
+        self.wind_configs: list[WindConfig | None] = [None] * n
+        self.current_configs: list[CurrentConfig | None] = [None] * n
+        self.rx = DGPSReceiver(self.S_p, n=n, sigma=self.dgps_sigma, dt=self.control_period,
+                               antenna=self.antenna)  # fmt: skip
+        self._gyro = NormalStreams(n, 2)
+        self._steps = np.zeros(n, dtype=np.int64)
+        self._z_prev = np.zeros((n, 2))
+        self._obs = np.zeros((n, 4 + n_r), dtype=np.float32)
+        self._info: dict[str, Any] = {}
+        self._sums = np.zeros((6, n))  # e^2, delta^2, |drift bias|, |speed bias|, their maxima
+        self._counts = np.zeros((3, n), dtype=np.int64)  # steps, rate-limited, saturated
+
+    # ---- episode ---------------------------------------------------------------------------
+    def _reset_envs(self, mask: NDArray[np.bool_]) -> None:
+        n, v = self.num_envs, self.base_vessel
+        nu0 = np.zeros((n, 3))
+        nu0[:, 0] = self.U
+        phys_rngs: list[Any] = [None] * n
+        rx_rngs: list[Any] = [None] * n
+        m = self.max_heading_change
+        for i in np.nonzero(mask)[0].tolist():
+            rng = self._rngs[i]
+            assert rng is not None
+            # every draw in a fixed order, made even when the quantity is fixed: same seed,
+            # same episode, and fixing one quantity leaves the others' draws unchanged
+            seeds = rng.integers(2**63, size=3)  # gyros, receiver noise, physics (gusts)
+            wind_dir = float(rng.uniform(0.0, 2.0 * math.pi))
+            current_dir = float(rng.uniform(0.0, 2.0 * math.pi))
+            changes = rng.uniform(-m, m, self._n_changes)
+            if self._n_changes:
+                self.targets[i] = np.r_[self.heading, self.heading + changes[1:]]
+            wc = self._wind_arg
+            if wc == AUTO:
+                wc = WindConfig(speed=float(v.nominal_wind), direction_from=wind_dir)
+            cc = self._current_arg
+            if cc == AUTO:
+                cc = CurrentConfig(speed=AUTO_CURRENT_SPEED / math.sqrt(v.scale),
+                                   direction_to=current_dir)  # fmt: skip
+            self.wind_configs[i], self.current_configs[i] = wc, cc
+            self.physics.set_disturbances(i, wc, cc)
+            self._gyro.seed(i, int(seeds[0]))
+            rx_rngs[i] = int(seeds[1])
+            phys_rngs[i] = np.random.default_rng(int(seeds[2]))
+            if cc is not None:  # straight running at U through the water, with the current
+                nu0[i, 0] += cc.speed * math.cos(cc.direction_to - self.heading)
+                nu0[i, 1] = cc.speed * math.sin(cc.direction_to - self.heading)
+        phys = self.physics
+        phys.reset(eta=(0.0, 0.0, self.heading), nu=nu0, actuators=self._st0, mask=mask,
+                   rngs=phys_rngs)  # fmt: skip
+        phys.set_command(np.where(mask[:, None], self._st0, phys.command))
+        out = self.rx.reset(phys.eta, phys.nu, rngs=rx_rngs, mask=mask)
+        self._steps[mask] = 0
+        self._sums[:, mask] = 0.0
+        self._counts[:, mask] = 0
+        self._sense(mask, out, first=True)
+
+    def _sense(self, mask: NDArray[np.bool_], out: DGPSOutput, first: bool = False) -> None:
+        """The observation and info of the envs of ``mask`` now (gyro draws for them)."""
+        phys = self.physics
+        eta, nu = phys.eta, phys.nu
+        psi, r = eta[:, 2], nu[:, 2]
+        if self.sensor_noise:
+            g = self._gyro.draw(mask)
+            psi_g, r_g = psi + GYRO_STD * g[:, 0], r + RATE_GYRO_STD * g[:, 1]
+        else:
+            psi_g, r_g = psi, r
+        if self.setpoint_period is None:
+            psi_d = np.full(self.num_envs, self.heading)
+        else:
+            t = self._steps * self.control_period
+            k = np.minimum(np.floor(t / self.setpoint_period + 1e-9).astype(np.int64),
+                           self._n_changes - 1)  # fmt: skip
+            psi_d = self.targets[np.arange(self.num_envs), k]
+        _p, vg = antenna_motion(eta, nu, self.antenna)
+        v_true, chi_true, beta_true = velocity_outputs(vg[:, 0], vg[:, 1], psi)
+        if self.receiver == "dgps-pv":
+            vn, ve = out.v_ns, out.v_ew
+        elif self.receiver == "truth" or first:  # raw: no difference yet at the reset
+            vn, ve = vg[:, 0], vg[:, 1]
+        else:
+            dz = (out.z - self._z_prev) / self.control_period
+            vn, ve = dz[:, 0], dz[:, 1]
+        self._z_prev = np.where(mask[:, None], out.z, self._z_prev)
+        v_rx, chi_rx, beta_rx = velocity_outputs(vn, ve, psi_g)
+        delta = phys.actuator_state[:, self._rudder_idx]
+        obs = np.column_stack([wrap_angle(psi_g - psi_d), r_g, delta, v_rx, beta_rx])
+        self._obs = np.where(mask[:, None], obs.astype(np.float32), self._obs)
+        self._info = {
+            "time": phys.t.copy(),
+            "eta": phys.eta_full,
+            "nu": phys.nu_full,
+            "heading": psi,
+            "heading_setpoint": psi_d,
+            "heading_error": wrap_angle(psi - psi_d),
+            "speed": v_true,
+            "course": chi_true,
+            "drift_angle": beta_true,
+            "receiver_speed": v_rx,
+            "receiver_course": chi_rx,
+            "receiver_drift_angle": beta_rx,
+            "speed_bias": v_rx - v_true,
+            "drift_angle_bias": wrap_angle(beta_rx - beta_true),
+            "dgps_position": out.z.copy(),
+            "rudder": delta,
+        }
+
+    def _observation(self) -> NDArray[np.float32]:
+        return self._obs.copy()
+
+    def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
+        return dict(self._info)
+
+    def _step_envs(
+        self, actions: NDArray[np.float64], active: NDArray[np.bool_]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+        phys = self.physics
+        a = np.clip(actions, -1.0, 1.0)
+        action_clipped = (np.abs(actions) > 1.0) & active[:, None]
+        command = phys.command  # the shafts keep their command
+        command[:, self._rudder_idx] = a * self.max_angle
+        if self._props:  # hold the speed through the water: resistance + a 20 s speed loop
+            u_r = phys.nu[:, 0] - phys._hulls.loads[:, 6]
+            thrust = self._thrust0 + self._m11 * (self.U - u_r) / 20.0
+            for j, prop in self._props:
+                command[:, j] = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
+        clipped = phys.set_command(np.where(active[:, None], command, phys.command))
+        phys.step(self.n_substeps, mask=active)
+        self._steps += active
+        out = self.rx.update(phys.eta, mask=active)
+        self._sense(active, out)
+        info = self._info
+        delta = info["rudder"]
+        w = self.reward_weights
+        n_r = delta.shape[1]
+        rudder, rudder2 = np.zeros(self.num_envs), np.zeros(self.num_envs)
+        for j in range(n_r):  # elementwise per rudder: a row's sum does not depend on N
+            rudder += (delta[:, j] / self.max_angle[j]) ** 2
+            rudder2 += delta[:, j] ** 2
+        terms = {"heading": -((info["heading_error"] / w.psi0) ** 2),
+                 "rudder": -w.rudder * (rudder / n_r)}  # fmt: skip
+        reward = terms["heading"] + terms["rudder"]
+        truncated = self._steps * self.control_period >= self.episode_duration - 1e-9
+        at_limit = np.abs(delta) >= self.max_angle * (1.0 - 1e-9)
+        rate_limited = (phys._hulls.hits[:, self._rudder_idx] > 0) & active[:, None]
+        saturated = (at_limit | clipped[:, self._rudder_idx] | action_clipped) & active[:, None]
+        info.update({
+            "rudder_command": phys.command[:, self._rudder_idx],
+            "rate_limited": rate_limited,
+            "saturated": saturated,
+            "action_clipped": action_clipped,
+            "reward_terms": terms,
+        })  # fmt: skip
+        # the episode's running sums
+        s, c = self._sums, self._counts
+        e, db = info["heading_error"], np.abs(info["drift_angle_bias"])
+        add = np.stack([e**2, rudder2 / n_r, db, np.abs(info["speed_bias"])])
+        s[:4] = np.where(active, s[:4] + add, s[:4])
+        s[4:6] = np.where(active, np.maximum(s[4:6], np.stack([np.abs(e), db])), s[4:6])
+        c += np.stack([active, rate_limited.any(axis=1), saturated.any(axis=1)])
+        return reward, np.zeros(self.num_envs, dtype=bool), truncated & active, dict(info)
+
+    def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
+        """Heading, rudder and receiver-bias statistics of each env's episode so far."""
+        s, c = self._sums, self._counts
+        n = np.maximum(c[0], 1)
+        return {
+            "speed": np.full(self.num_envs, self.U),
+            "receiver": np.full(self.num_envs, self.receiver),
+            "steps": c[0].copy(),
+            "heading_rms": np.sqrt(s[0] / n),
+            "heading_max": s[4].copy(),
+            "rudder_rms": np.sqrt(s[1] / n),
+            "drift_angle_bias_mean_abs": s[2] / n,
+            "drift_angle_bias_max_abs": s[5].copy(),
+            "speed_bias_mean_abs": s[3] / n,
+            "rate_limited_fraction": c[1] / n,
+            "saturated_fraction": c[2] / n,
+        }
+
+
+class CourseKeepingEnv(SingleEnv):
     r"""Hold and change the heading with the rudder, seeing the DGPS receiver's velocity.
 
     **Physics.** Any vessel with a rudder (:attr:`Vessel.rudders
-    <shipgym.dynamics.vessel.Vessel.rudders>`) in MuJoCo with the exact force injection of
-    :class:`~shipgym.envs.physics.VesselPhysics` (physics step ``timestep`` 0.05 s; control
+    <shipgym.dynamics.vessel.Vessel.rudders>`) in open water, integrated by
+    :class:`~shipgym.envs.batchphysics.BatchedPhysics` (the leapfrog step of
+    :mod:`shipgym.sim.step`; physics step ``timestep`` 0.05 s; control
     period ``control_period`` 1 s, the receiver's sample time, a whole multiple of it). The
     episode starts in straight running at the speed ``U`` through the water (``speed``;
     default the vessel's approach speed, ``Vessel.approach_speed``) on the heading ``heading``,
@@ -213,358 +547,40 @@ class CourseKeepingEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.
         control_period: control period and receiver sample time (s), a whole multiple of
             ``timestep``.
         render_mode: ``None`` or ``"rgb_array"``.
+
+    The env is the batch of one of :class:`CourseKeepingVectorEnv` (the one code path;
+    ``gymnasium.make_vec("shipgym/CourseKeeping-v0", num_envs=N)``): :attr:`batch`.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
+    batched = CourseKeepingVectorEnv
 
-    def __init__(
-        self,
-        vessel: Vessel | str | None = None,
-        speed: float | None = None,
-        heading: float = 0.0,
-        wind: Any = AUTO,
-        current: Any = AUTO,
-        receiver: str = "dgps-pv",
-        S_p: float = S_P_OPTIMAL,
-        dgps_sigma: float = DGPS_SIGMA,
-        antenna: tuple[float, float] = (0.0, 0.0),
-        sensor_noise: bool = True,
-        setpoint_period: float | None = 150.0,
-        max_heading_change: float = math.radians(30.0),
-        reward_weights: CourseRewardWeights | Mapping[str, float] | None = None,
-        episode_duration: float = 600.0,
-        timestep: float = 0.05,
-        control_period: float = 1.0,
-        render_mode: str | None = None,
-    ) -> None:
-        if vessel is None:
-            raise TypeError(
-                "CourseKeepingEnv needs vessel=NAME (a vessel with a rudder: 'kvlcc2-100m', "
-                "'kvlcc2-l7', 'naval-vessel', 'container-ship', 'van-der-klugt') or a package path"
-            )
-        self.base_vessel = load_vessel(vessel)
-        v = self.base_vessel
-        if not v.rudders:
-            raise ValueError(
-                f"CourseKeepingEnv steers with a rudder; {v.name!r} has none (actuators: "
-                f"{', '.join(a.label for a in v.actuators)})"
-            )
-        if speed is None:
-            speed = v.approach_speed
-            if speed is None:
-                raise ValueError(
-                    f"vessel {v.name!r} has no approach speed ([trials] approach_speed or "
-                    "[roll_control] design_speed in its vessel.toml): pass speed= (m/s)"
-                )
-        if not (_finite(speed) and 0 < speed <= 30.0):
-            raise ValueError(f"speed must be in (0, 30] m/s, got {speed!r}")
-        self.U = float(speed)
-        if not _finite(heading):
-            raise ValueError(f"heading must be a finite angle (rad), got {heading!r}")
-        self.heading = float(heading)
-        if receiver not in RECEIVERS:
-            raise ValueError(
-                f"unknown receiver {receiver!r}; choose one of: {', '.join(RECEIVERS)}"
-            )
-        self.receiver = receiver
-        if not (_finite(S_p) and S_p > 0):
-            raise ValueError(f"S_p must be > 0 m^2/s^3, got {S_p!r}")
-        self.S_p = float(S_p)
-        if not (_finite(dgps_sigma) and dgps_sigma >= 0):
-            raise ValueError(f"dgps_sigma must be >= 0 m, got {dgps_sigma!r}")
-        self.dgps_sigma = float(dgps_sigma)
-        ant = np.asarray(antenna, dtype=float).reshape(-1)
-        if ant.shape != (2,) or not np.all(np.isfinite(ant)):
-            raise ValueError(f"antenna must be a finite [x, y] (m), got {antenna!r}")
-        self.antenna = (float(ant[0]), float(ant[1]))
-        self.sensor_noise = bool(sensor_noise)
-        if setpoint_period is not None and not (_finite(setpoint_period) and setpoint_period > 0):
-            raise ValueError(f"setpoint_period must be > 0 s or None, got {setpoint_period!r}")
-        self.setpoint_period = None if setpoint_period is None else float(setpoint_period)
-        if not (_finite(max_heading_change) and 0 <= max_heading_change <= math.pi):
-            raise ValueError(
-                f"max_heading_change must be in [0, pi] rad, got {max_heading_change!r}"
-            )
-        self.max_heading_change = float(max_heading_change)
-        if reward_weights is None:
-            reward_weights = CourseRewardWeights()
-        elif isinstance(reward_weights, Mapping):
-            reward_weights = from_mapping(CourseRewardWeights, reward_weights,
-                                          where="reward_weights")  # fmt: skip
-        elif not isinstance(reward_weights, CourseRewardWeights):
-            raise TypeError(f"reward_weights must be a CourseRewardWeights or a mapping, got "
-                            f"{reward_weights!r}")  # fmt: skip
-        self.reward_weights = reward_weights
-        if not (_finite(episode_duration) and episode_duration > 0):
-            raise ValueError(f"episode_duration must be > 0 s, got {episode_duration!r}")
-        self.episode_duration = float(episode_duration)
-        _check_timing(timestep, control_period)
-        self.n_substeps = _whole_multiple(control_period, timestep)
-        self.timestep = float(timestep)
-        self.control_period = float(control_period)
-        _check_render_mode(render_mode, self.metadata)
-        self.render_mode = render_mode
-        self._wind_arg = self._parse_disturbance(wind, WindConfig, "wind")
-        self._current_arg = self._parse_disturbance(current, CurrentConfig, "current")
-        self.wind_config: WindConfig | None = None
-        self.current_config: CurrentConfig | None = None
+    def __init__(self, vessel: Vessel | str | None = None, render_mode: str | None = None,
+                 **kwargs: Any) -> None:  # fmt: skip
+        super().__init__(render_mode=render_mode, vessel=vessel, **kwargs)
+        b = self.batch
+        for name in _SHARED:  # the task's settings, as the batch holds them
+            setattr(self, name, getattr(b, name))
 
-        acts = v.actuators
-        chans = acts.channel_names
-        self._rudder_idx = [chans.index(n) for n in v.rudders]
-        lim = {}
-        rate = {}
-        self._shafts: list[int] = []  # MMG propellers held at the self-propulsion point
-        self._props: list[tuple[int, Propeller]] = []  # fixed propellers in the speed loop
-        for a, sl in zip(acts, acts.slices, strict=True):
-            if isinstance(a, MMGPropulsion):
-                lim[a.rudder_name], rate[a.rudder_name] = a.max_angle, a.max_rate
-                self._shafts.append(sl.start)
-            elif a.name in v.rudders:
-                lim[a.name], rate[a.name] = a.max_angle, a.max_rate
-            elif isinstance(a, Propeller) and a.alpha == 0 and not a.tunnel:
-                self._props.append((sl.start, a))
-        # the rudders among the servo channels (VesselPhysics.rate_limited's order)
-        servos = [j for j, c in enumerate(acts.channels) if c.dynamics == "servo"]
-        self._servo_of_rudder = [servos.index(j) for j in self._rudder_idx]
-        #: each rudder's angle limit (rad)
-        self.max_angle = np.array([lim[n] for n in v.rudders])
-        self._max_rate = np.array([rate[n] for n in v.rudders])
-        n = len(self._rudder_idx)
-        self.action_space = spaces.Box(-1.0, 1.0, (n,), dtype=np.float32)
-        lo = [-math.pi, -2.0, *(-self.max_angle), 0.0, -math.pi]
-        hi = [math.pi, 2.0, *self.max_angle, 100.0, math.pi]
-        self.observation_space = spaces.Box(
-            np.array(lo, dtype=np.float32), np.array(hi, dtype=np.float32), dtype=np.float32
-        )
-        self.physics: VesselPhysics | None = None
-        self._renderer: Any = None
-        self._receiver: DGPSReceiver | None = None
+    @property
+    def physics(self) -> BatchedPhysics:
+        """The batch's physics (one hull)."""
+        return self.batch.physics
 
-    # ---- set-up ----------------------------------------------------------------------------
-    @staticmethod
-    def _parse_disturbance(value: Any, cls: Any, name: str) -> Any:
-        if isinstance(value, str) and value in (AUTO, *_NONE):
-            return None if value in _NONE else AUTO
-        return cls.coerce(value, name=name)
+    @property
+    def wind_config(self) -> WindConfig | None:
+        """This episode's wind (``None`` before the first reset or without wind)."""
+        return self.batch.wind_configs[0]
 
-    def _disturbances(self, wind_dir: float, current_dir: float) -> None:
-        v = self.base_vessel
-        if self._wind_arg == AUTO:
-            self.wind_config = WindConfig(speed=float(v.nominal_wind), direction_from=wind_dir)
-        else:
-            self.wind_config = self._wind_arg
-        if self._current_arg == AUTO:
-            s = AUTO_CURRENT_SPEED / math.sqrt(v.scale)
-            self.current_config = CurrentConfig(speed=s, direction_to=current_dir)
-        else:
-            self.current_config = self._current_arg
-
-    def _make_physics(self) -> VesselPhysics:
-        if self.physics is None:
-            self.physics = VesselPhysics(self.base_vessel, world="open-water",
-                                         timestep=self.timestep)  # fmt: skip
-        self.physics.set_wind(self.wind_config)
-        self.physics.set_current(self.current_config)
-        return self.physics
-
-    def _setpoint(self, t: float) -> float:
-        if self.setpoint_period is None:
-            return self.heading
-        k = min(int(math.floor(t / self.setpoint_period + 1e-9)), len(self._targets) - 1)
-        return float(self._targets[k])
-
-    # ---- episode ---------------------------------------------------------------------------
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        super().reset(seed=seed)
-        rng = self.np_random
-        # every draw in a fixed order, made even when the quantity is fixed: same seed, same
-        # episode, and fixing one quantity leaves the others' draws unchanged
-        seeds = rng.integers(2**63, size=3)  # gyros, receiver noise, physics (gusts)
-        wind_dir = float(rng.uniform(0.0, 2.0 * math.pi))
-        current_dir = float(rng.uniform(0.0, 2.0 * math.pi))
-        n_changes = (
-            0 if self.setpoint_period is None
-            else int(math.ceil(self.episode_duration / self.setpoint_period))
-        )  # fmt: skip
-        m = self.max_heading_change
-        changes = rng.uniform(-m, m, n_changes)
-        self._targets = np.r_[self.heading, self.heading + changes[1:]] if n_changes else None
-        self._disturbances(wind_dir, current_dir)
-        phys = self._make_physics()
-        self._noise_rng = np.random.default_rng(int(seeds[0]))
-        U, psi0 = self.U, self.heading
-        # straight running at U through the water, carried by the (mean) current
-        cc = self.current_config
-        uc = vc = 0.0
-        if cc is not None:
-            uc = cc.speed * math.cos(cc.direction_to - psi0)
-            vc = cc.speed * math.sin(cc.direction_to - psi0)
-        st0 = phys.initial_actuator_state()
-        hull = phys.plant
-        for j in self._shafts:
-            st0[j] = float(hull.model.self_propulsion(U))
-        self._thrust0 = 0.0
-        if self._props:  # the thrust that balances the resistance at U, split evenly
-            M = hull.mass_matrix()
-            nu0 = np.zeros(M.shape[0])
-            nu0[0] = U
-            nd0 = np.asarray(hull.nu_dot(nu0, np.zeros(M.shape[0])))
-            self._thrust0 = float(-(M @ nd0)[0]) / len(self._props)
-            self._m11 = float(M[0, 0]) / len(self._props)
-            for j, prop in self._props:
-                st0[j] = float(np.clip(prop.inverse(self._thrust0), prop.lower, prop.upper))
-        phys.reset(eta=(0.0, 0.0, psi0), nu=(U + uc, vc, 0.0), actuators=st0,
-                   rng=np.random.default_rng(int(seeds[2])))  # fmt: skip
-        phys.set_command(st0)
-        self._receiver = DGPSReceiver(self.S_p, sigma=self.dgps_sigma, dt=self.control_period,
-                                      antenna=self.antenna, rng=int(seeds[1]))  # fmt: skip
-        out = self._receiver.reset(phys.eta, phys.nu)
-        self._z_prev = out.z.copy()
-        self._steps = 0
-        self._metrics = _CourseMetrics()
-        obs, info = self._observe(out, first=True)
-        return obs, info
-
-    def step(
-        self, action: NDArray[np.float32]
-    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        phys = self.physics
-        if phys is None or self._receiver is None:
-            raise gym.error.ResetNeeded("call reset() before step()")
-        a, action_clipped = rudder_action(action, self.action_space.shape, self.base_vessel.rudders)
-        command = phys.command  # the shafts keep their command
-        command[self._rudder_idx] = a * self.max_angle
-        if self._props:  # hold the speed through the water: resistance + a 20 s speed loop
-            u_r = float(phys.nu[0]) - float(phys.nu_c[0])
-            for j, prop in self._props:
-                thrust = self._thrust0 + self._m11 * (self.U - u_r) / 20.0
-                command[j] = float(np.clip(prop.inverse(thrust), prop.lower, prop.upper))
-        clipped = phys.set_command(command)
-        phys.step(self.n_substeps)
-        self._steps += 1
-        out = self._receiver.update(phys.eta)
-        obs, info = self._observe(out)
-        delta = info["rudder"]
-        w = self.reward_weights
-        terms = {
-            "heading": -((info["heading_error"] / w.psi0) ** 2),
-            "rudder": -w.rudder * float(np.mean((delta / self.max_angle) ** 2)),
-        }
-        reward = float(sum(terms.values()))
-        truncated = self._steps * self.control_period >= self.episode_duration - 1e-9
-        at_limit = np.abs(delta) >= self.max_angle * (1.0 - 1e-9)
-        rl = phys.rate_limited
-        info.update({
-            "rudder_command": phys.command[self._rudder_idx],
-            "rate_limited": np.array([bool(rl[k]) for k in self._servo_of_rudder]),
-            "saturated": at_limit | clipped[self._rudder_idx] | action_clipped,
-            "action_clipped": action_clipped,
-            "reward_terms": terms,
-        })  # fmt: skip
-        self._metrics.add(info)
-        if truncated:
-            info["episode_metrics"] = self.episode_metrics()
-        return obs, reward, False, bool(truncated), info
-
-    def _observe(
-        self, out: DGPSOutput, first: bool = False
-    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        phys = self.physics
-        assert phys is not None
-        eta, nu = phys.eta, phys.nu
-        psi, r = float(eta[2]), float(nu[2])
-        if self.sensor_noise:
-            g = self._noise_rng.standard_normal(2)
-            psi_g, r_g = psi + GYRO_STD * float(g[0]), r + RATE_GYRO_STD * float(g[1])
-        else:
-            psi_g, r_g = psi, r
-        t = self._steps * self.control_period
-        psi_d = self._setpoint(t)
-        _p, vg = antenna_motion(eta, nu, self.antenna)
-        v_true, chi_true, beta_true = (float(x) for x in velocity_outputs(vg[0], vg[1], psi))
-        if self.receiver == "dgps-pv":
-            vn, ve = float(out.v_ns), float(out.v_ew)
-        elif self.receiver == "truth":
-            vn, ve = float(vg[0]), float(vg[1])
-        elif first:  # raw: no difference yet; the receiver starts at the truth
-            vn, ve = float(vg[0]), float(vg[1])
-        else:
-            dz = (out.z - self._z_prev) / self.control_period
-            vn, ve = float(dz[0]), float(dz[1])
-        self._z_prev = out.z.copy()
-        v_rx, chi_rx, beta_rx = (float(x) for x in velocity_outputs(vn, ve, psi_g))
-        delta = phys.actuator_state[self._rudder_idx]
-        obs = np.array(
-            [float(wrap_angle(psi_g - psi_d)), r_g, *delta.tolist(), v_rx, beta_rx],
-            dtype=np.float32,
-        )
-        info: dict[str, Any] = {
-            "time": phys.time,
-            "eta": phys.eta_full,
-            "nu": phys.nu_full,
-            "heading": psi,
-            "heading_setpoint": psi_d,
-            "heading_error": float(wrap_angle(psi - psi_d)),
-            "speed": v_true,
-            "course": chi_true,
-            "drift_angle": beta_true,
-            "receiver_speed": v_rx,
-            "receiver_course": chi_rx,
-            "receiver_drift_angle": beta_rx,
-            "speed_bias": v_rx - v_true,
-            "drift_angle_bias": float(wrap_angle(beta_rx - beta_true)),
-            "dgps_position": np.asarray(out.z, dtype=float).copy(),
-            "rudder": delta.copy(),
-        }
-        return obs, info
-
-    def episode_metrics(self) -> dict[str, Any]:
-        """Heading, rudder and receiver-bias statistics of the episode so far."""
-        return self._metrics.summary(self)
+    @property
+    def current_config(self) -> CurrentConfig | None:
+        """This episode's current (``None`` before the first reset or without current)."""
+        return self.batch.current_configs[0]
 
 
-class _CourseMetrics:
-    """Running sums of an episode: RMS heading error and rudder, the receiver's bias."""
-
-    def __init__(self) -> None:
-        self.n = 0
-        self.sums = {"heading_error": 0.0, "rudder": 0.0, "drift_bias": 0.0, "speed_bias": 0.0}
-        self.max_heading = 0.0
-        self.max_drift_bias = 0.0
-        self.rate_limited = 0
-        self.saturated = 0
-
-    def add(self, info: Mapping[str, Any]) -> None:
-        self.n += 1
-        s = self.sums
-        s["heading_error"] += info["heading_error"] ** 2
-        d = info["rudder"].tolist()
-        s["rudder"] += sum(x * x for x in d) / len(d)
-        s["drift_bias"] += abs(info["drift_angle_bias"])
-        s["speed_bias"] += abs(info["speed_bias"])
-        self.max_heading = max(self.max_heading, abs(info["heading_error"]))
-        self.max_drift_bias = max(self.max_drift_bias, abs(info["drift_angle_bias"]))
-        self.rate_limited += any(info["rate_limited"].tolist())
-        self.saturated += any(info["saturated"].tolist())
-
-    def summary(self, env: CourseKeepingEnv) -> dict[str, Any]:
-        n = max(self.n, 1)
-        return {
-            "speed": env.U,
-            "receiver": env.receiver,
-            "steps": self.n,
-            "heading_rms": math.sqrt(self.sums["heading_error"] / n),
-            "heading_max": self.max_heading,
-            "rudder_rms": math.sqrt(self.sums["rudder"] / n),
-            "drift_angle_bias_mean_abs": self.sums["drift_bias"] / n,
-            "drift_angle_bias_max_abs": self.max_drift_bias,
-            "speed_bias_mean_abs": self.sums["speed_bias"] / n,
-            "rate_limited_fraction": self.rate_limited / n,
-            "saturated_fraction": self.saturated / n,
-        }
+#: the settings a single env shows as its own attributes (the batch's)
+_SHARED = ("base_vessel", "U", "heading", "receiver", "S_p", "dgps_sigma", "antenna",
+           "sensor_noise", "setpoint_period", "max_heading_change", "reward_weights",
+           "episode_duration", "timestep", "control_period", "n_substeps", "max_angle")  # fmt: skip
 
 
 class TankerCourseKeepingEnv(CourseKeepingEnv):
@@ -578,3 +594,9 @@ class TankerCourseKeepingEnv(CourseKeepingEnv):
     def __init__(self, **kwargs: Any) -> None:
         kwargs.setdefault("vessel", "kvlcc2-100m")
         super().__init__(**kwargs)
+
+
+def course_keeping_vector_env(num_envs: int, **kwargs: Any) -> CourseKeepingVectorEnv:
+    """``shipgym/CourseKeeping-v0``'s vector entry point (the tanker unless ``vessel=``)."""
+    kwargs.setdefault("vessel", "kvlcc2-100m")
+    return CourseKeepingVectorEnv(num_envs, **kwargs)

@@ -37,7 +37,8 @@ ENV_IDS: dict[str, tuple[str, int | None]] = {
     "shipgym/BlueLadyTracking-v0": ("shipgym.envs.tasks:BlueLadyTrackingEnv", 800),
 }
 
-#: ids with a native batched form (:class:`~shipgym.envs.vector.ShipVectorEnv`): id -> its
+#: ids with a native batched form (:class:`~shipgym.envs.vector.ShipVectorEnv` or a family's
+#: :class:`~shipgym.envs.batched.BatchedEnv`): id -> its
 #: vector entry point, for ``gymnasium.make_vec(id, num_envs=N)``. Gymnasium refuses a vector
 #: entry point next to additional wrappers, so these ids do without :class:`EpisodeEnd`
 #: under a bare ``gym.make``: ``shipgym.make`` applies it (episode metrics at a time-limit
@@ -51,6 +52,8 @@ VECTOR_IDS: dict[str, str] = {
     "shipgym/StationKeeping-v0": "shipgym.envs.vector:station_keeping_vector_env",
     "shipgym/BlueLadyTracking-v0": "shipgym.envs.vector:blue_lady_tracking_vector_env",
     "shipgym/BlueLadyStationKeeping-v0": "shipgym.envs.vector:blue_lady_station_keeping_vector_env",
+    "shipgym/CourseKeeping-v0": "shipgym.envs.coursekeeping:course_keeping_vector_env",
+    "shipgym/SeaTrial-v0": "shipgym.envs.seatrial:sea_trial_vector_env",
 }
 
 #: the Blue Lady aliases: id -> the vessel-neutral id they equal with ``vessel="blue-lady"``

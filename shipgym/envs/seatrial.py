@@ -9,18 +9,19 @@ carry them out, and at the end of the episode the trial's figures
 (:func:`~shipgym.trials.metrics.imo_criteria`) are in ``info``. With ``receiver="dgps-pv"``
 the observation also holds what the ship's DGPS receiver says (:class:`~shipgym.observers.
 dgps.DGPSReceiver`: 2 m noise at 1 Hz, the printed PV Kalman filter), biased as Artyszuk
-(2003) found. :func:`run_trial` is the script-only form (no Gymnasium loop) that the
-``shipgym trials`` command uses.
+(2003) found. The family is written once, batched: :class:`SeaTrialVectorEnv` steps N
+trials (``gymnasium.make_vec``), and :class:`SeaTrialEnv` is its batch of one.
+:func:`run_trials` flies several manoeuvres as one batch without a Gymnasium loop (the
+``shipgym trials`` command); :func:`run_trial` one.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
@@ -29,21 +30,25 @@ from shipgym._config import is_real
 from shipgym.disturbances import CurrentConfig
 from shipgym.dynamics.mmg import MMGHull
 from shipgym.dynamics.vessel import Vessel, load_vessel
-from shipgym.observers.dgps import S_P_OPTIMAL, DGPSReceiver
-from shipgym.trials.manoeuvres import manoeuvre, manoeuvre_names
-from shipgym.trials.metrics import imo_criteria, trial_metrics
+from shipgym.observers.dgps import S_P_OPTIMAL, DGPSOutput, DGPSReceiver
+from shipgym.trials.manoeuvres import Scripts, manoeuvre, manoeuvre_names
+from shipgym.trials.metrics import TrialMetrics, imo_criteria, trial_metrics
 
-from .base import TopCameraRender, _check_render_mode, _check_timing, _whole_multiple
-from .physics import VesselPhysics
+from .base import _check_timing, _whole_multiple
+from .batched import BatchedEnv, SingleEnv
+from .batchphysics import BatchedPhysics
 
 __all__ = [
     "RECEIVERS",
     "SeaTrialEnv",
+    "SeaTrialVectorEnv",
     "TrialRecord",
     "TankerSeaTrialEnv",
     "TrialStudy",
     "approach_command",
     "run_trial",
+    "run_trials",
+    "sea_trial_vector_env",
     "trial_study",
 ]
 
@@ -54,8 +59,13 @@ RECEIVERS = (None, "dgps-pv")
 OBSERVATION = ("x/L", "y/L", "sin psi", "cos psi", "u/U0", "v/U0", "r L/U0", "rudder/max",
                "shaft/n0", "v_xy_hat/U0", "beta_A_hat", "x_hat/L", "y_hat/L")  # fmt: skip
 
+#: ``info["receiver"]``'s keys: the receiver's outputs (:class:`~shipgym.observers.dgps.
+#: DGPSOutput` fields)
+_RX_KEYS = {"v_ns": "v_ns", "v_ew": "v_ew", "x": "x_hat", "y": "y_hat", "v_xy": "v_xy",
+            "chi": "chi", "beta_A": "beta_A"}  # fmt: skip
 
-def approach_command(physics: VesselPhysics, shaft: int, U0: float) -> float:
+
+def approach_command(physics: BatchedPhysics, shaft: int, U0: float) -> float:
     """The command of the shaft channel ``shaft`` that holds ``U0`` (m/s) in straight running.
 
     The MMG hull's self-propulsion point (:meth:`~shipgym.dynamics.mmg.MMGModel.
@@ -71,7 +81,7 @@ def approach_command(physics: VesselPhysics, shaft: int, U0: float) -> float:
     if isinstance(plant, MMGHull):
         return plant.model.self_propulsion(U0)
     acts = physics.actuators
-    st0 = physics.initial_actuator_state()
+    st0 = acts.initial_state()
     four = physics.dofs == 4
     nu = np.array([U0, 0.0, 0.0, 0.0]) if four else np.array([U0, 0.0, 0.0])
 
@@ -126,25 +136,287 @@ class TrialRecord:
         return imo_criteria(self.metrics(), self.L, self.U0)
 
 
-class SeaTrialEnv(TopCameraRender, gym.Env[NDArray[np.float32], Any]):
+class SeaTrialVectorEnv(BatchedEnv):
+    r"""``num_envs`` sea trials stepped together: the batched form of :class:`SeaTrialEnv`
+    (its docstring is the spec; env ``i`` is it seeded ``seed + i``), with ``autoreset_mode``
+    (``"next-step"`` or ``"same-step"``) and ``manoeuvre`` a name or ``num_envs`` names (one
+    per env). ``info["episode_metrics"]``: the figures as arrays, ``(N,)`` floats (NaN where
+    one does not apply), ``overshoots`` ``(N, 3)``, ``manoeuvre`` and ``kind`` strings,
+    ``imo_pass`` 1.0 / 0.0 (NaN: no criterion applies)."""
+
+    def __init__(
+        self,
+        num_envs: int,
+        vessel: str | Vessel | Any,
+        manoeuvre: str | Sequence[str] = "turning35_stbd",
+        *,
+        autoreset_mode: str = "next-step",
+        speed: float | None = None,
+        current: Any = None,
+        wind: Any = None,
+        receiver: str | None = None,
+        S_p: float = S_P_OPTIMAL,
+        antenna: Any = (0.0, 0.0),
+        receiver_sigma: float = 2.0,
+        override: bool = False,
+        timestep: float = 0.05,
+        control_period: float = 1.0,
+    ) -> None:
+        v = load_vessel(vessel)
+        if not v.rudders:
+            raise ValueError(
+                f"vessel {v.name!r} has no rudder: a sea trial steers with one (choose e.g. "
+                "kvlcc2-100m, naval-vessel)"
+            )
+        self.base_vessel = v
+        names = [manoeuvre] * num_envs if isinstance(manoeuvre, str) else list(manoeuvre)
+        if isinstance(num_envs, int) and len(names) != num_envs:
+            raise ValueError(f"manoeuvre must be a name or {num_envs} names, got {manoeuvre!r}")
+        self.manoeuvres = [_manoeuvre(m) for m in names]
+        U0 = v.approach_speed if speed is None else speed
+        if U0 is None:
+            raise ValueError(
+                f"vessel {v.name!r} has no approach speed ([trials] approach_speed): pass "
+                "speed=... (m/s)"
+            )
+        if not (is_real(U0) and math.isfinite(U0) and U0 > 0):
+            raise ValueError(f"speed must be > 0 m/s, got {U0!r}")
+        self.U0 = float(U0)
+        if receiver not in RECEIVERS:
+            raise ValueError(f"unknown receiver {receiver!r}; choose None or 'dgps-pv'")
+        self.receiver_name = receiver
+        _check_timing(timestep, control_period)
+        self.n_sub = _whole_multiple(control_period, timestep)
+        self.control_period = float(control_period)
+        if receiver is not None:
+            per = 1.0 / self.control_period
+            if abs(per - round(per)) > 1e-9:
+                raise ValueError(
+                    f"control_period {control_period} s must divide the receiver's 1 s sample"
+                )
+            self._rx_every = round(per)
+        cfg = CurrentConfig.coerce(current, name="current")
+        if cfg is not None and not cfg.is_constant:
+            raise ValueError("a sea trial's current must be constant (a speed and a direction)")
+        self.current = (0.0, 0.0) if cfg is None else (float(cfg.speed), float(cfg.direction_to))
+        self.physics = phys = BatchedPhysics(v, num_envs, wind=wind, current=cfg,
+                                             timestep=timestep)  # fmt: skip
+        acts = phys.actuators
+        chans = list(acts.channel_names)
+        self._rudder = chans.index(v.rudders[0])
+        self._shaft = chans.index(v.shafts[0]) if v.shafts else None
+        stop = next((m for m in self.manoeuvres if m.kind == "stop"), None)
+        if self._shaft is None and stop is not None:
+            raise ValueError(
+                f"{stop.name!r} needs a main propeller and {v.name!r} has none "
+                f"(its actuators: {', '.join(chans)})"
+            )
+        self.n0 = (
+            approach_command(phys, self._shaft, self.U0) if self._shaft is not None else math.nan
+        )
+        self.L = float(v.L_pp)
+        self.duration = np.array([m.duration(self.L, self.U0) for m in self.manoeuvres])
+        self.max_steps = np.ceil(self.duration / self.control_period - 1e-9).astype(np.int64)
+        self.override = bool(override)
+        n_ch = acts.n_channels
+        action_space: Any = (
+            spaces.Box(-1.0, 1.0, (n_ch,), dtype=np.float32) if override else spaces.Discrete(1)
+        )
+        n_obs = 9 + (4 if receiver else 0)
+        obs_space = spaces.Box(-np.inf, np.inf, (n_obs,), dtype=np.float32)
+        self._setup(num_envs, obs_space, action_space, autoreset_mode)
+        self.S_p = float(S_p)
+        self.antenna = tuple(float(a) for a in np.asarray(antenna, dtype=float).reshape(2))
+        self.receiver_sigma = float(receiver_sigma)
+        self._max_angle = float(acts.upper[self._rudder])
+        self._servo = [j for j, c in enumerate(acts.channels) if c.dynamics == "servo"]
+        self._names = np.array([m.name for m in self.manoeuvres])
+        self.scripts = Scripts(self.manoeuvres)
+        n = num_envs
+        self._command = phys.initial_actuator_state()
+        self._clipped = np.zeros(n, dtype=bool)
+        self._k = np.zeros(n, dtype=np.int64)
+        # the record of every env's episode: t, x, y, psi, u, v, r, rudder, shaft per step
+        self._hist = np.zeros((int(self.max_steps.max()) + 1, n, 9))
+        self._row = np.full((n, 9), np.nan)
+        # the observation from the row: x/L, y/L, u/U0, v/U0, r L/U0, rudder/max, shaft/n0
+        L, U0 = self.L, self.U0
+        has_shaft = self._shaft is not None and bool(self.n0)
+        self._obs_to = [0, 1, 4, 5, 6, 7] + ([8] if has_shaft else [])
+        self._obs_from = [1, 2, 4, 5, 6, 7] + ([8] if has_shaft else [])
+        self._obs_scale = np.array([1 / L, 1 / L, 1 / U0, 1 / U0, L / U0, 1 / self._max_angle]
+                                   + ([1 / self.n0] if has_shaft else []))  # fmt: skip
+        self.receiver = DGPSReceiver(self.S_p, n=n, sigma=self.receiver_sigma,
+                                     antenna=self.antenna)  # fmt: skip
+        self._rx_out: DGPSOutput | None = None  # the receiver's outputs, held between samples
+        self._now = False  # whether _row holds the state now
+
+    # ---- episode ---------------------------------------------------------------------------
+    def _state(self) -> NDArray[np.float64]:
+        """Every env's ``t, x, y, psi, u, v, r, rudder, shaft`` now (N, 9) (the record's row;
+        the shaft NaN without one), read once per state."""
+        if not self._now:
+            p, row = self.physics, self._row
+            st = p.actuator_state
+            row[:, 0], row[:, 1:4], row[:, 4:7], row[:, 7] = p.t, p.eta, p.nu, st[:, self._rudder]
+            if self._shaft is not None:
+                row[:, 8] = st[:, self._shaft]
+            self._now = True
+        return self._row
+
+    def _reset_envs(self, mask: NDArray[np.bool_]) -> None:
+        phys = self.physics
+        idx = np.nonzero(mask)[0].tolist()
+        rngs: list[Any] = [None] * self.num_envs
+        rx_rngs: list[Any] = [None] * self.num_envs
+        for i in idx:  # env i's generator: the physics' seed, then the receiver's
+            ss = self._rngs[i].bit_generator.random_raw(2)  # type: ignore[union-attr]
+            rngs[i], rx_rngs[i] = (np.random.default_rng(int(s)) for s in ss)
+        act = phys.initial_actuator_state()
+        if self._shaft is not None:
+            act[:, self._shaft] = self.n0
+        vc, bc = self.current  # straight running at U0 through the water, over ground
+        nu0 = np.array([self.U0 + vc * math.cos(bc), vc * math.sin(bc), 0.0])
+        phys.reset(eta=(0.0, 0.0, 0.0), nu=nu0, actuators=act, mask=mask, rngs=rngs)
+        self._command[mask] = act[mask]
+        phys.set_command(self._command)
+        self.scripts.reset(np.zeros(self.num_envs), mask)
+        self._now = False
+        self._clipped[mask] = False
+        self._k[mask] = 0
+        if self.receiver_name is not None:
+            nu = np.broadcast_to(nu0, (self.num_envs, 3))
+            self._rx_out = self.receiver.reset(self._state()[:, 1:4], nu, rngs=rx_rngs, mask=mask)
+        self._record(mask)
+
+    def _record(self, mask: NDArray[np.bool_]) -> None:
+        """The state now into the record of the envs of ``mask``, at their step count."""
+        i = np.nonzero(mask)[0]
+        self._hist[self._k[i], i] = self._state()[i]
+
+    def _step_envs(
+        self, actions: NDArray[np.float64], active: NDArray[np.bool_]
+    ) -> tuple[Any, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+        phys = self.physics
+        keep = ~active[:, None]
+        if self.override:
+            self._clipped = (np.abs(actions) > 1.0).any(axis=1)
+            cmd = phys.actuators.action_to_command(np.clip(actions, -1.0, 1.0))
+        else:
+            if (actions != 0).any():
+                raise ValueError(f"action must be 0 (the script acts), got {actions!r}")
+            rud, frac = self.scripts.command(self._state()[:, 3])
+            cmd = self._command.copy()
+            cmd[:, self._rudder] = rud
+            if self._shaft is not None:
+                cmd[:, self._shaft] = frac * self.n0
+        cmd = np.where(keep, self._command, cmd)
+        if not (cmd == self._command).all():  # (a held command is held)
+            self._command = cmd
+            phys.set_command(cmd)
+        phys.step(self.n_sub, mask=active)
+        self._now = False
+        self._k += active
+        if self.receiver_name is not None:
+            sample = active & (self._k % self._rx_every == 0)
+            if sample.any():
+                self._rx_out = self.receiver.update(self._state()[:, 1:4], mask=sample)
+        self._record(active)
+        n = self.num_envs
+        return np.zeros(n), self._k >= self.max_steps, np.zeros(n, dtype=bool), self._info()
+
+    def _observation(self) -> NDArray[np.float32]:
+        row = self._state()
+        obs = np.zeros((self.num_envs, self.single_observation_space.shape[0]), np.float32)
+        obs[:, self._obs_to] = row[:, self._obs_from] * self._obs_scale
+        obs[:, 2], obs[:, 3] = np.sin(row[:, 3]), np.cos(row[:, 3])
+        o = self._rx_out
+        if o is not None:  # v_xy/U0, beta_A, x_hat/L, y_hat/L
+            obs[:, 9], obs[:, 10] = o.v_xy / self.U0, o.beta_A
+            obs[:, 11], obs[:, 12] = o.x_hat / self.L, o.y_hat / self.L
+        return obs
+
+    def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
+        return self._info()
+
+    def _info(self) -> dict[str, Any]:
+        phys = self.physics
+        row = self._state()
+        u, v = row[:, 4], row[:, 5]
+        info: dict[str, Any] = {
+            "t": row[:, 0].copy(),
+            "eta": row[:, 1:4].copy(),
+            "manoeuvre": self._names.copy(),
+            "speed": np.hypot(u, v),
+            "drift": np.arctan2(-v, u),
+            "rudder": row[:, 7].copy(),
+            "rudder_command": phys.command[:, self._rudder],
+            "shaft": row[:, 8].copy(),
+            # (BatchedPhysics has no rate_limited: its hull batch's servo hits, read here)
+            "rate_limited": (phys._hulls.hits[:, self._servo] > 0).any(axis=1),
+            "saturated": phys.saturated.any(axis=1),
+            "clipped": self._clipped.copy(),
+            "reward_terms": {},
+        }
+        if self._rx_out is not None:
+            info["receiver"] = {k: getattr(self._rx_out, f).copy() for k, f in _RX_KEYS.items()}
+        return info
+
+    def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
+        n = self.num_envs
+        out: dict[str, Any] = {"overshoots": np.full((n, 3), np.nan)}
+        for i in np.nonzero(done)[0].tolist():  # the trial's analysis, at its end
+            for k, val in _summary(*self.result(i)).items():
+                if k == "overshoots":
+                    out[k][i, : len(val)] = val
+                elif isinstance(val, str):
+                    out.setdefault(k, np.full(n, "", dtype=object))[i] = val
+                else:
+                    out.setdefault(k, np.full(n, np.nan))[i] = math.nan if val is None else val
+        return {k: v.astype(str) if v.dtype == object else v for k, v in out.items()}
+
+    def record(self, i: int = 0) -> TrialRecord:
+        """Env ``i``'s true motion recorded so far in its episode (every control step)."""
+        h = self._hist[: self._k[i] + 1, i]
+        return TrialRecord(
+            vessel=self.base_vessel.name, manoeuvre=self.manoeuvres[i].name, L=self.L,
+            U0=self.U0, n0=self.n0, current=self.current, t=h[:, 0].copy(),
+            eta=h[:, 1:4].copy(), nu=h[:, 4:7].copy(), rudder=h[:, 7].copy(),
+            shaft=h[:, 8].copy(),
+        )  # fmt: skip
+
+    def result(self, i: int = 0) -> tuple[TrialMetrics, list[tuple[str, float, float, bool]]]:
+        """Env ``i``'s trial figures and IMO criteria, from its record so far."""
+        m = self.record(i).metrics()
+        return m, imo_criteria(m, self.L, self.U0)
+
+
+def _summary(m: TrialMetrics, crit: list[tuple[str, float, float, bool]]) -> dict[str, Any]:
+    """A trial's figures (SI) and whether every IMO criterion passed (``None``: none applies):
+    the single env's ``episode_metrics()``."""
+    return {**m.as_dict(), "imo_pass": all(c[3] for c in crit) if crit else None}
+
+
+class SeaTrialEnv(SingleEnv):
     r"""One IMO manoeuvre per episode, scripted, on a vessel with a rudder.
 
-    **Physics.** The vessel's MuJoCo hull (:class:`~shipgym.envs.physics.VesselPhysics`),
-    physics step ``timestep`` (0.05 s); a constant current (``current``, any form of
-    :meth:`CurrentConfig.coerce <shipgym.disturbances.CurrentConfig.coerce>`, e.g.
-    ``"0.25@225"``: 0.25 m/s going south-west); optional wind. The ship starts at ``eta = 0``
-    (heading north) running straight at the approach speed ``U0`` through the water
-    (``speed``, default :attr:`Vessel.approach_speed <shipgym.dynamics.vessel.Vessel.
-    approach_speed>`) with its main propeller at the
-    command that holds it (:func:`approach_command`) and the rudder amidships.
+    **Physics.** The vessel's hull (:class:`~shipgym.envs.batchphysics.BatchedPhysics` of
+    one, the open-water leapfrog integrator), physics step ``timestep`` (0.05 s); a constant
+    current (``current``, any form of :meth:`CurrentConfig.coerce
+    <shipgym.disturbances.CurrentConfig.coerce>`, e.g. ``"0.25@225"``: 0.25 m/s going
+    south-west); optional wind. The ship starts at ``eta = 0`` (heading north) running
+    straight at the approach speed ``U0`` through the water (``speed``, default
+    :attr:`Vessel.approach_speed <shipgym.dynamics.vessel.Vessel.approach_speed>`) with its
+    main propeller at the command that holds it (:func:`approach_command`) and the rudder
+    amidships.
 
     **Task.** ``manoeuvre``: one of :func:`~shipgym.trials.manoeuvres.manoeuvre_names`
     (``turning35_stbd``, ``turning35_port``, ``zigzag10``, ``zigzag20``, ``initial_turning``,
-    ``crash_stop``, ``coasting_stop``). Its script commands the first rudder
-    (:attr:`Vessel.rudders <shipgym.dynamics.vessel.Vessel.rudders>`) and the first main
-    propeller (:attr:`~shipgym.dynamics.vessel.Vessel.shafts`, as a fraction of the approach
-    command) every control step; a stopping manoeuvre needs a main propeller. The episode
-    ends (``terminated``) after the manoeuvre's duration
+    ``crash_stop``, ``coasting_stop``). Its script (:class:`~shipgym.trials.manoeuvres.
+    Scripts`) commands the first rudder (:attr:`Vessel.rudders <shipgym.dynamics.vessel.
+    Vessel.rudders>`) and the first main propeller (:attr:`~shipgym.dynamics.vessel.Vessel.
+    shafts`, as a fraction of the approach command) every control step; a stopping manoeuvre
+    needs a main propeller. The episode ends (``terminated``) after the manoeuvre's duration
     (:meth:`~shipgym.trials.manoeuvres.TurningCircle.duration`, a multiple of ``L/U0``).
 
     **Action.** ``override=False`` (default): ``Discrete(1)``, the only action (0) lets the
@@ -161,12 +433,15 @@ class SeaTrialEnv(TopCameraRender, gym.Env[NDArray[np.float32], Any]):
 
     **Reward.** 0 (an evaluation task): ``info["reward_terms"]`` is empty.
 
-    **Info.** ``t`` (s), ``eta`` (the true pose), ``speed`` (m/s) and ``drift`` (rad) over
-    ground, ``rudder`` (rad), ``rudder_command`` (rad), ``shaft`` (``None`` without one),
-    ``rate_limited``, ``saturated``, ``clipped`` (``override``: an
+    **Info.** ``t`` (s), ``eta`` (the true pose), ``manoeuvre``, ``speed`` (m/s) and
+    ``drift`` (rad) over ground, ``rudder`` (rad), ``rudder_command`` (rad), ``shaft``
+    (``None`` without one), ``rate_limited``, ``saturated``, ``clipped`` (``override``: an
     action outside ``[-1, 1]``), with a receiver ``receiver`` (its outputs); at the end
     ``trial`` (the figures, :meth:`TrialMetrics.as_dict <shipgym.trials.metrics.TrialMetrics.
     as_dict>`), ``imo`` (criterion, value, limit, passed) and ``episode_metrics``.
+
+    The batched form is :class:`SeaTrialVectorEnv` (``gymnasium.make_vec``); this env is its
+    batch of one (:attr:`batch`).
 
     Args:
         vessel: a vessel with a rudder (name, path or :class:`~shipgym.dynamics.vessel.
@@ -185,6 +460,7 @@ class SeaTrialEnv(TopCameraRender, gym.Env[NDArray[np.float32], Any]):
         render_mode: ``None`` or ``"rgb_array"``.
     """
 
+    batched = SeaTrialVectorEnv
     metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
 
     def __init__(
@@ -192,234 +468,58 @@ class SeaTrialEnv(TopCameraRender, gym.Env[NDArray[np.float32], Any]):
         vessel: str | Vessel | Any,
         manoeuvre: str = "turning35_stbd",
         *,
-        speed: float | None = None,
-        current: Any = None,
-        wind: Any = None,
-        receiver: str | None = None,
-        S_p: float = S_P_OPTIMAL,
-        antenna: Any = (0.0, 0.0),
-        receiver_sigma: float = 2.0,
-        override: bool = False,
-        timestep: float = 0.05,
-        control_period: float = 1.0,
         render_mode: str | None = None,
+        **kwargs: Any,
     ) -> None:
-        super().__init__()
-        v = load_vessel(vessel)
-        if not v.rudders:
-            raise ValueError(
-                f"vessel {v.name!r} has no rudder: a sea trial steers with one (choose e.g. "
-                "kvlcc2-100m, naval-vessel)"
-            )
-        self.base_vessel = v
-        self.manoeuvre = _manoeuvre(manoeuvre)
-        U0 = v.approach_speed if speed is None else speed
-        if U0 is None:
-            raise ValueError(
-                f"vessel {v.name!r} has no approach speed ([trials] approach_speed): pass "
-                "speed=... (m/s)"
-            )
-        if not (is_real(U0) and math.isfinite(U0) and U0 > 0):
-            raise ValueError(f"speed must be > 0 m/s, got {U0!r}")
-        self.U0 = float(U0)
-        if receiver not in RECEIVERS:
-            raise ValueError(f"unknown receiver {receiver!r}; choose None or 'dgps-pv'")
-        self.receiver_name = receiver
-        _check_render_mode(render_mode, self.metadata)
-        self.render_mode = render_mode
-        _check_timing(timestep, control_period)
-        self.n_sub = _whole_multiple(control_period, timestep)
-        self.control_period = float(control_period)
-        if receiver is not None:
-            per = 1.0 / self.control_period
-            if abs(per - round(per)) > 1e-9:
-                raise ValueError(
-                    f"control_period {control_period} s must divide the receiver's 1 s sample"
-                )
-            self._rx_every = round(per)
-        cfg = CurrentConfig.coerce(current, name="current")
-        if cfg is not None and not cfg.is_constant:
-            raise ValueError("a sea trial's current must be constant (a speed and a direction)")
-        self.current = (0.0, 0.0) if cfg is None else (float(cfg.speed), float(cfg.direction_to))
-        self.physics = VesselPhysics(v, current=cfg, wind=wind, timestep=timestep)
-        chans = list(self.physics.actuators.channel_names)
-        self._rudder = chans.index(v.rudders[0])
-        self._shaft = chans.index(v.shafts[0]) if v.shafts else None
-        kind = getattr(self.manoeuvre, "kind", "")
-        if self._shaft is None and kind == "stop":
-            raise ValueError(
-                f"{self.manoeuvre.name!r} needs a main propeller and {v.name!r} has none "
-                f"(its actuators: {', '.join(chans)})"
-            )
-        self.n0 = (
-            approach_command(self.physics, self._shaft, self.U0)
-            if self._shaft is not None
-            else math.nan
-        )
-        self.L = float(v.L_pp)
-        self.duration = float(self.manoeuvre.duration(self.L, self.U0))
-        self.max_steps = math.ceil(self.duration / self.control_period - 1e-9)
-        self.override = bool(override)
-        n_ch = self.physics.actuators.n_channels
-        self.action_space: spaces.Space[Any] = (
-            spaces.Box(-1.0, 1.0, (n_ch,), dtype=np.float32) if override else spaces.Discrete(1)
-        )
-        n_obs = 9 + (4 if receiver else 0)
-        self.observation_space = spaces.Box(-np.inf, np.inf, (n_obs,), dtype=np.float32)
-        self.S_p = float(S_p)
-        self.antenna = tuple(float(a) for a in np.asarray(antenna, dtype=float).reshape(2))
-        self.receiver_sigma = float(receiver_sigma)
-        self._max_angle = float(self.physics.actuators.upper[self._rudder])
-        self._renderer = None
-        self._rx: DGPSReceiver | None = None
-        self._rx_out: Any = None
-        self._hist: dict[str, list[Any]] = {}
-        self._k = 0
-        self._done = True
+        if not isinstance(manoeuvre, str):
+            raise ValueError(f"manoeuvre must be a name, one of {', '.join(manoeuvre_names())}")
+        super().__init__(render_mode, vessel=vessel, manoeuvre=manoeuvre, **kwargs)
+        b = self.batch
+        self.manoeuvre = b.manoeuvres[0]
+        self.duration, self.max_steps = float(b.duration[0]), int(b.max_steps[0])
 
-    # ---- episode ---------------------------------------------------------------------------
-    def _initial_nu(self) -> NDArray[np.float64]:
-        """Straight running at ``U0`` through the water: over ground plus the current."""
-        vc, bc = self.current
-        return np.array([self.U0 + vc * math.cos(bc), vc * math.sin(bc), 0.0])
+    def __getattr__(self, name: str) -> Any:
+        """The batch's configuration (``physics``, ``base_vessel``, ``n0``, ``L``, ``U0``,
+        ``control_period``, ``receiver``, ...)."""
+        if name.startswith("_") or name == "batch":
+            raise AttributeError(name)
+        return getattr(self.batch, name)
 
     def reset(
-        self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        super().reset(seed=seed)
-        if options:
-            raise ValueError(f"SeaTrialEnv.reset takes no options, got {dict(options)!r}")
-        phys = self.physics
-        act = phys.initial_actuator_state()
-        if self._shaft is not None:
-            act[self._shaft] = self.n0
-        nu0 = self._initial_nu()
-        ss = self.np_random.bit_generator.random_raw(2)
-        phys.reset(eta=(0.0, 0.0, 0.0), nu=nu0, actuators=act,
-                   rng=np.random.default_rng(int(ss[0])))  # fmt: skip
-        self._command = act.copy()
-        phys.set_command(self._command)
-        self.script = self.manoeuvre.script()
-        self.script.reset(0.0)
-        if self.receiver_name is not None:
-            self._rx = DGPSReceiver(self.S_p, sigma=self.receiver_sigma, antenna=self.antenna,
-                                    rng=np.random.default_rng(int(ss[1])))  # fmt: skip
-            self._rx_out = self._rx.reset(phys.eta, nu0)
-        self._hist = {"t": [], "eta": [], "nu": [], "rudder": [], "shaft": []}
-        self._record()
-        self._k = 0
-        self._done = False
-        return self._observe(), self._info(np.zeros(1, dtype=bool))
-
-    def _record(self) -> None:
-        phys = self.physics
-        h = self._hist
-        st = phys.actuator_state
-        h["t"].append(phys.time)
-        h["eta"].append(phys.eta)
-        h["nu"].append(phys.nu)
-        h["rudder"].append(float(st[self._rudder]))
-        h["shaft"].append(float(st[self._shaft]) if self._shaft is not None else math.nan)
+        obs, info = super().reset(seed=seed, options=options)
+        return obs, self._scalar(info)
 
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        if self._done:
-            raise RuntimeError("the trial has ended: call reset() first")
-        phys = self.physics
-        clipped = np.zeros(1, dtype=bool)
         if self.override:
             a = np.asarray(action, dtype=float)
             if a.shape != self.action_space.shape or not np.all(np.isfinite(a)):
                 raise ValueError(
                     f"action must be {self.action_space.shape} finite numbers in [-1, 1] "
-                    f"({', '.join(phys.actuators.channel_names)}), got {action!r}"
+                    f"({', '.join(self.physics.actuators.channel_names)}), got {action!r}"
                 )
-            clipped = np.abs(a) > 1.0
-            cmd = phys.actuators.action_to_command(np.clip(a, -1.0, 1.0))
-        else:
-            if not self.action_space.contains(action):
-                raise ValueError(f"action must be 0 (the script acts), got {action!r}")
-            eta = phys.eta
-            rud, frac = self.script.command(phys.time, float(eta[2]), float(phys.nu[0]))
-            cmd = self._command.copy()
-            cmd[self._rudder] = rud
-            if self._shaft is not None:
-                cmd[self._shaft] = frac * self.n0
-        self._command = np.asarray(cmd, dtype=float)
-        phys.set_command(self._command)
-        phys.step(self.n_sub)
-        self._k += 1
-        if self._rx is not None and self._k % self._rx_every == 0:
-            self._rx_out = self._rx.update(phys.eta)
-        self._record()
-        terminated = self._k >= self.max_steps
-        info = self._info(clipped)
+        elif not (type(action) is int and action == 0) and not self.action_space.contains(action):
+            raise ValueError(f"action must be 0 (the script acts), got {action!r}")
+        obs, reward, terminated, truncated, info = super().step(action)
+        info = self._scalar(info)
         if terminated:
-            self._done = True
-            rec = self.record()
-            m = rec.metrics()
-            info["trial"] = m.as_dict()
-            info["imo"] = imo_criteria(m, self.L, self.U0)
-            info["episode_metrics"] = self.episode_metrics()
-        return self._observe(), 0.0, terminated, False, info
+            m, crit = self.batch.result(0)
+            info.update(trial=m.as_dict(), imo=crit, episode_metrics=_summary(m, crit))
+        return obs, reward, terminated, truncated, info
 
-    def _info(self, clipped: NDArray[np.bool_]) -> dict[str, Any]:
-        phys = self.physics
-        u, v, _r = phys.nu.tolist()
-        st = phys.actuator_state
-        info: dict[str, Any] = {
-            "t": phys.time,
-            "eta": phys.eta,
-            "manoeuvre": self.manoeuvre.name,
-            "speed": math.hypot(u, v),
-            "drift": math.atan2(-v, u),
-            "rudder": float(st[self._rudder]),
-            "rudder_command": float(phys.command[self._rudder]),
-            "shaft": float(st[self._shaft]) if self._shaft is not None else None,
-            "rate_limited": bool(phys.rate_limited.any()),
-            "saturated": bool(phys.saturated.any()),
-            "clipped": bool(np.any(clipped)),
-            "reward_terms": {},
-        }
-        if self._rx_out is not None:
-            o = self._rx_out
-            info["receiver"] = {
-                "v_ns": float(o.v_ns), "v_ew": float(o.v_ew), "x": float(o.x_hat),
-                "y": float(o.y_hat), "v_xy": float(o.v_xy), "chi": float(o.chi),
-                "beta_A": float(o.beta_A),
-            }  # fmt: skip
+    def _scalar(self, info: dict[str, Any]) -> dict[str, Any]:
+        if self.batch._shaft is None:  # the single env's shaft without one: None
+            info["shaft"] = None
         return info
-
-    def _observe(self) -> NDArray[np.float32]:
-        phys = self.physics
-        x, y, psi = phys.eta.tolist()
-        u, v, r = phys.nu.tolist()
-        st = phys.actuator_state
-        L, U0 = self.L, self.U0
-        shaft = float(st[self._shaft]) / self.n0 if self._shaft is not None and self.n0 else 0.0
-        obs = [x / L, y / L, math.sin(psi), math.cos(psi), u / U0, v / U0, r * L / U0,
-               float(st[self._rudder]) / self._max_angle, shaft]  # fmt: skip
-        if self._rx_out is not None:
-            o = self._rx_out
-            obs += [float(o.v_xy) / U0, float(o.beta_A), float(o.x_hat) / L, float(o.y_hat) / L]
-        return np.array(obs, dtype=np.float32)
 
     def record(self) -> TrialRecord:
         """The true motion recorded so far (every control step)."""
-        h = self._hist
-        if not h:
-            raise RuntimeError("call reset() first")
-        return TrialRecord(
-            vessel=self.base_vessel.name, manoeuvre=self.manoeuvre.name, L=self.L, U0=self.U0,
-            n0=self.n0, current=self.current, t=np.array(h["t"]), eta=np.array(h["eta"]),
-            nu=np.array(h["nu"]), rudder=np.array(h["rudder"]), shaft=np.array(h["shaft"]),
-        )  # fmt: skip
+        return self.batch.record(0)
 
     def episode_metrics(self) -> dict[str, Any]:
         """The trial's figures so far (SI) and whether every IMO criterion passed."""
-        rec = self.record()
-        m = rec.metrics()
-        crit = imo_criteria(m, self.L, self.U0)
-        return {**m.as_dict(), "imo_pass": all(c[3] for c in crit) if crit else None}
+        return _summary(*self.batch.result(0))
 
 
 class TankerSeaTrialEnv(SeaTrialEnv):
@@ -431,37 +531,56 @@ class TankerSeaTrialEnv(SeaTrialEnv):
         super().__init__(**kwargs)
 
 
+def sea_trial_vector_env(num_envs: int, **kwargs: Any) -> SeaTrialVectorEnv:
+    """``shipgym/SeaTrial-v0``'s vector entry point (``kvlcc2-100m`` unless ``vessel=``)."""
+    kwargs.setdefault("vessel", "kvlcc2-100m")
+    if kwargs.pop("render_mode", None) is not None:
+        raise ValueError("the batched env does not render; use the single env (gym.make)")
+    return SeaTrialVectorEnv(num_envs, **kwargs)
+
+
 def _manoeuvre(name: Any) -> Any:
     if not isinstance(name, str):
         raise ValueError(f"manoeuvre must be a name, one of {', '.join(manoeuvre_names())}")
     return manoeuvre(name)
 
 
-def run_trial(
+def run_trials(
     vessel: str | Vessel | Any,
-    manoeuvre: str,
+    manoeuvres: Sequence[str],
     *,
     speed: float | None = None,
     current: Any = None,
     timestep: float = 0.05,
     record_period: float | None = None,
-) -> TrialRecord:
-    """Fly one scripted manoeuvre and return its true motion (:class:`TrialRecord`).
+) -> list[TrialRecord]:
+    """Fly scripted manoeuvres as one batch (:class:`SeaTrialVectorEnv`, one env each) and
+    return their true motions (:class:`TrialRecord`), in order.
 
     Args:
-        vessel, manoeuvre, speed, current, timestep: as for :class:`SeaTrialEnv`.
+        vessel, speed, current, timestep: as for :class:`SeaTrialEnv`.
+        manoeuvres: the manoeuvres' names.
         record_period: the record's sample time (s), a whole multiple of ``timestep``; the
             script acts at this period too (``None``: every physics step, so that a zig-zag's
             rudder is reversed within one step of the heading reaching the angle).
     """
     period = timestep if record_period is None else record_period
-    env = SeaTrialEnv(vessel, manoeuvre, speed=speed, current=current, timestep=timestep,
-                      control_period=period)  # fmt: skip
+    n = len(manoeuvres)
+    env = SeaTrialVectorEnv(n, vessel, list(manoeuvres), speed=speed, current=current,
+                            timestep=timestep, control_period=period)  # fmt: skip
     env.reset(seed=0)
-    done = False
-    while not done:
-        _, _, done, _, _ = env.step(0)
-    return env.record()
+    out: list[TrialRecord | None] = [None] * n
+    while any(r is None for r in out):
+        _, _, terminated, _, _ = env.step(np.zeros(n, dtype=np.int64))
+        for i in np.nonzero(terminated)[0].tolist():
+            out[i] = out[i] or env.record(i)
+    return out  # type: ignore[return-value]
+
+
+def run_trial(vessel: str | Vessel | Any, manoeuvre: str, **kwargs: Any) -> TrialRecord:
+    """Fly one scripted manoeuvre and return its true motion (:class:`TrialRecord`); the
+    keyword arguments are :func:`run_trials`'."""
+    return run_trials(vessel, [manoeuvre], **kwargs)[0]
 
 
 def _until_stopped(rec: TrialRecord) -> TrialRecord:
@@ -532,11 +651,10 @@ def trial_study(
     for s in sps:
         if not (math.isfinite(s) and s > 0):
             raise ValueError(f"S_p must be > 0 m^2/s^3, got {s!r}")
-    records: dict[str, TrialRecord] = {}
+    records = dict(zip(names, run_trials(v, names, speed=speed, current=current,
+                                         timestep=timestep), strict=True))  # fmt: skip
     rows, brows, bias = [], [], {}
-    for i, m in enumerate(names):
-        rec = run_trial(v, m, speed=speed, current=current, timestep=timestep)
-        records[m] = rec
+    for i, (m, rec) in enumerate(records.items()):
         met = rec.metrics()
         rows.append(trial_row(v.name, met, imo_criteria(met, rec.L, rec.U0), rec.L, rec.U0,
                               rec.current))  # fmt: skip

@@ -1,6 +1,6 @@
 r"""A DGPS receiver's position-velocity Kalman filter (Artyszuk 2003), and what it does to trials.
 
-Public names: ``DGPS_DT``, ``DGPS_SIGMA``, ``S_P_OPTIMAL``, ``DGPSOutput``, ``DGPSPVFilter``,
+Public names: ``DGPS_DT``, ``DGPS_SIGMA``, ``S_P_OPTIMAL``, ``DGPSOutput``,
 ``DGPSReceiver``, ``PVModel``, ``antenna_motion``, ...
 
 Design notes: docs/design/observers.dgps.md.
@@ -9,7 +9,7 @@ Design notes: docs/design/observers.dgps.md.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import scipy.linalg
@@ -22,8 +22,8 @@ __all__ = [
     "DGPS_SIGMA",
     "S_P_OPTIMAL",
     "DGPSOutput",
-    "DGPSPVFilter",
     "DGPSReceiver",
+    "NormalStreams",
     "PVModel",
     "antenna_motion",
     "apply_current",
@@ -150,73 +150,6 @@ def pv_lag(
     return float(e[0]), float(e[2]), float(math.sqrt(S[0, 0]))
 
 
-class DGPSPVFilter:
-    """The receiver's PV filter: ``step(z) -> [v_NS, v_EW, x, y]`` (m/s, m/s, m, m).
-
-    Args:
-        S_p: spectral amplitude of the velocity random walk (m^2/s^3).
-        dt: sample time (s).
-        sigma: position noise per axis (m).
-        steady: the converged gain of eq. 5 (the receiver, default) or the recursion.
-        x0: initial state (default: at rest at the origin); the first measurement after
-            :meth:`reset` starts the position if ``x0`` is not given.
-        P0: initial covariance (the recursion; default ``P_prior`` of the steady filter).
-    """
-
-    def __init__(
-        self,
-        S_p: float = S_P_OPTIMAL,
-        dt: float = DGPS_DT,
-        sigma: float = DGPS_SIGMA,
-        *,
-        steady: bool = True,
-        x0: ArrayLike | None = None,
-        P0: ArrayLike | None = None,
-    ) -> None:
-        self.model = pv_model(S_p, dt, sigma)
-        self.S_p, self.dt, self.sigma = float(S_p), float(dt), float(sigma)
-        self.steady = bool(steady)
-        self.K_inf, self.P_inf = pv_steady_gain(S_p, dt, sigma)
-        self._x0 = None if x0 is None else np.asarray(x0, dtype=float).reshape(4).copy()
-        self._P0 = self.P_inf.copy() if P0 is None else np.asarray(P0, dtype=float).copy()
-        if self._P0.shape != (4, 4):
-            raise ValueError(f"P0 must be 4x4, got {self._P0.shape}")
-        self.reset()
-
-    def reset(self) -> None:
-        """Back to ``x0`` (or to the next measurement) and ``P0``."""
-        self.x: Array = np.zeros(4) if self._x0 is None else self._x0.copy()
-        self._started = self._x0 is not None
-        self.P: Array = self._P0.copy()
-        self.K: Array = self.K_inf.copy()
-
-    def step(self, z: ArrayLike) -> Array:
-        """One cycle with the measured position ``z = [x, y]`` (m, north, east)."""
-        z = np.asarray(z, dtype=float).reshape(-1)
-        if z.shape != (2,) or not np.all(np.isfinite(z)):
-            raise ValueError(f"z must be a finite position [x, y] (m), got {z}")
-        if not self._started:  # the first fix starts the position, at rest
-            self.x = np.array([0.0, 0.0, z[0], z[1]])
-            self._started = True
-            return self.x.copy()
-        m = self.model
-        x_pred = m.Phi @ self.x
-        if self.steady:
-            K = self.K_inf
-        else:
-            Pm = m.Phi @ self.P @ m.Phi.T + m.Q
-            K = Pm @ m.H.T @ np.linalg.inv(m.H @ Pm @ m.H.T + m.R)
-            self.P = (np.eye(4) - K @ m.H) @ Pm
-        self.K = K
-        self.x = x_pred + K @ (z - m.H @ x_pred)
-        return self.x.copy()
-
-    def run(self, positions: ArrayLike) -> Array:
-        """The filter over a series of positions (n, 2): the estimates (n, 4)."""
-        p = np.asarray(positions, dtype=float)
-        return np.array([self.step(z) for z in p])
-
-
 def velocity_outputs(
     v_ns: ArrayLike, v_ew: ArrayLike, psi: ArrayLike
 ) -> tuple[Array, Array, Array]:
@@ -268,11 +201,11 @@ def apply_current(v_water: ArrayLike, psi: ArrayLike, speed: float, gamma_c: flo
 
 
 class DGPSOutput(NamedTuple):
-    """The receiver's outputs per sample (arrays (..., n)): the velocity estimate ``v_ns``,
-    ``v_ew`` (m/s), the position estimate ``x_hat``, ``y_hat`` (m, north, east), the track
-    speed ``v_xy`` (m/s), the course ``chi`` and the drift angle ``beta_A`` (rad, with the
-    gyro heading; :func:`velocity_outputs`), and the measured antenna positions ``z``
-    (..., n, 2) (m)."""
+    """The receivers' outputs (arrays (n,) per sample, (n, k) over ``k`` samples; a single
+    receiver's without the leading n): the velocity estimate ``v_ns``, ``v_ew`` (m/s), the
+    position estimate ``x_hat``, ``y_hat`` (m, north, east), the track speed ``v_xy`` (m/s),
+    the course ``chi`` and the drift angle ``beta_A`` (rad, with the gyro heading;
+    :func:`velocity_outputs`), and the measured antenna positions ``z`` (..., 2) (m)."""
 
     v_ns: Array
     v_ew: Array
@@ -314,113 +247,204 @@ def antenna_motion(eta: ArrayLike, nu: ArrayLike, antenna: ArrayLike) -> tuple[A
     return pos, np.stack([c * ub - s * vb, s * ub + c * vb], -1)
 
 
+class NormalStreams:
+    """Standard normal draws of ``n`` envs, ``width`` per draw, each env from its own
+    generator, drawn in blocks of ``block`` draws and refilled when used up (a generator's
+    ``standard_normal((k, width))`` is the stream of ``k`` calls of
+    ``standard_normal(width)``, so env ``i`` draws bit for bit what one call per draw from
+    its generator would draw, whatever ``n``).
+
+    Args:
+        n: number of envs; width: values per draw; block: draws per refill.
+        rng: each env's generator: a ``numpy.random.Generator``, a seed or ``None`` (seed 0),
+            or a sequence of ``n`` of them.
+    """
+
+    def __init__(self, n: int, width: int, block: int = 64, rng: Any = None) -> None:
+        self.n, self.width, self.block = n, int(width), int(block)
+        rngs = list(rng) if isinstance(rng, list | tuple) else [rng] * n
+        if len(rngs) != n:
+            raise ValueError(f"rng must be one generator or seed, or {n} of them; got {rng!r}")
+        self.rngs = [_generator(r) for r in rngs]
+        self._draws = np.zeros((n, self.block, self.width))
+        self._k = np.full(n, self.block, dtype=np.int64)  # next unused draw (block: refill)
+        self._rows = np.arange(n)
+
+    def seed(self, i: int, rng: Any) -> None:
+        """Env ``i`` draws from ``rng`` (a generator or a seed) from now on."""
+        self.rngs[i] = _generator(rng)
+        self._k[i] = self.block
+
+    def draw(self, mask: NDArray[np.bool_]) -> Array:
+        """The next draw (n, width) of the envs of ``mask`` (zeros elsewhere)."""
+        for i in np.nonzero(mask & (self._k >= self.block))[0].tolist():
+            self._draws[i] = self.rngs[i].standard_normal((self.block, self.width))
+            self._k[i] = 0
+        k = np.minimum(self._k, self.block - 1)
+        self._k += mask
+        return np.where(mask[:, None], self._draws[self._rows, k], 0.0)
+
+
+def _generator(rng: Any) -> np.random.Generator:
+    return rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+
+
 class DGPSReceiver:
-    """A DGPS receiver: antenna positions with noise through the PV filter of Artyszuk (2003).
+    """``n`` DGPS receivers: antenna positions with noise through the PV filter of Artyszuk
+    (2003), one row per receiver (the one form of the receiver; ``n = 1`` is a single one).
 
-    Given the true pose at the receiver's samples, it forms the antenna position (``eta``'s
-    ``[x, y] + R(psi) antenna``), adds ``N(0, sigma^2)`` per axis, runs :class:`DGPSPVFilter`
-    started at the truth's antenna state at the first sample (``x0 = [v_N, v_E, x, y]``, the
-    straight-run steady state of the notes' setup), and outputs :class:`DGPSOutput` with the
-    gyro heading ``psi`` of ``eta`` (noise-free). The outputs are at the antenna; they are not
-    transformed back to midship (the seed's comparison with an antenna 40 m aft is at the
-    antenna).
+    Given each receiver's true pose at its samples, it forms the antenna position (``eta``'s
+    ``[x, y] + R(psi) antenna``), adds ``N(0, sigma^2)`` per axis, runs the filter (eq. 5,
+    :func:`_steady_step`; or the recursion from ``P_prior``) started at the truth's antenna
+    state (``x0 = [v_N, v_E, x, y]``, the straight-run steady state of the notes' setup), and
+    outputs :class:`DGPSOutput` with the gyro heading ``psi`` of ``eta`` (noise-free), at the
+    antenna (not transformed back to midship).
 
-    Sample 0 is the initial state itself (no measurement is used there); sample ``k >= 1`` is
-    the filter after the measurement ``z_k``. The noise of samples ``1, 2, ...`` comes from
-    the generator in that order, two values (north, east) per sample, so the batch
-    (:meth:`run`) and the streaming form (:meth:`reset`, :meth:`update`) agree exactly.
+    Sample 0 is the initial state itself (:meth:`reset`, no measurement); each
+    :meth:`update` is the filter after one more measurement. Receiver ``i``'s noise comes
+    from its own generator, two values (north, east) per update in that order, drawn in
+    blocks of ``block`` updates (a generator's ``standard_normal((k, 2))`` is the stream of
+    ``k`` calls of ``standard_normal(2)``): receiver ``i`` of a batch gives bit for bit what
+    a receiver of one with the same generator gives, and :meth:`run` what the streaming form
+    gives. A generator is used ahead by up to a block: give each receiver its own.
+
+    Poses are ``(n, 3)`` and outputs ``(n,)`` (``z`` ``(n, 2)``); a single receiver also
+    takes a pose ``(3,)`` and then returns its row.
 
     Args:
         S_p: the filter's spectral amplitude (m^2/s^3).
-        sigma: the position noise added per axis (m, >= 0; 0 noise-free).
+        n: the number of receivers, >= 1.
+        sigma: the position noise added per axis (m, >= 0; 0 noise-free, no draws).
         dt: sample time (s).
         antenna: the antenna's ``[x, y]`` in the body frame (m, forward and starboard of the
             point ``eta`` describes, midship in :mod:`shipgym.dynamics.mmg`); the seed's aft
             antenna is e.g. ``(-40.0, 0.0)``.
         steady: the converged gain (eq. 5, the receiver) or the recursion from ``P_prior``.
-        rng: a ``numpy.random.Generator``, a seed, or ``None`` (seed 0).
+        rng: each receiver's noise generator: a ``numpy.random.Generator``, a seed or
+            ``None`` (seed 0), or a sequence of ``n`` of them; :meth:`reset` may replace them.
         filter_sigma: the noise the filter's ``R`` assumes (m; printed ``R = diag(4, 4)``,
             2 m), kept when ``sigma`` is 0.
+        block: updates drawn per refill of a receiver's noise.
     """
 
     def __init__(
         self,
         S_p: float = S_P_OPTIMAL,
         *,
+        n: int = 1,
         sigma: float = DGPS_SIGMA,
         dt: float = DGPS_DT,
         antenna: ArrayLike = (0.0, 0.0),
         steady: bool = True,
-        rng: np.random.Generator | int | None = None,
+        rng: Any = None,
         filter_sigma: float = DGPS_SIGMA,
+        block: int = 64,
     ) -> None:
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise ValueError(f"n must be an int >= 1 (the number of receivers), got {n!r}")
         if not (isinstance(sigma, int | float) and math.isfinite(sigma) and sigma >= 0):
             raise ValueError(f"sigma must be >= 0 m, got {sigma!r}")
         a = np.asarray(antenna, dtype=float).reshape(-1)
         if a.shape != (2,) or not np.all(np.isfinite(a)):
             raise ValueError(f"antenna must be a finite [x, y] (m), got {antenna!r}")
-        self.filter = DGPSPVFilter(S_p, dt, filter_sigma, steady=steady)
+        self.model = pv_model(S_p, dt, filter_sigma)
+        self.K_inf, self.P_inf = pv_steady_gain(S_p, dt, filter_sigma)
+        self.n = n
         self.S_p, self.sigma, self.dt = float(S_p), float(sigma), float(dt)
         self.antenna = a
         self.steady = bool(steady)
-        self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-        self._x: Array | None = None
+        self.block = int(block)
+        self.noise = NormalStreams(n, 2, self.block, rng)
+        self.x = np.zeros((n, 4))  # the estimates [v_N, v_E, x, y]
+        self.z = np.zeros((n, 2))  # the last measured antenna positions
+        self.psi = np.zeros(n)  # the gyro headings of the last samples (rad)
+        self.P = np.broadcast_to(self.P_inf, (n, 4, 4)).copy()  # the recursion's covariance
+        self.K = np.broadcast_to(self.K_inf, (n, 4, 2)).copy()  # the last gain
+        self._all = np.ones(n, dtype=bool)
+        self._started = False
 
-    def _initial(self, eta0: ArrayLike, nu0: ArrayLike) -> Array:
-        p, v = antenna_motion(eta0, nu0, self.antenna)
-        return np.r_[v, p]
+    @property
+    def rngs(self) -> list[np.random.Generator]:
+        """Each receiver's noise generator."""
+        return self.noise.rngs
 
-    def _outputs(self, x: Array, psi: ArrayLike, z: Array) -> DGPSOutput:
-        vxy, chi, beta = velocity_outputs(x[..., 0], x[..., 1], psi)
-        return DGPSOutput(x[..., 0], x[..., 1], x[..., 2], x[..., 3], vxy, chi, beta, z)
+    def _rows(self, x: ArrayLike, what: str) -> tuple[Array, bool]:
+        a = np.asarray(x, dtype=float)
+        one = a.ndim == 1 and self.n == 1
+        a = a.reshape(1, -1) if one else a
+        if a.shape != (self.n, 3) or not np.all(np.isfinite(a)):
+            raise ValueError(f"{what} must be ({self.n}, 3) finite values, got {np.shape(x)}")
+        return a, one
 
-    def _measure(self, pos: Array) -> Array:
-        if self.sigma == 0:
-            return pos
-        return pos + self.sigma * self.rng.standard_normal(pos.shape)
+    def _outputs(self, one: bool) -> DGPSOutput:
+        x = self.x
+        vxy, chi, beta = velocity_outputs(x[:, 0], x[:, 1], self.psi)
+        out = DGPSOutput(x[:, 0], x[:, 1], x[:, 2], x[:, 3], vxy, chi, beta, self.z)
+        return DGPSOutput(*(f[0].copy() if one else f.copy() for f in out))
 
-    def _step(self, x: Array, z: Array) -> Array:
-        if self.steady:
-            return _steady_step(x, z, self.filter.K_inf, self.dt)
-        self.filter.x = x
-        return self.filter.step(z)
+    def reset(
+        self, eta0: ArrayLike, nu0: ArrayLike, *, rngs: Any = None, mask: ArrayLike | None = None
+    ) -> DGPSOutput:
+        """Start the receivers (all, or those where ``mask`` is True) at the truth ``eta0 =
+        [x, y, psi]``, ``nu0 = [u, v, r]``; ``rngs``: new noise generators (or seeds), one
+        per receiver (the reset ones are taken), else each goes on with its own. Returns the
+        outputs of sample 0 (the initial state)."""
+        eta, one = self._rows(eta0, "eta0")
+        nu, _ = self._rows(nu0, "nu0")
+        m = self._all if mask is None else np.asarray(mask, dtype=bool)
+        if m.shape != (self.n,):
+            raise ValueError(f"mask must be ({self.n},) booleans, got {m.shape}")
+        if rngs is not None and len(rngs) != self.n:
+            raise ValueError(f"rngs must hold one generator per receiver ({self.n})")
+        for i in np.nonzero(m)[0].tolist() if rngs is not None else ():
+            self.noise.seed(i, rngs[i])
+        p, v = antenna_motion(eta, nu, self.antenna)
+        mc = m[:, None]
+        self.x = np.where(mc, np.concatenate([v, p], 1), self.x)
+        self.z = np.where(mc, p, self.z)
+        self.psi = np.where(m, eta[:, 2], self.psi)
+        self.P = np.where(mc[:, :, None], self.P_inf, self.P)
+        self.K = np.where(mc[:, :, None], self.K_inf, self.K)
+        self._started = True
+        return self._outputs(one)
 
-    def reset(self, eta0: ArrayLike, nu0: ArrayLike) -> DGPSOutput:
-        """Start at the truth ``eta0 = [x, y, psi]``, ``nu0 = [u, v, r]``; the outputs of
-        sample 0 (the initial state)."""
-        self.filter.reset()
-        self.filter._started = True
-        self._x = self._initial(eta0, nu0)
-        pos, _ = antenna_motion(eta0, nu0, self.antenna)
-        return self._outputs(self._x, np.asarray(eta0, dtype=float)[2], pos)
-
-    def update(self, eta: ArrayLike) -> DGPSOutput:
-        """One sample ``dt`` after the last: measure the antenna at the true pose ``eta``,
-        filter, and return the outputs."""
-        if self._x is None:
+    def update(self, eta: ArrayLike, *, mask: ArrayLike | None = None) -> DGPSOutput:
+        """One sample ``dt`` after the last, of the receivers of ``mask`` (default all; the
+        others keep their state and draws): measure the antenna at the true poses ``eta``,
+        filter, and return the outputs (every row; the others' as after their last sample)."""
+        if not self._started:
             raise RuntimeError("call reset(eta0, nu0) first")
-        eta = np.asarray(eta, dtype=float).reshape(3)
-        pos, _ = antenna_motion(eta, np.zeros(3), self.antenna)
-        z = self._measure(pos)
-        self._x = self._step(self._x, z)
-        return self._outputs(self._x, eta[2], z)
+        e, one = self._rows(eta, "eta")
+        m = self._all if mask is None else np.asarray(mask, dtype=bool)
+        pos, _ = antenna_motion(e, np.zeros_like(e), self.antenna)
+        z = pos if self.sigma == 0 else pos + self.sigma * self.noise.draw(m)
+        if self.steady:
+            x = _steady_step(self.x, z, self.K_inf, self.dt)
+        else:  # the recursion, each receiver's 4x4 matrices (stacked products)
+            md = self.model
+            Pm = md.Phi @ self.P @ md.Phi.T + md.Q
+            K = Pm @ md.H.T @ np.linalg.inv(md.H @ Pm @ md.H.T + md.R)
+            xp = (md.Phi @ self.x[:, :, None])[:, :, 0]
+            x = xp + (K @ (z - xp[:, 2:])[:, :, None])[:, :, 0]
+            mm = m[:, None, None]
+            self.P = np.where(mm, (np.eye(4) - K @ md.H) @ Pm, self.P)
+            self.K = np.where(mm, K, self.K)
+        self.x = np.where(m[:, None], x, self.x)
+        self.z = np.where(m[:, None], z, self.z)
+        self.psi = np.where(m, e[:, 2], self.psi)
+        return self._outputs(one)
 
     def run(self, eta: ArrayLike, nu0: ArrayLike) -> DGPSOutput:
-        """The receiver over the true poses ``eta`` (n, 3) sampled at ``dt``, started at the
-        truth (``eta[0]``, ``nu0``): outputs of shape (n,)."""
-        eta = np.asarray(eta, dtype=float)
-        if eta.ndim != 2 or eta.shape[1] != 3 or eta.shape[0] < 1:
-            raise ValueError(f"eta must be (n >= 1, 3), got {eta.shape}")
-        x = np.empty((eta.shape[0], 4))
-        self.reset(eta[0], nu0)
-        assert self._x is not None
-        x[0] = self._x
-        pos, _ = antenna_motion(eta, np.zeros_like(eta), self.antenna)
-        z = pos.copy()
-        z[1:] = self._measure(pos[1:])
-        for k in range(1, eta.shape[0]):
-            x[k] = self._x = self._step(self._x, z[k])
-        return self._outputs(x, eta[:, 2], z)
+        """The receivers over their true poses ``eta`` (n, k, 3) (or (k, 3) for a single
+        one) sampled at ``dt``, started at the truth (``eta[..., 0, :]``, ``nu0``): the
+        outputs of shape (n, k) (or (k,)); :meth:`reset`, then :meth:`update` per sample."""
+        e = np.asarray(eta, dtype=float)
+        if e.ndim < 2 or e.shape[-1] != 3 or e.shape[-2] < 1:
+            raise ValueError(f"eta must be (n, k >= 1, 3) or (k >= 1, 3), got {e.shape}")
+        outs = [self.reset(e[..., 0, :], nu0)]
+        outs += [self.update(e[..., k, :]) for k in range(1, e.shape[-2])]
+        fields = list(zip(*outs, strict=True))
+        return DGPSOutput(*(np.stack(f, axis=-2 if j == 7 else -1) for j, f in enumerate(fields)))
 
 
 def pv_filter_batch(

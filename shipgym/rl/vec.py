@@ -14,6 +14,7 @@ import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
+from shipgym.envs.batched import BatchedEnv
 from shipgym.envs.integral import ErrorIntegral
 from shipgym.envs.vector import ShipVectorEnv
 
@@ -21,15 +22,18 @@ __all__ = ["BatchedVecEnv", "ErrorIntegralVecEnv", "make_batched_vec_env"]
 
 
 class BatchedVecEnv(VecEnv):
-    """An SB3 ``VecEnv`` of a :class:`ShipVectorEnv` (module docstring).
+    """An SB3 ``VecEnv`` of a :class:`ShipVectorEnv` or a family's
+    :class:`~shipgym.envs.batched.BatchedEnv` (module docstring).
 
     Args:
-        venv: a ``ShipVectorEnv`` in ``autoreset_mode="same-step"``.
+        venv: a ``ShipVectorEnv`` or ``BatchedEnv`` in ``autoreset_mode="same-step"``.
     """
 
-    def __init__(self, venv: ShipVectorEnv) -> None:
-        if not isinstance(venv, ShipVectorEnv):
-            raise TypeError(f"BatchedVecEnv needs a ShipVectorEnv, got {type(venv).__name__}")
+    def __init__(self, venv: ShipVectorEnv | BatchedEnv) -> None:
+        if not isinstance(venv, ShipVectorEnv | BatchedEnv):
+            raise TypeError(
+                f"BatchedVecEnv needs a ShipVectorEnv or a BatchedEnv, got {type(venv).__name__}"
+            )
         if venv.autoreset_mode != gym.vector.AutoresetMode.SAME_STEP:
             raise ValueError(
                 "BatchedVecEnv needs the same-step autoreset (SB3's semantics): make the env "
@@ -74,8 +78,9 @@ class BatchedVecEnv(VecEnv):
         venv = self.venv
         if hasattr(venv, name):
             return getattr(venv, name)
-        if hasattr(venv.task, name):
-            return getattr(venv.task, name)
+        task = getattr(venv, "task", None)
+        if task is not None and hasattr(task, name):
+            return getattr(task, name)
         raise AttributeError(f"the batched env and its task have no attribute {name!r}")
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:

@@ -2,7 +2,8 @@
 receiver-bias study of Artyszuk (2003).
 
 - :mod:`~shipgym.trials.manoeuvres`: :data:`MANOEUVRES`, ``manoeuvre(name)``; each has
-  ``duration(L, U0)`` and ``script()`` (``command(t, psi, u) -> (rudder rad, shaft / n0)``);
+  ``duration(L, U0)`` and ``law()``; :class:`~shipgym.trials.manoeuvres.Scripts` commands N
+  of them at once (``command(psi) -> (rudder rad, shaft / n0)``, each (N,));
 - :mod:`~shipgym.trials.metrics`: :func:`trial_metrics`, :func:`imo_criteria`
   (IMO MSC.137(76) (2002));
 - :mod:`~shipgym.trials.bias`: :func:`receiver_bias`, the DGPS receiver's velocity bias and

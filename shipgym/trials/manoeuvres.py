@@ -1,7 +1,7 @@
 r"""The IMO manoeuvres of a sea trial as scripts (IMO MSC.137(76) (2002); Artyszuk 2003 §3).
 
-Public names: ``MANOEUVRES``, ``ConstantScript``, ``InitialTurning``, ``Stop``, ``TurningCircle``,
-``ZigZag``, ``ZigZagScript``, ``manoeuvre``, ...
+Public names: ``MANOEUVRES``, ``InitialTurning``, ``Scripts`` (the scripts of N envs as one
+law), ``Stop``, ``TurningCircle``, ``ZigZag``, ``manoeuvre``, ...
 
 Design notes: docs/design/trials.manoeuvres.md.
 """
@@ -9,18 +9,21 @@ Design notes: docs/design/trials.manoeuvres.md.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from shipgym.dynamics.frames import wrap_angle
 
 __all__ = [
     "MANOEUVRES",
-    "ConstantScript",
     "InitialTurning",
+    "Scripts",
     "Stop",
     "TurningCircle",
     "ZigZag",
-    "ZigZagScript",
     "manoeuvre",
     "manoeuvre_names",
 ]
@@ -42,58 +45,40 @@ def _side(side: int) -> int:
     return side
 
 
-class ConstantScript:
-    """A script holding one command: ``command(t, psi, u) -> (rudder rad, shaft fraction)``.
+class Scripts:
+    """The scripts of N manoeuvres, one per env, as one law over ``(N,)`` arrays:
+    ``command(psi) -> (rudder rad, shaft fraction of n0)``, each ``(N,)``.
+
+    A turning, initial-turning or stopping script holds its command; a zig-zag's rudder is
+    ``side`` first (a starboard order is ``-angle``), reversed whenever the heading change
+    from ``psi0`` reaches ``angle`` towards the side the rudder is on (classic Z-test).
 
     Args:
-        rudder: the rudder command (rad, shipgym convention: positive turns to port).
-        shaft: the shaft command as a fraction of the approach shaft speed ``n0``.
+        manoeuvres: one manoeuvre per env (:data:`MANOEUVRES` values).
     """
 
-    def __init__(self, rudder: float, shaft: float) -> None:
-        self.rudder, self.shaft = float(rudder), float(shaft)
-        self.psi0 = 0.0
+    def __init__(self, manoeuvres: Sequence[Manoeuvre]) -> None:
+        laws = np.array([m.law() for m in manoeuvres], dtype=float).reshape(-1, 3)
+        self.rudder, self.shaft, self.angle = laws.T.copy()
+        self.zigzag = self.angle > 0.0
+        self.psi0 = np.zeros(len(laws))
+        self.towards = np.zeros(len(laws))  # +1: rudder to starboard, heading change growing
+        self.reset(np.zeros(len(laws)))
 
-    def reset(self, psi0: float) -> None:
-        """Start a run from the approach heading ``psi0`` (rad)."""
-        self.psi0 = float(psi0)
+    def reset(self, psi0: ArrayLike, mask: NDArray[np.bool_] | None = None) -> None:
+        """Start the runs of ``mask`` (default all) from the approach headings ``psi0`` (rad)."""
+        m = np.ones(self.psi0.shape, bool) if mask is None else mask
+        self.psi0 = np.where(m, psi0, self.psi0)
+        self.towards = np.where(m, -np.sign(self.rudder), self.towards)
 
-    def command(self, t: float, psi: float, u: float) -> tuple[float, float]:
-        """``(rudder rad, shaft fraction of n0)`` at time ``t`` (s), heading ``psi`` (rad) and
-        surge speed ``u`` (m/s)."""
-        return self.rudder, self.shaft
-
-
-class ZigZagScript:
-    """The zig-zag's rudder logic: ``side`` first, reversed whenever the heading change from
-    ``psi0`` reaches ``angle`` towards the side the rudder is on (classic Z-test).
-
-    Args:
-        angle: the rudder angle and the heading-change angle (rad), > 0.
-        side: +1 the first order to starboard (command ``-angle``), -1 to port.
-        shaft: the shaft command (fraction of ``n0``).
-
-    Attributes:
-        executes: the times (s) of the rudder reversals so far.
-    """
-
-    def __init__(self, angle: float, side: int, shaft: float = 1.0) -> None:
-        self.angle, self.side, self.shaft = float(angle), _side(side), float(shaft)
-        self.reset(0.0)
-
-    def reset(self, psi0: float) -> None:
-        """Start a run from the approach heading ``psi0`` (rad)."""
-        self.psi0 = float(psi0)
-        self._towards = self.side  # +1: rudder to starboard, heading change growing
-        self.executes: list[float] = []
-
-    def command(self, t: float, psi: float, u: float) -> tuple[float, float]:
-        """``(rudder rad, shaft fraction of n0)``; see the class."""
-        dpsi = float(wrap_angle(float(psi) - self.psi0))
-        if self._towards * dpsi >= self.angle:
-            self._towards = -self._towards
-            self.executes.append(float(t))
-        return -self._towards * self.angle, self.shaft
+    def command(self, psi: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(rudder rad, shaft fraction of n0)`` at the headings ``psi`` (rad), each (N,)."""
+        if not self.zigzag.any():
+            return self.rudder.copy(), self.shaft.copy()
+        dpsi = wrap_angle(psi - self.psi0)
+        self.towards = np.where(self.zigzag & (self.towards * dpsi >= self.angle),
+                                -self.towards, self.towards)  # fmt: skip
+        return np.where(self.zigzag, -self.towards * self.angle, self.rudder), self.shaft.copy()
 
 
 @dataclass(frozen=True)
@@ -114,9 +99,10 @@ class TurningCircle:
         """36 ``L/U0`` (s) [chosen, module docstring]."""
         return 36.0 * _time_scale(L, U0)
 
-    def script(self) -> ConstantScript:
-        """A fresh script (shipgym rudder ``-side * angle``, shaft 1)."""
-        return ConstantScript(-_side(self.side) * self.angle, 1.0)
+    def law(self) -> tuple[float, float, float]:
+        """The script's ``(rudder rad, shaft fraction, zig-zag angle)``: shipgym rudder
+        ``-side * angle``, shaft 1, no zig-zag."""
+        return -_side(self.side) * self.angle, 1.0, 0.0
 
 
 @dataclass(frozen=True)
@@ -137,9 +123,9 @@ class ZigZag:
         """40 ``L/U0`` (s) [chosen]."""
         return 40.0 * _time_scale(L, U0)
 
-    def script(self) -> ZigZagScript:
-        """A fresh :class:`ZigZagScript`."""
-        return ZigZagScript(self.angle, self.side, 1.0)
+    def law(self) -> tuple[float, float, float]:
+        """The script's ``(first rudder rad, shaft fraction, zig-zag angle rad)``."""
+        return -_side(self.side) * self.angle, 1.0, self.angle
 
 
 @dataclass(frozen=True)
@@ -163,9 +149,10 @@ class InitialTurning:
         """6 ``L/U0`` (s) [chosen]."""
         return 6.0 * _time_scale(L, U0)
 
-    def script(self) -> ConstantScript:
-        """A fresh script (shipgym rudder ``-side * angle``, shaft 1)."""
-        return ConstantScript(-_side(self.side) * self.angle, 1.0)
+    def law(self) -> tuple[float, float, float]:
+        """The script's ``(rudder rad, shaft fraction, zig-zag angle)``: shipgym rudder
+        ``-side * angle``, shaft 1, no zig-zag."""
+        return -_side(self.side) * self.angle, 1.0, 0.0
 
 
 @dataclass(frozen=True)
@@ -190,9 +177,9 @@ class Stop:
         """``factor * L/U0`` (s) [chosen]: 30 the crash stop, 80 the coasting stop."""
         return self.factor * _time_scale(L, U0)
 
-    def script(self) -> ConstantScript:
-        """A fresh script (rudder 0, shaft ``shaft``)."""
-        return ConstantScript(0.0, self.shaft)
+    def law(self) -> tuple[float, float, float]:
+        """The script's ``(rudder 0, shaft fraction, no zig-zag)``."""
+        return 0.0, self.shaft, 0.0
 
 
 Manoeuvre = TurningCircle | ZigZag | InitialTurning | Stop
