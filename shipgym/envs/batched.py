@@ -235,11 +235,12 @@ def _merge_rows(info: dict[str, Any], reset: dict[str, Any], mask: Bools) -> dic
 def unbatch(value: Any) -> Any:
     """Row 0 of a batched value: arrays lose their leading axis (0-d ones become Python
     numbers), dicts are unbatched per key (their ``_key`` masks dropped)."""
-    if isinstance(value, Mapping):
-        return {k: unbatch(v) for k, v in value.items() if not k.startswith("_")}
-    if isinstance(value, np.ndarray):
+    t = type(value)
+    if t is np.ndarray:
         row = value[0]
         return row.item() if row.ndim == 0 else row
+    if t is dict or isinstance(value, Mapping):
+        return {k: unbatch(v) for k, v in value.items() if k[:1] != "_"}
     return value
 
 

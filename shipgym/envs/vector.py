@@ -495,7 +495,13 @@ def _task_class(task: type[ShipEnv] | str) -> tuple[type[ShipEnv], int | None]:
             )
         entry, steps = ENV_IDS[task]
         mod, name = entry.split(":")
-        return getattr(importlib.import_module(mod), name), steps
+        cls = getattr(importlib.import_module(mod), name)
+        if not issubclass(cls, ShipEnv):
+            raise ValueError(
+                f"{task!r} is not a plan task: its batched env is gymnasium.make_vec({task!r}, "
+                "num_envs=N), not ShipVectorEnv"
+            )
+        return cls, steps
     if not (isinstance(task, type) and issubclass(task, ShipEnv)):
         raise ValueError(f"task must be a ShipEnv subclass or a batched id, got {task!r}")
     for env_id in VECTOR_IDS:
