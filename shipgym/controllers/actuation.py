@@ -170,8 +170,10 @@ class _AzimuthAllocator:
         self.az = [i for i, a in enumerate(acts.actuators) if isinstance(a, Azimuth)]
         self.fx = [i for i, a in enumerate(acts.actuators) if isinstance(a, Propeller)]
         units: list[Azimuth] = [acts.actuators[i] for i in self.az]  # type: ignore[misc]
-        self._angle_idx = [acts.slices[i].start + 1 for i in self.az]
+        self._thrust_idx = np.array([acts.slices[i].start for i in self.az], dtype=np.intp)
+        self._angle_idx = self._thrust_idx + 1
         self._rate = np.array([a.max_rate for a in units])
+        self._f_max = np.array([a.max_thrust_n for a in units])
         spec = Azimuths(
             positions=np.array([a.position[:2] for a in units]),
             f_max=np.array([a.max_thrust_n for a in units]),
@@ -191,27 +193,34 @@ class _AzimuthAllocator:
         self._qp = AzimuthAllocator(spec, fixed=fixed, W=W, turn_weight=self.TURN_WEIGHT)
 
     def __call__(self, tau: ArrayLike, state: NDArray[np.float64]) -> Allocation:
-        t = _tau3(tau)
+        st = np.asarray(state, dtype=float).reshape(1, -1)
+        return Allocation(*(x[0] for x in self.batch(_tau3(tau).reshape(1, 3), st)))
+
+    def batch(self, tau: NDArray[np.float64], state: ArrayLike) -> tuple[Any, ...]:
+        """The allocations of N requests ``tau`` (N, 3) from the actuator states ``state``
+        (N, n_channels) (the azimuths' angles now): ``(command, force, tau, tau_error,
+        saturated)``, each with a leading axis N (the compiled law over N, one call)."""
         acts = self.acts
-        angle_prev = np.asarray(state, dtype=float)[self._angle_idx]
-        res = self._qp(t, angle_prev)
-        cmd = np.zeros(acts.n_channels)
-        force = np.zeros(len(acts))
-        sat = np.zeros(acts.n_channels, dtype=bool)
-        for k, i in enumerate(self.az):
-            a: Any = acts.actuators[i]
-            j = acts.slices[i].start
-            cmd[j] = res.thrust[k] / a.max_thrust_n
-            rate = (res.angle[k] - angle_prev[k]) / self.dt
-            cmd[j + 1] = min(max(rate, -a.max_rate), a.max_rate)
-            force[i] = res.thrust[k]
-            sat[j] = res.saturated[k] and not res.rate_limited[k]
-            sat[j + 1] = bool(res.rate_limited[k])
+        angle_prev = np.asarray(state, dtype=float)[:, self._angle_idx]
+        thrust, angle, _, f_fixed, delivered, error, sat_qp, rate_lim = self._qp.batch(
+            tau, angle_prev
+        )
+        n = thrust.shape[0]
+        cmd = np.zeros((n, acts.n_channels))
+        force = np.zeros((n, len(acts)))
+        sat = np.zeros((n, acts.n_channels), dtype=bool)
+        j = self._thrust_idx
+        cmd[:, j] = thrust / self._f_max
+        rate = (angle - angle_prev) / self.dt
+        cmd[:, j + 1] = np.minimum(np.maximum(rate, -self._rate), self._rate)
+        force[:, self.az] = thrust
+        sat[:, j] = sat_qp[:, : len(self.az)] & ~rate_lim
+        sat[:, j + 1] = rate_lim
         for k, i in enumerate(self.fx):
-            a = acts.actuators[i]
-            f = res.force_fixed[k]
-            cmd[acts.slices[i].start] = a.inverse(f)
-            force[i] = f
-            sat[acts.slices[i]] = res.saturated[len(self.az) + k]
+            a: Any = acts.actuators[i]
+            f = f_fixed[:, k]
+            cmd[:, acts.slices[i].start] = a.inverse(f)
+            force[:, i] = f
+            sat[:, acts.slices[i]] = sat_qp[:, len(self.az) + k, None]
         cmd = np.clip(cmd, acts.lower, acts.upper)
-        return Allocation(cmd, force, res.tau, res.tau_error, sat)
+        return cmd, force, delivered, error, sat

@@ -20,6 +20,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import entry, njit
+
 from .wls import _bounds, _capacity, _config_matrix, _real_array, _scaled_problem, _scales, _weights
 
 __all__ = [
@@ -35,33 +37,20 @@ __all__ = [
 _ACTIVE_TOL = 1e-7
 #: a force below this fraction of F_max has no direction: the unit keeps its angle
 _ZERO_FORCE = 1e-12
-_NO_BOUND = 1e30  # DAQP's "no lower bound"
+_NO_BOUND = 1e30  # a row's "no lower bound"
 #: a reversible unit's relaxed force more than this (of F_max) outside both of its sectors
 #: makes its branch ambiguous: both are tried, for at most _MAX_TRIED such units
 _BRANCH_TOL = 1e-9
 _MAX_TRIED = 3
-#: DAQP settings, tried in turn. The proximal-point iteration (eps_prox > 0) keeps the dual
-#: method exact when the objective is nearly singular (a redundant set with the tiny default
-#: H), iterated until the proximal steps change the answer by less than eta_prox. A rare
-#: degenerate problem makes DAQP report cycling (exit flag -2) or infeasibility with one
-#: setting; the next (a larger proximal weight) is tried then
-_DAQP_SETTINGS = (
-    {"primal_tol": 1e-10, "eps_prox": 1e-6, "eta_prox": 1e-12},
-    {"primal_tol": 1e-10, "eps_prox": 1e-4, "eta_prox": 1e-12},
-    {"primal_tol": 1e-9, "eps_prox": 1e-2, "eta_prox": 1e-12, "iter_limit": 100_000},
-)
+#: the floor of the regularisation H in the scaled problem (Q scaled to a largest diagonal of
+#: 1), so the dual method's Cholesky factor exists for any H >= 0: a smaller H acts as this
+_MIN_CURV = 1e-12
+#: a constraint violated by more than this (scaled forces, |x| <= 1) is added to the active set
+_PRIMAL_TOL = 1e-10
+#: a constraint whose normal's part outside the active normals (in the metric of Q^-1) is below
+#: this fraction of its norm (squared) is linearly dependent on them
+_DEPENDENT = 1e-20
 _TWO_PI = 2.0 * math.pi
-
-
-def _daqp() -> Any:
-    try:
-        import daqp
-    except ImportError:  # pragma: no cover - a dependency of the package
-        raise ImportError(
-            "allocate_azimuth needs the QP solver 'daqp' (pip install daqp), a dependency of "
-            "shipgym"
-        ) from None
-    return daqp
 
 
 class _Rows(NamedTuple):
@@ -310,47 +299,6 @@ def _fixed_part(fixed: Any, n_dof: int):
     return Bm, lo, hi
 
 
-def _solve(
-    Q: NDArray[np.float64],
-    c: NDArray[np.float64],
-    rows: _Rows,
-    centre: NDArray[np.float64],
-    xlo: NDArray[np.float64],
-    xhi: NDArray[np.float64],
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``argmin 0.5 x^T Q x - c^T x`` with the fixed thrusts (the first ``k``) in
-    ``[xlo, xhi]`` and the azimuth rows about ``centre``, by DAQP. Returns ``x`` and the
-    multipliers' magnitudes (the ``k`` bounds, then the rows)."""
-    k = xlo.shape[0]
-    ow = rows.owner
-    ps = centre[ow] + rows.offset
-    nrow = ps.size
-    A = np.zeros((nrow, c.shape[0]))
-    r = np.arange(nrow)
-    A[r, k + 2 * ow] = np.cos(ps)
-    A[r, k + 2 * ow + 1] = np.sin(ps)
-    bu = np.concatenate((xhi, rows.upper))
-    bl = np.concatenate((xlo, rows.lower))
-    sense = np.zeros(k + nrow, dtype=np.int32)
-    sense[k:][rows.equality] = 5
-    solve = _daqp().solve
-    flags = []
-    for settings in _DAQP_SETTINGS:
-        x, _, flag, info = solve(Q.copy(), -c, A, bu, bl, sense, **settings)
-        if flag in (1, 2):
-            return np.asarray(x), np.abs(np.asarray(info["lam"]))
-        flags.append(flag)
-    raise RuntimeError(
-        f"allocate_azimuth: the QP solver DAQP failed (exit flags {flags}; please report the "
-        "request and the azimuths)"
-    )
-
-
-def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Angles wrapped to [-pi, pi)."""
-    return (a + math.pi) % _TWO_PI - math.pi
-
-
 def allocate_azimuth(
     tau: ArrayLike,
     azimuths: Azimuths,
@@ -387,22 +335,456 @@ def allocate_azimuth(
     """
     prep = _prepare(azimuths, fixed, W, H)
     t = _real_array(tau, "tau", (prep.n_dof,), "requested generalised force, N and N m")
-    return _allocate(prep, azimuths, azimuths.angle_prev, t)
+    return AzimuthAllocation(*(x[0] for x in _run(prep, t[None], azimuths.angle_prev[None])))
+
+
+# ---- the QP: Goldfarb & Idnani's dual active-set method -----------------------------------------
+@njit(inline="always")
+def _forward(L, b, y):  # type: ignore[no-untyped-def]
+    """``y = L^-1 b`` (``L`` lower triangular)."""
+    for i in range(b.shape[0]):
+        t = b[i]
+        for j in range(i):
+            t -= L[i, j] * y[j]
+        y[i] = t / L[i, i]
+
+
+@njit(inline="always")
+def _backward(L, y, x):  # type: ignore[no-untyped-def]
+    """``x = L^-T y``."""
+    n = y.shape[0]
+    for i in range(n - 1, -1, -1):
+        t = y[i]
+        for j in range(i + 1, n):
+            t -= L[j, i] * x[j]
+        x[i] = t / L[i, i]
+
+
+@njit
+def _orthonormalise(G, act, q, U, Rt):  # type: ignore[no-untyped-def]
+    """QR of the columns ``G[act[:q]]`` by modified Gram-Schmidt with one re-orthogonalisation:
+    rows ``U[:q]`` orthonormal, ``Rt[j, i]`` the upper triangular factor's entry ``(i, j)``."""
+    n = G.shape[1]
+    for j in range(q):
+        v = U[j]
+        g = G[act[j]]
+        for e in range(n):
+            v[e] = g[e]
+        for i in range(j):
+            Rt[j, i] = 0.0
+        for _ in range(2):
+            for i in range(j):
+                t = 0.0
+                for e in range(n):
+                    t += U[i, e] * v[e]
+                Rt[j, i] += t
+                for e in range(n):
+                    v[e] -= t * U[i, e]
+        t = 0.0
+        for e in range(n):
+            t += v[e] * v[e]
+        t = math.sqrt(t)
+        Rt[j, j] = t
+        for e in range(n):
+            v[e] /= t
+
+
+@njit
+def _direction(L, G, ip, q, U, Rt, d, r, w, z):  # type: ignore[no-untyped-def]
+    """The primal step ``z = H a_p`` and the dual step ``r = N* a_p`` of Goldfarb & Idnani
+    (1983) for adding constraint ``ip`` to the ``q`` active ones (``U``, ``Rt``: the QR of
+    their ``L^-1 a``). ``w`` is left as the part of ``L^-1 a_p`` orthogonal to them. Returns
+    ``(|w|^2, |L^-1 a_p|^2)``: ``z . a_p`` and its scale."""
+    n = w.shape[0]
+    g = G[ip]
+    w0 = 0.0
+    for e in range(n):
+        w[e] = g[e]
+        w0 += g[e] * g[e]
+    for i in range(q):
+        d[i] = 0.0
+    for _ in range(2):
+        for i in range(q):
+            t = 0.0
+            for e in range(n):
+                t += U[i, e] * w[e]
+            d[i] += t
+            for e in range(n):
+                w[e] -= t * U[i, e]
+    for i in range(q - 1, -1, -1):  # r = R^-1 d
+        t = d[i]
+        for j in range(i + 1, q):
+            t -= Rt[j, i] * r[j]
+        r[i] = t / Rt[i, i]
+    _backward(L, w, z)
+    t = 0.0
+    for e in range(n):
+        t += w[e] * w[e]
+    return t, w0
+
+
+@njit
+def _slack(A, b, i, x):  # type: ignore[no-untyped-def]
+    t = -b[i]
+    for e in range(x.shape[0]):
+        t += A[i, e] * x[e]
+    return t
+
+
+@njit
+def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: ignore[no-untyped-def]
+    """``argmin 0.5 x^T Q x - c^T x`` subject to ``A[i] . x >= b[i]`` (``= b[i]`` where
+    ``eq[i]``), ``i < p``, with ``Q = L L^T`` positive definite, into ``x``; the multipliers into
+    ``u`` (``>= 0`` for inequalities, 0 for inactive constraints). The rest are scratch.
+    Returns 0, 1 (infeasible) or 2 (no convergence).
+
+    The dual active-set method of Goldfarb & Idnani (1983): start from the unconstrained
+    minimum, add the equalities, then repeatedly the most violated inequality, stepping along
+    the primal direction ``z`` and the dual direction ``r`` and dropping an active inequality
+    whose multiplier reaches zero first (a partial step). The active normals' ``L^-1 a`` are
+    kept orthonormalised (their QR, rebuilt after a drop), as in the method's numerically
+    stable form.
+    """
+    n = c.shape[0]
+    _forward(L, c, w)
+    _backward(L, w, x)
+    for i in range(p):
+        _forward(L, A[i], G[i])
+        u[i] = 0.0
+        on[i] = False
+    q = 0
+    for i in range(p):  # equalities: full steps, multipliers of either sign, never dropped
+        if not eq[i]:
+            continue
+        zn, w0 = _direction(L, G, i, q, U, Rt, d, r, w, z)
+        if zn <= _DEPENDENT * w0:
+            continue  # dependent on those already active (consistent: zero is feasible)
+        t = -_slack(A, b, i, x) / zn
+        for e in range(n):
+            x[e] += t * z[e]
+        for j in range(q):
+            u[act[j]] -= t * r[j]
+        u[i] = t
+        on[i] = True
+        act[q] = i
+        q += 1
+        _orthonormalise(G, act, q, U, Rt)
+    for _ in range(10 * (n + p) + 10):
+        ip, worst = -1, -_PRIMAL_TOL
+        for i in range(p):
+            if not on[i]:
+                sl = _slack(A, b, i, x)
+                if sl < worst:
+                    ip, worst = i, sl
+        if ip < 0:
+            return 0
+        up = 0.0
+        added = False
+        for _ in range(2 * n + 2):
+            zn, w0 = _direction(L, G, ip, q, U, Rt, d, r, w, z)
+            t1, kd = math.inf, -1  # the partial step: an active inequality's multiplier to zero
+            for j in range(q):
+                if r[j] > 0.0 and not eq[act[j]]:
+                    t = u[act[j]] / r[j]
+                    if t < t1:
+                        t1, kd = t, j
+            if zn > _DEPENDENT * w0:
+                t2 = max(-_slack(A, b, ip, x) / zn, 0.0)  # the full step
+                t = min(t1, t2)
+                for e in range(n):
+                    x[e] += t * z[e]
+            elif kd < 0:
+                return 1  # a_p is a combination of active normals with no room: infeasible
+            else:
+                t2 = math.inf
+                t = t1
+            for j in range(q):
+                u[act[j]] -= t * r[j]
+            up += t
+            if t2 <= t1:  # a full step: p joins the active set
+                u[ip] = up
+                on[ip] = True
+                act[q] = ip
+                q += 1
+                _orthonormalise(G, act, q, U, Rt)
+                added = True
+                break
+            i = act[kd]  # a partial step: drop the inequality kd
+            u[i] = 0.0
+            on[i] = False
+            q -= 1
+            for j in range(kd, q):
+                act[j] = act[j + 1]
+            _orthonormalise(G, act, q, U, Rt)
+        if not added:
+            return 2
+    return 2
+
+
+@njit
+def _cholesky(M, L):  # type: ignore[no-untyped-def]
+    """Lower Cholesky factor of ``M`` into ``L``: False where ``M`` is not positive definite."""
+    n = M.shape[0]
+    for j in range(n):
+        t = M[j, j]
+        for e in range(j):
+            t -= L[j, e] * L[j, e]
+        if not t > 0.0:
+            return False
+        t = math.sqrt(t)
+        L[j, j] = t
+        for i in range(j + 1, n):
+            v = M[i, j]
+            for e in range(j):
+                v -= L[i, e] * L[j, e]
+            L[i, j] = v / t
+    return True
+
+
+@njit
+def _constraints(k, xlo, xhi, owner, offset, lower, upper, equality, centre, A, b, eq, orig):  # type: ignore[no-untyped-def]
+    """The QP's constraints ``A x >= b`` / ``= b`` of the fixed thrusts' bounds and the rows
+    (:class:`_Rows`) about the units' ``centre`` angles; ``orig``: each one's bound (``< k``)
+    or row (``k + row``). Returns their number."""
+    p = 0
+    A[:] = 0.0
+    for i in range(k):
+        if xlo[i] == xhi[i]:
+            A[p, i], b[p], eq[p], orig[p] = 1.0, xlo[i], True, i
+            p += 1
+            continue
+        A[p, i], b[p], eq[p], orig[p] = 1.0, xlo[i], False, i
+        A[p + 1, i], b[p + 1], eq[p + 1], orig[p + 1] = -1.0, -xhi[i], False, i
+        p += 2
+    for row in range(owner.shape[0]):
+        col = k + 2 * owner[row]
+        psi = centre[owner[row]] + offset[row]
+        cs, sn = math.cos(psi), math.sin(psi)
+        if equality[row]:
+            A[p, col], A[p, col + 1], b[p], eq[p], orig[p] = cs, sn, upper[row], True, k + row
+            p += 1
+            continue
+        if lower[row] > -_NO_BOUND:
+            A[p, col], A[p, col + 1], b[p], eq[p], orig[p] = cs, sn, lower[row], False, k + row
+            p += 1
+        A[p, col], A[p, col + 1], b[p], eq[p], orig[p] = -cs, -sn, -upper[row], False, k + row
+        p += 1
+    return p
+
+
+@njit
+def _wrap(a):  # type: ignore[no-untyped-def]
+    """An angle wrapped to [-pi, pi)."""
+    return (a + math.pi) % _TWO_PI - math.pi
+
+
+@njit
+def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, tau, a_prev,
+                thrust, angle, f_az, f_fixed, delivered, error, saturated, rate_limited):  # type: ignore[no-untyped-def]  # fmt: skip
+    """The azimuth allocation of N requests (one law for every N; :func:`allocate_azimuth`
+    documents the problem, the module's design note the branches of reversible units).
+
+    Args:
+        Q0, R, qd, turn: the scaled problem (n, n), (n, n_dof), the curvatures ``diag(Q)``
+            (n,) and the turning cost's weight (:class:`AzimuthAllocator`).
+        B, s, flo, fhi: the configuration (n_dof, n), the scales (n,) and the fixed thrusts'
+            limits (k,) (N).
+        fmax, dmax, rev: the units' F_max (N), max_dangle (rad) and reversibility (M,).
+        rows, hull: the rows (:class:`_Rows`: owner, offset, lower, upper, rate, equality) of
+            the sectors and of the branch-choosing relaxation (no rows: no reversible unit
+            with a rate limit).
+        tau, a_prev: (N, n_dof) the requests (N, N m), (N, M) the previous angles (rad).
+        thrust, angle, f_az, f_fixed, delivered, error, saturated, rate_limited: out, the
+            fields of :class:`AzimuthAllocation` with a leading axis N.
+
+    Returns:
+        0, or the first failing request's index + 1 times 8 plus the reason (1: not finite;
+        2: the QP infeasible; 3: the QP did not converge; 4: its curvature not positive
+        definite).
+    """
+    N, n_dof = tau.shape
+    m = fmax.shape[0]
+    n = s.shape[0]
+    k = n - 2 * m
+    owner, offset, lower, upper, rate, equality = rows
+    howner, hoffset, hlower, hupper, _, hequality = hull
+    pmax = 2 * k + 2 * max(owner.shape[0], howner.shape[0])
+    xlo = np.empty(k)
+    xhi = np.empty(k)
+    for i in range(k):
+        xlo[i], xhi[i] = flo[i] / s[i], fhi[i] / s[i]
+    Q = np.empty((n, n))
+    L = np.zeros((n, n))
+    c = np.empty(n)
+    A = np.empty((pmax, n))
+    b = np.empty(pmax)
+    eq = np.empty(pmax, np.bool_)
+    orig = np.empty(pmax, np.int64)
+    on = np.empty(pmax, np.bool_)
+    u = np.empty(pmax)
+    act = np.empty(n + 1, np.int64)
+    G = np.empty((pmax, n))
+    U = np.empty((n + 1, n))
+    Rt = np.zeros((n + 1, n + 1))
+    d = np.empty(n + 1)
+    r = np.empty(n + 1)
+    w = np.empty(n)
+    z = np.empty(n)
+    x = np.empty(n)
+    bx = np.empty(n)
+    blam = np.empty(n + owner.shape[0])
+    centre = np.empty(m)
+    bcentre = np.empty(m)
+    bw = np.empty(m, np.bool_)
+    bbw = np.empty(m, np.bool_)
+    amb = np.empty(_MAX_TRIED, np.int64)
+    u_all = np.empty(n)
+    limited = dmax < math.inf
+    for row in range(N):
+        ap = a_prev[row]
+        for i in range(n_dof):
+            if not math.isfinite(tau[row, i]):
+                return 8 * (row + 1) + 1
+        for j in range(m):
+            if not math.isfinite(ap[j]):
+                return 8 * (row + 1) + 1
+        for i in range(n):
+            t = 0.0
+            for e in range(n_dof):
+                t += R[i, e] * tau[row, e]
+            c[i] = t
+            for e in range(n):
+                Q[i, e] = Q0[i, e]
+        if turn > 0.0:  # a cost on the force across each unit's previous direction
+            for j in range(m):
+                i = k + 2 * j
+                e0, e1 = -math.sin(ap[j]), math.cos(ap[j])
+                qj = turn * 0.5 * (qd[i] + qd[i + 1])
+                Q[i, i] += qj * e0 * e0
+                Q[i, i + 1] += qj * e0 * e1
+                Q[i + 1, i] += qj * e1 * e0
+                Q[i + 1, i + 1] += qj * e1 * e1
+        if not _cholesky(Q, L):
+            return 8 * (row + 1) + 4
+
+        # the sector of each unit: its centre angle (reversed for a reversible unit whose
+        # relaxed optimum points backwards) and half-width
+        for j in range(m):
+            bw[j] = False
+        na = 0
+        if howner.shape[0]:
+            p = _constraints(k, xlo, xhi, howner, hoffset, hlower, hupper, hequality, ap, A, b,
+                             eq, orig)  # fmt: skip
+            why = _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z)
+            if why:
+                return 8 * (row + 1) + 1 + why
+            for j in range(m):
+                if rev[j] and limited[j]:
+                    x0, x1 = x[k + 2 * j], x[k + 2 * j + 1]
+                    ca, sa = math.cos(ap[j]), math.sin(ap[j])
+                    along = x0 * ca + x1 * sa
+                    across = abs(-x0 * sa + x1 * ca)
+                    bw[j] = along < 0.0
+                    # relaxed force in neither sector (beyond the rate limit off the axis): both
+                    # branches are tried (for the first _MAX_TRIED such units)
+                    if across > abs(along) * math.tan(dmax[j]) + _BRANCH_TOL and na < _MAX_TRIED:
+                        amb[na] = j
+                        na += 1
+        best = math.inf
+        for flips in range(1 << na):
+            for i in range(na):
+                bw[amb[i]] = (flips >> i) & 1 == 1
+            for j in range(m):
+                centre[j] = ap[j] + math.pi if bw[j] else ap[j]
+            p = _constraints(k, xlo, xhi, owner, offset, lower, upper, equality, centre, A, b,
+                             eq, orig)  # fmt: skip
+            why = _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z)
+            if why:
+                return 8 * (row + 1) + 1 + why
+            J = 0.0
+            for i in range(n):
+                t = 0.0
+                for e in range(n):
+                    t += Q[i, e] * x[e]
+                J += x[i] * (0.5 * t - c[i])
+            if flips == 0 or J < best:
+                best = J
+                for i in range(n):
+                    bx[i] = x[i]
+                for i in range(blam.shape[0]):
+                    blam[i] = 0.0
+                for i in range(p):
+                    if u[i] != 0.0:
+                        blam[orig[i]] = max(blam[orig[i]], abs(u[i]))
+                for j in range(m):
+                    bbw[j] = bw[j]
+                    bcentre[j] = centre[j]
+
+        # fixed thrusters within their limits; azimuth angle and magnitude within theirs exactly
+        for i in range(k):
+            f = min(max(bx[i] * s[i], flo[i]), fhi[i])
+            f_fixed[row, i] = f
+            u_all[i] = f
+        for j in range(m):
+            fx, fy = bx[k + 2 * j] * fmax[j], bx[k + 2 * j + 1] * fmax[j]
+            mag = math.hypot(fx, fy)
+            rel = _wrap(math.atan2(fy, fx) - ap[j])  # relative to the previous angle
+            sign = 1.0
+            if bbw[j] or (rev[j] and not limited[j] and abs(rel) > 0.5 * math.pi):
+                sign = -1.0
+                rel = _wrap(rel - math.pi)
+            cl = min(max(rel, -dmax[j]), dmax[j]) if limited[j] else rel
+            th = sign * min(mag * max(math.cos(rel - cl), 0.0), fmax[j])
+            if mag <= _ZERO_FORCE * fmax[j]:
+                th, cl = 0.0, 0.0
+            a = ap[j] + cl
+            thrust[row, j] = th
+            angle[row, j] = a
+            f_az[row, j, 0] = th * math.cos(a)
+            f_az[row, j, 1] = th * math.sin(a)
+            u_all[k + 2 * j] = f_az[row, j, 0]
+            u_all[k + 2 * j + 1] = f_az[row, j, 1]
+        for i in range(n_dof):
+            t = 0.0
+            for e in range(n):
+                t += B[i, e] * u_all[e]
+            delivered[row, i] = t
+            error[row, i] = tau[row, i] - t
+
+        # active limits: multiplier over the curvature of the variables it acts on (the
+        # distance, in units of F_max or of the thrust range, the force would move past it if
+        # released)
+        for j in range(m + k):
+            saturated[row, j] = False
+        for j in range(m):
+            rate_limited[row, j] = False
+        for i in range(owner.shape[0]):
+            j = owner[i]
+            if blam[k + i] > _ACTIVE_TOL * 0.5 * (qd[k + 2 * j] + qd[k + 2 * j + 1]):
+                saturated[row, j] = True
+                if rate[i]:
+                    rate_limited[row, j] = True
+        for i in range(k):
+            saturated[row, m + i] = blam[i] > _ACTIVE_TOL * qd[i]
+    return 0
 
 
 class _Prepared(NamedTuple):
-    """What depends on the units, the fixed thrusters and the weights but not on the angles."""
+    """What depends on the units, the fixed thrusters and the weights but not on the angles:
+    the law's arguments before the requests."""
 
     n_dof: int
+    m: int
     k: int
-    B: NDArray[np.float64]
-    s: NDArray[np.float64]
-    flo: NDArray[np.float64]
-    fhi: NDArray[np.float64]
-    Q: NDArray[np.float64]
-    R: NDArray[np.float64]
-    qd: NDArray[np.float64]
-    turn: float = 0.0
+    args: tuple[Any, ...]
+
+
+def _law_rows(rows: _Rows | None) -> tuple[NDArray[Any], ...]:
+    if rows is None:
+        e = np.zeros(0)
+        return (np.zeros(0, np.int64), e, e, e, np.zeros(0, np.bool_), np.zeros(0, np.bool_))
+    return tuple(np.ascontiguousarray(a, dtype=np.int64 if i == 0 else None)
+                 for i, a in enumerate(rows))  # fmt: skip
 
 
 def _prepare(
@@ -419,7 +801,47 @@ def _prepare(
     Q, R = _scaled_problem(B, s, w, H)
     if not (isinstance(turn, int | float) and math.isfinite(turn) and turn >= 0.0):
         raise ValueError(f"turn_weight must be a finite number >= 0, got {turn!r}")
-    return _Prepared(n_dof, k, B, s, flo, fhi, Q, R, Q.diagonal().copy(), float(turn))
+    qd = Q.diagonal().copy()
+    # the regularisation's part of the curvature (Q less the weighted configuration's), floored
+    h = qd - np.einsum("ij,ji->i", R, B * s)
+    Q = Q + np.diag(np.maximum(_MIN_CURV - h, 0.0))
+    args = (Q, np.ascontiguousarray(R), qd, float(turn), np.ascontiguousarray(B, dtype=float), s,
+            np.asarray(flo, dtype=float), np.asarray(fhi, dtype=float), az.f_max, az.max_dangle,
+            az.reversible, _law_rows(az._rows), _law_rows(az._hull_rows))  # fmt: skip
+    return _Prepared(n_dof, az.n, k, args)
+
+
+_LAW: list[Any] = []
+
+
+def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64]):  # type: ignore[no-untyped-def]
+    """:func:`azimuth_law` on ``tau`` (N, n_dof) from ``a_prev`` (N, M) through its compiled
+    entry point: the fields of :class:`AzimuthAllocation`, each with a leading axis N."""
+    t = np.ascontiguousarray(tau, dtype=float)
+    a = np.ascontiguousarray(a_prev, dtype=float)
+    N, m, k = t.shape[0], prep.m, prep.k
+    out = (np.empty((N, m)), np.empty((N, m)), np.empty((N, m, 2)), np.empty((N, k)),
+           np.empty((N, prep.n_dof)), np.empty((N, prep.n_dof)),
+           np.empty((N, m + k), dtype=np.bool_), np.empty((N, m), dtype=np.bool_))  # fmt: skip
+    args = (*prep.args, t, a, *out)
+    if not _LAW:
+        _LAW.append(entry(azimuth_law, args))
+    code = _LAW[0](*args)
+    if code:
+        row, why = divmod(code, 8)
+        if why == 1:
+            raise ValueError(
+                f"tau or angle_prev contains NaN or infinite values: {t[row - 1].tolist()}, "
+                f"{a[row - 1].tolist()}"
+            )
+        what = {2: "found the problem infeasible", 3: "did not converge"}.get(
+            why, "met a curvature that is not positive definite"
+        )
+        raise RuntimeError(
+            f"allocate_azimuth: the dual active-set QP {what} (please report the request "
+            f"{t[row - 1].tolist()} and the angles {a[row - 1].tolist()})"
+        )
+    return out
 
 
 class AzimuthAllocator:
@@ -429,6 +851,7 @@ class AzimuthAllocator:
     ``allocate_azimuth(tau, azimuths.with_angles(angle_prev), fixed=..., W=..., H=...)``
     (``angle_prev=None``: ``azimuths.angle_prev``); the configuration, scaling and weights are
     validated and built at construction, a call validates ``tau`` and the angles only.
+    :meth:`batch` allocates N requests at once (row ``i`` equals the call on row ``i``).
 
     ``turn_weight`` (default 0: the plain problem) adds a cost on each unit's force across its
     previous direction, ``turn_weight * q_j * (e_perp(alpha_prev) . f_j / F_max_j)^2`` with
@@ -460,91 +883,22 @@ class AzimuthAllocator:
             a = az.angle_prev
         else:
             a = _real_array(angle_prev, "angle_prev", (az.n,), "previous angle of each unit, rad")
-        return _allocate(self._prep, az, a, t)
+        return AzimuthAllocation(*(x[0] for x in _run(self._prep, t[None], a[None])))
 
+    def batch(self, tau: ArrayLike, angle_prev: ArrayLike) -> tuple[NDArray[Any], ...]:
+        """The allocations of N requests ``tau`` (N, n_dof) from the angles ``angle_prev``
+        (N, M) (:func:`azimuth_law`): the fields of :class:`AzimuthAllocation`, each with a
+        leading axis N.
 
-def _allocate(
-    prep: _Prepared, az: Azimuths, a_prev: NDArray[np.float64], t: NDArray[np.float64]
-) -> AzimuthAllocation:
-    k, B, s, flo, fhi, Q, qd = prep.k, prep.B, prep.s, prep.flo, prep.fhi, prep.Q, prep.qd
-    m = az.n
-    fmax = az.f_max
-    c = prep.R @ t
-    if prep.turn > 0.0:  # a cost on the force across each unit's previous direction
-        Q = Q.copy()
-        ep = np.column_stack((-np.sin(a_prev), np.cos(a_prev)))  # (M, 2) unit normals
-        q = prep.turn * 0.5 * (qd[k::2] + qd[k + 1 :: 2])
-        blocks = q[:, None, None] * ep[:, :, None] * ep[:, None, :]
-        for j in range(m):
-            i = k + 2 * j
-            Q[i : i + 2, i : i + 2] += blocks[j]
-
-    # the sector of each unit: its centre angle (the reversed one for a reversible unit whose
-    # relaxed optimum points backwards) and half-width
-    dmax = az.max_dangle
-    limited = dmax < math.inf
-    centre = a_prev
-    backwards = np.zeros(m, dtype=bool)
-    rows = az._rows
-    ow = rows.owner
-    xlo, xhi = flo / s[:k], fhi / s[:k]
-    if az._hull_rows is None:
-        x, lam = _solve(Q, c, rows, centre, xlo, xhi)
-    else:
-        xr = _solve(Q, c, az._hull_rows, a_prev, xlo, xhi)[0]
-        xy = xr[k:].reshape(m, 2)
-        pick = az.reversible & limited
-        along = xy[:, 0] * np.cos(a_prev) + xy[:, 1] * np.sin(a_prev)
-        across = np.abs(-xy[:, 0] * np.sin(a_prev) + xy[:, 1] * np.cos(a_prev))
-        backwards = pick & (along < 0.0)
-        # units whose relaxed force lies in neither sector (beyond the rate limit off the axis):
-        # both branches are tried (the first _MAX_TRIED of them; the others by projection)
-        tan_d = np.tan(np.where(pick, dmax, 0.0))
-        outside = pick & (across > np.abs(along) * tan_d + _BRANCH_TOL)
-        ambiguous = np.flatnonzero(outside)[:_MAX_TRIED]
-        best = None
-        for flips in range(1 << ambiguous.size):
-            bw = backwards.copy()
-            for i, j in enumerate(ambiguous):
-                bw[j] = bool(flips >> i & 1)
-            cen = a_prev + np.where(bw, math.pi, 0.0)
-            xb, lb = _solve(Q, c, rows, cen, xlo, xhi)
-            J = 0.5 * float(xb @ Q @ xb) - float(c @ xb)
-            if best is None or J < best[0]:
-                best = (J, xb, lb, bw, cen)
-        assert best is not None
-        _, x, lam, backwards, centre = best
-
-    # fixed thrusters within their limits; azimuth angle and magnitude within theirs exactly
-    f_fixed = np.minimum(np.maximum(x[:k] * s[:k], flo), fhi)
-    fxy = x[k:].reshape(m, 2) * fmax[:, None]
-    mag = np.hypot(fxy[:, 0], fxy[:, 1])
-    rel = np.arctan2(fxy[:, 1], fxy[:, 0]) - a_prev  # direction relative to the previous angle
-    rel = _wrap(rel)
-    sign = np.ones(m)
-    flip = backwards | (az.reversible & ~limited & (np.abs(rel) > 0.5 * math.pi))
-    sign[flip] = -1.0
-    rel[flip] = _wrap(rel[flip] - math.pi)
-    clamped = np.where(limited, np.clip(rel, -dmax, dmax), rel)
-    thrust = sign * np.minimum(mag * np.maximum(np.cos(rel - clamped), 0.0), fmax)
-    tiny = mag <= _ZERO_FORCE * fmax
-    thrust[tiny] = 0.0
-    clamped[tiny] = 0.0
-    angle = a_prev + clamped
-    f_az = thrust[:, None] * np.column_stack((np.cos(angle), np.sin(angle)))
-    u = np.concatenate((f_fixed, f_az.reshape(-1)))
-    delivered = B @ u
-
-    # active limits: multiplier over the curvature of the variables it acts on (the distance,
-    # in units of F_max or of the thrust range, the force would move past it if released)
-    curv_az = 0.5 * (qd[k::2] + qd[k + 1 :: 2])
-    row_active = lam[k:] > _ACTIVE_TOL * curv_az[ow]
-    rate_row = rows.rate
-    rate_limited = np.zeros(m, dtype=bool)
-    np.logical_or.at(rate_limited, ow[row_active & rate_row], True)
-    saturated = np.zeros(m + k, dtype=bool)
-    np.logical_or.at(saturated, ow[row_active], True)
-    saturated[m:] = lam[:k] > _ACTIVE_TOL * qd[:k]
-    return AzimuthAllocation(
-        thrust, angle, f_az, f_fixed, delivered, t - delivered, saturated, rate_limited
-    )
+        Raises:
+            ValueError: wrong shapes, or NaN or infinite values.
+        """
+        t = np.asarray(tau, dtype=float)
+        a = np.asarray(angle_prev, dtype=float)
+        n_dof, m = self._prep.n_dof, self._prep.m
+        if t.ndim != 2 or t.shape[1] != n_dof or a.shape != (t.shape[0], m):
+            raise ValueError(
+                f"tau must have shape (N, {n_dof}) and angle_prev (N, {m}), got {t.shape} and "
+                f"{a.shape}"
+            )
+        return _run(self._prep, t, a)
