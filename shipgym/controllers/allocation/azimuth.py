@@ -5,7 +5,10 @@ with polygon magnitude limits and angle-rate sectors.
 
 Public names: ``AzimuthAllocation``, ``AzimuthAllocator``, ``Azimuths``, ``allocate_azimuth``,
 ``extended_thrust_matrix``.
-Sources: Fossen (2011); Johansen & Fossen (2013); Bemporad & Axehill (2022).
+One compiled law over N requests (``azimuth_law``); the QPs by Goldfarb & Idnani's dual
+active-set method.
+
+Sources: Fossen (2011); Johansen & Fossen (2013); Goldfarb & Idnani (1983).
 
 Design notes: docs/design/controllers.allocation.azimuth.md.
 """
@@ -432,18 +435,91 @@ def _slack(A, b, i, x):  # type: ignore[no-untyped-def]
 
 
 @njit
+def _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z):  # type: ignore[no-untyped-def]
+    """Make the active constraints hold to round-off again: ``x += Q^-1 N y`` with ``N^T (x +
+    dx) = b_N`` (``y = (N^T Q^-1 N)^-1 (b_N - N^T x)``, through their QR) and ``u_N += y``,
+    which keeps ``Q x - c = N u`` (the steps' round-off would otherwise accumulate where ``Q``
+    is nearly singular)."""
+    n = x.shape[0]
+    for i in range(q):  # d = R^-T (b_N - N^T x)
+        t = -_slack(A, b, act[i], x)
+        for j in range(i):
+            t -= Rt[i, j] * d[j]
+        d[i] = t / Rt[i, i]
+    for i in range(q - 1, -1, -1):  # r = R^-1 d
+        t = d[i]
+        for j in range(i + 1, q):
+            t -= Rt[j, i] * r[j]
+        r[i] = t / Rt[i, i]
+    for e in range(n):
+        t = 0.0
+        for i in range(q):
+            t += U[i, e] * d[i]
+        w[e] = t
+    _backward(L, w, z)
+    for e in range(n):
+        x[e] += z[e]
+    for i in range(q):
+        u[act[i]] += r[i]
+
+
+@njit(inline="always")
+def _sum_rt(Rt, r, i):  # type: ignore[no-untyped-def]
+    """``(R^T (U w))_i = sum_{j <= i} R_ji (U w)_j``."""
+    t = 0.0
+    for j in range(i + 1):
+        t += Rt[i, j] * r[j]
+    return t
+
+
+@njit
+def _resolve(L, c, A, b, act, q, U, Rt, x, u, d, r, w):  # type: ignore[no-untyped-def]
+    """``x`` and the active multipliers solved afresh from the active set (the minimum of
+    ``0.5 x^T Q x - c^T x`` on ``N^T x = b_N``: ``u_N = (N^T Q^-1 N)^-1 (b_N - N^T Q^-1 c)``,
+    ``x = Q^-1 (c + N u_N)``), free of the steps' accumulated round-off."""
+    n = x.shape[0]
+    _forward(L, c, w)  # w = L^-1 c
+    for i in range(q):  # d = R^-T (b_N - V^T w), V = L^-1 N = U R; V^T w = R^T U w
+        t = 0.0
+        for e in range(n):
+            t += U[i, e] * w[e]
+        r[i] = t
+    for i in range(q):
+        t = b[act[i]] - _sum_rt(Rt, r, i)
+        for j in range(i):
+            t -= Rt[i, j] * d[j]
+        d[i] = t / Rt[i, i]
+    for i in range(q):  # x = L^-T (w + U d)
+        for e in range(n):
+            w[e] += U[i, e] * d[i]
+    _backward(L, w, x)
+    for i in range(q - 1, -1, -1):  # u_N = R^-1 d
+        t = d[i]
+        for j in range(i + 1, q):
+            t -= Rt[j, i] * r[j]
+        r[i] = t / Rt[i, i]
+    for i in range(q):
+        u[act[i]] = r[i]
+
+
+@njit
 def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: ignore[no-untyped-def]
     """``argmin 0.5 x^T Q x - c^T x`` subject to ``A[i] . x >= b[i]`` (``= b[i]`` where
     ``eq[i]``), ``i < p``, with ``Q = L L^T`` positive definite, into ``x``; the multipliers into
     ``u`` (``>= 0`` for inequalities, 0 for inactive constraints). The rest are scratch.
-    Returns 0, 1 (infeasible) or 2 (no convergence).
+    Returns 0 or 1 (no convergence).
 
     The dual active-set method of Goldfarb & Idnani (1983): start from the unconstrained
     minimum, add the equalities, then repeatedly the most violated inequality, stepping along
     the primal direction ``z`` and the dual direction ``r`` and dropping an active inequality
     whose multiplier reaches zero first (a partial step). The active normals' ``L^-1 a`` are
-    kept orthonormalised (their QR, rebuilt after a drop), as in the method's numerically
-    stable form.
+    kept orthonormalised (their QR, rebuilt after a change), as in the method's numerically
+    stable form, and the active constraints are made to hold again after each change
+    (:func:`_correct`). A violated constraint that depends on active ones none of which can be
+    dropped is left out (it would prove the problem infeasible: here it is round-off, zero
+    being feasible in every problem of the allocation). At the end ``x`` and ``u`` are solved
+    afresh on the active set (:func:`_resolve`, then :func:`_correct`; twice at most, should
+    that violate another constraint).
     """
     n = c.shape[0]
     _forward(L, c, w)
@@ -453,10 +529,12 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
         u[i] = 0.0
         on[i] = False
     q = 0
+    resolved = 0
     for i in range(p):  # equalities: full steps, multipliers of either sign, never dropped
         if not eq[i]:
             continue
         zn, w0 = _direction(L, G, i, q, U, Rt, d, r, w, z)
+        on[i] = True
         if zn <= _DEPENDENT * w0:
             continue  # dependent on those already active (consistent: zero is feasible)
         t = -_slack(A, b, i, x) / zn
@@ -465,10 +543,10 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
         for j in range(q):
             u[act[j]] -= t * r[j]
         u[i] = t
-        on[i] = True
         act[q] = i
         q += 1
         _orthonormalise(G, act, q, U, Rt)
+        _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z)
     for _ in range(10 * (n + p) + 10):
         ip, worst = -1, -_PRIMAL_TOL
         for i in range(p):
@@ -477,14 +555,22 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
                 if sl < worst:
                     ip, worst = i, sl
         if ip < 0:
-            return 0
+            if resolved == 2:
+                return 0
+            _resolve(L, c, A, b, act, q, U, Rt, x, u, d, r, w)
+            _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z)
+            resolved += 1
+            continue
         up = 0.0
         added = False
         for _ in range(2 * n + 2):
             zn, w0 = _direction(L, G, ip, q, U, Rt, d, r, w, z)
+            rmax = 0.0
+            for j in range(q):
+                rmax = max(rmax, abs(r[j]))
             t1, kd = math.inf, -1  # the partial step: an active inequality's multiplier to zero
             for j in range(q):
-                if r[j] > 0.0 and not eq[act[j]]:
+                if r[j] > _DEPENDENT * rmax and not eq[act[j]]:
                     t = u[act[j]] / r[j]
                     if t < t1:
                         t1, kd = t, j
@@ -494,7 +580,9 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
                 for e in range(n):
                     x[e] += t * z[e]
             elif kd < 0:
-                return 1  # a_p is a combination of active normals with no room: infeasible
+                on[ip] = True  # round-off (see above): left out
+                added = True
+                break
             else:
                 t2 = math.inf
                 t = t1
@@ -507,6 +595,7 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
                 act[q] = ip
                 q += 1
                 _orthonormalise(G, act, q, U, Rt)
+                _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z)
                 added = True
                 break
             i = act[kd]  # a partial step: drop the inequality kd
@@ -516,9 +605,10 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
             for j in range(kd, q):
                 act[j] = act[j + 1]
             _orthonormalise(G, act, q, U, Rt)
+            _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z)
         if not added:
-            return 2
-    return 2
+            return 1
+    return 1
 
 
 @njit
@@ -599,8 +689,7 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
 
     Returns:
         0, or the first failing request's index + 1 times 8 plus the reason (1: not finite;
-        2: the QP infeasible; 3: the QP did not converge; 4: its curvature not positive
-        definite).
+        2: the QP did not converge; 3: its curvature not positive definite).
     """
     N, n_dof = tau.shape
     m = fmax.shape[0]
@@ -665,7 +754,7 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
                 Q[i + 1, i] += qj * e1 * e0
                 Q[i + 1, i + 1] += qj * e1 * e1
         if not _cholesky(Q, L):
-            return 8 * (row + 1) + 4
+            return 8 * (row + 1) + 3
 
         # the sector of each unit: its centre angle (reversed for a reversible unit whose
         # relaxed optimum points backwards) and half-width
@@ -834,9 +923,7 @@ def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64])
                 f"tau or angle_prev contains NaN or infinite values: {t[row - 1].tolist()}, "
                 f"{a[row - 1].tolist()}"
             )
-        what = {2: "found the problem infeasible", 3: "did not converge"}.get(
-            why, "met a curvature that is not positive definite"
-        )
+        what = "did not converge" if why == 2 else "met a curvature not positive definite"
         raise RuntimeError(
             f"allocate_azimuth: the dual active-set QP {what} (please report the request "
             f"{t[row - 1].tolist()} and the angles {a[row - 1].tolist()})"
