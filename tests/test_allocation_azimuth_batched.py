@@ -81,13 +81,18 @@ def test_bad_batch_input_raises():
 
 # ---- the QP solver: KKT conditions, optimum against independent solvers -------------------------
 def _solve(Q, c, A, b, eq):
+    """:func:`_dual_qp` on dense rows ``A`` whose non-zeros are two neighbours (or one)."""
     n, p = c.shape[0], b.shape[0]
     L = np.zeros((n, n))
     assert _cholesky(Q, L)
+    col = np.array([min(np.flatnonzero(a)[0], n - 2) for a in A])
+    pairs = np.array([A[i, j : j + 2] for i, j in enumerate(col)])
+    np.testing.assert_array_equal(pairs @ np.ones(2), A.sum(axis=1))  # nothing left out
     x, u = np.empty(n), np.empty(p)
-    why = _dual_qp(L, c, A, b, eq, p, x, u, np.empty(p, np.bool_), np.empty(n + 1, np.int64),
-                   np.empty((p, n)), np.empty((n + 1, n)), np.zeros((n + 1, n + 1)),
-                   np.empty(n + 1), np.empty(n + 1), np.empty(n), np.empty(n))  # fmt: skip
+    why = _dual_qp(L, c, col, pairs, b, eq, p, x, u, np.empty(p, np.bool_),
+                   np.empty(p, np.bool_), np.empty(n + 1, np.int64), np.empty((p, n)),
+                   np.empty((n + 1, n)), np.zeros((n + 1, n + 1)), np.empty(n + 1),
+                   np.empty(n + 1), np.empty(n), np.empty(n))  # fmt: skip
     assert why == 0
     return x, u
 

@@ -392,12 +392,40 @@ def _orthonormalise(G, act, q, U, Rt):  # type: ignore[no-untyped-def]
             v[e] /= t
 
 
+@njit(inline="always")
+def _append(act, q, ip, U, Rt, d, w, zn):  # type: ignore[no-untyped-def]
+    """Constraint ``ip`` joins the QR of the active ``L^-1 a`` (after :func:`_direction` for
+    it: ``d = U L^-1 a_p``, ``w`` its orthogonal part, ``zn = |w|^2``): one more row of ``U``
+    and column of ``R``. Returns the new number of active constraints."""
+    t = math.sqrt(zn)
+    for e in range(w.shape[0]):
+        U[q, e] = w[e] / t
+    for i in range(q):
+        Rt[q, i] = d[i]
+    Rt[q, q] = t
+    act[q] = ip
+    return q + 1
+
+
 @njit
-def _direction(L, G, ip, q, U, Rt, d, r, w, z):  # type: ignore[no-untyped-def]
+def _direction(L, col, A, G, have, ip, q, U, Rt, d, r, w, z):  # type: ignore[no-untyped-def]
     """The primal step ``z = H a_p`` and the dual step ``r = N* a_p`` of Goldfarb & Idnani
     (1983) for adding constraint ``ip`` to the ``q`` active ones (``U``, ``Rt``: the QR of
-    their ``L^-1 a``). ``w`` is left as the part of ``L^-1 a_p`` orthogonal to them. Returns
-    ``(|w|^2, |L^-1 a_p|^2)``: ``z . a_p`` and its scale."""
+    their ``L^-1 a``; ``G[ip] = L^-1 a_p`` is computed here where ``have[ip]`` is not set).
+    ``w`` is left as the part of ``L^-1 a_p`` orthogonal to them. Returns ``(|w|^2,
+    |L^-1 a_p|^2)``: ``z . a_p`` and its scale."""
+    if not have[ip]:  # a_p has two entries, at col and col + 1: L^-1 a_p from there on
+        g, j = G[ip], col[ip]
+        for e in range(j):
+            g[e] = 0.0
+        g[j] = A[ip, 0] / L[j, j]
+        g[j + 1] = (A[ip, 1] - L[j + 1, j] * g[j]) / L[j + 1, j + 1]
+        for e in range(j + 2, g.shape[0]):
+            t = 0.0
+            for f in range(j, e):
+                t -= L[e, f] * g[f]
+            g[e] = t / L[e, e]
+        have[ip] = True
     n = w.shape[0]
     g = G[ip]
     w0 = 0.0
@@ -426,23 +454,22 @@ def _direction(L, G, ip, q, U, Rt, d, r, w, z):  # type: ignore[no-untyped-def]
     return t, w0
 
 
-@njit
-def _slack(A, b, i, x):  # type: ignore[no-untyped-def]
-    t = -b[i]
-    for e in range(x.shape[0]):
-        t += A[i, e] * x[e]
-    return t
+@njit(inline="always")
+def _slack(col, A, b, i, x):  # type: ignore[no-untyped-def]
+    """``a_i . x - b_i`` (``a_i``: ``A[i]`` at ``col[i]`` and ``col[i] + 1``)."""
+    j = col[i]
+    return A[i, 0] * x[j] + A[i, 1] * x[j + 1] - b[i]
 
 
 @njit
-def _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z):  # type: ignore[no-untyped-def]
+def _correct(L, col, A, b, act, q, U, Rt, x, u, d, r, w, z):  # type: ignore[no-untyped-def]
     """Make the active constraints hold to round-off again: ``x += Q^-1 N y`` with ``N^T (x +
     dx) = b_N`` (``y = (N^T Q^-1 N)^-1 (b_N - N^T x)``, through their QR) and ``u_N += y``,
     which keeps ``Q x - c = N u`` (the steps' round-off would otherwise accumulate where ``Q``
     is nearly singular)."""
     n = x.shape[0]
     for i in range(q):  # d = R^-T (b_N - N^T x)
-        t = -_slack(A, b, act[i], x)
+        t = -_slack(col, A, b, act[i], x)
         for j in range(i):
             t -= Rt[i, j] * d[j]
         d[i] = t / Rt[i, i]
@@ -473,7 +500,7 @@ def _sum_rt(Rt, r, i):  # type: ignore[no-untyped-def]
 
 
 @njit
-def _resolve(L, c, A, b, act, q, U, Rt, x, u, d, r, w):  # type: ignore[no-untyped-def]
+def _resolve(L, c, b, act, q, U, Rt, x, u, d, r, w):  # type: ignore[no-untyped-def]
     """``x`` and the active multipliers solved afresh from the active set (the minimum of
     ``0.5 x^T Q x - c^T x`` on ``N^T x = b_N``: ``u_N = (N^T Q^-1 N)^-1 (b_N - N^T Q^-1 c)``,
     ``x = Q^-1 (c + N u_N)``), free of the steps' accumulated round-off."""
@@ -503,18 +530,21 @@ def _resolve(L, c, A, b, act, q, U, Rt, x, u, d, r, w):  # type: ignore[no-untyp
 
 
 @njit
-def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: ignore[no-untyped-def]
-    """``argmin 0.5 x^T Q x - c^T x`` subject to ``A[i] . x >= b[i]`` (``= b[i]`` where
-    ``eq[i]``), ``i < p``, with ``Q = L L^T`` positive definite, into ``x``; the multipliers into
-    ``u`` (``>= 0`` for inequalities, 0 for inactive constraints). The rest are scratch.
+def _dual_qp(L, c, col, A, b, eq, p, x, u, on, have, act, G, U, Rt, d, r, w, z):  # type: ignore[no-untyped-def]
+    """``argmin 0.5 x^T Q x - c^T x`` subject to ``a_i . x >= b[i]`` (``= b[i]`` where
+    ``eq[i]``), ``i < p``, ``a_i`` being ``A[i, 0]`` and ``A[i, 1]`` at ``col[i]`` and
+    ``col[i] + 1`` (zero elsewhere), with ``Q = L L^T`` positive definite, into ``x``; the
+    multipliers into ``u`` (``>= 0`` for inequalities, 0 for inactive constraints). The rest
+    are scratch.
     Returns 0 or 1 (no convergence).
 
     The dual active-set method of Goldfarb & Idnani (1983): start from the unconstrained
     minimum, add the equalities, then repeatedly the most violated inequality, stepping along
     the primal direction ``z`` and the dual direction ``r`` and dropping an active inequality
     whose multiplier reaches zero first (a partial step). The active normals' ``L^-1 a`` are
-    kept orthonormalised (their QR, rebuilt after a change), as in the method's numerically
-    stable form, and the active constraints are made to hold again after each change
+    kept orthonormalised (their QR, extended by a column or rebuilt after a drop), as in the
+    method's numerically stable form, and the active constraints are made to hold again after
+    each change
     (:func:`_correct`). A violated constraint that depends on active ones none of which can be
     dropped is left out (it would prove the problem infeasible: here it is round-off, zero
     being feasible in every problem of the allocation). At the end ``x`` and ``u`` are solved
@@ -525,46 +555,47 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
     _forward(L, c, w)
     _backward(L, w, x)
     for i in range(p):
-        _forward(L, A[i], G[i])
         u[i] = 0.0
         on[i] = False
+        have[i] = False
     q = 0
     resolved = 0
+    fresh = False
     for i in range(p):  # equalities: full steps, multipliers of either sign, never dropped
         if not eq[i]:
             continue
-        zn, w0 = _direction(L, G, i, q, U, Rt, d, r, w, z)
+        zn, w0 = _direction(L, col, A, G, have, i, q, U, Rt, d, r, w, z)
         on[i] = True
         if zn <= _DEPENDENT * w0:
             continue  # dependent on those already active (consistent: zero is feasible)
-        t = -_slack(A, b, i, x) / zn
+        t = -_slack(col, A, b, i, x) / zn
         for e in range(n):
             x[e] += t * z[e]
         for j in range(q):
             u[act[j]] -= t * r[j]
         u[i] = t
-        act[q] = i
-        q += 1
-        _orthonormalise(G, act, q, U, Rt)
-        _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z)
+        q = _append(act, q, i, U, Rt, d, w, zn)
+        _correct(L, col, A, b, act, q, U, Rt, x, u, d, r, w, z)
     for _ in range(10 * (n + p) + 10):
         ip, worst = -1, -_PRIMAL_TOL
         for i in range(p):
             if not on[i]:
-                sl = _slack(A, b, i, x)
+                sl = _slack(col, A, b, i, x)
                 if sl < worst:
                     ip, worst = i, sl
         if ip < 0:
-            if resolved == 2:
+            if resolved == 2 or fresh:
                 return 0
-            _resolve(L, c, A, b, act, q, U, Rt, x, u, d, r, w)
-            _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z)
+            fresh = True
+            _resolve(L, c, b, act, q, U, Rt, x, u, d, r, w)
+            _correct(L, col, A, b, act, q, U, Rt, x, u, d, r, w, z)
             resolved += 1
             continue
+        fresh = False
         up = 0.0
         added = False
         for _ in range(2 * n + 2):
-            zn, w0 = _direction(L, G, ip, q, U, Rt, d, r, w, z)
+            zn, w0 = _direction(L, col, A, G, have, ip, q, U, Rt, d, r, w, z)
             rmax = 0.0
             for j in range(q):
                 rmax = max(rmax, abs(r[j]))
@@ -575,7 +606,7 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
                     if t < t1:
                         t1, kd = t, j
             if zn > _DEPENDENT * w0:
-                t2 = max(-_slack(A, b, ip, x) / zn, 0.0)  # the full step
+                t2 = max(-_slack(col, A, b, ip, x) / zn, 0.0)  # the full step
                 t = min(t1, t2)
                 for e in range(n):
                     x[e] += t * z[e]
@@ -592,10 +623,8 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
             if t2 <= t1:  # a full step: p joins the active set
                 u[ip] = up
                 on[ip] = True
-                act[q] = ip
-                q += 1
-                _orthonormalise(G, act, q, U, Rt)
-                _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z)
+                q = _append(act, q, ip, U, Rt, d, w, zn)
+                _correct(L, col, A, b, act, q, U, Rt, x, u, d, r, w, z)
                 added = True
                 break
             i = act[kd]  # a partial step: drop the inequality kd
@@ -605,7 +634,7 @@ def _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z):  # type: i
             for j in range(kd, q):
                 act[j] = act[j + 1]
             _orthonormalise(G, act, q, U, Rt)
-            _correct(L, A, b, act, q, U, Rt, x, u, d, r, w, z)
+            _correct(L, col, A, b, act, q, U, Rt, x, u, d, r, w, z)
         if not added:
             return 1
     return 1
@@ -632,32 +661,34 @@ def _cholesky(M, L):  # type: ignore[no-untyped-def]
 
 
 @njit
-def _constraints(k, xlo, xhi, owner, offset, lower, upper, equality, centre, A, b, eq, orig):  # type: ignore[no-untyped-def]
-    """The QP's constraints ``A x >= b`` / ``= b`` of the fixed thrusts' bounds and the rows
-    (:class:`_Rows`) about the units' ``centre`` angles; ``orig``: each one's bound (``< k``)
-    or row (``k + row``). Returns their number."""
+def _constraints(k, xlo, xhi, owner, co, so, lower, upper, equality, cc, sc, col, A, b, eq, orig):  # type: ignore[no-untyped-def]
+    """The QP's constraints ``a . x >= b`` / ``= b`` (:func:`_dual_qp`) of the fixed thrusts'
+    bounds and the rows (:class:`_Rows`, their offsets' cosines and sines ``co``, ``so``)
+    about the units' centre angles (their cosines and sines ``cc``, ``sc``); ``orig``: each
+    one's bound (``< k``) or row (``k + row``). Returns their number."""
     p = 0
-    A[:] = 0.0
-    for i in range(k):
+    for i in range(k):  # (col + 1 exists: the azimuths' variables follow)
         if xlo[i] == xhi[i]:
-            A[p, i], b[p], eq[p], orig[p] = 1.0, xlo[i], True, i
+            col[p], A[p, 0], A[p, 1], b[p], eq[p], orig[p] = i, 1.0, 0.0, xlo[i], True, i
             p += 1
             continue
-        A[p, i], b[p], eq[p], orig[p] = 1.0, xlo[i], False, i
-        A[p + 1, i], b[p + 1], eq[p + 1], orig[p + 1] = -1.0, -xhi[i], False, i
-        p += 2
+        col[p], A[p, 0], A[p, 1], b[p], eq[p], orig[p] = i, 1.0, 0.0, xlo[i], False, i
+        p += 1
+        col[p], A[p, 0], A[p, 1], b[p], eq[p], orig[p] = i, -1.0, 0.0, -xhi[i], False, i
+        p += 1
     for row in range(owner.shape[0]):
-        col = k + 2 * owner[row]
-        psi = centre[owner[row]] + offset[row]
-        cs, sn = math.cos(psi), math.sin(psi)
+        o = owner[row]
+        j = k + 2 * o
+        cs = cc[o] * co[row] - sc[o] * so[row]  # the normal at centre + offset
+        sn = sc[o] * co[row] + cc[o] * so[row]
         if equality[row]:
-            A[p, col], A[p, col + 1], b[p], eq[p], orig[p] = cs, sn, upper[row], True, k + row
+            col[p], A[p, 0], A[p, 1], b[p], eq[p], orig[p] = j, cs, sn, upper[row], True, k + row
             p += 1
             continue
         if lower[row] > -_NO_BOUND:
-            A[p, col], A[p, col + 1], b[p], eq[p], orig[p] = cs, sn, lower[row], False, k + row
+            col[p], A[p, 0], A[p, 1], b[p], eq[p], orig[p] = j, cs, sn, lower[row], False, k + row
             p += 1
-        A[p, col], A[p, col + 1], b[p], eq[p], orig[p] = -cs, -sn, -upper[row], False, k + row
+        col[p], A[p, 0], A[p, 1], b[p], eq[p], orig[p] = j, -cs, -sn, -upper[row], False, k + row
         p += 1
     return p
 
@@ -705,8 +736,10 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
     Q = np.empty((n, n))
     L = np.zeros((n, n))
     c = np.empty(n)
-    A = np.empty((pmax, n))
+    col = np.empty(pmax, np.int64)
+    A = np.empty((pmax, 2))
     b = np.empty(pmax)
+    have = np.empty(pmax, np.bool_)
     eq = np.empty(pmax, np.bool_)
     orig = np.empty(pmax, np.int64)
     on = np.empty(pmax, np.bool_)
@@ -722,8 +755,8 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
     x = np.empty(n)
     bx = np.empty(n)
     blam = np.empty(n + owner.shape[0])
-    centre = np.empty(m)
-    bcentre = np.empty(m)
+    ca, sa, cc, sc = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    co, so, hco, hso = np.cos(offset), np.sin(offset), np.cos(hoffset), np.sin(hoffset)
     bw = np.empty(m, np.bool_)
     bbw = np.empty(m, np.bool_)
     amb = np.empty(_MAX_TRIED, np.int64)
@@ -737,6 +770,7 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
         for j in range(m):
             if not math.isfinite(ap[j]):
                 return 8 * (row + 1) + 1
+            ca[j], sa[j] = math.cos(ap[j]), math.sin(ap[j])
         for i in range(n):
             t = 0.0
             for e in range(n_dof):
@@ -747,7 +781,7 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
         if turn > 0.0:  # a cost on the force across each unit's previous direction
             for j in range(m):
                 i = k + 2 * j
-                e0, e1 = -math.sin(ap[j]), math.cos(ap[j])
+                e0, e1 = -sa[j], ca[j]
                 qj = turn * 0.5 * (qd[i] + qd[i + 1])
                 Q[i, i] += qj * e0 * e0
                 Q[i, i + 1] += qj * e0 * e1
@@ -762,17 +796,16 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
             bw[j] = False
         na = 0
         if howner.shape[0]:
-            p = _constraints(k, xlo, xhi, howner, hoffset, hlower, hupper, hequality, ap, A, b,
-                             eq, orig)  # fmt: skip
-            why = _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z)
+            p = _constraints(k, xlo, xhi, howner, hco, hso, hlower, hupper, hequality, ca, sa,
+                             col, A, b, eq, orig)  # fmt: skip
+            why = _dual_qp(L, c, col, A, b, eq, p, x, u, on, have, act, G, U, Rt, d, r, w, z)
             if why:
                 return 8 * (row + 1) + 1 + why
             for j in range(m):
                 if rev[j] and limited[j]:
                     x0, x1 = x[k + 2 * j], x[k + 2 * j + 1]
-                    ca, sa = math.cos(ap[j]), math.sin(ap[j])
-                    along = x0 * ca + x1 * sa
-                    across = abs(-x0 * sa + x1 * ca)
+                    along = x0 * ca[j] + x1 * sa[j]
+                    across = abs(-x0 * sa[j] + x1 * ca[j])
                     bw[j] = along < 0.0
                     # relaxed force in neither sector (beyond the rate limit off the axis): both
                     # branches are tried (for the first _MAX_TRIED such units)
@@ -783,11 +816,11 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
         for flips in range(1 << na):
             for i in range(na):
                 bw[amb[i]] = (flips >> i) & 1 == 1
-            for j in range(m):
-                centre[j] = ap[j] + math.pi if bw[j] else ap[j]
-            p = _constraints(k, xlo, xhi, owner, offset, lower, upper, equality, centre, A, b,
-                             eq, orig)  # fmt: skip
-            why = _dual_qp(L, c, A, b, eq, p, x, u, on, act, G, U, Rt, d, r, w, z)
+            for j in range(m):  # the centre angle, reversed where backwards
+                cc[j], sc[j] = (-ca[j], -sa[j]) if bw[j] else (ca[j], sa[j])
+            p = _constraints(k, xlo, xhi, owner, co, so, lower, upper, equality, cc, sc, col, A,
+                             b, eq, orig)  # fmt: skip
+            why = _dual_qp(L, c, col, A, b, eq, p, x, u, on, have, act, G, U, Rt, d, r, w, z)
             if why:
                 return 8 * (row + 1) + 1 + why
             J = 0.0
@@ -807,7 +840,6 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
                         blam[orig[i]] = max(blam[orig[i]], abs(u[i]))
                 for j in range(m):
                     bbw[j] = bw[j]
-                    bcentre[j] = centre[j]
 
         # fixed thrusters within their limits; azimuth angle and magnitude within theirs exactly
         for i in range(k):
