@@ -393,6 +393,26 @@ def _orthonormalise(G, act, q, U, Rt):  # type: ignore[no-untyped-def]
 
 
 @njit(inline="always")
+def _r_solve(Rt, q, d, r):  # type: ignore[no-untyped-def]
+    """``r = R^-1 d`` (``Rt[j, i]`` is ``R``'s entry ``(i, j)``, ``i <= j < q``)."""
+    for i in range(q - 1, -1, -1):
+        t = d[i]
+        for j in range(i + 1, q):
+            t -= Rt[j, i] * r[j]
+        r[i] = t / Rt[i, i]
+
+
+@njit(inline="always")
+def _rt_solve(Rt, q, d):  # type: ignore[no-untyped-def]
+    """``d = R^-T d`` in place."""
+    for i in range(q):
+        t = d[i]
+        for j in range(i):
+            t -= Rt[i, j] * d[j]
+        d[i] = t / Rt[i, i]
+
+
+@njit(inline="always")
 def _append(act, q, ip, U, Rt, d, w, zn):  # type: ignore[no-untyped-def]
     """Constraint ``ip`` joins the QR of the active ``L^-1 a`` (after :func:`_direction` for
     it: ``d = U L^-1 a_p``, ``w`` its orthogonal part, ``zn = |w|^2``): one more row of ``U``
@@ -442,11 +462,7 @@ def _direction(L, col, A, G, have, ip, q, U, Rt, d, r, w, z):  # type: ignore[no
             d[i] += t
             for e in range(n):
                 w[e] -= t * U[i, e]
-    for i in range(q - 1, -1, -1):  # r = R^-1 d
-        t = d[i]
-        for j in range(i + 1, q):
-            t -= Rt[j, i] * r[j]
-        r[i] = t / Rt[i, i]
+    _r_solve(Rt, q, d, r)
     _backward(L, w, z)
     t = 0.0
     for e in range(n):
@@ -468,16 +484,10 @@ def _correct(L, col, A, b, act, q, U, Rt, x, u, d, r, w, z):  # type: ignore[no-
     which keeps ``Q x - c = N u`` (the steps' round-off would otherwise accumulate where ``Q``
     is nearly singular)."""
     n = x.shape[0]
-    for i in range(q):  # d = R^-T (b_N - N^T x)
-        t = -_slack(col, A, b, act[i], x)
-        for j in range(i):
-            t -= Rt[i, j] * d[j]
-        d[i] = t / Rt[i, i]
-    for i in range(q - 1, -1, -1):  # r = R^-1 d
-        t = d[i]
-        for j in range(i + 1, q):
-            t -= Rt[j, i] * r[j]
-        r[i] = t / Rt[i, i]
+    for i in range(q):  # d = R^-T (b_N - N^T x), r = R^-1 d
+        d[i] = -_slack(col, A, b, act[i], x)
+    _rt_solve(Rt, q, d)
+    _r_solve(Rt, q, d, r)
     for e in range(n):
         t = 0.0
         for i in range(q):
@@ -490,15 +500,6 @@ def _correct(L, col, A, b, act, q, U, Rt, x, u, d, r, w, z):  # type: ignore[no-
         u[act[i]] += r[i]
 
 
-@njit(inline="always")
-def _sum_rt(Rt, r, i):  # type: ignore[no-untyped-def]
-    """``(R^T (U w))_i = sum_{j <= i} R_ji (U w)_j``."""
-    t = 0.0
-    for j in range(i + 1):
-        t += Rt[i, j] * r[j]
-    return t
-
-
 @njit
 def _resolve(L, c, b, act, q, U, Rt, x, u, d, r, w):  # type: ignore[no-untyped-def]
     """``x`` and the active multipliers solved afresh from the active set (the minimum of
@@ -506,25 +507,19 @@ def _resolve(L, c, b, act, q, U, Rt, x, u, d, r, w):  # type: ignore[no-untyped-
     ``x = Q^-1 (c + N u_N)``), free of the steps' accumulated round-off."""
     n = x.shape[0]
     _forward(L, c, w)  # w = L^-1 c
-    for i in range(q):  # d = R^-T (b_N - V^T w), V = L^-1 N = U R; V^T w = R^T U w
+    for i in range(q):  # d = R^-T b_N - U w (V = L^-1 N = U R)
+        d[i] = b[act[i]]
+    _rt_solve(Rt, q, d)
+    for i in range(q):
         t = 0.0
         for e in range(n):
             t += U[i, e] * w[e]
-        r[i] = t
-    for i in range(q):
-        t = b[act[i]] - _sum_rt(Rt, r, i)
-        for j in range(i):
-            t -= Rt[i, j] * d[j]
-        d[i] = t / Rt[i, i]
+        d[i] -= t
     for i in range(q):  # x = L^-T (w + U d)
         for e in range(n):
             w[e] += U[i, e] * d[i]
     _backward(L, w, x)
-    for i in range(q - 1, -1, -1):  # u_N = R^-1 d
-        t = d[i]
-        for j in range(i + 1, q):
-            t -= Rt[j, i] * r[j]
-        r[i] = t / Rt[i, i]
+    _r_solve(Rt, q, d, r)  # u_N = R^-1 d
     for i in range(q):
         u[act[i]] = r[i]
 
