@@ -22,6 +22,7 @@ __all__ = [
     "WriteFailed",
     "atomic_path",
     "atomic_write_text",
+    "check_outputs",
     "check_writable",
     "progress_enabled",
     "handle_signals",
@@ -279,3 +280,43 @@ def check_writable(path: Path) -> None:
             path.unlink()
     except OSError as exc:
         raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from exc
+
+
+def check_outputs(
+    outputs: dict[str, Path | None], inputs: dict[str, Path | None] | None = None
+) -> None:
+    """Refuse, before any work, outputs that would overwrite an input or each other.
+
+    Two outputs may not be the same path or one inside the other (a ``--json`` inside a
+    ``--report`` folder that is replaced as a whole); an output may not be an input file, lie
+    inside an input folder (a vessel package) or hold an input (a report folder around the
+    scenario file).
+
+    Args:
+        outputs: option name -> the path it writes (``None``: not given).
+        inputs: option name -> a path it reads (``None``: not given).
+
+    Raises:
+        ValueError: naming both options and the path.
+    """
+
+    def real(p: Path) -> Path:
+        return Path(os.path.realpath(os.path.expanduser(p)))
+
+    outs = [(k, real(p)) for k, p in outputs.items() if p is not None]
+    ins = [(k, real(p)) for k, p in (inputs or {}).items() if p is not None]
+
+    def nested(a: Path, b: Path) -> bool:
+        return a == b or a in b.parents or b in a.parents
+
+    for i, (ka, a) in enumerate(outs):
+        for kb, b in outs[i + 1 :]:
+            if nested(a, b):
+                raise ValueError(
+                    f"{ka} {a} and {kb} {b} would overwrite each other: give them separate paths"
+                )
+        for kb, b in ins:
+            if nested(a, b):
+                raise ValueError(
+                    f"{ka} {a} would overwrite the input {kb} {b}: write the results elsewhere"
+                )

@@ -912,6 +912,32 @@ def _parser() -> argparse.ArgumentParser:
     return ap
 
 
+#: the options that write files or folders (every subcommand)
+OUTPUT_OPTIONS = ("json", "markdown", "record", "report", "out", "figures")
+
+
+def _check_paths(args: argparse.Namespace) -> None:
+    """Outputs never overwrite an input or each other (:func:`shipgym._io.check_outputs`):
+    the inputs are every other argument naming an existing file or folder (a scenario file, a
+    vessel package, a run file, a model behind ``ppo:PATH``)."""
+    from shipgym._io import check_outputs
+
+    names = {"scenario_file": "--scenario", "run": "RUN"}  # dests named otherwise
+    outputs: dict[str, Path | None] = {}
+    inputs: dict[str, Path | None] = {}
+    for key, value in vars(args).items():
+        name = names.get(key, "--" + key.replace("_", "-"))
+        if key in OUTPUT_OPTIONS:
+            if isinstance(value, Path):
+                outputs[name] = value
+            continue
+        if isinstance(value, str) and ":" in value:  # ppo:PATH, sac:PATH
+            value = value.split(":", 1)[1]
+        if isinstance(value, str | Path) and str(value) and Path(value).exists():
+            inputs[name] = Path(value)
+    check_outputs(outputs, inputs)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``shipgym`` console script.
 
@@ -928,6 +954,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
     with handle_signals():
         try:
+            _check_paths(args)
             return int(args.func(args))
         except WriteFailed as exc:  # the results go to stdout instead of being lost
             res = exc.results

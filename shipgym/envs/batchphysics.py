@@ -28,6 +28,7 @@ from shipgym.disturbances import (
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.sim._mujoco import mujoco
 
+from .batched import MAX_ENVS
 from .physics import INTEGRATORS, check_lags, check_timestep, joint_inertia
 from .scene import build_model
 
@@ -76,8 +77,8 @@ class BatchedPhysics:
 
         self.vessel = load_vessel(vessel)
         v = self.vessel
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ValueError(f"n must be an int >= 1 (the number of hulls), got {n!r}")
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_ENVS:
+            raise ValueError(f"n must be an int in [1, {MAX_ENVS}] (the hulls), got {n!r}")
         self.n = n
         self.plant = v.plant(plant) if isinstance(plant, str) else plant
         dofs = getattr(self.plant, "dofs", None)

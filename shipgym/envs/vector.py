@@ -34,7 +34,7 @@ from .base import (
     harbour_body,
     place_harbour,
 )
-from .batched import AUTORESET_MODES, BatchedEnv
+from .batched import AUTORESET_MODES, BatchedEnv, check_num_envs
 from .batchphysics import BatchedPhysics
 
 __all__ = [
@@ -106,6 +106,7 @@ class ShipVectorEnv(BatchedEnv):
         env_sensors: Sequence[SensorConfig] | None = None,
         **kwargs: Any,
     ) -> None:
+        check_num_envs(num_envs)  # before anything is built for them
         cls, steps = _task_class(task)
         # the class's own defaults (the DP tasks' timing and sea), as its single env takes them
         env, task_args, extras = cls.split_args(kwargs)

@@ -1,6 +1,7 @@
-"""Physics health: an instability is an error, never a silently reset state (MuJoCo resets an
-unstable state to the model's default pose and only warns), and the number of steps per call
-is checked."""
+"""Defects that lose or falsify results: physics health (an instability is an error, never a
+silently reset state: MuJoCo resets an unstable state to the model's default pose and only
+warns; the steps per call checked), results that record what ran, checked flags and options,
+bounded loading, outputs that never overwrite an input or each other, bounded batches."""
 
 from __future__ import annotations
 
@@ -129,3 +130,37 @@ def test_deep_vessel_run_and_model_files_are_refused(tmp_path, absurd_vessel):
     with pytest.raises(ValueError, match="nested"):
         ModelMetadata.from_json("[" * DEEP + "]" * DEEP)
     assert main(["report", str(run), "--out", str(tmp_path / "rep")]) == 2
+
+
+# ---- outputs never overwrite inputs or each other (issue 33 item 2); bounded batches ---------
+def test_outputs_that_would_overwrite_an_input_or_each_other_are_refused(tmp_path, capsys):
+    scenario = tmp_path / "sc.yaml"
+    scenario.write_text("env: harbour\n")
+    before = scenario.read_bytes()
+    cases = [
+        ["run", "--scenario", str(scenario), "--json", str(scenario)],
+        ["run", "harbour", "--json", str(tmp_path / "r" / "a.json"), "--report",
+         str(tmp_path / "r")],
+        ["run", "--scenario", str(scenario), "--report", str(tmp_path)],
+    ]  # fmt: skip
+    for argv in cases:
+        assert main([*argv, "--no-progress"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "would overwrite" in err[0], err
+    assert scenario.read_bytes() == before
+    pkg = tmp_path / "pkg"
+    shutil.copytree(resources.files("shipgym") / "assets" / "mjcf" / "blue_lady", pkg)
+    toml = (pkg / "vessel.toml").read_bytes()
+    assert main(["run", "harbour", "--vessel", str(pkg), "--json", str(pkg / "vessel.toml")]) == 2
+    assert (pkg / "vessel.toml").read_bytes() == toml
+    assert "--vessel" in capsys.readouterr().err
+
+
+def test_a_batch_too_large_for_one_process_is_refused():
+    import gymnasium as gym
+
+    from shipgym.envs.batched import MAX_ENVS
+
+    for env_id in ("shipgym/BlueLadyTracking-v0", "shipgym/CourseKeeping-v0"):
+        with pytest.raises(ValueError, match=f"at most {MAX_ENVS}"):
+            gym.make_vec(env_id, num_envs=MAX_ENVS + 1)
