@@ -164,3 +164,22 @@ def test_a_batch_too_large_for_one_process_is_refused():
     for env_id in ("shipgym/BlueLadyTracking-v0", "shipgym/CourseKeeping-v0"):
         with pytest.raises(ValueError, match=f"at most {MAX_ENVS}"):
             gym.make_vec(env_id, num_envs=MAX_ENVS + 1)
+
+
+@pytest.mark.parametrize(
+    "element",
+    ['<include file="/etc/passwd"/>', '<include file="../../outside.xml"/>',
+     '<asset><mesh name="m" file="/etc/hosts"/></asset>', '<compiler meshdir="/"/>'],
+)  # fmt: skip
+def test_a_vessel_package_may_only_use_its_own_files(tmp_path, element):
+    from shipgym.dynamics.vessel import VesselError, load_vessel
+    from shipgym.envs.scene import build_model
+
+    pkg = tmp_path / "pkg"
+    shutil.copytree(resources.files("shipgym") / "assets" / "mjcf" / "blue_lady", pkg)
+    xml = pkg / "vessel.xml"
+    text, n = re.subn(r"(<mujoco[^>]*>)", r"\1" + element, xml.read_text(), count=1)
+    assert n == 1
+    xml.write_text(text)
+    with pytest.raises(VesselError, match="outside the vessel package"):
+        build_model(load_vessel(str(pkg)))
