@@ -19,6 +19,12 @@ from shipgym.envs.physics import VesselPhysics
 from shipgym.sim.step import MAX_STEPS, SimulationDiverged
 
 
+@pytest.fixture(autouse=True)
+def _mujoco_log_elsewhere(tmp_path, monkeypatch):
+    """MuJoCo writes its warnings to MUJOCO_LOG.TXT in the working folder: a temporary one."""
+    monkeypatch.chdir(tmp_path)
+
+
 @pytest.fixture(scope="module")
 def absurd_vessel(tmp_path_factory):
     """The Blue Lady with an absurd yaw damping (N_rr = -1e300 N m s^2)."""
