@@ -168,8 +168,8 @@ class ShipVectorEnv(BatchedEnv):
         self._fresh = False  # whether _obs is the observation now
         lo, hi = self.actuators.lower, self.actuators.upper
         self._lo_tol, self._hi_tol = lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)
-        if not (isinstance(residual_scale, int | float) and math.isfinite(residual_scale)):
-            raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
+        if not (isinstance(residual_scale, int | float) and 0 <= residual_scale < math.inf):
+            raise ValueError(f"residual_scale must be a finite number >= 0, got {residual_scale!r}")
         self.controller_name = controller
         self.residual_scale = float(residual_scale)
         if env_sensors is not None:
