@@ -29,6 +29,7 @@ __all__ = [
     "interrupt_message",
     "interrupt_status",
     "on_interrupt",
+    "output_lock",
     "os_reason",
     "partial_path",
     "replace_together",
@@ -320,3 +321,56 @@ def check_outputs(
                 raise ValueError(
                     f"{ka} {a} would overwrite the input {kb} {b}: write the results elsewhere"
                 )
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: alive
+        return True
+    return True
+
+
+@contextlib.contextmanager
+def output_lock(paths: Iterable[Path | None]) -> Iterator[None]:
+    """One run at a time writes a set of outputs: a lock file ``.NAME.lock`` (holding the
+    process id) next to each output for the duration of the block. A second run naming any of
+    them is refused before any work; a lock left by a process that no longer exists is taken
+    over.
+
+    Raises:
+        ValueError: another running process holds one of the outputs (naming it and the pid).
+    """
+    held: list[Path] = []
+    try:
+        for p in sorted({Path(os.path.realpath(p)) for p in paths if p is not None}):
+            lock = p.parent / f".{p.name}.lock"
+            for _ in range(2):
+                try:
+                    fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+                except FileExistsError:
+                    try:
+                        pid = int(lock.read_text().strip() or "0")
+                    except (OSError, ValueError):
+                        pid = 0
+                    if pid and pid != os.getpid() and _alive(pid):
+                        raise ValueError(
+                            f"{p} is being written by another run (process {pid}, lock {lock}): "
+                            "wait for it, or give this run other output paths"
+                        ) from None
+                    with contextlib.suppress(OSError):
+                        lock.unlink()  # left by a process that died
+                    continue
+                with os.fdopen(fd, "w") as fh:
+                    fh.write(str(os.getpid()))
+                held.append(lock)
+                break
+            else:
+                raise ValueError(f"cannot lock {p} (lock file {lock})")
+        yield
+    finally:
+        for lock in held:
+            with contextlib.suppress(OSError):
+                lock.unlink()

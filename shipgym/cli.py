@@ -236,20 +236,23 @@ def _cmd_run(args: argparse.Namespace) -> int:
     for path in (args.record, args.json):
         if path is not None and path.is_file():
             on_interrupt(f"{path} left as it was", path=path)
-    res = run_episode(
-        args.scenario,
-        controller=args.controller,
-        observer=observer if is_learned_controller(args.controller) else _truth_none(observer),
-        seed=args.seed,
-        plant="default",
-        env_kwargs=env_kwargs,
-        progress=not args.no_progress,
-        record=args.record,
-        spawn=args.spawn,
-        report=args.report,
-        json_path=args.json,
-        scenario_preset=None if args.scenario_file is None else str(args.scenario_file),
-    )
+    from shipgym._io import output_lock
+
+    with output_lock((args.record, args.json, args.report)):  # one run per set of outputs
+        res = run_episode(
+            args.scenario,
+            controller=args.controller,
+            observer=observer if is_learned_controller(args.controller) else _truth_none(observer),
+            seed=args.seed,
+            plant="default",
+            env_kwargs=env_kwargs,
+            progress=not args.no_progress,
+            record=args.record,
+            spawn=args.spawn,
+            report=args.report,
+            json_path=args.json,
+            scenario_preset=None if args.scenario_file is None else str(args.scenario_file),
+        )
     _print_table(res)
     for f in res["files"]:
         print(f"wrote {f}")

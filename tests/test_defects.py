@@ -189,3 +189,39 @@ def test_a_vessel_package_may_only_use_its_own_files(tmp_path, element):
     xml.write_text(text)
     with pytest.raises(VesselError, match="outside the vessel package"):
         build_model(load_vessel(str(pkg)))
+
+
+def test_a_second_concurrent_run_on_the_same_outputs_is_refused(tmp_path):
+    """Two `shipgym run` on one --json: the second is refused at once, the first completes."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "a.json"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    cmd = [sys.executable, "-m", "shipgym.cli", "run", "harbour", "--json", str(out),
+           "--no-progress"]  # fmt: skip
+    first = subprocess.Popen(cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)  # fmt: skip
+    lock = tmp_path / ".a.json.lock"
+    for _ in range(600):  # until the first holds its lock
+        if lock.exists() or first.poll() is not None:
+            break
+        time.sleep(0.05)
+    assert lock.exists(), first.communicate()
+    second = subprocess.run(cmd, env=env, cwd=tmp_path, capture_output=True, text=True,
+                            timeout=300)  # fmt: skip
+    assert second.returncode == 2 and "being written by another run" in second.stderr
+    assert first.wait(timeout=600) == 0
+    assert out.is_file() and not lock.exists()
+
+
+def test_a_lock_left_by_a_dead_process_is_taken_over(tmp_path):
+    from shipgym._io import output_lock
+
+    out = tmp_path / "a.json"
+    (tmp_path / ".a.json.lock").write_text("999999999")  # no such process
+    with output_lock([out]):
+        assert (tmp_path / ".a.json.lock").read_text() == str(__import__("os").getpid())
+    assert not (tmp_path / ".a.json.lock").exists()
