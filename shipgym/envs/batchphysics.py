@@ -139,6 +139,11 @@ class BatchedPhysics:
         return self._hulls.q[i].copy()
 
     @property
+    def timestep(self) -> float:
+        """The physics step (s)."""
+        return self.h
+
+    @property
     def aerodynamics(self) -> bool:
         """Whether any hull feels a wind load."""
         return any(w is not None for w in self.wind_configs)

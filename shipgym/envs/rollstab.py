@@ -23,11 +23,12 @@ from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
 from shipgym._config import from_mapping, is_real, param
-from shipgym._jit import entry
+from shipgym._jit import entry, njit
 from shipgym.disturbances.rollwaves import RollWaveConfig, RollWaves, roll_wave_moments
 from shipgym.disturbances.spectra import wave_spectrum
 from shipgym.dynamics import wrap_angle
 from shipgym.dynamics.actuators import Propeller, Rudder
+from shipgym.dynamics.frames import wrap
 from shipgym.dynamics.linearise import roll_model_of
 from shipgym.dynamics.vanderklugt import KDP_LAWS, VAN_DER_KLUGT, seed_vessel
 from shipgym.dynamics.vessel import Vessel, load_vessel
@@ -167,6 +168,83 @@ class _Normals:
         return out
 
 
+@njit
+def roll_command(actions, active, max_angle, amp, freq, t, cp, ridx, cmd, aclip):  # type: ignore[no-untyped-def]
+    """The rudder commands of the active envs into ``cmd[:, ridx]`` (rad): each action
+    clipped to [-1, 1] (``aclip`` where it was beyond) times the rudder's limit, plus the
+    rudder test ``amp sin(freq (t + cp))`` (``amp`` 0: none)."""
+    for i in range(actions.shape[0]):
+        if not active[i]:
+            continue
+        test = amp * math.sin(freq * (t[i] + cp)) if amp != 0.0 else 0.0
+        for k in range(actions.shape[1]):
+            a = actions[i, k]
+            aclip[i, k] = abs(a) > 1.0
+            a = 1.0 if a > 1.0 else (-1.0 if a < -1.0 else a)
+            cmd[i, ridx[k]] = a * max_angle[k] + test
+
+
+@njit
+def roll_terms(  # type: ignore[no-untyped-def]
+    active, eta, nu, delta, dprev, noise, std, heading, U, phi0, psi0, w_rate, max_rate,
+    max_angle, clipped, aclip, steps, cp, duration, max_roll, obs, sums,
+    y, rate, dmean, e_psi, terms, reward, term, trunc, sat,
+):  # fmt: skip
+    """The task's step law for the active envs (:class:`RudderRollEnv`): the gyros' ``y =
+    [r, psi, p, phi] + std noise``, the rudder rate and mean over the control period
+    (``dprev`` moved on), the observation (``obs``; the filter's column left alone), the
+    reward terms ``roll``, ``heading``, ``rudder_rate`` and their sum, termination at
+    ``max_roll``, truncation at ``duration``, the saturation flags and the episode sums
+    (:attr:`RudderRollVectorEnv._sums`; the rate-limit and filter sums are the caller's)."""
+    nr = delta.shape[1]
+    for i in range(eta.shape[0]):
+        if not active[i]:
+            continue
+        steps[i] += 1
+        y[i, 0] = nu[i, 3] + std[0] * noise[i, 0]
+        y[i, 1] = eta[i, 3] + std[1] * noise[i, 1]
+        y[i, 2] = nu[i, 2] + std[2] * noise[i, 2]
+        y[i, 3] = eta[i, 2] + std[3] * noise[i, 3]
+        obs[i, 0] = np.float32(y[i, 0])
+        obs[i, 1] = np.float32(wrap(y[i, 1] - heading))
+        obs[i, 2] = np.float32(y[i, 2])
+        obs[i, 3] = np.float32(y[i, 3])
+        obs[i, 4 + nr] = np.float32(U[i])
+        rr = 0.0
+        d2 = 0.0
+        w2 = 0.0
+        any_sat = False
+        for k in range(nr):
+            d = delta[i, k]
+            rate[i, k] = (d - dprev[i, k]) / cp
+            dmean[i, k] = 0.5 * (d + dprev[i, k])
+            dprev[i, k] = d
+            obs[i, 4 + k] = np.float32(d)
+            x = rate[i, k] / max_rate[k]
+            rr += x * x
+            d2 += d * d
+            w2 += rate[i, k] * rate[i, k]
+            sat[i, k] = abs(d) >= max_angle[k] * (1.0 - 1e-9) or clipped[i, k] or aclip[i, k]
+            any_sat = any_sat or sat[i, k]
+        phi = eta[i, 2]
+        e = wrap(eta[i, 3] - heading)
+        e_psi[i] = e
+        terms[i, 0] = -((phi / phi0) ** 2)
+        terms[i, 1] = -((e / psi0) ** 2)
+        terms[i, 2] = -w_rate * rr / nr
+        reward[i] = terms[i, 0] + terms[i, 1] + terms[i, 2]
+        term[i] = abs(phi) > max_roll
+        trunc[i] = not term[i] and steps[i] * cp >= duration - 1e-9
+        s = sums[i]
+        s[0] += phi * phi
+        s[1] += e * e
+        s[2] += d2 / nr
+        s[3] += w2 / nr
+        s[5] = max(s[5], abs(phi))
+        s[6] = max(s[6], abs(e))
+        s[8] += any_sat
+
+
 class RudderRollVectorEnv(BatchedEnv):
     """N envs of :class:`RudderRollEnv` stepped together (its docstring is the task's spec):
     ``RudderRollVectorEnv(num_envs, *, autoreset_mode="next-step", **RudderRollEnv's
@@ -282,12 +360,17 @@ class RudderRollVectorEnv(BatchedEnv):
         self._sea = [np.zeros((n, nc)) for _ in range(4)]  # w_e, eps, c_K, c_N of each sea
         self._kf = [np.zeros(s) for s in ((n, 5, 5), (n, 5), (n, 5, 5), (n, 4, 4))]
         self._kx, self._kP, self._kG = np.zeros((n, 5)), np.zeros((n, 5, 5)), np.zeros((n, 5, 4))
-        self._kf_entry: Any = None
+        self._entries: dict[Any, Any] = {}  # the compiled laws' entry points
+        self._ridx_a = np.array(self._ridx, dtype=np.int64)
+        self._std = np.array(ROLL_SENSOR_STD)
+        self._no_noise = np.zeros((n, 4))
+        self._external = np.zeros((n, 4))  # [X, Y, K, N]: the waves' K, N
         self._steps = np.zeros(n, dtype=np.int64)
         self._delta_prev = np.zeros((n, nr))
         self._obs = np.zeros((n, obs_space.shape[0]), dtype=np.float32)
-        self._sums = np.zeros((n, 9))  # roll2, heading2, rudder2, rate2, v_err2, max|phi|,
-        # max|e_psi|, steps rate-limited, steps saturated
+        #: per env the sums of roll^2, e_psi^2, rudder^2, rate^2, v_err^2, max |phi|,
+        #: max |e_psi|, steps rate-limited, steps saturated
+        self._sums = np.zeros((n, 9))
 
     # ---- set-up ----------------------------------------------------------------------------
     def _parse_waves(self, waves: Any) -> str | RollWaveConfig | None:
@@ -425,53 +508,40 @@ class RudderRollVectorEnv(BatchedEnv):
         self, actions: Array, active: Bools
     ) -> tuple[Array, Bools, Bools, dict[str, Any]]:
         phys = self.physics
-        a = np.clip(actions, -1.0, 1.0)
-        action_clipped = np.abs(actions) > 1.0
-        cmd_angle = a * self.max_angle
-        t0 = phys.t.copy()
-        if self.rudder_test:
-            test = np.sin(self.rudder_test_frequency * (t0 + self.control_period))
-            cmd_angle = cmd_angle + (self.rudder_test_amplitude * test)[:, None]
+        n, nr = actions.shape
         command = phys.command
-        command[:, self._ridx] = cmd_angle
-        u = phys.nu_full[:, 0]
-        for j, prop in self._props:  # hold the speed: resistance at U + a 20 s speed loop
-            thrust = self._thrust0 + self._m11 * (self.U - u) / 20.0
-            command[:, j] = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
-        command = np.where(active[:, None], command, phys.command)
-        clipped = phys.set_command(command)
+        t0 = phys.t.copy()
+        aclip = np.zeros((n, nr), dtype=np.bool_)
+        test = (self.rudder_test_amplitude, self.rudder_test_frequency) if self.rudder_test else (
+            0.0, 0.0)  # fmt: skip
+        self._call(roll_command, actions, active, self.max_angle, test[0], test[1], t0,
+                   self.control_period, self._ridx_a, command, aclip)  # fmt: skip
+        if self._props:  # hold the speed: resistance at U + a 20 s speed loop
+            thrust = self._thrust0 + self._m11 * (self.U - phys.nu_full[:, 0]) / 20.0
+            for j, prop in self._props:
+                c = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
+                command[:, j] = np.where(active, c, command[:, j])
+        clipped = phys.set_command(command)[:, self._ridx]
         moment = self._wave_moment(t0, active)
-        phys.set_external_force(np.stack([0 * moment[:, 0], 0 * moment[:, 0], *moment.T], 1))
+        self._external[:, 2:] = moment
+        phys.set_external_force(self._external)
         phys.step(self.n_substeps, mask=active)
-        self._steps += active
-        delta = phys.actuator_state[:, self._ridx]
-        rate = (delta - self._delta_prev) / self.control_period
-        delta_mean = 0.5 * (delta + self._delta_prev)
-        self._delta_prev = np.where(active[:, None], delta, self._delta_prev)
-        y = self._measure(active)
-        if self.sway_estimate:
-            args = (*self._kf, y, np.ascontiguousarray(delta_mean[:, 0]), active, self._kx,
-                    self._kP, self._kG)  # fmt: skip
-            if self._kf_entry is None:
-                self._kf_entry = entry(sway_kf_step, args)
-            self._kf_entry(*args)
-        self._observe(active, y)
-        eta, nu = phys.eta_full, phys.nu_full
-        phi = eta[:, 2]
-        e_psi = wrap_angle(eta[:, 3] - self.heading)
+        eta, nu, delta = phys.eta_full, phys.nu_full, phys.actuator_state[:, self._ridx]
+        noise = self._noise.take(active) if self.sensor_noise else self._no_noise
         w = self.reward_weights
-        rr = np.zeros(self.num_envs)
-        for k in range(rate.shape[1]):
-            rr += (rate[:, k] / self._max_rate[k]) ** 2
-        terms = {"roll": -((phi / w.phi0) ** 2), "heading": -((e_psi / w.psi0) ** 2),
-                 "rudder_rate": -w.rate * rr / rate.shape[1]}  # fmt: skip
-        reward = terms["roll"] + terms["heading"] + terms["rudder_rate"]
-        terminated = np.abs(phi) > self.max_roll
-        truncated = ~terminated & (
-            self._steps * self.control_period >= self.episode_duration - 1e-9
+        y, terms, rate, dmean = (
+            np.zeros((n, 4)),
+            np.zeros((n, 3)),
+            np.zeros((n, nr)),
+            np.zeros((n, nr)),
         )
-        at_limit = np.abs(delta) >= self.max_angle * (1.0 - 1e-9)
-        saturated = at_limit | clipped[:, self._ridx] | action_clipped
+        e_psi, reward = np.zeros(n), np.zeros(n)
+        term, trunc, sat = np.zeros(n, np.bool_), np.zeros(n, np.bool_), np.zeros((n, nr), np.bool_)
+        self._call(roll_terms, active, eta, nu, delta, self._delta_prev, noise, self._std,
+                   self.heading, self.U, w.phi0, w.psi0, w.rate, self._max_rate, self.max_angle,
+                   clipped, aclip, self._steps, self.control_period, self.episode_duration,
+                   self.max_roll, self._obs, self._sums, y, rate, dmean, e_psi, terms, reward,
+                   term, trunc, sat)  # fmt: skip
         info: dict[str, Any] = {
             "time": phys.t.copy(),
             "eta": eta,
@@ -480,23 +550,40 @@ class RudderRollVectorEnv(BatchedEnv):
             "v": nu[:, 1].copy(),
             "p": nu[:, 2].copy(),
             "r": nu[:, 3].copy(),
-            "roll": phi.copy(),
+            "roll": eta[:, 2].copy(),
             "heading_error": e_psi,
             "rudder": delta,
-            "rudder_command": phys.command[:, self._ridx],
+            "rudder_command": command[:, self._ridx],
             "rudder_rate": rate,
-            "saturated": saturated,
-            "rate_limited": phys.rate_limited[:, : len(self._ridx)],
+            "saturated": sat,
+            "rate_limited": phys.rate_limited[:, :nr],
             "stalled": phys.stalled,
-            "action_clipped": action_clipped,
+            "action_clipped": aclip,
             "wave_moment": moment,
-            "reward_terms": terms,
+            "reward_terms": {
+                "roll": terms[:, 0],
+                "heading": terms[:, 1],
+                "rudder_rate": terms[:, 2],
+            },  # fmt: skip
         }
+        s = self._sums
+        s[:, 7] += active & info["rate_limited"].any(1)
         if self.sway_estimate:
-            info["v_hat"] = self._kx[:, 0].copy()
+            self._call(sway_kf_step, *self._kf, y, dmean[:, 0].copy(), active, self._kx,
+                       self._kP, self._kG)  # fmt: skip
+            v_hat = self._kx[:, 0].copy()
+            self._obs[:, -1] = np.where(active, v_hat.astype(np.float32), self._obs[:, -1])
+            s[:, 4] += np.where(active, (v_hat - nu[:, 1]) ** 2, 0.0)
+            info["v_hat"] = v_hat
             info["trace_P"] = np.trace(self._kP, axis1=1, axis2=2)
-        self._add_metrics(info, active)
-        return reward, terminated, truncated, info
+        return reward, term, trunc, info
+
+    def _call(self, fn: Any, *args: Any) -> None:
+        """``fn(*args)`` through its compiled entry point (found once per function)."""
+        e = self._entries.get(fn)
+        if e is None:
+            e = self._entries[fn] = entry(fn, args)
+        e(*args)
 
     def _wave_moment(self, t0: Array, active: Bools) -> Array:
         """Each env's wave moments ``[K, N]`` (N m) over the control period from ``t0``."""
@@ -510,19 +597,6 @@ class RudderRollVectorEnv(BatchedEnv):
         return np.stack([K, N], 1)
 
     # ---- metrics ---------------------------------------------------------------------------
-    def _add_metrics(self, info: dict[str, Any], active: Bools) -> None:
-        s = self._sums
-        d, w = info["rudder"], info["rudder_rate"]
-        v_err = (info["v_hat"] - info["v"]) ** 2 if self.sway_estimate else 0.0 * d[:, 0]
-        add = [info["roll"] ** 2, info["heading_error"] ** 2, (d * d).sum(1) / d.shape[1],
-               (w * w).sum(1) / w.shape[1], v_err]  # fmt: skip
-        for k, x in enumerate(add):
-            s[:, k] += np.where(active, x, 0.0)
-        s[:, 5] = np.where(active, np.maximum(s[:, 5], np.abs(info["roll"])), s[:, 5])
-        s[:, 6] = np.where(active, np.maximum(s[:, 6], np.abs(info["heading_error"])), s[:, 6])
-        s[:, 7] += active & info["rate_limited"].any(1)
-        s[:, 8] += active & info["saturated"].any(1)
-
     def _episode_metrics(self, done: Bools) -> dict[str, Any]:
         """Roll, heading and rudder statistics of each env's episode so far: RMS of roll,
         heading error, rudder and rudder rate, their maxima, the fractions of steps
@@ -618,7 +692,6 @@ class RudderRollEnv(SingleEnv):
         max_roll: roll at which the episode terminates (rad).
         render_mode: ``None`` or ``"rgb_array"``.
     """
-
 
     batched = RudderRollVectorEnv
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
