@@ -130,8 +130,12 @@ class BatchedPhysics:
         self.currents = [Current(cc) for _ in range(n)]
         self.waves = [Waves(waves, v.hull) if waves is not None else None for _ in range(n)]
         self.saturated = np.zeros((n, acts.n_channels), dtype=bool)
-        self._servo_channels = [i for i, c in enumerate(acts.channels) if c.dynamics == "servo"]
-        self._flow_actuators = [i for i, a in enumerate(acts) if a.flow_dependent]
+        self._servo_channels = np.array(
+            [i for i, c in enumerate(acts.channels) if c.dynamics == "servo"], dtype=np.int64
+        )
+        self._flow_actuators = np.array(
+            [i for i, a in enumerate(acts) if a.flow_dependent], dtype=np.int64
+        )
         self.reset()
 
     def qpos(self, i: int) -> Array:

@@ -26,7 +26,6 @@ from shipgym._config import from_mapping, is_real, param
 from shipgym._jit import entry, njit
 from shipgym.disturbances.rollwaves import RollWaveConfig, RollWaves, roll_wave_moments
 from shipgym.disturbances.spectra import wave_spectrum
-from shipgym.dynamics import wrap_angle
 from shipgym.dynamics.actuators import Propeller, Rudder
 from shipgym.dynamics.frames import wrap
 from shipgym.dynamics.linearise import roll_model_of
@@ -157,25 +156,32 @@ class _Normals:
         self.gens[i] = gen
         self.k[i] = BLOCK
 
-    def take(self, mask: Bools) -> Array:
-        """The next ``m`` normals of the envs of ``mask`` (their rows; zeros elsewhere)."""
-        for i in np.nonzero(mask & (self.k >= BLOCK))[0].tolist():
-            self.draws[i] = self.gens[i].standard_normal(self.draws.shape[1:])  # type: ignore[union-attr]
-            self.k[i] = 0
-        rows = np.arange(len(mask))
-        out = np.where(mask[:, None], self.draws[rows, np.minimum(self.k, BLOCK - 1)], 0.0)
-        self.k += mask
-        return out
+    def ready(self, mask: Bools) -> tuple[Array, NDArray[np.int64]]:
+        """``(draws, k)`` with an unused draw ``draws[i, k[i]]`` for each env of ``mask``
+        (the envs that used up their block refilled); the taker moves ``k[i]`` on."""
+        if self.k.max() >= BLOCK:
+            for i in np.nonzero(mask & (self.k >= BLOCK))[0].tolist():
+                self.draws[i] = self.gens[i].standard_normal(self.draws.shape[1:])  # type: ignore[union-attr]
+                self.k[i] = 0
+        return self.draws, self.k
 
 
 @njit
-def roll_command(actions, active, max_angle, amp, freq, t, cp, ridx, cmd, aclip):  # type: ignore[no-untyped-def]
+def roll_command(  # type: ignore[no-untyped-def]
+    actions, active, max_angle, amp, freq, t, cp, ridx, cmd, aclip, white, draws, wk, sigma,
+    moment,
+):  # fmt: skip
     """The rudder commands of the active envs into ``cmd[:, ridx]`` (rad): each action
     clipped to [-1, 1] (``aclip`` where it was beyond) times the rudder's limit, plus the
-    rudder test ``amp sin(freq (t + cp))`` (``amp`` 0: none)."""
+    rudder test ``amp sin(freq (t + cp))`` (``amp`` 0: none); with ``white``, the seed's wave
+    moments ``sigma draws[i, wk[i]]`` into ``moment`` (``wk`` moved on)."""
     for i in range(actions.shape[0]):
         if not active[i]:
             continue
+        if white:
+            moment[i, 0] = sigma[i, 0] * draws[i, wk[i], 0]
+            moment[i, 1] = sigma[i, 1] * draws[i, wk[i], 1]
+            wk[i] += 1
         test = amp * math.sin(freq * (t[i] + cp)) if amp != 0.0 else 0.0
         for k in range(actions.shape[1]):
             a = actions[i, k]
@@ -185,31 +191,52 @@ def roll_command(actions, active, max_angle, amp, freq, t, cp, ridx, cmd, aclip)
 
 
 @njit
+def roll_measure(mask, eta, nu, sensor, draws, kn, std, y):  # type: ignore[no-untyped-def]
+    """The gyros' ``y = [r, psi, p, phi]`` of the envs of ``mask``, with ``sensor`` plus
+    ``std`` times the draws ``draws[i, kn[i]]`` (``kn`` moved on)."""
+    for i in range(eta.shape[0]):
+        if mask[i]:
+            y[i, 0], y[i, 1], y[i, 2], y[i, 3] = nu[i, 3], eta[i, 3], nu[i, 2], eta[i, 2]
+            if sensor:
+                for j in range(4):
+                    y[i, j] = y[i, j] + std[j] * draws[i, kn[i], j]
+                kn[i] += 1
+
+
+@njit
+def roll_observe(mask, y, delta, heading, U, x_hat, obs):  # type: ignore[no-untyped-def]
+    """The observation rows of ``mask`` (:class:`RudderRollEnv`): ``[y_r, wrap(y_psi -
+    heading), y_p, y_phi, delta..., U]`` and, in a wider ``obs``, the filter's ``x_hat``."""
+    nr = delta.shape[1]
+    for i in range(y.shape[0]):
+        if mask[i]:
+            obs[i, 0] = np.float32(y[i, 0])
+            obs[i, 1] = np.float32(wrap(y[i, 1] - heading))
+            obs[i, 2] = np.float32(y[i, 2])
+            obs[i, 3] = np.float32(y[i, 3])
+            for k in range(nr):
+                obs[i, 4 + k] = np.float32(delta[i, k])
+            obs[i, 4 + nr] = np.float32(U[i])
+            if obs.shape[1] > 5 + nr:
+                obs[i, 5 + nr] = np.float32(x_hat[i])
+
+
+@njit
 def roll_terms(  # type: ignore[no-untyped-def]
-    active, eta, nu, delta, dprev, noise, std, heading, U, phi0, psi0, w_rate, max_rate,
-    max_angle, clipped, aclip, steps, cp, duration, max_roll, obs, sums,
-    y, rate, dmean, e_psi, terms, reward, term, trunc, sat,
+    active, eta, delta, dprev, heading, phi0, psi0, w_rate, max_rate, max_angle, clipped,
+    aclip, steps, cp, duration, max_roll, sums, rate, dmean, e_psi, terms, reward, term,
+    trunc, sat,
 ):  # fmt: skip
-    """The task's step law for the active envs (:class:`RudderRollEnv`): the gyros' ``y =
-    [r, psi, p, phi] + std noise``, the rudder rate and mean over the control period
-    (``dprev`` moved on), the observation (``obs``; the filter's column left alone), the
-    reward terms ``roll``, ``heading``, ``rudder_rate`` and their sum, termination at
-    ``max_roll``, truncation at ``duration``, the saturation flags and the episode sums
+    """The task's step law for the active envs (:class:`RudderRollEnv`): the rudder rate and
+    mean over the control period (``dprev`` moved on), the reward terms ``roll``,
+    ``heading``, ``rudder_rate`` and their sum, termination at ``max_roll``, truncation at
+    ``duration``, the saturation flags and the episode sums
     (:attr:`RudderRollVectorEnv._sums`; the rate-limit and filter sums are the caller's)."""
     nr = delta.shape[1]
     for i in range(eta.shape[0]):
         if not active[i]:
             continue
         steps[i] += 1
-        y[i, 0] = nu[i, 3] + std[0] * noise[i, 0]
-        y[i, 1] = eta[i, 3] + std[1] * noise[i, 1]
-        y[i, 2] = nu[i, 2] + std[2] * noise[i, 2]
-        y[i, 3] = eta[i, 2] + std[3] * noise[i, 3]
-        obs[i, 0] = np.float32(y[i, 0])
-        obs[i, 1] = np.float32(wrap(y[i, 1] - heading))
-        obs[i, 2] = np.float32(y[i, 2])
-        obs[i, 3] = np.float32(y[i, 3])
-        obs[i, 4 + nr] = np.float32(U[i])
         rr = 0.0
         d2 = 0.0
         w2 = 0.0
@@ -219,7 +246,6 @@ def roll_terms(  # type: ignore[no-untyped-def]
             rate[i, k] = (d - dprev[i, k]) / cp
             dmean[i, k] = 0.5 * (d + dprev[i, k])
             dprev[i, k] = d
-            obs[i, 4 + k] = np.float32(d)
             x = rate[i, k] / max_rate[k]
             rr += x * x
             d2 += d * d
@@ -348,7 +374,8 @@ class RudderRollVectorEnv(BatchedEnv):
         self._setup(num_envs, obs_space, spaces.Box(-1.0, 1.0, (nr,), dtype=np.float32),
                     autoreset_mode)  # fmt: skip
         hull = self.physics.plant
-        self._m11 = float(hull.mass_matrix()[0, 0])
+        self._M = hull.mass_matrix()
+        self._m11 = float(self._M[0, 0])
         self.U = np.full(n, self.speed_range[0])  # each env's speed this episode (m/s)
         self.vessels: list[Vessel] = [v] * n  # each env's vessel (the printed law: at its U)
         self._thrust0 = np.zeros(n)
@@ -363,7 +390,7 @@ class RudderRollVectorEnv(BatchedEnv):
         self._entries: dict[Any, Any] = {}  # the compiled laws' entry points
         self._ridx_a = np.array(self._ridx, dtype=np.int64)
         self._std = np.array(ROLL_SENSOR_STD)
-        self._no_noise = np.zeros((n, 4))
+        self._rows = np.arange(n)
         self._external = np.zeros((n, 4))  # [X, Y, K, N]: the waves' K, N
         self._steps = np.zeros(n, dtype=np.int64)
         self._delta_prev = np.zeros((n, nr))
@@ -447,9 +474,9 @@ class RudderRollVectorEnv(BatchedEnv):
             self.vessels[i] = vessel = self.vessel_at(U)
             if self.kdp_law == "printed":
                 phys.set_actuators(i, vessel)
-            # the propeller's thrust that balances the resistance in straight running at U
-            nd0 = np.asarray(hull.nu_dot(np.array([U, 0.0, 0.0, 0.0]), np.zeros(4)))
-            self._thrust0[i] = -(hull.mass_matrix() @ nd0)[0]
+            if self._props:  # the thrust that balances the resistance in straight running at U
+                nd0 = np.asarray(hull.nu_dot(np.array([U, 0.0, 0.0, 0.0]), np.zeros(4)))
+                self._thrust0[i] = -(self._M @ nd0)[0]
             if self.waves == SEED_WAVES:
                 q_K, q_N = seed_wave_intensities(U)
                 self._sigma[i] = math.sqrt(q_K / self.control_period), math.sqrt(
@@ -475,24 +502,20 @@ class RudderRollVectorEnv(BatchedEnv):
         self._steps[mask] = 0
         self._delta_prev[mask] = phys.actuator_state[mask][:, self._ridx]
         self._sums[mask] = 0.0
-        y = self._measure(mask)
-        self._observe(mask, y)
+        self._observe(mask, self._measure(mask))
 
     def _measure(self, mask: Bools) -> Array:
-        """The gyros' ``[r, psi, p, phi]`` (n, 4), noise drawn for the envs of ``mask``."""
-        eta, nu = self.physics.eta_full, self.physics.nu_full
-        y = np.stack([nu[:, 3], eta[:, 3], nu[:, 2], eta[:, 2]], 1)
-        if self.sensor_noise:
-            y = y + np.asarray(ROLL_SENSOR_STD) * self._noise.take(mask)
+        """The gyros' ``[r, psi, p, phi]`` (n, 4) of the envs of ``mask`` (their noise drawn)."""
+        y = np.zeros((self.num_envs, 4))
+        noise = self._noise
+        nd, nk = noise.ready(mask) if self.sensor_noise else (noise.draws, noise.k)
+        self._call(roll_measure, mask, self.physics.eta_full, self.physics.nu_full,
+                   self.sensor_noise, nd, nk, self._std, y)  # fmt: skip
         return y
 
     def _observe(self, mask: Bools, y: Array) -> None:
-        delta = self.physics.actuator_state[:, self._ridx]
-        e = wrap_angle(y[:, 1] - self.heading)
-        cols = [y[:, 0], e, y[:, 2], y[:, 3], *delta.T, self.U]
-        if self.sway_estimate:
-            cols.append(self._kx[:, 0])
-        self._obs[mask] = np.stack(cols, 1)[mask].astype(np.float32)
+        self._call(roll_observe, mask, y, self.physics.actuator_state[:, self._ridx],
+                   self.heading, self.U, self._kx[:, 0].copy(), self._obs)  # fmt: skip
 
     def _observation(self) -> NDArray[np.float32]:
         return self._obs.copy()
@@ -512,36 +535,37 @@ class RudderRollVectorEnv(BatchedEnv):
         command = phys.command
         t0 = phys.t.copy()
         aclip = np.zeros((n, nr), dtype=np.bool_)
-        test = (self.rudder_test_amplitude, self.rudder_test_frequency) if self.rudder_test else (
-            0.0, 0.0)  # fmt: skip
-        self._call(roll_command, actions, active, self.max_angle, test[0], test[1], t0,
-                   self.control_period, self._ridx_a, command, aclip)  # fmt: skip
+        amp = self.rudder_test_amplitude if self.rudder_test else 0.0
+        white = self.waves == SEED_WAVES
+        wd, wk = self._white.ready(active) if white else (self._white.draws, self._white.k)
+        moment = np.zeros((n, 2))
+        self._call(roll_command, actions, active, self.max_angle, amp,
+                   self.rudder_test_frequency, t0, self.control_period, self._ridx_a, command,
+                   aclip, white, wd, wk, self._sigma, moment)  # fmt: skip
         if self._props:  # hold the speed: resistance at U + a 20 s speed loop
             thrust = self._thrust0 + self._m11 * (self.U - phys.nu_full[:, 0]) / 20.0
             for j, prop in self._props:
                 c = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
                 command[:, j] = np.where(active, c, command[:, j])
         clipped = phys.set_command(command)[:, self._ridx]
-        moment = self._wave_moment(t0, active)
+        if isinstance(self.waves, RollWaveConfig):  # the sea's, mid-period
+            t = np.ascontiguousarray(t0 + 0.5 * self.control_period)
+            K, N = np.empty(n), np.empty(n)
+            self._call(roll_wave_moments, t, self._rows, *self._sea, K, N)
+            moment[:, 0], moment[:, 1] = K, N
         self._external[:, 2:] = moment
         phys.set_external_force(self._external)
         phys.step(self.n_substeps, mask=active)
         eta, nu, delta = phys.eta_full, phys.nu_full, phys.actuator_state[:, self._ridx]
-        noise = self._noise.take(active) if self.sensor_noise else self._no_noise
+        y = self._measure(active)
         w = self.reward_weights
-        y, terms, rate, dmean = (
-            np.zeros((n, 4)),
-            np.zeros((n, 3)),
-            np.zeros((n, nr)),
-            np.zeros((n, nr)),
-        )
-        e_psi, reward = np.zeros(n), np.zeros(n)
-        term, trunc, sat = np.zeros(n, np.bool_), np.zeros(n, np.bool_), np.zeros((n, nr), np.bool_)
-        self._call(roll_terms, active, eta, nu, delta, self._delta_prev, noise, self._std,
-                   self.heading, self.U, w.phi0, w.psi0, w.rate, self._max_rate, self.max_angle,
-                   clipped, aclip, self._steps, self.control_period, self.episode_duration,
-                   self.max_roll, self._obs, self._sums, y, rate, dmean, e_psi, terms, reward,
-                   term, trunc, sat)  # fmt: skip
+        terms, e_psi, reward = np.zeros((n, 3)), np.zeros(n), np.zeros(n)
+        rate, dmean, sat = np.zeros((n, nr)), np.zeros((n, nr)), np.zeros((n, nr), np.bool_)
+        term, trunc = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
+        self._call(roll_terms, active, eta, delta, self._delta_prev, self.heading, w.phi0,
+                   w.psi0, w.rate, self._max_rate, self.max_angle, clipped, aclip, self._steps,
+                   self.control_period, self.episode_duration, self.max_roll, self._sums, rate,
+                   dmean, e_psi, terms, reward, term, trunc, sat)  # fmt: skip
         info: dict[str, Any] = {
             "time": phys.t.copy(),
             "eta": eta,
@@ -553,7 +577,7 @@ class RudderRollVectorEnv(BatchedEnv):
             "roll": eta[:, 2].copy(),
             "heading_error": e_psi,
             "rudder": delta,
-            "rudder_command": command[:, self._ridx],
+            "rudder_command": phys.command[:, self._ridx],
             "rudder_rate": rate,
             "saturated": sat,
             "rate_limited": phys.rate_limited[:, :nr],
@@ -572,10 +596,10 @@ class RudderRollVectorEnv(BatchedEnv):
             self._call(sway_kf_step, *self._kf, y, dmean[:, 0].copy(), active, self._kx,
                        self._kP, self._kG)  # fmt: skip
             v_hat = self._kx[:, 0].copy()
-            self._obs[:, -1] = np.where(active, v_hat.astype(np.float32), self._obs[:, -1])
             s[:, 4] += np.where(active, (v_hat - nu[:, 1]) ** 2, 0.0)
             info["v_hat"] = v_hat
             info["trace_P"] = np.trace(self._kP, axis1=1, axis2=2)
+        self._observe(active, y)
         return reward, term, trunc, info
 
     def _call(self, fn: Any, *args: Any) -> None:
@@ -584,17 +608,6 @@ class RudderRollVectorEnv(BatchedEnv):
         if e is None:
             e = self._entries[fn] = entry(fn, args)
         e(*args)
-
-    def _wave_moment(self, t0: Array, active: Bools) -> Array:
-        """Each env's wave moments ``[K, N]`` (N m) over the control period from ``t0``."""
-        if self.waves is None:
-            return np.zeros((self.num_envs, 2))
-        if self.waves == SEED_WAVES:
-            return self._sigma * self._white.take(active)
-        t = np.ascontiguousarray(t0 + 0.5 * self.control_period)
-        K, N = np.empty_like(t), np.empty_like(t)
-        roll_wave_moments(t, np.arange(self.num_envs), *self._sea, K, N)
-        return np.stack([K, N], 1)
 
     # ---- metrics ---------------------------------------------------------------------------
     def _episode_metrics(self, done: Bools) -> dict[str, Any]:

@@ -128,62 +128,44 @@ def _cov(value: ArrayLike | None, default: tuple[float, ...], n: int, name: str)
 
 
 @njit(inline="always")
+def _mul(a, b, out):  # type: ignore[no-untyped-def]
+    """``out = a b`` (small matrices, in index order)."""
+    for j in range(out.shape[0]):
+        for k in range(out.shape[1]):
+            acc = 0.0
+            for m in range(b.shape[0]):
+                acc += a[j, m] * b[m, k]
+            out[j, k] = acc
+
+
+@njit(inline="always")
 def _update_row(i, xp, Pp, R, y, x, P, gain):  # type: ignore[no-untyped-def]
     """Eq. 4 for row ``i``: the gain ``G = P^- C^T (C P^- C^T + R)^-1`` (``C`` picks
-    ``[r, psi, p, phi]``; the inverse through a Cholesky factor), the wrapped heading
-    innovation, ``x = x^- + G (y - C x^-)``, ``P = (I - G C) P^-`` symmetrised."""
-    S = np.empty((4, 4))
-    for a in range(4):
-        for b in range(4):
-            S[a, b] = Pp[a + 1, b + 1] + R[i, a, b]
-    L = np.zeros((4, 4))  # S = L L^T
-    for a in range(4):
-        for b in range(a + 1):
-            acc = S[a, b]
-            for m in range(b):
-                acc -= L[a, m] * L[b, m]
-            L[a, b] = math.sqrt(acc) if a == b else acc / L[b, b]
-    Li = np.zeros((4, 4))  # L^-1
-    for a in range(4):
-        Li[a, a] = 1.0 / L[a, a]
-        for b in range(a):
-            acc = 0.0
-            for m in range(b, a):
-                acc -= L[a, m] * Li[m, b]
-            Li[a, b] = acc / L[a, a]
-    Si = np.empty((4, 4))  # S^-1 = L^-T L^-1
-    for a in range(4):
-        for b in range(4):
-            acc = 0.0
-            for m in range(max(a, b), 4):
-                acc += Li[m, a] * Li[m, b]
-            Si[a, b] = acc
-    inn = np.empty(4)
-    for a in range(4):
-        inn[a] = y[i, a] - xp[a + 1]
+    ``[r, psi, p, phi]``), the wrapped heading innovation, ``x = x^- + G (y - C x^-)``,
+    ``P = (I - G C) P^-`` symmetrised."""
+    S = Pp[1:, 1:] + R[i]
+    Si = np.eye(4)  # S^-1 by Gauss-Jordan (S is positive definite: no pivoting)
+    for c in range(4):
+        piv = S[c, c]
+        S[c] /= piv
+        Si[c] /= piv
+        for r in range(4):
+            if r != c:
+                f = S[r, c]
+                S[r] -= f * S[c]
+                Si[r] -= f * Si[c]
+    _mul(Pp[:, 1:], Si, gain[i])
+    inn = y[i] - xp[1:]
     inn[_PSI_OUT] = wrap(inn[_PSI_OUT])
-    for j in range(5):
-        for b in range(4):
-            acc = 0.0
-            for a in range(4):
-                acc += Pp[j, a + 1] * Si[a, b]
-            gain[i, j, b] = acc
     for j in range(5):
         acc = xp[j]
         for b in range(4):
             acc += gain[i, j, b] * inn[b]
         x[i, j] = acc
-    for j in range(5):
-        for k in range(5):
-            acc = Pp[j, k]
-            for b in range(4):
-                acc -= gain[i, j, b] * Pp[b + 1, k]
-            P[i, j, k] = acc
-    for j in range(5):
-        for k in range(j):
-            m_ = 0.5 * (P[i, j, k] + P[i, k, j])
-            P[i, j, k] = m_
-            P[i, k, j] = m_
+    GP = np.empty((5, 5))
+    _mul(gain[i], Pp[1:], GP)
+    Pn = Pp - GP
+    P[i] = 0.5 * (Pn + Pn.T)
 
 
 @njit
@@ -192,30 +174,17 @@ def sway_kf_step(A, B, Q, R, y, delta, mask, x, P, gain):  # type: ignore[no-unt
     ``x^- = A_d x + B_d delta``, ``P^- = A_d P A_d^T + Q_W``, then :func:`_update_row` with
     ``y[i]``. Shapes: A, Q (N, 5, 5); B (N, 5); R (N, 4, 4); y (N, 4); delta (N,); mask (N,)
     bool; x (N, 5), P (N, 5, 5), gain (N, 5, 4) updated in place. Rows are independent."""
-    xp = np.empty(5)
     T = np.empty((5, 5))
     Pp = np.empty((5, 5))
     for i in range(x.shape[0]):
-        if not mask[i]:
-            continue
-        for j in range(5):
-            acc = B[i, j] * delta[i]
-            for k in range(5):
-                acc += A[i, j, k] * x[i, k]
-            xp[j] = acc
-        for j in range(5):
-            for k in range(5):
-                acc = 0.0
-                for m in range(5):
-                    acc += A[i, j, m] * P[i, m, k]
-                T[j, k] = acc
-        for j in range(5):
-            for k in range(5):
-                acc = Q[i, j, k]
-                for m in range(5):
-                    acc += T[j, m] * A[i, k, m]
-                Pp[j, k] = acc
-        _update_row(i, xp, Pp, R, y, x, P, gain)
+        if mask[i]:
+            xp = B[i] * delta[i]
+            for j in range(5):
+                for k in range(5):
+                    xp[j] += A[i, j, k] * x[i, k]
+            _mul(A[i], P[i], T)
+            _mul(T, A[i].T, Pp)
+            _update_row(i, xp, Pp + Q[i], R, y, x, P, gain)
 
 
 @njit
