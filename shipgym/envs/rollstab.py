@@ -67,9 +67,6 @@ SEED_WAVES = "seed"
 #: rate gyros' 0.05 deg/s and the gyros' 0.1 deg [chosen, the sway filter's R]
 ROLL_SENSOR_STD: tuple[float, float, float, float] = tuple(math.sqrt(x) for x in R_SWAY)  # type: ignore[assignment]
 
-#: the observation's entries, in order (the last only with ``sway_estimate=True``)
-OBSERVATION = ("r", "heading_error", "p", "phi", "rudder", "speed", "v_hat")
-
 
 #: the default sea of a hull with a displacement: [chosen] a slight beam sea (sea state 3),
 #: Hs 0.5 m, Tp 7 s (JONSWAP, gamma 3.3), whose roll-moment spectrum reaches the naval
@@ -136,6 +133,15 @@ def _speed_range(speed: Any) -> tuple[float, float]:
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi <= 30.0):
         raise ValueError(f"speed must lie in (0, 30] m/s with lo <= hi, got {speed!r}")
     return lo, hi
+
+
+def _real(name: str, value: Any, what: str, lo: float = -math.inf, hi: float = math.inf,
+          strict: bool = False) -> float:  # fmt: skip
+    """``value`` as a float, checked finite and in ``[lo, hi)`` (``(lo, hi)`` if ``strict``)."""
+    ok = is_real(value) and math.isfinite(value) and lo <= value < hi
+    if not ok or (strict and value == lo):
+        raise ValueError(f"{name} must be {what}, got {value!r}")
+    return float(value)
 
 
 #: normal draws per env and refill (a generator's ``standard_normal((k, m))`` is the stream of
@@ -320,17 +326,15 @@ class RudderRollVectorEnv(BatchedEnv):
             raise ValueError("kdp_law='printed' is the seed's law: it needs vessel='van-der-klugt'")
         self.kdp_law = kdp_law
         self.speed_range = _speed_range(speed)
-        if not (is_real(heading) and math.isfinite(heading)):
-            raise ValueError(f"heading must be a finite angle (rad), got {heading!r}")
-        self.heading = float(heading)
+        self.heading = _real("heading", heading, "a finite angle (rad)")
         self.waves = self._parse_waves(waves)
         self.rudder_test = bool(rudder_test)
-        for nm, val in (("rudder_test_amplitude", rudder_test_amplitude),
-                        ("rudder_test_frequency", rudder_test_frequency)):  # fmt: skip
-            if not (is_real(val) and math.isfinite(val) and val >= 0):
-                raise ValueError(f"{nm} must be a finite number >= 0, got {val!r}")
-        self.rudder_test_amplitude = float(rudder_test_amplitude)
-        self.rudder_test_frequency = float(rudder_test_frequency)
+        self.rudder_test_amplitude = _real(
+            "rudder_test_amplitude", rudder_test_amplitude, ">= 0", 0.0
+        )
+        self.rudder_test_frequency = _real(
+            "rudder_test_frequency", rudder_test_frequency, ">= 0", 0.0
+        )
         self.sensor_noise = bool(sensor_noise)
         self.sway_estimate = bool(sway_estimate)
         if reward_weights is None:
@@ -341,12 +345,10 @@ class RudderRollVectorEnv(BatchedEnv):
             raise TypeError(f"reward_weights must be a RollRewardWeights or a mapping, got "
                             f"{reward_weights!r}")  # fmt: skip
         self.reward_weights = reward_weights
-        if not (is_real(episode_duration) and 0 < episode_duration < math.inf):
-            raise ValueError(f"episode_duration must be > 0 s, got {episode_duration!r}")
-        self.episode_duration = float(episode_duration)
-        if not (is_real(max_roll) and 0 < max_roll < 1.2):
-            raise ValueError(f"max_roll must be in (0, 1.2) rad, got {max_roll!r}")
-        self.max_roll = float(max_roll)
+        self.episode_duration = _real(
+            "episode_duration", episode_duration, "> 0 s", 0.0, strict=True
+        )
+        self.max_roll = _real("max_roll", max_roll, "in (0, 1.2) rad", 0.0, 1.2, strict=True)
         _check_timing(timestep, control_period)
         self.n_substeps = _whole_multiple(control_period, timestep)
         self.timestep = float(timestep)
@@ -355,7 +357,7 @@ class RudderRollVectorEnv(BatchedEnv):
         self.physics = BatchedPhysics(v, n, timestep=self.timestep)
         acts = self.physics.actuators
         chans = acts.channel_names
-        self._ridx = [chans.index(r) for r in v.rudders]
+        self._ridx = np.array([chans.index(r) for r in v.rudders], dtype=np.int64)
         rudders = [a for a in acts if isinstance(a, Rudder)]
         self._rudder_name = rudders[0].name
         self._props = [(chans.index(a.name), a) for a in acts
@@ -388,7 +390,6 @@ class RudderRollVectorEnv(BatchedEnv):
         self._kf = [np.zeros(s) for s in ((n, 5, 5), (n, 5), (n, 5, 5), (n, 4, 4))]
         self._kx, self._kP, self._kG = np.zeros((n, 5)), np.zeros((n, 5, 5)), np.zeros((n, 5, 4))
         self._entries: dict[Any, Any] = {}  # the compiled laws' entry points
-        self._ridx_a = np.array(self._ridx, dtype=np.int64)
         self._std = np.array(ROLL_SENSOR_STD)
         self._rows = np.arange(n)
         self._external = np.zeros((n, 4))  # [X, Y, K, N]: the waves' K, N
@@ -540,7 +541,7 @@ class RudderRollVectorEnv(BatchedEnv):
         wd, wk = self._white.ready(active) if white else (self._white.draws, self._white.k)
         moment = np.zeros((n, 2))
         self._call(roll_command, actions, active, self.max_angle, amp,
-                   self.rudder_test_frequency, t0, self.control_period, self._ridx_a, command,
+                   self.rudder_test_frequency, t0, self.control_period, self._ridx, command,
                    aclip, white, wd, wk, self._sigma, moment)  # fmt: skip
         if self._props:  # hold the speed: resistance at U + a 20 s speed loop
             thrust = self._thrust0 + self._m11 * (self.U - phys.nu_full[:, 0]) / 20.0
@@ -727,22 +728,14 @@ class RudderRollEnv(SingleEnv):
         """The episode's vessel (:meth:`RudderRollVectorEnv.vessel_at` its speed)."""
         return self.batch.vessels[0]
 
-    @property
-    def physics(self) -> BatchedPhysics:
-        """The hull's physics (a :class:`~shipgym.envs.batchphysics.BatchedPhysics` of one)."""
-        return self.batch.physics
 
-    def filter_intensities(self, U: float) -> tuple[float, float]:
-        """:meth:`RudderRollVectorEnv.filter_intensities`."""
-        return self.batch.filter_intensities(U)
-
-
-#: the settings a single env reads from its batch
+#: what a single env reads from its batch: the settings, the hull's ``physics`` (a
+#: :class:`~shipgym.envs.batchphysics.BatchedPhysics` of one), ``filter_intensities``
 _SETTINGS = frozenset(
     ("base_vessel", "kdp_law", "speed_range", "heading", "waves", "rudder_test",
      "rudder_test_amplitude", "rudder_test_frequency", "sensor_noise", "sway_estimate",
      "reward_weights", "episode_duration", "max_roll", "n_substeps", "timestep",
-     "control_period", "max_angle")
+     "control_period", "max_angle", "physics", "filter_intensities", "vessel_at")
 )  # fmt: skip
 
 
@@ -756,7 +749,7 @@ class SeedRollEnv(RudderRollEnv):
     """
 
     def __init__(self, **kwargs: Any) -> None:
-        super().__init__(**seed_roll_defaults(kwargs))
+        super().__init__(**{**SEED_TASK, **kwargs})
 
 
 class NavalRollEnv(RudderRollEnv):
@@ -769,24 +762,19 @@ class NavalRollEnv(RudderRollEnv):
     """
 
     def __init__(self, **kwargs: Any) -> None:
-        super().__init__(**naval_roll_defaults(kwargs))
+        super().__init__(**{**NAVAL_TASK, **kwargs})
 
 
-def seed_roll_defaults(kwargs: dict[str, Any]) -> dict[str, Any]:
-    """``kwargs`` with the seed task's vessel and speed range where not given."""
-    return {"vessel": "van-der-klugt", "speed": (8.0, 15.0), **kwargs}
-
-
-def naval_roll_defaults(kwargs: dict[str, Any]) -> dict[str, Any]:
-    """``kwargs`` with the naval task's vessel and speed range where not given."""
-    return {"vessel": "naval-vessel", "speed": (6.0, 10.0), **kwargs}
+#: the registered tasks' vessel and speed range, where not given
+SEED_TASK: dict[str, Any] = {"vessel": "van-der-klugt", "speed": (8.0, 15.0)}
+NAVAL_TASK: dict[str, Any] = {"vessel": "naval-vessel", "speed": (6.0, 10.0)}
 
 
 def seed_roll_vector_env(num_envs: int, **kwargs: Any) -> RudderRollVectorEnv:
     """``shipgym/RudderRollStabilisation-v0``'s vector entry point."""
-    return RudderRollVectorEnv(num_envs, **seed_roll_defaults(kwargs))
+    return RudderRollVectorEnv(num_envs, **{**SEED_TASK, **kwargs})
 
 
 def naval_roll_vector_env(num_envs: int, **kwargs: Any) -> RudderRollVectorEnv:
     """``shipgym/NavalRollDamping-v0``'s vector entry point."""
-    return RudderRollVectorEnv(num_envs, **naval_roll_defaults(kwargs))
+    return RudderRollVectorEnv(num_envs, **{**NAVAL_TASK, **kwargs})
