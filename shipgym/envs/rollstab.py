@@ -503,20 +503,20 @@ class RudderRollVectorEnv(BatchedEnv):
         self._steps[mask] = 0
         self._delta_prev[mask] = phys.actuator_state[mask][:, self._ridx]
         self._sums[mask] = 0.0
-        self._observe(mask, self._measure(mask))
+        delta = phys.actuator_state[:, self._ridx]
+        self._observe(mask, self._measure(mask, phys.eta_full, phys.nu_full), delta)
 
-    def _measure(self, mask: Bools) -> Array:
+    def _measure(self, mask: Bools, eta: Array, nu: Array) -> Array:
         """The gyros' ``[r, psi, p, phi]`` (n, 4) of the envs of ``mask`` (their noise drawn)."""
         y = np.zeros((self.num_envs, 4))
         noise = self._noise
         nd, nk = noise.ready(mask) if self.sensor_noise else (noise.draws, noise.k)
-        self._call(roll_measure, mask, self.physics.eta_full, self.physics.nu_full,
-                   self.sensor_noise, nd, nk, self._std, y)  # fmt: skip
+        self._call(roll_measure, mask, eta, nu, self.sensor_noise, nd, nk, self._std, y)
         return y
 
-    def _observe(self, mask: Bools, y: Array) -> None:
-        self._call(roll_observe, mask, y, self.physics.actuator_state[:, self._ridx],
-                   self.heading, self.U, self._kx[:, 0].copy(), self._obs)  # fmt: skip
+    def _observe(self, mask: Bools, y: Array, delta: Array) -> None:
+        self._call(roll_observe, mask, y, delta, self.heading, self.U, self._kx[:, 0].copy(),
+                   self._obs)  # fmt: skip
 
     def _observation(self) -> NDArray[np.float32]:
         return self._obs.copy()
@@ -554,11 +554,12 @@ class RudderRollVectorEnv(BatchedEnv):
             K, N = np.empty(n), np.empty(n)
             self._call(roll_wave_moments, t, self._rows, *self._sea, K, N)
             moment[:, 0], moment[:, 1] = K, N
-        self._external[:, 2:] = moment
-        phys.set_external_force(self._external)
+        if self.waves is not None:
+            self._external[:, 2:] = moment
+            phys.set_external_force(self._external)
         phys.step(self.n_substeps, mask=active)
         eta, nu, delta = phys.eta_full, phys.nu_full, phys.actuator_state[:, self._ridx]
-        y = self._measure(active)
+        y = self._measure(active, eta, nu)
         w = self.reward_weights
         terms, e_psi, reward = np.zeros((n, 3)), np.zeros(n), np.zeros(n)
         rate, dmean, sat = np.zeros((n, nr)), np.zeros((n, nr)), np.zeros((n, nr), np.bool_)
@@ -600,7 +601,7 @@ class RudderRollVectorEnv(BatchedEnv):
             s[:, 4] += np.where(active, (v_hat - nu[:, 1]) ** 2, 0.0)
             info["v_hat"] = v_hat
             info["trace_P"] = np.trace(self._kP, axis1=1, axis2=2)
-        self._observe(active, y)
+        self._observe(active, y, delta)
         return reward, term, trunc, info
 
     def _call(self, fn: Any, *args: Any) -> None:
