@@ -139,33 +139,37 @@ def _mul(a, b, out):  # type: ignore[no-untyped-def]
 
 
 @njit(inline="always")
-def _update_row(i, xp, Pp, R, y, x, P, gain):  # type: ignore[no-untyped-def]
+def _update_row(i, xp, Pp, R, y, x, P, gain, S, Si, GP):  # type: ignore[no-untyped-def]
     """Eq. 4 for row ``i``: the gain ``G = P^- C^T (C P^- C^T + R)^-1`` (``C`` picks
     ``[r, psi, p, phi]``), the wrapped heading innovation, ``x = x^- + G (y - C x^-)``,
-    ``P = (I - G C) P^-`` symmetrised."""
-    S = Pp[1:, 1:] + R[i]
-    Si = np.eye(4)  # S^-1 by Gauss-Jordan (S is positive definite: no pivoting)
-    for c in range(4):
+    ``P = (I - G C) P^-`` symmetrised (``S``, ``Si``, ``GP``: scratch)."""
+    for a in range(4):
+        for b in range(4):
+            S[a, b] = Pp[a + 1, b + 1] + R[i, a, b]
+            Si[a, b] = 1.0 if a == b else 0.0
+    for c in range(4):  # S^-1 by Gauss-Jordan (S is positive definite: no pivoting)
         piv = S[c, c]
-        S[c] /= piv
-        Si[c] /= piv
+        for k in range(4):
+            S[c, k] /= piv
+            Si[c, k] /= piv
         for r in range(4):
-            if r != c:
-                f = S[r, c]
-                S[r] -= f * S[c]
-                Si[r] -= f * Si[c]
+            f = S[r, c] if r != c else 0.0
+            for k in range(4):
+                S[r, k] -= f * S[c, k]
+                Si[r, k] -= f * Si[c, k]
     _mul(Pp[:, 1:], Si, gain[i])
-    inn = y[i] - xp[1:]
-    inn[_PSI_OUT] = wrap(inn[_PSI_OUT])
+    _mul(gain[i], Pp[1:], GP)
     for j in range(5):
         acc = xp[j]
         for b in range(4):
-            acc += gain[i, j, b] * inn[b]
+            inn = y[i, b] - xp[b + 1]
+            acc += gain[i, j, b] * (wrap(inn) if b == _PSI_OUT else inn)
         x[i, j] = acc
-    GP = np.empty((5, 5))
-    _mul(gain[i], Pp[1:], GP)
-    Pn = Pp - GP
-    P[i] = 0.5 * (Pn + Pn.T)
+    for j in range(5):
+        for k in range(j + 1):
+            m_ = 0.5 * ((Pp[j, k] - GP[j, k]) + (Pp[k, j] - GP[k, j]))
+            P[i, j, k] = m_
+            P[i, k, j] = m_
 
 
 @njit
@@ -174,23 +178,26 @@ def sway_kf_step(A, B, Q, R, y, delta, mask, x, P, gain):  # type: ignore[no-unt
     ``x^- = A_d x + B_d delta``, ``P^- = A_d P A_d^T + Q_W``, then :func:`_update_row` with
     ``y[i]``. Shapes: A, Q (N, 5, 5); B (N, 5); R (N, 4, 4); y (N, 4); delta (N,); mask (N,)
     bool; x (N, 5), P (N, 5, 5), gain (N, 5, 4) updated in place. Rows are independent."""
-    T = np.empty((5, 5))
-    Pp = np.empty((5, 5))
+    xp, T, Pp, GP = np.empty(5), np.empty((5, 5)), np.empty((5, 5)), np.empty((5, 5))
+    S, Si = np.empty((4, 4)), np.empty((4, 4))
     for i in range(x.shape[0]):
         if mask[i]:
-            xp = B[i] * delta[i]
             for j in range(5):
+                xp[j] = B[i, j] * delta[i]
                 for k in range(5):
                     xp[j] += A[i, j, k] * x[i, k]
             _mul(A[i], P[i], T)
             _mul(T, A[i].T, Pp)
-            _update_row(i, xp, Pp + Q[i], R, y, x, P, gain)
+            for j in range(5):
+                for k in range(5):
+                    Pp[j, k] += Q[i, j, k]
+            _update_row(i, xp, Pp, R, y, x, P, gain, S, Si, GP)
 
 
 @njit
 def sway_update(xp, Pp, R, y, x, P, gain):  # type: ignore[no-untyped-def]
     """Eq. 4 alone for row 0 (the EKF's update, after its own prediction ``xp``, ``Pp``)."""
-    _update_row(0, xp, Pp, R, y, x, P, gain)
+    _update_row(0, xp, Pp, R, y, x, P, gain, np.empty((4, 4)), np.empty((4, 4)), np.empty((5, 5)))
 
 
 class _SwayFilterBase:
