@@ -501,9 +501,9 @@ class RudderRollVectorEnv(BatchedEnv):
         nu = np.stack([self.U, z, z, z], 1)
         phys.reset(eta=eta, nu=nu, mask=mask, rngs=gens)
         self._steps[mask] = 0
-        self._delta_prev[mask] = phys.actuator_state[mask][:, self._ridx]
-        self._sums[mask] = 0.0
         delta = phys.actuator_state[:, self._ridx]
+        self._delta_prev[mask] = delta[mask]
+        self._sums[mask] = 0.0
         self._observe(mask, self._measure(mask, phys.eta_full, phys.nu_full), delta)
 
     def _measure(self, mask: Bools, eta: Array, nu: Array) -> Array:
