@@ -130,11 +130,22 @@ class BatchedPhysics:
         self.currents = [Current(cc) for _ in range(n)]
         self.waves = [Waves(waves, v.hull) if waves is not None else None for _ in range(n)]
         self.saturated = np.zeros((n, acts.n_channels), dtype=bool)
+        self._servo_channels = np.array(
+            [i for i, c in enumerate(acts.channels) if c.dynamics == "servo"], dtype=np.int64
+        )
+        self._flow_actuators = np.array(
+            [i for i, a in enumerate(acts) if a.flow_dependent], dtype=np.int64
+        )
         self.reset()
 
     def qpos(self, i: int) -> Array:
         """Hull ``i``'s MuJoCo joint positions (its world's ``qpos``: rendering)."""
         return self._hulls.q[i].copy()
+
+    @property
+    def timestep(self) -> float:
+        """The physics step (s)."""
+        return self.h
 
     @property
     def aerodynamics(self) -> bool:
@@ -162,6 +173,13 @@ class BatchedPhysics:
         self.current_configs[i] = cc
         self.winds[i] = Wind(wind_cfg or WindConfig(), self.vessel.windage)
         self.currents[i] = Current(cc)
+
+    def set_actuators(self, i: int, vessel: Vessel) -> None:
+        """Give hull ``i`` the actuator constants of ``vessel``, a variant of the batch's
+        vessel with the same actuator kinds and channels (a rudder moved: the printed
+        ``K_dp`` law of :func:`~shipgym.dynamics.vanderklugt.seed_vessel` at each hull's
+        speed); effective from its next step. :attr:`actuators` stays the batch's."""
+        self._hulls.set_actuators(i, vessel.actuators_for(self.plant))
 
     # ---- state -----------------------------------------------------------------------------
     def _rows(self, x: ArrayLike | None, width: int, what: str, default: Array) -> Array:
@@ -259,7 +277,24 @@ class BatchedPhysics:
         """The held (clipped) commands (n, n_channels)."""
         return self._hulls.cmd.copy()
 
+    @property
+    def rate_limited(self) -> NDArray[np.bool_]:
+        """Per hull and servo channel, (n, n_servos): still at its rate limit in the last
+        physics step (as ``VesselPhysics.rate_limited``)."""
+        return self._hulls.hits[:, self._servo_channels] > 0
+
+    @property
+    def stalled(self) -> NDArray[np.bool_]:
+        """Per hull and flow-dependent actuator, (n, n_flow): past its stall angle at the
+        last step (as ``VesselPhysics.stalled``)."""
+        return self._hulls.flags[:, self._flow_actuators] > 0
+
     # ---- stepping --------------------------------------------------------------------------
+    def set_external_force(self, tau: ArrayLike) -> None:
+        """Hold an external body load on every hull, ``(n, 4)`` ``[X, Y, K, N]`` (N, N, N m,
+        N m; ``K`` acts on a 4-DOF hull only) until the next call or the hull's reset."""
+        self._hulls.external[:] = self._rows(tau, 4, "external force", self._hulls.external)
+
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
         """Commands ``(n, n_channels)`` (or one row for all), clipped to the channels' ranges;
         returns the clip flags (also :attr:`saturated`)."""
