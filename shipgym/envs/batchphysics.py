@@ -284,6 +284,17 @@ class BatchedPhysics:
         return self._hulls.hits[:, self._servo_channels] > 0
 
     @property
+    def nu_c(self) -> Array:
+        """Each hull's current ``(u_c, v_c)`` (m/s) in its body frame at the last physics step,
+        (n, 2) (as ``VesselPhysics.nu_c``)."""
+        return self._hulls.loads[:, 6:8].copy()
+
+    @property
+    def servo_channels(self) -> list[int]:
+        """The channels with servo dynamics (the columns of :attr:`rate_limited`)."""
+        return list(self._servo_channels)
+
+    @property
     def stalled(self) -> NDArray[np.bool_]:
         """Per hull and flow-dependent actuator, (n, n_flow): past its stall angle at the
         last step (as ``VesselPhysics.stalled``)."""
