@@ -364,7 +364,12 @@ class ShipVectorEnv(BatchedEnv):
         z, valid, outlier = self.sensors.measure(self.physics.t, seen, mask)
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
-            info = self.observer.step(self.physics.t, z, valid & mask)
+            if getattr(self.observer, "model_based", False):  # the thrust, as ObserverWrapper
+                cmd = getattr(self.observer, "thrust_input", "applied") == "command"
+                tau = self.physics.tau_command if cmd else self.physics.tau_model
+                info = self.observer.step(self.physics.t, z, valid & mask, tau=tau)
+            else:
+                info = self.observer.step(self.physics.t, z, valid & mask)
             self._nis = info.nis
             self._rejected = info.rejected
         self._last_z = np.where(mask[:, None], z, self._last_z)

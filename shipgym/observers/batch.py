@@ -25,6 +25,7 @@ from .base import (
     OutlierGate,
     StepInfo,
     as_pose,
+    as_tau,
     make_observer,
     no_measurement,
 )
@@ -32,10 +33,12 @@ from .design import KalmanDesign, discretise, double_integrator
 
 __all__ = [
     "BATCHED_OBSERVERS",
+    "BatchOfOne",
     "BatchedKalman",
     "BatchedStepInfo",
     "OneOfBatch",
     "make_batched_observer",
+    "register_batched_form",
     "register_batched_observer",
 ]
 
@@ -777,7 +780,9 @@ class BatchedKalman:
 #: ``reset(t0, eta0, mask=None)`` (``t0`` (n,) s, ``eta0`` (n, 3) m, m, rad), ``step(t, z,
 #: valid) -> BatchedStepInfo`` (``z`` (n, 3) with NaN rows where ``valid`` is False) and the
 #: estimates ``eta``, ``nu`` ((n, 3) arrays); ``model_based`` (optional, default False) as
-#: :attr:`Observer.model_based <shipgym.observers.base.Observer.model_based>`. The vector env
+#: :attr:`Observer.model_based <shipgym.observers.base.Observer.model_based>`: a model-based
+#: one's ``step`` also takes ``tau=`` (n, 3), the thrust its ``thrust_input`` names
+#: (``"applied"``, default: the bollard model of the actuator states; ``"command"``). The vector env
 #: runs it for N envs, the single env's observer wrapper through :class:`OneOfBatch`
 #: (``shipgym.make(..., observer=name)``): one implementation for both.
 BATCHED_OBSERVERS: dict[str, Callable[[int, Any], Any]] = {}
@@ -803,11 +808,24 @@ def register_batched_observer(name: str, factory: Callable[[int, Any], Any]) -> 
     register_observer(name, one, vessel_overrides=lambda vessel: {"vessel": vessel})
 
 
+def register_batched_form(name: str) -> None:
+    """Run the registered observer ``name`` batched: :data:`BATCHED_OBSERVERS` builds its
+    preset for the vessel (:func:`~shipgym.observers.base.make_observer`) and takes the
+    batched law of ``n`` envs from it (its ``batch(n)``); the single env keeps the preset's
+    own factory (with its options), which runs the same law at N = 1."""
+    BATCHED_OBSERVERS[name] = lambda n, vessel: make_observer(name, vessel).batch(n)
+
+
 def make_batched_observer(name: str, n: int, vessel: Any) -> Any:
     """The observer ``name`` of ``n`` envs: a registered batched observer
     (:data:`BATCHED_OBSERVERS`), else a double-integrator Kalman preset
     (:class:`BatchedKalman`, whose error names the valid ones)."""
     factory = BATCHED_OBSERVERS.get(name)
+    if factory is None:
+        from .base import _load_builtins
+
+        _load_builtins()
+        factory = BATCHED_OBSERVERS.get(name)
     if factory is not None:
         return factory(n, vessel)
     return BatchedKalman(name, n, vessel=vessel)
@@ -849,16 +867,15 @@ class OneOfBatch(Observer):
         valid = z is not None
         self._z[0] = as_pose(z) if valid else np.nan
         self._valid[0] = valid
-        info = self._b.step(self._t.copy(), self._z.copy(), self._valid.copy())
+        args = (self._t.copy(), self._z.copy(), self._valid.copy())
+        if self.model_based:  # the thrust, (1, 3) (only a model-based batch takes it)
+            ta = as_tau(tau)
+            info = self._b.step(*args, tau=None if ta is None else ta[None])
+        else:
+            info = self._b.step(*args)
         if not valid:
             return no_measurement()
-        nis = float(info.nis[0])
-        return StepInfo(
-            np.asarray(info.innovation, dtype=float)[0].copy(),
-            None if math.isnan(nis) else nis,
-            bool(info.rejected[0]),
-            bool(info.forced[0]),
-        )
+        return _step_info(info)
 
     def estimate(self) -> Estimate:
         if not self._started:
@@ -873,3 +890,53 @@ class OneOfBatch(Observer):
             P_eta=P_eta,
             P_nu=None,
         )
+
+
+class BatchOfOne(Observer):
+    """The :class:`~shipgym.observers.base.Observer` interface of one env of a batched
+    observer ``self._b`` (set by the subclass): the single env runs the batched law at N = 1.
+
+    The batch has ``reset(t0 (n,), eta0 (n, 3), mask=None, **rows)``, ``step(t (n,), z (n, 3),
+    valid (n,), tau (n, 3) | None) -> BatchedStepInfo`` and ``estimate(j) -> Estimate``.
+    """
+
+    _b: Any
+    _started = False
+
+    def _reset_one(self, t0: float, eta0: ArrayLike, **rows: Any) -> None:
+        """Reset the batch of one at ``t0`` from ``eta0``; ``rows``: per-env arrays of the
+        batch's reset (one env's value, or ``None``)."""
+        t0 = float(t0)
+        if not math.isfinite(t0):
+            raise ValueError(f"t0 must be finite, got {t0!r}")
+        extra = {
+            k: None if v is None else np.asarray(v, dtype=float)[None] for k, v in rows.items()
+        }
+        self._b.reset(np.array([t0]), as_pose(eta0, "eta0").reshape(1, 3), **extra)
+        self._started = True
+
+    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
+        if not self._started:
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
+        valid = z is not None
+        zz = as_pose(z).reshape(1, 3) if valid else np.full((1, 3), np.nan)
+        ta = as_tau(tau)
+        info = self._b.step(
+            np.array([float(t)]), zz, np.array([valid]), None if ta is None else ta.reshape(1, 3)
+        )
+        return _step_info(info)
+
+    def estimate(self) -> Estimate:
+        if not self._started:
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
+        return self._b.estimate(0)
+
+
+def _step_info(info: BatchedStepInfo) -> StepInfo:
+    """Env 0's :class:`StepInfo` of a batched step."""
+    innov = np.asarray(info.innovation, dtype=float)[0]
+    nis = float(info.nis[0])
+    if np.isnan(innov).all() and math.isnan(nis) and not info.rejected[0]:
+        return no_measurement()
+    return StepInfo(innov.copy(), None if math.isnan(nis) else nis, bool(info.rejected[0]),
+                    bool(info.forced[0]))  # fmt: skip
