@@ -268,6 +268,50 @@ def _readout(X, eta, nu, P, P_nu):
         P_nu[j, 2, 2] = vpsi
 
 
+# ---- dense algebra of one env's small matrices, for the compiled laws (plain loops: no BLAS,
+# so that an env's floats never depend on where its rows lie or on the other envs) ------------
+@njit(inline="always")
+def mat_mul(A, B, out):  # type: ignore[no-untyped-def]
+    """``out = A B``."""
+    for i in range(A.shape[0]):
+        for k in range(B.shape[1]):
+            acc = 0.0
+            for q in range(A.shape[1]):
+                acc += A[i, q] * B[q, k]
+            out[i, k] = acc
+
+
+@njit(inline="always")
+def mat_mul_t(A, B, out):  # type: ignore[no-untyped-def]
+    """``out = A B^T``."""
+    for i in range(A.shape[0]):
+        for k in range(B.shape[0]):
+            acc = 0.0
+            for q in range(A.shape[1]):
+                acc += A[i, q] * B[k, q]
+            out[i, k] = acc
+
+
+@njit(inline="always")
+def joseph(P, K, H, R, out):  # type: ignore[no-untyped-def]
+    """``out = (I - K H) P (I - K H)^T + K R K^T``: the Joseph-form covariance update."""
+    n = P.shape[0]
+    IKH = np.empty((n, n))
+    mat_mul(K, H, IKH)
+    for i in range(n):
+        for k in range(n):
+            IKH[i, k] = (1.0 if i == k else 0.0) - IKH[i, k]
+    T = np.empty((n, n))
+    mat_mul(IKH, P, T)
+    mat_mul_t(T, IKH, out)
+    KR = np.empty(K.shape)
+    mat_mul(K, R, KR)
+    mat_mul_t(KR, K, T)
+    for i in range(n):
+        for k in range(n):
+            out[i, k] += T[i, k]
+
+
 _ENTRIES: dict[str, Any] = {}
 
 

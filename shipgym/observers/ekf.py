@@ -26,7 +26,14 @@ from shipgym._config import from_mapping, param, required_param
 from shipgym._jit import entry, njit
 from shipgym.dynamics import seed_linear_matrices
 from shipgym.observers.base import Estimate, OutlierGate, register_observer
-from shipgym.observers.batch import BatchedStepInfo, BatchOfOne, register_batched_form
+from shipgym.observers.batch import (
+    BatchedStepInfo,
+    BatchOfOne,
+    joseph,
+    mat_mul,
+    mat_mul_t,
+    register_batched_form,
+)
 from shipgym.observers.sensors import SensorConfig
 
 __all__ = [
@@ -363,51 +370,31 @@ def _ekf_step(X, P, dt, z, valid, tau, count, gate_open, Minv, D, tb_inv, ned, A
     (eqs. 43-45), then the update with ``z[j]`` where ``valid[j]`` (Table 5, Joseph form,
     the NIS gate); in place. Returns ``-1``, or the first env whose estimate became
     non-finite (its state is left as before the update)."""
-    n = X.shape[0]
     pi, two_pi = math.pi, 2.0 * math.pi
-    f = np.empty(9)
-    A = np.empty((9, 9))
-    FP = np.empty((9, 9))
-    PH = np.empty((9, 3))
-    Si = np.empty((3, 3))
-    K = np.empty((9, 3))
-    IKH = np.empty((9, 9))
-    T = np.empty((9, 9))
-    Pn = np.empty((9, 9))
-    xn = np.empty(9)
-    hx = np.empty(3)
-    H = np.empty((3, 9))
-    e = np.empty(3)
+    f, xn, hx, e = np.empty(9), np.empty(9), np.empty(3), np.empty(3)
+    F, T, Pn, H = np.empty((9, 9)), np.empty((9, 9)), np.empty((9, 9)), np.empty((3, 9))
+    PH, S, K = np.empty((9, 3)), np.empty((3, 3)), np.empty((9, 3))
     bad = -1
-    for j in range(n):
+    for j in range(X.shape[0]):
         x, Pj = X[j], P[j]
         d = dt[j]
         if d > 0.0:
             m = max(1, math.ceil(d / max_substep - 1e-9))
             h = d / m
-            for _ in range(m):
-                _jacobian(x, A0, Minv, ned, A)
+            for _ in range(m):  # x + h f(x, tau), F P F^T + h Qc with F = I + h df/dx
+                _jacobian(x, A0, Minv, ned, F)
                 _field(x, tau[j], Minv, D, tb_inv, ned, f)
-                for i in range(9):  # F = I + h A
-                    for k in range(9):
-                        A[i, k] = h * A[i, k] + (1.0 if i == k else 0.0)
                 for i in range(9):
                     x[i] = x[i] + h * f[i]
-                for i in range(9):  # F P
                     for k in range(9):
-                        acc = 0.0
-                        for q in range(9):
-                            acc += A[i, q] * Pj[q, k]
-                        FP[i, k] = acc
-                for i in range(9):  # (F P) F^T + h Qc
+                        F[i, k] = h * F[i, k] + (1.0 if i == k else 0.0)
+                mat_mul(F, Pj, T)
+                mat_mul_t(T, F, Pj)
+                for i in range(9):
                     for k in range(9):
-                        acc = 0.0
-                        for q in range(9):
-                            acc += FP[i, q] * A[k, q]
-                        Pj[i, k] = acc + h * Qc[i, k]
+                        Pj[i, k] += h * Qc[i, k]
         if not valid[j]:
-            for i in range(3):
-                innov[j, i] = np.nan
+            innov[j] = np.nan
             nis[j] = np.nan
             rejected[j] = False
             forced[j] = False
@@ -416,33 +403,13 @@ def _ekf_step(X, P, dt, z, valid, tau, count, gate_open, Minv, D, tb_inv, ned, A
         for i in range(3):
             e[i] = z[j, i] - hx[i]
         e[2] = pi - np.fmod(np.fmod(pi - e[2], two_pi) + two_pi, two_pi)
-        for i in range(3):
-            innov[j, i] = e[i]
+        innov[j] = e
         rej = False
         force = False
         for attempt in range(2):  # the second: a forced acceptance's inflated prior
-            for i in range(9):  # P H^T
-                for k in range(3):
-                    acc = 0.0
-                    for q in range(9):
-                        acc += Pj[i, q] * H[k, q]
-                    PH[i, k] = acc
-            for i in range(3):  # S = H P H^T + R, then its inverse (Si)
-                for k in range(3):
-                    acc = 0.0
-                    for q in range(9):
-                        acc += H[i, q] * PH[q, k]
-                    T[i, k] = acc + R[i, k]
-            a, b, c = T[0, 0], T[0, 1], T[0, 2]
-            dd, ee, ff = T[1, 0], T[1, 1], T[1, 2]
-            g, hh, ii = T[2, 0], T[2, 1], T[2, 2]
-            c00, c01, c02 = ee * ii - ff * hh, c * hh - b * ii, b * ff - c * ee
-            c10, c11, c12 = ff * g - dd * ii, a * ii - c * g, c * dd - a * ff
-            c20, c21, c22 = dd * hh - ee * g, b * g - a * hh, a * ee - b * dd
-            det = a * c00 + b * c10 + c * c20
-            Si[0, 0], Si[0, 1], Si[0, 2] = c00 / det, c01 / det, c02 / det
-            Si[1, 0], Si[1, 1], Si[1, 2] = c10 / det, c11 / det, c12 / det
-            Si[2, 0], Si[2, 1], Si[2, 2] = c20 / det, c21 / det, c22 / det
+            mat_mul_t(Pj, H, PH)
+            mat_mul(H, PH, S)
+            Si = np.linalg.inv(S + R)
             if attempt == 1:
                 break
             w = 0.0
@@ -470,48 +437,21 @@ def _ekf_step(X, P, dt, z, valid, tau, count, gate_open, Minv, D, tb_inv, ned, A
         forced[j] = force
         if rej:
             continue
-        for i in range(9):  # K = P H^T S^-1, x + K e
-            for k in range(3):
-                K[i, k] = PH[i, 0] * Si[0, k] + PH[i, 1] * Si[1, k] + PH[i, 2] * Si[2, k]
-            xn[i] = x[i] + (K[i, 0] * e[0] + K[i, 1] * e[1] + K[i, 2] * e[2])
-        for i in range(9):  # I - K H
-            for k in range(9):
-                IKH[i, k] = (1.0 if i == k else 0.0) - (
-                    K[i, 0] * H[0, k] + K[i, 1] * H[1, k] + K[i, 2] * H[2, k]
-                )
-        for i in range(9):  # (I - K H) P
-            for k in range(9):
-                acc = 0.0
-                for q in range(9):
-                    acc += IKH[i, q] * Pj[q, k]
-                T[i, k] = acc
+        mat_mul(PH, Si, K)  # K = P H^T S^-1
         ok = True
-        for i in range(9):  # (I - K H) P (I - K H)^T + K R K^T
-            for k in range(9):
-                acc = 0.0
-                for q in range(9):
-                    acc += T[i, q] * IKH[k, q]
-                kr = 0.0
-                for q in range(3):
-                    kr += (K[i, 0] * R[0, q] + K[i, 1] * R[1, q] + K[i, 2] * R[2, q]) * K[k, q]
-                Pn[i, k] = acc + kr
         for i in range(9):
-            if not math.isfinite(xn[i]):
-                ok = False
+            xn[i] = x[i] + (K[i, 0] * e[0] + K[i, 1] * e[1] + K[i, 2] * e[2])
+            ok = ok and math.isfinite(xn[i])
+        joseph(Pj, K, H, R, Pn)
+        for i in range(9):
             for k in range(i + 1):
-                s_ = 0.5 * (Pn[i, k] + Pn[k, i])
-                if not math.isfinite(s_):
-                    ok = False
-                T[i, k] = s_
+                T[i, k] = T[k, i] = 0.5 * (Pn[i, k] + Pn[k, i])
+                ok = ok and math.isfinite(T[i, k])
         if not ok:
-            if bad < 0:
-                bad = j
+            bad = j if bad < 0 else bad
             continue
-        for i in range(9):
-            x[i] = xn[i]
-            for k in range(i + 1):
-                Pj[i, k] = T[i, k]
-                Pj[k, i] = T[i, k]
+        x[:] = xn
+        Pj[:] = T
     return bad
 
 

@@ -39,7 +39,14 @@ from shipgym.dynamics.altakie import (
 from shipgym.dynamics.perunit import PerUnit
 
 from .base import Estimate, as_pose, register_observer
-from .batch import BatchedStepInfo, BatchOfOne, register_batched_form
+from .batch import (
+    BatchedStepInfo,
+    BatchOfOne,
+    joseph,
+    mat_mul,
+    mat_mul_t,
+    register_batched_form,
+)
 
 __all__ = [
     "BIAS_Q",
@@ -77,36 +84,20 @@ def _kf_predict(sel, linear, Phi, add, W, freeze, steps, x, P):  # type: ignore[
     Phi P Phi^T + W`` (``Phi``, ``W``: (1 or N, n, n)), in place."""
     n = x.shape[1]
     shared = Phi.shape[0] == 1
-    xn = np.empty(n)
+    xn = np.empty((n, 1))
     T = np.empty((n, n))
     for j in range(x.shape[0]):
         if not sel[j]:
             continue
         F = Phi[0] if shared else Phi[j]
-        Wj = W[0] if shared else W[j]
         if linear:
+            mat_mul(F, x[j].reshape(n, 1), xn)
             for i in range(n):
-                acc = 0.0
-                for k in range(n):
-                    acc += F[i, k] * x[j, k]
-                xn[i] = acc + add[j, i]
-            for i in range(n):
-                x[j, i] = xn[i]
-        if 0 <= freeze <= steps[j]:
-            continue
-        Pj = P[j]
-        for i in range(n):
-            for k in range(n):
-                acc = 0.0
-                for q in range(n):
-                    acc += F[i, q] * Pj[q, k]
-                T[i, k] = acc
-        for i in range(n):
-            for k in range(n):
-                acc = 0.0
-                for q in range(n):
-                    acc += T[i, q] * F[k, q]
-                Pj[i, k] = acc + Wj[i, k]
+                x[j, i] = xn[i, 0] + add[j, i]
+        if not 0 <= freeze <= steps[j]:
+            mat_mul(F, P[j], T)
+            mat_mul_t(T, F, P[j])
+            P[j] += W[0] if shared else W[j]
 
 
 @njit
@@ -116,93 +107,42 @@ def _kf_update(sel, valid, z, H, R, wrap, freeze, steps, x, P, K, S, has_S, inno
     the last component of the innovation is a heading, wrapped to ``[-pi, pi)``."""
     n, q = x.shape[1], z.shape[1]
     pi, two_pi = math.pi, 2.0 * math.pi
-    e = np.empty(q)
+    e = np.empty((q, 1))
     HP = np.empty((q, n))
-    Sj = np.empty((q, q))
-    IKH = np.empty((n, n))
     T = np.empty((n, n))
+    Ke = np.empty((n, 1))
     for j in range(x.shape[0]):
         if not sel[j]:
             continue
         steps[j] += 1
         if not valid[j]:
-            for i in range(q):
-                innov[j, i] = np.nan
+            innov[j] = np.nan
             nis[j] = np.nan
             continue
+        mat_mul(H, x[j].reshape(n, 1), e)
         for i in range(q):
-            acc = 0.0
-            for k in range(n):
-                acc += H[i, k] * x[j, k]
-            e[i] = z[j, i] - acc
+            e[i, 0] = z[j, i] - e[i, 0]
         if wrap:
-            e[q - 1] = (e[q - 1] + pi) % two_pi - pi
-        Pj, Kj = P[j], K[j]
-        if not (0 <= freeze <= steps[j]):
-            for i in range(q):  # H P, S = H P H^T + R
-                for k in range(n):
-                    acc = 0.0
-                    for r in range(n):
-                        acc += H[i, r] * Pj[r, k]
-                    HP[i, k] = acc
-            for i in range(q):
-                for k in range(q):
-                    acc = 0.0
-                    for r in range(n):
-                        acc += HP[i, r] * H[k, r]
-                    S[j, i, k] = acc + R[i, k]
-            Kt = np.linalg.solve(S[j], HP)  # K^T = S^-1 H P
-            for i in range(n):
-                for k in range(q):
-                    Kj[i, k] = Kt[k, i]
-            for i in range(n):  # I - K H
-                for k in range(n):
-                    acc = 0.0
-                    for r in range(q):
-                        acc += Kj[i, r] * H[r, k]
-                    IKH[i, k] = (1.0 if i == k else 0.0) - acc
-            for i in range(n):
-                for k in range(n):
-                    acc = 0.0
-                    for r in range(n):
-                        acc += IKH[i, r] * Pj[r, k]
-                    T[i, k] = acc
-            for i in range(n):  # (I - K H) P (I - K H)^T + K R K^T
-                for k in range(n):
-                    acc = 0.0
-                    for r in range(n):
-                        acc += T[i, r] * IKH[k, r]
-                    kr = 0.0
-                    for r in range(q):
-                        kk = 0.0
-                        for m in range(q):
-                            kk += Kj[i, m] * R[m, r]
-                        kr += kk * Kj[k, r]
-                    Pj[i, k] = acc + kr
+            e[q - 1, 0] = (e[q - 1, 0] + pi) % two_pi - pi
+        frozen = 0 <= freeze <= steps[j]
+        if not (frozen and has_S[j]):  # S = H P H^T + R
+            mat_mul(H, P[j], HP)
+            mat_mul_t(HP, H, S[j])
+            S[j] += R
             has_S[j] = True
-        elif not has_S[j]:
-            for i in range(q):
-                for k in range(q):
-                    acc = 0.0
-                    for r in range(n):
-                        hp = 0.0
-                        for m in range(n):
-                            hp += H[i, m] * Pj[m, r]
-                        acc += hp * H[k, r]
-                    Sj[i, k] = acc + R[i, k]
-            S[j] = Sj
-            has_S[j] = True
-        for i in range(n):
-            acc = 0.0
-            for k in range(q):
-                acc += Kj[i, k] * e[k]
-            x[j, i] = x[j, i] + acc
+        if not frozen:  # K = (S^-1 H P)^T, the Joseph form
+            K[j] = np.linalg.solve(S[j], HP).T
+            joseph(P[j], K[j], H, R, T)
+            P[j] = T
+        mat_mul(K[j], e, Ke)
         w = np.linalg.solve(S[j], e)
         acc = 0.0
         for i in range(q):
-            innov[j, i] = e[i]
-            acc += e[i] * w[i]
+            innov[j, i] = e[i, 0]
+            acc += e[i, 0] * w[i, 0]
         nis[j] = acc
+        for i in range(n):
+            x[j, i] = x[j, i] + Ke[i, 0]
 
 
 def _rows(a: ArrayLike | None, shape: tuple[int, ...]) -> Array:
