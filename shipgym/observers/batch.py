@@ -272,44 +272,103 @@ def _readout(X, eta, nu, P, P_nu):
 # so that an env's floats never depend on where its rows lie or on the other envs) ------------
 @njit(inline="always")
 def mat_mul(A, B, out):  # type: ignore[no-untyped-def]
-    """``out = A B``."""
+    """``out = A B``, each entry summed in the order of ``A``'s columns (the zeros of ``A``
+    skipped: the sparse transitions and measurement matrices cost their nonzeros)."""
+    out[:] = 0.0
     for i in range(A.shape[0]):
-        for k in range(B.shape[1]):
-            acc = 0.0
-            for q in range(A.shape[1]):
-                acc += A[i, q] * B[q, k]
-            out[i, k] = acc
+        for q in range(A.shape[1]):
+            a = A[i, q]
+            if a != 0.0:
+                for k in range(B.shape[1]):
+                    out[i, k] += a * B[q, k]
 
 
 @njit(inline="always")
 def mat_mul_t(A, B, out):  # type: ignore[no-untyped-def]
-    """``out = A B^T``."""
-    for i in range(A.shape[0]):
-        for k in range(B.shape[0]):
-            acc = 0.0
-            for q in range(A.shape[1]):
-                acc += A[i, q] * B[k, q]
-            out[i, k] = acc
+    """``out = A B^T``, each entry summed in the order of ``B``'s columns (its zeros
+    skipped)."""
+    out[:] = 0.0
+    for k in range(B.shape[0]):
+        for q in range(B.shape[1]):
+            b = B[k, q]
+            if b != 0.0:
+                for i in range(A.shape[0]):
+                    out[i, k] += A[i, q] * b
 
 
 @njit(inline="always")
-def joseph(P, K, H, R, out):  # type: ignore[no-untyped-def]
-    """``out = (I - K H) P (I - K H)^T + K R K^T``: the Joseph-form covariance update."""
+def joseph(P, K, H, R, out, IKH, T, KR):  # type: ignore[no-untyped-def]
+    """``out = (I - K H) P (I - K H)^T + K R K^T``: the Joseph-form covariance update
+    (``IKH``, ``T`` (n, n) and ``KR`` (n, q): work space)."""
     n = P.shape[0]
-    IKH = np.empty((n, n))
     mat_mul(K, H, IKH)
     for i in range(n):
         for k in range(n):
             IKH[i, k] = (1.0 if i == k else 0.0) - IKH[i, k]
-    T = np.empty((n, n))
     mat_mul(IKH, P, T)
     mat_mul_t(T, IKH, out)
-    KR = np.empty(K.shape)
     mat_mul(K, R, KR)
     mat_mul_t(KR, K, T)
     for i in range(n):
         for k in range(n):
             out[i, k] += T[i, k]
+
+
+@njit(inline="always")
+def solve_small(S, B, out):  # type: ignore[no-untyped-def]
+    """``out = S^-1 B`` (Cramer's rule for a 1x1 or 2x2 ``S``, else LAPACK)."""
+    q = S.shape[0]
+    if q == 1:
+        for k in range(B.shape[1]):
+            out[0, k] = B[0, k] / S[0, 0]
+    elif q == 2:
+        a, b, c, d = S[0, 0], S[0, 1], S[1, 0], S[1, 1]
+        det = a * d - b * c
+        for k in range(B.shape[1]):
+            b0, b1 = B[0, k], B[1, k]
+            out[0, k] = (d * b0 - b * b1) / det
+            out[1, k] = (a * b1 - c * b0) / det
+    else:
+        out[:] = np.linalg.solve(S, B)
+
+
+_PADE13 = (64764752532480000.0, 32382376266240000.0, 7771770303897600.0, 1187353796428800.0,
+           129060195264000.0, 10559470521600.0, 670442572800.0, 33522128640.0, 1323241920.0,
+           40840800.0, 960960.0, 16380.0, 182.0, 1.0)  # fmt: skip
+"""The coefficients of the degree-13 Pade approximant of ``exp`` (Higham 2005, eq. 10.33)."""
+
+
+@njit
+def expm(A, out):  # type: ignore[no-untyped-def]
+    """``out = exp(A)`` of one small square matrix: scaling and squaring with the degree-13
+    Pade approximant (Higham 2005, the algorithm of ``scipy.linalg.expm`` for large norms),
+    in plain loops (:func:`mat_mul`)."""
+    n = A.shape[0]
+    b = _PADE13
+    norm = 0.0
+    for k in range(n):
+        c = 0.0
+        for i in range(n):
+            c += abs(A[i, k])
+        norm = max(norm, c)
+    s = max(0, int(math.ceil(math.log2(norm / 5.371920351148152)))) if norm > 0.0 else 0
+    As = A / 2.0**s
+    A2, A4, A6 = np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    mat_mul(As, As, A2)
+    mat_mul(A2, A2, A4)
+    mat_mul(A4, A2, A6)
+    eye = np.eye(n)
+    T = np.empty((n, n))
+    mat_mul(A6, b[13] * A6 + b[11] * A4 + b[9] * A2, T)
+    U = np.empty((n, n))
+    mat_mul(As, T + b[7] * A6 + b[5] * A4 + b[3] * A2 + b[1] * eye, U)
+    mat_mul(A6, b[12] * A6 + b[10] * A4 + b[8] * A2, T)
+    V = T + b[6] * A6 + b[4] * A4 + b[2] * A2 + b[0] * eye
+    R = np.linalg.solve(V - U, V + U)
+    for _ in range(s):
+        mat_mul(R, R, T)
+        R[:] = T
+    out[:] = R
 
 
 _ENTRIES: dict[str, Any] = {}

@@ -373,7 +373,8 @@ def _ekf_step(X, P, dt, z, valid, tau, count, gate_open, Minv, D, tb_inv, ned, A
     pi, two_pi = math.pi, 2.0 * math.pi
     f, xn, hx, e = np.empty(9), np.empty(9), np.empty(3), np.empty(3)
     F, T, Pn, H = np.empty((9, 9)), np.empty((9, 9)), np.empty((9, 9)), np.empty((3, 9))
-    PH, S, K = np.empty((9, 3)), np.empty((3, 3)), np.empty((9, 3))
+    PH, S, K, KR = np.empty((9, 3)), np.empty((3, 3)), np.empty((9, 3)), np.empty((9, 3))
+    IKH = np.empty((9, 9))
     bad = -1
     for j in range(X.shape[0]):
         x, Pj = X[j], P[j]
@@ -442,7 +443,7 @@ def _ekf_step(X, P, dt, z, valid, tau, count, gate_open, Minv, D, tb_inv, ned, A
         for i in range(9):
             xn[i] = x[i] + (K[i, 0] * e[0] + K[i, 1] * e[1] + K[i, 2] * e[2])
             ok = ok and math.isfinite(xn[i])
-        joseph(Pj, K, H, R, Pn)
+        joseph(Pj, K, H, R, Pn, IKH, T, KR)
         for i in range(9):
             for k in range(i + 1):
                 T[i, k] = T[k, i] = 0.5 * (Pn[i, k] + Pn[k, i])

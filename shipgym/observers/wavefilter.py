@@ -42,10 +42,12 @@ from .base import Estimate, as_pose, register_observer
 from .batch import (
     BatchedStepInfo,
     BatchOfOne,
+    expm,
     joseph,
     mat_mul,
     mat_mul_t,
     register_batched_form,
+    solve_small,
 )
 
 __all__ = [
@@ -107,9 +109,8 @@ def _kf_update(sel, valid, z, H, R, wrap, freeze, steps, x, P, K, S, has_S, inno
     the last component of the innovation is a heading, wrapped to ``[-pi, pi)``."""
     n, q = x.shape[1], z.shape[1]
     pi, two_pi = math.pi, 2.0 * math.pi
-    e = np.empty((q, 1))
-    HP = np.empty((q, n))
-    T = np.empty((n, n))
+    e, w, HP, Kt = np.empty((q, 1)), np.empty((q, 1)), np.empty((q, n)), np.empty((q, n))
+    T, IKH, T2, KR = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, q))
     Ke = np.empty((n, 1))
     for j in range(x.shape[0]):
         if not sel[j]:
@@ -131,11 +132,12 @@ def _kf_update(sel, valid, z, H, R, wrap, freeze, steps, x, P, K, S, has_S, inno
             S[j] += R
             has_S[j] = True
         if not frozen:  # K = (S^-1 H P)^T, the Joseph form
-            K[j] = np.linalg.solve(S[j], HP).T
-            joseph(P[j], K[j], H, R, T)
+            solve_small(S[j], HP, Kt)
+            K[j] = Kt.T
+            joseph(P[j], K[j], H, R, T, IKH, T2, KR)
             P[j] = T
         mat_mul(K[j], e, Ke)
-        w = np.linalg.solve(S[j], e)
+        solve_small(S[j], e, w)
         acc = 0.0
         for i in range(q):
             innov[j, i] = e[i, 0]
@@ -143,6 +145,42 @@ def _kf_update(sel, valid, z, H, R, wrap, freeze, steps, x, P, K, S, has_S, inno
         nis[j] = acc
         for i in range(n):
             x[j, i] = x[j, i] + Ke[i, 0]
+
+
+@njit
+def _relinearise(sel, X, A_lf, B_lf, G_lf, F1, F2, dt, Qd, Phi, Gamma, W, count):  # type: ignore[no-untyped-def]  # noqa: E501
+    """Al-Takie (1982) ch. 7 at the estimates of the envs ``sel``: the LF block of each env's
+    ``Phi`` and ``Gamma`` (:func:`~shipgym.dynamics.altakie.discretise` of the LF matrix with
+    the thruster columns times ``psi'(x5)``, ``psi'(x6)``,
+    :func:`~shipgym.dynamics.altakie.saturated_lf_matrix`) and its ``W = Gamma Qd Gamma^T``
+    (symmetrised), in place."""
+    m, p = B_lf.shape[1], G_lf.shape[1]
+    k = 6 + m + p
+    M = np.zeros((k, k))
+    E = np.empty((k, k))
+    n = Gamma.shape[1]
+    GQ = np.empty((n, p))
+    T = np.empty((n, n))
+    for j in range(X.shape[0]):
+        if not sel[j]:
+            continue
+        for i in range(6):
+            for c in range(6):
+                a = A_lf[i, c]
+                if i < 4 and c >= 4:  # the hull rows see the thrusters through psi
+                    a = a * (F1 * F2 * math.exp(-F2 * abs(X[j, c])))
+                M[i, c] = a * dt
+            for c in range(m):
+                M[i, 6 + c] = B_lf[i, c] * dt
+            for c in range(p):
+                M[i, 6 + m + c] = G_lf[i, c] * dt
+        expm(M, E)
+        Phi[j, :6, :6] = E[:6, :6]
+        Gamma[j, :6] = E[:6, 6 + m :]
+        mat_mul(Gamma[j], Qd, GQ)
+        mat_mul_t(GQ, Gamma[j], T)
+        W[j] = 0.5 * (T + T.T)
+        count[j] += 1
 
 
 def _rows(a: ArrayLike | None, shape: tuple[int, ...]) -> Array:
@@ -426,8 +464,8 @@ class WaveFilterEKF(DiscreteKF):
         self.substeps = int(substeps)
         # the LF block is nonlinear; the HF blocks are linear and fixed (exact transition)
         self._A_rest = model.A[:6, 6:]  # the LF block's input from the other states (bias)
-        self._B_lf = model.B[:6]
-        self._G_lf = model.G[:6]
+        self._B_lf = np.ascontiguousarray(model.B[:6])
+        self._G_lf = np.ascontiguousarray(model.G[:6])
         self._A_lf = np.ascontiguousarray(self.A[:6, :6])
         self._Phi_env = np.repeat(self.Phi[None], self.envs, axis=0)
         self._Gamma_env = np.repeat(self.Gamma[None], self.envs, axis=0)
@@ -452,15 +490,10 @@ class WaveFilterEKF(DiscreteKF):
     def predict(self, u: ArrayLike, sel: Any = None) -> None:
         s = self._all if sel is None else np.asarray(sel, dtype=bool)
         relin = s & (self._steps % self.relinearise_every == 0)
-        for j in np.nonzero(relin)[0].tolist():  # scipy's expm, env by env (when due)
-            # only the LF block depends on the estimate (the HF blocks are decoupled from it)
-            F = self.jacobian(self.X[j])[:6, :6]
-            Phi_l, _, Gam_l = discretise(F, self._B_lf, self._G_lf, self.dt)
-            self._Phi_env[j, :6, :6] = Phi_l
-            self._Gamma_env[j, :6] = Gam_l
-            W = self._Gamma_env[j] @ (self.Q / self.dt) @ self._Gamma_env[j].T
-            self._W_env[j] = 0.5 * (W + W.T)
-            self._relin[j] += 1
+        if relin.any():  # only the LF block depends on the estimate (the HF blocks do not)
+            _relinearise(relin, self.X, self._A_lf, self._B_lf, self._G_lf, self.F1, self.F2,
+                         self.dt, self.Q / self.dt, self._Phi_env, self._Gamma_env,
+                         self._W_env, self._relin)  # fmt: skip
         hf = self._times(np.ascontiguousarray(self._Phi_env[:, 6:, 6:]), self.X[:, 6:], self.n - 6)
         # held over the interval
         u_in = self._times(self._B_lf, u, self.B.shape[1]) + self._times(
