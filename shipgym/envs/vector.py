@@ -75,10 +75,10 @@ class ShipVectorEnv(BatchedEnv):
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
         observer: ``None`` / ``"truth"`` (the observation and the controller use the true
-            state), a Kalman observer (``"kbf"``, ``"dkf"``, ``"tomera-kbf"``,
-            ``"tomera-dkf"``: :class:`~shipgym.observers.batch.BatchedKalman`) or an observer
-            registered with :func:`~shipgym.observers.batch.register_batched_observer`, fed
-            every sensor sample, whose estimate they use instead, as under
+            state) or an observer name (``shipgym.observers.observer_names()``, or one
+            registered with :func:`~shipgym.observers.batch.register_batched_observer`:
+            :func:`~shipgym.observers.batch.make_batched_observer`), fed every sensor sample
+            (and a model-based one the thrust), whose estimate they use instead, as under
             :class:`~shipgym.observers.wrapper.ObserverWrapper` (``shipgym.make(...,
             observer=)``).
         env_sensors: one sensor configuration per env, each as the ``sensors=`` of env ``i``

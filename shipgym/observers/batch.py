@@ -1,8 +1,11 @@
-r"""The double-integrator Kalman filters (DKF, KBF) written once, over ``N >= 1`` envs.
+r"""The double-integrator Kalman filters (DKF, KBF) written once, over ``N >= 1`` envs, and
+what every observer written so shares.
 
 Public names: ``BatchedKalman``, ``BatchedStepInfo``; the registry of observers written once
-over N envs (``BATCHED_OBSERVERS``, ``register_batched_observer``, ``make_batched_observer``)
-and their N = 1 adapter ``OneOfBatch`` for the single env.
+over N envs (``BATCHED_OBSERVERS``, ``register_batched_observer``, ``register_batched_form``,
+``make_batched_observer``), their N = 1 adapters ``OneOfBatch`` and ``BatchOfOne`` for the
+single env, and the small dense algebra of the compiled laws (``mat_mul``, ``mat_mul_t``,
+``joseph``, ``solve_small``, ``expm``).
 
 Design notes: docs/design/observers.batch.md.
 """
@@ -920,9 +923,9 @@ def register_batched_form(name: str) -> None:
 
 
 def make_batched_observer(name: str, n: int, vessel: Any) -> Any:
-    """The observer ``name`` of ``n`` envs: a registered batched observer
-    (:data:`BATCHED_OBSERVERS`), else a double-integrator Kalman preset
-    (:class:`BatchedKalman`, whose error names the valid ones)."""
+    """The observer ``name`` of ``n`` envs fitted to ``vessel``: a registered batched observer
+    (:data:`BATCHED_OBSERVERS`: every built-in observer), else a double-integrator Kalman
+    preset (:class:`BatchedKalman`, whose error names the valid ones)."""
     factory = BATCHED_OBSERVERS.get(name)
     if factory is None:
         from .base import _load_builtins
