@@ -27,7 +27,7 @@ import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
 from .._config import from_mapping, param
-from ..dynamics import wrap_angle
+from .._jit import njit
 from .base import Estimate, as_pose, register_observer
 from .batch import BatchedStepInfo, BatchOfOne, register_batched_form
 
@@ -250,7 +250,9 @@ class NotchCascade:
         x = np.array(np.broadcast_to(np.asarray(u, dtype=float), (self.channels,)))
         if not np.isfinite(x).all():
             raise ValueError(f"the cascade's input must be finite, got {u!r}")
-        return _sos_step(self.sos, self._state, x)
+        out = np.empty(self.channels)
+        _cascade(self.sos, self._state, x, out)
+        return out
 
     def frequency_response(self, f_hz: ArrayLike) -> NDArray[np.complex128]:
         """The discrete cascade's frequency response at ``f_hz`` (Hz), ``scipy.signal.sosfreqz``."""
@@ -274,16 +276,52 @@ class NotchCascade:
         return scipy.signal.sosfilt(np.array(self.sos), x)
 
 
-def _sos_step(sos: NDArray[np.float64], st: NDArray[np.float64], x: NDArray[np.float64]) -> Any:
-    """One sample ``x`` (..., ) through the sections ``sos`` with the states ``st`` (...,
-    n_sections, 2), in place (transposed direct form II); returns the output. Elementwise:
-    each channel's floats are its own."""
-    for i, (b0, b1, b2, _, a1, a2) in enumerate(sos):
-        y = b0 * x + st[..., i, 0]
-        st[..., i, 0] = b1 * x - a1 * y + st[..., i, 1]
-        st[..., i, 1] = b2 * x - a2 * y
+@njit(inline="always")
+def _sections(sos, st, x):  # type: ignore[no-untyped-def]
+    """One sample ``x`` of one channel through the sections ``sos`` with its states ``st``
+    (n_sections, 2), in place (transposed direct form II); returns the output."""
+    for i in range(sos.shape[0]):
+        y = sos[i, 0] * x + st[i, 0]
+        st[i, 0] = sos[i, 1] * x - sos[i, 4] * y + st[i, 1]
+        st[i, 1] = sos[i, 2] * x - sos[i, 5] * y
         x = y
     return x
+
+
+@njit
+def _cascade(sos, st, x, out):  # type: ignore[no-untyped-def]
+    """Every channel's sample ``x[c]`` through the sections (states ``st[c]``) into
+    ``out[c]``."""
+    for c in range(x.shape[0]):
+        out[c] = _sections(sos, st[c], x[c])
+
+
+@njit
+def _notch_step(sel, valid, z, tt, h, a, delay, sos, t, eta, ed, yp, st, innov):  # type: ignore[no-untyped-def]  # noqa: E501
+    """One sampling interval ``h`` (s) of the envs ``sel`` to ``tt``, in place: the
+    prediction with the rate, the cascade fed the sample (``valid``; the innovation's
+    heading wrapped to ``(-pi, pi]``) or else the prediction led by the cascade's ``delay``
+    (s), so that on a ramp its input goes on as the measurements would; the rate filtered
+    from the output's difference (``a = exp(-h / T_v)``) where there was a sample."""
+    pi, two_pi = math.pi, 2.0 * math.pi
+    for j in range(t.shape[0]):
+        if not sel[j]:
+            continue
+        for i in range(3):
+            pred = eta[j, i] + ed[j, i] * h
+            if valid[j]:
+                e = z[j, i] - pred
+                if i == 2:
+                    e = pi - np.fmod(np.fmod(pi - e, two_pi) + two_pi, two_pi)
+                innov[j, i] = e
+                y = _sections(sos, st[j, i], pred + e)
+                ed[j, i] = a * ed[j, i] + (1.0 - a) * (y - yp[j, i]) / h
+                eta[j, i] = y
+            else:
+                y = _sections(sos, st[j, i], pred + ed[j, i] * delay)
+                eta[j, i] = pred
+            yp[j, i] = y
+        t[j] = tt[j]
 
 
 class BatchedNotch:
@@ -332,6 +370,9 @@ class BatchedNotch:
     def _build(self, dt: float) -> None:
         self.dt = dt
         self.cascade = NotchCascade(self.design, dt, channels=3)
+        self._sos = np.array(self.cascade.sos)
+        self._delay = self.cascade.dc_group_delay
+        self._a = math.exp(-dt / self.design.velocity_time_constant)
         hh, gg, hg = self.noise_gains()
         P6 = np.zeros((6, 6))
         i = np.arange(3)
@@ -399,14 +440,14 @@ class BatchedNotch:
         n = self.n
         if not self._started.all():
             raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
-        tt = np.broadcast_to(np.asarray(t, dtype=float), (n,))
-        za = np.full((n, 3), np.nan) if z is None else np.asarray(z, dtype=float)
+        tt = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=float), (n,)))
+        za = np.zeros((n, 3)) if z is None else np.ascontiguousarray(z, dtype=float)
         vm = (np.ones(n, bool) if z is not None else np.zeros(n, bool)) if valid is None else (
-            np.asarray(valid, dtype=bool))  # fmt: skip
+            np.ascontiguousarray(valid, dtype=bool))  # fmt: skip
         dt = tt - self._t
         sel = vm | (dt != 0.0)
-        innov = np.full((n, 3), np.nan)
-        out = BatchedStepInfo(innov, np.full(n, np.nan), np.zeros(n, bool), np.zeros(n, bool))
+        out = BatchedStepInfo(np.full((n, 3), np.nan), np.full(n, np.nan), np.zeros(n, bool),
+                              np.zeros(n, bool))  # fmt: skip
         if not sel.any():
             return out
         d = dt[sel]
@@ -432,26 +473,10 @@ class BatchedNotch:
         if learn.any():  # the first step after a reset with the interval unknown
             self._state[learn] = self._steady(self._y_prev[learn])
             self._learn[learn] = False
-        v = vm[sel]
-        if not np.isfinite(za[sel][v]).all():
+        if not np.isfinite(za[vm]).all():
             raise ValueError(f"{self.name}: z must be finite where valid")
-        eta, ed, yp = self._eta[sel], self._eta_dot[sel], self._y_prev[sel]
-        st = self._state[sel]
-        pred = eta + ed * h
-        e = za[sel] - pred
-        e[:, 2] = wrap_angle(e[:, 2])
-        # without a sample the cascade is fed the predicted *measurement*: the prediction led
-        # by the cascade's delay, so that on a ramp its input goes on as the measurements would
-        x = np.where(v[:, None], pred + e, pred + ed * self.cascade.dc_group_delay)
-        y = _sos_step(self.cascade.sos, st, x)
-        a = math.exp(-h / self.design.velocity_time_constant)
-        ed_new = a * ed + (1.0 - a) * (y - yp) / h
-        self._eta[sel] = np.where(v[:, None], y, pred)
-        self._eta_dot[sel] = np.where(v[:, None], ed_new, ed)
-        self._y_prev[sel] = y
-        self._state[sel] = st
-        self._t[sel] = tt[sel]
-        innov[sel] = np.where(v[:, None], e, np.nan)
+        _notch_step(sel, vm, za, tt, h, self._a, self._delay, self._sos, self._t, self._eta,
+                    self._eta_dot, self._y_prev, self._state, out.innovation)  # fmt: skip
         return out
 
     @property
@@ -470,13 +495,14 @@ class BatchedNotch:
         """Env ``j``'s estimate; ``P`` in ``[x, y, psi, x_dot, y_dot, psi_dot]``, the
         measurement-noise covariance through the filter (module doc)."""
         eta = self._eta[j].copy()
-        nu = self.nu[j]
+        c, s = math.cos(eta[2]), math.sin(eta[2])
+        ed = self._eta_dot[j]
+        nu = np.array([c * ed[0] + s * ed[1], -s * ed[0] + c * ed[1], ed[2]])
         t = float(self._t[j])
         if self._P6 is None:
             P6 = np.diag(np.concatenate([self._R, np.full(3, np.inf)]))
             return Estimate(t, eta, nu, P6, np.diag(self._R), None)
         P6 = self._P6.copy()
-        c, s = math.cos(eta[2]), math.sin(eta[2])
         J = np.zeros((3, 6))
         J[0, 2], J[1, 2] = nu[1], -nu[0]
         J[0, 3], J[0, 4], J[1, 3], J[1, 4], J[2, 5] = c, s, -s, c, 1.0
