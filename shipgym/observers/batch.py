@@ -937,77 +937,18 @@ def make_batched_observer(name: str, n: int, vessel: Any) -> Any:
     return BatchedKalman(name, n, vessel=vessel)
 
 
-class OneOfBatch(Observer):
-    """A batched observer (:data:`BATCHED_OBSERVERS`) as the single env's
-    :class:`~shipgym.observers.base.Observer`: the same code at N = 1.
-
-    Its estimate has the pose and velocity only (``P`` and ``P_eta`` NaN, ``P_nu`` None)
-    unless the batched observer has ``P_eta`` ((n, 3, 3)).
-    """
-
-    def __init__(self, batch: Any, name: str) -> None:
-        self._b = batch
-        self.name = name
-        self.model_based = bool(getattr(batch, "model_based", False))
-        self._t = np.zeros(1)
-        self._z = np.zeros((1, 3))
-        self._valid = np.zeros(1, dtype=bool)
-        self._started = False
-
-    def reset(
-        self, t0: float, eta0: ArrayLike, *, nu0: ArrayLike | None = None, P0: Any = None
-    ) -> None:
-        if nu0 is not None or P0 is not None:
-            raise ValueError(f"observer {self.name!r} starts from a pose only (no nu0, P0)")
-        t0 = float(t0)
-        if not math.isfinite(t0):
-            raise ValueError(f"t0 must be finite, got {t0!r}")
-        self._t[0] = t0
-        self._b.reset(self._t.copy(), as_pose(eta0, "eta0").reshape(1, 3))
-        self._started = True
-
-    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
-        if not self._started:
-            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
-        self._t[0] = float(t)
-        valid = z is not None
-        self._z[0] = as_pose(z) if valid else np.nan
-        self._valid[0] = valid
-        args = (self._t.copy(), self._z.copy(), self._valid.copy())
-        if self.model_based:  # the thrust, (1, 3) (only a model-based batch takes it)
-            ta = as_tau(tau)
-            info = self._b.step(*args, tau=None if ta is None else ta[None])
-        else:
-            info = self._b.step(*args)
-        if not valid:
-            return no_measurement()
-        return _step_info(info)
-
-    def estimate(self) -> Estimate:
-        if not self._started:
-            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
-        p = getattr(self._b, "P_eta", None)
-        P_eta = np.full((3, 3), np.nan) if p is None else np.array(p[0], dtype=float)
-        return Estimate(
-            t=float(self._t[0]),
-            eta=np.array(self._b.eta[0], dtype=float),
-            nu=np.array(self._b.nu[0], dtype=float),
-            P=np.full((6, 6), np.nan),
-            P_eta=P_eta,
-            P_nu=None,
-        )
-
-
 class BatchOfOne(Observer):
     """The :class:`~shipgym.observers.base.Observer` interface of one env of a batched
     observer ``self._b`` (set by the subclass): the single env runs the batched law at N = 1.
 
     The batch has ``reset(t0 (n,), eta0 (n, 3), mask=None, **rows)``, ``step(t (n,), z (n, 3),
-    valid (n,), tau (n, 3) | None) -> BatchedStepInfo`` and ``estimate(j) -> Estimate``.
+    valid (n,)) -> BatchedStepInfo`` (a model-based one also ``tau=`` (n, 3) or ``None``) and
+    ``estimate(j) -> Estimate``.
     """
 
     _b: Any
     _started = False
+    _t = 0.0
 
     def _reset_one(self, t0: float, eta0: ArrayLike, **rows: Any) -> None:
         """Reset the batch of one at ``t0`` from ``eta0``; ``rows``: per-env arrays of the
@@ -1019,23 +960,65 @@ class BatchOfOne(Observer):
             k: None if v is None else np.asarray(v, dtype=float)[None] for k, v in rows.items()
         }
         self._b.reset(np.array([t0]), as_pose(eta0, "eta0").reshape(1, 3), **extra)
+        self._t = t0
         self._started = True
 
     def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
         if not self._started:
             raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
         valid = z is not None
-        zz = as_pose(z).reshape(1, 3) if valid else np.full((1, 3), np.nan)
-        ta = as_tau(tau)
-        info = self._b.step(
-            np.array([float(t)]), zz, np.array([valid]), None if ta is None else ta.reshape(1, 3)
+        args = (
+            np.array([float(t)]),
+            as_pose(z).reshape(1, 3) if valid else np.full((1, 3), np.nan),
+            np.array([valid]),
         )
-        return _step_info(info)
+        if self.model_based:  # the thrust, (1, 3) (only a model-based batch takes it)
+            ta = as_tau(tau)
+            info = self._b.step(*args, tau=None if ta is None else ta.reshape(1, 3))
+        else:
+            info = self._b.step(*args)
+        self._t = float(t)
+        return _step_info(info) if valid else no_measurement()
 
     def estimate(self) -> Estimate:
         if not self._started:
             raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
         return self._b.estimate(0)
+
+
+class OneOfBatch(BatchOfOne):
+    """A batched observer (:data:`BATCHED_OBSERVERS`) as the single env's
+    :class:`~shipgym.observers.base.Observer`: the same code at N = 1.
+
+    Its estimate has the pose and velocity only (``P`` and ``P_eta`` NaN, ``P_nu`` None)
+    unless the batched observer has ``P_eta`` ((n, 3, 3)).
+    """
+
+    def __init__(self, batch: Any, name: str) -> None:
+        self._b = batch
+        self.name = name
+        self.model_based = bool(getattr(batch, "model_based", False))
+
+    def reset(
+        self, t0: float, eta0: ArrayLike, *, nu0: ArrayLike | None = None, P0: Any = None
+    ) -> None:
+        if nu0 is not None or P0 is not None:
+            raise ValueError(f"observer {self.name!r} starts from a pose only (no nu0, P0)")
+        self._reset_one(t0, eta0)
+
+    def estimate(self) -> Estimate:
+        if not self._started:
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
+        p = getattr(self._b, "P_eta", None)
+        P_eta = np.full((3, 3), np.nan) if p is None else np.array(p[0], dtype=float)
+        return Estimate(
+            t=self._t,
+            eta=np.array(self._b.eta[0], dtype=float),
+            nu=np.array(self._b.nu[0], dtype=float),
+            P=np.full((6, 6), np.nan),
+            P_eta=P_eta,
+            P_nu=None,
+        )
 
 
 def _step_info(info: BatchedStepInfo) -> StepInfo:
