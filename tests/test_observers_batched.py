@@ -18,8 +18,8 @@ import pytest
 import shipgym
 from shipgym.dynamics.vessel import load_vessel, vessel_names
 from shipgym.envs.registration import task_fits_vessel
-from shipgym.observers import observer_names
-from shipgym.observers.batch import BATCHED_OBSERVERS, make_batched_observer
+from shipgym.observers import make_observer, observer_names
+from shipgym.observers.batch import BATCHED_OBSERVERS, BatchedKalman, make_batched_observer
 
 DP = "shipgym/DPStationKeeping-v0"
 PLAN = "shipgym/StationKeeping-v0"
@@ -47,7 +47,44 @@ def test_every_observer_has_its_batched_form():
     assert len(NAMES) == 14
     for name in NAMES:
         batch = make_batched_observer(name, 2, load_vessel("star-hercules"))
-        assert batch.eta.shape == (2, 3) or name in BATCHED_OBSERVERS
+        assert name in BATCHED_OBSERVERS or isinstance(batch, BatchedKalman)
+        batch.reset(np.zeros(2), np.zeros((2, 3)))
+        assert batch.eta.shape == (2, 3) and batch.nu.shape == (2, 3)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_n_envs_are_n_single_observers(name):
+    """The batched observer of 4 envs, with dropouts, outliers (the gates' rejections and
+    forced acceptances) and thrust, against 4 single observers (its batch of one, the single
+    env's), to the last bit."""
+    vessel = load_vessel("wimpey-sealab")
+    n = 4
+    batch = make_batched_observer(name, n, vessel)
+    singles = [make_observer(name, vessel=vessel) for _ in range(n)]
+    dt = batch.dt if name.startswith("alt-") else 1.0
+    rng = np.random.default_rng(3)
+    eta0 = rng.normal(0.0, 1.0, (n, 3))
+    batch.reset(np.zeros(n), eta0)
+    for i, s in enumerate(singles):
+        s.reset(0.0, eta0[i])
+    model = getattr(batch, "model_based", False)
+    for k in range(1, 60):
+        z = eta0 + 0.02 * k + rng.normal(0.0, 0.05, (n, 3))
+        z[:, 2] = (z[:, 2] + math.pi) % (2 * math.pi) - math.pi
+        valid = rng.random(n) > 0.15
+        if 20 <= k < 30:  # a jump in env 1's fixes: rejected, then forced in
+            z[1, :2] += 30.0
+        tau = rng.normal(0.0, 1e4, (n, 3))
+        info = batch.step(np.full(n, k * dt), np.where(valid[:, None], z, np.nan), valid,
+                          **({"tau": tau} if model else {}))  # fmt: skip
+        for i, s in enumerate(singles):
+            si = s.step(k * dt, z[i] if valid[i] else None, tau[i])
+            if valid[i]:
+                np.testing.assert_array_equal(info.innovation[i], si.innovation)
+                assert info.rejected[i] == si.rejected
+            e = s.estimate()
+            np.testing.assert_array_equal(batch.eta[i], e.eta)
+            np.testing.assert_array_equal(batch.nu[i], e.nu)
 
 
 def _run(name, env_id, vessel, mode, n=3, steps=6, total=20, seed=11):
