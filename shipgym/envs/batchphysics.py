@@ -308,8 +308,11 @@ class BatchedPhysics:
         tau_model>`, (n, 3) ``[X, Y, N]`` (N, N, N m): the bollard thrust model of its actuator
         states (the same compiled laws, the same floats)."""
         hb = self._hulls
-        model = self.actuators.bollard()
-        table = hb.law_table if model is self.actuators else model.law_table()
+        table = getattr(self, "_bollard_table", None)
+        if table is None:  # the bollard laws' table, built once
+            model = self.actuators.bollard()
+            table = hb.law_table if model is self.actuators else model.law_table()
+            self._bollard_table = table
         return self._tau_rows(hb.act, table)
 
     @property

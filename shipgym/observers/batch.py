@@ -919,7 +919,7 @@ def register_batched_form(name: str) -> None:
     preset for the vessel (:func:`~shipgym.observers.base.make_observer`) and takes the
     batched law of ``n`` envs from it (its ``batch(n)``); the single env keeps the preset's
     own factory (with its options), which runs the same law at N = 1."""
-    BATCHED_OBSERVERS[name] = lambda n, vessel: make_observer(name, vessel).batch(n)
+    BATCHED_OBSERVERS[name] = lambda n, vessel: make_observer(name, vessel).batch(n)  # type: ignore[attr-defined]
 
 
 def make_batched_observer(name: str, n: int, vessel: Any) -> Any:
@@ -969,7 +969,7 @@ class BatchOfOne(Observer):
         valid = z is not None
         args = (
             np.array([float(t)]),
-            as_pose(z).reshape(1, 3) if valid else np.full((1, 3), np.nan),
+            np.full((1, 3), np.nan) if z is None else as_pose(z).reshape(1, 3),
             np.array([valid]),
         )
         if self.model_based:  # the thrust, (1, 3) (only a model-based batch takes it)

@@ -337,7 +337,7 @@ class DiscreteKF:
         a = np.zeros((1, self.n)) if add is None else add
         _kf_predict(s, add is not None, Phi, a, W, self._freeze(), self._steps, self.X, self.PP)
 
-    def _times(self, M: Array, u: ArrayLike, width: int) -> Array:
+    def _times(self, M: NDArray[Any], u: ArrayLike, width: int) -> Array:
         """``M u`` of every env's ``u`` ((width,) or (envs, width)), (envs, rows of M)."""
         out = np.empty((self.envs, M.shape[-2]))
         Mr = np.ascontiguousarray(M if M.ndim == 3 else M[None])
@@ -622,7 +622,7 @@ class BatchedWaveFilter:
             raise ValueError(f"design must be one of {', '.join(NOISE_DESIGNS)}, got {design!r}")
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
             raise ValueError(f"n must be an int >= 1 (the number of envs), got {n!r}")
-        self._settings = {
+        self._settings: dict[str, Any] = {
             "beaufort": beaufort, "hf_std": hf_std, "sigma_position": sigma_position,
             "sigma_heading": sigma_heading, "design": design, "q_l": q_l, "q_x": q_x,
             "bias_q": bias_q, "dt": dt, "freeze_time": freeze_time,
@@ -787,7 +787,7 @@ class BatchedWaveFilter:
                 f"control_period={self.dt:.6g} and sensors sampled at it"
             )
         if not sel.any():
-            return BatchedStepInfo(*(a.copy() for a in self._info))
+            return self._info_copy()
         self._t[sel] = tt[sel]
         f = np.zeros((n, 3)) if tau is None else np.asarray(tau, dtype=float) / self._scale
         if z is None:
@@ -819,7 +819,12 @@ class BatchedWaveFilter:
         info = self._info
         info.innovation[sel] = np.where(v[:, None], inn, np.nan)[sel]
         info.nis[sel] = np.where(v, core._nis + surge._nis, np.nan)[sel]
-        return BatchedStepInfo(*(a.copy() for a in info))
+        return self._info_copy()
+
+    def _info_copy(self) -> BatchedStepInfo:
+        i = self._info
+        return BatchedStepInfo(i.innovation.copy(), i.nis.copy(), i.rejected.copy(),
+                               i.forced.copy())  # fmt: skip
 
     def _to_local(self, z: Array, v: NDArray[np.bool_]) -> Array:
         """NED poses -> ``[x', y', psi']`` in the reset frames (p.u. positions, rad); the
