@@ -188,6 +188,8 @@ def _rows(a: ArrayLike | None, shape: tuple[int, ...]) -> Array:
     ``None``)."""
     if a is None:
         return np.zeros(shape)
+    if isinstance(a, np.ndarray) and a.shape == shape and a.dtype == np.float64:
+        return np.ascontiguousarray(a)
     return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), shape))
 
 
@@ -891,10 +893,15 @@ class BatchedWaveFilter:
     def estimate(self, j: int) -> Estimate:
         """Env ``j``'s estimate."""
         pu = self.pu
-        P = self.core.PP[j]
+        xs, us, lf = self._lf_now()
+        X, Y = xs[j] * pu.L, lf[j, 1] * pu.L
+        c, s, o = self._c[j], self._s[j], self._origin[j]
+        eta = np.array([o[0] + c * X - s * Y, o[1] + s * X + c * Y, o[2] + lf[j, 3]])
+        nu = np.array([us[j] * pu.velocity, lf[j, 0] * pu.velocity,
+                       lf[j, 2] * pu.angular_velocity])  # fmt: skip
+        P, Ps = self.core.PP[j], self.surge.PP[j]
         iy, ipsi, iv, ir = (1, 3, 0, 2)  # the same in the 14-, 12- and 6-state layouts
         scale_pos = pu.L**2
-        Ps = self.surge.PP[j]
         P_eta = np.diag([Ps[1, 1] * scale_pos, P[iy, iy] * scale_pos, P[ipsi, ipsi]])
         P_nu = np.diag(
             [
@@ -905,10 +912,13 @@ class BatchedWaveFilter:
         )
         bias = None
         if self.has_bias:  # the last states of both filters
-            x, xs = self.core.X[j], self.surge.X[j]
-            bias = np.array([xs[-1] * pu.force, x[-2] * pu.force, x[-1] * pu.moment])
-        return Estimate(float(self._t[j]), self.eta[j], self.nu[j],
-                        scipy.linalg.block_diag(Ps, P), P_eta, P_nu, bias)  # fmt: skip
+            x, xsj = self.core.X[j], self.surge.X[j]
+            bias = np.array([xsj[-1] * pu.force, x[-2] * pu.force, x[-1] * pu.moment])
+        ns = Ps.shape[0]
+        P_all = np.zeros((ns + P.shape[0],) * 2)  # the block diagonal [surge, sway-yaw]
+        P_all[:ns, :ns] = Ps
+        P_all[ns:, ns:] = P
+        return Estimate(float(self._t[j]), eta, nu, P_all, P_eta, P_nu, bias)
 
 
 class WaveFilterObserver(BatchOfOne):
