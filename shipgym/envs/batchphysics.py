@@ -28,6 +28,7 @@ from shipgym.disturbances import (
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.sim._mujoco import mujoco
 
+from .batched import MAX_ENVS
 from .physics import INTEGRATORS, check_lags, check_timestep, joint_inertia
 from .scene import build_model
 
@@ -76,8 +77,8 @@ class BatchedPhysics:
 
         self.vessel = load_vessel(vessel)
         v = self.vessel
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ValueError(f"n must be an int >= 1 (the number of hulls), got {n!r}")
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_ENVS:
+            raise ValueError(f"n must be an int in [1, {MAX_ENVS}] (the hulls), got {n!r}")
         self.n = n
         self.plant = v.plant(plant) if isinstance(plant, str) else plant
         dofs = getattr(self.plant, "dofs", None)
@@ -129,11 +130,22 @@ class BatchedPhysics:
         self.currents = [Current(cc) for _ in range(n)]
         self.waves = [Waves(waves, v.hull) if waves is not None else None for _ in range(n)]
         self.saturated = np.zeros((n, acts.n_channels), dtype=bool)
+        self._servo_channels = np.array(
+            [i for i, c in enumerate(acts.channels) if c.dynamics == "servo"], dtype=np.int64
+        )
+        self._flow_actuators = np.array(
+            [i for i, a in enumerate(acts) if a.flow_dependent], dtype=np.int64
+        )
         self.reset()
 
     def qpos(self, i: int) -> Array:
         """Hull ``i``'s MuJoCo joint positions (its world's ``qpos``: rendering)."""
         return self._hulls.q[i].copy()
+
+    @property
+    def timestep(self) -> float:
+        """The physics step (s)."""
+        return self.h
 
     @property
     def aerodynamics(self) -> bool:
@@ -161,6 +173,13 @@ class BatchedPhysics:
         self.current_configs[i] = cc
         self.winds[i] = Wind(wind_cfg or WindConfig(), self.vessel.windage)
         self.currents[i] = Current(cc)
+
+    def set_actuators(self, i: int, vessel: Vessel) -> None:
+        """Give hull ``i`` the actuator constants of ``vessel``, a variant of the batch's
+        vessel with the same actuator kinds and channels (a rudder moved: the printed
+        ``K_dp`` law of :func:`~shipgym.dynamics.vanderklugt.seed_vessel` at each hull's
+        speed); effective from its next step. :attr:`actuators` stays the batch's."""
+        self._hulls.set_actuators(i, vessel.actuators_for(self.plant))
 
     # ---- state -----------------------------------------------------------------------------
     def _rows(self, x: ArrayLike | None, width: int, what: str, default: Array) -> Array:
@@ -258,7 +277,35 @@ class BatchedPhysics:
         """The held (clipped) commands (n, n_channels)."""
         return self._hulls.cmd.copy()
 
+    @property
+    def rate_limited(self) -> NDArray[np.bool_]:
+        """Per hull and servo channel, (n, n_servos): still at its rate limit in the last
+        physics step (as ``VesselPhysics.rate_limited``)."""
+        return self._hulls.hits[:, self._servo_channels] > 0
+
+    @property
+    def nu_c(self) -> Array:
+        """Each hull's current ``(u_c, v_c)`` (m/s) in its body frame at the last physics step,
+        (n, 2) (as ``VesselPhysics.nu_c``)."""
+        return self._hulls.loads[:, 6:8].copy()
+
+    @property
+    def servo_channels(self) -> list[int]:
+        """The channels with servo dynamics (the columns of :attr:`rate_limited`)."""
+        return list(self._servo_channels)
+
+    @property
+    def stalled(self) -> NDArray[np.bool_]:
+        """Per hull and flow-dependent actuator, (n, n_flow): past its stall angle at the
+        last step (as ``VesselPhysics.stalled``)."""
+        return self._hulls.flags[:, self._flow_actuators] > 0
+
     # ---- stepping --------------------------------------------------------------------------
+    def set_external_force(self, tau: ArrayLike) -> None:
+        """Hold an external body load on every hull, ``(n, 4)`` ``[X, Y, K, N]`` (N, N, N m,
+        N m; ``K`` acts on a 4-DOF hull only) until the next call or the hull's reset."""
+        self._hulls.external[:] = self._rows(tau, 4, "external force", self._hulls.external)
+
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
         """Commands ``(n, n_channels)`` (or one row for all), clipped to the channels' ranges;
         returns the clip flags (also :attr:`saturated`)."""
@@ -300,3 +347,63 @@ class BatchedPhysics:
     def contact_counts(self) -> NDArray[np.int64]:
         """MuJoCo's number of contacts of each hull now, (n,) (zeros for ``leapfrog``)."""
         return np.array([d.ncon for d in self.datas] or [0] * self.n, dtype=np.int64)
+
+    # ---- the thrust a DP system's observer is fed (VesselPhysics.tau_model, tau_command) ----
+    @property
+    def tau_model(self) -> Array:
+        """Each hull's :attr:`VesselPhysics.tau_model <shipgym.envs.physics.VesselPhysics.
+        tau_model>`, (n, 3) ``[X, Y, N]`` (N, N, N m): the bollard thrust model of its actuator
+        states (the same compiled laws, the same floats)."""
+        hb = self._hulls
+        table = getattr(self, "_bollard_table", None)
+        if table is None:  # the bollard laws' table, built once
+            model = self.actuators.bollard()
+            table = hb.law_table if model is self.actuators else model.law_table()
+            self._bollard_table = table
+        return self._tau_rows(hb.act, table)
+
+    @property
+    def tau_command(self) -> Array:
+        """Each hull's :attr:`VesselPhysics.tau_command <shipgym.envs.physics.VesselPhysics.
+        tau_command>`, (n, 3): the plant's thrust law at the held commands (lagged and servo
+        channels) and the current integrator states."""
+        hb = self._hulls
+        return self._tau_rows(np.where(self._holds, hb.cmd, hb.act), hb.law_table)
+
+    def _tau_rows(self, st: Array, table: Any) -> Array:
+        """``[X, Y, N]`` (n, 3) of the actuator laws ``table`` at the states ``st`` (n, nc)
+        and each hull's velocity through the water (:meth:`_tau_kernel`)."""
+        from shipgym._jit import entry
+
+        hb = self._hulls
+        tab, laws, kinds = table
+        out = np.zeros((self.n, 4))
+        args = (tab, laws, kinds, np.ascontiguousarray(st, dtype=np.float64),
+                hb.body_velocities(), hb.loads, out)  # fmt: skip
+        kernel = BatchedPhysics._tau_kernel
+        if kernel is None:
+            kernel = BatchedPhysics._tau_kernel = BatchedPhysics._make_tau_kernel()
+        entry(kernel, args)(*args)
+        return out[:, [0, 1, 3]]
+
+    _tau_kernel: Any = None
+
+    @staticmethod
+    def _make_tau_kernel() -> Any:
+        """The compiled loop over the hulls of :meth:`_tau_rows`."""
+        from shipgym._jit import njit
+        from shipgym.dynamics.actuators import tau_of_table
+
+        @njit
+        def tau_rows(tab, laws, kinds, st, vel, loads, out):  # type: ignore[no-untyped-def]
+            """Hull ``i``'s ``(X, Y, K, N)`` into ``out[i]``: ``tau_of_table`` at its states
+            and ``(u - u_c, v - v_c, p, r)``, as ``VesselPhysics._tau``."""
+            forces = np.zeros(kinds.shape[0])
+            flags = np.zeros(kinds.shape[0])
+            for i in range(st.shape[0]):
+                u, v, p, r = vel[i, 0], vel[i, 1], vel[i, 2], vel[i, 3]
+                X, Y, K, N = tau_of_table(tab, laws, kinds, st[i], u - loads[i, 6],
+                                          v - loads[i, 7], p, r, forces, flags)  # fmt: skip
+                out[i, 0], out[i, 1], out[i, 2], out[i, 3] = X, Y, K, N
+
+        return tau_rows

@@ -34,7 +34,7 @@ from .base import (
     harbour_body,
     place_harbour,
 )
-from .batched import AUTORESET_MODES, BatchedEnv
+from .batched import AUTORESET_MODES, BatchedEnv, check_num_envs
 from .batchphysics import BatchedPhysics
 
 __all__ = [
@@ -75,10 +75,10 @@ class ShipVectorEnv(BatchedEnv):
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
         observer: ``None`` / ``"truth"`` (the observation and the controller use the true
-            state), a Kalman observer (``"kbf"``, ``"dkf"``, ``"tomera-kbf"``,
-            ``"tomera-dkf"``: :class:`~shipgym.observers.batch.BatchedKalman`) or an observer
-            registered with :func:`~shipgym.observers.batch.register_batched_observer`, fed
-            every sensor sample, whose estimate they use instead, as under
+            state) or an observer name (``shipgym.observers.observer_names()``, or one
+            registered with :func:`~shipgym.observers.batch.register_batched_observer`:
+            :func:`~shipgym.observers.batch.make_batched_observer`), fed every sensor sample
+            (and a model-based one the thrust), whose estimate they use instead, as under
             :class:`~shipgym.observers.wrapper.ObserverWrapper` (``shipgym.make(...,
             observer=)``).
         env_sensors: one sensor configuration per env, each as the ``sensors=`` of env ``i``
@@ -106,6 +106,7 @@ class ShipVectorEnv(BatchedEnv):
         env_sensors: Sequence[SensorConfig] | None = None,
         **kwargs: Any,
     ) -> None:
+        check_num_envs(num_envs)  # before anything is built for them
         cls, steps = _task_class(task)
         # the class's own defaults (the DP tasks' timing and sea), as its single env takes them
         env, task_args, extras = cls.split_args(kwargs)
@@ -167,8 +168,8 @@ class ShipVectorEnv(BatchedEnv):
         self._fresh = False  # whether _obs is the observation now
         lo, hi = self.actuators.lower, self.actuators.upper
         self._lo_tol, self._hi_tol = lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)
-        if not (isinstance(residual_scale, int | float) and math.isfinite(residual_scale)):
-            raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
+        if not (isinstance(residual_scale, int | float) and 0 <= residual_scale < math.inf):
+            raise ValueError(f"residual_scale must be a finite number >= 0, got {residual_scale!r}")
         self.controller_name = controller
         self.residual_scale = float(residual_scale)
         if env_sensors is not None:
@@ -364,7 +365,12 @@ class ShipVectorEnv(BatchedEnv):
         z, valid, outlier = self.sensors.measure(self.physics.t, seen, mask)
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
-            info = self.observer.step(self.physics.t, z, valid & mask)
+            if getattr(self.observer, "model_based", False):  # the thrust, as ObserverWrapper
+                cmd = getattr(self.observer, "thrust_input", "applied") == "command"
+                tau = self.physics.tau_command if cmd else self.physics.tau_model
+                info = self.observer.step(self.physics.t, z, valid & mask, tau=tau)
+            else:
+                info = self.observer.step(self.physics.t, z, valid & mask)
             self._nis = info.nis
             self._rejected = info.rejected
         self._last_z = np.where(mask[:, None], z, self._last_z)
