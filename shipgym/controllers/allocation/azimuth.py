@@ -899,8 +899,13 @@ def _law_rows(rows: _Rows | None) -> tuple[NDArray[Any], ...]:
     if rows is None:
         e = np.zeros(0)
         return (np.zeros(0, np.int64), e, e, e, np.zeros(0, np.bool_), np.zeros(0, np.bool_))
-    return tuple(np.ascontiguousarray(a, dtype=np.int64 if i == 0 else None)
+    return tuple(_c(a, np.int64 if i == 0 else np.bool_ if i > 3 else float)
                  for i, a in enumerate(rows))  # fmt: skip
+
+
+def _c(a: Any, dtype: Any = float) -> NDArray[Any]:
+    """A writeable C-contiguous copy: the law's one compiled entry point is typed for that."""
+    return np.array(a, dtype=dtype, order="C")
 
 
 def _prepare(
@@ -921,9 +926,9 @@ def _prepare(
     # the regularisation's part of the curvature (Q less the weighted configuration's), floored
     h = qd - np.einsum("ij,ji->i", R, B * s)
     Q = Q + np.diag(np.maximum(_MIN_CURV - h, 0.0))
-    args = (Q, np.ascontiguousarray(R), qd, float(turn), np.ascontiguousarray(B, dtype=float), s,
-            np.asarray(flo, dtype=float), np.asarray(fhi, dtype=float), az.f_max, az.max_dangle,
-            az.reversible, _law_rows(az._rows), _law_rows(az._hull_rows))  # fmt: skip
+    args = (_c(Q), _c(R), _c(qd), float(turn), _c(B), _c(s), _c(flo), _c(fhi), _c(az.f_max),
+            _c(az.max_dangle), _c(az.reversible, np.bool_), _law_rows(az._rows),
+            _law_rows(az._hull_rows))  # fmt: skip
     return _Prepared(n_dof, az.n, k, args)
 
 
