@@ -1,8 +1,10 @@
 r"""The DP controller and its thrust allocation for N envs at once (the vector env's stack).
 
 What :class:`~shipgym.controllers.wrappers.DPControllerWrapper` runs every control period for
-``controller="pid"`` (and ``"pid-smooth"``, ``"pid-raw"``, ``"pid-smooth-raw"``,
-``"pid-seed"``), for N envs: :class:`~shipgym.controllers.pid.BatchedPID` (Tomera 2014 eq. 23),
+any named controller, for N envs: the law (:class:`~shipgym.controllers.pid.BatchedPID`,
+Tomera 2014 eq. 23, for the ``pid*`` names; :class:`~shipgym.controllers.lq.BatchedLQ` for
+``"lq"``; :class:`~shipgym.controllers.grimble.BatchedGrimbleLQ` for ``"alt-lq"``,
+``"alt-lq-printed"``, ``"alt-sdre"``),
 :class:`BatchedAllocation` (the closed form of the Blue Lady pattern, Tomera 2014 eqs. 12,
 25-27: :func:`~shipgym.controllers.allocation.fixed3.fixed3_law`) and the reversal hysteresis
 (:class:`~shipgym.controllers.conditioning.BatchedReversalHysteresis`). Each is the one
@@ -25,7 +27,7 @@ from shipgym.dynamics.vessel import Vessel, load_vessel
 from .actuation import fixed3_parameters, make_allocator
 from .allocation.fixed3 import law_parameters, run_law
 from .conditioning import BatchedReversalHysteresis, reversal_threshold
-from .pid import BatchedPID, _mask, vessel_pid
+from .pid import BatchedPID, _mask
 
 __all__ = [
     "BATCHED_CONTROLLERS",
@@ -153,10 +155,10 @@ def apply_residual(
 
 
 # ---- the named controllers -------------------------------------------------------------------
-#: the batched controller names: (gain preset, bandwidth scale, allocation, conditioned), as
-#: the PID entries of :data:`shipgym.controllers.wrappers.CONTROLLERS` (a test checks they
-#: agree); conditioned: the vessel's velocity filter and reversal hysteresis
-#: (:mod:`shipgym.controllers.conditioning`)
+#: the PID designs by name: (gain preset, bandwidth scale, allocation, conditioned), as the
+#: PID entries of :data:`shipgym.controllers.wrappers.CONTROLLERS` build them (a test checks
+#: they agree); conditioned: the vessel's velocity filter and reversal hysteresis
+#: (:mod:`shipgym.controllers.conditioning`). Every controller name is batched.
 BATCHED_CONTROLLERS: dict[str, tuple[str, float, str, bool]] = {
     "pid": ("tuned", 1.0, "constrained", True),
     "pid-smooth": ("smooth", 0.7, "constrained", True),
@@ -167,12 +169,14 @@ BATCHED_CONTROLLERS: dict[str, tuple[str, float, str, bool]] = {
 
 
 class BatchedDPController:
-    """A :class:`BatchedPID` and its :class:`BatchedAllocation`, with the ``tau_error`` each
-    env feeds back (the controller wrapper's state, less the leg bookkeeping).
+    """A batched control law (:class:`BatchedPID`, :class:`~shipgym.controllers.lq.BatchedLQ`,
+    :class:`~shipgym.controllers.grimble.BatchedGrimbleLQ`) and its
+    :class:`BatchedAllocation`, with the ``tau_error`` each env feeds back (the controller
+    wrapper's state, less the leg bookkeeping).
 
     Attributes:
         name: the controller name.
-        pid: the :class:`BatchedPID`.
+        pid: the batched law (any of the above; the name is historical).
         allocation: the :class:`BatchedAllocation`.
         tau_error: each env's last ``tau_error`` (n, 3) (zeros after a reset: not read then).
     """
@@ -180,7 +184,7 @@ class BatchedDPController:
     def __init__(
         self,
         name: str,
-        pid: BatchedPID,
+        pid: Any,
         allocation: BatchedAllocation,
         hysteresis: BatchedReversalHysteresis | None = None,
     ) -> None:
@@ -203,7 +207,7 @@ class BatchedDPController:
             self.tau_error[m] = 0.0
 
     def change_frame(self, dpsi: ArrayLike, mask: ArrayLike | None = None) -> None:
-        """A leg switch of the envs in ``mask``: :meth:`BatchedPID.change_frame`."""
+        """A leg switch of the envs in ``mask``: the law's ``change_frame``."""
         self.pid.change_frame(dpsi, mask)
 
     def __call__(
@@ -218,7 +222,7 @@ class BatchedDPController:
         """One control period of every env (the wrapper's ``_control`` and action).
 
         Returns:
-            ``(tau_c, allocation, controller_action)``: the PID's ``tau`` (n, 3), its
+            ``(tau_c, allocation, controller_action)``: the law's ``tau`` (n, 3), its
             allocation and the normalised command (n, n_channels) before the residual.
         """
         tau = self.pid(eta_r, nu, eta_d_r, eta_dot_d_r, eta_ddot_d_r, saturated=self.tau_error)
@@ -239,7 +243,9 @@ def batched_dp_controller(
     designed as the controller wrapper's factory designs it (``make(..., controller=name)``).
 
     Args:
-        name: ``"pid"``, ``"pid-smooth"`` or ``"pid-seed"`` (:data:`BATCHED_CONTROLLERS`).
+        name: a name of :data:`~shipgym.controllers.wrappers.CONTROLLERS`: the PIDs of
+            :data:`BATCHED_CONTROLLERS`, ``"lq"``, ``"alt-lq"``, ``"alt-lq-printed"``,
+            ``"alt-sdre"``.
         vessel: a vessel or a packaged vessel's name.
         n: number of envs.
         dt: control period (s).
@@ -248,22 +254,45 @@ def batched_dp_controller(
             filter of a conditioned controller, as the wrapper does.
 
     Raises:
-        NotImplementedError: a controller that is not batched (the LQ family), or a vessel
-            whose allocation is iterative (:class:`BatchedAllocation`).
-        ValueError: an unknown name, a 4-DOF vessel, ``"pid-seed"`` for a vessel without the
-            printed gains, or what the scalar allocator raises.
+        NotImplementedError: a registered controller whose law has no batched form.
+        ValueError: an unknown name, a 4-DOF vessel, a vessel the controller does not apply
+            to (``"pid-seed"``, ``"alt-lq-printed"`` without printed gains), or what the
+            scalar allocator raises.
     """
-    if name not in BATCHED_CONTROLLERS:
-        raise NotImplementedError(
-            f"controller {name!r} has no batched form; batched: {', '.join(BATCHED_CONTROLLERS)}"
-        )
+    from .wrappers import controller_spec
+
+    spec = controller_spec(name)
     v = load_vessel(vessel)
     if v.dofs != 3:
         raise ValueError(f"the batched DP controller is 3-DOF; {v.name!r} has {v.dofs} DOF")
-    preset, scale, method, conditioned = BATCHED_CONTROLLERS[name]
-    pid = BatchedPID.from_scalar(
-        vessel_pid(v, preset, scale, dt, conditioned=conditioned, velocity_source=velocity_source),
-        n,
+    if spec.conditioned:
+        single = spec.factory(v, dt, velocity_source=velocity_source)
+    else:
+        single = spec.factory(v, dt)
+    law = _batched_law(name, single, n)
+    hyst = (
+        BatchedReversalHysteresis(v.actuators, reversal_threshold(v), n)
+        if spec.conditioned
+        else None
     )
-    hyst = BatchedReversalHysteresis(v.actuators, reversal_threshold(v), n) if conditioned else None
-    return BatchedDPController(name, pid, BatchedAllocation(v, method, dt), hyst)
+    return BatchedDPController(name, law, BatchedAllocation(v, spec.allocation, dt), hyst)
+
+
+def _batched_law(name: str, single: Any, n: int) -> Any:
+    """The batched form of a controller wrapper's single-env law, for ``n`` envs."""
+    from .grimble import BatchedGrimbleLQ, GrimbleLQController
+    from .lq import BatchedLQ, LQController
+    from .pid import MultivariablePID
+
+    forms: tuple[tuple[type, Any], ...] = (
+        (MultivariablePID, BatchedPID),
+        (LQController, BatchedLQ),
+        (GrimbleLQController, BatchedGrimbleLQ),
+    )
+    for kind, batched in forms:
+        if isinstance(single, kind):
+            return batched.from_scalar(single, n)
+    raise NotImplementedError(
+        f"controller {name!r} ({type(single).__name__}) has no batched form; batched: "
+        + ", ".join(kind.__name__ for kind, _ in forms)
+    )
