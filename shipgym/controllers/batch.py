@@ -1,4 +1,5 @@
-r"""The DP controller and its thrust allocation for N envs at once (the vector env's stack).
+r"""The named DP controllers, and each with its thrust allocation for N envs at once (the vector
+env's stack).
 
 What :class:`~shipgym.controllers.wrappers.DPControllerWrapper` runs every control period for
 any named controller, for N envs: the law (:class:`~shipgym.controllers.pid.BatchedPID`,
@@ -17,6 +18,8 @@ single env's allocator. Inputs and outputs are
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -27,16 +30,21 @@ from shipgym.dynamics.vessel import Vessel, load_vessel
 from .actuation import fixed3_parameters, make_allocator
 from .allocation.fixed3 import law_parameters, run_law
 from .conditioning import BatchedReversalHysteresis, reversal_threshold
-from .pid import BatchedPID, _mask
+from .grimble import GrimbleLQController
+from .pid import BatchedPID, _mask, vessel_pid
 
 __all__ = [
     "BATCHED_CONTROLLERS",
+    "CONTROLLERS",
+    "ControllerSpec",
     "BatchedAllocation",
     "BatchedAllocationResult",
     "BatchedDPController",
     "BatchedPID",
     "apply_residual",
     "batched_dp_controller",
+    "controller_spec",
+    "register_controller",
 ]
 
 Array = NDArray[np.float64]
@@ -155,10 +163,54 @@ def apply_residual(
 
 
 # ---- the named controllers -------------------------------------------------------------------
-#: the PID designs by name: (gain preset, bandwidth scale, allocation, conditioned), as the
-#: PID entries of :data:`shipgym.controllers.wrappers.CONTROLLERS` build them (a test checks
-#: they agree); conditioned: the vessel's velocity filter and reversal hysteresis
-#: (:mod:`shipgym.controllers.conditioning`). Every controller name is batched.
+@dataclass(frozen=True)
+class ControllerSpec:
+    """A named controller: a factory ``f(vessel, dt)`` of a law (the
+    :class:`~shipgym.controllers.wrappers.DPController` protocol) and an allocation.
+
+    The factory designs the controller for the vessel (its design model, capacity and
+    presets) and the control period ``dt`` (s); it raises ``ValueError`` for a vessel the
+    controller does not apply to. The law's ``batched(n)`` is its form for ``n`` envs (what
+    :func:`batched_dp_controller` runs).
+    """
+
+    factory: Callable[..., Any]
+    allocation: str
+    description: str
+    #: apply the vessel's reversal hysteresis after the allocation
+    #: (:class:`~shipgym.controllers.conditioning.ReversalHysteresis`), and call the factory
+    #: as ``f(vessel, dt, velocity_source=...)`` (:data:`~shipgym.controllers.pid.
+    #: VELOCITY_SOURCES`: where the controller's velocity comes from, which sets its filter)
+    conditioned: bool = False
+
+
+def _pid(preset: str, scale: float = 1.0, conditioned: bool = False) -> Callable[..., Any]:
+    """PID of Tomera (2014) eq. 23 for a vessel: its preset gains where it has them (the
+    Blue Lady's tuned gains), else pole placement at the vessel's bandwidth times ``scale``
+    on its design model (:func:`~shipgym.controllers.pid.pid_pole_placement`); with
+    ``conditioned`` its velocity and its output are low-passed with the vessel's time
+    constants for the velocity source (:func:`~shipgym.controllers.pid.vessel_pid`)."""
+
+    def make(vessel: Vessel, dt: float, velocity_source: str = "kinematic") -> Any:
+        return vessel_pid(
+            vessel, preset, scale, dt, conditioned=conditioned, velocity_source=velocity_source
+        )
+
+    return make
+
+
+def _grimble(variant: str) -> Callable[..., Any]:
+    """Al-Takie (1982) LQ of :class:`~shipgym.controllers.grimble.GrimbleLQController`."""
+
+    def make(vessel: Vessel, dt: float) -> Any:
+        return GrimbleLQController(vessel, dt, variant=variant)
+
+    return make
+
+
+#: the PID designs by name: (gain preset, bandwidth scale, allocation, conditioned), the PID
+#: entries of :data:`CONTROLLERS`; conditioned: the vessel's velocity filter and reversal
+#: hysteresis (:mod:`shipgym.controllers.conditioning`)
 BATCHED_CONTROLLERS: dict[str, tuple[str, float, str, bool]] = {
     "pid": ("tuned", 1.0, "constrained", True),
     "pid-smooth": ("smooth", 0.7, "constrained", True),
@@ -166,6 +218,68 @@ BATCHED_CONTROLLERS: dict[str, tuple[str, float, str, bool]] = {
     "pid-smooth-raw": ("smooth", 0.7, "constrained", False),
     "pid-seed": ("seed", 1.0, "inverse", False),
 }
+_PID_TEXT = {
+    "pid": "Tomera (2014) eq. 23 PID (Blue Lady: tuned gains; other vessels: pole placement at "
+    "the vessel's bandwidth), constrained allocation, command conditioning (the vessel's "
+    "velocity and output filters and reversal hysteresis)",
+    "pid-smooth": "Tomera (2014) eq. 23 PID, lower bandwidth for observer feedback, "
+    "constrained allocation, command conditioning",
+    "pid-raw": "'pid' without command conditioning (the unfiltered eq. 23 and the "
+    "allocation's commands as they are)",
+    "pid-smooth-raw": "'pid-smooth' without command conditioning",
+    "pid-seed": "Tomera (2014) eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1 "
+    "(the Blue Lady only)",
+}
+
+#: Controllers selectable by name (``shipgym run --controller NAME``); extend with
+#: :func:`register_controller`. Every one has a batched form (:func:`batched_dp_controller`).
+CONTROLLERS: dict[str, ControllerSpec] = {
+    **{
+        name: ControllerSpec(_pid(preset, scale, cond), method, _PID_TEXT[name], cond)
+        for name, (preset, scale, method, cond) in BATCHED_CONTROLLERS.items()
+    },
+    "alt-lq": ControllerSpec(
+        _grimble("lq"),
+        "constrained",
+        "Al-Takie (1982) ch. 4 LQ with Grimble's weights (case b) re-solved on the vessel's "
+        "per-unit LF model, surge alike; no integral action; constrained allocation",
+    ),
+    "alt-lq-printed": ControllerSpec(
+        _grimble("printed"),
+        "constrained",
+        "Al-Takie (1982) 4.4-4.5: the printed LQ gain of Wimpey Sealab (case b) or Star "
+        "Hercules (those vessels only), constrained allocation",
+    ),
+    "alt-sdre": ControllerSpec(
+        _grimble("sdre"),
+        "constrained",
+        "Al-Takie (1982) ch. 7: the LQ re-solved every 2 steps on the model linearised at the "
+        "saturating thruster states (SDRE), constrained allocation",
+    ),
+}
+
+
+def register_controller(name: str, spec: ControllerSpec) -> None:
+    """Add a named controller (e.g. ``"lq"``); names are unique."""
+    if name in CONTROLLERS:
+        raise ValueError(f"controller {name!r} is already registered")
+    if spec.allocation not in _ALLOCATIONS:
+        raise ValueError(f"unknown allocation {spec.allocation!r}; choose {list(_ALLOCATIONS)}")
+    CONTROLLERS[name] = spec
+
+
+#: allocation methods (:func:`~shipgym.controllers.actuation.make_allocator`)
+_ALLOCATIONS = ("constrained", "inverse")
+
+
+def controller_spec(name: str) -> ControllerSpec:
+    """The :class:`ControllerSpec` of a controller name; unknown names list the valid ones."""
+    try:
+        return CONTROLLERS[name]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"unknown controller {name!r}; choose one of: {', '.join(CONTROLLERS)}"
+        ) from None
 
 
 class BatchedDPController:
@@ -259,8 +373,6 @@ def batched_dp_controller(
             to (``"pid-seed"``, ``"alt-lq-printed"`` without printed gains), or what the
             scalar allocator raises.
     """
-    from .wrappers import controller_spec
-
     spec = controller_spec(name)
     v = load_vessel(vessel)
     if v.dofs != 3:
@@ -279,20 +391,11 @@ def batched_dp_controller(
 
 
 def _batched_law(name: str, single: Any, n: int) -> Any:
-    """The batched form of a controller wrapper's single-env law, for ``n`` envs."""
-    from .grimble import BatchedGrimbleLQ, GrimbleLQController
-    from .lq import BatchedLQ, LQController
-    from .pid import MultivariablePID
-
-    forms: tuple[tuple[type, Any], ...] = (
-        (MultivariablePID, BatchedPID),
-        (LQController, BatchedLQ),
-        (GrimbleLQController, BatchedGrimbleLQ),
-    )
-    for kind, batched in forms:
-        if isinstance(single, kind):
-            return batched.from_scalar(single, n)
-    raise NotImplementedError(
-        f"controller {name!r} ({type(single).__name__}) has no batched form; batched: "
-        + ", ".join(kind.__name__ for kind, _ in forms)
-    )
+    """The batched form of a controller wrapper's single-env law, for ``n`` envs (its
+    ``batched(n)``: the same design, the states at zero)."""
+    batched = getattr(single, "batched", None)
+    if batched is None:
+        raise NotImplementedError(
+            f"controller {name!r} ({type(single).__name__}) has no batched form (no batched(n))"
+        )
+    return batched(n)

@@ -314,11 +314,6 @@ class BatchedGrimbleLQ:
         self._zeros = np.zeros((n, 3))
         self._zeros.setflags(write=False)
 
-    @classmethod
-    def from_scalar(cls, controller: GrimbleLQController, n: int) -> BatchedGrimbleLQ:
-        """``n`` envs of a controller's design (the states start at zero)."""
-        return cls(controller, n)
-
     def reset(self, mask: ArrayLike | None = None) -> None:
         """Forget the thruster states and the last commands of every env, or of those where
         ``mask`` (``(n,)`` bool)."""
@@ -436,6 +431,10 @@ class GrimbleLQController:
     def reset(self) -> None:
         """Forget the thruster states and the last command."""
         self._law.reset()
+
+    def batched(self, n: int) -> BatchedGrimbleLQ:
+        """This design for ``n`` envs (the states at zero)."""
+        return BatchedGrimbleLQ(self, n)
 
     def change_frame(self, dpsi: float) -> None:
         """Nothing to rotate: the state is in the body frame."""

@@ -536,6 +536,10 @@ class LQController:
         """Clear the integral state (start of an episode)."""
         self._law.reset()
 
+    def batched(self, n: int) -> BatchedLQ:
+        """This design for ``n`` envs (:meth:`BatchedLQ.from_scalar`)."""
+        return BatchedLQ.from_scalar(self, n)
+
     @property
     def integral(self) -> Array:
         """The integral state ``xi`` (m s, m s, rad s) in the current r-frame."""
@@ -651,7 +655,7 @@ def _lq_for(vessel: Any, dt: float) -> LQController:
 
 def register_lq() -> None:
     """Register ``"lq"`` in the controller registry (idempotent); constrained allocation."""
-    from .wrappers import CONTROLLERS, ControllerSpec, register_controller
+    from .batch import CONTROLLERS, ControllerSpec, register_controller
 
     if "lq" not in CONTROLLERS:
         register_controller(

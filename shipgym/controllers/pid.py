@@ -786,6 +786,10 @@ class MultivariablePID:
         """Clear the integral state and the filters (start of an episode)."""
         self._law.reset()
 
+    def batched(self, n: int) -> BatchedPID:
+        """This design for ``n`` envs (:meth:`BatchedPID.from_scalar`)."""
+        return BatchedPID.from_scalar(self, n)
+
     @property
     def filtered_velocity(self) -> NDArray[np.float64] | None:
         """The low-passed body velocity ``nu_f`` (m/s, m/s, rad/s) the last call used, or
