@@ -163,10 +163,87 @@ _S_COLS = 19
 
 
 @njit
+def _inv_logdet(Z: Any) -> tuple[Any, float, bool]:
+    """``(Z^-1, log |det Z|, ok)`` by Gauss-Jordan elimination with partial pivoting;
+    ``ok`` false for a (numerically) singular ``Z``."""
+    m = Z.shape[0]
+    W = np.zeros((m, 2 * m))
+    for i in range(m):
+        for j in range(m):
+            W[i, j] = Z[i, j]
+        W[i, m + i] = 1.0
+    logdet = 0.0
+    for k in range(m):
+        p, big = k, abs(W[k, k])
+        for i in range(k + 1, m):
+            if abs(W[i, k]) > big:
+                p, big = i, abs(W[i, k])
+        if not big > 0.0 or not math.isfinite(big):
+            return W[:, m:], 0.0, False
+        if p != k:
+            for j in range(2 * m):
+                W[k, j], W[p, j] = W[p, j], W[k, j]
+        logdet += math.log(big)
+        piv = W[k, k]
+        for j in range(2 * m):
+            W[k, j] /= piv
+        for i in range(m):
+            if i != k and W[i, k] != 0.0:
+                f = W[i, k]
+                for j in range(2 * m):
+                    W[i, j] -= f * W[k, j]
+    return W[:, m:].copy(), logdet, True
+
+
+@njit
+def _lstsq(M: Any, B: Any) -> Any:
+    """The least-squares solution ``X`` of ``M X = B`` (``M`` (m, n) of full column rank,
+    ``m >= n``) by Householder QR; ``M`` and ``B`` are overwritten."""
+    m, n = M.shape
+    k = B.shape[1]
+    for j in range(n):
+        norm = 0.0
+        for i in range(j, m):
+            norm += M[i, j] * M[i, j]
+        norm = math.sqrt(norm)
+        if norm == 0.0:
+            continue
+        alpha = -norm if M[j, j] >= 0.0 else norm
+        v = M[j:, j].copy()
+        v[0] -= alpha
+        vv = 0.0
+        for i in range(m - j):
+            vv += v[i] * v[i]
+        for c in range(j, n):
+            dot = 0.0
+            for i in range(m - j):
+                dot += v[i] * M[j + i, c]
+            f = 2.0 * dot / vv
+            for i in range(m - j):
+                M[j + i, c] -= f * v[i]
+        for c in range(k):
+            dot = 0.0
+            for i in range(m - j):
+                dot += v[i] * B[j + i, c]
+            f = 2.0 * dot / vv
+            for i in range(m - j):
+                B[j + i, c] -= f * v[i]
+    X = np.empty((n, k))
+    for c in range(k):
+        for i in range(n - 1, -1, -1):
+            acc = B[i, c]
+            for j in range(i + 1, n):
+                acc -= M[i, j] * X[j, c]
+            X[i, c] = acc / M[i, i]
+    return X
+
+
+@njit
 def care(A: Any, G: Any, Q: Any) -> Any:
     """The stabilising solution ``S`` of ``A^T S + S A - S G S + Q = 0`` (``G = B R^-1 B^T``)
     by the matrix sign function of the Hamiltonian (Roberts 1980; determinant scaling,
-    Byers 1987): ``S`` from the stable invariant subspace ``(sign(H) + I) [I; S] = 0``."""
+    Byers 1987): ``S`` from the stable invariant subspace ``(sign(H) + I) [I; S] = 0``. NaNs
+    where the iteration breaks down (no stabilising solution)."""
     n = A.shape[0]
     Z = np.empty((2 * n, 2 * n))
     for i in range(n):
@@ -177,14 +254,22 @@ def care(A: Any, G: Any, Q: Any) -> Any:
             Z[n + i, n + j] = -A[j, i]
     close = False
     for _ in range(100):
-        Zi = np.linalg.inv(Z)
-        c = math.exp(np.linalg.slogdet(Z)[1] / (2 * n))
-        Zn = 0.5 * (Z / c + c * Zi)
-        diff = np.abs(Zn - Z).max()
-        Z = Zn
+        Zi, logdet, ok = _inv_logdet(Z)
+        if not ok:
+            return np.full((n, n), np.nan)
+        c = math.exp(logdet / (2 * n))
+        diff = big = 0.0
+        for i in range(2 * n):
+            for j in range(2 * n):
+                z = 0.5 * (Z[i, j] / c + c * Zi[i, j])
+                diff = max(diff, abs(z - Z[i, j]))
+                big = max(big, abs(z))
+                Z[i, j] = z
         if close:  # one more (quadratically convergent) step after the first small change
             break
-        close = diff <= 1e-10 * np.abs(Zn).max()
+        close = diff <= 1e-10 * big
+    if not (close and np.all(np.isfinite(Z))):
+        return np.full((n, n), np.nan)
     lhs = np.empty((2 * n, n))
     rhs = np.empty((2 * n, n))
     for i in range(n):
@@ -194,7 +279,7 @@ def care(A: Any, G: Any, Q: Any) -> Any:
             lhs[n + i, j] = Z[n + i, n + j] + one
             rhs[i, j] = -(Z[i, j] + one)
             rhs[n + i, j] = -Z[n + i, j]
-    X = np.linalg.lstsq(lhs, rhs)[0]
+    X = _lstsq(lhs, rhs)
     return 0.5 * (X + X.T)
 
 
