@@ -36,7 +36,6 @@ from .pid import (
     _drops,
     _mask,
     _mv,
-    _one,
     _rows,
     bad_input,
     saturation_input,
@@ -585,19 +584,7 @@ class LQController:
         Raises:
             ValueError: an input is not 3 finite numbers.
         """
-        law = self._law
-        z = law._zeros
-        kind, sat = saturation_input(saturated, z)
-        tau = np.empty((1, 3))
-        code = _entry("law")(
-            law._G, law._S, _one(eta_r, "eta_r"), _one(nu, "nu"), _one(eta_d_r, "eta_d_r"),
-            z if eta_dot_d_r is None else _one(eta_dot_d_r, "eta_dot_d_r"),
-            z if eta_ddot_d_r is None else _one(eta_ddot_d_r, "eta_ddot_d_r"),
-            sat, kind, tau,
-        )  # fmt: skip
-        if code:
-            raise ValueError(f"{_BAD_INPUT[code]} contains NaN or infinite values")
-        return tau[0]
+        return self._law(eta_r, nu, eta_d_r, eta_dot_d_r, eta_ddot_d_r, saturated=saturated)[0]
 
     def __repr__(self) -> str:
         return (
