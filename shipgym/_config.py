@@ -80,6 +80,22 @@ def require_finite(obj: Any) -> None:
             raise ValueError(f"{type(obj).__name__}.{f.name} must be finite, got {val!r}")
 
 
+#: the largest |angle| a direction may have (rad): a hundred turns; more is a unit mistake (a
+#: bearing in degrees given as radians, a typo), not a direction
+MAX_ANGLE = 200.0 * math.pi
+
+
+def require_angles(obj: Any, *names: str) -> None:
+    """Raise ``ValueError`` for a named angle field beyond :data:`MAX_ANGLE`."""
+    for name in names:
+        val = getattr(obj, name)
+        if val is not None and abs(val) > MAX_ANGLE:
+            raise ValueError(
+                f"{type(obj).__name__}.{name} must be within +-{MAX_ANGLE:.0f} rad (a hundred "
+                f"turns), got {val!r}: a direction in degrees given as radians?"
+            )
+
+
 def require_positive(obj: Any, *names: str) -> None:
     """Raise ``ValueError`` if any named field is not strictly positive."""
     for name in names:

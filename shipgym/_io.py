@@ -22,12 +22,14 @@ __all__ = [
     "WriteFailed",
     "atomic_path",
     "atomic_write_text",
+    "check_outputs",
     "check_writable",
     "progress_enabled",
     "handle_signals",
     "interrupt_message",
     "interrupt_status",
     "on_interrupt",
+    "output_lock",
     "os_reason",
     "partial_path",
     "replace_together",
@@ -279,3 +281,96 @@ def check_writable(path: Path) -> None:
             path.unlink()
     except OSError as exc:
         raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from exc
+
+
+def check_outputs(
+    outputs: dict[str, Path | None], inputs: dict[str, Path | None] | None = None
+) -> None:
+    """Refuse, before any work, outputs that would overwrite an input or each other.
+
+    Two outputs may not be the same path or one inside the other (a ``--json`` inside a
+    ``--report`` folder that is replaced as a whole); an output may not be an input file, lie
+    inside an input folder (a vessel package) or hold an input (a report folder around the
+    scenario file).
+
+    Args:
+        outputs: option name -> the path it writes (``None``: not given).
+        inputs: option name -> a path it reads (``None``: not given).
+
+    Raises:
+        ValueError: naming both options and the path.
+    """
+
+    def real(p: Path) -> Path:
+        return Path(os.path.realpath(os.path.expanduser(p)))
+
+    outs = [(k, real(p)) for k, p in outputs.items() if p is not None]
+    ins = [(k, real(p)) for k, p in (inputs or {}).items() if p is not None]
+
+    def nested(a: Path, b: Path) -> bool:
+        return a == b or a in b.parents or b in a.parents
+
+    for i, (ka, a) in enumerate(outs):
+        for kb, b in outs[i + 1 :]:
+            if nested(a, b):
+                raise ValueError(
+                    f"{ka} {a} and {kb} {b} would overwrite each other: give them separate paths"
+                )
+        for kb, b in ins:
+            if nested(a, b):
+                raise ValueError(
+                    f"{ka} {a} would overwrite the input {kb} {b}: write the results elsewhere"
+                )
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: alive
+        return True
+    return True
+
+
+@contextlib.contextmanager
+def output_lock(paths: Iterable[Path | None]) -> Iterator[None]:
+    """One run at a time writes a set of outputs: a lock file ``.NAME.lock`` (holding the
+    process id) next to each output for the duration of the block. A second run naming any of
+    them is refused before any work; a lock left by a process that no longer exists is taken
+    over.
+
+    Raises:
+        ValueError: another running process holds one of the outputs (naming it and the pid).
+    """
+    held: list[Path] = []
+    try:
+        for p in sorted({Path(os.path.realpath(p)) for p in paths if p is not None}):
+            lock = p.parent / f".{p.name}.lock"
+            for _ in range(2):
+                try:
+                    fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+                except FileExistsError:
+                    try:
+                        pid = int(lock.read_text().strip() or "0")
+                    except (OSError, ValueError):
+                        pid = 0
+                    if pid and pid != os.getpid() and _alive(pid):
+                        raise ValueError(
+                            f"{p} is being written by another run (process {pid}, lock {lock}): "
+                            "wait for it, or give this run other output paths"
+                        ) from None
+                    with contextlib.suppress(OSError):
+                        lock.unlink()  # left by a process that died
+                    continue
+                with os.fdopen(fd, "w") as fh:
+                    fh.write(str(os.getpid()))
+                held.append(lock)
+                break
+            else:
+                raise ValueError(f"cannot lock {p} (lock file {lock})")
+        yield
+    finally:
+        for lock in held:
+            with contextlib.suppress(OSError):
+                lock.unlink()

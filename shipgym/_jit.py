@@ -12,7 +12,11 @@ Design notes: docs/design/_jit.md.
 
 from __future__ import annotations
 
+import os
+import sys
+import tempfile
 import warnings
+from pathlib import Path
 from typing import Any
 
 import numba
@@ -37,13 +41,88 @@ LAW_SIG = types.UniTuple(_f8, 6)(_vec, _vec, _f8, _f8, _f8, _f8)
 _DISABLED = bool(numba.config.DISABLE_JIT)
 
 
+# ---- Numba's on-disk cache: a private folder per user ------------------------------------------
+def _private_cache_dir() -> str | None:
+    """The per-user cache folder (``$XDG_CACHE_HOME`` or ``~/.cache``, then
+    ``shipgym/numba``), created private (0700); ``None`` where it cannot be created or written,
+    or is not private (owned by another user, or writable by group or others: a pickle planted
+    there would run on loading)."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    path = Path(base) / "shipgym" / "numba"
+    try:
+        path.mkdir(parents=True, exist_ok=True, mode=0o700)
+        st = path.stat()
+        if (hasattr(os, "getuid") and st.st_uid != os.getuid()) or st.st_mode & 0o022:
+            return None
+        tempfile.TemporaryFile(dir=path).close()
+    except OSError:
+        return None
+    return str(path)
+
+
+def _configure_cache() -> bool:
+    """Where Numba caches shipgym's compiled laws; whether it caches at all.
+
+    ``NUMBA_CACHE_DIR`` set: Numba's own choice. Otherwise a private per-user folder
+    (:func:`_private_cache_dir`; never a folder another user can write, such as a shared
+    installation's ``__pycache__``), which this process's Numba then uses for every cached
+    function; without one, shipgym compiles in memory only (a one-line notice on stderr).
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return True
+    path = _private_cache_dir()
+    if path is None:
+        print(
+            "shipgym: notice: no private writable cache folder (set XDG_CACHE_HOME or "
+            "NUMBA_CACHE_DIR); compiling in memory, every process compiles again",
+            file=sys.stderr,
+        )
+        return False
+    numba.config.CACHE_DIR = path
+    return True
+
+
+def _tolerate_bad_cache_entries() -> None:
+    """A cache entry that cannot be loaded (a truncated or foreign file) is discarded and the
+    function compiled again, with one warning, instead of failing every run until deleted."""
+    from numba.core import caching
+
+    load = caching.Cache.load_overload
+    if getattr(load, "shipgym", False):
+        return
+
+    def load_overload(self: Any, sig: Any, target_context: Any) -> Any:
+        try:
+            return load(self, sig, target_context)
+        except Exception as exc:  # noqa: BLE001 - unpickling a damaged file raises anything
+            warnings.warn(
+                f"shipgym: discarded an unreadable Numba cache entry of {self._name} "
+                f"({type(exc).__name__}); compiling it again",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            try:
+                self._cache_file.flush()  # an empty index: the next save starts afresh
+            except OSError:
+                pass
+            return None
+
+    load_overload.shipgym = True  # type: ignore[attr-defined]
+    caching.Cache.load_overload = load_overload
+
+
+_CACHE = _configure_cache()
+_tolerate_bad_cache_entries()
+
+
 def njit(*args: Any, **kwargs: Any) -> Any:
-    """``numba.njit`` with ``cache=True`` by default (compiled code cached on disk), or
-    without the cache for a function Numba cannot cache (one defined in an interactive
-    session: no file to locate the cache by)."""
+    """``numba.njit`` with ``cache=True`` by default (compiled code cached on disk, in a
+    private per-user folder: :func:`_configure_cache`), or without the cache for a function
+    Numba cannot cache (one defined in an interactive session: no file to locate the cache by)
+    or where no private writable folder exists."""
     if args and callable(args[0]):
         return njit(**kwargs)(args[0])
-    kwargs.setdefault("cache", True)
+    kwargs.setdefault("cache", _CACHE)
 
     def wrap(fn: Any) -> Any:
         try:

@@ -236,20 +236,23 @@ def _cmd_run(args: argparse.Namespace) -> int:
     for path in (args.record, args.json):
         if path is not None and path.is_file():
             on_interrupt(f"{path} left as it was", path=path)
-    res = run_episode(
-        args.scenario,
-        controller=args.controller,
-        observer=observer if is_learned_controller(args.controller) else _truth_none(observer),
-        seed=args.seed,
-        plant="default",
-        env_kwargs=env_kwargs,
-        progress=not args.no_progress,
-        record=args.record,
-        spawn=args.spawn,
-        report=args.report,
-        json_path=args.json,
-        scenario_preset=None if args.scenario_file is None else str(args.scenario_file),
-    )
+    from shipgym._io import output_lock
+
+    with output_lock((args.record, args.json, args.report)):  # one run per set of outputs
+        res = run_episode(
+            args.scenario,
+            controller=args.controller,
+            observer=observer if is_learned_controller(args.controller) else _truth_none(observer),
+            seed=args.seed,
+            plant="default",
+            env_kwargs=env_kwargs,
+            progress=not args.no_progress,
+            record=args.record,
+            spawn=args.spawn,
+            report=args.report,
+            json_path=args.json,
+            scenario_preset=None if args.scenario_file is None else str(args.scenario_file),
+        )
     _print_table(res)
     for f in res["files"]:
         print(f"wrote {f}")
@@ -912,6 +915,32 @@ def _parser() -> argparse.ArgumentParser:
     return ap
 
 
+#: the options that write files or folders (every subcommand)
+OUTPUT_OPTIONS = ("json", "markdown", "record", "report", "out", "figures")
+
+
+def _check_paths(args: argparse.Namespace) -> None:
+    """Outputs never overwrite an input or each other (:func:`shipgym._io.check_outputs`):
+    the inputs are every other argument naming an existing file or folder (a scenario file, a
+    vessel package, a run file, a model behind ``ppo:PATH``)."""
+    from shipgym._io import check_outputs
+
+    names = {"scenario_file": "--scenario", "run": "RUN"}  # dests named otherwise
+    outputs: dict[str, Path | None] = {}
+    inputs: dict[str, Path | None] = {}
+    for key, value in vars(args).items():
+        name = names.get(key, "--" + key.replace("_", "-"))
+        if key in OUTPUT_OPTIONS:
+            if isinstance(value, Path):
+                outputs[name] = value
+            continue
+        if isinstance(value, str) and ":" in value:  # ppo:PATH, sac:PATH
+            value = value.split(":", 1)[1]
+        if isinstance(value, str | Path) and str(value) and Path(value).exists():
+            inputs[name] = Path(value)
+    check_outputs(outputs, inputs)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``shipgym`` console script.
 
@@ -928,6 +957,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
     with handle_signals():
         try:
+            _check_paths(args)
             return int(args.func(args))
         except WriteFailed as exc:  # the results go to stdout instead of being lost
             res = exc.results

@@ -578,3 +578,17 @@ def test_resume_refuses_a_crafted_pickle(tmp_path):
         with pytest.raises(ValueError, match=member.replace(".", r"\.")):
             train("ppo", resume=path, timesteps=8, out=tmp_path / "o", progress=False)
         assert not (tmp_path / "X").exists()
+
+
+@needs_rl
+def test_resume_refuses_a_model_of_an_unregistered_id(tmp_path):
+    """A metadata ``env_id`` of the form ``module:Name-v0`` would make Gymnasium import the
+    module: ``--resume`` accepts shipgym's registered ids only, before anything is built."""
+    import sys
+
+    from shipgym.rl.train import train
+
+    path = _with_meta(tmp_path, "foreign", env_id="this_module_does_not_exist:Foo-v0")
+    with pytest.raises(ValueError, match="not a shipgym environment"):
+        train("ppo", resume=path, timesteps=8, out=tmp_path / "o", progress=False)
+    assert "this_module_does_not_exist" not in sys.modules

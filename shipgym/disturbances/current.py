@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import from_mapping, param, require_finite
+from shipgym._config import from_mapping, param, require_angles, require_finite
 
 from ._boundary import coerce_config, parse_config
 from ._grid import CHUNK, GridPair, gauss_markov
@@ -105,6 +105,7 @@ class CurrentConfig:
         ):
             raise ValueError(f"{name}.v_max must be a real number or None, got {self.v_max!r}")
         require_finite(self)
+        require_angles(self, "direction_to")
         for key in ("speed", "mu", "sigma", "v_min", "direction_mu", "direction_sigma"):
             if getattr(self, key) < 0:
                 raise ValueError(f"{name}.{key} must be >= 0, got {getattr(self, key)!r}")

@@ -18,10 +18,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, is_real, param
+from shipgym._jit import njit
 
 from .spectra import harmonic_components, wave_spectrum
 
-__all__ = ["RollWaveConfig", "RollWaves"]
+__all__ = ["RollWaveConfig", "RollWaves", "roll_wave_moments"]
 
 _G = 9.81
 
@@ -108,6 +109,24 @@ class RollWaveConfig:
             return cls.from_dict(d)
         except (TypeError, ValueError) as exc:
             raise ValueError(f"{name} {value!r}: {exc}") from None
+
+
+@njit
+def roll_wave_moments(t, rows, we, eps, cK, cN, K, N):  # type: ignore[no-untyped-def]
+    """The roll and yaw moments (N m) at the times ``t`` (M,), time ``j`` of the sea in row
+    ``rows[j]`` of the components ``we``, ``eps``, ``cK``, ``cN`` (R, n): ``K = sum cK_i
+    sin(w_e,i t + eps_i)``, ``N = sum cN_i cos(w_e,i t + eps_i)``, summed in component order
+    into ``K``, ``N`` (M,). One row's sum does not depend on the others (a batch of seas)."""
+    for j in range(t.shape[0]):
+        r = rows[j]
+        k_ = 0.0
+        n_ = 0.0
+        for c in range(we.shape[1]):
+            ph = we[r, c] * t[j] + eps[r, c]
+            k_ += math.sin(ph) * cK[r, c]
+            n_ += math.cos(ph) * cN[r, c]
+        K[j] = k_
+        N[j] = n_
 
 
 class RollWaves:
@@ -211,8 +230,18 @@ class RollWaves:
         self._need()
         return math.sin(self.config.chi) * (np.sin(self._phase(t)) @ (self._k * self._a))
 
-    def moment(self, t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Roll and yaw moments ``(K, N)`` (N m) at the times ``t`` (s), each of ``t``'s shape."""
+    @property
+    def moment_constants(self) -> tuple[NDArray[np.float64], ...]:
+        """``(w_e, eps, c_K, c_N)`` (n,) each: a row of :func:`roll_wave_moments`."""
         self._need()
-        ph = self._phase(t)
-        return np.sin(ph) @ self._cK, np.cos(ph) @ self._cN
+        return self._we, self._eps, self._cK, self._cN  # type: ignore[return-value]
+
+    def moment(self, t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Roll and yaw moments ``(K, N)`` (N m) at the times ``t`` (s), each of ``t``'s shape
+        (:func:`roll_wave_moments`)."""
+        tt = np.asarray(t, dtype=float)
+        flat = np.ascontiguousarray(tt.reshape(-1))
+        K, N = np.empty_like(flat), np.empty_like(flat)
+        rows = np.zeros(flat.size, dtype=np.int64)
+        roll_wave_moments(flat, rows, *(c[None] for c in self.moment_constants), K, N)
+        return K.reshape(tt.shape), N.reshape(tt.shape)

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import from_mapping, is_real, param, require_finite
+from shipgym._config import from_mapping, is_real, param, require_angles, require_finite
 from shipgym.dynamics.params import HullParameters
 
 from .spectra import (
@@ -138,6 +138,11 @@ def drift_coefficients(
     return half * (2.0 / 3.0) * hull.B, half * side_fraction * hull.L_pp
 
 
+#: the largest significant wave height (m): well above the highest measured, 19 m (the WMO's
+#: record, a North Atlantic buoy, 4 February 2013)
+MAX_HS = 30.0
+
+
 @dataclass(frozen=True)
 class WaveConfig:
     """Sea state and wave-effect switches (SI units, radians).
@@ -221,8 +226,12 @@ class WaveConfig:
         if not is_real(self.sample_period):
             raise ValueError(f"{name}.sample_period must be a real number")
         require_finite(self)
-        if self.Hs < 0:
-            raise ValueError(f"{name}.Hs must be >= 0 (m), got {self.Hs!r}")
+        require_angles(self, "direction_from")
+        if not 0 <= self.Hs <= MAX_HS:
+            raise ValueError(
+                f"{name}.Hs must be >= 0 and <= {MAX_HS:g} m (beyond any sea measured), got "
+                f"{self.Hs!r}"
+            )
         if not self.Tp > 0:
             raise ValueError(f"{name}.Tp must be > 0 (s), got {self.Tp!r}")
         if not 1.0 <= self.gamma <= 10.0:

@@ -24,7 +24,13 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import from_mapping, param, require_finite, require_positive
+from shipgym._config import (
+    from_mapping,
+    param,
+    require_angles,
+    require_finite,
+    require_positive,
+)
 from shipgym._jit import njit
 from shipgym.dynamics.params import WindageParameters
 
@@ -532,6 +538,7 @@ class WindConfig:
         if self.gust_std is not None:
             _require_real(self, "gust_std")
         require_finite(self)
+        require_angles(self, "direction_from")
         if self.speed < 0:
             raise ValueError(
                 f"WindConfig.speed must be >= 0 (m/s), got {self.speed!r}; give the direction "

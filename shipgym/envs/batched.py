@@ -10,7 +10,7 @@ numbers). Env ``i`` of a batch of N therefore is the single env seeded ``seed + 
 bit, provided each row's arithmetic does not depend on N (elementwise array operations and
 per-row compiled loops; no batched BLAS products).
 
-Public names: ``AUTORESET_MODES``, ``BatchedEnv``, ``SingleEnv``, ``unbatch``.
+Public names: ``AUTORESET_MODES``, ``MAX_ENVS``, ``BatchedEnv``, ``SingleEnv``, ``unbatch``.
 """
 
 from __future__ import annotations
@@ -26,10 +26,14 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-__all__ = ["AUTORESET_MODES", "BatchedEnv", "SingleEnv", "unbatch"]
+__all__ = ["AUTORESET_MODES", "MAX_ENVS", "BatchedEnv", "SingleEnv", "check_num_envs", "unbatch"]
 
 Array = NDArray[np.float64]
 Bools = NDArray[np.bool_]
+
+#: the most envs in one batch: each env holds its physics, disturbances and noise streams
+#: (tens of kB), so 65 536 envs are a few GB; more is a mistake that would exhaust the memory
+MAX_ENVS = 1 << 16
 
 #: the accepted ``autoreset_mode`` values (strings or :class:`gymnasium.vector.AutoresetMode`)
 AUTORESET_MODES = {
@@ -38,6 +42,17 @@ AUTORESET_MODES = {
     AutoresetMode.NEXT_STEP: AutoresetMode.NEXT_STEP,
     AutoresetMode.SAME_STEP: AutoresetMode.SAME_STEP,
 }
+
+
+def check_num_envs(num_envs: Any) -> None:
+    """``num_envs`` is an int in ``[1, MAX_ENVS]``, or a ``ValueError`` saying so."""
+    if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+        raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+    if num_envs > MAX_ENVS:
+        raise ValueError(
+            f"num_envs must be at most {MAX_ENVS} (one process; use several processes for "
+            f"more), got {num_envs}"
+        )
 
 
 class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
@@ -71,8 +86,7 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
         autoreset_mode: str | AutoresetMode = "next-step",
     ) -> None:
         """The batch's size, spaces and autoreset mode, checked."""
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
-            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        check_num_envs(num_envs)
         if autoreset_mode not in AUTORESET_MODES:
             raise ValueError(
                 f"autoreset_mode must be 'next-step' or 'same-step', got {autoreset_mode!r}"

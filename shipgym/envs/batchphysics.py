@@ -28,6 +28,7 @@ from shipgym.disturbances import (
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.sim._mujoco import mujoco
 
+from .batched import MAX_ENVS
 from .physics import INTEGRATORS, check_lags, check_timestep, joint_inertia
 from .scene import build_model
 
@@ -76,8 +77,8 @@ class BatchedPhysics:
 
         self.vessel = load_vessel(vessel)
         v = self.vessel
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ValueError(f"n must be an int >= 1 (the number of hulls), got {n!r}")
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_ENVS:
+            raise ValueError(f"n must be an int in [1, {MAX_ENVS}] (the hulls), got {n!r}")
         self.n = n
         self.plant = v.plant(plant) if isinstance(plant, str) else plant
         dofs = getattr(self.plant, "dofs", None)
@@ -129,11 +130,22 @@ class BatchedPhysics:
         self.currents = [Current(cc) for _ in range(n)]
         self.waves = [Waves(waves, v.hull) if waves is not None else None for _ in range(n)]
         self.saturated = np.zeros((n, acts.n_channels), dtype=bool)
+        self._servo_channels = np.array(
+            [i for i, c in enumerate(acts.channels) if c.dynamics == "servo"], dtype=np.int64
+        )
+        self._flow_actuators = np.array(
+            [i for i, a in enumerate(acts) if a.flow_dependent], dtype=np.int64
+        )
         self.reset()
 
     def qpos(self, i: int) -> Array:
         """Hull ``i``'s MuJoCo joint positions (its world's ``qpos``: rendering)."""
         return self._hulls.q[i].copy()
+
+    @property
+    def timestep(self) -> float:
+        """The physics step (s)."""
+        return self.h
 
     @property
     def aerodynamics(self) -> bool:
@@ -161,6 +173,13 @@ class BatchedPhysics:
         self.current_configs[i] = cc
         self.winds[i] = Wind(wind_cfg or WindConfig(), self.vessel.windage)
         self.currents[i] = Current(cc)
+
+    def set_actuators(self, i: int, vessel: Vessel) -> None:
+        """Give hull ``i`` the actuator constants of ``vessel``, a variant of the batch's
+        vessel with the same actuator kinds and channels (a rudder moved: the printed
+        ``K_dp`` law of :func:`~shipgym.dynamics.vanderklugt.seed_vessel` at each hull's
+        speed); effective from its next step. :attr:`actuators` stays the batch's."""
+        self._hulls.set_actuators(i, vessel.actuators_for(self.plant))
 
     # ---- state -----------------------------------------------------------------------------
     def _rows(self, x: ArrayLike | None, width: int, what: str, default: Array) -> Array:
@@ -258,7 +277,35 @@ class BatchedPhysics:
         """The held (clipped) commands (n, n_channels)."""
         return self._hulls.cmd.copy()
 
+    @property
+    def rate_limited(self) -> NDArray[np.bool_]:
+        """Per hull and servo channel, (n, n_servos): still at its rate limit in the last
+        physics step (as ``VesselPhysics.rate_limited``)."""
+        return self._hulls.hits[:, self._servo_channels] > 0
+
+    @property
+    def nu_c(self) -> Array:
+        """Each hull's current ``(u_c, v_c)`` (m/s) in its body frame at the last physics step,
+        (n, 2) (as ``VesselPhysics.nu_c``)."""
+        return self._hulls.loads[:, 6:8].copy()
+
+    @property
+    def servo_channels(self) -> list[int]:
+        """The channels with servo dynamics (the columns of :attr:`rate_limited`)."""
+        return list(self._servo_channels)
+
+    @property
+    def stalled(self) -> NDArray[np.bool_]:
+        """Per hull and flow-dependent actuator, (n, n_flow): past its stall angle at the
+        last step (as ``VesselPhysics.stalled``)."""
+        return self._hulls.flags[:, self._flow_actuators] > 0
+
     # ---- stepping --------------------------------------------------------------------------
+    def set_external_force(self, tau: ArrayLike) -> None:
+        """Hold an external body load on every hull, ``(n, 4)`` ``[X, Y, K, N]`` (N, N, N m,
+        N m; ``K`` acts on a 4-DOF hull only) until the next call or the hull's reset."""
+        self._hulls.external[:] = self._rows(tau, 4, "external force", self._hulls.external)
+
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
         """Commands ``(n, n_channels)`` (or one row for all), clipped to the channels' ranges;
         returns the clip flags (also :attr:`saturated`)."""

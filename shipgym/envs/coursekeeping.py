@@ -239,6 +239,8 @@ class CourseKeepingVectorEnv(BatchedEnv):
         n = num_envs
         fixed_wind = None if self._wind_arg == AUTO else self._wind_arg
         self.physics = BatchedPhysics(v, n, wind=fixed_wind, timestep=self.timestep)
+        servos = self.physics.servo_channels  # the rudders' columns of its rate_limited
+        self._rudder_servo = [servos.index(j) for j in self._rudder_idx]
         # the actuators' start: shafts at the self-propulsion point, propellers at the thrust
         # that balances the resistance at U (split evenly), the rest at rest
         st0 = self.physics.actuators.initial_state()
@@ -382,7 +384,7 @@ class CourseKeepingVectorEnv(BatchedEnv):
         command = phys.command  # the shafts keep their command
         command[:, self._rudder_idx] = a * self.max_angle
         if self._props:  # hold the speed through the water: resistance + a 20 s speed loop
-            u_r = phys.nu[:, 0] - phys._hulls.loads[:, 6]
+            u_r = phys.nu[:, 0] - phys.nu_c[:, 0]
             thrust = self._thrust0 + self._m11 * (self.U - u_r) / 20.0
             for j, prop in self._props:
                 command[:, j] = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
@@ -404,7 +406,7 @@ class CourseKeepingVectorEnv(BatchedEnv):
         reward = terms["heading"] + terms["rudder"]
         truncated = self._steps * self.control_period >= self.episode_duration - 1e-9
         at_limit = np.abs(delta) >= self.max_angle * (1.0 - 1e-9)
-        rate_limited = (phys._hulls.hits[:, self._rudder_idx] > 0) & active[:, None]
+        rate_limited = phys.rate_limited[:, self._rudder_servo] & active[:, None]
         saturated = (at_limit | clipped[:, self._rudder_idx] | action_clipped) & active[:, None]
         info.update({
             "rudder_command": phys.command[:, self._rudder_idx],

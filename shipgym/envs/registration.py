@@ -54,6 +54,8 @@ VECTOR_IDS: dict[str, str] = {
     "shipgym/BlueLadyStationKeeping-v0": "shipgym.envs.vector:blue_lady_station_keeping_vector_env",
     "shipgym/CourseKeeping-v0": "shipgym.envs.coursekeeping:course_keeping_vector_env",
     "shipgym/SeaTrial-v0": "shipgym.envs.seatrial:sea_trial_vector_env",
+    "shipgym/RudderRollStabilisation-v0": "shipgym.envs.rollstab:seed_roll_vector_env",
+    "shipgym/NavalRollDamping-v0": "shipgym.envs.rollstab:naval_roll_vector_env",
 }
 
 #: the Blue Lady aliases: id -> the vessel-neutral id they equal with ``vessel="blue-lady"``

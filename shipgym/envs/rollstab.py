@@ -17,28 +17,30 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
 from shipgym._config import from_mapping, is_real, param
-from shipgym.disturbances.rollwaves import RollWaveConfig, RollWaves
-from shipgym.dynamics import wrap_angle
+from shipgym._jit import entry, njit
+from shipgym.disturbances.rollwaves import RollWaveConfig, RollWaves, roll_wave_moments
+from shipgym.disturbances.spectra import wave_spectrum
 from shipgym.dynamics.actuators import Propeller, Rudder
+from shipgym.dynamics.frames import wrap
 from shipgym.dynamics.linearise import roll_model_of
 from shipgym.dynamics.vanderklugt import KDP_LAWS, VAN_DER_KLUGT, seed_vessel
 from shipgym.dynamics.vessel import Vessel, load_vessel
-from shipgym.observers.sway import R_SWAY, SwayVelocityKF, calm_water_intensities
-
-from .base import (
-    TopCameraRender,
-    _check_render_mode,
-    _check_timing,
-    _whole_multiple,
-    rudder_action,
+from shipgym.observers.sway import (
+    R_SWAY,
+    SwayVelocityKF,
+    calm_water_intensities,
+    sway_kf_step,
 )
-from .physics import VesselPhysics
+
+from .base import _check_timing, _whole_multiple
+from .batched import BatchedEnv, SingleEnv
+from .batchphysics import BatchedPhysics
 
 __all__ = [
     "AUTO_WAVES",
@@ -47,10 +49,16 @@ __all__ = [
     "ROLL_SENSOR_STD",
     "RollRewardWeights",
     "RudderRollEnv",
+    "RudderRollVectorEnv",
     "SEED_WAVES",
     "SeedRollEnv",
+    "naval_roll_vector_env",
+    "seed_roll_vector_env",
     "seed_wave_intensities",
 ]
+
+Array = NDArray[np.float64]
+Bools = NDArray[np.bool_]
 
 #: the seed's white-noise waves (:func:`seed_wave_intensities`)
 SEED_WAVES = "seed"
@@ -58,9 +66,6 @@ SEED_WAVES = "seed"
 #: standard deviations of the measured ``[r, psi, p, phi]`` (rad/s, rad, rad/s, rad): the
 #: rate gyros' 0.05 deg/s and the gyros' 0.1 deg [chosen, the sway filter's R]
 ROLL_SENSOR_STD: tuple[float, float, float, float] = tuple(math.sqrt(x) for x in R_SWAY)  # type: ignore[assignment]
-
-#: the observation's entries, in order (the last only with ``sway_estimate=True``)
-OBSERVATION = ("r", "heading_error", "p", "phi", "rudder", "speed", "v_hat")
 
 
 #: the default sea of a hull with a displacement: [chosen] a slight beam sea (sea state 3),
@@ -130,7 +135,507 @@ def _speed_range(speed: Any) -> tuple[float, float]:
     return lo, hi
 
 
-class RudderRollEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+def _real(name: str, value: Any, what: str, lo: float = -math.inf, hi: float = math.inf,
+          strict: bool = False) -> float:  # fmt: skip
+    """``value`` as a float, checked finite and in ``[lo, hi)`` (``(lo, hi)`` if ``strict``)."""
+    ok = is_real(value) and math.isfinite(value) and lo <= value < hi
+    if not ok or (strict and value == lo):
+        raise ValueError(f"{name} must be {what}, got {value!r}")
+    return float(value)
+
+
+#: normal draws per env and refill (a generator's ``standard_normal((k, m))`` is the stream of
+#: ``k`` calls of ``standard_normal(m)``)
+BLOCK = 256
+
+
+class _Normals:
+    """Per env a stream of ``m`` standard normals per step from its own generator, drawn in
+    blocks of :data:`BLOCK` and refilled when used up."""
+
+    def __init__(self, n: int, m: int) -> None:
+        self.gens: list[np.random.Generator | None] = [None] * n
+        self.draws = np.zeros((n, BLOCK, m))
+        self.k = np.full(n, BLOCK, dtype=np.int64)
+
+    def reset(self, i: int, gen: np.random.Generator) -> None:
+        self.gens[i] = gen
+        self.k[i] = BLOCK
+
+    def ready(self, mask: Bools) -> tuple[Array, NDArray[np.int64]]:
+        """``(draws, k)`` with an unused draw ``draws[i, k[i]]`` for each env of ``mask``
+        (the envs that used up their block refilled); the taker moves ``k[i]`` on."""
+        if self.k.max() >= BLOCK:
+            for i in np.nonzero(mask & (self.k >= BLOCK))[0].tolist():
+                self.draws[i] = self.gens[i].standard_normal(self.draws.shape[1:])  # type: ignore[union-attr]
+                self.k[i] = 0
+        return self.draws, self.k
+
+
+@njit
+def roll_command(  # type: ignore[no-untyped-def]
+    actions, active, max_angle, amp, freq, t, cp, ridx, cmd, aclip, white, draws, wk, sigma,
+    moment,
+):  # fmt: skip
+    """The rudder commands of the active envs into ``cmd[:, ridx]`` (rad): each action
+    clipped to [-1, 1] (``aclip`` where it was beyond) times the rudder's limit, plus the
+    rudder test ``amp sin(freq (t + cp))`` (``amp`` 0: none); with ``white``, the seed's wave
+    moments ``sigma draws[i, wk[i]]`` into ``moment`` (``wk`` moved on)."""
+    for i in range(actions.shape[0]):
+        if not active[i]:
+            continue
+        if white:
+            moment[i, 0] = sigma[i, 0] * draws[i, wk[i], 0]
+            moment[i, 1] = sigma[i, 1] * draws[i, wk[i], 1]
+            wk[i] += 1
+        test = amp * math.sin(freq * (t[i] + cp)) if amp != 0.0 else 0.0
+        for k in range(actions.shape[1]):
+            a = actions[i, k]
+            aclip[i, k] = abs(a) > 1.0
+            a = 1.0 if a > 1.0 else (-1.0 if a < -1.0 else a)
+            cmd[i, ridx[k]] = a * max_angle[k] + test
+
+
+@njit
+def roll_measure(mask, eta, nu, sensor, draws, kn, std, y):  # type: ignore[no-untyped-def]
+    """The gyros' ``y = [r, psi, p, phi]`` of the envs of ``mask``, with ``sensor`` plus
+    ``std`` times the draws ``draws[i, kn[i]]`` (``kn`` moved on)."""
+    for i in range(eta.shape[0]):
+        if mask[i]:
+            y[i, 0], y[i, 1], y[i, 2], y[i, 3] = nu[i, 3], eta[i, 3], nu[i, 2], eta[i, 2]
+            if sensor:
+                for j in range(4):
+                    y[i, j] = y[i, j] + std[j] * draws[i, kn[i], j]
+                kn[i] += 1
+
+
+@njit
+def roll_observe(mask, y, delta, heading, U, x_hat, obs):  # type: ignore[no-untyped-def]
+    """The observation rows of ``mask`` (:class:`RudderRollEnv`): ``[y_r, wrap(y_psi -
+    heading), y_p, y_phi, delta..., U]`` and, in a wider ``obs``, the filter's ``x_hat``."""
+    nr = delta.shape[1]
+    for i in range(y.shape[0]):
+        if mask[i]:
+            obs[i, 0] = np.float32(y[i, 0])
+            obs[i, 1] = np.float32(wrap(y[i, 1] - heading))
+            obs[i, 2] = np.float32(y[i, 2])
+            obs[i, 3] = np.float32(y[i, 3])
+            for k in range(nr):
+                obs[i, 4 + k] = np.float32(delta[i, k])
+            obs[i, 4 + nr] = np.float32(U[i])
+            if obs.shape[1] > 5 + nr:
+                obs[i, 5 + nr] = np.float32(x_hat[i])
+
+
+@njit
+def roll_terms(  # type: ignore[no-untyped-def]
+    active, eta, delta, dprev, heading, phi0, psi0, w_rate, max_rate, max_angle, clipped,
+    aclip, steps, cp, duration, max_roll, sums, rate, dmean, e_psi, terms, reward, term,
+    trunc, sat,
+):  # fmt: skip
+    """The task's step law for the active envs (:class:`RudderRollEnv`): the rudder rate and
+    mean over the control period (``dprev`` moved on), the reward terms ``roll``,
+    ``heading``, ``rudder_rate`` and their sum, termination at ``max_roll``, truncation at
+    ``duration``, the saturation flags and the episode sums
+    (:attr:`RudderRollVectorEnv._sums`; the rate-limit and filter sums are the caller's)."""
+    nr = delta.shape[1]
+    for i in range(eta.shape[0]):
+        if not active[i]:
+            continue
+        steps[i] += 1
+        rr = 0.0
+        d2 = 0.0
+        w2 = 0.0
+        any_sat = False
+        for k in range(nr):
+            d = delta[i, k]
+            rate[i, k] = (d - dprev[i, k]) / cp
+            dmean[i, k] = 0.5 * (d + dprev[i, k])
+            dprev[i, k] = d
+            x = rate[i, k] / max_rate[k]
+            rr += x * x
+            d2 += d * d
+            w2 += rate[i, k] * rate[i, k]
+            sat[i, k] = abs(d) >= max_angle[k] * (1.0 - 1e-9) or clipped[i, k] or aclip[i, k]
+            any_sat = any_sat or sat[i, k]
+        phi = eta[i, 2]
+        e = wrap(eta[i, 3] - heading)
+        e_psi[i] = e
+        terms[i, 0] = -((phi / phi0) ** 2)
+        terms[i, 1] = -((e / psi0) ** 2)
+        terms[i, 2] = -w_rate * rr / nr
+        reward[i] = terms[i, 0] + terms[i, 1] + terms[i, 2]
+        term[i] = abs(phi) > max_roll
+        trunc[i] = not term[i] and steps[i] * cp >= duration - 1e-9
+        s = sums[i]
+        s[0] += phi * phi
+        s[1] += e * e
+        s[2] += d2 / nr
+        s[3] += w2 / nr
+        s[5] = max(s[5], abs(phi))
+        s[6] = max(s[6], abs(e))
+        s[8] += any_sat
+
+
+class RudderRollVectorEnv(BatchedEnv):
+    """N envs of :class:`RudderRollEnv` stepped together (its docstring is the task's spec):
+    ``RudderRollVectorEnv(num_envs, *, autoreset_mode="next-step", **RudderRollEnv's
+    arguments but render_mode)``; env ``i`` seeded ``seed + i`` is the single env seeded so,
+    bit for bit. Each env draws its own speed per episode; with ``kdp_law="printed"`` each
+    hull gets the rudder of the printed law at its speed
+    (:meth:`~shipgym.envs.batchphysics.BatchedPhysics.set_actuators`)."""
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+
+    def __init__(
+        self,
+        num_envs: int,
+        *,
+        autoreset_mode: str | AutoresetMode = "next-step",
+        vessel: Vessel | str | None = None,
+        speed: float | tuple[float, float] = (8.0, 15.0),
+        heading: float = 0.0,
+        waves: str | RollWaveConfig | Mapping[str, Any] | None = "auto",
+        kdp_law: str = "U2",
+        rudder_test: bool = False,
+        rudder_test_amplitude: float = math.radians(10.0),
+        rudder_test_frequency: float = 0.43,
+        sensor_noise: bool = True,
+        sway_estimate: bool = False,
+        reward_weights: RollRewardWeights | Mapping[str, float] | None = None,
+        episode_duration: float = 600.0,
+        timestep: float = 0.01,
+        control_period: float = 0.1,
+        max_roll: float = math.radians(30.0),
+    ) -> None:
+        if vessel is None:
+            raise TypeError(
+                "RudderRollEnv needs vessel=NAME (a 4-DOF vessel with a rudder: "
+                "'van-der-klugt', 'naval-vessel') or a package path"
+            )
+        self.base_vessel = load_vessel(vessel)
+        v = self.base_vessel
+        if v.dofs != 4 or not v.rudders:
+            raise ValueError(
+                f"RudderRollEnv needs a 4-DOF vessel with a rudder; {v.name!r} has {v.dofs} DOF "
+                f"and the actuators {', '.join(a.label for a in v.actuators)}"
+            )
+        if kdp_law not in KDP_LAWS:
+            raise ValueError(f"kdp_law must be one of {KDP_LAWS}, got {kdp_law!r}")
+        if kdp_law != "U2" and v.name != "van-der-klugt":
+            raise ValueError("kdp_law='printed' is the seed's law: it needs vessel='van-der-klugt'")
+        self.kdp_law = kdp_law
+        self.speed_range = _speed_range(speed)
+        self.heading = _real("heading", heading, "a finite angle (rad)")
+        self.waves = self._parse_waves(waves)
+        self.rudder_test = bool(rudder_test)
+        self.rudder_test_amplitude = _real(
+            "rudder_test_amplitude", rudder_test_amplitude, ">= 0", 0.0
+        )
+        self.rudder_test_frequency = _real(
+            "rudder_test_frequency", rudder_test_frequency, ">= 0", 0.0
+        )
+        self.sensor_noise = bool(sensor_noise)
+        self.sway_estimate = bool(sway_estimate)
+        if reward_weights is None:
+            reward_weights = RollRewardWeights()
+        elif isinstance(reward_weights, Mapping):
+            reward_weights = from_mapping(RollRewardWeights, reward_weights, where="reward_weights")
+        elif not isinstance(reward_weights, RollRewardWeights):
+            raise TypeError(f"reward_weights must be a RollRewardWeights or a mapping, got "
+                            f"{reward_weights!r}")  # fmt: skip
+        self.reward_weights = reward_weights
+        self.episode_duration = _real(
+            "episode_duration", episode_duration, "> 0 s", 0.0, strict=True
+        )
+        self.max_roll = _real("max_roll", max_roll, "in (0, 1.2) rad", 0.0, 1.2, strict=True)
+        _check_timing(timestep, control_period)
+        self.n_substeps = _whole_multiple(control_period, timestep)
+        self.timestep = float(timestep)
+        self.control_period = float(control_period)
+        n = num_envs if isinstance(num_envs, int) and num_envs >= 1 else 1  # _setup checks it
+        self.physics = BatchedPhysics(v, n, timestep=self.timestep)
+        acts = self.physics.actuators
+        chans = acts.channel_names
+        self._ridx = np.array([chans.index(r) for r in v.rudders], dtype=np.int64)
+        rudders = [a for a in acts if isinstance(a, Rudder)]
+        self._rudder_name = rudders[0].name
+        self._props = [(chans.index(a.name), a) for a in acts
+                       if isinstance(a, Propeller) and a.alpha == 0]  # fmt: skip
+        #: each rudder's angle limit (rad): an action of 1 commands it
+        self.max_angle = np.array([a.max_angle for a in rudders])
+        self._max_rate = np.array([a.max_rate for a in rudders])
+        nr = len(rudders)
+        lo = [-12.0, -math.pi, -12.0, -1.2, *(-self.max_angle), 0.0]
+        hi = [12.0, math.pi, 12.0, 1.2, *self.max_angle, 30.0]
+        if self.sway_estimate:
+            lo.append(-50.0)
+            hi.append(50.0)
+        obs_space = spaces.Box(np.array(lo, dtype=np.float32), np.array(hi, dtype=np.float32),
+                               dtype=np.float32)  # fmt: skip
+        self._setup(num_envs, obs_space, spaces.Box(-1.0, 1.0, (nr,), dtype=np.float32),
+                    autoreset_mode)  # fmt: skip
+        hull = self.physics.plant
+        self._M = hull.mass_matrix()
+        self._m11 = float(self._M[0, 0])
+        self.U = np.full(n, self.speed_range[0])  # each env's speed this episode (m/s)
+        self.vessels: list[Vessel] = [v] * n  # each env's vessel (the printed law: at its U)
+        self._thrust0 = np.zeros(n)
+        self._noise = _Normals(n, 4)
+        self._white = _Normals(n, 2)
+        self._sigma = np.zeros((n, 2))  # the seed's white moments' standard deviations
+        nc = RollWaveConfig().n_components if not isinstance(self.waves, RollWaveConfig) else (
+            self.waves.n_components)  # fmt: skip
+        self._sea = [np.zeros((n, nc)) for _ in range(4)]  # w_e, eps, c_K, c_N of each sea
+        self._kf = [np.zeros(s) for s in ((n, 5, 5), (n, 5), (n, 5, 5), (n, 4, 4))]
+        self._kx, self._kP, self._kG = np.zeros((n, 5)), np.zeros((n, 5, 5)), np.zeros((n, 5, 4))
+        self._entries: dict[Any, Any] = {}  # the compiled laws' entry points
+        self._std = np.array(ROLL_SENSOR_STD)
+        self._rows = np.arange(n)
+        self._external = np.zeros((n, 4))  # [X, Y, K, N]: the waves' K, N
+        self._steps = np.zeros(n, dtype=np.int64)
+        self._delta_prev = np.zeros((n, nr))
+        self._obs = np.zeros((n, obs_space.shape[0]), dtype=np.float32)
+        #: per env the sums of roll^2, e_psi^2, rudder^2, rate^2, v_err^2, max |phi|,
+        #: max |e_psi|, steps rate-limited, steps saturated
+        self._sums = np.zeros((n, 9))
+
+    # ---- set-up ----------------------------------------------------------------------------
+    def _parse_waves(self, waves: Any) -> str | RollWaveConfig | None:
+        if waves is None:
+            return None
+        if isinstance(waves, str) and waves == AUTO_WAVES:
+            if getattr(self.base_vessel.plant(), "nabla", 0.0) > 0:
+                return BEAM_SEA
+            return SEED_WAVES if self.base_vessel.name == "van-der-klugt" else None
+        if isinstance(waves, str):
+            if waves != SEED_WAVES:
+                raise ValueError(f"waves must be None, 'auto', 'seed', a RollWaveConfig or a "
+                                 f"mapping, got {waves!r}")  # fmt: skip
+            if self.base_vessel.name != "van-der-klugt":
+                raise ValueError(
+                    "waves='seed' are the seed's disturbances per unit inertia of the "
+                    "'van-der-klugt' hull; give this vessel a sea: waves={'Hs': 2.0, 'Tp': 8.0}"
+                )
+            return SEED_WAVES
+        cfg = RollWaveConfig.coerce(waves, name="waves")
+        hull = self.base_vessel.plant()
+        if not getattr(hull, "nabla", 0.0) > 0:
+            raise ValueError(
+                f"a wave spectrum needs the hull's displacement: {self.base_vessel.name!r} "
+                f"({type(hull).__name__}) has none (hull.nabla); use waves='seed' or None"
+            )
+        return cfg
+
+    def vessel_at(self, U: float) -> Vessel:
+        """The vessel of an episode at the speed ``U`` (m/s): the printed ``K_dp`` law's
+        rudder is placed for ``U``; otherwise the vessel itself."""
+        if self.kdp_law == "printed":
+            return seed_vessel("printed", speed=U)
+        return self.base_vessel
+
+    def filter_intensities(self, U: float) -> tuple[float, float]:
+        """The filter's white-noise intensities of the roll and yaw moments ((N m)^2 s).
+
+        The seed's (:func:`seed_wave_intensities`) for its waves; for a sea, ``q_K = pi
+        S_K(w_roll)`` (the one-sided roll-moment spectrum at the roll natural frequency: a white
+        noise with that density there) and ``q_N = q_K`` [chosen]; in calm water
+        :func:`~shipgym.observers.sway.calm_water_intensities` (a small process noise).
+        The filter of ``sway_estimate=True`` uses them; pass them to a pilot of your own
+        (:func:`~shipgym.controllers.rollpilot.roll_pilot`).
+        """
+        if self.waves == SEED_WAVES:
+            return seed_wave_intensities(U)
+        hull = self.physics.plant
+        if isinstance(self.waves, RollWaveConfig):
+            c = self.waves
+            wn = math.sqrt(hull.K_phi / hull.mass_matrix()[2, 2])
+            S = float(wave_spectrum(c.spectrum, np.array([wn]), c.Hs, c.Tp, c.gamma)[0])
+            q = math.pi * (hull.K_phi * math.sin(c.chi) * wn**2 / 9.81) ** 2 * S
+            return q, q
+        return calm_water_intensities(hull)
+
+    # ---- episodes --------------------------------------------------------------------------
+    def _reset_envs(self, mask: Bools) -> None:
+        n = self.num_envs
+        phys = self.physics
+        hull = phys.plant
+        lo, hi = self.speed_range
+        gens: list[Any] = [None] * n
+        for i in np.nonzero(mask)[0].tolist():
+            rng = self._rngs[i]
+            U = float(rng.uniform(lo, hi)) if hi > lo else lo  # type: ignore[union-attr]
+            self.U[i] = U
+            # one child generator per stochastic part, in a fixed order: same seed, same episode
+            seeds = rng.integers(2**63, size=3)  # type: ignore[union-attr]
+            self._noise.reset(i, np.random.default_rng(int(seeds[0])))
+            wave_rng = np.random.default_rng(int(seeds[1]))
+            self._white.reset(i, wave_rng)
+            gens[i] = np.random.default_rng(int(seeds[2]))
+            self.vessels[i] = vessel = self.vessel_at(U)
+            if self.kdp_law == "printed":
+                phys.set_actuators(i, vessel)
+            if self._props:  # the thrust that balances the resistance in straight running at U
+                nd0 = np.asarray(hull.nu_dot(np.array([U, 0.0, 0.0, 0.0]), np.zeros(4)))
+                self._thrust0[i] = -(self._M @ nd0)[0]
+            if self.waves == SEED_WAVES:
+                q_K, q_N = seed_wave_intensities(U)
+                self._sigma[i] = math.sqrt(q_K / self.control_period), math.sqrt(
+                    q_N / self.control_period)  # fmt: skip
+            elif isinstance(self.waves, RollWaveConfig):
+                w = RollWaves(dataclasses.replace(self.waves, U=U), hull.K_phi,
+                              length=vessel.L_pp, nabla=hull.nabla, rho=hull.rho)  # fmt: skip
+                w.reset(wave_rng)
+                for dst, src in zip(self._sea, w.moment_constants, strict=True):
+                    dst[i] = src
+            if self.sway_estimate:
+                model = roll_model_of(vessel, U, rudder=self._rudder_name)
+                x0 = np.array([0.0, 0.0, self.heading, 0.0, 0.0])  # on the known heading
+                kf = SwayVelocityKF(model, dt=self.control_period, q=self.filter_intensities(U),
+                                    x0=x0)  # fmt: skip
+                for dst, src in zip(self._kf, (kf.A_d, kf.B_d, kf.Q, kf.R), strict=True):
+                    dst[i] = src
+                self._kx[i], self._kP[i], self._kG[i] = kf.x, kf.P, kf.gain
+        z = np.zeros(n)
+        eta = np.stack([z, z, z, np.full(n, self.heading)], 1)
+        nu = np.stack([self.U, z, z, z], 1)
+        phys.reset(eta=eta, nu=nu, mask=mask, rngs=gens)
+        self._steps[mask] = 0
+        delta = phys.actuator_state[:, self._ridx]
+        self._delta_prev[mask] = delta[mask]
+        self._sums[mask] = 0.0
+        self._observe(mask, self._measure(mask, phys.eta_full, phys.nu_full), delta)
+
+    def _measure(self, mask: Bools, eta: Array, nu: Array) -> Array:
+        """The gyros' ``[r, psi, p, phi]`` (n, 4) of the envs of ``mask`` (their noise drawn)."""
+        y = np.zeros((self.num_envs, 4))
+        noise = self._noise
+        nd, nk = noise.ready(mask) if self.sensor_noise else (noise.draws, noise.k)
+        self._call(roll_measure, mask, eta, nu, self.sensor_noise, nd, nk, self._std, y)
+        return y
+
+    def _observe(self, mask: Bools, y: Array, delta: Array) -> None:
+        self._call(roll_observe, mask, y, delta, self.heading, self.U, self._kx[:, 0].copy(),
+                   self._obs)  # fmt: skip
+
+    def _observation(self) -> NDArray[np.float32]:
+        return self._obs.copy()
+
+    def _reset_info(self, mask: Bools) -> dict[str, Any]:
+        info: dict[str, Any] = {"speed": self.U.copy(), "time": np.zeros(self.num_envs)}
+        if self.sway_estimate:
+            info["v_hat"] = self._kx[:, 0].copy()
+            info["trace_P"] = np.trace(self._kP, axis1=1, axis2=2)
+        return info
+
+    def _step_envs(
+        self, actions: Array, active: Bools
+    ) -> tuple[Array, Bools, Bools, dict[str, Any]]:
+        phys = self.physics
+        n, nr = actions.shape
+        command = phys.command
+        t0 = phys.t.copy()
+        aclip = np.zeros((n, nr), dtype=np.bool_)
+        amp = self.rudder_test_amplitude if self.rudder_test else 0.0
+        white = self.waves == SEED_WAVES
+        wd, wk = self._white.ready(active) if white else (self._white.draws, self._white.k)
+        moment = np.zeros((n, 2))
+        self._call(roll_command, actions, active, self.max_angle, amp,
+                   self.rudder_test_frequency, t0, self.control_period, self._ridx, command,
+                   aclip, white, wd, wk, self._sigma, moment)  # fmt: skip
+        if self._props:  # hold the speed: resistance at U + a 20 s speed loop
+            thrust = self._thrust0 + self._m11 * (self.U - phys.nu_full[:, 0]) / 20.0
+            for j, prop in self._props:
+                c = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
+                command[:, j] = np.where(active, c, command[:, j])
+        clipped = phys.set_command(command)[:, self._ridx]
+        if isinstance(self.waves, RollWaveConfig):  # the sea's, mid-period
+            t = np.ascontiguousarray(t0 + 0.5 * self.control_period)
+            K, N = np.empty(n), np.empty(n)
+            self._call(roll_wave_moments, t, self._rows, *self._sea, K, N)
+            moment[:, 0], moment[:, 1] = K, N
+        if self.waves is not None:
+            self._external[:, 2:] = moment
+            phys.set_external_force(self._external)
+        phys.step(self.n_substeps, mask=active)
+        eta, nu, delta = phys.eta_full, phys.nu_full, phys.actuator_state[:, self._ridx]
+        y = self._measure(active, eta, nu)
+        w = self.reward_weights
+        terms, e_psi, reward = np.zeros((n, 3)), np.zeros(n), np.zeros(n)
+        rate, dmean, sat = np.zeros((n, nr)), np.zeros((n, nr)), np.zeros((n, nr), np.bool_)
+        term, trunc = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
+        self._call(roll_terms, active, eta, delta, self._delta_prev, self.heading, w.phi0,
+                   w.psi0, w.rate, self._max_rate, self.max_angle, clipped, aclip, self._steps,
+                   self.control_period, self.episode_duration, self.max_roll, self._sums, rate,
+                   dmean, e_psi, terms, reward, term, trunc, sat)  # fmt: skip
+        info: dict[str, Any] = {
+            "time": phys.t.copy(),
+            "eta": eta,
+            "nu": nu,
+            "speed": nu[:, 0].copy(),
+            "v": nu[:, 1].copy(),
+            "p": nu[:, 2].copy(),
+            "r": nu[:, 3].copy(),
+            "roll": eta[:, 2].copy(),
+            "heading_error": e_psi,
+            "rudder": delta,
+            "rudder_command": phys.command[:, self._ridx],
+            "rudder_rate": rate,
+            "saturated": sat,
+            "rate_limited": phys.rate_limited[:, :nr],
+            "stalled": phys.stalled,
+            "action_clipped": aclip,
+            "wave_moment": moment,
+            "reward_terms": {
+                "roll": terms[:, 0],
+                "heading": terms[:, 1],
+                "rudder_rate": terms[:, 2],
+            },  # fmt: skip
+        }
+        s = self._sums
+        s[:, 7] += active & info["rate_limited"].any(1)
+        if self.sway_estimate:
+            self._call(sway_kf_step, *self._kf, y, dmean[:, 0].copy(), active, self._kx,
+                       self._kP, self._kG)  # fmt: skip
+            v_hat = self._kx[:, 0].copy()
+            s[:, 4] += np.where(active, (v_hat - nu[:, 1]) ** 2, 0.0)
+            info["v_hat"] = v_hat
+            info["trace_P"] = np.trace(self._kP, axis1=1, axis2=2)
+        self._observe(active, y, delta)
+        return reward, term, trunc, info
+
+    def _call(self, fn: Any, *args: Any) -> None:
+        """``fn(*args)`` through its compiled entry point (found once per function)."""
+        e = self._entries.get(fn)
+        if e is None:
+            e = self._entries[fn] = entry(fn, args)
+        e(*args)
+
+    # ---- metrics ---------------------------------------------------------------------------
+    def _episode_metrics(self, done: Bools) -> dict[str, Any]:
+        """Roll, heading and rudder statistics of each env's episode so far: RMS of roll,
+        heading error, rudder and rudder rate, their maxima, the fractions of steps
+        rate-limited and saturated, the v-hat RMSE (with the filter)."""
+        s = self._sums
+        n = np.maximum(self._steps, 1)
+        out: dict[str, Any] = {
+            "speed": self.U.copy(),
+            "steps": self._steps.copy(),
+            "roll_rms": np.sqrt(s[:, 0] / n),
+            "roll_max": s[:, 5].copy(),
+            "heading_rms": np.sqrt(s[:, 1] / n),
+            "heading_max": s[:, 6].copy(),
+            "rudder_rms": np.sqrt(s[:, 2] / n),
+            "rudder_rate_rms": np.sqrt(s[:, 3] / n),
+            "rate_limited_fraction": s[:, 7] / n,
+            "saturated_fraction": s[:, 8] / n,
+        }
+        if self.sway_estimate:
+            out["v_hat_rmse"] = np.sqrt(s[:, 4] / n)
+        return out
+
+
+class RudderRollEnv(SingleEnv):
     r"""Hold a heading at speed with the rudder while damping the roll in waves.
 
     **Physics.** A 4-DOF vessel (surge, sway, roll, yaw) with a rudder (:class:`~shipgym.
@@ -203,382 +708,36 @@ class RudderRollEnv(TopCameraRender, gym.Env[NDArray[np.float32], NDArray[np.flo
         render_mode: ``None`` or ``"rgb_array"``.
     """
 
+    batched = RudderRollVectorEnv
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
 
-    def __init__(
-        self,
-        vessel: Vessel | str | None = None,
-        speed: float | tuple[float, float] = (8.0, 15.0),
-        heading: float = 0.0,
-        waves: str | RollWaveConfig | Mapping[str, Any] | None = "auto",
-        kdp_law: str = "U2",
-        rudder_test: bool = False,
-        rudder_test_amplitude: float = math.radians(10.0),
-        rudder_test_frequency: float = 0.43,
-        sensor_noise: bool = True,
-        sway_estimate: bool = False,
-        reward_weights: RollRewardWeights | Mapping[str, float] | None = None,
-        episode_duration: float = 600.0,
-        timestep: float = 0.01,
-        control_period: float = 0.1,
-        max_roll: float = math.radians(30.0),
-        render_mode: str | None = None,
-    ) -> None:
-        if vessel is None:
-            raise TypeError(
-                "RudderRollEnv needs vessel=NAME (a 4-DOF vessel with a rudder: "
-                "'van-der-klugt', 'naval-vessel') or a package path"
-            )
-        self.base_vessel = load_vessel(vessel)
-        v = self.base_vessel
-        if v.dofs != 4 or not v.rudders:
-            raise ValueError(
-                f"RudderRollEnv needs a 4-DOF vessel with a rudder; {v.name!r} has {v.dofs} DOF "
-                f"and the actuators {', '.join(a.label for a in v.actuators)}"
-            )
-        if kdp_law not in KDP_LAWS:
-            raise ValueError(f"kdp_law must be one of {KDP_LAWS}, got {kdp_law!r}")
-        if kdp_law != "U2" and v.name != "van-der-klugt":
-            raise ValueError("kdp_law='printed' is the seed's law: it needs vessel='van-der-klugt'")
-        self.kdp_law = kdp_law
-        self.speed_range = _speed_range(speed)
-        if not (is_real(heading) and math.isfinite(heading)):
-            raise ValueError(f"heading must be a finite angle (rad), got {heading!r}")
-        self.heading = float(heading)
-        self.waves = self._parse_waves(waves)
-        self.rudder_test = bool(rudder_test)
-        for nm, val in (("rudder_test_amplitude", rudder_test_amplitude),
-                        ("rudder_test_frequency", rudder_test_frequency)):  # fmt: skip
-            if not (is_real(val) and math.isfinite(val) and val >= 0):
-                raise ValueError(f"{nm} must be a finite number >= 0, got {val!r}")
-        self.rudder_test_amplitude = float(rudder_test_amplitude)
-        self.rudder_test_frequency = float(rudder_test_frequency)
-        self.sensor_noise = bool(sensor_noise)
-        self.sway_estimate = bool(sway_estimate)
-        if reward_weights is None:
-            reward_weights = RollRewardWeights()
-        elif isinstance(reward_weights, Mapping):
-            reward_weights = from_mapping(RollRewardWeights, reward_weights, where="reward_weights")
-        elif not isinstance(reward_weights, RollRewardWeights):
-            raise TypeError(f"reward_weights must be a RollRewardWeights or a mapping, got "
-                            f"{reward_weights!r}")  # fmt: skip
-        self.reward_weights = reward_weights
-        if not (is_real(episode_duration) and 0 < episode_duration < math.inf):
-            raise ValueError(f"episode_duration must be > 0 s, got {episode_duration!r}")
-        self.episode_duration = float(episode_duration)
-        if not (is_real(max_roll) and 0 < max_roll < 1.2):
-            raise ValueError(f"max_roll must be in (0, 1.2) rad, got {max_roll!r}")
-        self.max_roll = float(max_roll)
-        _check_timing(timestep, control_period)
-        self.n_substeps = _whole_multiple(control_period, timestep)
-        self.timestep = float(timestep)
-        self.control_period = float(control_period)
-        _check_render_mode(render_mode, self.metadata)
-        self.render_mode = render_mode
-        self._renderer: Any = None
-        chans = v.actuators.channel_names
-        self._rudder_idx = [chans.index(n) for n in v.rudders]
-        self._rudders = [a for a in v.actuators if isinstance(a, Rudder)]
-        self._props = [
-            (chans.index(a.name), a)
-            for a in v.actuators
-            if isinstance(a, Propeller) and a.alpha == 0
-        ]
-        n = len(self._rudder_idx)
-        self.action_space = spaces.Box(-1.0, 1.0, (n,), dtype=np.float32)
-        dmax = np.array([a.max_angle for a in self._rudders])
-        lo = [-12.0, -math.pi, -12.0, -1.2, *(-dmax), 0.0]
-        hi = [12.0, math.pi, 12.0, 1.2, *dmax, 30.0]
-        if self.sway_estimate:
-            lo.append(-50.0)
-            hi.append(50.0)
-        self.observation_space = spaces.Box(
-            np.array(lo, dtype=np.float32), np.array(hi, dtype=np.float32), dtype=np.float32
-        )
-        self._max_angle = dmax
-        self._max_rate = np.array([a.max_rate for a in self._rudders])
-        self.physics: VesselPhysics | None = None
-        self._physics_key: Any = None
-        self.U = float(self.speed_range[0])
-        self._rng = np.random.default_rng()
+    def __init__(self, vessel: Vessel | str | None = None, **kwargs: Any) -> None:
+        super().__init__(vessel=vessel, **kwargs)
 
-    # ---- set-up ----------------------------------------------------------------------------
-    def _parse_waves(self, waves: Any) -> str | RollWaveConfig | None:
-        if waves is None:
-            return None
-        if isinstance(waves, str) and waves == AUTO_WAVES:
-            if getattr(self.base_vessel.plant(), "nabla", 0.0) > 0:
-                return BEAM_SEA
-            return SEED_WAVES if self.base_vessel.name == "van-der-klugt" else None
-        if isinstance(waves, str):
-            if waves != SEED_WAVES:
-                raise ValueError(f"waves must be None, 'auto', 'seed', a RollWaveConfig or a "
-                                 f"mapping, got {waves!r}")  # fmt: skip
-            if self.base_vessel.name != "van-der-klugt":
-                raise ValueError(
-                    "waves='seed' are the seed's disturbances per unit inertia of the "
-                    "'van-der-klugt' hull; give this vessel a sea: waves={'Hs': 2.0, 'Tp': 8.0}"
-                )
-            return SEED_WAVES
-        cfg = RollWaveConfig.coerce(waves, name="waves")
-        hull = self.base_vessel.plant()
-        if not getattr(hull, "nabla", 0.0) > 0:
-            raise ValueError(
-                f"a wave spectrum needs the hull's displacement: {self.base_vessel.name!r} "
-                f"({type(hull).__name__}) has none (hull.nabla); use waves='seed' or None"
-            )
-        return cfg
+    def __getattr__(self, name: str) -> Any:
+        if name in _SETTINGS:  # the task's settings: those of its batch
+            return getattr(self.__dict__["batch"], name)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
-    def _vessel_at(self, U: float) -> Vessel:
-        if self.kdp_law == "printed":
-            return seed_vessel("printed", speed=U)
-        return self.base_vessel
+    @property
+    def U(self) -> float:
+        """The episode's forward speed (m/s)."""
+        return float(self.batch.U[0])
 
-    def _make_physics(self, U: float) -> VesselPhysics:
-        key = (self.kdp_law, U if self.kdp_law == "printed" else None)
-        if self.physics is None or key != self._physics_key:
-            if self._renderer is not None:
-                self._renderer.close()
-                self._renderer = None
-            self.physics = VesselPhysics(self._vessel_at(U), world="open-water",
-                                         timestep=self.timestep)  # fmt: skip
-            self._physics_key = key
-        return self.physics
-
-    # ---- episode ---------------------------------------------------------------------------
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        super().reset(seed=seed)
-        rng = self.np_random
-        lo, hi = self.speed_range
-        U = float(rng.uniform(lo, hi)) if hi > lo else lo
-        if options and "speed" in options:
-            U = float(_speed_range(options["speed"])[0])
-        self.U = U
-        phys = self._make_physics(U)
-        # one child generator per stochastic part, in a fixed order: same seed, same episode
-        seeds = rng.integers(2**63, size=3)
-        self._noise_rng = np.random.default_rng(int(seeds[0]))
-        self._wave_rng = np.random.default_rng(int(seeds[1]))
-        phys.reset(eta=(0.0, 0.0, 0.0, self.heading), nu=(U, 0.0, 0.0, 0.0),
-                   rng=np.random.default_rng(int(seeds[2])))  # fmt: skip
-        hull = phys.plant
-        # the propeller's thrust that balances the resistance in straight running at U
-        nd0 = np.asarray(hull.nu_dot(np.array([U, 0.0, 0.0, 0.0]), np.zeros(4)))
-        self._thrust0 = float(-(hull.mass_matrix() @ nd0)[0])
-        self._m11 = float(hull.mass_matrix()[0, 0])
-        self._wave_source = self._make_waves(U)
-        self._filter = None
-        if self.sway_estimate:
-            q = self.filter_intensities(U)
-            model = roll_model_of(phys.vessel, U, rudder=self._rudders[0].name)
-            x0 = np.array([0.0, 0.0, self.heading, 0.0, 0.0])  # starts on the known heading
-            self._filter = SwayVelocityKF(model, dt=self.control_period, q=q, x0=x0)
-        self._steps = 0
-        self._delta_prev = phys.actuator_state[self._rudder_idx].copy()
-        self._command = np.zeros(len(self._rudder_idx))
-        self._moment = (0.0, 0.0)
-        self._metrics = _RollMetrics()
-        obs = self._observe()
-        info = {"speed": U, "time": 0.0}
-        if self._filter is not None:
-            info["v_hat"] = float(self._filter.x[0])
-            info["trace_P"] = self._filter.trace_P
-        return obs, info
-
-    def _make_waves(self, U: float) -> Any:
-        if self.waves is None:
-            return None
-        if self.waves == SEED_WAVES:
-            q_K, q_N = seed_wave_intensities(U)
-            return ("white", math.sqrt(q_K / self.control_period),
-                    math.sqrt(q_N / self.control_period))  # fmt: skip
-        hull = self.physics.plant  # type: ignore[union-attr]
-        cfg = dataclasses.replace(self.waves, U=U)
-        w = RollWaves(cfg, hull.K_phi, length=self.physics.vessel.L_pp, nabla=hull.nabla,  # type: ignore[union-attr]
-                      rho=hull.rho)  # fmt: skip
-        w.reset(self._wave_rng)
-        return ("sea", w)
-
-    def filter_intensities(self, U: float) -> tuple[float, float]:
-        """The filter's white-noise intensities of the roll and yaw moments ((N m)^2 s).
-
-        The seed's (:func:`seed_wave_intensities`) for its waves; for a sea, ``q_K = pi
-        S_K(w_roll)`` (the one-sided roll-moment spectrum at the roll natural frequency: a white
-        noise with that density there) and ``q_N = q_K`` [chosen]; in calm water
-        :func:`~shipgym.observers.sway.calm_water_intensities` (a small process noise).
-        The filter of ``sway_estimate=True`` uses them; pass them to a pilot of your own
-        (:func:`~shipgym.controllers.rollpilot.roll_pilot`).
-        """
-        if self.waves == SEED_WAVES:
-            return seed_wave_intensities(U)
-        hull = self.physics.plant  # type: ignore[union-attr]
-        if isinstance(self._wave_source, tuple) and self._wave_source[0] == "sea":
-            w = self._wave_source[1]
-            M = hull.mass_matrix()
-            wn = math.sqrt(hull.K_phi / M[2, 2])
-            S = float(w.spectrum(np.array([wn]))[0])
-            s = math.sin(w.config.chi)
-            q = math.pi * (hull.K_phi * s * wn**2 / 9.81) ** 2 * S
-            return q, q
-        return calm_water_intensities(hull)
-
-    def _wave_moment(self, t0: float) -> tuple[float, float]:
-        src = self._wave_source
-        if src is None:
-            return 0.0, 0.0
-        if src[0] == "white":
-            a, b = self._wave_rng.standard_normal(2)
-            return float(src[1] * a), float(src[2] * b)
-        K, N = src[1].moment(t0 + 0.5 * self.control_period)
-        return float(K), float(N)
-
-    def step(
-        self, action: NDArray[np.float32]
-    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        phys = self.physics
-        if phys is None:
-            raise gym.error.ResetNeeded("call reset() before step()")
-        a, action_clipped = rudder_action(action, self.action_space.shape, self.base_vessel.rudders)
-        cmd_angle = a * self._max_angle
-        t0 = phys.time
-        if self.rudder_test:
-            cmd_angle = cmd_angle + self.rudder_test_amplitude * math.sin(
-                self.rudder_test_frequency * (t0 + self.control_period)
-            )
-        command = phys.command
-        command[self._rudder_idx] = cmd_angle
-        u = float(phys.nu_full[0])
-        for j, prop in self._props:  # hold the speed: resistance at U + a 20 s speed loop
-            thrust = self._thrust0 + self._m11 * (self.U - u) / 20.0
-            command[j] = float(np.clip(prop.inverse(thrust), prop.lower, prop.upper))
-        clipped = phys.set_command(command)
-        self._command = phys.command[self._rudder_idx]
-        K, N = self._wave_moment(t0)
-        self._moment = (K, N)
-        phys.set_external_force([0.0, 0.0, K, N])
-        phys.step(self.n_substeps)
-        self._steps += 1
-        delta = phys.actuator_state[self._rudder_idx]
-        rate = (delta - self._delta_prev) / self.control_period
-        delta_mean = 0.5 * (delta + self._delta_prev)
-        self._delta_prev = delta.copy()
-        obs = self._observe(delta_mean)
-        eta, nu = phys.eta_full, phys.nu_full
-        phi = float(eta[2])
-        e_psi = float(wrap_angle(eta[3] - self.heading))
-        w = self.reward_weights
-        terms = {
-            "roll": -((phi / w.phi0) ** 2),
-            "heading": -((e_psi / w.psi0) ** 2),
-            "rudder_rate": -w.rate
-            * sum(x * x for x in (rate / self._max_rate).tolist())
-            / len(rate),
-        }
-        reward = float(sum(terms.values()))
-        terminated = abs(phi) > self.max_roll
-        truncated = (
-            not terminated and self._steps * self.control_period >= self.episode_duration - 1e-9
-        )
-        at_limit = np.abs(delta) >= self._max_angle * (1.0 - 1e-9)
-        saturated = at_limit | clipped[self._rudder_idx] | action_clipped
-        rl = phys.rate_limited
-        rate_limited = np.array([bool(rl[k]) for k in range(len(self._rudder_idx))])
-        info: dict[str, Any] = {
-            "time": phys.time,
-            "eta": eta,
-            "nu": nu,
-            "speed": float(nu[0]),
-            "v": float(nu[1]),
-            "p": float(nu[2]),
-            "r": float(nu[3]),
-            "roll": phi,
-            "heading_error": e_psi,
-            "rudder": delta.copy(),
-            "rudder_command": self._command.copy(),
-            "rudder_rate": rate,
-            "saturated": saturated,
-            "rate_limited": rate_limited,
-            "stalled": phys.stalled.copy(),
-            "action_clipped": action_clipped,
-            "wave_moment": np.array([K, N]),
-            "reward_terms": terms,
-        }
-        if self._filter is not None:
-            info["v_hat"] = float(self._filter.x[0])
-            info["trace_P"] = self._filter.trace_P
-        self._metrics.add(info)
-        if terminated or truncated:
-            info["episode_metrics"] = self.episode_metrics()
-        return obs, reward, bool(terminated), bool(truncated), info
-
-    def _observe(self, delta_mean: NDArray[np.float64] | None = None) -> NDArray[np.float32]:
-        phys = self.physics
-        assert phys is not None
-        eta, nu = phys.eta_full, phys.nu_full
-        y = np.array([nu[3], eta[3], nu[2], eta[2]])
-        if self.sensor_noise:
-            y = y + np.asarray(ROLL_SENSOR_STD) * self._noise_rng.standard_normal(4)
-        delta = phys.actuator_state[self._rudder_idx]
-        if self._filter is not None and delta_mean is not None:
-            self._filter.step(y, float(delta_mean[0]))
-        obs = [y[0], float(wrap_angle(y[1] - self.heading)), y[2], y[3], *delta, self.U]
-        if self.sway_estimate:
-            obs.append(float(self._filter.x[0]) if self._filter is not None else 0.0)
-        return np.asarray(obs, dtype=np.float32)
-
-    def episode_metrics(self) -> dict[str, Any]:
-        """Roll, heading and rudder statistics of the episode so far (:class:`_RollMetrics`)."""
-        return self._metrics.summary(self)
+    @property
+    def vessel(self) -> Vessel:
+        """The episode's vessel (:meth:`RudderRollVectorEnv.vessel_at` its speed)."""
+        return self.batch.vessels[0]
 
 
-class _RollMetrics:
-    """Running sums of an episode: RMS of roll, heading error, rudder, rudder rate."""
-
-    def __init__(self) -> None:
-        self.n = 0
-        self.sums = {"roll": 0.0, "heading_error": 0.0, "rudder": 0.0, "rudder_rate": 0.0,
-                     "v_error": 0.0}  # fmt: skip
-        self.max_roll = 0.0
-        self.max_heading = 0.0
-        self.rate_limited = 0
-        self.saturated = 0
-        self.n_est = 0
-
-    def add(self, info: Mapping[str, Any]) -> None:
-        self.n += 1
-        s = self.sums
-        s["roll"] += info["roll"] ** 2
-        s["heading_error"] += info["heading_error"] ** 2
-        d, w = info["rudder"].tolist(), info["rudder_rate"].tolist()  # plain floats: cheap
-        s["rudder"] += sum(x * x for x in d) / len(d)
-        s["rudder_rate"] += sum(x * x for x in w) / len(w)
-        self.max_roll = max(self.max_roll, abs(info["roll"]))
-        self.max_heading = max(self.max_heading, abs(info["heading_error"]))
-        self.rate_limited += any(info["rate_limited"].tolist())
-        self.saturated += any(info["saturated"].tolist())
-        if "v_hat" in info:
-            s["v_error"] += (info["v_hat"] - info["v"]) ** 2
-            self.n_est += 1
-
-    def summary(self, env: RudderRollEnv) -> dict[str, Any]:
-        n = max(self.n, 1)
-        out: dict[str, Any] = {
-            "speed": env.U,
-            "steps": self.n,
-            "roll_rms": math.sqrt(self.sums["roll"] / n),
-            "roll_max": self.max_roll,
-            "heading_rms": math.sqrt(self.sums["heading_error"] / n),
-            "heading_max": self.max_heading,
-            "rudder_rms": math.sqrt(self.sums["rudder"] / n),
-            "rudder_rate_rms": math.sqrt(self.sums["rudder_rate"] / n),
-            "rate_limited_fraction": self.rate_limited / n,
-            "saturated_fraction": self.saturated / n,
-        }
-        if self.n_est:
-            out["v_hat_rmse"] = math.sqrt(self.sums["v_error"] / self.n_est)
-        return out
+#: what a single env reads from its batch: the settings, the hull's ``physics`` (a
+#: :class:`~shipgym.envs.batchphysics.BatchedPhysics` of one), ``filter_intensities``
+_SETTINGS = frozenset(
+    ("base_vessel", "kdp_law", "speed_range", "heading", "waves", "rudder_test",
+     "rudder_test_amplitude", "rudder_test_frequency", "sensor_noise", "sway_estimate",
+     "reward_weights", "episode_duration", "max_roll", "n_substeps", "timestep",
+     "control_period", "max_angle", "physics", "filter_intensities", "vessel_at")
+)  # fmt: skip
 
 
 class SeedRollEnv(RudderRollEnv):
@@ -591,9 +750,7 @@ class SeedRollEnv(RudderRollEnv):
     """
 
     def __init__(self, **kwargs: Any) -> None:
-        kwargs.setdefault("vessel", "van-der-klugt")
-        kwargs.setdefault("speed", (8.0, 15.0))
-        super().__init__(**kwargs)
+        super().__init__(**{**SEED_TASK, **kwargs})
 
 
 class NavalRollEnv(RudderRollEnv):
@@ -606,6 +763,19 @@ class NavalRollEnv(RudderRollEnv):
     """
 
     def __init__(self, **kwargs: Any) -> None:
-        kwargs.setdefault("vessel", "naval-vessel")
-        kwargs.setdefault("speed", (6.0, 10.0))
-        super().__init__(**kwargs)
+        super().__init__(**{**NAVAL_TASK, **kwargs})
+
+
+#: the registered tasks' vessel and speed range, where not given
+SEED_TASK: dict[str, Any] = {"vessel": "van-der-klugt", "speed": (8.0, 15.0)}
+NAVAL_TASK: dict[str, Any] = {"vessel": "naval-vessel", "speed": (6.0, 10.0)}
+
+
+def seed_roll_vector_env(num_envs: int, **kwargs: Any) -> RudderRollVectorEnv:
+    """``shipgym/RudderRollStabilisation-v0``'s vector entry point."""
+    return RudderRollVectorEnv(num_envs, **{**SEED_TASK, **kwargs})
+
+
+def naval_roll_vector_env(num_envs: int, **kwargs: Any) -> RudderRollVectorEnv:
+    """``shipgym/NavalRollDamping-v0``'s vector entry point."""
+    return RudderRollVectorEnv(num_envs, **{**NAVAL_TASK, **kwargs})

@@ -43,6 +43,46 @@ def fits(vessel: Vessel, world: str) -> bool:
     return limit is None or (vessel.L_oa <= limit[0] and vessel.B <= limit[1])
 
 
+#: MJCF attributes that name files or folders (``<include file>``, assets, compiler dirs)
+_FILE_ATTRIBUTES = ("file", "meshdir", "texturedir", "assetdir", "fileleft", "fileright",
+                    "fileup", "filedown", "filefront", "fileback")  # fmt: skip
+
+
+def check_package_files(xml: Path, root: Path | None = None, depth: int = 0) -> None:
+    """Every file a vessel's MJCF names (includes, meshes, textures, the compiler's folders)
+    lies inside its package folder ``root`` (default: the folder of ``xml``), so a vessel
+    package cannot make MuJoCo read other files on the disk; included files are checked too.
+
+    Raises:
+        VesselError: a name outside the package, an unreadable or malformed file, or
+            includes nested more than 8 deep.
+    """
+    import xml.etree.ElementTree as ET
+
+    from shipgym._safeload import read_bounded
+
+    root = (root or xml.parent).resolve()
+    if depth > 8:
+        raise VesselError(f"{xml}: <include> nested more than 8 deep")
+    try:
+        tree = ET.fromstring(read_bounded(xml, "MJCF file", 16 << 20))
+    except (OSError, ValueError, ET.ParseError) as exc:
+        raise VesselError(f"{xml}: not a readable MJCF file: {exc}") from None
+    for el in tree.iter():
+        for attr in _FILE_ATTRIBUTES:
+            name = el.get(attr)
+            if name is None:
+                continue
+            target = (xml.parent / name).resolve()
+            if target != root and root not in target.parents:
+                raise VesselError(
+                    f"{xml}: <{el.tag} {attr}={name!r}> names a file outside the vessel package "
+                    f"{root}: a package may only use its own files"
+                )
+            if el.tag == "include" and attr == "file":
+                check_package_files(target, root, depth + 1)
+
+
 def build_model(
     vessel: Vessel, world: str = "open-water", actuators: ActuatorSet | None = None
 ) -> mujoco.MjModel:
@@ -64,6 +104,7 @@ def build_model(
             f"vessel {vessel.name!r} (L_oa {vessel.L_oa:g} m, B {vessel.B:g} m) does not fit the "
             f"{world} world (at most {limit[0]:g} m x {limit[1]:g} m): use the open-water scene"
         )
+    check_package_files(Path(vessel.body_xml))
     try:
         child = mujoco.MjSpec.from_file(str(vessel.body_xml))
     except Exception as exc:  # noqa: BLE001 - MuJoCo's parser raises assorted errors

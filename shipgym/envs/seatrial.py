@@ -229,7 +229,6 @@ class SeaTrialVectorEnv(BatchedEnv):
         self.antenna = tuple(float(a) for a in np.asarray(antenna, dtype=float).reshape(2))
         self.receiver_sigma = float(receiver_sigma)
         self._max_angle = float(acts.upper[self._rudder])
-        self._servo = [j for j, c in enumerate(acts.channels) if c.dynamics == "servo"]
         self._names = np.array([m.name for m in self.manoeuvres])
         self.scripts = Scripts(self.manoeuvres)
         n = num_envs
@@ -353,7 +352,7 @@ class SeaTrialVectorEnv(BatchedEnv):
             "rudder_command": phys.command[:, self._rudder],
             "shaft": row[:, 8].copy(),
             # (BatchedPhysics has no rate_limited: its hull batch's servo hits, read here)
-            "rate_limited": (phys._hulls.hits[:, self._servo] > 0).any(axis=1),
+            "rate_limited": phys.rate_limited.any(axis=1),
             "saturated": phys.saturated.any(axis=1),
             "clipped": self._clipped.copy(),
             "reward_terms": {},

@@ -34,7 +34,7 @@ from .base import (
     harbour_body,
     place_harbour,
 )
-from .batched import AUTORESET_MODES, BatchedEnv
+from .batched import AUTORESET_MODES, BatchedEnv, check_num_envs
 from .batchphysics import BatchedPhysics
 
 __all__ = [
@@ -107,6 +107,7 @@ class ShipVectorEnv(BatchedEnv):
         env_sensors: Sequence[SensorConfig] | None = None,
         **kwargs: Any,
     ) -> None:
+        check_num_envs(num_envs)  # before anything is built for them
         cls, steps = _task_class(task)
         # the class's own defaults (the DP tasks' timing and sea), as its single env takes them
         env, task_args, extras = cls.split_args(kwargs)
@@ -168,8 +169,8 @@ class ShipVectorEnv(BatchedEnv):
         self._fresh = False  # whether _obs is the observation now
         lo, hi = self.actuators.lower, self.actuators.upper
         self._lo_tol, self._hi_tol = lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)
-        if not (isinstance(residual_scale, int | float) and math.isfinite(residual_scale)):
-            raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
+        if not (isinstance(residual_scale, int | float) and 0 <= residual_scale < math.inf):
+            raise ValueError(f"residual_scale must be a finite number >= 0, got {residual_scale!r}")
         self.controller_name = controller
         self.residual_scale = float(residual_scale)
         if env_sensors is not None:

@@ -22,7 +22,8 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym.dynamics.frames import wrap_angle
+from shipgym._jit import entry, njit
+from shipgym.dynamics.frames import wrap
 from shipgym.dynamics.vanderklugt import RollModel, roll_model
 
 from .design import discretise
@@ -37,6 +38,7 @@ __all__ = [
     "SwayVelocityKF",
     "process_noise",
     "simulate_sway_kf",
+    "sway_kf_step",
     "zoh",
 ]
 
@@ -54,7 +56,7 @@ R_SWAY = ((0.05 * _D) ** 2, (0.1 * _D) ** 2, (0.05 * _D) ** 2, (0.1 * _D) ** 2)
 #: (0.1 deg/s)^2, (1 deg)^2 [chosen]
 P0_SWAY = (0.01**2, (0.1 * _D) ** 2, (1.0 * _D) ** 2, (0.1 * _D) ** 2, (1.0 * _D) ** 2)
 
-_C = np.zeros((4, 5))
+_C = np.zeros((4, 5))  # y = C x (the design's form; the compiled update picks the rows)
 _C[0, 1] = _C[1, 2] = _C[2, 3] = _C[3, 4] = 1.0
 _PSI_OUT = 1  # the heading's row in y
 
@@ -125,8 +127,82 @@ def _cov(value: ArrayLike | None, default: tuple[float, ...], n: int, name: str)
     return 0.5 * (M + M.T)
 
 
+@njit(inline="always")
+def _mul(a, b, out):  # type: ignore[no-untyped-def]
+    """``out = a b`` (small matrices, in index order)."""
+    for j in range(out.shape[0]):
+        for k in range(out.shape[1]):
+            acc = 0.0
+            for m in range(b.shape[0]):
+                acc += a[j, m] * b[m, k]
+            out[j, k] = acc
+
+
+@njit(inline="always")
+def _update_row(i, xp, Pp, R, y, x, P, gain, S, Si, GP):  # type: ignore[no-untyped-def]
+    """Eq. 4 for row ``i``: the gain ``G = P^- C^T (C P^- C^T + R)^-1`` (``C`` picks
+    ``[r, psi, p, phi]``), the wrapped heading innovation, ``x = x^- + G (y - C x^-)``,
+    ``P = (I - G C) P^-`` symmetrised (``S``, ``Si``, ``GP``: scratch)."""
+    for a in range(4):
+        for b in range(4):
+            S[a, b] = Pp[a + 1, b + 1] + R[i, a, b]
+            Si[a, b] = 1.0 if a == b else 0.0
+    for c in range(4):  # S^-1 by Gauss-Jordan (S is positive definite: no pivoting)
+        piv = S[c, c]
+        for k in range(4):
+            S[c, k] /= piv
+            Si[c, k] /= piv
+        for r in range(4):
+            f = S[r, c] if r != c else 0.0
+            for k in range(4):
+                S[r, k] -= f * S[c, k]
+                Si[r, k] -= f * Si[c, k]
+    _mul(Pp[:, 1:], Si, gain[i])
+    _mul(gain[i], Pp[1:], GP)
+    for j in range(5):
+        acc = xp[j]
+        for b in range(4):
+            inn = y[i, b] - xp[b + 1]
+            acc += gain[i, j, b] * (wrap(inn) if b == _PSI_OUT else inn)
+        x[i, j] = acc
+    for j in range(5):
+        for k in range(j + 1):
+            m_ = 0.5 * ((Pp[j, k] - GP[j, k]) + (Pp[k, j] - GP[k, j]))
+            P[i, j, k] = m_
+            P[i, k, j] = m_
+
+
+@njit
+def sway_kf_step(A, B, Q, R, y, delta, mask, x, P, gain):  # type: ignore[no-untyped-def]
+    """One predict-update cycle of the KF of each row ``i`` where ``mask[i]`` (eqs. 3-4):
+    ``x^- = A_d x + B_d delta``, ``P^- = A_d P A_d^T + Q_W``, then :func:`_update_row` with
+    ``y[i]``. Shapes: A, Q (N, 5, 5); B (N, 5); R (N, 4, 4); y (N, 4); delta (N,); mask (N,)
+    bool; x (N, 5), P (N, 5, 5), gain (N, 5, 4) updated in place. Rows are independent."""
+    xp, T, Pp, GP = np.empty(5), np.empty((5, 5)), np.empty((5, 5)), np.empty((5, 5))
+    S, Si = np.empty((4, 4)), np.empty((4, 4))
+    for i in range(x.shape[0]):
+        if mask[i]:
+            for j in range(5):
+                xp[j] = B[i, j] * delta[i]
+                for k in range(5):
+                    xp[j] += A[i, j, k] * x[i, k]
+            _mul(A[i], P[i], T)
+            _mul(T, A[i].T, Pp)
+            for j in range(5):
+                for k in range(5):
+                    Pp[j, k] += Q[i, j, k]
+            _update_row(i, xp, Pp, R, y, x, P, gain, S, Si, GP)
+
+
+@njit
+def sway_update(xp, Pp, R, y, x, P, gain):  # type: ignore[no-untyped-def]
+    """Eq. 4 alone for row 0 (the EKF's update, after its own prediction ``xp``, ``Pp``)."""
+    _update_row(0, xp, Pp, R, y, x, P, gain, np.empty((4, 4)), np.empty((4, 4)), np.empty((5, 5)))
+
+
 class _SwayFilterBase:
-    """The measurement update and the state shared by the KF and the EKF (eqs. 3-4)."""
+    """The state and the measurement update shared by the KF and the EKF (eqs. 3-4): a batch
+    of one of :func:`sway_kf_step`'s rows."""
 
     def __init__(self, R: Array, x0: ArrayLike | None, P0: ArrayLike | None) -> None:
         self.R = R
@@ -136,46 +212,41 @@ class _SwayFilterBase:
         if self._x0.shape != (5,) or not np.all(np.isfinite(self._x0)):
             raise ValueError(f"x0 must be [v, r, psi, p, phi] (5 finite values), got {x0!r}")
         self._P0 = _cov(P0, P0_SWAY, 5, "P0")
+        self._R1 = np.ascontiguousarray(R[None])
         self.reset()
 
     def reset(self) -> None:
         """Back to ``x0``, ``P0``; the gain cleared."""
-        self._x = self._x0.copy()
-        self._P = self._P0.copy()
-        self._gain = np.zeros((5, 4))
+        self._x = self._x0[None].copy()
+        self._P = self._P0[None].copy()
+        self._gain = np.zeros((1, 5, 4))
 
     @property
     def x(self) -> Array:
         """The state estimate ``[v, r, psi, p, phi]`` (m/s, rad/s, rad, rad/s, rad)."""
-        return self._x.copy()
+        return self._x[0].copy()
 
     @property
     def P(self) -> Array:
         """The estimate's covariance (5, 5) (SI units squared)."""
-        return self._P.copy()
+        return self._P[0].copy()
 
     @property
     def trace_P(self) -> float:
         """``trace(P)`` (mixed SI units squared; the paper's Fig. 2d/2j)."""
-        return float(np.trace(self._P))
+        return float(np.trace(self._P[0]))
 
     @property
     def gain(self) -> Array:
         """The last Kalman gain ``G(k)`` (5, 4) (eq. 4)."""
-        return self._gain.copy()
+        return self._gain[0].copy()
 
-    def _update(self, x_pred: Array, P_pred: Array, y: ArrayLike) -> Array:
+    @staticmethod
+    def _measurement(y: ArrayLike) -> Array:
         y_ = np.asarray(y, dtype=float).reshape(-1)
         if y_.shape != (4,) or not np.all(np.isfinite(y_)):
             raise ValueError(f"y must be the measurement [r, psi, p, phi] (4 finite), got {y!r}")
-        S = np.linalg.inv(_C @ P_pred @ _C.T + self.R)
-        G = P_pred @ _C.T @ S
-        L = y_ - _C @ x_pred
-        L[_PSI_OUT] = wrap_angle(float(L[_PSI_OUT]))
-        x = x_pred + G @ L
-        P = (np.eye(5) - G @ _C) @ P_pred
-        self._x, self._P, self._gain = x, 0.5 * (P + P.T), G
-        return x.copy()
+        return y_[None]
 
 
 def _delta(delta: float) -> float:
@@ -214,6 +285,9 @@ class SwayVelocityKF(_SwayFilterBase):
         self.Q = q_ if q_.shape == (5, 5) else process_noise(model.G, q_, self.dt)
         self.Q = _cov(self.Q, (), 5, "q")
         super().__init__(_cov(r, R_SWAY, 4, "r"), x0, P0)
+        self._args = (self.A_d[None].copy(), self.B_d[None].copy(), self.Q[None].copy(),
+                      self._R1)  # fmt: skip
+        self._entry: Any = None  # sway_kf_step's compiled entry point
 
     def step(self, y: ArrayLike, delta: float) -> Array:
         """One predict-update cycle: eq. 3 over ``dt``, then eq. 4 with ``y``.
@@ -225,10 +299,16 @@ class SwayVelocityKF(_SwayFilterBase):
         Returns:
             the new estimate ``[v, r, psi, p, phi]``.
         """
-        d = _delta(delta)
-        x_pred = self.A_d @ self._x + self.B_d * d
-        P_pred = self.A_d @ self._P @ self.A_d.T + self.Q
-        return self._update(x_pred, P_pred, y)
+        y_ = self._measurement(y)
+        d = np.array([_delta(delta)])
+        args = (*self._args, y_, d, _ONE, self._x, self._P, self._gain)
+        if self._entry is None:
+            self._entry = entry(sway_kf_step, args)
+        self._entry(*args)
+        return self.x
+
+
+_ONE = np.ones(1, dtype=np.bool_)
 
 
 class SwayVelocityEKF(_SwayFilterBase):
@@ -312,11 +392,15 @@ class SwayVelocityEKF(_SwayFilterBase):
 
     def step(self, y: ArrayLike, delta: float) -> Array:
         """One predict-update cycle (as :meth:`SwayVelocityKF.step`)."""
+        y_ = self._measurement(y)
         d = _delta(delta)
-        F = self.jacobian(self._x, d)
-        x_pred = self.propagate(self._x, d)
-        P_pred = F @ self._P @ F.T + self.Q
-        return self._update(x_pred, P_pred, y)
+        x = self._x[0]
+        F = self.jacobian(x, d)
+        x_pred = self.propagate(x, d)
+        P_pred = F @ self._P[0] @ F.T + self.Q
+        sway_update(x_pred, np.ascontiguousarray(P_pred), self._R1, y_, self._x, self._P,
+                    self._gain)  # fmt: skip
+        return self.x
 
 
 @dataclass(frozen=True)

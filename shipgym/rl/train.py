@@ -34,6 +34,7 @@ from shipgym.controllers.learned import (
     ObsNormalization,
     algorithm_class,
     check_policy_spec,
+    check_trained_env,
     read_metadata,
     read_state_dicts,
     sb3_policy_kwargs,
@@ -1161,6 +1162,8 @@ def train(
     cls = algorithm_class(algo)
     resume_meta = read_metadata(resume) if resume is not None else None
     if resume_meta is not None:
+        # a registered shipgym id only: Gymnasium imports the module a "module:Name-v0" id names
+        check_trained_env(resume_meta, resume)
         if resume_meta.algorithm != algo:
             raise ValueError(f"{resume} holds a {resume_meta.algorithm} model, not {algo}")
         hp = copy.deepcopy(dict(resume_meta.hyperparams))

@@ -86,9 +86,9 @@ def _episode(job: tuple[Any, ...]) -> dict[str, Any]:
     mode, sway, schedule = METHODS[method]
     env = _env(vessel, float(U), task, float(duration))
     obs, _ = env.reset(seed=int(seed))
-    pilot = roll_pilot(env.physics.vessel, float(U), mode, sway_scale=sway, schedule=schedule,
+    pilot = roll_pilot(env.vessel, float(U), mode, sway_scale=sway, schedule=schedule,
                        dt=env.control_period, q=env.filter_intensities(float(U)))  # fmt: skip
-    dmax = float(env._max_angle[0])
+    dmax = float(env.max_angle[0])
     cols = ("t", "roll", "heading_error", "rudder", "rudder_rate", "v", "v_hat", "trace_P",
             "rate_limited", "saturated", "p", "r")  # fmt: skip
     rec: dict[str, list[float]] = {c: [] for c in cols}

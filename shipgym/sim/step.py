@@ -266,8 +266,9 @@ def run(  # type: ignore[no-untyped-def]
         h: the step (s); inertia: MuJoCo's joint-space inertia ``(m, m, I_z, I_x)``.
         accel: the address of the hull family's compiled acceleration
             (:func:`shipgym._jit.address`); kh: its constants.
-        laws, table, kind_index: the addresses of the actuator force laws (int64), one row of
-            constants per actuator, each row's law
+        laws, table, kind_index: the addresses of the actuator force laws (int64); (N, na, k)
+            each hull's row of constants per actuator (hulls of one vessel may differ in
+            them: a rudder moved); each row's law
             (:meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`).
         chan: (nc, 9) channel dynamics: code, lower, upper, alpha = 1 - exp(-h/T), rate-limit
             band, rate-limit step, servo rate, servo time constant, bounded.
@@ -304,6 +305,7 @@ def run(  # type: ignore[no-untyped-def]
         st = act[i]
         ti = t[i]
         m_w, m_c, m_d = mode[i, 0], mode[i, 1], mode[i, 2]
+        tab = table[i]
         while left[i] > 0:
             # 1. the velocity at the whole step
             u, v, p, r, phi, c, s, cphi, sphi, psid, phid = kinematics(
@@ -339,7 +341,7 @@ def run(  # type: ignore[no-untyped-def]
                 dx_ = dy_ = dn_ = 0.0
             ur = u - uc
             vr = v - vcb
-            tx, ty, tk, tn = tau_of_table(table, laws, kind_index, st, ur, vr, p, r, forces[i],
+            tx, ty, tk, tn = tau_of_table(tab, laws, kind_index, st, ur, vr, p, r, forces[i],
                                           flags[i])  # fmt: skip
             # 3. the hull's acceleration
             ud, vd, pd, rd = acc(
@@ -518,7 +520,8 @@ class HullBatch:
         self.integrator = integrator
         self.accel, self.kh = hull_kernel(plant)
         self.linear_kin = getattr(plant, "kinematics", "fossen") == "linear"
-        self.table, self.laws, self.kind_index = actuators.law_table()
+        table, self.laws, self.kind_index = actuators.law_table()
+        self.table = np.repeat(table[None], n, axis=0)  # (N, na, k): set_actuators
         self.chan = channel_table(actuators, self.h)
         self.kw = np.ascontiguousarray(wind_constants, dtype=np.float64)
         self.inertia = np.asarray(inertia, dtype=np.float64)
@@ -628,9 +631,28 @@ class HullBatch:
     # ---- state ---------------------------------------------------------------------------
     @property
     def law_table(self) -> tuple[Any, Any, Any]:
-        """``(table, laws, kind_index)`` of the actuators
+        """``(table, laws, kind_index)`` of hull 0's actuators
         (:meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`)."""
-        return self.table, self.laws, self.kind_index
+        return self.table[0], self.laws, self.kind_index
+
+    def set_actuators(self, i: int, actuators: Any) -> None:
+        """Hull ``i``'s actuator constants from ``actuators``: an
+        :class:`~shipgym.dynamics.actuators.ActuatorSet` of the batch's kinds and channels
+        whose law rows may differ (a rudder at another position, say).
+
+        Raises:
+            ValueError: other kinds or other channel dynamics.
+        """
+        table, laws, kinds = actuators.law_table()
+        if (
+            table.shape != self.table.shape[1:]
+            or not np.array_equal(laws[kinds], self.laws[self.kind_index])
+            or not np.array_equal(channel_table(actuators, self.h), self.chan)
+        ):
+            raise ValueError(
+                "a hull's actuators must be the batch's kinds with the same channel dynamics"
+            )
+        self.table[i] = table
 
     def set_pose(self, i: int, eta: Any, nu: Any) -> None:
         """Hull ``i`` at the pose ``eta`` and body velocity ``nu`` (3 DOF: ``[x, y, psi]``,

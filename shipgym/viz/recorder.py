@@ -99,6 +99,20 @@ _LIVE: weakref.WeakSet[RecordEpisode] = weakref.WeakSet()
 _ATEXIT = False
 
 
+def _release_streams() -> None:
+    """Free the threads of the recording streams nobody holds any longer: rerun keeps a
+    dropped Python stream's native threads (a batcher, a writer) until asked, so a process
+    recording thousands of episodes would gather thousands of idle threads."""
+    import gc
+
+    import rerun as rr
+
+    cleanup = getattr(getattr(rr, "bindings", None), "flush_and_cleanup_orphaned_recordings", None)
+    if cleanup is not None:
+        gc.collect(0)  # the young generation holds the last episode's stream
+        cleanup()
+
+
 def _finish_all() -> None:
     """At interpreter exit: finish the files of recorders nobody closed."""
     for recorder in list(_LIVE):
@@ -686,6 +700,7 @@ class RecordEpisode(
         try:
             self._finish(None)
         finally:
+            _release_streams()
             super().close()
 
     def __del__(self) -> None:
@@ -698,6 +713,7 @@ class RecordEpisode(
     def _start(self, seed: int | None, options: dict[str, Any] | None) -> None:
         import rerun as rr
 
+        _release_streams()  # the finished episodes' streams and their threads
         global _ATEXIT
         if not _ATEXIT:  # registered after rerun's own handler, so it runs before it
             atexit.register(_finish_all)

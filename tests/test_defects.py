@@ -1,6 +1,7 @@
-"""Physics health: an instability is an error, never a silently reset state (MuJoCo resets an
-unstable state to the model's default pose and only warns), and the number of steps per call
-is checked."""
+"""Defects that lose or falsify results: physics health (an instability is an error, never a
+silently reset state: MuJoCo resets an unstable state to the model's default pose and only
+warns; the steps per call checked), results that record what ran, checked flags and options,
+bounded loading, outputs that never overwrite an input or each other, bounded batches."""
 
 from __future__ import annotations
 
@@ -16,6 +17,12 @@ from shipgym.cli import main
 from shipgym.envs.batchphysics import BatchedPhysics
 from shipgym.envs.physics import VesselPhysics
 from shipgym.sim.step import MAX_STEPS, SimulationDiverged
+
+
+@pytest.fixture(autouse=True)
+def _mujoco_log_elsewhere(tmp_path, monkeypatch):
+    """MuJoCo writes its warnings to MUJOCO_LOG.TXT in the working folder: a temporary one."""
+    monkeypatch.chdir(tmp_path)
 
 
 @pytest.fixture(scope="module")
@@ -129,3 +136,92 @@ def test_deep_vessel_run_and_model_files_are_refused(tmp_path, absurd_vessel):
     with pytest.raises(ValueError, match="nested"):
         ModelMetadata.from_json("[" * DEEP + "]" * DEEP)
     assert main(["report", str(run), "--out", str(tmp_path / "rep")]) == 2
+
+
+# ---- outputs never overwrite inputs or each other (issue 33 item 2); bounded batches ---------
+def test_outputs_that_would_overwrite_an_input_or_each_other_are_refused(tmp_path, capsys):
+    scenario = tmp_path / "sc.yaml"
+    scenario.write_text("env: harbour\n")
+    before = scenario.read_bytes()
+    cases = [
+        ["run", "--scenario", str(scenario), "--json", str(scenario)],
+        ["run", "harbour", "--json", str(tmp_path / "r" / "a.json"), "--report",
+         str(tmp_path / "r")],
+        ["run", "--scenario", str(scenario), "--report", str(tmp_path)],
+    ]  # fmt: skip
+    for argv in cases:
+        assert main([*argv, "--no-progress"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "would overwrite" in err[0], err
+    assert scenario.read_bytes() == before
+    pkg = tmp_path / "pkg"
+    shutil.copytree(resources.files("shipgym") / "assets" / "mjcf" / "blue_lady", pkg)
+    toml = (pkg / "vessel.toml").read_bytes()
+    assert main(["run", "harbour", "--vessel", str(pkg), "--json", str(pkg / "vessel.toml")]) == 2
+    assert (pkg / "vessel.toml").read_bytes() == toml
+    assert "--vessel" in capsys.readouterr().err
+
+
+def test_a_batch_too_large_for_one_process_is_refused():
+    import gymnasium as gym
+
+    from shipgym.envs.batched import MAX_ENVS
+
+    for env_id in ("shipgym/BlueLadyTracking-v0", "shipgym/CourseKeeping-v0"):
+        with pytest.raises(ValueError, match=f"at most {MAX_ENVS}"):
+            gym.make_vec(env_id, num_envs=MAX_ENVS + 1)
+
+
+@pytest.mark.parametrize(
+    "element",
+    ['<include file="/etc/passwd"/>', '<include file="../../outside.xml"/>',
+     '<asset><mesh name="m" file="/etc/hosts"/></asset>', '<compiler meshdir="/"/>'],
+)  # fmt: skip
+def test_a_vessel_package_may_only_use_its_own_files(tmp_path, element):
+    from shipgym.dynamics.vessel import VesselError, load_vessel
+    from shipgym.envs.scene import build_model
+
+    pkg = tmp_path / "pkg"
+    shutil.copytree(resources.files("shipgym") / "assets" / "mjcf" / "blue_lady", pkg)
+    xml = pkg / "vessel.xml"
+    text, n = re.subn(r"(<mujoco[^>]*>)", r"\1" + element, xml.read_text(), count=1)
+    assert n == 1
+    xml.write_text(text)
+    with pytest.raises(VesselError, match="outside the vessel package"):
+        build_model(load_vessel(str(pkg)))
+
+
+def test_a_second_concurrent_run_on_the_same_outputs_is_refused(tmp_path):
+    """Two `shipgym run` on one --json: the second is refused at once, the first completes."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "a.json"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    cmd = [sys.executable, "-m", "shipgym.cli", "run", "harbour", "--json", str(out),
+           "--no-progress"]  # fmt: skip
+    first = subprocess.Popen(cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)  # fmt: skip
+    lock = tmp_path / ".a.json.lock"
+    for _ in range(600):  # until the first holds its lock
+        if lock.exists() or first.poll() is not None:
+            break
+        time.sleep(0.05)
+    assert lock.exists(), first.communicate()
+    second = subprocess.run(cmd, env=env, cwd=tmp_path, capture_output=True, text=True,
+                            timeout=300)  # fmt: skip
+    assert second.returncode == 2 and "being written by another run" in second.stderr
+    assert first.wait(timeout=600) == 0
+    assert out.is_file() and not lock.exists()
+
+
+def test_a_lock_left_by_a_dead_process_is_taken_over(tmp_path):
+    from shipgym._io import output_lock
+
+    out = tmp_path / "a.json"
+    (tmp_path / ".a.json.lock").write_text("999999999")  # no such process
+    with output_lock([out]):
+        assert (tmp_path / ".a.json.lock").read_text() == str(__import__("os").getpid())
+    assert not (tmp_path / ".a.json.lock").exists()
