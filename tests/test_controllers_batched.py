@@ -62,14 +62,33 @@ def _compare_info(vinfo: dict, i: int, sinfo: dict, where: str) -> None:
             assert np.array_equal(v[i], s, equal_nan=True), (where, k)
 
 
+#: with an observer (the controller on its estimate): each controller once, both modes
+OBSERVED = [(name, "shipgym/Tracking-v0", "kbf", mode) for name in CONTROLLERS
+            for mode in ("next-step", "same-step")]  # fmt: skip
+
+
 @pytest.mark.parametrize(("name", "env_id", "vessel"), CASES)
 def test_vector_env_with_the_controller_equals_the_single_envs(name, env_id, vessel):
     """N = 3 envs, episodes of 6 control steps (autoresets), 16 steps, random residuals;
     the autoreset mode alternates over the cases (both modes for every controller)."""
-    n, steps, total = 3, 6, 16
     mode = ("next-step", "same-step")[CASES.index((name, env_id, vessel)) % 2]
+    _run(name, env_id, vessel, mode, None)
+
+
+@pytest.mark.parametrize(("name", "env_id", "observer", "mode"), OBSERVED)
+def test_vector_env_with_an_observer_equals_the_single_envs(name, env_id, observer, mode):
+    """The same through the Kalman-Bucy filter (the Blue Lady, or Star Hercules for the
+    printed gains)."""
+    vessel = "star-hercules" if name == "alt-lq-printed" else "blue-lady"
+    _run(name, env_id, vessel, mode, observer)
+
+
+def _run(name, env_id, vessel, mode, observer):
+    n, steps, total = 3, 6, 16
     kw = {} if vessel is None else {"vessel": vessel}
     kw.update(controller=name, max_episode_steps=steps)
+    if observer is not None:
+        kw["observer"] = observer
     try:
         singles = [shipgym.make(env_id, **kw) for _ in range(n)]
     except ValueError as e:  # the task refuses the vessel (the harbour's size): so does the batch
