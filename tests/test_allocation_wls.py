@@ -310,3 +310,15 @@ def test_bad_input_raises(change, match):
     kw = {**GOOD, **change}
     with pytest.raises(ValueError, match=match):
         allocate_wls(kw.pop("tau"), kw.pop("B"), kw.pop("f_min"), kw.pop("f_max"), **kw)
+
+
+def test_any_memory_layout_of_b_gives_a_correct_allocation():
+    """The compiled law has one entry point; a transposed (Fortran-ordered) configuration
+    matrix first, then a C-ordered one, must both deliver B f (a layout misread gave tau off
+    by millions)."""
+    rng = np.random.default_rng(1)
+    B = rng.normal(size=(3, 5))
+    lo, hi = -100.0 * np.ones(5), 100.0 * np.ones(5)
+    for b in (np.asfortranarray(B), B, B.T.copy().T, B):
+        r = allocate_wls(rng.normal(size=3) * 300.0, b, lo, hi)
+        check_result(r, r.tau + r.tau_error, B, lo, hi)

@@ -255,7 +255,6 @@ def _residual_parity(env_id, observer, controller, vessel="blue-lady", steps=150
 @pytest.mark.parametrize(
     ("kw", "error", "match"),
     [
-        ({"observer": "ekf"}, ValueError, "double-integrator"),
         ({"observer": "nope"}, ValueError, "unknown observer"),
         ({"controller": "nope"}, ValueError, "unknown controller"),
         ({"sensors": None, "observer": "kbf"}, ValueError, "needs sensors"),

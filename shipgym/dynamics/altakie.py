@@ -22,6 +22,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import njit
 from shipgym.disturbances.waves import AL_TAKIE_HF_POLYNOMIALS
 
 from .perunit import PerUnit
@@ -44,6 +45,7 @@ __all__ = [
     "lf_model",
     "lf_model_from_vessel",
     "saturated_lf_matrix",
+    "saturated_lf_rows",
     "saturated_lf_step",
     "saturation",
     "saturation_slope",
@@ -530,24 +532,42 @@ def saturated_lf_step(
 
     ``dx/dt = A_0 x + A_f psi(x5, x6) + u`` on the hull rows (``A_0`` = ``A`` without its
     thruster columns there, ``A_f`` those columns) and ``A x + u`` on the thruster rows;
-    ``u`` is the whole input ``B u_d (+ other states' coupling)``, (6,).
+    ``u`` is the whole input ``B u_d (+ other states' coupling)``, (6,). One row of
+    :func:`saturated_lf_rows`.
     """
-    A_ = np.asarray(A, dtype=float)[:6, :6]
-    A_thr = np.zeros((6, 2))
-    A_thr[:4] = A_[:4, 4:6]
-    A_lin = A_.copy()
-    A_lin[:4, 4:6] = 0.0
-    u_ = np.asarray(u, dtype=float)
+    out = np.array(x, dtype=float).reshape(1, 6)
+    u_ = np.ascontiguousarray(np.asarray(u, dtype=float).reshape(1, 6))
+    A_ = np.ascontiguousarray(np.asarray(A, dtype=float)[:6, :6])
+    saturated_lf_rows(out, u_, A_, float(dt), float(F1), float(F2), int(substeps))
+    return out[0]
 
-    def f(s: Array) -> Array:
-        return A_lin @ s + A_thr @ saturation(s[4:6], F1, F2) + u_
 
+@njit
+def saturated_lf_rows(x, u, A, dt, F1, F2, substeps):  # type: ignore[no-untyped-def]
+    """:func:`saturated_lf_step` of every row of ``x`` (N, 6) with its input ``u`` (N, 6),
+    in place (``A``: the (6, 6) LF matrix); each row's floats are its own."""
     h = dt / substeps
-    s = np.array(x, dtype=float)
-    for _ in range(substeps):
-        k1 = f(s)
-        k2 = f(s + 0.5 * h * k1)
-        k3 = f(s + 0.5 * h * k2)
-        k4 = f(s + h * k3)
-        s = s + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    return s
+    k = np.empty((4, 6))
+    s = np.empty(6)
+    for j in range(x.shape[0]):
+        for _ in range(substeps):
+            for stage in range(4):
+                c = 0.0 if stage == 0 else (h if stage == 3 else 0.5 * h)
+                for i in range(6):
+                    s[i] = x[j, i] if stage == 0 else x[j, i] + c * k[stage - 1, i]
+                p0, p1 = s[4], s[5]
+                sat0 = F1 * (1.0 if p0 > 0 else (-1.0 if p0 < 0 else 0.0)) * -math.expm1(
+                    -F2 * abs(p0))  # fmt: skip
+                sat1 = F1 * (1.0 if p1 > 0 else (-1.0 if p1 < 0 else 0.0)) * -math.expm1(
+                    -F2 * abs(p1))  # fmt: skip
+                for i in range(6):
+                    acc = 0.0
+                    for q in range(6):
+                        if not (i < 4 and q >= 4):  # the hull rows see psi(x5), psi(x6)
+                            acc += A[i, q] * s[q]
+                    thr = A[i, 4] * sat0 + A[i, 5] * sat1 if i < 4 else 0.0
+                    k[stage, i] = (acc + thr) + u[j, i]
+            for i in range(6):
+                x[j, i] = x[j, i] + (h / 6.0) * (
+                    ((k[0, i] + 2.0 * k[1, i]) + 2.0 * k[2, i]) + k[3, i]
+                )

@@ -347,3 +347,63 @@ class BatchedPhysics:
     def contact_counts(self) -> NDArray[np.int64]:
         """MuJoCo's number of contacts of each hull now, (n,) (zeros for ``leapfrog``)."""
         return np.array([d.ncon for d in self.datas] or [0] * self.n, dtype=np.int64)
+
+    # ---- the thrust a DP system's observer is fed (VesselPhysics.tau_model, tau_command) ----
+    @property
+    def tau_model(self) -> Array:
+        """Each hull's :attr:`VesselPhysics.tau_model <shipgym.envs.physics.VesselPhysics.
+        tau_model>`, (n, 3) ``[X, Y, N]`` (N, N, N m): the bollard thrust model of its actuator
+        states (the same compiled laws, the same floats)."""
+        hb = self._hulls
+        table = getattr(self, "_bollard_table", None)
+        if table is None:  # the bollard laws' table, built once
+            model = self.actuators.bollard()
+            table = hb.law_table if model is self.actuators else model.law_table()
+            self._bollard_table = table
+        return self._tau_rows(hb.act, table)
+
+    @property
+    def tau_command(self) -> Array:
+        """Each hull's :attr:`VesselPhysics.tau_command <shipgym.envs.physics.VesselPhysics.
+        tau_command>`, (n, 3): the plant's thrust law at the held commands (lagged and servo
+        channels) and the current integrator states."""
+        hb = self._hulls
+        return self._tau_rows(np.where(self._holds, hb.cmd, hb.act), hb.law_table)
+
+    def _tau_rows(self, st: Array, table: Any) -> Array:
+        """``[X, Y, N]`` (n, 3) of the actuator laws ``table`` at the states ``st`` (n, nc)
+        and each hull's velocity through the water (:meth:`_tau_kernel`)."""
+        from shipgym._jit import entry
+
+        hb = self._hulls
+        tab, laws, kinds = table
+        out = np.zeros((self.n, 4))
+        args = (tab, laws, kinds, np.ascontiguousarray(st, dtype=np.float64),
+                hb.body_velocities(), hb.loads, out)  # fmt: skip
+        kernel = BatchedPhysics._tau_kernel
+        if kernel is None:
+            kernel = BatchedPhysics._tau_kernel = BatchedPhysics._make_tau_kernel()
+        entry(kernel, args)(*args)
+        return out[:, [0, 1, 3]]
+
+    _tau_kernel: Any = None
+
+    @staticmethod
+    def _make_tau_kernel() -> Any:
+        """The compiled loop over the hulls of :meth:`_tau_rows`."""
+        from shipgym._jit import njit
+        from shipgym.dynamics.actuators import tau_of_table
+
+        @njit
+        def tau_rows(tab, laws, kinds, st, vel, loads, out):  # type: ignore[no-untyped-def]
+            """Hull ``i``'s ``(X, Y, K, N)`` into ``out[i]``: ``tau_of_table`` at its states
+            and ``(u - u_c, v - v_c, p, r)``, as ``VesselPhysics._tau``."""
+            forces = np.zeros(kinds.shape[0])
+            flags = np.zeros(kinds.shape[0])
+            for i in range(st.shape[0]):
+                u, v, p, r = vel[i, 0], vel[i, 1], vel[i, 2], vel[i, 3]
+                X, Y, K, N = tau_of_table(tab, laws, kinds, st[i], u - loads[i, 6],
+                                          v - loads[i, 7], p, r, forces, flags)  # fmt: skip
+                out[i, 0], out[i, 1], out[i, 2], out[i, 3] = X, Y, K, N
+
+        return tau_rows

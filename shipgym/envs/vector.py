@@ -76,10 +76,10 @@ class ShipVectorEnv(BatchedEnv):
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
         observer: ``None`` / ``"truth"`` (the observation and the controller use the true
-            state), a Kalman observer (``"kbf"``, ``"dkf"``, ``"tomera-kbf"``,
-            ``"tomera-dkf"``: :class:`~shipgym.observers.batch.BatchedKalman`) or an observer
-            registered with :func:`~shipgym.observers.batch.register_batched_observer`, fed
-            every sensor sample, whose estimate they use instead, as under
+            state) or an observer name (``shipgym.observers.observer_names()``, or one
+            registered with :func:`~shipgym.observers.batch.register_batched_observer`:
+            :func:`~shipgym.observers.batch.make_batched_observer`), fed every sensor sample
+            (and a model-based one the thrust), whose estimate they use instead, as under
             :class:`~shipgym.observers.wrapper.ObserverWrapper` (``shipgym.make(...,
             observer=)``).
         env_sensors: one sensor configuration per env, each as the ``sensors=`` of env ``i``
@@ -366,7 +366,12 @@ class ShipVectorEnv(BatchedEnv):
         z, valid, outlier = self.sensors.measure(self.physics.t, seen, mask)
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
-            info = self.observer.step(self.physics.t, z, valid & mask)
+            if getattr(self.observer, "model_based", False):  # the thrust, as ObserverWrapper
+                cmd = getattr(self.observer, "thrust_input", "applied") == "command"
+                tau = self.physics.tau_command if cmd else self.physics.tau_model
+                info = self.observer.step(self.physics.t, z, valid & mask, tau=tau)
+            else:
+                info = self.observer.step(self.physics.t, z, valid & mask)
             self._nis = info.nis
             self._rejected = info.rejected
         self._last_z = np.where(mask[:, None], z, self._last_z)

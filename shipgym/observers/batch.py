@@ -1,8 +1,11 @@
-r"""The double-integrator Kalman filters (DKF, KBF) written once, over ``N >= 1`` envs.
+r"""The double-integrator Kalman filters (DKF, KBF) written once, over ``N >= 1`` envs, and
+what every observer written so shares.
 
 Public names: ``BatchedKalman``, ``BatchedStepInfo``; the registry of observers written once
-over N envs (``BATCHED_OBSERVERS``, ``register_batched_observer``, ``make_batched_observer``)
-and their N = 1 adapter ``OneOfBatch`` for the single env.
+over N envs (``BATCHED_OBSERVERS``, ``register_batched_observer``, ``register_batched_form``,
+``make_batched_observer``), their N = 1 adapters ``OneOfBatch`` and ``BatchOfOne`` for the
+single env, and the small dense algebra of the compiled laws (``mat_mul``, ``mat_mul_t``,
+``joseph``, ``solve_small``, ``expm``).
 
 Design notes: docs/design/observers.batch.md.
 """
@@ -25,6 +28,7 @@ from .base import (
     OutlierGate,
     StepInfo,
     as_pose,
+    as_tau,
     make_observer,
     no_measurement,
 )
@@ -32,10 +36,12 @@ from .design import KalmanDesign, discretise, double_integrator
 
 __all__ = [
     "BATCHED_OBSERVERS",
+    "BatchOfOne",
     "BatchedKalman",
     "BatchedStepInfo",
     "OneOfBatch",
     "make_batched_observer",
+    "register_batched_form",
     "register_batched_observer",
 ]
 
@@ -263,6 +269,109 @@ def _readout(X, eta, nu, P, P_nu):
         P_nu[j, 0, 2] = P_nu[j, 2, 0] = v * cpsi
         P_nu[j, 1, 2] = P_nu[j, 2, 1] = -u * cpsi
         P_nu[j, 2, 2] = vpsi
+
+
+# ---- dense algebra of one env's small matrices, for the compiled laws (plain loops: no BLAS,
+# so that an env's floats never depend on where its rows lie or on the other envs) ------------
+@njit(inline="always")
+def mat_mul(A, B, out):  # type: ignore[no-untyped-def]
+    """``out = A B``, each entry summed in the order of ``A``'s columns (the zeros of ``A``
+    skipped: the sparse transitions and measurement matrices cost their nonzeros)."""
+    out[:] = 0.0
+    for i in range(A.shape[0]):
+        for q in range(A.shape[1]):
+            a = A[i, q]
+            if a != 0.0:
+                for k in range(B.shape[1]):
+                    out[i, k] += a * B[q, k]
+
+
+@njit(inline="always")
+def mat_mul_t(A, B, out):  # type: ignore[no-untyped-def]
+    """``out = A B^T``, each entry summed in the order of ``B``'s columns (its zeros
+    skipped)."""
+    out[:] = 0.0
+    for k in range(B.shape[0]):
+        for q in range(B.shape[1]):
+            b = B[k, q]
+            if b != 0.0:
+                for i in range(A.shape[0]):
+                    out[i, k] += A[i, q] * b
+
+
+@njit(inline="always")
+def joseph(P, K, H, R, out, IKH, T, KR):  # type: ignore[no-untyped-def]
+    """``out = (I - K H) P (I - K H)^T + K R K^T``: the Joseph-form covariance update
+    (``IKH``, ``T`` (n, n) and ``KR`` (n, q): work space)."""
+    n = P.shape[0]
+    mat_mul(K, H, IKH)
+    for i in range(n):
+        for k in range(n):
+            IKH[i, k] = (1.0 if i == k else 0.0) - IKH[i, k]
+    mat_mul(IKH, P, T)
+    mat_mul_t(T, IKH, out)
+    mat_mul(K, R, KR)
+    mat_mul_t(KR, K, T)
+    for i in range(n):
+        for k in range(n):
+            out[i, k] += T[i, k]
+
+
+@njit(inline="always")
+def solve_small(S, B, out):  # type: ignore[no-untyped-def]
+    """``out = S^-1 B`` (Cramer's rule for a 1x1 or 2x2 ``S``, else LAPACK)."""
+    q = S.shape[0]
+    if q == 1:
+        for k in range(B.shape[1]):
+            out[0, k] = B[0, k] / S[0, 0]
+    elif q == 2:
+        a, b, c, d = S[0, 0], S[0, 1], S[1, 0], S[1, 1]
+        det = a * d - b * c
+        for k in range(B.shape[1]):
+            b0, b1 = B[0, k], B[1, k]
+            out[0, k] = (d * b0 - b * b1) / det
+            out[1, k] = (a * b1 - c * b0) / det
+    else:
+        out[:] = np.linalg.solve(S, B)
+
+
+_PADE13 = (64764752532480000.0, 32382376266240000.0, 7771770303897600.0, 1187353796428800.0,
+           129060195264000.0, 10559470521600.0, 670442572800.0, 33522128640.0, 1323241920.0,
+           40840800.0, 960960.0, 16380.0, 182.0, 1.0)  # fmt: skip
+"""The coefficients of the degree-13 Pade approximant of ``exp`` (Higham 2005, eq. 10.33)."""
+
+
+@njit
+def expm(A, out):  # type: ignore[no-untyped-def]
+    """``out = exp(A)`` of one small square matrix: scaling and squaring with the degree-13
+    Pade approximant (Higham 2005, the algorithm of ``scipy.linalg.expm`` for large norms),
+    in plain loops (:func:`mat_mul`)."""
+    n = A.shape[0]
+    b = _PADE13
+    norm = 0.0
+    for k in range(n):
+        c = 0.0
+        for i in range(n):
+            c += abs(A[i, k])
+        norm = max(norm, c)
+    s = max(0, int(math.ceil(math.log2(norm / 5.371920351148152)))) if norm > 0.0 else 0
+    As = A / 2.0**s
+    A2, A4, A6 = np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    mat_mul(As, As, A2)
+    mat_mul(A2, A2, A4)
+    mat_mul(A4, A2, A6)
+    eye = np.eye(n)
+    T = np.empty((n, n))
+    mat_mul(A6, b[13] * A6 + b[11] * A4 + b[9] * A2, T)
+    U = np.empty((n, n))
+    mat_mul(As, T + b[7] * A6 + b[5] * A4 + b[3] * A2 + b[1] * eye, U)
+    mat_mul(A6, b[12] * A6 + b[10] * A4 + b[8] * A2, T)
+    V = T + b[6] * A6 + b[4] * A4 + b[2] * A2 + b[0] * eye
+    R = np.linalg.solve(V - U, V + U)
+    for _ in range(s):
+        mat_mul(R, R, T)
+        R[:] = T
+    out[:] = R
 
 
 _ENTRIES: dict[str, Any] = {}
@@ -777,7 +886,9 @@ class BatchedKalman:
 #: ``reset(t0, eta0, mask=None)`` (``t0`` (n,) s, ``eta0`` (n, 3) m, m, rad), ``step(t, z,
 #: valid) -> BatchedStepInfo`` (``z`` (n, 3) with NaN rows where ``valid`` is False) and the
 #: estimates ``eta``, ``nu`` ((n, 3) arrays); ``model_based`` (optional, default False) as
-#: :attr:`Observer.model_based <shipgym.observers.base.Observer.model_based>`. The vector env
+#: :attr:`Observer.model_based <shipgym.observers.base.Observer.model_based>`: a model-based
+#: one's ``step`` also takes ``tau=`` (n, 3), the thrust its ``thrust_input`` names
+#: (``"applied"``, default: the bollard model of the actuator states; ``"command"``). The vector env
 #: runs it for N envs, the single env's observer wrapper through :class:`OneOfBatch`
 #: (``shipgym.make(..., observer=name)``): one implementation for both.
 BATCHED_OBSERVERS: dict[str, Callable[[int, Any], Any]] = {}
@@ -803,17 +914,79 @@ def register_batched_observer(name: str, factory: Callable[[int, Any], Any]) -> 
     register_observer(name, one, vessel_overrides=lambda vessel: {"vessel": vessel})
 
 
+def register_batched_form(name: str) -> None:
+    """Run the registered observer ``name`` batched: :data:`BATCHED_OBSERVERS` builds its
+    preset for the vessel (:func:`~shipgym.observers.base.make_observer`) and takes the
+    batched law of ``n`` envs from it (its ``batch(n)``); the single env keeps the preset's
+    own factory (with its options), which runs the same law at N = 1."""
+    BATCHED_OBSERVERS[name] = lambda n, vessel: make_observer(name, vessel).batch(n)  # type: ignore[attr-defined]
+
+
 def make_batched_observer(name: str, n: int, vessel: Any) -> Any:
-    """The observer ``name`` of ``n`` envs: a registered batched observer
-    (:data:`BATCHED_OBSERVERS`), else a double-integrator Kalman preset
-    (:class:`BatchedKalman`, whose error names the valid ones)."""
+    """The observer ``name`` of ``n`` envs fitted to ``vessel``: a registered batched observer
+    (:data:`BATCHED_OBSERVERS`: every built-in observer), else a double-integrator Kalman
+    preset (:class:`BatchedKalman`, whose error names the valid ones)."""
     factory = BATCHED_OBSERVERS.get(name)
+    if factory is None:
+        from .base import _load_builtins
+
+        _load_builtins()
+        factory = BATCHED_OBSERVERS.get(name)
     if factory is not None:
         return factory(n, vessel)
     return BatchedKalman(name, n, vessel=vessel)
 
 
-class OneOfBatch(Observer):
+class BatchOfOne(Observer):
+    """The :class:`~shipgym.observers.base.Observer` interface of one env of a batched
+    observer ``self._b`` (set by the subclass): the single env runs the batched law at N = 1.
+
+    The batch has ``reset(t0 (n,), eta0 (n, 3), mask=None, **rows)``, ``step(t (n,), z (n, 3),
+    valid (n,)) -> BatchedStepInfo`` (a model-based one also ``tau=`` (n, 3) or ``None``) and
+    ``estimate(j) -> Estimate``.
+    """
+
+    _b: Any
+    _started = False
+    _t = 0.0
+
+    def _reset_one(self, t0: float, eta0: ArrayLike, **rows: Any) -> None:
+        """Reset the batch of one at ``t0`` from ``eta0``; ``rows``: per-env arrays of the
+        batch's reset (one env's value, or ``None``)."""
+        t0 = float(t0)
+        if not math.isfinite(t0):
+            raise ValueError(f"t0 must be finite, got {t0!r}")
+        extra = {
+            k: None if v is None else np.asarray(v, dtype=float)[None] for k, v in rows.items()
+        }
+        self._b.reset(np.array([t0]), as_pose(eta0, "eta0").reshape(1, 3), **extra)
+        self._t = t0
+        self._started = True
+
+    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
+        if not self._started:
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
+        valid = z is not None
+        args = (
+            np.array([float(t)]),
+            np.full((1, 3), np.nan) if z is None else as_pose(z).reshape(1, 3),
+            np.array([valid]),
+        )
+        if self.model_based:  # the thrust, (1, 3) (only a model-based batch takes it)
+            ta = as_tau(tau)
+            info = self._b.step(*args, tau=None if ta is None else ta.reshape(1, 3))
+        else:
+            info = self._b.step(*args)
+        self._t = float(t)
+        return _step_info(info) if valid else no_measurement()
+
+    def estimate(self) -> Estimate:
+        if not self._started:
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
+        return self._b.estimate(0)
+
+
+class OneOfBatch(BatchOfOne):
     """A batched observer (:data:`BATCHED_OBSERVERS`) as the single env's
     :class:`~shipgym.observers.base.Observer`: the same code at N = 1.
 
@@ -825,40 +998,13 @@ class OneOfBatch(Observer):
         self._b = batch
         self.name = name
         self.model_based = bool(getattr(batch, "model_based", False))
-        self._t = np.zeros(1)
-        self._z = np.zeros((1, 3))
-        self._valid = np.zeros(1, dtype=bool)
-        self._started = False
 
     def reset(
         self, t0: float, eta0: ArrayLike, *, nu0: ArrayLike | None = None, P0: Any = None
     ) -> None:
         if nu0 is not None or P0 is not None:
             raise ValueError(f"observer {self.name!r} starts from a pose only (no nu0, P0)")
-        t0 = float(t0)
-        if not math.isfinite(t0):
-            raise ValueError(f"t0 must be finite, got {t0!r}")
-        self._t[0] = t0
-        self._b.reset(self._t.copy(), as_pose(eta0, "eta0").reshape(1, 3))
-        self._started = True
-
-    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
-        if not self._started:
-            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
-        self._t[0] = float(t)
-        valid = z is not None
-        self._z[0] = as_pose(z) if valid else np.nan
-        self._valid[0] = valid
-        info = self._b.step(self._t.copy(), self._z.copy(), self._valid.copy())
-        if not valid:
-            return no_measurement()
-        nis = float(info.nis[0])
-        return StepInfo(
-            np.asarray(info.innovation, dtype=float)[0].copy(),
-            None if math.isnan(nis) else nis,
-            bool(info.rejected[0]),
-            bool(info.forced[0]),
-        )
+        self._reset_one(t0, eta0)
 
     def estimate(self) -> Estimate:
         if not self._started:
@@ -866,10 +1012,20 @@ class OneOfBatch(Observer):
         p = getattr(self._b, "P_eta", None)
         P_eta = np.full((3, 3), np.nan) if p is None else np.array(p[0], dtype=float)
         return Estimate(
-            t=float(self._t[0]),
+            t=self._t,
             eta=np.array(self._b.eta[0], dtype=float),
             nu=np.array(self._b.nu[0], dtype=float),
             P=np.full((6, 6), np.nan),
             P_eta=P_eta,
             P_nu=None,
         )
+
+
+def _step_info(info: BatchedStepInfo) -> StepInfo:
+    """Env 0's :class:`StepInfo` of a batched step."""
+    innov = np.asarray(info.innovation, dtype=float)[0]
+    nis = float(info.nis[0])
+    if np.isnan(innov).all() and math.isnan(nis) and not info.rejected[0]:
+        return no_measurement()
+    return StepInfo(innov.copy(), None if math.isnan(nis) else nis, bool(info.rejected[0]),
+                    bool(info.forced[0]))  # fmt: skip

@@ -3,8 +3,8 @@ r"""Discrete extended Kalman filter on the 9-state DP model (Tomera 2014 eqs. 36
 Model ``eta_dot = R(psi) nu``, ``nu_dot = M^-1 (tau - D_L nu + b) + w``, ``b_dot = -T_b^-1 b
 + E_b w_b``, ``y = H x + v`` (Tomera 2014 eqs. 36-40).
 
-Public names: ``EKF_PRESETS``, ``EKFConfig``, ``ExtendedKalmanFilter``, ``default_ekf``,
-``ekf_config``, ``tomera_ekf``.
+Public names: ``EKF_PRESETS``, ``BatchedEKF``, ``EKFConfig``, ``ExtendedKalmanFilter``,
+``default_ekf``, ``ekf_config``, ``tomera_ekf``.
 Sources: Tomera (2014); Fossen (2011).
 
 Design notes: docs/design/observers.ekf.md.
@@ -23,21 +23,22 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, param, required_param
-from shipgym.dynamics import seed_linear_matrices, wrap_angle
-from shipgym.observers.base import (
-    Estimate,
-    Observer,
-    OutlierGate,
-    StepInfo,
-    as_pose,
-    as_tau,
-    no_measurement,
-    register_observer,
+from shipgym._jit import entry, njit
+from shipgym.dynamics import seed_linear_matrices
+from shipgym.observers.base import Estimate, OutlierGate, register_observer
+from shipgym.observers.batch import (
+    BatchedStepInfo,
+    BatchOfOne,
+    joseph,
+    mat_mul,
+    mat_mul_t,
+    register_batched_form,
 )
 from shipgym.observers.sensors import SensorConfig
 
 __all__ = [
     "EKF_PRESETS",
+    "BatchedEKF",
     "EKFConfig",
     "ExtendedKalmanFilter",
     "default_ekf",
@@ -294,12 +295,333 @@ def ekf_config(name: str = "ekf", **overrides: Any) -> EKFConfig:
     return EKFConfig.from_dict({**EKF_PRESETS[name], **overrides})
 
 
+# ---- the law over N envs: compiled, one loop over the envs ----------------------------------
+@njit(inline="always")
+def _field(x, tau, Minv, D, tb_inv, ned, out):  # type: ignore[no-untyped-def]
+    """``out = f(x, tau)`` (9,) (eq. 36 without noise; ``tau`` (3,))."""
+    c, s = math.cos(x[2]), math.sin(x[2])
+    u, v, r = x[3], x[4], x[5]
+    b0, b1, b2 = x[6], x[7], x[8]
+    if ned:
+        b0, b1 = c * x[6] + s * x[7], -s * x[6] + c * x[7]
+    f0 = (b0 - (D[0, 0] * u + D[0, 1] * v + D[0, 2] * r)) + tau[0]
+    f1 = (b1 - (D[1, 0] * u + D[1, 1] * v + D[1, 2] * r)) + tau[1]
+    f2 = (b2 - (D[2, 0] * u + D[2, 1] * v + D[2, 2] * r)) + tau[2]
+    out[0] = c * u - s * v
+    out[1] = s * u + c * v
+    out[2] = r
+    for i in range(3):
+        out[3 + i] = Minv[i, 0] * f0 + Minv[i, 1] * f1 + Minv[i, 2] * f2
+        out[6 + i] = -tb_inv[i] * x[6 + i]
+
+
+@njit(inline="always")
+def _jacobian(x, A0, Minv, ned, A):  # type: ignore[no-untyped-def]
+    """``A = df/dx`` (9, 9) at ``x`` (eq. 44)."""
+    c, s = math.cos(x[2]), math.sin(x[2])
+    u, v = x[3], x[4]
+    for i in range(9):
+        for k in range(9):
+            A[i, k] = A0[i, k]
+    A[0, 2] = -s * u - c * v
+    A[1, 2] = c * u - s * v
+    A[0, 3] = c
+    A[0, 4] = -s
+    A[1, 3] = s
+    A[1, 4] = c
+    if ned:
+        b1, b2 = x[6], x[7]
+        d0, d1 = -s * b1 + c * b2, -c * b1 - s * b2  # d(R^T b)/d psi
+        for i in range(3):
+            A[3 + i, 2] = Minv[i, 0] * d0 + Minv[i, 1] * d1
+            A[3 + i, 6] = Minv[i, 0] * c - Minv[i, 1] * s
+            A[3 + i, 7] = Minv[i, 0] * s + Minv[i, 1] * c
+            A[3 + i, 8] = Minv[i, 2]
+
+
+@njit(inline="always")
+def _measurement(x, off, hx, H):  # type: ignore[no-untyped-def]
+    """``hx = h(x)`` (3,) and its Jacobian ``H`` (3, 9) (eq. 40, with the antenna offset)."""
+    for i in range(3):
+        hx[i] = x[i]
+        for k in range(9):
+            H[i, k] = 1.0 if k == i else 0.0
+    if off[0] != 0.0 or off[1] != 0.0:
+        c, s = math.cos(x[2]), math.sin(x[2])
+        xa, ya = off[0], off[1]
+        hx[0] += c * xa - s * ya
+        hx[1] += s * xa + c * ya
+        H[0, 2] = -s * xa - c * ya
+        H[1, 2] = c * xa - s * ya
+
+
+@njit
+def _model(x, tau, Minv, D, tb_inv, ned, A0, off, f, A, hx, H):  # type: ignore[no-untyped-def]
+    """The model of one state ``x``: ``f``, its Jacobian ``A``, ``h(x)`` and ``H``."""
+    _field(x, tau, Minv, D, tb_inv, ned, f)
+    _jacobian(x, A0, Minv, ned, A)
+    _measurement(x, off, hx, H)
+
+
+@njit
+def _ekf_step(X, P, dt, z, valid, tau, count, gate_open, Minv, D, tb_inv, ned, A0, Qc, R, off,
+              max_substep, thr, max_rej, innov, nis, rejected, forced):  # fmt: skip
+    """Every env ``j`` over ``dt[j]`` (s), Euler sub-steps of at most ``max_substep``
+    (eqs. 43-45), then the update with ``z[j]`` where ``valid[j]`` (Table 5, Joseph form,
+    the NIS gate); in place. Returns ``-1``, or the first env whose estimate became
+    non-finite (its state is left as before the update)."""
+    pi, two_pi = math.pi, 2.0 * math.pi
+    f, xn, hx, e = np.empty(9), np.empty(9), np.empty(3), np.empty(3)
+    F, T, Pn, H = np.empty((9, 9)), np.empty((9, 9)), np.empty((9, 9)), np.empty((3, 9))
+    PH, S, K, KR = np.empty((9, 3)), np.empty((3, 3)), np.empty((9, 3)), np.empty((9, 3))
+    IKH = np.empty((9, 9))
+    bad = -1
+    for j in range(X.shape[0]):
+        x, Pj = X[j], P[j]
+        d = dt[j]
+        if d > 0.0:
+            m = max(1, math.ceil(d / max_substep - 1e-9))
+            h = d / m
+            for _ in range(m):  # x + h f(x, tau), F P F^T + h Qc with F = I + h df/dx
+                _jacobian(x, A0, Minv, ned, F)
+                _field(x, tau[j], Minv, D, tb_inv, ned, f)
+                for i in range(9):
+                    x[i] = x[i] + h * f[i]
+                    for k in range(9):
+                        F[i, k] = h * F[i, k] + (1.0 if i == k else 0.0)
+                mat_mul(F, Pj, T)
+                mat_mul_t(T, F, Pj)
+                for i in range(9):
+                    for k in range(9):
+                        Pj[i, k] += h * Qc[i, k]
+        if not valid[j]:
+            innov[j] = np.nan
+            nis[j] = np.nan
+            rejected[j] = False
+            forced[j] = False
+            continue
+        _measurement(x, off, hx, H)
+        for i in range(3):
+            e[i] = z[j, i] - hx[i]
+        e[2] = pi - np.fmod(np.fmod(pi - e[2], two_pi) + two_pi, two_pi)
+        innov[j] = e
+        rej = False
+        force = False
+        for attempt in range(2):  # the second: a forced acceptance's inflated prior
+            mat_mul_t(Pj, H, PH)
+            mat_mul(H, PH, S)
+            Si = np.linalg.inv(S + R)
+            if attempt == 1:
+                break
+            w = 0.0
+            for i in range(3):
+                for k in range(3):
+                    w += e[i] * Si[i, k] * e[k]
+            nis[j] = w
+            if w <= thr:  # the outlier gate (base.OutlierGate.check)
+                count[j] = 0
+                gate_open[j] = False
+            elif gate_open[j]:
+                force = True
+            elif count[j] >= max_rej:
+                count[j] = 0
+                gate_open[j] = True
+                force = True
+            else:
+                count[j] += 1
+                rej = True
+            if not force:
+                break
+            for i in range(3):  # re-anchor on what is probably a real jump
+                Pj[i, i] += e[i] * e[i]
+        rejected[j] = rej
+        forced[j] = force
+        if rej:
+            continue
+        mat_mul(PH, Si, K)  # K = P H^T S^-1
+        ok = True
+        for i in range(9):
+            xn[i] = x[i] + (K[i, 0] * e[0] + K[i, 1] * e[1] + K[i, 2] * e[2])
+            ok = ok and math.isfinite(xn[i])
+        joseph(Pj, K, H, R, Pn, IKH, T, KR)
+        for i in range(9):
+            for k in range(i + 1):
+                T[i, k] = T[k, i] = 0.5 * (Pn[i, k] + Pn[k, i])
+                ok = ok and math.isfinite(T[i, k])
+        if not ok:
+            bad = j if bad < 0 else bad
+            continue
+        x[:] = xn
+        Pj[:] = T
+    return bad
+
+
 # ---- the filter ------------------------------------------------------------------------------
-_I9 = np.eye(9)
+class BatchedEKF:
+    """``n`` EKFs of one :class:`EKFConfig` stepped together: Tomera (2014) Table 5 over the
+    envs, one compiled loop (:func:`_ekf_step`).
+
+    Args:
+        config: the design parameters.
+        n: number of envs, >= 1.
+        name: the observer's name.
+    """
+
+    model_based = True  # the hull model and the thrust drive its prediction
+    thrust_input = "applied"
+
+    def __init__(self, config: EKFConfig, n: int = 1, name: str = "ekf") -> None:
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+            raise ValueError(f"n must be an int >= 1 (the number of envs), got {n!r}")
+        self.config = config
+        self.name = name
+        self.n = n = int(n)
+        Minv = np.linalg.inv(np.array(config.M))
+        E_b = np.array(config.E_b)
+        tb_inv = 1.0 / np.array(config.T_b)
+        A0 = np.zeros((9, 9))
+        A0[2, 5] = 1.0
+        A0[3:6, 3:6] = -Minv @ np.array(config.D_L)
+        A0[3:6, 6:9] = Minv
+        A0[6:9, 6:9] = -np.diag(tb_inv)
+        Qc = np.zeros((9, 9))
+        Qc[3:6, 3:6] = np.array(config.Q_nu)
+        Qc[6:9, 6:9] = E_b @ np.array(config.Q) @ E_b.T
+        gate = OutlierGate(config.gate_probability, dof=3, max_rejections=config.max_rejections)
+        #: the constant arguments of the compiled law
+        self._law = (Minv, np.array(config.D_L), tb_inv, config.bias_frame == "ned", A0, Qc,
+                     np.array(config.R), np.array(config.antenna_offset))  # fmt: skip
+        self._gate = (config.max_substep, float(gate.threshold), int(gate.max_rejections))
+        self._X = np.zeros((n, 9))
+        self._P = np.broadcast_to(np.diag(config.P0), (n, 9, 9)).copy()
+        self._t = np.zeros(n)
+        self._started = np.zeros(n, dtype=bool)
+        self._count = np.zeros(n, dtype=np.int64)
+        self._open = np.zeros(n, dtype=bool)
+        self._zero_tau = np.zeros((n, 3))
+
+    def batch(self, n: int) -> BatchedEKF:
+        """A new batch of ``n`` envs of this configuration."""
+        return BatchedEKF(self.config, n, self.name)
+
+    def model(self, x: ArrayLike, tau: ArrayLike | None = None) -> tuple[NDArray[np.float64], ...]:
+        """``(f(x, tau), df/dx, h(x), H)`` of one state ``x`` (9,): the law's own model."""
+        xa = np.ascontiguousarray(x, dtype=float)
+        ta = np.zeros(3) if tau is None else np.ascontiguousarray(tau, dtype=float)
+        out = (np.empty(9), np.empty((9, 9)), np.empty(3), np.empty((3, 9)))
+        Minv, D, tb_inv, ned, A0, _, _, off = self._law
+        _model(xa, ta, Minv, D, tb_inv, ned, A0, off, *out)
+        return out
+
+    def reset(
+        self,
+        t0: ArrayLike,
+        eta0: ArrayLike,
+        *,
+        mask: ArrayLike | None = None,
+        nu0: ArrayLike | None = None,
+        bias0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+    ) -> None:
+        """Start the envs of ``mask`` (``None``: all) at ``t0`` (n,) from ``eta0``, ``nu0``,
+        ``bias0`` (n, 3) (``None``: zero) with the covariances ``P0`` (n, 9, 9) (``None``:
+        ``config.P0``); checked by the caller."""
+        n = self.n
+        m = np.ones(n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        tt = np.broadcast_to(np.asarray(t0, dtype=float), (n,))
+        if not np.isfinite(tt[m]).all():
+            raise ValueError("t0 must be finite")
+        x = np.zeros((n, 9))
+        for sl, val in ((slice(0, 3), eta0), (slice(3, 6), nu0), (slice(6, 9), bias0)):
+            if val is not None:
+                x[:, sl] = np.broadcast_to(np.asarray(val, dtype=float), (n, 3))
+        self._X[m] = x[m]
+        self._P[m] = np.diag(self.config.P0) if P0 is None else np.asarray(P0, dtype=float)[m]
+        self._t[m] = tt[m]
+        self._count[m] = 0
+        self._open[m] = False
+        self._started[m] = True
+
+    def step(
+        self,
+        t: ArrayLike,
+        z: ArrayLike | None = None,
+        valid: ArrayLike | None = None,
+        tau: ArrayLike | None = None,
+    ) -> BatchedStepInfo:
+        """Propagate every env to its ``t`` (n,) with its thrust ``tau`` (n, 3) (N, N, N m;
+        ``None``: zero) and update it with ``z`` (n, 3) where ``valid``.
+
+        Raises:
+            RuntimeError: an env was never reset, or an estimate became non-finite.
+            ValueError: time going backwards, a non-finite valid ``z``.
+        """
+        n = self.n
+        if not self._started.all():
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
+        tt = np.broadcast_to(np.asarray(t, dtype=float), (n,))
+        dt = tt - self._t
+        if not (dt >= -1e-12).all():
+            i = int(np.argmin(np.where(np.isnan(dt), -np.inf, dt)))
+            raise ValueError(
+                f"{self.name}: time must not go backwards (env {i}: previous {self._t[i]}, "
+                f"got {tt[i]!r})"
+            )
+        if z is None:
+            za, vm = np.zeros((n, 3)), np.zeros(n, dtype=bool)
+        else:
+            za = np.ascontiguousarray(z, dtype=float)
+            vm = np.ones(n, bool) if valid is None else np.ascontiguousarray(valid, dtype=bool)
+            if not np.isfinite(za[vm]).all():
+                raise ValueError(f"{self.name}: z must be finite where valid")
+        ta = self._zero_tau if tau is None else np.ascontiguousarray(tau, dtype=float)
+        out = BatchedStepInfo(np.empty((n, 3)), np.empty(n), np.empty(n, bool), np.empty(n, bool))
+        bad = _call_ekf(self._X, self._P, np.ascontiguousarray(dt), za, vm, ta, self._count,
+                        self._open, *self._law, *self._gate, *out)  # fmt: skip
+        self._t[:] = tt
+        if bad >= 0:
+            raise RuntimeError(
+                f"{self.name}: the estimate of env {bad} became non-finite at t = {tt[bad]} s "
+                "(check tau, the time step and the configuration)"
+            )
+        return out
+
+    @property
+    def eta(self) -> NDArray[np.float64]:
+        """The estimated poses (n, 3) (m, m, rad; heading continuous)."""
+        return self._X[:, 0:3].copy()
+
+    @property
+    def nu(self) -> NDArray[np.float64]:
+        """The estimated body velocities (n, 3) (m/s, m/s, rad/s)."""
+        return self._X[:, 3:6].copy()
+
+    @property
+    def bias(self) -> NDArray[np.float64]:
+        """The estimated bias forces (n, 3) (N, N, N m)."""
+        return self._X[:, 6:9].copy()
+
+    def estimate(self, j: int) -> Estimate:
+        """Env ``j``'s estimate (copies)."""
+        x, P = self._X[j], self._P[j]
+        return Estimate(t=float(self._t[j]), eta=x[0:3].copy(), nu=x[3:6].copy(), P=P.copy(),
+                        P_eta=P[0:3, 0:3].copy(), P_nu=P[3:6, 3:6].copy(),
+                        bias=x[6:9].copy())  # fmt: skip
 
 
-class ExtendedKalmanFilter(Observer):
-    """Discrete EKF of Tomera (2014) Table 5 on the 9-state model ``[eta, nu, b]``.
+_STEP_ENTRY: list[Any] = []
+
+
+def _call_ekf(*args: Any) -> int:
+    """:func:`_ekf_step` through its compiled entry point."""
+    if not _STEP_ENTRY:
+        _STEP_ENTRY.append(entry(_ekf_step, args))
+    return int(_STEP_ENTRY[0](*args))
+
+
+class ExtendedKalmanFilter(BatchOfOne):
+    """Discrete EKF of Tomera (2014) Table 5 on the 9-state model ``[eta, nu, b]``: one env
+    of :class:`BatchedEKF`.
 
     Implements the shared observer interface: :meth:`reset`, :meth:`step`, :meth:`estimate`
     and ``name``.
@@ -318,35 +640,14 @@ class ExtendedKalmanFilter(Observer):
             raise TypeError(f"config must be an EKFConfig, got {type(config).__name__}")
         self.config = config
         self.name = name
-        M = np.array(config.M)
-        D = np.array(config.D_L)
-        E_b = np.array(config.E_b)
-        self._Minv = np.linalg.inv(M)
-        self._D = D
-        self._tb_inv = 1.0 / np.array(config.T_b)
-        self._ned = config.bias_frame == "ned"
-        A0 = np.zeros((9, 9))
-        A0[2, 5] = 1.0
-        A0[3:6, 3:6] = -self._Minv @ D
-        A0[3:6, 6:9] = self._Minv
-        A0[6:9, 6:9] = -np.diag(self._tb_inv)
-        self._A0 = A0
-        Qc = np.zeros((9, 9))
-        Qc[3:6, 3:6] = np.array(config.Q_nu)
-        Qc[6:9, 6:9] = E_b @ np.array(config.Q) @ E_b.T
-        self._Qc = Qc
-        self._R = np.array(config.R)
-        self._off = np.array(config.antenna_offset)
-        self._has_off = bool(np.any(self._off != 0.0))
-        self._gate = OutlierGate(
-            config.gate_probability, dof=3, max_rejections=config.max_rejections
-        )
-        self._x = np.zeros(9)
-        self._P = np.diag(config.P0)
-        self._t: float | None = None
+        self._b = BatchedEKF(config, 1, name)
 
     def __repr__(self) -> str:
         return f"ExtendedKalmanFilter(name={self.name!r}, bias_frame={self.config.bias_frame!r})"
+
+    def batch(self, n: int) -> BatchedEKF:
+        """This filter's law over ``n`` envs (the vector env's)."""
+        return self._b.batch(n)
 
     # ---- model -------------------------------------------------------------------------------
     def f(self, x: ArrayLike, tau: ArrayLike | None = None) -> NDArray[np.float64]:
@@ -356,61 +657,18 @@ class ExtendedKalmanFilter(Observer):
             x: state ``[eta, nu, b]`` (9,).
             tau: applied body thrust ``[X, Y, N]`` (N, N, N m); ``None`` = 0.
         """
-        x = np.asarray(x, dtype=float)
-        psi = x[2]
-        c, s = math.cos(psi), math.sin(psi)
-        u, v, r = x[3], x[4], x[5]
-        b = x[6:9]
-        if self._ned:
-            b = np.array([c * b[0] + s * b[1], -s * b[0] + c * b[1], b[2]])
-        force = b - self._D @ x[3:6]
-        if tau is not None:
-            force = force + np.asarray(tau, dtype=float)
-        out = np.empty(9)
-        out[0] = c * u - s * v
-        out[1] = s * u + c * v
-        out[2] = r
-        out[3:6] = self._Minv @ force
-        out[6:9] = -self._tb_inv * x[6:9]
-        return out
+        return self._b.model(x, tau)[0]
 
     def jacobian(self, x: ArrayLike) -> NDArray[np.float64]:
         """Analytic Jacobian ``df/dx`` (9x9) at ``x`` (eq. 44); ``tau`` enters additively."""
-        x = np.asarray(x, dtype=float)
-        psi = x[2]
-        c, s = math.cos(psi), math.sin(psi)
-        u, v = x[3], x[4]
-        A = self._A0.copy()
-        A[0, 2] = -s * u - c * v
-        A[1, 2] = c * u - s * v
-        A[0, 3] = c
-        A[0, 4] = -s
-        A[1, 3] = s
-        A[1, 4] = c
-        if self._ned:
-            b1, b2 = x[6], x[7]
-            RT = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-            dRTb = np.array([-s * b1 + c * b2, -c * b1 - s * b2, 0.0])
-            A[3:6, 2] = self._Minv @ dRTb
-            A[3:6, 6:9] = self._Minv @ RT
-        return A
+        return self._b.model(x)[1]
 
     def measurement_model(self, x: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(h(x), H)``: predicted measurement (3,) and its Jacobian (3x9).
 
         With the default zero antenna offset ``h(x) = eta`` and ``H = [I 0 0]`` (eq. 40).
         """
-        x = np.asarray(x, dtype=float)
-        H = np.zeros((3, 9))
-        H[0, 0] = H[1, 1] = H[2, 2] = 1.0
-        hx = x[:3].copy()
-        if self._has_off:
-            c, s = math.cos(x[2]), math.sin(x[2])
-            xa, ya = self._off
-            hx[0] += c * xa - s * ya
-            hx[1] += s * xa + c * ya
-            H[0, 2] = -s * xa - c * ya
-            H[1, 2] = c * xa - s * ya
+        _, _, hx, H = self._b.model(x)
         return hx, H
 
     # ---- interface ---------------------------------------------------------------------------
@@ -436,25 +694,15 @@ class ExtendedKalmanFilter(Observer):
             ValueError: wrong shapes, non-finite values or a ``P0`` that is not symmetric
                 positive definite.
         """
-        t0 = float(t0)
-        if not math.isfinite(t0):
-            raise ValueError(f"t0 must be finite, got {t0!r}")
-        x = np.zeros(9)
-        for sl, val, nm in (
-            (slice(0, 3), eta0, "eta0"),
-            (slice(3, 6), nu0, "nu0"),
-            (slice(6, 9), bias0, "bias0"),
-        ):
+        rows: dict[str, Any] = {}
+        for val, nm in ((eta0, "eta0"), (nu0, "nu0"), (bias0, "bias0")):
             if val is None:
                 continue
             arr = np.asarray(val, dtype=float)
             if arr.shape != (3,) or not np.all(np.isfinite(arr)):
                 raise ValueError(f"{nm} must be 3 finite values, got {val!r}")
-            x[sl] = arr
-        P: NDArray[np.float64]
-        if P0 is None:
-            P = np.diag(self.config.P0)
-        else:
+            rows[nm] = arr
+        if P0 is not None:
             P = np.asarray(P0, dtype=float)
             if P.shape == (9,):
                 P = np.diag(P)
@@ -462,116 +710,14 @@ class ExtendedKalmanFilter(Observer):
                 raise ValueError(f"P0 must be 9x9 or 9 variances, finite; got shape {P.shape}")
             if not np.allclose(P, P.T) or not np.linalg.eigvalsh(0.5 * (P + P.T)).min() > 0:
                 raise ValueError("P0 must be symmetric positive definite")
-            P = 0.5 * (P + P.T)
-        self._x = x
-        self._P = P
-        self._t = t0
-        self._gate.reset()
-
-    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
-        """Propagate from the previous call's time to ``t``, then update with ``z``.
-
-        Args:
-            t: time now (s), not earlier than the previous call.
-            z: measured NED pose ``[x, y, psi]`` (m, m, rad; heading in any branch), or
-                ``None`` when no measurement is available (dropout: coast on the model).
-            tau: body thrust ``[X, Y, N]`` (N, N, N m) applied since the previous call;
-                ``None`` = zero.
-
-        Returns:
-            :class:`StepInfo` with the innovation, NIS and whether the gate rejected ``z``.
-
-        Raises:
-            RuntimeError: :meth:`reset` was not called, or the estimate became non-finite.
-            ValueError: time going backwards, or ``z``/``tau`` not 3 finite values.
-        """
-        if self._t is None:
-            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
-        dt = float(t) - self._t
-        if not dt >= -1e-12:
-            raise ValueError(
-                f"{self.name}: time must not go backwards (previous {self._t}, got {t!r})"
-            )
-        tau = as_tau(tau)
-        if z is not None:
-            z = as_pose(z)
-        if dt > 0.0:
-            n = max(1, math.ceil(dt / self.config.max_substep - 1e-9))
-            h = dt / n
-            for _ in range(n):
-                self._predict(h, tau)
-        self._t = float(t)
-        if z is None:
-            return no_measurement()
-        return self._update(z)
-
-    def estimate(self) -> Estimate:
-        """The current estimate (copies; heading continuous)."""
-        if self._t is None:
-            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
-        x, P = self._x, self._P
-        return Estimate(
-            t=self._t,
-            eta=x[0:3].copy(),
-            nu=x[3:6].copy(),
-            P=P.copy(),
-            P_eta=P[0:3, 0:3].copy(),
-            P_nu=P[3:6, 3:6].copy(),
-            bias=x[6:9].copy(),
-        )
+            rows["P0"] = 0.5 * (P + P.T)
+        eta = rows.pop("eta0", None)
+        self._reset_one(t0, np.zeros(3) if eta is None else eta, **rows)
 
     @property
     def state(self) -> NDArray[np.float64]:
         """A copy of the full state ``[eta, nu, b]`` (9,)."""
-        return self._x.copy()
-
-    # ---- Table 5 -----------------------------------------------------------------------------
-    def _predict(self, h: float, tau: NDArray[np.float64] | None) -> None:
-        """State and covariance propagation over ``h`` s (eqs. 43-45)."""
-        x = self._x
-        F = self.jacobian(x)
-        F *= h
-        F += _I9
-        self._x = x + h * self.f(x, tau)
-        P = F @ self._P @ F.T
-        P += h * self._Qc
-        self._P = P
-
-    def _update(self, z: NDArray[np.float64]) -> StepInfo:
-        """Gain, state and covariance update (Table 5) with the NIS gate."""
-        x, P = self._x, self._P
-        hx, H = self.measurement_model(x)
-        innov = z - hx
-        innov[2] = wrap_angle(float(innov[2]))
-        PHt = P[:, 0:3] if not self._has_off else P @ H.T
-        S = (PHt[0:3] if not self._has_off else H @ PHt) + self._R
-        S_inv = np.linalg.inv(S)
-        nis = float(innov @ S_inv @ innov)
-        decision = self._gate.check(nis)
-        if decision == "reject":
-            return StepInfo(innov, nis, True)
-        if decision == "force":
-            # forced in after max_rejections: re-anchor on what is probably a real jump
-            jump = np.zeros((9, 9))
-            jump[0:3, 0:3] = np.diag(innov * innov)
-            P = P + jump
-            self._P = P
-            PHt = P[:, 0:3] if not self._has_off else P @ H.T
-            S = (PHt[0:3] if not self._has_off else H @ PHt) + self._R
-            S_inv = np.linalg.inv(S)
-        K = PHt @ S_inv
-        x_new = x + K @ innov
-        IKH = _I9 - K @ H
-        P_new = IKH @ P @ IKH.T + K @ self._R @ K.T
-        P_new = 0.5 * (P_new + P_new.T)
-        if not (np.all(np.isfinite(x_new)) and np.all(np.isfinite(P_new))):
-            raise RuntimeError(
-                f"{self.name}: the estimate became non-finite at t = {self._t} s "
-                "(check tau, the time step and the configuration)"
-            )
-        self._x = x_new
-        self._P = P_new
-        return StepInfo(innov, nis, False, decision == "force")
+        return self._b._X[0].copy()
 
 
 # ---- factories -------------------------------------------------------------------------------
@@ -629,3 +775,5 @@ def _vessel_model(name: str) -> Callable[[Any], dict[str, Any]]:
 
 register_observer("ekf", default_ekf, _vessel_model("ekf"))
 register_observer("tomera-ekf", tomera_ekf, _vessel_model("tomera-ekf"))
+register_batched_form("ekf")
+register_batched_form("tomera-ekf")

@@ -7,7 +7,7 @@ The classical DP wave filter that the thesis compares its Kalman filters with: t
 ``[x, y, psi]`` passes through a cascade of notch filters centred on the first-order wave band,
 so that the controller sees the low-frequency (LF) motion only.
 
-Public names: ``NotchCascade``, ``NotchDesign``, ``NotchObserver``,
+Public names: ``BatchedNotch``, ``NotchCascade``, ``NotchDesign``, ``NotchObserver``,
 ``MEASUREMENT_VARIANCE_ALTAKIE``, ``notch_section``.
 Sources: Al-Takie (1982); Fossen (2011).
 
@@ -27,10 +27,12 @@ import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
 from .._config import from_mapping, param
-from ..dynamics import wrap_angle
-from .base import Estimate, Observer, StepInfo, as_pose, as_tau, register_observer
+from .._jit import njit
+from .base import Estimate, as_pose, register_observer
+from .batch import BatchedStepInfo, BatchOfOne, register_batched_form
 
 __all__ = [
+    "BatchedNotch",
     "NotchCascade",
     "NotchDesign",
     "NotchObserver",
@@ -248,13 +250,9 @@ class NotchCascade:
         x = np.array(np.broadcast_to(np.asarray(u, dtype=float), (self.channels,)))
         if not np.isfinite(x).all():
             raise ValueError(f"the cascade's input must be finite, got {u!r}")
-        st = self._state
-        for i, (b0, b1, b2, _, a1, a2) in enumerate(self.sos):
-            y = b0 * x + st[:, i, 0]
-            st[:, i, 0] = b1 * x - a1 * y + st[:, i, 1]
-            st[:, i, 1] = b2 * x - a2 * y
-            x = y
-        return x
+        out = np.empty(self.channels)
+        _cascade(self.sos, self._state, x, out)
+        return out
 
     def frequency_response(self, f_hz: ArrayLike) -> NDArray[np.complex128]:
         """The discrete cascade's frequency response at ``f_hz`` (Hz), ``scipy.signal.sosfreqz``."""
@@ -278,8 +276,260 @@ class NotchCascade:
         return scipy.signal.sosfilt(np.array(self.sos), x)
 
 
-class NotchObserver(Observer):
-    """Notch-filter wave filter with a filtered-difference velocity (module doc).
+@njit(inline="always")
+def _sections(sos, st, x):  # type: ignore[no-untyped-def]
+    """One sample ``x`` of one channel through the sections ``sos`` with its states ``st``
+    (n_sections, 2), in place (transposed direct form II); returns the output."""
+    for i in range(sos.shape[0]):
+        y = sos[i, 0] * x + st[i, 0]
+        st[i, 0] = sos[i, 1] * x - sos[i, 4] * y + st[i, 1]
+        st[i, 1] = sos[i, 2] * x - sos[i, 5] * y
+        x = y
+    return x
+
+
+@njit
+def _cascade(sos, st, x, out):  # type: ignore[no-untyped-def]
+    """Every channel's sample ``x[c]`` through the sections (states ``st[c]``) into
+    ``out[c]``."""
+    for c in range(x.shape[0]):
+        out[c] = _sections(sos, st[c], x[c])
+
+
+@njit
+def _notch_step(sel, valid, z, tt, h, a, delay, sos, t, eta, ed, yp, st, innov):  # type: ignore[no-untyped-def]  # noqa: E501
+    """One sampling interval ``h`` (s) of the envs ``sel`` to ``tt``, in place: the
+    prediction with the rate, the cascade fed the sample (``valid``; the innovation's
+    heading wrapped to ``(-pi, pi]``) or else the prediction led by the cascade's ``delay``
+    (s), so that on a ramp its input goes on as the measurements would; the rate filtered
+    from the output's difference (``a = exp(-h / T_v)``) where there was a sample."""
+    pi, two_pi = math.pi, 2.0 * math.pi
+    for j in range(t.shape[0]):
+        if not sel[j]:
+            continue
+        for i in range(3):
+            pred = eta[j, i] + ed[j, i] * h
+            if valid[j]:
+                e = z[j, i] - pred
+                if i == 2:
+                    e = pi - np.fmod(np.fmod(pi - e, two_pi) + two_pi, two_pi)
+                innov[j, i] = e
+                y = _sections(sos, st[j, i], pred + e)
+                ed[j, i] = a * ed[j, i] + (1.0 - a) * (y - yp[j, i]) / h
+                eta[j, i] = y
+            else:
+                y = _sections(sos, st[j, i], pred + ed[j, i] * delay)
+                eta[j, i] = pred
+            yp[j, i] = y
+        t[j] = tt[j]
+
+
+class BatchedNotch:
+    """``n`` notch observers (:class:`NotchObserver`) stepped together, elementwise over the
+    envs (module doc); one sampling interval for the batch.
+
+    Args:
+        design, measurement_variance, dt, name: as :class:`NotchObserver`.
+        n: number of envs, >= 1.
+    """
+
+    model_based = False
+
+    def __init__(
+        self,
+        design: NotchDesign,
+        n: int,
+        *,
+        measurement_variance: NDArray[np.float64],
+        dt: float | None,
+        name: str,
+    ) -> None:
+        self.design = design
+        self.name = name
+        self.n = n
+        self._R = measurement_variance
+        self._dt_fixed = dt
+        self.dt: float | None = None
+        self.cascade: NotchCascade | None = None
+        self._P6: NDArray[np.float64] | None = None
+        self._t = np.zeros(n)
+        self._started = np.zeros(n, dtype=bool)
+        self._eta = np.zeros((n, 3))
+        self._eta_dot = np.zeros((n, 3))
+        self._y_prev = np.zeros((n, 3))
+        self._state = np.zeros((n, 3, len(design.centres_hz), 2))
+        self._learn = np.zeros(n, dtype=bool)  # the first step after reset learns the interval
+        if dt is not None:
+            self._build(dt)
+
+    def batch(self, n: int) -> BatchedNotch:
+        """A new batch of ``n`` envs with these settings."""
+        return BatchedNotch(self.design, n, measurement_variance=self._R, dt=self._dt_fixed,
+                            name=self.name)  # fmt: skip
+
+    def _build(self, dt: float) -> None:
+        self.dt = dt
+        self.cascade = NotchCascade(self.design, dt, channels=3)
+        self._sos = np.array(self.cascade.sos)
+        self._delay = self.cascade.dc_group_delay
+        self._a = math.exp(-dt / self.design.velocity_time_constant)
+        hh, gg, hg = self.noise_gains()
+        P6 = np.zeros((6, 6))
+        i = np.arange(3)
+        P6[i, i] = hh * self._R
+        P6[i + 3, i + 3] = gg * self._R
+        P6[i, i + 3] = P6[i + 3, i] = hg * self._R
+        self._P6 = P6
+
+    def _steady(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The section states (m, 3, n_sections, 2) in steady state at the inputs ``x``
+        (m, 3) (:meth:`NotchCascade.reset`)."""
+        assert self.cascade is not None
+        _, b1, b2, _, a1, a2 = self.cascade.sos.T
+        s2 = (b2 - a2) * x[..., None]
+        s1 = (b1 - a1) * x[..., None] + s2
+        return np.stack([s1, s2], axis=-1)
+
+    def reset(
+        self,
+        t0: ArrayLike,
+        eta0: ArrayLike,
+        *,
+        mask: ArrayLike | None = None,
+        nu0: ArrayLike | None = None,
+    ) -> None:
+        """Start the envs of ``mask`` at ``t0`` (n,) in steady state at ``eta0`` (n, 3), with
+        the NED rates of ``nu0`` (n, 3) (``None``: rest)."""
+        m = np.ones(self.n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        tt = np.broadcast_to(np.asarray(t0, dtype=float), (self.n,))
+        eta = np.broadcast_to(np.asarray(eta0, dtype=float), (self.n, 3))
+        if not (np.isfinite(tt[m]).all() and np.isfinite(eta[m]).all()):
+            raise ValueError("t0 and eta0 must be finite")
+        if nu0 is None:
+            ed = np.zeros((self.n, 3))
+        else:
+            nu = np.broadcast_to(np.asarray(nu0, dtype=float), (self.n, 3))
+            c, s = np.cos(eta[:, 2]), np.sin(eta[:, 2])
+            ed = np.stack([c * nu[:, 0] - s * nu[:, 1], s * nu[:, 0] + c * nu[:, 1], nu[:, 2]], 1)
+        self._t[m] = tt[m]
+        self._eta[m] = eta[m]
+        self._eta_dot[m] = ed[m]
+        self._y_prev[m] = eta[m]
+        self._started[m] = True
+        if self._dt_fixed is None and m.all():  # the interval is learned again
+            self.dt = self.cascade = self._P6 = None
+        if self.cascade is not None:
+            self._state[m] = self._steady(eta[m])
+        self._learn[m] = self.cascade is None
+
+    def step(
+        self,
+        t: ArrayLike,
+        z: ArrayLike | None = None,
+        valid: ArrayLike | None = None,
+        tau: ArrayLike | None = None,
+    ) -> BatchedStepInfo:
+        """One sampling interval to ``t`` (n,) of every env whose time moves (an env whose
+        time stands and has no sample is left alone), filtering ``z`` (n, 3) where ``valid``
+        (else coasting). ``tau``: unused (a signal filter).
+
+        Raises:
+            RuntimeError: an env was never reset.
+            ValueError: an interval that is not the fixed one (or a first one <= 0).
+        """
+        n = self.n
+        if not self._started.all():
+            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
+        tt = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=float), (n,)))
+        za = np.zeros((n, 3)) if z is None else np.ascontiguousarray(z, dtype=float)
+        vm = (np.ones(n, bool) if z is not None else np.zeros(n, bool)) if valid is None else (
+            np.ascontiguousarray(valid, dtype=bool))  # fmt: skip
+        dt = tt - self._t
+        sel = vm | (dt != 0.0)
+        out = BatchedStepInfo(np.full((n, 3), np.nan), np.full(n, np.nan), np.zeros(n, bool),
+                              np.zeros(n, bool))  # fmt: skip
+        if not sel.any():
+            return out
+        d = dt[sel]
+        if self.cascade is None:
+            d0 = float(d[0])
+            if not (math.isfinite(d0) and d0 > 0.0):
+                i = int(np.nonzero(sel)[0][0])
+                raise ValueError(
+                    f"{self.name}: the first step must come after reset (t0 = {self._t[i]}, "
+                    f"got t = {tt[i]!r}); its interval fixes the sampling interval"
+                )
+            self._build(d0)
+        assert self.dt is not None and self.cascade is not None
+        h = self.dt
+        bad = ~(np.abs(d - h) <= _DT_RTOL * h)
+        if bad.any():
+            raise ValueError(
+                f"{self.name}: the notch filter is discretised for a fixed sampling interval "
+                f"{h:.9g} s but this step is {float(d[bad][0]):.9g} s after the previous one: call "
+                "step() once per sample (z=None for a missing one), or make a new observer (dt=...)"
+            )
+        learn = self._learn & sel
+        if learn.any():  # the first step after a reset with the interval unknown
+            self._state[learn] = self._steady(self._y_prev[learn])
+            self._learn[learn] = False
+        if not np.isfinite(za[vm]).all():
+            raise ValueError(f"{self.name}: z must be finite where valid")
+        _notch_step(sel, vm, za, tt, h, self._a, self._delay, self._sos, self._t, self._eta,
+                    self._eta_dot, self._y_prev, self._state, out.innovation)  # fmt: skip
+        return out
+
+    @property
+    def eta(self) -> NDArray[np.float64]:
+        """The estimated poses (n, 3) (m, m, rad; heading continuous)."""
+        return self._eta.copy()
+
+    @property
+    def nu(self) -> NDArray[np.float64]:
+        """The body velocities ``R^T(psi) eta_dot`` (n, 3) (m/s, m/s, rad/s)."""
+        c, s = np.cos(self._eta[:, 2]), np.sin(self._eta[:, 2])
+        ed = self._eta_dot
+        return np.stack([c * ed[:, 0] + s * ed[:, 1], -s * ed[:, 0] + c * ed[:, 1], ed[:, 2]], 1)
+
+    def estimate(self, j: int) -> Estimate:
+        """Env ``j``'s estimate; ``P`` in ``[x, y, psi, x_dot, y_dot, psi_dot]``, the
+        measurement-noise covariance through the filter (module doc)."""
+        eta = self._eta[j].copy()
+        c, s = math.cos(eta[2]), math.sin(eta[2])
+        ed = self._eta_dot[j]
+        nu = np.array([c * ed[0] + s * ed[1], -s * ed[0] + c * ed[1], ed[2]])
+        t = float(self._t[j])
+        if self._P6 is None:
+            P6 = np.diag(np.concatenate([self._R, np.full(3, np.inf)]))
+            return Estimate(t, eta, nu, P6, np.diag(self._R), None)
+        P6 = self._P6.copy()
+        J = np.zeros((3, 6))
+        J[0, 2], J[1, 2] = nu[1], -nu[0]
+        J[0, 3], J[0, 4], J[1, 3], J[1, 4], J[2, 5] = c, s, -s, c, 1.0
+        P_nu = J @ P6 @ J.T
+        return Estimate(t, eta, nu, P6, P6[:3, :3].copy(), 0.5 * (P_nu + P_nu.T))
+
+    def noise_gains(self) -> tuple[float, float, float]:
+        """``(sum h^2, sum g^2, sum h g)`` of the chain's impulse responses (``h``: pose, -;
+        ``g``: rate, 1/s): the pose variance, rate variance and their covariance per unit
+        measurement variance."""
+        if self.cascade is None or self.dt is None:
+            raise RuntimeError(f"{self.name}: the sampling interval is not known yet")
+        dt = self.dt
+        slowest = min(self.design.centres_hz)
+        damping = math.pi * slowest * self.design.bandwidth_ratio  # b / 2 of the slowest (1/s)
+        tmax = 60.0 / damping + 60.0 * self.design.velocity_time_constant
+        n = int(min(max(math.ceil(tmax / dt), 64), 2_000_000))
+        hresp = self.cascade.impulse_response(n)
+        a = math.exp(-dt / self.design.velocity_time_constant)
+        diff = np.diff(hresp, prepend=0.0) / dt
+        g = scipy.signal.lfilter([1.0 - a], [1.0, -a], diff)
+        return float(hresp @ hresp), float(g @ g), float(hresp @ g)
+
+
+class NotchObserver(BatchOfOne):
+    """Notch-filter wave filter with a filtered-difference velocity (module doc): one env of
+    :class:`BatchedNotch`.
 
     Args:
         design: the :class:`NotchDesign` (or a mapping of its fields); default the full-scale
@@ -312,19 +562,13 @@ class NotchObserver(Observer):
             )
         self.design = design
         self.name = str(name)
-        self._R = R
-        self._dt_fixed = None if dt is None else _positive("dt (sampling interval)", dt, "s")
-        self._dt: float | None = None
-        self._cascade: NotchCascade | None = None
-        self._P6: NDArray[np.float64] | None = None
-        self._t: float | None = None
-        self._eta = np.zeros(3)
-        self._eta_dot = np.zeros(3)
-        self._y_prev = np.zeros(3)
-        if self._dt_fixed is not None:
-            self._build(self._dt_fixed)
+        fixed = None if dt is None else _positive("dt (sampling interval)", dt, "s")
+        self._b = BatchedNotch(design, 1, measurement_variance=R, dt=fixed, name=self.name)
 
-    # ---- interface ---------------------------------------------------------------------------
+    def batch(self, n: int) -> BatchedNotch:
+        """This observer's law over ``n`` envs (the vector env's)."""
+        return self._b.batch(n)
+
     def reset(
         self,
         t0: float,
@@ -344,155 +588,33 @@ class NotchObserver(Observer):
         Raises:
             ValueError: non-finite or mis-shaped arguments, or ``P0`` given.
         """
-        t0 = float(t0)
-        if not math.isfinite(t0):
-            raise ValueError(f"t0 must be finite, got {t0!r}")
         if P0 is not None:
             raise ValueError(
                 "the notch observer has no covariance state: pass P0=None "
                 "(its P is the measurement-noise covariance through the filter, module doc)"
             )
-        eta = as_pose(eta0, "eta0")
-        if nu0 is None:
-            eta_dot = np.zeros(3)
-        else:
-            nu = as_pose(nu0, "nu0", "[u, v, r] (m/s, m/s, rad/s)")
-            c, s = math.cos(eta[2]), math.sin(eta[2])
-            eta_dot = np.array([c * nu[0] - s * nu[1], s * nu[0] + c * nu[1], nu[2]])
-        self._t = t0
-        self._eta = eta.copy()
-        self._eta_dot = eta_dot
-        self._y_prev = eta.copy()
-        if self._cascade is not None:
-            self._cascade.reset(eta)
-        if self._dt_fixed is None:  # the interval is learned again from this episode
-            self._dt = None
-            self._cascade = None
-            self._P6 = None
+        if nu0 is not None:
+            nu0 = as_pose(nu0, "nu0", "[u, v, r] (m/s, m/s, rad/s)")
+        self._reset_one(t0, eta0, nu0=nu0)
 
-    def step(self, t: float, z: ArrayLike | None, tau: ArrayLike | None = None) -> StepInfo:
-        """Advance one sampling interval to ``t`` and filter ``z`` (``None``: coast).
-
-        Args:
-            t: time now (s): the previous call's time plus the fixed sampling interval.
-            z: measured ``[x, y, psi]`` (m, m, rad; heading in any branch) or ``None``.
-            tau: body thrust ``[X, Y, N]`` (N, N, N m); checked, not used (a signal filter).
-
-        Returns:
-            :class:`~shipgym.observers.base.StepInfo`: innovation ``z`` minus the one-step
-            prediction (NaN without ``z``), no NIS, never rejected.
-
-        Raises:
-            RuntimeError: :meth:`reset` was not called.
-            ValueError: the interval is not the fixed one (or the first is <= 0), or ``z`` /
-                ``tau`` not 3 finite values.
-        """
-        if self._t is None:
-            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before step()")
-        t = float(t)
-        dt = t - self._t
-        if self._dt is None:
-            if not (math.isfinite(dt) and dt > 0.0):
-                raise ValueError(
-                    f"{self.name}: the first step must come after reset (t0 = {self._t}, "
-                    f"got t = {t!r}); its interval fixes the sampling interval"
-                )
-            self._build(dt)
-            assert self._cascade is not None
-            self._cascade.reset(self._y_prev)
-        elif not abs(dt - self._dt) <= _DT_RTOL * self._dt:
-            raise ValueError(
-                f"{self.name}: the notch filter is discretised for a fixed sampling interval "
-                f"{self._dt:.9g} s but this step is {dt:.9g} s after the previous one: call step() "
-                "once per sample (z=None for a missing one), or make a new observer (dt=...)"
-            )
-        as_tau(tau)
-        cascade = self._cascade
-        assert cascade is not None and self._dt is not None
-        h = self._dt
-        pred = self._eta + self._eta_dot * h
-        if z is None:
-            # the cascade is fed the predicted *measurement*: the prediction led by the
-            # cascade's delay, so that on a ramp its input goes on as the measurements would
-            self._y_prev = cascade.step(pred + self._eta_dot * cascade.dc_group_delay)
-            self._eta = pred
-            self._t = t
-            return StepInfo(np.full(3, np.nan), None, False)
-        zz = as_pose(z)
-        innov = zz - pred
-        innov[2] = wrap_angle(float(innov[2]))
-        y = cascade.step(pred + innov)  # the heading unwrapped next to the prediction
-        a = math.exp(-h / self.design.velocity_time_constant)
-        self._eta_dot = a * self._eta_dot + (1.0 - a) * (y - self._y_prev) / h
-        self._y_prev = y
-        self._eta = y.copy()
-        self._t = t
-        return StepInfo(innov, None, False)
-
-    def estimate(self) -> Estimate:
-        """The current estimate (copies); ``P`` in ``[x, y, psi, x_dot, y_dot, psi_dot]``,
-        the measurement-noise covariance through the filter (module doc)."""
-        if self._t is None:
-            raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
-        eta = self._eta.copy()
-        ed = self._eta_dot
-        c, s = math.cos(eta[2]), math.sin(eta[2])
-        u = c * ed[0] + s * ed[1]
-        v = -s * ed[0] + c * ed[1]
-        nu = np.array([u, v, ed[2]])
-        if self._P6 is None:
-            P6 = np.diag(np.concatenate([self._R, np.full(3, np.inf)]))
-            return Estimate(self._t, eta, nu, P6, np.diag(self._R), None)
-        P6 = self._P6.copy()
-        J = np.zeros((3, 6))
-        J[0, 2], J[1, 2] = v, -u
-        J[0, 3], J[0, 4], J[1, 3], J[1, 4], J[2, 5] = c, s, -s, c, 1.0
-        P_nu = J @ P6 @ J.T
-        return Estimate(self._t, eta, nu, P6, P6[:3, :3].copy(), 0.5 * (P_nu + P_nu.T))
-
-    # ---- extras ------------------------------------------------------------------------------
     @property
     def dt(self) -> float | None:
         """The fixed sampling interval (s), ``None`` until known."""
-        return self._dt
+        return self._b.dt
 
     @property
     def cascade(self) -> NotchCascade | None:
         """The discretised cascade, ``None`` until the sampling interval is known."""
-        return self._cascade
+        return self._b.cascade
 
     @property
     def t(self) -> float | None:
         """Time of the current estimate (s), ``None`` before :meth:`reset`."""
-        return self._t
+        return float(self._b._t[0]) if self._started else None
 
     def noise_gains(self) -> tuple[float, float, float]:
-        """``(sum h^2, sum g^2, sum h g)`` of the chain's impulse responses (``h``: pose, -;
-        ``g``: rate, 1/s): the pose variance, rate variance and their covariance per unit
-        measurement variance."""
-        if self._cascade is None or self._dt is None:
-            raise RuntimeError(f"{self.name}: the sampling interval is not known yet")
-        dt = self._dt
-        slowest = min(self.design.centres_hz)
-        damping = math.pi * slowest * self.design.bandwidth_ratio  # b / 2 of the slowest (1/s)
-        tmax = 60.0 / damping + 60.0 * self.design.velocity_time_constant
-        n = int(min(max(math.ceil(tmax / dt), 64), 2_000_000))
-        hresp = self._cascade.impulse_response(n)
-        a = math.exp(-dt / self.design.velocity_time_constant)
-        diff = np.diff(hresp, prepend=0.0) / dt
-        g = scipy.signal.lfilter([1.0 - a], [1.0, -a], diff)
-        return float(hresp @ hresp), float(g @ g), float(hresp @ g)
-
-    def _build(self, dt: float) -> None:
-        self._dt = dt
-        self._cascade = NotchCascade(self.design, dt, channels=3)
-        hh, gg, hg = self.noise_gains()
-        P6 = np.zeros((6, 6))
-        i = np.arange(3)
-        P6[i, i] = hh * self._R
-        P6[i + 3, i + 3] = gg * self._R
-        P6[i, i + 3] = P6[i + 3, i] = hg * self._R
-        self._P6 = P6
+        """:meth:`BatchedNotch.noise_gains`."""
+        return self._b.noise_gains()
 
 
 # --------------------------------------------------------------------------------------------
@@ -538,3 +660,4 @@ def vessel_design(vessel: Any) -> dict[str, Any]:
 
 
 register_observer("notch", notch_observer, vessel_design)
+register_batched_form("notch")

@@ -381,7 +381,12 @@ def run_wls(Q, R, xlo, xhi, s, lo, hi, B, tau):  # type: ignore[no-untyped-def]
     N, n = t.shape[0], s.shape[0]
     out = (np.empty((N, n)), np.empty((N, t.shape[1])), np.empty((N, t.shape[1])),
            np.empty((N, n), dtype=np.bool_))  # fmt: skip
-    args = (Q, R, xlo, xhi, s, lo, hi, B, t, *out)
+    # C-contiguous float64 throughout: the one compiled entry point is typed for that layout
+    # (a transposed B, as a configuration matrix built column by column is, would be misread)
+    c = np.ascontiguousarray
+    args = (c(Q, dtype=float), c(R, dtype=float), c(xlo, dtype=float), c(xhi, dtype=float),
+            c(s, dtype=float), c(lo, dtype=float), c(hi, dtype=float), c(B, dtype=float), t,
+            *out)  # fmt: skip
     if not _WLS:
         _WLS.append(entry(wls_law, args))
     code = _WLS[0](*args)
