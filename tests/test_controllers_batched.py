@@ -62,9 +62,10 @@ def _compare_info(vinfo: dict, i: int, sinfo: dict, where: str) -> None:
             assert np.array_equal(v[i], s, equal_nan=True), (where, k)
 
 
-#: with an observer (the controller on its estimate): each controller once, both modes
-OBSERVED = [(name, "shipgym/Tracking-v0", "kbf", mode) for name in CONTROLLERS
-            for mode in ("next-step", "same-step")]  # fmt: skip
+#: with an observer (the controller on its estimate): each controller with a kinematic and a
+#: model-based one
+OBSERVED = [(name, "shipgym/Tracking-v0", obs, mode) for name in CONTROLLERS
+            for obs, mode in (("kbf", "next-step"), ("ekf", "same-step"))]  # fmt: skip
 
 
 @pytest.mark.parametrize(("name", "env_id", "vessel"), CASES)
@@ -77,8 +78,8 @@ def test_vector_env_with_the_controller_equals_the_single_envs(name, env_id, ves
 
 @pytest.mark.parametrize(("name", "env_id", "observer", "mode"), OBSERVED)
 def test_vector_env_with_an_observer_equals_the_single_envs(name, env_id, observer, mode):
-    """The same through the Kalman-Bucy filter (the Blue Lady, or Star Hercules for the
-    printed gains)."""
+    """The same through the Kalman-Bucy filter and the EKF (model-based: the velocity
+    source of a conditioned PID; the Blue Lady, or Star Hercules for the printed gains)."""
     vessel = "star-hercules" if name == "alt-lq-printed" else "blue-lady"
     _run(name, env_id, vessel, mode, observer)
 
