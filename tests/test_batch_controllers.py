@@ -423,8 +423,10 @@ def test_what_is_not_batched_says_so():
         batched_dp_controller("pid", "naval-vessel", 4, 1.0)
     with pytest.raises(ValueError, match="pid-seed"):
         batched_dp_controller("pid-seed", "star-hercules", 4, 1.0)
-    with pytest.raises(NotImplementedError, match="alt-lq.*no batched form"):
-        batched_dp_controller("alt-lq", "blue-lady", 4, 1.0)
+    with pytest.raises(ValueError, match="unknown controller 'nope'"):
+        batched_dp_controller("nope", "blue-lady", 4, 1.0)
+    with pytest.raises(ValueError, match="prints LQ gains"):  # as the wrapper's factory
+        batched_dp_controller("alt-lq-printed", "blue-lady", 4, 1.0)
     with pytest.raises(ValueError, match="inverse"):
         BatchedAllocation("star-hercules", "inverse")
 

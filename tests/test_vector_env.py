@@ -256,7 +256,7 @@ def _residual_parity(env_id, observer, controller, vessel="blue-lady", steps=150
     ("kw", "error", "match"),
     [
         ({"observer": "nope"}, ValueError, "unknown observer"),
-        ({"controller": "lq"}, NotImplementedError, "no batched form"),
+        ({"controller": "nope"}, ValueError, "unknown controller"),
         ({"sensors": None, "observer": "kbf"}, ValueError, "needs sensors"),
         ({"controller": "pid", "residual_scale": float("nan")}, ValueError, "finite"),
         ({"autoreset_mode": "sometimes"}, ValueError, "autoreset_mode"),

@@ -1,8 +1,11 @@
-r"""The DP controller and its thrust allocation for N envs at once (the vector env's stack).
+r"""The named DP controllers, and each with its thrust allocation for N envs at once (the vector
+env's stack).
 
 What :class:`~shipgym.controllers.wrappers.DPControllerWrapper` runs every control period for
-``controller="pid"`` (and ``"pid-smooth"``, ``"pid-raw"``, ``"pid-smooth-raw"``,
-``"pid-seed"``), for N envs: :class:`~shipgym.controllers.pid.BatchedPID` (Tomera 2014 eq. 23),
+any named controller, for N envs: the law (:class:`~shipgym.controllers.pid.BatchedPID`,
+Tomera 2014 eq. 23, for the ``pid*`` names; :class:`~shipgym.controllers.lq.BatchedLQ` for
+``"lq"``; :class:`~shipgym.controllers.grimble.BatchedGrimbleLQ` for ``"alt-lq"``,
+``"alt-lq-printed"``, ``"alt-sdre"``),
 :class:`BatchedAllocation` (the closed form of the Blue Lady pattern, Tomera 2014 eqs. 12,
 25-27: :func:`~shipgym.controllers.allocation.fixed3.fixed3_law`) and the reversal hysteresis
 (:class:`~shipgym.controllers.conditioning.BatchedReversalHysteresis`). Each is the one
@@ -15,6 +18,8 @@ single env's allocator. Inputs and outputs are
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -25,16 +30,21 @@ from shipgym.dynamics.vessel import Vessel, load_vessel
 from .actuation import fixed3_parameters, make_allocator
 from .allocation.fixed3 import law_parameters, run_law
 from .conditioning import BatchedReversalHysteresis, reversal_threshold
+from .grimble import GrimbleLQController
 from .pid import BatchedPID, _mask, vessel_pid
 
 __all__ = [
     "BATCHED_CONTROLLERS",
+    "CONTROLLERS",
+    "ControllerSpec",
     "BatchedAllocation",
     "BatchedAllocationResult",
     "BatchedDPController",
     "BatchedPID",
     "apply_residual",
     "batched_dp_controller",
+    "controller_spec",
+    "register_controller",
 ]
 
 Array = NDArray[np.float64]
@@ -153,10 +163,54 @@ def apply_residual(
 
 
 # ---- the named controllers -------------------------------------------------------------------
-#: the batched controller names: (gain preset, bandwidth scale, allocation, conditioned), as
-#: the PID entries of :data:`shipgym.controllers.wrappers.CONTROLLERS` (a test checks they
-#: agree); conditioned: the vessel's velocity filter and reversal hysteresis
-#: (:mod:`shipgym.controllers.conditioning`)
+@dataclass(frozen=True)
+class ControllerSpec:
+    """A named controller: a factory ``f(vessel, dt)`` of a law (the
+    :class:`~shipgym.controllers.wrappers.DPController` protocol) and an allocation.
+
+    The factory designs the controller for the vessel (its design model, capacity and
+    presets) and the control period ``dt`` (s); it raises ``ValueError`` for a vessel the
+    controller does not apply to. The law's ``batched(n)`` is its form for ``n`` envs (what
+    :func:`batched_dp_controller` runs).
+    """
+
+    factory: Callable[..., Any]
+    allocation: str
+    description: str
+    #: apply the vessel's reversal hysteresis after the allocation
+    #: (:class:`~shipgym.controllers.conditioning.ReversalHysteresis`), and call the factory
+    #: as ``f(vessel, dt, velocity_source=...)`` (:data:`~shipgym.controllers.pid.
+    #: VELOCITY_SOURCES`: where the controller's velocity comes from, which sets its filter)
+    conditioned: bool = False
+
+
+def _pid(preset: str, scale: float = 1.0, conditioned: bool = False) -> Callable[..., Any]:
+    """PID of Tomera (2014) eq. 23 for a vessel: its preset gains where it has them (the
+    Blue Lady's tuned gains), else pole placement at the vessel's bandwidth times ``scale``
+    on its design model (:func:`~shipgym.controllers.pid.pid_pole_placement`); with
+    ``conditioned`` its velocity and its output are low-passed with the vessel's time
+    constants for the velocity source (:func:`~shipgym.controllers.pid.vessel_pid`)."""
+
+    def make(vessel: Vessel, dt: float, velocity_source: str = "kinematic") -> Any:
+        return vessel_pid(
+            vessel, preset, scale, dt, conditioned=conditioned, velocity_source=velocity_source
+        )
+
+    return make
+
+
+def _grimble(variant: str) -> Callable[..., Any]:
+    """Al-Takie (1982) LQ of :class:`~shipgym.controllers.grimble.GrimbleLQController`."""
+
+    def make(vessel: Vessel, dt: float) -> Any:
+        return GrimbleLQController(vessel, dt, variant=variant)
+
+    return make
+
+
+#: the PID designs by name: (gain preset, bandwidth scale, allocation, conditioned), the PID
+#: entries of :data:`CONTROLLERS`; conditioned: the vessel's velocity filter and reversal
+#: hysteresis (:mod:`shipgym.controllers.conditioning`)
 BATCHED_CONTROLLERS: dict[str, tuple[str, float, str, bool]] = {
     "pid": ("tuned", 1.0, "constrained", True),
     "pid-smooth": ("smooth", 0.7, "constrained", True),
@@ -164,15 +218,79 @@ BATCHED_CONTROLLERS: dict[str, tuple[str, float, str, bool]] = {
     "pid-smooth-raw": ("smooth", 0.7, "constrained", False),
     "pid-seed": ("seed", 1.0, "inverse", False),
 }
+_PID_TEXT = {
+    "pid": "Tomera (2014) eq. 23 PID (Blue Lady: tuned gains; other vessels: pole placement at "
+    "the vessel's bandwidth), constrained allocation, command conditioning (the vessel's "
+    "velocity and output filters and reversal hysteresis)",
+    "pid-smooth": "Tomera (2014) eq. 23 PID, lower bandwidth for observer feedback, "
+    "constrained allocation, command conditioning",
+    "pid-raw": "'pid' without command conditioning (the unfiltered eq. 23 and the "
+    "allocation's commands as they are)",
+    "pid-smooth-raw": "'pid-smooth' without command conditioning",
+    "pid-seed": "Tomera (2014) eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1 "
+    "(the Blue Lady only)",
+}
+
+#: Controllers selectable by name (``shipgym run --controller NAME``); extend with
+#: :func:`register_controller`. Every one has a batched form (:func:`batched_dp_controller`).
+CONTROLLERS: dict[str, ControllerSpec] = {
+    **{
+        name: ControllerSpec(_pid(preset, scale, cond), method, _PID_TEXT[name], cond)
+        for name, (preset, scale, method, cond) in BATCHED_CONTROLLERS.items()
+    },
+    "alt-lq": ControllerSpec(
+        _grimble("lq"),
+        "constrained",
+        "Al-Takie (1982) ch. 4 LQ with Grimble's weights (case b) re-solved on the vessel's "
+        "per-unit LF model, surge alike; no integral action; constrained allocation",
+    ),
+    "alt-lq-printed": ControllerSpec(
+        _grimble("printed"),
+        "constrained",
+        "Al-Takie (1982) 4.4-4.5: the printed LQ gain of Wimpey Sealab (case b) or Star "
+        "Hercules (those vessels only), constrained allocation",
+    ),
+    "alt-sdre": ControllerSpec(
+        _grimble("sdre"),
+        "constrained",
+        "Al-Takie (1982) ch. 7: the LQ re-solved every 2 steps on the model linearised at the "
+        "saturating thruster states (SDRE), constrained allocation",
+    ),
+}
+
+
+def register_controller(name: str, spec: ControllerSpec) -> None:
+    """Add a named controller (e.g. ``"lq"``); names are unique."""
+    if name in CONTROLLERS:
+        raise ValueError(f"controller {name!r} is already registered")
+    if spec.allocation not in _ALLOCATIONS:
+        raise ValueError(f"unknown allocation {spec.allocation!r}; choose {list(_ALLOCATIONS)}")
+    CONTROLLERS[name] = spec
+
+
+#: allocation methods (:func:`~shipgym.controllers.actuation.make_allocator`)
+_ALLOCATIONS = ("constrained", "inverse")
+
+
+def controller_spec(name: str) -> ControllerSpec:
+    """The :class:`ControllerSpec` of a controller name; unknown names list the valid ones."""
+    try:
+        return CONTROLLERS[name]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"unknown controller {name!r}; choose one of: {', '.join(CONTROLLERS)}"
+        ) from None
 
 
 class BatchedDPController:
-    """A :class:`BatchedPID` and its :class:`BatchedAllocation`, with the ``tau_error`` each
-    env feeds back (the controller wrapper's state, less the leg bookkeeping).
+    """A batched control law (:class:`BatchedPID`, :class:`~shipgym.controllers.lq.BatchedLQ`,
+    :class:`~shipgym.controllers.grimble.BatchedGrimbleLQ`) and its
+    :class:`BatchedAllocation`, with the ``tau_error`` each env feeds back (the controller
+    wrapper's state, less the leg bookkeeping).
 
     Attributes:
         name: the controller name.
-        pid: the :class:`BatchedPID`.
+        pid: the batched law (any of the above; the name is historical).
         allocation: the :class:`BatchedAllocation`.
         tau_error: each env's last ``tau_error`` (n, 3) (zeros after a reset: not read then).
     """
@@ -180,7 +298,7 @@ class BatchedDPController:
     def __init__(
         self,
         name: str,
-        pid: BatchedPID,
+        pid: Any,
         allocation: BatchedAllocation,
         hysteresis: BatchedReversalHysteresis | None = None,
     ) -> None:
@@ -203,7 +321,7 @@ class BatchedDPController:
             self.tau_error[m] = 0.0
 
     def change_frame(self, dpsi: ArrayLike, mask: ArrayLike | None = None) -> None:
-        """A leg switch of the envs in ``mask``: :meth:`BatchedPID.change_frame`."""
+        """A leg switch of the envs in ``mask``: the law's ``change_frame``."""
         self.pid.change_frame(dpsi, mask)
 
     def __call__(
@@ -218,7 +336,7 @@ class BatchedDPController:
         """One control period of every env (the wrapper's ``_control`` and action).
 
         Returns:
-            ``(tau_c, allocation, controller_action)``: the PID's ``tau`` (n, 3), its
+            ``(tau_c, allocation, controller_action)``: the law's ``tau`` (n, 3), its
             allocation and the normalised command (n, n_channels) before the residual.
         """
         tau = self.pid(eta_r, nu, eta_d_r, eta_dot_d_r, eta_ddot_d_r, saturated=self.tau_error)
@@ -239,7 +357,9 @@ def batched_dp_controller(
     designed as the controller wrapper's factory designs it (``make(..., controller=name)``).
 
     Args:
-        name: ``"pid"``, ``"pid-smooth"`` or ``"pid-seed"`` (:data:`BATCHED_CONTROLLERS`).
+        name: a name of :data:`~shipgym.controllers.wrappers.CONTROLLERS`: the PIDs of
+            :data:`BATCHED_CONTROLLERS`, ``"lq"``, ``"alt-lq"``, ``"alt-lq-printed"``,
+            ``"alt-sdre"``.
         vessel: a vessel or a packaged vessel's name.
         n: number of envs.
         dt: control period (s).
@@ -248,22 +368,34 @@ def batched_dp_controller(
             filter of a conditioned controller, as the wrapper does.
 
     Raises:
-        NotImplementedError: a controller that is not batched (the LQ family), or a vessel
-            whose allocation is iterative (:class:`BatchedAllocation`).
-        ValueError: an unknown name, a 4-DOF vessel, ``"pid-seed"`` for a vessel without the
-            printed gains, or what the scalar allocator raises.
+        NotImplementedError: a registered controller whose law has no batched form.
+        ValueError: an unknown name, a 4-DOF vessel, a vessel the controller does not apply
+            to (``"pid-seed"``, ``"alt-lq-printed"`` without printed gains), or what the
+            scalar allocator raises.
     """
-    if name not in BATCHED_CONTROLLERS:
-        raise NotImplementedError(
-            f"controller {name!r} has no batched form; batched: {', '.join(BATCHED_CONTROLLERS)}"
-        )
+    spec = controller_spec(name)
     v = load_vessel(vessel)
     if v.dofs != 3:
         raise ValueError(f"the batched DP controller is 3-DOF; {v.name!r} has {v.dofs} DOF")
-    preset, scale, method, conditioned = BATCHED_CONTROLLERS[name]
-    pid = BatchedPID.from_scalar(
-        vessel_pid(v, preset, scale, dt, conditioned=conditioned, velocity_source=velocity_source),
-        n,
+    if spec.conditioned:
+        single = spec.factory(v, dt, velocity_source=velocity_source)
+    else:
+        single = spec.factory(v, dt)
+    law = _batched_law(name, single, n)
+    hyst = (
+        BatchedReversalHysteresis(v.actuators, reversal_threshold(v), n)
+        if spec.conditioned
+        else None
     )
-    hyst = BatchedReversalHysteresis(v.actuators, reversal_threshold(v), n) if conditioned else None
-    return BatchedDPController(name, pid, BatchedAllocation(v, method, dt), hyst)
+    return BatchedDPController(name, law, BatchedAllocation(v, spec.allocation, dt), hyst)
+
+
+def _batched_law(name: str, single: Any, n: int) -> Any:
+    """The batched form of a controller wrapper's single-env law, for ``n`` envs (its
+    ``batched(n)``: the same design, the states at zero)."""
+    batched = getattr(single, "batched", None)
+    if batched is None:
+        raise NotImplementedError(
+            f"controller {name!r} ({type(single).__name__}) has no batched form (no batched(n))"
+        )
+    return batched(n)

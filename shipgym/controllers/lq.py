@@ -23,13 +23,27 @@ import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import param, require_given
+from shipgym._jit import entry, njit
 from shipgym.dynamics.params import BLUE_LADY_HULL
 
 from .design import dlqr, lqr
-from .pid import _DESIGN_HINT, _LIMIT_HINT, _saturation_directions, _vec3
+from .pid import (
+    _BAD_INPUT,
+    _DESIGN_HINT,
+    _LIMIT_HINT,
+    _SAT_NONE,
+    _direction,
+    _drops,
+    _mask,
+    _mv,
+    _rows,
+    bad_input,
+    saturation_input,
+)
 
 __all__ = [
     "LQ_PRESETS",
+    "BatchedLQ",
     "LQController",
     "LQDesign",
     "LQWeights",
@@ -216,14 +230,261 @@ def lq_design(
     return LQDesign(K, S, E, A, B, Q, R, method, float(dt))
 
 
-# ---- the online controller -------------------------------------------------------------------
+# ---- the online controller: one compiled law over N envs -------------------------------------
+# Rows of the design matrix ``G`` (float64, (20, 3)) the compiled law reads.
+_GM, _GD = 0, 3  # M (kg, kg m^2), D_L (N s/m, N s, N m s): 3 rows each
+_GKE, _GKV, _GKI, _GKII = 6, 9, 12, 15  # K's blocks on e_b, nu - nu_d, xi_b; K_xi^-1
+_GLIM, _GDT = 18, 19  # integral_limit (N, N, N m); (dt (s), 0, 0)
+# Columns of the state ``S`` (float64, (n, 8)), one row per env; zeros: the reset state.
+_SXI = 0  # xi (m s, m s, rad s), r-frame
+_SPEND = 3  # the pending error (e_x (m), e_y (m), e_psi (rad)) and its psi (rad)
+_SHAS = 7  # 1.0 while an error is pending
+_S_COLS = 8
+
+
+@njit
+def _lq_env(G: Any, s: Any, e: Any, w: Any, ed: Any, vd: Any, ad: Any, sat: Any, kind: int,
+            out: Any) -> None:  # fmt: skip
+    """One env's control period: the pending integral increment (conditional), the clamp of
+    the integral force, ``tau = tau_ff - K x`` (module docstring)."""
+    x, y, psi = e[0], e[1], e[2]
+    u, v, r = w[0], w[1], w[2]
+    if s[_SHAS] != 0.0:  # xi += dt e_{k-1}, unless it pushes a cut DOF further
+        h = G[_GDT, 0]
+        dx, dy, dz = h * s[_SPEND], h * s[_SPEND + 1], h * s[_SPEND + 2]
+        keep = True
+        if kind != _SAT_NONE:
+            j0, j1, j2 = (
+                _direction(sat[0], kind),
+                _direction(sat[1], kind),
+                _direction(sat[2], kind),
+            )
+            if j0 != 0 or j1 != 0 or j2 != 0:
+                c, sn = math.cos(s[_SPEND + 3]), math.sin(s[_SPEND + 3])
+                f0, f1, f2 = _mv(G, _GKI, c * dx + sn * dy, -sn * dx + c * dy, dz)
+                keep = not (_drops(j0, f0) or _drops(j1, f1) or _drops(j2, f2))
+        if keep:
+            s[_SXI] += dx
+            s[_SXI + 1] += dy
+            s[_SXI + 2] += dz
+        s[_SHAS] = 0.0
+    # the clamp of the integral force |K_xi xi_b| <= integral_limit per body DOF
+    c, sn = math.cos(psi), math.sin(psi)
+    f0, f1, f2 = _mv(G, _GKI, c * s[_SXI] + sn * s[_SXI + 1], -sn * s[_SXI] + c * s[_SXI + 1],
+                     s[_SXI + 2])  # fmt: skip
+    l0, l1, l2 = G[_GLIM, 0], G[_GLIM, 1], G[_GLIM, 2]
+    if not (abs(f0) <= l0 and abs(f1) <= l1 and abs(f2) <= l2):
+        bx, by, bz = _mv(G, _GKII, max(-l0, min(l0, f0)), max(-l1, min(l1, f1)),
+                         max(-l2, min(l2, f2)))  # fmt: skip
+        s[_SXI], s[_SXI + 1], s[_SXI + 2] = c * bx - sn * by, sn * bx + c * by, bz
+    ex, ey = x - ed[0], y - ed[1]
+    epsi = math.pi - (math.pi - (psi - ed[2])) % (2.0 * math.pi)  # wrap to (-pi, pi]
+    # body-frame errors, reference velocity and acceleration (R^T(psi) of r-frame vectors)
+    nd0, nd1, nd2 = c * vd[0] + sn * vd[1], -sn * vd[0] + c * vd[1], vd[2]
+    a0 = c * ad[0] + sn * ad[1] + r * nd1
+    a1 = -sn * ad[0] + c * ad[1] - r * nd0
+    m0, m1, m2 = _mv(G, _GM, a0, a1, ad[2])
+    d0, d1, d2 = _mv(G, _GD, nd0, nd1, nd2)
+    e0, e1, e2 = _mv(G, _GKE, c * ex + sn * ey, -sn * ex + c * ey, epsi)
+    v0, v1, v2 = _mv(G, _GKV, u - nd0, v - nd1, r - nd2)
+    i0, i1, i2 = _mv(G, _GKI, c * s[_SXI] + sn * s[_SXI + 1], -sn * s[_SXI] + c * s[_SXI + 1],
+                     s[_SXI + 2])  # fmt: skip
+    out[0] = m0 + d0 - e0 - v0 - i0
+    out[1] = m1 + d1 - e1 - v1 - i1
+    out[2] = m2 + d2 - e2 - v2 - i2
+    s[_SPEND], s[_SPEND + 1], s[_SPEND + 2], s[_SPEND + 3] = ex, ey, epsi, psi
+    s[_SHAS] = 1.0
+
+
+@njit
+def lq_law(G: Any, S: Any, eta: Any, nu: Any, eta_d: Any, eta_dot_d: Any, eta_ddot_d: Any,
+           sat: Any, kind: int, tau: Any) -> int:  # fmt: skip
+    """The LQ law for every env (row) of ``S``: writes ``tau`` (n, 3) (N, N, N m) and advances
+    the state. Returns 0, or the index of the first input that is not finite (the state is
+    then left as it was)."""
+    bad = bad_input(eta, nu, eta_d, eta_dot_d, eta_ddot_d, sat)
+    if bad:
+        return bad
+    for i in range(S.shape[0]):
+        _lq_env(G, S[i], eta[i], nu[i], eta_d[i], eta_dot_d[i], eta_ddot_d[i], sat[i], kind,
+                tau[i])  # fmt: skip
+    return 0
+
+
+@njit
+def lq_change_frame(S: Any, dpsi: Any, mask: Any) -> int:
+    """Rotate the integral (and a pending error) of the masked envs by ``dpsi`` (rad):
+    ``xi_new = R^T(dpsi) xi_old`` in x-y. Returns 1 (nothing changed) for a non-finite
+    ``dpsi`` of a masked env, else 0."""
+    n = S.shape[0]
+    for i in range(n):
+        if mask[i] and not math.isfinite(dpsi[i]):
+            return 1
+    for i in range(n):
+        if not mask[i]:
+            continue
+        c, s = math.cos(dpsi[i]), math.sin(dpsi[i])
+        for k in (_SXI, _SPEND):
+            if k == _SPEND and S[i, _SHAS] == 0.0:
+                continue
+            x, y = S[i, k], S[i, k + 1]
+            S[i, k], S[i, k + 1] = c * x + s * y, -s * x + c * y
+        if S[i, _SHAS] != 0.0:
+            S[i, _SPEND + 3] = S[i, _SPEND + 3] - dpsi[i]
+    return 0
+
+
+_F2 = np.zeros((1, 3))
+_ENTRIES: dict[str, Any] = {}
+
+
+def _entry(name: str) -> Any:
+    """The compiled entry point of :func:`lq_law` (``"law"``) or :func:`lq_change_frame`."""
+    e = _ENTRIES.get(name)
+    if e is None:
+        if name == "law":
+            e = entry(lq_law, (np.zeros((20, 3)), np.zeros((1, _S_COLS)), *[_F2] * 6, 0, _F2))
+        else:
+            b = np.zeros(1, dtype=np.bool_)
+            e = entry(lq_change_frame, (np.zeros((1, _S_COLS)), np.zeros(1), b))
+        _ENTRIES[name] = e
+    return e
+
+
+class BatchedLQ:
+    """The LQ DP controller for ``n`` envs: the one run-time form (:class:`LQController` is
+    its ``n = 1`` adapter).
+
+    Same design for every env, one integral state and pending error per env; row ``i`` of a
+    call equals the same call at ``n = 1`` on row ``i``'s inputs, bit for bit.
+
+    Args:
+        n: number of envs, >= 1.
+        weights, M, D_L, dt, method, integral_limit: as :class:`LQController`.
+    """
+
+    def __init__(
+        self,
+        n: int,
+        weights: LQWeights | str = "tuned",
+        M: ArrayLike | None = None,
+        D_L: ArrayLike | None = None,
+        dt: float = 1.0,
+        *,
+        method: str = "discrete",
+        integral_limit: ArrayLike | None = None,
+    ) -> None:
+        require_given("LQController()", _DESIGN_HINT, M=M, D_L=D_L)
+        require_given("LQController()", _LIMIT_HINT, integral_limit=integral_limit)
+        Ma = np.array(M, dtype=float)
+        Da = np.array(D_L, dtype=float)
+        design = lq_design(weights, dt=dt, method=method, M=Ma, D_L=Da)
+        lim = np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
+        if np.any(np.isnan(lim)) or np.any(lim <= 0):
+            raise ValueError(f"integral_limit must be > 0 (N, N, N m; inf allowed), got {lim!r}")
+        K = design.K
+        G = np.vstack([Ma, Da, K[:, 0:3], K[:, 3:6], K[:, 6:9], np.linalg.inv(K[:, 6:9]),
+                       lim, [float(dt), 0.0, 0.0]])  # fmt: skip
+        G.setflags(write=False)
+        self._setup(n, Ma, Da, design, np.array(lim), G)
+
+    @classmethod
+    def from_scalar(cls, controller: LQController, n: int) -> BatchedLQ:
+        """``n`` envs of a controller's design (the states start at zero)."""
+        if not isinstance(controller, LQController):
+            raise TypeError(f"controller must be an LQController, got {controller!r}")
+        law = controller._law
+        self = cls.__new__(cls)
+        self._setup(n, law.M, law.D_L, law.design, law.integral_limit, law._G)
+        return self
+
+    def _setup(self, n: int, M: Array, D_L: Array, design: LQDesign, lim: Array,
+               G: Array) -> None:  # fmt: skip
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+            raise ValueError(f"n must be an int >= 1 (the number of envs), got {n!r}")
+        self.n = n = int(n)
+        self.M, self.D_L, self.design, self.integral_limit = M, D_L, design, lim
+        self.dt = design.dt
+        self.K = design.K.copy()
+        self._G = G
+        self._S = np.zeros((n, _S_COLS))
+        self._zeros = np.zeros((n, 3))
+        self._zeros.setflags(write=False)
+
+    def reset(self, mask: ArrayLike | None = None) -> None:
+        """Clear the integral states and pending errors of every env, or of those where
+        ``mask`` (``(n,)`` bool)."""
+        m = _mask(mask, self.n)
+        if m is None:
+            self._S[:] = 0.0
+        else:
+            self._S[m] = 0.0
+
+    @property
+    def integral(self) -> Array:
+        """The integral states ``xi`` (m s, m s, rad s), r-frames, shape (n, 3) (a copy)."""
+        return self._S[:, _SXI : _SXI + 3].copy()
+
+    def change_frame(self, dpsi: ArrayLike, mask: ArrayLike | None = None) -> None:
+        """Re-express the integrals (and the pending errors) in the next leg's r-frame.
+
+        The new frame's x axis is the old one turned by ``dpsi`` (rad, clockwise positive):
+        ``xi_new = R^T(dpsi) xi_old`` in x-y; the yaw part is unchanged. The body-frame
+        integral ``xi_b`` and hence the integral force are unchanged by the switch.
+
+        Args:
+            dpsi: rotation of the frame (rad), shape (n,) or a scalar.
+            mask: ``(n,)`` bool, the envs that switched leg (``None``: all).
+        """
+        n = self.n
+        m = _mask(mask, n)
+        try:
+            d = np.ascontiguousarray(np.broadcast_to(np.asarray(dpsi, dtype=float), (n,)))
+        except (TypeError, ValueError):
+            raise ValueError(f"dpsi must be a rotation (rad), scalar or ({n},)") from None
+        m = np.ones(n, dtype=bool) if m is None else np.ascontiguousarray(m)
+        if _entry("frame")(self._S, d, m):
+            raise ValueError(f"dpsi must be finite (rad), got {dpsi!r}")
+
+    def __call__(
+        self,
+        eta_r: ArrayLike,
+        nu: ArrayLike,
+        eta_d_r: ArrayLike,
+        eta_dot_d_r: ArrayLike | None = None,
+        eta_ddot_d_r: ArrayLike | None = None,
+        *,
+        saturated: ArrayLike | None = None,
+    ) -> Array:
+        """Body-frame control forces ``tau = tau_ff - K x`` (N, N, N m) of every env, (n, 3)
+        (inputs as :meth:`LQController.__call__`, (n, 3) each).
+
+        Raises:
+            ValueError: an input of the wrong shape or not finite (the state is unchanged).
+        """
+        n, z = self.n, self._zeros
+        kind, sat = saturation_input(saturated, z)
+        tau = np.empty((n, 3))
+        code = _entry("law")(
+            self._G, self._S, _rows(eta_r, "eta_r", n), _rows(nu, "nu", n),
+            _rows(eta_d_r, "eta_d_r", n),
+            z if eta_dot_d_r is None else _rows(eta_dot_d_r, "eta_dot_d_r", n),
+            z if eta_ddot_d_r is None else _rows(eta_ddot_d_r, "eta_ddot_d_r", n),
+            sat, kind, tau,
+        )  # fmt: skip
+        if code:
+            raise ValueError(f"{_BAD_INPUT[code]} contains NaN or infinite values")
+        return tau
+
+
 class LQController:
     """LQ DP controller with integral action in the r-frame of the current leg.
 
     Implements the controller protocol of
     :class:`~shipgym.controllers.wrappers.DPControllerWrapper`: call it once per control period
     with the pose and reference in the r-frame; it returns the body-frame
-    ``tau = [X, Y, N]`` (N, N, N m) for the allocation.
+    ``tau = [X, Y, N]`` (N, N, N m) for the allocation. The law is :class:`BatchedLQ` at
+    ``n = 1``.
 
     Args:
         weights: :class:`LQWeights` or a preset name of the Blue Lady (``"tuned"``).
@@ -263,79 +524,38 @@ class LQController:
         method: str = "discrete",
         integral_limit: ArrayLike | None = None,
     ) -> None:
-        require_given("LQController()", _DESIGN_HINT, M=M, D_L=D_L)
-        require_given("LQController()", _LIMIT_HINT, integral_limit=integral_limit)
-        self.M = np.array(M, dtype=float)
-        self.D_L = np.array(D_L, dtype=float)
-        self.design = lq_design(weights, dt=dt, method=method, M=self.M, D_L=self.D_L)
-        self.dt = float(dt)
-        lim = np.broadcast_to(np.asarray(integral_limit, dtype=float), (3,))
-        if np.any(np.isnan(lim)) or np.any(lim <= 0):
-            raise ValueError(f"integral_limit must be > 0 (N, N, N m; inf allowed), got {lim!r}")
-        self.integral_limit = np.array(lim)
-        K = self.design.K
-        self.K = K.copy()
-        self._Ke = K[:, 0:3].copy()
-        self._Kv = K[:, 3:6].copy()
-        self._Ki = K[:, 6:9].copy()
-        self._xi = np.zeros(3)
-        self._pending: tuple[float, float, float, float] | None = None
+        self._law = law = BatchedLQ(
+            1, weights, M, D_L, dt, method=method, integral_limit=integral_limit
+        )
+        self.M, self.D_L, self.design, self.dt = law.M, law.D_L, law.design, law.dt
+        self.integral_limit, self.K = law.integral_limit, law.K
+        self._Ki = self.K[:, 6:9].copy()
 
     def reset(self) -> None:
         """Clear the integral state (start of an episode)."""
-        self._xi = np.zeros(3)
-        self._pending = None
+        self._law.reset()
+
+    def batched(self, n: int) -> BatchedLQ:
+        """This design for ``n`` envs (:meth:`BatchedLQ.from_scalar`)."""
+        return BatchedLQ.from_scalar(self, n)
 
     @property
     def integral(self) -> Array:
         """The integral state ``xi`` (m s, m s, rad s) in the current r-frame."""
-        return self._xi.copy()
+        return self._law._S[0, _SXI : _SXI + 3].copy()
 
     def change_frame(self, dpsi: float) -> None:
-        """Re-express the integral (and the pending error) in the next leg's r-frame.
-
-        The new frame's x axis is the old one turned by ``dpsi`` (rad, clockwise positive):
-        ``xi_new = R^T(dpsi) xi_old`` in x-y; the yaw part is unchanged. The body-frame
-        integral ``xi_b`` and hence the integral force are unchanged by the switch.
-        """
+        """Re-express the integral in the next leg's r-frame (:meth:`BatchedLQ.change_frame`)."""
         dpsi = float(dpsi)
         if not math.isfinite(dpsi):
             raise ValueError(f"dpsi must be finite (rad), got {dpsi!r}")
-        c, s = math.cos(dpsi), math.sin(dpsi)
-        x, y = self._xi[0], self._xi[1]
-        self._xi[0], self._xi[1] = c * x + s * y, -s * x + c * y
-        if self._pending is not None:
-            ex, ey, epsi, psi = self._pending
-            self._pending = (c * ex + s * ey, -s * ex + c * ey, epsi, psi - dpsi)
+        self._law.change_frame(dpsi)
 
     @staticmethod
     def _to_body(v: Array, psi: float) -> Array:
+        """``R^T(psi) v`` in x-y (a vector of the r-frame seen from the ship)."""
         c, s = math.cos(psi), math.sin(psi)
         return np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1], v[2]])
-
-    def _integrate(self, saturated: ArrayLike | None) -> None:
-        dirs = None if saturated is None else _saturation_directions(saturated)
-        if self._pending is None:
-            return
-        ex, ey, epsi, psi = self._pending
-        self._pending = None
-        d = self.dt * np.array([ex, ey, epsi])
-        if dirs is not None and any(dirs):
-            df = -self._Ki @ self._to_body(d, psi)  # change of the body force
-            for j, dj in enumerate(dirs):
-                if (dj == 2 and df[j] != 0.0) or (dj in (1, -1) and dj * df[j] > 0.0):
-                    return  # would push a cut DOF further: drop the increment
-        self._xi += d
-
-    def _clamp(self, psi: float) -> None:
-        f = self._Ki @ self._to_body(self._xi, psi)
-        lim = self.integral_limit
-        if np.all(np.abs(f) <= lim):
-            return
-        fc = np.clip(f, -lim, lim)
-        xb = np.linalg.solve(self._Ki, fc)
-        c, s = math.cos(psi), math.sin(psi)
-        self._xi = np.array([c * xb[0] - s * xb[1], s * xb[0] + c * xb[1], xb[2]])
 
     def __call__(
         self,
@@ -364,29 +584,12 @@ class LQController:
         Raises:
             ValueError: an input is not 3 finite numbers.
         """
-        x, y, psi = _vec3(eta_r, "eta_r")
-        nu_ = np.array(_vec3(nu, "nu"))
-        xd, yd, psid = _vec3(eta_d_r, "eta_d_r")
-        vd = np.zeros(3) if eta_dot_d_r is None else np.array(_vec3(eta_dot_d_r, "eta_dot_d_r"))
-        ad = np.zeros(3) if eta_ddot_d_r is None else np.array(_vec3(eta_ddot_d_r, "eta_ddot_d_r"))
-        self._integrate(saturated)
-        self._clamp(psi)
-        ex, ey = x - xd, y - yd
-        epsi = math.pi - (math.pi - (psi - psid)) % (2.0 * math.pi)  # wrap to (-pi, pi]
-        e_b = self._to_body(np.array([ex, ey, epsi]), psi)
-        nu_d = self._to_body(vd, psi)
-        r = nu_[2]
-        nu_dot_d = self._to_body(ad, psi) + np.array([r * nu_d[1], -r * nu_d[0], 0.0])
-        tau_ff = self.M @ nu_dot_d + self.D_L @ nu_d
-        xi_b = self._to_body(self._xi, psi)
-        tau = tau_ff - self._Ke @ e_b - self._Kv @ (nu_ - nu_d) - self._Ki @ xi_b
-        self._pending = (ex, ey, epsi, psi)
-        return tau
+        return self._law(eta_r, nu, eta_d_r, eta_dot_d_r, eta_ddot_d_r, saturated=saturated)[0]
 
     def __repr__(self) -> str:
         return (
             f"LQController(method={self.design.method!r}, dt={self.dt}, "
-            f"integral={tuple(round(float(v), 6) for v in self._xi)})"
+            f"integral={tuple(round(float(v), 6) for v in self.integral)})"
         )
 
 
@@ -439,7 +642,7 @@ def _lq_for(vessel: Any, dt: float) -> LQController:
 
 def register_lq() -> None:
     """Register ``"lq"`` in the controller registry (idempotent); constrained allocation."""
-    from .wrappers import CONTROLLERS, ControllerSpec, register_controller
+    from .batch import CONTROLLERS, ControllerSpec, register_controller
 
     if "lq" not in CONTROLLERS:
         register_controller(

@@ -363,13 +363,10 @@ def _pid_env(G: Any, s: Any, e: Any, w: Any, ed: Any, vd: Any, ad: Any, sat: Any
 
 
 @njit
-def pid_law(G: Any, S: Any, eta: Any, nu: Any, eta_d: Any, eta_dot_d: Any, eta_ddot_d: Any,
-            sat: Any, kind: int, tau: Any) -> int:  # fmt: skip
-    """The PID of Tomera (2014) eq. 23 for every env (row) of ``S``: writes ``tau`` (n, 3)
-    (N, N, N m) and advances the state. Returns 0, or the index in ``_BAD_INPUT`` of the first
-    input that is not finite (the state is then left as it was)."""
-    n = S.shape[0]
-    for i in range(n):
+def bad_input(eta: Any, nu: Any, eta_d: Any, eta_dot_d: Any, eta_ddot_d: Any, sat: Any) -> int:
+    """0, or the index in ``_BAD_INPUT`` of the first (n, 3) input with a value that is not
+    finite (the check of every DP law before it changes a state)."""
+    for i in range(eta.shape[0]):
         for j in range(3):
             if not math.isfinite(eta[i, j]):
                 return 1
@@ -383,7 +380,19 @@ def pid_law(G: Any, S: Any, eta: Any, nu: Any, eta_d: Any, eta_dot_d: Any, eta_d
                 return 5
             if not math.isfinite(sat[i, j]):
                 return 6
-    for i in range(n):
+    return 0
+
+
+@njit
+def pid_law(G: Any, S: Any, eta: Any, nu: Any, eta_d: Any, eta_dot_d: Any, eta_ddot_d: Any,
+            sat: Any, kind: int, tau: Any) -> int:  # fmt: skip
+    """The PID of Tomera (2014) eq. 23 for every env (row) of ``S``: writes ``tau`` (n, 3)
+    (N, N, N m) and advances the state. Returns 0, or the index in ``_BAD_INPUT`` of the first
+    input that is not finite (the state is then left as it was)."""
+    bad = bad_input(eta, nu, eta_d, eta_dot_d, eta_ddot_d, sat)
+    if bad:
+        return bad
+    for i in range(S.shape[0]):
         _pid_env(G, S[i], eta[i], nu[i], eta_d[i], eta_dot_d[i], eta_ddot_d[i], sat[i], kind,
                  tau[i])  # fmt: skip
     return 0
@@ -628,12 +637,7 @@ class BatchedPID:
 
     # ---- control law -------------------------------------------------------------------------
     def _saturated(self, saturated: ArrayLike | None) -> tuple[int, NDArray[np.float64]]:
-        if saturated is None:
-            return _SAT_NONE, self._zeros
-        a = np.asarray(saturated)
-        if a.dtype == np.bool_:
-            return _SAT_FLAGS, _rows(a.astype(float), "saturated", self.n)
-        return _SAT_ERROR, _rows(a, "saturated", self.n)
+        return saturation_input(saturated, self._zeros)
 
     def __call__(
         self,
@@ -680,6 +684,22 @@ class BatchedPID:
     def __repr__(self) -> str:
         g = self.gains
         return f"BatchedPID(n={self.n}, K_P={g.K_P}, K_I={g.K_I}, K_D={g.K_D}, dt={self.dt})"
+
+
+def saturation_input(
+    saturated: ArrayLike | None, zeros: NDArray[np.float64]
+) -> tuple[int, NDArray[np.float64]]:
+    """A DP law's ``saturated`` argument for ``n = len(zeros)`` envs as ``(kind, rows)``:
+    ``None`` (``_SAT_NONE``, the zeros), a ``tau_error`` (``_SAT_ERROR``) or flags
+    (``_SAT_FLAGS``, as 0.0 / 1.0), rows (n, 3) (a (3,) input at ``n = 1``)."""
+    if saturated is None:
+        return _SAT_NONE, zeros
+    if type(saturated) is np.ndarray and saturated.dtype == np.float64:
+        return _SAT_ERROR, _rows(saturated, "saturated", zeros.shape[0])
+    a = np.asarray(saturated)
+    if a.dtype == np.bool_:
+        return _SAT_FLAGS, _rows(a.astype(float), "saturated", zeros.shape[0])
+    return _SAT_ERROR, _rows(a, "saturated", zeros.shape[0])
 
 
 def _mask(mask: ArrayLike | None, n: int) -> NDArray[np.bool_] | None:
@@ -766,6 +786,10 @@ class MultivariablePID:
         """Clear the integral state and the filters (start of an episode)."""
         self._law.reset()
 
+    def batched(self, n: int) -> BatchedPID:
+        """This design for ``n`` envs (:meth:`BatchedPID.from_scalar`)."""
+        return BatchedPID.from_scalar(self, n)
+
     @property
     def filtered_velocity(self) -> NDArray[np.float64] | None:
         """The low-passed body velocity ``nu_f`` (m/s, m/s, rad/s) the last call used, or
@@ -823,12 +847,7 @@ class MultivariablePID:
         """
         law = self._law
         z = law._zeros
-        if saturated is None:
-            kind, sat = _SAT_NONE, z
-        elif type(saturated) is np.ndarray and saturated.dtype == np.float64:
-            kind, sat = _SAT_ERROR, _one(saturated, "saturated")
-        else:
-            kind, sat = law._saturated(saturated)
+        kind, sat = saturation_input(saturated, z)
         tau = np.empty((1, 3))
         code = _pid_entry()(
             law._G, law._S, _one(eta_r, "eta_r"), _one(nu, "nu"), _one(eta_d_r, "eta_d_r"),
@@ -847,57 +866,6 @@ class MultivariablePID:
             f"MultivariablePID(K_P={g.K_P}, K_I={g.K_I}, K_D={g.K_D}, dt={self.dt}, "
             f"integral={tuple(round(float(v), 6) for v in xi)})"
         )
-
-
-# ---- input helpers shared with the LQ controller (shipgym.controllers.lq) -----------------
-def _vec3(x: ArrayLike, name: str) -> Vec3:
-    """Three finite floats from a shape-(3,) input, or a clear ``ValueError``."""
-    if isinstance(x, np.ndarray):
-        if x.shape != (3,):
-            raise ValueError(f"{name} must have shape (3,), got an array of shape {x.shape}")
-        vals = x.tolist()
-        if x.dtype == np.float64:  # already three Python floats (the per-step case)
-            a, b, c = vals
-            if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
-                raise ValueError(f"{name} contains NaN or infinite values: {x!r}")
-            return a, b, c
-    else:
-        try:
-            vals = list(x)  # type: ignore[arg-type]
-        except TypeError:
-            raise ValueError(f"{name} must be a sequence of 3 numbers, got {x!r}") from None
-        if len(vals) != 3:
-            raise ValueError(f"{name} must have 3 entries, got {len(vals)}: {x!r}")
-    try:
-        a, b, c = map(float, vals)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must contain 3 real numbers, got {x!r}") from None
-    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
-        raise ValueError(f"{name} contains NaN or infinite values: {x!r}")
-    return a, b, c
-
-
-def _saturation_directions(saturated: ArrayLike) -> list[int]:
-    """Per DOF: +1 / -1 (cut while pushing +/-), 2 (flagged, direction unknown), 0 (free)."""
-    if isinstance(saturated, np.ndarray):
-        if saturated.shape != (3,):
-            raise ValueError(f"saturated must have shape (3,), got {saturated.shape}")
-        is_bool = saturated.dtype == np.bool_
-        vals = saturated.tolist()
-    else:
-        vals = list(saturated)  # type: ignore[arg-type]
-        if len(vals) != 3:
-            raise ValueError(f"saturated must have 3 entries, got {saturated!r}")
-        is_bool = all(isinstance(b, bool | np.bool_) for b in vals)
-    if is_bool:
-        return [2 if b else 0 for b in vals]
-    out = []
-    for v in vals:
-        f = float(v)
-        if math.isnan(f):
-            raise ValueError(f"saturated contains NaN: {saturated!r}")
-        out.append(1 if f > SATURATION_TOL else -1 if f < -SATURATION_TOL else 0)
-    return out
 
 
 #: where the DP controller's velocity comes from (:func:`vessel_pid`): the true state, a

@@ -9,8 +9,6 @@ system would know.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, Protocol
 
 import gymnasium as gym
@@ -25,9 +23,8 @@ from shipgym.records import ControlData, StepRecord, step_record
 
 from .actuation import make_allocator
 from .allocation import Allocation
+from .batch import CONTROLLERS, ControllerSpec, controller_spec, register_controller
 from .conditioning import ReversalHysteresis, reversal_threshold
-from .grimble import GrimbleLQController
-from .pid import vessel_pid
 
 __all__ = [
     "CONTROLLERS",
@@ -56,130 +53,6 @@ class DPController(Protocol):
     def reset(self) -> None: ...
 
     def change_frame(self, dpsi: float) -> None: ...
-
-
-@dataclass(frozen=True)
-class ControllerSpec:
-    """A named controller: a factory ``f(vessel, dt) -> DPController`` and an allocation.
-
-    The factory designs the controller for the vessel (its design model, capacity and
-    presets) and the control period ``dt`` (s); it raises ``ValueError`` for a vessel the
-    controller does not apply to.
-    """
-
-    factory: Callable[..., DPController]
-    allocation: str
-    description: str
-    #: apply the vessel's reversal hysteresis after the allocation
-    #: (:class:`~shipgym.controllers.conditioning.ReversalHysteresis`), and call the factory
-    #: as ``f(vessel, dt, velocity_source=...)`` (:data:`~shipgym.controllers.pid.
-    #: VELOCITY_SOURCES`: where the controller's velocity comes from, which sets its filter)
-    conditioned: bool = False
-
-
-def _pid(
-    preset: str, scale: float = 1.0, conditioned: bool = False
-) -> Callable[[Vessel, float], DPController]:
-    """PID of Tomera (2014) eq. 23 for a vessel: its preset gains where it has them (the
-    Blue Lady's tuned gains), else pole placement at the vessel's bandwidth times ``scale``
-    on its design model (:func:`~shipgym.controllers.pid.pid_pole_placement`); with
-    ``conditioned`` its velocity and its output are low-passed with the vessel's time
-    constants for the velocity source (:func:`~shipgym.controllers.pid.vessel_pid`)."""
-
-    def make(vessel: Vessel, dt: float, velocity_source: str = "kinematic") -> DPController:
-        return vessel_pid(
-            vessel, preset, scale, dt, conditioned=conditioned, velocity_source=velocity_source
-        )
-
-    return make
-
-
-def _grimble(variant: str) -> Callable[[Vessel, float], DPController]:
-    """Al-Takie (1982) LQ of :class:`~shipgym.controllers.grimble.GrimbleLQController`."""
-
-    def make(vessel: Vessel, dt: float) -> DPController:
-        return GrimbleLQController(vessel, dt, variant=variant)
-
-    return make
-
-
-#: Controllers selectable by name (``shipgym run --controller NAME``); extend with
-#: :func:`register_controller`.
-CONTROLLERS: dict[str, ControllerSpec] = {
-    "pid": ControllerSpec(
-        _pid("tuned", conditioned=True),
-        "constrained",
-        "Tomera (2014) eq. 23 PID (Blue Lady: tuned gains; other vessels: pole placement at "
-        "the vessel's bandwidth), constrained allocation, command conditioning (the vessel's "
-        "velocity and output filters and reversal hysteresis)",
-        conditioned=True,
-    ),
-    "pid-smooth": ControllerSpec(
-        _pid("smooth", 0.7, conditioned=True),
-        "constrained",
-        "Tomera (2014) eq. 23 PID, lower bandwidth for observer feedback, constrained "
-        "allocation, command conditioning",
-        conditioned=True,
-    ),
-    "pid-raw": ControllerSpec(
-        _pid("tuned"),
-        "constrained",
-        "'pid' without command conditioning (the unfiltered eq. 23 and the allocation's "
-        "commands as they are)",
-    ),
-    "pid-smooth-raw": ControllerSpec(
-        _pid("smooth", 0.7),
-        "constrained",
-        "'pid-smooth' without command conditioning",
-    ),
-    "pid-seed": ControllerSpec(
-        _pid("seed"),
-        "inverse",
-        "Tomera (2014) eq. 23 PID with the printed gains (eqs. 46-48), eq. 25 T^-1 "
-        "(the Blue Lady only)",
-    ),
-    "alt-lq": ControllerSpec(
-        _grimble("lq"),
-        "constrained",
-        "Al-Takie (1982) ch. 4 LQ with Grimble's weights (case b) re-solved on the vessel's "
-        "per-unit LF model, surge alike; no integral action; constrained allocation",
-    ),
-    "alt-lq-printed": ControllerSpec(
-        _grimble("printed"),
-        "constrained",
-        "Al-Takie (1982) 4.4-4.5: the printed LQ gain of Wimpey Sealab (case b) or Star "
-        "Hercules (those vessels only), constrained allocation",
-    ),
-    "alt-sdre": ControllerSpec(
-        _grimble("sdre"),
-        "constrained",
-        "Al-Takie (1982) ch. 7: the LQ re-solved every 2 steps on the model linearised at the "
-        "saturating thruster states (SDRE), constrained allocation",
-    ),
-}
-
-
-def register_controller(name: str, spec: ControllerSpec) -> None:
-    """Add a named controller (e.g. ``"lq"``); names are unique."""
-    if name in CONTROLLERS:
-        raise ValueError(f"controller {name!r} is already registered")
-    if spec.allocation not in _ALLOCATIONS:
-        raise ValueError(f"unknown allocation {spec.allocation!r}; choose {list(_ALLOCATIONS)}")
-    CONTROLLERS[name] = spec
-
-
-#: allocation methods (:func:`~shipgym.controllers.actuation.make_allocator`)
-_ALLOCATIONS = ("constrained", "inverse")
-
-
-def controller_spec(name: str) -> ControllerSpec:
-    """The :class:`ControllerSpec` of a controller name; unknown names list the valid ones."""
-    try:
-        return CONTROLLERS[name]
-    except (KeyError, TypeError):
-        raise ValueError(
-            f"unknown controller {name!r}; choose one of: {', '.join(CONTROLLERS)}"
-        ) from None
 
 
 def velocity_source(env: gym.Env[Any, Any]) -> str:

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, is_real, param, require_angles, require_finite
+from shipgym._jit import entry, njit
 from shipgym.dynamics.params import HullParameters
 
 from .spectra import (
@@ -71,6 +72,76 @@ AL_TAKIE_HF_POLYNOMIALS: dict[int, tuple[float, float, float, float]] = {
 }
 
 _CHUNK = 4096
+
+
+@njit
+def wf_rows(x, k0, win, cb, sb, out):  # type: ignore[no-untyped-def]
+    """First-order wave-frequency motion of N rows (one law for every N: the single and the
+    batched physics): row ``i`` at the grid position ``x[i]`` (its time over the grid step;
+    ``< 0``: no first-order motion, zeros), interpolated in its window ``win[i]`` (the HF
+    position amplitude and heading rows of its chunk, from the sample ``k0[i]``), with the
+    waves' direction cosines ``cb[i]``, ``sb[i]``, into ``out[i]`` ``(dx m, dy m, dpsi rad)``.
+
+    Returns:
+        -1, or the first row whose position lies outside its window (load its chunk, call
+        again).
+    """
+    for i in range(x.shape[0]):
+        xi = x[i]
+        if xi < 0.0:
+            out[i, 0] = 0.0
+            out[i, 1] = 0.0
+            out[i, 2] = 0.0
+            continue
+        k = int(xi)
+        j = k - k0[i]
+        if j < 0 or j >= _CHUNK:
+            return i
+        f = xi - k
+        d0 = win[i, 0, j]
+        d = d0 + f * (win[i, 0, j + 1] - d0)
+        h0 = win[i, 1, j]
+        out[i, 0] = d * cb[i]
+        out[i, 1] = d * sb[i]
+        out[i, 2] = h0 + f * (win[i, 1, j + 1] - h0)
+    return -1
+
+
+class WaveMotionRows:
+    """The first-order motion of N wave fields (``None``: none) at their own times, through
+    :func:`wf_rows`, each field's current chunk held in a window (loaded on first use)."""
+
+    def __init__(self, waves: list[Any]) -> None:
+        n = len(waves)
+        self.waves = waves
+        self.on = np.array([w is not None and w._wf_on for w in waves])
+        self.k0 = np.full(n, -(1 << 62), dtype=np.int64)  # nothing loaded
+        self.win = np.zeros((n, 2, _CHUNK + 1))
+        self.inv_dt = np.array([w._inv_dt if w is not None else 0.0 for w in waves])
+        self.cb = np.array([w._cb if w is not None else 0.0 for w in waves])
+        self.sb = np.array([w._sb if w is not None else 0.0 for w in waves])
+        self.out = np.zeros((n, 3))
+        self._entry: Any = None
+
+    def invalidate(self, i: int) -> None:
+        """Field ``i`` drew a new realisation: its window is stale."""
+        self.k0[i] = -(1 << 62)
+
+    def __call__(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(dx, dy, dpsi)`` of every row at its time ``t`` (n,) (s, >= 0), (n, 3)."""
+        x = np.where(self.on, t * self.inv_dt, -1.0)
+        if not np.all((x >= 0.0) | ~self.on):
+            raise ValueError(f"wave motion: times must be >= 0 s, got {t!r}")
+        args = (x, self.k0, self.win, self.cb, self.sb, self.out)
+        if self._entry is None:
+            self._entry = entry(wf_rows, args)
+        i = self._entry(*args)
+        while i >= 0:
+            j = int(x[i]) // _CHUNK
+            self.win[i] = self.waves[i].chunk(j)[1:3]
+            self.k0[i] = j * _CHUNK
+            i = self._entry(*args)
+        return self.out.copy()
 _ZERO3 = (0.0, 0.0, 0.0)
 _TWO_PI = 2.0 * math.pi
 
@@ -396,6 +467,7 @@ class Waves:
         if self._wf_on and cfg.wf_model != "rao":
             self._filter = self._build_filter()
         self._rng_wf: np.random.Generator | None = None
+        self._wf_rows: WaveMotionRows | None = None  # wf_motion's window (one row)
         self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
         self._mean_E = 0.0
         self._reset_grid()
@@ -458,6 +530,8 @@ class Waves:
             ValueError: ``rng`` is ``None`` for a non-calm sea.
         """
         self._reset_grid()
+        if self._wf_rows is not None:
+            self._wf_rows.invalidate(0)
         if rng is None:
             if not self.calm:
                 raise ValueError("Waves.reset needs a numpy Generator (or a seed) unless Hs = 0")
@@ -651,20 +725,13 @@ class Waves:
         """
         if not self._wf_on:
             return _ZERO3
-        x = t * self._inv_dt
-        if not x >= 0.0:
+        if not t >= 0.0:
             raise ValueError(f"Waves.wf_motion: time must be >= 0 s, got {t!r}")
-        k = int(x)
-        if k // _CHUNK != self._j:
-            self._select(k // _CHUNK)
-        i = k - self._k0
-        f = x - k
-        D = self._D
-        d0 = D[i]
-        d = d0 + f * (D[i + 1] - d0)
-        H = self._H
-        h0 = H[i]
-        return d * self._cb, d * self._sb, h0 + f * (H[i + 1] - h0)
+        rows = self._wf_rows
+        if rows is None:
+            rows = self._wf_rows = WaveMotionRows([self])
+        dx, dy, dpsi = rows(np.array([float(t)]))[0].tolist()
+        return dx, dy, dpsi
 
     def mean_drift_load(self, psi: float) -> tuple[float, float, float]:
         """Analytic mean drift loads ``T(beta) sum_j A_j^2 R_j`` of this realisation.

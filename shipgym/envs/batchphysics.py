@@ -129,6 +129,7 @@ class BatchedPhysics:
         self.winds = [Wind(wind_cfg or WindConfig(), v.windage) for _ in range(n)]
         self.currents = [Current(cc) for _ in range(n)]
         self.waves = [Waves(waves, v.hull) if waves is not None else None for _ in range(n)]
+        self._wf: Any = None  # wave_motion's windows
         self.saturated = np.zeros((n, acts.n_channels), dtype=bool)
         self._servo_channels = np.array(
             [i for i, c in enumerate(acts.channels) if c.dynamics == "servo"], dtype=np.int64
@@ -238,6 +239,8 @@ class BatchedPhysics:
         drift = self.wave_config is not None and self.wave_config.drift
         for i in np.nonzero(m)[0].tolist():
             self.saturated[i] = False
+            if self._wf is not None:
+                self._wf.invalidate(i)
             hb.reset_hull(
                 i, e[i], w[i], act[i], self._holds,
                 rngs[i] if rngs is not None else np.random.default_rng(0),
@@ -335,13 +338,15 @@ class BatchedPhysics:
     def wave_motion(self) -> Array:
         """Each hull's first-order wave-frequency motion ``(dx m, dy m, dpsi rad)`` (NED) now,
         (n, 3), what its sensors see (zeros without first-order waves), as
-        :meth:`VesselPhysics.wave_motion <shipgym.envs.physics.VesselPhysics.wave_motion>`."""
-        out = np.zeros((self.n, 3))
+        :meth:`VesselPhysics.wave_motion <shipgym.envs.physics.VesselPhysics.wave_motion>`
+        (one law: :func:`~shipgym.disturbances.waves.wf_rows`)."""
         if self.wave_config is None or not self.wave_config.first_order:
-            return out
-        for i, (wv, t) in enumerate(zip(self.waves, self.t.tolist(), strict=True)):
-            out[i] = wv.wf_motion(t)
-        return out
+            return np.zeros((self.n, 3))
+        if self._wf is None:
+            from shipgym.disturbances.waves import WaveMotionRows
+
+            self._wf = WaveMotionRows(self.waves)
+        return self._wf(self.t)
 
     @property
     def contact_counts(self) -> NDArray[np.int64]:

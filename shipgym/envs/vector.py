@@ -69,9 +69,10 @@ class ShipVectorEnv(BatchedEnv):
         max_episode_steps: the time limit (control steps); ``None``: the id's registered one.
         autoreset_mode: ``"next-step"`` (default) or ``"same-step"``.
         controller: ``None`` (the actions drive the actuators) or a DP controller name
-            (``"pid"``, ``"pid-smooth"``, ``"pid-seed"``: :func:`~shipgym.controllers.batch.
-            batched_dp_controller`): the actions are residuals on its normalised command, as
-            under :class:`~shipgym.controllers.wrappers.DPControllerWrapper`
+            (``"pid"``, ``"lq"``, ``"alt-sdre"``, any of :data:`~shipgym.controllers.wrappers.
+            CONTROLLERS`: :func:`~shipgym.controllers.batch.batched_dp_controller`): the
+            actions are residuals on its normalised command, as under
+            :class:`~shipgym.controllers.wrappers.DPControllerWrapper`
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
         observer: ``None`` / ``"truth"`` (the observation and the controller use the true
