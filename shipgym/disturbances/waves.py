@@ -142,6 +142,8 @@ class WaveMotionRows:
             self.k0[i] = j * _CHUNK
             i = self._entry(*args)
         return self.out.copy()
+
+
 _ZERO3 = (0.0, 0.0, 0.0)
 _TWO_PI = 2.0 * math.pi
 
