@@ -328,9 +328,9 @@ CLOSED_LOOPS: tuple[tuple[str, str, dict[str, Any]], ...] = (
      {"vessel": "star-hercules", "observer": "kbf", "controller": "pid"}),
     ("wimpey-sealab/dp", "shipgym/DPStationKeeping-v0",
      {"vessel": "wimpey-sealab", "observer": "kbf", "controller": "pid"}),
-    ("van-der-klugt/roll", "shipgym/RudderRollStabilisation-v0", {}),
-    ("naval-vessel/roll", "shipgym/NavalRollDamping-v0", {}),
-    ("kvlcc2-100m/course", "shipgym/CourseKeeping-v0", {}),
+    ("van-der-klugt/roll", "shipgym/RudderRollStabilisation-v0", {"episode_duration": 60.0}),
+    ("naval-vessel/roll", "shipgym/NavalRollDamping-v0", {"episode_duration": 60.0}),
+    ("kvlcc2-100m/course", "shipgym/CourseKeeping-v0", {"episode_duration": 60.0}),
     ("kvlcc2-100m/trial", "shipgym/SeaTrial-v0", {}),
 )  # fmt: skip
 
@@ -349,9 +349,13 @@ def _closed_loops(repeats: int, n: int = 256) -> dict[str, Any]:
         if gym.spec(env_id).vector_entry_point is None:
             missing[name] = f"{env_id} has no vector entry point"
             continue
-        venv = gym.make_vec(env_id, num_envs=n, max_episode_steps=EPISODE_STEPS, **kwargs)
+        # the plan tasks end at a step limit; the other families at their episode_duration
+        # (60 s of the roll and course tasks) or their manoeuvre's end (the sea trials)
+        plan = gym.spec(env_id).vector_entry_point.startswith("shipgym.envs.vector")
+        limit = {"max_episode_steps": EPISODE_STEPS} if plan else {}
+        venv = gym.make_vec(env_id, num_envs=n, **limit, **kwargs)
         u = venv.unwrapped
-        sub = getattr(u, "n_substeps", 1)
+        sub = getattr(u, "n_substeps", None) or round(u.control_period / u.physics.timestep)
         k = 2 * EPISODE_STEPS
         run = _rollout(venv, k)
         walls, cpus = [], []
