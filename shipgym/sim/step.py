@@ -744,7 +744,8 @@ class HullBatch:
             self.t[0] = self.datas[0].time
         integ = MUJOCO if self.integrator == "mujoco" else LEAPFROG
         taken = self._advance(integ, int(n), None, stop_on_contact, mask)
-        for i, d in enumerate(self.datas):  # MuJoCo resets an unstable state and warns: fail
+        # MuJoCo resets an unstable state and only warns: fail instead (its integrator only)
+        for i, d in enumerate(self.datas if integ == MUJOCO else ()):
             w = d.warning
             if w[_BADQACC].number or w[_BADQVEL].number or w[_BADQPOS].number:
                 raise SimulationDiverged(
