@@ -105,6 +105,11 @@ def _finite(x: Any) -> bool:
     return is_real(x) and math.isfinite(x)
 
 
+def _check(ok: bool, message: str, error: type[Exception] = ValueError) -> None:
+    if not ok:
+        raise error(message)
+
+
 def _disturbance(value: Any, cls: Any, name: str) -> Any:
     if isinstance(value, str) and value in (AUTO, *_NONE):
         return None if value in _NONE else AUTO
@@ -145,66 +150,42 @@ class CourseKeepingVectorEnv(BatchedEnv):
         timestep: float = 0.05,
         control_period: float = 1.0,
     ) -> None:
-        if vessel is None:
-            raise TypeError(
-                "CourseKeepingEnv needs vessel=NAME (a vessel with a rudder: 'kvlcc2-100m', "
-                "'kvlcc2-l7', 'naval-vessel', 'container-ship', 'van-der-klugt') or a package path"
-            )
-        self.base_vessel = load_vessel(vessel)
-        v = self.base_vessel
-        if not v.rudders:
-            raise ValueError(
-                f"CourseKeepingEnv steers with a rudder; {v.name!r} has none (actuators: "
-                f"{', '.join(a.label for a in v.actuators)})"
-            )
-        if speed is None:
-            speed = v.approach_speed
-            if speed is None:
-                raise ValueError(
-                    f"vessel {v.name!r} has no approach speed ([trials] approach_speed or "
-                    "[roll_control] design_speed in its vessel.toml): pass speed= (m/s)"
-                )
-        if not (_finite(speed) and 0 < speed <= 30.0):
-            raise ValueError(f"speed must be in (0, 30] m/s, got {speed!r}")
-        self.U = float(speed)
-        if not _finite(heading):
-            raise ValueError(f"heading must be a finite angle (rad), got {heading!r}")
-        self.heading = float(heading)
-        if receiver not in RECEIVERS:
-            raise ValueError(
-                f"unknown receiver {receiver!r}; choose one of: {', '.join(RECEIVERS)}"
-            )
-        self.receiver = receiver
-        if not (_finite(S_p) and S_p > 0):
-            raise ValueError(f"S_p must be > 0 m^2/s^3, got {S_p!r}")
-        self.S_p = float(S_p)
-        if not (_finite(dgps_sigma) and dgps_sigma >= 0):
-            raise ValueError(f"dgps_sigma must be >= 0 m, got {dgps_sigma!r}")
-        self.dgps_sigma = float(dgps_sigma)
-        ant = np.asarray(antenna, dtype=float).reshape(-1)
-        if ant.shape != (2,) or not np.all(np.isfinite(ant)):
-            raise ValueError(f"antenna must be a finite [x, y] (m), got {antenna!r}")
-        self.antenna = (float(ant[0]), float(ant[1]))
-        self.sensor_noise = bool(sensor_noise)
-        if setpoint_period is not None and not (_finite(setpoint_period) and setpoint_period > 0):
-            raise ValueError(f"setpoint_period must be > 0 s or None, got {setpoint_period!r}")
-        self.setpoint_period = None if setpoint_period is None else float(setpoint_period)
-        if not (_finite(max_heading_change) and 0 <= max_heading_change <= math.pi):
-            raise ValueError(
-                f"max_heading_change must be in [0, pi] rad, got {max_heading_change!r}"
-            )
-        self.max_heading_change = float(max_heading_change)
-        if reward_weights is None:
-            reward_weights = CourseRewardWeights()
-        elif isinstance(reward_weights, Mapping):
+        _check(vessel is not None, "CourseKeepingEnv needs vessel=NAME (a vessel with a rudder: "
+               "'kvlcc2-100m', 'kvlcc2-l7', 'naval-vessel', 'container-ship', 'van-der-klugt') or "
+               "a package path", TypeError)  # fmt: skip
+        self.base_vessel = v = load_vessel(vessel)  # type: ignore[arg-type]
+        _check(bool(v.rudders), f"CourseKeepingEnv steers with a rudder; {v.name!r} has none "
+               f"(actuators: {', '.join(a.label for a in v.actuators)})")  # fmt: skip
+        speed = v.approach_speed if speed is None else speed
+        _check(speed is not None, f"vessel {v.name!r} has no approach speed ([trials] "
+               "approach_speed or [roll_control] design_speed in its vessel.toml): pass speed= "
+               "(m/s)")  # fmt: skip
+        ok = _finite(speed) and 0 < speed <= 30.0  # type: ignore[operator]
+        _check(ok, f"speed must be in (0, 30] m/s, got {speed!r}")
+        _check(_finite(heading), f"heading must be a finite angle (rad), got {heading!r}")
+        _check(receiver in RECEIVERS,
+               f"unknown receiver {receiver!r}; choose one of: {', '.join(RECEIVERS)}")  # fmt: skip
+        _check(_finite(dgps_sigma) and dgps_sigma >= 0,
+               f"dgps_sigma must be >= 0 m, got {dgps_sigma!r}")  # fmt: skip
+        _check(setpoint_period is None or (_finite(setpoint_period) and setpoint_period > 0),
+               f"setpoint_period must be > 0 s or None, got {setpoint_period!r}")  # fmt: skip
+        _check(
+            _finite(max_heading_change) and 0 <= max_heading_change <= math.pi,
+            f"max_heading_change must be in [0, pi] rad, got {max_heading_change!r}",
+        )
+        if isinstance(reward_weights, Mapping):
             reward_weights = from_mapping(CourseRewardWeights, reward_weights,
                                           where="reward_weights")  # fmt: skip
-        elif not isinstance(reward_weights, CourseRewardWeights):
-            raise TypeError(f"reward_weights must be a CourseRewardWeights or a mapping, got "
-                            f"{reward_weights!r}")  # fmt: skip
-        self.reward_weights = reward_weights
-        if not (_finite(episode_duration) and episode_duration > 0):
-            raise ValueError(f"episode_duration must be > 0 s, got {episode_duration!r}")
+        _check(isinstance(reward_weights, CourseRewardWeights | None), "reward_weights must be a "
+               f"CourseRewardWeights or a mapping, got {reward_weights!r}", TypeError)  # fmt: skip
+        _check(_finite(episode_duration) and episode_duration > 0,
+               f"episode_duration must be > 0 s, got {episode_duration!r}")  # fmt: skip
+        self.U, self.heading = float(speed), float(heading)  # type: ignore[arg-type]
+        self.receiver, self.S_p, self.dgps_sigma = receiver, float(S_p), float(dgps_sigma)
+        self.sensor_noise = bool(sensor_noise)
+        self.setpoint_period = None if setpoint_period is None else float(setpoint_period)
+        self.max_heading_change = float(max_heading_change)
+        self.reward_weights = reward_weights or CourseRewardWeights()
         self.episode_duration = float(episode_duration)
         _check_timing(timestep, control_period)
         self.n_substeps = _whole_multiple(control_period, timestep)
@@ -237,6 +218,9 @@ class CourseKeepingVectorEnv(BatchedEnv):
         self._setup(num_envs, obs_space, spaces.Box(-1.0, 1.0, (n_r,), dtype=np.float32),
                     autoreset_mode)  # fmt: skip
         n = num_envs
+        self.rx = DGPSReceiver(self.S_p, n=n, sigma=self.dgps_sigma, dt=self.control_period,
+                               antenna=antenna)  # fmt: skip
+        self.antenna = (float(self.rx.antenna[0]), float(self.rx.antenna[1]))
         fixed_wind = None if self._wind_arg == AUTO else self._wind_arg
         self.physics = BatchedPhysics(v, n, wind=fixed_wind, timestep=self.timestep)
         # the actuators' start: shafts at the self-propulsion point, propellers at the thrust
@@ -263,8 +247,6 @@ class CourseKeepingVectorEnv(BatchedEnv):
         self.targets = np.full((n, max(self._n_changes, 1)), self.heading)
         self.wind_configs: list[WindConfig | None] = [None] * n
         self.current_configs: list[CurrentConfig | None] = [None] * n
-        self.rx = DGPSReceiver(self.S_p, n=n, sigma=self.dgps_sigma, dt=self.control_period,
-                               antenna=self.antenna)  # fmt: skip
         self._gyro = NormalStreams(n, 2)
         self._steps = np.zeros(n, dtype=np.int64)
         self._z_prev = np.zeros((n, 2))
@@ -553,6 +535,7 @@ class CourseKeepingEnv(SingleEnv):
     """
 
     batched = CourseKeepingVectorEnv
+    batch: CourseKeepingVectorEnv
 
     def __init__(self, vessel: Vessel | str | None = None, render_mode: str | None = None,
                  **kwargs: Any) -> None:  # fmt: skip

@@ -249,10 +249,8 @@ def antenna_motion(eta: ArrayLike, nu: ArrayLike, antenna: ArrayLike) -> tuple[A
 
 class NormalStreams:
     """Standard normal draws of ``n`` envs, ``width`` per draw, each env from its own
-    generator, drawn in blocks of ``block`` draws and refilled when used up (a generator's
-    ``standard_normal((k, width))`` is the stream of ``k`` calls of
-    ``standard_normal(width)``, so env ``i`` draws bit for bit what one call per draw from
-    its generator would draw, whatever ``n``).
+    generator in blocks of ``block`` draws, refilled when used up: ``standard_normal((k,
+    width))`` is the stream of ``k`` calls of ``standard_normal(width)``, whatever ``n``.
 
     Args:
         n: number of envs; width: values per draw; block: draws per refill.
@@ -265,14 +263,16 @@ class NormalStreams:
         rngs = list(rng) if isinstance(rng, list | tuple) else [rng] * n
         if len(rngs) != n:
             raise ValueError(f"rng must be one generator or seed, or {n} of them; got {rng!r}")
-        self.rngs = [_generator(r) for r in rngs]
         self._draws = np.zeros((n, self.block, self.width))
         self._k = np.full(n, self.block, dtype=np.int64)  # next unused draw (block: refill)
         self._rows = np.arange(n)
+        self.rngs: list[np.random.Generator] = [None] * n  # type: ignore[list-item]
+        for i, r in enumerate(rngs):
+            self.seed(i, r)
 
     def seed(self, i: int, rng: Any) -> None:
         """Env ``i`` draws from ``rng`` (a generator or a seed) from now on."""
-        self.rngs[i] = _generator(rng)
+        self.rngs[i] = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
         self._k[i] = self.block
 
     def draw(self, mask: NDArray[np.bool_]) -> Array:
@@ -283,10 +283,6 @@ class NormalStreams:
         k = np.minimum(self._k, self.block - 1)
         self._k += mask
         return np.where(mask[:, None], self._draws[self._rows, k], 0.0)
-
-
-def _generator(rng: Any) -> np.random.Generator:
-    return rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
 
 
 class DGPSReceiver:
@@ -302,14 +298,10 @@ class DGPSReceiver:
 
     Sample 0 is the initial state itself (:meth:`reset`, no measurement); each
     :meth:`update` is the filter after one more measurement. Receiver ``i``'s noise comes
-    from its own generator, two values (north, east) per update in that order, drawn in
-    blocks of ``block`` updates (a generator's ``standard_normal((k, 2))`` is the stream of
-    ``k`` calls of ``standard_normal(2)``): receiver ``i`` of a batch gives bit for bit what
-    a receiver of one with the same generator gives, and :meth:`run` what the streaming form
-    gives. A generator is used ahead by up to a block: give each receiver its own.
-
-    Poses are ``(n, 3)`` and outputs ``(n,)`` (``z`` ``(n, 2)``); a single receiver also
-    takes a pose ``(3,)`` and then returns its row.
+    from its own generator, two values (north, east) per update (:class:`NormalStreams`,
+    drawn ahead in blocks: give each receiver its own generator), so receiver ``i`` of a
+    batch is bit for bit a single receiver with the same generator. Poses are ``(n, 3)`` and
+    outputs ``(n,)`` (``z`` ``(n, 2)``); a single receiver also takes ``(3,)``, giving its row.
 
     Args:
         S_p: the filter's spectral amplitude (m^2/s^3).
