@@ -26,11 +26,20 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   batched ``Tracking`` env (:class:`~shipgym.envs.vector.ShipVectorEnv`: gusty wind, sensors,
   the KBF observer) in hull-steps per second, and over the single env with the same stack
   (``shipgym.make(..., observer="kbf")``), interleaved;
+- ``vector_n1_over_single``: the batched env of one env over the single env, same stack
+  (lower is better; the batched figures run whole episodes of ``EPISODE_STEPS`` steps with
+  their batched autoresets, after a warm-up);
+- ``closed_loop_n256``: hull-steps per second (wall and CPU) of each vessel on its own task
+  with the whole stack at N = 256 (:data:`CLOSED_LOOPS`);
+- ``dp_every_step_over_pvs``: control at every physics step, shipgym's DP env over
+  PythonVehicleSimulator's DP loop per step (lower is better; needs ``PVS_SRC``);
 - ``ppo_fps_batched_over_single``: stable-baselines3 PPO's training rate (rollouts and
   updates, the shipped hyperparameters and KBF + PID-residual stack, 32 envs) on the batched
   env over the same on ``DummyVecEnv`` of single envs (``null`` without the ``rl`` extra).
 
-Absolute rates are printed too (this machine's); ratios are what compares across machines.
+Every ratio records the CPU time beside the wall time (``cpu_median``, ``a_cpu_s``,
+``b_cpu_s``). Absolute rates are printed too (this machine's); ratios are what compares
+across machines.
 ``physics_step`` names the physics step that ran (:mod:`shipgym.sim.step`, compiled by Numba).
 Run with ``make bench``.
 """
@@ -65,20 +74,33 @@ def _timed(fn: Callable[[], Any]) -> Timed:
 def pair(a: Timed, b: Timed, repeats: int, *, per_a: float = 1.0, per_b: float = 1.0) -> dict:
     """``(time of a / per_a) / (time of b / per_b)`` per repeat, a and b interleaved.
 
-    Returns ``{"median", "min", "max", "a_s", "b_s"}`` (the ratios and the median seconds of
-    each side per unit ``per_a`` / ``per_b``).
+    Returns ``{"median", "min", "max", "a_s", "b_s", "cpu_median", "a_cpu_s", "b_cpu_s"}``:
+    the wall-time ratios, the median wall seconds of each side per unit ``per_a`` /
+    ``per_b``, and the same of the process's CPU time (all threads; measured around each
+    call).
     """
-    ratios, ta, tb = [], [], []
+
+    def call(f: Timed, per: float) -> tuple[float, float]:
+        c0 = time.process_time()
+        wall = f()
+        return wall / per, (time.process_time() - c0) / per
+
+    ratios, cpu, ta, tb, ca, cb = [], [], [], [], [], []
     for k in range(repeats):
         if k % 2 == 0:
-            x, y = a(), b()
+            x, y = call(a, per_a), call(b, per_b)
         else:
-            y, x = b(), a()
-        ta.append(x / per_a)
-        tb.append(y / per_b)
+            y, x = call(b, per_b), call(a, per_a)
+        ta.append(x[0])
+        tb.append(y[0])
+        ca.append(x[1])
+        cb.append(y[1])
         ratios.append(ta[-1] / tb[-1])
-    return {"median": statistics.median(ratios), "min": min(ratios), "max": max(ratios),
-            "a_s": statistics.median(ta), "b_s": statistics.median(tb)}  # fmt: skip
+        cpu.append(ca[-1] / cb[-1] if cb[-1] > 0 else math.nan)
+    med = statistics.median
+    return {"median": med(ratios), "min": min(ratios), "max": max(ratios), "a_s": med(ta),
+            "b_s": med(tb), "cpu_median": med(cpu), "a_cpu_s": med(ca),
+            "b_cpu_s": med(cb)}  # fmt: skip
 
 
 def _bare(model: Any, n: int) -> Timed:
@@ -210,6 +232,14 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
     out["batched_physics_over_single"] = rb
     out["batched_physics_hull_steps_per_s"] = 1.0 / rb["b_s"]
     out.update(_batched_env(repeats))
+    out.update(_closed_loops(max(3, repeats // 2)))
+    pvs = _pvs_dp(repeats)
+    if pvs is None:
+        out.setdefault("missing", {})["dp_every_step_over_pvs"] = (
+            "PythonVehicleSimulator not importable: set PVS_SRC to its checkout's src folder"
+        )
+    else:
+        out["dp_every_step_over_pvs"] = pvs
     return out
 
 
@@ -218,42 +248,66 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
 BATCHED_STACK = {"observer": "kbf"}
 
 
+#: control steps per episode in the batched timings: each timing runs two episodes of every
+#: env, their autoresets (batched) included
+EPISODE_STEPS = 50
+
+
+def _rollout(venv: Any, steps: int) -> Timed:
+    """``steps`` zero-action steps of a vector env, autoresets included."""
+    zeros = np.zeros(venv.action_space.shape, np.float32)
+
+    def run() -> float:
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            venv.step(zeros)
+        return time.perf_counter() - t0
+
+    venv.reset(seed=0)
+    run()  # warm-up: the compiled laws loaded, one episode and its resets done
+    return run
+
+
 def _batched_env(repeats: int, n: int = 256) -> dict[str, Any]:
     """``batched_hull_steps_per_s`` (N = ``n``) and ``batched_over_single``: the native
     batched Tracking env with gusts, sensors and the KBF against the single env with the same
-    stack (``shipgym.make(..., observer="kbf")``), hull-steps per second, interleaved; and
-    ``ppo_fps_batched_over_single`` (:func:`_ppo_fps`)."""
+    stack (``shipgym.make(..., observer="kbf")``), hull-steps per second over whole episodes
+    with their resets, interleaved; ``vector_n1_over_single``: the batched env of one env over
+    the single env (lower is better); and ``ppo_fps_batched_over_single`` (:func:`_ppo_fps`)."""
     import gymnasium as gym
 
     import shipgym
 
     env_id = "shipgym/BlueLadyTracking-v0"
-    venv = gym.make_vec(env_id, num_envs=n, **BATCHED_STACK)
-    single = shipgym.make(env_id, **BATCHED_STACK)
+    k = 2 * EPISODE_STEPS
+    limit = {"max_episode_steps": EPISODE_STEPS}
+    venv = gym.make_vec(env_id, num_envs=n, **limit, **BATCHED_STACK)
+    one = gym.make_vec(env_id, num_envs=1, **limit, **BATCHED_STACK)
+    single = shipgym.make(env_id, **limit, **BATCHED_STACK)
     rng = np.random.default_rng(0)
-    k_b, k_s = 20, 100  # batched steps, single steps per timing
-    acts = rng.uniform(-1, 1, (k_b, n, 3)).astype(np.float32)
-    venv.reset(seed=0)
-    single.reset(seed=0)
+    acts = rng.uniform(-1, 1, (k, 3)).astype(np.float32)
     n_sub = venv.unwrapped.n_substeps
 
-    def batched() -> None:
+    def single_run() -> float:
+        single.reset(seed=0)
+        t0 = time.perf_counter()
         for a in acts:
-            venv.step(a)
-
-    def one() -> None:
-        for j in range(k_s):
-            _, _, term, trunc, _ = single.step(acts[j % k_b, 0])
+            _, _, term, trunc, _ = single.step(a)
             if term or trunc:
                 single.reset()
+        return time.perf_counter() - t0
 
-    r = pair(_timed(one), _timed(batched), repeats, per_a=k_s * n_sub, per_b=k_b * n * n_sub)
+    single_run()  # warm-up
+    r = pair(_timed(single_run), _rollout(venv, k), repeats, per_a=k * n_sub,
+             per_b=k * n * n_sub)  # fmt: skip
     out: dict[str, Any] = {
         "batched_hull_steps_per_s": 1.0 / r["b_s"],
         "single_hull_steps_per_s": 1.0 / r["a_s"],
         "batched_over_single": r,
         "batched_num_envs": n,
     }
+    # the batch of one against the single env: > 1 means the batch of one is slower
+    out["vector_n1_over_single"] = pair(_rollout(one, k), _timed(single_run), repeats)
     ppo = _ppo_fps(env_id, max(3, repeats // 2))
     out["ppo_fps_batched_over_single"] = ppo
     if ppo is not None:
@@ -262,6 +316,96 @@ def _batched_env(repeats: int, n: int = 256) -> dict[str, Any]:
     else:
         out["missing"] = {"ppo_fps_batched_over_single": "needs the rl extra (make rl)"}
     return out
+
+
+#: the batched closed loops: (name, id, arguments): each vessel on its own task with the
+#: whole stack (gusts, sensors, the KBF, the PID with its allocation, guidance)
+CLOSED_LOOPS: tuple[tuple[str, str, dict[str, Any]], ...] = (
+    ("blue-lady/tracking", "shipgym/BlueLadyTracking-v0", {"observer": "kbf", "controller": "pid"}),
+    ("blue-lady/harbour", "shipgym/BlueLadyHarbour-v0", {"observer": "kbf", "controller": "pid"}),
+    ("star-hercules/dp", "shipgym/DPStationKeeping-v0",
+     {"vessel": "star-hercules", "observer": "kbf", "controller": "pid"}),
+    ("wimpey-sealab/dp", "shipgym/DPStationKeeping-v0",
+     {"vessel": "wimpey-sealab", "observer": "kbf", "controller": "pid"}),
+    ("van-der-klugt/roll", "shipgym/RudderRollStabilisation-v0", {}),
+    ("naval-vessel/roll", "shipgym/NavalRollDamping-v0", {}),
+    ("kvlcc2-100m/course", "shipgym/CourseKeeping-v0", {}),
+    ("kvlcc2-100m/trial", "shipgym/SeaTrial-v0", {}),
+)  # fmt: skip
+
+
+def _closed_loops(repeats: int, n: int = 256) -> dict[str, Any]:
+    """Hull-steps per second (wall and CPU) of each :data:`CLOSED_LOOPS` entry at N = ``n``
+    over whole episodes with their batched autoresets, after a warm-up; an id without a
+    vector entry point is listed under ``missing``."""
+    import gymnasium as gym
+
+    import shipgym  # noqa: F401  (registers the ids)
+
+    out: dict[str, Any] = {}
+    missing: dict[str, str] = {}
+    for name, env_id, kwargs in CLOSED_LOOPS:
+        if gym.spec(env_id).vector_entry_point is None:
+            missing[name] = f"{env_id} has no vector entry point"
+            continue
+        venv = gym.make_vec(env_id, num_envs=n, max_episode_steps=EPISODE_STEPS, **kwargs)
+        u = venv.unwrapped
+        sub = getattr(u, "n_substeps", 1)
+        k = 2 * EPISODE_STEPS
+        run = _rollout(venv, k)
+        walls, cpus = [], []
+        for _ in range(repeats):
+            c0 = time.process_time()
+            walls.append(run())
+            cpus.append(time.process_time() - c0)
+        hs = n * k * sub
+        out[name] = {"hull_steps_per_s": hs / statistics.median(walls),
+                     "hull_steps_per_cpu_s": hs / statistics.median(cpus),
+                     "min": hs / max(walls), "max": hs / min(walls)}  # fmt: skip
+        venv.close()
+    return {"closed_loop_n256": out, "closed_loop_missing": missing}
+
+
+def _pvs_dp(repeats: int, steps: int = 3000) -> dict[str, Any] | None:
+    """Control at every physics step, per step: shipgym's single DP env (Star Hercules, the
+    PID and its allocation, ``control_period = timestep``) over PythonVehicleSimulator's DP
+    loop (Fossen's supply vessel, ``lib.mainLoop.simulate``: pole-placement DP, actuator
+    dynamics, 6-DOF model), the same number of steps, interleaved (lower is better).
+    PythonVehicleSimulator is not on PyPI: point ``PVS_SRC`` at the ``src`` folder of a
+    checkout (cybergalactic/PythonVehicleSimulator); ``None`` without it."""
+    import os
+    import sys
+
+    src = os.environ.get("PVS_SRC")
+    if src:
+        sys.path.insert(0, src)
+    try:
+        from python_vehicle_simulator.lib.mainLoop import simulate
+        from python_vehicle_simulator.vehicles import supply
+    except ImportError:
+        return None
+    import shipgym
+
+    env = shipgym.make("shipgym/StationKeeping-v0", vessel="star-hercules", controller="pid",
+                       timestep=0.05, control_period=0.05, max_episode_steps=10**9)  # fmt: skip
+    zero = np.zeros(env.action_space.shape, np.float32)
+
+    def ours() -> float:
+        env.reset(seed=0)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            env.step(zero)
+        return time.perf_counter() - t0
+
+    def theirs() -> float:
+        vehicle = supply("DPcontrol", 4.0, 4.0, 50.0, 0.5, -20.0)
+        t0 = time.perf_counter()
+        simulate(steps - 1, 0.02, vehicle)  # steps - 1: its loop runs N + 1 steps
+        return time.perf_counter() - t0
+
+    ours()
+    theirs()
+    return pair(ours, theirs, repeats, per_a=steps, per_b=steps)
 
 
 def _ppo_fps(env_id: str, repeats: int, n_envs: int = 32, n_steps: int = 32) -> Any:
@@ -316,6 +460,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if res.get("ppo_fps_batched") is not None:
         print(f"  {'PPO, batched / DummyVecEnv':28s}: {res['ppo_fps_batched']:10,.0f} / "
               f"{res['ppo_fps_single']:,.0f} steps/s")  # fmt: skip
+    print(f"closed loops, N = 256, hull-steps/s (wall; CPU) over {2 * EPISODE_STEPS} steps:")
+    for name, v in res["closed_loop_n256"].items():
+        print(f"  {name:28s}: {v['hull_steps_per_s']:10,.0f}; {v['hull_steps_per_cpu_s']:,.0f}")
+    for name, why in {**res["closed_loop_missing"], **res.get("missing", {})}.items():
+        print(f"  {name:28s}: not measured ({why})")
     args.json.parent.mkdir(parents=True, exist_ok=True)
     flat = {k: (v["median"] if isinstance(v, dict) and "median" in v else v)
             for k, v in res.items()}  # fmt: skip

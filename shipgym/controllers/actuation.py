@@ -136,12 +136,17 @@ class _FixedAllocator:
         self._wls = WLSAllocator(self.B, self.f_min, self.f_max, W=self.W)
 
     def __call__(self, tau: ArrayLike, state: NDArray[np.float64]) -> Allocation:
-        t = _tau3(tau)
-        res = self._wls(t)
-        acts = self.acts.actuators
-        cmd = np.array([a.inverse(f) for a, f in zip(acts, res.force, strict=True)])  # type: ignore[attr-defined]
+        return Allocation(*(x[0] for x in self.batch(_tau3(tau).reshape(1, 3))))
+
+    def batch(self, tau: NDArray[np.float64], state: Any = None) -> tuple[Any, ...]:
+        """The allocations of N requests ``tau`` (N, 3): ``(command, force, tau, tau_error,
+        saturated)``, each with a leading axis N (the compiled law over N, one call)."""
+        force, delivered, error, sat = self._wls.batch(tau)
+        cmd = np.empty_like(force)
+        for j, a in enumerate(self.acts.actuators):
+            cmd[:, j] = a.inverse(force[:, j])  # type: ignore[attr-defined]
         cmd = np.clip(cmd, self.acts.lower, self.acts.upper)
-        return Allocation(cmd, res.force, res.tau, res.tau_error, res.saturated)
+        return cmd, force, delivered, error, sat
 
 
 class _AzimuthAllocator:

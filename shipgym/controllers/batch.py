@@ -118,6 +118,9 @@ class BatchedAllocation:
             )
         if len(self._each) != n:
             self._each = [make_allocator(self.vessel, self.method, self.dt) for _ in range(n)]
+        batch = getattr(self._each[0], "batch", None)
+        if batch is not None:  # a law over N (the fixed thruster sets' least squares)
+            return BatchedAllocationResult(*batch(t))
         st = None if state is None else np.asarray(state, dtype=float)
         rows = [alloc(t[i], None if st is None else st[i]) for i, alloc in enumerate(self._each)]
         return BatchedAllocationResult(*(np.array(field) for field in zip(*rows, strict=True)))

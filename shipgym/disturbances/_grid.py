@@ -11,10 +11,30 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["CHUNK", "GridPair"]
+from shipgym._jit import njit
+
+__all__ = ["CHUNK", "GridPair", "gauss_markov"]
 
 #: samples per chunk (each chunk also stores the first sample of the next one)
 CHUNK = 4096
+
+
+@njit
+def gauss_markov(x, m, a, b, e, lo, hi, deviation, out):  # type: ignore[no-untyped-def]
+    """A first-order Gauss-Markov sequence from ``x`` driven by the normals ``e`` (K,) into
+    ``out`` (K + 1,), returning the last state: ``deviation`` True, the deviation form ``x_{k+1}
+    = a x_k + b e_k``, ``out = m + x``; else the absolute form ``x_{k+1} = m + a (x_k - m) +
+    b e_k`` clipped to ``[lo, hi]``, ``out = x`` (the grids' one recursion, compiled)."""
+    out[0] = m + x if deviation else x
+    for k in range(e.shape[0]):
+        if deviation:
+            x = a * x + b * e[k]
+            out[k + 1] = m + x
+        else:
+            x = m + a * (x - m) + b * e[k]
+            x = lo if x < lo else (hi if x > hi else x)
+            out[k + 1] = x
+    return x
 
 
 class GridPair:

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import from_mapping, param, require_finite
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair
+from ._grid import CHUNK, GridPair, gauss_markov
 
 __all__ = ["CurrentConfig", "Current", "current_body_velocity", "MAX_CURRENT_SPEED"]
 
@@ -319,19 +319,13 @@ class Current(GridPair):
         mv, mb = self._mean
         lo, hi = self._lo, self._hi
         while len(self._chunks) <= j:
-            w = rng.standard_normal((2, CHUNK)).tolist()
+            w = rng.standard_normal((2, CHUNK))
+            rows = np.empty((2, CHUNK + 1))
             v, d = self._state
-            sp = [v]
-            dr = [d]
-            for e in w[0]:
-                v = mv + av * (v - mv) + bv * e
-                v = lo if v < lo else (hi if v > hi else v)
-                sp.append(v)
-            for e in w[1]:
-                d = mb + ab * (d - mb) + bb * e
-                dr.append(d)
+            v = gauss_markov(v, mv, av, bv, w[0], lo, hi, False, rows[0])
+            d = gauss_markov(d, mb, ab, bb, w[1], -math.inf, math.inf, False, rows[1])
             self._state = (v, d)
-            self._chunks.append(np.array([sp, dr], dtype=float))
+            self._chunks.append(rows)
 
     def at(self, t: float) -> tuple[float, float]:
         """Current at time ``t`` (cheap; call it every physics step).

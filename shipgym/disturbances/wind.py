@@ -29,7 +29,7 @@ from shipgym._jit import njit
 from shipgym.dynamics.params import WindageParameters
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair
+from ._grid import CHUNK, GridPair, gauss_markov
 from .spectra import harmonic_components, harmonic_sums, wind_gust_spectrum
 
 __all__ = [
@@ -872,16 +872,14 @@ class Wind(GridPair):
         """Chunks of a spectral speed gust (harmonic sum) and a Gauss-Markov direction gust."""
         a, b, m = self._a[1], self._b[1], self._mean_b
         while len(self._chunks) <= j:
-            x = self._state[1]
-            out = [m + x]
-            app = out.append
-            for e in rng.standard_normal(CHUNK).tolist():
-                x = a * x + b * e
-                app(m + x)
+            rows = np.empty((2, CHUNK + 1))
+            e = rng.standard_normal(CHUNK)
+            x = gauss_markov(self._state[1], m, a, b, e, -math.inf, math.inf, True, rows[1])
             self._state = (0.0, x)
             t0 = len(self._chunks) * CHUNK * self._dt
             gust = harmonic_sums(t0, self._dt, CHUNK + 1, self._gw, self._gph, self._ga).real
-            self._chunks.append(np.array([self._mean_v + gust, out], dtype=float))
+            rows[0] = self._mean_v + gust
+            self._chunks.append(rows)
 
     # -- queries ----------------------------------------------------------------------------
 

@@ -183,7 +183,9 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
         if done.any():  # SAME_STEP: reset now, the last observation and info kept aside
             info["final_obs"] = _where_rows(done, obs, np.full_like(obs, np.nan))
             info["_final_obs"] = done
-            info["final_info"] = {k: v for k, v in info.items() if not k.startswith("final")}
+            info["final_info"] = {
+                k: v for k, v in info.items() if not k.lstrip("_").startswith("final")
+            }
             info["_final_info"] = done
             self._reset_envs(done)
             obs = _where_rows(done, self._observation(), obs)
@@ -197,14 +199,15 @@ def _where_rows(mask: Bools, a: Any, b: Any) -> Any:
 
 
 def _masked(info: dict[str, Any], mask: Bools) -> dict[str, Any]:
-    """``info`` with Gymnasium's ``_key`` mask beside every key (nested dicts too)."""
-    out: dict[str, Any] = {}
+    """``info`` with Gymnasium's ``_key`` mask beside every key that has none (nested dicts
+    too)."""
+    out = dict(info)
     for k, v in info.items():
-        if k.startswith("_"):
-            out[k] = v
-            continue
-        out[k] = _masked(v, mask) if isinstance(v, dict) else v
-        out.setdefault("_" + k, mask)
+        if k[:1] != "_":
+            if "_" + k not in info:
+                out["_" + k] = mask
+            if type(v) is dict:
+                out[k] = _masked(v, mask)
     return out
 
 

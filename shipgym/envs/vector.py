@@ -17,12 +17,9 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode
-from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from shipgym.dynamics.frames import wrap_angle
@@ -37,6 +34,7 @@ from .base import (
     harbour_body,
     place_harbour,
 )
+from .batched import AUTORESET_MODES, BatchedEnv
 from .batchphysics import BatchedPhysics
 
 __all__ = [
@@ -51,16 +49,8 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: the accepted ``autoreset_mode`` values (strings or :class:`gymnasium.vector.AutoresetMode`)
-AUTORESET_MODES = {
-    "next-step": AutoresetMode.NEXT_STEP,
-    "same-step": AutoresetMode.SAME_STEP,
-    AutoresetMode.NEXT_STEP: AutoresetMode.NEXT_STEP,
-    AutoresetMode.SAME_STEP: AutoresetMode.SAME_STEP,
-}
 
-
-class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
+class ShipVectorEnv(BatchedEnv):
     """``num_envs`` envs of a plan task stepped together (module docstring).
 
     Spaces: the single env's, batched: ``observation_space`` ``Box(-inf, inf, (N, 12 + n),
@@ -103,8 +93,6 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         ValueError: a task, vessel or argument the batched form does not cover, naming it.
     """
 
-    metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
-
     def __init__(
         self,
         num_envs: int,
@@ -118,8 +106,6 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         env_sensors: Sequence[SensorConfig] | None = None,
         **kwargs: Any,
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
-            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
         cls, steps = _task_class(task)
         # the class's own defaults (the DP tasks' timing and sea), as its single env takes them
         env, task_args, extras = cls.split_args(kwargs)
@@ -137,18 +123,12 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
             max_episode_steps = steps
         if not (isinstance(max_episode_steps, int) and max_episode_steps >= 1):
             raise ValueError(f"max_episode_steps must be an int >= 1, got {max_episode_steps!r}")
-        if autoreset_mode not in AUTORESET_MODES:
-            raise ValueError(
-                f"autoreset_mode must be 'next-step' or 'same-step', got {autoreset_mode!r}"
-            )
         if render_mode is not None:
             raise ValueError("the batched env does not render; use the single env (gym.make)")
         # the task of these arguments: its configuration and each env's per-episode draws
         self.task = task = cls.make_task(vessel, **task_args)
-        self.num_envs = n = num_envs
+        n = num_envs
         self.max_episode_steps = max_episode_steps
-        self.autoreset_mode = AUTORESET_MODES[autoreset_mode]
-        self.metadata = dict(self.metadata, autoreset_mode=self.autoreset_mode)
         self.vessel = task.vessel
         _check_timing(timestep, control_period)
         self.n_substeps = _whole_multiple(control_period, timestep)
@@ -167,10 +147,12 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self.limits = vessel_limits(self.vessel)
         self.guidance = BatchedGuidance(n, limits=self.limits)
         self.observation_structure, size = task.observation_structure(self.n_actions)
-        self.single_observation_space = spaces.Box(-np.inf, np.inf, (size,), np.float32)
-        self.single_action_space = spaces.Box(-1.0, 1.0, (self.n_actions,), np.float32)
-        self.observation_space = batch_space(self.single_observation_space, n)
-        self.action_space = batch_space(self.single_action_space, n)
+        self._setup(
+            num_envs,
+            spaces.Box(-np.inf, np.inf, (size,), np.float32),
+            spaces.Box(-1.0, 1.0, (self.n_actions,), np.float32),
+            autoreset_mode,
+        )
         self._obs = np.zeros((n, size), np.float32)
         self._rew = np.zeros((n, len(task.reward_terms)))
         self._eta_r = np.zeros((n, 3))
@@ -178,13 +160,11 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self._harbour = harbour_body(self.physics.models[0]) if harbour else None
         self._contact = np.zeros(n, dtype=bool)
         self._stop = harbour  # stop a hull after the physics step in which it touches a quay
-        self._rngs: list[np.random.Generator | None] = [None] * n
         self._steps = np.zeros(n, dtype=np.int64)  # physics steps since reset
         self._elapsed = np.zeros(n, dtype=np.int64)  # control steps since reset
         self._return = np.zeros(n)
         self._prev = np.zeros((n, self.n_actions))
-        self._ended = np.zeros(n, dtype=bool)  # NEXT_STEP: reset at the next step
-        self._started = False
+        self._fresh = False  # whether _obs is the observation now
         lo, hi = self.actuators.lower, self.actuators.upper
         self._lo_tol, self._hi_tol = lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)
         if not (isinstance(residual_scale, int | float) and math.isfinite(residual_scale)):
@@ -240,64 +220,15 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         self._z_valid = np.zeros(n, dtype=bool)
         self._z_outlier = np.zeros(n, dtype=bool)
 
-    # ---- gymnasium API -------------------------------------------------------------------
-    def reset(
-        self,
-        *,
-        seed: int | Sequence[int | None] | None = None,
-        options: dict[str, Any] | None = None,
-    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        """Reset every env (or those of ``options["reset_mask"]``); env ``i`` is seeded with
-        ``seed + i`` (an int), ``seed[i]`` (a sequence) or, without a seed, goes on with its
-        generator (fresh entropy before the first seed)."""
+    # ---- the BatchedEnv hooks ------------------------------------------------------------
+    def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
+        return self._info(mask, None, None, None, {})
+
+    def _step_envs(
+        self, a: Array, active: NDArray[np.bool_]
+    ) -> tuple[Array, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+        """One control period of the ``active`` envs (the others reset at this step)."""
         n = self.num_envs
-        options = dict(options or {})
-        mask = np.asarray(options.pop("reset_mask", np.ones(n, bool)), dtype=bool)
-        if mask.shape != (n,):
-            raise ValueError(f"options['reset_mask'] must be ({n},) booleans, got {mask.shape}")
-        if options:
-            raise ValueError(f"unknown reset options {sorted(options)}; valid: ['reset_mask']")
-        if seed is None:
-            seeds: list[int | None] = [None] * n
-        elif isinstance(seed, int | np.integer) and not isinstance(seed, bool):
-            seeds = [int(seed) + i for i in range(n)]
-        else:
-            seeds = list(seed)  # type: ignore[arg-type]
-            if len(seeds) != n:
-                raise ValueError(f"seed must be an int or {n} seeds (one per env), got {seed!r}")
-        for i in np.nonzero(mask)[0].tolist():
-            if seeds[i] is not None or self._rngs[i] is None:
-                self._rngs[i], _ = seeding.np_random(seeds[i])
-        if not self._started:
-            if not mask.all():
-                raise ValueError("the first reset must reset every env (no reset_mask)")
-            self._started = True
-        self._reset_envs(mask)
-        self._ended[mask] = False
-        return self._observation(), self._info(mask, None, None, None, {})
-
-    def step(
-        self, actions: Any
-    ) -> tuple[NDArray[np.float32], Array, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
-        """One control period of every env (``actions``: (num_envs, n_channels) in [-1, 1]).
-
-        Raises:
-            gymnasium.error.ResetNeeded: before the first :meth:`reset`.
-            ValueError: actions of the wrong shape or with NaN / infinite values.
-        """
-        if not self._started:
-            raise gym.error.ResetNeeded("call reset() before step()")
-        a = np.asarray(actions, dtype=float)
-        n, m = self.num_envs, self.n_actions
-        if a.shape != (n, m):
-            raise ValueError(
-                f"actions must have shape ({n}, {m}) (num_envs, channels), got {a.shape}"
-            )
-        if not np.all(np.isfinite(a)):
-            bad = np.nonzero(~np.all(np.isfinite(a), axis=1))[0].tolist()
-            raise ValueError(f"actions must be finite; NaN or infinite in envs {bad}")
-        resetting = self._ended.copy()  # NEXT_STEP: these reset now and ignore their action
-        active = ~resetting
         control: dict[str, Array] = {}
         if self.controller is not None:
             a, control = self._control(a)
@@ -315,6 +246,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         new_contact = touched & ~self._contact
         self._contact |= touched
         rewards = self._terms(ref, clipped, switched, new_contact)
+        self._fresh = True  # _obs is this state's observation
         self._ref = ref
         if self.controller is not None:  # a leg switch turns the controller's r-frame
             moved = ref.leg != self._leg
@@ -333,30 +265,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
         done = (terminated | truncated) & active
         self._return += reward
         info = self._info(np.ones(n, bool), saturated, action_clipped, command, rewards, done=done)
-        for k, v in control.items():
-            info[k], info["_" + k] = v, np.ones(n, bool)
-        if self.autoreset_mode == AutoresetMode.NEXT_STEP:
-            obs = self._obs.copy()
-            if resetting.any():
-                self._reset_envs(resetting)
-                obs[resetting] = self._observation()[resetting]
-                reward = np.where(resetting, 0.0, reward)
-                terminated = terminated & active
-                truncated = truncated & active
-                info = _merge_reset_info(info, self._info(resetting, None, None, None, {}),
-                                         resetting)  # fmt: skip
-            self._ended = done
-            return obs, reward, terminated, truncated, info
-        obs = self._obs.copy()
-        if done.any():  # SAME_STEP: reset now, the last observation and info kept aside
-            info["final_obs"] = np.where(done[:, None], obs, np.nan).astype(np.float32)
-            info["_final_obs"] = done
-            last = {k: v for k, v in info.items() if not k.lstrip("_").startswith("final")}
-            info["final_info"] = last
-            info["_final_info"] = done
-            self._reset_envs(done)
-            obs = np.where(done[:, None], self._observation(), obs)
-        return obs, reward, terminated, truncated, info
+        info.update(control)
+        return reward, terminated, truncated, info
 
     # ---- internals ------------------------------------------------------------------------
     def _truth(self) -> tuple[Array, Array]:
@@ -400,6 +310,7 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
     def _reset_envs(self, mask: NDArray[np.bool_]) -> None:
         """Reset the masked envs, each from its generator in the single env's order."""
         self._cache.clear()
+        self._fresh = False
         task = self.task
         idx = np.nonzero(mask)[0].tolist()
         eta0 = np.zeros((self.num_envs, 3))
@@ -499,6 +410,8 @@ class ShipVectorEnv(gym.vector.VectorEnv[Any, Any, Any]):
 
     def _observation(self) -> NDArray[np.float32]:
         """The observation of every env now (after a reset: its previous action is zero)."""
+        if self._fresh:
+            return self._obs.copy()
         no = np.zeros(self.num_envs, dtype=bool)
         self._terms(self.guidance.reference(self.physics.t), self._prev, no, no)
         return self._obs.copy()
@@ -567,22 +480,6 @@ def _rows_from(old: Any, new: Any, mask: NDArray[np.bool_]) -> Any:
     names = ("eta_d_r", "eta_dot_d_r", "eta_ddot_d_r", "eta_P", "eta_d_n", "eta_K", "leg",
              "t_leg", "finished")  # fmt: skip
     return BatchedReference(*(pick(getattr(old, k), getattr(new, k)) for k in names))
-
-
-def _merge_reset_info(
-    info: dict[str, Any], reset: dict[str, Any], mask: NDArray[np.bool_]
-) -> dict[str, Any]:
-    """``info`` with the rows of ``mask`` taken from the reset envs' ``reset`` info."""
-    out = dict(info)
-    for k, v in reset.items():
-        if k.startswith("_"):
-            continue
-        if k in out and isinstance(v, np.ndarray) and v.shape == out[k].shape:
-            sel = mask.reshape(mask.shape + (1,) * (v.ndim - 1))
-            out[k] = np.where(sel, v, out[k])
-    for k in [k for k in out if k.startswith("reward_")]:
-        out[k] = np.where(mask, 0.0, out[k])
-    return out
 
 
 def _task_class(task: type[ShipEnv] | str) -> tuple[type[ShipEnv], int | None]:

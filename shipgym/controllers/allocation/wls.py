@@ -11,15 +11,15 @@ Design notes: docs/design/controllers.allocation.wls.md.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import math
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg.lapack import dposv as _dposv
-from scipy.linalg.lapack import dpotrf as _dpotrf
-from scipy.linalg.lapack import dpotrs as _dpotrs
 
-__all__ = ["DEFAULT_H_REL", "WLSAllocation", "WLSAllocator", "allocate_wls"]
+from shipgym._jit import entry, njit
+
+__all__ = ["DEFAULT_H_REL", "WLSAllocation", "WLSAllocator", "allocate_wls", "run_wls", "wls_law"]
 
 #: default regularisation: ``H`` in scaled thrusts is this fraction of the mean curvature
 DEFAULT_H_REL = 1e-9
@@ -175,107 +175,224 @@ def _scales(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.floa
     return s
 
 
-# ---- the solver ----------------------------------------------------------------------------
-def _box_qp(
-    Q: NDArray[np.float64],
-    c: NDArray[np.float64],
-    lo: NDArray[np.float64],
-    hi: NDArray[np.float64],
-    fac: NDArray[np.float64] | None = None,
-) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """Exact ``argmin 0.5 x^T Q x - c^T x`` over ``lo <= x <= hi`` (Q positive definite).
+# ---- the solver: one compiled law over N requests -------------------------------------------
+@njit(inline="always")
+def _cholesky_solve(M, b, L, y, x):  # type: ignore[no-untyped-def]
+    """``x = M^-1 b`` by Cholesky (``L`` scratch, lower): False where ``M`` is not positive
+    definite."""
+    n = b.shape[0]
+    for j in range(n):
+        d = M[j, j]
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
+            return False
+        d = math.sqrt(d)
+        L[j, j] = d
+        for i in range(j + 1, n):
+            t = M[i, j]
+            for k in range(j):
+                t -= L[i, k] * L[j, k]
+            L[i, j] = t / d
+    for i in range(n):
+        t = b[i]
+        for k in range(i):
+            t -= L[i, k] * y[k]
+        y[i] = t / L[i, i]
+    for i in range(n - 1, -1, -1):
+        t = y[i]
+        for k in range(i + 1, n):
+            t -= L[k, i] * x[k]
+        x[i] = t / L[i, i]
+    return True
+
+
+@njit(inline="always")
+def _box_qp(Q, c, lo, hi, x, active, st, M, rhs, xn, L, y):  # type: ignore[no-untyped-def]
+    """Exact ``argmin 0.5 x^T Q x - c^T x`` over ``lo <= x <= hi`` (Q positive definite) into
+    ``x``, and per variable whether its bound is active (non-zero multiplier of the right
+    sign) into ``active``; the rest are scratch. Returns 0, 1 (``Q`` not positive definite)
+    or 2 (no convergence).
 
     Primal active-set method on the bounds (Nocedal & Wright 2006 alg. 16.3). Each step solves
     the problem on the free variables with the others held at their bounds, written as one
-    n x n positive-definite system (the held rows and columns replaced by the identity) for
-    LAPACK's ``dposv``. Returns the minimiser and, per variable, whether its bound is active
-    (non-zero multiplier of the right sign).
-
-    ``fac``: the lower Cholesky factor of ``Q`` if known (``dpotrf``).
-
-    Raises:
-        ValueError: ``Q`` is not positive definite.
+    n x n positive-definite system (the held rows and columns replaced by the identity).
     """
     n = c.shape[0]
-    if fac is None:
-        _, x, info = _dposv(Q, c, lower=1)
-        if info != 0:
-            raise ValueError(_SINGULAR)
-    else:
-        x, _ = _dpotrs(fac, c, lower=1)
-    if ((x >= lo - _BOUND_TOL) & (x <= hi + _BOUND_TOL)).all():
-        return np.minimum(np.maximum(x, lo), hi), np.zeros(n, dtype=bool)
-    lol, hil = lo.tolist(), hi.tolist()
-    xl = x.tolist()
+    if not _cholesky_solve(Q, c, L, y, x):
+        return 1
+    inside = True
+    for i in range(n):
+        active[i] = False
+        if not (x[i] >= lo[i] - _BOUND_TOL and x[i] <= hi[i] + _BOUND_TOL):
+            inside = False
+    if inside:
+        for i in range(n):
+            x[i] = min(max(x[i], lo[i]), hi[i])
+        return 0
     # state per variable: 0 free, -1 on its lower bound, +1 on its upper bound, 2 held (lo = hi)
-    st = [
-        2 if a == b else (-1 if v <= a else (1 if v >= b else 0))
-        for v, a, b in zip(xl, lol, hil, strict=True)
-    ]
-    xl = [a if v < a else b if v > b else v for v, a, b in zip(xl, lol, hil, strict=True)]
-    diag = np.arange(n) * (n + 1)
-    qd = Q.diagonal()
+    for i in range(n):
+        v = x[i]
+        if lo[i] == hi[i]:
+            st[i] = 2
+        elif v <= lo[i]:
+            st[i] = -1
+        elif v >= hi[i]:
+            st[i] = 1
+        else:
+            st[i] = 0
+        x[i] = lo[i] if v < lo[i] else hi[i] if v > hi[i] else v
     for _ in range(10 * n + 10):
-        fm = np.array([1.0 if k == 0 else 0.0 for k in st])
-        xv = np.array(xl)
-        if 0 in st:
-            am = 1.0 - fm
-            xa = am * xv
-            M = Q * np.outer(fm, fm)
-            M.flat[diag] += am
-            _, xn, _ = _dposv(M, fm * (c - Q @ xa) + xa)
-            xnl = xn.tolist()
+        free = False
+        for i in range(n):
+            free |= st[i] == 0
+        if free:
+            for i in range(n):
+                t = c[i]
+                for k in range(n):
+                    if st[k] != 0:
+                        t -= Q[i, k] * x[k]
+                rhs[i] = t if st[i] == 0 else x[i]
+                for k in range(n):
+                    M[i, k] = Q[i, k] if st[i] == 0 and st[k] == 0 else 0.0
+                if st[i] != 0:
+                    M[i, i] = 1.0
+            _cholesky_solve(M, rhs, L, y, xn)
             # ratio test: the largest step in [0, 1] towards xn that stays in the box
             alpha, j = 1.0, -1
             for i in range(n):
                 if st[i] == 0:
-                    v, t = xl[i], xnl[i]
-                    if t < lol[i] and t < v:
-                        a = (lol[i] - v) / (t - v)
-                    elif t > hil[i] and t > v:
-                        a = (hil[i] - v) / (t - v)
+                    v, t = x[i], xn[i]
+                    if t < lo[i] and t < v:
+                        a = (lo[i] - v) / (t - v)
+                    elif t > hi[i] and t > v:
+                        a = (hi[i] - v) / (t - v)
                     else:
                         continue
                     if a < alpha:
                         alpha, j = a, i
             if j >= 0:
                 alpha = max(alpha, 0.0)
-                xl = [
-                    v + alpha * (t - v) if k == 0 else v
-                    for v, t, k in zip(xl, xnl, st, strict=True)
-                ]
-                if xnl[j] < lol[j]:
-                    xl[j], st[j] = lol[j], -1
+                for i in range(n):
+                    if st[i] == 0:
+                        x[i] = x[i] + alpha * (xn[i] - x[i])
+                if xn[j] < lo[j]:
+                    x[j], st[j] = lo[j], -1
                 else:
-                    xl[j], st[j] = hil[j], 1
+                    x[j], st[j] = hi[j], 1
                 continue
-            xl = [t if k == 0 else v for v, t, k in zip(xl, xnl, st, strict=True)]
-            xv = xn
+            for i in range(n):
+                if st[i] == 0:
+                    x[i] = xn[i]
         # multipliers, in units of each variable's own curvature (the distance it would move
         # past its bound if released): >= 0 on lower bounds, <= 0 on upper bounds when optimal
-        g = ((Q @ xv - c) / qd).tolist()
         worst, j = -_MULT_TOL, -1
         for i in range(n):
-            k = st[i]
-            if k == -1 or k == 1:
-                m = -k * g[i]  # the multiplier of the bound
+            g = -c[i]
+            for k in range(n):
+                g += Q[i, k] * x[k]
+            g /= Q[i, i]
+            y[i] = g
+            if st[i] == -1 or st[i] == 1:
+                m = -st[i] * g  # the multiplier of the bound
                 if m < worst:
                     worst, j = m, i
         if j < 0:
-            active = [
-                (k == -1 and gi > _ACTIVE_TOL)
-                or (k == 1 and gi < -_ACTIVE_TOL)
-                or (k == 2 and abs(gi) > _ACTIVE_TOL)
-                for k, gi in zip(st, g, strict=True)
-            ]
-            return np.array(xl), np.array(active)
+            for i in range(n):
+                k, g = st[i], y[i]
+                active[i] = (
+                    (k == -1 and g > _ACTIVE_TOL)
+                    or (k == 1 and g < -_ACTIVE_TOL)
+                    or (k == 2 and abs(g) > _ACTIVE_TOL)
+                )
+            return 0
         st[j] = 0
-    raise RuntimeError("allocate_wls: the active-set method did not converge (report this)")
+    return 2
 
 
-def _unscale(x, s, xlo, xhi, lo, hi) -> NDArray[np.float64]:
-    """Thrusts ``x * s``, exactly ``lo`` or ``hi`` where ``x`` sits on a bound."""
-    return np.where(x <= xlo, lo, np.where(x >= xhi, hi, np.minimum(np.maximum(x * s, lo), hi)))
+@njit
+def wls_law(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
+    """The box-constrained weighted least-squares allocation of N requests (one law for every
+    N; :func:`allocate_wls` documents the problem).
+
+    Args:
+        Q, R: the scaled problem (:func:`_scaled_problem`), (n, n) and (n, n_dof).
+        xlo, xhi: the scaled bounds ``lo / s``, ``hi / s`` (n,); ``s`` the scales (n,).
+        lo, hi: the thrust limits (N) (n,); ``B``: the configuration matrix (n_dof, n).
+        tau: (N, n_dof) the requests (N and N m).
+        force, delivered, error, active: out, (N, n), (N, n_dof), (N, n_dof), (N, n) bool:
+            the thrusts (exactly on a bound where the scaled one is), ``B f``, ``tau - B f``
+            and the active bounds.
+
+    Returns:
+        0, or the first failing request's index + 1 times 4 plus the reason (1: ``Q`` not
+        positive definite; 2: no convergence; 3: a request not finite).
+    """
+    N, n_dof = tau.shape
+    n = s.shape[0]
+    c = np.empty(n)
+    x = np.empty(n)
+    st = np.empty(n, np.int64)
+    M = np.empty((n, n))
+    rhs = np.empty(n)
+    xn = np.empty(n)
+    L = np.zeros((n, n))
+    y = np.empty(n)
+    for r in range(N):
+        for i in range(n_dof):
+            if not math.isfinite(tau[r, i]):
+                return 4 * (r + 1) + 3
+        for i in range(n):
+            t = 0.0
+            for k in range(n_dof):
+                t += R[i, k] * tau[r, k]
+            c[i] = t
+        why = _box_qp(Q, c, xlo, xhi, x, active[r], st, M, rhs, xn, L, y)
+        if why:
+            return 4 * (r + 1) + why
+        for i in range(n):
+            if x[i] <= xlo[i]:
+                force[r, i] = lo[i]
+            elif x[i] >= xhi[i]:
+                force[r, i] = hi[i]
+            else:
+                force[r, i] = min(max(x[i] * s[i], lo[i]), hi[i])
+        for k in range(n_dof):
+            t = 0.0
+            for i in range(n):
+                t += B[k, i] * force[r, i]
+            delivered[r, k] = t
+            error[r, k] = tau[r, k] - t
+    return 0
+
+
+_WLS: list[Any] = []
+
+
+def run_wls(Q, R, xlo, xhi, s, lo, hi, B, tau):  # type: ignore[no-untyped-def]
+    """:func:`wls_law` on ``tau`` (N, n_dof) through its compiled entry point: ``(force,
+    delivered, error, active)``.
+
+    Raises:
+        ValueError: a request with NaN or infinite values, or ``Q`` not positive definite.
+        RuntimeError: the active-set method did not converge.
+    """
+    t = np.ascontiguousarray(tau, dtype=float)
+    N, n = t.shape[0], s.shape[0]
+    out = (np.empty((N, n)), np.empty((N, t.shape[1])), np.empty((N, t.shape[1])),
+           np.empty((N, n), dtype=np.bool_))  # fmt: skip
+    args = (Q, R, xlo, xhi, s, lo, hi, B, t, *out)
+    if not _WLS:
+        _WLS.append(entry(wls_law, args))
+    code = _WLS[0](*args)
+    if code:
+        row, why = divmod(code, 4)
+        if why == 3:
+            raise ValueError(f"tau contains NaN or infinite values: {t[row - 1].tolist()}")
+        if why == 1:
+            raise ValueError(_SINGULAR)
+        raise RuntimeError("allocate_wls: the active-set method did not converge (report this)")
+    return out
 
 
 class WLSAllocator:
@@ -287,7 +404,7 @@ class WLSAllocator:
     there).
     """
 
-    __slots__ = ("B", "f_min", "f_max", "_s", "_lo", "_hi", "_Q", "_fac", "_BsWk", "_n_dof")
+    __slots__ = ("B", "f_min", "f_max", "_s", "_lo", "_hi", "_Q", "_BsWk", "_n_dof")
 
     def __init__(
         self,
@@ -304,23 +421,25 @@ class WLSAllocator:
         s = _scales(lo, hi)
         w = _weights(W, n_dof, _capacity(Bm, s))
         Q, BsWk = _scaled_problem(Bm, s, w, H)
-        fac, info = _dpotrf(Q, lower=1)
-        if info != 0:
+        if not np.all(np.linalg.eigvalsh(Q) > 0.0):
             raise ValueError(_SINGULAR)
         for a in (Bm, lo, hi):
             a.flags.writeable = False
         self.B, self.f_min, self.f_max = Bm, lo, hi
         self._s, self._lo, self._hi = s, lo / s, hi / s
-        self._Q, self._fac, self._BsWk, self._n_dof = Q, fac, BsWk, n_dof
+        self._Q, self._BsWk, self._n_dof = Q, np.ascontiguousarray(BsWk), n_dof
 
     def __call__(self, tau: ArrayLike) -> WLSAllocation:
         """The allocation of ``tau`` (shape (n_dof,), N and N m)."""
         t = _real_array(tau, "tau", (self._n_dof,), "requested generalised force, N and N m")
-        c = self._BsWk @ t
-        x, active = _box_qp(self._Q, c, self._lo, self._hi, self._fac)
-        f = _unscale(x, self._s, self._lo, self._hi, self.f_min, self.f_max)
-        delivered = self.B @ f
-        return WLSAllocation(f, delivered, t - delivered, active)
+        f, delivered, error, active = self.batch(t.reshape(1, -1))
+        return WLSAllocation(f[0], delivered[0], error[0], active[0])
+
+    def batch(self, tau: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+        """The allocations of N requests ``tau`` (N, n_dof) (:func:`wls_law`): ``(force,
+        delivered, tau_error, saturated)``, each with a leading axis N."""
+        return run_wls(self._Q, self._BsWk, self._lo, self._hi, self._s, self.f_min,
+                       self.f_max, self.B, tau)  # fmt: skip
 
 
 def allocate_wls(
@@ -370,8 +489,6 @@ def allocate_wls(
     s = _scales(lo, hi)
     w = _weights(W, n_dof, _capacity(Bm, s))
     Q, BsWk = _scaled_problem(Bm, s, w, H)
-    xlo, xhi = lo / s, hi / s
-    x, active = _box_qp(Q, BsWk @ t, xlo, xhi)
-    f = _unscale(x, s, xlo, xhi, lo, hi)
-    delivered = Bm @ f
-    return WLSAllocation(f, delivered, t - delivered, active)
+    f, delivered, error, active = run_wls(Q, np.ascontiguousarray(BsWk), lo / s, hi / s, s, lo,
+                                          hi, Bm, t.reshape(1, -1))  # fmt: skip
+    return WLSAllocation(f[0], delivered[0], error[0], active[0])
