@@ -33,7 +33,6 @@ from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.observers.dgps import (
     DGPS_SIGMA,
     S_P_OPTIMAL,
-    DGPSOutput,
     DGPSReceiver,
     NormalStreams,
     antenna_motion,
@@ -293,16 +292,23 @@ class CourseKeepingVectorEnv(BatchedEnv):
         phys.reset(eta=(0.0, 0.0, self.heading), nu=nu0, actuators=self._st0, mask=mask,
                    rngs=phys_rngs)  # fmt: skip
         phys.set_command(np.where(mask[:, None], self._st0, phys.command))
-        out = self.rx.reset(phys.eta, phys.nu, rngs=rx_rngs, mask=mask)
         self._steps[mask] = 0
         self._sums[:, mask] = 0.0
         self._counts[:, mask] = 0
-        self._sense(mask, out, first=True)
+        self._sense(mask, rx_rngs)
 
-    def _sense(self, mask: NDArray[np.bool_], out: DGPSOutput, first: bool = False) -> None:
-        """The observation and info of the envs of ``mask`` now (gyro draws for them)."""
+    def _sense(self, mask: NDArray[np.bool_], rx_rngs: list[Any] | None = None) -> None:
+        """The receiver's sample, the observation and the info of the envs of ``mask`` now
+        (gyro draws for them); ``rx_rngs``: at a reset, the receivers' new generators."""
         phys = self.physics
-        eta, nu = phys.eta, phys.nu
+        eta_full, nu_full = phys.eta_full, phys.nu_full
+        eta, nu = (eta_full, nu_full) if phys.dofs == 3 else (eta_full[:, [0, 1, 3]],
+                                                              nu_full[:, [0, 1, 3]])  # fmt: skip
+        first = rx_rngs is not None
+        if first:
+            out = self.rx.reset(eta, nu, rngs=rx_rngs, mask=mask)
+        else:
+            out = self.rx.update(eta, mask=mask)
         psi, r = eta[:, 2], nu[:, 2]
         if self.sensor_noise:
             g = self._gyro.draw(mask)
@@ -328,12 +334,15 @@ class CourseKeepingVectorEnv(BatchedEnv):
         self._z_prev = np.where(mask[:, None], out.z, self._z_prev)
         v_rx, chi_rx, beta_rx = velocity_outputs(vn, ve, psi_g)
         delta = phys.actuator_state[:, self._rudder_idx]
-        obs = np.column_stack([wrap_angle(psi_g - psi_d), r_g, delta, v_rx, beta_rx])
-        self._obs = np.where(mask[:, None], obs.astype(np.float32), self._obs)
+        obs = np.empty(self._obs.shape)
+        obs[:, 0], obs[:, 1], obs[:, 2:-2] = wrap_angle(psi_g - psi_d), r_g, delta
+        obs[:, -2], obs[:, -1] = v_rx, beta_rx
+        obs32 = obs.astype(np.float32)
+        self._obs = obs32 if mask.all() else np.where(mask[:, None], obs32, self._obs)
         self._info = {
             "time": phys.t.copy(),
-            "eta": phys.eta_full,
-            "nu": phys.nu_full,
+            "eta": eta_full,
+            "nu": nu_full,
             "heading": psi,
             "heading_setpoint": psi_d,
             "heading_error": wrap_angle(psi - psi_d),
@@ -361,18 +370,19 @@ class CourseKeepingVectorEnv(BatchedEnv):
         phys = self.physics
         a = np.clip(actions, -1.0, 1.0)
         action_clipped = (np.abs(actions) > 1.0) & active[:, None]
-        command = phys.command  # the shafts keep their command
+        held = phys.command
+        command = held.copy()  # the shafts keep their command
         command[:, self._rudder_idx] = a * self.max_angle
         if self._props:  # hold the speed through the water: resistance + a 20 s speed loop
             u_r = phys.nu[:, 0] - phys._hulls.loads[:, 6]
             thrust = self._thrust0 + self._m11 * (self.U - u_r) / 20.0
             for j, prop in self._props:
                 command[:, j] = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
-        clipped = phys.set_command(np.where(active[:, None], command, phys.command))
-        phys.step(self.n_substeps, mask=active)
+        every = bool(active.all())
+        clipped = phys.set_command(command if every else np.where(active[:, None], command, held))
+        phys.step(self.n_substeps, mask=None if every else active)
         self._steps += active
-        out = self.rx.update(phys.eta, mask=active)
-        self._sense(active, out)
+        self._sense(active)
         info = self._info
         delta = info["rudder"]
         w = self.reward_weights
@@ -399,8 +409,9 @@ class CourseKeepingVectorEnv(BatchedEnv):
         s, c = self._sums, self._counts
         e, db = info["heading_error"], np.abs(info["drift_angle_bias"])
         add = np.stack([e**2, rudder2 / n_r, db, np.abs(info["speed_bias"])])
-        s[:4] = np.where(active, s[:4] + add, s[:4])
-        s[4:6] = np.where(active, np.maximum(s[4:6], np.stack([np.abs(e), db])), s[4:6])
+        top = np.maximum(s[4:6], np.stack([np.abs(e), db]))
+        s[:4], s[4:6] = (s[:4] + add, top) if every else (np.where(active, s[:4] + add, s[:4]),
+                                                         np.where(active, top, s[4:6]))  # fmt: skip
         c += np.stack([active, rate_limited.any(axis=1), saturated.any(axis=1)])
         return reward, np.zeros(self.num_envs, dtype=bool), truncated & active, dict(info)
 

@@ -223,15 +223,21 @@ def _steady_step(x: Array, z: Array, K: Array, dt: float) -> Array:
     vn, ve = x[..., 0], x[..., 1]
     px, py = x[..., 2] + dt * vn, x[..., 3] + dt * ve
     ex, ey = z[..., 0] - px, z[..., 1] - py
-    return np.stack(
-        [
-            vn + K[0, 0] * ex + K[0, 1] * ey,
-            ve + K[1, 0] * ex + K[1, 1] * ey,
-            px + K[2, 0] * ex + K[2, 1] * ey,
-            py + K[3, 0] * ex + K[3, 1] * ey,
-        ],
-        axis=-1,
-    )
+    out = np.empty(np.broadcast_shapes(x.shape, z.shape[:-1] + (4,)))
+    out[..., 0] = vn + K[0, 0] * ex + K[0, 1] * ey
+    out[..., 1] = ve + K[1, 0] * ex + K[1, 1] * ey
+    out[..., 2] = px + K[2, 0] * ex + K[2, 1] * ey
+    out[..., 3] = py + K[3, 0] * ex + K[3, 1] * ey
+    return out
+
+
+def _antenna(eta: Array, ax: float, ay: float) -> tuple[Array, Array, Array]:
+    """``(position (..., 2), cos psi, sin psi)`` of the antenna ``[ax, ay]`` at ``eta``."""
+    c, s = np.cos(eta[..., 2]), np.sin(eta[..., 2])
+    pos = np.empty(eta.shape[:-1] + (2,))
+    pos[..., 0] = eta[..., 0] + c * ax - s * ay
+    pos[..., 1] = eta[..., 1] + s * ax + c * ay
+    return pos, c, s
 
 
 def antenna_motion(eta: ArrayLike, nu: ArrayLike, antenna: ArrayLike) -> tuple[Array, Array]:
@@ -240,11 +246,13 @@ def antenna_motion(eta: ArrayLike, nu: ArrayLike, antenna: ArrayLike) -> tuple[A
     ``p = [x, y] + R(psi) a`` and ``v = R(psi) [u - r y_a, v + r x_a]``."""
     eta = np.asarray(eta, dtype=float)
     nu = np.asarray(nu, dtype=float)
-    ax, ay = (float(a) for a in np.asarray(antenna, dtype=float).reshape(2))
-    c, s = np.cos(eta[..., 2]), np.sin(eta[..., 2])
-    pos = np.stack([eta[..., 0] + c * ax - s * ay, eta[..., 1] + s * ax + c * ay], -1)
+    ax, ay = np.asarray(antenna, dtype=float).reshape(2).tolist()
+    pos, c, s = _antenna(eta, ax, ay)
     ub, vb = nu[..., 0] - nu[..., 2] * ay, nu[..., 1] + nu[..., 2] * ax
-    return pos, np.stack([c * ub - s * vb, s * ub + c * vb], -1)
+    vel = np.empty(np.broadcast_shapes(eta.shape[:-1], nu.shape[:-1]) + (2,))
+    vel[..., 0] = c * ub - s * vb
+    vel[..., 1] = s * ub + c * vb
+    return pos, vel
 
 
 class NormalStreams:
@@ -408,7 +416,7 @@ class DGPSReceiver:
             raise RuntimeError("call reset(eta0, nu0) first")
         e, one = self._rows(eta, "eta")
         m = self._all if mask is None else np.asarray(mask, dtype=bool)
-        pos, _ = antenna_motion(e, np.zeros_like(e), self.antenna)
+        pos, _, _ = _antenna(e, *self.antenna.tolist())
         z = pos if self.sigma == 0 else pos + self.sigma * self.noise.draw(m)
         if self.steady:
             x = _steady_step(self.x, z, self.K_inf, self.dt)
@@ -421,9 +429,12 @@ class DGPSReceiver:
             mm = m[:, None, None]
             self.P = np.where(mm, (np.eye(4) - K @ md.H) @ Pm, self.P)
             self.K = np.where(mm, K, self.K)
-        self.x = np.where(m[:, None], x, self.x)
-        self.z = np.where(m[:, None], z, self.z)
-        self.psi = np.where(m, e[:, 2], self.psi)
+        if m.all():
+            self.x, self.z, self.psi = x, z, e[:, 2].copy()
+        else:
+            self.x = np.where(m[:, None], x, self.x)
+            self.z = np.where(m[:, None], z, self.z)
+            self.psi = np.where(m, e[:, 2], self.psi)
         return self._outputs(one)
 
     def run(self, eta: ArrayLike, nu0: ArrayLike) -> DGPSOutput:
