@@ -551,14 +551,13 @@ class CourseKeepingEnv(SingleEnv):
     def __init__(self, vessel: Vessel | str | None = None, render_mode: str | None = None,
                  **kwargs: Any) -> None:  # fmt: skip
         super().__init__(render_mode=render_mode, vessel=vessel, **kwargs)
-        b = self.batch
-        for name in _SHARED:  # the task's settings, as the batch holds them
-            setattr(self, name, getattr(b, name))
 
-    @property
-    def physics(self) -> BatchedPhysics:
-        """The batch's physics (one hull)."""
-        return self.batch.physics
+    def __getattr__(self, name: str) -> Any:
+        """The task's settings and physics (``U``, ``max_angle``, ``physics``, ...): the
+        batch's."""
+        if name.startswith("_") or name == "batch":
+            raise AttributeError(name)
+        return getattr(self.batch, name)
 
     @property
     def wind_config(self) -> WindConfig | None:
@@ -569,12 +568,6 @@ class CourseKeepingEnv(SingleEnv):
     def current_config(self) -> CurrentConfig | None:
         """This episode's current (``None`` before the first reset or without current)."""
         return self.batch.current_configs[0]
-
-
-#: the settings a single env shows as its own attributes (the batch's)
-_SHARED = ("base_vessel", "U", "heading", "receiver", "S_p", "dgps_sigma", "antenna",
-           "sensor_noise", "setpoint_period", "max_heading_change", "reward_weights",
-           "episode_duration", "timestep", "control_period", "n_substeps", "max_angle")  # fmt: skip
 
 
 class TankerCourseKeepingEnv(CourseKeepingEnv):
