@@ -33,7 +33,6 @@ from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.observers.dgps import (
     DGPS_SIGMA,
     S_P_OPTIMAL,
-    DGPSOutput,
     DGPSReceiver,
     NormalStreams,
     antenna_motion,
@@ -105,6 +104,11 @@ def _finite(x: Any) -> bool:
     return is_real(x) and math.isfinite(x)
 
 
+def _check(ok: bool, message: str, error: type[Exception] = ValueError) -> None:
+    if not ok:
+        raise error(message)
+
+
 def _disturbance(value: Any, cls: Any, name: str) -> Any:
     if isinstance(value, str) and value in (AUTO, *_NONE):
         return None if value in _NONE else AUTO
@@ -145,66 +149,42 @@ class CourseKeepingVectorEnv(BatchedEnv):
         timestep: float = 0.05,
         control_period: float = 1.0,
     ) -> None:
-        if vessel is None:
-            raise TypeError(
-                "CourseKeepingEnv needs vessel=NAME (a vessel with a rudder: 'kvlcc2-100m', "
-                "'kvlcc2-l7', 'naval-vessel', 'container-ship', 'van-der-klugt') or a package path"
-            )
-        self.base_vessel = load_vessel(vessel)
-        v = self.base_vessel
-        if not v.rudders:
-            raise ValueError(
-                f"CourseKeepingEnv steers with a rudder; {v.name!r} has none (actuators: "
-                f"{', '.join(a.label for a in v.actuators)})"
-            )
-        if speed is None:
-            speed = v.approach_speed
-            if speed is None:
-                raise ValueError(
-                    f"vessel {v.name!r} has no approach speed ([trials] approach_speed or "
-                    "[roll_control] design_speed in its vessel.toml): pass speed= (m/s)"
-                )
-        if not (_finite(speed) and 0 < speed <= 30.0):
-            raise ValueError(f"speed must be in (0, 30] m/s, got {speed!r}")
-        self.U = float(speed)
-        if not _finite(heading):
-            raise ValueError(f"heading must be a finite angle (rad), got {heading!r}")
-        self.heading = float(heading)
-        if receiver not in RECEIVERS:
-            raise ValueError(
-                f"unknown receiver {receiver!r}; choose one of: {', '.join(RECEIVERS)}"
-            )
-        self.receiver = receiver
-        if not (_finite(S_p) and S_p > 0):
-            raise ValueError(f"S_p must be > 0 m^2/s^3, got {S_p!r}")
-        self.S_p = float(S_p)
-        if not (_finite(dgps_sigma) and dgps_sigma >= 0):
-            raise ValueError(f"dgps_sigma must be >= 0 m, got {dgps_sigma!r}")
-        self.dgps_sigma = float(dgps_sigma)
-        ant = np.asarray(antenna, dtype=float).reshape(-1)
-        if ant.shape != (2,) or not np.all(np.isfinite(ant)):
-            raise ValueError(f"antenna must be a finite [x, y] (m), got {antenna!r}")
-        self.antenna = (float(ant[0]), float(ant[1]))
-        self.sensor_noise = bool(sensor_noise)
-        if setpoint_period is not None and not (_finite(setpoint_period) and setpoint_period > 0):
-            raise ValueError(f"setpoint_period must be > 0 s or None, got {setpoint_period!r}")
-        self.setpoint_period = None if setpoint_period is None else float(setpoint_period)
-        if not (_finite(max_heading_change) and 0 <= max_heading_change <= math.pi):
-            raise ValueError(
-                f"max_heading_change must be in [0, pi] rad, got {max_heading_change!r}"
-            )
-        self.max_heading_change = float(max_heading_change)
-        if reward_weights is None:
-            reward_weights = CourseRewardWeights()
-        elif isinstance(reward_weights, Mapping):
+        _check(vessel is not None, "CourseKeepingEnv needs vessel=NAME (a vessel with a rudder: "
+               "'kvlcc2-100m', 'kvlcc2-l7', 'naval-vessel', 'container-ship', 'van-der-klugt') or "
+               "a package path", TypeError)  # fmt: skip
+        self.base_vessel = v = load_vessel(vessel)  # type: ignore[arg-type]
+        _check(bool(v.rudders), f"CourseKeepingEnv steers with a rudder; {v.name!r} has none "
+               f"(actuators: {', '.join(a.label for a in v.actuators)})")  # fmt: skip
+        speed = v.approach_speed if speed is None else speed
+        _check(speed is not None, f"vessel {v.name!r} has no approach speed ([trials] "
+               "approach_speed or [roll_control] design_speed in its vessel.toml): pass speed= "
+               "(m/s)")  # fmt: skip
+        ok = _finite(speed) and 0 < speed <= 30.0  # type: ignore[operator]
+        _check(ok, f"speed must be in (0, 30] m/s, got {speed!r}")
+        _check(_finite(heading), f"heading must be a finite angle (rad), got {heading!r}")
+        _check(receiver in RECEIVERS,
+               f"unknown receiver {receiver!r}; choose one of: {', '.join(RECEIVERS)}")  # fmt: skip
+        _check(_finite(dgps_sigma) and dgps_sigma >= 0,
+               f"dgps_sigma must be >= 0 m, got {dgps_sigma!r}")  # fmt: skip
+        _check(setpoint_period is None or (_finite(setpoint_period) and setpoint_period > 0),
+               f"setpoint_period must be > 0 s or None, got {setpoint_period!r}")  # fmt: skip
+        _check(
+            _finite(max_heading_change) and 0 <= max_heading_change <= math.pi,
+            f"max_heading_change must be in [0, pi] rad, got {max_heading_change!r}",
+        )
+        if isinstance(reward_weights, Mapping):
             reward_weights = from_mapping(CourseRewardWeights, reward_weights,
                                           where="reward_weights")  # fmt: skip
-        elif not isinstance(reward_weights, CourseRewardWeights):
-            raise TypeError(f"reward_weights must be a CourseRewardWeights or a mapping, got "
-                            f"{reward_weights!r}")  # fmt: skip
-        self.reward_weights = reward_weights
-        if not (_finite(episode_duration) and episode_duration > 0):
-            raise ValueError(f"episode_duration must be > 0 s, got {episode_duration!r}")
+        _check(isinstance(reward_weights, CourseRewardWeights | None), "reward_weights must be a "
+               f"CourseRewardWeights or a mapping, got {reward_weights!r}", TypeError)  # fmt: skip
+        _check(_finite(episode_duration) and episode_duration > 0,
+               f"episode_duration must be > 0 s, got {episode_duration!r}")  # fmt: skip
+        self.U, self.heading = float(speed), float(heading)  # type: ignore[arg-type]
+        self.receiver, self.S_p, self.dgps_sigma = receiver, float(S_p), float(dgps_sigma)
+        self.sensor_noise = bool(sensor_noise)
+        self.setpoint_period = None if setpoint_period is None else float(setpoint_period)
+        self.max_heading_change = float(max_heading_change)
+        self.reward_weights = reward_weights or CourseRewardWeights()
         self.episode_duration = float(episode_duration)
         _check_timing(timestep, control_period)
         self.n_substeps = _whole_multiple(control_period, timestep)
@@ -237,6 +217,9 @@ class CourseKeepingVectorEnv(BatchedEnv):
         self._setup(num_envs, obs_space, spaces.Box(-1.0, 1.0, (n_r,), dtype=np.float32),
                     autoreset_mode)  # fmt: skip
         n = num_envs
+        self.rx = DGPSReceiver(self.S_p, n=n, sigma=self.dgps_sigma, dt=self.control_period,
+                               antenna=antenna)  # fmt: skip
+        self.antenna = (float(self.rx.antenna[0]), float(self.rx.antenna[1]))
         fixed_wind = None if self._wind_arg == AUTO else self._wind_arg
         self.physics = BatchedPhysics(v, n, wind=fixed_wind, timestep=self.timestep)
         servos = self.physics.servo_channels  # the rudders' columns of its rate_limited
@@ -265,8 +248,6 @@ class CourseKeepingVectorEnv(BatchedEnv):
         self.targets = np.full((n, max(self._n_changes, 1)), self.heading)
         self.wind_configs: list[WindConfig | None] = [None] * n
         self.current_configs: list[CurrentConfig | None] = [None] * n
-        self.rx = DGPSReceiver(self.S_p, n=n, sigma=self.dgps_sigma, dt=self.control_period,
-                               antenna=self.antenna)  # fmt: skip
         self._gyro = NormalStreams(n, 2)
         self._steps = np.zeros(n, dtype=np.int64)
         self._z_prev = np.zeros((n, 2))
@@ -313,16 +294,23 @@ class CourseKeepingVectorEnv(BatchedEnv):
         phys.reset(eta=(0.0, 0.0, self.heading), nu=nu0, actuators=self._st0, mask=mask,
                    rngs=phys_rngs)  # fmt: skip
         phys.set_command(np.where(mask[:, None], self._st0, phys.command))
-        out = self.rx.reset(phys.eta, phys.nu, rngs=rx_rngs, mask=mask)
         self._steps[mask] = 0
         self._sums[:, mask] = 0.0
         self._counts[:, mask] = 0
-        self._sense(mask, out, first=True)
+        self._sense(mask, rx_rngs)
 
-    def _sense(self, mask: NDArray[np.bool_], out: DGPSOutput, first: bool = False) -> None:
-        """The observation and info of the envs of ``mask`` now (gyro draws for them)."""
+    def _sense(self, mask: NDArray[np.bool_], rx_rngs: list[Any] | None = None) -> None:
+        """The receiver's sample, the observation and the info of the envs of ``mask`` now
+        (gyro draws for them); ``rx_rngs``: at a reset, the receivers' new generators."""
         phys = self.physics
-        eta, nu = phys.eta, phys.nu
+        eta_full, nu_full = phys.eta_full, phys.nu_full
+        eta, nu = (eta_full, nu_full) if phys.dofs == 3 else (eta_full[:, [0, 1, 3]],
+                                                              nu_full[:, [0, 1, 3]])  # fmt: skip
+        first = rx_rngs is not None
+        if first:
+            out = self.rx.reset(eta, nu, rngs=rx_rngs, mask=mask)
+        else:
+            out = self.rx.update(eta, mask=mask)
         psi, r = eta[:, 2], nu[:, 2]
         if self.sensor_noise:
             g = self._gyro.draw(mask)
@@ -348,12 +336,15 @@ class CourseKeepingVectorEnv(BatchedEnv):
         self._z_prev = np.where(mask[:, None], out.z, self._z_prev)
         v_rx, chi_rx, beta_rx = velocity_outputs(vn, ve, psi_g)
         delta = phys.actuator_state[:, self._rudder_idx]
-        obs = np.column_stack([wrap_angle(psi_g - psi_d), r_g, delta, v_rx, beta_rx])
-        self._obs = np.where(mask[:, None], obs.astype(np.float32), self._obs)
+        obs = np.empty(self._obs.shape)
+        obs[:, 0], obs[:, 1], obs[:, 2:-2] = wrap_angle(psi_g - psi_d), r_g, delta
+        obs[:, -2], obs[:, -1] = v_rx, beta_rx
+        obs32 = obs.astype(np.float32)
+        self._obs = obs32 if mask.all() else np.where(mask[:, None], obs32, self._obs)
         self._info = {
             "time": phys.t.copy(),
-            "eta": phys.eta_full,
-            "nu": phys.nu_full,
+            "eta": eta_full,
+            "nu": nu_full,
             "heading": psi,
             "heading_setpoint": psi_d,
             "heading_error": wrap_angle(psi - psi_d),
@@ -381,18 +372,19 @@ class CourseKeepingVectorEnv(BatchedEnv):
         phys = self.physics
         a = np.clip(actions, -1.0, 1.0)
         action_clipped = (np.abs(actions) > 1.0) & active[:, None]
-        command = phys.command  # the shafts keep their command
+        held = phys.command
+        command = held.copy()  # the shafts keep their command
         command[:, self._rudder_idx] = a * self.max_angle
         if self._props:  # hold the speed through the water: resistance + a 20 s speed loop
             u_r = phys.nu[:, 0] - phys.nu_c[:, 0]
             thrust = self._thrust0 + self._m11 * (self.U - u_r) / 20.0
             for j, prop in self._props:
                 command[:, j] = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
-        clipped = phys.set_command(np.where(active[:, None], command, phys.command))
-        phys.step(self.n_substeps, mask=active)
+        every = bool(active.all())
+        clipped = phys.set_command(command if every else np.where(active[:, None], command, held))
+        phys.step(self.n_substeps, mask=None if every else active)
         self._steps += active
-        out = self.rx.update(phys.eta, mask=active)
-        self._sense(active, out)
+        self._sense(active)
         info = self._info
         delta = info["rudder"]
         w = self.reward_weights
@@ -419,8 +411,9 @@ class CourseKeepingVectorEnv(BatchedEnv):
         s, c = self._sums, self._counts
         e, db = info["heading_error"], np.abs(info["drift_angle_bias"])
         add = np.stack([e**2, rudder2 / n_r, db, np.abs(info["speed_bias"])])
-        s[:4] = np.where(active, s[:4] + add, s[:4])
-        s[4:6] = np.where(active, np.maximum(s[4:6], np.stack([np.abs(e), db])), s[4:6])
+        top = np.maximum(s[4:6], np.stack([np.abs(e), db]))
+        s[:4], s[4:6] = (s[:4] + add, top) if every else (np.where(active, s[:4] + add, s[:4]),
+                                                         np.where(active, top, s[4:6]))  # fmt: skip
         c += np.stack([active, rate_limited.any(axis=1), saturated.any(axis=1)])
         return reward, np.zeros(self.num_envs, dtype=bool), truncated & active, dict(info)
 
@@ -555,18 +548,18 @@ class CourseKeepingEnv(SingleEnv):
     """
 
     batched = CourseKeepingVectorEnv
+    batch: CourseKeepingVectorEnv
 
     def __init__(self, vessel: Vessel | str | None = None, render_mode: str | None = None,
                  **kwargs: Any) -> None:  # fmt: skip
         super().__init__(render_mode=render_mode, vessel=vessel, **kwargs)
-        b = self.batch
-        for name in _SHARED:  # the task's settings, as the batch holds them
-            setattr(self, name, getattr(b, name))
 
-    @property
-    def physics(self) -> BatchedPhysics:
-        """The batch's physics (one hull)."""
-        return self.batch.physics
+    def __getattr__(self, name: str) -> Any:
+        """The task's settings and physics (``U``, ``max_angle``, ``physics``, ...): the
+        batch's."""
+        if name.startswith("_") or name == "batch":
+            raise AttributeError(name)
+        return getattr(self.batch, name)
 
     @property
     def wind_config(self) -> WindConfig | None:
@@ -577,12 +570,6 @@ class CourseKeepingEnv(SingleEnv):
     def current_config(self) -> CurrentConfig | None:
         """This episode's current (``None`` before the first reset or without current)."""
         return self.batch.current_configs[0]
-
-
-#: the settings a single env shows as its own attributes (the batch's)
-_SHARED = ("base_vessel", "U", "heading", "receiver", "S_p", "dgps_sigma", "antenna",
-           "sensor_noise", "setpoint_period", "max_heading_change", "reward_weights",
-           "episode_duration", "timestep", "control_period", "n_substeps", "max_angle")  # fmt: skip
 
 
 class TankerCourseKeepingEnv(CourseKeepingEnv):

@@ -223,15 +223,21 @@ def _steady_step(x: Array, z: Array, K: Array, dt: float) -> Array:
     vn, ve = x[..., 0], x[..., 1]
     px, py = x[..., 2] + dt * vn, x[..., 3] + dt * ve
     ex, ey = z[..., 0] - px, z[..., 1] - py
-    return np.stack(
-        [
-            vn + K[0, 0] * ex + K[0, 1] * ey,
-            ve + K[1, 0] * ex + K[1, 1] * ey,
-            px + K[2, 0] * ex + K[2, 1] * ey,
-            py + K[3, 0] * ex + K[3, 1] * ey,
-        ],
-        axis=-1,
-    )
+    out = np.empty(np.broadcast_shapes(x.shape, z.shape[:-1] + (4,)))
+    out[..., 0] = vn + K[0, 0] * ex + K[0, 1] * ey
+    out[..., 1] = ve + K[1, 0] * ex + K[1, 1] * ey
+    out[..., 2] = px + K[2, 0] * ex + K[2, 1] * ey
+    out[..., 3] = py + K[3, 0] * ex + K[3, 1] * ey
+    return out
+
+
+def _antenna(eta: Array, ax: float, ay: float) -> tuple[Array, Array, Array]:
+    """``(position (..., 2), cos psi, sin psi)`` of the antenna ``[ax, ay]`` at ``eta``."""
+    c, s = np.cos(eta[..., 2]), np.sin(eta[..., 2])
+    pos = np.empty(eta.shape[:-1] + (2,))
+    pos[..., 0] = eta[..., 0] + c * ax - s * ay
+    pos[..., 1] = eta[..., 1] + s * ax + c * ay
+    return pos, c, s
 
 
 def antenna_motion(eta: ArrayLike, nu: ArrayLike, antenna: ArrayLike) -> tuple[Array, Array]:
@@ -240,19 +246,19 @@ def antenna_motion(eta: ArrayLike, nu: ArrayLike, antenna: ArrayLike) -> tuple[A
     ``p = [x, y] + R(psi) a`` and ``v = R(psi) [u - r y_a, v + r x_a]``."""
     eta = np.asarray(eta, dtype=float)
     nu = np.asarray(nu, dtype=float)
-    ax, ay = (float(a) for a in np.asarray(antenna, dtype=float).reshape(2))
-    c, s = np.cos(eta[..., 2]), np.sin(eta[..., 2])
-    pos = np.stack([eta[..., 0] + c * ax - s * ay, eta[..., 1] + s * ax + c * ay], -1)
+    ax, ay = np.asarray(antenna, dtype=float).reshape(2).tolist()
+    pos, c, s = _antenna(eta, ax, ay)
     ub, vb = nu[..., 0] - nu[..., 2] * ay, nu[..., 1] + nu[..., 2] * ax
-    return pos, np.stack([c * ub - s * vb, s * ub + c * vb], -1)
+    vel = np.empty(np.broadcast_shapes(eta.shape[:-1], nu.shape[:-1]) + (2,))
+    vel[..., 0] = c * ub - s * vb
+    vel[..., 1] = s * ub + c * vb
+    return pos, vel
 
 
 class NormalStreams:
     """Standard normal draws of ``n`` envs, ``width`` per draw, each env from its own
-    generator, drawn in blocks of ``block`` draws and refilled when used up (a generator's
-    ``standard_normal((k, width))`` is the stream of ``k`` calls of
-    ``standard_normal(width)``, so env ``i`` draws bit for bit what one call per draw from
-    its generator would draw, whatever ``n``).
+    generator in blocks of ``block`` draws, refilled when used up: ``standard_normal((k,
+    width))`` is the stream of ``k`` calls of ``standard_normal(width)``, whatever ``n``.
 
     Args:
         n: number of envs; width: values per draw; block: draws per refill.
@@ -265,14 +271,16 @@ class NormalStreams:
         rngs = list(rng) if isinstance(rng, list | tuple) else [rng] * n
         if len(rngs) != n:
             raise ValueError(f"rng must be one generator or seed, or {n} of them; got {rng!r}")
-        self.rngs = [_generator(r) for r in rngs]
         self._draws = np.zeros((n, self.block, self.width))
         self._k = np.full(n, self.block, dtype=np.int64)  # next unused draw (block: refill)
         self._rows = np.arange(n)
+        self.rngs: list[np.random.Generator] = [None] * n  # type: ignore[list-item]
+        for i, r in enumerate(rngs):
+            self.seed(i, r)
 
     def seed(self, i: int, rng: Any) -> None:
         """Env ``i`` draws from ``rng`` (a generator or a seed) from now on."""
-        self.rngs[i] = _generator(rng)
+        self.rngs[i] = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
         self._k[i] = self.block
 
     def draw(self, mask: NDArray[np.bool_]) -> Array:
@@ -283,10 +291,6 @@ class NormalStreams:
         k = np.minimum(self._k, self.block - 1)
         self._k += mask
         return np.where(mask[:, None], self._draws[self._rows, k], 0.0)
-
-
-def _generator(rng: Any) -> np.random.Generator:
-    return rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
 
 
 class DGPSReceiver:
@@ -302,14 +306,10 @@ class DGPSReceiver:
 
     Sample 0 is the initial state itself (:meth:`reset`, no measurement); each
     :meth:`update` is the filter after one more measurement. Receiver ``i``'s noise comes
-    from its own generator, two values (north, east) per update in that order, drawn in
-    blocks of ``block`` updates (a generator's ``standard_normal((k, 2))`` is the stream of
-    ``k`` calls of ``standard_normal(2)``): receiver ``i`` of a batch gives bit for bit what
-    a receiver of one with the same generator gives, and :meth:`run` what the streaming form
-    gives. A generator is used ahead by up to a block: give each receiver its own.
-
-    Poses are ``(n, 3)`` and outputs ``(n,)`` (``z`` ``(n, 2)``); a single receiver also
-    takes a pose ``(3,)`` and then returns its row.
+    from its own generator, two values (north, east) per update (:class:`NormalStreams`,
+    drawn ahead in blocks: give each receiver its own generator), so receiver ``i`` of a
+    batch is bit for bit a single receiver with the same generator. Poses are ``(n, 3)`` and
+    outputs ``(n,)`` (``z`` ``(n, 2)``); a single receiver also takes ``(3,)``, giving its row.
 
     Args:
         S_p: the filter's spectral amplitude (m^2/s^3).
@@ -416,7 +416,7 @@ class DGPSReceiver:
             raise RuntimeError("call reset(eta0, nu0) first")
         e, one = self._rows(eta, "eta")
         m = self._all if mask is None else np.asarray(mask, dtype=bool)
-        pos, _ = antenna_motion(e, np.zeros_like(e), self.antenna)
+        pos, _, _ = _antenna(e, *self.antenna.tolist())
         z = pos if self.sigma == 0 else pos + self.sigma * self.noise.draw(m)
         if self.steady:
             x = _steady_step(self.x, z, self.K_inf, self.dt)
@@ -429,9 +429,12 @@ class DGPSReceiver:
             mm = m[:, None, None]
             self.P = np.where(mm, (np.eye(4) - K @ md.H) @ Pm, self.P)
             self.K = np.where(mm, K, self.K)
-        self.x = np.where(m[:, None], x, self.x)
-        self.z = np.where(m[:, None], z, self.z)
-        self.psi = np.where(m, e[:, 2], self.psi)
+        if m.all():
+            self.x, self.z, self.psi = x, z, e[:, 2].copy()
+        else:
+            self.x = np.where(m[:, None], x, self.x)
+            self.z = np.where(m[:, None], z, self.z)
+            self.psi = np.where(m, e[:, 2], self.psi)
         return self._outputs(one)
 
     def run(self, eta: ArrayLike, nu0: ArrayLike) -> DGPSOutput:
