@@ -191,6 +191,21 @@ def test_a_vessel_package_may_only_use_its_own_files(tmp_path, element):
         build_model(load_vessel(str(pkg)))
 
 
+#: ``shipgym`` with each recorded step slowed by argv[1] s (a run that lasts while a second
+#: one starts)
+SLOW_CLI = """
+import sys, time
+from shipgym.viz import recorder
+_step = recorder.RecordEpisode.step
+def step(self, action):
+    time.sleep(float(sys.argv[1]))
+    return _step(self, action)
+recorder.RecordEpisode.step = step
+from shipgym.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
 def test_a_second_concurrent_run_on_the_same_outputs_is_refused(tmp_path):
     """Two `shipgym run` on one --json: the second is refused at once, the first completes."""
     import os
@@ -200,20 +215,23 @@ def test_a_second_concurrent_run_on_the_same_outputs_is_refused(tmp_path):
 
     out = tmp_path / "a.json"
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
-    cmd = [sys.executable, "-m", "shipgym.cli", "run", "harbour", "--json", str(out),
-           "--no-progress"]  # fmt: skip
-    first = subprocess.Popen(cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True)  # fmt: skip
+    args = ["run", "harbour", "--json", str(out), "--no-progress"]
+    # the first records too, each step slowed: about 13 s of run holding its locks
+    first = subprocess.Popen(
+        [sys.executable, "-c", SLOW_CLI, "0.01", *args, "--record", str(tmp_path / "a.rrd")],
+        env=env, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
     lock = tmp_path / ".a.json.lock"
-    for _ in range(600):  # until the first holds its lock
+    for _ in range(1200):  # until the first holds its lock
         if lock.exists() or first.poll() is not None:
             break
         time.sleep(0.05)
     assert lock.exists(), first.communicate()
-    second = subprocess.run(cmd, env=env, cwd=tmp_path, capture_output=True, text=True,
-                            timeout=300)  # fmt: skip
+    second = subprocess.run([sys.executable, "-m", "shipgym.cli", *args], env=env, cwd=tmp_path,
+                            capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert first.poll() is None, "the first run ended before the second was checked"
     assert second.returncode == 2 and "being written by another run" in second.stderr
-    assert first.wait(timeout=600) == 0
+    assert first.wait(timeout=600) == 0, first.communicate()
     assert out.is_file() and not lock.exists()
 
 
