@@ -21,7 +21,7 @@ from shipgym.dynamics.altakie import THESIS_LF, lf_model_from_vessel, surge_mode
 from shipgym.dynamics.perunit import PerUnit
 
 from .design import lqr
-from .pid import _BAD_INPUT, _SAT_ERROR, _mask, _rows, bad_input, saturation_input
+from .pid import _BAD_INPUT, _SAT_ERROR, BatchedLaw, bad_input
 
 __all__ = [
     "PRINTED_GAINS",
@@ -376,7 +376,7 @@ class _GrimbleDesign(NamedTuple):
     RiBt: Array
 
 
-class BatchedGrimbleLQ:
+class BatchedGrimbleLQ(BatchedLaw):
     """:class:`GrimbleLQController` for ``n`` envs: the one run-time form (the controller is
     its ``n = 1`` adapter). Row ``i`` of a call equals the same call at ``n = 1`` on row
     ``i``'s inputs, bit for bit (the SDRE's Riccati equation is solved per env:
@@ -390,23 +390,9 @@ class BatchedGrimbleLQ:
     def __init__(self, controller: GrimbleLQController, n: int) -> None:
         if not isinstance(controller, GrimbleLQController):
             raise TypeError(f"controller must be a GrimbleLQController, got {controller!r}")
-        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-            raise ValueError(f"n must be an int >= 1 (the number of envs), got {n!r}")
-        self.n = n = int(n)
+        self._state(n, _S_COLS)
         self.controller = controller
         self._d = controller._design
-        self._S = np.zeros((n, _S_COLS))
-        self._zeros = np.zeros((n, 3))
-        self._zeros.setflags(write=False)
-
-    def reset(self, mask: ArrayLike | None = None) -> None:
-        """Forget the thruster states and the last commands of every env, or of those where
-        ``mask`` (``(n,)`` bool)."""
-        m = _mask(mask, self.n)
-        if m is None:
-            self._S[:] = 0.0
-        else:
-            self._S[m] = 0.0
 
     def change_frame(self, dpsi: ArrayLike, mask: ArrayLike | None = None) -> None:
         """Nothing to rotate: the state is in the body frame."""
@@ -423,14 +409,12 @@ class BatchedGrimbleLQ:
     ) -> Array:
         """Body-frame control forces ``[X, Y, N]`` (N, N, N m) of every env, (n, 3) (inputs
         as :meth:`GrimbleLQController.__call__`, (n, 3) each)."""
-        n, z = self.n, self._zeros
-        kind, sat = saturation_input(saturated, z)
-        tau = np.empty((n, 3))
+        # the law needs no reference derivatives
+        e, w, ed, _, _, sat, kind = self._inputs(eta_r, nu, eta_d_r, None, None, saturated)
+        tau = np.empty((self.n, 3))
         d = self._d
-        code = _law_entry()(
-            d.P, d.K, d.Ks, d.A, d.G, d.Q, d.RiBt, self._S, _rows(eta_r, "eta_r", n),
-            _rows(nu, "nu", n), _rows(eta_d_r, "eta_d_r", n), sat, kind, tau,
-        )  # fmt: skip
+        code = _law_entry()(d.P, d.K, d.Ks, d.A, d.G, d.Q, d.RiBt, self._S, e, w, ed, sat, kind,
+                            tau)  # fmt: skip
         if code:
             raise ValueError(f"{_BAD_INPUT[code]} contains NaN or infinite values")
         return tau

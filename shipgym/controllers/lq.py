@@ -32,13 +32,11 @@ from .pid import (
     _DESIGN_HINT,
     _LIMIT_HINT,
     _SAT_NONE,
+    BatchedLaw,
     _direction,
     _drops,
-    _mask,
     _mv,
-    _rows,
     bad_input,
-    saturation_input,
 )
 
 __all__ = [
@@ -351,7 +349,7 @@ def _entry(name: str) -> Any:
     return e
 
 
-class BatchedLQ:
+class BatchedLQ(BatchedLaw):
     """The LQ DP controller for ``n`` envs: the one run-time form (:class:`LQController` is
     its ``n = 1`` adapter).
 
@@ -400,25 +398,11 @@ class BatchedLQ:
 
     def _setup(self, n: int, M: Array, D_L: Array, design: LQDesign, lim: Array,
                G: Array) -> None:  # fmt: skip
-        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-            raise ValueError(f"n must be an int >= 1 (the number of envs), got {n!r}")
-        self.n = n = int(n)
+        self._state(n, _S_COLS)
         self.M, self.D_L, self.design, self.integral_limit = M, D_L, design, lim
         self.dt = design.dt
         self.K = design.K.copy()
         self._G = G
-        self._S = np.zeros((n, _S_COLS))
-        self._zeros = np.zeros((n, 3))
-        self._zeros.setflags(write=False)
-
-    def reset(self, mask: ArrayLike | None = None) -> None:
-        """Clear the integral states and pending errors of every env, or of those where
-        ``mask`` (``(n,)`` bool)."""
-        m = _mask(mask, self.n)
-        if m is None:
-            self._S[:] = 0.0
-        else:
-            self._S[m] = 0.0
 
     @property
     def integral(self) -> Array:
@@ -436,13 +420,7 @@ class BatchedLQ:
             dpsi: rotation of the frame (rad), shape (n,) or a scalar.
             mask: ``(n,)`` bool, the envs that switched leg (``None``: all).
         """
-        n = self.n
-        m = _mask(mask, n)
-        try:
-            d = np.ascontiguousarray(np.broadcast_to(np.asarray(dpsi, dtype=float), (n,)))
-        except (TypeError, ValueError):
-            raise ValueError(f"dpsi must be a rotation (rad), scalar or ({n},)") from None
-        m = np.ones(n, dtype=bool) if m is None else np.ascontiguousarray(m)
+        d, m = self._turn(dpsi, mask)
         if _entry("frame")(self._S, d, m):
             raise ValueError(f"dpsi must be finite (rad), got {dpsi!r}")
 
@@ -462,16 +440,10 @@ class BatchedLQ:
         Raises:
             ValueError: an input of the wrong shape or not finite (the state is unchanged).
         """
-        n, z = self.n, self._zeros
-        kind, sat = saturation_input(saturated, z)
-        tau = np.empty((n, 3))
-        code = _entry("law")(
-            self._G, self._S, _rows(eta_r, "eta_r", n), _rows(nu, "nu", n),
-            _rows(eta_d_r, "eta_d_r", n),
-            z if eta_dot_d_r is None else _rows(eta_dot_d_r, "eta_dot_d_r", n),
-            z if eta_ddot_d_r is None else _rows(eta_ddot_d_r, "eta_ddot_d_r", n),
-            sat, kind, tau,
-        )  # fmt: skip
+        e, w, ed, vd, ad, sat, kind = self._inputs(eta_r, nu, eta_d_r, eta_dot_d_r,
+                                                   eta_ddot_d_r, saturated)  # fmt: skip
+        tau = np.empty((self.n, 3))
+        code = _entry("law")(self._G, self._S, e, w, ed, vd, ad, sat, kind, tau)
         if code:
             raise ValueError(f"{_BAD_INPUT[code]} contains NaN or infinite values")
         return tau

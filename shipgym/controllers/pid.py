@@ -531,7 +531,67 @@ def _rows(x: ArrayLike, name: str, n: int) -> NDArray[np.float64]:
     return a if a.flags.c_contiguous else np.ascontiguousarray(a)
 
 
-class BatchedPID:
+class BatchedLaw:
+    """What every batched DP control law shares (:class:`BatchedPID`, the LQ laws): one state
+    row per env (``_S``, reset by mask), the frame turn's arguments and the call's inputs,
+    checked once."""
+
+    n: int
+    _S: NDArray[np.float64]
+    _zeros: NDArray[np.float64]
+
+    def _state(self, n: Any, cols: int) -> None:
+        """``n`` envs (checked) of ``cols`` state values each, all zero."""
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+            raise ValueError(f"n must be an int >= 1 (the number of envs), got {n!r}")
+        self.n = n = int(n)
+        self._S = np.zeros((n, cols))
+        self._zeros = np.zeros((n, 3))
+        self._zeros.setflags(write=False)
+
+    def reset(self, mask: ArrayLike | None = None) -> None:
+        """Clear the state (integrals, pending increments, filters, thruster states) of every
+        env, or of those where ``mask`` (``(n,)`` bool)."""
+        m = _mask(mask, self.n)
+        if m is None:
+            self._S[:] = 0.0
+        else:
+            self._S[m] = 0.0
+
+    def _turn(
+        self, dpsi: ArrayLike, mask: ArrayLike | None
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """A frame turn's ``(dpsi (n,), mask (n,))``, C-contiguous (``None``: every env)."""
+        n = self.n
+        m = _mask(mask, n)
+        try:
+            d = np.ascontiguousarray(np.broadcast_to(np.asarray(dpsi, dtype=float), (n,)))
+        except (TypeError, ValueError):
+            raise ValueError(f"dpsi must be a rotation (rad), scalar or ({n},)") from None
+        return d, np.ones(n, dtype=bool) if m is None else np.ascontiguousarray(m)
+
+    def _inputs(
+        self,
+        eta_r: ArrayLike,
+        nu: ArrayLike,
+        eta_d_r: ArrayLike,
+        eta_dot_d_r: ArrayLike | None,
+        eta_ddot_d_r: ArrayLike | None,
+        saturated: ArrayLike | None,
+    ) -> tuple[Any, ...]:
+        """A call's ``(eta, nu, eta_d, eta_dot_d, eta_ddot_d, sat, kind)`` as (n, 3) rows
+        (the reference's derivatives zero where not given)."""
+        n, z = self.n, self._zeros
+        kind, sat = saturation_input(saturated, z)
+        return (
+            _rows(eta_r, "eta_r", n), _rows(nu, "nu", n), _rows(eta_d_r, "eta_d_r", n),
+            z if eta_dot_d_r is None else _rows(eta_dot_d_r, "eta_dot_d_r", n),
+            z if eta_ddot_d_r is None else _rows(eta_ddot_d_r, "eta_ddot_d_r", n),
+            sat, kind,
+        )  # fmt: skip
+
+
+class BatchedPID(BatchedLaw):
     """The PID-type DP controller of Tomera (2014) eq. 23 for ``n`` envs: the one run-time form
     (:class:`MultivariablePID` is its ``n = 1`` adapter).
 
@@ -573,28 +633,14 @@ class BatchedPID:
         return self
 
     def _setup(self, n: int, design: _PIDDesign) -> None:
-        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-            raise ValueError(f"n must be an int >= 1 (the number of envs), got {n!r}")
-        self.n = n = int(n)
+        self._state(n, _S_COLS)
         self._design = d = design
         self.gains, self.M, self.D_L, self.dt = d.gains, d.M, d.D_L, d.dt
         self.integral_limit = d.integral_limit
         self.velocity_filter, self.command_filter = d.velocity_filter, d.command_filter
         self._G = d.G
-        self._S = np.zeros((n, _S_COLS))
-        self._zeros = np.zeros((n, 3))
-        self._zeros.setflags(write=False)
 
     # ---- state -------------------------------------------------------------------------------
-    def reset(self, mask: ArrayLike | None = None) -> None:
-        """Clear the state (integral, pending increment, filters) of every env, or of those
-        where ``mask`` (``(n,)`` bool)."""
-        m = _mask(mask, self.n)
-        if m is None:
-            self._S[:] = 0.0
-        else:
-            self._S[m] = 0.0
-
     @property
     def integral(self) -> NDArray[np.float64]:
         """The integral states ``xi`` (m s, m s, rad s), shape (n, 3) (a copy)."""
@@ -625,20 +671,11 @@ class BatchedPID:
         Raises:
             ValueError: a non-finite ``dpsi`` of a switching env, a wrong shape.
         """
-        n = self.n
-        m = _mask(mask, n)
-        try:
-            d = np.ascontiguousarray(np.broadcast_to(np.asarray(dpsi, dtype=float), (n,)))
-        except (TypeError, ValueError):
-            raise ValueError(f"dpsi must be a rotation (rad), scalar or ({n},)") from None
-        m = np.ones(n, dtype=bool) if m is None else np.ascontiguousarray(m)
+        d, m = self._turn(dpsi, mask)
         if _frame_entry()(self._G, self._S, d, m):
             raise ValueError(f"dpsi must be finite (rad), got {dpsi!r}")
 
     # ---- control law -------------------------------------------------------------------------
-    def _saturated(self, saturated: ArrayLike | None) -> tuple[int, NDArray[np.float64]]:
-        return saturation_input(saturated, self._zeros)
-
     def __call__(
         self,
         eta_r: ArrayLike,
@@ -667,16 +704,10 @@ class BatchedPID:
         Raises:
             ValueError: an input of the wrong shape or not finite (the state is unchanged).
         """
-        n, z = self.n, self._zeros
-        kind, sat = self._saturated(saturated)
-        tau = np.empty((n, 3))
-        code = _pid_entry()(
-            self._G, self._S, _rows(eta_r, "eta_r", n), _rows(nu, "nu", n),
-            _rows(eta_d_r, "eta_d_r", n),
-            z if eta_dot_d_r is None else _rows(eta_dot_d_r, "eta_dot_d_r", n),
-            z if eta_ddot_d_r is None else _rows(eta_ddot_d_r, "eta_ddot_d_r", n),
-            sat, kind, tau,
-        )  # fmt: skip
+        e, w, ed, vd, ad, sat, kind = self._inputs(eta_r, nu, eta_d_r, eta_dot_d_r,
+                                                   eta_ddot_d_r, saturated)  # fmt: skip
+        tau = np.empty((self.n, 3))
+        code = _pid_entry()(self._G, self._S, e, w, ed, vd, ad, sat, kind, tau)
         if code:
             raise ValueError(f"{_BAD_INPUT[code]} contains NaN or infinite values")
         return tau
