@@ -25,7 +25,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._jit import entry, njit
 
-from .wls import _bounds, _capacity, _config_matrix, _real_array, _scaled_problem, _scales, _weights
+from .wls import (
+    _bounds,
+    _capacity,
+    _config_matrix,
+    _real_array,
+    _scaled_problem,
+    _scales,
+    _weights,
+)
+from .wls import cholesky as _cholesky
 
 __all__ = [
     "AzimuthAllocation",
@@ -633,26 +642,6 @@ def _dual_qp(L, c, col, A, b, eq, p, x, u, on, have, act, G, U, Rt, d, r, w, z):
         if not added:
             return 1
     return 1
-
-
-@njit
-def _cholesky(M, L):  # type: ignore[no-untyped-def]
-    """Lower Cholesky factor of ``M`` into ``L``: False where ``M`` is not positive definite."""
-    n = M.shape[0]
-    for j in range(n):
-        t = M[j, j]
-        for e in range(j):
-            t -= L[j, e] * L[j, e]
-        if not t > 0.0:
-            return False
-        t = math.sqrt(t)
-        L[j, j] = t
-        for i in range(j + 1, n):
-            v = M[i, j]
-            for e in range(j):
-                v -= L[i, e] * L[j, e]
-            L[i, j] = v / t
-    return True
 
 
 @njit

@@ -176,11 +176,11 @@ def _scales(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.floa
 
 
 # ---- the solver: one compiled law over N requests -------------------------------------------
-@njit(inline="always")
-def _cholesky_solve(M, b, L, y, x):  # type: ignore[no-untyped-def]
-    """``x = M^-1 b`` by Cholesky (``L`` scratch, lower): False where ``M`` is not positive
-    definite."""
-    n = b.shape[0]
+@njit
+def cholesky(M, L):  # type: ignore[no-untyped-def]
+    """Lower Cholesky factor of ``M`` into ``L``: False where ``M`` is not positive definite
+    (the allocation laws' one factorisation)."""
+    n = M.shape[0]
     for j in range(n):
         d = M[j, j]
         for k in range(j):
@@ -194,6 +194,16 @@ def _cholesky_solve(M, b, L, y, x):  # type: ignore[no-untyped-def]
             for k in range(j):
                 t -= L[i, k] * L[j, k]
             L[i, j] = t / d
+    return True
+
+
+@njit(inline="always")
+def _cholesky_solve(M, b, L, y, x):  # type: ignore[no-untyped-def]
+    """``x = M^-1 b`` by Cholesky (``L`` scratch, lower): False where ``M`` is not positive
+    definite."""
+    n = b.shape[0]
+    if not cholesky(M, L):
+        return False
     for i in range(n):
         t = b[i]
         for k in range(i):
