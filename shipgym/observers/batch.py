@@ -85,6 +85,31 @@ class BatchedStepInfo(NamedTuple):
 # --------------------------------------------------------------------------------------------
 
 
+#: the outlier gate's verdicts (:func:`outlier_gate`)
+ACCEPT, FORCE, REJECT = 0, 1, 2
+
+
+@njit(inline="always")
+def outlier_gate(w, thr, max_rej, count, gate_open, j):  # type: ignore[no-untyped-def]
+    """The outlier gate of env ``j`` (the compiled :meth:`base.OutlierGate.check
+    <shipgym.observers.base.OutlierGate.check>`) for the normalised innovation ``w``: accept
+    below ``thr``; else reject, up to ``max_rej`` times in a row, then force one acceptance and
+    keep forcing until a sample passes. Updates ``count[j]`` and ``gate_open[j]``; returns
+    ``ACCEPT``, ``FORCE`` or ``REJECT``."""
+    if w <= thr:
+        count[j] = 0
+        gate_open[j] = False
+        return ACCEPT
+    if gate_open[j]:
+        return FORCE
+    if count[j] >= max_rej:
+        count[j] = 0
+        gate_open[j] = True
+        return FORCE
+    count[j] += 1
+    return REJECT
+
+
 @njit
 def _kalman_step(mode, thr, max_rej, sel, dt, X, count, gate_open, yprev, has_prev, R, Rc,
                  gain, Q, blk, z, valid, innov, nis, rejected, forced):  # fmt: skip
@@ -143,19 +168,9 @@ def _kalman_step(mode, thr, max_rej, sel, dt, X, count, gate_open, yprev, has_pr
             innov[j, i] = e[i]
             w += e[i] * e[i] / (pr[4, i] + R[i, j])
         nis[j] = w
-        # the outlier gate (base.OutlierGate.check)
-        force = False
-        if w <= thr:
-            count[j] = 0
-            gate_open[j] = False
-        elif gate_open[j]:
-            force = True
-        elif count[j] >= max_rej:
-            count[j] = 0
-            gate_open[j] = True
-            force = True
-        else:
-            count[j] += 1
+        verdict = outlier_gate(w, thr, max_rej, count, gate_open, j)
+        force = verdict == FORCE
+        if verdict == REJECT:
             for i in range(3):
                 for r in range(5):
                     X[r, i, j] = pr[r, i]

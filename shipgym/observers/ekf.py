@@ -27,11 +27,14 @@ from shipgym._jit import entry, njit
 from shipgym.dynamics import seed_linear_matrices
 from shipgym.observers.base import Estimate, OutlierGate, register_observer
 from shipgym.observers.batch import (
+    FORCE,
+    REJECT,
     BatchedStepInfo,
     BatchOfOne,
     joseph,
     mat_mul,
     mat_mul_t,
+    outlier_gate,
     register_batched_form,
 )
 from shipgym.observers.sensors import SensorConfig
@@ -418,18 +421,9 @@ def _ekf_step(X, P, dt, z, valid, tau, count, gate_open, Minv, D, tb_inv, ned, A
                 for k in range(3):
                     w += e[i] * Si[i, k] * e[k]
             nis[j] = w
-            if w <= thr:  # the outlier gate (base.OutlierGate.check)
-                count[j] = 0
-                gate_open[j] = False
-            elif gate_open[j]:
-                force = True
-            elif count[j] >= max_rej:
-                count[j] = 0
-                gate_open[j] = True
-                force = True
-            else:
-                count[j] += 1
-                rej = True
+            verdict = outlier_gate(w, thr, max_rej, count, gate_open, j)
+            force = verdict == FORCE
+            rej = verdict == REJECT
             if not force:
                 break
             for i in range(3):  # re-anchor on what is probably a real jump
