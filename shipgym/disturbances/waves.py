@@ -132,6 +132,12 @@ class WaveMotionRows:
         x = np.where(self.on, t * self.inv_dt, -1.0)
         if not np.all((x >= 0.0) | ~self.on):
             raise ValueError(f"wave motion: times must be >= 0 s, got {t!r}")
+        self.run(x)
+        return self.out.copy()
+
+    def run(self, x: NDArray[np.float64]) -> None:
+        """:func:`wf_rows` at the grid positions ``x`` (n,) into :attr:`out`, each row's chunk
+        loaded where it is not in its window."""
         args = (x, self.k0, self.win, self.cb, self.sb, self.out)
         if self._entry is None:
             self._entry = entry(wf_rows, args)
@@ -141,7 +147,6 @@ class WaveMotionRows:
             self.win[i] = self.waves[i].chunk(j)[1:3]
             self.k0[i] = j * _CHUNK
             i = self._entry(*args)
-        return self.out.copy()
 
 
 _ZERO3 = (0.0, 0.0, 0.0)
@@ -470,6 +475,7 @@ class Waves:
             self._filter = self._build_filter()
         self._rng_wf: np.random.Generator | None = None
         self._wf_rows: WaveMotionRows | None = None  # wf_motion's window (one row)
+        self._wf_x = np.zeros(1)  # and its grid position
         self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
         self._mean_E = 0.0
         self._reset_grid()
@@ -732,7 +738,9 @@ class Waves:
         rows = self._wf_rows
         if rows is None:
             rows = self._wf_rows = WaveMotionRows([self])
-        dx, dy, dpsi = rows(np.array([float(t)]))[0].tolist()
+        self._wf_x[0] = t * self._inv_dt  # the grid position, as the rows' law forms it
+        rows.run(self._wf_x)
+        dx, dy, dpsi = rows.out[0].tolist()
         return dx, dy, dpsi
 
     def mean_drift_load(self, psi: float) -> tuple[float, float, float]:
