@@ -284,22 +284,30 @@ def check_writable(path: Path) -> None:
 
 
 def check_outputs(
-    outputs: dict[str, Path | None], inputs: dict[str, Path | None] | None = None
+    outputs: dict[str, Path | None],
+    inputs: dict[str, Path | None] | None = None,
+    folders: dict[str, tuple[str, ...]] | None = None,
 ) -> None:
     """Refuse, before any work, outputs that would overwrite an input or each other.
 
-    Two outputs may not be the same path or one inside the other (a ``--json`` inside a
-    ``--report`` folder that is replaced as a whole); an output may not be an input file, lie
-    inside an input folder (a vessel package) or hold an input (a report folder around the
-    scenario file).
+    A file output is one path; a folder output (named in ``folders``) writes files of the
+    given name patterns (``*.png``, ``metrics.md``) directly into its folder and nothing else,
+    so a ``--json`` next to a ``--report``'s figures is fine and a ``--markdown`` named
+    ``metrics.md`` in it is not. Refused: two outputs that are the same path, a file output
+    that a folder output would write, an output that is an input file or lies inside an input
+    folder (a vessel package), a folder output that would write over an input file.
 
     Args:
         outputs: option name -> the path it writes (``None``: not given).
         inputs: option name -> a path it reads (``None``: not given).
+        folders: option name -> the name patterns (:mod:`fnmatch`) its folder receives.
 
     Raises:
         ValueError: naming both options and the path.
     """
+    from fnmatch import fnmatch
+
+    folders = folders or {}
 
     def real(p: Path) -> Path:
         return Path(os.path.realpath(os.path.expanduser(p)))
@@ -307,17 +315,23 @@ def check_outputs(
     outs = [(k, real(p)) for k, p in outputs.items() if p is not None]
     ins = [(k, real(p)) for k, p in (inputs or {}).items() if p is not None]
 
-    def nested(a: Path, b: Path) -> bool:
-        return a == b or a in b.parents or b in a.parents
+    def writes(option: str, folder: Path, path: Path) -> bool:  # the folder output writes path
+        return path.parent == folder and any(fnmatch(path.name, g) for g in folders[option])
+
+    def clash(ka: str, a: Path, kb: str, b: Path) -> bool:  # two outputs
+        if a == b:
+            return True
+        return (ka in folders and writes(ka, a, b)) or (kb in folders and writes(kb, b, a))
 
     for i, (ka, a) in enumerate(outs):
         for kb, b in outs[i + 1 :]:
-            if nested(a, b):
+            if clash(ka, a, kb, b):
                 raise ValueError(
                     f"{ka} {a} and {kb} {b} would overwrite each other: give them separate paths"
                 )
         for kb, b in ins:
-            if nested(a, b):
+            inside = a == b or (b.is_dir() and b in a.parents)
+            if inside or (ka in folders and writes(ka, a, b)):
                 raise ValueError(
                     f"{ka} {a} would overwrite the input {kb} {b}: write the results elsewhere"
                 )

@@ -917,12 +917,16 @@ def _parser() -> argparse.ArgumentParser:
 
 #: the options that write files or folders (every subcommand)
 OUTPUT_OPTIONS = ("json", "markdown", "record", "report", "out", "figures")
+#: the folder options and the names they write into their folder (figures, metrics.md)
+FOLDER_OUTPUTS = {"--report": ("*.png", "*.md"), "--out": ("*.png", "*.md"),
+                  "--figures": ("*.png",)}  # fmt: skip
 
 
 def _check_paths(args: argparse.Namespace) -> None:
     """Outputs never overwrite an input or each other (:func:`shipgym._io.check_outputs`):
-    the inputs are every other argument naming an existing file or folder (a scenario file, a
-    vessel package, a run file, a model behind ``ppo:PATH``)."""
+    the inputs are the path-typed options, the scenario file, vessel packages given as folders
+    and a model behind ``ppo:PATH`` (a name such as ``harbour`` is not a path even where a
+    file of that name exists)."""
     from shipgym._io import check_outputs
 
     names = {"scenario_file": "--scenario", "run": "RUN"}  # dests named otherwise
@@ -934,11 +938,14 @@ def _check_paths(args: argparse.Namespace) -> None:
             if isinstance(value, Path):
                 outputs[name] = value
             continue
-        if isinstance(value, str) and ":" in value:  # ppo:PATH, sac:PATH
-            value = value.split(":", 1)[1]
-        if isinstance(value, str | Path) and str(value) and Path(value).exists():
-            inputs[name] = Path(value)
-    check_outputs(outputs, inputs)
+        values = value if isinstance(value, list) else [value]
+        for i, v in enumerate(values):
+            if isinstance(v, str) and key in ("scenario_file", "vessel", "controller"):
+                v = Path(v.split(":", 1)[1] if ":" in v else v)
+                v = v if v.exists() else None
+            if isinstance(v, Path):
+                inputs[name if len(values) == 1 else f"{name}[{i}]"] = v
+    check_outputs(outputs, inputs, FOLDER_OUTPUTS)
 
 
 def main(argv: list[str] | None = None) -> int:

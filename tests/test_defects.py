@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import re
 import shutil
+from pathlib import Path
 from importlib import resources
 
 import numpy as np
@@ -145,9 +146,10 @@ def test_outputs_that_would_overwrite_an_input_or_each_other_are_refused(tmp_pat
     before = scenario.read_bytes()
     cases = [
         ["run", "--scenario", str(scenario), "--json", str(scenario)],
-        ["run", "harbour", "--json", str(tmp_path / "r" / "a.json"), "--report",
+        ["run", "harbour", "--json", str(tmp_path / "r" / "metrics.md"), "--report",
          str(tmp_path / "r")],
-        ["run", "--scenario", str(scenario), "--report", str(tmp_path)],
+        ["run", "harbour", "--json", str(tmp_path / "r.json"), "--record",
+         str(tmp_path / "r.json")],
     ]  # fmt: skip
     for argv in cases:
         assert main([*argv, "--no-progress"]) == 2
@@ -160,6 +162,31 @@ def test_outputs_that_would_overwrite_an_input_or_each_other_are_refused(tmp_pat
     assert main(["run", "harbour", "--vessel", str(pkg), "--json", str(pkg / "vessel.toml")]) == 2
     assert (pkg / "vessel.toml").read_bytes() == toml
     assert "--vessel" in capsys.readouterr().err
+    assert main(["run", "harbour", "--vessel", str(pkg), "--report", str(pkg / "r")]) == 2
+    assert "--vessel" in capsys.readouterr().err
+
+
+def test_outputs_beside_a_folder_outputs_files_are_accepted(tmp_path):
+    """A folder output writes its own file names only: ``make demo``'s JSON and recording
+    inside its report folder, a trials JSON beside its figures, a report folder holding the
+    scenario file are all fine (the CI of 2026-12-05 failed on the trials case)."""
+    import shlex
+
+    from shipgym.cli import _check_paths, _parser
+
+    scenario = tmp_path / "sc.yaml"
+    scenario.write_text("env: harbour\n")
+    make = (Path(__file__).parents[1] / "Makefile").read_text()
+    demo = re.search(r"^demo:.*\n((?:\t.*\n)+)", make, re.M).group(1)
+    demo = shlex.split(demo.replace("\\\n", " ").replace("$(PY) -m shipgym.cli", ""))
+    assert demo[0] == "run" and "--report" in demo, demo
+    for argv in (
+        [a.replace("runs/demo", str(tmp_path / "demo")) for a in demo],
+        ["trials", "--json", str(tmp_path / "t.json"), "--markdown", str(tmp_path / "t.md"),
+         "--figures", str(tmp_path)],
+        ["run", "--scenario", str(scenario), "--report", str(tmp_path)],
+    ):  # fmt: skip
+        _check_paths(_parser().parse_args(argv))
 
 
 def test_a_batch_too_large_for_one_process_is_refused():
