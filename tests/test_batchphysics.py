@@ -295,3 +295,73 @@ def test_a_mujoco_batch_in_the_harbour_stops_each_hull_at_its_own_quay_contact()
     counts = bp.contact_counts
     assert counts[0] > 0 and counts[2] == 0, counts  # pushed to starboard: the quay; to port: not
     assert (taken_all < taken_all.max()).any()  # the hulls stopped at different steps
+
+
+@pytest.mark.parametrize("integrator", ["leapfrog", "mujoco"])
+def test_a_batch_on_numbas_threads_gives_the_floats_of_the_serial_loop(integrator, monkeypatch):
+    """A batch of at least ``PARALLEL_MIN`` hulls steps on Numba's threads
+    (:func:`~shipgym.sim.step.run_parallel`): the same per-hull law, so the same floats as the
+    serial loop, across grid chunks that every hull needs at the same step (a 0.05 s gust grid:
+    a chunk is 204.8 s) and with each hull's own commands and weather; hull 7 is also the
+    single physics bit for bit (leapfrog)."""
+    from shipgym.sim import step
+
+    n = step.PARALLEL_MIN + 3
+    wind = WindConfig(speed=8.0, direction_from=math.radians(300.0), sample_period=0.05)
+
+    def trajectory(parallel: bool) -> list[np.ndarray]:
+        monkeypatch.setattr(step, "PARALLEL_MIN", step.PARALLEL_MIN if parallel else 10**9)
+        bp = BatchedPhysics("blue-lady", n, wind=wind, current=GM_CURRENT, integrator=integrator)
+        bp.reset(rngs=[np.random.default_rng(40 + i) for i in range(n)])
+        out = []
+        for cmd in _commands(bp.actuators, n, 25, seed=9):  # 25 x 10 s, two chunk boundaries
+            bp.set_command(cmd)
+            bp.step(200)
+            out.append(np.concatenate([bp.eta_full, bp.nu_full, bp.actuator_state], axis=1))
+        return out
+
+    par, ser = trajectory(True), trajectory(False)
+    for a, b in zip(par, ser, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(par[-1][0], par[-1][1])
+    if integrator == "leapfrog":
+        p = VesselPhysics("blue-lady", wind=wind, current=GM_CURRENT, integrator="leapfrog")
+        p.reset(rng=np.random.default_rng(47))
+        for cmd in _commands(p.actuators, n, 25, seed=9):
+            p.set_command(cmd[7])
+            p.step(200)
+        np.testing.assert_array_equal(p.eta_full, par[-1][7, : p.eta_full.size])
+
+
+def _forked_child_trajectory(q) -> None:  # type: ignore[no-untyped-def]
+    from shipgym.sim import step
+
+    bp = BatchedPhysics("blue-lady", step.PARALLEL_MIN, wind=GUSTY)
+    bp.reset(rngs=[np.random.default_rng(i) for i in range(bp.n)])
+    bp.set_command(np.tile(bp.actuators.upper, (bp.n, 1)))
+    bp.step(400)
+    q.put((bp.eta_full.tolist(), step._THREADS["allowed"]))
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="needs fork()")
+def test_a_child_forked_after_threaded_steps_steps_serially_to_the_same_floats():
+    """GNU OpenMP (Numba's usual threading layer) is not fork-safe: Numba ends a forked child
+    that enters a parallel region its parent used. A child forked from a process that stepped
+    a large batch on threads steps serially instead, to the same floats."""
+    import multiprocessing as mp
+
+    from shipgym.sim import step
+
+    bp = BatchedPhysics("blue-lady", step.PARALLEL_MIN, wind=GUSTY)
+    bp.reset(rngs=[np.random.default_rng(i) for i in range(bp.n)])
+    bp.set_command(np.tile(bp.actuators.upper, (bp.n, 1)))
+    bp.step(400)
+    assert step._THREADS["used"]
+    ctx = mp.get_context("fork")
+    q = ctx.Queue()
+    child = ctx.Process(target=_forked_child_trajectory, args=(q,))
+    child.start()
+    eta, allowed = q.get(timeout=120)
+    child.join(30)
+    assert child.exitcode == 0 and not allowed
+    np.testing.assert_array_equal(np.array(eta), bp.eta_full)

@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import ctypes
 import math
+import os
+import threading
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numba import prange
 
 from shipgym._jit import ACCEL_SIG, accel_at, address, entry, njit
 from shipgym.disturbances._grid import CHUNK
@@ -51,6 +54,25 @@ LAG, SERVO, INTEGRATOR = 0, 1, 2
 MAX_SPEED = 50.0
 MAX_RATE = 10.0
 MAX_ROLL = 1.2
+
+
+#: the smallest batch stepped on all of Numba's threads (:func:`run_parallel`); smaller ones
+#: step on the calling thread, where a thread pool's start costs more than it saves
+PARALLEL_MIN = 32
+
+
+#: ``used``: this process stepped on Numba's threads; ``allowed``: it may (not in a child
+#: forked from a process that did: GNU OpenMP, Numba's usual threading layer, is not
+#: fork-safe, and Numba ends such a child)
+_THREADS = {"used": False, "allowed": True}
+os.register_at_fork(after_in_child=lambda: _THREADS.update(allowed=not _THREADS["used"]))
+
+
+def _threads_ok() -> bool:
+    """Whether a large batch may step on Numba's threads now: in the main thread (Numba's
+    ``workqueue`` layer may not be entered from two threads at once) of a process allowed to
+    (:data:`_THREADS`)."""
+    return _THREADS["allowed"] and threading.current_thread() is threading.main_thread()
 
 
 #: the most physics steps one call may take (5.8 days at 0.05 s): a larger request is a
@@ -239,7 +261,8 @@ def process_at(mode, t, i, slot, inv_dt, k0, win, const):  # type: ignore[no-unt
 
 
 @njit
-def run(  # type: ignore[no-untyped-def]
+def _hull(  # type: ignore[no-untyped-def]
+    i,
     integrator, mj_step, mps, dps, fields, stop_on_contact,
     dofs, linear_kin, h, inertia,
     accel, kh, laws, table, kind_index, chan, kw,
@@ -247,61 +270,16 @@ def run(  # type: ignore[no-untyped-def]
     mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
     loads, forces, flags, hits, stopped, status,
 ):  # fmt: skip
-    """Advance each hull ``i`` by ``left[i]`` physics steps (module docstring).
-
-    Args (all arrays C-contiguous float64 unless said; N hulls, nv joints, nc channels, na
-    actuators):
-        integrator: :data:`MUJOCO` (each hull its own ``mjData``), :data:`LEAPFROG`, or
-            :data:`EVALUATE` (only ``qa`` and the read-outs of the state written: the start
-            of a run).
-        mj_step, mps, dps: the address of MuJoCo's ``mj_step``; (N,) int64 the addresses of
-            each hull's ``mjModel`` and ``mjData`` (``mujoco`` only).
-        fields: (N, 5) int64 the addresses of each hull's ``qpos``, ``qvel``, ``qacc``,
-            ``qfrc_applied`` and ``ncon`` in its ``mjData`` (``mujoco`` only): the loop
-            writes ``q``, ``qv`` and ``qfrc`` there before ``mj_step`` and reads ``q``, ``qv``
-            and ``qa`` back after it (a no-op where the arrays are views on the ``mjData``,
-            as for :class:`~shipgym.envs.physics.VesselPhysics`);
-        stop_on_contact: stop a hull after the step in which MuJoCo finds a contact.
-        dofs: 3 or 4; linear_kin: the 4-DOF hull's linear kinematics (``cos phi = 1``).
-        h: the step (s); inertia: MuJoCo's joint-space inertia ``(m, m, I_z, I_x)``.
-        accel: the address of the hull family's compiled acceleration
-            (:func:`shipgym._jit.address`); kh: its constants.
-        laws, table, kind_index: the addresses of the actuator force laws (int64); (N, na, k)
-            each hull's row of constants per actuator (hulls of one vessel may differ in
-            them: a rudder moved); each row's law
-            (:meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`).
-        chan: (nc, 9) channel dynamics: code, lower, upper, alpha = 1 - exp(-h/T), rate-limit
-            band, rate-limit step, servo rate, servo time constant, bounded.
-        kw: the wind load's constants (:meth:`~shipgym.disturbances.wind.WindLoad.
-            kernel_constants`).
-        q, qv, qa, qfrc: (N, nv) joint positions, half-step velocities, accelerations, and
-            the applied force written for MuJoCo.
-        act, cmd: (N, nc) actuator states and commands.
-        t: (N,) each hull's time (s); left: (N,) int64 steps still to take, counted down.
-        external: (N, 4) a held external load ``[X, Y, K, N]`` (N, N m).
-        mode: (N, 3) int64 process modes (wind, current, drift: ``OFF``, ``CONSTANT``,
-            ``SAMPLED``); const: (N, 3, 2) constant values (speed, direction); inv_dt,
-            k0: (N, 3) sample rate (1/s) and the first sample of each window (int64);
-            win_w, win_c, win_d: (N, 2, W) the windows of samples.
-        drift_k: (N, 4) the drift's ``beta_p`` (rad), ``k_x``, ``k_y``, ``k_n``.
-        loads: (N, 8) out: the last step's wind X, Y, N, drift X, Y, N, current u_c, v_c.
-        forces, flags: (N, na) out: each actuator's force reading (N) and stall flag.
-        hits: (N, nc) int64 out: 1 where a servo ran at its rate limit in the last step.
-        stopped: (N,) int64 out: the steps a contact stop left untaken (``mujoco``).
-        status: (3,) int64 out: the hull, the process and the chunk needed (``NEED``), or
-            the hull that diverged (``DIVERGED``; its t, nu, nu_dot in ``loads[i]``).
-
-    Returns:
-        ``OK``, ``NEED`` or ``DIVERGED``.
-    """
-    n_hulls = q.shape[0]
+    """Hull ``i`` of :func:`run`: its ``left[i]`` steps; its code in ``status[i, 0]``
+    (``NEED`` with the process slot and chunk in ``status[i, 1:]``), returned too."""
+    status[i, 0] = OK
     nq = q.shape[1]
     n_ch = chan.shape[0]
     hh = 0.5 * h
     mq, iq, ix = inertia[0], inertia[2], inertia[3]
     acc = accel_at(accel)
     four = dofs == 4
-    for i in range(n_hulls):
+    if True:  # hull i
         st = act[i]
         ti = t[i]
         m_w, m_c, m_d = mode[i, 0], mode[i, 1], mode[i, 2]
@@ -318,7 +296,8 @@ def run(  # type: ignore[no-untyped-def]
             ok_d, e, _unused = process_at(m_d, ti, i, DRIFT, inv_dt, k0, win_d, const)
             if not (ok_w and ok_c and ok_d):
                 slot = WIND if not ok_w else (CURRENT if not ok_c else DRIFT)
-                status[0], status[1], status[2] = i, slot, int(ti * inv_dt[i, slot]) // CHUNK
+                status[i, 0], status[i, 1] = NEED, slot
+                status[i, 2] = int(ti * inv_dt[i, slot]) // CHUNK
                 t[i] = ti
                 return NEED
             vw = vw if vw > 0.0 else 0.0  # a gust's speed never below 0
@@ -355,7 +334,7 @@ def run(  # type: ignore[no-untyped-def]
                 and abs(r) + abs(p) < MAX_RATE
                 and abs(phi) < MAX_ROLL
             ):
-                status[0] = i
+                status[i, 0] = DIVERGED
                 lo = loads[i]
                 lo[0], lo[1], lo[2], lo[3], lo[4] = ti, u, v, p, r
                 lo[5], lo[6], lo[7] = ud, vd, rd
@@ -443,6 +422,104 @@ def run(  # type: ignore[no-untyped-def]
                     q[i, k] += h * qv[i, k]
         t[i] = ti
     return OK
+
+
+@njit
+def run(  # type: ignore[no-untyped-def]
+    integrator, mj_step, mps, dps, fields, stop_on_contact,
+    dofs, linear_kin, h, inertia,
+    accel, kh, laws, table, kind_index, chan, kw,
+    q, qv, qa, qfrc, act, cmd, t, left, external,
+    mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
+    loads, forces, flags, hits, stopped, status,
+):  # fmt: skip
+    """Advance each hull ``i`` by ``left[i]`` physics steps (module docstring).
+
+    Args (all arrays C-contiguous float64 unless said; N hulls, nv joints, nc channels, na
+    actuators):
+        integrator: :data:`MUJOCO` (each hull its own ``mjData``), :data:`LEAPFROG`, or
+            :data:`EVALUATE` (only ``qa`` and the read-outs of the state written: the start
+            of a run).
+        mj_step, mps, dps: the address of MuJoCo's ``mj_step``; (N,) int64 the addresses of
+            each hull's ``mjModel`` and ``mjData`` (``mujoco`` only).
+        fields: (N, 5) int64 the addresses of each hull's ``qpos``, ``qvel``, ``qacc``,
+            ``qfrc_applied`` and ``ncon`` in its ``mjData`` (``mujoco`` only): the loop
+            writes ``q``, ``qv`` and ``qfrc`` there before ``mj_step`` and reads ``q``, ``qv``
+            and ``qa`` back after it (a no-op where the arrays are views on the ``mjData``,
+            as for :class:`~shipgym.envs.physics.VesselPhysics`);
+        stop_on_contact: stop a hull after the step in which MuJoCo finds a contact.
+        dofs: 3 or 4; linear_kin: the 4-DOF hull's linear kinematics (``cos phi = 1``).
+        h: the step (s); inertia: MuJoCo's joint-space inertia ``(m, m, I_z, I_x)``.
+        accel: the address of the hull family's compiled acceleration
+            (:func:`shipgym._jit.address`); kh: its constants.
+        laws, table, kind_index: the addresses of the actuator force laws (int64); (N, na, k)
+            each hull's row of constants per actuator (hulls of one vessel may differ in
+            them: a rudder moved); each row's law
+            (:meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`).
+        chan: (nc, 9) channel dynamics: code, lower, upper, alpha = 1 - exp(-h/T), rate-limit
+            band, rate-limit step, servo rate, servo time constant, bounded.
+        kw: the wind load's constants (:meth:`~shipgym.disturbances.wind.WindLoad.
+            kernel_constants`).
+        q, qv, qa, qfrc: (N, nv) joint positions, half-step velocities, accelerations, and
+            the applied force written for MuJoCo.
+        act, cmd: (N, nc) actuator states and commands.
+        t: (N,) each hull's time (s); left: (N,) int64 steps still to take, counted down.
+        external: (N, 4) a held external load ``[X, Y, K, N]`` (N, N m).
+        mode: (N, 3) int64 process modes (wind, current, drift: ``OFF``, ``CONSTANT``,
+            ``SAMPLED``); const: (N, 3, 2) constant values (speed, direction); inv_dt,
+            k0: (N, 3) sample rate (1/s) and the first sample of each window (int64);
+            win_w, win_c, win_d: (N, 2, W) the windows of samples.
+        drift_k: (N, 4) the drift's ``beta_p`` (rad), ``k_x``, ``k_y``, ``k_n``.
+        loads: (N, 8) out: the last step's wind X, Y, N, drift X, Y, N, current u_c, v_c.
+        forces, flags: (N, na) out: each actuator's force reading (N) and stall flag.
+        hits: (N, nc) int64 out: 1 where a servo ran at its rate limit in the last step.
+        stopped: (N,) int64 out: the steps a contact stop left untaken (``mujoco``).
+        status: (N, 3) int64 out: each hull's code, and the process and the chunk it needs
+            (``NEED``); a hull that diverged (``DIVERGED``) has its t, nu, nu_dot in
+            ``loads[i]``. Every hull runs on whatever another one needs.
+
+    Returns:
+        The largest code of the hulls: ``OK``, ``NEED`` or ``DIVERGED``.
+    """
+    code = OK
+    for i in range(q.shape[0]):
+        c = _hull(
+            i,
+                integrator, mj_step, mps, dps, fields, stop_on_contact,
+                dofs, linear_kin, h, inertia,
+                accel, kh, laws, table, kind_index, chan, kw,
+                q, qv, qa, qfrc, act, cmd, t, left, external,
+                mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
+                loads, forces, flags, hits, stopped, status,
+        )  # fmt: skip
+        code = c if c > code else code
+    return code
+
+
+@njit(parallel=True)
+def run_parallel(  # type: ignore[no-untyped-def]
+    integrator, mj_step, mps, dps, fields, stop_on_contact,
+    dofs, linear_kin, h, inertia,
+    accel, kh, laws, table, kind_index, chan, kw,
+    q, qv, qa, qfrc, act, cmd, t, left, external,
+    mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
+    loads, forces, flags, hits, stopped, status,
+):  # fmt: skip
+    """:func:`run` with the hulls spread over Numba's threads (the same per-hull law, so the
+    same floats); for large batches called from the main thread (:data:`PARALLEL_MIN`)."""
+    n = q.shape[0]
+    codes = np.zeros(n, dtype=np.int64)
+    for i in prange(n):
+        codes[i] = _hull(
+            i,
+                integrator, mj_step, mps, dps, fields, stop_on_contact,
+                dofs, linear_kin, h, inertia,
+                accel, kh, laws, table, kind_index, chan, kw,
+                q, qv, qa, qfrc, act, cmd, t, left, external,
+                mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
+                loads, forces, flags, hits, stopped, status,
+        )  # fmt: skip
+    return codes.max() if n else OK
 
 
 def channel_table(actuators: Any, h: float) -> np.ndarray:
@@ -575,7 +652,7 @@ class HullBatch:
         self.flags = np.zeros((n, na))
         self.hits = np.zeros((n, nc), dtype=np.int64)
         self.stopped = np.zeros(n, dtype=np.int64)
-        self.status = np.zeros(3, dtype=np.int64)
+        self.status = np.zeros((n, 3), dtype=np.int64)
         self._entry: Any = None  # run's compiled entry point for these arguments' types
         self._args: tuple[Any, ...] | None = None
         self._nu = np.zeros((n, 4))  # body_velocities' output
@@ -781,16 +858,22 @@ class HullBatch:
                     *self.windows, self.drift_k, self.loads, self.forces, self.flags, self.hits,
                     self.stopped, self.status,
                 )  # fmt: skip
-            if self._entry is None:
-                self._entry = entry(run, (integ, self._mj_step, self.mps, self.dps, self.fields,
-                                          stop_on_contact, *self._args))  # fmt: skip
-            code = self._entry(integ, self._mj_step, self.mps, self.dps, self.fields,
-                               stop_on_contact, *self._args)  # fmt: skip
+            fn = run
+            if self.n >= PARALLEL_MIN and _threads_ok():
+                fn = run_parallel
+                _THREADS["used"] = True
+            if self._entry is None or self._entry[0] is not fn:
+                self._entry = (fn, entry(fn, (integ, self._mj_step, self.mps, self.dps,
+                                              self.fields, stop_on_contact, *self._args)))  # fmt: skip
+            code = self._entry[1](integ, self._mj_step, self.mps, self.dps, self.fields,
+                                  stop_on_contact, *self._args)  # fmt: skip
             if code == OK:
                 return n - int(self.stopped.max())
-            i, slot, j = (int(x) for x in self.status[:3])
+            codes = self.status[:, 0]
             if code == DIVERGED:
+                i = int(np.argmax(codes == DIVERGED))
                 lo = self.loads[i].tolist()
                 nu = lo[1:5] if self.dofs == 4 else (lo[1], lo[2], lo[4])
                 diverged(lo[0], nu, lo[5:8])
-            self._load(i, slot, j)
+            for i in np.nonzero(codes == NEED)[0].tolist():
+                self._load(i, int(self.status[i, 1]), int(self.status[i, 2]))
