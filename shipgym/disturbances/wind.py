@@ -856,23 +856,15 @@ class Wind(GridPair):
         if self._spectral:
             self._extend_spectral(j, rng)
             return
-        from scipy.signal import lfilter
-
+        inf = math.inf
         while len(self._chunks) <= j:
             w = rng.standard_normal((2, CHUNK))
             rows = np.empty((2, CHUNK + 1))
-            new_state = []
-            for r, (x, a, b, m) in enumerate(
-                zip(self._state, self._a, self._b, (self._mean_v, self._mean_b), strict=True)
-            ):
-                # x_{k+1} = a x_k + b e_k as a first-order filter (y_k = b e_k + a y_{k-1}: the
-                # same products and sum as the loop it replaces, so the same floats)
-                y = lfilter([b], [1.0, -a], w[r], zi=[a * x])[0]
-                rows[r, 0] = x
-                rows[r, 1:] = y
-                rows[r] += m
-                new_state.append(float(y[-1]))
-            self._state = (new_state[0], new_state[1])
+            # the deviation x_{k+1} = a x_k + b e_k of each channel about its mean
+            (xv, xb), (av, ab), (bv, bb) = self._state, self._a, self._b
+            xv = gauss_markov(xv, self._mean_v, av, bv, w[0], -inf, inf, True, rows[0])
+            xb = gauss_markov(xb, self._mean_b, ab, bb, w[1], -inf, inf, True, rows[1])
+            self._state = (float(xv), float(xb))
             self._chunks.append(rows)
 
     def _extend_spectral(self, j: int, rng: np.random.Generator) -> None:

@@ -310,6 +310,14 @@ class Measurement:
     outlier: bool = False
 
 
+#: the fields a batched env's sensors share (each env may have its own noise variances)
+_SHARED_FIELDS = tuple(
+    f.name
+    for f in dataclasses.fields(SensorConfig)
+    if f.name not in ("position_variance", "heading_variance")
+)
+
+
 def _streams(rng: np.random.Generator) -> tuple[np.random.Generator, ...]:
     """The noise, outlier, dropout and correlated-error streams of one sensor set: one
     ``integers(2**63)`` draw from ``rng`` seeds a sequence that spawns the four (the first
@@ -432,11 +440,9 @@ class BatchedSensors:
         outliers and the correlated errors' fraction, times and bias std are the batch's;
         the Gauss-Markov DGPS error takes its share of env ``i``'s variance). Call it before
         :meth:`reset` of that env (the reset draws the errors' start from it)."""
-        same = config.replace(
-            position_variance=self.config.position_variance,
-            heading_variance=self.config.heading_variance,
-        )
-        if same != self.config:
+        if config is not self.config and any(
+            getattr(config, f) != getattr(self.config, f) for f in _SHARED_FIELDS
+        ):
             raise ValueError(
                 "a batched env's sensors may differ only in position_variance and "
                 f"heading_variance; got {config!r} against {self.config!r}"
