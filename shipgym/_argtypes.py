@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, NoReturn
 
 __all__ = [
@@ -98,6 +99,27 @@ def bounded_float(
     return parse
 
 
+def ray_address(text: str) -> str:
+    """An argparse type: a Ray address (``ray://host:10001``, ``host:6379``, ``auto``), not
+    empty or blank (which would silently mean a local instance)."""
+    if not str(text).strip() or any(c.isspace() for c in str(text)):
+        raise argparse.ArgumentTypeError(
+            f"must be a Ray address such as ray://host:10001 or auto, got {text!r}"
+        )
+    return str(text)
+
+
+def path_arg(text: str) -> Path:
+    """An argparse type: a file or folder path, not empty (``Path("")`` would mean the
+    current folder)."""
+    if not str(text).strip():
+        raise argparse.ArgumentTypeError(f"must be a file or folder path, got {text!r}")
+    return Path(text)
+
+
+path_arg.__name__ = "path"
+
+
 def parse_wind(text: str) -> Any:
     """The ``--wind`` argparse type: :meth:`WindConfig.parse` (``"3@300"``: 3 m/s from 300 deg).
 
@@ -125,7 +147,7 @@ def add_executor_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--executor", choices=["process", "ray"], default="process",
                    help="run the jobs in a local process pool (default) or as Ray tasks "
                    "(the ray extra)")  # fmt: skip
-    p.add_argument("--ray-address", default=None, metavar="ADDRESS",
+    p.add_argument("--ray-address", type=ray_address, default=None, metavar="ADDRESS",
                    help="a Ray cluster (ray://host:10001, auto); default: a local Ray "
                    "instance of --workers CPUs")  # fmt: skip
 

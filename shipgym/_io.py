@@ -12,6 +12,7 @@ import contextlib
 import os
 import signal
 import sys
+import tempfile
 import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
@@ -22,6 +23,7 @@ __all__ = [
     "WriteFailed",
     "atomic_path",
     "atomic_write_text",
+    "check_folder",
     "check_outputs",
     "check_writable",
     "progress_enabled",
@@ -281,6 +283,21 @@ def check_writable(path: Path) -> None:
             path.unlink()
     except OSError as exc:
         raise ValueError(f"cannot write {path}: {exc.strerror or exc}") from exc
+
+
+def check_folder(path: Path) -> None:
+    """Create the output folder ``path`` and check that files can be written in it, before
+    any work.
+
+    Raises:
+        ValueError: the folder cannot be created (a file in the way, no permission) or
+            written (the message names the path and the reason).
+    """
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        tempfile.TemporaryFile(dir=path).close()
+    except OSError as exc:
+        raise ValueError(f"cannot write into the folder {path}: {exc.strerror or exc}") from exc
 
 
 def check_outputs(

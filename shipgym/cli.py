@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from shipgym._argtypes import add_executor_options, executor_of, parse_wind
-from shipgym._io import check_writable
+from shipgym._argtypes import add_executor_options, executor_of, parse_wind, path_arg
+from shipgym._io import check_folder, check_writable
 from shipgym._safeload import jsonable
 from shipgym.bench import row_log, write_bench_outputs
 from shipgym.catalogue import catalogue, check_controller, controller_catalogue
@@ -223,9 +223,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 f"running it with {observer!r} as asked (--observer); the results say so",
                 file=sys.stderr,
             )
-    for path in (args.json, args.record):
-        if path is not None:
-            check_writable(path)
     if args.record is not None and args.record.suffix != ".rrd":
         raise ValueError(f"--record needs a .rrd path, got {args.record}")
     from shipgym._io import on_interrupt, partial_path
@@ -288,9 +285,6 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     blue_lady = load_vessel("blue-lady")  # the benchmark's harbour manoeuvre
     for name in args.observers:
         make_observer(name, vessel=blue_lady)  # unknown names fail before any work
-    for path in (args.json, args.markdown):
-        if path is not None:
-            check_writable(path)
     log = row_log(args.json, args.markdown, len(args.observers) * args.seeds)
     t0 = time.perf_counter()
     check_controller(args.controller)
@@ -358,11 +352,6 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
             raise ValueError(f"unknown DP method {m!r}; choose from {', '.join(METHODS)}")
     if args.duration is None:
         args.duration = 400.0 if args.task == "sway-step" else 600.0
-    if not (math.isfinite(args.duration) and args.duration >= 100.0):
-        raise ValueError(f"--duration must be >= 100 s (the metrics' spectra), got {args.duration}")
-    for path in (args.json, args.markdown):
-        if path is not None:
-            check_writable(path)
     total = len(args.vessel) * len(beauforts) * len(methods) * args.seeds
     log = row_log(args.json, args.markdown, total)
     t0 = time.perf_counter()
@@ -482,13 +471,6 @@ def _cmd_bench_roll(args: argparse.Namespace) -> int:
             raise ValueError(f"unknown roll method {m!r}; choose from {', '.join(METHODS)}")
     if args.task is not None and args.task not in TASKS:
         raise ValueError(f"unknown roll task {args.task!r}; choose from {', '.join(TASKS)}")
-    if not (math.isfinite(args.duration) and args.duration >= 150.0):
-        raise ValueError(
-            f"--duration must be >= 150 s (the metrics skip the first 100 s), got {args.duration}"
-        )
-    for path in (args.json, args.markdown):
-        if path is not None:
-            check_writable(path)
     run_speeds: dict[str, list[float]] = {}
     for v, vv in vessels.items():
         top = vv.limits.get("surge_speed", math.inf)
@@ -576,11 +558,13 @@ def _cmd_trials(args: argparse.Namespace) -> int:
     try:
         ax, ay = (float(x) for x in args.antenna.split(","))
     except ValueError:
-        raise ValueError(f"--antenna must be X,Y in m (body frame), got {args.antenna!r}") from None
+        ax = ay = math.nan
+    if not (math.isfinite(ax) and math.isfinite(ay) and max(abs(ax), abs(ay)) <= MAX_ANTENNA):
+        raise ValueError(
+            f"--antenna must be X,Y: two finite numbers within +-{MAX_ANTENNA:g} m (body frame, "
+            f"from midship), got {args.antenna!r}"
+        )
     receiver = None if args.receiver == "none" else args.receiver
-    for path in (args.json, args.markdown):
-        if path is not None:
-            check_writable(path)
     bar = None
     if progress_enabled(args.no_progress):
         from tqdm import tqdm
@@ -697,6 +681,11 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 #: longest simulated time of ``shipgym demo`` (s): one day
 MAX_DEMO_DURATION = 86_400.0
+#: farthest antenna from midship (m): beyond any hull's half length (a VLCC: 170 m)
+MAX_ANTENNA = 500.0
+#: longest episode of ``shipgym bench dp`` / ``bench roll`` (s): one day per episode (a
+#: larger value is a typo, and would hold the machine for days)
+MAX_BENCH_DURATION = 86_400.0
 
 
 def _version() -> str:
@@ -713,8 +702,8 @@ def _add_bench_outputs(b: argparse.ArgumentParser) -> None:
         "--workers", type=bounded_int(1, MAX_WORKERS), default=None,
         help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
     )  # fmt: skip
-    b.add_argument("--json", type=Path, default=None, metavar="PATH")
-    b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    b.add_argument("--json", type=path_arg, default=None, metavar="PATH")
+    b.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
     add_executor_options(b)
 
 
@@ -765,18 +754,19 @@ def _parser() -> argparse.ArgumentParser:
         "--vessel", default=None,
         help="vessel name or package path (see 'shipgym list'; the Blue Lady ids imply it)",
     )  # fmt: skip
-    p.add_argument("--json", type=Path, default=None, metavar="PATH", help="write results")
-    p.add_argument("--record", type=Path, default=None, metavar="PATH.rrd",
+    p.add_argument("--json", type=path_arg, default=None, metavar="PATH", help="write results")
+    p.add_argument("--record", type=path_arg, default=None, metavar="PATH.rrd",
                    help="record the episode to a rerun file (no viewer needed)")  # fmt: skip
     p.add_argument("--spawn", action="store_true", help="also open the rerun viewer if possible")
-    p.add_argument("--report", type=Path, default=None, metavar="DIR",
+    p.add_argument("--report", type=path_arg, default=None, metavar="DIR",
                    help="write PNG figures and metrics.md into DIR")  # fmt: skip
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.set_defaults(func=_cmd_run)
+    p.set_defaults(func=_cmd_run, folders={"--report": REPORT})
     p = sub.add_parser("report", help="PNG figures and metrics.md from a recorded run")
-    p.add_argument("run", type=Path, help="RUN.rrd or RUN.json")
-    p.add_argument("--out", type=Path, required=True, metavar="DIR")
-    p.set_defaults(func=_cmd_report)
+    p.add_argument("run", type=path_arg, help="RUN.rrd (shipgym run --record) or a run file "
+                   "of shipgym.viz.save_run_json")  # fmt: skip
+    p.add_argument("--out", type=path_arg, required=True, metavar="DIR")
+    p.set_defaults(func=_cmd_report, folders={"--out": REPORT})
     p = sub.add_parser(
         "bench", help="benchmarks: 'bench observers', 'bench controllers', 'bench dp', 'bench roll'"
     )
@@ -797,10 +787,10 @@ def _parser() -> argparse.ArgumentParser:
                    "current, sensors (e.g. tomera2014-lake; default: the harbour env's)",
                    )  # fmt: skip
     _add_bench_outputs(b)
-    b.add_argument("--report", type=Path, default=None, metavar="DIR",
+    b.add_argument("--report", type=path_arg, default=None, metavar="DIR",
                    help="bar chart of the indices and velocity-error plots (PNG)")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
-    b.set_defaults(func=_cmd_bench)
+    b.set_defaults(func=_cmd_bench, folders={"--report": REPORT})
     b = bsub.add_parser(
         "dp", help="Al-Takie (1982) DP wave filters in closed loop, Beaufort 5-9 (table)"
     )
@@ -814,17 +804,18 @@ def _parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     b.add_argument("--methods", nargs="+", default=None, metavar="NAME",
                    help="methods of shipgym.dp.bench.METHODS (all)")  # fmt: skip
-    b.add_argument("--duration", type=float, default=None,
-                   help="episode length, s (600; the sway step: 400)")  # fmt: skip
+    b.add_argument("--duration", type=bounded_float(100.0, MAX_BENCH_DURATION, unit="s"),
+                   default=None, help="episode length, s, >= 100 (the metrics' spectra) and <= "
+                   f"{MAX_BENCH_DURATION:g} (600; the sway step: 400)")  # fmt: skip
     b.add_argument("--task", choices=("station-keeping", "sway-step"), default="station-keeping",
                    help="DPStationKeeping-v0 or the thesis's 0.02 p.u. sway step, DPSwayStep-v0 "
                    "(station-keeping)")  # fmt: skip
     _add_bench_outputs(b)
-    b.add_argument("--figures", type=Path, default=None, metavar="DIR",
+    b.add_argument("--figures", type=path_arg, default=None, metavar="DIR",
                    help="estimates vs truth, thrust spectra and gain history (PNG), per vessel "
                    "in Beaufort 8 (or the highest given), seed 0")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
-    b.set_defaults(func=_cmd_bench_dp)
+    b.set_defaults(func=_cmd_bench_dp, folders={"--figures": FIGURES})
     b = bsub.add_parser(
         "roll", help="Radhakrishnan (n.d.) rudder-roll stabilisation across speeds (table)"
     )
@@ -845,14 +836,15 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--task", default=None, metavar="seed-test|beam-sea",
                    help="the seed's sinusoidal rudder in calm water, or a beam sea (each "
                    "vessel's default: seed-test for van-der-klugt, else beam-sea)")  # fmt: skip
-    b.add_argument("--duration", type=float, default=400.0,
-                   help="episode length, s, >= 150 (400)")  # fmt: skip
+    b.add_argument("--duration", type=bounded_float(150.0, MAX_BENCH_DURATION, unit="s"),
+                   default=400.0, help="episode length, s, >= 150 (the metrics skip the first "
+                   f"100 s) and <= {MAX_BENCH_DURATION:g} (400)")  # fmt: skip
     _add_bench_outputs(b)
-    b.add_argument("--figures", type=Path, default=None, metavar="DIR",
+    b.add_argument("--figures", type=path_arg, default=None, metavar="DIR",
                    help="RRR, heading/rudder, stability margin against speed, and one episode "
                    "per vessel at its design speed (PNG)")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
-    b.set_defaults(func=_cmd_bench_roll)
+    b.set_defaults(func=_cmd_bench_roll, folders={"--figures": FIGURES})
     from shipgym.rl.cli import add_bench_controllers_parser, add_plot_parser, add_train_parser
 
     add_bench_controllers_parser(bsub)
@@ -891,17 +883,17 @@ def _parser() -> argparse.ArgumentParser:
         metavar="X,Y",
         help="antenna position, m, body frame from midship (0,0; the seed's: aft)",
     )
-    p.add_argument("--json", type=Path, default=None, metavar="PATH")
-    p.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    p.add_argument("--json", type=path_arg, default=None, metavar="PATH")
+    p.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
     p.add_argument(
         "--figures",
-        type=Path,
+        type=path_arg,
         default=None,
         metavar="DIR",
         help="tracks, drift angle and speed against time, receiver bias (PNG)",
     )
     p.add_argument("--no-progress", action="store_true")
-    p.set_defaults(func=_cmd_trials)
+    p.set_defaults(func=_cmd_trials, folders={"--figures": FIGURES})
     p = sub.add_parser("demo", help="open-loop turn in gusty wind; prints a summary")
     p.add_argument("--wind", type=parse_wind, default="3@300",
                    metavar="SPEED@FROM_DEG", help="mean wind, e.g. 3@300 (default)")  # fmt: skip
@@ -917,9 +909,10 @@ def _parser() -> argparse.ArgumentParser:
 
 #: the options that write files or folders (every subcommand)
 OUTPUT_OPTIONS = ("json", "markdown", "record", "report", "out", "figures")
-#: the folder options and the names they write into their folder (figures, metrics.md)
-FOLDER_OUTPUTS = {"--report": ("*.png", "*.md"), "--out": ("*.png", "*.md"),
-                  "--figures": ("*.png",)}  # fmt: skip
+#: the names a report folder and a figures folder write (a subcommand's ``folders`` default
+#: maps its folder options to these; every other output option is one file)
+REPORT = ("*.png", "*.md")
+FIGURES = ("*.png",)
 
 
 def _check_paths(args: argparse.Namespace) -> None:
@@ -945,7 +938,10 @@ def _check_paths(args: argparse.Namespace) -> None:
                 v = v if v.exists() else None
             if isinstance(v, Path):
                 inputs[name if len(values) == 1 else f"{name}[{i}]"] = v
-    check_outputs(outputs, inputs, FOLDER_OUTPUTS)
+    folders: dict[str, tuple[str, ...]] = getattr(args, "folders", {})
+    check_outputs(outputs, inputs, folders)
+    for name, path in outputs.items():  # writable, before any work
+        (check_folder if name in folders else check_writable)(path)  # type: ignore[arg-type]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import re
 import shutil
-from pathlib import Path
 from importlib import resources
+from pathlib import Path
 
 import numpy as np
 import pytest

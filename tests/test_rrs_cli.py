@@ -130,7 +130,7 @@ def test_cli_writes_the_figures(bench):
         (["--vessel", "blue-lady"], "has no [roll_control] table"),
         (["--methods", "rrs-magic"], "unknown roll method 'rrs-magic'; choose from autopilot"),
         (["--task", "zigzag"], "unknown roll task 'zigzag'; choose from seed-test, beam-sea"),
-        (["--duration", "100"], "--duration must be >= 150 s"),
+        (["--duration", "100"], "--duration: must be a finite number >= 150 s"),
         (["--vessel", "naval-vessel", "--speeds", "12"], "no runs"),
         (["--seeds", "0"], "--seeds"),
     ],

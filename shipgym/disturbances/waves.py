@@ -17,6 +17,7 @@ Design notes: docs/design/disturbances.waves.md.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -358,7 +359,11 @@ class WaveConfig:
         if self.wf_lambda is not None and not 0.0 < self.wf_lambda < 1.0:
             raise ValueError(f"{name}.wf_lambda must be in (0, 1) or None, got {self.wf_lambda!r}")
         bf = self.wf_beaufort
-        if bf is not None and (isinstance(bf, bool) or bf not in AL_TAKIE_HF_POLYNOMIALS):
+        if bf is not None and (
+            isinstance(bf, bool)
+            or not isinstance(bf, numbers.Integral)
+            or bf not in AL_TAKIE_HF_POLYNOMIALS
+        ):
             raise ValueError(f"{name}.wf_beaufort must be None or an int 5-9, got {bf!r}")
         if self.wf_model == "al-takie" and bf is None:
             raise ValueError(

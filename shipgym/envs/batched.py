@@ -78,6 +78,11 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
 
     metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
+    def __new__(cls, *args: Any, **kwargs: Any) -> Any:
+        if args or kwargs:  # (none: unpickling) before a subclass builds anything for them
+            check_num_envs(args[0] if args else kwargs.get("num_envs"))
+        return super().__new__(cls)
+
     def _setup(
         self,
         num_envs: int,

@@ -30,6 +30,7 @@ from shipgym.dynamics.vessel import load_vessel
 from shipgym.guidance import Leg, ManoeuvrePlan
 from shipgym.observers.sensors import sensor_config
 
+from .base import MAX_CONTROL_PERIOD
 from .tasks import StationKeepingEnv
 
 __all__ = [
@@ -242,10 +243,13 @@ class OffshoreDPEnv(StationKeepingEnv):
         # timing: 0.1 p.u. control period, whole physics steps of <= 0.05 s
         if "control_period" not in kwargs:
             kwargs["control_period"] = dp_control_period(vessel.hull.L_pp)
+        cp = kwargs["control_period"]
+        if isinstance(cp, bool) or not isinstance(cp, numbers.Real) or not 0 < cp <= MAX_CONTROL_PERIOD:
+            raise ValueError(
+                f"control_period must be a number of s in (0, {MAX_CONTROL_PERIOD:g}], got {cp!r}"
+            )
         if "timestep" not in kwargs:
-            cp = kwargs["control_period"]
-            if isinstance(cp, numbers.Real) and not isinstance(cp, bool) and float(cp) > 0:
-                kwargs["timestep"] = dp_timing(float(cp))[0]
+            kwargs["timestep"] = dp_timing(float(cp))[0]
         # wind and waves: the Beaufort preset, Al-Takie's printed Beaufort 8 wind
         sea = beaufort_sea(int(beaufort), scale, math.radians(direction), wave_motion)
         kwargs.setdefault("wind", sea.wind)

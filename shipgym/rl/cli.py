@@ -30,9 +30,10 @@ from shipgym._argtypes import (
     executor_of,
     nonneg_int,
     parse_wind,
+    path_arg,
     seed_int,
 )
-from shipgym._io import check_writable, progress_enabled
+from shipgym._io import progress_enabled
 
 __all__ = [
     "add_bench_controllers_parser",
@@ -87,10 +88,10 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
         default=None,
         help="parallel environments, 1-256 (YAML)",
     )
-    p.add_argument("--out", type=Path, default=None, help="output folder")
+    p.add_argument("--out", type=path_arg, default=None, help="output folder")
     p.add_argument(
         "--resume",
-        type=Path,
+        type=path_arg,
         default=None,
         metavar="CKPT",
         help="continue a checkpoint/model written by 'shipgym train' (nothing is unpickled: "
@@ -106,7 +107,7 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
         default=None,
         help="what the policy sees: kbf (YAML default), dkf, ekf or truth",
     )
-    p.add_argument("--hyperparams", type=Path, default=None, help="another YAML file")
+    p.add_argument("--hyperparams", type=path_arg, default=None, help="another YAML file")
     p.add_argument(
         "--eval-freq",
         type=nonneg_int,
@@ -135,7 +136,7 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--verbose", type=bounded_int(0, 2), default=0, help="SB3 verbosity, 0-2 (0)")
-    p.set_defaults(func=cmd_train)
+    p.set_defaults(func=cmd_train, folders={"--out": ("*",)})  # a model folder
     return p
 
 
@@ -284,8 +285,8 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
         default=None,
         help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
     )
-    b.add_argument("--json", type=Path, default=None, metavar="PATH")
-    b.add_argument("--markdown", type=Path, default=None, metavar="PATH")
+    b.add_argument("--json", type=path_arg, default=None, metavar="PATH")
+    b.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
     add_executor_options(b)
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=cmd_bench_controllers)
@@ -308,7 +309,7 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
     )
     from shipgym.runner import ENV_DEFAULT
 
-    vessel = args.vessel or default_vessel(args.task)
+    vessel = default_vessel(args.task) if args.vessel is None else args.vessel
     if args.vessel is not None:
         from shipgym.dynamics.vessel import load_vessel
         from shipgym.envs.registration import resolve_env_id, task_fits_vessel
@@ -328,9 +329,6 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
         from shipgym.observers import make_observer
 
         make_observer(args.observer)
-    for path in (args.json, args.markdown):
-        if path is not None:
-            check_writable(path)
     from shipgym.bench import row_log, write_bench_outputs
 
     missing = missing_baselines(args.task, vessel) if args.controllers is None else []
@@ -376,9 +374,10 @@ def add_plot_parser(sub: Any) -> argparse.ArgumentParser:
         description="Reads progress.csv (time/total_timesteps, rollout/ep_rew_mean) and "
         "evaluations.json of each run folder and draws one line per run.",
     )
-    t.add_argument("runs", nargs="+", type=Path, metavar="RUN_DIR",
+    t.add_argument("runs", nargs="+", type=path_arg, metavar="RUN_DIR",
                    help="output folders of 'shipgym train' (--out)")  # fmt: skip
-    t.add_argument("--out", type=Path, required=True, metavar="FIG.png", help="the figure (PNG)")
+    t.add_argument("--out", type=path_arg, required=True, metavar="FIG.png",
+                   help="the figure (PNG)")  # fmt: skip
     t.add_argument("--labels", nargs="+", default=None, metavar="NAME",
                    help="legend names, one per run (default: the folder names)")  # fmt: skip
     t.set_defaults(func=cmd_plot_training)
@@ -389,7 +388,6 @@ def cmd_plot_training(args: argparse.Namespace) -> int:
     """Run :func:`shipgym.viz.training.plot_training`; prints what it drew."""
     from shipgym.viz.training import plot_training, read_training_run
 
-    check_writable(args.out)
     path = plot_training(args.runs, args.out, labels=args.labels)
     for d in args.runs:
         c = read_training_run(d)

@@ -477,6 +477,18 @@ def _check_hp_types(algo: str, hp: Mapping[str, Any], where: str) -> None:
                 f"{where}: normalize has unknown keys {unknown}; valid: "
                 f"{', '.join(_NORMALIZE_KEYS)}"
             )
+        for k, v in norm.items():  # VecNormalize's flags and positive bounds
+            flag = k in ("norm_obs", "norm_reward")
+            ok = isinstance(v, bool) if flag else _is_number(v) and v > 0
+            if ok and k == "gamma":
+                ok = v <= 1
+            if not ok:
+                what = (
+                    "true or false"
+                    if flag
+                    else ("a number in (0, 1]" if k == "gamma" else "a finite number > 0")
+                )
+                raise ValueError(f"{where}: normalize.{k} must be {what}, got {v!r}")
     seeds = hp.get("eval_seeds")
     if seeds is not None and not (
         isinstance(seeds, list | tuple)

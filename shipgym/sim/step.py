@@ -863,8 +863,8 @@ class HullBatch:
                 fn = run_parallel
                 _THREADS["used"] = True
             if self._entry is None or self._entry[0] is not fn:
-                self._entry = (fn, entry(fn, (integ, self._mj_step, self.mps, self.dps,
-                                              self.fields, stop_on_contact, *self._args)))  # fmt: skip
+                args = (integ, self._mj_step, self.mps, self.dps, self.fields, stop_on_contact)
+                self._entry = (fn, entry(fn, (*args, *self._args)))
             code = self._entry[1](integ, self._mj_step, self.mps, self.dps, self.fields,
                                   stop_on_contact, *self._args)  # fmt: skip
             if code == OK:

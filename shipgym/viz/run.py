@@ -380,6 +380,12 @@ def _load_json(path: Path) -> Run:
         doc = parse(raw.decode("utf-8"), "json", f"run file {path}", limit=1 << 27)
     except (ValueError, UnicodeDecodeError) as exc:
         raise ValueError(f"cannot read the run file {path}: {exc}") from None
+    if isinstance(doc, dict) and "format" not in doc and "env_id" in doc and "seed" in doc:
+        raise ValueError(
+            f"{path} holds the results of 'shipgym run --json' (metrics, no trajectory): "
+            "make the figures from the run's recording (shipgym report RUN.rrd, from "
+            "'shipgym run --record RUN.rrd') or with 'shipgym run --report DIR'"
+        )
     if not isinstance(doc, dict) or doc.get("format") != JSON_FORMAT:
         raise ValueError(
             f"{path} is not a shipgym run file (expected a JSON object with "
