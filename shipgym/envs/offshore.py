@@ -244,7 +244,11 @@ class OffshoreDPEnv(StationKeepingEnv):
         if "control_period" not in kwargs:
             kwargs["control_period"] = dp_control_period(vessel.hull.L_pp)
         cp = kwargs["control_period"]
-        if isinstance(cp, bool) or not isinstance(cp, numbers.Real) or not 0 < cp <= MAX_CONTROL_PERIOD:
+        if (
+            isinstance(cp, bool)
+            or not isinstance(cp, numbers.Real)
+            or not 0 < cp <= MAX_CONTROL_PERIOD
+        ):
             raise ValueError(
                 f"control_period must be a number of s in (0, {MAX_CONTROL_PERIOD:g}], got {cp!r}"
             )
