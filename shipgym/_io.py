@@ -34,6 +34,7 @@ __all__ = [
     "output_lock",
     "os_reason",
     "partial_path",
+    "rrd_complete",
     "replace_together",
     "write_partial_text",
 ]
@@ -246,6 +247,25 @@ def write_partial_text(path: str | os.PathLike[str], text: str) -> Path | None:
             tmp.unlink()
         raise
     return tmp
+
+
+#: the last 12 bytes of a finished rerun recording: the footer's magic and version (rerun
+#: writes the footer, a manifest of the file, when the recording's file sink is finalised)
+RRD_FOOTER = b"RRF2FOOT"
+
+
+def rrd_complete(path: str | os.PathLike[str]) -> bool:
+    """Whether the ``.rrd`` file at ``path`` was written to its end (its footer is there): a
+    recording cut short by a full disk, a lost folder or a killed process is not."""
+    try:
+        with open(path, "rb") as f:
+            f.seek(0, os.SEEK_END)
+            if f.tell() < 12:
+                return False
+            f.seek(-12, os.SEEK_END)
+            return f.read(8) == RRD_FOOTER
+    except OSError:
+        return False
 
 
 def os_reason(exc: OSError) -> str:

@@ -974,6 +974,10 @@ def main(argv: list[str] | None = None) -> int:
         except SimulationDiverged as exc:  # a plant or setting that does not simulate
             print(f"shipgym: error: {exc}", file=sys.stderr)
             return 3
+        except OSError as exc:  # a full disk, a folder removed during the run, ...
+            where = f" {exc.filename}" if exc.filename else ""
+            print(f"shipgym: error: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
+            return 1
         except KeyboardInterrupt as exc:
             print(interrupt_message(exc), file=sys.stderr, flush=True)
             return interrupt_status(exc)

@@ -13,7 +13,7 @@ import json
 import math
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -144,11 +144,20 @@ def run_episode(
     files: list[str] = []
     if record is not None:
         files.append(str(record))
-    if report is not None:
-        from shipgym.viz import write_report
+    report_failed = None
+    report_moves: list[tuple[Path, Path]] = []
+    if report is not None:  # at partial names: renamed with the recording and the JSON
+        from shipgym._io import os_reason
+        from shipgym.viz import load_run
+        from shipgym.viz.report import report_files
 
         run = getattr(env, "last_run", None)
-        files += [str(p) for p in write_report(run if run is not None else record, report)]
+        try:
+            report.mkdir(parents=True, exist_ok=True)
+            report_moves = report_files(run if run is not None else load_run(record), report)
+        except OSError as exc:  # a full disk: the results are printed instead
+            report_failed = f"cannot write the report into {report} ({os_reason(exc)})"
+        files += [str(dst) for _, dst in report_moves]
     res = {
         "scenario": scenario,
         "scenario_preset": scenario_preset,
@@ -166,7 +175,8 @@ def run_episode(
         "files": files,
     }
     if record is not None or json_path is not None:
-        _commit_results(res, env if record is not None else None, json_path)
+        _commit_results(res, env if record is not None else None, json_path, report_moves,
+                        failed=[report_failed] if report_failed else [])  # fmt: skip
     return res
 
 
@@ -277,35 +287,57 @@ def _model_info(env: Any, controller: str) -> dict[str, Any] | None:
     }
 
 
-def _commit_results(res: dict[str, Any], recorder: Any, json_path: Path | None) -> None:
-    """Rename the recording (``recorder.ended``) and the JSON results onto their names together.
+def _commit_results(
+    res: dict[str, Any],
+    recorder: Any,
+    json_path: Path | None,
+    more: Sequence[tuple[Path, Path]] = (),
+    failed: Sequence[str] = (),
+) -> None:
+    """Rename the recording (``recorder.ended``), the JSON results and ``more`` (the report's
+    ``(partial, final)`` files) onto their names together, only when all were written to their
+    ends (``failed``: what could not be written already).
 
-    A JSON file that cannot be written leaves no stale JSON of an earlier run next to the new
-    recording; the failure is raised as :class:`shipgym._io.WriteFailed` with the results.
+    Where one could not be written (a full disk) nothing is renamed and nothing removed: the
+    earlier complete outputs stay as they were, the new partial recording stays at its
+    partial name; the failure is raised as :class:`shipgym._io.WriteFailed` with the results.
     """
-    from shipgym._io import WriteFailed, os_reason, replace_together, write_partial_text
+    from shipgym._io import (
+        WriteFailed,
+        os_reason,
+        replace_together,
+        rrd_complete,
+        write_partial_text,
+    )
 
-    moves = list(recorder.ended) if recorder is not None else []
-    stale: list[Path] = []
-    failed: list[str] = []
+    moves = [*(recorder.ended if recorder is not None else ()), *more]
+    failed = [*failed] + [
+        f"the recording {dst} could not be written to its end (a full disk?); the incomplete "
+        f"file is at {src}"
+        for src, dst in moves
+        if Path(dst).suffix == ".rrd" and not rrd_complete(src)
+    ]
     if json_path is not None:
         try:
             tmp = write_partial_text(json_path, json.dumps(jsonable(res), indent=2))
         except OSError as exc:
             failed.append(f"cannot write the results to {json_path} ({os_reason(exc)})")
-            stale.append(json_path)
         else:
             if tmp is not None:
                 moves.append((tmp, json_path))
-    try:
-        replace_together(moves, remove=stale)
-        if recorder is not None:
-            recorder.ended.clear()
-    except OSError as exc:
-        where = ", ".join(str(dst) for _, dst in moves)
-        failed.append(f"cannot rename the finished files onto {where} ({os_reason(exc)})")
+    if not failed:
+        try:
+            replace_together(moves)
+            if recorder is not None:
+                recorder.ended.clear()
+        except OSError as exc:
+            where = ", ".join(str(dst) for _, dst in moves)
+            failed.append(f"cannot rename the finished files onto {where} ({os_reason(exc)})")
     if failed:
-        raise WriteFailed("; ".join(failed), res)
+        for src, dst in moves:  # the new JSON's partial file (the recording's stays)
+            if Path(dst).suffix != ".rrd":
+                Path(src).unlink(missing_ok=True)
+        raise WriteFailed("; ".join(failed) + "; the earlier outputs are kept as they were", res)
 
 
 def _progress(total: int | None, enabled: bool, desc: str) -> Any:

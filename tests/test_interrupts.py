@@ -221,9 +221,9 @@ def test_json_to_a_full_device_prints_the_results(tmp_path):
     assert "printed on stdout" in out.stderr
 
 
-def test_failed_json_write_leaves_no_stale_pair(tmp_path, earlier, monkeypatch, capsys):
-    """The JSON cannot be written (disk full): the new recording is kept, the earlier JSON
-    goes (it would describe another run), the results are printed; exit 2."""
+def test_failed_json_write_keeps_the_earlier_pair(tmp_path, earlier, monkeypatch, capsys):
+    """The JSON cannot be written (disk full): the earlier pair stays byte for byte, the new
+    recording stays at its partial name, the results are printed; exit 2 (issue 33)."""
     import errno
 
     import shipgym._io
@@ -231,6 +231,7 @@ def test_failed_json_write_leaves_no_stale_pair(tmp_path, earlier, monkeypatch, 
 
     for f in ("h.rrd", "h.json"):
         shutil.copyfile(earlier / f, tmp_path / f)
+    before = {f: (tmp_path / f).read_bytes() for f in ("h.rrd", "h.json")}
 
     def full(path, text):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
@@ -242,10 +243,52 @@ def test_failed_json_write_leaves_no_stale_pair(tmp_path, earlier, monkeypatch, 
     captured = capsys.readouterr()
     res = json.loads(captured.out)
     assert "No space left on device" in captured.err and captured.err.count("\n") == 1
-    assert not js.exists()
-    run = load_run(rrd)
+    assert "earlier outputs are kept" in captured.err
+    assert {f: (tmp_path / f).read_bytes() for f in before} == before
+    run = load_run(tmp_path / "h.partial.rrd")
     assert run.metadata["seed"] == 3 and run.metrics["J_c"] == pytest.approx(res["J_c"])
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["h.rrd"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["h.json", "h.partial.rrd", "h.rrd"]
+
+
+def test_a_recording_cut_short_is_never_renamed_onto_the_earlier_one(
+    tmp_path, earlier, monkeypatch, capsys
+):
+    """A recording that could not be written to its end (a full disk: rerun's file sink
+    drops what it cannot write) lacks its footer: it is not renamed onto ``h.rrd``, the
+    earlier pair stays byte for byte, the results are printed; exit 2."""
+    import shipgym.runner
+    from shipgym._io import rrd_complete
+    from shipgym.cli import main
+
+    assert rrd_complete(earlier / "h.rrd")
+    cut = tmp_path / "cut.rrd"
+    cut.write_bytes((earlier / "h.rrd").read_bytes()[:-20000])
+    assert not rrd_complete(cut) and not rrd_complete(tmp_path / "missing.rrd")
+    for f in ("h.rrd", "h.json"):
+        shutil.copyfile(earlier / f, tmp_path / f)
+    before = {f: (tmp_path / f).read_bytes() for f in ("h.rrd", "h.json")}
+    commit = shipgym.runner._commit_results
+
+    def disk_full(res, recorder, json_path, *args, **kwargs):  # the sink lost its last bytes
+        for src, _ in recorder.ended:
+            Path(src).write_bytes(Path(src).read_bytes()[:-5000])
+        return commit(res, recorder, json_path, *args, **kwargs)
+
+    monkeypatch.setattr(shipgym.runner, "_commit_results", disk_full)
+    argv = ["run", "station-keeping", "--seed", "4", "--record", str(tmp_path / "h.rrd"),
+            "--json", str(tmp_path / "h.json"), "--no-progress"]  # fmt: skip
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["seed"] == 4
+    assert "could not be written to its end" in captured.err
+    assert captured.err.count("\n") == 1, captured.err
+    assert {f: (tmp_path / f).read_bytes() for f in before} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "cut.rrd",
+        "h.json",
+        "h.partial.rrd",
+        "h.rrd",
+    ]
 
 
 def _rows(path):
@@ -378,3 +421,33 @@ def test_signalled_training_leaves_no_process(tmp_path, name, request):
     assert proc.returncode == 143, err
     assert err.strip().splitlines()[-1].startswith("shipgym: interrupted (SIGTERM); ")
     assert "no final model.zip written" in err and "Traceback" not in err
+
+
+def test_a_report_that_cannot_be_written_leaves_the_earlier_report_whole(
+    tmp_path, monkeypatch, capsys
+):
+    """A report folder is replaced as a whole with its recording and JSON, or not at all: a
+    figure that cannot be written (a full disk) leaves every earlier file byte for byte and no
+    new figure beside them; the results are printed; exit 2 (issue 33)."""
+    import errno
+
+    import shipgym.viz.report as report
+    from shipgym.cli import main
+
+    rep, js = tmp_path / "rep", tmp_path / "rep" / "h.json"
+    argv = ["run", "station-keeping", "--report", str(rep), "--json", str(js), "--no-progress"]
+    assert main([*argv, "--seed", "5"]) == 0
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in rep.iterdir()}
+    assert {"metrics.md", "trajectory.png", "run.rrd", "h.json"} <= set(before)
+
+    def full(run, path):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(report, "_plot_velocities", full)
+    assert main([*argv, "--seed", "6"]) == 2
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["seed"] == 6
+    assert "cannot write the report" in captured.err and captured.err.count("\n") == 1
+    after = {p.name: p.read_bytes() for p in rep.iterdir() if p.name != "run.partial.rrd"}
+    assert after == before

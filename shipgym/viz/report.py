@@ -593,12 +593,29 @@ def write_report(
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ValueError(f"cannot create the report folder {out}: {exc.strerror or exc}") from None
-    files = report_paths(out)
-    _plot_trajectory(run, files[0], float(hull_every))
-    _plot_positions(run, files[1])
-    _plot_velocities(run, files[2])
-    _plot_thrusters(run, files[3])
-    from shipgym._io import atomic_write_text
+    from shipgym._io import replace_together
 
-    atomic_write_text(files[4], _metrics_markdown(run, files[:4]))
-    return files
+    return replace_together(report_files(run, out, hull_every=float(hull_every)))
+
+
+def report_files(run: Run, out: Path, *, hull_every: float = 60.0) -> list[tuple[Path, Path]]:
+    """The report of :func:`write_report` written at partial names (``trajectory.partial.png``
+    ...) in the existing folder ``out``: ``(partial, final)`` pairs for
+    :func:`shipgym._io.replace_together`, so that a report replaces the earlier one as a
+    whole, with the run's other outputs, or not at all. A failed write (a full disk) removes
+    the partial files written so far and raises its ``OSError``."""
+    from shipgym._io import atomic_write_text, partial_path
+
+    files = report_paths(out)
+    parts = [partial_path(f) for f in files]
+    try:
+        _plot_trajectory(run, parts[0], hull_every)
+        _plot_positions(run, parts[1])
+        _plot_velocities(run, parts[2])
+        _plot_thrusters(run, parts[3])
+        atomic_write_text(parts[4], _metrics_markdown(run, files[:4]))
+    except BaseException:
+        for p in parts:
+            p.unlink(missing_ok=True)
+        raise
+    return list(zip(parts, files, strict=True))
