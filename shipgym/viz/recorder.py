@@ -113,6 +113,32 @@ def _release_streams() -> None:
         cleanup()
 
 
+def _send_blueprint(rec: Any, blueprint: Any) -> None:
+    """``rec.send_blueprint(blueprint)`` (active and default), without its thread leak: rerun
+    0.41 builds the blueprint in a stream of its own whose two native threads outlive it, two
+    threads per episode for ever; that stream is disconnected here once its contents are sent.
+    Falls back to the public call where rerun's internals differ."""
+    try:
+        from rerun import bindings
+        from rerun.recording_stream import RecordingStream, get_application_id
+
+        stream = RecordingStream._from_native(
+            bindings.new_blueprint(application_id=get_application_id(recording=rec),
+                                   make_default=False, make_thread_default=False,
+                                   default_enabled=True)
+        )  # fmt: skip
+    except (ImportError, AttributeError, TypeError):
+        rec.send_blueprint(blueprint, make_active=True, make_default=True)
+        return
+    try:
+        stream.set_time("blueprint", sequence=0)
+        blueprint.to_blueprint()._log_to_stream(stream)
+        storage = stream.memory_recording().storage
+        bindings.send_blueprint(storage, True, True, recording=rec.to_native())
+    finally:
+        stream.disconnect()
+
+
 def _finish_all() -> None:
     """At interpreter exit: finish the files of recorders nobody closed."""
     for recorder in list(_LIVE):
@@ -766,7 +792,7 @@ class RecordEpisode(
             rec.set_sinks(rr.FileSink(path), rr.GrpcSink(url))
         else:
             rec.save(path)  # the footer (manifest) is written when the sink is finalised
-        rec.send_blueprint(blueprint, make_active=True, make_default=True)
+        _send_blueprint(rec, blueprint)
 
     def _context(self, seed: int | None) -> dict[str, Any]:
         """Static facts of the episode: geometry, metadata, constants for the hot path."""
