@@ -323,3 +323,31 @@ def test_a_thousand_recorded_episodes_keep_threads_and_memory_flat(tmp_path):
     """Issue 33's acceptance: 1,000 recorded episodes in one process, thread count and RSS
     flat within 5 %."""
     _assert_flat(_recorded_episodes(tmp_path, 1000), warm=20)
+
+
+# ---- refusals at construction (issue 33 item 5) -------------------------------------------------
+@pytest.mark.parametrize(
+    ("observer", "options", "match"),
+    [
+        ("alt-kf14", None, "samples every 0.2728 s|samples every 0.272789 s"),
+        ("notch", {"design": {"centres_hz": [1.5]}}, "Nyquist"),
+    ],
+)
+def test_an_observer_that_cannot_take_the_sample_interval_is_refused_at_make(
+    observer, options, match
+):
+    """An Al-Takie filter samples at 0.1 per-unit time only and a notch centre must lie below
+    the sensors' Nyquist frequency: both were refused at the first step, now when the single
+    and the batched env are made."""
+    import gymnasium as gym
+
+    kw = {"vessel": "star-hercules", "control_period": 0.5, "observer": observer}
+    if options:
+        kw["observer_options"] = options
+    with pytest.raises(ValueError, match=match):
+        shipgym.make("shipgym/DPStationKeeping-v0", **kw)
+    if options is None:
+        with pytest.raises(ValueError, match=match):
+            gym.make_vec("shipgym/DPStationKeeping-v0", num_envs=2, **kw)
+    kw.pop("control_period")  # the task's own period (0.1 p.u.) fits both
+    shipgym.make("shipgym/DPStationKeeping-v0", **kw).close()

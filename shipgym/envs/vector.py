@@ -199,6 +199,9 @@ class ShipVectorEnv(BatchedEnv):
                 )
             # the design noise of the vessel, as the observer wrapper's make_observer
             self.observer = make_batched_observer(self.observer_name, n, self.vessel)
+            check = getattr(self.observer, "check_sample_interval", None)
+            if check is not None:  # refused now, not at the first step
+                check(self.sensors.config.period, self.control_period)
         self.controller = None
         if controller is not None:
             from shipgym.controllers.batch import batched_dp_controller

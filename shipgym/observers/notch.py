@@ -362,6 +362,21 @@ class BatchedNotch:
         if dt is not None:
             self._build(dt)
 
+    def check_sample_interval(self, period: float, control_period: float) -> None:
+        """Refuse, when an env is built, a sensor ``period`` (s) at which a notch centre lies at
+        or above the Nyquist frequency, or that differs from a fixed ``dt``: the first step
+        would raise (``control_period`` unused: the notch filters the samples).
+
+        Raises:
+            ValueError: naming the centres, the period and what to change.
+        """
+        if self._dt_fixed is not None and abs(period - self._dt_fixed) > 1e-9 * self._dt_fixed:
+            raise ValueError(
+                f"{self.name} samples every dt = {self._dt_fixed:.6g} s; the env's sensor period "
+                f"is {period:.6g} s: make them equal"
+            )
+        NotchCascade(self.design, period, channels=3)  # raises above Nyquist
+
     def batch(self, n: int) -> BatchedNotch:
         """A new batch of ``n`` envs with these settings."""
         return BatchedNotch(self.design, n, measurement_variance=self._R, dt=self._dt_fixed,
@@ -564,6 +579,10 @@ class NotchObserver(BatchOfOne):
         self.name = str(name)
         fixed = None if dt is None else _positive("dt (sampling interval)", dt, "s")
         self._b = BatchedNotch(design, 1, measurement_variance=R, dt=fixed, name=self.name)
+
+    def check_sample_interval(self, period: float, control_period: float) -> None:
+        """The batch's :meth:`BatchedNotch.check_sample_interval`."""
+        self._b.check_sample_interval(period, control_period)
 
     def batch(self, n: int) -> BatchedNotch:
         """This observer's law over ``n`` envs (the vector env's)."""

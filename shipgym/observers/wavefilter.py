@@ -717,6 +717,22 @@ class BatchedWaveFilter:
         self._info = BatchedStepInfo(np.full((n, 3), np.nan), np.full(n, np.nan),
                                      np.zeros(n, bool), np.zeros(n, bool))  # fmt: skip
 
+    def check_sample_interval(self, period: float, control_period: float) -> None:
+        """Refuse, when an env is built, sensors sampled (``period``, s) or control steps
+        (``control_period``, s) at another interval than the filter's :attr:`dt`: the first
+        step would raise.
+
+        Raises:
+            ValueError: naming both intervals and the setting to use.
+        """
+        for what, x in (("sensor period", period), ("control period", control_period)):
+            if abs(float(x) - self.dt) > 1e-6 * self.dt:
+                raise ValueError(
+                    f"{self.name} samples every {self.dt:.6g} s (0.1 per-unit time of "
+                    f"{self.vessel.name}); the env's {what} is {float(x):.6g} s: run the env "
+                    f"with control_period={self.dt:.6g} and sensors sampled at it"
+                )
+
     def batch(self, n: int) -> BatchedWaveFilter:
         """A new batch of ``n`` envs with these settings."""
         return BatchedWaveFilter(self.vessel, self.kind, n, **self._settings)
@@ -972,6 +988,10 @@ class WaveFilterObserver(BatchOfOne):
         if key in _SHARED_ATTRS:
             return getattr(self.__dict__["_b"], key)
         raise AttributeError(key)
+
+    def check_sample_interval(self, period: float, control_period: float) -> None:
+        """The batch's :meth:`BatchedWaveFilter.check_sample_interval`."""
+        self._b.check_sample_interval(period, control_period)
 
     def batch(self, n: int) -> BatchedWaveFilter:
         """This filter's law over ``n`` envs (the vector env's)."""

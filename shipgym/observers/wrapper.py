@@ -82,6 +82,9 @@ class ObserverWrapper(
                 "an observer needs sensors: create the environment with sensors='default' "
                 "(or another preset), not sensors=None"
             )
+        check = getattr(self.observer, "check_sample_interval", None)
+        if check is not None:  # an interval the filter cannot take: refused now, not at step
+            check(base.sensors.config.period, base.control_period)
         self._sq = np.zeros(6)
         self._n = 0
         # the env's observation layout, rebuilt around the estimate
