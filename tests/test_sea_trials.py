@@ -155,7 +155,7 @@ def test_stops_need_a_main_propeller_and_bad_input_is_named():
         SeaTrialEnv("blue-lady")
     env = SeaTrialEnv("kvlcc2-100m")
     env.reset(seed=0)
-    with pytest.raises(ValueError, match="action must be 0"):
+    with pytest.raises(ValueError, match="actions? must be (the int )?0"):
         env.step(1)
     env = SeaTrialEnv("kvlcc2-100m", override=True)
     env.reset(seed=0)

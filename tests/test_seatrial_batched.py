@@ -23,14 +23,14 @@ KW = {"manoeuvre": "initial_turning", "receiver": "dgps-pv"}
 
 def _same(single, batched):
     """A single env's value equals the batched row, bit for bit (NaN equal to NaN; the
-    single env's ``None`` shaft is the batch's NaN)."""
+    single env's ``None`` shaft of a vessel without one is a key the batch does not have)."""
     if isinstance(single, dict):
-        assert set(single) == {k for k in batched if not k.startswith("_")}
+        absent = {k for k, v in single.items() if v is None}
+        assert set(single) - absent == {k for k in batched if not k.startswith("_")}
+        assert not absent & set(batched)
         for k, v in single.items():
-            _same(v, batched[k])
-        return
-    if single is None:
-        assert np.isnan(batched)
+            if v is not None:
+                _same(v, batched[k])
         return
     b = np.asarray(batched)
     if b.dtype.kind in "US":
@@ -180,7 +180,7 @@ def test_bad_input_is_named():
         gym.make_vec(ID, num_envs=2, render_mode="rgb_array")
     venv = gym.make_vec(ID, num_envs=2)
     venv.reset(seed=0)
-    with pytest.raises(ValueError, match="action must be 0"):
+    with pytest.raises(ValueError, match="actions? must be (the int )?0"):
         venv.step(np.array([0, 1]))
 
 

@@ -303,7 +303,10 @@ class SeaTrialVectorEnv(BatchedEnv):
             cmd = phys.actuators.action_to_command(np.clip(actions, -1.0, 1.0))
         else:
             if (actions != 0).any():
-                raise ValueError(f"action must be 0 (the script acts), got {actions!r}")
+                raise ValueError(
+                    "actions must be 0 (the script steers; override=True to steer yourself), "
+                    f"got {actions!r}"
+                )
             rud, frac = self.scripts.command(self._state()[:, 3])
             cmd = self._command.copy()
             cmd[:, self._rudder] = rud
@@ -350,13 +353,14 @@ class SeaTrialVectorEnv(BatchedEnv):
             "drift": np.arctan2(-v, u),
             "rudder": row[:, 7].copy(),
             "rudder_command": phys.command[:, self._rudder],
-            "shaft": row[:, 8].copy(),
             # (BatchedPhysics has no rate_limited: its hull batch's servo hits, read here)
             "rate_limited": phys.rate_limited.any(axis=1),
             "saturated": phys.saturated.any(axis=1),
             "clipped": self._clipped.copy(),
             "reward_terms": {},
         }
+        if self._shaft is not None:  # (a vessel without a shaft: no key, not NaN)
+            info["shaft"] = row[:, 8].copy()
         if self._rx_out is not None:
             info["receiver"] = {k: getattr(self._rx_out, f).copy() for k, f in _RX_KEYS.items()}
         return info
@@ -499,7 +503,10 @@ class SeaTrialEnv(SingleEnv):
                     f"({', '.join(self.physics.actuators.channel_names)}), got {action!r}"
                 )
         elif not (type(action) is int and action == 0) and not self.action_space.contains(action):
-            raise ValueError(f"action must be 0 (the script acts), got {action!r}")
+            raise ValueError(
+                "action must be the int 0 of the action space Discrete(1) (the script steers; "
+                f"override=True to steer yourself), got {action!r}"
+            )
         obs, reward, terminated, truncated, info = super().step(action)
         info = self._scalar(info)
         if terminated:
@@ -509,7 +516,7 @@ class SeaTrialEnv(SingleEnv):
 
     def _scalar(self, info: dict[str, Any]) -> dict[str, Any]:
         if self.batch._shaft is None:  # the single env's shaft without one: None
-            info["shaft"] = None
+            info["shaft"] = None  # (the batch has no such key)
         return info
 
     def record(self) -> TrialRecord:
