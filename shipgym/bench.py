@@ -214,11 +214,17 @@ def _run_ray(
     ray = _import_ray()
     started = False
     if not ray.is_initialized():
-        kw: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False,
-                              "configure_logging": False}  # fmt: skip
-        if address is None:
-            kw["num_cpus"] = n
-        ray.init(address=address, **kw)
+        kw: dict[str, Any] = {"log_to_driver": False, "configure_logging": False}
+        local = {"num_cpus": n, "include_dashboard": False}
+        if address is None and not os.environ.get("RAY_ADDRESS"):
+            try:  # a local instance of n CPUs
+                ray.init(**kw, **local)
+            except ValueError as exc:  # Ray found a running local cluster and joins it
+                if "existing cluster" not in str(exc):
+                    raise
+                ray.init(**kw)
+        else:  # a cluster is taken as it is: Ray refuses local-only settings for one
+            ray.init(address=address, **kw)
         started = True
     try:
         task = ray.remote(num_cpus=1)(fn)

@@ -95,3 +95,48 @@ def test_multi_seed_training_on_ray_equals_the_process_pool(ray, tmp_path):
         assert a["model_path"].endswith(f"seed{a['seed']}/model.zip")
         assert _weights(a["model_path"]) == _weights(b["model_path"])
     assert _weights(pool[0]["model_path"]) != _weights(pool[1]["model_path"])
+
+
+@pytest.mark.slow
+def test_bench_on_a_cluster_named_by_ray_address_gives_the_pool_table(ray, tmp_path):
+    """``RAY_ADDRESS`` set (a cluster: here a local head this test starts), ``--executor ray``
+    connects to it without local-only settings (it exited 2, "num_cpus must not be
+    provided"), and the table is the process pool's; so is ``--ray-address`` to it."""
+    import os
+    import shutil
+    import socket
+    import subprocess
+    import tempfile
+
+    exe = shutil.which("ray", path=os.path.dirname(sys.executable))
+    if exe is None:
+        pytest.skip("the ray command is not installed beside this Python")
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}
+    short = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # (Ray's socket paths: <= 107 bytes)
+    head = subprocess.run(
+        [exe, "start", "--head", f"--port={port}", "--num-cpus=2", "--include-dashboard=false",
+         "--disable-usage-stats", f"--temp-dir={short}"],
+        capture_output=True, text=True, timeout=120, env=env,
+    )  # fmt: skip
+    assert head.returncode == 0, head.stderr[-2000:]
+    try:
+        argv = [sys.executable, "-m", "shipgym.cli", "bench", "observers", "--seeds", "2",
+                "--observers", "kbf", "dkf", "--no-progress"]  # fmt: skip
+
+        def table(extra: list[str], **env_extra: str) -> list[str]:
+            out = subprocess.run([*argv, *extra], capture_output=True, text=True, timeout=300,
+                                 env={**env, **env_extra})  # fmt: skip
+            assert out.returncode == 0, out.stderr[-2000:]
+            return [ln for ln in out.stdout.splitlines() if ln.startswith("|")]
+
+        address = f"127.0.0.1:{port}"
+        pool = table([])
+        assert pool
+        assert table(["--executor", "ray"], RAY_ADDRESS=address) == pool
+        assert table(["--executor", "ray", "--ray-address", address]) == pool
+    finally:
+        subprocess.run([exe, "stop", "--force"], capture_output=True, timeout=120, env=env)
+        shutil.rmtree(short, ignore_errors=True)
