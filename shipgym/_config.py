@@ -96,6 +96,22 @@ def require_angles(obj: Any, *names: str) -> None:
             )
 
 
+#: the largest ship dimension accepted (m): above the longest ship ever built (Seawise Giant,
+#: 458 m); a larger value is a unit mistake (mm for m), not a ship
+MAX_DIMENSION = 1000.0
+
+
+def require_dimensions(obj: Any, *names: str) -> None:
+    """Raise ``ValueError`` for a named length (m) beyond :data:`MAX_DIMENSION`."""
+    for name in names:
+        val = getattr(obj, name)
+        if val is not None and val > MAX_DIMENSION:
+            raise ValueError(
+                f"{type(obj).__name__}.{name} must be at most {MAX_DIMENSION:g} m, got {val!r}: "
+                "a length in mm given as m?"
+            )
+
+
 def require_positive(obj: Any, *names: str) -> None:
     """Raise ``ValueError`` if any named field is not strictly positive."""
     for name in names:

@@ -351,3 +351,22 @@ def test_an_observer_that_cannot_take_the_sample_interval_is_refused_at_make(
             gym.make_vec("shipgym/DPStationKeeping-v0", num_envs=2, **kw)
     kw.pop("control_period")  # the task's own period (0.1 p.u.) fits both
     shipgym.make("shipgym/DPStationKeeping-v0", **kw).close()
+
+
+@pytest.mark.parametrize("key", ["L_oa", "L_pp", "B", "T"])
+def test_an_absurd_ship_dimension_is_refused_naming_it(tmp_path, key):
+    """A length beyond 1,000 m (``L_oa = 1e300`` ran) is a unit mistake: refused when the
+    vessel package is read, naming the key."""
+    import re
+
+    from shipgym.dynamics.vessel import load_vessel
+
+    pkg = tmp_path / "pkg"
+    shutil.copytree(resources.files("shipgym") / "assets" / "mjcf" / "blue_lady", pkg)
+    toml = pkg / "vessel.toml"
+    text, n = re.subn(rf"(?m)^{key} = \{{ value = [-0-9.e+]+", f"{key} = {{ value = 1e300",
+                      toml.read_text())  # fmt: skip
+    assert n >= 1, key
+    toml.write_text(text)
+    with pytest.raises(ValueError, match=rf"{key} must be at most 1000 m"):
+        load_vessel(pkg)

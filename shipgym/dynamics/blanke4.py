@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import require_positive, required_param
+from shipgym._config import require_dimensions, require_positive, required_param
 from shipgym._jit import njit
 
 __all__ = [
@@ -187,6 +187,7 @@ class Blanke4Hull:
         object.__setattr__(self, "m", self.rho * self.nabla)
         object.__setattr__(self, "K_phi", self.rho * self.g * self.nabla * self.GM)
         require_positive(self, "rho", "g", "L_pp", "B", "T", "nabla", "I_xx", "I_zz", "GM")
+        require_dimensions(self, "L_pp", "B", "T")
         M = self.mass_matrix()
         if not np.all(np.diag(M) > 0) or not np.linalg.cond(M) < 1e12:
             raise ValueError(

@@ -19,6 +19,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._config import require_dimensions
 from shipgym._jit import njit
 
 __all__ = [
@@ -114,6 +115,7 @@ class MMGParameters:
         for k in ("L", "B", "d", "nabla", "D_P", "H_R", "A_R", "rho", "k_zz"):
             if not getattr(self, k) > 0:
                 raise ValueError(f"MMGParameters.{k} must be > 0, got {getattr(self, k)!r}")
+        require_dimensions(self, "L", "B", "d", "D_P")
 
     def scaled(self, L: float) -> MMGParameters:
         """The same hull geometrically scaled to the length ``L`` (m): lengths x ``L/self.L``,

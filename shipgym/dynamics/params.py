@@ -14,7 +14,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from shipgym._config import param, require_finite, require_positive, required_param
+from shipgym._config import (
+    param,
+    require_dimensions,
+    require_finite,
+    require_positive,
+    required_param,
+)
 
 __all__ = ["HullParameters", "WindageParameters", "BLUE_LADY_HULL", "BLUE_LADY_WINDAGE"]
 
@@ -54,6 +60,7 @@ class HullParameters:
     def __post_init__(self) -> None:
         require_finite(self)
         require_positive(self, "m", "I_z", "L_oa", "L_pp", "B", "T")
+        require_dimensions(self, "L_oa", "L_pp", "B", "T")
 
 
 @dataclass(frozen=True)
@@ -75,6 +82,7 @@ class WindageParameters:
     def __post_init__(self) -> None:
         require_finite(self)
         require_positive(self, "A_F", "A_L", "L_oa", "rho_a")
+        require_dimensions(self, "L_oa")
         if not isinstance(self.coefficients, str):
             raise ValueError(
                 f"coefficients must be a Blendermann ship type, got {self.coefficients!r}"

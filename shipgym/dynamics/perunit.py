@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import param
+from shipgym._config import param, require_dimensions
 
 __all__ = ["KINDS", "PerUnit"]
 
@@ -74,6 +74,7 @@ class PerUnit:
             if not math.isfinite(val):
                 raise ValueError(f"PerUnit.{key} must be finite, got {val!r}")
             object.__setattr__(self, key, float(val))
+        require_dimensions(self, "L")
 
     @classmethod
     def of_vessel(cls, vessel: Any) -> PerUnit:
