@@ -99,6 +99,24 @@ def bounded_float(
     return parse
 
 
+#: options that do not change a benchmark's rows (how and where it runs, what it writes)
+RUN_ONLY = ("workers", "json", "markdown", "executor", "ray_address", "no_progress", "resume",
+            "func", "folders", "report", "figures")  # fmt: skip
+
+
+def add_resume_option(p: argparse.ArgumentParser) -> None:
+    """A benchmark's ``--resume``: continue an interrupted run from its partial rows."""
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted run of the same options from the finished "
+                   "rows it kept (PATH.partial.jsonl beside --json or --markdown)")  # fmt: skip
+
+
+def bench_settings(args: argparse.Namespace) -> dict[str, Any]:
+    """The options that decide a benchmark's rows (all but :data:`RUN_ONLY`): a resumed run
+    must have the same."""
+    return {k: v for k, v in sorted(vars(args).items()) if k not in RUN_ONLY}
+
+
 def ray_address(text: str) -> str:
     """An argparse type: a Ray address (``ray://host:10001``, ``host:6379``, ``auto``), not
     empty or blank (which would silently mean a local instance)."""

@@ -21,7 +21,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
@@ -207,10 +207,11 @@ def _import_ray() -> Any:
 
 
 def _run_ray(
-    fn: Callable[[Any], Any], jobs: Sequence[Any], n: int, address: str | None,
+    fn: Callable[[Any], Any], jobs: Sequence[tuple[int, Any]], n: int, address: str | None,
     done: Callable[[int, Any], None],
 ) -> None:  # fmt: skip
-    """The jobs as Ray tasks (:func:`run_jobs`), results handed to ``done`` as they finish."""
+    """The ``(index, job)`` pairs as Ray tasks (:func:`run_jobs`), results handed to ``done``
+    as they finish."""
     ray = _import_ray()
     started = False
     if not ray.is_initialized():
@@ -228,7 +229,7 @@ def _run_ray(
         started = True
     try:
         task = ray.remote(num_cpus=1)(fn)
-        pending = {task.remote(job): i for i, job in enumerate(jobs)}
+        pending = {task.remote(job): i for i, job in jobs}
         try:
             while pending:
                 ready, _ = ray.wait(list(pending), num_returns=1)
@@ -254,8 +255,12 @@ def run_jobs(
     on_result: Callable[[int, Any], None] | None = None,
     start_method: str | None = None,
     executor: Executor | str | None = None,
+    known: Mapping[int, Any] | None = None,
 ) -> list[Any]:
     """``[fn(job) for job in jobs]`` in worker processes, in order, with a progress bar.
+
+    ``known``: results already at hand (job index -> result, an interrupted run's rows,
+    :meth:`RowLog.resume`): those jobs are not run again.
 
     ``fn`` must be a module-level function (picklable). Forks unless torch is loaded in this
     process (forking a process with torch's thread pools can hang): then ``forkserver``
@@ -278,6 +283,11 @@ def run_jobs(
         _import_ray()  # a missing extra fails before any work
     bar = tqdm(total=len(jobs), disable=not progress, desc=desc, unit="run")
     out: list[Any] = [None] * len(jobs)
+    known = known or {}
+    for i, res in known.items():
+        out[i] = res
+    bar.update(len(known))
+    todo = [(i, job) for i, job in enumerate(jobs) if i not in known]
 
     def done(i: int, res: Any) -> None:
         out[i] = res
@@ -287,9 +297,9 @@ def run_jobs(
 
     try:
         if ex.kind == "ray":
-            _run_ray(fn, jobs, max(n, 1), ex.address, done)
+            _run_ray(fn, todo, max(n, 1), ex.address, done)
         elif n <= 1:
-            for i, job in enumerate(jobs):
+            for i, job in todo:
                 done(i, fn(job))
         else:
             method = start_method or ("forkserver" if "torch" in sys.modules else None)
@@ -300,7 +310,7 @@ def run_jobs(
                 initargs=(os.getpid(), forked),
             )  # fmt: skip
             try:
-                pending = {pool.submit(fn, job): i for i, job in enumerate(jobs)}
+                pending = {pool.submit(fn, job): i for i, job in todo}
                 while pending:
                     finished, _ = wait(pending, return_when=FIRST_COMPLETED)
                     for fut in sorted(finished, key=pending.__getitem__):
@@ -316,18 +326,66 @@ def run_jobs(
 
 class RowLog:
     """The finished rows of a benchmark, appended as JSON lines (``{"index": i, "row": ...}``)
-    to ``path`` as they come (``path`` ``None``: counted only).
+    to ``path`` as they come (``path`` ``None``: counted only), after a first line with the
+    bench's settings (``{"settings": ...}``).
 
     Pass :meth:`add` as ``on_result``; :meth:`discard` the file once the complete result is
-    written. The file of an earlier, interrupted bench is replaced when the first row comes. A
-    file that cannot be written is reported once on stderr and then only counted.
+    written. The file of an earlier, interrupted bench is replaced when the first row comes,
+    unless this log resumes it (:meth:`resume`: its rows are :attr:`known` and are not run
+    again). A file that cannot be written is reported once on stderr and then only counted.
     """
 
-    def __init__(self, path: str | os.PathLike[str] | None, total: int) -> None:
+    def __init__(
+        self,
+        path: str | os.PathLike[str] | None,
+        total: int,
+        settings: Mapping[str, Any] | None = None,
+    ) -> None:
         self.path = None if path is None else Path(path)
         self.total = int(total)
         self.count = 0
         self.written_to: Path | None = None
+        # as read back from the file (tuples as lists; a configuration object by its repr)
+        self.settings = json.loads(json.dumps(dict(settings or {}), default=repr))
+        #: the rows of an interrupted run this log resumes (job index -> row)
+        self.known: dict[int, Any] = {}
+        self._append = False
+
+    @classmethod
+    def resume(
+        cls, path: str | os.PathLike[str], total: int, settings: Mapping[str, Any]
+    ) -> RowLog:
+        """The log of an interrupted run at ``path``, continued: its rows become :attr:`known`.
+
+        Raises:
+            ValueError: no such file, a damaged one, or one of a run with other settings
+                (naming the settings that differ).
+        """
+        log = cls(path, total, settings)
+        p = Path(path)
+        if not p.is_file():
+            raise ValueError(f"nothing to resume: no partial rows at {p} (run without --resume)")
+        items = []
+        for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1):
+            if not line.endswith("}"):
+                continue  # a last line cut short by the interrupt
+            try:
+                items.append(json.loads(line))
+            except json.JSONDecodeError:
+                raise ValueError(f"cannot resume from {p}: line {n} is not a JSON row") from None
+        head = items[0] if items and "settings" in items[0] else None
+        if head is None or head["settings"] != log.settings:
+            was = {} if head is None else head["settings"]
+            diff = sorted(k for k in {*was, *log.settings} if was.get(k) != log.settings.get(k))
+            raise ValueError(
+                f"cannot resume from {p}: it holds the rows of a run with other settings "
+                f"({', '.join(diff) or 'none recorded'}); run with the same options, or "
+                "without --resume"
+            )
+        log.known = {int(d["index"]): d["row"] for d in items[1:] if 0 <= d["index"] < total}
+        log.count = len(log.known)
+        log._append = True
+        return log
 
     def add(self, index: int, row: Any) -> None:
         """Append one finished row."""
@@ -335,8 +393,13 @@ class RowLog:
         if self.path is None:
             return
         try:
-            with open(self.path, "w" if self.count == 1 else "a", encoding="utf-8") as fh:
-                fh.write(json.dumps(jsonable({"index": index, "row": row})) + "\n")
+            first = not self._append
+            with open(self.path, "w" if first else "a", encoding="utf-8") as fh:
+                if first:
+                    fh.write(json.dumps({"settings": self.settings}) + "\n")
+                # (NaN kept as JSON's NaN token: a resumed row is the row that was computed)
+                fh.write(json.dumps({"index": index, "row": row}, default=_plain) + "\n")
+            self._append = True
         except OSError as exc:
             print(
                 f"shipgym: warning: cannot keep the finished rows in {self.path} "
@@ -353,7 +416,10 @@ class RowLog:
             return f"none of the {self.total} runs had finished"
         if self.path is None or not self.path.exists():
             return f"{self.count} of {self.total} runs had finished (not kept: no --json)"
-        return f"{self.count} of {self.total} finished rows kept at {self.path}"
+        return (
+            f"{self.count} of {self.total} finished rows kept at {self.path} (the same command "
+            "with --resume continues)"
+        )
 
     def discard(self, written_to: str | os.PathLike[str] | None = None) -> None:
         """Remove the file: the complete result is written (to ``written_to``)."""
@@ -367,17 +433,40 @@ class RowLog:
         """The rows of a row log, in job order."""
         lines = Path(path).read_text(encoding="utf-8").splitlines()
         items = [json.loads(line) for line in lines if line.strip()]
-        return [d["row"] for d in sorted(items, key=lambda d: d["index"])]
+        rows = [d for d in items if "index" in d]
+        return [d["row"] for d in sorted(rows, key=lambda d: d["index"])]
 
 
-def row_log(json_path: Path | None, markdown: Path | None, total: int) -> Any:
-    """A :class:`RowLog` next to the bench's output (``PATH.partial.jsonl``),
-    named in the message of an interrupt."""
+def _plain(x: Any) -> Any:
+    """A NumPy value in a row as a plain Python one (for the row log)."""
+    if isinstance(x, np.ndarray | np.generic):
+        return x.tolist()
+    raise TypeError(f"a benchmark row holds a {type(x).__name__}, not JSON data")
+
+
+def row_log(
+    json_path: Path | None,
+    markdown: Path | None,
+    total: int,
+    settings: Mapping[str, Any] | None = None,
+    resume: bool = False,
+) -> Any:
+    """A :class:`RowLog` next to the bench's output (``PATH.partial.jsonl``), named in the
+    message of an interrupt; with ``resume``, the interrupted run's log continued
+    (:meth:`RowLog.resume`, which needs ``--json`` or ``--markdown``)."""
     from shipgym._io import on_interrupt, partial_path
 
     out = json_path or markdown
     usable = out is not None and (not out.exists() or out.is_file())  # not /dev/stdout
-    log = RowLog(partial_path(out, ".jsonl") if usable and out is not None else None, total)
+    path = partial_path(out, ".jsonl") if usable and out is not None else None
+    if resume:
+        if path is None:
+            raise ValueError(
+                "--resume continues the partial rows of --json or --markdown: give one"
+            )
+        log = RowLog.resume(path, total, settings or {})
+    else:
+        log = RowLog(path, total, settings)
     on_interrupt(log.summary)
     return log
 
@@ -528,6 +617,7 @@ def bench_observers(
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, dict[str, Any]], None] | None = None,
+    known: Mapping[int, Any] | None = None,
     executor: Executor | str | None = None,
     scenario: Any = None,
 ) -> list[dict[str, Any]]:
@@ -561,7 +651,7 @@ def bench_observers(
     jobs = [(obs, s, wind, controller, env_kwargs) for obs in observers for s in range(seeds)]
     return run_jobs(
         _one, jobs, workers=workers, progress=progress, desc="observers x seeds",
-        on_result=on_row, executor=executor,
+        on_result=on_row, known=known, executor=executor,
     )  # fmt: skip
 
 

@@ -21,7 +21,14 @@ from typing import Any
 
 import numpy as np
 
-from shipgym._argtypes import add_executor_options, executor_of, parse_wind, path_arg
+from shipgym._argtypes import (
+    add_executor_options,
+    add_resume_option,
+    bench_settings,
+    executor_of,
+    parse_wind,
+    path_arg,
+)
 from shipgym._io import check_folder, check_writable
 from shipgym._safeload import jsonable
 from shipgym.bench import row_log, write_bench_outputs
@@ -285,7 +292,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     blue_lady = load_vessel("blue-lady")  # the benchmark's harbour manoeuvre
     for name in args.observers:
         make_observer(name, vessel=blue_lady)  # unknown names fail before any work
-    log = row_log(args.json, args.markdown, len(args.observers) * args.seeds)
+    total = len(args.observers) * args.seeds
+    log = row_log(args.json, args.markdown, total, bench_settings(args), args.resume)
     t0 = time.perf_counter()
     check_controller(args.controller)
     from shipgym._io import progress_enabled
@@ -293,7 +301,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     rows = bench_observers(
         args.observers, seeds=args.seeds, wind=args.wind, workers=args.workers,
         progress=progress_enabled(args.no_progress), controller=args.controller,
-        on_row=log.add, executor=executor_of(args), scenario=args.scenario,
+        on_row=log.add, known=log.known, executor=executor_of(args), scenario=args.scenario,
     )  # fmt: skip
     wall = time.perf_counter() - t0
     table = observer_table(rows) + "\n\n" + table6_comparison(rows)
@@ -353,12 +361,12 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
     if args.duration is None:
         args.duration = 400.0 if args.task == "sway-step" else 600.0
     total = len(args.vessel) * len(beauforts) * len(methods) * args.seeds
-    log = row_log(args.json, args.markdown, total)
+    log = row_log(args.json, args.markdown, total, bench_settings(args), args.resume)
     t0 = time.perf_counter()
     rows = bench_dp(
         args.vessel, beauforts, args.seeds, methods=methods, duration=args.duration,
         task=args.task, workers=args.workers, progress=progress_enabled(args.no_progress),
-        on_row=log.add, executor=executor_of(args),
+        on_row=log.add, known=log.known, executor=executor_of(args),
     )  # fmt: skip
     wall = time.perf_counter() - t0
     title = (
@@ -483,12 +491,12 @@ def _cmd_bench_roll(args: argparse.Namespace) -> int:
         raise ValueError("no runs: every speed lies above the vessels' surge_speed limits")
     n_methods = len(methods) + ("autopilot" not in methods)  # the RRR's baseline is added
     total = sum(len(u) for u in run_speeds.values()) * n_methods * args.seeds
-    log = row_log(args.json, args.markdown, total)
+    log = row_log(args.json, args.markdown, total, bench_settings(args), args.resume)
     t0 = time.perf_counter()
     rows = bench_roll(
         list(vessels), speeds, args.seeds, methods=methods, duration=args.duration,
         task=args.task, workers=args.workers, progress=progress_enabled(args.no_progress),
-        on_row=log.add, executor=executor_of(args),
+        on_row=log.add, known=log.known, executor=executor_of(args),
     )  # fmt: skip
     analyses = {v: roll_analysis(v, u) for v, u in run_speeds.items() if u}
     wall = time.perf_counter() - t0
@@ -705,6 +713,7 @@ def _add_bench_outputs(b: argparse.ArgumentParser) -> None:
     b.add_argument("--json", type=path_arg, default=None, metavar="PATH")
     b.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
     add_executor_options(b)
+    add_resume_option(b)
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -9,7 +9,7 @@ Design notes: docs/design/dp.bench.md.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -249,6 +249,7 @@ def bench_dp(
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, Any], None] | None = None,
+    known: Mapping[int, Any] | None = None,
     executor: Any = None,
 ) -> list[dict[str, Any]]:
     """All (vessel, Beaufort, method, seed) runs, in worker processes (or Ray tasks:
@@ -278,6 +279,7 @@ def bench_dp(
             progress=progress,
             desc="dp runs",
             on_result=on_row,
+            known=known,
             start_method="forkserver",
             executor=executor,
         )

@@ -10,7 +10,7 @@ Design notes: docs/design/rl.bench.md.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -209,6 +209,7 @@ def bench_controllers(
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, dict[str, Any]], None] | None = None,
+    known: Mapping[int, Any] | None = None,
     executor: Any = None,
 ) -> list[dict[str, Any]]:
     """Run the task for every controller and seed ``0..seeds-1``.
@@ -303,7 +304,7 @@ def bench_controllers(
     ]
     rows = run_jobs(
         _job, jobs, workers=workers, progress=progress, desc="controllers x seeds",
-        on_result=on_row, executor=executor,
+        on_result=on_row, known=known, executor=executor,
     )  # fmt: skip
     if task == "station-keeping":
         names = _actuator_names(vessel)

@@ -25,6 +25,8 @@ from shipgym._argtypes import (
     MAX_COUNT,
     MAX_WORKERS,
     add_executor_options,
+    add_resume_option,
+    bench_settings,
     bounded_float,
     bounded_int,
     executor_of,
@@ -288,6 +290,7 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
     b.add_argument("--json", type=path_arg, default=None, metavar="PATH")
     b.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
     add_executor_options(b)
+    add_resume_option(b)
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=cmd_bench_controllers)
     return b
@@ -338,7 +341,8 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
             f"left out: {', '.join(missing)}",
             file=sys.stderr,
         )
-    log = row_log(args.json, args.markdown, len(controllers) * max(args.seeds, 0))
+    total = len(controllers) * max(args.seeds, 0)
+    log = row_log(args.json, args.markdown, total, bench_settings(args), args.resume)
     wind = ENV_DEFAULT if args.wind is None else args.wind
     t0 = time.perf_counter()
     rows = bench_controllers(
@@ -351,6 +355,7 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
         workers=args.workers,
         progress=progress_enabled(args.no_progress),
         on_row=log.add,
+        known=log.known,
         executor=executor_of(args),
     )
     wall = time.perf_counter() - t0

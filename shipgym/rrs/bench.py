@@ -10,7 +10,7 @@ Design notes: docs/design/rrs.bench.md.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -169,6 +169,7 @@ def bench_roll(
     workers: int | None = None,
     progress: bool = True,
     on_row: Callable[[int, Any], None] | None = None,
+    known: Mapping[int, Any] | None = None,
     executor: Any = None,
 ) -> list[dict[str, Any]]:
     """All (vessel, speed, method, seed) runs in worker processes; rows with the RRR added.
@@ -203,7 +204,7 @@ def bench_roll(
         raise ValueError("no runs: every speed lies above the vessels' surge_speed limits")
     with single_threaded_blas():
         rows = run_jobs(roll_run, jobs, workers=workers, progress=progress, desc="roll runs",
-                        on_result=on_row, start_method="forkserver",
+                        on_result=on_row, known=known, start_method="forkserver",
                         executor=executor)  # fmt: skip
     base = {(r["vessel"], r["speed"], r["seed"]): r["roll_rms"] for r in rows
             if r["method"] == "autopilot"}  # fmt: skip
