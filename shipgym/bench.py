@@ -116,6 +116,21 @@ def _watch_owner(owner: int) -> None:
     os._exit(1)
 
 
+def serial_physics() -> None:
+    """This process steps its hull batches on its own thread (:mod:`shipgym.sim.step`): a
+    pool's workers already fill the cores, and threads of their own would oversubscribe
+    them."""
+    from shipgym.sim import step
+
+    step.THREADS["allowed"] = False
+
+
+def _serial_job(fn: Callable[[Any], Any], job: Any) -> Any:
+    """``fn(job)`` in a Ray worker, with :func:`serial_physics`."""
+    serial_physics()
+    return fn(job)
+
+
 def _worker_init(owner: int, forked: bool) -> None:
     """Initializer of the pool's workers: die with the pool's owner, leave SIGINT to it.
 
@@ -127,6 +142,7 @@ def _worker_init(owner: int, forked: bool) -> None:
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the parent stops the pool
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the parent's handler, if inherited
+    serial_physics()
     if forked and sys.platform.startswith("linux"):
         with contextlib.suppress(OSError, AttributeError):
             libc = ctypes.CDLL(None, use_errno=True)
@@ -228,8 +244,8 @@ def _run_ray(
             ray.init(address=address, **kw)
         started = True
     try:
-        task = ray.remote(num_cpus=1)(fn)
-        pending = {task.remote(job): i for i, job in jobs}
+        task = ray.remote(num_cpus=1)(_serial_job)
+        pending = {task.remote(fn, job): i for i, job in jobs}
         try:
             while pending:
                 ready, _ = ray.wait(list(pending), num_returns=1)

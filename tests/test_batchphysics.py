@@ -340,7 +340,7 @@ def _forked_child_trajectory(q) -> None:  # type: ignore[no-untyped-def]
     bp.reset(rngs=[np.random.default_rng(i) for i in range(bp.n)])
     bp.set_command(np.tile(bp.actuators.upper, (bp.n, 1)))
     bp.step(400)
-    q.put((bp.eta_full.tolist(), step._THREADS["allowed"]))
+    q.put((bp.eta_full.tolist(), step.THREADS["allowed"]))
 
 
 @pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="needs fork()")
@@ -356,7 +356,7 @@ def test_a_child_forked_after_threaded_steps_steps_serially_to_the_same_floats()
     bp.reset(rngs=[np.random.default_rng(i) for i in range(bp.n)])
     bp.set_command(np.tile(bp.actuators.upper, (bp.n, 1)))
     bp.step(400)
-    assert step._THREADS["used"]
+    assert step.THREADS["used"]
     ctx = mp.get_context("fork")
     q = ctx.Queue()
     child = ctx.Process(target=_forked_child_trajectory, args=(q,))
@@ -365,3 +365,18 @@ def test_a_child_forked_after_threaded_steps_steps_serially_to_the_same_floats()
     child.join(30)
     assert child.exitcode == 0 and not allowed
     np.testing.assert_array_equal(np.array(eta), bp.eta_full)
+
+
+def _physics_threads_allowed(_: int) -> bool:
+    from shipgym.sim import step
+
+    return bool(step.THREADS["allowed"])
+
+
+def test_the_workers_of_a_pool_step_their_batches_serially():
+    """A bench's or a seed sweep's worker processes already fill the cores: their batches
+    step on their own thread (threads of their own would oversubscribe the machine)."""
+    from shipgym.bench import run_jobs
+
+    assert run_jobs(_physics_threads_allowed, [0, 1], workers=2, progress=False,
+                    start_method="fork") == [False, False]  # fmt: skip

@@ -58,21 +58,21 @@ MAX_ROLL = 1.2
 
 #: the smallest batch stepped on all of Numba's threads (:func:`run_parallel`); smaller ones
 #: step on the calling thread, where a thread pool's start costs more than it saves
-PARALLEL_MIN = 32
+PARALLEL_MIN = 64
 
 
 #: ``used``: this process stepped on Numba's threads; ``allowed``: it may (not in a child
 #: forked from a process that did: GNU OpenMP, Numba's usual threading layer, is not
 #: fork-safe, and Numba ends such a child)
-_THREADS = {"used": False, "allowed": True}
-os.register_at_fork(after_in_child=lambda: _THREADS.update(allowed=not _THREADS["used"]))
+THREADS = {"used": False, "allowed": True}
+os.register_at_fork(after_in_child=lambda: THREADS.update(allowed=not THREADS["used"]))
 
 
 def _threads_ok() -> bool:
     """Whether a large batch may step on Numba's threads now: in the main thread (Numba's
     ``workqueue`` layer may not be entered from two threads at once) of a process allowed to
-    (:data:`_THREADS`)."""
-    return _THREADS["allowed"] and threading.current_thread() is threading.main_thread()
+    (:data:`THREADS`)."""
+    return THREADS["allowed"] and threading.current_thread() is threading.main_thread()
 
 
 #: the most physics steps one call may take (5.8 days at 0.05 s): a larger request is a
@@ -861,7 +861,10 @@ class HullBatch:
             fn = run
             if self.n >= PARALLEL_MIN and _threads_ok():
                 fn = run_parallel
-                _THREADS["used"] = True
+                if not THREADS["used"]:  # idle threads sleep (before OpenMP starts): a busy
+                    # machine is not slowed by threads spinning for work
+                    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+                    THREADS["used"] = True
             if self._entry is None or self._entry[0] is not fn:
                 args = (integ, self._mj_step, self.mps, self.dps, self.fields, stop_on_contact)
                 self._entry = (fn, entry(fn, (*args, *self._args)))
