@@ -56,9 +56,10 @@ MAX_RATE = 10.0
 MAX_ROLL = 1.2
 
 
-#: the smallest batch stepped on all of Numba's threads (:func:`run_parallel`); smaller ones
+#: the smallest batch stepped on all of Numba's threads (:func:`run_parallel`; about break-even
+#: at 64 hulls with sleeping idle threads on 2 cores); smaller ones
 #: step on the calling thread, where a thread pool's start costs more than it saves
-PARALLEL_MIN = 64
+PARALLEL_MIN = 128
 
 
 #: ``used``: this process stepped on Numba's threads; ``allowed``: it may (not in a child
