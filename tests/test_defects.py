@@ -370,3 +370,22 @@ def test_an_absurd_ship_dimension_is_refused_naming_it(tmp_path, key):
     toml.write_text(text)
     with pytest.raises(ValueError, match=rf"{key} must be at most 1000 m"):
         load_vessel(pkg)
+
+
+@pytest.mark.parametrize("colour", ["blue-ish", "#12345", "#gggggg", "1f77b4"])
+def test_an_invalid_actuator_colour_is_refused_when_read(tmp_path, colour):
+    """An actuator colour the figures cannot draw failed after the run; it is refused when
+    the vessel package is read, naming the key."""
+    import re
+
+    from shipgym.dynamics.vessel import load_vessel
+
+    pkg = tmp_path / "pkg"
+    shutil.copytree(resources.files("shipgym") / "assets" / "mjcf" / "blue_lady", pkg)
+    toml = pkg / "vessel.toml"
+    text, n = re.subn(r'colour = "#[0-9a-f]{6}"', f'colour = "{colour}"', toml.read_text(),
+                      count=1)  # fmt: skip
+    assert n == 1
+    toml.write_text(text)
+    with pytest.raises(ValueError, match=r"colour.*must be a colour #rrggbb"):
+        load_vessel(pkg)

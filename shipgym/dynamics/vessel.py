@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
@@ -598,6 +599,8 @@ class ActuatorSite:
 ACTUATOR_READERS: dict[str, Callable[..., Actuator]] = {}
 
 #: the keys every actuator table may hold, whatever its kind
+#: an actuator's colour in the figures and the recording: ``#rrggbb``
+_HEX_COLOUR = re.compile(r"#[0-9a-fA-F]{6}")
 COMMON_ACTUATOR_KEYS = frozenset({"name", "kind", "position", "time_constant", "colour"})
 
 
@@ -644,7 +647,10 @@ def _read_actuators(
                 f"{where}.kind",
                 f"unknown actuator kind {kind!r}; choose {', '.join(ACTUATOR_READERS)}",
             )
-        site = ActuatorSite(name, where, (x, y, z), r.string(t, "colour", where, "#1f77b4"), hull)
+        colour = r.string(t, "colour", where, "#1f77b4")
+        if not _HEX_COLOUR.fullmatch(colour):  # the plots and the recording read it after a run
+            raise r.fail(f"{where}.colour", f"must be a colour #rrggbb, got {colour!r}")
+        site = ActuatorSite(name, where, (x, y, z), colour, hull)
         try:
             out.append(read(r, t, site))
         except ValueError as exc:
