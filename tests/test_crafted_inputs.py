@@ -22,7 +22,7 @@ from typing import Any
 import gymnasium as gym
 import pytest
 
-import shipgym  # noqa: F401  (registers the ids)
+import shipgym
 from shipgym.cli import _parser, main
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
 from shipgym.envs.registration import ENV_IDS, VECTOR_IDS
@@ -271,3 +271,59 @@ def test_the_suite_has_at_least_500_cases() -> None:
     """Issue 33's floor: at least 500 crafted CLI and API cases, 300 of them CLI."""
     n_api = len(list(_env_cases())) + 6 * len(VECTOR_IDS) + len(list(_config_cases()))
     assert len(CLI_CASES) >= 300 and len(CLI_CASES) + n_api >= 500, (len(CLI_CASES), n_api)
+
+
+# ---- observers' options and the wrapper stack (shipgym.make) ------------------------------------
+OBSERVER_OPTIONS: list[tuple[str, Any]] = [
+    ("bogus_option", 1),
+    ("measurement_variance", [NAN, 1.0, 1.0]),
+    ("measurement_variance", -1.0),
+    ("process_noise", "x"),
+    ("dt", -1.0),
+    ("dt", NAN),
+    ("initial_velocity_std", -1.0),
+]
+
+
+def _observer_cases() -> Iterator[Any]:
+    from shipgym.observers import observer_names
+
+    for name in observer_names():
+        for k, v in OBSERVER_OPTIONS:
+            yield pytest.param(name, k, v, id=f"{name} {k}={v!r}")
+
+
+@pytest.mark.parametrize(("name", "key", "value"), list(_observer_cases()))
+def test_a_crafted_observer_option_is_refused_naming_it(name: str, key: str, value: Any) -> None:
+    from shipgym.dynamics.vessel import load_vessel
+    from shipgym.observers import make_observer
+
+    with pytest.raises((ValueError, TypeError)) as info:
+        make_observer(name, vessel=load_vessel("star-hercules"), **{key: value})
+    msg = str(info.value)
+    assert key in msg or repr(value) in msg, msg
+
+
+STACK_KWARGS: list[dict[str, Any]] = [
+    {"controller": "bogus"},
+    {"controller": ""},
+    {"controller": 3},
+    {"controller": "ppo:/no/such/model.zip"},
+    {"controller": "pid", "residual_scale": -1.0},
+    {"controller": "pid", "residual_scale": NAN},
+    {"controller": "pid", "residual_scale": "x"},
+    {"observer": "bogus"},
+    {"observer": ""},
+    {"observer": "kbf", "observer_options": {"bogus": 1}},
+    {"observer": "kbf", "sensors": None},
+]
+
+
+@pytest.mark.parametrize("kwargs", STACK_KWARGS, ids=[repr(k) for k in STACK_KWARGS])
+def test_a_crafted_stack_argument_is_refused_naming_it(kwargs: dict[str, Any]) -> None:
+    """``shipgym.make`` with a bad controller, residual scale, observer or its options."""
+    with pytest.raises((ValueError, TypeError, FileNotFoundError)) as info:
+        shipgym.make("shipgym/BlueLadyStationKeeping-v0", **kwargs)
+    msg = str(info.value)
+    named = [str(v) for v in kwargs.values()] + list(kwargs) + ["sensors", "bogus", "model"]
+    assert any(n and n in msg for n in named), msg

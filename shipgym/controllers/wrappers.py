@@ -103,8 +103,12 @@ class DPControllerWrapper(
         )
         gym.Wrapper.__init__(self, env)
         spec = controller_spec(controller)
-        if not (isinstance(residual_scale, int | float) and np.isfinite(residual_scale)):
-            raise ValueError(f"residual_scale must be a finite number, got {residual_scale!r}")
+        if not (
+            isinstance(residual_scale, int | float)
+            and not isinstance(residual_scale, bool)
+            and 0 <= residual_scale < np.inf
+        ):  # (a negative scale would turn the policy's residual against it)
+            raise ValueError(f"residual_scale must be a finite number >= 0, got {residual_scale!r}")
         self.controller_name = controller
         self.residual_scale = float(residual_scale)
         base = env.unwrapped
