@@ -453,3 +453,29 @@ def test_a_report_that_cannot_be_written_leaves_the_earlier_report_whole(
     assert "cannot write the report" in captured.err and captured.err.count("\n") == 1
     after = {p.name: p.read_bytes() for p in rep.iterdir() if p.name != "run.partial.rrd"}
     assert after == before
+
+
+@pytest.mark.parametrize(
+    "delay", [1.6, *(pytest.param(d, marks=pytest.mark.slow) for d in (0.2, 0.8, 2.4, 3.2))]
+)
+def test_a_report_rerun_killed_at_any_moment_leaves_the_earlier_report_whole(tmp_path, delay):
+    """SIGKILL at moments spread over a ``run --report DIR --json DIR/h.json`` re-run (during
+    the episode, the figures, the renames): every earlier file stays byte for byte, next to at
+    most partial files and the dead run's locks; never a mix of two runs (issue 33)."""
+    rep = tmp_path / "rep"
+    args = ["run", "station-keeping", "--report", str(rep), "--json", str(rep / "h.json")]
+    out = _cli(*args, "--seed", 1, "--no-progress", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    before = {p.name: p.read_bytes() for p in rep.iterdir()}
+    proc = _start([*args, "--seed", 2, "--no-progress"], tmp_path, slow=0.002)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGKILL)
+    proc.communicate(timeout=WAIT)
+    _assert_group_gone(proc.pid)
+    now = {p.name: p.read_bytes() for p in rep.iterdir()}
+    if proc.returncode == 0:  # it finished first: the new run's files, all of them
+        assert set(now) == set(before) and json.loads(now["h.json"])["seed"] == 2
+        return
+    extra = {n for n in set(now) - set(before) if ".partial" not in n and not n.endswith(".lock")}
+    assert not extra, extra
+    assert {n: now[n] for n in before} == before
