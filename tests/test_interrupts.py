@@ -367,7 +367,9 @@ def test_row_log_keeps_rows_in_job_order(tmp_path):
     log.add(2, {"seed": 2})
     log.add(0, {"seed": 0})
     assert RowLog.read(log.path) == [{"seed": 0}, {"seed": 2}]
-    assert log.summary() == f"2 of 3 finished rows kept at {log.path}"
+    assert log.summary() == (
+        f"2 of 3 finished rows kept at {log.path} (the same command with --resume continues)"
+    )
     log.discard(tmp_path / "x.json")
     assert not log.path.exists()
     assert log.summary() == f"the rows were written to {tmp_path / 'x.json'}"
