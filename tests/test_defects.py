@@ -389,3 +389,12 @@ def test_an_invalid_actuator_colour_is_refused_when_read(tmp_path, colour):
     toml.write_text(text)
     with pytest.raises(ValueError, match=r"colour.*must be a colour #rrggbb"):
         load_vessel(pkg)
+
+
+def test_a_wave_period_beyond_any_sea_is_refused():
+    """``Tp = 1e6`` s (11 days) ran; a peak period beyond 100 s is a unit mistake."""
+    from shipgym.disturbances import WaveConfig
+
+    with pytest.raises(ValueError, match=r"Tp must be > 0 and <= 100 s"):
+        WaveConfig(Tp=1e6)
+    assert WaveConfig(Tp=25.0).Tp == 25.0  # long swell

@@ -222,6 +222,11 @@ def drift_coefficients(
 MAX_HS = 30.0
 
 
+#: the longest peak period accepted (s): beyond any sea (long swell is about 25 s); a larger
+#: value is a unit mistake
+MAX_TP = 100.0
+
+
 @dataclass(frozen=True)
 class WaveConfig:
     """Sea state and wave-effect switches (SI units, radians).
@@ -311,8 +316,11 @@ class WaveConfig:
                 f"{name}.Hs must be >= 0 and <= {MAX_HS:g} m (beyond any sea measured), got "
                 f"{self.Hs!r}"
             )
-        if not self.Tp > 0:
-            raise ValueError(f"{name}.Tp must be > 0 (s), got {self.Tp!r}")
+        if not 0 < self.Tp <= MAX_TP:
+            raise ValueError(
+                f"{name}.Tp must be > 0 and <= {MAX_TP:g} s (beyond any sea's peak period; "
+                f"long swell is about 25 s), got {self.Tp!r}"
+            )
         if not 1.0 <= self.gamma <= 10.0:
             raise ValueError(f"{name}.gamma must be in [1, 10], got {self.gamma!r}")
         n = self.n_components
