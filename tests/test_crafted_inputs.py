@@ -327,3 +327,42 @@ def test_a_crafted_stack_argument_is_refused_naming_it(kwargs: dict[str, Any]) -
     msg = str(info.value)
     named = [str(v) for v in kwargs.values()] + list(kwargs) + ["sensors", "bogus", "model"]
     assert any(n and n in msg for n in named), msg
+
+
+# ---- the public constructors of plans, physics and controllers ----------------------------------
+def _constructor_cases() -> list[Any]:
+    from shipgym.controllers import PIDGains
+    from shipgym.envs import VesselPhysics
+    from shipgym.envs.batchphysics import BatchedPhysics
+    from shipgym.guidance import Leg, Limits, ManoeuvrePlan
+
+    leg = Leg(surge=1.0)
+    limits = {f: 1.0 for f in ("surge_speed", "surge_accel", "surge_astern_speed",
+                               "surge_astern_accel", "sway_speed", "sway_accel", "yaw_rate",
+                               "yaw_accel")}  # fmt: skip
+    cases: list[tuple[Any, dict[str, Any]]] = [
+        *((Leg, {k: v}) for k in ("surge", "sway", "yaw") for v in (NAN, math.inf, "x", 1e12)),
+        (Leg, {"delay": -1.0}), (Leg, {"step": "yes"}), (Leg, {"limits": "fast"}),
+        (ManoeuvrePlan, {"legs": ()}), (ManoeuvrePlan, {"legs": ("x",)}),
+        (ManoeuvrePlan, {"legs": [leg], "name": 3}),
+        *((Limits, {**limits, k: v}) for k in limits for v in (NAN, -1.0)),
+        *((PIDGains, {"K_P": v, "K_I": (0, 0, 0), "K_D": (0, 0, 0)})
+          for v in ((NAN, 0, 0), (1, 2), "x")),
+        (VesselPhysics, {"vessel": "nope"}), (VesselPhysics, {"vessel": 3}),
+        *((VesselPhysics, {"vessel": "blue-lady", k: v}) for k, v in (
+            ("timestep", -1.0), ("timestep", NAN), ("integrator", "rk4"), ("world", "moon"),
+            ("wind", "abc"), ("current", "1@nan"), ("plant", "bogus"), ("waves", "storm"))),
+        *((BatchedPhysics, {"vessel": "blue-lady", "n": n}) for n in (0, -1, 1.5, 10**7)),
+        *((BatchedPhysics, {"vessel": "blue-lady", "n": 2, k: v}) for k, v in (
+            ("timestep", NAN), ("integrator", "x"), ("wind", (NAN, 0.0)))),
+    ]  # fmt: skip
+    return [pytest.param(c, kw, id=f"{c.__name__}({kw!r})") for c, kw in cases]
+
+
+@pytest.mark.parametrize(("cls", "kwargs"), _constructor_cases())
+def test_a_crafted_constructor_argument_is_refused_naming_it(cls: Any, kwargs: dict[str, Any]):
+    with pytest.raises((ValueError, TypeError)) as info:
+        cls(**kwargs)
+    msg = str(info.value)
+    named = [*kwargs, *(str(v) for v in kwargs.values()), *(repr(v) for v in kwargs.values())]
+    assert any(n and n in msg for n in named), msg

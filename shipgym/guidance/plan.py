@@ -15,12 +15,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import param
+from shipgym._config import MAX_ANGLE, param
 
 from .reference import Limits, leg_duration
 from .rframe import from_r_frame
 
 __all__ = ["Leg", "ManoeuvrePlan", "tomera2014_plan", "PLANS", "plan"]
+
+
+#: the longest leg accepted (m): 1,000 km, far beyond any manoeuvre
+MAX_LEG = 1.0e6
 
 
 def _finite(owner: str, name: str, value: Any) -> float:
@@ -77,6 +81,13 @@ class Leg:
     def __post_init__(self) -> None:
         for key in ("surge", "sway", "yaw"):
             object.__setattr__(self, key, _finite("Leg", key, getattr(self, key)))
+        for key, bound, unit in (("surge", MAX_LEG, "m"), ("sway", MAX_LEG, "m"),
+                                 ("yaw", MAX_ANGLE, "rad")):  # fmt: skip
+            if abs(getattr(self, key)) > bound:
+                raise ValueError(
+                    f"Leg.{key} must be within +-{bound:g} {unit}, got {getattr(self, key)!r}: "
+                    "a unit mistake (a leg is a manoeuvre, not a voyage)"
+                )
         if not isinstance(self.name, str):
             raise ValueError(f"Leg.name must be a string, got {self.name!r}")
         if self.limits is not None and not isinstance(self.limits, Limits):
