@@ -398,3 +398,26 @@ def test_a_wave_period_beyond_any_sea_is_refused():
     with pytest.raises(ValueError, match=r"Tp must be > 0 and <= 100 s"):
         WaveConfig(Tp=1e6)
     assert WaveConfig(Tp=25.0).Tp == 25.0  # long swell
+
+
+def test_a_run_file_of_the_wrong_shape_is_named_not_met_in_the_plots(tmp_path, capsys):
+    """A run file whose arrays disagree in length failed deep in matplotlib ("operands could
+    not be broadcast together ..."); it is now one line naming the file and the array."""
+    import json
+
+    from shipgym.cli import main
+    from shipgym.viz import load_run, save_run_json
+
+    rrd = tmp_path / "r.rrd"
+    assert main(["run", "station-keeping", "--record", str(rrd), "--no-progress"]) == 0
+    save_run_json(load_run(rrd), tmp_path / "good.json")
+    capsys.readouterr()
+    doc = json.loads((tmp_path / "good.json").read_text())
+    for key in ("eta", "step", "command", "meas_z", "t"):
+        bad = json.loads(json.dumps(doc))
+        bad["arrays"][key] = bad["arrays"][key][:3]
+        path = tmp_path / f"bad_{key}.json"
+        path.write_text(json.dumps(bad))
+        assert main(["report", str(path), "--out", str(tmp_path / "rep")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and str(path) in err[0] and "shape" in err[0], err

@@ -391,7 +391,18 @@ def _load_json(path: Path) -> Run:
             f"{path} is not a shipgym run file (expected a JSON object with "
             f'"format": "{JSON_FORMAT}", as written by shipgym.viz.save_run_json)'
         )
+    try:
+        return _run_of_doc(doc, path)
+    except (ValueError, TypeError, KeyError, AttributeError) as exc:  # a file of the wrong shape
+        msg = str(exc)
+        raise ValueError(msg if msg.startswith(str(path)) else f"{path}: {msg}") from None
+
+
+def _run_of_doc(doc: dict[str, Any], path: Path) -> Run:
+    """The :class:`Run` of a parsed run file ``doc`` (``path``: for the messages)."""
     arrays = doc.get("arrays", {})
+    if not isinstance(arrays, dict):
+        raise ValueError(f"{path}: 'arrays' must be a JSON object of named arrays")
     widths = {"command": 3, "thrust": 3, "saturated": 3}  # files before per-vessel widths
     acts = doc.get("actuators")
     if isinstance(acts, dict) and acts.get("names"):
@@ -413,6 +424,7 @@ def _load_json(path: Path) -> Run:
         if a.size == 0 and f.name in widths:
             a = a.reshape(0, widths[f.name])
         kwargs[f.name] = a
+    _check_lengths(kwargs, path)
     return Run(
         **kwargs,
         actuators=dict(acts) if isinstance(acts, dict) else {},
@@ -421,6 +433,34 @@ def _load_json(path: Path) -> Run:
         metadata=dict(doc.get("metadata") or {}),
         metrics=dict(doc.get("metrics") or {}),
     )
+
+
+#: the arrays of a run with a row per control step (and the width of a row, None: any)
+_PER_STEP = {"step": None, "leg": None, "legs_completed": None, "command": None,
+             "thrust": None, "saturated": None, "actuator_state": None, "wind": 2,
+             **dict.fromkeys(("eta", "nu", "nav_eta", "nav_nu", "eta_d", "eta_d_r",
+                              "eta_dot_d_r", "eta_r", "eta_P", "tau_wind", "tau_waves",
+                              "current_body"), 3)}  # fmt: skip
+#: the arrays with a row per valid measurement
+_PER_SAMPLE = {"meas_step": None, "meas_outlier": None, "meas_z": 3, "meas_z_r": 3}
+
+
+def _check_lengths(arrays: dict[str, Any], path: Path) -> None:
+    """Every per-step array has a row per time of ``t`` and every per-sample array a row per
+    time of ``meas_t``, of the expected width (a run file of the wrong shape is named, not
+    met later as a plotting library's broadcast error)."""
+    for times, group in (("t", _PER_STEP), ("meas_t", _PER_SAMPLE)):
+        n = len(arrays[times])
+        for name, width in group.items():
+            a = arrays.get(name)
+            if a is None:
+                continue
+            if a.shape[:1] != (n,) or (width is not None and a.shape[1:] != (width,)):
+                want = f"({n},)" if width is None else f"({n}, {width})"
+                raise ValueError(
+                    f"{path}: the array {name!r} has shape {a.shape}; a run with {n} "
+                    f"{'control steps' if times == 't' else 'measurements'} needs {want}"
+                )
 
 
 # ---- rrd -------------------------------------------------------------------------------------
