@@ -421,3 +421,14 @@ def test_a_run_file_of_the_wrong_shape_is_named_not_met_in_the_plots(tmp_path, c
         assert main(["report", str(path), "--out", str(tmp_path / "rep")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and str(path) in err[0] and "shape" in err[0], err
+
+
+def test_a_recording_too_large_to_read_is_refused(tmp_path, monkeypatch):
+    """rerun reads a recording whole: one beyond the bound is refused before it is read."""
+    import shipgym.viz.run as run
+
+    big = tmp_path / "big.rrd"
+    big.write_bytes(b"\0" * 2048)
+    monkeypatch.setattr(run, "MAX_RUN_RRD_BYTES", 1024)
+    with pytest.raises(ValueError, match=r"big.rrd has 2,048 bytes, more than the limit"):
+        run.load_run(big)

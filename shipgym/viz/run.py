@@ -370,6 +370,8 @@ def _as_array(name: str, value: Any) -> NDArray[Any]:
 
 #: largest JSON run file read (bytes)
 MAX_RUN_JSON_BYTES = 1 << 30
+#: the largest recording ``load_run`` reads (bytes), read whole into memory by rerun
+MAX_RUN_RRD_BYTES = 4 << 30
 
 
 def _load_json(path: Path) -> Run:
@@ -666,6 +668,12 @@ def load_run(path: str | os.PathLike[str]) -> Run:
     if suffix == ".json":
         return _load_json(path)
     if suffix == ".rrd":
+        size = path.stat().st_size
+        if size > MAX_RUN_RRD_BYTES:  # rerun reads a recording whole into memory
+            raise ValueError(
+                f"recording {path} has {size:,} bytes, more than the limit of "
+                f"{MAX_RUN_RRD_BYTES:,} (a run of days records a few hundred MB)"
+            )
         return _load_rrd(path)
     raise ValueError(f"unsupported run file {path}: expected a .rrd or .json file")
 
