@@ -262,8 +262,8 @@ def process_at(mode, t, i, slot, inv_dt, k0, win, const):  # type: ignore[no-unt
 
 
 @njit
-def _hull(  # type: ignore[no-untyped-def]
-    i,
+def _hulls(  # type: ignore[no-untyped-def]
+    first, end,
     integrator, mj_step, mps, dps, fields, stop_on_contact,
     dofs, linear_kin, h, inertia,
     accel, kh, laws, table, kind_index, chan, kw,
@@ -271,16 +271,20 @@ def _hull(  # type: ignore[no-untyped-def]
     mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
     loads, forces, flags, hits, stopped, status,
 ):  # fmt: skip
-    """Hull ``i`` of :func:`run`: its ``left[i]`` steps; its code in ``status[i, 0]``
-    (``NEED`` with the process slot and chunk in ``status[i, 1:]``), returned too."""
-    status[i, 0] = OK
+    """Hulls ``first .. end - 1`` of :func:`run`, one after the other: each its ``left[i]`` steps
+    and its code in ``status[i, 0]`` (``NEED`` with the process slot and chunk in
+    ``status[i, 1:]``); returns the largest code."""
+    worst = OK
     nq = q.shape[1]
     n_ch = chan.shape[0]
     hh = 0.5 * h
     mq, iq, ix = inertia[0], inertia[2], inertia[3]
     acc = accel_at(accel)
     four = dofs == 4
-    if True:  # hull i
+    for i in range(first, end):
+        status[i, 0] = OK
+        if left[i] <= 0:  # (not stepped: a reset's start of another hull, a masked hull)
+            continue
         st = act[i]
         ti = t[i]
         m_w, m_c, m_d = mode[i, 0], mode[i, 1], mode[i, 2]
@@ -299,8 +303,7 @@ def _hull(  # type: ignore[no-untyped-def]
                 slot = WIND if not ok_w else (CURRENT if not ok_c else DRIFT)
                 status[i, 0], status[i, 1] = NEED, slot
                 status[i, 2] = int(ti * inv_dt[i, slot]) // CHUNK
-                t[i] = ti
-                return NEED
+                break
             vw = vw if vw > 0.0 else 0.0  # a gust's speed never below 0
             if m_w != OFF:
                 wx, wy, wn = blendermann_load(kw, psi, u, v, vw, bw)
@@ -339,8 +342,7 @@ def _hull(  # type: ignore[no-untyped-def]
                 lo = loads[i]
                 lo[0], lo[1], lo[2], lo[3], lo[4] = ti, u, v, p, r
                 lo[5], lo[6], lo[7] = ud, vd, rd
-                t[i] = ti
-                return DIVERGED
+                break
             if four:  # qacc = J nu_dot + J_dot nu (Fossen's 4-DOF kinematics)
                 sv, cv = s * v, c * v
                 a0 = c * ud - s * cphi * vd - s * u * psid - cphi * cv * psid + sphi * sv * phid
@@ -422,7 +424,8 @@ def _hull(  # type: ignore[no-untyped-def]
                     qv[i, k] += h * qa[i, k]
                     q[i, k] += h * qv[i, k]
         t[i] = ti
-    return OK
+        worst = status[i, 0] if status[i, 0] > worst else worst
+    return worst
 
 
 @njit
@@ -482,19 +485,15 @@ def run(  # type: ignore[no-untyped-def]
     Returns:
         The largest code of the hulls: ``OK``, ``NEED`` or ``DIVERGED``.
     """
-    code = OK
-    for i in range(q.shape[0]):
-        c = _hull(
-            i,
-                integrator, mj_step, mps, dps, fields, stop_on_contact,
-                dofs, linear_kin, h, inertia,
-                accel, kh, laws, table, kind_index, chan, kw,
-                q, qv, qa, qfrc, act, cmd, t, left, external,
-                mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
-                loads, forces, flags, hits, stopped, status,
-        )  # fmt: skip
-        code = c if c > code else code
-    return code
+    return _hulls(
+        0, q.shape[0],
+        integrator, mj_step, mps, dps, fields, stop_on_contact,
+        dofs, linear_kin, h, inertia,
+        accel, kh, laws, table, kind_index, chan, kw,
+        q, qv, qa, qfrc, act, cmd, t, left, external,
+        mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
+        loads, forces, flags, hits, stopped, status,
+    )  # fmt: skip
 
 
 @njit(parallel=True)
@@ -509,18 +508,20 @@ def run_parallel(  # type: ignore[no-untyped-def]
     """:func:`run` with the hulls spread over Numba's threads (the same per-hull law, so the
     same floats); for large batches called from the main thread (:data:`PARALLEL_MIN`)."""
     n = q.shape[0]
-    codes = np.zeros(n, dtype=np.int64)
-    for i in prange(n):
-        codes[i] = _hull(
-            i,
-                integrator, mj_step, mps, dps, fields, stop_on_contact,
-                dofs, linear_kin, h, inertia,
-                accel, kh, laws, table, kind_index, chan, kw,
-                q, qv, qa, qfrc, act, cmd, t, left, external,
-                mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
-                loads, forces, flags, hits, stopped, status,
+    chunks = min(n, 64)  # a few chunks a thread: hulls of unequal work balance
+    size = (n + chunks - 1) // chunks
+    codes = np.zeros(chunks, dtype=np.int64)
+    for c in prange(chunks):
+        codes[c] = _hulls(
+            min(c * size, n), min((c + 1) * size, n),
+            integrator, mj_step, mps, dps, fields, stop_on_contact,
+            dofs, linear_kin, h, inertia,
+            accel, kh, laws, table, kind_index, chan, kw,
+            q, qv, qa, qfrc, act, cmd, t, left, external,
+            mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
+            loads, forces, flags, hits, stopped, status,
         )  # fmt: skip
-    return codes.max() if n else OK
+    return codes.max()
 
 
 def channel_table(actuators: Any, h: float) -> np.ndarray:
@@ -849,6 +850,8 @@ class HullBatch:
             self.left.fill(0)
             self.left[only] = n
         self.stopped.fill(0)
+        # the hulls that step: a reset's start (one hull) or a few masked ones stay serial
+        busy = 1 if only is not None else self.n if mask is None else int(np.count_nonzero(mask))
         while True:
             if self._args is None:  # the arrays of run (built again when a window grows)
                 self._args = (
@@ -860,7 +863,7 @@ class HullBatch:
                     self.stopped, self.status,
                 )  # fmt: skip
             fn = run
-            if self.n >= PARALLEL_MIN and _threads_ok():
+            if busy >= PARALLEL_MIN and _threads_ok():
                 fn = run_parallel
                 if not THREADS["used"]:  # idle threads sleep (before OpenMP starts): a busy
                     # machine is not slowed by threads spinning for work
