@@ -716,15 +716,24 @@ def place_harbour(model: Any, body: int | None, start: NDArray[np.float64]) -> N
     model.body_quat[body] = (math.cos(h), 0.0, 0.0, math.sin(h))
 
 
-def _check_timing(timestep: Any, control_period: Any) -> None:
-    """Bounds of the physics timestep and control period (see :data:`MIN_TIMESTEP` etc.)."""
-    check_timestep(timestep)
+def check_control_period(control_period: Any) -> None:
+    """A control period (s) is a number in ``(0, MAX_CONTROL_PERIOD]``.
+
+    Raises:
+        TypeError: not a number; ValueError: out of the range (NaN included).
+    """
     if not is_real(control_period):
         raise TypeError(f"control_period must be a number of seconds, got {control_period!r}")
     if not 0 < control_period <= MAX_CONTROL_PERIOD:  # NaN fails too
         raise ValueError(
             f"control_period must be > 0 and <= {MAX_CONTROL_PERIOD:g} s, got {control_period!r}"
         )
+
+
+def _check_timing(timestep: Any, control_period: Any) -> None:
+    """Bounds of the physics timestep and control period (see :data:`MIN_TIMESTEP` etc.)."""
+    check_timestep(timestep)
+    check_control_period(control_period)
     if control_period / timestep > MAX_SUBSTEPS + 0.5:
         raise ValueError(
             f"control_period / timestep = {control_period / timestep:.0f} physics steps per "

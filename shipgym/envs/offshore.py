@@ -30,7 +30,7 @@ from shipgym.dynamics.vessel import load_vessel
 from shipgym.guidance import Leg, ManoeuvrePlan
 from shipgym.observers.sensors import sensor_config
 
-from .base import MAX_CONTROL_PERIOD
+from .base import check_control_period
 from .tasks import StationKeepingEnv
 
 __all__ = [
@@ -244,14 +244,7 @@ class OffshoreDPEnv(StationKeepingEnv):
         if "control_period" not in kwargs:
             kwargs["control_period"] = dp_control_period(vessel.hull.L_pp)
         cp = kwargs["control_period"]
-        if (
-            isinstance(cp, bool)
-            or not isinstance(cp, numbers.Real)
-            or not 0 < cp <= MAX_CONTROL_PERIOD
-        ):
-            raise ValueError(
-                f"control_period must be a number of s in (0, {MAX_CONTROL_PERIOD:g}], got {cp!r}"
-            )
+        check_control_period(cp)  # before the timing is derived from it
         if "timestep" not in kwargs:
             kwargs["timestep"] = dp_timing(float(cp))[0]
         # wind and waves: the Beaufort preset, Al-Takie's printed Beaufort 8 wind
