@@ -55,6 +55,23 @@ def test_the_batched_mujoco_physics_names_the_hull(absurd_vessel):
         bp.step(50)
 
 
+def test_a_state_mujoco_resets_stops_at_that_step_single_and_batched():
+    """A load MuJoCo cannot integrate (its acceleration past ``mjMAXVAL``): MuJoCo resets the
+    state and counts a warning; the compiled loop stops that hull at that step and the
+    physics raises, naming the hull, with the clock at the step (not at the end of the call)."""
+    p = VesselPhysics("blue-lady")
+    p.reset()
+    p.set_external_force([1e25, 0.0, 0.0])
+    with pytest.raises(SimulationDiverged, match=r"t = 0\.050 s \(hull 0\): MuJoCo found"):
+        p.step(5)
+    bp = BatchedPhysics("blue-lady", 3, integrator="mujoco")
+    bp.reset()
+    bp._hulls.external[1] = (1e25, 0.0, 0.0, 0.0)
+    with pytest.raises(SimulationDiverged, match=r"\(hull 1\): MuJoCo found"):
+        bp.step(5)
+    assert bp._hulls.t.tolist() == pytest.approx([0.25, 0.05, 0.25])  # the others ran on
+
+
 def test_the_harbour_env_ends_with_the_divergence_error(absurd_vessel):
     env = shipgym.make("harbour", vessel=absurd_vessel, controller="pid")
     env.reset(seed=0)

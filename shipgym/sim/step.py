@@ -17,9 +17,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numba import prange
+from numba import carray, prange
 
-from shipgym._jit import ACCEL_SIG, accel_at, address, entry, njit
+from shipgym._jit import _DISABLED, ACCEL_SIG, accel_at, address, entry, njit
 from shipgym.disturbances._grid import CHUNK
 from shipgym.disturbances.wind import blendermann_load
 from shipgym.dynamics.actuators import tau_of_table
@@ -38,8 +38,8 @@ __all__ = [
     "mj_step_address",
 ]
 
-#: return codes of :func:`run`
-OK, NEED, DIVERGED = 0, 1, 2
+#: return codes of :func:`run` (``RESET``: MuJoCo found a bad state and reset it)
+OK, NEED, DIVERGED, RESET = 0, 1, 2, 3
 #: integrators (and EVALUATE: the joint acceleration of the state, nothing stepped)
 MUJOCO, LEAPFROG, EVALUATE = 0, 1, 2
 #: process slots: wind, current, wave drift
@@ -199,6 +199,26 @@ try:
 
         return sig, codegen
 
+    @intrinsic
+    def _f8p(typingctx, addr):  # type: ignore[no-untyped-def]
+        """The address ``addr`` as a float64 pointer (for ``numba.carray``)."""
+        sig = types.CPointer(types.float64)(types.int64)
+
+        def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+            return builder.inttoptr(args[0], ir.DoubleType().as_pointer())
+
+        return sig, codegen
+
+    @intrinsic
+    def _i8p(typingctx, addr):  # type: ignore[no-untyped-def]
+        """The address ``addr`` as an int64 pointer (for ``numba.carray``)."""
+        sig = types.CPointer(types.int64)(types.int64)
+
+        def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+            return builder.inttoptr(args[0], ir.IntType(64).as_pointer())
+
+        return sig, codegen
+
 except ImportError:  # pragma: no cover - numba is a core dependency
     raise
 
@@ -263,9 +283,8 @@ def process_at(mode, t, i, slot, inv_dt, k0, win, const):  # type: ignore[no-unt
 
 @njit
 def _hulls(  # type: ignore[no-untyped-def]
-    first, end,
-    integrator, mj_step, mps, dps, fields, stop_on_contact,
-    dofs, linear_kin, h, inertia,
+    first, end, integrator, stop_on_contact, h,
+    mj_step, mps, dps, fields, views, dofs, linear_kin, inertia,
     accel, kh, laws, table, kind_index, chan, kw,
     q, qv, qa, qfrc, act, cmd, t, left, external,
     mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
@@ -404,15 +423,21 @@ def _hulls(  # type: ignore[no-untyped-def]
                 if four:
                     qfrc[i, 3] = ix * pd
                 fp, fv, fa, ff = fields[i, 0], fields[i, 1], fields[i, 2], fields[i, 3]
-                for k in range(nq):
-                    _store(fp, k, q[i, k])
-                    _store(fv, k, qv[i, k])
-                    _store(ff, k, qfrc[i, k])
+                if not views:  # (views: the arrays are the mjData's own)
+                    for k in range(nq):
+                        _store(fp, k, q[i, k])
+                        _store(fv, k, qv[i, k])
+                        _store(ff, k, qfrc[i, k])
                 _call(mj_step, mps[i], dps[i])
-                for k in range(nq):
-                    q[i, k] = _load(fp, k)
-                    qv[i, k] = _load(fv, k)
-                    qa[i, k] = _load(fa, k)
+                if not views:
+                    for k in range(nq):
+                        q[i, k] = _load(fp, k)
+                        qv[i, k] = _load(fv, k)
+                        qa[i, k] = _load(fa, k)
+                # MuJoCo resets a bad state and only counts a warning: stop the hull
+                if _load_i32(fields[i, 5]) + _load_i32(fields[i, 6]) + _load_i32(fields[i, 7]):
+                    status[i, 0] = RESET
+                    break
                 if stop_on_contact and _load_i32(fields[i, 4]) != 0:
                     stopped[i] = left[i]
                     left[i] = 0
@@ -428,99 +453,106 @@ def _hulls(  # type: ignore[no-untyped-def]
     return worst
 
 
-@njit
-def run(  # type: ignore[no-untyped-def]
-    integrator, mj_step, mps, dps, fields, stop_on_contact,
-    dofs, linear_kin, h, inertia,
-    accel, kh, laws, table, kind_index, chan, kw,
-    q, qv, qa, qfrc, act, cmd, t, left, external,
-    mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
-    loads, forces, flags, hits, stopped, status,
-):  # fmt: skip
-    """Advance each hull ``i`` by ``left[i]`` physics steps (module docstring).
-
-    Args (all arrays C-contiguous float64 unless said; N hulls, nv joints, nc channels, na
-    actuators):
-        integrator: :data:`MUJOCO` (each hull its own ``mjData``), :data:`LEAPFROG`, or
-            :data:`EVALUATE` (only ``qa`` and the read-outs of the state written: the start
-            of a run).
-        mj_step, mps, dps: the address of MuJoCo's ``mj_step``; (N,) int64 the addresses of
-            each hull's ``mjModel`` and ``mjData`` (``mujoco`` only).
-        fields: (N, 5) int64 the addresses of each hull's ``qpos``, ``qvel``, ``qacc``,
-            ``qfrc_applied`` and ``ncon`` in its ``mjData`` (``mujoco`` only): the loop
-            writes ``q``, ``qv`` and ``qfrc`` there before ``mj_step`` and reads ``q``, ``qv``
-            and ``qa`` back after it (a no-op where the arrays are views on the ``mjData``,
-            as for :class:`~shipgym.envs.physics.VesselPhysics`);
-        stop_on_contact: stop a hull after the step in which MuJoCo finds a contact.
-        dofs: 3 or 4; linear_kin: the 4-DOF hull's linear kinematics (``cos phi = 1``).
-        h: the step (s); inertia: MuJoCo's joint-space inertia ``(m, m, I_z, I_x)``.
-        accel: the address of the hull family's compiled acceleration
-            (:func:`shipgym._jit.address`); kh: its constants.
-        laws, table, kind_index: the addresses of the actuator force laws (int64); (N, na, k)
-            each hull's row of constants per actuator (hulls of one vessel may differ in
-            them: a rudder moved); each row's law
-            (:meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`).
-        chan: (nc, 9) channel dynamics: code, lower, upper, alpha = 1 - exp(-h/T), rate-limit
-            band, rate-limit step, servo rate, servo time constant, bounded.
-        kw: the wind load's constants (:meth:`~shipgym.disturbances.wind.WindLoad.
-            kernel_constants`).
-        q, qv, qa, qfrc: (N, nv) joint positions, half-step velocities, accelerations, and
-            the applied force written for MuJoCo.
-        act, cmd: (N, nc) actuator states and commands.
-        t: (N,) each hull's time (s); left: (N,) int64 steps still to take, counted down.
-        external: (N, 4) a held external load ``[X, Y, K, N]`` (N, N m).
-        mode: (N, 3) int64 process modes (wind, current, drift: ``OFF``, ``CONSTANT``,
-            ``SAMPLED``); const: (N, 3, 2) constant values (speed, direction); inv_dt,
-            k0: (N, 3) sample rate (1/s) and the first sample of each window (int64);
-            win_w, win_c, win_d: (N, 2, W) the windows of samples.
-        drift_k: (N, 4) the drift's ``beta_p`` (rad), ``k_x``, ``k_y``, ``k_n``.
-        loads: (N, 8) out: the last step's wind X, Y, N, drift X, Y, N, current u_c, v_c.
-        forces, flags: (N, na) out: each actuator's force reading (N) and stall flag.
-        hits: (N, nc) int64 out: 1 where a servo ran at its rate limit in the last step.
-        stopped: (N,) int64 out: the steps a contact stop left untaken (``mujoco``).
-        status: (N, 3) int64 out: each hull's code, and the process and the chunk it needs
-            (``NEED``); a hull that diverged (``DIVERGED``) has its t, nu, nu_dot in
-            ``loads[i]``. Every hull runs on whatever another one needs.
-
-    Returns:
-        The largest code of the hulls: ``OK``, ``NEED`` or ``DIVERGED``.
-    """
-    return _hulls(
-        0, q.shape[0],
-        integrator, mj_step, mps, dps, fields, stop_on_contact,
-        dofs, linear_kin, h, inertia,
-        accel, kh, laws, table, kind_index, chan, kw,
-        q, qv, qa, qfrc, act, cmd, t, left, external,
-        mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
-        loads, forces, flags, hits, stopped, status,
+@njit(inline="always")
+def _arrays(p):  # type: ignore[no-untyped-def]
+    """:func:`run`'s arrays from the table ``p`` of their shapes and addresses
+    (:meth:`HullBatch.table_of_arrays`), in :func:`_hulls`' order after ``h``."""
+    n, nq, nc, na, kt, nkh, nl, nkw = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]
+    ww, wc, wd = p[8], p[9], p[10]
+    f, i = _f8p, _i8p
+    return (
+        p[14], carray(i(p[15]), n), carray(i(p[16]), n), carray(i(p[17]), (n, 8)),
+        p[48] != 0, p[11], p[12] != 0, carray(f(p[18]), 4),
+        p[13], carray(f(p[19]), nkh), carray(i(p[20]), nl), carray(f(p[21]), (n, na, kt)),
+        carray(i(p[22]), na), carray(f(p[23]), (nc, 9)), carray(f(p[24]), nkw),
+        carray(f(p[25]), (n, nq)), carray(f(p[26]), (n, nq)), carray(f(p[27]), (n, nq)),
+        carray(f(p[28]), (n, nq)), carray(f(p[29]), (n, nc)), carray(f(p[30]), (n, nc)),
+        carray(f(p[31]), n), carray(i(p[32]), n), carray(f(p[33]), (n, 4)),
+        carray(i(p[34]), (n, 3)), carray(f(p[35]), (n, 3, 2)), carray(f(p[36]), (n, 3)),
+        carray(i(p[37]), (n, 3)), carray(f(p[38]), (n, 2, ww)), carray(f(p[39]), (n, 2, wc)),
+        carray(f(p[40]), (n, 2, wd)), carray(f(p[41]), (n, 4)), carray(f(p[42]), (n, 8)),
+        carray(f(p[43]), (n, na)), carray(f(p[44]), (n, na)), carray(i(p[45]), (n, nc)),
+        carray(i(p[46]), n), carray(i(p[47]), (n, 3)),
     )  # fmt: skip
 
 
+@njit
+def run(integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-def]
+    """Advance each hull ``i`` by ``left[i]`` physics steps (module docstring).
+
+    Args:
+        integrator: :data:`MUJOCO` (each hull its own ``mjData``), :data:`LEAPFROG`, or
+            :data:`EVALUATE` (only ``qa`` and the read-outs of the state written: the start
+            of a run).
+        stop_on_contact: stop a hull after the step in which MuJoCo finds a contact.
+        h: the step (s).
+        p: int64, the shapes and addresses of the batch's arrays
+            (:meth:`HullBatch.table_of_arrays`: passing one table instead of 30 arrays saves
+            the microseconds Numba spends unboxing each array of each call). They are, N
+            hulls, nv joints, nc channels, na actuators, all C-contiguous float64 unless said:
+
+            - mj_step, mps, dps: the address of MuJoCo's ``mj_step``; (N,) int64 the
+              addresses of each hull's ``mjModel`` and ``mjData`` (``mujoco`` only);
+            - fields: (N, 8) int64 the addresses of each hull's ``qpos``, ``qvel``,
+              ``qacc``, ``qfrc_applied``, ``ncon`` and the bad-position, -velocity and
+              -acceleration warning counters in its ``mjData`` (``mujoco`` only): the loop
+              writes ``q``, ``qv`` and ``qfrc`` there before ``mj_step`` and reads ``q``,
+              ``qv`` and ``qa`` back after it (a no-op where the arrays are views on the
+              ``mjData``, as for :class:`~shipgym.envs.physics.VesselPhysics`: ``views``,
+              the last entry of ``p``);
+            - dofs: 3 or 4; linear_kin: the 4-DOF hull's linear kinematics (``cos phi = 1``);
+            - inertia: MuJoCo's joint-space inertia ``(m, m, I_z, I_x)``;
+            - accel: the address of the hull family's compiled acceleration
+              (:func:`shipgym._jit.address`); kh: its constants;
+            - laws, table, kind_index: the addresses of the actuator force laws (int64);
+              (N, na, k) each hull's row of constants per actuator (hulls of one vessel may
+              differ in them: a rudder moved); each row's law
+              (:meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`);
+            - chan: (nc, 9) channel dynamics: code, lower, upper, alpha = 1 - exp(-h/T),
+              rate-limit band, rate-limit step, servo rate, servo time constant, bounded;
+            - kw: the wind load's constants
+              (:meth:`~shipgym.disturbances.wind.WindLoad.kernel_constants`);
+            - q, qv, qa, qfrc: (N, nv) joint positions, half-step velocities, accelerations,
+              and the applied force written for MuJoCo;
+            - act, cmd: (N, nc) actuator states and commands;
+            - t: (N,) each hull's time (s); left: (N,) int64 steps still to take, counted
+              down;
+            - external: (N, 4) a held external load ``[X, Y, K, N]`` (N, N m);
+            - mode: (N, 3) int64 process modes (wind, current, drift: ``OFF``,
+              ``CONSTANT``, ``SAMPLED``); const: (N, 3, 2) constant values (speed,
+              direction); inv_dt, k0: (N, 3) sample rate (1/s) and the first sample of each
+              window (int64); win_w, win_c, win_d: (N, 2, W) the windows of samples;
+            - drift_k: (N, 4) the drift's ``beta_p`` (rad), ``k_x``, ``k_y``, ``k_n``;
+            - loads: (N, 8) out: the last step's wind X, Y, N, drift X, Y, N, current
+              u_c, v_c;
+            - forces, flags: (N, na) out: each actuator's force reading (N) and stall flag;
+            - hits: (N, nc) int64 out: 1 where a servo ran at its rate limit in the last
+              step;
+            - stopped: (N,) int64 out: the steps a contact stop left untaken (``mujoco``);
+            - status: (N, 3) int64 out: each hull's code, and the process and the chunk it
+              needs (``NEED``); a hull that diverged (``DIVERGED``) has its t, nu, nu_dot in
+              ``loads[i]``; ``RESET``: MuJoCo reset the hull's bad state. Every hull runs on
+              whatever another one needs.
+
+    Returns:
+        The largest code of the hulls: ``OK``, ``NEED``, ``DIVERGED`` or ``RESET``.
+    """
+    return _hulls(0, p[0], integrator, stop_on_contact, h, *_arrays(p))
+
+
 @njit(parallel=True)
-def run_parallel(  # type: ignore[no-untyped-def]
-    integrator, mj_step, mps, dps, fields, stop_on_contact,
-    dofs, linear_kin, h, inertia,
-    accel, kh, laws, table, kind_index, chan, kw,
-    q, qv, qa, qfrc, act, cmd, t, left, external,
-    mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
-    loads, forces, flags, hits, stopped, status,
-):  # fmt: skip
+def run_parallel(integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-def]
     """:func:`run` with the hulls spread over Numba's threads (the same per-hull law, so the
     same floats); for large batches called from the main thread (:data:`PARALLEL_MIN`)."""
-    n = q.shape[0]
+    n = p[0]
     chunks = min(n, 64)  # a few chunks a thread: hulls of unequal work balance
     size = (n + chunks - 1) // chunks
     codes = np.zeros(chunks, dtype=np.int64)
+    arrays = _arrays(p)
     for c in prange(chunks):
         codes[c] = _hulls(
-            min(c * size, n), min((c + 1) * size, n),
-            integrator, mj_step, mps, dps, fields, stop_on_contact,
-            dofs, linear_kin, h, inertia,
-            accel, kh, laws, table, kind_index, chan, kw,
-            q, qv, qa, qfrc, act, cmd, t, left, external,
-            mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
-            loads, forces, flags, hits, stopped, status,
-        )  # fmt: skip
+            min(c * size, n), min((c + 1) * size, n), integrator, stop_on_contact, h, *arrays
+        )
     return codes.max()
 
 
@@ -608,7 +640,7 @@ class HullBatch:
         self._mj_step = 0
         self.mps = np.zeros(n, dtype=np.int64)
         self.dps = np.zeros(n, dtype=np.int64)
-        self.fields = np.zeros((n, 5), dtype=np.int64)
+        self.fields = np.zeros((n, 8), dtype=np.int64)
         self.models: list[Any] = []
         self.datas: list[Any] = []
         if integrator == "mujoco":
@@ -626,7 +658,12 @@ class HullBatch:
                     a.ctypes.data for a in (d.qpos, d.qvel, d.qacc, d.qfrc_applied)
                 ]
                 self.fields[i, 4] = ncon_view(m, d).ctypes.data
-        if integrator == "mujoco" and n == 1:  # the hull's own arrays: MuJoCo's state
+                warn = d.warning.number  # int32 counters, a strided view on mjData
+                self.fields[i, 5:] = [
+                    warn.ctypes.data + k * warn.strides[0] for k in (_BADQPOS, _BADQVEL, _BADQACC)
+                ]
+        self._views = integrator == "mujoco" and n == 1
+        if self._views:  # the hull's own arrays: MuJoCo's state
             d = self.datas[0]
             self.q = d.qpos.reshape(1, -1)
             self.qv = d.qvel.reshape(1, -1)
@@ -655,8 +692,11 @@ class HullBatch:
         self.hits = np.zeros((n, nc), dtype=np.int64)
         self.stopped = np.zeros(n, dtype=np.int64)
         self.status = np.zeros((n, 3), dtype=np.int64)
+        self._integ = MUJOCO if integrator == "mujoco" else LEAPFROG
+        self._clock = self.datas[0] if integrator == "mujoco" and n == 1 else None
         self._entry: Any = None  # run's compiled entry point for these arguments' types
-        self._args: tuple[Any, ...] | None = None
+        self._args: tuple[Any, ...] | None = None  # run's arrays, held while p points at them
+        self._p = np.zeros(49, dtype=np.int64)  # their shapes and addresses (table_of_arrays)
         self._nu = np.zeros((n, 4))  # body_velocities' output
         self._nu_entry: Any = None
 
@@ -813,26 +853,62 @@ class HullBatch:
 
         Raises:
             SimulationDiverged: a hull's state became non-finite or absurd (its state before
-                that step is kept).
+                that step is kept), or MuJoCo found a bad state and reset it (``mujoco``).
         """
-        if isinstance(n, bool) or not isinstance(n, int | np.integer) or not 0 <= n <= MAX_STEPS:
+        if type(n) is not int and (
+            isinstance(n, bool) or not isinstance(n, int | np.integer)
+        ):  # (an int first: the call of every control period)
             raise ValueError(
                 f"the number of physics steps must be an int in [0, {MAX_STEPS}], got {n!r}"
             )
-        if self.integrator == "mujoco" and self.n == 1:
-            self.t[0] = self.datas[0].time
-        integ = MUJOCO if self.integrator == "mujoco" else LEAPFROG
-        taken = self._advance(integ, int(n), None, stop_on_contact, mask)
-        # MuJoCo resets an unstable state and only warns: fail instead (its integrator only)
-        for i, d in enumerate(self.datas if integ == MUJOCO else ()):
-            w = d.warning
-            if w[_BADQACC].number or w[_BADQVEL].number or w[_BADQPOS].number:
-                raise SimulationDiverged(
-                    f"simulation diverged by t = {self.t[i]:.3f} s (hull {i}): MuJoCo found a "
-                    "NaN, infinite or huge value in the state or its acceleration and reset the "
-                    "state; check the plant parameters, the timestep and the applied forces"
-                )
-        return taken
+        if not 0 <= n <= MAX_STEPS:
+            raise ValueError(
+                f"the number of physics steps must be an int in [0, {MAX_STEPS}], got {n!r}"
+            )
+        if self._clock is not None:  # the hull's own mjData: MuJoCo's clock
+            self.t[0] = self._clock.time
+        return self._advance(self._integ, int(n), None, stop_on_contact, mask)
+
+    def table_of_arrays(self) -> np.ndarray:
+        """The int64 table of :func:`run`'s argument ``p``: the batch's shapes, then the
+        addresses of its arrays (checked C-contiguous of the dtype the loop reads), which
+        :attr:`_args` holds while the table is in use (built again when a window grows)."""
+        f8, i8 = np.dtype(np.float64), np.dtype(np.int64)
+        arrays = (
+            (self.mps, i8), (self.dps, i8), (self.fields, i8), (self.inertia, f8),
+            (self.kh, f8), (self.laws, i8), (self.table, f8), (self.kind_index, i8),
+            (self.chan, f8), (self.kw, f8), (self.q, f8), (self.qv, f8), (self.qa, f8),
+            (self.qfrc, f8), (self.act, f8), (self.cmd, f8), (self.t, f8), (self.left, i8),
+            (self.external, f8), (self.mode, i8), (self.const, f8), (self.inv_dt, f8),
+            (self.k0, i8), *((w, f8) for w in self.windows), (self.drift_k, f8),
+            (self.loads, f8), (self.forces, f8), (self.flags, f8), (self.hits, i8),
+            (self.stopped, i8), (self.status, i8),
+        )  # fmt: skip
+        n, nq, nc = self.n, self.q.shape[1], self.act.shape[1]
+        na, kt = self.table.shape[1:]
+        shapes = {  # what _arrays reads each array as
+            "mps": (n,), "dps": (n,), "fields": (n, 8), "inertia": (4,), "table": (n, na, kt),
+            "kind_index": (na,), "chan": (nc, 9), "q": (n, nq), "qv": (n, nq), "qa": (n, nq),
+            "qfrc": (n, nq), "act": (n, nc), "cmd": (n, nc), "forces": (n, na),
+        }  # fmt: skip
+        for name, want in shapes.items():
+            if getattr(self, name).shape != want:
+                raise ValueError(f"HullBatch.{name} has shape {getattr(self, name).shape}, "
+                                 f"the loop reads {want}")  # fmt: skip
+        for a, dt in arrays:
+            if a.dtype != dt or not a.flags.c_contiguous:
+                raise ValueError("the physics loop's arrays must be C-contiguous float64/int64")
+        head = (
+            n, nq, nc, na, kt, self.kh.size, self.laws.size, self.kw.size,
+            *(w.shape[2] for w in self.windows), self.dofs, int(self.linear_kin),
+            int(self.accel), self._mj_step,
+        )  # fmt: skip
+        p = self._p
+        p[: len(head)] = head
+        p[len(head) : len(head) + len(arrays)] = [a.ctypes.data for a, _ in arrays]
+        p[len(head) + len(arrays)] = self._views
+        self._args = tuple(a for a, _ in arrays)
+        return p
 
     def _advance(
         self,
@@ -853,15 +929,8 @@ class HullBatch:
         # the hulls that step: a reset's start (one hull) or a few masked ones stay serial
         busy = 1 if only is not None else self.n if mask is None else int(np.count_nonzero(mask))
         while True:
-            if self._args is None:  # the arrays of run (built again when a window grows)
-                self._args = (
-                    self.dofs, self.linear_kin, self.h, self.inertia,
-                    self.accel, self.kh, self.laws, self.table, self.kind_index, self.chan,
-                    self.kw, self.q, self.qv, self.qa, self.qfrc, self.act, self.cmd, self.t,
-                    self.left, self.external, self.mode, self.const, self.inv_dt, self.k0,
-                    *self.windows, self.drift_k, self.loads, self.forces, self.flags, self.hits,
-                    self.stopped, self.status,
-                )  # fmt: skip
+            if self._args is None:
+                self.table_of_arrays()
             fn = run
             if busy >= PARALLEL_MIN and _threads_ok():
                 fn = run_parallel
@@ -870,13 +939,18 @@ class HullBatch:
                     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
                     THREADS["used"] = True
             if self._entry is None or self._entry[0] is not fn:
-                args = (integ, self._mj_step, self.mps, self.dps, self.fields, stop_on_contact)
-                self._entry = (fn, entry(fn, (*args, *self._args)))
-            code = self._entry[1](integ, self._mj_step, self.mps, self.dps, self.fields,
-                                  stop_on_contact, *self._args)  # fmt: skip
+                self._entry = (fn, self._entry_of(fn, integ, stop_on_contact))
+            code = self._entry[1](integ, stop_on_contact, self.h, self._p)
             if code == OK:
-                return n - int(self.stopped.max())
+                return n - int(self.stopped.max()) if stop_on_contact else n
             codes = self.status[:, 0]
+            if code == RESET:
+                i = int(np.argmax(codes == RESET))
+                raise SimulationDiverged(
+                    f"simulation diverged by t = {self.t[i]:.3f} s (hull {i}): MuJoCo found a "
+                    "NaN, infinite or huge value in the state or its acceleration and reset the "
+                    "state; check the plant parameters, the timestep and the applied forces"
+                )
             if code == DIVERGED:
                 i = int(np.argmax(codes == DIVERGED))
                 lo = self.loads[i].tolist()
@@ -884,3 +958,14 @@ class HullBatch:
                 diverged(lo[0], nu, lo[5:8])
             for i in np.nonzero(codes == NEED)[0].tolist():
                 self._load(i, int(self.status[i, 1]), int(self.status[i, 2]))
+
+    def _entry_of(self, fn: Any, integ: int, stop_on_contact: bool) -> Any:
+        """``fn``'s compiled entry point (:func:`shipgym._jit.entry`); where compilation is
+        off (``NUMBA_DISABLE_JIT``, the debugging path), the loop called on the arrays."""
+        if not _DISABLED:
+            return entry(fn, (integ, stop_on_contact, self.h, self._p))
+        return lambda integ, stop, h, _p: _hulls(0, self.n, integ, stop, h, self._mj_step,
+                                                 *self._args[:3], self._views, self.dofs,
+                                                 self.linear_kin,
+                                                 self._args[3], int(self.accel),
+                                                 *self._args[4:])  # fmt: skip
