@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym.dynamics.actuators import ActuatorSet, Azimuth, Propeller
+from shipgym.dynamics.actuators import ActuatorSet, Azimuth, Propeller, bollard_inverse
 from shipgym.dynamics.thrusters import ThrusterParameters
 from shipgym.dynamics.vessel import Vessel
 
@@ -114,6 +114,16 @@ def _planar_B(acts: ActuatorSet, idx: list[int]) -> NDArray[np.float64]:
     return np.array(cols, dtype=float).reshape(-1, 3).T
 
 
+def _inverse_constants(props: Any) -> tuple[Any, Any, Any]:
+    """The propellers' constants of :func:`~shipgym.dynamics.actuators.bollard_inverse`, as
+    rows: ``k_ahead``, ``k_astern``, quadratic."""
+    return (
+        np.array([a.k_ahead for a in props], dtype=float),
+        np.array([a.k_astern for a in props], dtype=float),
+        np.array([a.law == "quadratic" for a in props]),
+    )
+
+
 def _tau3(tau: ArrayLike) -> NDArray[np.float64]:
     t = np.asarray(tau, dtype=float)
     if t.shape != (3,) or not np.all(np.isfinite(t)):
@@ -134,6 +144,7 @@ class _FixedAllocator:
         # each DOF's error relative to its capacity
         self.W = 1.0 / np.maximum(acts.capacity()[[0, 1, -1]], 1e-9) ** 2
         self._wls = WLSAllocator(self.B, self.f_min, self.f_max, W=self.W)
+        self._inverse = _inverse_constants(acts.actuators)
 
     def __call__(self, tau: ArrayLike, state: NDArray[np.float64]) -> Allocation:
         return Allocation(*(x[0] for x in self.batch(_tau3(tau).reshape(1, 3))))
@@ -142,10 +153,7 @@ class _FixedAllocator:
         """The allocations of N requests ``tau`` (N, 3): ``(command, force, tau, tau_error,
         saturated)``, each with a leading axis N (the compiled law over N, one call)."""
         force, delivered, error, sat = self._wls.batch(tau)
-        cmd = np.empty_like(force)
-        for j, a in enumerate(self.acts.actuators):
-            cmd[:, j] = a.inverse(force[:, j])  # type: ignore[attr-defined]
-        cmd = np.clip(cmd, self.acts.lower, self.acts.upper)
+        cmd = np.clip(bollard_inverse(force, *self._inverse), self.acts.lower, self.acts.upper)
         return cmd, force, delivered, error, sat
 
 
@@ -182,6 +190,8 @@ class _AzimuthAllocator:
             reversible=np.array([a.reversible for a in units]),
         )
         fixed: Any = None
+        self._inverse = _inverse_constants([acts.actuators[i] for i in self.fx])
+        self._fixed_channels = np.array([acts.slices[i].start for i in self.fx], dtype=np.intp)
         if self.fx:
             fa = [acts.actuators[i] for i in self.fx]
             fixed = (
@@ -216,11 +226,10 @@ class _AzimuthAllocator:
         force[:, self.az] = thrust
         sat[:, j] = sat_qp[:, : len(self.az)] & ~rate_lim
         sat[:, j + 1] = rate_lim
-        for k, i in enumerate(self.fx):
-            a: Any = acts.actuators[i]
-            f = f_fixed[:, k]
-            cmd[:, acts.slices[i].start] = a.inverse(f)
-            force[:, i] = f
-            sat[:, acts.slices[i]] = sat_qp[:, len(self.az) + k, None]
+        if self.fx:
+            fx = self._fixed_channels
+            cmd[:, fx] = bollard_inverse(f_fixed, *self._inverse)
+            force[:, self.fx] = f_fixed
+            sat[:, fx] = sat_qp[:, len(self.az) :]
         cmd = np.clip(cmd, acts.lower, acts.upper)
         return cmd, force, delivered, error, sat

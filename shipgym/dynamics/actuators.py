@@ -22,7 +22,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._jit import LAW_SIG, address, law_at, njit
+from .._jit import LAW_SIG, address, entry, law_at, njit
 
 __all__ = [
     "ACTUATOR_KINDS",
@@ -295,6 +295,37 @@ def tau_of_table(table, laws, kind_index, st, u, v, p, r, forces, flags):  # typ
     return X, Y, K, N
 
 
+@njit
+def _bollard_inverse(f, k_ahead, k_astern, quadratic, out):  # type: ignore[no-untyped-def]
+    """:func:`bollard_inverse` over rows: ``f`` (N, n), constants (n,), ``out`` (N, n)."""
+    for i in range(f.shape[0]):
+        for j in range(f.shape[1]):
+            x = f[i, j]
+            k = k_ahead[j] if x >= 0.0 else k_astern[j]
+            if quadratic[j]:
+                sg = 1.0 if x > 0.0 else (-1.0 if x < 0.0 else x)  # numpy's sign (0, NaN kept)
+                out[i, j] = sg * math.sqrt(abs(x) / k)
+            else:
+                out[i, j] = x / k
+
+
+def bollard_inverse(force: Any, k_ahead: Any, k_astern: Any, quadratic: Any) -> Any:
+    """The state (command) that gives the bollard thrust ``force`` (N) of a propeller's law
+    (:class:`Propeller`: ``F = k a`` linear, ``F = k |a| a`` quadratic; ``k = k_ahead`` for
+    ``F >= 0``, else ``k_astern``), unsaturated. ``force`` (..., n) with the constants (n,)
+    (one call inverts a set's propellers over N requests), or any shape with scalar
+    constants; the result has the shape of ``force`` (a float for a scalar)."""
+    f = np.asarray(force, dtype=float)
+    ka, kb = np.atleast_1d(np.asarray(k_ahead, float)), np.atleast_1d(np.asarray(k_astern, float))
+    q = np.atleast_1d(np.asarray(quadratic, dtype=np.bool_))
+    n = ka.size
+    rows = np.ascontiguousarray(f.reshape(-1, n) if n > 1 else f.reshape(-1, 1))
+    out = np.empty_like(rows)
+    args = (rows, ka, kb, q, out)
+    entry(_bollard_inverse, args)(*args)
+    return out.reshape(f.shape) if f.ndim else out[0, 0]
+
+
 @dataclass(frozen=True)
 class Propeller(Actuator):
     r"""A fixed-direction thruster: main propeller (``alpha = 0``) or tunnel (90 deg).
@@ -457,11 +488,7 @@ class Propeller(Actuator):
     def inverse(self, force: ArrayLike) -> NDArray[np.float64]:
         """The state (command) that gives the bollard thrust ``force`` (N), unsaturated (the
         design model of the allocation: the advance-speed and tunnel losses are left out)."""
-        f = np.asarray(force, dtype=float)
-        k = np.where(f >= 0, self.k_ahead, self.k_astern)
-        if self.law == "quadratic":
-            return np.sign(f) * np.sqrt(np.abs(f) / k)
-        return f / k
+        return bollard_inverse(force, self.k_ahead, self.k_astern, self.law == "quadratic")
 
     def force(self, states: NDArray[np.float64], nu: ArrayLike | None = None) -> tuple[Any, Any]:
         f = self.thrust(states, nu)
