@@ -13,7 +13,10 @@ Per vessel:
 
 - ``physics_over_bare``: bare ``mj_step`` time over the single physics' time for the same
   steps, called as an env calls it: one control period (20 steps) per call (higher is better,
-  1 = as fast as bare MuJoCo);
+  1 = as fast as bare MuJoCo), with the ``mujoco`` integrator (MuJoCo's own ``mj_step`` with
+  the hull's forces: the harbour's, with quay contact);
+- ``physics_leapfrog_over_bare``: the same with the ``leapfrog`` integrator, the one the
+  open-water envs step with (the same forces, no MuJoCo call);
 - ``batched_hull_steps_per_s``: the batched physics, N = 256 hulls in a gusty wind (each its
   own gusts) and a Gauss-Markov current, 20 steps per call; ``batched_waves_ratio``: the same
   with the wave drift on (a sea of the vessel's scale) over without.
@@ -107,16 +110,21 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     calls_b = max(1, n // (20 * nh) * 4)  # batched: about 4n hull-steps per timing
     for name in vessel_names():
         v = load_vessel(name)
-        pv = VesselPhysics(v, wind=f"{v.nominal_wind:g}@300")
-        pv.reset(rng=np.random.default_rng(0))
-        pv.set_command(v.actuators.action_to_command(np.full(v.actuators.n_channels, 0.5)))
-        pv.step(20)  # warm-up
+        period = {}
+        for integrator in ("mujoco", "leapfrog"):
+            pv = VesselPhysics(v, wind=f"{v.nominal_wind:g}@300", integrator=integrator)
+            pv.reset(rng=np.random.default_rng(0))
+            pv.set_command(v.actuators.action_to_command(np.full(v.actuators.n_channels, 0.5)))
+            pv.step(20)  # warm-up
 
-        def period(pv: VesselPhysics = pv) -> None:  # as an env calls the physics
-            for _ in range(n // 20):
-                pv.step(20)
+            def calls(pv: VesselPhysics = pv) -> None:  # as an env calls the physics
+                for _ in range(n // 20):
+                    pv.step(20)
 
-        r = pair(_bare(f"{name}/bare", build_model(v), n), _timed(f"{name}/physics", period), rep)
+            period[integrator] = calls
+        bare = _bare(f"{name}/bare", build_model(v), n)
+        r = pair(bare, _timed(f"{name}/physics", period["mujoco"]), rep)
+        lf = pair(bare, _timed(f"{name}/physics_leapfrog", period["leapfrog"]), rep)
         calm, sea = _batched(v, nh, calls_b, None), _batched(v, nh, calls_b, _sea(v))
         hs = calls_b * 20 * nh
         b = pair(_timed(f"{name}/batched", calm), _timed(f"{name}/batched_waves", sea), rep,
@@ -124,13 +132,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         rec = {
             "physics_over_bare": r,
             "physics_steps_per_s": n / r["b_s"],
+            "physics_leapfrog_over_bare": lf,
             "batched_hull_steps_per_s": 1.0 / b["a_s"],
             "batched_waves_ratio": b["a_s"] / b["b_s"],
             "cpu_s": {k.split("/")[1]: float(np.median(t)) for k, t in CPU.items()
                       if k.startswith(name + "/")},
         }  # fmt: skip
         out[name] = rec
-        print(f"{name:16s} physics / bare mj_step {_fmt(r)} ({n / r['b_s']:,.0f} steps/s); "
+        print(f"{name:16s} physics / bare mj_step {_fmt(r)} ({n / r['b_s']:,.0f} steps/s), "
+              f"leapfrog {lf['median']:.2f}; "
               f"batched N = {nh}: {rec['batched_hull_steps_per_s'] / 1e6:.2f} M hull-steps/s, "
               f"with waves x{rec['batched_waves_ratio']:.2f}")  # fmt: skip
     # a rudder-roll episode (seed model at 12 m/s, its waves, the seed's rudder test, the sway
