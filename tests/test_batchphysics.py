@@ -380,3 +380,31 @@ def test_the_workers_of_a_pool_step_their_batches_serially():
 
     assert run_jobs(_physics_threads_allowed, [0, 1], workers=2, progress=False,
                     start_method="fork") == [False, False]  # fmt: skip
+
+
+@pytest.mark.parametrize("integrator", ["leapfrog", "mujoco"])
+@pytest.mark.parametrize("how", ["deepcopy", "pickle"])
+def test_a_copied_physics_steps_its_own_state_as_the_original_would(integrator, how):
+    """The compiled loop reads its arrays and MuJoCo's data through addresses: a copy (or an
+    unpickled physics) binds its own, so stepping it moves the copy alone, to the floats the
+    original reaches with the same steps (single physics and a batch of three)."""
+    import copy
+    import pickle
+
+    def dup(x):
+        return copy.deepcopy(x) if how == "deepcopy" else pickle.loads(pickle.dumps(x))
+
+    single = VesselPhysics("star-hercules", integrator=integrator, wind="6@300")
+    single.reset(rng=np.random.default_rng(3))
+    batch = BatchedPhysics("star-hercules", 3, integrator=integrator, wind="6@300")
+    batch.reset(rngs=[np.random.default_rng(i) for i in range(3)])
+    for phys in (single, batch):
+        phys.set_command(phys.actuators.action_to_command(np.full(phys.actuators.n_channels, 0.4)))
+        phys.step(20)
+        twin = dup(phys)
+        before = np.array(phys.eta, copy=True)
+        twin.step(200)
+        assert np.array_equal(phys.eta, before)  # the original did not move
+        phys.step(200)
+        assert np.array_equal(twin.eta, phys.eta) and not np.array_equal(twin.eta, before)
+        assert np.array_equal(twin.nu, phys.nu)

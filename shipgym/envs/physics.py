@@ -255,8 +255,7 @@ class VesselPhysics:
         """The hull batch of one (:class:`~shipgym.sim.step.HullBatch`) for the current step."""
         from shipgym.sim.step import HullBatch
 
-        self._opt = self.model.opt  # (read at every step: a timestep changed since)
-        self._h = float(self._opt.timestep)
+        self._h = float(self.model.opt.timestep)
         name = self.wind_config.coefficients or self.windage.coefficients
         wind_load = WindLoad(blendermann(name), self.windage)
         self._hulls = HullBatch(
@@ -326,8 +325,8 @@ class VesselPhysics:
             if actuators is None
             else self.actuators.check_states(actuators, "actuators")
         )
-        if self._opt.timestep != self._h:
-            self._check_lags(float(self._opt.timestep))
+        if self.model.opt.timestep != self._h:
+            self._check_lags(float(self.model.opt.timestep))
             self._build()
         self._at = self._vel = None
         self.saturated[:] = False
@@ -566,8 +565,8 @@ class VesselPhysics:
         Raises:
             SimulationDiverged: a non-finite or absurd state (the state before the step is kept).
         """
-        if self._opt.timestep != self._h:
-            self._check_lags(float(self._opt.timestep))
+        if self.model.opt.timestep != self._h:
+            self._check_lags(float(self.model.opt.timestep))
             hb = self._hulls
             state = (hb.q.copy(), hb.qv.copy(), hb.qa.copy(), hb.act.copy(), hb.cmd.copy(),
                      hb.t.copy(), hb.external.copy())  # fmt: skip

@@ -637,10 +637,7 @@ class HullBatch:
         self.kw = np.ascontiguousarray(wind_constants, dtype=np.float64)
         self.inertia = np.asarray(inertia, dtype=np.float64)
         nc, na = actuators.n_channels, len(actuators)
-        self._mj_step = 0
-        self.mps = np.zeros(n, dtype=np.int64)
-        self.dps = np.zeros(n, dtype=np.int64)
-        self.fields = np.zeros((n, 8), dtype=np.int64)
+        self._sources = (plant, actuators)  # (the laws' addresses again after a pickle)
         self.models: list[Any] = []
         self.datas: list[Any] = []
         if integrator == "mujoco":
@@ -651,29 +648,13 @@ class HullBatch:
                     f"the mujoco integrator needs each hull's mjModel and mjData ({n} of each)"
                 )
             self.models, self.datas = models, datas
-            self._mj_step = mj_step_address()
-            for i, (m, d) in enumerate(zip(models, datas, strict=True)):
-                self.mps[i], self.dps[i] = m._address, d._address
-                self.fields[i, :4] = [
-                    a.ctypes.data for a in (d.qpos, d.qvel, d.qacc, d.qfrc_applied)
-                ]
-                self.fields[i, 4] = ncon_view(m, d).ctypes.data
-                warn = d.warning.number  # int32 counters, a strided view on mjData
-                self.fields[i, 5:] = [
-                    warn.ctypes.data + k * warn.strides[0] for k in (_BADQPOS, _BADQVEL, _BADQACC)
-                ]
         self._views = integrator == "mujoco" and n == 1
-        if self._views:  # the hull's own arrays: MuJoCo's state
-            d = self.datas[0]
-            self.q = d.qpos.reshape(1, -1)
-            self.qv = d.qvel.reshape(1, -1)
-            self.qa = d.qacc.reshape(1, -1)
-            self.qfrc = d.qfrc_applied.reshape(1, -1)
-        else:
+        if not self._views:
             self.q = np.zeros((n, dofs))
             self.qv = np.zeros((n, dofs))
             self.qa = np.zeros((n, dofs))
             self.qfrc = np.zeros((n, dofs))
+        self._bind_mujoco()
         self.act = np.zeros((n, nc))
         self.cmd = np.zeros((n, nc))
         self.t = np.zeros(n)
@@ -693,12 +674,54 @@ class HullBatch:
         self.stopped = np.zeros(n, dtype=np.int64)
         self.status = np.zeros((n, 3), dtype=np.int64)
         self._integ = MUJOCO if integrator == "mujoco" else LEAPFROG
-        self._clock = self.datas[0] if integrator == "mujoco" and n == 1 else None
         self._entry: Any = None  # run's compiled entry point for these arguments' types
         self._args: tuple[Any, ...] | None = None  # run's arrays, held while p points at them
         self._p = np.zeros(49, dtype=np.int64)  # their shapes and addresses (table_of_arrays)
         self._nu = np.zeros((n, 4))  # body_velocities' output
         self._nu_entry: Any = None
+
+    def _bind_mujoco(self) -> None:
+        """The addresses the loop reads each hull's ``mjData`` at (``mujoco``; again after a
+        copy or a pickle: addresses belong to one process and one object), and for one hull
+        the state arrays as views on its ``mjData``."""
+        n = self.n
+        self._mj_step = mj_step_address() if self.datas else 0
+        self.mps = np.zeros(n, dtype=np.int64)
+        self.dps = np.zeros(n, dtype=np.int64)
+        self.fields = np.zeros((n, 8), dtype=np.int64)
+        for i, (m, d) in enumerate(zip(self.models, self.datas, strict=True)):
+            self.mps[i], self.dps[i] = m._address, d._address
+            self.fields[i, :4] = [a.ctypes.data for a in (d.qpos, d.qvel, d.qacc, d.qfrc_applied)]
+            self.fields[i, 4] = ncon_view(m, d).ctypes.data
+            warn = d.warning.number  # int32 counters, a strided view on mjData
+            self.fields[i, 5:] = [
+                warn.ctypes.data + k * warn.strides[0] for k in (_BADQPOS, _BADQVEL, _BADQACC)
+            ]
+        if self._views:  # the hull's own arrays: MuJoCo's state
+            d = self.datas[0]
+            self.q = d.qpos.reshape(1, -1)
+            self.qv = d.qvel.reshape(1, -1)
+            self.qa = d.qacc.reshape(1, -1)
+            self.qfrc = d.qfrc_applied.reshape(1, -1)
+        self._clock = self.datas[0] if self._views else None
+        self._args = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        """A copy or a pickle keeps the state and rebuilds every address on first use: the
+        loop's table (:meth:`table_of_arrays`), the compiled laws', MuJoCo's."""
+        state = dict(self.__dict__)
+        state.update(_args=None, _entry=None, _nu_entry=None, _p=np.zeros_like(self._p))
+        for k in ("q", "qv", "qa", "qfrc"):  # (views on the mjData: rebound to its copy)
+            if self._views:
+                state[k] = None
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        plant, actuators = self._sources
+        self.accel = hull_kernel(plant)[0]
+        self.laws = actuators.law_table()[1]
+        self._bind_mujoco()
 
     # ---- disturbances ----------------------------------------------------------------------
     def set_processes(self, i: int, wind: Any, current: Any, waves: Any) -> None:
