@@ -408,3 +408,23 @@ def test_a_copied_physics_steps_its_own_state_as_the_original_would(integrator, 
         phys.step(200)
         assert np.array_equal(twin.eta, phys.eta) and not np.array_equal(twin.eta, before)
         assert np.array_equal(twin.nu, phys.nu)
+
+
+@pytest.mark.parametrize("env_id", ["shipgym/BlueLadyTracking-v0", "shipgym/BlueLadyHarbour-v0"])
+def test_a_deep_copied_env_continues_its_episode_as_the_original(env_id):
+    """A look-ahead copy of an env (model-predictive control does this): both run on, each
+    its own physics, to the same observations."""
+    import copy
+
+    import gymnasium as gym
+
+    env = gym.make(env_id)
+    env.reset(seed=0)
+    a = np.full(env.action_space.shape, 0.3, np.float32)
+    for _ in range(3):
+        env.step(a)
+    twin = copy.deepcopy(env)
+    ours = [twin.step(a)[0] for _ in range(5)]
+    theirs = [env.step(a)[0] for _ in range(5)]
+    assert all(np.array_equal(x, y) for x, y in zip(ours, theirs, strict=True))
+    assert not np.array_equal(ours[0], ours[-1])
