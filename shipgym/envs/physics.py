@@ -255,7 +255,8 @@ class VesselPhysics:
         """The hull batch of one (:class:`~shipgym.sim.step.HullBatch`) for the current step."""
         from shipgym.sim.step import HullBatch
 
-        self._h = float(self.model.opt.timestep)
+        self._opt = self.model.opt  # (read at every step: has the timestep changed?)
+        self._h = float(self._opt.timestep)
         name = self.wind_config.coefficients or self.windage.coefficients
         wind_load = WindLoad(blendermann(name), self.windage)
         self._hulls = HullBatch(
@@ -264,6 +265,15 @@ class VesselPhysics:
             model=self.model, data=self.data,
         )  # fmt: skip
         self._model_table = self._model_actuators.law_table()
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        del state["_opt"]  # (MuJoCo's MjOption view cannot be pickled: taken from the model)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._opt = self.model.opt
 
     def _bind_model(self) -> None:
         self.hull_body = self.model.body("hull").id
@@ -325,8 +335,8 @@ class VesselPhysics:
             if actuators is None
             else self.actuators.check_states(actuators, "actuators")
         )
-        if self.model.opt.timestep != self._h:
-            self._check_lags(float(self.model.opt.timestep))
+        if self._opt.timestep != self._h:
+            self._check_lags(float(self._opt.timestep))
             self._build()
         self._at = self._vel = None
         self.saturated[:] = False
@@ -565,8 +575,8 @@ class VesselPhysics:
         Raises:
             SimulationDiverged: a non-finite or absurd state (the state before the step is kept).
         """
-        if self.model.opt.timestep != self._h:
-            self._check_lags(float(self.model.opt.timestep))
+        if self._opt.timestep != self._h:
+            self._check_lags(float(self._opt.timestep))
             hb = self._hulls
             state = (hb.q.copy(), hb.qv.copy(), hb.qa.copy(), hb.act.copy(), hb.cmd.copy(),
                      hb.t.copy(), hb.external.copy())  # fmt: skip
