@@ -876,7 +876,7 @@ class Wind(GridPair):
             x = gauss_markov(self._state[1], m, a, b, e, -math.inf, math.inf, True, rows[1])
             self._state = (0.0, x)
             t0 = len(self._chunks) * CHUNK * self._dt
-            gust = harmonic_sums(t0, self._dt, CHUNK + 1, self._gw, self._gph, self._ga).real
+            gust = harmonic_sums(t0, self._dt, CHUNK + 1, self._gw, self._gph, self._ga, real=True)
             rows[0] = self._mean_v + gust
             self._chunks.append(rows)
 
