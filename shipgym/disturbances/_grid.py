@@ -8,15 +8,40 @@ hundred nanoseconds; values between samples are interpolated linearly.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import njit
+from shipgym._jit import entry, njit
 
-__all__ = ["CHUNK", "GridPair", "gauss_markov"]
+__all__ = ["CHUNK", "GridPair", "gauss_markov", "standard_normals"]
 
 #: samples per chunk (each chunk also stores the first sample of the next one)
 CHUNK = 4096
+
+
+@njit
+def _fill_normals(rng, out):  # type: ignore[no-untyped-def]
+    """``out`` (K,) filled with ``rng``'s next K standard normals, one draw at a time."""
+    for k in range(out.shape[0]):
+        out[k] = rng.standard_normal()
+
+
+def standard_normals(rng: np.random.Generator, shape: int | tuple[int, ...]) -> NDArray[np.float64]:
+    """``rng.standard_normal(shape)``: the same numbers, and the generator left in the same
+    state (Numba's ``Generator`` runs NumPy's ziggurat on the same bit generator; an array is
+    filled in C order, as NumPy fills it), drawn in compiled code: about three times faster
+    for the chunks of the grids and the wave filters (thousands of normals at each reset)."""
+    out = np.empty(shape)
+    flat = out.reshape(-1)
+    if not _FILL:
+        _FILL.append(entry(_fill_normals, (rng, flat)))
+    _FILL[0](rng, flat)
+    return out
+
+
+_FILL: list[Any] = []  # _fill_normals' compiled entry point (its argument types never change)
 
 
 @njit

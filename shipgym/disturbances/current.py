@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import from_mapping, param, require_angles, require_finite
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair, gauss_markov
+from ._grid import CHUNK, GridPair, gauss_markov, standard_normals
 
 __all__ = ["CurrentConfig", "Current", "current_body_velocity", "MAX_CURRENT_SPEED"]
 
@@ -320,7 +320,7 @@ class Current(GridPair):
         mv, mb = self._mean
         lo, hi = self._lo, self._hi
         while len(self._chunks) <= j:
-            w = rng.standard_normal((2, CHUNK))
+            w = standard_normals(rng, (2, CHUNK))
             rows = np.empty((2, CHUNK + 1))
             v, d = self._state
             v = gauss_markov(v, mv, av, bv, w[0], lo, hi, False, rows[0])

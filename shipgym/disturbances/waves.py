@@ -29,6 +29,7 @@ from shipgym._config import from_mapping, is_real, param, require_angles, requir
 from shipgym._jit import entry, njit
 from shipgym.dynamics.params import HullParameters
 
+from ._grid import standard_normals
 from .spectra import (
     RHO_WATER,
     G,
@@ -668,7 +669,7 @@ class Waves:
         :func:`modal_filter_rows`)."""
         assert self._filter is not None and self._rng_wf is not None and self._q is not None
         lam_i, Gm, _, c_out, nf = self._filter
-        z = self._rng_wf.standard_normal((nf, 2 * _CHUNK)).reshape(nf, 2, _CHUNK)
+        z = standard_normals(self._rng_wf, (nf, 2, _CHUNK))  # the (nf, 2 CHUNK) draw
         zi = np.empty((nf, 2), dtype=complex)
         for i in range(nf):
             zi[i] = lam_i[i] * self._q[i]  # the recursion's state before the first sample

@@ -35,7 +35,7 @@ from shipgym._jit import njit
 from shipgym.dynamics.params import WindageParameters
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair, gauss_markov
+from ._grid import CHUNK, GridPair, gauss_markov, standard_normals
 from .spectra import harmonic_components, harmonic_sums, wind_gust_spectrum
 
 __all__ = [
@@ -858,7 +858,7 @@ class Wind(GridPair):
             return
         inf = math.inf
         while len(self._chunks) <= j:
-            w = rng.standard_normal((2, CHUNK))
+            w = standard_normals(rng, (2, CHUNK))
             rows = np.empty((2, CHUNK + 1))
             # the deviation x_{k+1} = a x_k + b e_k of each channel about its mean
             (xv, xb), (av, ab), (bv, bb) = self._state, self._a, self._b
@@ -872,7 +872,7 @@ class Wind(GridPair):
         a, b, m = self._a[1], self._b[1], self._mean_b
         while len(self._chunks) <= j:
             rows = np.empty((2, CHUNK + 1))
-            e = rng.standard_normal(CHUNK)
+            e = standard_normals(rng, CHUNK)
             x = gauss_markov(self._state[1], m, a, b, e, -math.inf, math.inf, True, rows[1])
             self._state = (0.0, x)
             t0 = len(self._chunks) * CHUNK * self._dt
