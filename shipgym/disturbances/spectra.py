@@ -41,6 +41,7 @@ __all__ = [
     "wind_gust_spectrum",
     "shaping_filter_psd",
     "fit_shaping_filter_lambda",
+    "harmonic_bins",
     "harmonic_components",
     "harmonic_sums",
     "FROUDE_EXPONENTS",
@@ -348,6 +349,32 @@ def wind_gust_spectrum(
 # ---------------------------------------------------------------------------------------------
 
 
+def harmonic_bins(
+    spectrum: Any, lo: float, hi: float, n: int, *, log: bool = False
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The bins of :func:`harmonic_components` and their amplitudes, which do not depend on
+    the draws: ``(edges, widths, amplitudes)``, ``n + 1``, ``n`` and ``n`` values (read-only
+    arrays; a process keeps them for its next realisations).
+
+    The band ``[lo, hi]`` is cut into ``n`` bins (equal widths, or equal ratios with
+    ``log=True``); a bin's amplitude is ``sqrt(2 int_bin S df)`` (the bin's energy, 16-interval
+    Simpson rule).
+    """
+    edges = np.geomspace(lo, hi, n + 1) if log else np.linspace(lo, hi, n + 1)
+    df = np.diff(edges)
+    m = 16  # Simpson sub-intervals per bin
+    sub = edges[:-1, None] + df[:, None] * (np.arange(m + 1) / m)
+    wts = np.ones(m + 1)
+    wts[1:-1:2] = 4.0
+    wts[2:-1:2] = 2.0
+    dens = np.maximum(np.asarray(spectrum(sub), dtype=float), 0.0)
+    energy = np.einsum("jk,k->j", dens, wts) * df / (3.0 * m)
+    amp = np.sqrt(2.0 * energy)
+    for a in (edges, df, amp):
+        a.setflags(write=False)
+    return edges, df, amp
+
+
 def harmonic_components(
     spectrum: Any,
     lo: float,
@@ -356,6 +383,7 @@ def harmonic_components(
     rng: np.random.Generator,
     *,
     log: bool = False,
+    bins: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Random components of a harmonic superposition of a one-sided spectrum.
 
@@ -374,23 +402,17 @@ def harmonic_components(
         n: Number of components, ``>= 1``.
         rng: Generator to draw from.
         log: Logarithmic bins (for spectra spread over decades, like wind gusts).
+        bins: :func:`harmonic_bins` of these arguments, computed before (``None``: computed
+            here).
 
     Returns:
-        ``(f, a, phase)``: frequencies, amplitudes (sqrt of the spectrum's variance units) and
-        phases (rad), each of length ``n``.
+        ``(f, a, phase)``: frequencies, amplitudes (sqrt of the spectrum's variance units;
+        read-only) and phases (rad), each of length ``n``.
     """
-    edges = np.geomspace(lo, hi, n + 1) if log else np.linspace(lo, hi, n + 1)
-    df = np.diff(edges)
+    edges, df, amp = harmonic_bins(spectrum, lo, hi, n, log=log) if bins is None else bins
     f = edges[:-1] + rng.random(n) * df
     phase = rng.uniform(0.0, 2.0 * math.pi, n)
-    m = 16  # Simpson sub-intervals per bin
-    sub = edges[:-1, None] + df[:, None] * (np.arange(m + 1) / m)
-    wts = np.ones(m + 1)
-    wts[1:-1:2] = 4.0
-    wts[2:-1:2] = 2.0
-    dens = np.maximum(np.asarray(spectrum(sub), dtype=float), 0.0)
-    energy = np.einsum("jk,k->j", dens, wts) * df / (3.0 * m)
-    return f, np.sqrt(2.0 * energy), phase
+    return f, amp, phase
 
 
 #: grid points per block of :func:`harmonic_sums` (the block factor is computed directly)

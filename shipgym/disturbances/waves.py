@@ -34,6 +34,7 @@ from .spectra import (
     RHO_WATER,
     G,
     fit_shaping_filter_lambda,
+    harmonic_bins,
     harmonic_components,
     harmonic_sums,
     wave_spectrum,
@@ -534,6 +535,7 @@ class Waves:
         self._wf_rows: WaveMotionRows | None = None  # wf_motion's window (one row)
         self._wf_x = np.zeros(1)  # and its grid position
         self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
+        self._bins: Any = None  # the sea's harmonic_bins (computed at the first reset)
         self._mean_E = 0.0
         self._reset_grid()
         self._ready = self.calm
@@ -613,7 +615,9 @@ class Waves:
         crng = np.random.default_rng(int(s_comp))
         n = int(cfg.n_components)
         lo, hi = cfg.frequency_range
-        w, A, eps = harmonic_components(cfg.spectral_density, lo, hi, n, crng)
+        if self._bins is None:  # the sea's bins, the same at every reset
+            self._bins = harmonic_bins(cfg.spectral_density, lo, hi, n)
+        w, A, eps = harmonic_components(cfg.spectral_density, lo, hi, n, crng, bins=self._bins)
         r = cfg.reflection
         if r == "kT":
             kT = w * w / G * float(self.hull.T)

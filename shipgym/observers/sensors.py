@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import from_mapping, param
+from shipgym._config import fields_of, from_mapping, param
 from shipgym._jit import entry, njit
 
 __all__ = [
@@ -115,12 +115,14 @@ class SensorConfig:
                 f"got {self.antenna_offset!r}"
             )
         object.__setattr__(self, "antenna_offset", off)
-        for f in dataclasses.fields(self):
+        for f in fields_of(type(self)):
             if f.name == "antenna_offset":
                 vals: tuple[Any, ...] = off
             else:
                 val = getattr(self, f.name)
-                if isinstance(val, bool) or not isinstance(val, int | float | np.number):
+                if type(val) is not float and (
+                    isinstance(val, bool) or not isinstance(val, int | float | np.number)
+                ):
                     raise ValueError(
                         f"{cls}.{f.name} must be a number ({f.metadata['unit']}), got {val!r}"
                     )
@@ -170,7 +172,7 @@ class SensorConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (round-trips through :meth:`from_dict`)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        return {f.name: getattr(self, f.name) for f in fields_of(type(self))}
 
     def replace(self, **changes: Any) -> SensorConfig:
         """A validated copy with some fields changed (unknown names raise ``ValueError``)."""
