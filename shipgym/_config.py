@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import numbers
 from collections.abc import Mapping
@@ -16,6 +17,7 @@ __all__ = [
     "require_given",
     "from_mapping",
     "describe",
+    "fields_of",
     "is_real",
     "require_finite",
     "require_positive",
@@ -49,7 +51,7 @@ def require_given(where: str, hint: str, **values: Any) -> None:
 
 def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, where: str = "") -> T:
     """Build a dataclass from a mapping; unknown keys raise ``ValueError`` naming the valid ones."""
-    names = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
+    names = [f.name for f in fields_of(cls)]
     unknown = sorted(set(mapping) - set(names))
     if unknown:
         ctx = f" in {where}" if where else ""
@@ -61,7 +63,17 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, where: str = "") -
 
 def is_real(x: Any) -> bool:
     """Whether ``x`` is a real number (Python or NumPy int or float), ``bool`` excluded."""
+    t = type(x)
+    if t is float or t is int:  # the common case, without the ABC check
+        return True
     return isinstance(x, numbers.Real) and not isinstance(x, bool)
+
+
+@functools.cache
+def fields_of(cls: type) -> tuple[dataclasses.Field, ...]:  # type: ignore[type-arg]
+    """``dataclasses.fields`` of a dataclass type, looked up once per type (validation at
+    every construction, such as an episode's drawn configs, reads them)."""
+    return dataclasses.fields(cls)
 
 
 def describe(obj: Any) -> list[tuple[str, Any, str, str]]:
@@ -74,7 +86,7 @@ def describe(obj: Any) -> list[tuple[str, Any, str, str]]:
 
 def require_finite(obj: Any) -> None:
     """Raise ``ValueError`` for any non-finite float field of a dataclass."""
-    for f in dataclasses.fields(obj):
+    for f in fields_of(type(obj)):
         val = getattr(obj, f.name)
         if isinstance(val, float | int) and not isinstance(val, bool) and not math.isfinite(val):
             raise ValueError(f"{type(obj).__name__}.{f.name} must be finite, got {val!r}")

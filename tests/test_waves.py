@@ -315,3 +315,25 @@ def test_from_dict_rejects_unknown_keys() -> None:
     assert WaveConfig.from_dict({"Hs": 0.1, "Tp": 2.0}).Hs == 0.1
     with pytest.raises(ValueError, match=r"unknown key\(s\) \['hs'\].*valid keys are: spectrum"):
         WaveConfig.from_dict({"hs": 0.1})
+
+
+def test_modal_filter_rows_are_lfilter_floats() -> None:
+    """The compiled WF-filter recursion is SciPy's ``lfilter`` (direct form II transposed,
+    complex) on the modal noise ``einsum("ij,jdk->idk", Gm, z)``, float for float."""
+    from scipy.signal import lfilter
+
+    from shipgym.disturbances.waves import modal_filter_rows
+
+    rng = np.random.default_rng(4)
+    nf, k = 4, 500
+    lam = 0.97 * np.exp(1j * rng.uniform(-1, 1, nf))
+    Gm = rng.normal(size=(nf, nf)) + 1j * rng.normal(size=(nf, nf))
+    z = rng.standard_normal((nf, 2, k))
+    q = rng.normal(size=(nf, 2)) + 1j * rng.normal(size=(nf, 2))
+    zi = np.stack([lam[i] * q[i] for i in range(nf)])
+    got = np.empty((nf, 2, k), dtype=complex)
+    modal_filter_rows(lam, Gm, z, zi, got)
+    u = np.einsum("ij,jdk->idk", Gm, z)
+    for i in range(nf):
+        ref = lfilter([1.0], [1.0, -lam[i]], u[i], axis=-1, zi=zi[i][:, None])[0]
+        assert np.array_equal(got[i], ref)

@@ -212,6 +212,25 @@ def test_harmonic_sums_match_direct_evaluation() -> None:
     assert harmonic_sums(t0, dt, n, w, eps, c[0]).shape == (n,)
 
 
+def test_harmonic_sums_are_the_numpy_blocks_floats() -> None:
+    """The compiled sums are the floats of the NumPy block form they replaced (the gust and
+    wave grids, hence every episode, stay the same), real parts alone included."""
+    rng = np.random.default_rng(3)
+    for nj, t0, dt in ((200, 0.0, 0.1), (100, 3 * 4096 * 0.0443, 0.0443), (7, 12.5, 0.25)):
+        w = rng.uniform(0.01, 6.0, nj)
+        eps = rng.uniform(0, 2 * np.pi, nj)
+        c = rng.uniform(0.0, 2.0, (2, nj))
+        c[0, :3] = 0.0  # zero amplitudes (a spectrum's empty bins)
+        n = 4097
+        n_blk = -(-n // 64)
+        zb = np.exp(1j * (np.multiply.outer(t0 + (64 * dt) * np.arange(n_blk), w) + eps))
+        zm = np.exp(1j * np.multiply.outer(dt * np.arange(64), w))
+        ref = np.stack([np.einsum("bj,mj->bm", zb * c[r], zm).ravel()[:n] for r in range(2)])
+        got = harmonic_sums(t0, dt, n, w, eps, c)
+        assert np.array_equal(got, ref)
+        assert np.array_equal(harmonic_sums(t0, dt, n, w, eps, c[1], real=True), ref[1].real)
+
+
 def test_harmonic_components_bin_energy_exact() -> None:
     rng = np.random.default_rng(3)
     f, a, ph = harmonic_components(lambda x: np.exp(-x), 0.1, 3.0, 29, rng, log=True)

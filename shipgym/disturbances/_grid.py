@@ -8,15 +8,40 @@ hundred nanoseconds; values between samples are interpolated linearly.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import njit
+from shipgym._jit import entry, njit
 
-__all__ = ["CHUNK", "GridPair", "gauss_markov"]
+__all__ = ["CHUNK", "GridPair", "gauss_markov", "gauss_markov_rows", "standard_normals"]
 
 #: samples per chunk (each chunk also stores the first sample of the next one)
 CHUNK = 4096
+
+
+@njit
+def _fill_normals(rng, out):  # type: ignore[no-untyped-def]
+    """``out`` (K,) filled with ``rng``'s next K standard normals, one draw at a time."""
+    for k in range(out.shape[0]):
+        out[k] = rng.standard_normal()
+
+
+def standard_normals(rng: np.random.Generator, shape: int | tuple[int, ...]) -> NDArray[np.float64]:
+    """``rng.standard_normal(shape)``: the same numbers, and the generator left in the same
+    state (Numba's ``Generator`` runs NumPy's ziggurat on the same bit generator; an array is
+    filled in C order, as NumPy fills it), drawn in compiled code: about three times faster
+    for the chunks of the grids and the wave filters (thousands of normals at each reset)."""
+    out = np.empty(shape)
+    flat = out.reshape(-1)
+    if not _FILL:
+        _FILL.append(entry(_fill_normals, (rng, flat)))
+    _FILL[0](rng, flat)
+    return out
+
+
+_FILL: list[Any] = []  # _fill_normals' compiled entry point (its argument types never change)
 
 
 @njit
@@ -35,6 +60,41 @@ def gauss_markov(x, m, a, b, e, lo, hi, deviation, out):  # type: ignore[no-unty
             x = lo if x < lo else (hi if x > hi else x)
             out[k + 1] = x
     return x
+
+
+@njit
+def _gauss_markov_rows(rng, x, m, a, b, lo, hi, deviation, e, out):  # type: ignore[no-untyped-def]
+    """:func:`gauss_markov_rows`, compiled: row ``r``'s normals into ``e`` then its
+    :func:`gauss_markov` from ``x[r]`` into ``out[r]``, the last state back into ``x[r]``."""
+    for r in range(out.shape[0]):
+        for k in range(e.shape[0]):
+            e[k] = rng.standard_normal()
+        x[r] = gauss_markov(x[r], m[r], a[r], b[r], e, lo[r], hi[r], deviation, out[r])
+
+
+def gauss_markov_rows(
+    rng: np.random.Generator,
+    x: NDArray[np.float64],
+    m: NDArray[np.float64],
+    a: NDArray[np.float64],
+    b: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+    deviation: bool,
+    out: NDArray[np.float64],
+) -> None:
+    """One chunk of R Gauss-Markov channels (:func:`gauss_markov`, each with its own ``m, a,
+    b, lo, hi``, (R,)) into ``out`` (R, K + 1), driven by ``rng``'s next R K standard normals
+    in the order of ``rng.standard_normal((R, K))`` (row by row: the same numbers, the
+    generator left in the same state), the states ``x`` (R,) advanced in place; one compiled
+    call for a chunk (draws and recursion)."""
+    args = (rng, x, m, a, b, lo, hi, bool(deviation), np.empty(out.shape[1] - 1), out)
+    if not _ROWS:
+        _ROWS.append(entry(_gauss_markov_rows, args))
+    _ROWS[0](*args)
+
+
+_ROWS: list[Any] = []  # _gauss_markov_rows' compiled entry point
 
 
 class GridPair:

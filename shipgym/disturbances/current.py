@@ -22,10 +22,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import from_mapping, param, require_angles, require_finite
+from shipgym._config import from_mapping, is_real, param, require_angles, require_finite
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair, gauss_markov
+from ._grid import CHUNK, GridPair, gauss_markov_rows
 
 __all__ = ["CurrentConfig", "Current", "current_body_velocity", "MAX_CURRENT_SPEED"]
 
@@ -98,11 +98,9 @@ class CurrentConfig:
             "sample_period",
         ):
             val = getattr(self, key)
-            if isinstance(val, bool) or not isinstance(val, numbers.Real):
+            if not is_real(val):
                 raise ValueError(f"{name}.{key} must be a real number, got {val!r}")
-        if self.v_max is not None and (
-            isinstance(self.v_max, bool) or not isinstance(self.v_max, numbers.Real)
-        ):
+        if self.v_max is not None and not is_real(self.v_max):
             raise ValueError(f"{name}.v_max must be a real number or None, got {self.v_max!r}")
         require_finite(self)
         require_angles(self, "direction_to")
@@ -319,13 +317,14 @@ class Current(GridPair):
         (av, ab), (bv, bb) = self._a, self._b
         mv, mb = self._mean
         lo, hi = self._lo, self._hi
+        m, a, b = np.array([mv, mb]), np.array([av, ab]), np.array([bv, bb])
+        lows, highs = np.array([lo, -math.inf]), np.array([hi, math.inf])
         while len(self._chunks) <= j:
-            w = rng.standard_normal((2, CHUNK))
             rows = np.empty((2, CHUNK + 1))
-            v, d = self._state
-            v = gauss_markov(v, mv, av, bv, w[0], lo, hi, False, rows[0])
-            d = gauss_markov(d, mb, ab, bb, w[1], -math.inf, math.inf, False, rows[1])
-            self._state = (v, d)
+            # speed clipped to [lo, hi], direction free; from standard_normal((2, CHUNK))
+            x = np.array(self._state)
+            gauss_markov_rows(rng, x, m, a, b, lows, highs, False, rows)
+            self._state = (float(x[0]), float(x[1]))
             self._chunks.append(rows)
 
     def at(self, t: float) -> tuple[float, float]:

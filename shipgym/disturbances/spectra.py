@@ -1,4 +1,5 @@
-r"""Wave and wind-gust spectra, shaping-filter fits and Froude scaling (pure NumPy/SciPy).
+r"""Wave and wind-gust spectra, shaping-filter fits and Froude scaling (NumPy/SciPy; the
+harmonic sums of the gust and wave grids are compiled).
 
 ``S_PM(w) = (5/16) Hs^2 w_p^4 w^-5 exp(-1.25 (w_p/w)^4)``, JONSWAP ``S_J = (1 - 0.287 ln
 gamma) S_PM gamma^...``; NPD/ISO 19901-1 gust spectrum.
@@ -22,6 +23,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import njit
+
 __all__ = [
     "G",
     "RHO_WATER",
@@ -38,6 +41,7 @@ __all__ = [
     "wind_gust_spectrum",
     "shaping_filter_psd",
     "fit_shaping_filter_lambda",
+    "harmonic_bins",
     "harmonic_components",
     "harmonic_sums",
     "FROUDE_EXPONENTS",
@@ -345,6 +349,32 @@ def wind_gust_spectrum(
 # ---------------------------------------------------------------------------------------------
 
 
+def harmonic_bins(
+    spectrum: Any, lo: float, hi: float, n: int, *, log: bool = False
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The bins of :func:`harmonic_components` and their amplitudes, which do not depend on
+    the draws: ``(edges, widths, amplitudes)``, ``n + 1``, ``n`` and ``n`` values (read-only
+    arrays; a process keeps them for its next realisations).
+
+    The band ``[lo, hi]`` is cut into ``n`` bins (equal widths, or equal ratios with
+    ``log=True``); a bin's amplitude is ``sqrt(2 int_bin S df)`` (the bin's energy, 16-interval
+    Simpson rule).
+    """
+    edges = np.geomspace(lo, hi, n + 1) if log else np.linspace(lo, hi, n + 1)
+    df = np.diff(edges)
+    m = 16  # Simpson sub-intervals per bin
+    sub = edges[:-1, None] + df[:, None] * (np.arange(m + 1) / m)
+    wts = np.ones(m + 1)
+    wts[1:-1:2] = 4.0
+    wts[2:-1:2] = 2.0
+    dens = np.maximum(np.asarray(spectrum(sub), dtype=float), 0.0)
+    energy = np.einsum("jk,k->j", dens, wts) * df / (3.0 * m)
+    amp = np.sqrt(2.0 * energy)
+    for a in (edges, df, amp):
+        a.setflags(write=False)
+    return edges, df, amp
+
+
 def harmonic_components(
     spectrum: Any,
     lo: float,
@@ -353,6 +383,7 @@ def harmonic_components(
     rng: np.random.Generator,
     *,
     log: bool = False,
+    bins: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Random components of a harmonic superposition of a one-sided spectrum.
 
@@ -371,23 +402,71 @@ def harmonic_components(
         n: Number of components, ``>= 1``.
         rng: Generator to draw from.
         log: Logarithmic bins (for spectra spread over decades, like wind gusts).
+        bins: :func:`harmonic_bins` of these arguments, computed before (``None``: computed
+            here).
 
     Returns:
-        ``(f, a, phase)``: frequencies, amplitudes (sqrt of the spectrum's variance units) and
-        phases (rad), each of length ``n``.
+        ``(f, a, phase)``: frequencies, amplitudes (sqrt of the spectrum's variance units;
+        read-only) and phases (rad), each of length ``n``.
     """
-    edges = np.geomspace(lo, hi, n + 1) if log else np.linspace(lo, hi, n + 1)
-    df = np.diff(edges)
+    edges, df, amp = harmonic_bins(spectrum, lo, hi, n, log=log) if bins is None else bins
     f = edges[:-1] + rng.random(n) * df
     phase = rng.uniform(0.0, 2.0 * math.pi, n)
-    m = 16  # Simpson sub-intervals per bin
-    sub = edges[:-1, None] + df[:, None] * (np.arange(m + 1) / m)
-    wts = np.ones(m + 1)
-    wts[1:-1:2] = 4.0
-    wts[2:-1:2] = 2.0
-    dens = np.maximum(np.asarray(spectrum(sub), dtype=float), 0.0)
-    energy = np.einsum("jk,k->j", dens, wts) * df / (3.0 * m)
-    return f, np.sqrt(2.0 * energy), phase
+    return f, amp, phase
+
+
+#: grid points per block of :func:`harmonic_sums` (the block factor is computed directly)
+_BLOCK = 64
+
+
+@njit
+def _harmonic_rows(t0, dt, n, w, eps, c, imag, out):  # type: ignore[no-untyped-def]
+    """:func:`harmonic_sums` of the real weights ``c`` (R, N) into ``out`` (R, 2, n): the real
+    parts (``out[r, 0]``) and, where ``imag``, the imaginary parts (``out[r, 1]``; else left
+    as they are). The float operations of the NumPy form this replaced, in its order: the
+    phase ``w_j (t0 + 64 dt b) + eps_j`` and ``w_j (dt m)``, ``exp(i x) = cos x + i sin x``,
+    the block factor times ``c``, and each sample summed over ``j`` in order (the real part
+    ``sum (a_re z_re - a_im z_im)``), so that a grid's samples stay the same floats; the
+    samples of a block are summed side by side (independent sums: vectorised)."""
+    nj = w.shape[0]
+    n_blk = -(-n // _BLOCK)
+    zr = np.empty((nj, _BLOCK))
+    zi = np.empty((nj, _BLOCK))
+    for j in range(nj):
+        for m in range(_BLOCK):
+            x = (dt * m) * w[j]
+            zr[j, m] = math.cos(x)
+            zi[j, m] = math.sin(x)
+    step = _BLOCK * dt
+    cb = np.empty(nj)
+    sb = np.empty(nj)
+    acc_r = np.empty(_BLOCK)
+    acc_i = np.empty(_BLOCK)
+    for b in range(n_blk):
+        tb = t0 + step * b
+        for j in range(nj):
+            x = tb * w[j] + eps[j]
+            cb[j] = math.cos(x)
+            sb[j] = math.sin(x)
+        size = min(_BLOCK, n - b * _BLOCK)
+        for r in range(c.shape[0]):
+            acc_r[:] = 0.0
+            acc_i[:] = 0.0
+            for j in range(nj):
+                # the block factor times the weight (a complex product with c_j + 0 i)
+                ar = cb[j] * c[r, j]
+                ai = sb[j] * c[r, j]
+                for m in range(_BLOCK):
+                    acc_r[m] += ar * zr[j, m] - ai * zi[j, m]
+                if imag:
+                    for m in range(_BLOCK):
+                        acc_i[m] += ar * zi[j, m] + ai * zr[j, m]
+            k0 = b * _BLOCK
+            for m in range(size):
+                out[r, 0, k0 + m] = acc_r[m]
+            if imag:
+                for m in range(size):
+                    out[r, 1, k0 + m] = acc_i[m]
 
 
 def harmonic_sums(
@@ -397,13 +476,16 @@ def harmonic_sums(
     w: NDArray[np.float64],
     eps: NDArray[np.float64],
     weights: ArrayLike,
-) -> NDArray[np.complex128]:
+    *,
+    real: bool = False,
+) -> NDArray[np.complex128] | NDArray[np.float64]:
     """Phasor sums ``sum_j c[r, j] exp(i (w_j t_k + eps_j))`` on the grid ``t_k = t0 + k dt``.
 
     With ``k = 64 b + m`` the phasor factorises into a block factor ``exp(i (w_j (t0 + 64 b dt)
     + eps_j))`` and an in-block factor ``exp(i w_j m dt)``, so each row is one small product
     instead of ``n x N`` complex exponentials; every block factor is computed directly, so no
-    rounding error accumulates. ``einsum`` (not BLAS) keeps it fast on busy machines.
+    rounding error accumulates. Compiled (:func:`_harmonic_rows`); complex weights are summed
+    as their real and imaginary parts' sums.
 
     Args:
         t0: First time (s).
@@ -412,21 +494,35 @@ def harmonic_sums(
         w: Angular frequencies (rad/s), shape ``(N,)``.
         eps: Phases (rad), shape ``(N,)``.
         weights: Real or complex weights, shape ``(R, N)`` (or ``(N,)`` for one row).
+        real: return the real parts only (``sum c_j cos(w_j t + eps_j)``, real weights;
+            the imaginary parts are not computed).
 
     Returns:
         Complex array ``(R, n)`` (or ``(n,)`` for 1-D weights). The real part of a row is
-        ``sum c_j cos(w_j t + eps_j)``, the imaginary part ``sum c_j sin(w_j t + eps_j)``.
+        ``sum c_j cos(w_j t + eps_j)``, the imaginary part ``sum c_j sin(w_j t + eps_j)``;
+        with ``real``, those real parts as a float array of the same shape.
     """
     c = np.asarray(weights)
     one = c.ndim == 1
     c = np.atleast_2d(c)
-    n_in = 64
-    n_blk = -(-n // n_in)
-    zb = np.exp(1j * (np.multiply.outer(t0 + (n_in * dt) * np.arange(n_blk), w) + eps))
-    zm = np.exp(1j * np.multiply.outer(dt * np.arange(n_in), w))
-    out = np.empty((c.shape[0], n), dtype=complex)
-    for r in range(c.shape[0]):
-        out[r] = np.einsum("bj,mj->bm", zb * c[r], zm).ravel()[:n]
+    w = np.ascontiguousarray(w, dtype=float)
+    eps = np.ascontiguousarray(eps, dtype=float)
+    if np.iscomplexobj(c):
+        if real:
+            raise ValueError("harmonic_sums(real=True) takes real weights")
+        re = harmonic_sums(t0, dt, n, w, eps, c.real)
+        im = harmonic_sums(t0, dt, n, w, eps, c.imag)
+        out_c = re + 1j * im
+        return out_c[0] if one else out_c
+    c = np.ascontiguousarray(c, dtype=float)
+    rows = np.zeros((c.shape[0], 2, n))
+    _harmonic_rows(float(t0), float(dt), int(n), w, eps, c, not real, rows)
+    if real:
+        out = rows[:, 0]
+    else:
+        out = np.empty((c.shape[0], n), dtype=complex)
+        out.real = rows[:, 0]
+        out.imag = rows[:, 1]
     return out[0] if one else out
 
 

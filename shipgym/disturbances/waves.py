@@ -29,10 +29,12 @@ from shipgym._config import from_mapping, is_real, param, require_angles, requir
 from shipgym._jit import entry, njit
 from shipgym.dynamics.params import HullParameters
 
+from ._grid import standard_normals
 from .spectra import (
     RHO_WATER,
     G,
     fit_shaping_filter_lambda,
+    harmonic_bins,
     harmonic_components,
     harmonic_sums,
     wave_spectrum,
@@ -106,6 +108,49 @@ def wf_rows(x, k0, win, cb, sb, out):  # type: ignore[no-untyped-def]
         out[i, 1] = d * sb[i]
         out[i, 2] = h0 + f * (win[i, 1, j + 1] - h0)
     return -1
+
+
+@njit
+def modal_filter_rows(lam, Gm, z, zi, s):  # type: ignore[no-untyped-def]
+    """The WF filters' modal states over one chunk (the run-time form of
+    :meth:`Waves._filter_chunk`): for each mode ``i`` and DOF ``d`` the modal noise ``u_k =
+    sum_j Gm[i, j] z[j, d, k]`` (the complex products with ``z + 0 i``, summed over ``j`` in
+    order) and the exact discrete recursion ``s_k = lam_i s_{k-1} + u_k`` from the state
+    ``zi[i, d] = lam_i s_{-1}``, into ``s`` (nf, 2, K) complex. The float operations of
+    ``scipy.signal.lfilter([1], [1, -lam_i], u, zi=zi)`` (direct form II transposed, as SciPy
+    forms it for complex coefficients: ``a_0 = 1``, ``b = [1, 0]``), so the samples stay the
+    same floats."""
+    nf = lam.shape[0]
+    # lfilter's normalised coefficients (a_0 = 1 + 0 i: |a_0|^2 = 1)
+    a0r, a0i = 1.0, 0.0
+    mag = a0r * a0r + a0i * a0i
+    b0r = 1.0 * a0r + 0.0 * a0i
+    b0i = 0.0 * a0r - 1.0 * a0i
+    b1r = 0.0 * a0r + 0.0 * a0i
+    b1i = 0.0 * a0r - 0.0 * a0i
+    for i in range(nf):
+        a1r = -lam[i].real
+        a1i = -lam[i].imag
+        tr = a1r * a0r + a1i * a0i
+        ti = a1i * a0r - a1r * a0i
+        for d in range(2):
+            zr = zi[i, d].real
+            zim = zi[i, d].imag
+            for k in range(z.shape[2]):
+                xr = 0.0
+                xi = 0.0
+                for j in range(nf):
+                    g = Gm[i, j]
+                    x = z[j, d, k]
+                    xr += g.real * x - g.imag * 0.0
+                    xi += g.real * 0.0 + g.imag * x
+                yr = zr + (b0r * xr - b0i * xi) / mag
+                yi = zim + (b0i * xr + b0r * xi) / mag
+                zr = (b1r * xr - b1i * xi) / mag
+                zim = (b1i * xr + b1r * xi) / mag
+                zr -= (tr * yr - ti * yi) / mag
+                zim -= (ti * yr + tr * yi) / mag
+                s[i, d, k] = complex(yr, yi)
 
 
 class WaveMotionRows:
@@ -490,6 +535,7 @@ class Waves:
         self._wf_rows: WaveMotionRows | None = None  # wf_motion's window (one row)
         self._wf_x = np.zeros(1)  # and its grid position
         self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
+        self._bins: Any = None  # the sea's harmonic_bins (computed at the first reset)
         self._mean_E = 0.0
         self._reset_grid()
         self._ready = self.calm
@@ -569,7 +615,9 @@ class Waves:
         crng = np.random.default_rng(int(s_comp))
         n = int(cfg.n_components)
         lo, hi = cfg.frequency_range
-        w, A, eps = harmonic_components(cfg.spectral_density, lo, hi, n, crng)
+        if self._bins is None:  # the sea's bins, the same at every reset
+            self._bins = harmonic_bins(cfg.spectral_density, lo, hi, n)
+        w, A, eps = harmonic_components(cfg.spectral_density, lo, hi, n, crng, bins=self._bins)
         r = cfg.reflection
         if r == "kT":
             kT = w * w / G * float(self.hull.T)
@@ -621,22 +669,21 @@ class Waves:
         return rows
 
     def _filter_chunk(self) -> NDArray[np.float64]:
-        """Advance the WF filters by one chunk (exact discrete recursion, modal lfilter)."""
-        from scipy.signal import lfilter
-
+        """Advance the WF filters by one chunk (exact discrete recursion, modal; compiled:
+        :func:`modal_filter_rows`)."""
         assert self._filter is not None and self._rng_wf is not None and self._q is not None
         lam_i, Gm, _, c_out, nf = self._filter
-        z = self._rng_wf.standard_normal((nf, 2 * _CHUNK)).reshape(nf, 2, _CHUNK)
-        u = np.einsum("ij,jdk->idk", Gm, z)  # modal noise, (n, 2, CHUNK)
-        y = np.zeros((2, _CHUNK + 1), dtype=complex)
-        q_end = np.empty_like(self._q)
+        z = standard_normals(self._rng_wf, (nf, 2, _CHUNK))  # the (nf, 2 CHUNK) draw
+        zi = np.empty((nf, 2), dtype=complex)
         for i in range(nf):
-            q0 = self._q[i]  # (2,)
-            s = lfilter([1.0], [1.0, -lam_i[i]], u[i], axis=-1, zi=(lam_i[i] * q0)[:, None])[0]
-            y[:, 0] += c_out[i] * q0
-            y[:, 1:] += c_out[i] * s
-            q_end[i] = s[:, -1]
-        self._q = q_end
+            zi[i] = lam_i[i] * self._q[i]  # the recursion's state before the first sample
+        s = np.empty((nf, 2, _CHUNK), dtype=complex)
+        modal_filter_rows(np.ascontiguousarray(lam_i), np.ascontiguousarray(Gm), z, zi, s)
+        y = np.zeros((2, _CHUNK + 1), dtype=complex)
+        for i in range(nf):
+            y[:, 0] += c_out[i] * self._q[i]
+            y[:, 1:] += c_out[i] * s[i]
+        self._q = s[:, :, -1].copy()
         out = y.real
         out[0] *= self._sig_d
         out[1] *= self._sig_h

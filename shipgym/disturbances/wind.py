@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import functools
 import math
-import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, NamedTuple
@@ -26,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import (
     from_mapping,
+    is_real,
     param,
     require_angles,
     require_finite,
@@ -35,8 +35,8 @@ from shipgym._jit import njit
 from shipgym.dynamics.params import WindageParameters
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair, gauss_markov
-from .spectra import harmonic_components, harmonic_sums, wind_gust_spectrum
+from ._grid import CHUNK, GridPair, gauss_markov_rows
+from .spectra import harmonic_bins, harmonic_components, harmonic_sums, wind_gust_spectrum
 
 __all__ = [
     "BlendermannCoefficients",
@@ -74,7 +74,7 @@ _BSRC = "Blendermann (1994), as in MSS blendermann94.m"
 def _require_real(obj: Any, *names: str) -> None:
     for name in names:
         val = getattr(obj, name)
-        if isinstance(val, bool) or not isinstance(val, numbers.Real):
+        if not is_real(val):
             raise ValueError(
                 f"{type(obj).__name__}.{name} must be a real number, got {val!r} "
                 f"({type(val).__name__})"
@@ -808,6 +808,7 @@ class Wind(GridPair):
         )
         self._spectral = cfg.is_spectral and cfg.gust_sigma > 0.0
         self._gw = self._ga = self._gph = np.zeros(0)
+        self._bins: Any = None  # the spectral gust's harmonic_bins (computed at the first reset)
         self._clear()
         self._rng: np.random.Generator | None = None
 
@@ -843,8 +844,11 @@ class Wind(GridPair):
             if self._spectral:
                 cfg = self.config
                 lo, hi = cfg.gust_band
+                n = int(cfg.gust_components)
+                if self._bins is None:  # the config's bins, the same at every reset
+                    self._bins = harmonic_bins(cfg.gust_psd, lo, hi, n, log=True)
                 f, a, ph = harmonic_components(
-                    cfg.gust_psd, lo, hi, int(cfg.gust_components), child, log=True
+                    cfg.gust_psd, lo, hi, n, child, log=True, bins=self._bins
                 )
                 self._gw, self._ga, self._gph = 2.0 * math.pi * f, a, ph
 
@@ -857,26 +861,28 @@ class Wind(GridPair):
             self._extend_spectral(j, rng)
             return
         inf = math.inf
+        m, a, b = np.array([self._mean_v, self._mean_b]), np.array(self._a), np.array(self._b)
+        lo, hi = np.full(2, -inf), np.full(2, inf)
         while len(self._chunks) <= j:
-            w = rng.standard_normal((2, CHUNK))
             rows = np.empty((2, CHUNK + 1))
-            # the deviation x_{k+1} = a x_k + b e_k of each channel about its mean
-            (xv, xb), (av, ab), (bv, bb) = self._state, self._a, self._b
-            xv = gauss_markov(xv, self._mean_v, av, bv, w[0], -inf, inf, True, rows[0])
-            xb = gauss_markov(xb, self._mean_b, ab, bb, w[1], -inf, inf, True, rows[1])
-            self._state = (float(xv), float(xb))
+            # the deviation x_{k+1} = a x_k + b e_k of each channel about its mean, from the
+            # normals standard_normal((2, CHUNK))
+            x = np.array(self._state)
+            gauss_markov_rows(rng, x, m, a, b, lo, hi, True, rows)
+            self._state = (float(x[0]), float(x[1]))
             self._chunks.append(rows)
 
     def _extend_spectral(self, j: int, rng: np.random.Generator) -> None:
         """Chunks of a spectral speed gust (harmonic sum) and a Gauss-Markov direction gust."""
-        a, b, m = self._a[1], self._b[1], self._mean_b
+        a, b, m = np.array(self._a[1:]), np.array(self._b[1:]), np.array([self._mean_b])
+        lo, hi = np.full(1, -math.inf), np.full(1, math.inf)
         while len(self._chunks) <= j:
             rows = np.empty((2, CHUNK + 1))
-            e = rng.standard_normal(CHUNK)
-            x = gauss_markov(self._state[1], m, a, b, e, -math.inf, math.inf, True, rows[1])
-            self._state = (0.0, x)
+            x = np.array([self._state[1]])  # the direction gust, from standard_normal(CHUNK)
+            gauss_markov_rows(rng, x, m, a, b, lo, hi, True, rows[1:])
+            self._state = (0.0, float(x[0]))
             t0 = len(self._chunks) * CHUNK * self._dt
-            gust = harmonic_sums(t0, self._dt, CHUNK + 1, self._gw, self._gph, self._ga).real
+            gust = harmonic_sums(t0, self._dt, CHUNK + 1, self._gw, self._gph, self._ga, real=True)
             rows[0] = self._mean_v + gust
             self._chunks.append(rows)
 

@@ -98,7 +98,11 @@ class BatchedPhysics:
         self.upper = acts.upper.copy()
         self._holds = acts.holds_state
         wind_cfg = WindConfig.coerce(wind, name="wind")
-        cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
+        # the configs of "none" (one object each, so that a hull's process is kept: see
+        # set_disturbances)
+        self._calm_wind = WindConfig()
+        self._still_water = CurrentConfig()
+        cc = CurrentConfig.coerce(current, name="current") or self._still_water
         self._coeffs = (wind_cfg.coefficients if wind_cfg else None) or v.windage.coefficients
         wind_load = WindLoad(blendermann(self._coeffs), v.windage)
         if integrator not in INTEGRATORS:
@@ -126,7 +130,7 @@ class BatchedPhysics:
         self.wind_configs: list[WindConfig | None] = [wind_cfg] * n
         self.current_configs: list[CurrentConfig] = [cc] * n
         self.wave_config = waves
-        self.winds = [Wind(wind_cfg or WindConfig(), v.windage) for _ in range(n)]
+        self.winds = [Wind(wind_cfg or self._calm_wind, v.windage) for _ in range(n)]
         self.currents = [Current(cc) for _ in range(n)]
         self.waves = [Waves(waves, v.hull) if waves is not None else None for _ in range(n)]
         self._wf: Any = None  # wave_motion's windows
@@ -164,16 +168,20 @@ class BatchedPhysics:
         ``VesselPhysics.set_wind`` / ``set_current``. Every hull's wind uses the same
         Blendermann coefficients (the vessel's, or those the constructor's wind names)."""
         wind_cfg = WindConfig.coerce(wind, name="wind")
-        cc = CurrentConfig.coerce(current, name="current") or CurrentConfig()
+        cc = CurrentConfig.coerce(current, name="current") or self._still_water
         if wind_cfg is not None and (wind_cfg.coefficients or self._coeffs) != self._coeffs:
             raise ValueError(
                 f"hull {i}: wind coefficients {wind_cfg.coefficients!r} differ from the batch's "
                 f"{self._coeffs!r}; one batch uses one set of Blendermann coefficients"
             )
+        # the same config as the hull's last one (a task's fixed wind): its process object is
+        # kept (each reset draws the realisation afresh), not built again
+        if wind_cfg is not self.wind_configs[i]:
+            self.winds[i] = Wind(wind_cfg or self._calm_wind, self.vessel.windage)
+        if cc is not self.current_configs[i]:
+            self.currents[i] = Current(cc)
         self.wind_configs[i] = wind_cfg
         self.current_configs[i] = cc
-        self.winds[i] = Wind(wind_cfg or WindConfig(), self.vessel.windage)
-        self.currents[i] = Current(cc)
 
     def set_actuators(self, i: int, vessel: Vessel) -> None:
         """Give hull ``i`` the actuator constants of ``vessel``, a variant of the batch's

@@ -305,6 +305,10 @@ def _leg_table(plan: ManoeuvrePlan, profiles: Sequence[LegProfile], wp: Array) -
     return out
 
 
+#: leg tables kept by :meth:`BatchedGuidance._table` (plan objects a task reuses)
+_TABLES = 16
+
+
 class BatchedGuidance:
     """Leg-by-leg guidance of ``n`` envs, each through its own manoeuvre plan (module
     docstring; :class:`~shipgym.guidance.runtime.Guidance` is its ``n = 1`` case).
@@ -342,6 +346,8 @@ class BatchedGuidance:
         self._finished = self._frozen(np.zeros(n, dtype=bool))
         self._ready = np.zeros(n, dtype=bool)
         self._all_ready = False
+        # the leg tables of recent (plan, start) pairs: _table
+        self._tables: dict[tuple[int, bytes], tuple[ManoeuvrePlan, Array]] = {}
 
     @staticmethod
     def _frozen(a: NDArray[Any]) -> NDArray[Any]:
@@ -430,18 +436,17 @@ class BatchedGuidance:
         starts = self._per_env(eta_start, idx, "eta_start", (3,))
         t0s = self._per_env(t0, idx, "t0", ())
         # everything computed before any state changes (a failing reset changes nothing)
-        if _profiles is None:
-            _profiles = [
-                [leg_profile(leg, p.limits if p.limits is not None else self.limits)
-                 for leg in p.legs]
-                for p in chosen
-            ]  # fmt: skip
-        if _waypoints is None:
-            _waypoints = [p.waypoints(e) for p, e in zip(chosen, starts, strict=True)]
-        rows = [
-            _leg_table(p, prof, wp)
-            for p, prof, wp in zip(chosen, _profiles, _waypoints, strict=True)
-        ]
+        if _profiles is None and _waypoints is None:
+            rows = [self._table(p, e) for p, e in zip(chosen, starts, strict=True)]
+        else:
+            if _profiles is None:
+                _profiles = [self._profiles(p) for p in chosen]
+            if _waypoints is None:
+                _waypoints = [p.waypoints(e) for p, e in zip(chosen, starts, strict=True)]
+            rows = [
+                _leg_table(p, prof, wp)
+                for p, prof, wp in zip(chosen, _profiles, _waypoints, strict=True)
+            ]
         L = max([self._tab.shape[1], *(p.n_legs for p in chosen)])
         if L > self._tab.shape[1]:  # a longer plan: pad the tables
             tab = np.zeros((self.n, L, _R))
@@ -463,6 +468,27 @@ class BatchedGuidance:
         self._refresh()
         self._ready[idx] = True
         self._all_ready = bool(self._ready.all())
+
+    def _profiles(self, plan: ManoeuvrePlan) -> list[LegProfile]:
+        """The leg profiles of ``plan`` under its limits (its own, else the guidance's)."""
+        limits = plan.limits if plan.limits is not None else self.limits
+        return [leg_profile(leg, limits) for leg in plan.legs]
+
+    def _table(self, plan: ManoeuvrePlan, start: Array) -> Array:
+        """:func:`_leg_table` of ``plan`` started at ``start``, kept for the next episodes of
+        the same plan object and start (a plan is frozen, and a task with a fixed plan and
+        start gives every episode the same table: the harbour's five legs, the station's
+        one); the last :data:`_TABLES` kept."""
+        key = (id(plan), start.tobytes())
+        hit = self._tables.get(key)
+        if hit is not None and hit[0] is plan:
+            return hit[1]
+        rows = _leg_table(plan, self._profiles(plan), plan.waypoints(start))
+        rows.setflags(write=False)
+        if len(self._tables) >= _TABLES:
+            del self._tables[next(iter(self._tables))]
+        self._tables[key] = (plan, rows)
+        return rows
 
     def _require_reset(self) -> None:
         if not self._all_ready:

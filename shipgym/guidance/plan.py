@@ -28,6 +28,8 @@ MAX_LEG = 1.0e6
 
 
 def _finite(owner: str, name: str, value: Any) -> float:
+    if type(value) is float and math.isfinite(value):  # the common case, at once
+        return value
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         raise ValueError(f"{owner}.{name} must be a number, got {value!r}")
     value = float(value)

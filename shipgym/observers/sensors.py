@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._config import from_mapping, param
+from shipgym._config import fields_of, from_mapping, param
 from shipgym._jit import entry, njit
 
 __all__ = [
@@ -115,12 +115,14 @@ class SensorConfig:
                 f"got {self.antenna_offset!r}"
             )
         object.__setattr__(self, "antenna_offset", off)
-        for f in dataclasses.fields(self):
+        for f in fields_of(type(self)):
             if f.name == "antenna_offset":
                 vals: tuple[Any, ...] = off
             else:
                 val = getattr(self, f.name)
-                if isinstance(val, bool) or not isinstance(val, int | float | np.number):
+                if type(val) is not float and (
+                    isinstance(val, bool) or not isinstance(val, int | float | np.number)
+                ):
                     raise ValueError(
                         f"{cls}.{f.name} must be a number ({f.metadata['unit']}), got {val!r}"
                     )
@@ -170,7 +172,7 @@ class SensorConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (round-trips through :meth:`from_dict`)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        return {f.name: getattr(self, f.name) for f in fields_of(type(self))}
 
     def replace(self, **changes: Any) -> SensorConfig:
         """A validated copy with some fields changed (unknown names raise ``ValueError``)."""
@@ -318,12 +320,20 @@ _SHARED_FIELDS = tuple(
 )
 
 
-def _streams(rng: np.random.Generator) -> tuple[np.random.Generator, ...]:
+def _streams(
+    rng: np.random.Generator, used: tuple[bool, ...] = (True, True, True, True)
+) -> tuple[np.random.Generator | None, ...]:
     """The noise, outlier, dropout and correlated-error streams of one sensor set: one
-    ``integers(2**63)`` draw from ``rng`` seeds a sequence that spawns the four (the first
-    three are those of a three-child spawn: adding the fourth changed none of them)."""
-    seq = np.random.SeedSequence(int(rng.integers(2**63)))
-    return tuple(np.random.default_rng(s) for s in seq.spawn(4))
+    ``integers(2**63)`` draw from ``rng`` seeds a sequence whose four spawned children seed
+    them (the first three are those of a three-child spawn: adding the fourth changed none of
+    them). Only the streams where ``used`` is True are made (``None`` for the others): each
+    child is the spawn's ``SeedSequence(entropy, spawn_key=(k,))``, so a stream left out
+    changes none of the others."""
+    entropy = int(rng.integers(2**63))
+    return tuple(
+        np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=(k,))) if use else None
+        for k, use in enumerate(used)
+    )
 
 
 @njit
@@ -406,6 +416,14 @@ class BatchedSensors:
         self.n = n
         self.block = int(block)
         self._corr_on = config.correlated
+        # the streams a sample reads: an outlier or dropout draw decides nothing where its
+        # probability is 0 (``u < 0`` is False for every uniform), so its stream is not made
+        self._used = (
+            True,
+            config.outlier_probability > 0.0,
+            config.dropout_probability > 0.0,
+            self._corr_on,
+        )
         a_p, _, a_b, _ = config.correlated_parameters()
         c = config
         self._par = np.array(
@@ -419,7 +437,7 @@ class BatchedSensors:
             self._set_coefficients(i, config)
         self._st = np.zeros((n, 4))
         self._st[:, 3] = -math.inf
-        self._gens: list[tuple[np.random.Generator, ...] | None] = [None] * n
+        self._gens: list[tuple[np.random.Generator | None, ...] | None] = [None] * n
         self._draws = np.zeros((n, self.block, 9))
         self._k = np.full(n, self.block, dtype=np.int64)  # next unused draw (block: refill)
         self._all = np.ones(n, dtype=bool)
@@ -458,11 +476,12 @@ class BatchedSensors:
             raise ValueError(f"rngs must hold one generator per env ({self.n}), got {len(rngs)}")
         m = self._all if mask is None else np.asarray(mask, dtype=bool)
         for i in np.nonzero(m)[0].tolist():
-            self._gens[i] = gens = _streams(rngs[i])
+            self._gens[i] = gens = _streams(rngs[i], self._used)
             self._k[i] = self.block
             self._st[i, 3] = -math.inf
-            if self._corr_on:  # stationary start, b_0 ~ N(0, sd^2)
-                self._st[i, :3] = self._sd[i] * gens[3].standard_normal(3)
+            corr = gens[3]  # made where the correlated errors are on
+            if corr is not None:  # stationary start, b_0 ~ N(0, sd^2)
+                self._st[i, :3] = self._sd[i] * corr.standard_normal(3)
 
     def _refill(self, i: int) -> None:
         gens = self._gens[i]
@@ -471,9 +490,10 @@ class BatchedSensors:
         noise, outlier, dropout, corr = gens
         d = self._draws[i]
         d[:, 0:3] = noise.standard_normal((self.block, 3))
-        d[:, 3:5] = outlier.random((self.block, 2))
-        d[:, 5] = dropout.random(self.block)
-        if self._corr_on:
+        # no outliers or no dropouts: zeros, which decide the same (never)
+        d[:, 3:5] = 0.0 if outlier is None else outlier.random((self.block, 2))
+        d[:, 5] = 0.0 if dropout is None else dropout.random(self.block)
+        if corr is not None:
             d[:, 6:9] = corr.standard_normal((self.block, 3))
         self._k[i] = 0
 
