@@ -1130,9 +1130,21 @@ class ActuatorSet:
                 else:
                     out.append(lo + 0.5 * (v + 1.0) * (hi - lo))
             return np.array(out)
-        lo, hi = self.lower, self.upper
-        two = np.where(a >= 0.0, a * hi, a * -lo)
-        return np.where(lo < 0.0, two, lo + 0.5 * (a + 1.0) * (hi - lo))
+        neg_lo, span, two_sided = self._action_scales()
+        two = np.where(a >= 0.0, a * self.upper, a * neg_lo)
+        if two_sided:  # every range around zero (the affine rows are not read)
+            return two
+        lo = self.lower
+        return np.where(lo < 0.0, two, lo + 0.5 * (a + 1.0) * span)
+
+    def _action_scales(self) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
+        """``(-lower, upper - lower, all(lower < 0))`` of the channels, computed once (the
+        factors of :meth:`action_to_command` and :meth:`command_to_action`)."""
+        found = self.__dict__.get("_scales")
+        if found is None:
+            lo, hi = self.lower, self.upper
+            found = self._scales = (-lo, hi - lo, bool((lo < 0.0).all()))
+        return found  # type: ignore[no-any-return]
 
     def command_to_action(self, command: ArrayLike) -> NDArray[np.float64]:
         """Physical command -> normalised action (the inverse of :meth:`action_to_command`)."""
@@ -1145,9 +1157,12 @@ class ActuatorSet:
                 else:
                     out.append(2.0 * (v - lo) / (hi - lo) - 1.0)
             return np.array(out)
-        lo, hi = self.lower, self.upper
-        two = np.where(c >= 0.0, c / hi, c / np.where(lo < 0, -lo, 1.0))
-        return np.where(lo < 0.0, two, 2.0 * (c - lo) / (hi - lo) - 1.0)
+        neg_lo, span, two_sided = self._action_scales()
+        if two_sided:  # every range around zero
+            return np.where(c >= 0.0, c / self.upper, c / neg_lo)
+        lo = self.lower
+        two = np.where(c >= 0.0, c / self.upper, c / np.where(lo < 0, neg_lo, 1.0))
+        return np.where(lo < 0.0, two, 2.0 * (c - lo) / span - 1.0)
 
     # ---- run time ------------------------------------------------------------------------
     def law_table(self) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:

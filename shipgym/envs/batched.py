@@ -77,6 +77,9 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
     """
 
     metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+    #: whether ``_step_envs``' info already holds every key's ``_key`` mask (all envs), those
+    #: of its nested dicts too, so that :meth:`step` need not add them
+    _step_info_masked: ClassVar[bool] = False
 
     def __new__(cls, *args: Any, **kwargs: Any) -> Any:
         if args or kwargs:  # (none: unpickling) before a subclass builds anything for them
@@ -174,17 +177,17 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
         shape = self.action_space.shape
         if a.shape != shape:
             raise ValueError(f"actions must have shape {shape} (num_envs, ...), got {a.shape}")
-        if not np.all(np.isfinite(a)):
+        if not np.isfinite(a).all():
             bad = np.nonzero(~np.all(np.isfinite(a.reshape(len(a), -1)), axis=1))[0].tolist()
             raise ValueError(f"actions must be finite; NaN or infinite in envs {bad}")
-        n = self.num_envs
-        resetting = self._ended.copy()  # NEXT_STEP: these reset now and ignore their action
+        resetting = self._ended  # NEXT_STEP: these reset now and ignore their action
         active = ~resetting
         reward, terminated, truncated, info = self._step_envs(a, active)
         terminated = terminated & active
         truncated = truncated & active
         done = terminated | truncated
-        info = _masked(info, np.ones(n, bool))
+        if not self._step_info_masked:
+            info = _masked(info, np.ones(self.num_envs, bool))
         if done.any():
             metrics = self._episode_metrics(done)
             if metrics is not None:

@@ -38,6 +38,8 @@ Array = NDArray[np.float64]
 
 #: the default physics step of the worlds (s), as :class:`~shipgym.envs.physics.VesselPhysics`
 DEFAULT_TIMESTEP = 0.05
+#: the columns ``[u, v, r]`` of a hull's ``(u, v, p, r)``
+_UVR = np.array([0, 1, 3])
 
 
 class BatchedPhysics:
@@ -262,7 +264,7 @@ class BatchedPhysics:
     @property
     def nu(self) -> Array:
         """Body velocities ``[u, v, r]`` (n, 3) at the whole step."""
-        return self._hulls.body_velocities()[:, [0, 1, 3]]
+        return self._hulls.body_velocities().take(_UVR, axis=1)
 
     @property
     def nu_full(self) -> Array:
@@ -312,8 +314,12 @@ class BatchedPhysics:
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
         """Commands ``(n, n_channels)`` (or one row for all), clipped to the channels' ranges;
         returns the clip flags (also :attr:`saturated`)."""
-        c = self._rows(command, self.actuators.n_channels, "command", self._hulls.cmd)
-        clipped = np.clip(c, self.lower, self.upper)
+        nc = self.actuators.n_channels
+        c = None if command is None else np.asarray(command, dtype=float)
+        if c is None or c.shape != (self.n, nc) or not np.isfinite(c).all():
+            c = self._rows(command, nc, "command", self._hulls.cmd)  # one row, none, or refused
+        # np.clip(c, lower, upper): its definition, without its overhead (the same floats)
+        clipped = np.minimum(np.maximum(c, self.lower), self.upper)
         self.saturated = clipped != c
         self._hulls.cmd[:] = clipped
         return self.saturated.copy()
