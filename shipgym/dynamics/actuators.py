@@ -273,6 +273,26 @@ def law_mmg(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
 
 
 @njit(inline="always")
+def channel_command(v, lo, hi):  # type: ignore[no-untyped-def]
+    """A channel's physical command of its normalised action ``v`` in ``[-1, 1]``, its range
+    ``[lo, hi]``: a range around zero is scaled on each side (``v >= 0 -> v hi``, ``v < 0 ->
+    v |lo|``), another one mapped affinely (-1 -> lo, 1 -> hi). The one compiled form of
+    :meth:`ActuatorSet.action_to_command`, inlined where compiled code needs it."""
+    if lo < 0.0:
+        return v * hi if v >= 0.0 else v * -lo
+    return lo + 0.5 * (v + 1.0) * (hi - lo)
+
+
+@njit
+def action_commands(a, lo, hi, out):  # type: ignore[no-untyped-def]
+    """:func:`channel_command` of every row of the actions ``a`` (n, n_channels), the
+    channels' ranges ``lo``, ``hi`` (n_channels,), into ``out`` (n, n_channels)."""
+    for i in range(a.shape[0]):
+        for j in range(a.shape[1]):
+            out[i, j] = channel_command(a[i, j], lo[j], hi[j])
+
+
+@njit(inline="always")
 def tau_of_table(table, laws, kind_index, st, u, v, p, r, forces, flags):  # type: ignore[no-untyped-def]
     """The generalised force ``(X, Y, K, N)`` (N, N, N m, N m) of every actuator of a
     :meth:`ActuatorSet.law_table` at the actuator states ``st`` and the body velocity through
@@ -1130,16 +1150,20 @@ class ActuatorSet:
                 else:
                     out.append(lo + 0.5 * (v + 1.0) * (hi - lo))
             return np.array(out)
-        neg_lo, span, two_sided = self._action_scales()
-        two = np.where(a >= 0.0, a * self.upper, a * neg_lo)
-        if two_sided:  # every range around zero (the affine rows are not read)
-            return two
-        lo = self.lower
-        return np.where(lo < 0.0, two, lo + 0.5 * (a + 1.0) * span)
+        nc = self.n_channels
+        if a.ndim != 2 or a.shape[1] != nc:  # any leading shape (or a value for all channels)
+            shape = np.broadcast_shapes(a.shape, (nc,))
+            rows = np.broadcast_to(a, shape).reshape(-1, nc)
+            out = np.empty(rows.shape)
+            action_commands(rows, self.lower, self.upper, out)
+            return out.reshape(shape)
+        out = np.empty(a.shape)
+        action_commands(a, self.lower, self.upper, out)
+        return out
 
     def _action_scales(self) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
         """``(-lower, upper - lower, all(lower < 0))`` of the channels, computed once (the
-        factors of :meth:`action_to_command` and :meth:`command_to_action`)."""
+        factors of :meth:`command_to_action`)."""
         found = self.__dict__.get("_scales")
         if found is None:
             lo, hi = self.lower, self.upper

@@ -9,12 +9,14 @@ Design notes: docs/design/envs.batchphysics.md.
 from __future__ import annotations
 
 import copy
+import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import njit
 from shipgym.disturbances import (
     Current,
     CurrentConfig,
@@ -40,6 +42,27 @@ Array = NDArray[np.float64]
 DEFAULT_TIMESTEP = 0.05
 #: the columns ``[u, v, r]`` of a hull's ``(u, v, p, r)``
 _UVR = np.array([0, 1, 3])
+
+
+@njit
+def _hold_commands(c, lo, hi, cmd, flags):  # type: ignore[no-untyped-def]
+    """The commands ``c`` (n, n_channels) clipped to each channel's ``[lo, hi]`` into ``cmd``
+    and where they were clipped into ``flags``: ``min(max(c, lo), hi)`` as two comparisons,
+    the single physics' clip (:meth:`VesselPhysics.set_command
+    <shipgym.envs.physics.VesselPhysics.set_command>`). Returns -1, or the first row with a
+    command that is not finite (then nothing is written)."""
+    n, m = c.shape
+    for i in range(n):
+        for j in range(m):
+            if not math.isfinite(c[i, j]):
+                return i
+    for i in range(n):
+        for j in range(m):
+            x = c[i, j]
+            y = hi[j] if x > hi[j] else (lo[j] if x < lo[j] else x)
+            cmd[i, j] = y
+            flags[i, j] = y != x
+    return -1
 
 
 class BatchedPhysics:
@@ -316,13 +339,13 @@ class BatchedPhysics:
         returns the clip flags (also :attr:`saturated`)."""
         nc = self.actuators.n_channels
         c = None if command is None else np.asarray(command, dtype=float)
-        if c is None or c.shape != (self.n, nc) or not np.isfinite(c).all():
+        if c is None or c.shape != (self.n, nc):
             c = self._rows(command, nc, "command", self._hulls.cmd)  # one row, none, or refused
-        # np.clip(c, lower, upper): its definition, without its overhead (the same floats)
-        clipped = np.minimum(np.maximum(c, self.lower), self.upper)
-        self.saturated = clipped != c
-        self._hulls.cmd[:] = clipped
-        return self.saturated.copy()
+        flags = np.empty((self.n, nc), dtype=bool)
+        if _hold_commands(c, self.lower, self.upper, self._hulls.cmd, flags) >= 0:
+            self._rows(command, nc, "command", self._hulls.cmd)  # refused: not finite
+        self.saturated = flags
+        return flags.copy()
 
     def step(
         self, k: int = 1, *, stop_on_contact: bool = False, mask: ArrayLike | None = None

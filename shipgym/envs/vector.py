@@ -22,6 +22,8 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
+from shipgym._jit import njit
+from shipgym.dynamics.actuators import channel_command
 from shipgym.dynamics.frames import wrap_angle
 from shipgym.guidance.batch import BatchedGuidance
 from shipgym.guidance.limits import vessel_limits
@@ -247,12 +249,13 @@ class ShipVectorEnv(BatchedEnv):
         control: dict[str, Array] | None = None
         if self.controller is not None:
             a, control = self._control(a)
-        # np.clip(a, -1, 1) of finite actions (BatchedEnv.step checked them), the same floats
-        clipped = np.minimum(np.maximum(a, -1.0), 1.0)
-        action_clipped = clipped != a
-        command = self.actuators.action_to_command(clipped)
-        held = self.physics.set_command(command)
-        saturated = held | (command <= self._lo_tol) | (command >= self._hi_tol)
+        n, m = a.shape
+        clipped, command = np.empty((n, m)), np.empty((n, m))
+        action_clipped, near = np.empty((n, m), bool), np.empty((n, m), bool)
+        acts = self.actuators
+        _actions(a, acts.lower, acts.upper, self._lo_tol, self._hi_tol, clipped, action_clipped,
+                 command, near)  # fmt: skip
+        saturated = self.physics.set_command(command) | near
         self._advance(active)
         t = self.physics.t
         eta = self._truth()[0]
@@ -512,6 +515,24 @@ _CONTROL_MASKS = ("_tau_c", "_tau_delivered", "_tau_error", "_controller_action"
                   "_residual_clipped")  # fmt: skip
 #: the masks of ``info["episode_summary"]``'s keys
 _SUMMARY_MASKS = ("_return", "_length", "_duration_s", "_legs_completed", "_completed")
+
+
+@njit
+def _actions(a, lo, hi, lo_tol, hi_tol, clipped, flags, command, near):  # type: ignore[no-untyped-def]
+    """The env's action law of every row of the actions ``a`` (n, m) (finite): the action
+    clipped to ``[-1, 1]`` (``np.clip``'s floats) into ``clipped`` and where it was clipped
+    into ``flags``, each channel's command of it (:func:`~shipgym.dynamics.actuators.
+    channel_command`, ranges ``lo``, ``hi``) into ``command``, and whether that command is
+    within ``1e-9`` of its range's ends (``lo_tol``, ``hi_tol``) into ``near``."""
+    for i in range(a.shape[0]):
+        for j in range(a.shape[1]):
+            x = a[i, j]
+            c = -1.0 if x < -1.0 else (1.0 if x > 1.0 else x)
+            clipped[i, j] = c
+            flags[i, j] = c != x
+            u = channel_command(c, lo[j], hi[j])
+            command[i, j] = u
+            near[i, j] = u <= lo_tol[j] or u >= hi_tol[j]
 
 
 def _rows_from(old: Any, new: Any, mask: NDArray[np.bool_]) -> Any:
