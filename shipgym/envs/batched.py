@@ -188,21 +188,22 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
         done = terminated | truncated
         if not self._step_info_masked:
             info = _masked(info, np.ones(self.num_envs, bool))
-        if done.any():
+        ended = np.count_nonzero(done)  # (any(): count_nonzero is the cheaper reduction)
+        if ended:
             metrics = self._episode_metrics(done)
             if metrics is not None:
                 info["episode_metrics"] = metrics
                 info["_episode_metrics"] = done
         obs = self._observation()
         if self.autoreset_mode == AutoresetMode.NEXT_STEP:
-            if resetting.any():
+            if np.count_nonzero(resetting):
                 self._reset_envs(resetting)
                 obs = _where_rows(resetting, self._observation(), obs)
                 reward = np.where(resetting, 0.0, reward)
                 info = _merge_rows(info, self._reset_info(resetting), resetting)
             self._ended = done
             return obs, reward, terminated, truncated, info
-        if done.any():  # SAME_STEP: reset now, the last observation and info kept aside
+        if ended:  # SAME_STEP: reset now, the last observation and info kept aside
             info["final_obs"] = _where_rows(done, obs, np.full_like(obs, np.nan))
             info["_final_obs"] = done
             info["final_info"] = {
