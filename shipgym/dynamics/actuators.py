@@ -293,6 +293,26 @@ def action_commands(a, lo, hi, out):  # type: ignore[no-untyped-def]
 
 
 @njit(inline="always")
+def channel_action(c, lo, hi):  # type: ignore[no-untyped-def]
+    """A channel's normalised action of its physical command ``c``, its range ``[lo, hi]``:
+    the inverse of :func:`channel_command` (``c >= 0 -> c / hi``, ``c < 0 -> c / |lo|``
+    around zero, else affine). The one compiled form of :meth:`ActuatorSet.command_to_action`,
+    inlined where compiled code needs it."""
+    if lo < 0.0:
+        return c / hi if c >= 0.0 else c / -lo
+    return 2.0 * (c - lo) / (hi - lo) - 1.0
+
+
+@njit
+def command_actions(c, lo, hi, out):  # type: ignore[no-untyped-def]
+    """:func:`channel_action` of every row of the commands ``c`` (n, n_channels), the
+    channels' ranges ``lo``, ``hi`` (n_channels,), into ``out`` (n, n_channels)."""
+    for i in range(c.shape[0]):
+        for j in range(c.shape[1]):
+            out[i, j] = channel_action(c[i, j], lo[j], hi[j])
+
+
+@njit(inline="always")
 def tau_of_table(table, laws, kind_index, st, u, v, p, r, forces, flags):  # type: ignore[no-untyped-def]
     """The generalised force ``(X, Y, K, N)`` (N, N, N m, N m) of every actuator of a
     :meth:`ActuatorSet.law_table` at the actuator states ``st`` and the body velocity through
@@ -1161,15 +1181,6 @@ class ActuatorSet:
         action_commands(a, self.lower, self.upper, out)
         return out
 
-    def _action_scales(self) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
-        """``(-lower, upper - lower, all(lower < 0))`` of the channels, computed once (the
-        factors of :meth:`command_to_action`)."""
-        found = self.__dict__.get("_scales")
-        if found is None:
-            lo, hi = self.lower, self.upper
-            found = self._scales = (-lo, hi - lo, bool((lo < 0.0).all()))
-        return found  # type: ignore[no-any-return]
-
     def command_to_action(self, command: ArrayLike) -> NDArray[np.float64]:
         """Physical command -> normalised action (the inverse of :meth:`action_to_command`)."""
         c = np.asarray(command, dtype=float)
@@ -1181,12 +1192,16 @@ class ActuatorSet:
                 else:
                     out.append(2.0 * (v - lo) / (hi - lo) - 1.0)
             return np.array(out)
-        neg_lo, span, two_sided = self._action_scales()
-        if two_sided:  # every range around zero
-            return np.where(c >= 0.0, c / self.upper, c / neg_lo)
-        lo = self.lower
-        two = np.where(c >= 0.0, c / self.upper, c / np.where(lo < 0, neg_lo, 1.0))
-        return np.where(lo < 0.0, two, 2.0 * (c - lo) / span - 1.0)
+        nc = self.n_channels
+        if c.ndim != 2 or c.shape[1] != nc:  # any leading shape (or a value for all channels)
+            shape = np.broadcast_shapes(c.shape, (nc,))
+            rows = np.broadcast_to(c, shape).reshape(-1, nc)
+            out = np.empty(rows.shape)
+            command_actions(rows, self.lower, self.upper, out)
+            return out.reshape(shape)
+        out = np.empty(c.shape)
+        command_actions(c, self.lower, self.upper, out)
+        return out
 
     # ---- run time ------------------------------------------------------------------------
     def law_table(self) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
