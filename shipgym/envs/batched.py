@@ -218,7 +218,8 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
 def _where_rows(mask: Bools, a: Any, b: Any) -> Any:
     """Rows of ``a`` where ``mask``, else of ``b``."""
     a, b = np.asarray(a), np.asarray(b)
-    return np.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b).astype(a.dtype)
+    out = np.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b)
+    return out.astype(a.dtype, copy=False)  # (a new array already: no second copy)
 
 
 def _masked(info: dict[str, Any], mask: Bools) -> dict[str, Any]:
