@@ -273,6 +273,46 @@ def law_mmg(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
 
 
 @njit(inline="always")
+def channel_command(v, lo, hi):  # type: ignore[no-untyped-def]
+    """A channel's physical command of its normalised action ``v`` in ``[-1, 1]``, its range
+    ``[lo, hi]``: a range around zero is scaled on each side (``v >= 0 -> v hi``, ``v < 0 ->
+    v |lo|``), another one mapped affinely (-1 -> lo, 1 -> hi). The one compiled form of
+    :meth:`ActuatorSet.action_to_command`, inlined where compiled code needs it."""
+    if lo < 0.0:
+        return v * hi if v >= 0.0 else v * -lo
+    return lo + 0.5 * (v + 1.0) * (hi - lo)
+
+
+@njit
+def action_commands(a, lo, hi, out):  # type: ignore[no-untyped-def]
+    """:func:`channel_command` of every row of the actions ``a`` (n, n_channels), the
+    channels' ranges ``lo``, ``hi`` (n_channels,), into ``out`` (n, n_channels)."""
+    for i in range(a.shape[0]):
+        for j in range(a.shape[1]):
+            out[i, j] = channel_command(a[i, j], lo[j], hi[j])
+
+
+@njit(inline="always")
+def channel_action(c, lo, hi):  # type: ignore[no-untyped-def]
+    """A channel's normalised action of its physical command ``c``, its range ``[lo, hi]``:
+    the inverse of :func:`channel_command` (``c >= 0 -> c / hi``, ``c < 0 -> c / |lo|``
+    around zero, else affine). The one compiled form of :meth:`ActuatorSet.command_to_action`,
+    inlined where compiled code needs it."""
+    if lo < 0.0:
+        return c / hi if c >= 0.0 else c / -lo
+    return 2.0 * (c - lo) / (hi - lo) - 1.0
+
+
+@njit
+def command_actions(c, lo, hi, out):  # type: ignore[no-untyped-def]
+    """:func:`channel_action` of every row of the commands ``c`` (n, n_channels), the
+    channels' ranges ``lo``, ``hi`` (n_channels,), into ``out`` (n, n_channels)."""
+    for i in range(c.shape[0]):
+        for j in range(c.shape[1]):
+            out[i, j] = channel_action(c[i, j], lo[j], hi[j])
+
+
+@njit(inline="always")
 def tau_of_table(table, laws, kind_index, st, u, v, p, r, forces, flags):  # type: ignore[no-untyped-def]
     """The generalised force ``(X, Y, K, N)`` (N, N, N m, N m) of every actuator of a
     :meth:`ActuatorSet.law_table` at the actuator states ``st`` and the body velocity through
@@ -1130,9 +1170,16 @@ class ActuatorSet:
                 else:
                     out.append(lo + 0.5 * (v + 1.0) * (hi - lo))
             return np.array(out)
-        lo, hi = self.lower, self.upper
-        two = np.where(a >= 0.0, a * hi, a * -lo)
-        return np.where(lo < 0.0, two, lo + 0.5 * (a + 1.0) * (hi - lo))
+        nc = self.n_channels
+        if a.ndim != 2 or a.shape[1] != nc:  # any leading shape (or a value for all channels)
+            shape = np.broadcast_shapes(a.shape, (nc,))
+            rows = np.broadcast_to(a, shape).reshape(-1, nc)
+            out = np.empty(rows.shape)
+            action_commands(rows, self.lower, self.upper, out)
+            return out.reshape(shape)
+        out = np.empty(a.shape)
+        action_commands(a, self.lower, self.upper, out)
+        return out
 
     def command_to_action(self, command: ArrayLike) -> NDArray[np.float64]:
         """Physical command -> normalised action (the inverse of :meth:`action_to_command`)."""
@@ -1145,9 +1192,16 @@ class ActuatorSet:
                 else:
                     out.append(2.0 * (v - lo) / (hi - lo) - 1.0)
             return np.array(out)
-        lo, hi = self.lower, self.upper
-        two = np.where(c >= 0.0, c / hi, c / np.where(lo < 0, -lo, 1.0))
-        return np.where(lo < 0.0, two, 2.0 * (c - lo) / (hi - lo) - 1.0)
+        nc = self.n_channels
+        if c.ndim != 2 or c.shape[1] != nc:  # any leading shape (or a value for all channels)
+            shape = np.broadcast_shapes(c.shape, (nc,))
+            rows = np.broadcast_to(c, shape).reshape(-1, nc)
+            out = np.empty(rows.shape)
+            command_actions(rows, self.lower, self.upper, out)
+            return out.reshape(shape)
+        out = np.empty(c.shape)
+        command_actions(c, self.lower, self.upper, out)
+        return out
 
     # ---- run time ------------------------------------------------------------------------
     def law_table(self) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:

@@ -77,6 +77,9 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
     """
 
     metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+    #: whether ``_step_envs``' info already holds every key's ``_key`` mask (all envs), those
+    #: of its nested dicts too, so that :meth:`step` need not add them
+    _step_info_masked: ClassVar[bool] = False
 
     def __new__(cls, *args: Any, **kwargs: Any) -> Any:
         if args or kwargs:  # (none: unpickling) before a subclass builds anything for them
@@ -174,32 +177,33 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
         shape = self.action_space.shape
         if a.shape != shape:
             raise ValueError(f"actions must have shape {shape} (num_envs, ...), got {a.shape}")
-        if not np.all(np.isfinite(a)):
+        if not np.isfinite(a).all():
             bad = np.nonzero(~np.all(np.isfinite(a.reshape(len(a), -1)), axis=1))[0].tolist()
             raise ValueError(f"actions must be finite; NaN or infinite in envs {bad}")
-        n = self.num_envs
-        resetting = self._ended.copy()  # NEXT_STEP: these reset now and ignore their action
+        resetting = self._ended  # NEXT_STEP: these reset now and ignore their action
         active = ~resetting
         reward, terminated, truncated, info = self._step_envs(a, active)
         terminated = terminated & active
         truncated = truncated & active
         done = terminated | truncated
-        info = _masked(info, np.ones(n, bool))
-        if done.any():
+        if not self._step_info_masked:
+            info = _masked(info, np.ones(self.num_envs, bool))
+        ended = np.count_nonzero(done)  # (any(): count_nonzero is the cheaper reduction)
+        if ended:
             metrics = self._episode_metrics(done)
             if metrics is not None:
                 info["episode_metrics"] = metrics
                 info["_episode_metrics"] = done
         obs = self._observation()
         if self.autoreset_mode == AutoresetMode.NEXT_STEP:
-            if resetting.any():
+            if np.count_nonzero(resetting):
                 self._reset_envs(resetting)
                 obs = _where_rows(resetting, self._observation(), obs)
                 reward = np.where(resetting, 0.0, reward)
                 info = _merge_rows(info, self._reset_info(resetting), resetting)
             self._ended = done
             return obs, reward, terminated, truncated, info
-        if done.any():  # SAME_STEP: reset now, the last observation and info kept aside
+        if ended:  # SAME_STEP: reset now, the last observation and info kept aside
             info["final_obs"] = _where_rows(done, obs, np.full_like(obs, np.nan))
             info["_final_obs"] = done
             info["final_info"] = {
@@ -214,7 +218,8 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
 def _where_rows(mask: Bools, a: Any, b: Any) -> Any:
     """Rows of ``a`` where ``mask``, else of ``b``."""
     a, b = np.asarray(a), np.asarray(b)
-    return np.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b).astype(a.dtype)
+    out = np.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b)
+    return out.astype(a.dtype, copy=False)  # (a new array already: no second copy)
 
 
 def _masked(info: dict[str, Any], mask: Bools) -> dict[str, Any]:

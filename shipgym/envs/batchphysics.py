@@ -9,12 +9,14 @@ Design notes: docs/design/envs.batchphysics.md.
 from __future__ import annotations
 
 import copy
+import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._jit import njit
 from shipgym.disturbances import (
     Current,
     CurrentConfig,
@@ -38,6 +40,29 @@ Array = NDArray[np.float64]
 
 #: the default physics step of the worlds (s), as :class:`~shipgym.envs.physics.VesselPhysics`
 DEFAULT_TIMESTEP = 0.05
+#: the columns ``[u, v, r]`` of a hull's ``(u, v, p, r)``
+_UVR = np.array([0, 1, 3])
+
+
+@njit
+def _hold_commands(c, lo, hi, cmd, flags):  # type: ignore[no-untyped-def]
+    """The commands ``c`` (n, n_channels) clipped to each channel's ``[lo, hi]`` into ``cmd``
+    and where they were clipped into ``flags``: ``min(max(c, lo), hi)`` as two comparisons,
+    the single physics' clip (:meth:`VesselPhysics.set_command
+    <shipgym.envs.physics.VesselPhysics.set_command>`). Returns -1, or the first row with a
+    command that is not finite (then nothing is written)."""
+    n, m = c.shape
+    for i in range(n):
+        for j in range(m):
+            if not math.isfinite(c[i, j]):
+                return i
+    for i in range(n):
+        for j in range(m):
+            x = c[i, j]
+            y = hi[j] if x > hi[j] else (lo[j] if x < lo[j] else x)
+            cmd[i, j] = y
+            flags[i, j] = y != x
+    return -1
 
 
 class BatchedPhysics:
@@ -270,7 +295,7 @@ class BatchedPhysics:
     @property
     def nu(self) -> Array:
         """Body velocities ``[u, v, r]`` (n, 3) at the whole step."""
-        return self._hulls.body_velocities()[:, [0, 1, 3]]
+        return self._hulls.body_velocities().take(_UVR, axis=1)
 
     @property
     def nu_full(self) -> Array:
@@ -320,11 +345,15 @@ class BatchedPhysics:
     def set_command(self, command: ArrayLike) -> NDArray[np.bool_]:
         """Commands ``(n, n_channels)`` (or one row for all), clipped to the channels' ranges;
         returns the clip flags (also :attr:`saturated`)."""
-        c = self._rows(command, self.actuators.n_channels, "command", self._hulls.cmd)
-        clipped = np.clip(c, self.lower, self.upper)
-        self.saturated = clipped != c
-        self._hulls.cmd[:] = clipped
-        return self.saturated.copy()
+        nc = self.actuators.n_channels
+        c = None if command is None else np.asarray(command, dtype=float)
+        if c is None or c.shape != (self.n, nc):
+            c = self._rows(command, nc, "command", self._hulls.cmd)  # one row, none, or refused
+        flags = np.empty((self.n, nc), dtype=bool)
+        if _hold_commands(c, self.lower, self.upper, self._hulls.cmd, flags) >= 0:
+            self._rows(command, nc, "command", self._hulls.cmd)  # refused: not finite
+        self.saturated = flags
+        return flags.copy()
 
     def step(
         self, k: int = 1, *, stop_on_contact: bool = False, mask: ArrayLike | None = None

@@ -22,6 +22,8 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
+from shipgym._jit import njit
+from shipgym.dynamics.actuators import channel_command
 from shipgym.dynamics.frames import wrap_angle
 from shipgym.guidance.batch import BatchedGuidance
 from shipgym.guidance.limits import vessel_limits
@@ -93,6 +95,8 @@ class ShipVectorEnv(BatchedEnv):
     Raises:
         ValueError: a task, vessel or argument the batched form does not cover, naming it.
     """
+
+    _step_info_masked = True  # _info and _step_envs add every key's mask
 
     def __init__(
         self,
@@ -224,6 +228,16 @@ class ShipVectorEnv(BatchedEnv):
         self._last_z = np.full((n, 3), np.nan)
         self._z_valid = np.zeros(n, dtype=bool)
         self._z_outlier = np.zeros(n, dtype=bool)
+        # what the step reads every period, decided once
+        self._nan_n = np.full(n, np.nan)  # the observer's NIS before a sample (copied)
+        self._true_n = np.ones(n, dtype=bool)  # the step info's masks (copied: np.ones is slow)
+        self._no_contact = np.zeros(n, dtype=bool)  # open water: no quay (never written)
+        obs = self.observer
+        self._model_based = obs is not None and bool(getattr(obs, "model_based", False))
+        self._thrust_cmd = getattr(obs, "thrust_input", "applied") == "command"
+        w = self.physics.wave_config
+        self._seen_waves = w is not None and w.first_order  # sensors see the wave motion
+        self._mask_names: dict[int, tuple[str, ...]] = {}  # info's key masks, by key count
 
     # ---- the BatchedEnv hooks ------------------------------------------------------------
     def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
@@ -233,29 +247,33 @@ class ShipVectorEnv(BatchedEnv):
         self, a: Array, active: NDArray[np.bool_]
     ) -> tuple[Array, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
         """One control period of the ``active`` envs (the others reset at this step)."""
-        n = self.num_envs
-        control: dict[str, Array] = {}
+        control: dict[str, Array] | None = None
         if self.controller is not None:
             a, control = self._control(a)
-        clipped = np.clip(a, -1.0, 1.0)
-        action_clipped = clipped != a
-        command = self.actuators.action_to_command(clipped)
-        held = self.physics.set_command(command)
-        saturated = held | (command <= self._lo_tol) | (command >= self._hi_tol)
+        n, m = a.shape
+        clipped, command = np.empty((n, m)), np.empty((n, m))
+        action_clipped, near = np.empty((n, m), bool), np.empty((n, m), bool)
+        acts = self.actuators
+        _actions(a, acts.lower, acts.upper, self._lo_tol, self._hi_tol, clipped, action_clipped,
+                 command, near)  # fmt: skip
+        saturated = self.physics.set_command(command) | near
         self._advance(active)
         t = self.physics.t
         eta = self._truth()[0]
         switched = self.guidance.update(t, eta)
         ref = self.guidance.reference(t)
-        touched = (self.physics.contact_counts > 0) & active
-        new_contact = touched & ~self._contact
-        self._contact |= touched
+        if self._harbour is not None:
+            touched = (self.physics.contact_counts > 0) & active
+            new_contact = touched & ~self._contact
+            self._contact |= touched
+        else:  # open water: no quay to touch
+            new_contact = self._no_contact
         rewards = self._terms(ref, clipped, switched, new_contact)
         self._fresh = True  # _obs is this state's observation
         self._ref = ref
         if self.controller is not None:  # a leg switch turns the controller's r-frame
             moved = ref.leg != self._leg
-            if moved.any():
+            if np.count_nonzero(moved):  # (any(): count_nonzero is the cheaper reduction)
                 psi_P = ref.eta_P[:, 2]
                 self.controller.change_frame(wrap_angle(psi_P - self._psi_P), moved)
                 self._leg = np.where(moved, ref.leg, self._leg)
@@ -269,25 +287,30 @@ class ShipVectorEnv(BatchedEnv):
             truncated |= (t >= self.episode_duration - 0.5 * self.physics.h) & ~terminated
         done = (terminated | truncated) & active
         self._return += reward
-        info = self._info(np.ones(n, bool), saturated, action_clipped, command, rewards, done=done)
-        info.update(control)
+        every = self._true_n.copy()
+        info = self._info(every, saturated, action_clipped, command, rewards, done=done)
+        if control is not None:
+            info.update(control)
+            info.update(dict.fromkeys(_CONTROL_MASKS, every))
         return reward, terminated, truncated, info
 
     # ---- internals ------------------------------------------------------------------------
     def _truth(self) -> tuple[Array, Array]:
         """The hulls' ``(eta, nu)`` now, read once per state (cached until the next physics
         step, sample or reset)."""
-        if self._cache.get("truth") is None:
-            self._cache["truth"] = (self.physics.eta, self.physics.nu)
-        return self._cache["truth"]
+        truth = self._cache.get("truth")
+        if truth is None:
+            truth = self._cache["truth"] = (self.physics.eta, self.physics.nu)
+        return truth  # type: ignore[no-any-return]
 
     def _navigation(self) -> tuple[Array, Array]:
         """What the controller and the observation use: the estimate, else the truth."""
         if self.observer is None:
             return self._truth()
-        if self._cache.get("nav") is None:
-            self._cache["nav"] = (self.observer.eta, self.observer.nu)
-        return self._cache["nav"]
+        nav = self._cache.get("nav")
+        if nav is None:
+            nav = self._cache["nav"] = (self.observer.eta, self.observer.nu)
+        return nav  # type: ignore[no-any-return]
 
     def _control(self, residual: Array) -> tuple[Array, dict[str, Array]]:
         """The DP controller's action plus the residual, as the controller wrapper forms it
@@ -364,45 +387,48 @@ class ShipVectorEnv(BatchedEnv):
         observer (every env samples at the same instants: the sensor period divides the
         control period)."""
         assert self.sensors is not None
-        # first-order wave motion is seen, not lived
-        seen = self._truth()[0] + self.physics.wave_motion()
-        z, valid, outlier = self.sensors.measure(self.physics.t, seen, mask)
+        physics = self.physics
+        # first-order wave motion is seen, not lived (x + 0.0 without it, as x + zeros)
+        eta = self._truth()[0]
+        seen = eta + physics.wave_motion() if self._seen_waves else eta + 0.0
+        z, valid, outlier = self.sensors.measure(physics.t, seen, mask)
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
-            if getattr(self.observer, "model_based", False):  # the thrust, as ObserverWrapper
-                cmd = getattr(self.observer, "thrust_input", "applied") == "command"
-                tau = self.physics.tau_command if cmd else self.physics.tau_model
-                info = self.observer.step(self.physics.t, z, valid & mask, tau=tau)
+            if self._model_based:  # the thrust, as ObserverWrapper
+                tau = physics.tau_command if self._thrust_cmd else physics.tau_model
+                info = self.observer.step(physics.t, z, valid & mask, tau=tau)
             else:
-                info = self.observer.step(self.physics.t, z, valid & mask)
+                info = self.observer.step(physics.t, z, valid & mask)
             self._nis = info.nis
             self._rejected = info.rejected
-        self._last_z = np.where(mask[:, None], z, self._last_z)
-        self._z_valid = np.where(mask, valid, self._z_valid)
-        self._z_outlier = np.where(mask, outlier, self._z_outlier)
+        np.copyto(self._last_z, z, where=mask[:, None])  # (info hands out copies)
+        np.copyto(self._z_valid, valid, where=mask)
+        np.copyto(self._z_outlier, outlier, where=mask)
 
     def _advance(self, active: NDArray[np.bool_]) -> None:
         """``n_substeps`` physics steps, the sensors sampled on their grid (active envs)."""
         left = self.n_substeps
         every = self._sensor_steps
-        self._nis = np.full(self.num_envs, np.nan)
+        self._nis = self._nan_n.copy()
         self._rejected = np.zeros(self.num_envs, bool)
-        if self.sensors is not None:
-            self._last_z[:] = np.nan
-            self._z_valid[:] = False
-            self._z_outlier[:] = False
+        if every is not None:
+            self._last_z.fill(np.nan)
+            self._z_valid.fill(False)
+            self._z_outlier.fill(False)
         while left > 0:
             if every is None:
                 k = left
-            else:
-                k = min(left, int((every - self._steps[active] % every).min(initial=every)))
+            else:  # to the next sample of any active env: every - the largest phase
+                phase = int((self._steps % every).max(where=active, initial=0))
+                k = min(left, every - phase)
+            # the steps each hull took (0 outside active)
             taken = self.physics.step(k, stop_on_contact=self._stop, mask=active)
             self._cache.clear()
-            self._steps += np.where(active, taken, 0)
+            self._steps += taken
             left -= k
             if every is not None:
                 hit = active & (self._steps % every == 0)
-                if hit.any():
+                if np.count_nonzero(hit):
                     self._sample(hit)
             if self._stop:  # a hull that touched a quay stops (the episode ends with it)
                 active = active & (taken == k)
@@ -416,7 +442,8 @@ class ShipVectorEnv(BatchedEnv):
         nav_eta, nav_nu = self._navigation()
         self.task.terms(eta, nu, nav_eta, nav_nu, ref.buffer, action, self._prev, switched,
                         new_contact, self._obs, self._rew, self._eta_r)  # fmt: skip
-        return {k: self._rew[:, j].copy() for j, k in enumerate(self.task.reward_terms)}
+        # each term's column, a row of one transposed copy
+        return dict(zip(self.task.reward_terms, self._rew.T.copy(), strict=True))
 
     def _observation(self) -> NDArray[np.float32]:
         """The observation of every env now (after a reset: its previous action is zero)."""
@@ -435,6 +462,7 @@ class ShipVectorEnv(BatchedEnv):
         rewards: dict[str, Array],
         done: NDArray[np.bool_] | None = None,
     ) -> dict[str, Any]:
+        """The info of a reset or a step: every key with its ``_key`` mask (``mask``)."""
         n, m = self.num_envs, self.n_actions
         g = self.guidance
         eta, nu = self._truth()
@@ -446,7 +474,7 @@ class ShipVectorEnv(BatchedEnv):
             "nav_eta": nav_eta,
             "nav_nu": nav_nu,
             "leg": g.leg.copy(),
-            "legs_completed": g.legs_completed.copy(),
+            "legs_completed": g.legs_completed,
             "finished": g.finished.copy(),
             "command": self.physics.command if command is None else command,
             "saturated": np.zeros((n, m), bool) if saturated is None else saturated,
@@ -464,20 +492,48 @@ class ShipVectorEnv(BatchedEnv):
             info["z"] = self._last_z.copy()
             info["z_valid"] = self._z_valid.copy()
             info["z_outlier"] = self._z_outlier.copy()
-        for k in rewards:
-            info[k] = rewards[k]
-        for k in list(info):
-            info["_" + k] = mask
-        if done is not None and done.any():
-            info["episode_summary"] = {
+        info.update(rewards)
+        names = self._mask_names.get(len(info))
+        if names is None:  # the keys of a reset (no reward terms) or of a step
+            names = self._mask_names[len(info)] = tuple("_" + k for k in info)
+        info.update(dict.fromkeys(names, mask))
+        if done is not None and np.count_nonzero(done):
+            summary = {
                 "return": np.where(done, self._return, 0.0),
                 "length": np.where(done, self._elapsed, 0),
                 "duration_s": np.where(done, self.physics.t, 0.0),
                 "legs_completed": np.where(done, g.legs_completed, 0),
                 "completed": done & g.finished,
             }
+            summary.update(dict.fromkeys(_SUMMARY_MASKS, mask))
+            info["episode_summary"] = summary
             info["_episode_summary"] = done
         return info
+
+
+#: the masks of the controller's info keys (:meth:`ShipVectorEnv._control`)
+_CONTROL_MASKS = ("_tau_c", "_tau_delivered", "_tau_error", "_controller_action",
+                  "_residual_clipped")  # fmt: skip
+#: the masks of ``info["episode_summary"]``'s keys
+_SUMMARY_MASKS = ("_return", "_length", "_duration_s", "_legs_completed", "_completed")
+
+
+@njit
+def _actions(a, lo, hi, lo_tol, hi_tol, clipped, flags, command, near):  # type: ignore[no-untyped-def]
+    """The env's action law of every row of the actions ``a`` (n, m) (finite): the action
+    clipped to ``[-1, 1]`` (``np.clip``'s floats) into ``clipped`` and where it was clipped
+    into ``flags``, each channel's command of it (:func:`~shipgym.dynamics.actuators.
+    channel_command`, ranges ``lo``, ``hi``) into ``command``, and whether that command is
+    within ``1e-9`` of its range's ends (``lo_tol``, ``hi_tol``) into ``near``."""
+    for i in range(a.shape[0]):
+        for j in range(a.shape[1]):
+            x = a[i, j]
+            c = -1.0 if x < -1.0 else (1.0 if x > 1.0 else x)
+            clipped[i, j] = c
+            flags[i, j] = c != x
+            u = channel_command(c, lo[j], hi[j])
+            command[i, j] = u
+            near[i, j] = u <= lo_tol[j] or u >= hi_tol[j]
 
 
 def _rows_from(old: Any, new: Any, mask: NDArray[np.bool_]) -> Any:

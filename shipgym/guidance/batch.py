@@ -19,7 +19,7 @@ from shipgym._jit import njit
 
 from .plan import ManoeuvrePlan
 from .reference import LegProfile, Limits, leg_profile, path_law
-from .rframe import to_r_frame
+from .rframe import r_frame_poses
 
 __all__ = ["BatchedGuidance", "BatchedReference"]
 
@@ -284,7 +284,11 @@ class BatchedReference:
             raise ValueError(
                 f"eta_n must have shape ({n}, 3) ([x, y, psi] per env), got {eta.shape}"
             )
-        return to_r_frame(eta, self.eta_P, psi_ref_r=self.eta_d_r[:, 2])
+        # to_r_frame(eta, eta_P, psi_ref_r=psi_d^r) without its broadcasting: the rows as they
+        # are (the buffer's views), the same compiled law
+        out = np.empty((n, 3))
+        r_frame_poses(eta, self.eta_P, self.eta_d_r[:, 2], True, out)
+        return out
 
 
 # ---- the guidance ---------------------------------------------------------------------------

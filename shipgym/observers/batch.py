@@ -580,6 +580,7 @@ class BatchedKalman:
         self._none = np.zeros(n, dtype=bool)
         self._z0 = np.zeros((n, 3))
         self._dt = np.zeros(n)
+        self._tt = np.zeros(n)  # step's times (s), (n,)
         self._innov = np.zeros((n, 3))
         self._nis = np.zeros(n)
         self._rej = np.zeros(n, dtype=bool)
@@ -799,7 +800,9 @@ class BatchedKalman:
                 vm = np.ascontiguousarray(valid, dtype=bool)
                 if vm.shape != (n,):
                     raise ValueError(f"valid must be ({n},) booleans, got shape {vm.shape}")
-        self._advance(np.broadcast_to(np.asarray(t, dtype=float), (n,)), za, vm)
+        tt = self._tt
+        tt[:] = t  # a scalar or (n,) (broadcast, as np.broadcast_to refuses other shapes)
+        self._advance(tt, za, vm)
         return BatchedStepInfo(
             self._innov.copy(), self._nis.copy(), self._rej.copy(), self._forced.copy()
         )

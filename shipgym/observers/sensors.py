@@ -524,9 +524,9 @@ class BatchedSensors:
             available, and the outlier truth flags.
         """
         eta = np.array(eta_true, dtype=float)
-        if eta.shape != (self.n, 3) or not np.all(np.isfinite(eta)):
+        if eta.shape != (self.n, 3) or not np.isfinite(eta).all():
             raise ValueError(f"eta_true must be ({self.n}, 3) finite values, got {eta.shape}")
-        self._t[:] = np.broadcast_to(np.asarray(t, dtype=float), (self.n,))
+        self._t[:] = t  # a scalar or (n,) (broadcast, as np.broadcast_to refuses other shapes)
         m = self._all if mask is None else np.array(mask, dtype=bool)
         out = self._out
         out[:, :3] = np.nan
