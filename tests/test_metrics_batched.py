@@ -310,3 +310,71 @@ def test_single_errors_leave_the_run_as_it_was():
     with pytest.raises(ValueError, match="t must be finite"):
         m.record(float("inf"), np.zeros(3), np.zeros(3))
     same(m.summary(), before)
+
+
+# ---- the vector env's episode metrics: the single env's episode_metrics() of env i --------------
+def _env_row(metrics, i):
+    """Env ``i``'s dict of the vector env's ``info["episode_metrics"]``."""
+    return {k: v[i].item() if v.dtype != object else v[i] for k, v in metrics.items()
+            if not k.startswith("_")}  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("env_id", "kw", "steps", "total"),
+    [
+        ("shipgym/BlueLadyTracking-v0", {"max_legs": 2}, 200, 420),
+        ("shipgym/BlueLadyHarbour-v0", {}, 90, 200),
+        ("shipgym/DPStationKeeping-v0", {"vessel": "star-hercules", "episode_duration": 8.0},
+         None, 100),
+    ],
+)  # fmt: skip
+def test_vector_env_episode_metrics_are_the_single_envs(env_id, kw, steps, total):
+    """Env i of ``ShipVectorEnv`` seeded s + i reports at each episode end the single env's
+    ``episode_metrics()`` (same keys, types and floats): legs completed (Tracking), sensor
+    dropouts (a stale fix measured), saturated and clipped actions, autoresets."""
+    import gymnasium as gym
+
+    import shipgym
+
+    n = 3
+    if "vessel" not in kw:  # (the DP tasks' sensors come with their timing)
+        kw = {**kw, "sensors": {"dropout_probability": 0.3}}
+    if steps is not None:
+        kw["max_episode_steps"] = steps
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kw)
+    # the single envs under the PID controller (legs complete), plus a random residual that
+    # saturates and clips; the vector env gets the actions they applied
+    singles = [shipgym.make(env_id, controller="pid", residual_scale=1.5, **kw) for _ in range(n)]
+    venv.reset(seed=11)
+    for i, s in enumerate(singles):
+        s.reset(seed=11 + i)
+    rng = np.random.default_rng(3)
+    pending = np.zeros(n, bool)
+    ends = legs = saturated = 0
+    for _ in range(total):
+        actions = np.zeros((n, venv.single_action_space.shape[0]), np.float32)
+        mine = []
+        for i, s in enumerate(singles):
+            if pending[i]:
+                s.reset()
+                mine.append(None)
+            else:
+                res = rng.normal(0.0, 0.5, s.action_space.shape).astype(np.float32)
+                _, _, te, tr, _ = s.step(res)
+                actions[i] = s.unwrapped.prev_action
+                mine.append(s.unwrapped.episode_metrics() if te or tr else None)
+        _, _, term, trunc, info = venv.step(actions)
+        done = term | trunc
+        for i, want in enumerate(mine):
+            assert (want is not None) == bool(done[i])
+            if want is not None:
+                assert info["_episode_metrics"][i]
+                same(_env_row(info["episode_metrics"], i), want, f"env {i}")
+                ends += 1
+                legs += want["legs_completed"]
+                saturated += sum(want["saturated_time"]) > 0
+                assert want["n_measured_samples"] > 0
+        pending = done
+    assert ends >= n
+    if env_id == "shipgym/BlueLadyTracking-v0":
+        assert legs > 0

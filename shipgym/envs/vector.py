@@ -25,6 +25,8 @@ from numpy.typing import NDArray
 from shipgym.dynamics.frames import wrap_angle
 from shipgym.guidance.batch import BatchedGuidance
 from shipgym.guidance.limits import vessel_limits
+from shipgym.guidance.rframe import to_r_frame
+from shipgym.metrics import BatchedManoeuvreMetrics
 from shipgym.observers.sensors import BatchedSensors, SensorConfig
 
 from .base import (
@@ -224,6 +226,7 @@ class ShipVectorEnv(BatchedEnv):
         self._last_z = np.full((n, 3), np.nan)
         self._z_valid = np.zeros(n, dtype=bool)
         self._z_outlier = np.zeros(n, dtype=bool)
+        self._metrics_setup()
 
     # ---- the BatchedEnv hooks ------------------------------------------------------------
     def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
@@ -271,6 +274,7 @@ class ShipVectorEnv(BatchedEnv):
         self._return += reward
         info = self._info(np.ones(n, bool), saturated, action_clipped, command, rewards, done=done)
         info.update(control)
+        self._metrics_record(active, ref, saturated, clipped)
         return reward, terminated, truncated, info
 
     # ---- internals ------------------------------------------------------------------------
@@ -358,6 +362,7 @@ class ShipVectorEnv(BatchedEnv):
             eta_start = np.where(self._z_valid[:, None], self._last_z, ref.eta_P)
             self.observer.reset(self.physics.t, eta_start, mask=mask)
             self._cache.clear()
+        self._metrics_record(mask)
 
     def _sample(self, mask: NDArray[np.bool_], observe: bool = True) -> None:
         """A sensor sample of the masked envs now (the single env's ``_measure``), fed to the
@@ -367,6 +372,7 @@ class ShipVectorEnv(BatchedEnv):
         # first-order wave motion is seen, not lived
         seen = self._truth()[0] + self.physics.wave_motion()
         z, valid, outlier = self.sensors.measure(self.physics.t, seen, mask)
+        self._fix = np.where((valid & mask)[:, None], z, self._fix)  # the metrics' last fix
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
             if getattr(self.observer, "model_based", False):  # the thrust, as ObserverWrapper
@@ -478,6 +484,74 @@ class ShipVectorEnv(BatchedEnv):
             }
             info["_episode_summary"] = done
         return info
+
+    # ---- the episode metrics (ShipEnv.episode_metrics of each env) ----------------------
+    def _metrics_setup(self) -> None:
+        """The accumulator of the single env's :class:`~shipgym.metrics.ManoeuvreMetrics`
+        for the N envs, and each env's last valid sensor fix (NED, NaN before the first)."""
+        lower = self.actuators.lower
+        self._metrics = BatchedManoeuvreMetrics(
+            self.num_envs, 1.0, n_actuators=len(self.actuators), n_channels=self.n_actions,
+            control_period=self.control_period, reversible=(lower < 0.0).tolist(),
+        )  # fmt: skip
+        slices = self.actuators.slices
+        self._metrics_slices = None if all(x.stop - x.start == 1 for x in slices) else slices
+        self._fix = np.full((self.num_envs, 3), np.nan)
+
+    def _metrics_record(
+        self,
+        mask: NDArray[np.bool_],
+        ref: Any = None,
+        saturated: NDArray[np.bool_] | None = None,
+        action: Array | None = None,
+    ) -> None:
+        """Record the envs of ``mask`` as the single env's ``_record_metrics``: after a reset
+        (``ref`` None: the run restarts, no saturation or command), or after a control step
+        with the step's reference, per-channel ``saturated`` flags and clipped ``action``."""
+        m = self._metrics
+        if ref is None:  # a reset: a new run from the first sample, as the single env's reset
+            self._fix[mask & ~self._z_valid] = np.nan  # (no fix yet where it was a dropout)
+            self._observation()  # the r-frame poses of this state (_eta_r)
+            ref = self.guidance.reference(self.physics.t)
+            m.reset(mask)
+        if saturated is not None and self._metrics_slices is not None:  # per actuator
+            saturated = np.stack([saturated[:, sl].any(axis=1) for sl in self._metrics_slices], 1)
+        fix = self._fix
+        measured = ~np.isnan(fix[:, 0])
+        meas = to_r_frame(fix, ref.eta_P, ref.eta_d_r[:, 2]) if measured.any() else None
+        m.record(self.physics.t, self._eta_r, ref.eta_d_r, meas, self.physics.thrust, saturated,
+                 ref.leg, action, mask=mask, measured=measured)  # fmt: skip
+
+    def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
+        """The single env's :meth:`~shipgym.envs.base.ShipEnv.episode_metrics` of the envs of
+        ``done``: numbers as (N,) arrays (float NaN, int 0, bool False elsewhere), the other
+        values (lists, dicts, ``None``) as (N,) object arrays (``None`` elsewhere); env ``i``'s
+        dict is ``{k: v[i]}`` (numbers as ``v[i].item()``)."""
+        g = self.guidance
+        rows = {}
+        for i in np.flatnonzero(done).tolist():  # episode ends: per env
+            out = self._metrics.summary(i)
+            times = g.leg_completion_times(i)
+            out["completed"] = bool(g.finished[i])
+            out["legs_completed"] = len(times)
+            out["leg_times"] = list(times)
+            out["quay_contact"] = bool(self._contact[i])
+            out["duration_s"] = float(self.physics.t[i])
+            rows[i] = out
+        n = self.num_envs
+        fill = {float: np.nan, int: 0, bool: False}
+        metrics: dict[str, Any] = {}
+        for k in next(iter(rows.values())):
+            kinds = {type(r[k]) for r in rows.values()}
+            kind = kinds.pop() if len(kinds) == 1 else None
+            if kind in fill:
+                a = np.full(n, fill[kind], dtype=kind)
+            else:
+                a = np.full(n, None, dtype=object)
+            for i, r in rows.items():
+                a[i] = r[k]
+            metrics[k] = a
+        return metrics
 
 
 def _rows_from(old: Any, new: Any, mask: NDArray[np.bool_]) -> Any:
