@@ -362,8 +362,6 @@ _I_HAS_T, _I_NEXT_K, _I_N_TRUTH, _I_N_MEAS, _I_N_STEPS, _I_SAMPLED = 0, 1, 2, 3,
 _I_HAS_LEG, _I_LEG, _I_SLOT, _I_HAS_FPREV, _I_N_THRUST = 6, 7, 8, 9, 10
 _I_HAS_SPREV, _I_N_SAT, _I_N_SLOTS, _I_N_LT, _I_N_CMD, _I_ACT = 11, 12, 13, 14, 15, 16
 _L_LEG, _L_N, _L_SUM, _L_TIME = 0, 1, 2, 5  # L: slot (leg, n, 3 sums), completed leg (2)
-#: ``rows`` bits of the kernel: the env records this step; its measured pose is given
-_R_ACTIVE, _R_MEASURED = 1, 2
 #: ``given`` bits of the kernel: which optional inputs this call has
 _G_THRUST, _G_SAT, _G_LEG, _G_CMD = 1, 2, 4, 8
 #: kernel error codes (returned as ``-(code + 16 * env)``)
@@ -410,19 +408,19 @@ def _finite3(x, i):  # type: ignore[no-untyped-def]
 
 
 @njit
-def _record(t, rows, eta, eta_d, meas, thrust, sat, leg, cmd, given, period, tol, F, I, L,
-            CH):  # type: ignore[no-untyped-def]  # fmt: skip
-    """One control step of the envs with ``rows[i] & _R_ACTIVE`` (module section above; the
-    inputs flat, C-order rows: ``eta[3 i + j]``). First every env is checked (nothing
-    changes on an error: ``-(code + 16 i)`` is returned, also where a table must grow
-    first); then each env's sums advance in the order of its own step. Returns the number
-    of envs sampled (``I[i, _I_SAMPLED]``: env ``i`` took an accuracy sample)."""
+def _record(t, mask, eta, eta_d, meas, has_meas, thrust, sat, leg, cmd, given, period, tol,
+            F, I, L, CH):  # type: ignore[no-untyped-def]  # fmt: skip
+    """One control step of the envs of ``mask`` (module section above; the inputs flat,
+    C-order rows: ``eta[3 i + j]``; ``meas`` read where ``has_meas``). First every env is
+    checked (nothing changes on an error: ``-(code + 16 i)`` is returned, also where a table
+    must grow first); then each env's sums advance in the order of its own step. Returns the
+    number of envs sampled (``I[i, _I_SAMPLED]``: env ``i`` took an accuracy sample)."""
     n = t.shape[0]
     na = (F.shape[1] - _F_ACT) // 4
     nc = CH.shape[2] - 1
     cap = L.shape[1]
     for i in range(n):  # checks only
-        if not rows[i] & _R_ACTIVE:
+        if not mask[i]:
             continue
         ti = t[i]
         if not math.isfinite(ti):
@@ -442,7 +440,7 @@ def _record(t, rows, eta, eta_d, meas, thrust, sat, leg, cmd, given, period, tol
                 return -(_E_ETA + 16 * i)
             if not _finite3(eta_d, i):
                 return -(_E_ETA_D + 16 * i)
-            if rows[i] & _R_MEASURED and not _finite3(meas, i):
+            if has_meas[i] and not _finite3(meas, i):
                 return -(_E_MEAS + 16 * i)
         if given & _G_LEG and (I[i, _I_N_SLOTS] == cap or I[i, _I_N_LT] == cap):
             return -(_E_L + 16 * i)
@@ -452,7 +450,7 @@ def _record(t, rows, eta, eta_d, meas, thrust, sat, leg, cmd, given, period, tol
     s_count, s_prev = _I_ACT, _I_ACT + na
     count = 0
     for i in range(n):
-        if not rows[i] & _R_ACTIVE:
+        if not mask[i]:
             I[i, _I_SAMPLED] = 0
             continue
         ti = t[i]
@@ -510,7 +508,7 @@ def _record(t, rows, eta, eta_d, meas, thrust, sat, leg, cmd, given, period, tol
             F[i, _F_SUM + 1] += ey
             F[i, _F_SUM + 2] += ep
             I[i, _I_N_TRUTH] += 1
-            if rows[i] & _R_MEASURED:
+            if has_meas[i]:
                 F[i, _F_MEAS] += abs(eta_d[o] - meas[o])
                 F[i, _F_MEAS + 1] += abs(eta_d[o + 1] - meas[o + 1])
                 F[i, _F_MEAS + 2] += abs(wrap(eta_d[o + 2] - meas[o + 2]))
@@ -537,10 +535,9 @@ def _record_entry() -> Any:
     the C-contiguous state: the caller passes arrays of these dtypes and dimensions."""
     if not _ENTRY:
         f, b, i = np.zeros(2)[::2], np.zeros(2, bool)[::2], np.zeros(2, np.int64)[::2]
-        r = np.zeros(2, np.int8)[::2]
         state = (np.zeros((1, 8)), np.zeros((1, 1), np.int64), np.zeros((1, 1, 1)),
                  np.zeros((1, 1, 1)))  # fmt: skip
-        _ENTRY.append(entry(_record, (f, r, f, f, f, f, b, i, f, 0, 1.0, 1.0, *state)))
+        _ENTRY.append(entry(_record, (f, b, f, f, f, b, f, b, i, f, 0, 1.0, 1.0, *state)))
     return _ENTRY[0]
 
 
@@ -604,8 +601,8 @@ class BatchedManoeuvreMetrics:
         self._I = np.zeros((n, _I_ACT + 2 * na), np.int64)
         self._L = np.zeros((n, 4, _L_TIME + 2))
         self._CH = np.zeros((n, 64, nc + 1))
-        self._active = np.full(n, _R_ACTIVE, np.int8)  # every env records, none measured
-        self._measured = np.full(n, _R_ACTIVE | _R_MEASURED, np.int8)  # ... all measured
+        self._all = np.ones(n, bool)
+        self._none = np.zeros(n, bool)
         self._rec = _record_entry()
         self._shape_a, self._shape_c = (na,), (nc,)
         self.reset()
@@ -624,10 +621,11 @@ class BatchedManoeuvreMetrics:
         return m
 
     def _rows(self, x: ArrayLike, k: int, what: str, dtype: Any = float) -> NDArray[Any]:
+        """``x`` (N, k) as a flat vector of its rows (a view of a C-contiguous array)."""
         a = np.asarray(x, dtype=dtype)
         if a.shape != (self.n, k):
             raise ValueError(f"{what} must have shape ({self.n}, {k}), got {a.shape}")
-        return np.ascontiguousarray(a).reshape(-1)
+        return a.reshape(-1)  # (a copy only where the rows are not C-contiguous)
 
     # -- recording ---------------------------------------------------------------------------
     def record(
@@ -680,15 +678,12 @@ class BatchedManoeuvreMetrics:
             raise ValueError(f"t must be one time or ({n},) times, got shape {tt.shape}")
         eta = self._rows(eta_r, 3, "eta_r")
         eta_d = self._rows(eta_d_r, 3, "eta_d_r")
+        m = self._all if mask is None else self._mask(mask, "mask")
         if eta_meas_r is None:
-            meas, rows = _EMPTY_F, self._active
+            meas, has_meas = _EMPTY_F, self._none
         else:
             meas = self._rows(eta_meas_r, 3, "eta_meas_r")
-            rows = self._measured
-            if measured is not None:
-                rows = np.where(self._mask(measured, "measured"), rows, self._active)
-        if mask is not None:
-            rows = np.where(self._mask(mask, "mask"), rows, np.int8(0))
+            has_meas = self._all if measured is None else self._mask(measured, "measured")
         na, nc = self.n_actuators, self.n_channels
         given = 0
         f = s = c = _EMPTY_F
@@ -705,7 +700,7 @@ class BatchedManoeuvreMetrics:
             given |= _G_LEG
         if command is not None:
             c, given = self._rows(command, nc, "command"), given | _G_CMD
-        args = (tt, rows, eta, eta_d, meas, f, s, lg, c, given)
+        args = (tt, m, eta, eta_d, meas, has_meas, f, s, lg, c, given)
         r = self._rec(*args, self.sample_period, self._tol, self._F, self._I, self._L, self._CH)
         if r < 0:
             self._retry(r, args)
@@ -727,7 +722,7 @@ class BatchedManoeuvreMetrics:
         return r
 
     def _error(self, code: int, i: int, args: tuple[Any, ...]) -> str:
-        t, _, eta, eta_d, meas, thrust = args[:6]
+        t, _, eta, eta_d, meas, _, thrust = args[:7]
         na = self.n_actuators
         ti = float(t[i])
         if code == _E_T:
@@ -913,9 +908,9 @@ class ManoeuvreMetrics:
         if type(eta_d) is not nd or eta_d.dtype is not f8 or eta_d.shape != s3:
             eta_d = _vector(eta_d_r, 3, "eta_d_r")
         if eta_meas_r is None:
-            meas, rows = _EMPTY_F, b._active
+            meas, has_meas = _EMPTY_F, b._none
         else:
-            meas, rows = eta_meas_r, b._measured
+            meas, has_meas = eta_meas_r, b._all
             if type(meas) is not nd or meas.dtype is not f8 or meas.shape != s3:
                 meas = _vector(eta_meas_r, 3, "eta_meas_r")
         if thrust is None:
@@ -947,10 +942,11 @@ class ManoeuvreMetrics:
             c, given = command, given | _G_CMD
             if type(c) is not nd or c.dtype is not f8 or c.shape != b._shape_c:
                 c = _vector(command, b.n_channels, "command")
-        r = b._rec(self._t, rows, eta, eta_d, meas, f, s, lg, c, given, b.sample_period,
-                   b._tol, b._F, b._I, b._L, b._CH)  # fmt: skip
+        mask = b._all
+        r = b._rec(self._t, mask, eta, eta_d, meas, has_meas, f, s, lg, c, given,
+                   b.sample_period, b._tol, b._F, b._I, b._L, b._CH)  # fmt: skip
         if r < 0:
-            r = b._retry(r, (self._t, rows, eta, eta_d, meas, f, s, lg, c, given))
+            r = b._retry(r, (self._t, mask, eta, eta_d, meas, has_meas, f, s, lg, c, given))
         return r > 0
 
     def complete_leg(self, t: float, next_leg: int | None = None) -> None:

@@ -378,3 +378,22 @@ def test_vector_env_episode_metrics_are_the_single_envs(env_id, kw, steps, total
     assert ends >= n
     if env_id == "shipgym/BlueLadyTracking-v0":
         assert legs > 0
+
+
+def test_vector_env_episode_metrics_in_same_step_mode_and_types():
+    """Same-step autoreset: the ended episode's metrics in ``final_info`` too; numbers are
+    numeric arrays (NaN / 0 / False for the envs that did not end), the rest object arrays."""
+    import gymnasium as gym
+
+    kw = {"max_episode_steps": 5, "autoreset_mode": "same-step"}
+    venv = gym.make_vec("shipgym/BlueLadyStationKeeping-v0", num_envs=2,
+                        vectorization_mode="vector_entry_point", **kw)  # fmt: skip
+    venv.reset(seed=0)
+    for _ in range(5):
+        _, _, term, trunc, info = venv.step(np.full((2, 3), 0.5, np.float32))
+    assert (term | trunc).all()
+    m = info["episode_metrics"]
+    assert info["final_info"]["episode_metrics"] is m
+    assert m["J_c"].dtype == np.float64 and m["n_steps"].dtype == np.int64
+    assert m["completed"].dtype == bool and m["thrust_mean_abs"].dtype == object
+    assert m["n_steps"].tolist() == [6, 6]  # the reset and 5 control steps, as the single env

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from shipgym.dynamics.frames import wrap_angle
 from shipgym.guidance.batch import BatchedGuidance
 from shipgym.guidance.limits import vessel_limits
-from shipgym.guidance.rframe import to_r_frame
+from shipgym.guidance.rframe import r_frame_poses
 from shipgym.metrics import BatchedManoeuvreMetrics
 from shipgym.observers.sensors import BatchedSensors, SensorConfig
 
@@ -517,8 +517,12 @@ class ShipVectorEnv(BatchedEnv):
         if saturated is not None and self._metrics_slices is not None:  # per actuator
             saturated = np.stack([saturated[:, sl].any(axis=1) for sl in self._metrics_slices], 1)
         fix = self._fix
-        measured = ~np.isnan(fix[:, 0])
-        meas = to_r_frame(fix, ref.eta_P, ref.eta_d_r[:, 2]) if measured.any() else None
+        measured = fix[:, 0] == fix[:, 0]  # (not NaN: a fix since the reset)
+        meas = None
+        if measured.any():  # to_r_frame's compiled law on the rows (no broadcasting)
+            meas = np.empty((self.num_envs, 3))
+            psi_d_r = np.ascontiguousarray(ref.eta_d_r[:, 2])
+            r_frame_poses(fix, np.ascontiguousarray(ref.eta_P), psi_d_r, True, meas)
         m.record(self.physics.t, self._eta_r, ref.eta_d_r, meas, self.physics.thrust, saturated,
                  ref.leg, action, mask=mask, measured=measured)  # fmt: skip
 
