@@ -607,6 +607,15 @@ class BatchedManoeuvreMetrics:
         self._shape_a, self._shape_c = (na,), (nc,)
         self.reset()
 
+    def __getstate__(self) -> dict[str, Any]:  # the compiled entry point is found again
+        state = dict(self.__dict__)
+        del state["_rec"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._rec = _record_entry()
+
     def reset(self, mask: ArrayLike | None = None) -> None:
         """Forget everything recorded by the envs of ``mask`` ((N,) bools; default all)."""
         m = slice(None) if mask is None else self._mask(mask, "mask")

@@ -397,3 +397,15 @@ def test_vector_env_episode_metrics_in_same_step_mode_and_types():
     assert m["J_c"].dtype == np.float64 and m["n_steps"].dtype == np.int64
     assert m["completed"].dtype == bool and m["thrust_mean_abs"].dtype == object
     assert m["n_steps"].tolist() == [6, 6]  # the reset and 5 control steps, as the single env
+
+
+def test_metrics_pickle_and_copy():
+    import copy
+    import pickle
+
+    m = ManoeuvreMetrics()
+    m.record(0.0, np.zeros(3), np.ones(3), leg=0)
+    for other in (copy.deepcopy(m), pickle.loads(pickle.dumps(m))):
+        other.record(1.0, np.zeros(3), np.ones(3), leg=1)
+        assert other.n_samples == 2 and other.summary()["legs_completed"] == 1
+    assert m.n_samples == 1 and m.summary()["legs_completed"] == 0
