@@ -62,7 +62,9 @@ class ShipVectorEnv(BatchedEnv):
     of range is clipped and flagged in ``info["action_clipped"]``, NaN raises). Reward: the
     single env's terms (``info["reward_*"]``, which sum to it). Episodes end as the single
     env's: terminated when the plan is complete (Tracking), truncated at
-    ``max_episode_steps``.
+    ``max_episode_steps``; at an episode's end ``info["episode_metrics"]`` holds env ``i``'s
+    :meth:`ShipEnv.episode_metrics <shipgym.envs.base.ShipEnv.episode_metrics>` (Tomera 2014
+    eqs. 54-57, thruster usage, legs; :meth:`_episode_metrics`).
 
     Args:
         num_envs: number of envs, >= 1.
