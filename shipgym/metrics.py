@@ -1,7 +1,9 @@
-"""Accuracy indices and run statistics (Tomera 2014 eqs. 54-57). Pure NumPy.
+"""Accuracy indices and run statistics (Tomera 2014 eqs. 54-57): the analysis forms (NumPy)
+and the online accumulator of N >= 1 runs (one compiled step over the N envs).
 
 Public names: ``CHATTER_KEYS``, ``HF_PERIOD_S``, ``INDEX_KEYS``, ``MIN_SAMPLES``,
-``REVERSAL_BAND``, ``SEED_WEIGHTS``, ``accuracy_indices``, ``command_chatter``, ...
+``REVERSAL_BAND``, ``SEED_WEIGHTS``, ``BatchedManoeuvreMetrics``, ``ManoeuvreMetrics``,
+``accuracy_indices``, ``command_chatter``, ...
 
 Design notes: docs/design/metrics.md.
 """
@@ -13,9 +15,10 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
-from shipgym.dynamics.frames import wrap_angle
+from shipgym._jit import entry, njit
+from shipgym.dynamics.frames import wrap, wrap_angle
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from shipgym.records import StepRecord
@@ -28,6 +31,7 @@ __all__ = [
     "REVERSAL_BAND",
     "SEED_WEIGHTS",
     "accuracy_indices",
+    "BatchedManoeuvreMetrics",
     "command_chatter",
     "episode_result",
     "honest_indices",
@@ -63,14 +67,8 @@ CHATTER_KEYS = (
 SEED_WEIGHTS: tuple[float, float, float] = (1.0, 1.0, 0.01)
 """``(lambda_1, lambda_2, lambda_3)`` of Tomera (2014) eq. 57 (1/m, 1/m, 1/deg)."""
 
-_TWO_PI = 2.0 * math.pi
 _NAN = float("nan")
 _DEG = 180.0 / math.pi
-
-
-def _wrap(a: float) -> float:
-    """Scalar wrap to (-pi, pi] (same convention as :func:`shipgym.dynamics.wrap_angle`)."""
-    return math.pi - (math.pi - a) % _TWO_PI
 
 
 def _weights(weights: Sequence[float]) -> tuple[float, float, float]:
@@ -353,40 +351,479 @@ def rmse(a: ArrayLike, b: ArrayLike, angle: bool = False, axis: int | None = 0) 
     return float(out) if np.ndim(out) == 0 else out
 
 
-def _floats3(v: Any, what: str) -> tuple[float, float, float]:
-    if isinstance(v, np.ndarray):
-        x = v.tolist()
-    elif type(v) is tuple and len(v) == 3 and type(v[0]) is type(v[1]) is type(v[2]) is float:
-        x = v  # the environment's measured pose (every control step): floats already
+# ---- the run-time law: one compiled accumulator over N >= 1 envs ------------------------------
+# Per env i the state is a row of F (float64) and of I (int64), with the columns below, and
+# rows of two growing tables: L (float64) holds in its row s the per-leg sums of leg slot s
+# (leg index, samples, |errors| of eqs. 54-56; integers below 2**53, exact as floats) and the
+# s-th completed leg (duration, completion time); CH holds the recorded commands (the command,
+# then its time). A flag column holds what the Python form held as ``None``.
+_F_T_LAST, _F_LEG_START, _F_SUM, _F_MEAS, _F_ACT = 0, 1, 2, 5, 8  # F: then 4 blocks of n_act
+_I_HAS_T, _I_NEXT_K, _I_N_TRUTH, _I_N_MEAS, _I_N_STEPS, _I_SAMPLED = 0, 1, 2, 3, 4, 5
+_I_HAS_LEG, _I_LEG, _I_SLOT, _I_HAS_FPREV, _I_N_THRUST = 6, 7, 8, 9, 10
+_I_HAS_SPREV, _I_N_SAT, _I_N_SLOTS, _I_N_LT, _I_N_CMD, _I_ACT = 11, 12, 13, 14, 15, 16
+_L_LEG, _L_N, _L_SUM, _L_TIME = 0, 1, 2, 5  # L: slot (leg, n, 3 sums), completed leg (2)
+#: ``given`` bits of the kernel: which optional inputs this call has
+_G_THRUST, _G_SAT, _G_LEG, _G_CMD = 1, 2, 4, 8
+#: kernel error codes (returned as ``-(code + 16 * env)``)
+_E_T, _E_BACK, _E_THRUST, _E_ETA, _E_ETA_D, _E_MEAS, _E_L, _E_CMD = range(1, 9)
+
+
+@njit
+def _slot(i, leg, I, L):  # type: ignore[no-untyped-def]
+    """The per-leg slot of ``leg`` in env ``i``; a new, empty one if the leg is new (the
+    caller made room)."""
+    n = I[i, _I_N_SLOTS]
+    for s in range(n):
+        if L[i, s, _L_LEG] == leg:
+            return s
+    L[i, n, _L_LEG] = leg
+    L[i, n, _L_N] = L[i, n, _L_SUM] = L[i, n, _L_SUM + 1] = L[i, n, _L_SUM + 2] = 0.0
+    I[i, _I_N_SLOTS] = n + 1
+    return n
+
+
+@njit
+def _complete_leg(i, t, has_next, next_leg, F, I, L):  # type: ignore[no-untyped-def]
+    """Env ``i``'s current leg (if any) completed at ``t`` (s): its duration
+    ``t - t_start`` and ``t`` appended; ``next_leg`` (if ``has_next``) starts at ``t``."""
+    if I[i, _I_HAS_LEG]:
+        k = I[i, _I_N_LT]
+        L[i, k, _L_TIME] = t - F[i, _F_LEG_START]
+        L[i, k, _L_TIME + 1] = t
+        I[i, _I_N_LT] = k + 1
+    if has_next:
+        I[i, _I_HAS_LEG] = 1
+        I[i, _I_LEG] = next_leg
+        I[i, _I_SLOT] = _slot(i, next_leg, I, L)
+        F[i, _F_LEG_START] = t
     else:
-        x = [float(e) for e in v]
-    if len(x) != 3:
-        raise ValueError(f"{what} must have 3 elements, got {len(x)}")
-    a, b, c = x
-    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
-        raise ValueError(f"{what} must be finite, got {x}")
-    return a, b, c
+        I[i, _I_HAS_LEG] = 0
+        I[i, _I_SLOT] = -1
 
 
-class _Acc:
-    """Running sums of |errors| of eqs. 54-56 (Python floats; cheap)."""
+@njit
+def _finite3(x, i):  # type: ignore[no-untyped-def]
+    o = 3 * i
+    return math.isfinite(x[o]) and math.isfinite(x[o + 1]) and math.isfinite(x[o + 2])
 
-    __slots__ = ("sx", "sy", "sp", "n")
 
-    def __init__(self) -> None:
-        self.sx = self.sy = self.sp = 0.0
-        self.n = 0
+@njit
+def _record(t, mask, eta, eta_d, meas, has_meas, thrust, sat, leg, cmd, given, period, tol,
+            F, I, L, CH):  # type: ignore[no-untyped-def]  # fmt: skip
+    """One control step of the envs of ``mask`` (module section above; the inputs flat,
+    C-order rows: ``eta[3 i + j]``; ``meas`` read where ``has_meas``). First every env is
+    checked (nothing changes on an error: ``-(code + 16 i)`` is returned, also where a table
+    must grow first); then each env's sums advance in the order of its own step. Returns the
+    number of envs sampled (``I[i, _I_SAMPLED]``: env ``i`` took an accuracy sample)."""
+    n = t.shape[0]
+    na = (F.shape[1] - _F_ACT) // 4
+    nc = CH.shape[2] - 1
+    cap = L.shape[1]
+    for i in range(n):  # checks only
+        if not mask[i]:
+            continue
+        ti = t[i]
+        if not math.isfinite(ti):
+            return -(_E_T + 16 * i)
+        if I[i, _I_HAS_T]:
+            if ti < F[i, _F_T_LAST]:
+                return -(_E_BACK + 16 * i)
+            next_k = I[i, _I_NEXT_K]
+        else:
+            next_k = max(0, math.ceil((ti - tol) / period))
+        if given & _G_THRUST:
+            for j in range(na):
+                if not math.isfinite(thrust[na * i + j]):
+                    return -(_E_THRUST + 16 * i)
+        if ti >= next_k * period - tol:
+            if not _finite3(eta, i):
+                return -(_E_ETA + 16 * i)
+            if not _finite3(eta_d, i):
+                return -(_E_ETA_D + 16 * i)
+            if has_meas[i] and not _finite3(meas, i):
+                return -(_E_MEAS + 16 * i)
+        if given & _G_LEG and (I[i, _I_N_SLOTS] == cap or I[i, _I_N_LT] == cap):
+            return -(_E_L + 16 * i)
+        if given & _G_CMD and I[i, _I_N_CMD] == CH.shape[1]:
+            return -(_E_CMD + 16 * i)
+    f_abs, f_tv, f_prev, s_time = _F_ACT, _F_ACT + na, _F_ACT + 2 * na, _F_ACT + 3 * na
+    s_count, s_prev = _I_ACT, _I_ACT + na
+    count = 0
+    for i in range(n):
+        if not mask[i]:
+            I[i, _I_SAMPLED] = 0
+            continue
+        ti = t[i]
+        if I[i, _I_HAS_T]:
+            dt = ti - F[i, _F_T_LAST]
+        else:  # the first step: the first sample at the first multiple of the period
+            dt = 0.0
+            I[i, _I_HAS_T] = 1
+            I[i, _I_NEXT_K] = max(0, math.ceil((ti - tol) / period))
+        F[i, _F_T_LAST] = ti
+        I[i, _I_N_STEPS] += 1
+        if given & _G_LEG:  # a new leg index completes the current leg at ti
+            lg = leg[i]
+            if not I[i, _I_HAS_LEG] or lg != I[i, _I_LEG]:
+                _complete_leg(i, ti, True, lg, F, I, L)
+        if given & _G_THRUST:  # sum |F_k| and sum |F_k - F_{k-1}|
+            o = na * i
+            has_prev = I[i, _I_HAS_FPREV]
+            for j in range(na):
+                fj = thrust[o + j]
+                F[i, f_abs + j] += abs(fj)
+                if has_prev:
+                    F[i, f_tv + j] += abs(fj - F[i, f_prev + j])
+                F[i, f_prev + j] = fj
+            I[i, _I_HAS_FPREV] = 1
+            I[i, _I_N_THRUST] += 1
+        if given & _G_SAT:  # steps with the flag; time with the previous step's flag held
+            o = na * i
+            for j in range(na):
+                if sat[o + j]:
+                    I[i, s_count + j] += 1
+            if I[i, _I_HAS_SPREV]:
+                for j in range(na):
+                    if I[i, s_prev + j]:
+                        F[i, s_time + j] += dt
+            for j in range(na):
+                I[i, s_prev + j] = 1 if sat[o + j] else 0
+            I[i, _I_HAS_SPREV] = 1
+            I[i, _I_N_SAT] += 1
+        if given & _G_CMD:
+            k = I[i, _I_N_CMD]
+            for j in range(nc):
+                CH[i, k, j] = cmd[nc * i + j]
+            CH[i, k, nc] = ti
+            I[i, _I_N_CMD] = k + 1
+        s = ti >= I[i, _I_NEXT_K] * period - tol
+        I[i, _I_SAMPLED] = s
+        if s:  # eqs. 54-56: |x_d - x|, |y_d - y|, |wrap(psi_d - psi)|
+            count += 1
+            o = 3 * i
+            ex = abs(eta_d[o] - eta[o])
+            ey = abs(eta_d[o + 1] - eta[o + 1])
+            ep = abs(wrap(eta_d[o + 2] - eta[o + 2]))
+            F[i, _F_SUM] += ex
+            F[i, _F_SUM + 1] += ey
+            F[i, _F_SUM + 2] += ep
+            I[i, _I_N_TRUTH] += 1
+            if has_meas[i]:
+                F[i, _F_MEAS] += abs(eta_d[o] - meas[o])
+                F[i, _F_MEAS + 1] += abs(eta_d[o + 1] - meas[o + 1])
+                F[i, _F_MEAS + 2] += abs(wrap(eta_d[o + 2] - meas[o + 2]))
+                I[i, _I_N_MEAS] += 1
+            if I[i, _I_HAS_LEG]:
+                sl = I[i, _I_SLOT]
+                L[i, sl, _L_N] += 1.0
+                L[i, sl, _L_SUM] += ex
+                L[i, sl, _L_SUM + 1] += ey
+                L[i, sl, _L_SUM + 2] += ep
+            I[i, _I_NEXT_K] = math.floor((ti + tol) / period) + 1
+    return count
 
-    def add(self, a: tuple[float, float, float], d: tuple[float, float, float]) -> None:
-        self.sx += abs(d[0] - a[0])
-        self.sy += abs(d[1] - a[1])
-        self.sp += abs(_wrap(d[2] - a[2]))
-        self.n += 1
 
-    def result(self, w: tuple[float, float, float]) -> dict[str, float] | None:
-        if self.n == 0:
-            return None
-        return _indices(self.sx, self.sy, self.sp, self.n, w)
+_EMPTY_F = np.empty(0)
+_EMPTY_B = np.empty(0, bool)
+_EMPTY_I = np.empty(0, np.int64)
+_ENTRY: list[Any] = []
+
+
+def _record_entry() -> Any:
+    """The compiled entry point of :func:`_record` (:func:`shipgym._jit.entry`: no per-call
+    type resolution), for inputs of any strides (1-D float64, bool and int64 vectors) and
+    the C-contiguous state: the caller passes arrays of these dtypes and dimensions."""
+    if not _ENTRY:
+        f, b, i = np.zeros(2)[::2], np.zeros(2, bool)[::2], np.zeros(2, np.int64)[::2]
+        state = (np.zeros((1, 8)), np.zeros((1, 1), np.int64), np.zeros((1, 1, 1)),
+                 np.zeros((1, 1, 1)))  # fmt: skip
+        _ENTRY.append(entry(_record, (f, b, f, f, f, b, f, b, i, f, 0, 1.0, 1.0, *state)))
+    return _ENTRY[0]
+
+
+def _grown(a: NDArray[Any]) -> NDArray[Any]:
+    """``a`` with its axis 1 (a table's rows per env) twice as long, the new rows zero."""
+    out = np.zeros((a.shape[0], 2 * a.shape[1], *a.shape[2:]), a.dtype)
+    out[:, : a.shape[1]] = a
+    return out
+
+
+class BatchedManoeuvreMetrics:
+    """Online accumulators of the Tomera (2014) accuracy indices and thruster usage of N >= 1
+    runs (envs) at once: :class:`ManoeuvreMetrics` of each env, with one compiled step over
+    the N envs.
+
+    Call :meth:`record` once per control step with the rows of the envs (arrays with a
+    leading axis of N); env ``i``'s statistics (:meth:`summary`) are those of
+    :class:`ManoeuvreMetrics` fed env ``i``'s rows alone, bit for bit: the same operations in
+    the same order per env. The sampling rule, the statistics and the arguments are
+    :class:`ManoeuvreMetrics`'s.
+
+    Args:
+        n: number of envs N >= 1.
+        sample_period, weights, n_actuators, n_channels, control_period, reversible: as
+            :class:`ManoeuvreMetrics` (the same for every env).
+    """
+
+    def __init__(
+        self,
+        n: int,
+        sample_period: float = 1.0,
+        weights: Sequence[float] = SEED_WEIGHTS,
+        n_actuators: int = 3,
+        *,
+        n_channels: int | None = None,
+        control_period: float | None = None,
+        reversible: Sequence[bool] | None = None,
+    ) -> None:
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+            raise ValueError(f"n must be a number of envs >= 1, got {n!r}")
+        sample_period = float(sample_period)
+        if not (math.isfinite(sample_period) and sample_period > 0.0):
+            raise ValueError(f"sample_period must be a positive number of s, got {sample_period}")
+        if int(n_actuators) < 1:
+            raise ValueError(f"n_actuators must be >= 1, got {n_actuators}")
+        self.n = n = int(n)
+        self.sample_period = sample_period
+        self.weights = _weights(weights)
+        self.n_actuators = na = int(n_actuators)
+        self.n_channels = nc = na if n_channels is None else int(n_channels)
+        if control_period is not None and not (
+            math.isfinite(float(control_period)) and float(control_period) > 0.0
+        ):
+            raise ValueError(f"control_period must be > 0 s or None, got {control_period!r}")
+        self.control_period = None if control_period is None else float(control_period)
+        if reversible is not None and len(reversible) != nc:
+            raise ValueError(f"reversible must have {nc} flags, got {reversible!r}")
+        self.reversible = None if reversible is None else tuple(bool(x) for x in reversible)
+        self._tol = 1e-6 * sample_period
+        self._F = np.zeros((n, _F_ACT + 4 * na))
+        self._I = np.zeros((n, _I_ACT + 2 * na), np.int64)
+        self._L = np.zeros((n, 4, _L_TIME + 2))
+        self._CH = np.zeros((n, 64, nc + 1))
+        self._all = np.ones(n, bool)
+        self._none = np.zeros(n, bool)
+        self._rec = _record_entry()
+        self._shape_a, self._shape_c = (na,), (nc,)
+        self.reset()
+
+    def __getstate__(self) -> dict[str, Any]:  # the compiled entry point is found again
+        state = dict(self.__dict__)
+        del state["_rec"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._rec = _record_entry()
+
+    def reset(self, mask: ArrayLike | None = None) -> None:
+        """Forget everything recorded by the envs of ``mask`` ((N,) bools; default all)."""
+        m = slice(None) if mask is None else self._mask(mask, "mask")
+        self._F[m] = 0.0
+        self._I[m] = 0
+        self._I[m, _I_SLOT] = -1
+
+    def _mask(self, mask: ArrayLike, what: str) -> NDArray[np.bool_]:
+        m = np.asarray(mask, dtype=bool)
+        if m.shape != (self.n,):
+            raise ValueError(f"{what} must be ({self.n},) booleans, got shape {m.shape}")
+        return m
+
+    def _rows(self, x: ArrayLike, k: int, what: str, dtype: Any = float) -> NDArray[Any]:
+        """``x`` (N, k) as a flat vector of its rows (a view of a C-contiguous array)."""
+        a = np.asarray(x, dtype=dtype)
+        if a.shape != (self.n, k):
+            raise ValueError(f"{what} must have shape ({self.n}, {k}), got {a.shape}")
+        return a.reshape(-1)  # (a copy only where the rows are not C-contiguous)
+
+    # -- recording ---------------------------------------------------------------------------
+    def record(
+        self,
+        t: ArrayLike,
+        eta_r: ArrayLike,
+        eta_d_r: ArrayLike,
+        eta_meas_r: ArrayLike | None = None,
+        thrust: ArrayLike | None = None,
+        saturated: ArrayLike | None = None,
+        leg: ArrayLike | None = None,
+        command: ArrayLike | None = None,
+        mask: ArrayLike | None = None,
+        measured: ArrayLike | None = None,
+    ) -> NDArray[np.bool_]:
+        """Record one control step of the envs of ``mask`` (the others are untouched and
+        their rows ignored).
+
+        Args:
+            t: time (s) per env, (N,) (or one number for all), non-decreasing per env.
+            eta_r: true poses in the current legs' r-frames (m, m, rad), (N, 3).
+            eta_d_r: desired poses in the same r-frames (m, m, rad), (N, 3).
+            eta_meas_r: measured poses in the same r-frames (m, m, rad), (N, 3), or None (no
+                env measured).
+            thrust: actuator forces (N), (N, n_actuators), or None.
+            saturated: per-actuator saturation flags, (N, n_actuators), or None.
+            leg: the leg index per env, (N,) ints, or None; a change marks env ``i``'s
+                previous leg complete at ``t[i]``.
+            command: the normalised commands (N, n_channels) applied over the step that ended
+                at ``t``, or None.
+            mask: (N,) bools, the envs that record this step (default all).
+            measured: (N,) bools, the envs whose row of ``eta_meas_r`` is a measurement this
+                step (default all when ``eta_meas_r`` is given); the other rows are ignored
+                and may hold anything (NaN). A missing measurement is a ``False`` here, as
+                ``eta_meas_r=None`` is in :meth:`ManoeuvreMetrics.record`.
+
+        Returns:
+            (N,) bools: the envs that took an accuracy sample at this call.
+
+        Raises:
+            ValueError: wrong shapes; for an env of ``mask``: a non-finite time, time going
+                backwards, non-finite thrust, or a non-finite pose at a sample. Nothing is
+                recorded then.
+        """
+        n = self.n
+        tt = np.asarray(t, dtype=float)
+        if tt.ndim == 0:
+            tt = np.full(n, float(tt))
+        elif tt.shape != (n,):
+            raise ValueError(f"t must be one time or ({n},) times, got shape {tt.shape}")
+        eta = self._rows(eta_r, 3, "eta_r")
+        eta_d = self._rows(eta_d_r, 3, "eta_d_r")
+        m = self._all if mask is None else self._mask(mask, "mask")
+        if eta_meas_r is None:
+            meas, has_meas = _EMPTY_F, self._none
+        else:
+            meas = self._rows(eta_meas_r, 3, "eta_meas_r")
+            has_meas = self._all if measured is None else self._mask(measured, "measured")
+        na, nc = self.n_actuators, self.n_channels
+        given = 0
+        f = s = c = _EMPTY_F
+        s = _EMPTY_B
+        lg = _EMPTY_I
+        if thrust is not None:
+            f, given = self._rows(thrust, na, "thrust"), given | _G_THRUST
+        if saturated is not None:
+            s, given = self._rows(saturated, na, "saturated", bool), given | _G_SAT
+        if leg is not None:
+            lg = np.asarray(leg, dtype=np.int64)
+            if lg.shape != (n,):
+                raise ValueError(f"leg must be ({n},) leg indices, got shape {lg.shape}")
+            given |= _G_LEG
+        if command is not None:
+            c, given = self._rows(command, nc, "command"), given | _G_CMD
+        args = (tt, m, eta, eta_d, meas, has_meas, f, s, lg, c, given)
+        r = self._rec(*args, self.sample_period, self._tol, self._F, self._I, self._L, self._CH)
+        if r < 0:
+            self._retry(r, args)
+        return self._I[:, _I_SAMPLED].astype(bool)
+
+    def _retry(self, r: int, args: tuple[Any, ...]) -> int:
+        """After the compiled step (:func:`_record`) returned ``r < 0``: the full table grown
+        and the step run again, or the error raised as ``ValueError``."""
+        while r < 0:
+            code, i = -r % 16, -r // 16
+            if code == _E_L:
+                self._L = _grown(self._L)
+            elif code == _E_CMD:
+                self._CH = _grown(self._CH)
+            else:
+                raise ValueError(self._error(code, i, args))
+            r = self._rec(*args, self.sample_period, self._tol, self._F, self._I, self._L,
+                          self._CH)  # fmt: skip
+        return r
+
+    def _error(self, code: int, i: int, args: tuple[Any, ...]) -> str:
+        t, _, eta, eta_d, meas, _, thrust = args[:7]
+        na = self.n_actuators
+        ti = float(t[i])
+        if code == _E_T:
+            msg = f"t must be finite, got {ti!r}"
+        elif code == _E_BACK:
+            t_last = float(self._F[i, _F_T_LAST])
+            msg = f"time went backwards ({ti} s < {t_last} s); call reset() for a new run"
+        elif code == _E_THRUST:
+            msg = f"thrust must be finite, got {thrust[na * i : na * i + na].tolist()}"
+        else:
+            what, x = {_E_ETA: ("eta_r", eta), _E_ETA_D: ("eta_d_r", eta_d)}.get(
+                code, ("eta_meas_r", meas)
+            )
+            msg = f"{what} must be finite, got {x[3 * i : 3 * i + 3].tolist()}"
+        return msg if self.n == 1 else f"env {i}: {msg}"
+
+    def complete_leg(
+        self, t: ArrayLike, next_leg: ArrayLike | None = None, mask: ArrayLike | None = None
+    ) -> None:
+        """Mark the current leg of each env of ``mask`` complete at ``t`` (s, one or (N,));
+        ``next_leg`` ((N,) ints, if any) starts at ``t`` (:meth:`ManoeuvreMetrics.complete_leg`).
+        """
+        n = self.n
+        tt = np.broadcast_to(np.asarray(t, dtype=float), (n,))
+        nxt = None if next_leg is None else np.broadcast_to(np.asarray(next_leg, np.int64), (n,))
+        envs = range(n) if mask is None else np.flatnonzero(self._mask(mask, "mask")).tolist()
+        for i in envs:  # a rare event: per env
+            if max(self._I[i, _I_N_LT], self._I[i, _I_N_SLOTS]) == self._L.shape[1]:
+                self._L = _grown(self._L)
+            _complete_leg(i, float(tt[i]), nxt is not None, 0 if nxt is None else int(nxt[i]),
+                          self._F, self._I, self._L)  # fmt: skip
+
+    # -- results -----------------------------------------------------------------------------
+    @property
+    def n_samples(self) -> NDArray[np.int64]:
+        """Number of accuracy samples taken (truth), (N,)."""
+        return self._I[:, _I_N_TRUTH].copy()
+
+    def _result(self, sums: list[float], n: int) -> dict[str, float] | None:
+        return None if n == 0 else _indices(sums[0], sums[1], sums[2], n, self.weights)
+
+    def summary(self, i: int = 0) -> dict[str, Any]:
+        """Env ``i``'s statistics: :meth:`ManoeuvreMetrics.summary` of its rows."""
+        F, I = self._F[i].tolist(), self._I[i].tolist()  # Python floats and ints
+        na = self.n_actuators
+        nan = float("nan")
+        truth = self._result(F[_F_SUM : _F_SUM + 3], I[_I_N_TRUTH]) or {
+            "x_E": nan, "y_E": nan, "psi_E": nan, "J_c": nan
+        }  # fmt: skip
+        fa = _F_ACT
+        n_thrust, n_sat = I[_I_N_THRUST], I[_I_N_SAT]
+        if n_thrust:
+            mean_abs = [x / n_thrust for x in F[fa : fa + na]]
+            tv = F[fa + na : fa + 2 * na]
+        else:
+            mean_abs, tv = [nan] * na, [nan] * na
+        count = I[_I_ACT : _I_ACT + na]
+        sat = [c / n_sat for c in count] if n_sat else [nan] * na
+        per_leg = {}
+        for row in sorted(self._L[i, : I[_I_N_SLOTS], : _L_SUM + 3].tolist()):
+            k, n = int(row[_L_LEG]), int(row[_L_N])
+            if n:
+                sx, sy, sp = row[_L_SUM : _L_SUM + 3]
+                per_leg[k] = {**_indices(sx, sy, sp, n, self.weights), "n_samples": n}
+        lt = self._L[i, : I[_I_N_LT], _L_TIME:].tolist()
+        return {
+            **truth,
+            "measured": self._result(F[_F_MEAS : _F_MEAS + 3], I[_I_N_MEAS]),
+            "n_samples": I[_I_N_TRUTH],
+            "n_measured_samples": I[_I_N_MEAS],
+            "n_steps": I[_I_N_STEPS],
+            "thrust_mean_abs": mean_abs,
+            "thrust_total_variation": tv,
+            "saturated_fraction": sat,
+            "saturated_time": F[fa + 3 * na : fa + 4 * na],
+            "legs_completed": len(lt),
+            "leg_times": [x[0] for x in lt],
+            "leg_completion_times": [x[1] for x in lt],
+            "per_leg": per_leg,
+            **self.chatter(i),
+        }
+
+    def chatter(self, i: int = 0) -> dict[str, list[float]]:
+        """:func:`command_chatter` of env ``i``'s commands recorded so far (lists per
+        channel)."""
+        k, nc = int(self._I[i, _I_N_CMD]), self.n_channels
+        dt = self.control_period
+        if dt is None:
+            ts = self._CH[i, :k, nc].tolist()
+            dt = (ts[-1] - ts[0]) / (k - 1) if k > 1 and ts[-1] > ts[0] else 1.0
+        a = np.ascontiguousarray(self._CH[i, :k, :nc])  # (k, n_channels), C order
+        return command_chatter(a, dt, reversible=self.reversible)
 
 
 class ManoeuvreMetrics:
@@ -396,7 +833,8 @@ class ManoeuvreMetrics:
     at ``t = k * sample_period`` (the first call at or after each multiple; the tolerance
     ``1e-6 * sample_period`` absorbs accumulated float error in ``t``), both from the true pose
     (``eta_r``) and, when given, from the measured pose (``eta_meas_r``; the paper's choice).
-    Thruster statistics use every call (every control step).
+    Thruster statistics use every call (every control step). The run of one env of
+    :class:`BatchedManoeuvreMetrics` (N = 1; its compiled step).
 
     Args:
         sample_period: sampling time of the indices (s; Tomera 2014: 1 s).
@@ -419,50 +857,20 @@ class ManoeuvreMetrics:
         control_period: float | None = None,
         reversible: Sequence[bool] | None = None,
     ) -> None:
-        sample_period = float(sample_period)
-        if not (math.isfinite(sample_period) and sample_period > 0.0):
-            raise ValueError(f"sample_period must be a positive number of s, got {sample_period}")
-        if int(n_actuators) < 1:
-            raise ValueError(f"n_actuators must be >= 1, got {n_actuators}")
-        self.sample_period = sample_period
-        self.weights = _weights(weights)
-        self.n_actuators = int(n_actuators)
-        self.n_channels = self.n_actuators if n_channels is None else int(n_channels)
-        if control_period is not None and not (
-            math.isfinite(float(control_period)) and float(control_period) > 0.0
-        ):
-            raise ValueError(f"control_period must be > 0 s or None, got {control_period!r}")
-        self.control_period = None if control_period is None else float(control_period)
-        if reversible is not None and len(reversible) != self.n_channels:
-            raise ValueError(f"reversible must have {self.n_channels} flags, got {reversible!r}")
-        self.reversible = None if reversible is None else tuple(bool(x) for x in reversible)
-        self._tol = 1e-6 * sample_period
-        self.reset()
+        self.batch = b = BatchedManoeuvreMetrics(
+            1, sample_period, weights, n_actuators, n_channels=n_channels,
+            control_period=control_period, reversible=reversible,
+        )  # fmt: skip
+        self.sample_period, self.weights = b.sample_period, b.weights
+        self.n_actuators, self.n_channels = b.n_actuators, b.n_channels
+        self.control_period, self.reversible = b.control_period, b.reversible
+        self._t = np.zeros(1)
+        self._leg = np.zeros(1, np.int64)
+        self._sat = np.zeros(b.n_actuators, bool)
 
     def reset(self) -> None:
         """Forget everything recorded."""
-        n = self.n_actuators
-        self._next_k = 0
-        self._t_last: float | None = None
-        self._truth = _Acc()
-        self._meas = _Acc()
-        self._per_leg: dict[int, _Acc] = {}
-        self._n_steps = 0
-        self._f_abs = [0.0] * n
-        self._f_tv = [0.0] * n
-        self._f_prev: list[float] | None = None
-        self._n_thrust = 0
-        self._sat_count = [0] * n
-        self._sat_time = [0.0] * n
-        self._sat_prev: list[bool] | None = None
-        self._n_sat = 0
-        self._leg: int | None = None
-        self._leg_start: float | None = None
-        self._leg_times: list[float] = []
-        self._leg_completion: list[float] = []
-        self._t_first: float | None = None
-        self._commands: list[list[float]] = []
-        self._t_commands: list[float] = []
+        self.batch.reset()
 
     # -- recording ---------------------------------------------------------------------------
     def record(
@@ -492,99 +900,63 @@ class ManoeuvreMetrics:
 
         Returns:
             True when this call was taken as an accuracy sample.
+
+        Raises:
+            ValueError: a wrong number of elements, a non-finite time, time going backwards,
+                non-finite thrust, or a non-finite pose at a sample; nothing is recorded then.
         """
-        if type(t) is not float:  # (a float already every control step: no call)
-            t = float(t)
-        t_last = self._t_last
-        if not math.isfinite(t):
-            raise ValueError(f"t must be finite, got {t!r}")
-        if t_last is None:
-            dt = 0.0
-        elif t < t_last:
-            raise ValueError(
-                f"time went backwards ({t} s < {t_last} s); call reset() for a new run"
-            )
+        # the arrays as they come where they are float64 vectors of the right length (every
+        # control step: no conversion), else converted and checked by _vector
+        b = self.batch
+        self._t[0] = t if type(t) is float else float(t)
+        given = 0
+        nd, f8, s3 = np.ndarray, _F8, _SHAPE3
+        eta, eta_d = eta_r, eta_d_r
+        if type(eta) is not nd or eta.dtype is not f8 or eta.shape != s3:
+            eta = _vector(eta_r, 3, "eta_r")
+        if type(eta_d) is not nd or eta_d.dtype is not f8 or eta_d.shape != s3:
+            eta_d = _vector(eta_d_r, 3, "eta_d_r")
+        if eta_meas_r is None:
+            meas, has_meas = _EMPTY_F, b._none
         else:
-            dt = t - t_last
-        if self._t_first is None:
-            self._t_first = t
-            self._next_k = max(0, math.ceil((t - self._tol) / self.sample_period))
-        self._t_last = t
-        self._n_steps += 1
-
-        if leg is not None:
-            if type(leg) is not int:
-                leg = int(leg)
-            if self._leg is None:
-                self._leg, self._leg_start = leg, t
-            elif leg != self._leg:
-                self.complete_leg(t, next_leg=leg)
-
-        if thrust is not None:
-            self._record_thrust(thrust)
-        if saturated is not None:
-            self._record_saturation(saturated, dt)
-        if command is not None:
-            c = command.tolist() if isinstance(command, np.ndarray) else [float(x) for x in command]
-            if len(c) != self.n_channels:
-                raise ValueError(f"command must have {self.n_channels} elements, got {len(c)}")
-            self._commands.append(c)
-            self._t_commands.append(t)
-
-        sampled = t >= self._next_k * self.sample_period - self._tol
-        if sampled:
-            a = _floats3(eta_r, "eta_r")
-            d = _floats3(eta_d_r, "eta_d_r")
-            self._truth.add(a, d)
-            if eta_meas_r is not None:
-                self._meas.add(_floats3(eta_meas_r, "eta_meas_r"), d)
-            if self._leg is not None:
-                acc = self._per_leg.get(self._leg)
-                if acc is None:
-                    acc = self._per_leg[self._leg] = _Acc()
-                acc.add(a, d)
-            self._next_k = math.floor((t + self._tol) / self.sample_period) + 1
-        return sampled
-
-    def _record_thrust(self, thrust: Any) -> None:
-        f = thrust.tolist() if isinstance(thrust, np.ndarray) else [float(x) for x in thrust]
-        n = self.n_actuators
-        if len(f) != n:
-            raise ValueError(f"thrust must have {n} elements, got {len(f)}")
-        # one test of the sum (every control step), of the elements only when it fails
-        if not math.isfinite(sum(f)) and not all(map(math.isfinite, f)):
-            raise ValueError(f"thrust must be finite, got {f}")
-        prev = self._f_prev
-        fa = self._f_abs
-        if prev is None:
-            for i, fi in enumerate(f):
-                fa[i] += abs(fi)
+            meas, has_meas = eta_meas_r, b._all
+            if type(meas) is not nd or meas.dtype is not f8 or meas.shape != s3:
+                meas = _vector(eta_meas_r, 3, "eta_meas_r")
+        if thrust is None:
+            f = _EMPTY_F
         else:
-            tv = self._f_tv
-            for i, fi in enumerate(f):
-                fa[i] += abs(fi)
-                tv[i] += abs(fi - prev[i])
-        self._f_prev = f
-        self._n_thrust += 1
-
-    def _record_saturation(self, saturated: Any, dt: float) -> None:
-        s = saturated.tolist() if isinstance(saturated, np.ndarray) else list(saturated)
-        n = self.n_actuators
-        if len(s) != n:
-            raise ValueError(f"saturated must have {n} flags, got {len(s)}")
-        if any(s):  # (the loops only when a flag is set: rarely, every control step)
-            count = self._sat_count
-            for i, x in enumerate(s):
-                if x:
-                    count[i] += 1
-        prev = self._sat_prev
-        if prev is not None and any(prev):
-            held = self._sat_time
-            for i, x in enumerate(prev):
-                if x:
-                    held[i] += dt  # zero-order hold of the previous step's flag
-        self._sat_prev = list(map(bool, s))
-        self._n_sat += 1
+            f, given = thrust, _G_THRUST
+            if type(f) is not nd or f.dtype is not f8 or f.shape != b._shape_a:
+                f = _vector(thrust, b.n_actuators, "thrust")
+        if saturated is None:
+            s = _EMPTY_B
+        else:
+            s = self._sat
+            if type(saturated) is list and len(saturated) == len(s):
+                s[:] = saturated  # (the env's flags)
+            else:
+                s = np.array(saturated, dtype=bool)
+                if s.shape != (b.n_actuators,):
+                    raise ValueError(f"saturated must have {b.n_actuators} flags, got {s.size}")
+            given |= _G_SAT
+        if leg is None:
+            lg = _EMPTY_I
+        else:
+            lg = self._leg
+            lg[0] = leg if type(leg) is int else int(leg)
+            given |= _G_LEG
+        if command is None:
+            c = _EMPTY_F
+        else:
+            c, given = command, given | _G_CMD
+            if type(c) is not nd or c.dtype is not f8 or c.shape != b._shape_c:
+                c = _vector(command, b.n_channels, "command")
+        mask = b._all
+        r = b._rec(self._t, mask, eta, eta_d, meas, has_meas, f, s, lg, c, given,
+                   b.sample_period, b._tol, b._F, b._I, b._L, b._CH)  # fmt: skip
+        if r < 0:
+            r = b._retry(r, (self._t, mask, eta, eta_d, meas, has_meas, f, s, lg, c, given))
+        return r > 0
 
     def complete_leg(self, t: float, next_leg: int | None = None) -> None:
         """Mark the current leg complete at ``t`` (s); ``next_leg`` (if any) starts at ``t``.
@@ -592,18 +964,13 @@ class ManoeuvreMetrics:
         :meth:`record` calls this when its ``leg`` argument changes; call it yourself for the
         last leg (e.g. when ``Guidance.finished`` becomes True).
         """
-        t = float(t)
-        if self._leg_start is not None:
-            self._leg_times.append(t - self._leg_start)
-            self._leg_completion.append(t)
-        self._leg = next_leg
-        self._leg_start = t if next_leg is not None else None
+        self.batch.complete_leg(float(t), None if next_leg is None else int(next_leg))
 
     # -- results -----------------------------------------------------------------------------
     @property
     def n_samples(self) -> int:
         """Number of accuracy samples taken (truth)."""
-        return self._truth.n
+        return int(self.batch._I[0, _I_N_TRUTH])
 
     def summary(self) -> dict[str, Any]:
         """The run's statistics.
@@ -625,45 +992,21 @@ class ManoeuvreMetrics:
               ``travel_per_min``: :func:`command_chatter` of the recorded commands, lists per
               channel (NaN without commands).
         """
-        w = self.weights
-        nan = float("nan")
-        truth = self._truth.result(w) or {"x_E": nan, "y_E": nan, "psi_E": nan, "J_c": nan}
-        n = self.n_actuators
-        if self._n_thrust:
-            mean_abs = [x / self._n_thrust for x in self._f_abs]
-            tv = list(self._f_tv)
-        else:
-            mean_abs, tv = [nan] * n, [nan] * n
-        sat = [c / self._n_sat for c in self._sat_count] if self._n_sat else [nan] * n
-        per_leg = {}
-        for k in sorted(self._per_leg):
-            acc = self._per_leg[k]
-            res = acc.result(w)
-            if res is not None:
-                per_leg[k] = {**res, "n_samples": acc.n}
-        return {
-            **truth,
-            "measured": self._meas.result(w),
-            "n_samples": self._truth.n,
-            "n_measured_samples": self._meas.n,
-            "n_steps": self._n_steps,
-            "thrust_mean_abs": mean_abs,
-            "thrust_total_variation": tv,
-            "saturated_fraction": sat,
-            "saturated_time": list(self._sat_time),
-            "legs_completed": len(self._leg_times),
-            "leg_times": list(self._leg_times),
-            "leg_completion_times": list(self._leg_completion),
-            "per_leg": per_leg,
-            **self.chatter(),
-        }
+        return self.batch.summary(0)
 
     def chatter(self) -> dict[str, list[float]]:
         """:func:`command_chatter` of the commands recorded so far (lists per channel)."""
-        k = len(self._commands)
-        dt = self.control_period
-        if dt is None:
-            ts = self._t_commands
-            dt = (ts[-1] - ts[0]) / (k - 1) if k > 1 and ts[-1] > ts[0] else 1.0
-        a = np.array(self._commands, dtype=float).reshape(k, self.n_channels)
-        return command_chatter(a, dt, reversible=self.reversible)
+        return self.batch.chatter(0)
+
+
+_F8 = np.dtype(np.float64)
+_SHAPE3 = (3,)
+
+
+def _vector(x: Any, n: int, what: str) -> NDArray[np.float64]:
+    """``x`` as a float64 vector of ``n`` elements (an array of them as it is)."""
+    if type(x) is not np.ndarray or x.dtype is not _F8:
+        x = np.asarray(x, dtype=float)
+    if x.shape != (n,):
+        raise ValueError(f"{what} must have {n} elements, got {len(x) if x.ndim else x.shape}")
+    return x

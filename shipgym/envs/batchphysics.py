@@ -412,16 +412,29 @@ class BatchedPhysics:
         hb = self._hulls
         return self._tau_rows(np.where(self._holds, hb.cmd, hb.act), hb.law_table)
 
-    def _tau_rows(self, st: Array, table: Any) -> Array:
+    @property
+    def thrust(self) -> Array:
+        """Each hull's :attr:`VesselPhysics.thrust <shipgym.envs.physics.VesselPhysics.
+        thrust>`, (n, n_actuators) (N): every actuator's signed thrust at its state and the
+        hull's flow (the plant's compiled laws, the same floats)."""
+        hb = self._hulls
+        forces = np.zeros((self.n, len(hb.law_table[2])))
+        self._tau_rows(hb.act, hb.law_table, forces)
+        return forces
+
+    def _tau_rows(self, st: Array, table: Any, forces: Array | None = None) -> Array:
         """``[X, Y, N]`` (n, 3) of the actuator laws ``table`` at the states ``st`` (n, nc)
-        and each hull's velocity through the water (:meth:`_tau_kernel`)."""
+        and each hull's velocity through the water (:meth:`_tau_kernel`); each actuator's own
+        force (N) into ``forces`` (n, n_actuators) where given."""
         from shipgym._jit import entry
 
         hb = self._hulls
         tab, laws, kinds = table
         out = np.zeros((self.n, 4))
+        if forces is None:
+            forces = np.zeros((self.n, kinds.shape[0]))
         args = (tab, laws, kinds, np.ascontiguousarray(st, dtype=np.float64),
-                hb.body_velocities(), hb.loads, out)  # fmt: skip
+                hb.body_velocities(), hb.loads, out, forces)  # fmt: skip
         kernel = BatchedPhysics._tau_kernel
         if kernel is None:
             kernel = BatchedPhysics._tau_kernel = BatchedPhysics._make_tau_kernel()
@@ -437,15 +450,15 @@ class BatchedPhysics:
         from shipgym.dynamics.actuators import tau_of_table
 
         @njit
-        def tau_rows(tab, laws, kinds, st, vel, loads, out):  # type: ignore[no-untyped-def]
-            """Hull ``i``'s ``(X, Y, K, N)`` into ``out[i]``: ``tau_of_table`` at its states
-            and ``(u - u_c, v - v_c, p, r)``, as ``VesselPhysics._tau``."""
-            forces = np.zeros(kinds.shape[0])
+        def tau_rows(tab, laws, kinds, st, vel, loads, out, forces):  # type: ignore[no-untyped-def]
+            """Hull ``i``'s ``(X, Y, K, N)`` into ``out[i]`` and its actuators' forces into
+            ``forces[i]``: ``tau_of_table`` at its states and ``(u - u_c, v - v_c, p, r)``, as
+            ``VesselPhysics._tau``."""
             flags = np.zeros(kinds.shape[0])
             for i in range(st.shape[0]):
                 u, v, p, r = vel[i, 0], vel[i, 1], vel[i, 2], vel[i, 3]
                 X, Y, K, N = tau_of_table(tab, laws, kinds, st[i], u - loads[i, 6],
-                                          v - loads[i, 7], p, r, forces, flags)  # fmt: skip
+                                          v - loads[i, 7], p, r, forces[i], flags)  # fmt: skip
                 out[i, 0], out[i, 1], out[i, 2], out[i, 3] = X, Y, K, N
 
         return tau_rows

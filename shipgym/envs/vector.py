@@ -27,6 +27,8 @@ from shipgym.dynamics.actuators import channel_command
 from shipgym.dynamics.frames import wrap_angle
 from shipgym.guidance.batch import BatchedGuidance
 from shipgym.guidance.limits import vessel_limits
+from shipgym.guidance.rframe import r_frame_poses
+from shipgym.metrics import BatchedManoeuvreMetrics
 from shipgym.observers.sensors import BatchedSensors, SensorConfig
 
 from .base import (
@@ -62,7 +64,9 @@ class ShipVectorEnv(BatchedEnv):
     of range is clipped and flagged in ``info["action_clipped"]``, NaN raises). Reward: the
     single env's terms (``info["reward_*"]``, which sum to it). Episodes end as the single
     env's: terminated when the plan is complete (Tracking), truncated at
-    ``max_episode_steps``.
+    ``max_episode_steps``; at an episode's end ``info["episode_metrics"]`` holds env ``i``'s
+    :meth:`ShipEnv.episode_metrics <shipgym.envs.base.ShipEnv.episode_metrics>` (Tomera 2014
+    eqs. 54-57, thruster usage, legs; :meth:`_episode_metrics`).
 
     Args:
         num_envs: number of envs, >= 1.
@@ -238,6 +242,7 @@ class ShipVectorEnv(BatchedEnv):
         w = self.physics.wave_config
         self._seen_waves = w is not None and w.first_order  # sensors see the wave motion
         self._mask_names: dict[int, tuple[str, ...]] = {}  # info's key masks, by key count
+        self._metrics_setup()
 
     # ---- the BatchedEnv hooks ------------------------------------------------------------
     def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
@@ -292,6 +297,7 @@ class ShipVectorEnv(BatchedEnv):
         if control is not None:
             info.update(control)
             info.update(dict.fromkeys(_CONTROL_MASKS, every))
+        self._metrics_record(active, ref, saturated, clipped)
         return reward, terminated, truncated, info
 
     # ---- internals ------------------------------------------------------------------------
@@ -381,6 +387,7 @@ class ShipVectorEnv(BatchedEnv):
             eta_start = np.where(self._z_valid[:, None], self._last_z, ref.eta_P)
             self.observer.reset(self.physics.t, eta_start, mask=mask)
             self._cache.clear()
+        self._metrics_record(mask)
 
     def _sample(self, mask: NDArray[np.bool_], observe: bool = True) -> None:
         """A sensor sample of the masked envs now (the single env's ``_measure``), fed to the
@@ -392,6 +399,7 @@ class ShipVectorEnv(BatchedEnv):
         eta = self._truth()[0]
         seen = eta + physics.wave_motion() if self._seen_waves else eta + 0.0
         z, valid, outlier = self.sensors.measure(physics.t, seen, mask)
+        self._fix = np.where((valid & mask)[:, None], z, self._fix)  # the metrics' last fix
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
             if self._model_based:  # the thrust, as ObserverWrapper
@@ -509,6 +517,78 @@ class ShipVectorEnv(BatchedEnv):
             info["episode_summary"] = summary
             info["_episode_summary"] = done
         return info
+
+    # ---- the episode metrics (ShipEnv.episode_metrics of each env) ----------------------
+    def _metrics_setup(self) -> None:
+        """The accumulator of the single env's :class:`~shipgym.metrics.ManoeuvreMetrics`
+        for the N envs, and each env's last valid sensor fix (NED, NaN before the first)."""
+        lower = self.actuators.lower
+        self._metrics = BatchedManoeuvreMetrics(
+            self.num_envs, 1.0, n_actuators=len(self.actuators), n_channels=self.n_actions,
+            control_period=self.control_period, reversible=(lower < 0.0).tolist(),
+        )  # fmt: skip
+        slices = self.actuators.slices
+        self._metrics_slices = None if all(x.stop - x.start == 1 for x in slices) else slices
+        self._fix = np.full((self.num_envs, 3), np.nan)
+
+    def _metrics_record(
+        self,
+        mask: NDArray[np.bool_],
+        ref: Any = None,
+        saturated: NDArray[np.bool_] | None = None,
+        action: Array | None = None,
+    ) -> None:
+        """Record the envs of ``mask`` as the single env's ``_record_metrics``: after a reset
+        (``ref`` None: the run restarts, no saturation or command), or after a control step
+        with the step's reference, per-channel ``saturated`` flags and clipped ``action``."""
+        m = self._metrics
+        if ref is None:  # a reset: a new run from the first sample, as the single env's reset
+            self._fix[mask & ~self._z_valid] = np.nan  # (no fix yet where it was a dropout)
+            self._observation()  # the r-frame poses of this state (_eta_r)
+            ref = self.guidance.reference(self.physics.t)
+            m.reset(mask)
+        if saturated is not None and self._metrics_slices is not None:  # per actuator
+            saturated = np.stack([saturated[:, sl].any(axis=1) for sl in self._metrics_slices], 1)
+        fix = self._fix
+        measured = fix[:, 0] == fix[:, 0]  # (not NaN: a fix since the reset)
+        meas = None
+        if measured.any():  # to_r_frame's compiled law on the rows (no broadcasting)
+            meas = np.empty((self.num_envs, 3))
+            psi_d_r = np.ascontiguousarray(ref.eta_d_r[:, 2])
+            r_frame_poses(fix, np.ascontiguousarray(ref.eta_P), psi_d_r, True, meas)
+        m.record(self.physics.t, self._eta_r, ref.eta_d_r, meas, self.physics.thrust, saturated,
+                 ref.leg, action, mask=mask, measured=measured)  # fmt: skip
+
+    def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
+        """The single env's :meth:`~shipgym.envs.base.ShipEnv.episode_metrics` of the envs of
+        ``done``: numbers as (N,) arrays (float NaN, int 0, bool False elsewhere), the other
+        values (lists, dicts, ``None``) as (N,) object arrays (``None`` elsewhere); env ``i``'s
+        dict is ``{k: v[i]}`` (numbers as ``v[i].item()``)."""
+        g = self.guidance
+        rows = {}
+        for i in np.flatnonzero(done).tolist():  # episode ends: per env
+            out = self._metrics.summary(i)
+            times = g.leg_completion_times(i)
+            out["completed"] = bool(g.finished[i])
+            out["legs_completed"] = len(times)
+            out["leg_times"] = list(times)
+            out["quay_contact"] = bool(self._contact[i])
+            out["duration_s"] = float(self.physics.t[i])
+            rows[i] = out
+        n = self.num_envs
+        fill = {float: np.nan, int: 0, bool: False}
+        metrics: dict[str, Any] = {}
+        for k in next(iter(rows.values())):
+            kinds = {type(r[k]) for r in rows.values()}
+            kind = kinds.pop() if len(kinds) == 1 else None
+            if kind in fill:
+                a = np.full(n, fill[kind], dtype=kind)
+            else:
+                a = np.full(n, None, dtype=object)
+            for i, r in rows.items():
+                a[i] = r[k]
+            metrics[k] = a
+        return metrics
 
 
 #: the masks of the controller's info keys (:meth:`ShipVectorEnv._control`)
