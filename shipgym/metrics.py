@@ -279,8 +279,6 @@ def command_chatter(
         ``{key: [value per channel]}`` for the keys of :data:`CHATTER_KEYS`; all NaN for an
         empty command.
     """
-    from scipy.signal import periodogram
-
     a = np.asarray(command, dtype=float)
     if a.ndim == 1:
         a = a[:, None]
@@ -304,6 +302,8 @@ def command_chatter(
         return {key: [nan] * n for key in CHATTER_KEYS}
     minutes = k * dt / 60.0
     out: dict[str, list[float]] = {key: [] for key in CHATTER_KEYS}
+    resolved = k >= 4 and hf_period > 2.0 * dt  # else no resolved content below hf_period
+    hf_all = _hf_fractions(a, dt, hf_period) if resolved else None
     for j in range(n):
         x = a[:, j]
         if rev[j]:
@@ -320,14 +320,29 @@ def command_chatter(
             out["reversals_per_min"].append(0.0)
         out["limit_fraction"].append(float(np.mean(np.abs(x) >= 1.0 - limit_tol)))
         out["travel_per_min"].append(float(np.abs(np.diff(x)).sum()) / minutes)
-        hf = nan
-        if k >= 4 and hf_period > 2.0 * dt:  # else no resolved content below hf_period
-            f, p = periodogram(x, fs=1.0 / dt, window="boxcar", detrend="linear")
-            total = float(p[1:].sum())
-            # no variance left (round-off of a constant or a ramp): no high-frequency content
-            hf = float(p[f > 1.0 / hf_period].sum()) / total if total > 1e-24 else 0.0
-        out["hf_variance_fraction"].append(hf)
+        out["hf_variance_fraction"].append(nan if hf_all is None else hf_all[j])
     return out
+
+
+def _hf_fractions(a: NDArray[np.float64], dt: float, hf_period: float) -> list[float]:
+    """:func:`command_chatter`'s ``hf_variance_fraction`` of each column of ``a`` (K >= 4
+    samples ``dt`` apart): the one-sided periodogram of the linearly detrended column
+    (rectangular window, density scaling ``|X_j|^2 dt / K``, doubled except at 0 and the
+    Nyquist frequency; SciPy's ``periodogram(x, 1/dt, "boxcar", detrend="linear")``, which
+    the tests compare it with), its sum above ``1/hf_period`` over its sum above 0; 0 where
+    the detrended column has no variance left (``sum < 1e-24``: round-off of a constant or
+    a ramp)."""
+    k = a.shape[0]
+    i = np.arange(k, dtype=float) - 0.5 * (k - 1)  # centred sample index
+    centred = a - a.mean(axis=0)
+    slope = (i @ centred) / (i @ i)
+    x = np.fft.rfft(centred - i[:, None] * slope, axis=0)
+    p = (x.real * x.real + x.imag * x.imag) * (dt / k)
+    p[1 : (k + 1) // 2] *= 2.0  # one-sided: every bin but 0 and (even K) Nyquist twice
+    f = np.arange(p.shape[0]) / (k * dt)
+    total = p[1:].sum(axis=0)
+    high = p[f > 1.0 / hf_period].sum(axis=0)
+    return [float(h / s) if s > 1e-24 else 0.0 for h, s in zip(high, total, strict=True)]
 
 
 def rmse(a: ArrayLike, b: ArrayLike, angle: bool = False, axis: int | None = 0) -> Any:

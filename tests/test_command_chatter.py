@@ -118,3 +118,25 @@ def test_chatter_table_gives_mean_and_worst_seed_per_channel():
     line = chatter_table(rows).splitlines()[-1]
     assert line.startswith("| kbf | 2.00 [3.00] / 3.00 [3.00] | 20.0 [30.0] / 0.0 [0.0] |")
     assert "20.0 [20.0] / 30.0 [40.0]" in line and "3.00 [4.00] / 2.00 [2.00]" in line
+
+
+@pytest.mark.parametrize("k", [4, 5, 50, 51, 1285])
+@pytest.mark.parametrize("dt", [0.05, 1.0, 3.0])
+def test_the_high_frequency_share_is_scipys_periodogram(k, dt):
+    """The share computed with NumPy's FFT equals the one of SciPy's periodogram (rectangular
+    window, linear detrend, density scaling) of each channel, the definition it implements."""
+    from scipy.signal import periodogram
+
+    rng = np.random.default_rng(k)
+    a = rng.uniform(-1.0, 1.0, (k, 3))
+    a[:, 1] = 0.2 + 0.3 * np.linspace(0.0, 1.0, k)  # a ramp: no variance left
+    a[:, 2] += np.sin(0.7 * np.arange(k))
+    got = command_chatter(a, dt)["hf_variance_fraction"]
+    for j in range(3):
+        f, p = periodogram(a[:, j], fs=1.0 / dt, window="boxcar", detrend="linear")
+        total = float(p[1:].sum())
+        want = float(p[f > 1.0 / 20.0].sum()) / total if total > 1e-24 else 0.0
+        if 20.0 <= 2.0 * dt:
+            assert math.isnan(got[j])
+        else:
+            assert got[j] == pytest.approx(want, abs=1e-12)

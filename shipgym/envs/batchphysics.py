@@ -42,6 +42,7 @@ Array = NDArray[np.float64]
 DEFAULT_TIMESTEP = 0.05
 #: the columns ``[u, v, r]`` of a hull's ``(u, v, p, r)``
 _UVR = np.array([0, 1, 3])
+_XYN = _UVR  # (X, Y, N) of (X, Y, K, N)
 
 
 @njit
@@ -425,23 +426,37 @@ class BatchedPhysics:
     def _tau_rows(self, st: Array, table: Any, forces: Array | None = None) -> Array:
         """``[X, Y, N]`` (n, 3) of the actuator laws ``table`` at the states ``st`` (n, nc)
         and each hull's velocity through the water (:meth:`_tau_kernel`); each actuator's own
-        force (N) into ``forces`` (n, n_actuators) where given."""
-        from shipgym._jit import entry
-
+        force (N) into ``forces`` (n, n_actuators) where given. ``table``: the hulls' own
+        (:attr:`HullBatch.table <shipgym.sim.step.HullBatch>`, each hull its rows) or one
+        ``law_table`` for every hull."""
         hb = self._hulls
         tab, laws, kinds = table
-        out = np.zeros((self.n, 4))
+        if tab is hb.table[0] or tab.base is hb.table:  # the plant's: each hull its own rows
+            tab = hb.table
+        out = np.empty((self.n, 4))
         if forces is None:
-            forces = np.zeros((self.n, kinds.shape[0]))
-        args = (tab, laws, kinds, np.ascontiguousarray(st, dtype=np.float64),
-                hb.body_velocities(), hb.loads, out, forces)  # fmt: skip
-        kernel = BatchedPhysics._tau_kernel
-        if kernel is None:
-            kernel = BatchedPhysics._tau_kernel = BatchedPhysics._make_tau_kernel()
-        entry(kernel, args)(*args)
-        return out[:, [0, 1, 3]]
+            forces = np.empty((self.n, kinds.shape[0]))
+        args = (tab if tab.ndim == 3 else tab[None], laws, kinds,
+                np.ascontiguousarray(st, dtype=np.float64), hb.body_velocities(), hb.loads, out,
+                forces)  # fmt: skip
+        fn = self._tau_entry
+        if fn is None:  # (the types do not change: the entry point found once)
+            from shipgym._jit import entry
+
+            kernel = BatchedPhysics._tau_kernel
+            if kernel is None:
+                kernel = BatchedPhysics._tau_kernel = BatchedPhysics._make_tau_kernel()
+            fn = self._tau_entry = entry(kernel, args)
+        fn(*args)
+        return out[:, _XYN]
 
     _tau_kernel: Any = None
+    _tau_entry: Any = None  # this batch's entry point of the kernel (not pickled)
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state.pop("_tau_entry", None)
+        return state
 
     @staticmethod
     def _make_tau_kernel() -> Any:
@@ -453,12 +468,14 @@ class BatchedPhysics:
         def tau_rows(tab, laws, kinds, st, vel, loads, out, forces):  # type: ignore[no-untyped-def]
             """Hull ``i``'s ``(X, Y, K, N)`` into ``out[i]`` and its actuators' forces into
             ``forces[i]``: ``tau_of_table`` at its states and ``(u - u_c, v - v_c, p, r)``, as
-            ``VesselPhysics._tau``."""
+            ``VesselPhysics._tau``; ``tab`` (N or 1, na, k): each hull's rows, or one set."""
             flags = np.zeros(kinds.shape[0])
+            own = tab.shape[0] > 1
             for i in range(st.shape[0]):
                 u, v, p, r = vel[i, 0], vel[i, 1], vel[i, 2], vel[i, 3]
-                X, Y, K, N = tau_of_table(tab, laws, kinds, st[i], u - loads[i, 6],
-                                          v - loads[i, 7], p, r, forces[i], flags)  # fmt: skip
+                X, Y, K, N = tau_of_table(tab[i if own else 0], laws, kinds, st[i],
+                                          u - loads[i, 6], v - loads[i, 7], p, r, forces[i],
+                                          flags)  # fmt: skip
                 out[i, 0], out[i, 1], out[i, 2], out[i, 3] = X, Y, K, N
 
         return tau_rows
