@@ -96,6 +96,18 @@ def test_next_step_autoreset_ignores_the_action_and_zeroes_the_reward():
     assert not np.array_equal(o2, obs)  # the generator went on, it was not re-seeded
 
 
+def test_a_masked_reset_leaves_the_last_steps_info_as_it_was():
+    """A reset by mask after an episode end (next-step mode) does not change the mask the
+    last step handed out in its ``info``."""
+    vec = Walk(2, length=2)
+    vec.reset(seed=0)
+    vec.step(np.zeros((2, 1)))
+    _, _, _, trunc, info = vec.step(np.zeros((2, 1)))
+    assert trunc.all() and info["_episode_metrics"].all()
+    vec.reset(options={"reset_mask": np.array([True, False])})
+    assert info["_episode_metrics"].tolist() == [True, True]
+
+
 def test_bad_actions_and_options_are_refused():
     vec = Walk(2)
     with pytest.raises(gym.error.ResetNeeded):

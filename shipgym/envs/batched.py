@@ -161,7 +161,7 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
                 raise ValueError("the first reset must reset every env (no reset_mask)")
             self._started = True
         self._reset_envs(mask)
-        self._ended[mask] = False
+        self._ended = self._ended & ~mask  # (rebound: the last step's info holds the old)
         return self._observation(), _masked(self._reset_info(mask), mask)
 
     def step(self, actions: Any) -> tuple[Any, Array, Bools, Bools, dict[str, Any]]:
