@@ -389,7 +389,7 @@ class BatchedPhysics:
     @property
     def contact_counts(self) -> NDArray[np.int64]:
         """MuJoCo's number of contacts of each hull now, (n,) (zeros for ``leapfrog``)."""
-        return np.array([d.ncon for d in self.datas] or [0] * self.n, dtype=np.int64)
+        return self._hulls.contact_counts()
 
     # ---- the thrust a DP system's observer is fed (VesselPhysics.tau_model, tau_command) ----
     @property

@@ -556,6 +556,14 @@ def run_parallel(integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-
     return codes.max()
 
 
+@njit
+def ncon_rows(fields, out):  # type: ignore[no-untyped-def]
+    """Each hull's MuJoCo contact count now (``mjData.ncon`` at ``fields[i, 4]``) into
+    ``out`` (N,) int64."""
+    for i in range(out.shape[0]):
+        out[i] = _load_i32(fields[i, 4])
+
+
 def channel_table(actuators: Any, h: float) -> np.ndarray:
     """The channel dynamics of :func:`run` ``(nc, 9)`` for the step ``h`` (s): code, lower,
     upper, ``alpha = 1 - exp(-h/T)``, rate-limit band ``rate T`` (inf: none), rate-limit step
@@ -679,6 +687,7 @@ class HullBatch:
         self._p = np.zeros(49, dtype=np.int64)  # their shapes and addresses (table_of_arrays)
         self._nu = np.zeros((n, 4))  # body_velocities' output
         self._nu_entry: Any = None
+        self._ncon_entry: Any = None
 
     def _bind_mujoco(self) -> None:
         """The addresses the loop reads each hull's ``mjData`` at (``mujoco``; again after a
@@ -710,7 +719,9 @@ class HullBatch:
         """A copy or a pickle keeps the state and rebuilds every address on first use: the
         loop's table (:meth:`table_of_arrays`), the compiled laws', MuJoCo's."""
         state = dict(self.__dict__)
-        state.update(_args=None, _entry=None, _nu_entry=None, _p=np.zeros_like(self._p))
+        state.update(
+            _args=None, _entry=None, _nu_entry=None, _ncon_entry=None, _p=np.zeros_like(self._p)
+        )
         for k in ("q", "qv", "qa", "qfrc"):  # (views on the mjData: rebound to its copy)
             if self._views:
                 state[k] = None
@@ -851,6 +862,17 @@ class HullBatch:
         self.qa[i] = 0.0
         self._advance(EVALUATE, 1, i)
         self.qv[i] -= 0.5 * self.h * self.qa[i]
+
+    def contact_counts(self) -> np.ndarray:
+        """Each hull's MuJoCo contact count now, (N,) int64 (zeros for ``leapfrog``): one
+        compiled read of the ``mjData`` fields, not N attribute reads."""
+        out = np.zeros(self.n, dtype=np.int64)
+        if self.datas:
+            args = (self.fields, out)
+            if self._ncon_entry is None:
+                self._ncon_entry = entry(ncon_rows, args)
+            self._ncon_entry(*args)
+        return out
 
     def body_velocities(self) -> np.ndarray:
         """Every hull's ``(u, v, p, r)`` (m/s, rad/s) at the whole step, (N, 4) (``p = 0`` for
