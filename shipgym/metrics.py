@@ -788,6 +788,16 @@ class BatchedManoeuvreMetrics:
     def _result(self, sums: list[float], n: int) -> dict[str, float] | None:
         return None if n == 0 else _indices(sums[0], sums[1], sums[2], n, self.weights)
 
+    def indices(self, i: int = 0) -> tuple[dict[str, float] | None, dict[str, float] | None]:
+        """Env ``i``'s accuracy indices so far (``x_E``, ``y_E``, ``psi_E`` (deg), ``J_c``:
+        Tomera 2014 eqs. 54-57), from the truth and from the measured pose, each ``None``
+        before its first sample: those of :meth:`summary`, without the rest."""
+        F, I = self._F[i], self._I[i]
+        return (
+            self._result(F[_F_SUM : _F_SUM + 3].tolist(), int(I[_I_N_TRUTH])),
+            self._result(F[_F_MEAS : _F_MEAS + 3].tolist(), int(I[_I_N_MEAS])),
+        )
+
     def summary(self, i: int = 0) -> dict[str, Any]:
         """Env ``i``'s statistics: :meth:`ManoeuvreMetrics.summary` of its rows."""
         F, I = self._F[i].tolist(), self._I[i].tolist()  # Python floats and ints
@@ -986,6 +996,11 @@ class ManoeuvreMetrics:
     def n_samples(self) -> int:
         """Number of accuracy samples taken (truth)."""
         return int(self.batch._I[0, _I_N_TRUTH])
+
+    def indices(self) -> tuple[dict[str, float] | None, dict[str, float] | None]:
+        """The accuracy indices so far, from the truth and from the measured pose
+        (:meth:`BatchedManoeuvreMetrics.indices`)."""
+        return self.batch.indices(0)
 
     def summary(self) -> dict[str, Any]:
         """The run's statistics.

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shipgym._io import partial_path, replace_together
+from shipgym.metrics import ManoeuvreMetrics
 from shipgym.records import step_record
 
 from .geometry import (
@@ -50,7 +51,6 @@ from .run import (
 __all__ = ["RecordEpisode", "episode_path"]
 
 _DEG = 180.0 / math.pi
-_TWO_PI = 2.0 * math.pi
 #: values buffered every step: the name (an ``info`` key and a :class:`~shipgym.viz.Run`
 #: field) and where it is in the step's :class:`~shipgym.records.StepRecord`
 _VEC_FIELDS = (
@@ -187,10 +187,6 @@ def _check_writable(path: Path, suffix: str, what: str) -> None:
         path.unlink(missing_ok=True)
 
 
-def _wrap(a: float) -> float:
-    return math.pi - (math.pi - a) % _TWO_PI
-
-
 def _stack(items: list[Any], n: int, width: int = 3) -> NDArray[np.float64]:
     if not items:
         return np.zeros((0, width))
@@ -252,13 +248,10 @@ class _Episode:
         }
         self.rows_done = 0
         self.meas_done = 0
-        # running accuracy (Tomera 2014 eqs. 54-57), same sampling rule as ManoeuvreMetrics
+        # running accuracy (Tomera 2014 eqs. 54-57): the env's own metrics, fed the rows
         self.sample_period = float(ctx["sample_period"])
-        self.next_k = 0
-        self.first = True
-        self.acc = [0.0, 0.0, 0.0, 0]
-        self.acc_m = [0.0, 0.0, 0.0, 0]
-        self.last_z: tuple[float, float, float] | None = None
+        self.metrics = ManoeuvreMetrics(self.sample_period, ctx["weights"])
+        self.last_z: NDArray[np.float64] | None = None
         self.next_trace = 0.0
         self.prev_leg: int | None = None
 
@@ -449,45 +442,28 @@ class _Episode:
         m_step: NDArray[np.int64],
         m_z: NDArray[np.float64],
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Running Tomera (2014) indices ``[x_E, y_E, psi_E (deg), J_c]`` (truth, measured)."""
-        w1, w2, w3 = self.ctx["weights"]
-        tp = self.sample_period
-        tol = 1e-6 * tp
+        """Running Tomera (2014) indices ``[x_E, y_E, psi_E (deg), J_c]`` (truth, measured)
+        after each row: :class:`~shipgym.metrics.ManoeuvreMetrics` fed the rows as the env
+        feeds it (the last valid fix in the r-frame of the row's leg as the measured pose)."""
         n = len(t)
         out = np.full((n, 4), np.nan)
         out_m = np.full((n, 4), np.nan)
-        i0 = self.rows_done
-        j = 0
-        steps = m_step.tolist()
-        zs = m_z.tolist()
-        a_tr, d_tr, p_tr, tt = eta_r.tolist(), eta_d_r.tolist(), eta_P.tolist(), t.tolist()
-        acc, acc_m = self.acc, self.acc_m
+        fix = np.full((n, 3), np.nan)  # each row's last valid fix (NaN before the first)
+        i0, j, steps = self.rows_done, 0, m_step.tolist()
         for i in range(n):
             while j < len(steps) and steps[j] <= i0 + i:
-                self.last_z = tuple(zs[j])  # type: ignore[assignment]
+                self.last_z = m_z[j]
                 j += 1
-            ti = tt[i]
-            if self.first:
-                self.first = False
-                self.next_k = max(0, math.ceil((ti - tol) / tp))
-            d = d_tr[i]
-            if ti >= self.next_k * tp - tol:
-                a = a_tr[i]
-                acc[0] += abs(d[0] - a[0])
-                acc[1] += abs(d[1] - a[1])
-                acc[2] += abs(_wrap(d[2] - a[2]))
-                acc[3] += 1
-                if self.last_z is not None:
-                    zr = _to_r_one(self.last_z, p_tr[i], d[2])
-                    acc_m[0] += abs(d[0] - zr[0])
-                    acc_m[1] += abs(d[1] - zr[1])
-                    acc_m[2] += abs(_wrap(d[2] - zr[2]))
-                    acc_m[3] += 1
-                self.next_k = math.floor((ti + tol) / tp) + 1
-            for s, o in ((acc, out), (acc_m, out_m)):
-                if s[3]:
-                    x_e, y_e, p_e = s[0] / s[3], s[1] / s[3], s[2] / s[3] * _DEG
-                    o[i] = (x_e, y_e, p_e, w1 * x_e + w2 * y_e + w3 * p_e)
+            if self.last_z is not None:
+                fix[i] = self.last_z
+        meas = _to_r(fix, eta_P, eta_d_r[:, 2])
+        m = self.metrics
+        for i, (ti, has) in enumerate(zip(t.tolist(), (fix[:, 0] == fix[:, 0]).tolist(),
+                                          strict=True)):  # fmt: skip
+            m.record(ti, eta_r[i], eta_d_r[i], eta_meas_r=meas[i] if has else None)
+            for row, ind in zip((out, out_m), m.indices(), strict=True):
+                if ind is not None:
+                    row[i] = (ind["x_E"], ind["y_E"], ind["psi_E"], ind["J_c"])
         return out, out_m
 
     def _log_target(
@@ -587,12 +563,6 @@ def _to_r(eta: NDArray[np.float64], eta_P: NDArray[np.float64], psi_ref: Any) ->
     if len(eta) == 0:
         return np.zeros((0, 3))
     return to_r_frame(eta, eta_P, psi_ref_r=psi_ref)
-
-
-def _to_r_one(z: Any, p: Any, psi_ref: float) -> tuple[float, float, float]:
-    c, s = math.cos(p[2]), math.sin(p[2])
-    dx, dy = z[0] - p[0], z[1] - p[1]
-    return c * dx + s * dy, -s * dx + c * dy, psi_ref + _wrap(z[2] - p[2] - psi_ref)
 
 
 class RecordEpisode(
