@@ -961,8 +961,6 @@ class ActuatorSet:
         self.upper = np.array([c.upper for c in self.channels])
         for arr in (self.lower, self.upper):
             arr.setflags(write=False)
-        self._lo = tuple(self.lower.tolist())
-        self._hi = tuple(self.upper.tolist())
         #: per channel: whether its command is the state it moves to (a lag, a servo), not a
         #: rate (an integrator: an azimuth's angle)
         self.holds_state = np.array([c.dynamics in ("lag", "servo") for c in self.channels])
@@ -1159,49 +1157,31 @@ class ActuatorSet:
 
         A range around zero is scaled on each side separately (``a >= 0 -> a upper``,
         ``a < 0 -> a |lower|``), so 0 is "off" and +-1 the range ends; a range that does not
-        contain zero (``lower >= 0``) is mapped affinely (-1 -> lower, 1 -> upper).
+        contain zero (``lower >= 0``) is mapped affinely (-1 -> lower, 1 -> upper): the
+        compiled law :func:`channel_command` on every row.
         """
-        a = np.asarray(action, dtype=float)
-        if a.shape == (self.n_channels,):  # one action per control step: plain floats
-            out = []
-            for v, lo, hi in zip(a.tolist(), self._lo, self._hi, strict=True):
-                if lo < 0.0:
-                    out.append(v * hi if v >= 0.0 else v * -lo)
-                else:
-                    out.append(lo + 0.5 * (v + 1.0) * (hi - lo))
-            return np.array(out)
-        nc = self.n_channels
-        if a.ndim != 2 or a.shape[1] != nc:  # any leading shape (or a value for all channels)
-            shape = np.broadcast_shapes(a.shape, (nc,))
-            rows = np.broadcast_to(a, shape).reshape(-1, nc)
-            out = np.empty(rows.shape)
-            action_commands(rows, self.lower, self.upper, out)
-            return out.reshape(shape)
-        out = np.empty(a.shape)
-        action_commands(a, self.lower, self.upper, out)
-        return out
+        return self._rows_law(action_commands, action)
 
     def command_to_action(self, command: ArrayLike) -> NDArray[np.float64]:
-        """Physical command -> normalised action (the inverse of :meth:`action_to_command`)."""
-        c = np.asarray(command, dtype=float)
-        if c.shape == (self.n_channels,):
-            out = []
-            for v, lo, hi in zip(c.tolist(), self._lo, self._hi, strict=True):
-                if lo < 0.0:
-                    out.append(v / hi if v >= 0.0 else v / -lo)
-                else:
-                    out.append(2.0 * (v - lo) / (hi - lo) - 1.0)
-            return np.array(out)
+        """Physical command -> normalised action (the inverse of :meth:`action_to_command`:
+        the compiled law :func:`channel_action` on every row)."""
+        return self._rows_law(command_actions, command)
+
+    def _rows_law(self, law: Any, x: ArrayLike) -> NDArray[np.float64]:
+        """``law`` (:func:`action_commands` or :func:`command_actions`) on the rows of ``x``
+        (..., n_channels), or of a value broadcast to every channel."""
+        a = np.asarray(x, dtype=float)
         nc = self.n_channels
-        if c.ndim != 2 or c.shape[1] != nc:  # any leading shape (or a value for all channels)
-            shape = np.broadcast_shapes(c.shape, (nc,))
-            rows = np.broadcast_to(c, shape).reshape(-1, nc)
-            out = np.empty(rows.shape)
-            command_actions(rows, self.lower, self.upper, out)
-            return out.reshape(shape)
-        out = np.empty(c.shape)
-        command_actions(c, self.lower, self.upper, out)
-        return out
+        shape = a.shape if a.ndim and a.shape[-1] == nc else np.broadcast_shapes(a.shape, (nc,))
+        rows = np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, nc))
+        out = np.empty(rows.shape)
+        args = (rows, self.lower, self.upper, out)
+        entries = self.__dict__.setdefault("_row_laws", {})
+        fn = entries.get(law)
+        if fn is None:
+            fn = entries[law] = entry(law, args)
+        fn(*args)
+        return out.reshape(shape)
 
     # ---- run time ------------------------------------------------------------------------
     def law_table(self) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
@@ -1258,4 +1238,5 @@ class ActuatorSet:
     def __getstate__(self) -> dict[str, Any]:
         state = dict(self.__dict__)
         state.pop("_law_table", None)  # compiled functions: rebuilt on demand
+        state.pop("_row_laws", None)
         return state
