@@ -398,12 +398,10 @@ class BatchedPhysics:
         tau_model>`, (n, 3) ``[X, Y, N]`` (N, N, N m): the bollard thrust model of its actuator
         states (the same compiled laws, the same floats)."""
         hb = self._hulls
-        table = getattr(self, "_bollard_table", None)
-        if table is None:  # the bollard laws' table, built once
-            model = self.actuators.bollard()
-            table = hb.law_table if model is self.actuators else model.law_table()
-            self._bollard_table = table
-        return self._tau_rows(hb.act, table)
+        if not hasattr(self, "_bollard_table"):  # the bollard laws' table, found once
+            model = self.actuators.bollard()  # (None: the plant's own laws are the model)
+            self._bollard_table = None if model is self.actuators else model.law_table()
+        return self._tau_rows(hb.act, self._bollard_table)
 
     @property
     def tau_command(self) -> Array:
@@ -411,7 +409,7 @@ class BatchedPhysics:
         tau_command>`, (n, 3): the plant's thrust law at the held commands (lagged and servo
         channels) and the current integrator states."""
         hb = self._hulls
-        return self._tau_rows(np.where(self._holds, hb.cmd, hb.act), hb.law_table)
+        return self._tau_rows(np.where(self._holds, hb.cmd, hb.act), None)
 
     @property
     def thrust(self) -> Array:
@@ -419,63 +417,13 @@ class BatchedPhysics:
         thrust>`, (n, n_actuators) (N): every actuator's signed thrust at its state and the
         hull's flow (the plant's compiled laws, the same floats)."""
         hb = self._hulls
-        forces = np.zeros((self.n, len(hb.law_table[2])))
-        self._tau_rows(hb.act, hb.law_table, forces)
+        forces = np.empty((self.n, hb.kind_index.shape[0]))
+        hb.actuator_loads(hb.act, None, forces)
         return forces
 
     def _tau_rows(self, st: Array, table: Any, forces: Array | None = None) -> Array:
         """``[X, Y, N]`` (n, 3) of the actuator laws ``table`` at the states ``st`` (n, nc)
-        and each hull's velocity through the water (:meth:`_tau_kernel`); each actuator's own
-        force (N) into ``forces`` (n, n_actuators) where given. ``table``: the hulls' own
-        (:attr:`HullBatch.table <shipgym.sim.step.HullBatch>`, each hull its rows) or one
-        ``law_table`` for every hull."""
-        hb = self._hulls
-        tab, laws, kinds = table
-        if tab is hb.table[0] or tab.base is hb.table:  # the plant's: each hull its own rows
-            tab = hb.table
-        out = np.empty((self.n, 4))
-        if forces is None:
-            forces = np.empty((self.n, kinds.shape[0]))
-        args = (tab if tab.ndim == 3 else tab[None], laws, kinds,
-                np.ascontiguousarray(st, dtype=np.float64), hb.body_velocities(), hb.loads, out,
-                forces)  # fmt: skip
-        fn = self._tau_entry
-        if fn is None:  # (the types do not change: the entry point found once)
-            from shipgym._jit import entry
-
-            kernel = BatchedPhysics._tau_kernel
-            if kernel is None:
-                kernel = BatchedPhysics._tau_kernel = BatchedPhysics._make_tau_kernel()
-            fn = self._tau_entry = entry(kernel, args)
-        fn(*args)
-        return out[:, _XYN]
-
-    _tau_kernel: Any = None
-    _tau_entry: Any = None  # this batch's entry point of the kernel (not pickled)
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = dict(self.__dict__)
-        state.pop("_tau_entry", None)
-        return state
-
-    @staticmethod
-    def _make_tau_kernel() -> Any:
-        """The compiled loop over the hulls of :meth:`_tau_rows`."""
-        from shipgym._jit import njit
-        from shipgym.dynamics.actuators import tau_of_table
-
-        @njit
-        def tau_rows(tab, laws, kinds, st, vel, loads, out, forces):  # type: ignore[no-untyped-def]
-            """Hull ``i``'s ``(X, Y, K, N)`` into ``out[i]`` and its actuators' forces into
-            ``forces[i]``: ``tau_of_table`` at its states and ``(u - u_c, v - v_c, p, r)``, as
-            ``VesselPhysics._tau``; ``tab`` (N or 1, na, k): each hull's rows, or one set."""
-            flags = np.zeros(kinds.shape[0])
-            own = tab.shape[0] > 1
-            for i in range(st.shape[0]):
-                u, v, p, r = vel[i, 0], vel[i, 1], vel[i, 2], vel[i, 3]
-                X, Y, K, N = tau_of_table(tab[i if own else 0], laws, kinds, st[i],
-                                          u - loads[i, 6], v - loads[i, 7], p, r, forces[i],
-                                          flags)  # fmt: skip
-                out[i, 0], out[i, 1], out[i, 2], out[i, 3] = X, Y, K, N
-
-        return tau_rows
+        and each hull's velocity through the water; each actuator's own force (N) into
+        ``forces`` (n, n_actuators) where given
+        (:meth:`HullBatch.actuator_loads <shipgym.sim.step.HullBatch.actuator_loads>`)."""
+        return self._hulls.actuator_loads(st, table, forces)[:, _XYN]

@@ -240,8 +240,6 @@ class VesselPhysics:
         self._flow_actuators = [i for i, a in enumerate(acts) if a.flow_dependent]
         self._holds = acts.holds_state
         self.saturated = np.zeros(v.actuators.n_channels, dtype=bool)
-        self._flags = np.zeros(len(acts))  # the read-outs' stall flags (not reported)
-        self._tau_entry: Any = None  # tau_of_table's compiled entry point
         self._at: Any = None  # _now(): the actuators' read-out at the current state
         self._vel: tuple[float, float, float, float] | None = None  # _velocity()
         self._build()
@@ -454,20 +452,12 @@ class VesselPhysics:
         """``([X, Y, K, N], forces)`` of the actuators (``table``: the plant's, or another
         :meth:`~shipgym.dynamics.actuators.ActuatorSet.law_table`) at the states ``st`` and the
         current velocity through the water (the current of the last physics step): their
-        compiled laws (:func:`~shipgym.dynamics.actuators.tau_of_table`)."""
-        u, v, p, r = self._velocity()
-        lo = self._hulls.loads[0]
-        tab, laws, kinds = self._hulls.law_table if table is None else table
-        forces = np.zeros(len(kinds))
-        st = np.ascontiguousarray(st, dtype=np.float64)
-        args = (tab, laws, kinds, st, u - lo[6], v - lo[7], p, r, forces, self._flags)
-        if self._tau_entry is None:
-            from shipgym._jit import entry
-            from shipgym.dynamics.actuators import tau_of_table
-
-            self._tau_entry = entry(tau_of_table, args)
-        X, Y, K, N = self._tau_entry(*args)
-        return [X, Y, K, N], forces
+        compiled laws (:meth:`HullBatch.actuator_loads
+        <shipgym.sim.step.HullBatch.actuator_loads>`, the batched physics' read-out)."""
+        hb = self._hulls
+        forces = np.empty((1, hb.kind_index.shape[0]))
+        out = hb.actuator_loads(np.reshape(st, (1, -1)), table, forces)
+        return out[0].tolist(), forces[0]
 
     def _velocity(self) -> tuple[float, float, float, float]:
         """``(u, v, p, r)`` at the current state, computed once per state (as :meth:`_now`)."""

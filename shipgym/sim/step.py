@@ -557,6 +557,22 @@ def run_parallel(integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-
 
 
 @njit
+def actuator_rows(tab, laws, kinds, st, vel, loads, out, forces):  # type: ignore[no-untyped-def]
+    """Hull ``i``'s actuator load ``(X, Y, K, N)`` into ``out[i]`` and its actuators' forces
+    into ``forces[i]``: :func:`~shipgym.dynamics.actuators.tau_of_table` at its states
+    ``st[i]`` and its velocity through the water ``(u - u_c, v - v_c, p, r)`` (``vel``: the
+    body velocities, ``loads``: the last step's current in columns 6-7); ``tab`` (N or 1, na,
+    k): each hull's rows, or one set for all."""
+    flags = np.zeros(kinds.shape[0])
+    own = tab.shape[0] > 1
+    for i in range(st.shape[0]):
+        u, v, p, r = vel[i, 0], vel[i, 1], vel[i, 2], vel[i, 3]
+        X, Y, K, N = tau_of_table(tab[i if own else 0], laws, kinds, st[i], u - loads[i, 6],
+                                  v - loads[i, 7], p, r, forces[i], flags)  # fmt: skip
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = X, Y, K, N
+
+
+@njit
 def ncon_rows(fields, out):  # type: ignore[no-untyped-def]
     """Each hull's MuJoCo contact count now (``mjData.ncon`` at ``fields[i, 4]``) into
     ``out`` (N,) int64."""
@@ -688,6 +704,7 @@ class HullBatch:
         self._nu = np.zeros((n, 4))  # body_velocities' output
         self._nu_entry: Any = None
         self._ncon_entry: Any = None
+        self._loads_entry: Any = None
 
     def _bind_mujoco(self) -> None:
         """The addresses the loop reads each hull's ``mjData`` at (``mujoco``; again after a
@@ -862,6 +879,29 @@ class HullBatch:
         self.qa[i] = 0.0
         self._advance(EVALUATE, 1, i)
         self.qv[i] -= 0.5 * self.h * self.qa[i]
+
+    def actuator_loads(
+        self, st: np.ndarray, table: Any = None, forces: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``[X, Y, K, N]`` (N, N, N m, N m), (N, 4), of the actuator force laws at the states
+        ``st`` (N, nc) and each hull's velocity through the water now (the current of the last
+        step): the laws of ``table`` (a ``law_table`` for every hull, e.g. a DP system's
+        bollard model) or, ``None``, each hull's own rows; each actuator's own force (N) into
+        ``forces`` (N, na) where given. The read-outs of the single and the batched physics."""
+        if table is None:
+            tab, laws, kinds = self.table, self.laws, self.kind_index
+        else:
+            tab, laws, kinds = table
+            tab = tab if tab.ndim == 3 else tab[None]
+        out = np.empty((self.n, 4))
+        if forces is None:
+            forces = np.empty((self.n, kinds.shape[0]))
+        args = (tab, laws, kinds, np.ascontiguousarray(st, dtype=np.float64),
+                self.body_velocities(), self.loads, out, forces)  # fmt: skip
+        if self._loads_entry is None:  # (the types do not change: found once)
+            self._loads_entry = entry(actuator_rows, args)
+        self._loads_entry(*args)
+        return out
 
     def contact_counts(self) -> np.ndarray:
         """Each hull's MuJoCo contact count now, (N,) int64 (zeros for ``leapfrog``): one
