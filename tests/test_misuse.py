@@ -592,3 +592,13 @@ def test_resume_refuses_a_model_of_an_unregistered_id(tmp_path):
     with pytest.raises(ValueError, match="not a shipgym environment"):
         train("ppo", resume=path, timesteps=8, out=tmp_path / "o", progress=False)
     assert "this_module_does_not_exist" not in sys.modules
+
+
+@pytest.mark.parametrize("arg", [{"observer": "kbf"}, {"controller": "pid"}])
+def test_gym_make_with_a_stack_argument_says_where_it_belongs(arg):
+    """``observer=``/``controller=`` are the vector env's arguments and shipgym.make's
+    wrappers: gym.make of a single env names both routes instead of a task's TypeError."""
+    import gymnasium as gym
+
+    with pytest.raises(TypeError, match=r"shipgym\.make\(id, observer=\.\.\., controller"):
+        gym.make("shipgym/BlueLadyTracking-v0", **arg)

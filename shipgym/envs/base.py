@@ -65,6 +65,9 @@ MAX_SUBSTEPS = 10_000
 MAX_CONTROL_PERIOD = 10.0
 
 
+#: the observer and controller stack's arguments (shipgym.make's wrappers, the vector env's)
+_STACK_ARGS = frozenset({"observer", "observer_options", "controller", "residual_scale"})
+
 #: the env's own arguments (not the task's) and their defaults
 ENV_ARGS: dict[str, Any] = {
     "vessel": None,
@@ -263,6 +266,13 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         return cls.task_class(vessel, owner=cls.__name__, **task_args)
 
     def __init__(self, vessel: Vessel | str | None = None, **kwargs: Any) -> None:
+        stack = sorted(set(kwargs) & _STACK_ARGS)
+        if stack:  # the vector env takes them; the single env is wrapped by shipgym.make
+            raise TypeError(
+                f"{type(self).__name__} got {', '.join(stack)}: the observer and controller of a "
+                "single env are wrappers; use shipgym.make(id, observer=..., controller=...) "
+                "(gym.make_vec(id, num_envs, observer=..., controller=...) for a vector env)"
+            )
         # the env's own arguments (plant, timestep, control_period, render_mode: ENV_ARGS),
         # the task's (plan, wind, sensors, waves, current, scene, start, reward), and the
         # settings the class keeps (episode_duration, ...), as the vector env splits them
