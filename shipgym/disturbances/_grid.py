@@ -26,7 +26,6 @@ __all__ = [
     "PieceGrid",
     "gauss_markov",
     "gauss_markov_piece",
-    "gauss_markov_rows",
     "standard_normals",
 ]
 
@@ -81,41 +80,6 @@ def gauss_markov(x, m, a, b, e, lo, hi, deviation, out):  # type: ignore[no-unty
 
 
 @njit
-def _gauss_markov_rows(rng, x, m, a, b, lo, hi, deviation, e, out):  # type: ignore[no-untyped-def]
-    """:func:`gauss_markov_rows`, compiled: row ``r``'s normals into ``e`` then its
-    :func:`gauss_markov` from ``x[r]`` into ``out[r]``, the last state back into ``x[r]``."""
-    for r in range(out.shape[0]):
-        for k in range(e.shape[0]):
-            e[k] = rng.standard_normal()
-        x[r] = gauss_markov(x[r], m[r], a[r], b[r], e, lo[r], hi[r], deviation, out[r])
-
-
-def gauss_markov_rows(
-    rng: np.random.Generator,
-    x: NDArray[np.float64],
-    m: NDArray[np.float64],
-    a: NDArray[np.float64],
-    b: NDArray[np.float64],
-    lo: NDArray[np.float64],
-    hi: NDArray[np.float64],
-    deviation: bool,
-    out: NDArray[np.float64],
-) -> None:
-    """One chunk of R Gauss-Markov channels (:func:`gauss_markov`, each with its own ``m, a,
-    b, lo, hi``, (R,)) into ``out`` (R, K + 1), driven by ``rng``'s next R K standard normals
-    in the order of ``rng.standard_normal((R, K))`` (row by row: the same numbers, the
-    generator left in the same state), the states ``x`` (R,) advanced in place; one compiled
-    call for a chunk (draws and recursion)."""
-    args = (rng, x, m, a, b, lo, hi, bool(deviation), np.empty(out.shape[1] - 1), out)
-    if not _ROWS:
-        _ROWS.append(entry(_gauss_markov_rows, args))
-    _ROWS[0](*args)
-
-
-_ROWS: list[Any] = []  # _gauss_markov_rows' compiled entry point
-
-
-@njit
 def _gauss_markov_piece(x, m, a, b, lo, hi, deviation, e, ka, kb, out):  # type: ignore[no-untyped-def]
     """:func:`gauss_markov_piece`, compiled."""
     s = ka - 1 if ka > 0 else 0
@@ -137,13 +101,13 @@ def gauss_markov_piece(
     kb: int,
     out: NDArray[np.float64],
 ) -> None:
-    """The samples ``ka ... kb - 1`` of a chunk of R Gauss-Markov channels
-    (:func:`gauss_markov_rows`' recursion, :func:`gauss_markov`) into ``out`` (R, CHUNK + 1),
-    from the states ``x`` (R,) at the sample ``ka - 1`` (at ``ka = 0``: the chunk's start),
-    driven by the chunk's normals ``e`` (R, CHUNK) (drawn whole when the chunk is begun:
-    ``rng.standard_normal((R, CHUNK))``, the numbers :func:`gauss_markov_rows` draws); the
-    states advanced in place to the sample ``kb - 1``. The recursion stopped and taken up
-    again: the same floats as the whole chunk's."""
+    """The samples ``ka ... kb - 1`` of a chunk of R Gauss-Markov channels (:func:`gauss_markov`,
+    each with its own ``m, a, b, lo, hi``, (R,)) into ``out`` (R, CHUNK + 1), from the states
+    ``x`` (R,) at the sample ``ka - 1`` (at ``ka = 0``: the chunk's start), driven by the
+    chunk's normals ``e`` (R, CHUNK) (drawn whole when the chunk is begun:
+    ``rng.standard_normal((R, CHUNK))``, row by row, :func:`standard_normals`); the states
+    advanced in place to the sample ``kb - 1``. The recursion stopped and taken up again: the
+    same floats as the whole chunk's; one compiled call for a piece."""
     args = (x, m, a, b, lo, hi, bool(deviation), e, int(ka), int(kb), out)
     if not _PIECE:
         _PIECE.append(entry(_gauss_markov_piece, args))

@@ -120,7 +120,7 @@ def modal_filter_rows(lam, Gm, z, zi, s):  # type: ignore[no-untyped-def]
 @njit
 def modal_filter_piece(lam, Gm, z, zi, s, ka, kb):  # type: ignore[no-untyped-def]
     """The WF filters' modal states over one chunk (the run-time form of
-    :meth:`Waves._filter_chunk`): for each mode ``i`` and DOF ``d`` the modal noise ``u_k =
+    :meth:`Waves._filter_piece`): for each mode ``i`` and DOF ``d`` the modal noise ``u_k =
     sum_j Gm[i, j] z[j, d, k]`` (the complex products with ``z + 0 i``, summed over ``j`` in
     order) and the exact discrete recursion ``s_k = lam_i s_{k-1} + u_k`` from the state
     ``zi[i, d] = lam_i s_{-1}``, into ``s`` (nf, 2, K) complex; only the samples ``ka ... kb -
