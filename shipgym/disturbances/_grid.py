@@ -3,9 +3,10 @@
 The samples ``t_k = k * dt`` are generated in chunks of :data:`CHUNK` samples, always in time
 order from ``t = 0``, so a realisation does not depend on the order of the queries. A chunk is
 computed a piece of :data:`PIECE` samples at a time, as far as it is read (a short episode
-reads a few hundred samples of its first chunk): a chunk's random draws are made whole when it
-is begun, its recursions and harmonic sums stop at the end of a piece, so a piece is the same
-floats as in the whole chunk. The piece being read is kept as Python lists, so a scalar query
+reads a few hundred samples of its first chunk): a chunk's random draws are made in their
+order when it is begun (all but the last row's, drawn as far as read), its recursions and
+harmonic sums stop at the end of a piece, so a piece is the same floats as in the whole
+chunk. The piece being read is kept as Python lists, so a scalar query
 (every physics step) costs a few hundred nanoseconds; values between samples are interpolated
 linearly.
 """
@@ -51,11 +52,16 @@ def standard_normals(rng: np.random.Generator, shape: int | tuple[int, ...]) -> 
     filled in C order, as NumPy fills it), drawn in compiled code: about three times faster
     for the chunks of the grids and the wave filters (thousands of normals at each reset)."""
     out = np.empty(shape)
-    flat = out.reshape(-1)
-    if not _FILL:
-        _FILL.append(entry(_fill_normals, (rng, flat)))
-    _FILL[0](rng, flat)
+    fill_normals(rng, out.reshape(-1))
     return out
+
+
+def fill_normals(rng: np.random.Generator, out: NDArray[np.float64]) -> None:
+    """``out`` (K,) contiguous, filled with ``rng``'s next K standard normals (the draws of
+    :func:`standard_normals`: an array drawn in two calls holds the numbers of one)."""
+    if not _FILL:
+        _FILL.append(entry(_fill_normals, (rng, out)))
+    _FILL[0](rng, out)
 
 
 _FILL: list[Any] = []  # _fill_normals' compiled entry point (its argument types never change)
@@ -104,8 +110,8 @@ def gauss_markov_piece(
     """The samples ``ka ... kb - 1`` of a chunk of R Gauss-Markov channels (:func:`gauss_markov`,
     each with its own ``m, a, b, lo, hi``, (R,)) into ``out`` (R, CHUNK + 1), from the states
     ``x`` (R,) at the sample ``ka - 1`` (at ``ka = 0``: the chunk's start), driven by the
-    chunk's normals ``e`` (R, CHUNK) (drawn whole when the chunk is begun:
-    ``rng.standard_normal((R, CHUNK))``, row by row, :func:`standard_normals`); the states
+    chunk's normals ``e`` (R, CHUNK) (``rng.standard_normal((R, CHUNK))``, row by row,
+    :meth:`PieceGrid._normals`, drawn up to ``e[:, kb - 2]`` at least); the states
     advanced in place to the sample ``kb - 1``. The recursion stopped and taken up again: the
     same floats as the whole chunk's; one compiled call for a piece."""
     args = (x, m, a, b, lo, hi, bool(deviation), e, int(ka), int(kb), out)
@@ -127,10 +133,32 @@ class PieceGrid:
 
     _chunks: list[NDArray[np.float64]]
     _fill: int  # samples of the last chunk computed (CHUNK + 1: whole)
+    _drawn: int  # normals of the chunk being filled drawn (flat, C order)
+    _draw_rng: np.random.Generator | None
 
     def _clear_pieces(self) -> None:
         self._chunks = []
         self._fill = CHUNK + 1
+
+    def _normals(self, rng: np.random.Generator, shape: tuple[int, ...]) -> NDArray[np.float64]:
+        """A chunk's normals ``rng.standard_normal(shape)`` (``shape[-1] = CHUNK``), to be read
+        after :meth:`_draw_to`: every row but the last drawn now, the last one's (the last of
+        the chunk's draws from ``rng``, a generator of this grid alone) as far as a piece
+        needs them; the same numbers, ``rng`` in the same state once the chunk is whole."""
+        e = np.empty(shape)
+        self._drawn = e.size - shape[-1]
+        self._draw_rng = rng
+        fill_normals(rng, e.reshape(-1)[: self._drawn])
+        return e
+
+    def _draw_to(self, e: NDArray[np.float64], kb: int) -> None:
+        """The normals ``e[..., :kb - 1]`` of the chunk being filled drawn (:meth:`_normals`):
+        what the samples before ``kb`` read."""
+        need = e.size - e.shape[-1] + max(kb - 1, 0)
+        if need > self._drawn:
+            assert self._draw_rng is not None
+            fill_normals(self._draw_rng, e.reshape(-1)[self._drawn : need])
+            self._drawn = need
 
     def _ready_check(self) -> None:  # pragma: no cover - abstract
         raise NotImplementedError

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import from_mapping, is_real, param, require_angles, require_finite
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair, gauss_markov_piece, standard_normals
+from ._grid import CHUNK, GridPair, gauss_markov_piece
 
 __all__ = ["CurrentConfig", "Current", "current_body_velocity", "MAX_CURRENT_SPEED"]
 
@@ -315,21 +315,23 @@ class Current(GridPair):
             raise RuntimeError("call Current.reset(rng) before querying a varying current")
 
     def _begin(self, j: int) -> NDArray[np.float64]:
-        """Chunk ``j`` begun: its normals ``standard_normal((2, CHUNK))`` drawn whole, from
-        the states at its start."""
+        """Chunk ``j`` begun from the states at its start: its normals
+        ``standard_normal((2, CHUNK))``, the last row as far as read
+        (:meth:`~shipgym.disturbances._grid.PieceGrid._normals`)."""
         assert self._rng is not None
         (av, ab), (bv, bb) = self._a, self._b
         mv, mb = self._mean
         m, a, b = np.array([mv, mb]), np.array([av, ab]), np.array([bv, bb])
         lows, highs = np.array([self._lo, -math.inf]), np.array([self._hi, math.inf])
         self._gm = (np.array(self._state), m, a, b, lows, highs)
-        self._e = standard_normals(self._rng, (2, CHUNK))
+        self._e = self._normals(self._rng, (2, CHUNK))
         return np.empty((2, CHUNK + 1))
 
     def _piece(self, j: int, ka: int, kb: int) -> None:
         """Samples ``ka ... kb - 1`` of chunk ``j``: speed clipped to ``[v_min, v_max]``,
         direction free (:func:`~shipgym.disturbances._grid.gauss_markov_piece`)."""
         x, m, a, b, lows, highs = self._gm
+        self._draw_to(self._e, kb)
         gauss_markov_piece(x, m, a, b, lows, highs, False, self._e, ka, kb, self._chunks[j])
         if kb == CHUNK + 1:
             self._state = (float(x[0]), float(x[1]))

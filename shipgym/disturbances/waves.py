@@ -29,7 +29,7 @@ from shipgym._config import from_mapping, is_real, param, require_angles, requir
 from shipgym._jit import entry, njit
 from shipgym.dynamics.params import HullParameters
 
-from ._grid import CHUNK, PIECE, PieceGrid, standard_normals
+from ._grid import CHUNK, PIECE, PieceGrid
 from .spectra import (
     RHO_WATER,
     G,
@@ -662,12 +662,13 @@ class Waves(PieceGrid):
 
     def _begin(self, j: int) -> NDArray[np.float64]:
         """Chunk ``j`` begun (rows ``[E, d, h]`` on grid points ``j*CHUNK .. (j+1)*CHUNK``,
-        inclusive): the WF filters' noise drawn whole, ``standard_normal((nf, 2, CHUNK))``,
-        and their recursion's state before its first sample."""
+        inclusive): the WF filters' noise ``standard_normal((nf, 2, CHUNK))`` (its last row as
+        far as read, :meth:`~shipgym.disturbances._grid.PieceGrid._normals`) and their
+        recursion's state before its first sample."""
         if self._filter is not None:
             assert self._rng_wf is not None and self._q is not None
             lam_i, _, _, _, nf = self._filter
-            self._z = standard_normals(self._rng_wf, (nf, 2, _CHUNK))  # the (nf, 2 CHUNK) draw
+            self._z = self._normals(self._rng_wf, (nf, 2, _CHUNK))  # the (nf, 2 CHUNK) draw
             zi = np.empty((nf, 2), dtype=complex)
             for i in range(nf):
                 zi[i] = lam_i[i] * self._q[i]  # the recursion's state before the first sample
@@ -708,6 +709,7 @@ class Waves(PieceGrid):
         lam_i, Gm, _, c_out, nf = self._filter
         sa = ka - 1 if ka > 0 else 0  # the modal states s_k of the samples k + 1
         s = self._s
+        self._draw_to(self._z, kb)
         modal_filter_piece(
             np.ascontiguousarray(lam_i), np.ascontiguousarray(Gm), self._z, self._zi, s, sa,
             kb - 1,

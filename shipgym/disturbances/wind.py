@@ -35,7 +35,7 @@ from shipgym._jit import njit
 from shipgym.dynamics.params import WindageParameters
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair, gauss_markov_piece, standard_normals
+from ._grid import CHUNK, GridPair, gauss_markov_piece
 from .spectra import harmonic_bins, harmonic_components, harmonic_sums, wind_gust_spectrum
 
 __all__ = [
@@ -857,9 +857,10 @@ class Wind(GridPair):
             raise RuntimeError("call Wind.reset(rng) before querying a gusty wind")
 
     def _begin(self, j: int) -> NDArray[np.float64]:
-        """Chunk ``j`` begun: its normals drawn whole, ``standard_normal((2, CHUNK))`` (the
-        speed and direction gusts; a spectral speed gust: ``standard_normal((1, CHUNK))``,
-        the direction's), from the gust states at its start."""
+        """Chunk ``j`` begun from the gust states at its start: its normals
+        ``standard_normal((2, CHUNK))`` (the speed and direction gusts; a spectral speed gust:
+        ``standard_normal((1, CHUNK))``, the direction's), the last row as far as read
+        (:meth:`~shipgym.disturbances._grid.PieceGrid._normals`)."""
         assert self._rng is not None
         inf = math.inf
         if self._spectral:  # the direction gust only
@@ -869,7 +870,7 @@ class Wind(GridPair):
             m, a, b = np.array([self._mean_v, self._mean_b]), np.array(self._a), np.array(self._b)
             x = np.array(self._state)
         self._gm = (x, m, a, b, np.full(x.size, -inf), np.full(x.size, inf))
-        self._e = standard_normals(self._rng, (x.size, CHUNK))
+        self._e = self._normals(self._rng, (x.size, CHUNK))
         return np.empty((2, CHUNK + 1))
 
     def _piece(self, j: int, ka: int, kb: int) -> None:
@@ -878,6 +879,7 @@ class Wind(GridPair):
         harmonic sum on the chunk's grid from ``t0 = j CHUNK dt``."""
         rows = self._chunks[j]
         x, m, a, b, lo, hi = self._gm
+        self._draw_to(self._e, kb)
         if self._spectral:
             gauss_markov_piece(x, m, a, b, lo, hi, True, self._e, ka, kb, rows[1:])
             t0 = j * CHUNK * self._dt
