@@ -44,6 +44,7 @@ __all__ = [
     "harmonic_bins",
     "harmonic_components",
     "harmonic_sums",
+    "harmonic_table",
     "FROUDE_EXPONENTS",
     "froude_factor",
     "froude_scale",
@@ -420,14 +421,37 @@ _BLOCK = 64
 
 
 @njit
-def _harmonic_rows(t0, dt, start, n, w, eps, c, imag, out):  # type: ignore[no-untyped-def]
+def _in_block(dt, w, zr, zi):  # type: ignore[no-untyped-def]
+    """The in-block factors ``exp(i w_j (dt m))`` of :func:`harmonic_sums` into ``zr``, ``zi``
+    (N, 64): their cosines and sines."""
+    for j in range(w.shape[0]):
+        for m in range(_BLOCK):
+            x = (dt * m) * w[j]
+            zr[j, m] = math.cos(x)
+            zi[j, m] = math.sin(x)
+
+
+def harmonic_table(dt: float, w: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+    """The in-block factors of :func:`harmonic_sums` on the grid step ``dt`` (s) for the
+    angular frequencies ``w`` (rad/s): ``(cos, sin)`` of ``w_j dt m``, (N, 64) each, computed
+    once for a realisation whose pieces are summed one by one (``table=``)."""
+    w = np.ascontiguousarray(w, dtype=float)
+    zr = np.empty((w.shape[0], _BLOCK))
+    zi = np.empty((w.shape[0], _BLOCK))
+    _in_block(float(dt), w, zr, zi)
+    return zr, zi
+
+
+@njit
+def _harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
     """:func:`harmonic_sums` of the real weights ``c`` (R, N) at the grid points ``k = start
     ... start + n - 1`` into ``out`` (R, 2, n): the real
     parts (``out[r, 0]``) and, where ``imag``, the imaginary parts (``out[r, 1]``; else left
     as they are). The float operations of the NumPy form this replaced, in its order: the
     phase ``w_j (t0 + 64 dt b) + eps_j`` and ``w_j (dt m)``, ``exp(i x) = cos x + i sin x``,
     the block factor times ``c``, and each sample summed over ``j`` in order (the real part
-    ``sum (a_re z_re - a_im z_im)``), so that a grid's samples stay the same floats; the
+    ``sum (a_re z_re - a_im z_im)``; the in-block factors ``zr``, ``zi`` from
+    :func:`_in_block`), so that a grid's samples stay the same floats; the
     samples of a block are summed side by side (independent sums: vectorised). The blocks are
     those of the grid from ``k = 0`` (``k = 64 b + m``), so any range of samples is the same
     floats as in the whole grid (a partly read block is summed whole)."""
@@ -435,13 +459,6 @@ def _harmonic_rows(t0, dt, start, n, w, eps, c, imag, out):  # type: ignore[no-u
     end = start + n
     b_first = start // _BLOCK
     n_blk = -(-end // _BLOCK)
-    zr = np.empty((nj, _BLOCK))
-    zi = np.empty((nj, _BLOCK))
-    for j in range(nj):
-        for m in range(_BLOCK):
-            x = (dt * m) * w[j]
-            zr[j, m] = math.cos(x)
-            zi[j, m] = math.sin(x)
     step = _BLOCK * dt
     cb = np.empty(nj)
     sb = np.empty(nj)
@@ -485,6 +502,7 @@ def harmonic_sums(
     *,
     real: bool = False,
     start: int = 0,
+    table: tuple[NDArray[np.float64], ...] | None = None,
 ) -> NDArray[np.complex128] | NDArray[np.float64]:
     """Phasor sums ``sum_j c[r, j] exp(i (w_j t_k + eps_j))`` on the grid ``t_k = t0 + k dt``,
     ``k = start ... start + n - 1``.
@@ -507,6 +525,7 @@ def harmonic_sums(
         start: The first grid point (``>= 0``): the points ``start ... start + n - 1`` of
             the grid from ``t0`` are the same floats as in the whole grid (a piece of a chunk
             computed on its own).
+        table: :func:`harmonic_table` of ``dt`` and ``w`` (``None``: computed here).
 
     Returns:
         Complex array ``(R, n)`` (or ``(n,)`` for 1-D weights). The real part of a row is
@@ -521,13 +540,14 @@ def harmonic_sums(
     if np.iscomplexobj(c):
         if real:
             raise ValueError("harmonic_sums(real=True) takes real weights")
-        re = harmonic_sums(t0, dt, n, w, eps, c.real, start=start)
-        im = harmonic_sums(t0, dt, n, w, eps, c.imag, start=start)
+        re = harmonic_sums(t0, dt, n, w, eps, c.real, start=start, table=table)
+        im = harmonic_sums(t0, dt, n, w, eps, c.imag, start=start, table=table)
         out_c = re + 1j * im
         return out_c[0] if one else out_c
     c = np.ascontiguousarray(c, dtype=float)
     rows = np.zeros((c.shape[0], 2, n))
-    _harmonic_rows(float(t0), float(dt), int(start), int(n), w, eps, c, not real, rows)
+    zr, zi = harmonic_table(dt, w) if table is None else table
+    _harmonic_rows(float(t0), float(dt), int(start), int(n), w, eps, c, not real, zr, zi, rows)
     if real:
         out = rows[:, 0]
     else:

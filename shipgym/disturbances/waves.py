@@ -37,6 +37,7 @@ from .spectra import (
     harmonic_bins,
     harmonic_components,
     harmonic_sums,
+    harmonic_table,
     wave_spectrum,
 )
 
@@ -547,6 +548,7 @@ class Waves(PieceGrid):
         self._wf_x = np.zeros(1)  # and its grid position
         self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
         self._bins: Any = None  # the sea's harmonic_bins (computed at the first reset)
+        self._table: Any = None
         self._mean_E = 0.0
         self._reset_grid()
         self._ready = self.calm
@@ -638,6 +640,7 @@ class Waves(PieceGrid):
         else:
             sqrtR = np.full(n, math.sqrt(float(r)))
         self._w, self._A, self._eps, self._sqrtR = w, A, eps, sqrtR
+        self._table: Any = None  # harmonic_table of the sea (at its first piece)
         self._cdrift = A * sqrtR
         self._mean_E = float(np.sum(self._cdrift**2))
         k = w * w / G
@@ -689,9 +692,12 @@ class Waves(PieceGrid):
             if need_rao:
                 weights += [self._A, self._kA]
             t0 = j * _CHUNK * self._dt
+            if self._table is None:
+                self._table = harmonic_table(self._dt, self._w)
             sums = harmonic_sums(
-                t0, self._dt, kb - ka, self._w, self._eps, np.array(weights), start=ka
-            )
+                t0, self._dt, kb - ka, self._w, self._eps, np.array(weights), start=ka,
+                table=self._table,
+            )  # fmt: skip
             r = 0
             if self._drift_on:
                 rows[0, ka:kb] = sums[0].real ** 2 + sums[0].imag ** 2

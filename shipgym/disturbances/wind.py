@@ -36,7 +36,13 @@ from shipgym.dynamics.params import WindageParameters
 
 from ._boundary import coerce_config, parse_config
 from ._grid import CHUNK, GridPair, gauss_markov_piece
-from .spectra import harmonic_bins, harmonic_components, harmonic_sums, wind_gust_spectrum
+from .spectra import (
+    harmonic_bins,
+    harmonic_components,
+    harmonic_sums,
+    harmonic_table,
+    wind_gust_spectrum,
+)
 
 __all__ = [
     "BlendermannCoefficients",
@@ -809,6 +815,7 @@ class Wind(GridPair):
         self._spectral = cfg.is_spectral and cfg.gust_sigma > 0.0
         self._gw = self._ga = self._gph = np.zeros(0)
         self._bins: Any = None  # the spectral gust's harmonic_bins (computed at the first reset)
+        self._table: Any = None
         self._clear()
         self._rng: np.random.Generator | None = None
 
@@ -851,6 +858,7 @@ class Wind(GridPair):
                     cfg.gust_psd, lo, hi, n, child, log=True, bins=self._bins
                 )
                 self._gw, self._ga, self._gph = 2.0 * math.pi * f, a, ph
+                self._table: Any = None  # harmonic_table of the gust (at its first piece)
 
     def _ready_check(self) -> None:
         if self._rng is None:
@@ -883,9 +891,12 @@ class Wind(GridPair):
         if self._spectral:
             gauss_markov_piece(x, m, a, b, lo, hi, True, self._e, ka, kb, rows[1:])
             t0 = j * CHUNK * self._dt
+            if self._table is None:
+                self._table = harmonic_table(self._dt, self._gw)
             gust = harmonic_sums(
-                t0, self._dt, kb - ka, self._gw, self._gph, self._ga, real=True, start=ka
-            )
+                t0, self._dt, kb - ka, self._gw, self._gph, self._ga, real=True, start=ka,
+                table=self._table,
+            )  # fmt: skip
             rows[0, ka:kb] = self._mean_v + gust
             if kb == CHUNK + 1:
                 self._state = (0.0, float(x[0]))
