@@ -428,3 +428,70 @@ def test_a_deep_copied_env_continues_its_episode_as_the_original(env_id):
     theirs = [env.step(a)[0] for _ in range(5)]
     assert all(np.array_equal(x, y) for x, y in zip(ours, theirs, strict=True))
     assert not np.array_equal(ours[0], ours[-1])
+
+
+def test_pieces_of_a_long_run_are_the_whole_chunks_floats() -> None:
+    """A spectral gust wind, a Gauss-Markov current and a sea with drift and Fossen's WF
+    filter on fine grids (0.02 s: a chunk is 82 s, a piece 10 s), 200 s: every hull's physics
+    window, read as it crosses pieces and two chunk boundaries, holds the samples of the whole
+    chunk of a fresh process of the same seed (``chunk(j)``, computed in one go); the wave
+    motion, the wind and the drift queried on the batch's processes are those of the fresh
+    ones; hull 1 is the single physics bit for bit."""
+    from dataclasses import replace
+
+    from shipgym.disturbances import Waves
+    from shipgym.disturbances._grid import PIECE
+    from shipgym.sim.step import CURRENT, DRIFT, WIND
+
+    name, n, dt = "blue-lady", 3, 0.02
+    wind = WindConfig(
+        speed=6.0, direction_from=math.radians(300.0), gust_spectrum="npd", sample_period=dt
+    )
+    current = replace(GM_CURRENT, sample_period=dt)
+    waves = WaveConfig(Hs=0.08, Tp=1.8, direction_from=math.radians(210.0), first_order=True,
+                       wf_model="fossen", sample_period=dt)  # fmt: skip
+    bp = BatchedPhysics(name, n, wind=wind, current=current, waves=waves)
+    nu0, act0, _ = _start(bp)
+    bp.reset(nu=nu0, actuators=act0, rngs=[np.random.default_rng(40 + i) for i in range(n)])
+    single = VesselPhysics(name, wind=wind, current=current, waves=waves, integrator="leapfrog")
+    single.reset(nu=nu0[1], actuators=act0[1], rng=np.random.default_rng(41))
+    fresh = []
+    v = load_vessel(name)
+    for i in range(n):
+        g = np.random.default_rng(40 + i)
+        procs = (Wind(wind, v.windage), Current(current), Waves(waves, v.hull))
+        for p in procs:
+            p.reset(g)
+        fresh.append(procs)
+    hb = bp._hulls
+    cmds = _commands(bp.actuators, n, 20, seed=5)  # 20 x 10 s
+    seen = set()
+    for cmd in cmds:
+        bp.set_command(cmd)
+        bp.step(200)
+        single.set_command(cmd[1])
+        single.step(200)
+        np.testing.assert_array_equal(single.eta_full, bp.eta_full[1])
+        np.testing.assert_array_equal(single.nu_full, bp.nu_full[1])
+        motion = bp.wave_motion()
+        for i in range(n):
+            for slot, proc in ((WIND, fresh[i][0]), (CURRENT, fresh[i][1]), (DRIFT, fresh[i][2])):
+                k0 = int(hb.k0[i, slot])
+                j, p = divmod(k0, CHUNK)
+                assert p % PIECE == 0 and hb.windows[slot].shape[2] == PIECE + 1
+                whole = proc.chunk(j)[:2, p : p + PIECE + 1]
+                np.testing.assert_array_equal(hb.windows[slot][i], whole)
+                seen.add((slot, j))
+            t = float(bp.t[i])
+            w_batch, w_fresh = bp.winds[i], fresh[i][0]
+            assert w_batch.at(t) == w_fresh.at(t) and w_batch.at(0.5 * t) == w_fresh.at(0.5 * t)
+            assert bp.currents[i].at(t) == fresh[i][1].at(t)
+            assert bp.waves[i].drift_load(t, 0.3) == fresh[i][2].drift_load(t, 0.3)
+            np.testing.assert_array_equal(motion[i], np.ravel(fresh[i][2].wf_series(t)))
+    assert {j for _, j in seen} == {0, 1, 2}  # two chunk boundaries crossed
+    for i in range(n):  # the batch's grids, completed piece by piece, are the whole chunks
+        for b, f in zip((bp.winds[i], bp.currents[i]), fresh[i][:2], strict=True):
+            for j in range(3):
+                np.testing.assert_array_equal(b.chunk(j), f.chunk(j))
+        for j in range(3):
+            np.testing.assert_array_equal(bp.waves[i].chunk(j), fresh[i][2].chunk(j))

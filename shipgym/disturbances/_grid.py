@@ -1,9 +1,14 @@
 """Two-channel random processes sampled lazily on a fixed time grid (wind gusts, current).
 
 The samples ``t_k = k * dt`` are generated in chunks of :data:`CHUNK` samples, always in time
-order from ``t = 0``, so a realisation does not depend on the order of the queries. The chunk
-being read is kept as Python lists, so a scalar query (every physics step) costs a few
-hundred nanoseconds; values between samples are interpolated linearly.
+order from ``t = 0``, so a realisation does not depend on the order of the queries. A chunk is
+computed a piece of :data:`PIECE` samples at a time, as far as it is read (a short episode
+reads a few hundred samples of its first chunk): a chunk's random draws are made in their
+order when it is begun (all but the last row's, drawn as far as read), its recursions and
+harmonic sums stop at the end of a piece, so a piece is the same floats as in the whole
+chunk. The piece being read is kept as Python lists, so a scalar query
+(every physics step) costs a few hundred nanoseconds; values between samples are interpolated
+linearly.
 """
 
 from __future__ import annotations
@@ -15,10 +20,23 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._jit import entry, njit
 
-__all__ = ["CHUNK", "GridPair", "gauss_markov", "gauss_markov_rows", "standard_normals"]
+__all__ = [
+    "CHUNK",
+    "PIECE",
+    "GridPair",
+    "PieceGrid",
+    "gauss_markov",
+    "gauss_markov_piece",
+    "standard_normals",
+]
 
 #: samples per chunk (each chunk also stores the first sample of the next one)
 CHUNK = 4096
+
+#: samples per piece of a chunk (computed on first read; a multiple of the harmonic sums'
+#: block of 64 samples, a divisor of :data:`CHUNK`); a window (:meth:`PieceGrid.window`)
+#: holds one piece and the piece's next sample
+PIECE = 512
 
 
 @njit
@@ -34,11 +52,16 @@ def standard_normals(rng: np.random.Generator, shape: int | tuple[int, ...]) -> 
     filled in C order, as NumPy fills it), drawn in compiled code: about three times faster
     for the chunks of the grids and the wave filters (thousands of normals at each reset)."""
     out = np.empty(shape)
-    flat = out.reshape(-1)
-    if not _FILL:
-        _FILL.append(entry(_fill_normals, (rng, flat)))
-    _FILL[0](rng, flat)
+    fill_normals(rng, out.reshape(-1))
     return out
+
+
+def fill_normals(rng: np.random.Generator, out: NDArray[np.float64]) -> None:
+    """``out`` (K,) contiguous, filled with ``rng``'s next K standard normals (the draws of
+    :func:`standard_normals`: an array drawn in two calls holds the numbers of one)."""
+    if not _FILL:
+        _FILL.append(entry(_fill_normals, (rng, out)))
+    _FILL[0](rng, out)
 
 
 _FILL: list[Any] = []  # _fill_normals' compiled entry point (its argument types never change)
@@ -63,17 +86,15 @@ def gauss_markov(x, m, a, b, e, lo, hi, deviation, out):  # type: ignore[no-unty
 
 
 @njit
-def _gauss_markov_rows(rng, x, m, a, b, lo, hi, deviation, e, out):  # type: ignore[no-untyped-def]
-    """:func:`gauss_markov_rows`, compiled: row ``r``'s normals into ``e`` then its
-    :func:`gauss_markov` from ``x[r]`` into ``out[r]``, the last state back into ``x[r]``."""
+def _gauss_markov_piece(x, m, a, b, lo, hi, deviation, e, ka, kb, out):  # type: ignore[no-untyped-def]
+    """:func:`gauss_markov_piece`, compiled."""
+    s = ka - 1 if ka > 0 else 0
     for r in range(out.shape[0]):
-        for k in range(e.shape[0]):
-            e[k] = rng.standard_normal()
-        x[r] = gauss_markov(x[r], m[r], a[r], b[r], e, lo[r], hi[r], deviation, out[r])
+        x[r] = gauss_markov(x[r], m[r], a[r], b[r], e[r, s : kb - 1], lo[r], hi[r], deviation,
+                            out[r, s:kb])  # fmt: skip
 
 
-def gauss_markov_rows(
-    rng: np.random.Generator,
+def gauss_markov_piece(
     x: NDArray[np.float64],
     m: NDArray[np.float64],
     a: NDArray[np.float64],
@@ -81,27 +102,109 @@ def gauss_markov_rows(
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
     deviation: bool,
+    e: NDArray[np.float64],
+    ka: int,
+    kb: int,
     out: NDArray[np.float64],
 ) -> None:
-    """One chunk of R Gauss-Markov channels (:func:`gauss_markov`, each with its own ``m, a,
-    b, lo, hi``, (R,)) into ``out`` (R, K + 1), driven by ``rng``'s next R K standard normals
-    in the order of ``rng.standard_normal((R, K))`` (row by row: the same numbers, the
-    generator left in the same state), the states ``x`` (R,) advanced in place; one compiled
-    call for a chunk (draws and recursion)."""
-    args = (rng, x, m, a, b, lo, hi, bool(deviation), np.empty(out.shape[1] - 1), out)
-    if not _ROWS:
-        _ROWS.append(entry(_gauss_markov_rows, args))
-    _ROWS[0](*args)
+    """The samples ``ka ... kb - 1`` of a chunk of R Gauss-Markov channels (:func:`gauss_markov`,
+    each with its own ``m, a, b, lo, hi``, (R,)) into ``out`` (R, CHUNK + 1), from the states
+    ``x`` (R,) at the sample ``ka - 1`` (at ``ka = 0``: the chunk's start), driven by the
+    chunk's normals ``e`` (R, CHUNK) (``rng.standard_normal((R, CHUNK))``, row by row,
+    :meth:`PieceGrid._normals`, drawn up to ``e[:, kb - 2]`` at least); the states
+    advanced in place to the sample ``kb - 1``. The recursion stopped and taken up again: the
+    same floats as the whole chunk's; one compiled call for a piece."""
+    args = (x, m, a, b, lo, hi, bool(deviation), e, int(ka), int(kb), out)
+    if not _PIECE:
+        _PIECE.append(entry(_gauss_markov_piece, args))
+    _PIECE[0](*args)
 
 
-_ROWS: list[Any] = []  # _gauss_markov_rows' compiled entry point
+_PIECE: list[Any] = []  # _gauss_markov_piece's compiled entry point
 
 
-class GridPair:
-    """Base of a two-channel process on a grid; subclasses implement :meth:`_extend_to`.
+class PieceGrid:
+    """Chunks of a grid computed a piece at a time, in time order (:data:`PIECE`).
 
-    Subclasses set ``self._inv_dt`` (1/s) and append chunks of shape ``(2, CHUNK + 1)`` to
-    ``self._chunks`` in :meth:`_extend_to`.
+    Subclasses implement :meth:`_begin` (a new chunk: its array, its draws) and :meth:`_piece`
+    (the samples ``ka ... kb - 1`` of the chunk being filled), and call :meth:`_clear_pieces`
+    at a reset. Chunk ``j`` is computed only once the chunks before it are whole.
+    """
+
+    _chunks: list[NDArray[np.float64]]
+    _fill: int  # samples of the last chunk computed (CHUNK + 1: whole)
+    _drawn: int  # normals of the chunk being filled drawn (flat, C order)
+    _draw_rng: np.random.Generator | None
+
+    def _clear_pieces(self) -> None:
+        self._chunks = []
+        self._fill = CHUNK + 1
+
+    def _normals(self, rng: np.random.Generator, shape: tuple[int, ...]) -> NDArray[np.float64]:
+        """A chunk's normals ``rng.standard_normal(shape)`` (``shape[-1] = CHUNK``), to be read
+        after :meth:`_draw_to`: every row but the last drawn now, the last one's (the last of
+        the chunk's draws from ``rng``, a generator of this grid alone) as far as a piece
+        needs them; the same numbers, ``rng`` in the same state once the chunk is whole."""
+        e = np.empty(shape)
+        self._drawn = e.size - shape[-1]
+        self._draw_rng = rng
+        fill_normals(rng, e.reshape(-1)[: self._drawn])
+        return e
+
+    def _draw_to(self, e: NDArray[np.float64], kb: int) -> None:
+        """The normals ``e[..., :kb - 1]`` of the chunk being filled drawn (:meth:`_normals`):
+        what the samples before ``kb`` read."""
+        need = e.size - e.shape[-1] + max(kb - 1, 0)
+        if need > self._drawn:
+            assert self._draw_rng is not None
+            fill_normals(self._draw_rng, e.reshape(-1)[self._drawn : need])
+            self._drawn = need
+
+    def _ready_check(self) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _begin(self, j: int) -> NDArray[np.float64]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _piece(self, j: int, ka: int, kb: int) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _fill_to(self, j: int, n: int) -> None:
+        """Chunk ``j``'s first ``n`` samples (1 <= n <= CHUNK + 1) computed, and every chunk
+        before it whole, in time order, a whole number of pieces (and the next sample)."""
+        while True:
+            last = len(self._chunks) - 1
+            if last > j or (last == j and self._fill >= n):
+                return
+            if self._fill == CHUNK + 1:  # the next chunk: its array and draws
+                self._ready_check()
+                self._chunks.append(self._begin(last + 1))
+                self._fill = 0
+                continue
+            want = CHUNK + 1 if last < j else min(CHUNK + 1, -(-(n - 1) // PIECE) * PIECE + 1)
+            self._piece(last, self._fill, want)
+            self._fill = want
+
+    def _extend_to(self, j: int) -> None:
+        """Chunks ``0 ... j`` whole."""
+        self._fill_to(j, CHUNK + 1)
+
+    def window(self, k: int) -> tuple[int, NDArray[np.float64]]:
+        """The piece holding sample ``k`` (>= 0) and the piece's next sample: ``(k0, rows)``,
+        ``rows`` (R, PIECE + 1) the samples ``k0 ... k0 + PIECE`` of every row (the next
+        sample from the same chunk as the piece), ``k0 <= k < k0 + PIECE``; computed on first
+        use, only that far (read only)."""
+        j, p = divmod(int(k), CHUNK)
+        p -= p % PIECE
+        self._fill_to(j, p + PIECE + 1)
+        return j * CHUNK + p, self._chunks[j][:, p : p + PIECE + 1]
+
+
+class GridPair(PieceGrid):
+    """Base of a two-channel process on a grid; subclasses implement :meth:`_begin` and
+    :meth:`_piece` (:class:`PieceGrid`).
+
+    Subclasses set ``self._inv_dt`` (1/s); their chunks have shape ``(2, CHUNK + 1)``.
     """
 
     _inv_dt: float
@@ -148,29 +251,31 @@ class GridPair:
         self._extend_to(j)
         return self._chunks[j]
 
+    def window(self, k: int) -> tuple[int, NDArray[np.float64]]:
+        """:meth:`PieceGrid.window` of the grid, ``(k0, (2, PIECE + 1))``."""
+        if self._const is not None:
+            raise ValueError(f"a constant {type(self).__name__} has no grid: read .constant")
+        return super().window(k)
+
     def _clear(self) -> None:
-        self._chunks: list[NDArray[np.float64]] = []
+        self._clear_pieces()
         self._cache: dict[int, tuple[list[float], list[float]]] = {}
-        self._j = -1  # chunk currently held as Python lists
+        self._j = -1  # piece currently held as Python lists
         self._k0 = 0
         self._c0: list[float] = []
         self._c1: list[float] = []
 
-    def _extend_to(self, j: int) -> None:  # pragma: no cover - abstract
-        raise NotImplementedError
-
     def _select(self, j: int) -> None:
         lists = self._cache.get(j)
         if lists is None:
-            self._extend_to(j)
-            arr = self._chunks[j]
+            _k0, arr = self.window(j * PIECE)
             lists = (arr[0].tolist(), arr[1].tolist())
-            if len(self._cache) >= 2:  # keep the two most recent chunks as lists
+            if len(self._cache) >= 2:  # keep the two most recent pieces as lists
                 del self._cache[next(iter(self._cache))]
             self._cache[j] = lists
         self._c0, self._c1 = lists
         self._j = j
-        self._k0 = j * CHUNK
+        self._k0 = j * PIECE
 
     def _interp(self, t: float) -> tuple[float, float]:
         """Both channels at time ``t`` (s, >= 0), linearly interpolated (scalar, fast)."""
@@ -178,8 +283,8 @@ class GridPair:
         if not x >= 0.0:
             raise ValueError(f"{type(self).__name__}: time must be >= 0 s, got {t!r}")
         k = int(x)
-        if k // CHUNK != self._j:
-            self._select(k // CHUNK)
+        if k // PIECE != self._j:
+            self._select(k // PIECE)
         f = x - k
         i = k - self._k0
         c0, c1 = self._c0, self._c1

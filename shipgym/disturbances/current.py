@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import from_mapping, is_real, param, require_angles, require_finite
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair, gauss_markov_rows
+from ._grid import CHUNK, GridPair, gauss_markov_piece
 
 __all__ = ["CurrentConfig", "Current", "current_body_velocity", "MAX_CURRENT_SPEED"]
 
@@ -310,22 +310,31 @@ class Current(GridPair):
             v = min(max(self._mean[0] + self._std0[0] * float(z[0]), self._lo), self._hi)
             self._state = (v, self._mean[1] + self._std0[1] * float(z[1]))
 
-    def _extend_to(self, j: int) -> None:
+    def _ready_check(self) -> None:
         if self._rng is None:
             raise RuntimeError("call Current.reset(rng) before querying a varying current")
-        rng = self._rng
+
+    def _begin(self, j: int) -> NDArray[np.float64]:
+        """Chunk ``j`` begun from the states at its start: its normals
+        ``standard_normal((2, CHUNK))``, the last row as far as read
+        (:meth:`~shipgym.disturbances._grid.PieceGrid._normals`)."""
+        assert self._rng is not None
         (av, ab), (bv, bb) = self._a, self._b
         mv, mb = self._mean
-        lo, hi = self._lo, self._hi
         m, a, b = np.array([mv, mb]), np.array([av, ab]), np.array([bv, bb])
-        lows, highs = np.array([lo, -math.inf]), np.array([hi, math.inf])
-        while len(self._chunks) <= j:
-            rows = np.empty((2, CHUNK + 1))
-            # speed clipped to [lo, hi], direction free; from standard_normal((2, CHUNK))
-            x = np.array(self._state)
-            gauss_markov_rows(rng, x, m, a, b, lows, highs, False, rows)
+        lows, highs = np.array([self._lo, -math.inf]), np.array([self._hi, math.inf])
+        self._gm = (np.array(self._state), m, a, b, lows, highs)
+        self._e = self._normals(self._rng, (2, CHUNK))
+        return np.empty((2, CHUNK + 1))
+
+    def _piece(self, j: int, ka: int, kb: int) -> None:
+        """Samples ``ka ... kb - 1`` of chunk ``j``: speed clipped to ``[v_min, v_max]``,
+        direction free (:func:`~shipgym.disturbances._grid.gauss_markov_piece`)."""
+        x, m, a, b, lows, highs = self._gm
+        self._draw_to(self._e, kb)
+        gauss_markov_piece(x, m, a, b, lows, highs, False, self._e, ka, kb, self._chunks[j])
+        if kb == CHUNK + 1:
             self._state = (float(x[0]), float(x[1]))
-            self._chunks.append(rows)
 
     def at(self, t: float) -> tuple[float, float]:
         """Current at time ``t`` (cheap; call it every physics step).

@@ -44,6 +44,7 @@ __all__ = [
     "harmonic_bins",
     "harmonic_components",
     "harmonic_sums",
+    "harmonic_table",
     "FROUDE_EXPONENTS",
     "froude_factor",
     "froude_scale",
@@ -420,35 +421,58 @@ _BLOCK = 64
 
 
 @njit
-def _harmonic_rows(t0, dt, n, w, eps, c, imag, out):  # type: ignore[no-untyped-def]
-    """:func:`harmonic_sums` of the real weights ``c`` (R, N) into ``out`` (R, 2, n): the real
-    parts (``out[r, 0]``) and, where ``imag``, the imaginary parts (``out[r, 1]``; else left
-    as they are). The float operations of the NumPy form this replaced, in its order: the
-    phase ``w_j (t0 + 64 dt b) + eps_j`` and ``w_j (dt m)``, ``exp(i x) = cos x + i sin x``,
-    the block factor times ``c``, and each sample summed over ``j`` in order (the real part
-    ``sum (a_re z_re - a_im z_im)``), so that a grid's samples stay the same floats; the
-    samples of a block are summed side by side (independent sums: vectorised)."""
-    nj = w.shape[0]
-    n_blk = -(-n // _BLOCK)
-    zr = np.empty((nj, _BLOCK))
-    zi = np.empty((nj, _BLOCK))
-    for j in range(nj):
+def _in_block(dt, w, zr, zi):  # type: ignore[no-untyped-def]
+    """The in-block factors ``exp(i w_j (dt m))`` of :func:`harmonic_sums` into ``zr``, ``zi``
+    (N, 64): their cosines and sines."""
+    for j in range(w.shape[0]):
         for m in range(_BLOCK):
             x = (dt * m) * w[j]
             zr[j, m] = math.cos(x)
             zi[j, m] = math.sin(x)
+
+
+def harmonic_table(dt: float, w: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+    """The in-block factors of :func:`harmonic_sums` on the grid step ``dt`` (s) for the
+    angular frequencies ``w`` (rad/s): ``(cos, sin)`` of ``w_j dt m``, (N, 64) each, computed
+    once for a realisation whose pieces are summed one by one (``table=``)."""
+    w = np.ascontiguousarray(w, dtype=float)
+    zr = np.empty((w.shape[0], _BLOCK))
+    zi = np.empty((w.shape[0], _BLOCK))
+    _in_block(float(dt), w, zr, zi)
+    return zr, zi
+
+
+@njit
+def _harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
+    """:func:`harmonic_sums` of the real weights ``c`` (R, N) at the grid points ``k = start
+    ... start + n - 1`` into ``out`` (R, 2, n): the real
+    parts (``out[r, 0]``) and, where ``imag``, the imaginary parts (``out[r, 1]``; else left
+    as they are). The float operations of the NumPy form this replaced, in its order: the
+    phase ``w_j (t0 + 64 dt b) + eps_j`` and ``w_j (dt m)``, ``exp(i x) = cos x + i sin x``,
+    the block factor times ``c``, and each sample summed over ``j`` in order (the real part
+    ``sum (a_re z_re - a_im z_im)``; the in-block factors ``zr``, ``zi`` from
+    :func:`_in_block`), so that a grid's samples stay the same floats; the
+    samples of a block are summed side by side (independent sums: vectorised). The blocks are
+    those of the grid from ``k = 0`` (``k = 64 b + m``), so any range of samples is the same
+    floats as in the whole grid (a partly read block is summed whole)."""
+    nj = w.shape[0]
+    end = start + n
+    b_first = start // _BLOCK
+    n_blk = -(-end // _BLOCK)
     step = _BLOCK * dt
     cb = np.empty(nj)
     sb = np.empty(nj)
     acc_r = np.empty(_BLOCK)
     acc_i = np.empty(_BLOCK)
-    for b in range(n_blk):
+    for b in range(b_first, n_blk):
         tb = t0 + step * b
         for j in range(nj):
             x = tb * w[j] + eps[j]
             cb[j] = math.cos(x)
             sb[j] = math.sin(x)
-        size = min(_BLOCK, n - b * _BLOCK)
+        k0 = b * _BLOCK
+        m0 = start - k0 if start > k0 else 0
+        m1 = min(_BLOCK, end - k0)
         for r in range(c.shape[0]):
             acc_r[:] = 0.0
             acc_i[:] = 0.0
@@ -461,12 +485,11 @@ def _harmonic_rows(t0, dt, n, w, eps, c, imag, out):  # type: ignore[no-untyped-
                 if imag:
                     for m in range(_BLOCK):
                         acc_i[m] += ar * zi[j, m] + ai * zr[j, m]
-            k0 = b * _BLOCK
-            for m in range(size):
-                out[r, 0, k0 + m] = acc_r[m]
+            for m in range(m0, m1):
+                out[r, 0, k0 + m - start] = acc_r[m]
             if imag:
-                for m in range(size):
-                    out[r, 1, k0 + m] = acc_i[m]
+                for m in range(m0, m1):
+                    out[r, 1, k0 + m - start] = acc_i[m]
 
 
 def harmonic_sums(
@@ -478,8 +501,11 @@ def harmonic_sums(
     weights: ArrayLike,
     *,
     real: bool = False,
+    start: int = 0,
+    table: tuple[NDArray[np.float64], ...] | None = None,
 ) -> NDArray[np.complex128] | NDArray[np.float64]:
-    """Phasor sums ``sum_j c[r, j] exp(i (w_j t_k + eps_j))`` on the grid ``t_k = t0 + k dt``.
+    """Phasor sums ``sum_j c[r, j] exp(i (w_j t_k + eps_j))`` on the grid ``t_k = t0 + k dt``,
+    ``k = start ... start + n - 1``.
 
     With ``k = 64 b + m`` the phasor factorises into a block factor ``exp(i (w_j (t0 + 64 b dt)
     + eps_j))`` and an in-block factor ``exp(i w_j m dt)``, so each row is one small product
@@ -496,6 +522,10 @@ def harmonic_sums(
         weights: Real or complex weights, shape ``(R, N)`` (or ``(N,)`` for one row).
         real: return the real parts only (``sum c_j cos(w_j t + eps_j)``, real weights;
             the imaginary parts are not computed).
+        start: The first grid point (``>= 0``): the points ``start ... start + n - 1`` of
+            the grid from ``t0`` are the same floats as in the whole grid (a piece of a chunk
+            computed on its own).
+        table: :func:`harmonic_table` of ``dt`` and ``w`` (``None``: computed here).
 
     Returns:
         Complex array ``(R, n)`` (or ``(n,)`` for 1-D weights). The real part of a row is
@@ -510,13 +540,14 @@ def harmonic_sums(
     if np.iscomplexobj(c):
         if real:
             raise ValueError("harmonic_sums(real=True) takes real weights")
-        re = harmonic_sums(t0, dt, n, w, eps, c.real)
-        im = harmonic_sums(t0, dt, n, w, eps, c.imag)
+        re = harmonic_sums(t0, dt, n, w, eps, c.real, start=start, table=table)
+        im = harmonic_sums(t0, dt, n, w, eps, c.imag, start=start, table=table)
         out_c = re + 1j * im
         return out_c[0] if one else out_c
     c = np.ascontiguousarray(c, dtype=float)
     rows = np.zeros((c.shape[0], 2, n))
-    _harmonic_rows(float(t0), float(dt), int(n), w, eps, c, not real, rows)
+    zr, zi = harmonic_table(dt, w) if table is None else table
+    _harmonic_rows(float(t0), float(dt), int(start), int(n), w, eps, c, not real, zr, zi, rows)
     if real:
         out = rows[:, 0]
     else:

@@ -29,7 +29,7 @@ from shipgym._config import from_mapping, is_real, param, require_angles, requir
 from shipgym._jit import entry, njit
 from shipgym.dynamics.params import HullParameters
 
-from ._grid import standard_normals
+from ._grid import CHUNK, PIECE, PieceGrid
 from .spectra import (
     RHO_WATER,
     G,
@@ -37,6 +37,7 @@ from .spectra import (
     harmonic_bins,
     harmonic_components,
     harmonic_sums,
+    harmonic_table,
     wave_spectrum,
 )
 
@@ -74,7 +75,7 @@ AL_TAKIE_HF_POLYNOMIALS: dict[int, tuple[float, float, float, float]] = {
     for bf, alpha in _AL_TAKIE_ALPHA.items()
 }
 
-_CHUNK = 4096
+_CHUNK = CHUNK
 
 
 @njit
@@ -84,6 +85,7 @@ def wf_rows(x, k0, win, cb, sb, out):  # type: ignore[no-untyped-def]
     ``< 0``: no first-order motion, zeros), interpolated in its window ``win[i]`` (the HF
     position amplitude and heading rows of its chunk, from the sample ``k0[i]``), with the
     waves' direction cosines ``cb[i]``, ``sb[i]``, into ``out[i]`` ``(dx m, dy m, dpsi rad)``.
+    A window holds the samples ``k0[i] ... k0[i] + W - 1`` (W = ``win.shape[2]``).
 
     Returns:
         -1, or the first row whose position lies outside its window (load its chunk, call
@@ -98,7 +100,7 @@ def wf_rows(x, k0, win, cb, sb, out):  # type: ignore[no-untyped-def]
             continue
         k = int(xi)
         j = k - k0[i]
-        if j < 0 or j >= _CHUNK:
+        if j < 0 or j >= win.shape[2] - 1:
             return i
         f = xi - k
         d0 = win[i, 0, j]
@@ -112,11 +114,19 @@ def wf_rows(x, k0, win, cb, sb, out):  # type: ignore[no-untyped-def]
 
 @njit
 def modal_filter_rows(lam, Gm, z, zi, s):  # type: ignore[no-untyped-def]
+    """:func:`modal_filter_piece` over the whole chunk (``zi`` left as it is)."""
+    modal_filter_piece(lam, Gm, z, zi.copy(), s, 0, z.shape[2])
+
+
+@njit
+def modal_filter_piece(lam, Gm, z, zi, s, ka, kb):  # type: ignore[no-untyped-def]
     """The WF filters' modal states over one chunk (the run-time form of
-    :meth:`Waves._filter_chunk`): for each mode ``i`` and DOF ``d`` the modal noise ``u_k =
+    :meth:`Waves._filter_piece`): for each mode ``i`` and DOF ``d`` the modal noise ``u_k =
     sum_j Gm[i, j] z[j, d, k]`` (the complex products with ``z + 0 i``, summed over ``j`` in
     order) and the exact discrete recursion ``s_k = lam_i s_{k-1} + u_k`` from the state
-    ``zi[i, d] = lam_i s_{-1}``, into ``s`` (nf, 2, K) complex. The float operations of
+    ``zi[i, d] = lam_i s_{-1}``, into ``s`` (nf, 2, K) complex; only the samples ``ka ... kb -
+    1``, from the states ``zi`` before ``ka``, left in ``zi`` after ``kb - 1`` (the recursion
+    stopped and taken up again: the same floats). The float operations of
     ``scipy.signal.lfilter([1], [1, -lam_i], u, zi=zi)`` (direct form II transposed, as SciPy
     forms it for complex coefficients: ``a_0 = 1``, ``b = [1, 0]``), so the samples stay the
     same floats."""
@@ -136,7 +146,7 @@ def modal_filter_rows(lam, Gm, z, zi, s):  # type: ignore[no-untyped-def]
         for d in range(2):
             zr = zi[i, d].real
             zim = zi[i, d].imag
-            for k in range(z.shape[2]):
+            for k in range(ka, kb):
                 xr = 0.0
                 xi = 0.0
                 for j in range(nf):
@@ -151,18 +161,20 @@ def modal_filter_rows(lam, Gm, z, zi, s):  # type: ignore[no-untyped-def]
                 zr -= (tr * yr - ti * yi) / mag
                 zim -= (ti * yr + tr * yi) / mag
                 s[i, d, k] = complex(yr, yi)
+            zi[i, d] = complex(zr, zim)
 
 
 class WaveMotionRows:
     """The first-order motion of N wave fields (``None``: none) at their own times, through
-    :func:`wf_rows`, each field's current chunk held in a window (loaded on first use)."""
+    :func:`wf_rows`, each field's current piece held in a window (:meth:`Waves.window`,
+    loaded on first use)."""
 
     def __init__(self, waves: list[Any]) -> None:
         n = len(waves)
         self.waves = waves
         self.on = np.array([w is not None and w._wf_on for w in waves])
         self.k0 = np.full(n, -(1 << 62), dtype=np.int64)  # nothing loaded
-        self.win = np.zeros((n, 2, _CHUNK + 1))
+        self.win = np.zeros((n, 2, PIECE + 1))
         self.inv_dt = np.array([w._inv_dt if w is not None else 0.0 for w in waves])
         self.cb = np.array([w._cb if w is not None else 0.0 for w in waves])
         self.sb = np.array([w._sb if w is not None else 0.0 for w in waves])
@@ -182,16 +194,16 @@ class WaveMotionRows:
         return self.out.copy()
 
     def run(self, x: NDArray[np.float64]) -> None:
-        """:func:`wf_rows` at the grid positions ``x`` (n,) into :attr:`out`, each row's chunk
+        """:func:`wf_rows` at the grid positions ``x`` (n,) into :attr:`out`, each row's piece
         loaded where it is not in its window."""
         args = (x, self.k0, self.win, self.cb, self.sb, self.out)
         if self._entry is None:
             self._entry = entry(wf_rows, args)
         i = self._entry(*args)
         while i >= 0:
-            j = int(x[i]) // _CHUNK
-            self.win[i] = self.waves[i].chunk(j)[1:3]
-            self.k0[i] = j * _CHUNK
+            k0, rows = self.waves[i].window(int(x[i]))
+            self.win[i] = rows[1:3]
+            self.k0[i] = k0
             i = self._entry(*args)
 
 
@@ -483,7 +495,7 @@ class WaveConfig:
         return from_mapping(cls, mapping, where="wave config")
 
 
-class Waves:
+class Waves(PieceGrid):
     """Runtime wave model for one vessel: elevation, WF motion and drift loads.
 
     Args:
@@ -536,6 +548,7 @@ class Waves:
         self._wf_x = np.zeros(1)  # and its grid position
         self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
         self._bins: Any = None  # the sea's harmonic_bins (computed at the first reset)
+        self._table: Any = None
         self._mean_E = 0.0
         self._reset_grid()
         self._ready = self.calm
@@ -574,7 +587,7 @@ class Waves:
         return lam_i, Vinv @ Gq, Vinv @ G0, V[out, :], n
 
     def _reset_grid(self) -> None:
-        self._chunks: list[NDArray[np.float64]] = []
+        self._clear_pieces()
         self._cache: dict[int, tuple[list[float], list[float], list[float]]] = {}
         self._j = -1
         self._k0 = 0
@@ -627,6 +640,7 @@ class Waves:
         else:
             sqrtR = np.full(n, math.sqrt(float(r)))
         self._w, self._A, self._eps, self._sqrtR = w, A, eps, sqrtR
+        self._table: Any = None  # harmonic_table of the sea (at its first piece)
         self._cdrift = A * sqrtR
         self._mean_E = float(np.sum(self._cdrift**2))
         k = w * w / G
@@ -645,9 +659,31 @@ class Waves:
 
     # -- grid generation --------------------------------------------------------------------
 
-    def _make_chunk(self, j: int) -> NDArray[np.float64]:
-        """Rows ``[E, d, h]`` on grid points ``j*CHUNK .. (j+1)*CHUNK`` (inclusive)."""
-        rows = np.zeros((3, _CHUNK + 1))
+    def _ready_check(self) -> None:
+        if not self._ready:
+            raise RuntimeError("call Waves.reset(rng) before querying the waves")
+
+    def _begin(self, j: int) -> NDArray[np.float64]:
+        """Chunk ``j`` begun (rows ``[E, d, h]`` on grid points ``j*CHUNK .. (j+1)*CHUNK``,
+        inclusive): the WF filters' noise ``standard_normal((nf, 2, CHUNK))`` (its last row as
+        far as read, :meth:`~shipgym.disturbances._grid.PieceGrid._normals`) and their
+        recursion's state before its first sample."""
+        if self._filter is not None:
+            assert self._rng_wf is not None and self._q is not None
+            lam_i, _, _, _, nf = self._filter
+            self._z = self._normals(self._rng_wf, (nf, 2, _CHUNK))  # the (nf, 2 CHUNK) draw
+            zi = np.empty((nf, 2), dtype=complex)
+            for i in range(nf):
+                zi[i] = lam_i[i] * self._q[i]  # the recursion's state before the first sample
+            self._zi = zi
+            self._s = np.empty((nf, 2, _CHUNK), dtype=complex)
+        return np.zeros((3, _CHUNK + 1))
+
+    def _piece(self, j: int, ka: int, kb: int) -> None:
+        """Samples ``ka ... kb - 1`` of chunk ``j``: the drift envelope and the RAO motion
+        (harmonic sums on the chunk's grid from ``t0 = j CHUNK dt``), or the WF filters'
+        samples (:meth:`_filter_piece`)."""
+        rows = self._chunks[j]
         need_rao = self._wf_on and self.config.wf_model == "rao"
         if self._drift_on or need_rao:
             weights = []
@@ -656,57 +692,58 @@ class Waves:
             if need_rao:
                 weights += [self._A, self._kA]
             t0 = j * _CHUNK * self._dt
-            sums = harmonic_sums(t0, self._dt, _CHUNK + 1, self._w, self._eps, np.array(weights))
+            if self._table is None:
+                self._table = harmonic_table(self._dt, self._w)
+            sums = harmonic_sums(
+                t0, self._dt, kb - ka, self._w, self._eps, np.array(weights), start=ka,
+                table=self._table,
+            )  # fmt: skip
             r = 0
             if self._drift_on:
-                rows[0] = sums[0].real ** 2 + sums[0].imag ** 2
+                rows[0, ka:kb] = sums[0].real ** 2 + sums[0].imag ** 2
                 r = 1
             if need_rao:
-                rows[1] = self._g_rao[0] * sums[r].imag
-                rows[2] = self._g_rao[1] * sums[r + 1].imag
+                rows[1, ka:kb] = self._g_rao[0] * sums[r].imag
+                rows[2, ka:kb] = self._g_rao[1] * sums[r + 1].imag
         if self._filter is not None:
-            rows[1:] = self._filter_chunk()
-        return rows
+            rows[1:, ka:kb] = self._filter_piece(ka, kb)
 
-    def _filter_chunk(self) -> NDArray[np.float64]:
-        """Advance the WF filters by one chunk (exact discrete recursion, modal; compiled:
-        :func:`modal_filter_rows`)."""
-        assert self._filter is not None and self._rng_wf is not None and self._q is not None
+    def _filter_piece(self, ka: int, kb: int) -> NDArray[np.float64]:
+        """The WF filters' samples ``ka ... kb - 1`` of the chunk being filled (exact discrete
+        recursion, modal; compiled: :func:`modal_filter_piece`), (2, kb - ka)."""
+        assert self._filter is not None and self._q is not None
         lam_i, Gm, _, c_out, nf = self._filter
-        z = standard_normals(self._rng_wf, (nf, 2, _CHUNK))  # the (nf, 2 CHUNK) draw
-        zi = np.empty((nf, 2), dtype=complex)
+        sa = ka - 1 if ka > 0 else 0  # the modal states s_k of the samples k + 1
+        s = self._s
+        self._draw_to(self._z, kb)
+        modal_filter_piece(
+            np.ascontiguousarray(lam_i), np.ascontiguousarray(Gm), self._z, self._zi, s, sa,
+            kb - 1,
+        )  # fmt: skip
+        y = np.zeros((2, kb - ka), dtype=complex)
+        first = 1 if ka == 0 else 0
         for i in range(nf):
-            zi[i] = lam_i[i] * self._q[i]  # the recursion's state before the first sample
-        s = np.empty((nf, 2, _CHUNK), dtype=complex)
-        modal_filter_rows(np.ascontiguousarray(lam_i), np.ascontiguousarray(Gm), z, zi, s)
-        y = np.zeros((2, _CHUNK + 1), dtype=complex)
-        for i in range(nf):
-            y[:, 0] += c_out[i] * self._q[i]
-            y[:, 1:] += c_out[i] * s[i]
-        self._q = s[:, :, -1].copy()
+            if ka == 0:
+                y[:, 0] += c_out[i] * self._q[i]
+            y[:, first:] += c_out[i] * s[i, :, sa : kb - 1]
+        if kb == _CHUNK + 1:
+            self._q = s[:, :, -1].copy()
         out = y.real
         out[0] *= self._sig_d
         out[1] *= self._sig_h
         return out
 
-    def _extend_to(self, j: int) -> None:
-        if not self._ready:
-            raise RuntimeError("call Waves.reset(rng) before querying the waves")
-        while len(self._chunks) <= j:
-            self._chunks.append(self._make_chunk(len(self._chunks)))
-
     def _select(self, j: int) -> None:
         lists = self._cache.get(j)
         if lists is None:
-            self._extend_to(j)
-            arr = self._chunks[j]
+            _k0, arr = self.window(j * PIECE)
             lists = (arr[0].tolist(), arr[1].tolist(), arr[2].tolist())
             if len(self._cache) >= 2:
                 del self._cache[next(iter(self._cache))]
             self._cache[j] = lists
         self._E, self._D, self._H = lists
         self._j = j
-        self._k0 = j * _CHUNK
+        self._k0 = j * PIECE
 
     def _grid(self, rows: slice, t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Linearly interpolated grid rows at times ``t`` (vectorised); returns (rows, shape)."""
@@ -767,8 +804,8 @@ class Waves:
         if not x >= 0.0:
             raise ValueError(f"Waves.drift_load: time must be >= 0 s, got {t!r}")
         k = int(x)
-        if k // _CHUNK != self._j:
-            self._select(k // _CHUNK)
+        if k // PIECE != self._j:
+            self._select(k // PIECE)
         i = k - self._k0
         E = self._E
         e0 = E[i]

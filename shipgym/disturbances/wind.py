@@ -35,8 +35,14 @@ from shipgym._jit import njit
 from shipgym.dynamics.params import WindageParameters
 
 from ._boundary import coerce_config, parse_config
-from ._grid import CHUNK, GridPair, gauss_markov_rows
-from .spectra import harmonic_bins, harmonic_components, harmonic_sums, wind_gust_spectrum
+from ._grid import CHUNK, GridPair, gauss_markov_piece
+from .spectra import (
+    harmonic_bins,
+    harmonic_components,
+    harmonic_sums,
+    harmonic_table,
+    wind_gust_spectrum,
+)
 
 __all__ = [
     "BlendermannCoefficients",
@@ -809,6 +815,7 @@ class Wind(GridPair):
         self._spectral = cfg.is_spectral and cfg.gust_sigma > 0.0
         self._gw = self._ga = self._gph = np.zeros(0)
         self._bins: Any = None  # the spectral gust's harmonic_bins (computed at the first reset)
+        self._table: Any = None
         self._clear()
         self._rng: np.random.Generator | None = None
 
@@ -851,40 +858,52 @@ class Wind(GridPair):
                     cfg.gust_psd, lo, hi, n, child, log=True, bins=self._bins
                 )
                 self._gw, self._ga, self._gph = 2.0 * math.pi * f, a, ph
+                self._table: Any = None  # harmonic_table of the gust (at its first piece)
 
-    def _extend_to(self, j: int) -> None:
-        """Generate chunks in time order until chunk ``j`` exists."""
+    def _ready_check(self) -> None:
         if self._rng is None:
             raise RuntimeError("call Wind.reset(rng) before querying a gusty wind")
-        rng = self._rng
-        if self._spectral:
-            self._extend_spectral(j, rng)
-            return
-        inf = math.inf
-        m, a, b = np.array([self._mean_v, self._mean_b]), np.array(self._a), np.array(self._b)
-        lo, hi = np.full(2, -inf), np.full(2, inf)
-        while len(self._chunks) <= j:
-            rows = np.empty((2, CHUNK + 1))
-            # the deviation x_{k+1} = a x_k + b e_k of each channel about its mean, from the
-            # normals standard_normal((2, CHUNK))
-            x = np.array(self._state)
-            gauss_markov_rows(rng, x, m, a, b, lo, hi, True, rows)
-            self._state = (float(x[0]), float(x[1]))
-            self._chunks.append(rows)
 
-    def _extend_spectral(self, j: int, rng: np.random.Generator) -> None:
-        """Chunks of a spectral speed gust (harmonic sum) and a Gauss-Markov direction gust."""
-        a, b, m = np.array(self._a[1:]), np.array(self._b[1:]), np.array([self._mean_b])
-        lo, hi = np.full(1, -math.inf), np.full(1, math.inf)
-        while len(self._chunks) <= j:
-            rows = np.empty((2, CHUNK + 1))
-            x = np.array([self._state[1]])  # the direction gust, from standard_normal(CHUNK)
-            gauss_markov_rows(rng, x, m, a, b, lo, hi, True, rows[1:])
-            self._state = (0.0, float(x[0]))
-            t0 = len(self._chunks) * CHUNK * self._dt
-            gust = harmonic_sums(t0, self._dt, CHUNK + 1, self._gw, self._gph, self._ga, real=True)
-            rows[0] = self._mean_v + gust
-            self._chunks.append(rows)
+    def _begin(self, j: int) -> NDArray[np.float64]:
+        """Chunk ``j`` begun from the gust states at its start: its normals
+        ``standard_normal((2, CHUNK))`` (the speed and direction gusts; a spectral speed gust:
+        ``standard_normal((1, CHUNK))``, the direction's), the last row as far as read
+        (:meth:`~shipgym.disturbances._grid.PieceGrid._normals`)."""
+        assert self._rng is not None
+        inf = math.inf
+        if self._spectral:  # the direction gust only
+            a, b, m = np.array(self._a[1:]), np.array(self._b[1:]), np.array([self._mean_b])
+            x = np.array([self._state[1]])
+        else:  # the deviation x_{k+1} = a x_k + b e_k of each channel about its mean
+            m, a, b = np.array([self._mean_v, self._mean_b]), np.array(self._a), np.array(self._b)
+            x = np.array(self._state)
+        self._gm = (x, m, a, b, np.full(x.size, -inf), np.full(x.size, inf))
+        self._e = self._normals(self._rng, (x.size, CHUNK))
+        return np.empty((2, CHUNK + 1))
+
+    def _piece(self, j: int, ka: int, kb: int) -> None:
+        """Samples ``ka ... kb - 1`` of chunk ``j``: the Gauss-Markov gusts' recursion
+        (:func:`~shipgym.disturbances._grid.gauss_markov_piece`), a spectral speed gust's
+        harmonic sum on the chunk's grid from ``t0 = j CHUNK dt``."""
+        rows = self._chunks[j]
+        x, m, a, b, lo, hi = self._gm
+        self._draw_to(self._e, kb)
+        if self._spectral:
+            gauss_markov_piece(x, m, a, b, lo, hi, True, self._e, ka, kb, rows[1:])
+            t0 = j * CHUNK * self._dt
+            if self._table is None:
+                self._table = harmonic_table(self._dt, self._gw)
+            gust = harmonic_sums(
+                t0, self._dt, kb - ka, self._gw, self._gph, self._ga, real=True, start=ka,
+                table=self._table,
+            )  # fmt: skip
+            rows[0, ka:kb] = self._mean_v + gust
+            if kb == CHUNK + 1:
+                self._state = (0.0, float(x[0]))
+        else:
+            gauss_markov_piece(x, m, a, b, lo, hi, True, self._e, ka, kb, rows)
+            if kb == CHUNK + 1:
+                self._state = (float(x[0]), float(x[1]))
 
     # -- queries ----------------------------------------------------------------------------
 

@@ -20,7 +20,6 @@ import numpy as np
 from numba import carray, prange
 
 from shipgym._jit import _DISABLED, ACCEL_SIG, accel_at, address, entry, njit
-from shipgym.disturbances._grid import CHUNK
 from shipgym.disturbances.wind import blendermann_load
 from shipgym.dynamics.actuators import tau_of_table
 from shipgym.sim._mujoco import mujoco
@@ -291,8 +290,8 @@ def _hulls(  # type: ignore[no-untyped-def]
     loads, forces, flags, hits, stopped, status,
 ):  # fmt: skip
     """Hulls ``first .. end - 1`` of :func:`run`, one after the other: each its ``left[i]`` steps
-    and its code in ``status[i, 0]`` (``NEED`` with the process slot and chunk in
-    ``status[i, 1:]``); returns the largest code."""
+    and its code in ``status[i, 0]`` (``NEED`` with the process slot and the sample its time
+    lies in, ``int(t inv_dt)``, in ``status[i, 1:]``); returns the largest code."""
     worst = OK
     nq = q.shape[1]
     n_ch = chan.shape[0]
@@ -321,7 +320,7 @@ def _hulls(  # type: ignore[no-untyped-def]
             if not (ok_w and ok_c and ok_d):
                 slot = WIND if not ok_w else (CURRENT if not ok_c else DRIFT)
                 status[i, 0], status[i, 1] = NEED, slot
-                status[i, 2] = int(ti * inv_dt[i, slot]) // CHUNK
+                status[i, 2] = int(ti * inv_dt[i, slot])
                 break
             vw = vw if vw > 0.0 else 0.0  # a gust's speed never below 0
             if m_w != OFF:
@@ -529,7 +528,7 @@ def run(integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-def]
             - hits: (N, nc) int64 out: 1 where a servo ran at its rate limit in the last
               step;
             - stopped: (N,) int64 out: the steps a contact stop left untaken (``mujoco``);
-            - status: (N, 3) int64 out: each hull's code, and the process and the chunk it
+            - status: (N, 3) int64 out: each hull's code, and the process and the sample it
               needs (``NEED``); a hull that diverged (``DIVERGED``) has its t, nu, nu_dot in
               ``loads[i]``; ``RESET``: MuJoCo reset the hull's bad state. Every hull runs on
               whatever another one needs.
@@ -773,7 +772,7 @@ class HullBatch:
             self.mode[i, slot] = SAMPLED
             self.processes[slot][i] = proc
             self.inv_dt[i, slot] = proc.sample_rate
-            self._load(i, slot, int(self.t[i] * proc.sample_rate) // CHUNK)
+            self._load(i, slot, int(self.t[i] * proc.sample_rate))
         drift = None if waves is None else waves.drift_constants
         self.processes[DRIFT][i] = None
         if drift is None:
@@ -784,19 +783,22 @@ class HullBatch:
             self.processes[DRIFT][i] = waves
             self.drift_k[i] = drift
             self.inv_dt[i, DRIFT] = waves.sample_rate
-            self._load(i, DRIFT, int(self.t[i] * waves.sample_rate) // CHUNK)
+            self._load(i, DRIFT, int(self.t[i] * waves.sample_rate))
 
-    def _load(self, i: int, slot: int, j: int) -> None:
-        """Chunk ``j`` of hull ``i``'s process ``slot`` into its window."""
-        chunk = self.processes[slot][i].chunk(j)[:2]
+    def _load(self, i: int, slot: int, k: int) -> None:
+        """The piece of hull ``i``'s process ``slot`` that holds the sample ``k`` into its
+        window (``window(k)``: only that piece is computed, :data:`~shipgym.disturbances.
+        _grid.PIECE` samples)."""
+        k0, rows = self.processes[slot][i].window(k)
+        rows = rows[:2]
         win = self.windows[slot]
-        if win.shape[2] != chunk.shape[1]:
-            win = np.zeros((self.n, 2, chunk.shape[1]))
+        if win.shape[2] != rows.shape[1]:
+            win = np.zeros((self.n, 2, rows.shape[1]))
             win[:] = self.windows[slot][:, :, :1]
             self.windows[slot] = win
             self._args = None
-        win[i] = chunk
-        self.k0[i, slot] = j * CHUNK
+        win[i] = rows
+        self.k0[i, slot] = k0
 
     # ---- state ---------------------------------------------------------------------------
     @property
