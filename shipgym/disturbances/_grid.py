@@ -131,6 +131,10 @@ class PieceGrid:
     at a reset. Chunk ``j`` is computed only once the chunks before it are whole.
     """
 
+    #: samples computed past a window's last one with its piece: 1 (the next sample), or a
+    #: harmonic sum's block (64), so that every block of the sums is computed once, whole
+    _LEAD = 1
+
     _chunks: list[NDArray[np.float64]]
     _fill: int  # samples of the last chunk computed (CHUNK + 1: whole)
     _drawn: int  # normals of the chunk being filled drawn (flat, C order)
@@ -181,7 +185,8 @@ class PieceGrid:
                 self._chunks.append(self._begin(last + 1))
                 self._fill = 0
                 continue
-            want = CHUNK + 1 if last < j else min(CHUNK + 1, -(-(n - 1) // PIECE) * PIECE + 1)
+            lead = self._LEAD
+            want = CHUNK + 1 if last < j else min(CHUNK + 1, -(-(n - 1) // PIECE) * PIECE + lead)
             self._piece(last, self._fill, want)
             self._fill = want
 

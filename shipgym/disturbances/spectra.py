@@ -43,6 +43,8 @@ __all__ = [
     "fit_shaping_filter_lambda",
     "harmonic_bins",
     "harmonic_components",
+    "HARMONIC_BLOCK",
+    "harmonic_rows",
     "harmonic_sums",
     "harmonic_table",
     "FROUDE_EXPONENTS",
@@ -417,7 +419,7 @@ def harmonic_components(
 
 
 #: grid points per block of :func:`harmonic_sums` (the block factor is computed directly)
-_BLOCK = 64
+HARMONIC_BLOCK = 64
 
 
 @njit
@@ -425,7 +427,7 @@ def _in_block(dt, w, zr, zi):  # type: ignore[no-untyped-def]
     """The in-block factors ``exp(i w_j (dt m))`` of :func:`harmonic_sums` into ``zr``, ``zi``
     (N, 64): their cosines and sines."""
     for j in range(w.shape[0]):
-        for m in range(_BLOCK):
+        for m in range(HARMONIC_BLOCK):
             x = (dt * m) * w[j]
             zr[j, m] = math.cos(x)
             zi[j, m] = math.sin(x)
@@ -436,14 +438,14 @@ def harmonic_table(dt: float, w: NDArray[np.float64]) -> tuple[NDArray[np.float6
     angular frequencies ``w`` (rad/s): ``(cos, sin)`` of ``w_j dt m``, (N, 64) each, computed
     once for a realisation whose pieces are summed one by one (``table=``)."""
     w = np.ascontiguousarray(w, dtype=float)
-    zr = np.empty((w.shape[0], _BLOCK))
-    zi = np.empty((w.shape[0], _BLOCK))
+    zr = np.empty((w.shape[0], HARMONIC_BLOCK))
+    zi = np.empty((w.shape[0], HARMONIC_BLOCK))
     _in_block(float(dt), w, zr, zi)
     return zr, zi
 
 
 @njit
-def _harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
+def harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
     """:func:`harmonic_sums` of the real weights ``c`` (R, N) at the grid points ``k = start
     ... start + n - 1`` into ``out`` (R, 2, n): the real
     parts (``out[r, 0]``) and, where ``imag``, the imaginary parts (``out[r, 1]``; else left
@@ -457,22 +459,22 @@ def _harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ign
     floats as in the whole grid (a partly read block is summed whole)."""
     nj = w.shape[0]
     end = start + n
-    b_first = start // _BLOCK
-    n_blk = -(-end // _BLOCK)
-    step = _BLOCK * dt
+    b_first = start // HARMONIC_BLOCK
+    n_blk = -(-end // HARMONIC_BLOCK)
+    step = HARMONIC_BLOCK * dt
     cb = np.empty(nj)
     sb = np.empty(nj)
-    acc_r = np.empty(_BLOCK)
-    acc_i = np.empty(_BLOCK)
+    acc_r = np.empty(HARMONIC_BLOCK)
+    acc_i = np.empty(HARMONIC_BLOCK)
     for b in range(b_first, n_blk):
         tb = t0 + step * b
         for j in range(nj):
             x = tb * w[j] + eps[j]
             cb[j] = math.cos(x)
             sb[j] = math.sin(x)
-        k0 = b * _BLOCK
+        k0 = b * HARMONIC_BLOCK
         m0 = start - k0 if start > k0 else 0
-        m1 = min(_BLOCK, end - k0)
+        m1 = min(HARMONIC_BLOCK, end - k0)
         for r in range(c.shape[0]):
             acc_r[:] = 0.0
             acc_i[:] = 0.0
@@ -480,11 +482,15 @@ def _harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ign
                 # the block factor times the weight (a complex product with c_j + 0 i)
                 ar = cb[j] * c[r, j]
                 ai = sb[j] * c[r, j]
-                for m in range(_BLOCK):
-                    acc_r[m] += ar * zr[j, m] - ai * zi[j, m]
-                if imag:
-                    for m in range(_BLOCK):
-                        acc_i[m] += ar * zi[j, m] + ai * zr[j, m]
+                if imag:  # both parts in one pass over the in-block factors
+                    for m in range(HARMONIC_BLOCK):
+                        x = zr[j, m]
+                        y = zi[j, m]
+                        acc_r[m] += ar * x - ai * y
+                        acc_i[m] += ar * y + ai * x
+                else:
+                    for m in range(HARMONIC_BLOCK):
+                        acc_r[m] += ar * zr[j, m] - ai * zi[j, m]
             for m in range(m0, m1):
                 out[r, 0, k0 + m - start] = acc_r[m]
             if imag:
@@ -510,7 +516,7 @@ def harmonic_sums(
     With ``k = 64 b + m`` the phasor factorises into a block factor ``exp(i (w_j (t0 + 64 b dt)
     + eps_j))`` and an in-block factor ``exp(i w_j m dt)``, so each row is one small product
     instead of ``n x N`` complex exponentials; every block factor is computed directly, so no
-    rounding error accumulates. Compiled (:func:`_harmonic_rows`); complex weights are summed
+    rounding error accumulates. Compiled (:func:`harmonic_rows`); complex weights are summed
     as their real and imaginary parts' sums.
 
     Args:
@@ -547,7 +553,7 @@ def harmonic_sums(
     c = np.ascontiguousarray(c, dtype=float)
     rows = np.zeros((c.shape[0], 2, n))
     zr, zi = harmonic_table(dt, w) if table is None else table
-    _harmonic_rows(float(t0), float(dt), int(start), int(n), w, eps, c, not real, zr, zi, rows)
+    harmonic_rows(float(t0), float(dt), int(start), int(n), w, eps, c, not real, zr, zi, rows)
     if real:
         out = rows[:, 0]
     else:

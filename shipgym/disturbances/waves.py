@@ -31,12 +31,13 @@ from shipgym.dynamics.params import HullParameters
 
 from ._grid import CHUNK, PIECE, PieceGrid
 from .spectra import (
+    HARMONIC_BLOCK,
     RHO_WATER,
     G,
     fit_shaping_filter_lambda,
     harmonic_bins,
     harmonic_components,
-    harmonic_sums,
+    harmonic_rows,
     harmonic_table,
     wave_spectrum,
 )
@@ -512,6 +513,8 @@ class Waves(PieceGrid):
         >>> dx, dy, dpsi = waves.wf_motion(12.3)        # add to the measured pose (NED)
     """
 
+    _LEAD = HARMONIC_BLOCK  # a piece's harmonic sums whole blocks (PieceGrid)
+
     def __init__(
         self,
         config: WaveConfig | None = None,
@@ -547,6 +550,7 @@ class Waves(PieceGrid):
         self._wf_rows: WaveMotionRows | None = None  # wf_motion's window (one row)
         self._wf_x = np.zeros(1)  # and its grid position
         self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
+        self._weights = np.zeros((0, 0))  # the harmonic sums' weights of a piece (reset)
         self._bins: Any = None  # the sea's harmonic_bins (computed at the first reset)
         self._table: Any = None
         self._mean_E = 0.0
@@ -651,6 +655,11 @@ class Waves(PieceGrid):
             self._sig_h / math.sqrt(0.5 * ka2) if ka2 > 0 else 0.0,
         )
         self._kA = k * A
+        weights = [self._cdrift] if self._drift_on else []
+        if self._wf_on and cfg.wf_model == "rao":
+            weights += [A, self._kA]
+        self._weights = np.ascontiguousarray(np.reshape(weights, (len(weights), n)), dtype=float)
+        self._sums = np.empty((len(weights), 2, PIECE + HARMONIC_BLOCK))  # a piece's harmonic sums
         if self._filter is not None:
             self._rng_wf = np.random.default_rng(int(s_wf))
             lam_i, _, G0, _, nf = self._filter
@@ -684,27 +693,27 @@ class Waves(PieceGrid):
         (harmonic sums on the chunk's grid from ``t0 = j CHUNK dt``), or the WF filters'
         samples (:meth:`_filter_piece`)."""
         rows = self._chunks[j]
-        need_rao = self._wf_on and self.config.wf_model == "rao"
-        if self._drift_on or need_rao:
-            weights = []
-            if self._drift_on:
-                weights.append(self._cdrift)
-            if need_rao:
-                weights += [self._A, self._kA]
-            t0 = j * _CHUNK * self._dt
+        weights = self._weights
+        if weights.shape[0]:
             if self._table is None:
                 self._table = harmonic_table(self._dt, self._w)
-            sums = harmonic_sums(
-                t0, self._dt, kb - ka, self._w, self._eps, np.array(weights), start=ka,
-                table=self._table,
-            )  # fmt: skip
+            zr, zi = self._table
+            n = kb - ka
+            if self._sums.shape[2] < n:
+                self._sums = np.empty((weights.shape[0], 2, n))
+            args = (j * _CHUNK * self._dt, self._dt, ka, n, self._w, self._eps, weights, True,
+                    zr, zi, self._sums)  # fmt: skip
+            entry(harmonic_rows, args)(*args)
+            sums = self._sums[:, :, :n]  # (rows, re/im, n)
             r = 0
             if self._drift_on:
-                rows[0, ka:kb] = sums[0].real ** 2 + sums[0].imag ** 2
+                e = rows[0, ka:kb]
+                np.multiply(sums[0, 0], sums[0, 0], out=e)  # |sum|^2
+                e += sums[0, 1] * sums[0, 1]
                 r = 1
-            if need_rao:
-                rows[1, ka:kb] = self._g_rao[0] * sums[r].imag
-                rows[2, ka:kb] = self._g_rao[1] * sums[r + 1].imag
+            if r < weights.shape[0]:  # the RAO motion
+                rows[1, ka:kb] = self._g_rao[0] * sums[r, 1]
+                rows[2, ka:kb] = self._g_rao[1] * sums[r + 1, 1]
         if self._filter is not None:
             rows[1:, ka:kb] = self._filter_piece(ka, kb)
 

@@ -37,6 +37,7 @@ from shipgym.dynamics.params import WindageParameters
 from ._boundary import coerce_config, parse_config
 from ._grid import CHUNK, GridPair, gauss_markov_piece
 from .spectra import (
+    HARMONIC_BLOCK,
     harmonic_bins,
     harmonic_components,
     harmonic_sums,
@@ -813,6 +814,8 @@ class Wind(GridPair):
             (self._mean_v, self._mean_b) if cfg.is_constant else None
         )
         self._spectral = cfg.is_spectral and cfg.gust_sigma > 0.0
+        if self._spectral:  # a piece's harmonic sums whole blocks (PieceGrid)
+            self._LEAD = HARMONIC_BLOCK
         self._gw = self._ga = self._gph = np.zeros(0)
         self._bins: Any = None  # the spectral gust's harmonic_bins (computed at the first reset)
         self._table: Any = None
