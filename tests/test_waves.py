@@ -124,7 +124,9 @@ def test_drift_envelope_is_the_newman_geometric_mean_sum() -> None:
     om, A, eps = w.components
     kT = om**2 / G * BLUE_LADY_HULL.T
     sqrtR = np.minimum(1.0, kT / 2)
-    t = np.array([0.0, 0.05, 10.0, 204.8, 777.7])  # grid points: exact
+    h = w.config.grid_period  # Tp / 20 (drift alone)
+    assert h == pytest.approx(BF5["Tp"] / 20.0)
+    t = h * np.array([0.0, 1.0, 200.0, 4096.0, 15554.0])  # grid points: exact
     Z = np.exp(1j * (np.multiply.outer(t, om) + eps)) @ (A * sqrtR)
     assert w.envelope(t) == pytest.approx(np.abs(Z) ** 2, rel=1e-9, abs=1e-15)
     # = the double sum sum_jk a_j a_k cos((w_j - w_k) t + eps_j - eps_k)

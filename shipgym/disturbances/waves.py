@@ -319,7 +319,8 @@ class WaveConfig:
         wf_peak_frequency: Where the ``"al-takie"`` filter's peak ``|G(jw)|`` falls (rad/s);
             ``None``: on ``w_p``. The offshore DP tasks put it on the thesis's own peak
             (:func:`al_takie_hf_peak_frequency`, Froude-scaled). Other models ignore it.
-        sample_period: Grid of the precomputed envelope and WF motion (s), ``<= Tp / 10``.
+        sample_period: Grid of the precomputed envelope and WF motion (s), ``<= Tp / 10``;
+            ``None``: ``Tp / 20`` (:attr:`grid_period`; 0.05 s for the lake's 1 s sea).
     """
 
     spectrum: str | None = param("jonswap", "-", "lake default (estimate)")
@@ -340,7 +341,9 @@ class WaveConfig:
     wf_heading_std: float | None = param(None, "rad", "None: rad(2) Hs w_p^2/g [assumption]")
     wf_lambda: float | None = param(None, "1", "None: LS fit (0.102 JONSWAP / 0.257 PM)")
     wf_beaufort: int | None = param(None, "-", "Al-Takie (1982) App. 2 (al-takie model only)")
-    sample_period: float = param(0.05, "s", "grid of the precomputed signals [assumption]")
+    sample_period: float | None = param(
+        None, "s", "None: Tp/20, grid of the precomputed signals [assumption]"
+    )
     wf_peak_frequency: float | None = param(
         None, "rad/s", "None: w_p; peak of the al-takie filter (Al-Takie 1982 App. 2)"
     )
@@ -365,8 +368,8 @@ class WaveConfig:
             val = getattr(self, key)
             if val is not None and not is_real(val):
                 raise ValueError(f"{name}.{key} must be a real number or None, got {val!r}")
-        if not is_real(self.sample_period):
-            raise ValueError(f"{name}.sample_period must be a real number")
+        if self.sample_period is not None and not is_real(self.sample_period):
+            raise ValueError(f"{name}.sample_period must be a real number or None")
         require_finite(self)
         require_angles(self, "direction_from")
         if not 0 <= self.Hs <= MAX_HS:
@@ -436,15 +439,28 @@ class WaveConfig:
                 f"{name}: wf_model 'al-takie' needs wf_beaufort (5-9), the row of Al-Takie's "
                 "(1982) table"
             )
-        if not self.sample_period > 0:
+        if self.sample_period is not None and not self.sample_period > 0:
             raise ValueError(f"{name}.sample_period must be > 0 s, got {self.sample_period!r}")
-        if self.sample_period > self.Tp / 10.0:
+        if self.sample_period is not None and self.sample_period > self.Tp / 10.0:
             raise ValueError(
                 f"{name}.sample_period ({self.sample_period!r} s) must be <= Tp / 10 "
                 f"({self.Tp / 10.0:.4g} s) to resolve the wave-frequency signals"
             )
 
     # -- derived ----------------------------------------------------------------------------
+
+    @property
+    def grid_period(self) -> float:
+        """The grid step of the precomputed signals (s): ``sample_period``, or ``Tp / 20``
+        where it is ``None``, whatever the wave effects on (so switching the first-order
+        motion on leaves the drift as it was). Linear interpolation between samples ``h``
+        apart loses ``(w h)^2 / 8`` of a component's amplitude: on ``Tp / 20``, 0.3 % at the
+        drift envelope's difference frequencies up to ``w_p / 2`` and 1.2 % of the first-order
+        motion at the peak frequency (the offshore sea states,
+        :func:`~shipgym.disturbances.seastate.beaufort`, keep ``min(0.05 s, Tp / 20)``)."""
+        if self.sample_period is not None:
+            return float(self.sample_period)
+        return float(self.Tp) / 20.0
 
     @property
     def peak_frequency(self) -> float:
@@ -528,7 +544,7 @@ class Waves(PieceGrid):
         self.config = cfg = WaveConfig() if config is None else config
         self.hull = hull
         self.rho = float(rho)
-        self._dt = float(cfg.sample_period)
+        self._dt = cfg.grid_period
         self._inv_dt = 1.0 / self._dt
         self._beta_p = float(cfg.direction_from) + math.pi
         self._cb = math.cos(self._beta_p)
