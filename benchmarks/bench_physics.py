@@ -19,9 +19,10 @@ Per vessel:
   open-water envs step with (the same forces, no MuJoCo call);
 - ``batched_hull_steps_per_s``: the batched physics, N = 256 hulls in a gusty wind (each its
   own gusts) and a Gauss-Markov current, 20 steps per call; ``batched_waves_ratio``: the same
-  with the wave drift on (a sea of the vessel's scale) over without. The realisations are
-  generated as the hulls go (a piece of 512 samples of a grid at a time), so their cost is in
-  the figures: a 100-component drift sampled every 0.05 s costs about as much as the hull.
+  with the wave drift on (a sea of the vessel's scale, its grid ``Tp / 20``) over without. The
+  realisations are generated as the hulls go (a piece of 512 samples of a grid at a time), so
+  each batched timing spans a whole number of the wave grid's pieces (at least 4n
+  hull-steps): a timing shorter than a piece would time no generation at all.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ import numpy as np
 from bench_summary import _episode, pair
 
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
+from shipgym.disturbances._grid import PIECE
 from shipgym.dynamics.vessel import load_vessel, vessel_names
 from shipgym.envs.batchphysics import BatchedPhysics
 from shipgym.envs.physics import VesselPhysics
@@ -85,6 +87,17 @@ def _sea(v: Any) -> WaveConfig | None:
     return WaveConfig(Hs=2.5 / s, Tp=8.0 / math.sqrt(s), direction_from=math.radians(210.0))
 
 
+def _whole_pieces(v: Any, calls: int) -> int:
+    """At least ``calls`` calls of 20 steps, as many as span a whole number of pieces of the
+    wave grid of :func:`_sea` (within a call)."""
+    sea = _sea(v)
+    if sea is None:
+        return calls
+    h = BatchedPhysics(v, 1).h
+    per_piece = PIECE * sea.grid_period / h / 20.0  # calls a piece lasts
+    return max(1, round(math.ceil(calls / per_piece) * per_piece))
+
+
 def _batched(v: Any, n_hulls: int, calls: int, waves: WaveConfig | None) -> Callable[[], None]:
     wind = WindConfig(speed=v.nominal_wind, direction_from=math.radians(300.0))
     current = CurrentConfig.from_std(0.3 / math.sqrt(v.scale), 0.5, 0.05, 300.0)
@@ -127,8 +140,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         bare = _bare(f"{name}/bare", build_model(v), n)
         r = pair(bare, _timed(f"{name}/physics", period["mujoco"]), rep)
         lf = pair(bare, _timed(f"{name}/physics_leapfrog", period["leapfrog"]), rep)
-        calm, sea = _batched(v, nh, calls_b, None), _batched(v, nh, calls_b, _sea(v))
-        hs = calls_b * 20 * nh
+        calls = _whole_pieces(v, calls_b)
+        calm, sea = _batched(v, nh, calls, None), _batched(v, nh, calls, _sea(v))
+        hs = calls * 20 * nh
         b = pair(_timed(f"{name}/batched", calm), _timed(f"{name}/batched_waves", sea), rep,
                  per_a=hs, per_b=hs)  # fmt: skip
         rec = {
