@@ -1,14 +1,15 @@
 """Two-channel random processes sampled lazily on a fixed time grid (wind gusts, current).
 
 The samples ``t_k = k * dt`` are generated in chunks of :data:`CHUNK` samples, always in time
-order from ``t = 0``, so a realisation does not depend on the order of the queries. A chunk is
-computed a piece of :data:`PIECE` samples at a time, as far as it is read (a short episode
-reads a few hundred samples of its first chunk): a chunk's random draws are made in their
-order when it is begun (all but the last row's, drawn as far as read), its recursions and
-harmonic sums stop at the end of a piece, so a piece is the same floats as in the whole
-chunk. The piece being read is kept as Python lists, so a scalar query
-(every physics step) costs a few hundred nanoseconds; values between samples are interpolated
-linearly.
+order from ``t = 0``, so a realisation does not depend on the order of the queries. The first
+piece of :data:`PIECE` samples is computed on its own (a reset: a short episode reads a few
+hundred samples of its first chunk), the rest a chunk at a time as it is read (a compiled call
+for thousands of samples, not one for each piece: the Python around a piece cost as much as
+its samples): a chunk's random draws are made in their order when it is begun (all but the
+last row's, drawn as far as read), its recursions and harmonic sums stop at the end of a
+piece, so a piece is the same floats as in the whole chunk. The piece being read is kept as
+Python lists, so a scalar query (every physics step) costs a few hundred nanoseconds; values
+between samples are interpolated linearly.
 """
 
 from __future__ import annotations
@@ -131,8 +132,9 @@ class PieceGrid:
     at a reset. Chunk ``j`` is computed only once the chunks before it are whole.
     """
 
-    #: samples computed past a window's last one with its piece: 1 (the next sample), or a
-    #: harmonic sum's block (64), so that every block of the sums is computed once, whole
+    #: samples computed past the first window's last one with the first piece: 1 (the next
+    #: sample), or a harmonic sum's block (64), so that every block of the sums is computed
+    #: once, whole
     _LEAD = 1
 
     _chunks: list[NDArray[np.float64]]
@@ -185,8 +187,9 @@ class PieceGrid:
                 self._chunks.append(self._begin(last + 1))
                 self._fill = 0
                 continue
-            lead = self._LEAD
-            want = CHUNK + 1 if last < j else min(CHUNK + 1, -(-(n - 1) // PIECE) * PIECE + lead)
+            want = CHUNK + 1  # past the first piece, the rest of the chunk
+            if last == j == 0 and self._fill == 0:  # the first piece: a reset's
+                want = min(CHUNK + 1, -(-(n - 1) // PIECE) * PIECE + self._LEAD)
             self._piece(last, self._fill, want)
             self._fill = want
 
@@ -198,7 +201,7 @@ class PieceGrid:
         """The piece holding sample ``k`` (>= 0) and the piece's next sample: ``(k0, rows)``,
         ``rows`` (R, PIECE + 1) the samples ``k0 ... k0 + PIECE`` of every row (the next
         sample from the same chunk as the piece), ``k0 <= k < k0 + PIECE``; computed on first
-        use, only that far (read only)."""
+        use (the first piece alone, then the rest of its chunk; read only)."""
         j, p = divmod(int(k), CHUNK)
         p -= p % PIECE
         self._fill_to(j, p + PIECE + 1)
