@@ -20,9 +20,10 @@ Per vessel:
 - ``batched_hull_steps_per_s``: the batched physics, N = 256 hulls in a gusty wind (each its
   own gusts) and a Gauss-Markov current, 20 steps per call; ``batched_waves_ratio``: the same
   with the wave drift on (a sea of the vessel's scale, its grid ``Tp / 20``) over without. The
-  realisations are generated as the hulls go (a piece of 512 samples of a grid at a time), so
-  each batched timing spans a whole number of the wave grid's pieces (at least 4n
-  hull-steps): a timing shorter than a piece would time no generation at all.
+  realisations are generated as the hulls go (a chunk of 4096 samples of a grid at a time,
+  after a first piece of 512), so each batched timing spans a whole number of chunks of the
+  wave grid (or of the gusts' grid without waves; at least 4n hull-steps): a shorter timing
+  would time some or none of the generation.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ import numpy as np
 from bench_summary import _episode, pair
 
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
-from shipgym.disturbances._grid import PIECE
+from shipgym.disturbances._grid import CHUNK
 from shipgym.dynamics.vessel import load_vessel, vessel_names
 from shipgym.envs.batchphysics import BatchedPhysics
 from shipgym.envs.physics import VesselPhysics
@@ -87,15 +88,13 @@ def _sea(v: Any) -> WaveConfig | None:
     return WaveConfig(Hs=2.5 / s, Tp=8.0 / math.sqrt(s), direction_from=math.radians(210.0))
 
 
-def _whole_pieces(v: Any, calls: int) -> int:
-    """At least ``calls`` calls of 20 steps, as many as span a whole number of pieces of the
-    wave grid of :func:`_sea` (within a call)."""
+def _whole_chunks(v: Any, calls: int) -> int:
+    """At least ``calls`` calls of 20 steps, as many as span a whole number of chunks of the
+    wave grid of :func:`_sea` (of the gusts' grid without one), within a call."""
     sea = _sea(v)
-    if sea is None:
-        return calls
-    h = BatchedPhysics(v, 1).h
-    per_piece = PIECE * sea.grid_period / h / 20.0  # calls a piece lasts
-    return max(1, round(math.ceil(calls / per_piece) * per_piece))
+    grid = sea.grid_period if sea is not None else WindConfig().sample_period
+    per_chunk = CHUNK * grid / BatchedPhysics(v, 1).h / 20.0  # calls a chunk lasts
+    return max(1, round(math.ceil(calls / per_chunk) * per_chunk))
 
 
 def _batched(v: Any, n_hulls: int, calls: int, waves: WaveConfig | None) -> Callable[[], None]:
@@ -140,7 +139,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         bare = _bare(f"{name}/bare", build_model(v), n)
         r = pair(bare, _timed(f"{name}/physics", period["mujoco"]), rep)
         lf = pair(bare, _timed(f"{name}/physics_leapfrog", period["leapfrog"]), rep)
-        calls = _whole_pieces(v, calls_b)
+        calls = _whole_chunks(v, calls_b)
         calm, sea = _batched(v, nh, calls, None), _batched(v, nh, calls, _sea(v))
         hs = calls * 20 * nh
         b = pair(_timed(f"{name}/batched", calm), _timed(f"{name}/batched_waves", sea), rep,
