@@ -5,7 +5,8 @@ so that the one stepping loop (:mod:`shipgym.sim.step`) takes any hull family's 
 and any actuator kind's force law as a first-class function argument: the loop is compiled
 once (and cached on disk by Numba), a new family or kind compiles only its own small law.
 
-Public names: ``ACCEL_SIG``, ``LAW_SIG``, ``njit``, ``kernel``, ``entry``.
+Public names: ``ACCEL_SIG``, ``LAW_SIG``, ``THREADS``, ``njit``, ``kernel``, ``entry``,
+``threads_ok``, ``use_threads``.
 
 Design notes: docs/design/_jit.md.
 """
@@ -15,6 +16,7 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
+import threading
 import warnings
 from pathlib import Path
 from typing import Any
@@ -25,7 +27,16 @@ from numba import njit as _njit
 from numba import types
 from numba.core.errors import NumbaExperimentalFeatureWarning
 
-__all__ = ["ACCEL_SIG", "LAW_SIG", "njit", "kernel", "entry"]
+__all__ = [
+    "ACCEL_SIG",
+    "LAW_SIG",
+    "THREADS",
+    "njit",
+    "kernel",
+    "entry",
+    "threads_ok",
+    "use_threads",
+]
 
 # first-class function arguments are "experimental" in Numba; the loop relies on them
 warnings.filterwarnings("ignore", category=NumbaExperimentalFeatureWarning)
@@ -178,6 +189,29 @@ def entry(dispatcher: Any, args: tuple[Any, ...]) -> Any:
         dispatcher.compile(sig)
         found = _ENTRIES[key] = dispatcher.overloads[sig].entry_point
     return found
+
+
+# ---- Numba's threads ---------------------------------------------------------------------------
+#: ``used``: this process ran compiled code on Numba's threads; ``allowed``: it may (not in a
+#: child forked from a process that did: GNU OpenMP, Numba's usual threading layer, is not
+#: fork-safe, and Numba ends such a child; not in a worker of a pool that fills the cores)
+THREADS = {"used": False, "allowed": True}
+os.register_at_fork(after_in_child=lambda: THREADS.update(allowed=not THREADS["used"]))
+
+
+def threads_ok() -> bool:
+    """Whether compiled code may run on Numba's threads now: in the main thread (Numba's
+    ``workqueue`` layer may not be entered from two threads at once) of a process allowed to
+    (:data:`THREADS`)."""
+    return THREADS["allowed"] and threading.current_thread() is threading.main_thread()
+
+
+def use_threads() -> None:
+    """Note that this process runs on Numba's threads (before the first parallel call: idle
+    threads sleep, so a busy machine is not slowed by threads spinning for work)."""
+    if not THREADS["used"]:
+        os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+        THREADS["used"] = True
 
 
 # ---- laws by address ------------------------------------------------------------------------

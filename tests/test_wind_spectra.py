@@ -17,7 +17,10 @@ from shipgym.disturbances.spectra import (
     froude_scale,
     gauss_markov_psd,
     harmonic_components,
+    harmonic_rows,
+    harmonic_rows_parallel,
     harmonic_sums,
+    harmonic_table,
     harris_wind_spectrum,
     jonswap,
     model_force,
@@ -229,6 +232,22 @@ def test_harmonic_sums_are_the_numpy_blocks_floats() -> None:
         got = harmonic_sums(t0, dt, n, w, eps, c)
         assert np.array_equal(got, ref)
         assert np.array_equal(harmonic_sums(t0, dt, n, w, eps, c[1], real=True), ref[1].real)
+
+
+@pytest.mark.parametrize("start,n", [(0, 4097), (37, 3000), (576, 3521), (100, 5)])
+def test_harmonic_rows_on_threads_are_the_serial_floats(start: int, n: int) -> None:
+    """A chunk's sums on Numba's threads (its blocks side by side) are the floats of the
+    serial loop, for any range of samples."""
+    rng = np.random.default_rng(5)
+    w = rng.uniform(0.3, 3.0, 100)
+    eps = rng.uniform(0, 2 * np.pi, 100)
+    c = rng.uniform(0.0, 1.0, (3, 100))
+    zr, zi = harmonic_table(0.07, w)
+    args = (11.0, 0.07, start, n, w, eps, c, True, zr, zi)
+    serial, threads = np.zeros((3, 2, n)), np.zeros((3, 2, n))
+    harmonic_rows(*args, serial)
+    harmonic_rows_parallel(*args, threads)
+    assert np.array_equal(serial, threads) and np.all(serial[:, 1] != 0.0)
 
 
 def test_harmonic_components_bin_energy_exact() -> None:

@@ -21,9 +21,10 @@ import numbers
 from typing import Any
 
 import numpy as np
+from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import njit
+from shipgym._jit import entry, njit, threads_ok, use_threads
 
 __all__ = [
     "G",
@@ -44,7 +45,9 @@ __all__ = [
     "harmonic_bins",
     "harmonic_components",
     "HARMONIC_BLOCK",
+    "harmonic_into",
     "harmonic_rows",
+    "harmonic_rows_parallel",
     "harmonic_sums",
     "harmonic_table",
     "FROUDE_EXPONENTS",
@@ -444,6 +447,42 @@ def harmonic_table(dt: float, w: NDArray[np.float64]) -> tuple[NDArray[np.float6
     return zr, zi
 
 
+@njit(inline="always")
+def _harmonic_block(b, t0, dt, start, end, w, eps, c, imag, zr, zi, out, cb, sb, acc_r, acc_i):  # type: ignore[no-untyped-def]
+    """Block ``b`` of :func:`harmonic_rows` (its samples in ``[start, end)``), with the work
+    arrays ``cb``, ``sb`` (N,) and ``acc_r``, ``acc_i`` (64,)."""
+    nj = w.shape[0]
+    tb = t0 + (HARMONIC_BLOCK * dt) * b
+    for j in range(nj):
+        x = tb * w[j] + eps[j]
+        cb[j] = math.cos(x)
+        sb[j] = math.sin(x)
+    k0 = b * HARMONIC_BLOCK
+    m0 = start - k0 if start > k0 else 0
+    m1 = min(HARMONIC_BLOCK, end - k0)
+    for r in range(c.shape[0]):
+        acc_r[:] = 0.0
+        acc_i[:] = 0.0
+        for j in range(nj):
+            # the block factor times the weight (a complex product with c_j + 0 i)
+            ar = cb[j] * c[r, j]
+            ai = sb[j] * c[r, j]
+            if imag:  # both parts in one pass over the in-block factors
+                for m in range(HARMONIC_BLOCK):
+                    x = zr[j, m]
+                    y = zi[j, m]
+                    acc_r[m] += ar * x - ai * y
+                    acc_i[m] += ar * y + ai * x
+            else:
+                for m in range(HARMONIC_BLOCK):
+                    acc_r[m] += ar * zr[j, m] - ai * zi[j, m]
+        for m in range(m0, m1):
+            out[r, 0, k0 + m - start] = acc_r[m]
+        if imag:
+            for m in range(m0, m1):
+                out[r, 1, k0 + m - start] = acc_i[m]
+
+
 @njit
 def harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
     """:func:`harmonic_sums` of the real weights ``c`` (R, N) at the grid points ``k = start
@@ -459,43 +498,40 @@ def harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: igno
     floats as in the whole grid (a partly read block is summed whole)."""
     nj = w.shape[0]
     end = start + n
+    cb, sb = np.empty(nj), np.empty(nj)
+    acc_r, acc_i = np.empty(HARMONIC_BLOCK), np.empty(HARMONIC_BLOCK)
+    for b in range(start // HARMONIC_BLOCK, -(-end // HARMONIC_BLOCK)):
+        _harmonic_block(b, t0, dt, start, end, w, eps, c, imag, zr, zi, out, cb, sb, acc_r,
+                        acc_i)  # fmt: skip
+
+
+@njit(parallel=True)
+def harmonic_rows_parallel(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
+    """:func:`harmonic_rows` with its blocks on Numba's threads (each block the same floats:
+    its factor is computed directly), for a long range (a grid's chunk)."""
+    nj = w.shape[0]
+    end = start + n
     b_first = start // HARMONIC_BLOCK
-    n_blk = -(-end // HARMONIC_BLOCK)
-    step = HARMONIC_BLOCK * dt
-    cb = np.empty(nj)
-    sb = np.empty(nj)
-    acc_r = np.empty(HARMONIC_BLOCK)
-    acc_i = np.empty(HARMONIC_BLOCK)
-    for b in range(b_first, n_blk):
-        tb = t0 + step * b
-        for j in range(nj):
-            x = tb * w[j] + eps[j]
-            cb[j] = math.cos(x)
-            sb[j] = math.sin(x)
-        k0 = b * HARMONIC_BLOCK
-        m0 = start - k0 if start > k0 else 0
-        m1 = min(HARMONIC_BLOCK, end - k0)
-        for r in range(c.shape[0]):
-            acc_r[:] = 0.0
-            acc_i[:] = 0.0
-            for j in range(nj):
-                # the block factor times the weight (a complex product with c_j + 0 i)
-                ar = cb[j] * c[r, j]
-                ai = sb[j] * c[r, j]
-                if imag:  # both parts in one pass over the in-block factors
-                    for m in range(HARMONIC_BLOCK):
-                        x = zr[j, m]
-                        y = zi[j, m]
-                        acc_r[m] += ar * x - ai * y
-                        acc_i[m] += ar * y + ai * x
-                else:
-                    for m in range(HARMONIC_BLOCK):
-                        acc_r[m] += ar * zr[j, m] - ai * zi[j, m]
-            for m in range(m0, m1):
-                out[r, 0, k0 + m - start] = acc_r[m]
-            if imag:
-                for m in range(m0, m1):
-                    out[r, 1, k0 + m - start] = acc_i[m]
+    for bb in prange(-(-end // HARMONIC_BLOCK) - b_first):
+        cb, sb = np.empty(nj), np.empty(nj)
+        acc_r, acc_i = np.empty(HARMONIC_BLOCK), np.empty(HARMONIC_BLOCK)
+        _harmonic_block(b_first + bb, t0, dt, start, end, w, eps, c, imag, zr, zi, out, cb, sb,
+                        acc_r, acc_i)  # fmt: skip
+
+
+#: samples from which :func:`harmonic_into` sums the blocks on Numba's threads
+PARALLEL_SAMPLES = 1024
+
+
+def harmonic_into(args: tuple[Any, ...]) -> None:
+    """:func:`harmonic_rows` of ``args``, its blocks on Numba's threads for a range of at
+    least :data:`PARALLEL_SAMPLES` where this thread may use them
+    (:func:`shipgym._jit.threads_ok`): the same floats either way."""
+    fn = harmonic_rows
+    if args[3] >= PARALLEL_SAMPLES and threads_ok():
+        use_threads()
+        fn = harmonic_rows_parallel
+    entry(fn, args)(*args)
 
 
 def harmonic_sums(
@@ -553,7 +589,7 @@ def harmonic_sums(
     c = np.ascontiguousarray(c, dtype=float)
     rows = np.zeros((c.shape[0], 2, n))
     zr, zi = harmonic_table(dt, w) if table is None else table
-    harmonic_rows(float(t0), float(dt), int(start), int(n), w, eps, c, not real, zr, zi, rows)
+    harmonic_into((float(t0), float(dt), int(start), int(n), w, eps, c, not real, zr, zi, rows))
     if real:
         out = rows[:, 0]
     else:

@@ -37,7 +37,7 @@ from .spectra import (
     fit_shaping_filter_lambda,
     harmonic_bins,
     harmonic_components,
-    harmonic_rows,
+    harmonic_into,
     harmonic_table,
     wave_spectrum,
 )
@@ -719,7 +719,7 @@ class Waves(PieceGrid):
                 self._sums = np.empty((weights.shape[0], 2, n))
             args = (j * _CHUNK * self._dt, self._dt, ka, n, self._w, self._eps, weights, True,
                     zr, zi, self._sums)  # fmt: skip
-            entry(harmonic_rows, args)(*args)
+            harmonic_into(args)
             sums = self._sums[:, :, :n]  # (rows, re/im, n)
             r = 0
             if self._drift_on:

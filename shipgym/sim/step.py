@@ -11,15 +11,23 @@ from __future__ import annotations
 
 import ctypes
 import math
-import os
-import threading
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numba import carray, prange
 
-from shipgym._jit import _DISABLED, ACCEL_SIG, accel_at, address, entry, njit
+from shipgym import _jit
+from shipgym._jit import (
+    _DISABLED,
+    ACCEL_SIG,
+    accel_at,
+    address,
+    entry,
+    njit,
+    threads_ok,
+    use_threads,
+)
 from shipgym.disturbances.wind import blendermann_load
 from shipgym.dynamics.actuators import tau_of_table
 from shipgym.sim._mujoco import mujoco
@@ -61,18 +69,8 @@ MAX_ROLL = 1.2
 PARALLEL_MIN = 128
 
 
-#: ``used``: this process stepped on Numba's threads; ``allowed``: it may (not in a child
-#: forked from a process that did: GNU OpenMP, Numba's usual threading layer, is not
-#: fork-safe, and Numba ends such a child)
-THREADS = {"used": False, "allowed": True}
-os.register_at_fork(after_in_child=lambda: THREADS.update(allowed=not THREADS["used"]))
-
-
-def _threads_ok() -> bool:
-    """Whether a large batch may step on Numba's threads now: in the main thread (Numba's
-    ``workqueue`` layer may not be entered from two threads at once) of a process allowed to
-    (:data:`THREADS`)."""
-    return THREADS["allowed"] and threading.current_thread() is threading.main_thread()
+#: the guard of Numba's threads (:data:`shipgym._jit.THREADS`), here for the callers that set it
+THREADS = _jit.THREADS
 
 
 #: the most physics steps one call may take (5.8 days at 0.05 s): a larger request is a
@@ -1019,12 +1017,9 @@ class HullBatch:
             if self._args is None:
                 self.table_of_arrays()
             fn = run
-            if busy >= PARALLEL_MIN and _threads_ok():
+            if busy >= PARALLEL_MIN and threads_ok():
                 fn = run_parallel
-                if not THREADS["used"]:  # idle threads sleep (before OpenMP starts): a busy
-                    # machine is not slowed by threads spinning for work
-                    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-                    THREADS["used"] = True
+                use_threads()
             if self._entry is None or self._entry[0] is not fn:
                 self._entry = (fn, self._entry_of(fn, integ, stop_on_contact))
             code = self._entry[1](integ, stop_on_contact, self.h, self._p)
