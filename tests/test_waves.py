@@ -319,12 +319,12 @@ def test_from_dict_rejects_unknown_keys() -> None:
         WaveConfig.from_dict({"hs": 0.1})
 
 
-def test_modal_filter_rows_are_lfilter_floats() -> None:
+def test_modal_filter_is_lfilter_floats() -> None:
     """The compiled WF-filter recursion is SciPy's ``lfilter`` (direct form II transposed,
     complex) on the modal noise ``einsum("ij,jdk->idk", Gm, z)``, float for float."""
     from scipy.signal import lfilter
 
-    from shipgym.disturbances.waves import modal_filter_rows
+    from shipgym.disturbances.waves import modal_filter_piece
 
     rng = np.random.default_rng(4)
     nf, k = 4, 500
@@ -334,7 +334,7 @@ def test_modal_filter_rows_are_lfilter_floats() -> None:
     q = rng.normal(size=(nf, 2)) + 1j * rng.normal(size=(nf, 2))
     zi = np.stack([lam[i] * q[i] for i in range(nf)])
     got = np.empty((nf, 2, k), dtype=complex)
-    modal_filter_rows(lam, Gm, z, zi, got)
+    modal_filter_piece(lam, Gm, z, zi.copy(), got, 0, k)  # the whole chunk
     u = np.einsum("ij,jdk->idk", Gm, z)
     for i in range(nf):
         ref = lfilter([1.0], [1.0, -lam[i]], u[i], axis=-1, zi=zi[i][:, None])[0]

@@ -114,12 +114,6 @@ def wf_rows(x, k0, win, cb, sb, out):  # type: ignore[no-untyped-def]
 
 
 @njit
-def modal_filter_rows(lam, Gm, z, zi, s):  # type: ignore[no-untyped-def]
-    """:func:`modal_filter_piece` over the whole chunk (``zi`` left as it is)."""
-    modal_filter_piece(lam, Gm, z, zi.copy(), s, 0, z.shape[2])
-
-
-@njit
 def modal_filter_piece(lam, Gm, z, zi, s, ka, kb):  # type: ignore[no-untyped-def]
     """The WF filters' modal states over one chunk (the run-time form of
     :meth:`Waves._filter_piece`): for each mode ``i`` and DOF ``d`` the modal noise ``u_k =

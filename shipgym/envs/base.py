@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import gymnasium as gym
@@ -751,24 +751,6 @@ def _check_timing(timestep: Any, control_period: Any) -> None:
         )
 
 
-def rudder_action(
-    action: Any, shape: tuple[int, ...], rudders: Sequence[str]
-) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """A steering env's normalised rudder action: ``(clip(a, -1, 1), |a| > 1)``.
-
-    Raises:
-        ValueError: a wrong shape (naming the rudders) or NaN / infinite values.
-    """
-    a = np.asarray(action, dtype=float)
-    if a.shape != shape:
-        raise ValueError(
-            f"action must have shape {shape} (one per rudder: {', '.join(rudders)}), got {a.shape}"
-        )
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"action contains NaN or infinite values: {a}")
-    return np.clip(a, -1.0, 1.0), np.abs(a) > 1.0
-
-
 def _check_render_mode(render_mode: Any, metadata: Mapping[str, Any]) -> None:
     """``ValueError`` unless ``render_mode`` is ``None`` or one of the env's render modes."""
     if render_mode is not None and render_mode not in metadata["render_modes"]:
@@ -803,27 +785,3 @@ def _make_renderer(model: Any) -> Any:
             "machine set MUJOCO_GL=egl (or MUJOCO_GL=osmesa with PYOPENGL_PLATFORM=osmesa and "
             "libosmesa installed) before importing mujoco"
         ) from exc
-
-
-class TopCameraRender:
-    """``render()`` and ``close()`` of an env that holds ``physics`` (a
-    :class:`~shipgym.envs.physics.VesselPhysics` or ``None`` before the first reset),
-    ``render_mode`` and ``_renderer``: an RGB frame from the world's ``top`` camera. Put it
-    before ``gym.Env`` in the bases."""
-
-    physics: Any
-    render_mode: str | None
-    _renderer: Any
-
-    def render(self) -> Any:
-        if self.render_mode is None or self.physics is None:
-            return None
-        if self._renderer is None:
-            self._renderer = _make_renderer(self.physics.model)
-        self._renderer.update_scene(self.physics.data, camera="top")
-        return self._renderer.render()
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None

@@ -416,11 +416,6 @@ class VesselPhysics:
         u, v, _p, r = self._velocity()
         return np.array([u, v, r])
 
-    def _nu3(self) -> tuple[float, float, float]:
-        """``(u, v, r)`` as floats (:attr:`nu`)."""
-        u, v, _p, r = self._velocity()
-        return u, v, r
-
     @property
     def p(self) -> float:
         """Roll rate (rad/s), 0 for a 3-DOF vessel."""
