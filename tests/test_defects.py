@@ -237,12 +237,13 @@ def test_a_vessel_package_may_only_use_its_own_files(tmp_path, element):
 
 #: ``shipgym`` with each recorded step slowed by argv[1] s (a run that lasts while a second
 #: one starts)
-SLOW_CLI = """
-import sys, time
+HELD_CLI = """
+import os, sys, time
 from shipgym.viz import recorder
 _step = recorder.RecordEpisode.step
 def step(self, action):
-    time.sleep(float(sys.argv[1]))
+    while os.path.exists(sys.argv[1]):  # held while the file exists
+        time.sleep(0.01)
     return _step(self, action)
 recorder.RecordEpisode.step = step
 from shipgym.cli import main
@@ -260,20 +261,27 @@ def test_a_second_concurrent_run_on_the_same_outputs_is_refused(tmp_path):
     out = tmp_path / "a.json"
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
     args = ["run", "harbour", "--json", str(out), "--no-progress"]
-    # the first records too, each step slowed: about 13 s of run holding its locks
+    # the first records too, held at its first step (holding its locks) until the second
+    # has been checked
+    hold = tmp_path / "hold"
+    hold.touch()
     first = subprocess.Popen(
-        [sys.executable, "-c", SLOW_CLI, "0.01", *args, "--record", str(tmp_path / "a.rrd")],
+        [sys.executable, "-c", HELD_CLI, str(hold), *args, "--record", str(tmp_path / "a.rrd")],
         env=env, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     lock = tmp_path / ".a.json.lock"
-    for _ in range(1200):  # until the first holds its lock
-        if lock.exists() or first.poll() is not None:
-            break
-        time.sleep(0.05)
-    assert lock.exists(), first.communicate()
-    second = subprocess.run([sys.executable, "-m", "shipgym.cli", *args], env=env, cwd=tmp_path,
-                            capture_output=True, text=True, timeout=300)  # fmt: skip
-    assert first.poll() is None, "the first run ended before the second was checked"
+    try:
+        for _ in range(1200):  # until the first holds its lock
+            if lock.exists() or first.poll() is not None:
+                break
+            time.sleep(0.05)
+        assert lock.exists(), first.communicate()
+        second = subprocess.run([sys.executable, "-m", "shipgym.cli", *args], env=env,
+                                cwd=tmp_path, capture_output=True, text=True,
+                                timeout=300)  # fmt: skip
+        assert first.poll() is None, "the first run ended before the second was checked"
+    finally:  # the first goes on (whatever failed here)
+        hold.unlink()
     assert second.returncode == 2 and "being written by another run" in second.stderr
     assert first.wait(timeout=600) == 0, first.communicate()
     assert out.is_file() and not lock.exists()
