@@ -561,6 +561,7 @@ class Waves(PieceGrid):
         self._wf_x = np.zeros(1)  # and its grid position
         self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
         self._weights = np.zeros((0, 0))  # the harmonic sums' weights of a piece (reset)
+        self._entries: dict[Any, Any] = {}  # harmonic_into's entry points (the same types)
         self._bins: Any = None  # the sea's harmonic_bins (computed at the first reset)
         self._table: Any = None
         self._mean_E = 0.0
@@ -670,6 +671,7 @@ class Waves(PieceGrid):
             weights += [A, self._kA]
         self._weights = np.ascontiguousarray(np.reshape(weights, (len(weights), n)), dtype=float)
         self._sums = np.empty((len(weights), 2, PIECE + HARMONIC_BLOCK))  # a piece's harmonic sums
+        self._entries = {}  # (this realisation's arrays)
         if self._filter is not None:
             self._rng_wf = np.random.default_rng(int(s_wf))
             lam_i, _, G0, _, nf = self._filter
@@ -696,7 +698,12 @@ class Waves(PieceGrid):
                 zi[i] = lam_i[i] * self._q[i]  # the recursion's state before the first sample
             self._zi = zi
             self._s = np.empty((nf, 2, _CHUNK), dtype=complex)
-        return np.zeros((3, _CHUNK + 1))
+        rows = np.empty((3, _CHUNK + 1))  # the rows that no piece writes are zeros
+        if not self._drift_on:
+            rows[0] = 0.0
+        if not self._wf_on:
+            rows[1:] = 0.0
+        return rows
 
     def _piece(self, j: int, ka: int, kb: int) -> None:
         """Samples ``ka ... kb - 1`` of chunk ``j``: the drift envelope and the RAO motion
@@ -713,7 +720,7 @@ class Waves(PieceGrid):
                 self._sums = np.empty((weights.shape[0], 2, n))
             args = (j * _CHUNK * self._dt, self._dt, ka, n, self._w, self._eps, weights, True,
                     zr, zi, self._sums)  # fmt: skip
-            harmonic_into(args)
+            harmonic_into(args, self._entries)
             sums = self._sums[:, :, :n]  # (rows, re/im, n)
             r = 0
             if self._drift_on:
