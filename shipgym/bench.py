@@ -117,12 +117,12 @@ def _watch_owner(owner: int) -> None:
 
 
 def serial_physics() -> None:
-    """This process steps its hull batches on its own thread (:mod:`shipgym.sim.step`): a
-    pool's workers already fill the cores, and threads of their own would oversubscribe
-    them."""
-    from shipgym.sim import step
+    """This process runs its compiled code on its own thread (the hull batches of
+    :mod:`shipgym.sim.step`, the grids' harmonic sums): a pool's workers already fill the cores,
+    and threads of their own would oversubscribe them."""
+    from shipgym._jit import THREADS
 
-    step.THREADS["allowed"] = False
+    THREADS["allowed"] = False
 
 
 def _serial_job(fn: Callable[[Any], Any], job: Any) -> Any:

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from shipgym import _jit
 from shipgym.disturbances import Current, CurrentConfig, WaveConfig, Wind, WindConfig
 from shipgym.disturbances._grid import CHUNK
 from shipgym.dynamics.mmg import MMGHull
@@ -340,7 +341,7 @@ def _forked_child_trajectory(q) -> None:  # type: ignore[no-untyped-def]
     bp.reset(rngs=[np.random.default_rng(i) for i in range(bp.n)])
     bp.set_command(np.tile(bp.actuators.upper, (bp.n, 1)))
     bp.step(400)
-    q.put((bp.eta_full.tolist(), step.THREADS["allowed"]))
+    q.put((bp.eta_full.tolist(), _jit.THREADS["allowed"]))
 
 
 @pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="needs fork()")
@@ -356,7 +357,7 @@ def test_a_child_forked_after_threaded_steps_steps_serially_to_the_same_floats()
     bp.reset(rngs=[np.random.default_rng(i) for i in range(bp.n)])
     bp.set_command(np.tile(bp.actuators.upper, (bp.n, 1)))
     bp.step(400)
-    assert step.THREADS["used"]
+    assert _jit.THREADS["used"]
     ctx = mp.get_context("fork")
     q = ctx.Queue()
     child = ctx.Process(target=_forked_child_trajectory, args=(q,))
@@ -368,9 +369,7 @@ def test_a_child_forked_after_threaded_steps_steps_serially_to_the_same_floats()
 
 
 def _physics_threads_allowed(_: int) -> bool:
-    from shipgym.sim import step
-
-    return bool(step.THREADS["allowed"])
+    return bool(_jit.THREADS["allowed"])
 
 
 def test_the_workers_of_a_pool_step_their_batches_serially():

@@ -523,22 +523,15 @@ def harmonic_rows_parallel(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # t
 PARALLEL_SAMPLES = 1024
 
 
-def harmonic_into(args: tuple[Any, ...], entries: dict[Any, Any] | None = None) -> None:
+def harmonic_into(args: tuple[Any, ...]) -> None:
     """:func:`harmonic_rows` of ``args``, its blocks on Numba's threads for a range of at
     least :data:`PARALLEL_SAMPLES` where this thread may use them
-    (:func:`shipgym._jit.threads_ok`): the same floats either way. ``entries``: the compiled
-    entry points found for a caller whose arguments always have the same types (kept there)."""
+    (:func:`shipgym._jit.threads_ok`): the same floats either way."""
     fn = harmonic_rows
     if args[3] >= PARALLEL_SAMPLES and threads_ok():
         use_threads()
         fn = harmonic_rows_parallel
-    if entries is None:
-        entry(fn, args)(*args)
-        return
-    found = entries.get(fn)
-    if found is None:
-        found = entries[fn] = entry(fn, args)
-    found(*args)
+    entry(fn, args)(*args)
 
 
 def harmonic_sums(

@@ -358,12 +358,11 @@ class WaveConfig:
             "wf_heading_std",
             "wf_lambda",
             "wf_peak_frequency",
+            "sample_period",
         ):
             val = getattr(self, key)
             if val is not None and not is_real(val):
                 raise ValueError(f"{name}.{key} must be a real number or None, got {val!r}")
-        if self.sample_period is not None and not is_real(self.sample_period):
-            raise ValueError(f"{name}.sample_period must be a real number or None")
         require_finite(self)
         require_angles(self, "direction_from")
         if not 0 <= self.Hs <= MAX_HS:
@@ -433,11 +432,12 @@ class WaveConfig:
                 f"{name}: wf_model 'al-takie' needs wf_beaufort (5-9), the row of Al-Takie's "
                 "(1982) table"
             )
-        if self.sample_period is not None and not self.sample_period > 0:
-            raise ValueError(f"{name}.sample_period must be > 0 s, got {self.sample_period!r}")
-        if self.sample_period is not None and self.sample_period > self.Tp / 10.0:
+        h = self.sample_period
+        if h is not None and not h > 0:
+            raise ValueError(f"{name}.sample_period must be > 0 s, got {h!r}")
+        if h is not None and h > self.Tp / 10.0:
             raise ValueError(
-                f"{name}.sample_period ({self.sample_period!r} s) must be <= Tp / 10 "
+                f"{name}.sample_period ({h!r} s) must be <= Tp / 10 "
                 f"({self.Tp / 10.0:.4g} s) to resolve the wave-frequency signals"
             )
 
@@ -561,7 +561,6 @@ class Waves(PieceGrid):
         self._wf_x = np.zeros(1)  # and its grid position
         self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
         self._weights = np.zeros((0, 0))  # the harmonic sums' weights of a piece (reset)
-        self._entries: dict[Any, Any] = {}  # harmonic_into's entry points (the same types)
         self._bins: Any = None  # the sea's harmonic_bins (computed at the first reset)
         self._table: Any = None
         self._mean_E = 0.0
@@ -671,7 +670,6 @@ class Waves(PieceGrid):
             weights += [A, self._kA]
         self._weights = np.ascontiguousarray(np.reshape(weights, (len(weights), n)), dtype=float)
         self._sums = np.empty((len(weights), 2, PIECE + HARMONIC_BLOCK))  # a piece's harmonic sums
-        self._entries = {}  # (this realisation's arrays)
         if self._filter is not None:
             self._rng_wf = np.random.default_rng(int(s_wf))
             lam_i, _, G0, _, nf = self._filter
@@ -720,7 +718,7 @@ class Waves(PieceGrid):
                 self._sums = np.empty((weights.shape[0], 2, n))
             args = (j * _CHUNK * self._dt, self._dt, ka, n, self._w, self._eps, weights, True,
                     zr, zi, self._sums)  # fmt: skip
-            harmonic_into(args, self._entries)
+            harmonic_into(args)
             sums = self._sums[:, :, :n]  # (rows, re/im, n)
             r = 0
             if self._drift_on:

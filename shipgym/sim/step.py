@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 from numba import carray, prange
 
-from shipgym import _jit
 from shipgym._jit import (
     _DISABLED,
     ACCEL_SIG,
@@ -67,10 +66,6 @@ MAX_ROLL = 1.2
 #: at 64 hulls with sleeping idle threads on 2 cores); smaller ones
 #: step on the calling thread, where a thread pool's start costs more than it saves
 PARALLEL_MIN = 128
-
-
-#: the guard of Numba's threads (:data:`shipgym._jit.THREADS`), here for the callers that set it
-THREADS = _jit.THREADS
 
 
 #: the most physics steps one call may take (5.8 days at 0.05 s): a larger request is a
