@@ -559,7 +559,7 @@ class Waves(PieceGrid):
         self._rng_wf: np.random.Generator | None = None
         self._wf_rows: WaveMotionRows | None = None  # wf_motion's window (one row)
         self._wf_x = np.zeros(1)  # and its grid position
-        self._w = self._A = self._eps = self._sqrtR = np.zeros(0)
+        self._w = self._A = self._eps = np.zeros(0)
         self._weights = np.zeros((0, 0))  # the harmonic sums' weights of a piece (reset)
         self._bins: Any = None  # the sea's harmonic_bins (computed at the first reset)
         self._table: Any = None
@@ -602,12 +602,10 @@ class Waves(PieceGrid):
 
     def _reset_grid(self) -> None:
         self._clear_pieces()
-        self._cache: dict[int, tuple[list[float], list[float], list[float]]] = {}
+        self._cache: dict[int, list[float]] = {}  # drift_load's pieces of the envelope
         self._j = -1
         self._k0 = 0
         self._E: list[float] = []
-        self._D: list[float] = []
-        self._H: list[float] = []
         self._q: NDArray[np.complex128] | None = None
 
     def reset(self, rng: np.random.Generator | int | None = None) -> None:
@@ -653,7 +651,7 @@ class Waves(PieceGrid):
             sqrtR = np.ones(n)
         else:
             sqrtR = np.full(n, math.sqrt(float(r)))
-        self._w, self._A, self._eps, self._sqrtR = w, A, eps, sqrtR
+        self._w, self._A, self._eps = w, A, eps
         self._table: Any = None  # harmonic_table of the sea (at its first piece)
         self._cdrift = A * sqrtR
         self._mean_E = float(np.sum(self._cdrift**2))
@@ -758,14 +756,14 @@ class Waves(PieceGrid):
         return out
 
     def _select(self, j: int) -> None:
-        lists = self._cache.get(j)
-        if lists is None:
+        envelope = self._cache.get(j)
+        if envelope is None:
             _k0, arr = self.window(j * PIECE)
-            lists = (arr[0].tolist(), arr[1].tolist(), arr[2].tolist())
+            envelope = arr[0].tolist()
             if len(self._cache) >= 2:
                 del self._cache[next(iter(self._cache))]
-            self._cache[j] = lists
-        self._E, self._D, self._H = lists
+            self._cache[j] = envelope
+        self._E = envelope
         self._j = j
         self._k0 = j * PIECE
 
