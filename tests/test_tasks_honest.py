@@ -31,7 +31,7 @@ def _check_reported_is_used(u):
     if u.sensors is None:
         assert u.sensor_config is None
     else:
-        assert u.sensor_config is u.sensors.config
+        assert u.sensor_config is u.sensors.configs[0]  # (the batch of one's env 0)
 
 
 @pytest.mark.parametrize("env_id", IDS)

@@ -133,7 +133,7 @@ def test_bad_input_is_refused_clearly():
     with pytest.raises(ValueError, match="envs \\[1\\]"):
         venv.step(np.array([[0, 0, 0], [np.nan, 0, 0]]))
     with pytest.raises(ValueError, match="reset options"):
-        venv.reset(options={"start_pose": (0, 0, 0)})
+        venv.reset(options={"no_such_option": 1})
     with pytest.raises(ValueError, match="no batched form"):
         from shipgym.envs.vector import ShipVectorEnv
 
@@ -293,7 +293,7 @@ def test_batched_env_with_time_correlated_sensor_errors_equals_the_single_envs()
         for i, s in enumerate(singles):
             _, _, _, _, inf = s.step(res[i])
             err = max(err, float(np.abs(info["nav_eta"][i] - inf["nav_eta"]).max()))
-            biased = max(biased, abs(float(s.unwrapped.sensors.correlated_error[2])))
+            biased = max(biased, abs(float(s.unwrapped.sensors.correlated_error[0, 2])))
     assert err < 1e-6, err
     assert biased > 0  # the bias was on
     assert venv.unwrapped.sensors.correlated_error.shape == (n, 3)
@@ -337,3 +337,27 @@ def test_batched_dp_tasks_equal_the_single_envs(env_id, vessel):
         ends += int(trunc.sum())
         pending = term | trunc
     assert ends >= n  # every env reached the episode's duration and was reset
+
+
+def test_start_pose_option_one_row_per_env_equals_the_single_envs():
+    """``reset(options={"start_pose": ...})``: a row per env (or one pose for all) starts each
+    env where its single env with the same option starts, for that reset only."""
+    poses = np.array([[1.0, 2.0, 0.1], [-3.0, 0.5, -0.2]])
+    venv = gym.make_vec("shipgym/BlueLadyStationKeeping-v0", num_envs=2)
+    _, info = venv.reset(seed=3, options={"start_pose": poses})
+    for i in range(2):
+        env = gym.make("shipgym/BlueLadyStationKeeping-v0")
+        _, one = env.reset(seed=3 + i, options={"start_pose": poses[i]})
+        np.testing.assert_array_equal(info["eta"][i], one["eta"])
+    assert not np.allclose(info["eta"][0], info["eta"][1])
+    _, info = venv.reset(seed=3, options={"start_pose": poses[1]})  # one pose for all
+    for i in range(2):
+        _, one = gym.make("shipgym/BlueLadyStationKeeping-v0").reset(
+            seed=3 + i, options={"start_pose": poses[1]}
+        )
+        np.testing.assert_array_equal(info["eta"][i], one["eta"])
+    _, again = venv.reset(seed=3)  # the option was that reset's only
+    _, task = gym.make("shipgym/BlueLadyStationKeeping-v0").reset(seed=3)
+    np.testing.assert_array_equal(again["eta"][0], task["eta"])
+    with pytest.raises(ValueError, match="start_pose"):
+        venv.reset(options={"start_pose": [[0.0, 0.0]] * 2})

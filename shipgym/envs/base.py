@@ -1,8 +1,11 @@
-"""The ship Gymnasium environment: physics + guidance task (dm_control's Physics/Task split).
+"""The ship Gymnasium environment of the plan tasks: the vector env of one.
 
-:class:`ShipEnv` composes a :class:`~shipgym.envs.physics.VesselPhysics` (MuJoCo and the
-vessel's hull model) with a task: a manoeuvre plan followed through
-:class:`~shipgym.guidance.Guidance`, a reward made of named terms, metrics and termination.
+:class:`ShipEnv` is the single-env form of :class:`~shipgym.envs.vector.ShipVectorEnv` with
+``num_envs=1`` (one code path: env ``i`` of a vector env is the single env seeded
+``seed + i``): its physics (MuJoCo and the vessel's hull model, read through
+:class:`~shipgym.envs.batchphysics.HullView`), a task (a manoeuvre plan followed by the
+guidance, a reward made of named terms, metrics and termination) and the single-env API:
+spaces, Python-number ``info`` and the typed :class:`~shipgym.records.StepRecord`.
 Everything is generic over the vessel (``vessel=``, a :class:`~shipgym.dynamics.vessel.Vessel`
 package): the action space comes from its actuators, the guidance limits from the vessel file.
 The registered tasks (:mod:`shipgym.envs.tasks`) differ only in their plan, start,
@@ -11,37 +14,38 @@ disturbances and time limit.
 
 from __future__ import annotations
 
-import math
-import operator
+import sys
 from collections.abc import Mapping
-from typing import Any, NamedTuple
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 from numpy.typing import NDArray
 
-from shipgym._config import is_real
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
 from shipgym.dynamics.vessel import Vessel
-from shipgym.guidance import Guidance, ManoeuvrePlan, Reference
-from shipgym.guidance.limits import vessel_limits
-from shipgym.guidance.rframe import to_r_frame
-from shipgym.metrics import ManoeuvreMetrics
-from shipgym.observers.sensors import SensorConfig, Sensors
-from shipgym.records import StepRecord, step_record_of_env
+from shipgym.guidance import ManoeuvrePlan, Reference
+from shipgym.observers.sensors import BatchedSensors, SensorConfig
+from shipgym.records import step_record_of_env
 
-from .physics import MAX_TIMESTEP, MIN_TIMESTEP, NO_CURRENT, VesselPhysics, check_timestep
+from .physics import MAX_TIMESTEP, MIN_TIMESTEP
+from .spec import (
+    MAX_CONTROL_PERIOD,
+    MAX_SUBSTEPS,
+    STACK_ARGS,
+    PlanEnvSpec,
+    _check_render_mode,
+    _make_renderer,
+)
 from .task import (
     MAX_START_OFFSET,
     SCENES,
-    PlanTask,
     RewardWeights,
-    _vec3,
     parse_sensors_arg,
     parse_waves_arg,
     tracking_penalty,
 )
+from .vector import ShipVectorEnv
 
 __all__ = [
     "MAX_CONTROL_PERIOD",
@@ -58,44 +62,8 @@ __all__ = [
     "tracking_penalty",
 ]
 
-#: most physics steps per control step (``control_period / timestep``); bounds the work of
-#: one ``env.step`` (10 000 steps are about half a second).
-MAX_SUBSTEPS = 10_000
-#: longest control period (s): a DP controller acts every second or so (Tomera 2014: 1 s)
-MAX_CONTROL_PERIOD = 10.0
 
-
-#: the observer and controller stack's arguments (shipgym.make's wrappers, the vector env's)
-_STACK_ARGS = frozenset({"observer", "observer_options", "controller", "residual_scale"})
-
-#: the env's own arguments (not the task's) and their defaults
-ENV_ARGS: dict[str, Any] = {
-    "vessel": None,
-    "plant": "default",
-    "timestep": 0.05,
-    "control_period": 1.0,
-    "render_mode": None,
-}
-
-
-class _Sample(NamedTuple):
-    """What a step produced, before it is turned into observation and info.
-
-    The arrays go into ``info``; the task's terms and the metrics read the same values. A
-    tuple, not a frozen dataclass: built every control step, and a frozen dataclass costs a
-    microsecond more to build.
-    """
-
-    t: float
-    eta: NDArray[np.float64]
-    nu: NDArray[np.float64]
-    ref: Reference
-    eta_r: NDArray[np.float64]
-    thrust: NDArray[np.float64]  # of every actuator (N), read once per step
-    ref_r: list[float]  # ref.eta_d_r
-
-
-class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     r"""A vessel on a manoeuvre plan: the common spec of every ``shipgym/...`` env.
 
     ## Description
@@ -223,129 +191,53 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
 
-    #: the task of this env class (the registered tasks set their own)
-    task_class: type[PlanTask] = PlanTask
-    #: the one vessel of an alias id (``shipgym/BlueLady*-v0``: ``"blue-lady"``), else None
-    fixed_vessel: str | None = None
-
-    #: the episode length (s) after which the env truncates itself (with
-    #: ``info["episode_metrics"]``); ``None``: the registered time limit only
-    episode_duration: float | None = None
-
-    @classmethod
-    def configure(cls, kwargs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-        """The env's arguments with a task's own defaults filled in (timing, sea, ...), and
-        the settings the env keeps (``episode_duration``, ...): what the single env and the
-        vector env of the class both start from (here: as given)."""
-        return dict(kwargs), {}
-
-    @classmethod
-    def split_args(
-        cls, kwargs: dict[str, Any]
-    ) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
-        """``(env, task, extras)``: the env's own arguments (:data:`ENV_ARGS`, defaults filled
-        in), the task's arguments and the class's settings, after :meth:`configure` (the
-        single env and the vector env of the class split alike)."""
-        kwargs, extras = cls.configure(kwargs)
-        env = {k: kwargs.pop(k, default) for k, default in ENV_ARGS.items()}
-        return env, kwargs, extras
-
-    @classmethod
-    def make_task(cls, vessel: Any = None, **task_args: Any) -> PlanTask:
-        """This env class's task for ``vessel`` and the task arguments (the single env and
-        the vector env of the class make it alike)."""
-        if cls.fixed_vessel is not None:
-            vessel = cls.fixed_vessel if vessel is None else vessel
-            if vessel != cls.fixed_vessel:
-                base = cls.__mro__[1].__name__
-                raise ValueError(
-                    f"{cls.__name__} is the task of vessel {cls.fixed_vessel!r}; for "
-                    f"vessel={vessel!r} use the vessel-neutral {base} (gym.make('shipgym/"
-                    f"{base[:-3]}-v0', vessel=...))"
-                )
-        return cls.task_class(vessel, owner=cls.__name__, **task_args)
-
     def __init__(self, vessel: Vessel | str | None = None, **kwargs: Any) -> None:
-        stack = sorted(set(kwargs) & _STACK_ARGS)
+        stack = sorted(set(kwargs) & STACK_ARGS)
         if stack:  # the vector env takes them; the single env is wrapped by shipgym.make
             raise TypeError(
                 f"{type(self).__name__} got {', '.join(stack)}: the observer and controller of a "
                 "single env are wrappers; use shipgym.make(id, observer=..., controller=...) "
                 "(gym.make_vec(id, num_envs, observer=..., controller=...) for a vector env)"
             )
-        # the env's own arguments (plant, timestep, control_period, render_mode: ENV_ARGS),
-        # the task's (plan, wind, sensors, waves, current, scene, start, reward), and the
-        # settings the class keeps (episode_duration, ...), as the vector env splits them
-        env, task_args, extras = self.split_args({"vessel": vessel, **kwargs})
-        for name, value in extras.items():
-            setattr(self, name, value)
-        plant, timestep, control_period, render_mode = (
-            env["plant"],
-            env["timestep"],
-            env["control_period"],
-            env["render_mode"],
-        )
-        self.task = task = self.make_task(env["vessel"], **task_args)
-        self.vessel = task.vessel
+        render_mode = kwargs.pop("render_mode", None)
         _check_render_mode(render_mode, self.metadata)
-        _check_timing(timestep, control_period)
-        self.n_substeps = _whole_multiple(control_period, timestep)
-        self.control_period = float(control_period)
-        self.sensors = None if task.sensors is None else Sensors(task.sensors)
-        self._sensor_steps = (
-            None if task.sensors is None else _whole_multiple(task.sensors.period, timestep)
-        )
-        self._steps = 0
-        self._episode_over = True  # until the first reset
-        # the last measured pose (floats; None before the first valid sample)
-        self._last_z: tuple[float, float, float] | None = None
-        self.physics = VesselPhysics(
-            self.vessel,
-            plant,
-            wind=task.wind,
-            waves=task.waves,
-            current=task.current,
-            world=task.scene,
-            timestep=timestep,
-            # MuJoCo's step where there are quays; the same forces without MuJoCo in open water
-            integrator="mujoco" if task.scene == "harbour" else "leapfrog",
-        )
-        self.actuators = self.physics.actuators  # the laws of this plant (vessel.actuators_for)
-        self.n_actions = self.actuators.n_channels
-        # (lower, upper, lower + tol, upper - tol) of the saturation test in step(), the
-        # last two as lists of floats
-        self._sat_bounds: tuple[Any, ...] | None = None
+        # the env is the vector env of one: its physics, sensors, guidance, task and metrics
+        # (the time limit is gym.make's TimeLimit, or the class's episode_duration)
+        self.batch = b = ShipVectorEnv(1, type(self), max_episode_steps=sys.maxsize,
+                                       vessel=vessel, **kwargs)  # fmt: skip
+        for name, value in b.extras.items():  # the class's settings (episode_duration, ...)
+            setattr(self, name, value)
+        self.task = b.task
+        self.vessel = b.vessel
+        self.n_substeps = b.n_substeps
+        self.control_period = b.control_period
+        #: the hull, read as a single physics (:class:`~shipgym.envs.batchphysics.HullView`)
+        self.physics = b.physics.hull(0)
+        self.actuators = b.actuators  # the laws of this plant (vessel.actuators_for)
+        self.n_actions = b.n_actions
+        self.limits = b.limits
+        self.guidance = GuidanceView(b, 0)
+        #: the episode's accuracy and usage accumulator (env 0 of the batch's)
+        self.metrics = b._metrics
         self._actuator_names = self.actuators.names
         multi = self.actuators.channel_names != self.actuators.names
         self._channel_names = self.actuators.channel_names if multi else ()
-        self.limits = vessel_limits(self.vessel)
-        self.guidance = Guidance(task.plan, limits=self.limits)
-        self.metrics = ManoeuvreMetrics(
-            sample_period=1.0,
-            n_actuators=len(self.actuators),
-            n_channels=self.n_actions,
-            control_period=self.control_period,
-            reversible=(self.actuators.lower < 0.0).tolist(),
-        )
-        # per-actuator saturation from the channels' (None: one channel per actuator)
-        sl = self.actuators.slices
-        self._slices = None if all(x.stop - x.start == 1 for x in sl) else sl
         self.render_mode = render_mode
         self._renderer: Any = None
-        n = self.n_actions
-        self.action_space = spaces.Box(-1.0, 1.0, (n,), np.float32)
-        self.observation_structure, i = task.observation_structure(n)
-        self.observation_space = spaces.Box(-np.inf, np.inf, (i,), np.float32)
-        self._harbour_body = harbour_body(self.physics.model)
-        self._prev_action = np.zeros((1, n))
-        self._contact = False
-        # the task's outputs of N = 1: observation and reward terms; the inputs it reads
-        self._obs = np.zeros((1, i), np.float32)
-        self._rew = np.zeros((1, len(task.reward_terms)))
-        self._flags = np.zeros((2, 1), bool)  # switched, new contact
-        self._eta_r = np.zeros((1, 3))
+        self.action_space = b.single_action_space
+        self.observation_structure = b.observation_structure
+        self.observation_space = b.single_observation_space
+        self._harbour = self.task.scene == "harbour"
+        self._episode_over = True  # until the first reset
+        self._active = np.ones(1, dtype=bool)
+        self._flags = np.zeros((2, 1), bool)  # navigation_observation's switched, new contact
 
     # ---- the task's settings ----------------------------------------------------------------
+    @property
+    def sensors(self) -> BatchedSensors | None:
+        """The sensors (the batch's of one; ``None``: no sensors)."""
+        return self.batch.sensors
+
     @property
     def plan(self) -> ManoeuvrePlan:
         """The plan given (a drawing task's default)."""
@@ -389,7 +281,8 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     @property
     def sensor_config(self) -> SensorConfig | None:
         """The sensor configuration the sensors use now (``None``: no sensors); set at reset."""
-        return None if self.sensors is None else self.sensors.config
+        s = self.batch.sensors
+        return None if s is None else s.configs[0]
 
     # ---- gym API ---------------------------------------------------------------------------
     def reset(
@@ -397,46 +290,17 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         """Start an episode; ``options`` may hold ``start_pose`` (m, m, rad)."""
         super().reset(seed=seed)
-        rng = self.np_random
-        start = None
         unknown = sorted(set(options or {}) - {"start_pose"})
         if unknown:
             raise ValueError(f"unknown reset options {unknown}; valid: ['start_pose']")
-        if options and "start_pose" in options:
-            start = _vec3(options["start_pose"], "options['start_pose']")
-        ep = self.task.initialize_episode(rng, start)
-        if ep.plan is not self.guidance.plan:
-            self.guidance = Guidance(ep.plan, limits=self.limits)
-        if ep.wind is not self.wind_config:
-            self.physics.set_wind(ep.wind)
-        current = ep.current
-        if (NO_CURRENT if current is None else current) is not self.physics.current_config:
-            self.physics.set_current(current)
-        sensors = ep.sensors
-        if sensors is not None and self.sensors is not None and sensors is not self.sensors.config:
-            self.sensors = Sensors(sensors)
-        start = ep.start
-        self._place_harbour(start)
-        self.physics.reset(eta=ep.eta0, rng=rng)
-        if self.sensors is not None:
-            self.sensors.reset(rng)
-        self._steps = 0
+        b = self.batch
+        b._rngs[0] = self.np_random  # the env's generator is the batch's (gym.Env's seeding)
+        b.sample_log = [] if b.sensors is not None else None
+        b.reset(options=options)
         self._episode_over = False
-        self._last_z = None
-        self.guidance.reset(start, t0=0.0)
-        self.metrics.reset()
-        self._prev_action = np.zeros((1, self.n_actions))
-        self._contact = False
-        measurements = [self._measure()] if self.sensors is not None else []
-        self._flags[:] = False
-        sample = self._observe(self._prev_action)
-        self._record_metrics(sample)
         n = self.n_actions
-        command = self.physics.command
-        info = self._info(sample, command, np.zeros(n, bool), np.zeros(n, bool), False, {}, [])
-        info["measurements"] = measurements
-        info["record"] = self._record(info, sample)
-        return self._obs[0].copy(), info
+        info = self._info(self.physics.command, np.zeros(n, bool), np.zeros(n, bool), {}, [])
+        return b._observation()[0], info
 
     def step(
         self, action: NDArray[np.float32]
@@ -453,60 +317,21 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
                 "the episode has ended (terminated) or was never started: call reset() before "
                 "step()"
             )
-        # the control step in plain floats where the values only pass through (the same
-        # comparisons and products as the array forms), and each physics value read once
-        acts, phys = self.actuators, self.physics
-        _, vals = acts.as_vector(action, "action")
-        # np.clip(a, -1, 1) and its flags (comparisons: min() and max() of two numbers are
-        # slow calls)
-        cl = [-1.0 if v < -1.0 else 1.0 if v > 1.0 else v for v in vals]
-        clipped = np.array(cl, float)
-        action_clipped = list(map(operator.ne, cl, vals))  # (map: same lengths, no zip)
-        command = acts.action_to_command(clipped)
-        clipped_cmd = phys.set_command(command).tolist()
-        # an actuator is saturated when its command sits at a limit of its range
-        lo, hi = acts.lower, acts.upper
-        bounds = self._sat_bounds
-        if bounds is None or bounds[0] is not lo or bounds[1] is not hi:
-            tol = 1e-9 * (hi - lo)
-            bounds = self._sat_bounds = (lo, hi, (lo + tol).tolist(), (hi - tol).tolist())
-        saturated = [
-            k or c <= lt or c >= ht
-            for k, c, lt, ht in zip(
-                clipped_cmd, command.tolist(), bounds[2], bounds[3], strict=True
-            )
-        ]
-        measurements = self._advance(self.n_substeps)
-        contacts = phys.contacts() if phys.data.ncon else []
-        new_contact = bool(contacts) and not self._contact
-        self._contact = self._contact or bool(contacts)
-        t, eta = phys.time, phys.eta
-        switched = self.guidance.update(t, eta)
-        flags = self._flags
-        flags[0, 0], flags[1, 0] = switched, new_contact
-        sample = self._observe(clipped.reshape(1, -1), t, eta)
-        self._record_metrics(sample, saturated, clipped)
-        rewards = dict(zip(self.task.reward_terms, self._rew[0].tolist(), strict=True))
-        reward = float(sum(rewards.values()))
-        self._prev_action = clipped.reshape(1, -1)
-        finished = self.guidance.finished
-        terminated = self._contact or (finished and self.terminate_on_finish)
-        truncated = not terminated and self._past_duration(t)
-        flags = np.array(list(map(operator.or_, saturated, action_clipped)), bool)
-        info = self._info(
-            sample, command, flags, np.array(action_clipped, bool), finished, rewards, contacts
-        )
-        info["measurements"] = measurements
-        info["record"] = self._record(info, sample)
-        if terminated or truncated:  # a time-limit truncation is seen by EpisodeEnd
+        a, _ = self.actuators.as_vector(action, "action")  # the shape and finiteness checked
+        b = self.batch
+        if b.sensors is not None:
+            b.sample_log = []
+        out = b.control_step(a.reshape(1, -1), self._active)
+        reward, terminated, truncated, saturated, action_clipped, command, _, _ = out
+        contacts = self.physics.contacts() if self._harbour else []
+        flags = saturated[0] | action_clipped[0]
+        rewards = dict(zip(self.task.reward_terms, b._rew[0].tolist(), strict=True))
+        info = self._info(command[0], flags, action_clipped[0], rewards, contacts)
+        done = bool(terminated[0]), bool(truncated[0])
+        if done[0] or done[1]:  # a time-limit truncation is seen by EpisodeEnd
             self._episode_over = True
             info["episode_metrics"] = self.episode_metrics()
-        return self._obs[0].copy(), reward, terminated, truncated, info
-
-    def _past_duration(self, t: float) -> bool:
-        """Whether the time ``t`` (s) reached :attr:`episode_duration` (to half a step)."""
-        d = self.episode_duration
-        return d is not None and t >= d - 0.5 * self.physics.timestep
+        return b._obs[0].copy(), float(reward[0]), done[0], done[1], info
 
     def render(self) -> NDArray[np.uint8] | None:
         """An RGB frame (H, W, 3) of the map camera; needs ``render_mode="rgb_array"``."""
@@ -525,103 +350,19 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             self._renderer = None
 
     # ---- helpers ---------------------------------------------------------------------------
-    def _advance(self, n: int) -> list[dict[str, Any]]:
-        """Step the physics ``n`` times, sampling the sensors on their grid; stop on contact."""
-        phys = self.physics
-        stop = self.scene == "harbour"
-        out: list[dict[str, Any]] = []
-        every = self._sensor_steps
-        while n > 0:
-            k = n if every is None else every - self._steps % every
-            if k > n:  # (a comparison, not min(): two-argument min() is a slow call)
-                k = n
-            taken = phys.step(k, stop_on_contact=stop)
-            self._steps += taken
-            n -= taken
-            if every is not None and self._steps % every == 0:
-                out.append(self._measure())
-            if taken < k:  # contact
-                break
-        return out
-
-    def _measure(self) -> dict[str, Any]:
-        """One sensor sample now: measured NED pose (or None in a dropout), the thrust the DP
-        system computes from the actuator states (``tau``: its bollard model,
-        :attr:`VesselPhysics.tau_model`) and the steady-state thrust of the held commands
-        (``tau_command``)."""
-        assert self.sensors is not None
-        phys = self.physics
-        x, y, psi = phys.eta.tolist()
-        dx, dy, dpsi = phys.wave_motion()  # first-order wave motion is seen, not lived
-        t = phys.time
-        _, z, valid, outlier = self.sensors.measure_pose(t, x + dx, y + dy, psi + dpsi)
-        if z is not None:
-            self._last_z = z
-        return {
-            "t": t,
-            "z": None if z is None else np.array(z, float),
-            "valid": valid,
-            "outlier": outlier,
-            "tau": phys.tau_model,
-            "tau_command": phys.tau_command,
-        }
-
     def episode_metrics(self) -> dict[str, Any]:
         """Accuracy indices (Tomera 2014 eqs. 54-57), thruster usage, legs and contact so far."""
-        out = dict(self.metrics.summary())
-        out["completed"] = bool(self.guidance.finished)
-        out["legs_completed"] = len(self.guidance.leg_completion_times)
-        out["leg_times"] = list(self.guidance.leg_completion_times)
-        out["quay_contact"] = bool(self._contact)
-        out["duration_s"] = float(self.physics.time)
-        return out
-
-    def _observe(
-        self,
-        action: NDArray[np.float64],
-        t: float | None = None,
-        eta: NDArray[np.float64] | None = None,
-    ) -> _Sample:
-        """The sample now and the task's observation (``_obs``) and reward terms (``_rew``)
-        of the applied ``action`` (1, n) (``t``, ``eta``: the time and pose, when already
-        read)."""
-        phys = self.physics
-        if t is None or eta is None:
-            t, eta = phys.time, phys.eta
-        nu = phys.nu
-        ref = self.guidance.reference(t)
-        self.reference = ref
-        e, w = eta.reshape(1, 3), nu.reshape(1, 3)
-        self.task.terms(e, w, e, w, ref.buffer, action, self._prev_action, self._flags[0],
-                        self._flags[1], self._obs, self._rew, self._eta_r)  # fmt: skip
-        return _Sample(t, eta, nu, ref, self._eta_r[0].copy(), phys.thrust, ref.eta_d_r.tolist())
-
-    def _record_metrics(
-        self,
-        s: _Sample,
-        saturated: list[bool] | None = None,
-        command: NDArray[np.float64] | None = None,
-    ) -> None:
-        z = self._last_z
-        ref = s.ref
-        # the arrays where they exist (their tolist() is cheaper than checking floats)
-        self.metrics.record(
-            s.t,
-            s.eta_r,
-            ref.eta_d_r,
-            eta_meas_r=None if z is None else to_r_frame(z, ref.eta_P, s.ref_r[2]),
-            thrust=s.thrust,
-            saturated=saturated
-            if saturated is None or self._slices is None
-            else [any(saturated[sl]) for sl in self._slices],
-            leg=ref.leg,
-            command=command,
-        )
+        return self.batch.episode_metrics(0)
 
     @property
     def prev_action(self) -> NDArray[np.float64]:
         """The normalised action applied in the last step (zeros after a reset)."""
-        return self._prev_action[0].copy()
+        return self.batch._prev[0].copy()
+
+    @property
+    def reference(self) -> Reference:
+        """The guidance reference of the state now (the last step's or reset's)."""
+        return _row_reference(self.batch._ref, 0)
 
     def navigation_observation(
         self,
@@ -641,63 +382,111 @@ class ShipEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     def _info(
         self,
-        s: _Sample,
         command: NDArray[np.float64],
         saturated: NDArray[np.bool_],
         action_clipped: NDArray[np.bool_],
-        finished: bool,
         rewards: Mapping[str, float],
         contacts: list[tuple[str, str]],
     ) -> dict[str, Any]:
-        phys = self.physics
-        ref = s.ref
+        """The info of the state now (env 0 of the batch), with its typed ``record``."""
+        b, phys = self.batch, self.physics
+        ref = _row_reference(b._ref, 0)
+        eta, nu = b._truth()
+        e, w = eta[0], nu[0]
+        g = b.guidance
+        hb = b.physics._hulls
         # copies of the reference's arrays: info is the caller's to keep and change
         info: dict[str, Any] = {
-            "t": s.t,
-            "eta": s.eta,
-            "nu": s.nu,
-            "nav_eta": s.eta,
-            "nav_nu": s.nu,
+            "t": float(b.physics.t[0]),
+            "eta": e,
+            "nu": w,
+            "nav_eta": e,
+            "nav_nu": w,
             "eta_d": ref.eta_d_n.copy(),
             "eta_d_r": ref.eta_d_r.copy(),
             "eta_dot_d_r": ref.eta_dot_d_r.copy(),
             "eta_ddot_d_r": ref.eta_ddot_d_r.copy(),
             "eta_P": ref.eta_P.copy(),
-            "eta_r": s.eta_r,
+            "eta_r": b._eta_r[0].copy(),
             "leg": ref.leg,
-            "legs_completed": self.guidance.legs_completed,
-            "finished": finished,
-            "command": np.asarray(command, dtype=float),
-            "thrust": s.thrust,
-            "actuator_state": phys.actuator_state,
+            "legs_completed": int(g.legs_completed[0]),
+            "finished": bool(g.finished[0]),
+            "command": np.array(command, dtype=float),
+            "thrust": phys.thrust,
+            "actuator_state": hb.act[0].copy(),
             "saturated": saturated,
             "action_clipped": action_clipped,
-            "tau_wind": np.array(phys.tau_wind, float),
-            "tau_waves": np.array(phys.tau_waves, float),
+            "tau_wind": hb.loads[0, 0:3].copy(),
+            "tau_waves": hb.loads[0, 3:6].copy(),
             "current_body": np.array([*phys.nu_c, 0.0], float),
             "wave_elevation": phys.wave_elevation(),
-            "quay_contact": self._contact,
+            "quay_contact": bool(b._contact[0]),
             "contacts": contacts,
         }
         if phys.dofs == 4:
             info["phi"] = phys.phi
             info["p"] = phys.p
         info.update(rewards)
-        return info
-
-    def _record(self, info: Mapping[str, Any], s: _Sample) -> StepRecord:
-        """The typed record of a step (``info["record"]``), holding the same arrays as ``info``."""
-        return step_record_of_env(
-            info, s.ref, self._prev_action[0], self._actuator_names, self._channel_names
+        info["measurements"] = b.sample_log if b.sample_log is not None else []
+        info["record"] = step_record_of_env(
+            info, ref, b._prev[0].copy(), self._actuator_names, self._channel_names
         )
-
-    def _place_harbour(self, start: NDArray[np.float64]) -> None:
-        """Put the static harbour body at the start pose (the layout turns with the start)."""
-        place_harbour(self.physics.model, self._harbour_body, start)
+        return info
 
     def command_to_action(self, command: NDArray[np.float64]) -> NDArray[np.float64]:
         """Physical command (channel order, each in its unit) to the normalised action."""
         return self.actuators.command_to_action(command)
+
+
+class GuidanceView:
+    """Env ``i``'s guidance of a plan task's vector env, read as a single
+    :class:`~shipgym.guidance.Guidance` is (its plan, waypoints, legs and references)."""
+
+    def __init__(self, env: Any, i: int) -> None:
+        self._env = env
+        self._i = i
+
+    @property
+    def plan(self) -> ManoeuvrePlan:
+        """The plan of the episode."""
+        return self._env.plans[self._i]  # type: ignore[no-any-return]
+
+    @property
+    def waypoints(self) -> NDArray[np.float64]:
+        """Planned NED poses ``[P_0, K_0, ..., K_{n-1}]``, (n_legs + 1, 3)."""
+        return self._env.guidance.waypoints(self._i)  # type: ignore[no-any-return]
+
+    @property
+    def leg_index(self) -> int:
+        """Index of the current leg."""
+        return int(self._env.guidance.leg[self._i])
+
+    @property
+    def finished(self) -> bool:
+        """True once every leg is complete."""
+        return bool(self._env.guidance.finished[self._i])
+
+    @property
+    def legs_completed(self) -> int:
+        """Number of legs completed."""
+        return int(self._env.guidance.legs_completed[self._i])
+
+    @property
+    def leg_completion_times(self) -> tuple[float, ...]:
+        """Completion times (s) of the legs completed so far."""
+        return self._env.guidance.leg_completion_times(self._i)  # type: ignore[no-any-return]
+
+    def reference(self, t: float) -> Reference:
+        """The reference at time ``t`` (s) of the current leg."""
+        n = self._env.num_envs
+        return _row_reference(self._env.guidance.reference(np.full(n, float(t))), self._i)
+
+
+def _row_reference(ref: Any, i: int) -> Reference:
+    """Row ``i`` of a :class:`~shipgym.guidance.batch.BatchedReference` as a
+    :class:`~shipgym.guidance.Reference`."""
+    return Reference._build(ref.buffer[i], int(ref.leg[i]), float(ref.t_leg[i]),
+                            bool(ref.finished[i]))  # fmt: skip
 
 
 class BlueLadyEnv(ShipEnv):
@@ -706,82 +495,3 @@ class BlueLadyEnv(ShipEnv):
     def __init__(self, **kwargs: Any) -> None:
         kwargs.setdefault("vessel", "blue-lady")
         super().__init__(**kwargs)
-
-
-def harbour_body(model: Any) -> int | None:
-    """The id of a world's static harbour body (``None`` in open water)."""
-    try:
-        return int(model.body("harbour").id)
-    except KeyError:
-        return None
-
-
-def place_harbour(model: Any, body: int | None, start: NDArray[np.float64]) -> None:
-    """Put the static harbour ``body`` of ``model`` at the start pose ``start`` (m, m, rad):
-    the layout turns with the start (nothing in open water, ``body`` None)."""
-    if body is None:
-        return
-    model.body_pos[body] = (start[0], start[1], 0.0)
-    h = 0.5 * start[2]
-    model.body_quat[body] = (math.cos(h), 0.0, 0.0, math.sin(h))
-
-
-def check_control_period(control_period: Any) -> None:
-    """A control period (s) is a number in ``(0, MAX_CONTROL_PERIOD]``.
-
-    Raises:
-        TypeError: not a number; ValueError: out of the range (NaN included).
-    """
-    if not is_real(control_period):
-        raise TypeError(f"control_period must be a number of seconds, got {control_period!r}")
-    if not 0 < control_period <= MAX_CONTROL_PERIOD:  # NaN fails too
-        raise ValueError(
-            f"control_period must be > 0 and <= {MAX_CONTROL_PERIOD:g} s, got {control_period!r}"
-        )
-
-
-def _check_timing(timestep: Any, control_period: Any) -> None:
-    """Bounds of the physics timestep and control period (see :data:`MIN_TIMESTEP` etc.)."""
-    check_timestep(timestep)
-    check_control_period(control_period)
-    if control_period / timestep > MAX_SUBSTEPS + 0.5:
-        raise ValueError(
-            f"control_period / timestep = {control_period / timestep:.0f} physics steps per "
-            f"control step, more than {MAX_SUBSTEPS}: use a larger timestep"
-        )
-
-
-def _check_render_mode(render_mode: Any, metadata: Mapping[str, Any]) -> None:
-    """``ValueError`` unless ``render_mode`` is ``None`` or one of the env's render modes."""
-    if render_mode is not None and render_mode not in metadata["render_modes"]:
-        raise ValueError(
-            f"render_mode must be None or one of {metadata['render_modes']}, got {render_mode!r}"
-        )
-
-
-def _whole_multiple(control_period: float, timestep: float) -> int:
-    """Physics steps per control step; raises unless the ratio is a whole number (dm_control)."""
-    if not (timestep > 0 and control_period > 0):
-        raise ValueError(
-            f"timestep and control_period must be > 0 s, got {timestep!r}, {control_period!r}"
-        )
-    n = round(control_period / timestep)
-    if n < 1 or abs(n * timestep - control_period) > 1e-9 * control_period:
-        raise ValueError(
-            f"control_period {control_period} s must be a whole multiple of the physics "
-            f"timestep {timestep} s"
-        )
-    return n
-
-
-def _make_renderer(model: Any) -> Any:
-    from shipgym.envs._mujoco import mujoco
-
-    try:
-        return mujoco.Renderer(model, 480, 640)
-    except Exception as exc:  # noqa: BLE001 - any GL failure gets the same advice
-        raise RuntimeError(
-            f"rendering needs an OpenGL backend and none works here ({exc}); on a headless "
-            "machine set MUJOCO_GL=egl (or MUJOCO_GL=osmesa with PYOPENGL_PLATFORM=osmesa and "
-            "libosmesa installed) before importing mujoco"
-        ) from exc

@@ -70,7 +70,8 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
       of the action space's shape; returns ``(reward, terminated, truncated, info)``, each a
       ``(N,)`` array but ``info``, a dict as ``_reset_info``'s;
     - ``_episode_metrics(done)`` (optional): the metrics of the envs of ``done`` at their
-      episode's end, a dict of ``(N, ...)`` arrays, reported as ``info["episode_metrics"]``.
+      episode's end, a dict of ``(N, ...)`` arrays, reported as ``info["episode_metrics"]``;
+    - ``_reset_options(options, mask)`` (optional): the family's own reset options.
 
     Actions in the single action space's range are the task's; the subclass clips and flags
     them (``info["action_clipped"]``): the base checks the shape and finiteness only.
@@ -128,6 +129,12 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
     def _episode_metrics(self, done: Bools) -> dict[str, Any] | None:
         return None
 
+    def _reset_options(self, options: dict[str, Any], mask: Bools) -> None:
+        """Take the family's own reset ``options`` (``reset_mask`` removed) for the envs of
+        ``mask``; here: none, so any is refused."""
+        if options:
+            raise ValueError(f"unknown reset options {sorted(options)}; valid: ['reset_mask']")
+
     # ---- gymnasium API -------------------------------------------------------------------
     def reset(
         self,
@@ -143,8 +150,7 @@ class BatchedEnv(gym.vector.VectorEnv[Any, Any, Any]):
         mask = np.asarray(options.pop("reset_mask", np.ones(n, bool)), dtype=bool)
         if mask.shape != (n,):
             raise ValueError(f"options['reset_mask'] must be ({n},) booleans, got {mask.shape}")
-        if options:
-            raise ValueError(f"unknown reset options {sorted(options)}; valid: ['reset_mask']")
+        self._reset_options(options, mask)
         if seed is None:
             seeds: list[int | None] = [None] * n
         elif isinstance(seed, int | np.integer) and not isinstance(seed, bool):
@@ -302,8 +308,8 @@ class SingleEnv(gym.Env[Any, Any]):
             return None
         from shipgym.sim._mujoco import mujoco
 
-        from .base import _make_renderer
         from .scene import build_model
+        from .spec import _make_renderer
 
         if self._view is None:
             model = build_model(physics.vessel, "open-water", physics.actuators)

@@ -1,7 +1,7 @@
 r"""N hulls of one vessel stepped together: the batched form of
 :class:`~shipgym.envs.physics.VesselPhysics`.
 
-Public names: ``BatchedPhysics``.
+Public names: ``BatchedPhysics``, ``HullView``.
 
 Design notes: docs/design/envs.batchphysics.md.
 """
@@ -31,10 +31,10 @@ from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.sim._mujoco import mujoco
 
 from .batched import MAX_ENVS
-from .physics import INTEGRATORS, check_lags, check_timestep, joint_inertia
+from .physics import INTEGRATORS, check_lags, check_timestep, contact_pairs, joint_inertia
 from .scene import build_model
 
-__all__ = ["BatchedPhysics"]
+__all__ = ["BatchedPhysics", "HullView"]
 
 Array = NDArray[np.float64]
 
@@ -386,6 +386,10 @@ class BatchedPhysics:
             self._wf = WaveMotionRows(self.waves)
         return self._wf(self.t)
 
+    def hull(self, i: int) -> HullView:
+        """Hull ``i`` with the single physics' read-out (:class:`HullView`)."""
+        return HullView(self, i)
+
     @property
     def contact_counts(self) -> NDArray[np.int64]:
         """MuJoCo's number of contacts of each hull now, (n,) (zeros for ``leapfrog``)."""
@@ -427,3 +431,197 @@ class BatchedPhysics:
         ``forces`` (n, n_actuators) where given
         (:meth:`HullBatch.actuator_loads <shipgym.sim.step.HullBatch.actuator_loads>`)."""
         return self._hulls.actuator_loads(st, table, forces)[:, _XYN]
+
+
+class HullView:
+    """Hull ``i`` of a :class:`BatchedPhysics`, read as a single physics is
+    (:class:`~shipgym.envs.physics.VesselPhysics`' read-out: Python numbers, ``(3,)`` rows):
+    what the single env of a plan task, its recorder and its users read. It holds no state
+    of its own: every value is the batch's row ``i`` now.
+    """
+
+    def __init__(self, batch: BatchedPhysics, i: int) -> None:
+        self.batch = batch
+        self.i = i
+        self.vessel = batch.vessel
+        self.plant = batch.plant
+        self.actuators = batch.actuators
+        self.dofs = batch.dofs
+        self.integrator = batch.integrator
+        self.wave_config = batch.wave_config
+        self._view: Any = None  # (model, data) of a leapfrog hull's pose (rendering)
+
+    # ---- configuration of the episode ------------------------------------------------------
+    @property
+    def timestep(self) -> float:
+        """The physics step (s)."""
+        return self.batch.h
+
+    @property
+    def aerodynamics(self) -> bool:
+        """Whether the hull feels a wind load."""
+        return self.batch.wind_configs[self.i] is not None
+
+    @property
+    def wind_config(self) -> WindConfig:
+        """The wind now (``WindConfig()``, still air, where :attr:`aerodynamics` is off)."""
+        cfg = self.batch.wind_configs[self.i]
+        return self.batch._calm_wind if cfg is None else cfg
+
+    @property
+    def wind(self) -> Wind:
+        """The hull's wind process."""
+        return self.batch.winds[self.i]
+
+    @property
+    def current_config(self) -> CurrentConfig:
+        """The current now (``speed == 0``: none)."""
+        return self.batch.current_configs[self.i]
+
+    @property
+    def current(self) -> Current:
+        """The hull's current process."""
+        return self.batch.currents[self.i]
+
+    @property
+    def waves(self) -> Waves | None:
+        """The hull's sea (``None`` without waves)."""
+        return self.batch.waves[self.i]
+
+    # ---- state -----------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """Simulation time (s)."""
+        return float(self.batch.t[self.i])
+
+    @property
+    def eta(self) -> Array:
+        """Pose ``[x, y, psi]`` (m, m, rad; psi continuous)."""
+        return self.batch._hulls.q[self.i, :3].copy()
+
+    @property
+    def nu(self) -> Array:
+        """Body velocity ``[u, v, r]`` (m/s, m/s, rad/s)."""
+        u, v, _p, r = self.batch._hulls.body_velocity(self.i)
+        return np.array([u, v, r])
+
+    @property
+    def phi(self) -> float:
+        """Roll angle (rad), 0 for a 3-DOF vessel."""
+        return float(self.batch._hulls.q[self.i, 3]) if self.dofs == 4 else 0.0
+
+    @property
+    def p(self) -> float:
+        """Roll rate (rad/s), 0 for a 3-DOF vessel."""
+        return float(self.batch._hulls.body_velocity(self.i)[2])
+
+    @property
+    def eta_full(self) -> Array:
+        """``[x, y, psi]`` (3 DOF) or Fossen's ``[x, y, phi, psi]`` (4 DOF)."""
+        return self.batch.eta_full[self.i]
+
+    @property
+    def nu_full(self) -> Array:
+        """``[u, v, r]`` (3 DOF) or Fossen's ``[u, v, p, r]`` (4 DOF)."""
+        return self.batch.nu_full[self.i]
+
+    @property
+    def actuator_state(self) -> Array:
+        """Actuator states, in channel order."""
+        return self.batch._hulls.act[self.i].copy()
+
+    @property
+    def command(self) -> Array:
+        """The held (clipped) commands, in channel order."""
+        return self.batch._hulls.cmd[self.i].copy()
+
+    @property
+    def saturated(self) -> NDArray[np.bool_]:
+        """The clip flags of the last commands."""
+        return self.batch.saturated[self.i].copy()
+
+    @property
+    def thrust(self) -> Array:
+        """Signed thrust of every actuator (N) at its state and the hull's flow."""
+        return self.batch.thrust[self.i]
+
+    @property
+    def tau_model(self) -> Array:
+        """:attr:`BatchedPhysics.tau_model` of the hull, ``[X, Y, N]`` (N, N, N m)."""
+        return self.batch.tau_model[self.i]
+
+    @property
+    def tau_command(self) -> Array:
+        """:attr:`BatchedPhysics.tau_command` of the hull, ``[X, Y, N]`` (N, N, N m)."""
+        return self.batch.tau_command[self.i]
+
+    @property
+    def tau_wind(self) -> tuple[float, float, float]:
+        """Wind load ``[X, Y, N]`` (N, N, N m, body) of the last physics step."""
+        X, Y, N = self.batch._hulls.loads[self.i, 0:3].tolist()
+        return X, Y, N
+
+    @property
+    def tau_waves(self) -> tuple[float, float, float]:
+        """Second-order wave drift load ``[X, Y, N]`` (N, N, N m, body) of the last step."""
+        X, Y, N = self.batch._hulls.loads[self.i, 3:6].tolist()
+        return X, Y, N
+
+    @property
+    def nu_c(self) -> tuple[float, float]:
+        """Current ``(u_c, v_c)`` (m/s) in the body frame at the last physics step."""
+        u, v = self.batch._hulls.loads[self.i, 6:8].tolist()
+        return u, v
+
+    @property
+    def rate_limited(self) -> NDArray[np.bool_]:
+        """Per servo channel: at its rate limit in the last physics step."""
+        return self.batch.rate_limited[self.i]
+
+    @property
+    def stalled(self) -> NDArray[np.bool_]:
+        """Per flow-dependent actuator: past its stall angle at the last step."""
+        return self.batch.stalled[self.i]
+
+    def wave_motion(self) -> tuple[float, float, float]:
+        """First-order wave motion ``(dx m, dy m, dpsi rad)`` (NED) now, what sensors see."""
+        dx, dy, dpsi = self.batch.wave_motion()[self.i].tolist()
+        return dx, dy, dpsi
+
+    def wave_elevation(self) -> float:
+        """Wave elevation (m) now at the wave field's reference point (0 without waves)."""
+        w = self.waves
+        return 0.0 if w is None else float(w.elevation(self.time))
+
+    # ---- MuJoCo ----------------------------------------------------------------------------
+    @property
+    def model(self) -> Any:
+        """The hull's MuJoCo model (its world's, or an open-water one for a leapfrog hull)."""
+        return self._mujoco()[0]
+
+    @property
+    def data(self) -> Any:
+        """The hull's ``MjData`` now (a leapfrog hull's pose and clock copied in)."""
+        model, data = self._mujoco()
+        if self.integrator == "leapfrog":
+            data.qpos[:] = self.batch._hulls.q[self.i]
+            data.time = self.time
+            mujoco.mj_forward(model, data)
+        return data
+
+    def _mujoco(self) -> tuple[Any, Any]:
+        b = self.batch
+        if b.models:
+            return b.models[self.i], b.datas[self.i]
+        if self._view is None:
+            model = build_model(b.vessel, "open-water", b.actuators)
+            model.opt.timestep = b.h
+            self._view = (model, mujoco.MjData(model))
+        return self._view  # type: ignore[no-any-return]
+
+    def contacts(self) -> list[tuple[str, str]]:
+        """Pairs of geom names in contact now (the hull's geom first when it is involved)."""
+        if not self.batch.models:
+            return []
+        model, data = self._mujoco()
+        return contact_pairs(model, data)

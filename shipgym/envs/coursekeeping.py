@@ -39,9 +39,9 @@ from shipgym.observers.dgps import (
     velocity_outputs,
 )
 
-from .base import _check_timing, _whole_multiple
 from .batched import BatchedEnv, SingleEnv
 from .batchphysics import BatchedPhysics
+from .spec import _check_timing, _whole_multiple
 
 __all__ = [
     "AUTO",

@@ -30,7 +30,7 @@ from shipgym.dynamics.vessel import load_vessel
 from shipgym.guidance import Leg, ManoeuvrePlan
 from shipgym.observers.sensors import sensor_config
 
-from .base import check_control_period
+from .spec import check_control_period
 from .tasks import StationKeepingEnv
 
 __all__ = [

@@ -44,6 +44,7 @@ __all__ = [
     "MIN_TIMESTEP",
     "check_lags",
     "check_timestep",
+    "contact_pairs",
     "joint_inertia",
 ]
 
@@ -596,11 +597,17 @@ class VesselPhysics:
 
     def contacts(self) -> list[tuple[str, str]]:
         """Pairs of geom names in contact now (the hull's geom first when it is involved)."""
-        m, d = self.model, self.data
-        out = []
-        for c in d.contact[: d.ncon]:
-            a, b = m.geom(c.geom1), m.geom(c.geom2)
-            if b.bodyid[0] == self.hull_body:
-                a, b = b, a
-            out.append((a.name, b.name))
-        return out
+        return contact_pairs(self.model, self.data)
+
+
+def contact_pairs(model: Any, data: Any) -> list[tuple[str, str]]:
+    """Pairs of geom names in contact in ``data`` now (the hull's geom first when it is
+    involved)."""
+    hull = model.body("hull").id
+    out = []
+    for c in data.contact[: data.ncon]:
+        a, b = model.geom(c.geom1), model.geom(c.geom2)
+        if b.bodyid[0] == hull:
+            a, b = b, a
+        out.append((a.name, b.name))
+    return out

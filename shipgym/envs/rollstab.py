@@ -38,9 +38,9 @@ from shipgym.observers.sway import (
     sway_kf_step,
 )
 
-from .base import _check_timing, _whole_multiple
 from .batched import BatchedEnv, SingleEnv
 from .batchphysics import BatchedPhysics
+from .spec import _check_timing, _whole_multiple
 
 __all__ = [
     "AUTO_WAVES",

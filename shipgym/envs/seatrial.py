@@ -34,9 +34,9 @@ from shipgym.observers.dgps import S_P_OPTIMAL, DGPSOutput, DGPSReceiver
 from shipgym.trials.manoeuvres import Scripts, manoeuvre, manoeuvre_names
 from shipgym.trials.metrics import TrialMetrics, imo_criteria, trial_metrics
 
-from .base import _check_timing, _whole_multiple
 from .batched import BatchedEnv, SingleEnv
 from .batchphysics import BatchedPhysics
+from .spec import _check_timing, _whole_multiple
 
 __all__ = [
     "RECEIVERS",

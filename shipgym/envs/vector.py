@@ -31,15 +31,16 @@ from shipgym.guidance.rframe import r_frame_poses
 from shipgym.metrics import BatchedManoeuvreMetrics
 from shipgym.observers.sensors import BatchedSensors, SensorConfig
 
-from .base import (
-    ShipEnv,
+from .batched import AUTORESET_MODES, BatchedEnv, check_num_envs
+from .batchphysics import BatchedPhysics
+from .spec import (
+    PlanEnvSpec,
     _check_timing,
     _whole_multiple,
     harbour_body,
     place_harbour,
 )
-from .batched import AUTORESET_MODES, BatchedEnv, check_num_envs
-from .batchphysics import BatchedPhysics
+from .task import _vec3
 
 __all__ = [
     "AUTORESET_MODES",
@@ -105,7 +106,7 @@ class ShipVectorEnv(BatchedEnv):
     def __init__(
         self,
         num_envs: int,
-        task: type[ShipEnv] | str,
+        task: type[PlanEnvSpec] | str,
         *,
         max_episode_steps: int | None = None,
         autoreset_mode: str | AutoresetMode = "next-step",
@@ -119,6 +120,8 @@ class ShipVectorEnv(BatchedEnv):
         cls, steps = _task_class(task)
         # the class's own defaults (the DP tasks' timing and sea), as its single env takes them
         env, task_args, extras = cls.split_args(kwargs)
+        #: the class's settings (``episode_duration``, the sway step's ``step_time``, ...)
+        self.extras = extras
         vessel, plant, render_mode = env["vessel"], env["plant"], env["render_mode"]
         timestep, control_period = env["timestep"], env["control_period"]
         #: the episode length (s) after which an env truncates (``None``: the step limit only)
@@ -242,9 +245,30 @@ class ShipVectorEnv(BatchedEnv):
         w = self.physics.wave_config
         self._seen_waves = w is not None and w.first_order  # sensors see the wave motion
         self._mask_names: dict[int, tuple[str, ...]] = {}  # info's key masks, by key count
+        self.plans: list[Any] = [None] * n  # each env's plan of its episode
+        self._start: Array | None = None  # the next reset's start poses (options)
+        #: the sensor samples of a step, logged for the single env (N = 1), else None
+        self.sample_log: list[dict[str, Any]] | None = None
         self._metrics_setup()
 
     # ---- the BatchedEnv hooks ------------------------------------------------------------
+    def _reset_options(self, options: dict[str, Any], mask: NDArray[np.bool_]) -> None:
+        """``options["start_pose"]``: the start pose (m, m, rad) of the reset envs instead of
+        the task's, ``(3,)`` or one row per env ``(N, 3)``."""
+        unknown = sorted(set(options) - {"start_pose"})
+        if unknown:
+            raise ValueError(
+                f"unknown reset options {unknown}; valid: ['reset_mask', 'start_pose']"
+            )
+        self._start = None
+        if "start_pose" in options:
+            x = options["start_pose"]
+            if np.ndim(x) == 2 and np.shape(x)[0] == self.num_envs:
+                pose = [_vec3(r, f"options['start_pose'][{i}]") for i, r in enumerate(x)]
+            else:
+                pose = [_vec3(x, "options['start_pose']")] * self.num_envs
+            self._start = np.array(pose)
+
     def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
         return self._info(mask, None, None, None, {})
 
@@ -252,6 +276,21 @@ class ShipVectorEnv(BatchedEnv):
         self, a: Array, active: NDArray[np.bool_]
     ) -> tuple[Array, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
         """One control period of the ``active`` envs (the others reset at this step)."""
+        out = self.control_step(a, active)
+        reward, terminated, truncated, saturated, action_clipped, command, rewards, control = out
+        done = (terminated | truncated) & active
+        every = self._true_n.copy()
+        info = self._info(every, saturated, action_clipped, command, rewards, done=done)
+        if control is not None:
+            info.update(control)
+            info.update(dict.fromkeys(_CONTROL_MASKS, every))
+        return reward, terminated, truncated, info
+
+    def control_step(self, a: Array, active: NDArray[np.bool_]) -> tuple[Any, ...]:
+        """One control period of the ``active`` envs from the actions ``a`` (n, m) (finite):
+        ``(reward, terminated, truncated, saturated, action_clipped, command, rewards,
+        control)``, the last the controller's info (``None`` without a controller); what the
+        vector env's step and the single env's (N = 1) both build their info from."""
         control: dict[str, Array] | None = None
         if self.controller is not None:
             a, control = self._control(a)
@@ -288,17 +327,12 @@ class ShipVectorEnv(BatchedEnv):
         self._elapsed += 1
         terminated = (self.guidance.finished & self.task.terminate_on_finish) | self._contact
         truncated = self._elapsed >= self.max_episode_steps
-        if self.episode_duration is not None:  # as the single env: to half a physics step
+        if self.episode_duration is not None:  # to half a physics step
             truncated |= (t >= self.episode_duration - 0.5 * self.physics.h) & ~terminated
-        done = (terminated | truncated) & active
         self._return += reward
-        every = self._true_n.copy()
-        info = self._info(every, saturated, action_clipped, command, rewards, done=done)
-        if control is not None:
-            info.update(control)
-            info.update(dict.fromkeys(_CONTROL_MASKS, every))
         self._metrics_record(active, ref, saturated, clipped)
-        return reward, terminated, truncated, info
+        return (reward, terminated, truncated, saturated, action_clipped, command, rewards,
+                control)  # fmt: skip
 
     # ---- internals ------------------------------------------------------------------------
     def _truth(self) -> tuple[Array, Array]:
@@ -355,8 +389,10 @@ class ShipVectorEnv(BatchedEnv):
             assert rng is not None
             # the task's draws from env i's generator; env i as made with sensors=env_sensors[i]
             own = None if self._env_sensors is None else self._env_sensors[i]
-            ep = task.initialize_episode(rng, sensors=own)
+            start_i = None if self._start is None else self._start[i]
+            ep = task.initialize_episode(rng, start_i, sensors=own)
             plans.append(ep.plan)
+            self.plans[i] = ep.plan
             self.physics.set_disturbances(i, ep.wind, ep.current)
             sensors = ep.sensors
             if sensors is not None and self.sensors is not None:
@@ -365,6 +401,7 @@ class ShipVectorEnv(BatchedEnv):
             start[i] = ep.start
             if self._harbour is not None:
                 place_harbour(self.physics.models[i], self._harbour, ep.start)
+        self._start = None  # (one reset's option)
         rngs = self._rngs
         self.physics.reset(eta=eta0, mask=mask, rngs=rngs)  # type: ignore[arg-type]
         self._steps[mask] = 0
@@ -409,6 +446,17 @@ class ShipVectorEnv(BatchedEnv):
                 info = self.observer.step(physics.t, z, valid & mask)
             self._nis = info.nis
             self._rejected = info.rejected
+        log = self.sample_log
+        if log is not None and mask[0]:  # the single env's info["measurements"] (env 0)
+            ok = bool(valid[0])
+            log.append({
+                "t": float(physics.t[0]),
+                "z": z[0].copy() if ok else None,
+                "valid": ok,
+                "outlier": ok and bool(outlier[0]),
+                "tau": physics.tau_model[0],
+                "tau_command": physics.tau_command[0],
+            })  # fmt: skip
         np.copyto(self._last_z, z, where=mask[:, None])  # (info hands out copies)
         np.copyto(self._z_valid, valid, where=mask)
         np.copyto(self._z_outlier, outlier, where=mask)
@@ -559,22 +607,27 @@ class ShipVectorEnv(BatchedEnv):
         m.record(self.physics.t, self._eta_r, ref.eta_d_r, meas, self.physics.thrust, saturated,
                  ref.leg, action, mask=mask, measured=measured)  # fmt: skip
 
+    def episode_metrics(self, i: int) -> dict[str, Any]:
+        """Env ``i``'s episode so far: accuracy indices (Tomera 2014 eqs. 54-57), thruster
+        usage, legs and contact (:meth:`ShipEnv.episode_metrics
+        <shipgym.envs.base.ShipEnv.episode_metrics>`)."""
+        g = self.guidance
+        out = self._metrics.summary(i)
+        times = g.leg_completion_times(i)
+        out["completed"] = bool(g.finished[i])
+        out["legs_completed"] = len(times)
+        out["leg_times"] = list(times)
+        out["quay_contact"] = bool(self._contact[i])
+        out["duration_s"] = float(self.physics.t[i])
+        return out
+
     def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
         """The single env's :meth:`~shipgym.envs.base.ShipEnv.episode_metrics` of the envs of
         ``done``: numbers as (N,) arrays (float NaN, int 0, bool False elsewhere), the other
         values (lists, dicts, ``None``) as (N,) object arrays (``None`` elsewhere); env ``i``'s
         dict is ``{k: v[i]}`` (numbers as ``v[i].item()``)."""
-        g = self.guidance
-        rows = {}
-        for i in np.flatnonzero(done).tolist():  # episode ends: per env
-            out = self._metrics.summary(i)
-            times = g.leg_completion_times(i)
-            out["completed"] = bool(g.finished[i])
-            out["legs_completed"] = len(times)
-            out["leg_times"] = list(times)
-            out["quay_contact"] = bool(self._contact[i])
-            out["duration_s"] = float(self.physics.t[i])
-            rows[i] = out
+        # episode ends: per env
+        rows = {i: self.episode_metrics(i) for i in np.flatnonzero(done).tolist()}
         n = self.num_envs
         fill = {float: np.nan, int: 0, bool: False}
         metrics: dict[str, Any] = {}
@@ -628,7 +681,7 @@ def _rows_from(old: Any, new: Any, mask: NDArray[np.bool_]) -> Any:
     return BatchedReference(*(pick(getattr(old, k), getattr(new, k)) for k in names))
 
 
-def _task_class(task: type[ShipEnv] | str) -> tuple[type[ShipEnv], int | None]:
+def _task_class(task: type[PlanEnvSpec] | str) -> tuple[type[PlanEnvSpec], int | None]:
     """The single env's class and registered time limit of ``task`` (a class or an id)."""
     import importlib
 
@@ -642,13 +695,13 @@ def _task_class(task: type[ShipEnv] | str) -> tuple[type[ShipEnv], int | None]:
         entry, steps = ENV_IDS[task]
         mod, name = entry.split(":")
         cls = getattr(importlib.import_module(mod), name)
-        if not issubclass(cls, ShipEnv):
+        if not issubclass(cls, PlanEnvSpec):
             raise ValueError(
                 f"{task!r} is not a plan task: its batched env is gymnasium.make_vec({task!r}, "
                 "num_envs=N), not ShipVectorEnv"
             )
         return cls, steps
-    if not (isinstance(task, type) and issubclass(task, ShipEnv)):
+    if not (isinstance(task, type) and issubclass(task, PlanEnvSpec)):
         raise ValueError(f"task must be a ShipEnv subclass or a batched id, got {task!r}")
     for env_id in VECTOR_IDS:
         entry, steps = ENV_IDS[env_id]
