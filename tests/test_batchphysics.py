@@ -94,7 +94,7 @@ def test_a_mask_resets_some_hulls_only():
 
 
 def test_bad_input_is_named():
-    with pytest.raises(TypeError, match="4-DOF hull model"):
+    with pytest.raises(ValueError, match="has 3 DOF but vessel .naval-vessel. has 4"):
         BatchedPhysics("naval-vessel", 2, plant=load_vessel("blue-lady").plant())
     with pytest.raises(ValueError, match=r"n must be an int in \[1, 65536\]"):
         BatchedPhysics("blue-lady", 0)

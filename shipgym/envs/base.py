@@ -29,13 +29,13 @@ from shipgym.observers.sensors import BatchedSensors, SensorConfig
 from shipgym.records import step_record_of_env
 
 from .physics import MAX_TIMESTEP, MIN_TIMESTEP
+from .scene import make_renderer
 from .spec import (
     MAX_CONTROL_PERIOD,
     MAX_SUBSTEPS,
     STACK_ARGS,
     PlanEnvSpec,
     _check_render_mode,
-    _make_renderer,
 )
 from .task import (
     MAX_START_OFFSET,
@@ -339,7 +339,7 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             gym.logger.warn("render() called without render_mode; pass render_mode='rgb_array'")
             return None
         if self._renderer is None:
-            self._renderer = _make_renderer(self.physics.model)
+            self._renderer = make_renderer(self.physics.model)
         cam = "map" if self.scene == "harbour" else "top"
         self._renderer.update_scene(self.physics.data, camera=cam)
         return self._renderer.render()

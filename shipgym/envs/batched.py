@@ -308,12 +308,11 @@ class SingleEnv(gym.Env[Any, Any]):
             return None
         from shipgym.sim._mujoco import mujoco
 
-        from .scene import build_model
-        from .spec import _make_renderer
+        from .scene import build_model, make_renderer
 
         if self._view is None:
             model = build_model(physics.vessel, "open-water", physics.actuators)
-            self._view = (_make_renderer(model), model, mujoco.MjData(model))
+            self._view = (make_renderer(model), model, mujoco.MjData(model))
         renderer, model, data = self._view
         data.qpos[:] = physics.qpos(0)
         mujoco.mj_forward(model, data)

@@ -16,8 +16,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._config import is_real
 from shipgym._jit import njit
 from shipgym.disturbances import (
+    BLENDERMANN,
     Current,
     CurrentConfig,
     WaveConfig,
@@ -27,11 +29,11 @@ from shipgym.disturbances import (
     WindLoad,
     blendermann,
 )
+from shipgym.dynamics import WindageParameters
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.sim._mujoco import mujoco
 
 from .batched import MAX_ENVS
-from .physics import INTEGRATORS, check_lags, check_timestep, contact_pairs, joint_inertia
 from .scene import build_model
 
 __all__ = ["BatchedPhysics", "HullView"]
@@ -40,6 +42,92 @@ Array = NDArray[np.float64]
 
 #: the default physics step of the worlds (s), as :class:`~shipgym.envs.physics.VesselPhysics`
 DEFAULT_TIMESTEP = 0.05
+#: largest |roll| (rad) of a reset state (69 deg: far beyond any ship's capsize angle)
+_MAX_ROLL = 1.2
+
+
+#: the integrators of :class:`VesselPhysics` (:mod:`shipgym.sim.step`)
+INTEGRATORS = ("mujoco", "leapfrog")
+
+#: smallest physics timestep (s). The default 0.05 s resolves the fastest dynamics (thruster
+#: lags of 1-2 s, the hull's surge/sway/yaw time constants of tens of seconds) many times
+#: over; below 1e-4 s each simulated second costs more than 10 000 MuJoCo steps for nothing.
+MIN_TIMESTEP = 1e-4
+#: largest physics timestep (s): half the Blue Lady's shortest thruster time constant (1 s,
+#: the tunnel thrusters), where MuJoCo's semi-implicit Euler still tracks the lags; a vessel
+#: with faster actuators needs a smaller step (checked against its lags when it is built).
+MAX_TIMESTEP = 0.5
+
+
+def joint_inertia(model: Any, actuators: Any, dofs: int) -> tuple[float, float, float]:
+    """MuJoCo's joint-space inertia ``(m, I_z, I_x)`` (kg, kg m^2, kg m^2; ``I_x = 0`` for 3
+    DOF) of a vessel model built by :func:`~shipgym.envs.scene.build_model`, after checking
+    the model's layout: the joints ``x, y, psi[, phi]`` in this order, the actuators the
+    channels in order, a constant diagonal inertia ``diag(m, m, I_z[, I_x])`` and no bias
+    force (what the compiled step's ``qfrc_applied = M_q qacc`` relies on)."""
+    m = model
+    names = ("x", "y", "psi", "phi")[:dofs]
+    jids = [m.joint(n).id for n in names]
+    act_ids = [m.actuator(n).id for n in actuators.channel_names]
+    if jids != list(range(dofs)) or m.nv != dofs:
+        raise ValueError(f"the hull must have exactly the joints {names}, in this order")
+    if act_ids != list(range(m.nu)) or m.nu != actuators.n_channels:
+        raise ValueError("MuJoCo actuators must be the vessel's channels, in order")
+    d = mujoco.MjData(m)
+    if dofs == 4:  # a rolled, moving state: the inertia must not depend on it
+        d.qpos[3] = 0.3
+        d.qvel[:] = (0.4, -0.2, 0.05, 0.1)
+    mujoco.mj_forward(m, d)
+    Mq = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, Mq)
+    diag = np.diag(Mq)
+    scale = float(np.max(np.abs(Mq)))
+    if (
+        np.any(np.abs(Mq - np.diag(diag)) > 1e-9 * scale)
+        or abs(diag[0] - diag[1]) > 1e-12 * diag[0]
+        or np.any(np.abs(d.qfrc_bias) > 1e-9 * scale)
+    ):
+        raise ValueError(
+            f"unexpected joint-space inertia (need a constant diag(m, m, I_z[, I_x])): {Mq}"
+        )
+    return float(Mq[0, 0]), float(Mq[2, 2]), float(Mq[3, 3]) if dofs == 4 else 0.0
+
+
+def check_lags(actuators: Any, h: float, name: str) -> None:
+    """``ValueError`` where the physics step ``h`` (s) is more than half the shortest
+    actuator lag of the vessel ``name`` (the bound both physics classes set on their step)."""
+    lags = [c.time_constant for c in actuators.channels if c.dynamics == "lag"]
+    if lags and h > 0.5 * min(lags) + 1e-12:
+        raise ValueError(
+            f"timestep {h:g} s is more than half the shortest actuator lag of "
+            f"{name!r} ({min(lags):g} s): use timestep <= {0.5 * min(lags):g}"
+        )
+
+
+def check_timestep(timestep: Any) -> float:
+    """The physics timestep (s) as a float; ``TypeError``/``ValueError`` outside the bounds."""
+    if not is_real(timestep):
+        raise TypeError(f"timestep must be a number of seconds, got {timestep!r}")
+    if not MIN_TIMESTEP <= timestep <= MAX_TIMESTEP:  # NaN fails too
+        raise ValueError(
+            f"timestep must be from {MIN_TIMESTEP:g} to {MAX_TIMESTEP:g} s, got {timestep!r}"
+        )
+    return float(timestep)
+
+
+def contact_pairs(model: Any, data: Any) -> list[tuple[str, str]]:
+    """Pairs of geom names in contact in ``data`` now (the hull's geom first when it is
+    involved)."""
+    hull = model.body("hull").id
+    out = []
+    for c in data.contact[: data.ncon]:
+        a, b = model.geom(c.geom1), model.geom(c.geom2)
+        if b.bodyid[0] == hull:
+            a, b = b, a
+        out.append((a.name, b.name))
+    return out
+
+
 #: the columns ``[u, v, r]`` of a hull's ``(u, v, p, r)``
 _UVR = np.array([0, 1, 3])
 _XYN = _UVR  # (X, Y, N) of (X, Y, K, N)
@@ -98,6 +186,7 @@ class BatchedPhysics:
         timestep: float = DEFAULT_TIMESTEP,
         integrator: str = "leapfrog",
         world: str | None = None,
+        windage: WindageParameters | None = None,
     ) -> None:
         from shipgym.sim.step import HullBatch
 
@@ -108,10 +197,20 @@ class BatchedPhysics:
         self.n = n
         self.plant = v.plant(plant) if isinstance(plant, str) else plant
         dofs = getattr(self.plant, "dofs", None)
-        if getattr(type(self.plant), "accel_kernel", None) is None or dofs != v.dofs:
+        if dofs not in (3, 4) or getattr(type(self.plant), "accel_kernel", None) is None:
             raise TypeError(
-                f"plant must be a {v.dofs}-DOF hull model of a hull family (a compiled "
-                f"accel_kernel) or a variant name of {v.name!r}, got {plant!r}"
+                f"plant must be a hull model of a hull family (PlantModel, Hull4, Blanke4Hull, "
+                f"MMGHull, ...: a compiled accel_kernel) or a variant name, got {plant!r}"
+            )
+        if dofs != v.dofs:
+            raise ValueError(f"plant {plant!r} has {dofs} DOF but vessel {v.name!r} has {v.dofs}")
+        self.windage = v.windage if windage is None else windage
+        if not isinstance(self.windage, WindageParameters):
+            raise TypeError(f"windage must be WindageParameters or None, got {windage!r}")
+        if (self.windage.coefficients or "") not in BLENDERMANN:
+            raise ValueError(
+                f"vessel {v.name!r}: windage.coefficients {self.windage.coefficients!r} is not a "
+                f"Blendermann (1994) ship type; valid: {', '.join(sorted(BLENDERMANN))}"
             )
         self.dofs = v.dofs
         # the actuators this plant drives (a plant of the paper's model: the bollard laws)
@@ -129,8 +228,8 @@ class BatchedPhysics:
         self._calm_wind = WindConfig()
         self._still_water = CurrentConfig()
         cc = CurrentConfig.coerce(current, name="current") or self._still_water
-        self._coeffs = (wind_cfg.coefficients if wind_cfg else None) or v.windage.coefficients
-        wind_load = WindLoad(blendermann(self._coeffs), v.windage)
+        self._coeffs = (wind_cfg.coefficients if wind_cfg else None) or self.windage.coefficients
+        wind_load = WindLoad(blendermann(self._coeffs), self.windage)
         if integrator not in INTEGRATORS:
             raise ValueError(
                 f"integrator must be one of {', '.join(INTEGRATORS)}, got {integrator!r}"
@@ -156,7 +255,7 @@ class BatchedPhysics:
         self.wind_configs: list[WindConfig | None] = [wind_cfg] * n
         self.current_configs: list[CurrentConfig] = [cc] * n
         self.wave_config = waves
-        self.winds = [Wind(wind_cfg or self._calm_wind, v.windage) for _ in range(n)]
+        self.winds = [Wind(wind_cfg or self._calm_wind, self.windage) for _ in range(n)]
         self.currents = [Current(cc) for _ in range(n)]
         self.waves = [Waves(waves, v.hull) if waves is not None else None for _ in range(n)]
         self._wf: Any = None  # wave_motion's windows
@@ -203,7 +302,7 @@ class BatchedPhysics:
         # the same config as the hull's last one (a task's fixed wind): its process object is
         # kept (each reset draws the realisation afresh), not built again
         if wind_cfg is not self.wind_configs[i]:
-            self.winds[i] = Wind(wind_cfg or self._calm_wind, self.vessel.windage)
+            self.winds[i] = Wind(wind_cfg or self._calm_wind, self.windage)
         if cc is not self.current_configs[i]:
             self.currents[i] = Current(cc)
         self.wind_configs[i] = wind_cfg
@@ -215,6 +314,28 @@ class BatchedPhysics:
         ``K_dp`` law of :func:`~shipgym.dynamics.vanderklugt.seed_vessel` at each hull's
         speed); effective from its next step. :attr:`actuators` stays the batch's."""
         self._hulls.set_actuators(i, vessel.actuators_for(self.plant))
+
+    def set_timestep(self, timestep: float) -> None:
+        """Change every hull's physics step (s), keeping their states, commands, processes and
+        actuator constants (the worlds' ``opt.timestep`` too)."""
+        from shipgym.sim.step import HullBatch
+
+        h = check_timestep(timestep)
+        check_lags(self.actuators, h, self.vessel.name)
+        old = self._hulls
+        for m in self.models:
+            m.opt.timestep = h
+        self.h = h
+        hb = HullBatch(self.plant, self.actuators, old.kw, self.n, h, tuple(old.inertia.tolist()),
+                       integrator=self.integrator, model=self.models or None,
+                       data=self.datas or None)  # fmt: skip
+        for name in ("q", "qv", "qa", "act", "cmd", "t", "external", "table"):
+            getattr(hb, name)[:] = getattr(old, name)
+        drift = self.wave_config is not None and self.wave_config.drift
+        for i in range(self.n):
+            wind = self.winds[i] if self.wind_configs[i] is not None else None
+            hb.set_processes(i, wind, self.currents[i], self.waves[i] if drift else None)
+        self._hulls = hb
 
     # ---- state -----------------------------------------------------------------------------
     def _rows(self, x: ArrayLike | None, width: int, what: str, default: Array) -> Array:
@@ -257,6 +378,8 @@ class BatchedPhysics:
         width = 4 if self.dofs == 4 and nu is not None and np.shape(nu)[-1] == 4 else 3
         w = self._rows(nu, width, "nu", np.zeros((self.n, width)))
         if self.dofs == 4:
+            if e.shape[1] == 4 and np.any(np.abs(e[:, 2]) >= _MAX_ROLL):
+                raise ValueError(f"roll angle must be below {_MAX_ROLL} rad, got {e[:, 2]!r}")
             if e.shape[1] == 3:
                 e = np.stack([e[:, 0], e[:, 1], np.zeros(self.n), e[:, 2]], 1)
             if w.shape[1] == 3:
@@ -449,6 +572,9 @@ class HullView:
         self.dofs = batch.dofs
         self.integrator = batch.integrator
         self.wave_config = batch.wave_config
+        self.windage = batch.windage
+        #: the world a leapfrog hull is drawn in (its own world with the ``mujoco`` integrator)
+        self.world = "open-water"
         self._view: Any = None  # (model, data) of a leapfrog hull's pose (rendering)
 
     # ---- configuration of the episode ------------------------------------------------------
@@ -614,14 +740,14 @@ class HullView:
         if b.models:
             return b.models[self.i], b.datas[self.i]
         if self._view is None:
-            model = build_model(b.vessel, "open-water", b.actuators)
+            model = build_model(b.vessel, self.world, b.actuators)
             model.opt.timestep = b.h
             self._view = (model, mujoco.MjData(model))
         return self._view  # type: ignore[no-any-return]
 
     def contacts(self) -> list[tuple[str, str]]:
-        """Pairs of geom names in contact now (the hull's geom first when it is involved)."""
+        """Pairs of geom names in contact now (the hull's geom first when it is involved;
+        none for a leapfrog hull)."""
         if not self.batch.models:
             return []
-        model, data = self._mujoco()
-        return contact_pairs(model, data)
+        return contact_pairs(*self._mujoco())

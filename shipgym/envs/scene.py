@@ -8,6 +8,7 @@ Design notes: docs/design/envs.scene.md.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from shipgym.assets import asset_path
 from shipgym.dynamics.actuators import ActuatorSet
@@ -16,7 +17,7 @@ from shipgym.dynamics.vessel import Vessel, VesselError
 
 from ._mujoco import mujoco
 
-__all__ = ["WORLDS", "build_model", "fits", "world_path"]
+__all__ = ["WORLDS", "build_model", "fits", "make_renderer", "world_path"]
 
 #: world name -> file in ``shipgym/assets/mjcf/worlds/``
 _PREFIX = "vessel/"
@@ -169,3 +170,16 @@ def build_model(
         return spec.compile()
     except Exception as exc:  # noqa: BLE001
         raise VesselError(f"{vessel.folder}: the MuJoCo model does not compile: {exc}") from None
+
+
+def make_renderer(model: Any) -> Any:
+    """A 640 x 480 MuJoCo renderer of ``model``, or a ``RuntimeError`` that says how to get
+    an OpenGL backend."""
+    try:
+        return mujoco.Renderer(model, 480, 640)
+    except Exception as exc:  # noqa: BLE001 - any GL failure gets the same advice
+        raise RuntimeError(
+            f"rendering needs an OpenGL backend and none works here ({exc}); on a headless "
+            "machine set MUJOCO_GL=egl (or MUJOCO_GL=osmesa with PYOPENGL_PLATFORM=osmesa and "
+            "libosmesa installed) before importing mujoco"
+        ) from exc

@@ -1,6 +1,6 @@
 """What a plan-task env class is, for its single env and its vector env alike: its
-arguments and their split (:class:`PlanEnvSpec`), the control timing's checks, the harbour's
-placement and the renderer.
+arguments and their split (:class:`PlanEnvSpec`), the control timing's checks and the
+harbour's placement.
 
 Public names: ``ENV_ARGS``, ``MAX_CONTROL_PERIOD``, ``MAX_SUBSTEPS``, ``PlanEnvSpec``,
 ``check_control_period``, ``harbour_body``, ``place_harbour``.
@@ -162,16 +162,3 @@ def _whole_multiple(control_period: float, timestep: float) -> int:
             f"timestep {timestep} s"
         )
     return n
-
-
-def _make_renderer(model: Any) -> Any:
-    from shipgym.envs._mujoco import mujoco
-
-    try:
-        return mujoco.Renderer(model, 480, 640)
-    except Exception as exc:  # noqa: BLE001 - any GL failure gets the same advice
-        raise RuntimeError(
-            f"rendering needs an OpenGL backend and none works here ({exc}); on a headless "
-            "machine set MUJOCO_GL=egl (or MUJOCO_GL=osmesa with PYOPENGL_PLATFORM=osmesa and "
-            "libosmesa installed) before importing mujoco"
-        ) from exc
