@@ -322,7 +322,7 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         if b.sensors is not None:
             b.sample_log = []
         out = b.control_step(a.reshape(1, -1), self._active)
-        reward, terminated, truncated, saturated, action_clipped, command, _, _ = out
+        reward, terminated, truncated, saturated, action_clipped, command, _ = out
         contacts = self.physics.contacts() if self._harbour else []
         flags = saturated[0] | action_clipped[0]
         rewards = dict(zip(self.task.reward_terms, b._rew[0].tolist(), strict=True))
@@ -412,7 +412,7 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "legs_completed": int(g.legs_completed[0]),
             "finished": bool(g.finished[0]),
             "command": np.array(command, dtype=float),
-            "thrust": phys.thrust,
+            "thrust": b.thrust()[0],
             "actuator_state": hb.act[0].copy(),
             "saturated": saturated,
             "action_clipped": action_clipped,

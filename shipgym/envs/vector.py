@@ -157,6 +157,9 @@ class ShipVectorEnv(BatchedEnv):
         cfg = task.sensors
         self.sensors = None if cfg is None else BatchedSensors(cfg, n)
         self._sensor_steps = None if cfg is None else _whole_multiple(cfg.period, timestep)
+        # whether the sensor period divides the control period: every active env then starts
+        # each period at a sample instant (its steps since reset a multiple of the period's)
+        self._aligned = cfg is not None and self.n_substeps % self._sensor_steps == 0
         self.limits = vessel_limits(self.vessel)
         self.guidance = BatchedGuidance(n, limits=self.limits)
         self.observation_structure, size = task.observation_structure(self.n_actions)
@@ -277,7 +280,9 @@ class ShipVectorEnv(BatchedEnv):
     ) -> tuple[Array, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
         """One control period of the ``active`` envs (the others reset at this step)."""
         out = self.control_step(a, active)
-        reward, terminated, truncated, saturated, action_clipped, command, rewards, control = out
+        reward, terminated, truncated, saturated, action_clipped, command, control = out
+        # each term's column, a row of one transposed copy
+        rewards = dict(zip(self.task.reward_terms, self._rew.T.copy(), strict=True))
         done = (terminated | truncated) & active
         every = self._true_n.copy()
         info = self._info(every, saturated, action_clipped, command, rewards, done=done)
@@ -288,9 +293,10 @@ class ShipVectorEnv(BatchedEnv):
 
     def control_step(self, a: Array, active: NDArray[np.bool_]) -> tuple[Any, ...]:
         """One control period of the ``active`` envs from the actions ``a`` (n, m) (finite):
-        ``(reward, terminated, truncated, saturated, action_clipped, command, rewards,
-        control)``, the last the controller's info (``None`` without a controller); what the
-        vector env's step and the single env's (N = 1) both build their info from."""
+        ``(reward, terminated, truncated, saturated, action_clipped, command, control)``, the
+        last the controller's info (``None`` without a controller), the reward terms in
+        ``_rew``: what the vector env's step and the single env's (N = 1) both build their
+        info from."""
         control: dict[str, Array] | None = None
         if self.controller is not None:
             a, control = self._control(a)
@@ -312,7 +318,7 @@ class ShipVectorEnv(BatchedEnv):
             self._contact |= touched
         else:  # open water: no quay to touch
             new_contact = self._no_contact
-        rewards = self._terms(ref, clipped, switched, new_contact)
+        self._terms(ref, clipped, switched, new_contact)
         self._fresh = True  # _obs is this state's observation
         self._ref = ref
         if self.controller is not None:  # a leg switch turns the controller's r-frame
@@ -331,8 +337,7 @@ class ShipVectorEnv(BatchedEnv):
             truncated |= (t >= self.episode_duration - 0.5 * self.physics.h) & ~terminated
         self._return += reward
         self._metrics_record(active, ref, saturated, clipped)
-        return (reward, terminated, truncated, saturated, action_clipped, command, rewards,
-                control)  # fmt: skip
+        return reward, terminated, truncated, saturated, action_clipped, command, control
 
     # ---- internals ------------------------------------------------------------------------
     def _truth(self) -> tuple[Array, Array]:
@@ -342,6 +347,13 @@ class ShipVectorEnv(BatchedEnv):
         if truth is None:
             truth = self._cache["truth"] = (self.physics.eta, self.physics.nu)
         return truth  # type: ignore[no-any-return]
+
+    def thrust(self) -> Array:
+        """Every hull's actuator thrusts (N) now, (N, n_actuators), read once per state."""
+        thrust = self._cache.get("thrust")
+        if thrust is None:
+            thrust = self._cache["thrust"] = self.physics.thrust
+        return thrust  # type: ignore[no-any-return]
 
     def _navigation(self) -> tuple[Array, Array]:
         """What the controller and the observation use: the estimate, else the truth."""
@@ -465,8 +477,9 @@ class ShipVectorEnv(BatchedEnv):
         """``n_substeps`` physics steps, the sensors sampled on their grid (active envs)."""
         left = self.n_substeps
         every = self._sensor_steps
-        self._nis = self._nan_n.copy()
-        self._rejected = np.zeros(self.num_envs, bool)
+        if self.observer is not None:
+            self._nis = self._nan_n.copy()
+            self._rejected = np.zeros(self.num_envs, bool)
         if every is not None:
             self._last_z.fill(np.nan)
             self._z_valid.fill(False)
@@ -474,6 +487,8 @@ class ShipVectorEnv(BatchedEnv):
         while left > 0:
             if every is None:
                 k = left
+            elif self._aligned:  # every active env is at a sample instant: the next is every on
+                k = every
             else:  # to the next sample of any active env: every - the largest phase
                 phase = int((self._steps % every).max(where=active, initial=0))
                 k = min(left, every - phase)
@@ -483,7 +498,10 @@ class ShipVectorEnv(BatchedEnv):
             self._steps += taken
             left -= k
             if every is not None:
-                hit = active & (self._steps % every == 0)
+                if not self._aligned:
+                    hit = active & (self._steps % every == 0)
+                else:  # (the envs that took every step are at a sample instant)
+                    hit = active & (taken == k) if self._stop else active
                 if np.count_nonzero(hit):
                     self._sample(hit)
             if self._stop:  # a hull that touched a quay stops (the episode ends with it)
@@ -491,15 +509,13 @@ class ShipVectorEnv(BatchedEnv):
 
     def _terms(
         self, ref: Any, action: Array, switched: NDArray[np.bool_], new_contact: NDArray[np.bool_]
-    ) -> dict[str, Array]:
+    ) -> None:
         """The task's observation (``_obs``, from the navigation data) and reward terms
         (``_rew``, from the truth) of every env."""
         eta, nu = self._truth()
         nav_eta, nav_nu = self._navigation()
         self.task.terms(eta, nu, nav_eta, nav_nu, ref.buffer, action, self._prev, switched,
                         new_contact, self._obs, self._rew, self._eta_r)  # fmt: skip
-        # each term's column, a row of one transposed copy
-        return dict(zip(self.task.reward_terms, self._rew.T.copy(), strict=True))
 
     def _observation(self) -> NDArray[np.float32]:
         """The observation of every env now (after a reset: its previous action is zero)."""
@@ -604,7 +620,7 @@ class ShipVectorEnv(BatchedEnv):
             meas = np.empty((self.num_envs, 3))
             psi_d_r = np.ascontiguousarray(ref.eta_d_r[:, 2])
             r_frame_poses(fix, np.ascontiguousarray(ref.eta_P), psi_d_r, True, meas)
-        m.record(self.physics.t, self._eta_r, ref.eta_d_r, meas, self.physics.thrust, saturated,
+        m.record(self.physics.t, self._eta_r, ref.eta_d_r, meas, self.thrust(), saturated,
                  ref.leg, action, mask=mask, measured=measured)  # fmt: skip
 
     def episode_metrics(self, i: int) -> dict[str, Any]:
