@@ -118,6 +118,8 @@ def check_timestep(timestep: Any) -> float:
 def contact_pairs(model: Any, data: Any) -> list[tuple[str, str]]:
     """Pairs of geom names in contact in ``data`` now (the hull's geom first when it is
     involved)."""
+    if not data.ncon:  # (slicing MuJoCo's contact buffer costs about 0.2 ms)
+        return []
     hull = model.body("hull").id
     out = []
     for c in data.contact[: data.ncon]:
