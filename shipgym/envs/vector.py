@@ -448,14 +448,15 @@ class ShipVectorEnv(BatchedEnv):
         eta = self._truth()[0]
         seen = eta + physics.wave_motion() if self._seen_waves else eta + 0.0
         z, valid, outlier = self.sensors.measure(physics.t, seen, mask)
-        self._fix = np.where((valid & mask)[:, None], z, self._fix)  # the metrics' last fix
+        fixed = valid & mask
+        np.copyto(self._fix, z, where=fixed[:, None])  # the metrics' last fix
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
             if self._model_based:  # the thrust, as ObserverWrapper
                 tau = physics.tau_command if self._thrust_cmd else physics.tau_model
-                info = self.observer.step(physics.t, z, valid & mask, tau=tau)
+                info = self.observer.step(physics.t, z, fixed, tau=tau)
             else:
-                info = self.observer.step(physics.t, z, valid & mask)
+                info = self.observer.step(physics.t, z, fixed)
             self._nis = info.nis
             self._rejected = info.rejected
         log = self.sample_log
@@ -484,6 +485,7 @@ class ShipVectorEnv(BatchedEnv):
             self._last_z.fill(np.nan)
             self._z_valid.fill(False)
             self._z_outlier.fill(False)
+        full = np.count_nonzero(active) == self.num_envs
         while left > 0:
             if every is None:
                 k = left
@@ -492,8 +494,8 @@ class ShipVectorEnv(BatchedEnv):
             else:  # to the next sample of any active env: every - the largest phase
                 phase = int((self._steps % every).max(where=active, initial=0))
                 k = min(left, every - phase)
-            # the steps each hull took (0 outside active)
-            taken = self.physics.step(k, stop_on_contact=self._stop, mask=active)
+            # the steps each hull took (0 outside active; every hull: no mask to apply)
+            taken = self.physics.step(k, stop_on_contact=self._stop, mask=None if full else active)
             self._cache.clear()
             self._steps += taken
             left -= k
@@ -506,6 +508,7 @@ class ShipVectorEnv(BatchedEnv):
                     self._sample(hit)
             if self._stop:  # a hull that touched a quay stops (the episode ends with it)
                 active = active & (taken == k)
+                full = full and bool(active.all())
 
     def _terms(
         self, ref: Any, action: Array, switched: NDArray[np.bool_], new_contact: NDArray[np.bool_]
