@@ -28,8 +28,10 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   the KBF observer) in hull-steps per second, and over the single env with the same stack
   (``shipgym.make(..., observer="kbf")``), interleaved;
 - ``vector_n1_over_single``: the batched env of one env over the single env, same stack
-  (lower is better; the batched figures run whole episodes of ``EPISODE_STEPS`` steps with
-  their batched autoresets, after a warm-up);
+  (lower is better; the single plan-task env is that vector env of one with its single-env
+  ``info``, its typed step record and the observer wrapper, so this is the cost of those; the
+  batched figures run whole episodes of ``EPISODE_STEPS`` steps with their batched
+  autoresets, after a warm-up);
 - ``closed_loop_n256``: hull-steps per second (wall and CPU) of each vessel on its own task
   with the whole stack at N = 256 (:data:`CLOSED_LOOPS`);
 - ``dp_every_step_over_pvs``: control at every physics step, shipgym's DP env over
