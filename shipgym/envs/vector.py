@@ -448,10 +448,13 @@ class ShipVectorEnv(BatchedEnv):
         eta = self._truth()[0]
         seen = eta + physics.wave_motion() if self._seen_waves else eta + 0.0
         z, valid, outlier = self.sensors.measure(physics.t, seen, mask)
-        fixed = valid & mask
-        np.copyto(self._fix, z, where=fixed[:, None])  # the metrics' last fix
+        # the sample's rows (mask) into the info's last sample (copies: info hands them out)
+        # and the valid fixes into the metrics' last fix
+        _store_sample(z, valid, outlier, mask, self._last_z, self._z_valid, self._z_outlier,
+                      self._fix)  # fmt: skip
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
+            fixed = valid & mask
             if self._model_based:  # the thrust, as ObserverWrapper
                 tau = physics.tau_command if self._thrust_cmd else physics.tau_model
                 info = self.observer.step(physics.t, z, fixed, tau=tau)
@@ -470,9 +473,6 @@ class ShipVectorEnv(BatchedEnv):
                 "tau": physics.tau_model[0],
                 "tau_command": physics.tau_command[0],
             })  # fmt: skip
-        np.copyto(self._last_z, z, where=mask[:, None])  # (info hands out copies)
-        np.copyto(self._z_valid, valid, where=mask)
-        np.copyto(self._z_outlier, outlier, where=mask)
 
     def _advance(self, active: NDArray[np.bool_]) -> None:
         """``n_substeps`` physics steps, the sensors sampled on their grid (active envs)."""
@@ -686,6 +686,21 @@ def _actions(a, lo, hi, lo_tol, hi_tol, clipped, flags, command, near):  # type:
             u = channel_command(c, lo[j], hi[j])
             command[i, j] = u
             near[i, j] = u <= lo_tol[j] or u >= hi_tol[j]
+
+
+@njit
+def _store_sample(z, valid, outlier, mask, last_z, z_valid, z_outlier, fix):  # type: ignore[no-untyped-def]
+    """The rows of ``mask`` of a sensor sample (poses ``z`` (n, 3), flags ``valid``,
+    ``outlier``) into ``last_z``, ``z_valid``, ``z_outlier``, and its valid rows into
+    ``fix``."""
+    for i in range(z.shape[0]):
+        if mask[i]:
+            for j in range(3):
+                last_z[i, j] = z[i, j]
+                if valid[i]:
+                    fix[i, j] = z[i, j]
+            z_valid[i] = valid[i]
+            z_outlier[i] = outlier[i]
 
 
 def _rows_from(old: Any, new: Any, mask: NDArray[np.bool_]) -> Any:
