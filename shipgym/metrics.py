@@ -301,27 +301,44 @@ def command_chatter(
     if k == 0:
         return {key: [nan] * n for key in CHATTER_KEYS}
     minutes = k * dt / 60.0
-    out: dict[str, list[float]] = {key: [] for key in CHATTER_KEYS}
     resolved = k >= 4 and hf_period > 2.0 * dt  # else no resolved content below hf_period
-    hf_all = _hf_fractions(a, dt, hf_period) if resolved else None
+    hf_all = _hf_fractions(a, dt, hf_period) if resolved else [nan] * n
+    counts = np.zeros((3, n))  # reversals, samples at a limit, travel
+    _chatter_sums(np.ascontiguousarray(a), rev, float(band), 1.0 - limit_tol, counts)
+    reversals, at_limit, travel = counts.tolist()
+    return {
+        "reversals_per_min": [c / minutes for c in reversals],
+        "limit_fraction": [c / k for c in at_limit],
+        "hf_variance_fraction": hf_all,
+        "travel_per_min": [x / minutes for x in travel],
+    }
+
+
+@njit
+def _chatter_sums(a, rev, band, limit, out):  # type: ignore[no-untyped-def]
+    """:func:`command_chatter`'s sums per channel ``j`` of the commands ``a`` (K, n) into
+    ``out`` (3, n): the reversals through the band ``|a| <= band`` (0 where not ``rev[j]``),
+    the samples with ``|a| >= limit`` and the travel ``sum_k |a_k - a_{k-1}|``."""
+    k, n = a.shape
     for j in range(n):
-        x = a[:, j]
-        if rev[j]:
-            side = 0
-            count = 0
-            for v in x.tolist():
-                s = 1 if v > band else -1 if v < -band else 0
-                if s != 0:
-                    if side != 0 and s != side:
-                        count += 1
-                    side = s
-            out["reversals_per_min"].append(count / minutes)
-        else:  # it cannot reverse
-            out["reversals_per_min"].append(0.0)
-        out["limit_fraction"].append(float(np.mean(np.abs(x) >= 1.0 - limit_tol)))
-        out["travel_per_min"].append(float(np.abs(np.diff(x)).sum()) / minutes)
-        out["hf_variance_fraction"].append(nan if hf_all is None else hf_all[j])
-    return out
+        side = 0
+        count = 0
+        hits = 0
+        travel = 0.0
+        for i in range(k):
+            v = a[i, j]
+            s = 1 if v > band else (-1 if v < -band else 0)
+            if s != 0:
+                if side != 0 and s != side:
+                    count += 1
+                side = s
+            if abs(v) >= limit:
+                hits += 1
+            if i > 0:
+                travel += abs(v - a[i - 1, j])
+        out[0, j] = count if rev[j] else 0
+        out[1, j] = hits
+        out[2, j] = travel
 
 
 def _hf_fractions(a: NDArray[np.float64], dt: float, hf_period: float) -> list[float]:

@@ -140,3 +140,27 @@ def test_the_high_frequency_share_is_scipys_periodogram(k, dt):
             assert math.isnan(got[j])
         else:
             assert got[j] == pytest.approx(want, abs=1e-12)
+
+
+def test_the_compiled_sums_equal_a_plain_count_on_random_commands():
+    """Reversals, samples at a limit and travel of random commands (dithering across the band,
+    saturated runs) equal a plain Python count and NumPy's sum (travel to round-off)."""
+    rng = np.random.default_rng(5)
+    band, dt = 0.05, 1.0
+    for k in (1, 2, 7, 50, 333):
+        a = np.clip(rng.normal(0.0, 0.6, (k, 3)), -1.0, 1.0)
+        a[: k // 3, 1] = 1.0  # a saturated run
+        out = command_chatter(a, dt, reversible=[True, True, False], band=band)
+        minutes = k * dt / 60.0
+        for j in range(3):
+            side = count = 0
+            for v in a[:, j]:
+                s = 1 if v > band else -1 if v < -band else 0
+                if s:
+                    count += side != 0 and s != side
+                    side = s
+            want = count / minutes if j < 2 else 0.0
+            assert out["reversals_per_min"][j] == want
+            assert out["limit_fraction"][j] == np.mean(np.abs(a[:, j]) >= 1.0 - 1e-6)
+            travel = np.abs(np.diff(a[:, j])).sum() / minutes
+            assert out["travel_per_min"][j] == pytest.approx(travel, rel=1e-12, abs=1e-15)
