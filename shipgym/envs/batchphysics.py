@@ -1,7 +1,10 @@
-r"""N hulls of one vessel stepped together: the batched form of
-:class:`~shipgym.envs.physics.VesselPhysics`.
+r"""N hulls of one vessel stepped together: the physics of every env (the single
+:class:`~shipgym.envs.physics.VesselPhysics` is its batch of one), and hull ``i`` read as a
+single physics (:class:`HullView`).
 
-Public names: ``BatchedPhysics``, ``HullView``.
+Public names: ``BatchedPhysics``, ``HullView``, and the physics' checks and constants
+(``INTEGRATORS``, ``MIN_TIMESTEP``, ``MAX_TIMESTEP``, ``check_timestep``, ``check_lags``,
+``joint_inertia``, ``contact_pairs``).
 
 Design notes: docs/design/envs.batchphysics.md.
 """
@@ -36,7 +39,17 @@ from shipgym.sim._mujoco import mujoco
 from .batched import MAX_ENVS
 from .scene import build_model
 
-__all__ = ["BatchedPhysics", "HullView"]
+__all__ = [
+    "INTEGRATORS",
+    "MAX_TIMESTEP",
+    "MIN_TIMESTEP",
+    "BatchedPhysics",
+    "HullView",
+    "check_lags",
+    "check_timestep",
+    "contact_pairs",
+    "joint_inertia",
+]
 
 Array = NDArray[np.float64]
 
