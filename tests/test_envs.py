@@ -218,3 +218,11 @@ def test_tracking_env_randomises_current_and_sensor_noise_per_episode():
     a = (env.physics.current_config, env.sensors.config)
     env.reset(seed=1)
     assert (env.physics.current_config, env.sensors.config) == a
+
+
+def test_guidance_reports_the_task_plan_before_the_first_reset_and_the_drawn_one_after():
+    u = gym.make("shipgym/BlueLadyTracking-v0").unwrapped
+    assert u.guidance.plan is u.task.plan
+    u.reset(seed=1)
+    drawn = u.guidance.plan
+    assert drawn is not u.task.plan and len(u.guidance.waypoints) == len(drawn.legs) + 1

@@ -448,8 +448,9 @@ class GuidanceView:
 
     @property
     def plan(self) -> ManoeuvrePlan:
-        """The plan of the episode."""
-        return self._env.plans[self._i]  # type: ignore[no-any-return]
+        """The plan of the episode (before the first reset: the task's)."""
+        plan = self._env.plans[self._i]
+        return self._env.task.plan if plan is None else plan  # type: ignore[no-any-return]
 
     @property
     def waypoints(self) -> NDArray[np.float64]:
