@@ -394,10 +394,9 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         eta, nu = b._truth()
         e, w = eta[0], nu[0]
         g = b.guidance
-        hb = b.physics._hulls
         # copies of the reference's arrays: info is the caller's to keep and change
         info: dict[str, Any] = {
-            "t": float(b.physics.t[0]),
+            "t": phys.time,
             "eta": e,
             "nu": w,
             "nav_eta": e,
@@ -413,11 +412,11 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "finished": bool(g.finished[0]),
             "command": np.array(command, dtype=float),
             "thrust": b.thrust()[0],
-            "actuator_state": hb.act[0].copy(),
+            "actuator_state": phys.actuator_state,
             "saturated": saturated,
             "action_clipped": action_clipped,
-            "tau_wind": hb.loads[0, 0:3].copy(),
-            "tau_waves": hb.loads[0, 3:6].copy(),
+            "tau_wind": np.array(phys.tau_wind),
+            "tau_waves": np.array(phys.tau_waves),
             "current_body": np.array([*phys.nu_c, 0.0], float),
             "wave_elevation": phys.wave_elevation(),
             "quay_contact": bool(b._contact[0]),
@@ -440,7 +439,8 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
 class GuidanceView:
     """Env ``i``'s guidance of a plan task's vector env, read as a single
-    :class:`~shipgym.guidance.Guidance` is (its plan, waypoints, legs and references)."""
+    :class:`~shipgym.guidance.Guidance` is: its plan, waypoints and references (the legs are
+    in the step's ``info``)."""
 
     def __init__(self, env: Any, i: int) -> None:
         self._env = env
@@ -456,26 +456,6 @@ class GuidanceView:
     def waypoints(self) -> NDArray[np.float64]:
         """Planned NED poses ``[P_0, K_0, ..., K_{n-1}]``, (n_legs + 1, 3)."""
         return self._env.guidance.waypoints(self._i)  # type: ignore[no-any-return]
-
-    @property
-    def leg_index(self) -> int:
-        """Index of the current leg."""
-        return int(self._env.guidance.leg[self._i])
-
-    @property
-    def finished(self) -> bool:
-        """True once every leg is complete."""
-        return bool(self._env.guidance.finished[self._i])
-
-    @property
-    def legs_completed(self) -> int:
-        """Number of legs completed."""
-        return int(self._env.guidance.legs_completed[self._i])
-
-    @property
-    def leg_completion_times(self) -> tuple[float, ...]:
-        """Completion times (s) of the legs completed so far."""
-        return self._env.guidance.leg_completion_times(self._i)  # type: ignore[no-any-return]
 
     def reference(self, t: float) -> Reference:
         """The reference at time ``t`` (s) of the current leg."""

@@ -395,7 +395,6 @@ class ShipVectorEnv(BatchedEnv):
         idx = np.nonzero(mask)[0].tolist()
         eta0 = np.zeros((self.num_envs, 3))
         start = np.zeros((self.num_envs, 3))
-        plans = []
         for i in idx:
             rng = self._rngs[i]
             assert rng is not None
@@ -403,7 +402,6 @@ class ShipVectorEnv(BatchedEnv):
             own = None if self._env_sensors is None else self._env_sensors[i]
             start_i = None if self._start is None else self._start[i]
             ep = task.initialize_episode(rng, start_i, sensors=own)
-            plans.append(ep.plan)
             self.plans[i] = ep.plan
             self.physics.set_disturbances(i, ep.wind, ep.current)
             sensors = ep.sensors
@@ -421,7 +419,7 @@ class ShipVectorEnv(BatchedEnv):
         self._return[mask] = 0.0
         self._prev[mask] = 0.0
         self._contact[mask] = False
-        self.guidance.reset(plans, start, 0.0, mask=mask)
+        self.guidance.reset([self.plans[i] for i in idx], start, 0.0, mask=mask)
         ref = self.guidance.reference(self.physics.t)
         # the reset envs' rows of the reference the next step's controller reads
         self._ref = ref if self._ref is None else _rows_from(self._ref, ref, mask)
@@ -499,16 +497,13 @@ class ShipVectorEnv(BatchedEnv):
             self._cache.clear()
             self._steps += taken
             left -= k
-            if every is not None:
-                if not self._aligned:
-                    hit = active & (self._steps % every == 0)
-                else:  # (the envs that took every step are at a sample instant)
-                    hit = active & (taken == k) if self._stop else active
-                if np.count_nonzero(hit):
-                    self._sample(hit)
             if self._stop:  # a hull that touched a quay stops (the episode ends with it)
                 active = active & (taken == k)
                 full = full and bool(active.all())
+            if every is not None:  # (a hull stopped early is not at a sample instant)
+                hit = active if self._aligned else active & (self._steps % every == 0)
+                if np.count_nonzero(hit):
+                    self._sample(hit)
 
     def _terms(
         self, ref: Any, action: Array, switched: NDArray[np.bool_], new_contact: NDArray[np.bool_]
