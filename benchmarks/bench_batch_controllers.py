@@ -24,8 +24,7 @@ from functools import partial
 import numpy as np
 
 from shipgym.controllers.actuation import make_allocator
-from shipgym.controllers.batch import batched_dp_controller
-from shipgym.controllers.wrappers import controller_spec
+from shipgym.controllers.batch import batched_dp_controller, controller_spec
 from shipgym.dynamics.vessel import load_vessel
 
 

@@ -29,7 +29,7 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   (``shipgym.make(..., observer="kbf")``), interleaved;
 - ``vector_n1_over_single``: the batched env of one env over the single env, same stack
   (lower is better; the single plan-task env is that vector env of one with its single-env
-  ``info``, its typed step record and the observer wrapper, so this is the cost of those; the
+  ``info`` and its typed step record, so this is the cost of those; the
   batched figures run whole episodes of ``EPISODE_STEPS`` steps with their batched
   autoresets, after a warm-up);
 - ``closed_loop_n256``: hull-steps per second (wall and CPU) of each vessel on its own task

@@ -23,7 +23,7 @@ def catalogue() -> dict[str, Any]:
         ``wind_models`` and ``actuators``.
     """
     from shipgym import ENV_IDS
-    from shipgym.controllers.wrappers import CONTROLLERS
+    from shipgym.controllers.batch import CONTROLLERS
     from shipgym.disturbances import BLENDERMANN
     from shipgym.dynamics import ACTUATOR_NAMES, PLANT_VARIANTS
     from shipgym.dynamics.vessel import vessels
@@ -60,7 +60,7 @@ def catalogue() -> dict[str, Any]:
 def controller_catalogue(classical: Any = None) -> dict[str, str]:
     """Controller names and descriptions: the classical registry plus the learned names."""
     if classical is None:
-        from shipgym.controllers.wrappers import CONTROLLERS as classical
+        from shipgym.controllers.batch import CONTROLLERS as classical
     from shipgym.controllers.learned import (
         ALGORITHMS,
         BASELINE_MODELS,

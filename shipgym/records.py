@@ -1,4 +1,4 @@
-"""Typed records passed up a wrapper stack: env -> observer -> controller -> recorder.
+"""Typed records of a step: env (physics, observer, DP controller) -> wrappers -> recorder.
 
 Public names: ``POSE_3DOF``, ``VELOCITY_3DOF``, ``ActuatorData``, ``ControlData``, ``Measurement``,
 ``NavigationData``, ``StepRecord``, ``step_record``, ...
@@ -185,7 +185,7 @@ class Measurement:
 
 @dataclass(slots=True, eq=False)
 class ControlData:
-    """What a DP controller wrapper computed for the step.
+    """What the env's DP controller computed for the step.
 
     Attributes:
         controller: the controller's name.
@@ -226,7 +226,7 @@ class StepRecord:
         current_body: the current's velocity in the body frame (the ``nu`` layout).
         measurements: the sensor samples taken during the step (oldest first).
         quay_contact: whether the hull has touched a quay in this episode.
-        control: the DP controller's part (``None`` without a controller wrapper).
+        control: the DP controller's part (``None`` without a controller).
         estimation_rmse: the observer's estimation RMSE over the episode, on its last step
             (``None`` otherwise, and without an observer).
     """

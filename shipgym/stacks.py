@@ -1,5 +1,5 @@
-"""The composition root: an env with its wrapper stack, env -> observer -> controller ->
-learned policy (``shipgym.make``, ``make_learned_env``).
+"""The composition root: an env with its stack, env (observer, DP controller) -> learned
+policy (``shipgym.make``, ``make_learned_env``).
 
 It sits above the envs, the observers and the controllers (it imports them; none of them
 imports it), so a stack is assembled in one place.
@@ -19,7 +19,7 @@ from shipgym.controllers.learned import (
     parse_learned_controller,
     read_metadata,
 )
-from shipgym.envs.registration import resolve_env_id
+from shipgym.envs.registration import PLAN_IDS, resolve_env_id
 
 __all__ = ["USE_MODEL", "make", "make_learned_env"]
 
@@ -36,39 +36,55 @@ def make(
     residual_scale: float = 1.0,
     **kwargs: Any,
 ) -> gym.Env[Any, Any]:
-    """``gym.make`` plus the wrapper stack: env -> observer wrapper -> controller wrapper.
+    """``gym.make`` of a registered id or a scenario name, with the observer and the DP
+    controller of a plan task.
 
-    The one place that stacks these wrappers (``shipgym.make``, the learned controllers'
-    stacks and the training envs use it).
+    The plan tasks (harbour, station keeping, tracking, the offshore DP tasks) run the
+    observer and the controller inside their step, as their vector env does
+    (``gym.make_vec(id, N, observer=..., controller=...)``: one implementation); ``gym.make(id,
+    observer=..., controller=...)`` builds the same env.
 
     Args:
         env_id: a registered id or a scenario name (:data:`SCENARIOS`; with ``vessel=`` in
             ``kwargs`` a scenario name is that vessel's task, see :func:`resolve_env_id`).
         observer: ``None`` or ``"truth"`` (controllers see the true state), or an observer
-            name (``shipgym.observers.OBSERVERS``).
+            name (``shipgym.observers.observer_names()``).
         observer_options: keyword arguments for the observer (e.g. ``{"beaufort": 5}`` for the
             ``alt-*`` wave filters: the sea state their HF model is designed for).
-        controller: ``None`` (raw thruster actions) or a controller name.
-        residual_scale: the controller wrapper's factor on the residual action (see
-            :class:`~shipgym.controllers.wrappers.DPControllerWrapper`).
+        controller: ``None`` (raw thruster actions) or a controller name
+            (:data:`~shipgym.controllers.batch.CONTROLLERS`): the actions are then residuals
+            on its normalised command.
+        residual_scale: the factor on the residual actions (with ``controller``).
         **kwargs: environment arguments (``wind="3@300"``, ``current=(0.1, 90)``, ...: any
             form of ``WindConfig.coerce`` / ``CurrentConfig.coerce``, directions in degrees;
             ``vessel=``; see :class:`~shipgym.envs.base.ShipEnv`) and ``gym.make``'s own
             (``max_episode_steps``).
+
+    Raises:
+        ValueError: an observer or controller for an env that is not a plan task.
     """
-    env = gym.make(resolve_env_id(env_id, kwargs.get("vessel")), **kwargs)
+    env_id = resolve_env_id(env_id, kwargs.get("vessel"))
+    if observer == "truth":
+        observer = None
+    if observer is not None or controller is not None:
+        if env_id not in PLAN_IDS:
+            raise ValueError(
+                f"{env_id} has no observer or DP controller stack (observer=, controller= "
+                "apply to the plan tasks: Harbour, StationKeeping, Tracking, DPStationKeeping, "
+                "DPSwayStep)"
+            )
+        if observer is not None:
+            kwargs["observer"] = observer
+            if observer_options is not None:
+                kwargs["observer_options"] = observer_options
+        if controller is not None:
+            kwargs["controller"] = controller
+            kwargs["residual_scale"] = residual_scale
+    env = gym.make(env_id, **kwargs)
     if not any(w.name == "EpisodeEnd" for w in env.spec.additional_wrappers):  # type: ignore[union-attr]
         from shipgym.envs.episode import EpisodeEnd  # the batched ids' (registration.VECTOR_IDS)
 
         env = EpisodeEnd(env)
-    if observer not in (None, "truth"):
-        from shipgym.observers.wrapper import ObserverWrapper
-
-        env = ObserverWrapper(env, observer=observer, options=observer_options)
-    if controller is not None:
-        from shipgym.controllers.wrappers import DPControllerWrapper
-
-        env = DPControllerWrapper(env, controller=controller, residual_scale=residual_scale)
     return env
 
 

@@ -24,14 +24,15 @@ from shipgym.controllers.actuation import fixed3_parameters, make_allocator
 from shipgym.controllers.allocation import default_weights
 from shipgym.controllers.batch import (
     BATCHED_CONTROLLERS,
+    CONTROLLERS,
     BatchedAllocation,
     BatchedPID,
     apply_residual,
     batched_dp_controller,
+    controller_spec,
 )
 from shipgym.controllers.conditioning import ReversalHysteresis, reversal_threshold
 from shipgym.controllers.pid import vessel_pid
-from shipgym.controllers.wrappers import CONTROLLERS, controller_spec
 from shipgym.dynamics.vessel import load_vessel
 
 VESSELS = shipgym.vessels()
@@ -44,8 +45,6 @@ def _same(a, b, scale=None):
 
 def _unsupported(vessel):
     """Why the batched controller does not run ``vessel`` (``None``: it does)."""
-    if vessel.dofs != 3:
-        return f"{vessel.name}: {vessel.dofs}-DOF vessel (the batched DP controller is 3-DOF)"
     try:
         BatchedAllocation(vessel, "constrained")
     except NotImplementedError as e:
@@ -325,8 +324,8 @@ def test_against_the_controller_wrapper_in_a_tracking_run():
         for _ in range(n)
     ]
     recs = [e.reset(seed=i)[1]["record"] for i, e in enumerate(envs)]
-    # no observer: the wrapper's velocity is the truth, its velocity filter off
-    assert envs[0].get_wrapper_attr("velocity_source") == "truth"
+    # no observer: the controller's velocity is the truth, its velocity filter off
+    assert envs[0].unwrapped.controller.velocity_source == "truth"
     batch = batched_dp_controller(
         "pid", "blue-lady", n, envs[0].unwrapped.control_period, velocity_source="truth"
     )
@@ -417,15 +416,15 @@ def test_iterative_allocations_run_per_env_as_the_single_allocator(name):
 
 
 def test_what_is_not_batched_says_so():
-    with pytest.raises(ValueError, match="integral_limit"):  # as the wrapper's factory fails
+    with pytest.raises(ValueError, match="integral_limit"):  # no sway/yaw thrusters
         batched_dp_controller("pid", "kvlcc2-100m", 4, 1.0)
-    with pytest.raises(ValueError, match="3-DOF"):
+    with pytest.raises(ValueError, match="integral_limit"):  # a 4-DOF hull's, likewise
         batched_dp_controller("pid", "naval-vessel", 4, 1.0)
     with pytest.raises(ValueError, match="pid-seed"):
         batched_dp_controller("pid-seed", "star-hercules", 4, 1.0)
     with pytest.raises(ValueError, match="unknown controller 'nope'"):
         batched_dp_controller("nope", "blue-lady", 4, 1.0)
-    with pytest.raises(ValueError, match="prints LQ gains"):  # as the wrapper's factory
+    with pytest.raises(ValueError, match="prints LQ gains"):  # as the scalar factory
         batched_dp_controller("alt-lq-printed", "blue-lady", 4, 1.0)
     with pytest.raises(ValueError, match="inverse"):
         BatchedAllocation("star-hercules", "inverse")

@@ -203,8 +203,8 @@ def test_harbour_commands_meet_the_chatter_bound_and_raw_does_not(observer):
     [(None, "truth", None), ("kbf", "kinematic", "velocity_filter"),
      ("dkf", "kinematic", "velocity_filter"), ("ekf", "model", "velocity_filter_model_based")],
 )  # fmt: skip
-def test_the_wrapper_filters_the_velocity_for_its_source(observer, source, key):
-    """The controller wrapper finds the observer below it: no filter on the true state, the
+def test_the_controller_filters_the_velocity_for_its_source(observer, source, key):
+    """The env's controller is made for its observer: no filter on the true state, the
     kinematic time constants with kbf/dkf, the model-based ones with the EKF; the raw
     controller never filters."""
     import shipgym
@@ -212,14 +212,14 @@ def test_the_wrapper_filters_the_velocity_for_its_source(observer, source, key):
     env = shipgym.make("harbour", observer=observer, controller="pid-smooth")
     raw = shipgym.make("harbour", observer=observer, controller="pid-smooth-raw")
     try:
-        assert env.get_wrapper_attr("velocity_source") == source
+        assert env.unwrapped.controller.velocity_source == source
         want = (0.0, 0.0, 0.0) if key is None else tuple(BL.control[key])
-        ctrl = env.get_wrapper_attr("controller")
+        ctrl = env.unwrapped.controller.pid
         assert tuple(ctrl.velocity_filter) == want
         cmd = None if key is None else key.replace("velocity", "command")
         assert tuple(ctrl.command_filter) == ((0.0,) * 3 if cmd is None else tuple(BL.control[cmd]))
-        assert tuple(raw.get_wrapper_attr("controller").velocity_filter) == (0.0, 0.0, 0.0)
-        assert tuple(raw.get_wrapper_attr("controller").command_filter) == (0.0, 0.0, 0.0)
+        assert tuple(raw.unwrapped.controller.pid.velocity_filter) == (0.0, 0.0, 0.0)
+        assert tuple(raw.unwrapped.controller.pid.command_filter) == (0.0, 0.0, 0.0)
     finally:
         env.close()
         raw.close()

@@ -12,10 +12,9 @@ import numpy as np
 import pytest
 
 import shipgym
-from shipgym.controllers.batch import batched_dp_controller
+from shipgym.controllers.batch import CONTROLLERS, batched_dp_controller
 from shipgym.controllers.design import lqr
 from shipgym.controllers.grimble import GrimbleLQController, care, grimble_weights
-from shipgym.controllers.wrappers import CONTROLLERS
 from shipgym.dynamics.vessel import load_vessel, vessel_names
 from shipgym.envs.registration import VECTOR_IDS, task_fits_vessel
 

@@ -45,13 +45,13 @@ def test_the_lake_run_splits_plant_and_design_model(observer):
         assert min(plant.d_quad) > 0 and plant.coriolis  # nonlinear damping and Coriolis on
         M_plant = np.asarray(plant.M_RB, dtype=float) + np.asarray(plant.M_A, dtype=float)[:3]
         # the controller: eqs. 49-50, not the plant
-        ctrl = env.controller
+        ctrl = base.controller.pid
         np.testing.assert_array_equal(np.asarray(ctrl.M), EQ49_M)
         np.testing.assert_array_equal(np.asarray(ctrl.D_L), EQ50_D_L)
         assert not np.allclose(np.asarray(ctrl.D_L), D_plant)
         assert not np.allclose(np.asarray(ctrl.M), M_plant)
         # the observer: the EKF holds eqs. 49-50; the kinematic filters hold no hull model
-        obs = env.env.observer
+        obs = base.observer
         if observer == "ekf":
             np.testing.assert_array_equal(np.asarray(obs.config.M), EQ49_M)
             np.testing.assert_array_equal(np.asarray(obs.config.D_L), EQ50_D_L)

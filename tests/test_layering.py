@@ -236,7 +236,7 @@ def test_pure_layers_never_reach_the_simulator(package):
     """A module of ``package`` and everything it imports in shipgym stay off MuJoCo/Gymnasium.
 
     (``shipgym.controllers.lq`` is not in the list: its ``register_lq`` registers it with the
-    Gymnasium controller wrapper.)
+    named controllers the envs run.)
     """
     mods = [m for m in GRAPH if m == package or m.startswith(package + ".")]
     assert mods, f"no module {package}"

@@ -8,6 +8,7 @@ import pytest
 from _helpers import BLUE_LADY_CONTROL, BLUE_LADY_DESIGN, assert_same_eigenvalues
 
 from shipgym.controllers import lq
+from shipgym.controllers.batch import CONTROLLERS, controller_spec
 from shipgym.controllers.lq import (
     LQController,
     LQWeights,
@@ -16,7 +17,6 @@ from shipgym.controllers.lq import (
     lq_model,
     lqr,
 )
-from shipgym.controllers.wrappers import CONTROLLERS, controller_spec
 from shipgym.dynamics import seed_linear_matrices
 
 M, D_L = seed_linear_matrices()

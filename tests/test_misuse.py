@@ -357,7 +357,7 @@ def test_version_matches_pyproject(capsys):
 
 
 def test_list_is_complete_and_json(capsys):
-    from shipgym.controllers.wrappers import CONTROLLERS
+    from shipgym.controllers.batch import CONTROLLERS
     from shipgym.disturbances import BLENDERMANN
     from shipgym.dynamics import ACTUATOR_NAMES, PLANT_VARIANTS
     from shipgym.observers import observer_names
@@ -595,10 +595,16 @@ def test_resume_refuses_a_model_of_an_unregistered_id(tmp_path):
 
 
 @pytest.mark.parametrize("arg", [{"observer": "kbf"}, {"controller": "pid"}])
-def test_gym_make_with_a_stack_argument_says_where_it_belongs(arg):
-    """``observer=``/``controller=`` are the vector env's arguments and shipgym.make's
-    wrappers: gym.make of a single env names both routes instead of a task's TypeError."""
+def test_a_stack_argument_of_an_env_without_one_says_where_it_belongs(arg):
+    """``observer=``/``controller=`` are the plan tasks' arguments (gym.make takes them, as
+    shipgym.make and gym.make_vec do); another env's refusal names the tasks that take them."""
     import gymnasium as gym
 
-    with pytest.raises(TypeError, match=r"shipgym\.make\(id, observer=\.\.\., controller"):
-        gym.make("shipgym/BlueLadyTracking-v0", **arg)
+    import shipgym
+
+    env = gym.make("shipgym/BlueLadyTracking-v0", **arg)
+    name = next(iter(arg.values()))
+    assert name in (env.unwrapped.observer_name, env.unwrapped.controller_name)
+    env.close()
+    with pytest.raises(ValueError, match="apply to the plan tasks"):
+        shipgym.make("shipgym/CourseKeeping-v0", **arg)

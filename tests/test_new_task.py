@@ -177,7 +177,7 @@ def alpha_beta():
 @pytest.mark.parametrize("controller", [None, "pid"])
 def test_the_new_observer_single_and_batched_is_one_code_path(alpha_beta, controller):
     """The alpha-beta filter estimates for the observation (and the PID), single through the
-    observer wrapper, batched inside the vector env: the same estimates and observations."""
+    single env, batched inside the vector env: the same estimates and observations."""
     env_id, n = "shipgym/Tracking-v0", 2
     kw = {"vessel": "blue-lady", "observer": alpha_beta, "max_episode_steps": 60, "max_legs": 1}
     if controller:

@@ -19,8 +19,7 @@ from scipy.signal import welch
 
 import shipgym  # noqa: F401  (registers the ids)
 from shipgym.dynamics.vessel import load_vessel
-from shipgym.observers.base import OBSERVERS, Observer, StepInfo, no_measurement
-from shipgym.observers.wrapper import ObserverWrapper
+from shipgym.observers.batch import BATCHED_OBSERVERS, BatchedStepInfo
 from shipgym.records import Measurement
 
 IDS = ("shipgym/DPStationKeeping-v0", "shipgym/DPSwayStep-v0")
@@ -328,55 +327,58 @@ def test_measurement_from_mapping_tolerates_no_tau_command() -> None:
     np.testing.assert_array_equal(m.tau_command, 2.0)
 
 
-class _Recorder(Observer):
-    """A stub observer that records the thrust it is given."""
+class _Recorder:
+    """A stub observer of N envs that records the thrust it is given."""
 
-    name = "recorder"
+    model_based = True
 
-    def __init__(self, thrust_input: str) -> None:
+    def __init__(self, n: int, thrust_input: str) -> None:
+        self.n = n
         self.thrust_input = thrust_input
         self.taus: list[np.ndarray | None] = []
-        self._eta = np.zeros(3)
-        self._t = 0.0
+        self.eta = np.zeros((n, 3))
+        self.nu = np.zeros((n, 3))
 
-    def reset(self, t0, eta0, *, nu0=None, P0=None) -> None:
-        self._t, self._eta = t0, np.array(eta0, float)
+    def reset(self, t0, eta0, mask=None) -> None:
+        self.eta = np.array(eta0, float)
 
-    def step(self, t, z, tau=None) -> StepInfo:
-        self._t = t
+    def step(self, t, z, valid, tau=None) -> BatchedStepInfo:
         self.taus.append(None if tau is None else np.array(tau))
-        return no_measurement()
+        n = self.n
+        return BatchedStepInfo(np.full((n, 3), np.nan), np.full(n, np.nan), np.zeros(n, bool),
+                               np.zeros(n, bool))  # fmt: skip
 
-    def estimate(self):
+    def estimate(self, j):
         from shipgym.observers.base import Estimate
 
-        return Estimate(self._t, self._eta, np.zeros(3), np.eye(6), np.eye(3), None)
+        return Estimate(0.0, self.eta[j], np.zeros(3), np.eye(6), np.eye(3), None)
 
 
 @pytest.mark.parametrize("mode", ["applied", "command"])
-def test_observer_wrapper_passes_the_thrust_the_observer_asks_for(monkeypatch, mode) -> None:
-    monkeypatch.setitem(OBSERVERS, "recorder-test", lambda **kw: _Recorder(mode))
-    env = ObserverWrapper(
-        gym.make("shipgym/DPStationKeeping-v0", vessel="star-hercules"), observer="recorder-test"
-    )
+def test_the_env_passes_the_thrust_the_observer_asks_for(monkeypatch, mode) -> None:
+    made: list[_Recorder] = []
+
+    def factory(n, vessel):
+        made.append(_Recorder(n, mode))
+        return made[-1]
+
+    monkeypatch.setitem(BATCHED_OBSERVERS, "recorder-test", factory)
+    env = gym.make("shipgym/DPStationKeeping-v0", vessel="star-hercules", observer="recorder-test")
     env.reset(seed=0)
     want = []
     for _ in range(5):
         *_, info = env.step(np.full(4, 0.5, np.float32))
         key = "tau" if mode == "applied" else "tau_command"
         want += [m[key] for m in info["measurements"]]
-    got = env.observer.taus
+    got = made[0].taus
     assert len(got) == len(want) == 5
     for g, w in zip(got, want, strict=True):
-        np.testing.assert_array_equal(g, w)
+        np.testing.assert_array_equal(g[0], w)
     # the two differ while the thrusters lag (so the test can tell them apart)
     assert not np.allclose(info["measurements"][0]["tau"], info["measurements"][0]["tau_command"])
 
 
-def test_observer_wrapper_refuses_an_unknown_thrust_input(monkeypatch) -> None:
-    monkeypatch.setitem(OBSERVERS, "recorder-bad", lambda **kw: _Recorder("lagged"))
+def test_the_env_refuses_an_unknown_thrust_input(monkeypatch) -> None:
+    monkeypatch.setitem(BATCHED_OBSERVERS, "recorder-bad", lambda n, v: _Recorder(n, "lagged"))
     with pytest.raises(ValueError, match="thrust_input must be 'applied' or 'command'"):
-        ObserverWrapper(
-            gym.make("shipgym/DPStationKeeping-v0", vessel="star-hercules"),
-            observer="recorder-bad",
-        )
+        gym.make("shipgym/DPStationKeeping-v0", vessel="star-hercules", observer="recorder-bad")

@@ -23,7 +23,6 @@ from shipgym.controllers.learned import (  # noqa: E402
     parse_learned_controller,
     read_metadata,
 )
-from shipgym.controllers.wrappers import DPControllerWrapper  # noqa: E402
 from shipgym.rl.train import hyperparams_path, load_hyperparams, train  # noqa: E402
 from shipgym.stacks import make_learned_env  # noqa: E402
 
@@ -97,7 +96,7 @@ def test_smoke_train_save_load_run(trained):
 
     env = make_learned_env("harbour", trained.model_path)
     layers = [type(w).__name__ for w in _stack(env)]
-    assert layers[0] == "LearnedControllerWrapper" and "DPControllerWrapper" in layers
+    assert layers[0] == "LearnedControllerWrapper" and env.unwrapped.controller_name == "pid"
     obs, _ = env.reset(seed=0)
     for _ in range(10):
         obs, reward, terminated, truncated, info = env.step(np.zeros(3, np.float32))
@@ -200,10 +199,11 @@ def test_controller_names_and_stack_checks(trained):
         parse_learned_controller(f"sac:{trained.model_path}")
     # a residual model needs its DP controller below it
     env = gym.make("shipgym/BlueLadyHarbour-v0")
-    with pytest.raises(ValueError, match="DPControllerWrapper"):
+    with pytest.raises(ValueError, match="controller='pid'"):
         LearnedControllerWrapper(env, trained.model_path)
+    other = gym.make("shipgym/BlueLadyHarbour-v0", controller="pid", residual_scale=1.0)
     with pytest.raises(ValueError, match="residual_scale"):
-        LearnedControllerWrapper(DPControllerWrapper(env, "pid", 1.0), trained.model_path)
+        LearnedControllerWrapper(other, trained.model_path)
     meta = read_metadata(trained.model_path)
     assert ModelMetadata.from_json(meta.to_json()) == meta
 

@@ -248,19 +248,34 @@ def test_env_wrapper_must_be_the_observer(tmp_path):
     assert load_hyperparams("ppo", path=p)["observer"] is None  # no wrapper: the true state
 
 
-def test_the_zoo_builds_the_same_wrapper_stack_as_shipgym():
-    """rl-zoo3 builds ``spec.make(**env_kwargs)`` wrapped in the env_wrapper classes; the
-    observer wrapper it imports is the one ``shipgym.make(..., observer=)`` applies."""
+def test_the_zoo_builds_the_same_env_as_shipgym():
+    """rl-zoo3 builds ``gym.make(id, **env_kwargs)`` wrapped in the env_wrapper classes; the
+    observer wrapper it imports rebuilds the env with the observer: the env
+    ``shipgym.make(..., observer=)`` makes, step for step."""
     import importlib
+
+    import gymnasium as gym
 
     import shipgym
     from shipgym.observers.wrapper import ObserverWrapper
 
     mod, _, name = train_mod.OBSERVER_WRAPPER.rpartition(".")
     assert getattr(importlib.import_module(mod), name) is ObserverWrapper
-    env = shipgym.make(TRACKING, observer="kbf")
-    assert isinstance(env, ObserverWrapper) and env.observer_name == "kbf"
-    env.close()
+    zoo = ObserverWrapper(gym.make(TRACKING, max_legs=2), observer="kbf")
+    ours = shipgym.make(TRACKING, observer="kbf", max_legs=2)
+    assert zoo.observer_name == zoo.unwrapped.observer_name == "kbf"
+    np.testing.assert_array_equal(zoo.reset(seed=4)[0], ours.reset(seed=4)[0])
+    for _ in range(30):
+        a = np.full(3, 0.2, np.float32)
+        (o1, r1, *_, i1), (o2, r2, *_, i2) = zoo.step(a), ours.step(a)
+        np.testing.assert_array_equal(o1, o2)
+        assert r1 == r2 and i1["observer_nis"] == i2["observer_nis"]
+    with pytest.raises(ValueError, match="already runs observer"):
+        ObserverWrapper(ours, observer="ekf")
+    with pytest.raises(ValueError, match="plan-task env"):
+        ObserverWrapper(gym.make("shipgym/CourseKeeping-v0"), observer="kbf")
+    zoo.close()
+    ours.close()
 
 
 # ---- shipgym train --env, evaluations, TensorBoard ---------------------------------------------

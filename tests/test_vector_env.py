@@ -199,10 +199,9 @@ def test_batched_conditioned_and_raw_controllers_equal_the_wrapper(controller):
 
 
 @pytest.mark.parametrize("vessel", ["star-hercules", "wimpey-sealab"])
-def test_batched_iterative_allocations_equal_the_wrapper(vessel):
+def test_batched_iterative_allocations_equal_the_single_env(vessel):
     """The vessels whose allocation is iterative (active-set least squares, azimuth QP): each
-    env allocates with its own allocator inside the batched step, as the single env's
-    controller wrapper does."""
+    env allocates with its own allocator inside the batched step, as the single env does."""
     _residual_parity("shipgym/StationKeeping-v0", "kbf", "pid", vessel=vessel, steps=60)
 
 

@@ -1,15 +1,15 @@
 r"""The named DP controllers, and each with its thrust allocation for N envs at once (the vector
 env's stack).
 
-What :class:`~shipgym.controllers.wrappers.DPControllerWrapper` runs every control period for
-any named controller, for N envs: the law (:class:`~shipgym.controllers.pid.BatchedPID`,
+What a plan-task env with ``controller=NAME`` runs every control period, for N envs (the
+single env: N = 1): the law (:class:`~shipgym.controllers.pid.BatchedPID`,
 Tomera 2014 eq. 23, for the ``pid*`` names; :class:`~shipgym.controllers.lq.BatchedLQ` for
 ``"lq"``; :class:`~shipgym.controllers.grimble.BatchedGrimbleLQ` for ``"alt-lq"``,
 ``"alt-lq-printed"``, ``"alt-sdre"``),
 :class:`BatchedAllocation` (the closed form of the Blue Lady pattern, Tomera 2014 eqs. 12,
 25-27: :func:`~shipgym.controllers.allocation.fixed3.fixed3_law`) and the reversal hysteresis
 (:class:`~shipgym.controllers.conditioning.BatchedReversalHysteresis`). Each is the one
-compiled run-time form of its law, which the single env's controller wrapper runs at N = 1, so
+compiled run-time form of its law, which the single env runs at N = 1, so
 env i of a batch equals the single env bit for bit. The iterative allocations (active-set
 weighted least squares, the azimuth QP) run per env inside the step, each env with the
 single env's allocator. Inputs and outputs are
@@ -80,7 +80,7 @@ class BatchedAllocation:
     envs; the iterative allocations (the active-set weighted least squares of other fixed
     thruster sets, the azimuth QP) run per env, each env with its own allocator of
     :func:`~shipgym.controllers.actuation.make_allocator` (what the single env's controller
-    wrapper calls), so env ``i`` gets the single env's allocation.
+    the single env's), so env ``i`` gets the single env's allocation.
 
     Args:
         vessel: a vessel, a packaged vessel's name or a package path.
@@ -145,11 +145,11 @@ class BatchedAllocation:
 def apply_residual(
     controller_action: ArrayLike, residual: ArrayLike, residual_scale: float
 ) -> tuple[Array, NDArray[np.bool_]]:
-    """The action the controller wrapper sends to the env, for N envs.
+    """The action a DP controller with a residual on top sends to the physics, for N envs.
 
     ``total = controller_action + residual_scale * residual``, ``applied = clip(total, -1, 1)``
-    (what :class:`~shipgym.controllers.wrappers.DPControllerWrapper` does; the wrapper then
-    passes ``applied.astype(float32)`` to the env).
+    (the env then applies ``applied.astype(float32)``, the action a policy's float32 would
+    be).
 
     Returns:
         ``(applied, residual_clipped)``: the clipped actions (n, n_channels) (float64) and
@@ -166,7 +166,8 @@ def apply_residual(
 @dataclass(frozen=True)
 class ControllerSpec:
     """A named controller: a factory ``f(vessel, dt)`` of a law (the
-    :class:`~shipgym.controllers.wrappers.DPController` protocol) and an allocation.
+    ``law(eta_r, nu, eta_d_r, eta_dot_d_r, eta_ddot_d_r, *, saturated=None) -> tau``, with
+    ``reset()``, ``change_frame(dpsi)`` and ``batched(n)``) and an allocation.
 
     The factory designs the controller for the vessel (its design model, capacity and
     presets) and the control period ``dt`` (s); it raises ``ValueError`` for a vessel the
@@ -286,7 +287,7 @@ class BatchedDPController:
     """A batched control law (:class:`BatchedPID`, :class:`~shipgym.controllers.lq.BatchedLQ`,
     :class:`~shipgym.controllers.grimble.BatchedGrimbleLQ`) and its
     :class:`BatchedAllocation`, with the ``tau_error`` each env feeds back (the controller
-    wrapper's state, less the leg bookkeeping).
+    state in an env, less the leg bookkeeping).
 
     Attributes:
         name: the controller name.
@@ -301,8 +302,12 @@ class BatchedDPController:
         pid: Any,
         allocation: BatchedAllocation,
         hysteresis: BatchedReversalHysteresis | None = None,
+        velocity_source: str = "kinematic",
     ) -> None:
         self.name = name
+        #: where the law's velocity comes from (``"truth"``, ``"kinematic"``, ``"model"``),
+        #: which set its velocity filter
+        self.velocity_source = velocity_source
         self.pid = pid
         self.allocation = allocation
         self.hysteresis = hysteresis if hysteresis is not None and hysteresis.active else None
@@ -333,7 +338,7 @@ class BatchedDPController:
         eta_ddot_d_r: ArrayLike | None = None,
         state: ArrayLike | None = None,
     ) -> tuple[Array, BatchedAllocationResult, Array]:
-        """One control period of every env (the wrapper's ``_control`` and action).
+        """One control period of every env (the law, its allocation and the action).
 
         Returns:
             ``(tau_c, allocation, controller_action)``: the law's ``tau`` (n, 3), its
@@ -354,10 +359,10 @@ def batched_dp_controller(
     name: str, vessel: Vessel | str, n: int, dt: float, velocity_source: str = "kinematic"
 ) -> BatchedDPController:
     """The named DP controller for ``n`` envs of ``vessel`` at control period ``dt`` (s),
-    designed as the controller wrapper's factory designs it (``make(..., controller=name)``).
+    designed as the single env's factory designs it (``make(..., controller=name)``).
 
     Args:
-        name: a name of :data:`~shipgym.controllers.wrappers.CONTROLLERS`: the PIDs of
+        name: a name of :data:`CONTROLLERS`: the PIDs of
             :data:`BATCHED_CONTROLLERS`, ``"lq"``, ``"alt-lq"``, ``"alt-lq-printed"``,
             ``"alt-sdre"``.
         vessel: a vessel or a packaged vessel's name.
@@ -365,18 +370,16 @@ def batched_dp_controller(
         dt: control period (s).
         velocity_source: where the velocity comes from (``"truth"``, ``"kinematic"``,
             ``"model"``; :func:`~shipgym.controllers.pid.vessel_pid`): sets the velocity
-            filter of a conditioned controller, as the wrapper does.
+            filter of a conditioned controller.
 
     Raises:
         NotImplementedError: a registered controller whose law has no batched form.
-        ValueError: an unknown name, a 4-DOF vessel, a vessel the controller does not apply
+        ValueError: an unknown name, a vessel the controller does not apply
             to (``"pid-seed"``, ``"alt-lq-printed"`` without printed gains), or what the
             scalar allocator raises.
     """
     spec = controller_spec(name)
     v = load_vessel(vessel)
-    if v.dofs != 3:
-        raise ValueError(f"the batched DP controller is 3-DOF; {v.name!r} has {v.dofs} DOF")
     if spec.conditioned:
         single = spec.factory(v, dt, velocity_source=velocity_source)
     else:
@@ -387,11 +390,13 @@ def batched_dp_controller(
         if spec.conditioned
         else None
     )
-    return BatchedDPController(name, law, BatchedAllocation(v, spec.allocation, dt), hyst)
+    return BatchedDPController(
+        name, law, BatchedAllocation(v, spec.allocation, dt), hyst, velocity_source
+    )
 
 
 def _batched_law(name: str, single: Any, n: int) -> Any:
-    """The batched form of a controller wrapper's single-env law, for ``n`` envs (its
+    """The batched form of a controller's law, for ``n`` envs (its
     ``batched(n)``: the same design, the states at zero)."""
     batched = getattr(single, "batched", None)
     if batched is None:

@@ -1079,9 +1079,9 @@ class LearnedControllerWrapper(
     data from the observer below, reference, previous action) to a normalised action; the
     wrapper's own action, a *residual* (``Box(-1, 1)`` of the environment's action shape; zero:
     the policy alone) is added and the sum clipped to [-1, 1] (flagged in
-    ``info["learned_clipped"]``). For a residual model the environment below must contain the
-    ``DPControllerWrapper`` it was trained on (same controller and residual scale), whose
-    residual input the policy drives.
+    ``info["learned_clipped"]``). For a residual model the environment below must run the DP
+    controller it was trained on (``controller=``, same residual scale), whose residual input
+    the policy drives.
 
     Info gains ``policy_action`` (the network's action, before the residual).
 
@@ -1091,8 +1091,8 @@ class LearnedControllerWrapper(
         deterministic: use the policy's mean action (default) or sample it.
 
     Raises:
-        ValueError: not a shipgym model, or a residual model on a stack without the matching
-            ``DPControllerWrapper``.
+        ValueError: not a shipgym model, or a residual model on an env without the matching
+            DP controller.
 
     Note:
         Records its constructor arguments, so ``gym.make(env.spec)`` rebuilds the stack.
@@ -1169,30 +1169,26 @@ class LearnedControllerWrapper(
 
 def _check_stack(env: gym.Env[Any, Any], meta: ModelMetadata) -> None:
     """Check that ``env`` contains what the model was trained on (controller, observer)."""
-    from shipgym.controllers.wrappers import DPControllerWrapper
-
     layers = _stack(env)
-    dp = [w for w in layers if isinstance(w, DPControllerWrapper)]
+    base = env.unwrapped
+    controller = getattr(base, "controller_name", None)
     if meta.residual:
-        if not dp:
+        if controller is None:
             raise ValueError(
-                f"this model is a residual policy on the {meta.controller!r} controller: wrap the "
-                f"environment in DPControllerWrapper(env, controller={meta.controller!r}, "
-                f"residual_scale={meta.residual_scale}) first, or use make_learned_env()"
+                f"this model is a residual policy on the {meta.controller!r} controller: make "
+                f"the environment with controller={meta.controller!r}, residual_scale="
+                f"{meta.residual_scale} (shipgym.make), or use make_learned_env()"
             )
-        w = dp[0]
-        if w.controller_name != meta.controller or not math.isclose(
-            w.residual_scale, meta.residual_scale
-        ):
+        scale = float(getattr(base, "residual_scale", 1.0))
+        if controller != meta.controller or not math.isclose(scale, meta.residual_scale):
             raise ValueError(
                 f"the model was trained on controller {meta.controller!r} with residual_scale "
-                f"{meta.residual_scale}, the environment has {w.controller_name!r} with "
-                f"{w.residual_scale}"
+                f"{meta.residual_scale}, the environment has {controller!r} with {scale}"
             )
-    elif dp:
+    elif controller is not None:
         raise ValueError(
-            "this model drives the thrusters directly (not residual) but the environment has a "
-            "DPControllerWrapper: build the stack with make_learned_env()"
+            "this model drives the thrusters directly (not residual) but the environment runs "
+            f"the DP controller {controller!r}: build the stack with make_learned_env()"
         )
     integ = [w for w in layers if type(w).__name__ == "ErrorIntegralObservation"]
     have = getattr(integ[0], "time_constant", None) if integ else None
@@ -1208,8 +1204,7 @@ def _check_stack(env: gym.Env[Any, Any], meta: ModelMetadata) -> None:
             f"{meta.error_integral} s appended to its observation; the environment has "
             f"{have}: build the stack with make_learned_env(), or give the env {fix}"
         )
-    observers = [w for w in layers if type(w).__name__ == "ObserverWrapper"]
-    name = getattr(observers[0], "observer_name", None) if observers else None
+    name = getattr(base, "observer_name", None)
     if name != meta.observer:
         gym.logger.warn(
             f"the model was trained with observer {meta.observer or 'truth'!r}; the environment "

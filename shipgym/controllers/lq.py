@@ -452,8 +452,8 @@ class BatchedLQ(BatchedLaw):
 class LQController:
     """LQ DP controller with integral action in the r-frame of the current leg.
 
-    Implements the controller protocol of
-    :class:`~shipgym.controllers.wrappers.DPControllerWrapper`: call it once per control period
+    Implements the controller protocol of :class:`~shipgym.controllers.batch.ControllerSpec`:
+    call it once per control period
     with the pose and reference in the r-frame; it returns the body-frame
     ``tau = [X, Y, N]`` (N, N, N m) for the allocation. The law is :class:`BatchedLQ` at
     ``n = 1``.

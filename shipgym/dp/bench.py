@@ -95,7 +95,7 @@ def _episode(
     """One episode, ``on_step(env, info)`` after every step; ``(env, filter seconds per step)``."""
     vessel_name, bf, method, seed, duration = job[:5]
     env = _make_env(vessel_name, bf, method, duration, _task(job))
-    observer = env.env.observer  # the ObserverWrapper's observer (controller wrapper above)
+    observer = env.unwrapped.observer  # the env's observer (N = 1)
     spent = [0.0, 0]
     step = observer.step
 
@@ -159,7 +159,7 @@ def dp_run(job: tuple[Any, ...]) -> dict[str, Any]:
         beaufort=bf,
         method=method,
         observer=METHODS[method][0],
-        controller=env.controller_name,
+        controller=env.unwrapped.controller_name,
         seed=seed,
         task=_task(job),
         filter_step_us=1e6 * per_step,
@@ -200,14 +200,14 @@ def dp_trace(job: tuple[Any, ...]) -> dict[str, Any]:
 
     def keep(env: Any, info: dict[str, Any]) -> None:
         rec = info["record"]
-        obs = env.env.observer
+        obs = env.unwrapped.observer
         zs = [m.z for m in rec.measurements if m.z is not None]
         cols["t"].append(rec.t)
         cols["eta"].append(rec.truth.eta)
         cols["eta_hat"].append(rec.nav.eta)
         cols["z"].append(zs[-1] if zs else np.full(3, np.nan))
         cols["hf"].append(np.array(env.unwrapped.physics.wave_motion()))
-        cols["hf_hat"].append(obs.hf_motion() if hasattr(obs, "hf_motion") else np.zeros(3))
+        cols["hf_hat"].append(obs.hf_motion(0) if hasattr(obs, "hf_motion") else np.zeros(3))
         cols["tau_c"].append(info["tau_c"])
 
     env, _ = _episode(job, keep)

@@ -14,6 +14,7 @@ disturbances and time limit.
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Mapping
 from typing import Any
@@ -23,17 +24,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
+from shipgym.dynamics.frames import wrap_angle
 from shipgym.dynamics.vessel import Vessel
 from shipgym.guidance import ManoeuvrePlan, Reference
+from shipgym.observers.batch import estimate_of
 from shipgym.observers.sensors import BatchedSensors, SensorConfig
-from shipgym.records import step_record_of_env
+from shipgym.records import ControlData, NavigationData, StepRecord, step_record_of_env
 
 from .physics import MAX_TIMESTEP, MIN_TIMESTEP
 from .scene import make_renderer
 from .spec import (
     MAX_CONTROL_PERIOD,
     MAX_SUBSTEPS,
-    STACK_ARGS,
     PlanEnvSpec,
     _check_render_mode,
 )
@@ -92,8 +94,8 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     infinite actions raise ``ValueError``.
 
     ## Observation Space
-    ``Box(-inf, inf, (12 + n,), float32)``; what a controller may know (navigation data, i.e.
-    the truth here and an observer's estimate once an observer wrapper is stacked):
+    ``Box(-inf, inf, (12 + n,), float32)``; what a controller may know (navigation data: the
+    truth, or with ``observer=`` the observer's estimate):
 
     | Num | Observation | Unit |
     |-----|-------------|------|
@@ -151,7 +153,17 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     truncated) ``episode_metrics``
     (Tomera 2014 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
     ``record``: the same as a typed :class:`shipgym.records.StepRecord` (the same arrays),
-    which the observer and controller wrappers hand on with their own parts.
+    with the observer's and the controller's parts where the env has them.
+
+    With ``observer=`` the info's ``nav_eta``, ``nav_nu`` are the estimate, and it gains
+    ``est_error_eta`` (m, m, rad; heading wrapped), ``est_error_nu`` (m/s, m/s, rad/s),
+    ``observer_nis`` (``None`` in a period without a fix) and ``observer_rejected`` (the
+    outlier gate) of the period's last sample, and at the end of an episode
+    ``estimation_rmse`` (x, y, psi, u, v, r; psi and r in deg and deg/s). With
+    ``controller=`` the action is a residual on the controller's normalised command (their
+    sum clipped to [-1, 1], flagged in ``residual_clipped``), and the info gains ``tau_c``
+    (the law's demand, N, N, N m, body), ``tau_delivered``, ``tau_error`` (what the
+    allocation could not deliver), ``controller_action`` and ``allocation_saturated``.
 
     ## Arguments
     | Argument | Default | Description |
@@ -175,6 +187,11 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | ``control_period`` | ``1.0`` | control step (s); a whole multiple of ``timestep`` |
     | ``terminate_on_finish`` | ``True`` | end the episode when the plan is complete |
     | ``reward_weights`` | ``RewardWeights()`` | weights of the reward terms |
+    | ``observer`` | ``None`` | an observer name (``shipgym.observers.observer_names()``) fed |
+    |  |  | every sensor sample; ``None``: the truth |
+    | ``observer_options`` | ``None`` | the observer's options (``{"beaufort": 5}``) |
+    | ``controller`` | ``None`` | a DP controller name (``shipgym.controllers.batch.CONTROLLERS``) |
+    | ``residual_scale`` | ``1.0`` | the factor on the residual actions (with ``controller``) |
     | ``render_mode`` | ``None`` | ``"rgb_array"`` (needs an EGL/OSMesa/GLFW backend) |
 
     ``wind`` and ``current`` accept exactly the forms of :meth:`WindConfig.coerce
@@ -191,20 +208,34 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
 
-    def __init__(self, vessel: Vessel | str | None = None, **kwargs: Any) -> None:
-        stack = sorted(set(kwargs) & STACK_ARGS)
-        if stack:  # the vector env takes them; the single env is wrapped by shipgym.make
-            raise TypeError(
-                f"{type(self).__name__} got {', '.join(stack)}: the observer and controller of a "
-                "single env are wrappers; use shipgym.make(id, observer=..., controller=...) "
-                "(gym.make_vec(id, num_envs, observer=..., controller=...) for a vector env)"
-            )
+    def __init__(
+        self,
+        vessel: Vessel | str | None = None,
+        *,
+        observer: str | None = None,
+        observer_options: Mapping[str, Any] | None = None,
+        controller: str | None = None,
+        residual_scale: float = 1.0,
+        **kwargs: Any,
+    ) -> None:
         render_mode = kwargs.pop("render_mode", None)
         _check_render_mode(render_mode, self.metadata)
-        # the env is the vector env of one: its physics, sensors, guidance, task and metrics
-        # (the time limit is gym.make's TimeLimit, or the class's episode_duration)
-        self.batch = b = ShipVectorEnv(1, type(self), max_episode_steps=sys.maxsize,
-                                       vessel=vessel, **kwargs)  # fmt: skip
+        # the env is the vector env of one: its physics, sensors, guidance, task, metrics,
+        # observer and controller (the time limit is gym.make's TimeLimit, or the class's
+        # episode_duration)
+        self.batch = b = ShipVectorEnv(
+            1, type(self), max_episode_steps=sys.maxsize, vessel=vessel, observer=observer,
+            observer_options=observer_options, controller=controller,
+            residual_scale=residual_scale, **kwargs,
+        )  # fmt: skip
+        #: the observer's name (``None``: the controllers and the observation use the truth)
+        self.observer_name: str | None = b.observer_name
+        #: the DP controller's name (``None``: the actions drive the actuators)
+        self.controller_name: str | None = b.controller_name
+        #: the factor on the residual actions (with a controller)
+        self.residual_scale = b.residual_scale
+        self._sq = np.zeros(6)  # the estimation errors' sums of squares, and their count
+        self._n_est = 0
         for name, value in b.extras.items():  # the class's settings (episode_duration, ...)
             setattr(self, name, value)
         self.task = b.task
@@ -230,9 +261,19 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._harbour = self.task.scene == "harbour"
         self._episode_over = True  # until the first reset
         self._active = np.ones(1, dtype=bool)
-        self._flags = np.zeros((2, 1), bool)  # navigation_observation's switched, new contact
 
     # ---- the task's settings ----------------------------------------------------------------
+    @property
+    def observer(self) -> Any:
+        """The observer (the batch's, N = 1; ``None``: none): ``observer.eta``, ``nu``,
+        ``estimate(0)``, ..."""
+        return self.batch.observer
+
+    @property
+    def controller(self) -> Any:
+        """The DP controller and its allocation (the batch's, N = 1; ``None``: none)."""
+        return self.batch.controller
+
     @property
     def sensors(self) -> BatchedSensors | None:
         """The sensors (the batch's of one; ``None``: no sensors)."""
@@ -298,6 +339,8 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         b.sample_log = [] if b.sensors is not None else None
         b.reset(options=options)
         self._episode_over = False
+        self._sq[:] = 0.0
+        self._n_est = 0
         n = self.n_actions
         info = self._info(self.physics.command, np.zeros(n, bool), np.zeros(n, bool), {}, [])
         return b._observation()[0], info
@@ -322,15 +365,15 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         if b.sensors is not None:
             b.sample_log = []
         out = b.control_step(a.reshape(1, -1), self._active)
-        reward, terminated, truncated, saturated, action_clipped, command, _ = out
+        reward, terminated, truncated, saturated, action_clipped, command, control = out
         contacts = self.physics.contacts() if self._harbour else []
         flags = saturated[0] | action_clipped[0]
         rewards = dict(zip(self.task.reward_terms, b._rew[0].tolist(), strict=True))
-        info = self._info(command[0], flags, action_clipped[0], rewards, contacts)
+        info = self._info(command[0], flags, action_clipped[0], rewards, contacts, control)
         done = bool(terminated[0]), bool(truncated[0])
         if done[0] or done[1]:  # a time-limit truncation is seen by EpisodeEnd
             self._episode_over = True
-            info["episode_metrics"] = self.episode_metrics()
+            self.end_info(info)
         return b._obs[0].copy(), float(reward[0]), done[0], done[1], info
 
     def render(self) -> NDArray[np.uint8] | None:
@@ -364,22 +407,6 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         """The guidance reference of the state now (the last step's or reset's)."""
         return _row_reference(self.batch._ref, 0)
 
-    def navigation_observation(
-        self,
-        eta: NDArray[np.float64],
-        nu: NDArray[np.float64],
-        ref: Reference,
-        prev_action: NDArray[np.float64],
-    ) -> NDArray[np.float32]:
-        """The observation vector (layout in the class docstring) from navigation data (the
-        task's observation of N = 1, as an observer wrapper forms it from its estimate)."""
-        obs = np.zeros((1, self.observation_space.shape[0]), np.float32)
-        e, w = np.reshape(eta, (1, 3)), np.reshape(nu, (1, 3))
-        prev = np.reshape(prev_action, (1, -1)).astype(float)
-        self.task.terms(e, w, e, w, ref.buffer, prev, prev, self._flags[0], self._flags[1], obs,
-                        np.zeros((1, len(self.task.reward_terms))), np.zeros((1, 3)))  # fmt: skip
-        return obs[0]
-
     def _info(
         self,
         command: NDArray[np.float64],
@@ -387,8 +414,11 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         action_clipped: NDArray[np.bool_],
         rewards: Mapping[str, float],
         contacts: list[tuple[str, str]],
+        control: Mapping[str, NDArray[Any]] | None = None,
     ) -> dict[str, Any]:
-        """The info of the state now (env 0 of the batch), with its typed ``record``."""
+        """The info of the state now (env 0 of the batch), with its typed ``record``: the
+        observer's part, and the controller's (``control``: its info of the step, (1, ...)
+        rows) where the env has them."""
         b, phys = self.batch, self.physics
         ref = _row_reference(b._ref, 0)
         eta, nu = b._truth()
@@ -427,14 +457,75 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             info["p"] = phys.p
         info.update(rewards)
         info["measurements"] = b.sample_log if b.sample_log is not None else []
-        info["record"] = step_record_of_env(
+        rec = step_record_of_env(
             info, ref, b._prev[0].copy(), self._actuator_names, self._channel_names
         )
+        if b.observer is not None:
+            rec = self._observer_info(info, rec)
+        if control is not None:
+            rec = rec.with_control(self._control_info(info, control))
+        info["record"] = rec
         return info
+
+    def _observer_info(self, info: dict[str, Any], rec: StepRecord) -> StepRecord:
+        """The observer's keys of ``info`` (its estimate as the navigation data, the estimation
+        errors against the truth, the NIS and gate decision of the period's last sample), and
+        ``rec`` with them."""
+        b = self.batch
+        est = estimate_of(b.observer, 0, info["t"])
+        eta, nu = info["eta"], info["nu"]
+        e_eta = np.array(
+            [est.eta[0] - eta[0], est.eta[1] - eta[1], wrap_angle(est.eta[2] - eta[2])]
+        )
+        e_nu = est.nu - nu
+        self._sq += np.concatenate([e_eta, e_nu]) ** 2
+        self._n_est += 1
+        nav = NavigationData(info["t"], est.eta, est.nu, est.P_eta, est.P_nu, self.observer_name)
+        nis = float(b._nis[0])
+        info["nav_eta"] = nav.eta
+        info["nav_nu"] = nav.nu
+        info["est_error_eta"] = e_eta
+        info["est_error_nu"] = e_nu
+        info["observer_nis"] = None if math.isnan(nis) else nis
+        info["observer_rejected"] = bool(b._rejected[0])
+        return rec.with_nav(nav)
+
+    def end_info(self, info: dict[str, Any]) -> None:
+        """The end of an episode into its last step's ``info``: ``episode_metrics``, and with
+        an observer ``estimation_rmse`` (also in ``info["record"]``). The env calls it when
+        the episode terminates or reaches its ``episode_duration``; the
+        :class:`~shipgym.envs.episode.EpisodeEnd` wrapper at a time-limit truncation."""
+        info["episode_metrics"] = self.episode_metrics()
+        if self.batch.observer is not None:
+            rmse = self.estimation_rmse()
+            info["estimation_rmse"] = rmse
+            rec = info["record"]
+            info["record"] = rec.with_nav(rec.nav, estimation_rmse=rmse)
+
+    def _control_info(self, info: dict[str, Any], control: Mapping[str, Any]) -> ControlData:
+        """The controller's keys of ``info`` (env 0's rows of its step info), as ``ControlData``."""
+        for k in _CONTROL_KEYS:
+            info[k] = control[k][0].copy()
+        return ControlData(self.controller_name or "", *(info[k] for k in _CONTROL_KEYS))
+
+    def estimation_rmse(self) -> dict[str, float]:
+        """RMSE of the observer's estimate over the episode's states so far, its reset's
+        included (m, m, deg, m/s, m/s, deg/s); an env without an observer has none."""
+        if self.batch.observer is None:
+            raise ValueError("the env has no observer: make it with observer=NAME")
+        r = np.sqrt(self._sq / max(self._n_est, 1))
+        r[2] = math.degrees(r[2])
+        r[5] = math.degrees(r[5])
+        return dict(zip(("x", "y", "psi", "u", "v", "r"), r.tolist(), strict=True))
 
     def command_to_action(self, command: NDArray[np.float64]) -> NDArray[np.float64]:
         """Physical command (channel order, each in its unit) to the normalised action."""
         return self.actuators.command_to_action(command)
+
+
+#: the controller's keys of the step info, in :class:`~shipgym.records.ControlData`'s order
+_CONTROL_KEYS = ("tau_c", "tau_delivered", "tau_error", "controller_action",
+                 "allocation_saturated", "residual_clipped")  # fmt: skip
 
 
 class GuidanceView:

@@ -45,6 +45,11 @@ class EpisodeEnd(gym.Wrapper[Any, Any, Any, Any], gym.utils.RecordConstructorArg
         obs, reward, terminated, truncated, info = self.env.step(action)
         if terminated or truncated:
             self._over = True
-            if "episode_metrics" not in info:
-                info["episode_metrics"] = self.env.unwrapped.episode_metrics()  # type: ignore[attr-defined]
+            if "episode_metrics" not in info:  # a time-limit truncation: the env's end
+                base: Any = self.env.unwrapped
+                end = getattr(base, "end_info", None)
+                if end is not None:
+                    end(info)
+                else:
+                    info["episode_metrics"] = base.episode_metrics()
         return obs, reward, terminated, truncated, info

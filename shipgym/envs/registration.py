@@ -14,6 +14,7 @@ __all__ = [
     "ENV_IDS",
     "NEEDS",
     "SCENARIOS",
+    "PLAN_IDS",
     "VECTOR_IDS",
     "register_envs",
     "resolve_env_id",
@@ -57,6 +58,12 @@ VECTOR_IDS: dict[str, str] = {
     "shipgym/RudderRollStabilisation-v0": "shipgym.envs.rollstab:seed_roll_vector_env",
     "shipgym/NavalRollDamping-v0": "shipgym.envs.rollstab:naval_roll_vector_env",
 }
+
+#: the plan tasks (their env a :class:`~shipgym.envs.spec.PlanEnvSpec`, their vector env a
+#: :class:`~shipgym.envs.vector.ShipVectorEnv`), which take ``observer=`` and ``controller=``
+PLAN_IDS: frozenset[str] = frozenset(
+    k for k, v in VECTOR_IDS.items() if v.startswith("shipgym.envs.vector:")
+)
 
 #: the Blue Lady aliases: id -> the vessel-neutral id they equal with ``vessel="blue-lady"``
 ALIASES: dict[str, str] = {

@@ -37,9 +37,6 @@ MAX_SUBSTEPS = 10_000
 MAX_CONTROL_PERIOD = 10.0
 
 
-#: the observer and controller stack's arguments (shipgym.make's wrappers, the vector env's)
-STACK_ARGS = frozenset({"observer", "observer_options", "controller", "residual_scale"})
-
 #: the env's own arguments (not the task's) and their defaults
 ENV_ARGS: dict[str, Any] = {
     "vessel": None,

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -76,10 +76,9 @@ class ShipVectorEnv(BatchedEnv):
         max_episode_steps: the time limit (control steps); ``None``: the id's registered one.
         autoreset_mode: ``"next-step"`` (default) or ``"same-step"``.
         controller: ``None`` (the actions drive the actuators) or a DP controller name
-            (``"pid"``, ``"lq"``, ``"alt-sdre"``, any of :data:`~shipgym.controllers.wrappers.
+            (``"pid"``, ``"lq"``, ``"alt-sdre"``, any of :data:`~shipgym.controllers.batch.
             CONTROLLERS`: :func:`~shipgym.controllers.batch.batched_dp_controller`): the
-            actions are residuals on its normalised command, as under
-            :class:`~shipgym.controllers.wrappers.DPControllerWrapper`
+            actions are residuals on its normalised command, as in the single env
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
         observer: ``None`` / ``"truth"`` (the observation and the controller use the true
@@ -87,8 +86,9 @@ class ShipVectorEnv(BatchedEnv):
             registered with :func:`~shipgym.observers.batch.register_batched_observer`:
             :func:`~shipgym.observers.batch.make_batched_observer`), fed every sensor sample
             (and a model-based one the thrust), whose estimate they use instead, as under
-            :class:`~shipgym.observers.wrapper.ObserverWrapper` (``shipgym.make(...,
-            observer=)``).
+            as the single env's (``shipgym.make(id, observer=)``).
+        observer_options: keyword arguments for the observer (e.g. ``{"beaufort": 5}``, the
+            sea state an ``alt-*`` wave filter is designed for); they win over the vessel's.
         env_sensors: one sensor configuration per env, each as the ``sensors=`` of env ``i``
             (the training stack's per-env noise); they may differ only in their variances.
         **kwargs: the single env's arguments (``vessel=``, ``plant=``, ``timestep=``,
@@ -113,6 +113,7 @@ class ShipVectorEnv(BatchedEnv):
         controller: str | None = None,
         residual_scale: float = 1.0,
         observer: str | None = None,
+        observer_options: Mapping[str, Any] | None = None,
         env_sensors: Sequence[SensorConfig] | None = None,
         **kwargs: Any,
     ) -> None:
@@ -205,14 +206,16 @@ class ShipVectorEnv(BatchedEnv):
                     "an observer needs sensors: create the env with sensors='default' (or "
                     "another preset), not sensors=None"
                 )
-            if self.n_substeps % every:
+            if self.n_substeps % every and n > 1:
                 raise ValueError(
                     f"the batched env's observer needs a sensor period that divides the control "
                     f"period ({self.control_period:g} s); got {self.sensors.config.period:g} s: "
                     "use the single env (shipgym.make) for it"
                 )
-            # the design noise of the vessel, as the observer wrapper's make_observer
-            self.observer = make_batched_observer(self.observer_name, n, self.vessel)
+            # the design noise of the vessel (make_observer's), and the options given
+            self.observer = make_batched_observer(
+                self.observer_name, n, self.vessel, **dict(observer_options or {})
+            )
             check = getattr(self.observer, "check_sample_interval", None)
             if check is not None:  # refused now, not at the first step
                 check(self.sensors.config.period, self.control_period)
@@ -220,7 +223,7 @@ class ShipVectorEnv(BatchedEnv):
         if controller is not None:
             from shipgym.controllers.batch import batched_dp_controller
 
-            # the velocity filter for the observer's kind (as the controller wrapper chooses)
+            # the velocity filter for the observer's kind
             src = (
                 "truth"
                 if self.observer is None
@@ -244,7 +247,17 @@ class ShipVectorEnv(BatchedEnv):
         self._no_contact = np.zeros(n, dtype=bool)  # open water: no quay (never written)
         obs = self.observer
         self._model_based = obs is not None and bool(getattr(obs, "model_based", False))
-        self._thrust_cmd = getattr(obs, "thrust_input", "applied") == "command"
+        # the observer's clock (s) and the thrust of its last sample (a coast to the end of a
+        # period holds it): a period that does not end at a sample (a sensor period that does
+        # not divide the control period, N = 1; a hull stopped at a quay) ends with a coast
+        self._obs_t = np.zeros(n)
+        self._obs_tau: Array | None = None
+        mode = getattr(obs, "thrust_input", "applied")
+        if self._model_based and mode not in ("applied", "command"):
+            raise ValueError(
+                f"observer {observer!r}: thrust_input must be 'applied' or 'command', got {mode!r}"
+            )
+        self._thrust_cmd = mode == "command"
         w = self.physics.wave_config
         self._seen_waves = w is not None and w.first_order  # sensors see the wave motion
         self._mask_names: dict[int, tuple[str, ...]] = {}  # info's key masks, by key count
@@ -365,7 +378,7 @@ class ShipVectorEnv(BatchedEnv):
         return nav  # type: ignore[no-any-return]
 
     def _control(self, residual: Array) -> tuple[Array, dict[str, Array]]:
-        """The DP controller's action plus the residual, as the controller wrapper forms it
+        """The DP controller's action plus the residual
         (from the navigation data and reference at the end of the previous step)."""
         from shipgym.controllers.batch import apply_residual
 
@@ -382,6 +395,7 @@ class ShipVectorEnv(BatchedEnv):
             "tau_delivered": np.ascontiguousarray(alloc.tau),
             "tau_error": np.ascontiguousarray(alloc.tau_error),
             "controller_action": np.ascontiguousarray(a_ctrl),
+            "allocation_saturated": np.ascontiguousarray(alloc.saturated),
             "residual_clipped": clipped,
         }
         # the wrapper hands the env a float32 action
@@ -433,6 +447,7 @@ class ShipVectorEnv(BatchedEnv):
         if self.observer is not None:  # from the first fix, or the leg's start in a dropout
             eta_start = np.where(self._z_valid[:, None], self._last_z, ref.eta_P)
             self.observer.reset(self.physics.t, eta_start, mask=mask)
+            self._obs_t = np.where(mask, self.physics.t, self._obs_t)
             self._cache.clear()
         self._metrics_record(mask)
 
@@ -453,11 +468,14 @@ class ShipVectorEnv(BatchedEnv):
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
             fixed = valid & mask
-            if self._model_based:  # the thrust, as ObserverWrapper
+            t = physics.t
+            if self._model_based:  # the thrust its thrust_input names
                 tau = physics.tau_command if self._thrust_cmd else physics.tau_model
-                info = self.observer.step(physics.t, z, fixed, tau=tau)
+                self._obs_tau = tau
+                info = self.observer.step(t, z, fixed, tau=tau)
             else:
-                info = self.observer.step(physics.t, z, fixed)
+                info = self.observer.step(t, z, fixed)
+            self._obs_t = t.copy()  # (the physics' clock is updated in place)
             self._nis = info.nis
             self._rejected = info.rejected
         log = self.sample_log
@@ -484,6 +502,7 @@ class ShipVectorEnv(BatchedEnv):
             self._z_valid.fill(False)
             self._z_outlier.fill(False)
         full = np.count_nonzero(active) == self.num_envs
+        started = active
         while left > 0:
             if every is None:
                 k = left
@@ -504,6 +523,22 @@ class ShipVectorEnv(BatchedEnv):
                 hit = active if self._aligned else active & (self._steps % every == 0)
                 if np.count_nonzero(hit):
                     self._sample(hit)
+        if self.observer is not None:  # a period that did not end at a sample: coast to now
+            behind = started & (self._obs_t < self.physics.t)
+            if np.count_nonzero(behind):
+                self._coast()
+
+    def _coast(self) -> None:
+        """Propagate the observer to now without a measurement (holding the thrust of the
+        last sample for a model-based one)."""
+        assert self.observer is not None
+        t = self.physics.t
+        if self._model_based:
+            self.observer.step(t, None, tau=self._obs_tau)
+        else:
+            self.observer.step(t, None)
+        self._obs_t = t.copy()
+        self._cache.pop("nav", None)
 
     def _terms(
         self, ref: Any, action: Array, switched: NDArray[np.bool_], new_contact: NDArray[np.bool_]
@@ -660,7 +695,7 @@ class ShipVectorEnv(BatchedEnv):
 
 #: the masks of the controller's info keys (:meth:`ShipVectorEnv._control`)
 _CONTROL_MASKS = ("_tau_c", "_tau_delivered", "_tau_error", "_controller_action",
-                  "_residual_clipped")  # fmt: skip
+                  "_allocation_saturated", "_residual_clipped")  # fmt: skip
 #: the masks of ``info["episode_summary"]``'s keys
 _SUMMARY_MASKS = ("_return", "_length", "_duration_s", "_legs_completed", "_completed")
 

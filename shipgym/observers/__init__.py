@@ -1,10 +1,13 @@
-"""Sensors, state observers (Kalman filters) and the observer wrapper.
+"""Sensors and state observers (Kalman filters).
 
 - :mod:`~shipgym.observers.sensors`: DGPS position and gyrocompass heading samples;
 - :mod:`~shipgym.observers.design`: ``lqe``/``dlqe`` gain design (python-control style);
 - :mod:`~shipgym.observers.kalman`: discrete KF and Kalman-Bucy filters per DOF;
 - :mod:`~shipgym.observers.ekf`: the 9-state extended Kalman filter of Tomera (2014);
-- :mod:`~shipgym.observers.wrapper`: :class:`ObserverWrapper` (env -> observer -> controller).
+- :mod:`~shipgym.observers.batch`: the observers written once over N envs, which the envs run
+  (``shipgym.make(id, observer=NAME)``, ``gym.make_vec(id, N, observer=NAME)``);
+- :mod:`~shipgym.observers.wrapper`: :class:`ObserverWrapper`, rl-zoo3's ``env_wrapper`` form
+  of ``observer=``.
 
 ``make_observer(name)`` builds any registered observer (``observer_names()`` lists them).
 """

@@ -96,10 +96,10 @@ class Observer(ABC):
 
     Attributes:
         name: the observer's name.
-        thrust_input: which thrust :class:`~shipgym.observers.wrapper.ObserverWrapper` hands
-            to :meth:`step`: ``"applied"`` (default), the actuators' applied generalised force
-            (:attr:`Measurement.tau <shipgym.records.Measurement.tau>`); ``"command"``, the
-            steady-state force of the held commands (:attr:`Measurement.tau_command
+        thrust_input: which thrust the env hands to :meth:`step`: ``"applied"`` (default),
+            the actuators' applied generalised force (:attr:`Measurement.tau
+            <shipgym.records.Measurement.tau>`); ``"command"``, the steady-state force of the
+            held commands (:attr:`Measurement.tau_command
             <shipgym.records.Measurement.tau_command>`), for filters that model the thruster
             lags themselves (Al-Takie 1982 eq. 3.21).
         model_based: the estimate comes from a model of the hull driven by the thrust (an

@@ -40,6 +40,7 @@ __all__ = [
     "BatchedKalman",
     "BatchedStepInfo",
     "OneOfBatch",
+    "estimate_of",
     "make_batched_observer",
     "register_batched_form",
     "register_batched_observer",
@@ -898,6 +899,12 @@ class BatchedKalman:
         """States (n, 6) ``[x, y, psi, x_dot, y_dot, psi_dot]``."""
         return np.concatenate([self._X[1].T, self._X[0].T], axis=1)
 
+    def estimate(self, j: int) -> Estimate:
+        """Env ``j``'s estimate (copies); ``P`` in ``[x, y, psi, x_dot, y_dot, psi_dot]``."""
+        eta, nu, P, P_nu = self._readouts()
+        return Estimate(t=float(self._t[j]), eta=eta[j].copy(), nu=nu[j].copy(), P=P[j].copy(),
+                        P_eta=P[j, :3, :3].copy(), P_nu=P_nu[j].copy())  # fmt: skip
+
 
 # ---- observers written once: the batched registry and its N = 1 adapter --------------------
 #: batched observers by name: ``factory(n, vessel)`` returns an observer of ``n`` envs with
@@ -907,8 +914,8 @@ class BatchedKalman:
 #: :attr:`Observer.model_based <shipgym.observers.base.Observer.model_based>`: a model-based
 #: one's ``step`` also takes ``tau=`` (n, 3), the thrust its ``thrust_input`` names
 #: (``"applied"``, default: the bollard model of the actuator states; ``"command"``). The vector env
-#: runs it for N envs, the single env's observer wrapper through :class:`OneOfBatch`
-#: (``shipgym.make(..., observer=name)``): one implementation for both.
+#: runs it for N envs, the single env (``shipgym.make(..., observer=name)``) for one: one
+#: implementation for both; :class:`OneOfBatch` is its scalar ``Observer`` interface.
 BATCHED_OBSERVERS: dict[str, Callable[[int, Any], Any]] = {}
 
 
@@ -940,19 +947,30 @@ def register_batched_form(name: str) -> None:
     BATCHED_OBSERVERS[name] = lambda n, vessel: make_observer(name, vessel).batch(n)  # type: ignore[attr-defined]
 
 
-def make_batched_observer(name: str, n: int, vessel: Any) -> Any:
+def make_batched_observer(name: str, n: int, vessel: Any, **options: Any) -> Any:
     """The observer ``name`` of ``n`` envs fitted to ``vessel``: a registered batched observer
     (:data:`BATCHED_OBSERVERS`: every built-in observer), else a double-integrator Kalman
-    preset (:class:`BatchedKalman`, whose error names the valid ones)."""
+    preset (:class:`BatchedKalman`, whose error names the valid ones).
+
+    ``options``: the observer's options, as :func:`~shipgym.observers.base.make_observer`
+    takes them (e.g. ``beaufort=5``, the sea state an ``alt-*`` wave filter is designed for);
+    they win over the vessel's. An observer registered with :func:`register_batched_observer`
+    takes none."""
     factory = BATCHED_OBSERVERS.get(name)
     if factory is None:
         from .base import _load_builtins
 
         _load_builtins()
         factory = BATCHED_OBSERVERS.get(name)
-    if factory is not None:
+    if factory is None:
+        return BatchedKalman(name, n, vessel=vessel, **options)
+    if not options:
         return factory(n, vessel)
-    return BatchedKalman(name, n, vessel=vessel)
+    preset = make_observer(name, vessel, **options)  # a batched form's preset, with them
+    batch = getattr(preset, "batch", None)
+    if batch is None:
+        raise TypeError(f"observer {name!r} (batched) takes no options, got {sorted(options)}")
+    return batch(n)
 
 
 class BatchOfOne(Observer):
@@ -1027,16 +1045,26 @@ class OneOfBatch(BatchOfOne):
     def estimate(self) -> Estimate:
         if not self._started:
             raise RuntimeError(f"{self.name}: call reset(t0, eta0) before estimate()")
-        p = getattr(self._b, "P_eta", None)
-        P_eta = np.full((3, 3), np.nan) if p is None else np.array(p[0], dtype=float)
-        return Estimate(
-            t=self._t,
-            eta=np.array(self._b.eta[0], dtype=float),
-            nu=np.array(self._b.nu[0], dtype=float),
-            P=np.full((6, 6), np.nan),
-            P_eta=P_eta,
-            P_nu=None,
-        )
+        return estimate_of(self._b, 0, self._t)
+
+
+def estimate_of(observer: Any, j: int, t: float = math.nan) -> Estimate:
+    """Env ``j``'s :class:`~shipgym.observers.base.Estimate` of a batched observer: its
+    ``estimate(j)`` where it has one, else its pose and velocity (``P`` and ``P_eta`` NaN
+    unless it has ``P_eta`` ((n, 3, 3)), ``P_nu`` None) at the time ``t`` (s)."""
+    own = getattr(observer, "estimate", None)
+    if own is not None:
+        return own(j)  # type: ignore[no-any-return]
+    p = getattr(observer, "P_eta", None)
+    P_eta = np.full((3, 3), np.nan) if p is None else np.array(p[j], dtype=float)
+    return Estimate(
+        t=float(t),
+        eta=np.array(observer.eta[j], dtype=float),
+        nu=np.array(observer.nu[j], dtype=float),
+        P=np.full((6, 6), np.nan),
+        P_eta=P_eta,
+        P_nu=None,
+    )
 
 
 def _step_info(info: BatchedStepInfo) -> StepInfo:

@@ -255,9 +255,9 @@ def bench_controllers(
             before any run).
         FileNotFoundError: a named baseline whose file is not shipped, a missing model file.
     """
+    from shipgym.controllers.batch import controller_spec
     from shipgym.controllers.learned import is_learned_controller, parse_learned_controller
     from shipgym.controllers.lq import register_lq
-    from shipgym.controllers.wrappers import controller_spec
     from shipgym.disturbances import WindConfig
 
     register_lq()

@@ -88,7 +88,7 @@ def make_controlled_env(
 
     Args:
         scenario: scenario name or env id (``harbour``, ``tracking``, ...).
-        controller: a name in ``shipgym.controllers.wrappers.CONTROLLERS`` or a learned
+        controller: a name in ``shipgym.controllers.batch.CONTROLLERS`` or a learned
             controller (a shipped baseline ``ppo``, ``sac``, ``ppo-residual`` for the scenario
             and ``vessel=``, or ``ppo:PATH``, ``sac:PATH``).
         observer: ``None``/``"truth"`` or an observer name. Learned controllers always get

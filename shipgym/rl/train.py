@@ -282,8 +282,8 @@ def parse_env_wrapper(spec: Any, where: str = "hyperparameters") -> tuple[str | 
 
     rl-zoo3 wraps every env in what ``env_wrapper`` names (``rl_zoo3.utils.get_wrapper_class``),
     in order: a class path, or a one-entry mapping ``{class path: keyword arguments}``, or a
-    list of these. shipgym takes :data:`OBSERVER_WRAPPER` (``ObserverWrapper``, the wrapper
-    ``shipgym.make(..., observer=)`` applies), with at most the argument ``observer``
+    list of these. shipgym takes :data:`OBSERVER_WRAPPER` (``ObserverWrapper``, which rebuilds
+    the env as ``shipgym.make(..., observer=)`` makes it), with at most the argument ``observer``
     (default ``kbf``), then optionally :data:`INTEGRAL_WRAPPER` (``ErrorIntegralObservation``,
     the leaky integral of the observed errors, with at most ``time_constant`` in s); so the
     zoo and ``shipgym train`` build the same stack. ``None`` / ``None``: the truth, no integral.
