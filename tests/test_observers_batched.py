@@ -138,3 +138,26 @@ def test_vector_env_equals_the_single_env_with_the_observer(name, env_id, vessel
 @pytest.mark.parametrize("name", [n for n in NAMES if n.startswith("alt-")] + ["ekf", "notch"])
 def test_same_step_autoreset(name):
     _run(name, DP, "wimpey-sealab", "same-step", steps=5, total=12)
+
+
+@pytest.mark.parametrize("name", ["dkf", "kbf", "tomera-dkf", "tomera-kbf"])
+def test_a_coast_of_no_time_changes_nothing(name):
+    """A step without a measurement in which no time passes (env i at its own time while
+    another env coasts) leaves env i's filter as it was: the estimate and the next updates
+    (the time-varying KBF's previous sample included)."""
+    rng = np.random.default_rng(1)
+    zs = rng.normal(0.0, 0.3, (12, 2, 3))
+    out = []
+    for coast in (False, True):
+        b = BatchedKalman(name, 2)
+        b.reset(np.zeros(2), np.zeros((2, 3)))
+        for k in range(1, 6):
+            b.step(np.full(2, 0.5 * k), zs[k], np.ones(2, bool))
+        if coast:  # env 0 coasts 0.2 s, env 1 stays at its time
+            b.step(np.array([2.7, 2.5]), None)
+        shift = np.array([0.2 if coast else 0.0, 0.0])
+        for k in range(6, 12):
+            b.step(np.full(2, 0.5 * k) + shift, zs[k], np.ones(2, bool))
+        out.append((b.x[1], b.P[1]))
+    np.testing.assert_array_equal(out[0][0], out[1][0])
+    np.testing.assert_array_equal(out[0][1], out[1][1])

@@ -360,3 +360,33 @@ def test_start_pose_option_one_row_per_env_equals_the_single_envs():
     np.testing.assert_array_equal(again["eta"][0], task["eta"])
     with pytest.raises(ValueError, match="start_pose"):
         venv.reset(options={"start_pose": [[0.0, 0.0]] * 2})
+
+
+@pytest.mark.parametrize("observer", ["kbf", "ekf", "notch"])
+def test_batched_harbour_with_quay_contacts_equals_the_single_envs(observer):
+    """Hulls driven into the quays at different times: a hull stops mid-period at its
+    contact, the others sample on; env i's estimate follows env i's samples only (the
+    others' samples leave it where it is), and a kinematic or model-based observer coasts
+    to the contact, as in the single env; autoresets follow."""
+    n = 3
+    kw = {"observer": observer, "max_episode_steps": 60, "sensors": {"period": 0.5}}
+    venv = gym.make_vec("shipgym/BlueLadyHarbour-v0", num_envs=n, **kw)
+    singles = [shipgym.make("harbour", **kw) for _ in range(n)]
+    venv.reset(seed=3)
+    for i, s in enumerate(singles):
+        s.reset(seed=3 + i)
+    pending = np.zeros(n, bool)
+    contacts = 0
+    a = np.array([[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, 1.0]], np.float32)
+    for _ in range(100):
+        obs, _, term, trunc, info = venv.step(a)
+        for i, s in enumerate(singles):
+            if pending[i]:
+                o, inf = s.reset()
+            else:
+                o, _, _, _, inf = s.step(a[i])
+                contacts += int(inf["quay_contact"])
+            np.testing.assert_array_equal(obs[i], o)
+            np.testing.assert_array_equal(info["nav_eta"][i], inf["nav_eta"])
+        pending = term | trunc
+    assert contacts >= 3

@@ -198,3 +198,53 @@ def test_every_batched_id_and_vessel(task: str, vessel: str) -> None:
     o, r, d, infos = sb3.step(np.zeros((n, *sb3.action_space.shape), np.float32))
     assert o.shape == (n, *sb3.observation_space.shape) and r.shape == d.shape == (n,)
     assert len(infos) == n
+
+
+def _short_episodes(task: str, vessel: str) -> tuple[dict, dict]:
+    """``(vector kwargs, single kwargs)`` of short episodes of ``task``: a few control steps
+    (a step limit, or the family's ``episode_duration``); the sea trials' manoeuvres run
+    whole."""
+    kw: dict = {"vessel": vessel}
+    if "DP" in task:
+        kw["episode_duration"] = 2.0
+        return kw, kw
+    if task in ("shipgym/RudderRollStabilisation-v0", "shipgym/NavalRollDamping-v0",
+                "shipgym/CourseKeeping-v0"):  # fmt: skip
+        kw["episode_duration"] = 6.0
+        return kw, kw
+    if task == "shipgym/SeaTrial-v0":
+        return kw, kw
+    return {**kw, "max_episode_steps": 5}, {**kw, "max_episode_steps": 5}
+
+
+@pytest.mark.parametrize(("task", "vessel"), VECTOR_CASES,
+                         ids=[f"{t.split('/')[1]}-{v}" for t, v in VECTOR_CASES])  # fmt: skip
+def test_batched_env_equals_the_single_envs_over_whole_episodes(task: str, vessel: str) -> None:
+    """Env i of ``make_vec(id, N)`` is the single env seeded ``seed + i``, bit for bit, over
+    whole episodes and their autoresets (next-step mode: the step after an episode's end
+    resets the env, as the single env's ``reset()``)."""
+    n = 2
+    vkw, skw = _short_episodes(task, vessel)
+    venv = gym.make_vec(task, num_envs=n, **vkw)
+    singles = [gym.make(task, **skw) for _ in range(n)]
+    obs, _ = venv.reset(seed=11)
+    for i, s in enumerate(singles):
+        np.testing.assert_array_equal(obs[i], s.reset(seed=11 + i)[0])
+    venv.action_space.seed(2)
+    pending = np.zeros(n, bool)
+    episodes = np.zeros(n, int)
+    for _ in range(5000):
+        a = venv.action_space.sample()
+        obs, r, term, trunc, _ = venv.step(a)
+        for i, s in enumerate(singles):
+            if pending[i]:
+                o, _ = s.reset()
+            else:
+                o, ri, te, tr, _ = s.step(a[i])
+                assert ri == r[i] and (te, tr) == (term[i], trunc[i])
+            np.testing.assert_array_equal(obs[i], o)
+        pending = term | trunc
+        episodes += pending
+        if (episodes >= 2).all():
+            break
+    assert (episodes >= 2).all(), episodes

@@ -252,6 +252,9 @@ class ShipVectorEnv(BatchedEnv):
         # not divide the control period, N = 1; a hull stopped at a quay) ends with a coast
         self._obs_t = np.zeros(n)
         self._obs_tau: Array | None = None
+        # an observer of a fixed sampling interval (the notch, the wave filters) is stepped
+        # at its samples only: its estimate stays at the last one
+        self._coasts = obs is not None and not getattr(obs, "fixed_interval", False)
         mode = getattr(obs, "thrust_input", "applied")
         if self._model_based and mode not in ("applied", "command"):
             raise ValueError(
@@ -468,14 +471,17 @@ class ShipVectorEnv(BatchedEnv):
         if observe and self.observer is not None:
             self._cache.pop("nav", None)
             fixed = valid & mask
-            t = physics.t
+            # each env's observer on its own samples: the others stay where they are (no time
+            # passes for them), as in their single envs
+            t = np.where(mask, physics.t, self._obs_t)
             if self._model_based:  # the thrust its thrust_input names
                 tau = physics.tau_command if self._thrust_cmd else physics.tau_model
-                self._obs_tau = tau
+                held = self._obs_tau
+                self._obs_tau = tau if held is None else np.where(mask[:, None], tau, held)
                 info = self.observer.step(t, z, fixed, tau=tau)
             else:
                 info = self.observer.step(t, z, fixed)
-            self._obs_t = t.copy()  # (the physics' clock is updated in place)
+            self._obs_t = t
             self._nis = info.nis
             self._rejected = info.rejected
         log = self.sample_log
@@ -523,21 +529,22 @@ class ShipVectorEnv(BatchedEnv):
                 hit = active if self._aligned else active & (self._steps % every == 0)
                 if np.count_nonzero(hit):
                     self._sample(hit)
-        if self.observer is not None:  # a period that did not end at a sample: coast to now
+        if self._coasts:  # a period that did not end at a sample: coast to now
             behind = started & (self._obs_t < self.physics.t)
             if np.count_nonzero(behind):
-                self._coast()
+                self._coast(behind)
 
-    def _coast(self) -> None:
-        """Propagate the observer to now without a measurement (holding the thrust of the
-        last sample for a model-based one)."""
+    def _coast(self, behind: NDArray[np.bool_]) -> None:
+        """Propagate the observer of the envs ``behind`` to now without a measurement (holding
+        the thrust of the last sample for a model-based one)."""
         assert self.observer is not None
-        t = self.physics.t
+        t = np.where(behind, self.physics.t, self._obs_t)
         if self._model_based:
             self.observer.step(t, None, tau=self._obs_tau)
         else:
             self.observer.step(t, None)
-        self._obs_t = t.copy()
+        self._obs_t = t
+        self._cache.pop("nav", None)
         self._cache.pop("nav", None)
 
     def _terms(

@@ -150,7 +150,7 @@ def _kalman_step(mode, thr, max_rej, sel, dt, X, count, gate_open, yprev, has_pr
                 pr[4, i] = ((c + (2.0 * d) * b) + (d * d) * a) + Q[2, i]
             else:
                 pr[0, i], pr[1, i], pr[2, i], pr[3, i], pr[4, i] = v, p, a, b, c
-        if not valid[j]:  # coast
+        if not valid[j]:  # coast (no time passing: nothing changes, the last sample kept)
             for i in range(3):
                 for r in range(5):
                     X[r, i, j] = pr[r, i]
@@ -158,7 +158,8 @@ def _kalman_step(mode, thr, max_rej, sel, dt, X, count, gate_open, yprev, has_pr
             nis[j] = np.nan
             rejected[j] = False
             forced[j] = False
-            has_prev[j] = False
+            if moving:
+                has_prev[j] = False
             continue
         w = 0.0
         for i in range(3):
@@ -916,6 +917,9 @@ class BatchedKalman:
 #: (``"applied"``, default: the bollard model of the actuator states; ``"command"``). The vector env
 #: runs it for N envs, the single env (``shipgym.make(..., observer=name)``) for one: one
 #: implementation for both; :class:`OneOfBatch` is its scalar ``Observer`` interface.
+#: An env steps env ``i``'s observer at env ``i``'s samples (the others' times unchanged)
+#: and coasts it (``z=None``) to the end of a control period that did not end at a sample,
+#: unless it has ``fixed_interval = True`` (discretised for one sampling interval).
 BATCHED_OBSERVERS: dict[str, Callable[[int, Any], Any]] = {}
 
 

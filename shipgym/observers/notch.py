@@ -333,6 +333,10 @@ class BatchedNotch:
         n: number of envs, >= 1.
     """
 
+    #: discretised for one sampling interval: stepped at its samples only (an env does not
+    #: coast it to the end of a period without a sample)
+    fixed_interval = True
+
     model_based = False
 
     def __init__(

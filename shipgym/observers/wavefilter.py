@@ -591,6 +591,10 @@ class BatchedWaveFilter:
         n: number of envs, >= 1.
     """
 
+    #: discretised for one sampling interval: stepped at its samples only (an env does not
+    #: coast it to the end of a period without a sample)
+    fixed_interval = True
+
     model_based = True  # the LF model and the thrust drive its prediction
     thrust_input = "command"
 
