@@ -15,7 +15,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym.dynamics.actuators import ActuatorSet, Azimuth, Propeller, bollard_inverse
+from shipgym.dynamics.actuators import (
+    ActuatorSet,
+    Azimuth,
+    Propeller,
+    bollard_inverse,
+    bollard_inverse_rows,
+)
 from shipgym.dynamics.thrusters import ThrusterParameters
 from shipgym.dynamics.vessel import Vessel
 
@@ -145,6 +151,7 @@ class _FixedAllocator:
         self.W = 1.0 / np.maximum(acts.capacity()[[0, 1, -1]], 1e-9) ** 2
         self._wls = WLSAllocator(self.B, self.f_min, self.f_max, W=self.W)
         self._inverse = _inverse_constants(acts.actuators)
+        self._lower, self._upper = acts.lower, acts.upper
 
     def __call__(self, tau: ArrayLike, state: NDArray[np.float64]) -> Allocation:
         return Allocation(*(x[0] for x in self.batch(_tau3(tau).reshape(1, 3))))
@@ -153,7 +160,9 @@ class _FixedAllocator:
         """The allocations of N requests ``tau`` (N, 3): ``(command, force, tau, tau_error,
         saturated)``, each with a leading axis N (the compiled law over N, one call)."""
         force, delivered, error, sat = self._wls.batch(tau)
-        cmd = np.clip(bollard_inverse(force, *self._inverse), self.acts.lower, self.acts.upper)
+        cmd = np.empty_like(force)
+        bollard_inverse_rows(force, *self._inverse, cmd)  # (the constants are C rows)
+        np.minimum(np.maximum(cmd, self._lower, out=cmd), self._upper, out=cmd)  # np.clip's
         return cmd, force, delivered, error, sat
 
 

@@ -361,9 +361,23 @@ def bollard_inverse(force: Any, k_ahead: Any, k_astern: Any, quadratic: Any) -> 
     n = ka.size
     rows = np.ascontiguousarray(f.reshape(-1, n) if n > 1 else f.reshape(-1, 1))
     out = np.empty_like(rows)
-    args = (rows, ka, kb, q, out)
-    entry(_bollard_inverse, args)(*args)
+    bollard_inverse_rows(rows, ka, kb, q, out)
     return out.reshape(f.shape) if f.ndim else out[0, 0]
+
+
+def bollard_inverse_rows(force: Any, k_ahead: Any, k_astern: Any, quadratic: Any, out: Any) -> None:
+    """:func:`bollard_inverse` of the rows ``force`` (N, n) into ``out`` (N, n), the constants
+    (n,) as C-contiguous float64 (``quadratic`` bool) arrays: the compiled law without the
+    conversions (an allocator's hot path, its constants prepared once)."""
+    args = (force, k_ahead, k_astern, quadratic, out)
+    if not _INVERSE:
+        _INVERSE.append(entry(_bollard_inverse, args))
+    _INVERSE[0](*args)
+
+
+_INVERSE: list[
+    Any
+] = []  # _bollard_inverse's compiled entry point (its argument types never change)
 
 
 @dataclass(frozen=True)

@@ -387,16 +387,25 @@ def run_wls(Q, R, xlo, xhi, s, lo, hi, B, tau):  # type: ignore[no-untyped-def]
         ValueError: a request with NaN or infinite values, or ``Q`` not positive definite.
         RuntimeError: the active-set method did not converge.
     """
-    t = np.ascontiguousarray(tau, dtype=float)
-    N, n = t.shape[0], s.shape[0]
-    out = (np.empty((N, n)), np.empty((N, t.shape[1])), np.empty((N, t.shape[1])),
-           np.empty((N, n), dtype=np.bool_))  # fmt: skip
     # C-contiguous float64 throughout: the one compiled entry point is typed for that layout
     # (a transposed B, as a configuration matrix built column by column is, would be misread)
-    c = np.ascontiguousarray
-    args = (c(Q, dtype=float), c(R, dtype=float), c(xlo, dtype=float), c(xhi, dtype=float),
-            c(s, dtype=float), c(lo, dtype=float), c(hi, dtype=float), c(B, dtype=float), t,
-            *out)  # fmt: skip
+    return _run_wls(_problem(Q, R, xlo, xhi, s, lo, hi, B), tau)
+
+
+def _problem(*arrays: Any) -> tuple[NDArray[np.float64], ...]:
+    """:func:`run_wls`'s problem arrays ``(Q, R, xlo, xhi, s, lo, hi, B)``, C-contiguous
+    float64 (what its compiled entry point is typed for)."""
+    return tuple(np.ascontiguousarray(a, dtype=float) for a in arrays)
+
+
+def _run_wls(problem: tuple[NDArray[np.float64], ...], tau: ArrayLike) -> tuple[Any, ...]:
+    """:func:`run_wls` of a problem of :func:`_problem` (prepared once by a
+    :class:`WLSAllocator`)."""
+    t = np.ascontiguousarray(tau, dtype=float)
+    N, n = t.shape[0], problem[4].shape[0]
+    out = (np.empty((N, n)), np.empty((N, t.shape[1])), np.empty((N, t.shape[1])),
+           np.empty((N, n), dtype=np.bool_))  # fmt: skip
+    args = (*problem, t, *out)
     if not _WLS:
         _WLS.append(entry(wls_law, args))
     code = _WLS[0](*args)
@@ -419,7 +428,7 @@ class WLSAllocator:
     there).
     """
 
-    __slots__ = ("B", "f_min", "f_max", "_s", "_lo", "_hi", "_Q", "_BsWk", "_n_dof")
+    __slots__ = ("B", "f_min", "f_max", "_s", "_lo", "_hi", "_Q", "_BsWk", "_n_dof", "_problem")
 
     def __init__(
         self,
@@ -443,6 +452,8 @@ class WLSAllocator:
         self.B, self.f_min, self.f_max = Bm, lo, hi
         self._s, self._lo, self._hi = s, lo / s, hi / s
         self._Q, self._BsWk, self._n_dof = Q, np.ascontiguousarray(BsWk), n_dof
+        self._problem = _problem(self._Q, self._BsWk, self._lo, self._hi, self._s, self.f_min,
+                                 self.f_max, self.B)  # fmt: skip
 
     def __call__(self, tau: ArrayLike) -> WLSAllocation:
         """The allocation of ``tau`` (shape (n_dof,), N and N m)."""
@@ -453,8 +464,7 @@ class WLSAllocator:
     def batch(self, tau: ArrayLike) -> tuple[NDArray[np.float64], ...]:
         """The allocations of N requests ``tau`` (N, n_dof) (:func:`wls_law`): ``(force,
         delivered, tau_error, saturated)``, each with a leading axis N."""
-        return run_wls(self._Q, self._BsWk, self._lo, self._hi, self._s, self.f_min,
-                       self.f_max, self.B, tau)  # fmt: skip
+        return _run_wls(self._problem, tau)
 
 
 def allocate_wls(
