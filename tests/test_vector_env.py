@@ -258,6 +258,8 @@ def _residual_parity(env_id, observer, controller, vessel="blue-lady", steps=150
         ({"controller": "nope"}, ValueError, "unknown controller"),
         ({"sensors": None, "observer": "kbf"}, ValueError, "needs sensors"),
         ({"controller": "pid", "residual_scale": float("nan")}, ValueError, "finite"),
+        ({"controller": "pid", "residual_scale": True}, ValueError, "finite"),
+        ({"observer_options": {"beaufort": 5}}, ValueError, "needs an observer"),
         ({"autoreset_mode": "sometimes"}, ValueError, "autoreset_mode"),
         ({"render_mode": "rgb_array"}, ValueError, "does not render"),
     ],

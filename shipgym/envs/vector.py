@@ -184,7 +184,8 @@ class ShipVectorEnv(BatchedEnv):
         self._fresh = False  # whether _obs is the observation now
         lo, hi = self.actuators.lower, self.actuators.upper
         self._lo_tol, self._hi_tol = lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)
-        if not (isinstance(residual_scale, int | float) and 0 <= residual_scale < math.inf):
+        if not (isinstance(residual_scale, int | float) and not isinstance(residual_scale, bool)
+                and 0 <= residual_scale < math.inf):  # fmt: skip
             raise ValueError(f"residual_scale must be a finite number >= 0, got {residual_scale!r}")
         self.controller_name = controller
         self.residual_scale = float(residual_scale)
@@ -196,6 +197,10 @@ class ShipVectorEnv(BatchedEnv):
                 raise ValueError("env_sensors needs sensors (the env was made with sensors=None)")
         self._env_sensors = env_sensors
         self.observer_name = None if observer in (None, "truth") else observer
+        if observer_options and self.observer_name is None:
+            raise ValueError(
+                f"observer_options={dict(observer_options)!r} needs an observer: pass observer="
+            )
         self.observer = None
         if self.observer_name is not None:
             from shipgym.observers.batch import make_batched_observer
