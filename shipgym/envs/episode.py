@@ -18,7 +18,9 @@ EPISODE_END_ENTRY_POINT = "shipgym.envs.episode:EpisodeEnd"
 
 
 class EpisodeEnd(gym.Wrapper[Any, Any, Any, Any], gym.utils.RecordConstructorArgs):
-    """``episode_metrics`` at every episode end; ``step()`` after the end raises ``ResetNeeded``.
+    """The episode's end in the last ``info`` (``episode_metrics``; the env's ``end_info`` where
+    it has one, e.g. with the estimation RMSE) at every episode end; ``step()`` after the end
+    raises ``ResetNeeded``.
 
     Args:
         env: a shipgym env, usually wrapped in ``TimeLimit`` (``gym.make`` does it).
