@@ -100,3 +100,33 @@ def test_dropout_at_reset_starts_the_observer_from_the_planned_pose():
     for _ in range(3):
         _, _, _, _, info = env.step(np.zeros(3, np.float32))
     assert np.all(np.isfinite(info["nav_eta"]))
+
+
+@pytest.mark.parametrize("observer", ["kbf", "ekf"])
+def test_a_sensor_period_off_the_control_period_coasts_to_the_step_end(observer):
+    """Sensors every 0.3 s under a 1 s control period: the env feeds its observer each sample
+    of the step (with the thrust the observer asks for) and coasts it to the end of the
+    period: its estimate equals the same observer (``make_observer``) stepped by hand with the
+    step's ``info["measurements"]`` and coasted to ``info["t"]`` with the last sample's
+    thrust."""
+    from shipgym.observers import make_observer
+
+    env = shipgym.make("harbour", observer=observer, controller="pid", sensors={"period": 0.3})
+    _, info = env.reset(seed=4)
+    vessel = env.unwrapped.vessel
+    ref = make_observer(observer, vessel=vessel)
+    first = info["measurements"][0]
+    ref.reset(first["t"], first["z"])
+    key = "tau_command" if getattr(ref, "thrust_input", "applied") == "command" else "tau"
+    coasts = 0
+    for _ in range(12):
+        _, _, _, _, info = env.step(np.zeros(3, np.float32))
+        ms = info["measurements"]
+        for m in ms:
+            ref.step(m["t"], m["z"], m[key])
+        if ms[-1]["t"] < info["t"]:
+            ref.step(info["t"], None, ms[-1][key])
+            coasts += 1
+        np.testing.assert_array_equal(ref.estimate().eta, info["nav_eta"])
+        np.testing.assert_array_equal(ref.estimate().nu, info["nav_nu"])
+    assert coasts > 0
