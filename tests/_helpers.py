@@ -120,3 +120,19 @@ def accel_of(plant):  # type: ignore[no-untyped-def]
         return ud, vd, rd
 
     return accel3
+
+
+def step_singles(singles, actions, pending):  # type: ignore[no-untyped-def]
+    """The single envs' side of one step of a vector env in next-step autoreset mode: env
+    ``i`` reset where ``pending[i]`` (its action ignored, as the vector env ignores it), else
+    stepped with ``actions[i]``. Returns one ``(obs, info, stepped)`` per env, ``stepped`` the
+    ``(reward, terminated, truncated)`` of a step, ``None`` after a reset."""
+    out = []
+    for s, a, p in zip(singles, actions, pending, strict=True):
+        if p:
+            o, info = s.reset()
+            out.append((o, info, None))
+        else:
+            o, r, te, tr, info = s.step(a)
+            out.append((o, info, (r, te, tr)))
+    return out

@@ -9,6 +9,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
+from _helpers import step_singles
 
 import shipgym
 from shipgym.dynamics.vessel import load_vessel, vessel_names
@@ -225,11 +226,9 @@ def _residual_parity(env_id, observer, controller, vessel="blue-lady", steps=150
     for _ in range(320 if steps == 150 else 130):
         res = rng.normal(0.0, 0.6, (n, venv.single_action_space.shape[0])).astype(np.float32)
         obs, rew, term, trunc, info = venv.step(res)
-        for i, s in enumerate(singles):
-            if pending[i]:
-                o, inf = s.reset()
-            else:
-                o, r, te, tr, inf = s.step(res[i])
+        for i, (o, inf, stepped) in enumerate(step_singles(singles, res, pending)):
+            if stepped is not None:
+                r, te, tr = stepped
                 assert (te, tr) == (bool(term[i]), bool(trunc[i]))
                 assert rew[i] == r
                 np.testing.assert_array_equal(info["tau_c"][i], inf["tau_c"])
@@ -382,11 +381,8 @@ def test_batched_harbour_with_quay_contacts_equals_the_single_envs(observer):
     a = np.array([[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, 1.0]], np.float32)
     for _ in range(100):
         obs, _, term, trunc, info = venv.step(a)
-        for i, s in enumerate(singles):
-            if pending[i]:
-                o, inf = s.reset()
-            else:
-                o, _, _, _, inf = s.step(a[i])
+        for i, (o, inf, stepped) in enumerate(step_singles(singles, a, pending)):
+            if stepped is not None:
                 contacts += int(inf["quay_contact"])
             np.testing.assert_array_equal(obs[i], o)
             np.testing.assert_array_equal(info["nav_eta"][i], inf["nav_eta"])
