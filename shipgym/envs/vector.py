@@ -479,14 +479,11 @@ class ShipVectorEnv(BatchedEnv):
             # each env's observer on its own samples: the others stay where they are (no time
             # passes for them), as in their single envs
             t = np.where(mask, physics.t, self._obs_t)
-            if self._model_based:  # the thrust its thrust_input names
+            if self._model_based:  # the thrust its thrust_input names, held to the next sample
                 tau = physics.tau_command if self._thrust_cmd else physics.tau_model
                 held = self._obs_tau
                 self._obs_tau = tau if held is None else np.where(mask[:, None], tau, held)
-                info = self.observer.step(t, z, fixed, tau=tau)
-            else:
-                info = self.observer.step(t, z, fixed)
-            self._obs_t = t
+            info = self._step_observer(t, z, fixed)
             self._nis = info.nis
             self._rejected = info.rejected
         log = self.sample_log
@@ -542,14 +539,21 @@ class ShipVectorEnv(BatchedEnv):
     def _coast(self, behind: NDArray[np.bool_]) -> None:
         """Propagate the observer of the envs ``behind`` to now without a measurement (holding
         the thrust of the last sample for a model-based one)."""
-        assert self.observer is not None
         t = np.where(behind, self.physics.t, self._obs_t)
-        if self._model_based:
-            self.observer.step(t, None, tau=self._obs_tau)
-        else:
-            self.observer.step(t, None)
-        self._obs_t = t
+        n = self.num_envs
+        self._step_observer(t, np.full((n, 3), np.nan), np.zeros(n, dtype=bool))
         self._cache.pop("nav", None)
+
+    def _step_observer(self, t: Array, z: Array, valid: NDArray[np.bool_]) -> Any:
+        """Step the observer to the envs' times ``t`` with the samples ``z`` where ``valid``
+        (a model-based one with the held thrust of each env's last sample) and keep its clock."""
+        assert self.observer is not None
+        if self._model_based:
+            info = self.observer.step(t, z, valid, tau=self._obs_tau)
+        else:
+            info = self.observer.step(t, z, valid)
+        self._obs_t = t
+        return info
         self._cache.pop("nav", None)
 
     def _terms(
