@@ -16,6 +16,7 @@ __all__ = [
     "required_param",
     "require_given",
     "from_mapping",
+    "replace_drawn",
     "describe",
     "fields_of",
     "is_real",
@@ -47,6 +48,22 @@ def require_given(where: str, hint: str, **values: Any) -> None:
     missing = [k for k, v in values.items() if v is None]
     if missing:
         raise TypeError(f"{where} needs {' and '.join(missing)} (no vessel is a default): {hint}")
+
+
+def replace_drawn(obj: T, **changes: Any) -> T:
+    """A copy of the frozen dataclass ``obj`` (validated when it was made) with ``changes``,
+    WITHOUT running its validation again: for an episode's draws, every reset, whose values the
+    task draws inside ranges it validated when it was made (a wind speed in ``[0,
+    max_wind_speed]``); every other change goes through ``dataclasses.replace``. The copy equals
+    the validated one (``==``). Raises ``ValueError`` for a name that is not a field."""
+    own = obj.__dict__
+    unknown = sorted(set(changes) - set(own))
+    if unknown:
+        raise ValueError(f"{type(obj).__name__} has no field(s) {unknown}")
+    new = object.__new__(type(obj))
+    new.__dict__.update(own)
+    new.__dict__.update(changes)
+    return new
 
 
 def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, where: str = "") -> T:

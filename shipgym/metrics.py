@@ -293,73 +293,100 @@ def command_chatter(
         raise ValueError(f"band must be in [0, 1) (normalised command), got {band!r}")
     if not (math.isfinite(hf_period) and hf_period > 0.0):
         raise ValueError(f"hf_period must be a period > 0 (s), got {hf_period!r}")
-    k, n = a.shape
+    n = a.shape[1]
     rev = np.ones(n, bool) if reversible is None else np.asarray(reversible, dtype=bool)
     if rev.shape != (n,):
         raise ValueError(f"reversible must have {n} flags, got shape {rev.shape}")
+    rows = chatter_rows(a[None], dt, rev, band, hf_period, limit_tol)
+    return {key: v[0] for key, v in rows.items()}
+
+
+def chatter_rows(
+    a: NDArray[np.float64],
+    dt: float,
+    reversible: NDArray[np.bool_],
+    band: float = REVERSAL_BAND,
+    hf_period: float = HF_PERIOD_S,
+    limit_tol: float = 1e-6,
+) -> dict[str, list[list[float]]]:
+    """:func:`command_chatter` of M runs of the same length at once (the one law; arguments
+    checked by the caller): ``a`` (M, K, n_channels) finite commands, ``dt`` (s) > 0,
+    ``reversible`` (n_channels,) bools. Returns ``{key: [[value per channel] per run]}``;
+    run ``r``'s values are those of ``a[r]`` alone, bit for bit, whatever M."""
+    m, k, n = a.shape
     nan = _NAN  # one object: two summaries of the same run compare equal
     if k == 0:
-        return {key: [nan] * n for key in CHATTER_KEYS}
+        return {key: [[nan] * n for _ in range(m)] for key in CHATTER_KEYS}
     minutes = k * dt / 60.0
     resolved = k >= 4 and hf_period > 2.0 * dt  # else no resolved content below hf_period
-    hf_all = _hf_fractions(a, dt, hf_period) if resolved else [nan] * n
-    counts = np.zeros((3, n))  # reversals, samples at a limit, travel
-    _chatter_sums(np.ascontiguousarray(a), rev, float(band), 1.0 - limit_tol, counts)
+    hf_all = _hf_fractions(a, dt, hf_period) if resolved else [[nan] * n for _ in range(m)]
+    counts = np.zeros((3, m, n))  # reversals, samples at a limit, travel
+    _chatter_sums(np.ascontiguousarray(a), reversible, float(band), 1.0 - limit_tol, counts)
     reversals, at_limit, travel = counts.tolist()
     return {
-        "reversals_per_min": [c / minutes for c in reversals],
-        "limit_fraction": [c / k for c in at_limit],
+        "reversals_per_min": [[c / minutes for c in r] for r in reversals],
+        "limit_fraction": [[c / k for c in r] for r in at_limit],
         "hf_variance_fraction": hf_all,
-        "travel_per_min": [x / minutes for x in travel],
+        "travel_per_min": [[x / minutes for x in r] for r in travel],
     }
 
 
 @njit
 def _chatter_sums(a, rev, band, limit, out):  # type: ignore[no-untyped-def]
-    """:func:`command_chatter`'s sums per channel ``j`` of the commands ``a`` (K, n) into
-    ``out`` (3, n): the reversals through the band ``|a| <= band`` (0 where not ``rev[j]``),
-    the samples with ``|a| >= limit`` and the travel ``sum_k |a_k - a_{k-1}|``."""
-    k, n = a.shape
-    for j in range(n):
-        side = 0
-        count = 0
-        hits = 0
-        travel = 0.0
-        for i in range(k):
-            v = a[i, j]
-            s = 1 if v > band else (-1 if v < -band else 0)
-            if s != 0:
-                if side != 0 and s != side:
-                    count += 1
-                side = s
-            if abs(v) >= limit:
-                hits += 1
-            if i > 0:
-                travel += abs(v - a[i - 1, j])
-        out[0, j] = count if rev[j] else 0
-        out[1, j] = hits
-        out[2, j] = travel
+    """:func:`command_chatter`'s sums per run ``r`` and channel ``j`` of the commands ``a``
+    (M, K, n) into ``out`` (3, M, n): the reversals through the band ``|a| <= band`` (0 where
+    not ``rev[j]``), the samples with ``|a| >= limit`` and the travel
+    ``sum_k |a_k - a_{k-1}|``."""
+    m, k, n = a.shape
+    for q in range(m):
+        for j in range(n):
+            side = 0
+            count = 0
+            hits = 0
+            travel = 0.0
+            for i in range(k):
+                v = a[q, i, j]
+                s = 1 if v > band else (-1 if v < -band else 0)
+                if s != 0:
+                    if side != 0 and s != side:
+                        count += 1
+                    side = s
+                if abs(v) >= limit:
+                    hits += 1
+                if i > 0:
+                    travel += abs(v - a[q, i - 1, j])
+            out[0, q, j] = count if rev[j] else 0
+            out[1, q, j] = hits
+            out[2, q, j] = travel
 
 
-def _hf_fractions(a: NDArray[np.float64], dt: float, hf_period: float) -> list[float]:
-    """:func:`command_chatter`'s ``hf_variance_fraction`` of each column of ``a`` (K >= 4
-    samples ``dt`` apart): the one-sided periodogram of the linearly detrended column
-    (rectangular window, density scaling ``|X_j|^2 dt / K``, doubled except at 0 and the
-    Nyquist frequency; SciPy's ``periodogram(x, 1/dt, "boxcar", detrend="linear")``, which
-    the tests compare it with), its sum above ``1/hf_period`` over its sum above 0; 0 where
-    the detrended column has no variance left (``sum < 1e-24``: round-off of a constant or
-    a ramp)."""
-    k = a.shape[0]
+def _hf_fractions(a: NDArray[np.float64], dt: float, hf_period: float) -> list[list[float]]:
+    """:func:`command_chatter`'s ``hf_variance_fraction`` of each column of each run of ``a``
+    (M, K, n) (K >= 4 samples ``dt`` apart): the one-sided periodogram of the linearly
+    detrended column (rectangular window, density scaling ``|X_j|^2 dt / K``, doubled except
+    at 0 and the Nyquist frequency; SciPy's ``periodogram(x, 1/dt, "boxcar",
+    detrend="linear")``, which the tests compare it with), its sum above ``1/hf_period`` over
+    its sum above 0; 0 where the detrended column has no variance left (``sum < 1e-24``:
+    round-off of a constant or a ramp). Each run's floats are its own alone, whatever M.
+    """
+    k = a.shape[1]
     i = np.arange(k, dtype=float) - 0.5 * (k - 1)  # centred sample index
-    centred = a - a.mean(axis=0)
-    slope = (i @ centred) / (i @ i)
-    x = np.fft.rfft(centred - i[:, None] * slope, axis=0)
-    p = (x.real * x.real + x.imag * x.imag) * (dt / k)
-    p[1 : (k + 1) // 2] *= 2.0  # one-sided: every bin but 0 and (even K) Nyquist twice
-    f = np.arange(p.shape[0]) / (k * dt)
-    total = p[1:].sum(axis=0)
-    high = p[f > 1.0 / hf_period].sum(axis=0)
-    return [float(h / s) if s > 1e-24 else 0.0 for h, s in zip(high, total, strict=True)]
+    # each column of each run a contiguous row (M, n, K): every sum below runs along its row
+    # alone (NumPy's pairwise sum), so the floats of a run do not depend on M or n
+    x = np.ascontiguousarray(a.transpose(0, 2, 1))
+    centred = x - x.mean(axis=2, keepdims=True)
+    slope = (centred * i).sum(axis=2) / (i @ i)
+    z = np.fft.rfft(centred - slope[:, :, None] * i, axis=2)
+    p = (z.real * z.real + z.imag * z.imag) * (dt / k)
+    p[:, :, 1 : (k + 1) // 2] *= 2.0  # one-sided: every bin but 0 and (even K) Nyquist twice
+    f = np.arange(p.shape[2]) / (k * dt)
+    j0 = int(np.searchsorted(f, 1.0 / hf_period, side="right"))  # the first f > 1/hf_period
+    total = p[:, :, 1:].sum(axis=2)
+    high = p[:, :, j0:].sum(axis=2)  # (a slice: a row's sum whatever M, as a mask's is not)
+    return [
+        [float(h / s) if s > 1e-24 else 0.0 for h, s in zip(hr, sr, strict=True)]
+        for hr, sr in zip(high.tolist(), total.tolist(), strict=True)
+    ]
 
 
 def rmse(a: ArrayLike, b: ArrayLike, angle: bool = False, axis: int | None = 0) -> Any:
@@ -817,6 +844,16 @@ class BatchedManoeuvreMetrics:
 
     def summary(self, i: int = 0) -> dict[str, Any]:
         """Env ``i``'s statistics: :meth:`ManoeuvreMetrics.summary` of its rows."""
+        return self.summaries([i])[0]
+
+    def summaries(self, envs: Sequence[int]) -> list[dict[str, Any]]:
+        """:meth:`summary` of each env of ``envs`` (the chatter of the envs with as many
+        recorded commands computed together: the same floats as one by one)."""
+        envs = [int(i) for i in envs]
+        chatter = self.chatters(envs)
+        return [self._summary(i, c) for i, c in zip(envs, chatter, strict=True)]
+
+    def _summary(self, i: int, chatter: dict[str, list[float]]) -> dict[str, Any]:
         F, I = self._F[i].tolist(), self._I[i].tolist()  # Python floats and ints
         na = self.n_actuators
         nan = float("nan")
@@ -853,19 +890,36 @@ class BatchedManoeuvreMetrics:
             "leg_times": [x[0] for x in lt],
             "leg_completion_times": [x[1] for x in lt],
             "per_leg": per_leg,
-            **self.chatter(i),
+            **chatter,
         }
 
     def chatter(self, i: int = 0) -> dict[str, list[float]]:
         """:func:`command_chatter` of env ``i``'s commands recorded so far (lists per
         channel)."""
-        k, nc = int(self._I[i, _I_N_CMD]), self.n_channels
-        dt = self.control_period
-        if dt is None:
-            ts = self._CH[i, :k, nc].tolist()
-            dt = (ts[-1] - ts[0]) / (k - 1) if k > 1 and ts[-1] > ts[0] else 1.0
-        a = np.ascontiguousarray(self._CH[i, :k, :nc])  # (k, n_channels), C order
-        return command_chatter(a, dt, reversible=self.reversible)
+        return self.chatters([i])[0]
+
+    def chatters(self, envs: Sequence[int]) -> list[dict[str, list[float]]]:
+        """:meth:`chatter` of each env of ``envs``: one :func:`chatter_rows` call for the envs
+        with the same number of commands and period."""
+        nc, rev = self.n_channels, self.reversible
+        rev = np.ones(nc, bool) if rev is None else np.asarray(rev, dtype=bool)
+        groups: dict[tuple[int, float], list[int]] = {}
+        for i in envs:
+            k = int(self._I[i, _I_N_CMD])
+            dt = self.control_period
+            if dt is None:
+                ts = self._CH[i, :k, nc].tolist()
+                dt = (ts[-1] - ts[0]) / (k - 1) if k > 1 and ts[-1] > ts[0] else 1.0
+            groups.setdefault((k, float(dt)), []).append(i)
+        out: dict[int, dict[str, list[float]]] = {}
+        for (k, dt), rows in groups.items():
+            a = self._CH[rows, :k, :nc]  # (M, k, n_channels), a copy
+            if not np.all(np.isfinite(a)):
+                raise ValueError("command must be finite (normalised actions in [-1, 1])")
+            res = chatter_rows(a, dt, rev)
+            for r, i in enumerate(rows):
+                out[i] = {key: v[r] for key, v in res.items()}
+        return [out[i] for i in envs]
 
 
 class ManoeuvreMetrics:

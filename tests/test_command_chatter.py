@@ -164,3 +164,21 @@ def test_the_compiled_sums_equal_a_plain_count_on_random_commands():
             assert out["limit_fraction"][j] == np.mean(np.abs(a[:, j]) >= 1.0 - 1e-6)
             travel = np.abs(np.diff(a[:, j])).sum() / minutes
             assert out["travel_per_min"][j] == pytest.approx(travel, rel=1e-12, abs=1e-15)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4])
+@pytest.mark.parametrize("k", [0, 3, 4, 49, 118, 1285])
+def test_runs_computed_together_are_each_run_alone(n, k):
+    """The chatter of M runs in one call (the vector env's episode ends) is each run's own
+    chatter, bit for bit, whatever M and the number of channels (a masked sum or a stacked
+    product would sum in another order for some shapes)."""
+    from shipgym.metrics import chatter_rows
+
+    rng = np.random.default_rng(10 * k + n)
+    a = rng.uniform(-1.2, 1.2, (5, k, n)).clip(-1.0, 1.0)
+    rev = rng.random(n) < 0.7
+    together = chatter_rows(a, 0.5, rev)
+    for r in range(5):
+        alone = command_chatter(a[r], 0.5, reversible=rev)
+        for key in CHATTER_KEYS:
+            assert np.array_equal(together[key][r], alone[key], equal_nan=True), key

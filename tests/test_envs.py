@@ -224,3 +224,21 @@ def test_guidance_reports_the_task_plan_before_the_first_reset_and_the_drawn_one
     u.reset(seed=1)
     drawn = u.guidance.plan
     assert drawn is not u.task.plan and len(u.guidance.waypoints) == len(drawn.legs) + 1
+
+
+@pytest.mark.parametrize(
+    "env_id", ["shipgym/BlueLadyTracking-v0", "shipgym/BlueLadyStationKeeping-v0"]
+)
+def test_an_episodes_drawn_configs_pass_their_validation(env_id):
+    """The wind, current and sensors a task draws each episode are copies made without
+    running the validation again (every reset): each must equal its validated copy
+    (``dataclasses.replace`` validates), whatever the seed."""
+    import dataclasses
+
+    kwargs = {"random_wind": (0.0, 4.0)} if "Station" in env_id else {}
+    task = gym.make(env_id, **kwargs).unwrapped.batch.task
+    for seed in range(50):
+        ep = task.initialize_episode(np.random.default_rng(seed))
+        for cfg in (ep.wind, ep.current, ep.sensors):
+            if cfg is not None:
+                assert dataclasses.replace(cfg) == cfg

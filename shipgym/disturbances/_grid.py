@@ -222,7 +222,8 @@ class GridPair(PieceGrid):
     def _start(
         self, rng: np.random.Generator | int | None, what: str
     ) -> np.random.Generator | None:
-        """Clear, then take one child generator from ``rng`` (one ``integers(2**63)`` draw).
+        """Clear, then take one child generator from ``rng`` (one ``integers(2**63)`` draw;
+        ``None`` for a constant process, which draws nothing from it).
 
         ``rng`` may be ``None`` only for a constant process (``_const`` set); ``what`` names
         the varying process in the error message.
@@ -237,7 +238,9 @@ class GridPair(PieceGrid):
             return None
         if not isinstance(rng, np.random.Generator):
             rng = np.random.default_rng(rng)
-        self._rng = np.random.default_rng(int(rng.integers(2**63)))
+        seed = int(rng.integers(2**63))  # drawn for a constant process too (the same stream)
+        # a constant process draws nothing from its child: none is made (a reset's cost)
+        self._rng = None if self._const is not None else np.random.default_rng(seed)
         return self._rng
 
     @property

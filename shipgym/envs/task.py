@@ -18,7 +18,7 @@ from typing import Any, ClassVar, NamedTuple, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from shipgym._config import is_real, param
+from shipgym._config import is_real, param, replace_drawn
 from shipgym._jit import entry, njit
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
 from shipgym.disturbances.current import MAX_CURRENT_SPEED
@@ -79,6 +79,10 @@ REWARD_TERMS = (
     "reward_contact",
     "reward_leg",
 )
+
+#: the templates of an episode's drawn wind and current (:func:`replace_drawn`)
+_CALM_WIND = WindConfig()
+_STILL_WATER = CurrentConfig()
 
 #: the default wind: the vessel's nominal wind from 300 deg
 _NOMINAL: Any = type("_Nominal", (), {"__repr__": lambda self: "<the vessel's nominal wind>"})()
@@ -517,7 +521,7 @@ class StationKeepingTask(PlanTask):
             return given
         speed = rng.uniform(*self.random_wind)
         direction = rng.uniform(0.0, 2.0 * math.pi)
-        return dataclasses.replace(given, speed=speed, direction_from=direction)
+        return replace_drawn(given, speed=speed, direction_from=direction)  # (validated ranges)
 
 
 class TrackingTask(PlanTask):
@@ -611,7 +615,9 @@ class TrackingTask(PlanTask):
         direction = rng.uniform(0.0, 2.0 * math.pi)
         if not self._draw_wind:
             return self.wind
-        return WindConfig(speed=speed, direction_from=direction)
+        # WindConfig(speed=, direction_from=) of the drawn values (in the ranges checked when
+        # the task was made: its validation not run again every reset)
+        return replace_drawn(_CALM_WIND, speed=speed, direction_from=direction)
 
     def episode_current(self, rng: np.random.Generator) -> CurrentConfig | None:
         if self.max_current_speed == 0.0:  # no draw: the random stream stays as without current
@@ -620,7 +626,7 @@ class TrackingTask(PlanTask):
         direction = rng.uniform(0.0, 2.0 * math.pi)
         if not self._draw_current:
             return self.current
-        return CurrentConfig(speed=speed, direction_to=direction)
+        return replace_drawn(_STILL_WATER, speed=speed, direction_to=direction)  # (as above)
 
     def episode_sensors(
         self, rng: np.random.Generator, given: SensorConfig | None
@@ -631,7 +637,7 @@ class TrackingTask(PlanTask):
         psi = math.radians(rng.uniform(0.2, 0.45))
         if not self.randomize_sensors:
             return given
-        return given.replace(position_variance=pos * pos, heading_variance=psi * psi)
+        return replace_drawn(given, position_variance=pos * pos, heading_variance=psi * psi)
 
 
 # ---- argument parsing (the boundary: coerced once here) ------------------------------------

@@ -554,7 +554,6 @@ class ShipVectorEnv(BatchedEnv):
             info = self.observer.step(t, z, valid)
         self._obs_t = t
         return info
-        self._cache.pop("nav", None)
 
     def _terms(
         self, ref: Any, action: Array, switched: NDArray[np.bool_], new_contact: NDArray[np.bool_]
@@ -676,15 +675,22 @@ class ShipVectorEnv(BatchedEnv):
         """Env ``i``'s episode so far: accuracy indices (Tomera 2014 eqs. 54-57), thruster
         usage, legs and contact (:meth:`ShipEnv.episode_metrics
         <shipgym.envs.base.ShipEnv.episode_metrics>`)."""
+        return self._episode_rows([i])[i]
+
+    def _episode_rows(self, envs: list[int]) -> dict[int, dict[str, Any]]:
+        """:meth:`episode_metrics` of each env of ``envs`` (their command chatter computed
+        together)."""
         g = self.guidance
-        out = self._metrics.summary(i)
-        times = g.leg_completion_times(i)
-        out["completed"] = bool(g.finished[i])
-        out["legs_completed"] = len(times)
-        out["leg_times"] = list(times)
-        out["quay_contact"] = bool(self._contact[i])
-        out["duration_s"] = float(self.physics.t[i])
-        return out
+        rows = {}
+        for i, out in zip(envs, self._metrics.summaries(envs), strict=True):
+            times = g.leg_completion_times(i)
+            out["completed"] = bool(g.finished[i])
+            out["legs_completed"] = len(times)
+            out["leg_times"] = list(times)
+            out["quay_contact"] = bool(self._contact[i])
+            out["duration_s"] = float(self.physics.t[i])
+            rows[i] = out
+        return rows
 
     def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
         """The single env's :meth:`~shipgym.envs.base.ShipEnv.episode_metrics` of the envs of
@@ -692,7 +698,7 @@ class ShipVectorEnv(BatchedEnv):
         values (lists, dicts, ``None``) as (N,) object arrays (``None`` elsewhere); env ``i``'s
         dict is ``{k: v[i]}`` (numbers as ``v[i].item()``)."""
         # episode ends: per env
-        rows = {i: self.episode_metrics(i) for i in np.flatnonzero(done).tolist()}
+        rows = self._episode_rows(np.flatnonzero(done).tolist())
         n = self.num_envs
         fill = {float: np.nan, int: 0, bool: False}
         metrics: dict[str, Any] = {}

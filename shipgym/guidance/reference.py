@@ -252,19 +252,23 @@ def leg_profile(leg: Leg, limits: Limits | None = None) -> LegProfile:
     Returns:
         The :class:`LegProfile` (see the module docstring for the profile).
     """
-    disp = np.asarray(leg.displacement, dtype=float).copy()
+    d = (float(leg.surge), float(leg.sway), float(leg.yaw))  # the leg's displacement
+    disp = np.array(d)
     disp.setflags(write=False)
     delay = float(getattr(leg, "delay", 0.0))
     if getattr(leg, "step", False):  # no profile, no limits needed
         return LegProfile(disp, 0.0, 0.0, 0.0, 0.0, 0.0, delay, True)
     lim = _effective_limits(leg, limits)
-    mag = np.abs(disp)
-    moving = mag > 0.0
-    if not np.any(moving):
+    if d == (0.0, 0.0, 0.0):
         return LegProfile(disp, 0.0, 0.0, 0.0, 0.0, 0.0, delay)
-    v_max, a_max = lim.for_displacement(disp)
-    V = float(np.min(v_max[moving] / mag[moving]))
-    A = float(np.min(a_max[moving] / mag[moving]))
+    # the tightest of the moving DOFs' limits over their distances (Limits.for_displacement's
+    # limits: a negative surge is astern), in Python floats: the same IEEE quotients
+    astern = d[0] < 0.0
+    v_max = (lim.surge_astern_speed if astern else lim.surge_speed, lim.sway_speed, lim.yaw_rate)
+    a_max = (lim.surge_astern_accel if astern else lim.surge_accel, lim.sway_accel,
+             lim.yaw_accel)  # fmt: skip
+    V = min([float(v) / abs(x) for v, x in zip(v_max, d, strict=True) if x != 0.0])
+    A = min([float(a) / abs(x) for a, x in zip(a_max, d, strict=True) if x != 0.0])
     if 2.0 * V * V <= A:  # trapezoid: the distance 1 covers acceleration + deceleration
         Ta = 2.0 * V / A
         Tc = max(1.0 / V - Ta, 0.0)
