@@ -263,3 +263,29 @@ def test_any_array_layout_gives_the_same_answer():
     for x, y in zip(a.batch(np.ascontiguousarray(taus), np.ascontiguousarray(angles)),
                     b.batch(taus, angles), strict=True):  # fmt: skip
         assert np.array_equal(x, y)
+
+
+def test_the_parallel_law_is_the_serial_law(monkeypatch):
+    """Many requests run on Numba's threads (``azimuth_law_parallel``): the same floats as
+    the serial law, row by row, and a bad row is reported as the serial law reports it."""
+    import shipgym.controllers.allocation.azimuth as law
+
+    v = load_vessel("wimpey-sealab")
+    al = make_allocator(v, "constrained", 0.5)
+    rng = np.random.default_rng(8)
+    n = 70  # chunks of unequal size
+    cap = v.actuators.capacity()[[0, 1, -1]]
+    tau = rng.uniform(-1.2, 1.2, (n, 3)) * cap * rng.choice([0.05, 0.5, 1.0], (n, 1))
+    state = np.zeros((n, v.actuators.n_channels))
+    state[:, 1::2] = rng.uniform(-7.0, 7.0, (n, 4))
+    monkeypatch.setattr(law, "PARALLEL_MIN", 1)
+    par = al.batch(tau, state)
+    monkeypatch.setattr(law, "PARALLEL_MIN", 10**9)
+    ser = al.batch(tau, state)
+    for a, b in zip(par, ser, strict=True):
+        assert np.array_equal(a, b)
+    monkeypatch.setattr(law, "PARALLEL_MIN", 1)
+    tau[50, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN") as err:
+        al.batch(tau, state)
+    assert str(tau[50, 0]) in str(err.value)

@@ -21,9 +21,10 @@ from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
+from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, njit
+from shipgym._jit import entry, njit, threads_ok, use_threads
 
 from .wls import (
     _bounds,
@@ -687,7 +688,9 @@ def _wrap(a):  # type: ignore[no-untyped-def]
 def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, tau, a_prev,
                 thrust, angle, f_az, f_fixed, delivered, error, saturated, rate_limited):  # type: ignore[no-untyped-def]  # fmt: skip
     """The azimuth allocation of N requests (one law for every N; :func:`allocate_azimuth`
-    documents the problem, the module's design note the branches of reversible units).
+    documents the problem, the module's design note the branches of reversible units): the
+    rows one after the other (:func:`_azimuth_rows`; :func:`azimuth_law_parallel` spreads
+    them over Numba's threads, the same floats).
 
     Args:
         Q0, R, qd, turn: the scaled problem (n, n), (n, n_dof), the curvatures ``diag(Q)``
@@ -706,7 +709,41 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
         0, or the first failing request's index + 1 times 8 plus the reason (1: not finite;
         2: the QP did not converge; 3: its curvature not positive definite).
     """
-    N, n_dof = tau.shape
+    return _azimuth_rows(0, tau.shape[0], Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev,
+                         rows, hull, tau, a_prev, thrust, angle, f_az, f_fixed, delivered, error,
+                         saturated, rate_limited)  # fmt: skip
+
+
+@njit(parallel=True)
+def azimuth_law_parallel(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, tau,
+                         a_prev, thrust, angle, f_az, f_fixed, delivered, error, saturated,
+                         rate_limited):  # type: ignore[no-untyped-def]  # fmt: skip
+    """:func:`azimuth_law` with the requests spread over Numba's threads in chunks (each row
+    the same law, so the same floats; the code of the first failing row, as the serial law's);
+    for large batches called from the main thread."""
+    N = tau.shape[0]
+    chunks = min(N, 64)  # a few chunks a thread: rows of unequal work (branches) balance
+    size = (N + chunks - 1) // chunks
+    codes = np.zeros(chunks, dtype=np.int64)
+    for c in prange(chunks):
+        codes[c] = _azimuth_rows(
+            min(c * size, N), min((c + 1) * size, N), Q0, R, qd, turn, B, s, flo, fhi, fmax,
+            dmax, rev, rows, hull, tau, a_prev, thrust, angle, f_az, f_fixed, delivered, error,
+            saturated, rate_limited,
+        )  # fmt: skip
+    for c in range(chunks):
+        if codes[c]:
+            return codes[c]
+    return 0
+
+
+@njit
+def _azimuth_rows(first, end, Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull,
+                  tau, a_prev, thrust, angle, f_az, f_fixed, delivered, error, saturated,
+                  rate_limited):  # type: ignore[no-untyped-def]  # fmt: skip
+    """The rows ``first .. end - 1`` of :func:`azimuth_law` (its own work arrays): 0, or the
+    code of the first failing row."""
+    n_dof = tau.shape[1]
     m = fmax.shape[0]
     n = s.shape[0]
     k = n - 2 * m
@@ -746,7 +783,7 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
     amb = np.empty(_MAX_TRIED, np.int64)
     u_all = np.empty(n)
     limited = dmax < math.inf
-    for row in range(N):
+    for row in range(first, end):
         ap = a_prev[row]
         for i in range(n_dof):
             if not math.isfinite(tau[row, i]):
@@ -921,7 +958,12 @@ def _prepare(
     return _Prepared(n_dof, az.n, k, args)
 
 
-_LAW: list[Any] = []
+#: the compiled entry points of the serial and the parallel law
+_LAW: dict[Any, Any] = {}
+
+#: the fewest requests spread over Numba's threads (:func:`azimuth_law_parallel`): a request
+#: costs tens of microseconds (a QP per branch), so a few pay for waking the threads
+PARALLEL_MIN = 16
 
 
 def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64]):  # type: ignore[no-untyped-def]
@@ -934,9 +976,14 @@ def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64])
            np.empty((N, prep.n_dof)), np.empty((N, prep.n_dof)),
            np.empty((N, m + k), dtype=np.bool_), np.empty((N, m), dtype=np.bool_))  # fmt: skip
     args = (*prep.args, t, a, *out)
-    if not _LAW:
-        _LAW.append(entry(azimuth_law, args))
-    code = _LAW[0](*args)
+    parallel = N >= PARALLEL_MIN and threads_ok()
+    if parallel:
+        use_threads()
+    law = azimuth_law_parallel if parallel else azimuth_law
+    fn = _LAW.get(law)
+    if fn is None:
+        fn = _LAW[law] = entry(law, args)
+    code = fn(*args)
     if code:
         row, why = divmod(code, 8)
         if why == 1:
