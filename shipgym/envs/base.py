@@ -130,10 +130,13 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ``terminate_on_finish``, when the last leg is complete (``info["finished"]``).
     Truncated by the registered time limit (``max_episode_steps`` control steps, ``gym.make``'s
     ``TimeLimit``). At the end of every episode ``info`` holds ``episode_metrics``, and
-    :meth:`step` raises ``gymnasium.error.ResetNeeded`` until :meth:`reset` is called (the env
-    itself on termination; on truncation the
-    :class:`~shipgym.envs.episode.EpisodeEnd` wrapper that ``gym.make`` applies to every
-    shipgym id, outside the ``TimeLimit``).
+    :meth:`step` raises ``gymnasium.error.ResetNeeded`` until :meth:`reset` is called: the env
+    itself on termination and at its ``episode_duration``; at the ``TimeLimit``'s truncation
+    the :class:`~shipgym.envs.episode.EpisodeEnd` wrapper that ``shipgym.make`` applies
+    outside it. A bare ``gym.make`` has no ``EpisodeEnd`` (the ``TimeLimit`` is outside the
+    env, and Gymnasium's ``make_vec`` refuses an id with a vector entry point that carries an
+    additional wrapper): there the time limit's last ``info`` has no ``episode_metrics``
+    (call :meth:`episode_metrics`).
 
     ## Info
     Truth ``eta`` (m, m, rad; NED), ``nu`` (and ``phi`` (rad), ``p`` (rad/s) for a 4-DOF

@@ -126,9 +126,11 @@ def task_fits_vessel(env_id: str, vessel: Any) -> bool:
 def register_envs() -> None:
     """Register every id in :data:`ENV_IDS` with Gymnasium (idempotent).
 
-    Each id carries :class:`~shipgym.envs.episode.EpisodeEnd` as an additional wrapper, so
-    ``gym.make`` applies it outside the ``TimeLimit``: ``info["episode_metrics"]`` at the end
-    of every episode and no ``step()`` after it.
+    An id without a vector entry point carries :class:`~shipgym.envs.episode.EpisodeEnd` as
+    an additional wrapper, so ``gym.make`` applies it outside the ``TimeLimit``:
+    ``info["episode_metrics"]`` at the end of every episode and no ``step()`` after it. Every
+    packaged id has a vector entry point, and Gymnasium's ``make_vec`` refuses those with an
+    additional wrapper: ``shipgym.make`` adds ``EpisodeEnd`` for them.
     """
     end = WrapperSpec(name="EpisodeEnd", entry_point=EPISODE_END_ENTRY_POINT, kwargs={})
     for env_id, (entry_point, steps) in ENV_IDS.items():
