@@ -252,9 +252,9 @@ def leg_profile(leg: Leg, limits: Limits | None = None) -> LegProfile:
     Returns:
         The :class:`LegProfile` (see the module docstring for the profile).
     """
-    d = (float(leg.surge), float(leg.sway), float(leg.yaw))  # the leg's displacement
-    disp = np.array(d)
+    disp = np.array(leg.displacement, dtype=float)
     disp.setflags(write=False)
+    d = tuple(disp.tolist())  # (surge, sway, yaw) as Python floats
     delay = float(getattr(leg, "delay", 0.0))
     if getattr(leg, "step", False):  # no profile, no limits needed
         return LegProfile(disp, 0.0, 0.0, 0.0, 0.0, 0.0, delay, True)
