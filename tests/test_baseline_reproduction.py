@@ -1,8 +1,9 @@
 """The shipped learned baselines are reproducible: re-running each one's documented training
 command (the shipped hyperparameter file, its seed) up to the checkpoint recorded in its
-metadata gives bit-identical policy weights (``policy_fingerprint``), on the CPU model the
-fingerprint was taken on (torch's kernels differ between CPU families, so elsewhere the test
-says so and skips). Slow: each re-run trains about a million steps (a few minutes).
+metadata gives bit-identical policy weights (``policy_fingerprint``), on the CPU the
+fingerprint was taken on (``cpu_identity``: its model name and its widest vector instructions;
+torch's and NumPy's kernels differ between them, so elsewhere the test says so and skips).
+Slow: each re-run trains about a million steps (a few minutes).
 
 The shipped models were trained on the NumPy form of the batched physics, which the one
 compiled physics step (:mod:`shipgym.sim.step`) replaced; it agrees with that form to round-off,
@@ -13,26 +14,17 @@ weights themselves are those trained then; their acceptance figures hold on the 
 
 from __future__ import annotations
 
-import platform
-from pathlib import Path
-
 import pytest
 
 pytest.importorskip("stable_baselines3")
 pytest.importorskip("torch")
 
 import shipgym.controllers.learned as learned  # noqa: E402
-from shipgym.controllers.learned import policy_fingerprint, read_metadata  # noqa: E402
-
-
-def _cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+from shipgym.controllers.learned import (  # noqa: E402
+    cpu_identity,
+    policy_fingerprint,
+    read_metadata,
+)
 
 
 def _reproducible() -> list[str]:
@@ -58,10 +50,11 @@ def test_documented_command_gives_the_same_weights(file, tmp_path):
 
     meta = read_metadata(learned.models_dir() / file)
     rep = meta.extra["reproduce"]
-    if _cpu_model() != rep["cpu"]:
+    if cpu_identity() != rep["cpu"]:
         pytest.skip(
             f"the fingerprint of {file} was taken on {rep['cpu']!r}, this is "
-            f"{_cpu_model()!r}: bit-identical weights hold on the same CPU model only"
+            f"{cpu_identity()!r}: bit-identical weights hold on the same CPU model and "
+            "instructions only"
         )
     steps = int(rep["checkpoint_steps"])
     assert f"--seed {meta.seed}" in meta.command and meta.command.startswith(

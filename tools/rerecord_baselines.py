@@ -20,7 +20,12 @@ import zipfile
 from pathlib import Path
 
 import shipgym.controllers.learned as learned
-from shipgym.controllers.learned import METADATA_NAME, policy_fingerprint, read_metadata
+from shipgym.controllers.learned import (
+    METADATA_NAME,
+    cpu_identity,
+    policy_fingerprint,
+    read_metadata,
+)
 from shipgym.rl.train import train
 
 
@@ -37,7 +42,7 @@ def rerecord(path: Path, physics: str) -> tuple[str, str] | None:
               progress=False)  # fmt: skip
         new = policy_fingerprint(Path(tmp) / "checkpoints" / f"{meta.algorithm}_{steps}_steps.zip")
     old = rep["policy_sha256"]
-    rep = {**rep, "policy_sha256": new, "physics": physics}
+    rep = {**rep, "policy_sha256": new, "physics": physics, "cpu": cpu_identity()}
     meta = dataclasses.replace(meta, extra={**meta.extra, "reproduce": rep})
     out = path.with_suffix(".tmp")
     with zipfile.ZipFile(path) as zin, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zout:

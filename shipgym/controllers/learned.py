@@ -706,6 +706,28 @@ def read_state_dicts(path: str | Path, *, device: str = "cpu") -> dict[str, Any]
     return out
 
 
+def cpu_identity() -> str:
+    """The CPU a policy fingerprint holds on: its model name and the widest vector
+    instructions it has (``avx512``, ``avx2`` or ``baseline``), which NumPy's and torch's
+    kernels dispatch on, so that their last bits differ between them. A virtual machine may
+    name two CPU generations alike (``AMD EPYC``); the instructions tell them apart."""
+    import platform
+
+    name, flags = "", set()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            key, _, value = line.partition(":")
+            if key.strip() == "model name" and not name:
+                name = value.strip()
+            elif key.strip() == "flags" and not flags:
+                flags = set(value.split())
+    except OSError:
+        pass
+    name = name or platform.processor() or "unknown"
+    isa = "avx512" if "avx512f" in flags else "avx2" if "avx2" in flags else "baseline"
+    return f"{name} ({isa})"
+
+
 def policy_fingerprint(path: str | Path) -> str:
     """SHA-256 (hex) of a model's policy weights, tensor by tensor in key order.
 
