@@ -43,6 +43,18 @@ def test_every_pure_baseline_records_how_to_reproduce_it():
     assert shipped and set(shipped) <= set(_reproducible())
 
 
+def test_each_fingerprint_names_the_cpu_and_its_vector_instructions():
+    """A fingerprint holds on one CPU model and instruction set (``cpu_identity``); a record
+    with the model name alone would let the slow test run, and fail, on another generation
+    of the same name."""
+    import re
+
+    form = re.compile(r".+ \((avx512|avx2|baseline)\)$")
+    assert form.match(cpu_identity())
+    for file in _reproducible():
+        assert form.match(read_metadata(learned.models_dir() / file).extra["reproduce"]["cpu"])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("file", _reproducible())
 def test_documented_command_gives_the_same_weights(file, tmp_path):
