@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import MAX_ANGLE, param
 
 from .reference import Limits, leg_duration
+from .rframe import from_r_frame
 
 __all__ = ["Leg", "ManoeuvrePlan", "tomera2014_plan", "PLANS", "plan"]
 
@@ -237,20 +238,11 @@ class ManoeuvrePlan:
         p = np.asarray(eta_start, dtype=float)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise ValueError(f"eta_start must be a finite [x, y, psi] (m, m, rad), got {p!r}")
-        # from_r_frame leg by leg, its floats: the headings first (psi_{i+1} = psi_i + yaw_i),
-        # their cosines and sines in one call, then the positions
-        psi = [float(p[2])]
-        for leg in self.legs:
-            psi.append(psi[-1] + leg.yaw)
-        c = np.cos(psi).tolist()
-        s = np.sin(psi).tolist()
-        x, y = float(p[0]), float(p[1])
-        rows = [(x, y, psi[0])]
+        out = np.empty((self.n_legs + 1, 3))
+        out[0] = p
         for i, leg in enumerate(self.legs):
-            xr, yr = leg.surge, leg.sway
-            x, y = x + c[i] * xr - s[i] * yr, y + s[i] * xr + c[i] * yr
-            rows.append((x, y, psi[i + 1]))
-        return np.array(rows)
+            out[i + 1] = from_r_frame(leg.displacement, out[i])
+        return out
 
     _KEYS = (
         "legs",

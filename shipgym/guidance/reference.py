@@ -84,13 +84,15 @@ class Limits:
         Returns:
             ``v_max`` (m/s, m/s, rad/s) and ``a_max`` (m/s^2, m/s^2, rad/s^2).
         """
-        astern = float(np.asarray(displacement, dtype=float)[0]) < 0.0
+        v_max, a_max = self._for_surge(float(np.asarray(displacement, dtype=float)[0]))
+        return np.array(v_max), np.array(a_max)
+
+    def _for_surge(self, surge: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """:meth:`for_displacement` as Python floats, from the surge's sign alone."""
+        astern = surge < 0.0
         vx = self.surge_astern_speed if astern else self.surge_speed
         ax = self.surge_astern_accel if astern else self.surge_accel
-        return (
-            np.array([vx, self.sway_speed, self.yaw_rate]),
-            np.array([ax, self.sway_accel, self.yaw_accel]),
-        )
+        return (vx, self.sway_speed, self.yaw_rate), (ax, self.sway_accel, self.yaw_accel)
 
 
 #: The Blue Lady's limits (equal to ``[limits]`` of its vessel file; a test checks it), each
@@ -261,12 +263,9 @@ def leg_profile(leg: Leg, limits: Limits | None = None) -> LegProfile:
     lim = _effective_limits(leg, limits)
     if d == (0.0, 0.0, 0.0):
         return LegProfile(disp, 0.0, 0.0, 0.0, 0.0, 0.0, delay)
-    # the tightest of the moving DOFs' limits over their distances (Limits.for_displacement's
-    # limits: a negative surge is astern), in Python floats: the same IEEE quotients
-    astern = d[0] < 0.0
-    v_max = (lim.surge_astern_speed if astern else lim.surge_speed, lim.sway_speed, lim.yaw_rate)
-    a_max = (lim.surge_astern_accel if astern else lim.surge_accel, lim.sway_accel,
-             lim.yaw_accel)  # fmt: skip
+    # the tightest of the moving DOFs' limits over their distances, in Python floats: the same
+    # IEEE quotients as on arrays
+    v_max, a_max = lim._for_surge(d[0])
     V = min([float(v) / abs(x) for v, x in zip(v_max, d, strict=True) if x != 0.0])
     A = min([float(a) / abs(x) for a, x in zip(a_max, d, strict=True) if x != 0.0])
     if 2.0 * V * V <= A:  # trapezoid: the distance 1 covers acceleration + deceleration
