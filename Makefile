@@ -94,9 +94,12 @@ demo: $(STAMP) ## the harbour manoeuvre: recording, figures and metrics in runs/
 		--no-progress \
 		--json runs/demo/harbour.json --record runs/demo/harbour.rrd --report runs/demo
 
-# The tests include stable-baselines3's check_env, so they need the RL extra.
-test: $(RL_STAMP) ## the test suite (slow tests skipped)
-	$(PY) -m pytest -q
+# The tests include stable-baselines3's check_env, so they need the RL extra. They run on
+# TEST_WORKERS processes (pytest-xdist; auto: one a core, at most 4); TEST_WORKERS=0 runs them
+# in this process, in file order.
+TEST_WORKERS ?= auto
+test: $(RL_STAMP) ## the test suite (slow tests skipped), on TEST_WORKERS processes
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --maxprocesses=4
 
 test-random: $(RL_STAMP) ## the test suite in a shuffled order (SEED=N repeats an order)
 	@seed=$${SEED:-$$(( RANDOM * 32768 + RANDOM ))}; \

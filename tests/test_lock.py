@@ -53,7 +53,7 @@ def test_lock_files_are_exact_pins_without_cuda_packages() -> None:
         assert not name.startswith("nvidia-") and name != "triton", name
     for name in ("numpy", "mujoco", "gymnasium", "rerun-sdk", "pip", "setuptools"):
         assert name in core, name
-    for name in ("pytest", "hypothesis", "control", "ruff", "pytest-random-order"):
+    for name in ("pytest", "hypothesis", "control", "ruff", "pytest-random-order", "pytest-xdist"):
         assert name in dev, name
     assert "stable-baselines3" in rl
 

@@ -24,6 +24,7 @@ from shipgym.envs.physics import VesselPhysics
 from shipgym.envs.scene import build_model
 
 VESSELS = vessel_names()
+INTEGRATORS = ("mujoco", "leapfrog")
 GUSTY = WindConfig(speed=3.0, direction_from=math.radians(300.0), sample_period=1.0)
 
 # A linear 4-DOF hull (surge, sway, roll, yaw) of the Van der Klugt (1987) family: sway-roll
@@ -292,40 +293,45 @@ def _commands(acts, duration: float, period: float, seed: int) -> tuple[np.ndarr
 
 
 def _parity(vessel, plant=None, timestep: float = 0.05, duration: float = 600.0,
-            integrator: str = "mujoco", sea: bool = False):  # fmt: skip
-    """The physics against the SciPy oracle; ``sea``: a constant current (0.3 m/s at full
-    scale) and the wave drift (Hs 2.5 m, Tp 8 s at full scale) besides the gusts."""
+            integrators: tuple[str, ...] = ("mujoco",), sea: bool = False):  # fmt: skip
+    """The physics with each of ``integrators`` against one run of the SciPy oracle (the
+    same vessel, commands and gusts): ``{integrator: (pos_err, ang_err, dist)}``; ``sea``: a
+    constant current (0.3 m/s at full scale) and the wave drift (Hs 2.5 m, Tp 8 s at full
+    scale) besides the gusts."""
     v = load_vessel(vessel)
     s = float(v.scale)
     # the wave drift of a sea is in newtons: not on a hull written per unit inertia
     waves = (WaveConfig(Hs=2.5 / s, Tp=8.0 / math.sqrt(s), direction_from=math.radians(210.0))
              if sea and v.hull.m != 1.0 else None)  # fmt: skip
     current = (0.3 / math.sqrt(s), math.radians(60.0)) if sea else (0.0, 0.0)
-    phys = VesselPhysics(v, plant or "default", wind=GUSTY, timestep=timestep,
-                         integrator=integrator, waves=waves,
-                         current=f"{current[0]:.17g}@{math.degrees(current[1]):.17g}")  # fmt: skip
-    acts = phys.actuators
-    ct, cmds = _commands(acts, duration, 10.0, seed=1)
-    act0 = phys.initial_actuator_state()
-    nu0 = np.zeros(phys.dofs)
-    if isinstance(phys.plant, MMGHull):
-        # a manoeuvring model (not valid at low speed): from its approach speed, the propeller
-        # between 70 % and 100 % of the self-propulsion point, the rudder anywhere
-        U0 = phys.vessel.trials["approach_speed"]
-        n0 = phys.plant.model.self_propulsion(U0)
-        nu0[0] = U0
-        act0[0] = n0
-        cmds[:, 0] = n0 * (0.85 + 0.15 * np.clip(cmds[:, 0] / acts.upper[0], -1.0, 1.0))
-    phys.reset(nu=nu0, actuators=act0)
-    n_cmd = round(10.0 / timestep)
-    traj = [phys.eta_full]
-    for k in range(ct.size):
-        phys.set_command(cmds[k])
-        for _ in range(round(n_cmd / 10)):
-            phys.step(10)
-            traj.append(phys.eta_full)
-    traj = np.array(traj)
-    t_eval = np.arange(traj.shape[0]) * 10 * timestep
+    flow = f"{current[0]:.17g}@{math.degrees(current[1]):.17g}"
+    trajs, phys = {}, None
+    for integrator in integrators:
+        phys = VesselPhysics(v, plant or "default", wind=GUSTY, timestep=timestep,
+                             integrator=integrator, waves=waves, current=flow)  # fmt: skip
+        acts = phys.actuators
+        ct, cmds = _commands(acts, duration, 10.0, seed=1)
+        act0 = phys.initial_actuator_state()
+        nu0 = np.zeros(phys.dofs)
+        if isinstance(phys.plant, MMGHull):
+            # a manoeuvring model (not valid at low speed): from its approach speed, the
+            # propeller between 70 % and 100 % of the self-propulsion point, the rudder anywhere
+            U0 = phys.vessel.trials["approach_speed"]
+            n0 = phys.plant.model.self_propulsion(U0)
+            nu0[0] = U0
+            act0[0] = n0
+            cmds[:, 0] = n0 * (0.85 + 0.15 * np.clip(cmds[:, 0] / acts.upper[0], -1.0, 1.0))
+        phys.reset(nu=nu0, actuators=act0)
+        n_cmd = round(10.0 / timestep)
+        traj = [phys.eta_full]
+        for k in range(ct.size):
+            phys.set_command(cmds[k])
+            for _ in range(round(n_cmd / 10)):
+                phys.step(10)
+                traj.append(phys.eta_full)
+        trajs[integrator] = np.array(traj)
+    # every integrator's physics drew the same gusts (and sea): the last one's are the oracle's
+    t_eval = np.arange(trajs[integrators[0]].shape[0]) * 10 * timestep
     four = phys.dofs == 4
 
     def env_load(t, eta, nu):
@@ -341,41 +347,42 @@ def _parity(vessel, plant=None, timestep: float = 0.05, duration: float = 600.0,
         current=current, breakpoints=np.unique(np.concatenate(grid)),
     )  # fmt: skip
     dist = np.sum(np.hypot(*np.diff(ref.eta[:, :2], axis=0).T))
-    pos_err = np.max(np.hypot(*(traj[:, :2] - ref.eta[:, :2]).T))
-    ang_err = np.degrees(np.max(np.abs(wrap_angle(traj[:, 2:] - ref.eta[:, 2:]))))
-    return pos_err, ang_err, dist
+    out = {}
+    for integrator, traj in trajs.items():
+        pos_err = np.max(np.hypot(*(traj[:, :2] - ref.eta[:, :2]).T))
+        ang_err = np.degrees(np.max(np.abs(wrap_angle(traj[:, 2:] - ref.eta[:, 2:]))))
+        out[integrator] = pos_err, ang_err, dist
+    return out
 
 
-@pytest.mark.parametrize("integrator", ["mujoco", "leapfrog"])
 @pytest.mark.parametrize("name", [*VESSELS, "hull4"])
-def test_parity_with_scipy_reference(name: str, hull4: Path, integrator: str) -> None:
-    """600 s, saturating time-varying commands, gusty wind, with each integrator (the batched
-    physics is the leapfrog one, bit for bit: test_batchphysics): <= 0.01 % of the distance,
-    0.01 deg."""
+def test_parity_with_scipy_reference(name: str, hull4: Path) -> None:
+    """600 s, saturating time-varying commands, gusty wind, with each integrator against one
+    oracle run (the batched physics is the leapfrog one, bit for bit: test_batchphysics):
+    <= 0.01 % of the distance, 0.01 deg."""
     vessel = hull4 if name == "hull4" else name
-    pos, ang, dist = _parity(vessel, integrator=integrator)
-    assert dist > 20.0  # the commands move the hull
-    assert pos <= 1e-4 * dist and ang <= 0.01, (pos, dist, ang)
+    for integrator, (pos, ang, dist) in _parity(vessel, integrators=INTEGRATORS).items():
+        assert dist > 20.0  # the commands move the hull
+        assert pos <= 1e-4 * dist and ang <= 0.01, (integrator, pos, dist, ang)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("integrator", ["mujoco", "leapfrog"])
 @pytest.mark.parametrize("name", VESSELS)
-def test_parity_in_a_sea(name: str, integrator: str) -> None:
+def test_parity_in_a_sea(name: str) -> None:
     """As above with a current and the wave drift besides the gusts (slow: the oracle stops
     at every sample of the drift): <= 0.01 % of the distance, 0.05 deg (the heading error of
     the 0.05 s step grows in a sea, to 0.02 deg for Star Hercules; it falls with h^2,
     test_parity_error_falls_with_the_timestep)."""
-    pos, ang, dist = _parity(name, integrator=integrator, sea=True)
-    assert dist > 20.0
-    assert pos <= 1e-4 * dist and ang <= 0.05, (pos, dist, ang)
+    for integrator, (pos, ang, dist) in _parity(name, integrators=INTEGRATORS, sea=True).items():
+        assert dist > 20.0
+        assert pos <= 1e-4 * dist and ang <= 0.05, (integrator, pos, dist, ang)
 
 
 @pytest.mark.parametrize("name", ["wimpey-sealab", "hull4"])
 def test_parity_error_falls_with_the_timestep(name: str, hull4: Path) -> None:
     vessel = hull4 if name == "hull4" else name
-    coarse = _parity(vessel, timestep=0.1, duration=300.0)
-    fine = _parity(vessel, timestep=0.025, duration=300.0)
+    coarse = _parity(vessel, timestep=0.1, duration=300.0)["mujoco"]
+    fine = _parity(vessel, timestep=0.025, duration=300.0)["mujoco"]
     assert fine[0] < 0.5 * coarse[0] and fine[1] < 0.5 * coarse[1] + 1e-9, (coarse, fine)
 
 
