@@ -109,10 +109,7 @@ def test_limits_hold_for_random_layouts(seed):
     check_limits(r2, az.with_angles(r.angle), fixed)
 
 
-@settings(max_examples=200, deadline=None)
-@given(st.integers(0, 2**32 - 1))
-def test_request_inside_the_limits_is_met(seed):
-    """(b) Forces well inside every limit: the request is delivered to round-off."""
+def _request_inside_the_limits(seed):
     rng = np.random.default_rng(seed)
     az, fixed, _, cap = random_case(rng)
     m = az.n
@@ -131,6 +128,22 @@ def test_request_inside_the_limits_is_met(seed):
     check_limits(r, az, fixed)
     np.testing.assert_allclose(r.tau, tau, rtol=0, atol=1e-9 * cap.max())
     assert not r.saturated.any() and not r.rate_limited.any()
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_request_inside_the_limits_is_met(seed):
+    """(b) Forces well inside every limit: the request is delivered to round-off."""
+    _request_inside_the_limits(seed)
+
+
+@pytest.mark.parametrize("seed", [8617, 12528, 19196])
+def test_a_units_projected_branch_is_tried_against_the_other(seed):
+    """Cases (a search of 20 000 seeds) of two reversible units, both backwards at the
+    optimum, where one's relaxed force lies off both its sectors and the other's in its
+    forward sector: that other unit's branch must be tried too (its projection's branch left
+    it no force and 15 % of N undelivered)."""
+    _request_inside_the_limits(seed)
 
 
 # ---- (c) optimality against an independent solver ----------------------------------------------

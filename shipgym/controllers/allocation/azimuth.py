@@ -55,6 +55,9 @@ _NO_BOUND = 1e30  # a row's "no lower bound"
 #: makes its branch ambiguous: both are tried, for at most _MAX_TRIED such units
 _BRANCH_TOL = 1e-9
 _MAX_TRIED = 3
+#: the local search keeps another branch where it lowers the cost by more than this (of the
+#: cost's scale): not for round-off
+_BETTER = 1e-9
 #: the floor of the regularisation H in the scaled problem (Q scaled to a largest diagonal of
 #: 1), so the dual method's Cholesky factor exists for any H >= 0: a smaller H acts as this
 _MIN_CURV = 1e-12
@@ -678,6 +681,15 @@ def _constraints(k, xlo, xhi, owner, co, so, lower, upper, equality, cc, sc, col
     return p
 
 
+@njit(inline="always")
+def _enumerated(amb, na, j):  # type: ignore[no-untyped-def]
+    """Whether unit ``j`` is one of the ``na`` units ``amb`` whose branches were enumerated."""
+    for i in range(na):
+        if amb[i] == j:
+            return True
+    return False
+
+
 @njit
 def _wrap(a):  # type: ignore[no-untyped-def]
     """An angle wrapped to [-pi, pi)."""
@@ -833,10 +845,34 @@ def _azimuth_rows(first, end, Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, 
                     if across > abs(along) * math.tan(dmax[j]) + _BRANCH_TOL and na < _MAX_TRIED:
                         amb[na] = j
                         na += 1
+        # the branches: every combination of the ambiguous units' (the others at their
+        # projection's); then, where the relaxed optimum was not feasible (na > 0), a local
+        # search: another reversible unit whose rate limit is active in the best answer so far
+        # may do better in its other branch now that the ambiguous units' forces changed (its
+        # projection's branch was the relaxed optimum's); each such unit's other branch is
+        # tried once, in turn, and kept where it lowers the cost by more than round-off
         best = math.inf
-        for flips in range(1 << na):
-            for i in range(na):
-                bw[amb[i]] = (flips >> i) & 1 == 1
+        trials = 1 << na
+        trial = 0
+        unit = 0  # the next unit the local search looks at
+        while True:
+            if trial < trials:
+                for i in range(na):
+                    bw[amb[i]] = (trial >> i) & 1 == 1
+            else:
+                flip = -1
+                while na and unit < m and flip < 0:
+                    if rev[unit] and limited[unit] and not _enumerated(amb, na, unit):
+                        lim = _ACTIVE_TOL * 0.5 * (qd[k + 2 * unit] + qd[k + 2 * unit + 1])
+                        for i in range(owner.shape[0]):
+                            if owner[i] == unit and rate[i] and blam[k + i] > lim:
+                                flip = unit
+                    unit += 1
+                if flip < 0:
+                    break
+                for j in range(m):
+                    bw[j] = bbw[j]
+                bw[flip] = not bbw[flip]
             for j in range(m):  # the centre angle, reversed where backwards
                 cc[j], sc[j] = (-ca[j], -sa[j]) if bw[j] else (ca[j], sa[j])
             p = _constraints(k, xlo, xhi, owner, co, so, lower, upper, equality, cc, sc, col, A,
@@ -850,7 +886,11 @@ def _azimuth_rows(first, end, Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, 
                 for e in range(n):
                     t += Q[i, e] * x[e]
                 J += x[i] * (0.5 * t - c[i])
-            if flips == 0 or J < best:
+            if trial < trials:
+                better = trial == 0 or J < best
+            else:  # J is the cost less its constant: compare against the cost's scale
+                better = J < best - _BETTER * (abs(best) + qd.max())
+            if better:
                 best = J
                 for i in range(n):
                     bx[i] = x[i]
@@ -861,6 +901,7 @@ def _azimuth_rows(first, end, Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, 
                         blam[orig[i]] = max(blam[orig[i]], abs(u[i]))
                 for j in range(m):
                     bbw[j] = bw[j]
+            trial += 1
 
         # fixed thrusters within their limits; azimuth angle and magnitude within theirs exactly
         for i in range(k):
