@@ -81,3 +81,18 @@ def test_a_different_seed_gives_a_different_episode():
 
     assert digest(1) != digest(2)
     assert digest(1) == digest(1)
+
+
+def test_child_seeds_are_numpys_draws_past_int64():
+    """``child_seeds`` (the seeds of every stochastic part's child generator) draws what
+    ``rng.integers(2**63)`` draws, one or several, and leaves the generator as it does."""
+    from shipgym._seeding import child_seeds
+
+    for seed in range(300):
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        for size in (None, 1, 2, 3, None):
+            want = a.integers(2**63) if size is None else a.integers(2**63, size=size)
+            got = child_seeds(b, size)
+            assert (type(got) is int) == (size is None)
+            np.testing.assert_array_equal(got, want)
+        assert a.bit_generator.state == b.bit_generator.state

@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._jit import entry, njit
+from shipgym._seeding import child_seeds
 
 __all__ = [
     "CHUNK",
@@ -238,7 +239,7 @@ class GridPair(PieceGrid):
             return None
         if not isinstance(rng, np.random.Generator):
             rng = np.random.default_rng(rng)
-        seed = int(rng.integers(2**63))  # drawn for a constant process too (the same stream)
+        seed = child_seeds(rng)  # drawn for a constant process too (the same stream)
         # a constant process draws nothing from its child: none is made (a reset's cost)
         self._rng = None if self._const is not None else np.random.default_rng(seed)
         return self._rng

@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, is_real, param
 from shipgym._jit import njit
+from shipgym._seeding import child_seeds
 
 from .spectra import harmonic_components, wave_spectrum
 
@@ -186,7 +187,7 @@ class RollWaves:
             if isinstance(rng, bool) or not isinstance(rng, numbers.Integral):
                 raise ValueError(f"rng must be a numpy Generator or an integer seed, got {rng!r}")
             rng = np.random.default_rng(rng)
-        child = np.random.default_rng(int(rng.integers(2**63)))
+        child = np.random.default_rng(child_seeds(rng))
         c = self.config
         w, a, eps = harmonic_components(self.spectrum, c.omega_min, c.omega_max,
                                         c.n_components, child)  # fmt: skip

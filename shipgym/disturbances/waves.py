@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import from_mapping, is_real, param, require_angles, require_finite
 from shipgym._jit import entry, njit
+from shipgym._seeding import child_seeds
 from shipgym.dynamics.params import HullParameters
 
 from ._grid import CHUNK, PIECE, PieceGrid
@@ -631,8 +632,8 @@ class Waves(PieceGrid):
             return
         if not isinstance(rng, np.random.Generator):
             rng = np.random.default_rng(rng)
-        child = np.random.default_rng(int(rng.integers(2**63)))
-        s_comp, s_wf = child.integers(2**63, size=2)
+        child = np.random.default_rng(child_seeds(rng))
+        s_comp, s_wf = child_seeds(child, 2)
         self._ready = True
         if self.calm:
             return

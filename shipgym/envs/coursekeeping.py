@@ -26,6 +26,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from shipgym._config import from_mapping, is_real, param
+from shipgym._seeding import child_seeds
 from shipgym.disturbances import CurrentConfig, WindConfig
 from shipgym.dynamics import wrap_angle
 from shipgym.dynamics.actuators import MMGPropulsion, Propeller
@@ -269,7 +270,7 @@ class CourseKeepingVectorEnv(BatchedEnv):
             assert rng is not None
             # every draw in a fixed order, made even when the quantity is fixed: same seed,
             # same episode, and fixing one quantity leaves the others' draws unchanged
-            seeds = rng.integers(2**63, size=3)  # gyros, receiver noise, physics (gusts)
+            seeds = child_seeds(rng, 3)  # gyros, receiver noise, physics (gusts)
             wind_dir = float(rng.uniform(0.0, 2.0 * math.pi))
             current_dir = float(rng.uniform(0.0, 2.0 * math.pi))
             changes = rng.uniform(-m, m, self._n_changes)

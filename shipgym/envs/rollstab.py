@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from shipgym._config import from_mapping, is_real, param
 from shipgym._jit import entry, njit
+from shipgym._seeding import child_seeds
 from shipgym.disturbances.rollwaves import RollWaveConfig, RollWaves, roll_wave_moments
 from shipgym.disturbances.spectra import wave_spectrum
 from shipgym.dynamics.actuators import Propeller, Rudder
@@ -467,7 +468,7 @@ class RudderRollVectorEnv(BatchedEnv):
             U = float(rng.uniform(lo, hi)) if hi > lo else lo  # type: ignore[union-attr]
             self.U[i] = U
             # one child generator per stochastic part, in a fixed order: same seed, same episode
-            seeds = rng.integers(2**63, size=3)  # type: ignore[union-attr]
+            seeds = child_seeds(rng, 3)  # type: ignore[arg-type]
             self._noise.reset(i, np.random.default_rng(int(seeds[0])))
             wave_rng = np.random.default_rng(int(seeds[1]))
             self._white.reset(i, wave_rng)

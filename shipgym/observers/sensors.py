@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import fields_of, from_mapping, param
 from shipgym._jit import entry, njit
+from shipgym._seeding import child_seeds
 
 __all__ = [
     "AL_TAKIE1982_HEADING_SIGMA",
@@ -329,7 +330,7 @@ def _streams(
     them). Only the streams where ``used`` is True are made (``None`` for the others): each
     child is the spawn's ``SeedSequence(entropy, spawn_key=(k,))``, so a stream left out
     changes none of the others."""
-    entropy = int(rng.integers(2**63))
+    entropy = child_seeds(rng)
     return tuple(
         np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=(k,))) if use else None
         for k, use in enumerate(used)
