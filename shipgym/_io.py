@@ -36,6 +36,7 @@ __all__ = [
     "partial_path",
     "rrd_complete",
     "replace_together",
+    "signals_held",
     "write_partial_text",
 ]
 
@@ -96,7 +97,7 @@ def atomic_write_text(path: str | os.PathLike[str], text: str, *, encoding: str 
 
 
 @contextlib.contextmanager
-def _signals_held() -> Iterator[None]:
+def signals_held() -> Iterator[None]:
     """Hold SIGINT and SIGTERM back (delivered when the block ends); main thread, POSIX only."""
     if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not (
         threading.main_thread()
@@ -125,7 +126,7 @@ def replace_together(
         OSError: a rename failed (e.g. the folder was removed during the run).
     """
     dests = [(Path(src), _destination(Path(dst))) for src, dst in moves]
-    with _signals_held():
+    with signals_held():
         for p in [*(d for _, d in dests), *(_destination(Path(r)) for r in remove)]:
             if p.is_file():
                 p.unlink()

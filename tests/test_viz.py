@@ -452,3 +452,48 @@ def test_report_of_a_whole_run_has_no_partial_warning(tmp_path):
     res = run_episode("station-keeping", env_kwargs={"max_episode_steps": 30}, report=tmp_path)
     assert res["indices_note"] is None  # station keeping holds until its time limit
     assert "do not describe a whole run" not in (tmp_path / "metrics.md").read_text()
+
+
+class _Cut(BaseException):
+    """An interrupt landing at a chosen place (a BaseException, as ``KeyboardInterrupt``)."""
+
+
+@pytest.mark.parametrize("where", ["_log_target", "_log_hull_trace"])
+def test_an_interrupt_inside_a_flush_leaves_the_episode_recordable(tmp_path, monkeypatch, where):
+    """Ctrl-C or SIGTERM landing inside a flush of the buffered rows, after the running
+    accuracy indices took them but before the block was booked: the clean-up's flush sends
+    the rows again from the same state (it replayed them into the indices a second time:
+    'time went backwards (0.0 s < 98.99 s)', exit 2 instead of the interrupt's status)."""
+    from shipgym.viz import recorder
+
+    real = getattr(recorder._Episode, where)
+    hit = {"n": 0}
+
+    def cut(self, *args, **kwargs):
+        hit["n"] += 1
+        if hit["n"] == 1:
+            raise _Cut
+        return real(self, *args, **kwargs)
+
+    a = np.zeros(3, np.float32)
+    env = RecordEpisode(_make(), tmp_path / "cut.rrd", flush_every=50)
+    env.reset(seed=0)
+    for _ in range(48):
+        env.step(a)
+    monkeypatch.setattr(recorder._Episode, where, cut)
+    with pytest.raises(_Cut):
+        env.step(a)  # the 50th row (the reset's the first): the flush
+    env.close()  # what the command line's clean-up does: the rows are sent once more
+    monkeypatch.undo()
+    run = load_run(tmp_path / "cut.partial.rrd")
+    assert run.n_steps == 49 and recording_problem(run) is not None
+    full = RecordEpisode(_make(), tmp_path / "whole.rrd", flush_every=1000)
+    full.reset(seed=0)
+    for _ in range(49):
+        full.step(a)
+    full.close()
+    whole = load_run(tmp_path / "whole.partial.rrd")
+    # the indices of the cut episode are those of the same rows recorded in one flush
+    np.testing.assert_array_equal(run.t, whole.t)  # each row once
+    np.testing.assert_array_equal(run.accuracy, whole.accuracy)
+    np.testing.assert_array_equal(run.accuracy_measured, whole.accuracy_measured)

@@ -8,6 +8,7 @@ Design notes: docs/design/viz.recorder.md.
 from __future__ import annotations
 
 import atexit
+import copy
 import datetime as _dt
 import json
 import math
@@ -25,7 +26,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from shipgym._io import partial_path, replace_together
+from shipgym._io import partial_path, replace_together, signals_held
 from shipgym.metrics import ManoeuvreMetrics
 from shipgym.records import step_record
 
@@ -279,7 +280,23 @@ class _Episode:
 
     # -- columns -------------------------------------------------------------------------------
     def flush(self) -> None:
-        """Send the buffered rows to the recording as columns."""
+        """Send the buffered rows to the recording as columns.
+
+        An interrupt (Ctrl-C, SIGTERM) on the way leaves the state a flush changes as it was
+        (the running indices, the last fix, the leg and hull-trace marks): the clean-up's
+        flush sends the same rows again from the same state, and the block is booked (its
+        derived rows kept, the rows marked done) with the signals held."""
+        saved = (copy.deepcopy(self.metrics), self.last_z, self.prev_leg, self.next_trace)
+        booked = self.rows_done, self.meas_done
+        try:
+            self._send()
+        except BaseException:
+            if (self.rows_done, self.meas_done) == booked:
+                self.metrics, self.last_z, self.prev_leg, self.next_trace = saved
+            raise
+
+    def _send(self) -> None:
+        """:meth:`flush`'s work."""
         import rerun as rr
 
         i0, i1 = self.rows_done, len(self.t)
@@ -412,11 +429,12 @@ class _Episode:
         for name in DATA_VECTORS:
             scal(f"{P.DATA}/{name}", np.asarray(data[name], dtype=float))
 
-        self.blocks["wind"].append(data["wind"])
-        self.blocks["acc"].append(acc)
-        self.blocks["acc_meas"].append(acc_m)
-        self.blocks["meas_r"].append(m_zr)
-        self.rows_done, self.meas_done = i1, j1
+        with signals_held():  # the block's rows and its booking together, or neither
+            self.blocks["wind"].append(data["wind"])
+            self.blocks["acc"].append(acc)
+            self.blocks["acc_meas"].append(acc_m)
+            self.blocks["meas_r"].append(m_zr)
+            self.rows_done, self.meas_done = i1, j1
 
     def _wind(self, t: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """``[speed (m/s), from (rad)]`` at the times ``t``, or None without aerodynamics."""
