@@ -305,7 +305,7 @@ def _parity(vessel, plant=None, timestep: float = 0.05, duration: float = 600.0,
              if sea and v.hull.m != 1.0 else None)  # fmt: skip
     current = (0.3 / math.sqrt(s), math.radians(60.0)) if sea else (0.0, 0.0)
     flow = f"{current[0]:.17g}@{math.degrees(current[1]):.17g}"
-    trajs, phys = {}, None
+    trajs, gusts, phys = {}, [], None
     for integrator in integrators:
         phys = VesselPhysics(v, plant or "default", wind=GUSTY, timestep=timestep,
                              integrator=integrator, waves=waves, current=flow)  # fmt: skip
@@ -330,7 +330,9 @@ def _parity(vessel, plant=None, timestep: float = 0.05, duration: float = 600.0,
                 phys.step(10)
                 traj.append(phys.eta_full)
         trajs[integrator] = np.array(traj)
-    # every integrator's physics drew the same gusts (and sea): the last one's are the oracle's
+        gusts.append(phys.wind.series(np.arange(0.0, duration, 0.37)))
+    for g in gusts[1:]:  # every integrator's physics had the oracle's gusts
+        np.testing.assert_array_equal(g, gusts[0])
     t_eval = np.arange(trajs[integrators[0]].shape[0]) * 10 * timestep
     four = phys.dofs == 4
 
