@@ -1186,8 +1186,11 @@ class ActuatorSet:
         (..., n_channels), or of a value broadcast to every channel."""
         a = np.asarray(x, dtype=float)
         nc = self.n_channels
-        shape = a.shape if a.ndim and a.shape[-1] == nc else np.broadcast_shapes(a.shape, (nc,))
-        rows = np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, nc))
+        if a.ndim == 2 and a.shape[1] == nc and a.flags.c_contiguous:  # rows already (a step)
+            rows, shape = a, a.shape
+        else:
+            shape = a.shape if a.ndim and a.shape[-1] == nc else np.broadcast_shapes(a.shape, (nc,))
+            rows = np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, nc))
         out = np.empty(rows.shape)
         args = (rows, self.lower, self.upper, out)
         entries = self.__dict__.setdefault("_row_laws", {})
