@@ -1,8 +1,9 @@
 r"""The mechanics every native batched env shares, and the single env as its batch of one.
 
-A task family is written once, as a :class:`BatchedEnv` over N >= 1 envs (arrays with a
-leading axis of N). :class:`BatchedEnv` supplies Gymnasium's ``VectorEnv`` protocol around
-the family's hooks: seeding (env ``i`` seeded ``seed + i``), reset masks, the autoreset modes
+The envs are written once over N >= 1 envs (arrays with a leading axis of N): the stepped
+tasks' :class:`~shipgym.envs.stepped.TaskEnv` and the plan tasks'
+:class:`~shipgym.envs.vector.ShipVectorEnv`. :class:`BatchedEnv` supplies Gymnasium's
+``VectorEnv`` protocol around their hooks: seeding (env ``i`` seeded ``seed + i``), reset masks, the autoreset modes
 (``"next-step"``, ``"same-step"``), the ``_key`` masks of ``info``, action validation and
 the episode metrics at each episode's end. :class:`SingleEnv` is the Gymnasium single env of
 a family: its batch of one, with the single-env API (rows unbatched, scalars as Python

@@ -40,15 +40,15 @@ from shipgym.observers.dgps import (
     velocity_outputs,
 )
 
-from .batched import BatchedEnv, SingleEnv
 from .batchphysics import BatchedPhysics
-from .spec import _check_timing, _whole_multiple
+from .stepped import StepTask, TaskEnv, TaskSingleEnv
 
 __all__ = [
     "AUTO",
     "AUTO_CURRENT_SPEED",
     "COURSE_OBSERVATION",
     "CourseKeepingEnv",
+    "CourseKeepingTask",
     "CourseKeepingVectorEnv",
     "CourseRewardWeights",
     "GYRO_STD",
@@ -116,23 +116,16 @@ def _disturbance(value: Any, cls: Any, name: str) -> Any:
     return cls.coerce(value, name=name)
 
 
-class CourseKeepingVectorEnv(BatchedEnv):
-    """``num_envs`` course-keeping envs stepped together: the task written once over N >= 1
-    envs (:class:`CourseKeepingEnv`, its batch of one, is the spec). Env ``i`` reset with
-    seed ``s + i`` is the single env reset with that seed, bit for bit.
+class CourseKeepingTask(StepTask):
+    """The course-keeping task over N >= 1 envs (:class:`CourseKeepingEnv` is its spec; the
+    arguments are its own), stepped by :class:`CourseKeepingVectorEnv`."""
 
-    Args:
-        num_envs: number of envs, >= 1.
-        autoreset_mode: ``"next-step"`` or ``"same-step"``.
-        **kwargs: the arguments of :class:`CourseKeepingEnv` (``vessel=`` required), but
-            ``render_mode``.
-    """
+    reward_terms = ("heading", "rudder")
 
     def __init__(
         self,
         num_envs: int,
         *,
-        autoreset_mode: str = "next-step",
         vessel: Vessel | str | None = None,
         speed: float | None = None,
         heading: float = 0.0,
@@ -186,11 +179,7 @@ class CourseKeepingVectorEnv(BatchedEnv):
         self.setpoint_period = None if setpoint_period is None else float(setpoint_period)
         self.max_heading_change = float(max_heading_change)
         self.reward_weights = reward_weights or CourseRewardWeights()
-        self.episode_duration = float(episode_duration)
-        _check_timing(timestep, control_period)
-        self.n_substeps = _whole_multiple(control_period, timestep)
-        self.timestep = float(timestep)
-        self.control_period = float(control_period)
+        self.set_timing(timestep, control_period, episode_duration)
         self._wind_arg = _disturbance(wind, WindConfig, "wind")
         self._current_arg = _disturbance(current, CurrentConfig, "current")
         acts = v.actuators
@@ -215,8 +204,7 @@ class CourseKeepingVectorEnv(BatchedEnv):
         obs_space = spaces.Box(
             np.array(lo, dtype=np.float32), np.array(hi, dtype=np.float32), dtype=np.float32
         )
-        self._setup(num_envs, obs_space, spaces.Box(-1.0, 1.0, (n_r,), dtype=np.float32),
-                    autoreset_mode)  # fmt: skip
+        self.attach(num_envs, obs_space, spaces.Box(-1.0, 1.0, (n_r,), dtype=np.float32))
         n = num_envs
         self.rx = DGPSReceiver(self.S_p, n=n, sigma=self.dgps_sigma, dt=self.control_period,
                                antenna=antenna)  # fmt: skip
@@ -250,7 +238,6 @@ class CourseKeepingVectorEnv(BatchedEnv):
         self.wind_configs: list[WindConfig | None] = [None] * n
         self.current_configs: list[CurrentConfig | None] = [None] * n
         self._gyro = NormalStreams(n, 2)
-        self._steps = np.zeros(n, dtype=np.int64)
         self._z_prev = np.zeros((n, 2))
         self._obs = np.zeros((n, 4 + n_r), dtype=np.float32)
         self._info: dict[str, Any] = {}
@@ -258,7 +245,7 @@ class CourseKeepingVectorEnv(BatchedEnv):
         self._counts = np.zeros((3, n), dtype=np.int64)  # steps, rate-limited, saturated
 
     # ---- episode ---------------------------------------------------------------------------
-    def _reset_envs(self, mask: NDArray[np.bool_]) -> None:
+    def initialize_episode(self, rngs: list[Any], mask: NDArray[np.bool_]) -> None:
         n, v = self.num_envs, self.base_vessel
         nu0 = np.zeros((n, 3))
         nu0[:, 0] = self.U
@@ -266,8 +253,7 @@ class CourseKeepingVectorEnv(BatchedEnv):
         rx_rngs: list[Any] = [None] * n
         m = self.max_heading_change
         for i in np.nonzero(mask)[0].tolist():
-            rng = self._rngs[i]
-            assert rng is not None
+            rng = rngs[i]
             # every draw in a fixed order, made even when the quantity is fixed: same seed,
             # same episode, and fixing one quantity leaves the others' draws unchanged
             seeds = child_seeds(rng, 3)  # gyros, receiver noise, physics (gusts)
@@ -295,7 +281,6 @@ class CourseKeepingVectorEnv(BatchedEnv):
         phys.reset(eta=(0.0, 0.0, self.heading), nu=nu0, actuators=self._st0, mask=mask,
                    rngs=phys_rngs)  # fmt: skip
         phys.set_command(np.where(mask[:, None], self._st0, phys.command))
-        self._steps[mask] = 0
         self._sums[:, mask] = 0.0
         self._counts[:, mask] = 0
         self._sense(mask, rx_rngs)
@@ -321,7 +306,7 @@ class CourseKeepingVectorEnv(BatchedEnv):
         if self.setpoint_period is None:
             psi_d = np.full(self.num_envs, self.heading)
         else:
-            t = self._steps * self.control_period
+            t = self.steps * self.control_period
             k = np.minimum(np.floor(t / self.setpoint_period + 1e-9).astype(np.int64),
                            self._n_changes - 1)  # fmt: skip
             psi_d = self.targets[np.arange(self.num_envs), k]
@@ -361,15 +346,13 @@ class CourseKeepingVectorEnv(BatchedEnv):
             "rudder": delta,
         }
 
-    def _observation(self) -> NDArray[np.float32]:
+    def observation(self) -> NDArray[np.float32]:
         return self._obs.copy()
 
-    def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
+    def reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
         return dict(self._info)
 
-    def _step_envs(
-        self, actions: NDArray[np.float64], active: NDArray[np.bool_]
-    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+    def before_step(self, actions: NDArray[np.float64], active: NDArray[np.bool_]) -> None:
         phys = self.physics
         a = np.clip(actions, -1.0, 1.0)
         action_clipped = (np.abs(actions) > 1.0) & active[:, None]
@@ -383,8 +366,14 @@ class CourseKeepingVectorEnv(BatchedEnv):
                 command[:, j] = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
         every = bool(active.all())
         clipped = phys.set_command(command if every else np.where(active[:, None], command, held))
-        phys.step(self.n_substeps, mask=None if every else active)
-        self._steps += active
+        self._clipped = clipped, action_clipped
+
+    def after_step(
+        self, active: NDArray[np.bool_]
+    ) -> tuple[dict[str, NDArray[np.float64]], NDArray[np.bool_], dict[str, Any]]:
+        phys = self.physics
+        clipped, action_clipped = self._clipped
+        every = bool(active.all())
         self._sense(active)
         info = self._info
         delta = info["rudder"]
@@ -396,8 +385,6 @@ class CourseKeepingVectorEnv(BatchedEnv):
             rudder2 += delta[:, j] ** 2
         terms = {"heading": -((info["heading_error"] / w.psi0) ** 2),
                  "rudder": -w.rudder * (rudder / n_r)}  # fmt: skip
-        reward = terms["heading"] + terms["rudder"]
-        truncated = self._steps * self.control_period >= self.episode_duration - 1e-9
         at_limit = np.abs(delta) >= self.max_angle * (1.0 - 1e-9)
         rate_limited = phys.rate_limited[:, self._rudder_servo] & active[:, None]
         saturated = (at_limit | clipped[:, self._rudder_idx] | action_clipped) & active[:, None]
@@ -406,7 +393,6 @@ class CourseKeepingVectorEnv(BatchedEnv):
             "rate_limited": rate_limited,
             "saturated": saturated,
             "action_clipped": action_clipped,
-            "reward_terms": terms,
         })  # fmt: skip
         # the episode's running sums
         s, c = self._sums, self._counts
@@ -416,9 +402,9 @@ class CourseKeepingVectorEnv(BatchedEnv):
         s[:4], s[4:6] = (s[:4] + add, top) if every else (np.where(active, s[:4] + add, s[:4]),
                                                          np.where(active, top, s[4:6]))  # fmt: skip
         c += np.stack([active, rate_limited.any(axis=1), saturated.any(axis=1)])
-        return reward, np.zeros(self.num_envs, dtype=bool), truncated & active, dict(info)
+        return terms, np.zeros(self.num_envs, dtype=bool), dict(info)
 
-    def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
+    def episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
         """Heading, rudder and receiver-bias statistics of each env's episode so far."""
         s, c = self._sums, self._counts
         n = np.maximum(c[0], 1)
@@ -437,7 +423,22 @@ class CourseKeepingVectorEnv(BatchedEnv):
         }
 
 
-class CourseKeepingEnv(SingleEnv):
+class CourseKeepingVectorEnv(TaskEnv):
+    """``num_envs`` course-keeping envs stepped together: :class:`CourseKeepingTask` in the
+    env of every stepped task (:class:`CourseKeepingEnv`, its batch of one, is the spec).
+    Env ``i`` reset with seed ``s + i`` is the single env reset with that seed, bit for bit.
+
+    Args:
+        num_envs: number of envs, >= 1.
+        autoreset_mode: ``"next-step"`` or ``"same-step"``.
+        **kwargs: the arguments of :class:`CourseKeepingEnv` (``vessel=`` required), but
+            ``render_mode``.
+    """
+
+    task_class = CourseKeepingTask
+
+
+class CourseKeepingEnv(TaskSingleEnv):
     r"""Hold and change the heading with the rudder, seeing the DGPS receiver's velocity.
 
     **Physics.** Any vessel with a rudder (:attr:`Vessel.rudders
@@ -554,13 +555,6 @@ class CourseKeepingEnv(SingleEnv):
     def __init__(self, vessel: Vessel | str | None = None, render_mode: str | None = None,
                  **kwargs: Any) -> None:  # fmt: skip
         super().__init__(render_mode=render_mode, vessel=vessel, **kwargs)
-
-    def __getattr__(self, name: str) -> Any:
-        """The task's settings and physics (``U``, ``max_angle``, ``physics``, ...): the
-        batch's."""
-        if name.startswith("_") or name == "batch":
-            raise AttributeError(name)
-        return getattr(self.batch, name)
 
     @property
     def wind_config(self) -> WindConfig | None:

@@ -38,8 +38,8 @@ ENV_IDS: dict[str, tuple[str, int | None]] = {
     "shipgym/BlueLadyTracking-v0": ("shipgym.envs.tasks:BlueLadyTrackingEnv", 800),
 }
 
-#: ids with a native batched form (:class:`~shipgym.envs.vector.ShipVectorEnv` or a family's
-#: :class:`~shipgym.envs.batched.BatchedEnv`): id -> its
+#: ids with a native batched form (:class:`~shipgym.envs.vector.ShipVectorEnv` or a stepped
+#: task's :class:`~shipgym.envs.stepped.TaskEnv`): id -> its
 #: vector entry point, for ``gymnasium.make_vec(id, num_envs=N)``. Gymnasium refuses a vector
 #: entry point next to additional wrappers, so these ids do without :class:`EpisodeEnd`
 #: under a bare ``gym.make``: ``shipgym.make`` applies it (episode metrics at a time-limit

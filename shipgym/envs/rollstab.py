@@ -19,11 +19,10 @@ from typing import Any
 
 import numpy as np
 from gymnasium import spaces
-from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
 from shipgym._config import from_mapping, is_real, param
-from shipgym._jit import entry, njit
+from shipgym._jit import njit
 from shipgym._seeding import child_seeds
 from shipgym.disturbances.rollwaves import RollWaveConfig, RollWaves, roll_wave_moments
 from shipgym.disturbances.spectra import wave_spectrum
@@ -39,9 +38,8 @@ from shipgym.observers.sway import (
     sway_kf_step,
 )
 
-from .batched import BatchedEnv, SingleEnv
 from .batchphysics import BatchedPhysics
-from .spec import _check_timing, _whole_multiple
+from .stepped import StepTask, TaskEnv, TaskSingleEnv
 
 __all__ = [
     "AUTO_WAVES",
@@ -50,6 +48,7 @@ __all__ = [
     "ROLL_SENSOR_STD",
     "RollRewardWeights",
     "RudderRollEnv",
+    "RudderRollTask",
     "RudderRollVectorEnv",
     "SEED_WAVES",
     "SeedRollEnv",
@@ -231,19 +230,17 @@ def roll_observe(mask, y, delta, heading, U, x_hat, obs):  # type: ignore[no-unt
 @njit
 def roll_terms(  # type: ignore[no-untyped-def]
     active, eta, delta, dprev, heading, phi0, psi0, w_rate, max_rate, max_angle, clipped,
-    aclip, steps, cp, duration, max_roll, sums, rate, dmean, e_psi, terms, reward, term,
-    trunc, sat,
+    aclip, cp, max_roll, sums, rate, dmean, e_psi, terms, term, sat,
 ):  # fmt: skip
     """The task's step law for the active envs (:class:`RudderRollEnv`): the rudder rate and
     mean over the control period (``dprev`` moved on), the reward terms ``roll``,
-    ``heading``, ``rudder_rate`` and their sum, termination at ``max_roll``, truncation at
-    ``duration``, the saturation flags and the episode sums
-    (:attr:`RudderRollVectorEnv._sums`; the rate-limit and filter sums are the caller's)."""
+    ``heading``, ``rudder_rate``, termination at ``max_roll``, the saturation flags and the
+    episode sums (:attr:`RudderRollTask._sums`; the rate-limit and filter sums are the
+    caller's)."""
     nr = delta.shape[1]
     for i in range(eta.shape[0]):
         if not active[i]:
             continue
-        steps[i] += 1
         rr = 0.0
         d2 = 0.0
         w2 = 0.0
@@ -265,9 +262,7 @@ def roll_terms(  # type: ignore[no-untyped-def]
         terms[i, 0] = -((phi / phi0) ** 2)
         terms[i, 1] = -((e / psi0) ** 2)
         terms[i, 2] = -w_rate * rr / nr
-        reward[i] = terms[i, 0] + terms[i, 1] + terms[i, 2]
         term[i] = abs(phi) > max_roll
-        trunc[i] = not term[i] and steps[i] * cp >= duration - 1e-9
         s = sums[i]
         s[0] += phi * phi
         s[1] += e * e
@@ -278,21 +273,19 @@ def roll_terms(  # type: ignore[no-untyped-def]
         s[8] += any_sat
 
 
-class RudderRollVectorEnv(BatchedEnv):
-    """N envs of :class:`RudderRollEnv` stepped together (its docstring is the task's spec):
-    ``RudderRollVectorEnv(num_envs, *, autoreset_mode="next-step", **RudderRollEnv's
-    arguments but render_mode)``; env ``i`` seeded ``seed + i`` is the single env seeded so,
-    bit for bit. Each env draws its own speed per episode; with ``kdp_law="printed"`` each
-    hull gets the rudder of the printed law at its speed
-    (:meth:`~shipgym.envs.batchphysics.BatchedPhysics.set_actuators`)."""
+class RudderRollTask(StepTask):
+    """The rudder-roll task over N >= 1 envs (:class:`RudderRollEnv` is its spec; the
+    arguments are its own), stepped by :class:`RudderRollVectorEnv`. Each env draws its own
+    speed per episode; with ``kdp_law="printed"`` each hull gets the rudder of the printed
+    law at its speed (:meth:`~shipgym.envs.batchphysics.BatchedPhysics.set_actuators`)."""
 
-    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+    needs = "roll-steering"
+    reward_terms = ("roll", "heading", "rudder_rate")
 
     def __init__(
         self,
         num_envs: int,
         *,
-        autoreset_mode: str | AutoresetMode = "next-step",
         vessel: Vessel | str | None = None,
         speed: float | tuple[float, float] = (8.0, 15.0),
         heading: float = 0.0,
@@ -350,10 +343,7 @@ class RudderRollVectorEnv(BatchedEnv):
             "episode_duration", episode_duration, "> 0 s", 0.0, strict=True
         )
         self.max_roll = _real("max_roll", max_roll, "in (0, 1.2) rad", 0.0, 1.2, strict=True)
-        _check_timing(timestep, control_period)
-        self.n_substeps = _whole_multiple(control_period, timestep)
-        self.timestep = float(timestep)
-        self.control_period = float(control_period)
+        self.set_timing(timestep, control_period, self.episode_duration)
         n = num_envs if isinstance(num_envs, int) and num_envs >= 1 else 1  # _setup checks it
         self.physics = BatchedPhysics(v, n, timestep=self.timestep)
         acts = self.physics.actuators
@@ -374,8 +364,7 @@ class RudderRollVectorEnv(BatchedEnv):
             hi.append(50.0)
         obs_space = spaces.Box(np.array(lo, dtype=np.float32), np.array(hi, dtype=np.float32),
                                dtype=np.float32)  # fmt: skip
-        self._setup(num_envs, obs_space, spaces.Box(-1.0, 1.0, (nr,), dtype=np.float32),
-                    autoreset_mode)  # fmt: skip
+        self.attach(num_envs, obs_space, spaces.Box(-1.0, 1.0, (nr,), dtype=np.float32))
         hull = self.physics.plant
         self._M = hull.mass_matrix()
         self._m11 = float(self._M[0, 0])
@@ -390,11 +379,9 @@ class RudderRollVectorEnv(BatchedEnv):
         self._sea = [np.zeros((n, nc)) for _ in range(4)]  # w_e, eps, c_K, c_N of each sea
         self._kf = [np.zeros(s) for s in ((n, 5, 5), (n, 5), (n, 5, 5), (n, 4, 4))]
         self._kx, self._kP, self._kG = np.zeros((n, 5)), np.zeros((n, 5, 5)), np.zeros((n, 5, 4))
-        self._entries: dict[Any, Any] = {}  # the compiled laws' entry points
         self._std = np.array(ROLL_SENSOR_STD)
         self._rows = np.arange(n)
         self._external = np.zeros((n, 4))  # [X, Y, K, N]: the waves' K, N
-        self._steps = np.zeros(n, dtype=np.int64)
         self._delta_prev = np.zeros((n, nr))
         self._obs = np.zeros((n, obs_space.shape[0]), dtype=np.float32)
         #: per env the sums of roll^2, e_psi^2, rudder^2, rate^2, v_err^2, max |phi|,
@@ -457,14 +444,14 @@ class RudderRollVectorEnv(BatchedEnv):
         return calm_water_intensities(hull)
 
     # ---- episodes --------------------------------------------------------------------------
-    def _reset_envs(self, mask: Bools) -> None:
+    def initialize_episode(self, rngs: list[Any], mask: Bools) -> None:
         n = self.num_envs
         phys = self.physics
         hull = phys.plant
         lo, hi = self.speed_range
         gens: list[Any] = [None] * n
         for i in np.nonzero(mask)[0].tolist():
-            rng = self._rngs[i]
+            rng = rngs[i]
             U = float(rng.uniform(lo, hi)) if hi > lo else lo  # type: ignore[union-attr]
             self.U[i] = U
             # one child generator per stochastic part, in a fixed order: same seed, same episode
@@ -501,7 +488,6 @@ class RudderRollVectorEnv(BatchedEnv):
         eta = np.stack([z, z, z, np.full(n, self.heading)], 1)
         nu = np.stack([self.U, z, z, z], 1)
         phys.reset(eta=eta, nu=nu, mask=mask, rngs=gens)
-        self._steps[mask] = 0
         delta = phys.actuator_state[:, self._ridx]
         self._delta_prev[mask] = delta[mask]
         self._sums[mask] = 0.0
@@ -512,26 +498,24 @@ class RudderRollVectorEnv(BatchedEnv):
         y = np.zeros((self.num_envs, 4))
         noise = self._noise
         nd, nk = noise.ready(mask) if self.sensor_noise else (noise.draws, noise.k)
-        self._call(roll_measure, mask, eta, nu, self.sensor_noise, nd, nk, self._std, y)
+        self.call(roll_measure, mask, eta, nu, self.sensor_noise, nd, nk, self._std, y)
         return y
 
     def _observe(self, mask: Bools, y: Array, delta: Array) -> None:
-        self._call(roll_observe, mask, y, delta, self.heading, self.U, self._kx[:, 0].copy(),
+        self.call(roll_observe, mask, y, delta, self.heading, self.U, self._kx[:, 0].copy(),
                    self._obs)  # fmt: skip
 
-    def _observation(self) -> NDArray[np.float32]:
+    def observation(self) -> NDArray[np.float32]:
         return self._obs.copy()
 
-    def _reset_info(self, mask: Bools) -> dict[str, Any]:
+    def reset_info(self, mask: Bools) -> dict[str, Any]:
         info: dict[str, Any] = {"speed": self.U.copy(), "time": np.zeros(self.num_envs)}
         if self.sway_estimate:
             info["v_hat"] = self._kx[:, 0].copy()
             info["trace_P"] = np.trace(self._kP, axis1=1, axis2=2)
         return info
 
-    def _step_envs(
-        self, actions: Array, active: Bools
-    ) -> tuple[Array, Bools, Bools, dict[str, Any]]:
+    def before_step(self, actions: Array, active: Bools) -> None:
         phys = self.physics
         n, nr = actions.shape
         command = phys.command
@@ -541,7 +525,7 @@ class RudderRollVectorEnv(BatchedEnv):
         white = self.waves == SEED_WAVES
         wd, wk = self._white.ready(active) if white else (self._white.draws, self._white.k)
         moment = np.zeros((n, 2))
-        self._call(roll_command, actions, active, self.max_angle, amp,
+        self.call(roll_command, actions, active, self.max_angle, amp,
                    self.rudder_test_frequency, t0, self.control_period, self._ridx, command,
                    aclip, white, wd, wk, self._sigma, moment)  # fmt: skip
         if self._props:  # hold the speed: resistance at U + a 20 s speed loop
@@ -553,22 +537,26 @@ class RudderRollVectorEnv(BatchedEnv):
         if isinstance(self.waves, RollWaveConfig):  # the sea's, mid-period
             t = np.ascontiguousarray(t0 + 0.5 * self.control_period)
             K, N = np.empty(n), np.empty(n)
-            self._call(roll_wave_moments, t, self._rows, *self._sea, K, N)
+            self.call(roll_wave_moments, t, self._rows, *self._sea, K, N)
             moment[:, 0], moment[:, 1] = K, N
         if self.waves is not None:
             self._external[:, 2:] = moment
             phys.set_external_force(self._external)
-        phys.step(self.n_substeps, mask=active)
+        self._held = clipped, aclip, moment
+
+    def after_step(self, active: Bools) -> tuple[dict[str, Array], Bools, dict[str, Any]]:
+        phys = self.physics
+        clipped, aclip, moment = self._held
+        n, nr = aclip.shape
         eta, nu, delta = phys.eta_full, phys.nu_full, phys.actuator_state[:, self._ridx]
         y = self._measure(active, eta, nu)
         w = self.reward_weights
-        terms, e_psi, reward = np.zeros((n, 3)), np.zeros(n), np.zeros(n)
+        terms, e_psi = np.zeros((n, 3)), np.zeros(n)
         rate, dmean, sat = np.zeros((n, nr)), np.zeros((n, nr)), np.zeros((n, nr), np.bool_)
-        term, trunc = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
-        self._call(roll_terms, active, eta, delta, self._delta_prev, self.heading, w.phi0,
-                   w.psi0, w.rate, self._max_rate, self.max_angle, clipped, aclip, self._steps,
-                   self.control_period, self.episode_duration, self.max_roll, self._sums, rate,
-                   dmean, e_psi, terms, reward, term, trunc, sat)  # fmt: skip
+        term = np.zeros(n, np.bool_)
+        self.call(roll_terms, active, eta, delta, self._delta_prev, self.heading, w.phi0, w.psi0,
+                  w.rate, self._max_rate, self.max_angle, clipped, aclip, self.control_period,
+                  self.max_roll, self._sums, rate, dmean, e_psi, terms, term, sat)  # fmt: skip
         info: dict[str, Any] = {
             "time": phys.t.copy(),
             "eta": eta,
@@ -587,41 +575,30 @@ class RudderRollVectorEnv(BatchedEnv):
             "stalled": phys.stalled,
             "action_clipped": aclip,
             "wave_moment": moment,
-            "reward_terms": {
-                "roll": terms[:, 0],
-                "heading": terms[:, 1],
-                "rudder_rate": terms[:, 2],
-            },  # fmt: skip
         }
         s = self._sums
         s[:, 7] += active & info["rate_limited"].any(1)
         if self.sway_estimate:
-            self._call(sway_kf_step, *self._kf, y, dmean[:, 0].copy(), active, self._kx,
+            self.call(sway_kf_step, *self._kf, y, dmean[:, 0].copy(), active, self._kx,
                        self._kP, self._kG)  # fmt: skip
             v_hat = self._kx[:, 0].copy()
             s[:, 4] += np.where(active, (v_hat - nu[:, 1]) ** 2, 0.0)
             info["v_hat"] = v_hat
             info["trace_P"] = np.trace(self._kP, axis1=1, axis2=2)
         self._observe(active, y, delta)
-        return reward, term, trunc, info
-
-    def _call(self, fn: Any, *args: Any) -> None:
-        """``fn(*args)`` through its compiled entry point (found once per function)."""
-        e = self._entries.get(fn)
-        if e is None:
-            e = self._entries[fn] = entry(fn, args)
-        e(*args)
+        names = self.reward_terms
+        return {names[k]: terms[:, k] for k in range(3)}, term, info
 
     # ---- metrics ---------------------------------------------------------------------------
-    def _episode_metrics(self, done: Bools) -> dict[str, Any]:
+    def episode_metrics(self, done: Bools) -> dict[str, Any]:
         """Roll, heading and rudder statistics of each env's episode so far: RMS of roll,
         heading error, rudder and rudder rate, their maxima, the fractions of steps
         rate-limited and saturated, the v-hat RMSE (with the filter)."""
         s = self._sums
-        n = np.maximum(self._steps, 1)
+        n = np.maximum(self.steps, 1)
         out: dict[str, Any] = {
             "speed": self.U.copy(),
-            "steps": self._steps.copy(),
+            "steps": self.steps.copy(),
             "roll_rms": np.sqrt(s[:, 0] / n),
             "roll_max": s[:, 5].copy(),
             "heading_rms": np.sqrt(s[:, 1] / n),
@@ -636,7 +613,16 @@ class RudderRollVectorEnv(BatchedEnv):
         return out
 
 
-class RudderRollEnv(SingleEnv):
+class RudderRollVectorEnv(TaskEnv):
+    """N envs of :class:`RudderRollEnv` stepped together (its docstring is the task's spec):
+    ``RudderRollVectorEnv(num_envs, *, autoreset_mode="next-step", **RudderRollEnv's
+    arguments but render_mode)``, :class:`RudderRollTask` in the env of every stepped task;
+    env ``i`` seeded ``seed + i`` is the single env seeded so, bit for bit."""
+
+    task_class = RudderRollTask
+
+
+class RudderRollEnv(TaskSingleEnv):
     r"""Hold a heading at speed with the rudder while damping the roll in waves.
 
     **Physics.** A 4-DOF vessel (surge, sway, roll, yaw) with a rudder (:class:`~shipgym.
@@ -715,11 +701,6 @@ class RudderRollEnv(SingleEnv):
     def __init__(self, vessel: Vessel | str | None = None, **kwargs: Any) -> None:
         super().__init__(vessel=vessel, **kwargs)
 
-    def __getattr__(self, name: str) -> Any:
-        if name in _SETTINGS:  # the task's settings: those of its batch
-            return getattr(self.__dict__["batch"], name)
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-
     @property
     def U(self) -> float:
         """The episode's forward speed (m/s)."""
@@ -729,16 +710,6 @@ class RudderRollEnv(SingleEnv):
     def vessel(self) -> Vessel:
         """The episode's vessel (:meth:`RudderRollVectorEnv.vessel_at` its speed)."""
         return self.batch.vessels[0]
-
-
-#: what a single env reads from its batch: the settings, the hull's ``physics`` (a
-#: :class:`~shipgym.envs.batchphysics.BatchedPhysics` of one), ``filter_intensities``
-_SETTINGS = frozenset(
-    ("base_vessel", "kdp_law", "speed_range", "heading", "waves", "rudder_test",
-     "rudder_test_amplitude", "rudder_test_frequency", "sensor_noise", "sway_estimate",
-     "reward_weights", "episode_duration", "max_roll", "n_substeps", "timestep",
-     "control_period", "max_angle", "physics", "filter_intensities", "vessel_at")
-)  # fmt: skip
 
 
 class SeedRollEnv(RudderRollEnv):

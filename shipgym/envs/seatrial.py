@@ -34,13 +34,13 @@ from shipgym.observers.dgps import S_P_OPTIMAL, DGPSOutput, DGPSReceiver
 from shipgym.trials.manoeuvres import Scripts, manoeuvre, manoeuvre_names
 from shipgym.trials.metrics import TrialMetrics, imo_criteria, trial_metrics
 
-from .batched import BatchedEnv, SingleEnv
 from .batchphysics import BatchedPhysics
-from .spec import _check_timing, _whole_multiple
+from .stepped import StepTask, TaskEnv, TaskSingleEnv
 
 __all__ = [
     "RECEIVERS",
     "SeaTrialEnv",
+    "SeaTrialTask",
     "SeaTrialVectorEnv",
     "TrialRecord",
     "TankerSeaTrialEnv",
@@ -136,13 +136,11 @@ class TrialRecord:
         return imo_criteria(self.metrics(), self.L, self.U0)
 
 
-class SeaTrialVectorEnv(BatchedEnv):
-    r"""``num_envs`` sea trials stepped together: the batched form of :class:`SeaTrialEnv`
-    (its docstring is the spec; env ``i`` is it seeded ``seed + i``), with ``autoreset_mode``
-    (``"next-step"`` or ``"same-step"``) and ``manoeuvre`` a name or ``num_envs`` names (one
-    per env). ``info["episode_metrics"]``: the figures as arrays, ``(N,)`` floats (NaN where
-    one does not apply), ``overshoots`` ``(N, 3)``, ``manoeuvre`` and ``kind`` strings,
-    ``imo_pass`` 1.0 / 0.0 (NaN: no criterion applies)."""
+class SeaTrialTask(StepTask):
+    r"""The sea trials over N >= 1 envs (:class:`SeaTrialEnv` is the spec; the arguments are
+    its own, ``manoeuvre`` a name or ``num_envs`` names), stepped by
+    :class:`SeaTrialVectorEnv`. An episode ends (terminates) when its manoeuvre's duration
+    is flown; no reward."""
 
     def __init__(
         self,
@@ -150,7 +148,6 @@ class SeaTrialVectorEnv(BatchedEnv):
         vessel: str | Vessel | Any,
         manoeuvre: str | Sequence[str] = "turning35_stbd",
         *,
-        autoreset_mode: str = "next-step",
         speed: float | None = None,
         current: Any = None,
         wind: Any = None,
@@ -185,9 +182,7 @@ class SeaTrialVectorEnv(BatchedEnv):
         if receiver not in RECEIVERS:
             raise ValueError(f"unknown receiver {receiver!r}; choose None or 'dgps-pv'")
         self.receiver_name = receiver
-        _check_timing(timestep, control_period)
-        self.n_sub = _whole_multiple(control_period, timestep)
-        self.control_period = float(control_period)
+        self.set_timing(timestep, control_period, None)
         if receiver is not None:
             per = 1.0 / self.control_period
             if abs(per - round(per)) > 1e-9:
@@ -224,7 +219,7 @@ class SeaTrialVectorEnv(BatchedEnv):
         )
         n_obs = 9 + (4 if receiver else 0)
         obs_space = spaces.Box(-np.inf, np.inf, (n_obs,), dtype=np.float32)
-        self._setup(num_envs, obs_space, action_space, autoreset_mode)
+        self.attach(num_envs, obs_space, action_space)
         self.S_p = float(S_p)
         self.antenna = tuple(float(a) for a in np.asarray(antenna, dtype=float).reshape(2))
         self.receiver_sigma = float(receiver_sigma)
@@ -234,7 +229,6 @@ class SeaTrialVectorEnv(BatchedEnv):
         n = num_envs
         self._command = phys.initial_actuator_state()
         self._clipped = np.zeros(n, dtype=bool)
-        self._k = np.zeros(n, dtype=np.int64)
         # the record of every env's episode: t, x, y, psi, u, v, r, rudder, shaft per step
         self._hist = np.zeros((int(self.max_steps.max()) + 1, n, 9))
         self._row = np.full((n, 9), np.nan)
@@ -263,26 +257,25 @@ class SeaTrialVectorEnv(BatchedEnv):
             self._now = True
         return self._row
 
-    def _reset_envs(self, mask: NDArray[np.bool_]) -> None:
+    def initialize_episode(self, rngs: list[Any], mask: NDArray[np.bool_]) -> None:
         phys = self.physics
         idx = np.nonzero(mask)[0].tolist()
-        rngs: list[Any] = [None] * self.num_envs
+        gens: list[Any] = [None] * self.num_envs
         rx_rngs: list[Any] = [None] * self.num_envs
         for i in idx:  # env i's generator: the physics' seed, then the receiver's
-            ss = self._rngs[i].bit_generator.random_raw(2)  # type: ignore[union-attr]
-            rngs[i], rx_rngs[i] = (np.random.default_rng(int(s)) for s in ss)
+            ss = rngs[i].bit_generator.random_raw(2)
+            gens[i], rx_rngs[i] = (np.random.default_rng(int(s)) for s in ss)
         act = phys.initial_actuator_state()
         if self._shaft is not None:
             act[:, self._shaft] = self.n0
         vc, bc = self.current  # straight running at U0 through the water, over ground
         nu0 = np.array([self.U0 + vc * math.cos(bc), vc * math.sin(bc), 0.0])
-        phys.reset(eta=(0.0, 0.0, 0.0), nu=nu0, actuators=act, mask=mask, rngs=rngs)
+        phys.reset(eta=(0.0, 0.0, 0.0), nu=nu0, actuators=act, mask=mask, rngs=gens)
         self._command[mask] = act[mask]
         phys.set_command(self._command)
         self.scripts.reset(np.zeros(self.num_envs), mask)
         self._now = False
         self._clipped[mask] = False
-        self._k[mask] = 0
         if self.receiver_name is not None:
             nu = np.broadcast_to(nu0, (self.num_envs, 3))
             self._rx_out = self.receiver.reset(self._state()[:, 1:4], nu, rngs=rx_rngs, mask=mask)
@@ -291,11 +284,9 @@ class SeaTrialVectorEnv(BatchedEnv):
     def _record(self, mask: NDArray[np.bool_]) -> None:
         """The state now into the record of the envs of ``mask``, at their step count."""
         i = np.nonzero(mask)[0]
-        self._hist[self._k[i], i] = self._state()[i]
+        self._hist[self.steps[i], i] = self._state()[i]
 
-    def _step_envs(
-        self, actions: NDArray[np.float64], active: NDArray[np.bool_]
-    ) -> tuple[Any, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+    def before_step(self, actions: NDArray[np.float64], active: NDArray[np.bool_]) -> None:
         phys = self.physics
         keep = ~active[:, None]
         if self.override:
@@ -316,18 +307,19 @@ class SeaTrialVectorEnv(BatchedEnv):
         if not (cmd == self._command).all():  # (a held command is held)
             self._command = cmd
             phys.set_command(cmd)
-        phys.step(self.n_sub, mask=active)
+
+    def after_step(
+        self, active: NDArray[np.bool_]
+    ) -> tuple[dict[str, Any], NDArray[np.bool_], dict[str, Any]]:
         self._now = False
-        self._k += active
         if self.receiver_name is not None:
-            sample = active & (self._k % self._rx_every == 0)
+            sample = active & (self.steps % self._rx_every == 0)
             if sample.any():
                 self._rx_out = self.receiver.update(self._state()[:, 1:4], mask=sample)
         self._record(active)
-        n = self.num_envs
-        return np.zeros(n), self._k >= self.max_steps, np.zeros(n, dtype=bool), self._info()
+        return {}, self.steps >= self.max_steps, self._info()
 
-    def _observation(self) -> NDArray[np.float32]:
+    def observation(self) -> NDArray[np.float32]:
         row = self._state()
         obs = np.zeros((self.num_envs, self.single_observation_space.shape[0]), np.float32)
         obs[:, self._obs_to] = row[:, self._obs_from] * self._obs_scale
@@ -338,7 +330,7 @@ class SeaTrialVectorEnv(BatchedEnv):
             obs[:, 11], obs[:, 12] = o.x_hat / self.L, o.y_hat / self.L
         return obs
 
-    def _reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
+    def reset_info(self, mask: NDArray[np.bool_]) -> dict[str, Any]:
         return self._info()
 
     def _info(self) -> dict[str, Any]:
@@ -365,7 +357,7 @@ class SeaTrialVectorEnv(BatchedEnv):
             info["receiver"] = {k: getattr(self._rx_out, f).copy() for k, f in _RX_KEYS.items()}
         return info
 
-    def _episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
+    def episode_metrics(self, done: NDArray[np.bool_]) -> dict[str, Any]:
         n = self.num_envs
         out: dict[str, Any] = {"overshoots": np.full((n, 3), np.nan)}
         for i in np.nonzero(done)[0].tolist():  # the trial's analysis, at its end
@@ -380,7 +372,7 @@ class SeaTrialVectorEnv(BatchedEnv):
 
     def record(self, i: int = 0) -> TrialRecord:
         """Env ``i``'s true motion recorded so far in its episode (every control step)."""
-        h = self._hist[: self._k[i] + 1, i]
+        h = self._hist[: self.steps[i] + 1, i]
         return TrialRecord(
             vessel=self.base_vessel.name, manoeuvre=self.manoeuvres[i].name, L=self.L,
             U0=self.U0, n0=self.n0, current=self.current, t=h[:, 0].copy(),
@@ -400,7 +392,31 @@ def _summary(m: TrialMetrics, crit: list[tuple[str, float, float, bool]]) -> dic
     return {**m.as_dict(), "imo_pass": all(c[3] for c in crit) if crit else None}
 
 
-class SeaTrialEnv(SingleEnv):
+class SeaTrialVectorEnv(TaskEnv):
+    r"""``num_envs`` sea trials stepped together: the batched form of :class:`SeaTrialEnv`
+    (its docstring is the spec; env ``i`` is it seeded ``seed + i``), :class:`SeaTrialTask`
+    in the env of every stepped task, with ``autoreset_mode`` (``"next-step"`` or
+    ``"same-step"``) and ``manoeuvre`` a name or ``num_envs`` names (one per env).
+    ``info["episode_metrics"]``: the figures as arrays, ``(N,)`` floats (NaN where one does
+    not apply), ``overshoots`` ``(N, 3)``, ``manoeuvre`` and ``kind`` strings, ``imo_pass``
+    1.0 / 0.0 (NaN: no criterion applies)."""
+
+    task_class = SeaTrialTask
+
+    def __init__(
+        self,
+        num_envs: int,
+        vessel: str | Vessel | Any,
+        manoeuvre: str | Sequence[str] = "turning35_stbd",
+        *,
+        autoreset_mode: str = "next-step",
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(num_envs, autoreset_mode=autoreset_mode, vessel=vessel,
+                         manoeuvre=manoeuvre, **kwargs)  # fmt: skip
+
+
+class SeaTrialEnv(TaskSingleEnv):
     r"""One IMO manoeuvre per episode, scripted, on a vessel with a rudder.
 
     **Physics.** The vessel's hull (:class:`~shipgym.envs.batchphysics.BatchedPhysics` of
@@ -480,13 +496,6 @@ class SeaTrialEnv(SingleEnv):
         b = self.batch
         self.manoeuvre = b.manoeuvres[0]
         self.duration, self.max_steps = float(b.duration[0]), int(b.max_steps[0])
-
-    def __getattr__(self, name: str) -> Any:
-        """The batch's configuration (``physics``, ``base_vessel``, ``n0``, ``L``, ``U0``,
-        ``control_period``, ``receiver``, ...)."""
-        if name.startswith("_") or name == "batch":
-            raise AttributeError(name)
-        return getattr(self.batch, name)
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
