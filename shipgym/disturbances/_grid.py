@@ -29,7 +29,6 @@ __all__ = [
     "PieceGrid",
     "gauss_markov",
     "gauss_markov_piece",
-    "standard_normals",
 ]
 
 #: samples per chunk (each chunk also stores the first sample of the next one)
@@ -41,32 +40,10 @@ CHUNK = 4096
 PIECE = 512
 
 
-@njit
-def _fill_normals(rng, out):  # type: ignore[no-untyped-def]
-    """``out`` (K,) filled with ``rng``'s next K standard normals, one draw at a time."""
-    for k in range(out.shape[0]):
-        out[k] = rng.standard_normal()
-
-
-def standard_normals(rng: np.random.Generator, shape: int | tuple[int, ...]) -> NDArray[np.float64]:
-    """``rng.standard_normal(shape)``: the same numbers, and the generator left in the same
-    state (Numba's ``Generator`` runs NumPy's ziggurat on the same bit generator; an array is
-    filled in C order, as NumPy fills it), drawn in compiled code: about three times faster
-    for the chunks of the grids and the wave filters (thousands of normals at each reset)."""
-    out = np.empty(shape)
-    fill_normals(rng, out.reshape(-1))
-    return out
-
-
 def fill_normals(rng: np.random.Generator, out: NDArray[np.float64]) -> None:
-    """``out`` (K,) contiguous, filled with ``rng``'s next K standard normals (the draws of
-    :func:`standard_normals`: an array drawn in two calls holds the numbers of one)."""
-    if not _FILL:
-        _FILL.append(entry(_fill_normals, (rng, out)))
-    _FILL[0](rng, out)
-
-
-_FILL: list[Any] = []  # _fill_normals' compiled entry point (its argument types never change)
+    """``out`` (K,) contiguous, filled with ``rng``'s next K standard normals (NumPy's
+    ziggurat, in order: an array drawn in two calls holds the numbers of one)."""
+    rng.standard_normal(out=out)
 
 
 @njit
