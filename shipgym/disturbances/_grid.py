@@ -9,11 +9,14 @@ its samples): a chunk's random draws are made in their order when it is begun (a
 last row's, drawn as far as read), its recursions and harmonic sums stop at the end of a
 piece, so a piece is the same floats as in the whole chunk. The piece being read is kept as
 Python lists, so a scalar query (every physics step) costs a few hundred nanoseconds; values
-between samples are interpolated linearly.
+between samples are interpolated linearly. A grid keeps the chunk being filled and the one
+before it; an older chunk read again (a series over a long run) is recomputed from the
+realisation's seed, the same floats, so a long run's memory stays bounded.
 """
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
@@ -115,7 +118,12 @@ class PieceGrid:
     #: once, whole
     _LEAD = 1
 
-    _chunks: list[NDArray[np.float64]]
+    #: drop the chunks before the one before the last (a long run's memory stays bounded: a
+    #: few chunks a process); one read again is recomputed from the realisation's seed
+    #: (:meth:`_replica`), the same floats
+    _evict = True
+
+    _chunks: list[NDArray[np.float64] | None]
     _fill: int  # samples of the last chunk computed (CHUNK + 1: whole)
     _drawn: int  # normals of the chunk being filled drawn (flat, C order)
     _draw_rng: np.random.Generator | None
@@ -153,6 +161,33 @@ class PieceGrid:
     def _piece(self, j: int, ka: int, kb: int) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def _replica(self) -> PieceGrid:  # pragma: no cover - abstract
+        """A copy of this grid started afresh on the same realisation (its seed), sharing
+        nothing it writes: it recomputes dropped chunks."""
+        raise NotImplementedError
+
+    def _chunk(self, j: int) -> NDArray[np.float64]:
+        """Chunk ``j`` (computed as far as asked before): this grid's, or a dropped one
+        recomputed by a replica (:attr:`_evict`)."""
+        c = self._chunks[j]
+        if c is None:
+            r = self._replica()
+            r._evict = False
+            r._extend_to(j)
+            c = r._chunks[j]
+            assert c is not None
+        return c
+
+    def _whole(self, j: int) -> list[NDArray[np.float64]]:
+        """Chunks ``0 ... j``, whole (one replica for the dropped ones)."""
+        self._extend_to(j)
+        if self._chunks[0] is not None:
+            return self._chunks[: j + 1]  # type: ignore[return-value]
+        r = self._replica()
+        r._evict = False
+        r._extend_to(j)
+        return [c if c is not None else r._chunks[k] for k, c in enumerate(self._chunks[: j + 1])]  # type: ignore[misc]
+
     def _fill_to(self, j: int, n: int) -> None:
         """Chunk ``j``'s first ``n`` samples (1 <= n <= CHUNK + 1) computed, and every chunk
         before it whole, in time order, a whole number of pieces (and the next sample)."""
@@ -163,6 +198,8 @@ class PieceGrid:
             if self._fill == CHUNK + 1:  # the next chunk: its array and draws
                 self._ready_check()
                 self._chunks.append(self._begin(last + 1))
+                if self._evict and last >= 1:  # the one before the last goes
+                    self._chunks[last - 1] = None
                 self._fill = 0
                 continue
             want = CHUNK + 1  # past the first piece, the rest of the chunk
@@ -183,7 +220,7 @@ class PieceGrid:
         j, p = divmod(int(k), CHUNK)
         p -= p % PIECE
         self._fill_to(j, p + PIECE + 1)
-        return j * CHUNK + p, self._chunks[j][:, p : p + PIECE + 1]
+        return j * CHUNK + p, self._chunk(j)[:, p : p + PIECE + 1]
 
 
 class GridPair(PieceGrid):
@@ -217,9 +254,20 @@ class GridPair(PieceGrid):
         if not isinstance(rng, np.random.Generator):
             rng = np.random.default_rng(rng)
         seed = child_seeds(rng)  # drawn for a constant process too (the same stream)
+        self._seed = seed
         # a constant process draws nothing from its child: none is made (a reset's cost)
         self._rng = None if self._const is not None else np.random.default_rng(seed)
         return self._rng
+
+    def _draws(self, child: np.random.Generator | None) -> None:
+        """A reset's draws from its child generator (none for a constant process)."""
+
+    def _replica(self) -> GridPair:
+        r = copy.copy(self)
+        r._clear()
+        r._rng = np.random.default_rng(self._seed)
+        r._draws(r._rng)
+        return r
 
     @property
     def constant(self) -> tuple[float, float] | None:
@@ -238,7 +286,7 @@ class GridPair(PieceGrid):
         if self._const is not None:
             raise ValueError(f"a constant {type(self).__name__} has no grid: read .constant")
         self._extend_to(j)
-        return self._chunks[j]
+        return self._chunk(j)
 
     def window(self, k: int) -> tuple[int, NDArray[np.float64]]:
         """:meth:`PieceGrid.window` of the grid, ``(k0, (2, PIECE + 1))``."""
@@ -290,11 +338,8 @@ class GridPair(PieceGrid):
             return np.empty(tt.shape), np.empty(tt.shape)
         k = np.floor(x).astype(np.int64)
         jmax = int(k.max()) // CHUNK
-        self._extend_to(jmax)
-        grid = np.concatenate(
-            [c[:, :CHUNK] for c in self._chunks[: jmax + 1]] + [self._chunks[jmax][:, CHUNK:]],
-            axis=1,
-        )
+        chunks = self._whole(jmax)
+        grid = np.concatenate([c[:, :CHUNK] for c in chunks] + [chunks[jmax][:, CHUNK:]], axis=1)
         f = x - k
         s0, s1 = grid[0, k], grid[0, k + 1]
         d0, d1 = grid[1, k], grid[1, k + 1]

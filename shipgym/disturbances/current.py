@@ -304,7 +304,10 @@ class Current(GridPair):
         Raises:
             ValueError: ``rng`` is ``None`` for a varying current.
         """
-        child = self._start(rng, "a varying current")
+        self._draws(self._start(rng, "a varying current"))
+
+    def _draws(self, child: np.random.Generator | None) -> None:
+        """The states' start from the reset's child generator."""
         if child is not None and self._const is None:
             z = child.standard_normal(2)
             v = min(max(self._mean[0] + self._std0[0] * float(z[0]), self._lo), self._hi)
@@ -332,7 +335,7 @@ class Current(GridPair):
         direction free (:func:`~shipgym.disturbances._grid.gauss_markov_piece`)."""
         x, m, a, b, lows, highs = self._gm
         self._draw_to(self._e, kb)
-        gauss_markov_piece(x, m, a, b, lows, highs, False, self._e, ka, kb, self._chunks[j])
+        gauss_markov_piece(x, m, a, b, lows, highs, False, self._e, ka, kb, self._chunk(j))
         if kb == CHUNK + 1:
             self._state = (float(x[0]), float(x[1]))
 

@@ -16,6 +16,7 @@ Design notes: docs/design/disturbances.waves.md.
 
 from __future__ import annotations
 
+import copy
 import math
 import numbers
 from collections.abc import Mapping
@@ -632,7 +633,12 @@ class Waves(PieceGrid):
             return
         if not isinstance(rng, np.random.Generator):
             rng = np.random.default_rng(rng)
-        child = np.random.default_rng(child_seeds(rng))
+        self._seed = child_seeds(rng)
+        self._draws()
+
+    def _draws(self) -> None:
+        """A reset's draws from its child generator (seeded with :attr:`_seed`)."""
+        child = np.random.default_rng(self._seed)
         s_comp, s_wf = child_seeds(child, 2)
         self._ready = True
         if self.calm:
@@ -681,6 +687,13 @@ class Waves(PieceGrid):
         if not self._ready:
             raise RuntimeError("call Waves.reset(rng) before querying the waves")
 
+    def _replica(self) -> Waves:
+        r = copy.copy(self)
+        r._wf_rows = None  # (the original's motion rows are its own)
+        r._reset_grid()
+        r._draws()
+        return r
+
     def _begin(self, j: int) -> NDArray[np.float64]:
         """Chunk ``j`` begun (rows ``[E, d, h]`` on grid points ``j*CHUNK .. (j+1)*CHUNK``,
         inclusive): the WF filters' noise ``standard_normal((nf, 2, CHUNK))`` (its last row as
@@ -706,7 +719,7 @@ class Waves(PieceGrid):
         """Samples ``ka ... kb - 1`` of chunk ``j``: the drift envelope and the RAO motion
         (harmonic sums on the chunk's grid from ``t0 = j CHUNK dt``), or the WF filters'
         samples (:meth:`_filter_piece`)."""
-        rows = self._chunks[j]
+        rows = self._chunk(j)
         weights = self._weights
         if weights.shape[0]:
             if self._table is None:
@@ -779,8 +792,9 @@ class Waves(PieceGrid):
         k = np.floor(x).astype(np.int64)
         jmax = int(k.max()) // _CHUNK
         self._extend_to(jmax)
-        grid = np.concatenate([c[:, :_CHUNK] for c in self._chunks[: jmax + 1]], axis=1)
-        grid = np.concatenate([grid, self._chunks[jmax][:, _CHUNK:]], axis=1)[rows]
+        chunks = self._whole(jmax)
+        grid = np.concatenate([c[:, :_CHUNK] for c in chunks] + [chunks[jmax][:, _CHUNK:]], axis=1)
+        grid = grid[rows]
         f = x - k
         return grid[:, k] + f * (grid[:, k + 1] - grid[:, k]), tt
 
@@ -806,7 +820,7 @@ class Waves(PieceGrid):
         1) CHUNK`` of the drift energy ``E`` and the first-order motion's two channels,
         generated in time order on first use. Read only."""
         self._extend_to(j)
-        return self._chunks[j]
+        return self._chunk(j)
 
     def drift_load(self, t: float, psi: float) -> tuple[float, float, float]:
         """Mean + slowly varying second-order drift loads on the hull at time ``t``.

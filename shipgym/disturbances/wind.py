@@ -847,7 +847,10 @@ class Wind(GridPair):
         Raises:
             ValueError: If ``rng`` is ``None`` for a gusty wind.
         """
-        child = self._start(rng, "a gusty wind (gust_std or direction_std > 0)")
+        self._draws(self._start(rng, "a gusty wind (gust_std or direction_std > 0)"))
+
+    def _draws(self, child: np.random.Generator | None) -> None:
+        """The gusts' start and (spectral) components from the reset's child generator."""
         if child is not None and self._const is None:
             z = child.standard_normal(2)
             self._state = (self._sigma[0] * float(z[0]), self._sigma[1] * float(z[1]))
@@ -888,7 +891,7 @@ class Wind(GridPair):
         """Samples ``ka ... kb - 1`` of chunk ``j``: the Gauss-Markov gusts' recursion
         (:func:`~shipgym.disturbances._grid.gauss_markov_piece`), a spectral speed gust's
         harmonic sum on the chunk's grid from ``t0 = j CHUNK dt``."""
-        rows = self._chunks[j]
+        rows = self._chunk(j)
         x, m, a, b, lo, hi = self._gm
         self._draw_to(self._e, kb)
         if self._spectral:

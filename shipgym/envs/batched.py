@@ -3,13 +3,14 @@ r"""The mechanics every native batched env shares, and the single env as its bat
 The envs are written once over N >= 1 envs (arrays with a leading axis of N): the stepped
 tasks' :class:`~shipgym.envs.stepped.TaskEnv` and the plan tasks'
 :class:`~shipgym.envs.vector.ShipVectorEnv`. :class:`BatchedEnv` supplies Gymnasium's
-``VectorEnv`` protocol around their hooks: seeding (env ``i`` seeded ``seed + i``), reset masks, the autoreset modes
-(``"next-step"``, ``"same-step"``), the ``_key`` masks of ``info``, action validation and
-the episode metrics at each episode's end. :class:`SingleEnv` is the Gymnasium single env of
-a family: its batch of one, with the single-env API (rows unbatched, scalars as Python
-numbers). Env ``i`` of a batch of N therefore is the single env seeded ``seed + i``, bit for
-bit, provided each row's arithmetic does not depend on N (elementwise array operations and
-per-row compiled loops; no batched BLAS products).
+``VectorEnv`` protocol around their hooks: seeding (env ``i`` seeded ``seed + i``), reset
+masks, the autoreset modes (``"next-step"``, ``"same-step"``), the ``_key`` masks of
+``info``, action validation and the episode metrics at each episode's end.
+:class:`SingleEnv` is the Gymnasium single env of a family: its batch of one, with the
+single-env API (rows unbatched, scalars as Python numbers). Env ``i`` of a batch of N
+therefore is the single env seeded ``seed + i``, bit for bit, provided each row's arithmetic
+does not depend on N (elementwise array operations and per-row compiled loops; no batched
+BLAS products).
 
 Public names: ``AUTORESET_MODES``, ``MAX_ENVS``, ``BatchedEnv``, ``SingleEnv``, ``unbatch``.
 """
