@@ -1,29 +1,18 @@
 r"""Stepped tasks: a task written once over N >= 1 envs, and the one env that steps any of them.
 
-dm_control's Task/Environment split, batched. A :class:`StepTask` holds what an episode is
-for N envs (their physics, sensors, filters, set-points and running metrics as ``(N, ...)``
-arrays): how it starts (:meth:`~StepTask.initialize_episode`), what each control step
-commands before the physics runs (:meth:`~StepTask.before_step`: actuator commands,
-external forces), what it measures, rewards and ends after it (:meth:`~StepTask.
-after_step`), what the agent sees (:meth:`~StepTask.observation`) and the episode's
-metrics. :class:`TaskEnv` is the env of every stepped task: it owns the loop (the physics'
-``n_substeps`` steps a control period, the step counter, the truncation after
-``episode_duration``, the reward as the sum of the named terms in ``info["reward_terms"]``),
-and through :class:`~shipgym.envs.batched.BatchedEnv` Gymnasium's vector API (seeding, masks,
-autoresets); :class:`TaskSingleEnv` is its batch of one. Course keeping, rudder-roll
-stabilisation and the sea trials are stepped tasks; the plan tasks (harbour, station
-keeping, tracking, offshore DP) run their guidance-observer-controller loop in
-:class:`~shipgym.envs.vector.ShipVectorEnv` instead.
-
-A new stepped task is one class; with no package file changed it runs single and batched::
+dm_control's Task/Environment split, batched: a :class:`StepTask` says how N episodes start,
+what a control step commands before the physics runs, and what it measures, rewards and ends
+after; :class:`TaskEnv` owns the loop and Gymnasium's vector API, :class:`TaskSingleEnv` is
+its batch of one. Course keeping, rudder-roll stabilisation and the sea trials are stepped
+tasks. A new one is one class, run with no package file changed::
 
     gym.register("my/Task-v0", entry_point="shipgym.envs.stepped:TaskSingleEnv",
                  vector_entry_point="shipgym.envs.stepped:TaskEnv",
                  kwargs={"task": MyTask, "vessel": "kvlcc2-100m"})
-    env = gym.make("my/Task-v0")
-    envs = gym.make_vec("my/Task-v0", num_envs=8)
 
 Public names: ``StepTask``, ``TaskEnv``, ``TaskSingleEnv``.
+
+Design notes: docs/design/envs.stepped.md.
 """
 
 from __future__ import annotations
