@@ -366,13 +366,13 @@ class CourseKeepingTask(StepTask):
                 command[:, j] = np.clip(prop.inverse(thrust), prop.lower, prop.upper)
         every = bool(active.all())
         clipped = phys.set_command(command if every else np.where(active[:, None], command, held))
-        self._clipped = clipped, action_clipped
+        self._held = clipped, action_clipped  # (after_step reads them)
 
     def after_step(
         self, active: NDArray[np.bool_]
     ) -> tuple[dict[str, NDArray[np.float64]], NDArray[np.bool_], dict[str, Any]]:
         phys = self.physics
-        clipped, action_clipped = self._clipped
+        clipped, action_clipped = self._held
         every = bool(active.all())
         self._sense(active)
         info = self._info
