@@ -170,13 +170,7 @@ class PieceGrid:
         """Chunk ``j`` (computed as far as asked before): this grid's, or a dropped one
         recomputed by a replica (:attr:`_evict`)."""
         c = self._chunks[j]
-        if c is None:
-            r = self._replica()
-            r._evict = False
-            r._extend_to(j)
-            c = r._chunks[j]
-            assert c is not None
-        return c
+        return c if c is not None else self._whole(j)[j]
 
     def _whole(self, j: int) -> list[NDArray[np.float64]]:
         """Chunks ``0 ... j``, whole (one replica for the dropped ones)."""

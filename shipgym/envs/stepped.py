@@ -202,7 +202,7 @@ class TaskEnv(BatchedEnv):
             truncated = np.zeros(self.num_envs, dtype=bool)
         else:
             up = t.steps * t.control_period >= t.episode_duration - 1e-9
-            truncated = up & ~terminated & active
+            truncated = up & ~terminated  # (the base keeps the active envs' flags)
         return reward, terminated, truncated, info
 
     def _episode_metrics(self, done: Bools) -> dict[str, Any] | None:
@@ -218,9 +218,6 @@ class TaskSingleEnv(SingleEnv):
 
     batched = TaskEnv
     batch: TaskEnv
-
-    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
-        super().__init__(render_mode=render_mode, **kwargs)
 
     def __getattr__(self, name: str) -> Any:
         """The task's attributes (its settings, ``physics``, ...): the batch's."""
