@@ -768,11 +768,44 @@ class BatchedManoeuvreMetrics:
             given |= _G_LEG
         if command is not None:
             c, given = self._rows(command, nc, "command"), given | _G_CMD
-        args = (tt, m, eta, eta_d, meas, has_meas, f, s, lg, c, given)
+        self._step((tt, m, eta, eta_d, meas, has_meas, f, s, lg, c, given))
+        return self._I[:, _I_SAMPLED].astype(bool)
+
+    def record_rows(
+        self,
+        t: NDArray[np.float64],
+        mask: NDArray[np.bool_],
+        eta_r: NDArray[np.float64],
+        eta_d_r: NDArray[np.float64],
+        eta_meas_r: NDArray[np.float64] | None,
+        measured: NDArray[np.bool_],
+        thrust: NDArray[np.float64],
+        saturated: NDArray[np.bool_] | None,
+        leg: NDArray[np.int64],
+        command: NDArray[np.float64] | None,
+    ) -> None:
+        """:meth:`record` of arrays its caller made to the shapes and dtypes it checks (an
+        env's own rows: ``t`` (N,) float64, ``mask`` and ``measured`` (N,) bools, the poses
+        (N, 3) and ``thrust`` (N, n_actuators) float64, ``saturated`` (N, n_actuators)
+        bools, ``leg`` (N,) int64, ``command`` (N, n_channels) float64), without the checks
+        and conversions: the same compiled step (the errors of a non-finite value or of time
+        going backwards are raised as there)."""
+        given = _G_THRUST | _G_LEG
+        s, c = _EMPTY_B, _EMPTY_F
+        if saturated is not None:
+            s, given = saturated.reshape(-1), given | _G_SAT
+        if command is not None:
+            c, given = command.reshape(-1), given | _G_CMD
+        meas = _EMPTY_F if eta_meas_r is None else eta_meas_r.reshape(-1)
+        self._step((t, mask, eta_r.reshape(-1), eta_d_r.reshape(-1), meas,
+                    self._none if eta_meas_r is None else measured, thrust.reshape(-1), s,
+                    leg, c, given))  # fmt: skip
+
+    def _step(self, args: tuple[Any, ...]) -> None:
+        """The compiled step (:func:`_record`) on ``args``, its tables grown where full."""
         r = self._rec(*args, self.sample_period, self._tol, self._F, self._I, self._L, self._CH)
         if r < 0:
             self._retry(r, args)
-        return self._I[:, _I_SAMPLED].astype(bool)
 
     def _retry(self, r: int, args: tuple[Any, ...]) -> int:
         """After the compiled step (:func:`_record`) returned ``r < 0``: the full table grown

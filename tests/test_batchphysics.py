@@ -494,3 +494,26 @@ def test_pieces_of_a_long_run_are_the_whole_chunks_floats() -> None:
                 np.testing.assert_array_equal(b.chunk(j), f.chunk(j))
         for j in range(3):
             np.testing.assert_array_equal(bp.waves[i].chunk(j), fresh[i][2].chunk(j))
+
+
+@pytest.mark.parametrize("name", vessel_names())
+def test_the_one_call_readouts_are_the_properties_floats(name: str) -> None:
+    """What an env reads of one state in one compiled call (``readouts``) is the thrust, the
+    bollard-model load and the load at the held commands of the properties, bit for bit, on
+    every vessel (own laws or a separate bollard model; lagged, servo and integrator channels)
+    in a current, after commands the lags have not reached."""
+    n = 3
+    bp = BatchedPhysics(name, n, current=GM_CURRENT)
+    nu0, act0, _ = _start(bp)
+    nu0 = nu0 if bp.dofs == 3 else np.insert(nu0, 2, 0.0, axis=1)
+    bp.reset(nu=nu0, actuators=act0, rngs=[np.random.default_rng(i) for i in range(n)])
+    for cmd in _commands(bp.actuators, n, 3, seed=5):
+        bp.set_command(cmd)
+        bp.step(7)
+        thrust, tau_model, tau_command = bp.readouts(True)
+        np.testing.assert_array_equal(thrust, bp.thrust)
+        np.testing.assert_array_equal(tau_model, bp.tau_model)
+        np.testing.assert_array_equal(tau_command, bp.tau_command)
+        assert bp.readouts()[2] is None
+        np.testing.assert_array_equal(bp.readouts()[1], tau_model)
+    assert np.abs(thrust).max() > 0.0

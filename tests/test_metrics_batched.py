@@ -409,3 +409,38 @@ def test_metrics_pickle_and_copy():
         other.record(1.0, np.zeros(3), np.ones(3), leg=1)
         assert other.n_samples == 2 and other.summary()["legs_completed"] == 1
     assert m.n_samples == 1 and m.summary()["legs_completed"] == 0
+
+
+def test_record_rows_is_record_without_its_checks():
+    """An env's path (``record_rows``: its own rows, no checks or conversions) accumulates
+    what ``record`` does, bit for bit, with and without saturation, commands and
+    measurements, over masks, resets and leg changes."""
+    rng = np.random.default_rng(4)
+    n, na, nc = 5, 3, 4
+    a = BatchedManoeuvreMetrics(n, 1.0, SEED_WEIGHTS, na, n_channels=nc, control_period=0.5)
+    b = BatchedManoeuvreMetrics(n, 1.0, SEED_WEIGHTS, na, n_channels=nc, control_period=0.5)
+    t = np.zeros(n)
+    legs = np.zeros(n, np.int64)
+    for k in range(300):
+        if k % 71 == 70:
+            reset = rng.random(n) < 0.5
+            a.reset(reset)
+            b.reset(reset)
+        mask = rng.random(n) < 0.9
+        t = t + np.where(mask, 0.5, 0.0)
+        eta = rng.normal(0.0, 5.0, (n, 3))
+        eta_d = eta + rng.normal(0.0, 1.0, (n, 3))
+        measured = rng.random(n) < 0.7
+        meas = None if k % 9 == 1 else np.where(measured[:, None], eta + 0.1, np.nan)
+        thrust = rng.normal(0.0, 100.0, (n, na))
+        sat = None if k % 7 == 2 else rng.random((n, na)) < 0.2
+        legs = np.where(rng.random(n) < 0.05, legs + 1, legs)
+        cmd = None if k % 5 == 3 else np.clip(rng.normal(0.0, 0.6, (n, nc)), -1.0, 1.0)
+        a.record(t, eta, eta_d, meas, thrust, sat, legs, cmd, mask=mask,
+                 measured=None if meas is None else measured)  # fmt: skip
+        b.record_rows(t, mask, eta, eta_d, meas, measured, thrust, sat, legs, cmd)
+    for x, y in ((a._F, b._F), (a._I, b._I), (a._L, b._L), (a._CH, b._CH)):
+        np.testing.assert_array_equal(x, y)
+    for i in range(n):
+        same(b.summary(i), a.summary(i), f"env {i}")
+    assert a.summary(0)["legs_completed"] >= 1 and a.n_samples.min() >= 5

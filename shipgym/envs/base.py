@@ -427,6 +427,7 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         eta, nu = b._truth()
         e, w = eta[0], nu[0]
         g = b.guidance
+        tau_wind, tau_waves, current_body = phys.environment_loads()
         # copies of the reference's arrays: info is the caller's to keep and change
         info: dict[str, Any] = {
             "t": phys.time,
@@ -448,9 +449,9 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "actuator_state": phys.actuator_state,
             "saturated": saturated,
             "action_clipped": action_clipped,
-            "tau_wind": np.array(phys.tau_wind),
-            "tau_waves": np.array(phys.tau_waves),
-            "current_body": np.array([*phys.nu_c, 0.0], float),
+            "tau_wind": tau_wind,
+            "tau_waves": tau_waves,
+            "current_body": current_body,
             "wave_elevation": phys.wave_elevation(),
             "quay_contact": bool(b._contact[0]),
             "contacts": contacts,

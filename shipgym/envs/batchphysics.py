@@ -539,11 +539,14 @@ class BatchedPhysics:
         """Each hull's :attr:`VesselPhysics.tau_model <shipgym.envs.physics.VesselPhysics.
         tau_model>`, (n, 3) ``[X, Y, N]`` (N, N, N m): the bollard thrust model of its actuator
         states (the same compiled laws, the same floats)."""
-        hb = self._hulls
-        if not hasattr(self, "_bollard_table"):  # the bollard laws' table, found once
-            model = self.actuators.bollard()  # (None: the plant's own laws are the model)
+        return self._tau_rows(self._hulls.act, self._bollard())
+
+    def _bollard(self) -> Any:
+        """The bollard laws' table (``None``: the plant's own laws are the model), found once."""
+        if not hasattr(self, "_bollard_table"):
+            model = self.actuators.bollard()
             self._bollard_table = None if model is self.actuators else model.law_table()
-        return self._tau_rows(hb.act, self._bollard_table)
+        return self._bollard_table
 
     @property
     def tau_command(self) -> Array:
@@ -562,6 +565,14 @@ class BatchedPhysics:
         forces = np.empty((self.n, hb.kind_index.shape[0]))
         hb.actuator_loads(hb.act, None, forces)
         return forces
+
+    def readouts(self, command: bool = False) -> tuple[Array, Array, Array | None]:
+        """``(thrust, tau_model, tau_command)`` now, the properties' floats from one compiled
+        call (:meth:`HullBatch.readouts <shipgym.sim.step.HullBatch.readouts>`);
+        ``tau_command`` only where ``command`` (else ``None``): what an env reads of one
+        state."""
+        forces, model, at_command = self._hulls.readouts(self._bollard(), self._holds, command)
+        return forces, model[:, _XYN], None if at_command is None else at_command[:, _XYN]
 
     def _tau_rows(self, st: Array, table: Any, forces: Array | None = None) -> Array:
         """``[X, Y, N]`` (n, 3) of the actuator laws ``table`` at the states ``st`` (n, nc)
@@ -707,6 +718,14 @@ class HullView:
         """Second-order wave drift load ``[X, Y, N]`` (N, N, N m, body) of the last step."""
         X, Y, N = self.batch._hulls.loads[self.i, 3:6].tolist()
         return X, Y, N
+
+    def environment_loads(self) -> tuple[Array, Array, Array]:
+        """``(tau_wind, tau_waves, current_body)`` of the last physics step as new arrays:
+        :attr:`tau_wind`, :attr:`tau_waves` (N, N, N m) and ``[u_c, v_c, 0]`` (m/s, the
+        ``nu`` layout) from one read of the hull's row."""
+        out = np.zeros(9)  # one new array, the three its rows
+        out[:8] = self.batch._hulls.loads[self.i, :8]
+        return out[0:3], out[3:6], out[6:9]
 
     @property
     def nu_c(self) -> tuple[float, float]:

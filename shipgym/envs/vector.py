@@ -349,7 +349,7 @@ class ShipVectorEnv(BatchedEnv):
                 self.controller.change_frame(wrap_angle(psi_P - self._psi_P), moved)
                 self._leg = np.where(moved, ref.leg, self._leg)
                 self._psi_P = np.where(moved, psi_P, self._psi_P)
-        reward = self._rew.sum(axis=1)
+        reward = np.add.reduce(self._rew, axis=1)  # (ndarray.sum's reduction, from 0.0)
         self._prev = clipped
         self._elapsed += 1
         terminated = (self.guidance.finished & self.task.terminate_on_finish) | self._contact
@@ -371,10 +371,16 @@ class ShipVectorEnv(BatchedEnv):
 
     def thrust(self) -> Array:
         """Every hull's actuator thrusts (N) now, (N, n_actuators), read once per state."""
-        thrust = self._cache.get("thrust")
-        if thrust is None:
-            thrust = self._cache["thrust"] = self.physics.thrust
-        return thrust  # type: ignore[no-any-return]
+        return self._readouts()[0]
+
+    def _readouts(self, command: bool = False) -> tuple[Array, Array, Array | None]:
+        """:meth:`BatchedPhysics.readouts <shipgym.envs.batchphysics.BatchedPhysics.readouts>`
+        of the state now, ``(thrust, tau_model, tau_command)``, read once per state (again
+        where ``command`` asks for the ``tau_command`` the cached read did not make)."""
+        out = self._cache.get("readouts")
+        if out is None or (command and out[2] is None):
+            out = self._cache["readouts"] = self.physics.readouts(command)
+        return out  # type: ignore[no-any-return]
 
     def _navigation(self) -> tuple[Array, Array]:
         """What the controller and the observation use: the estimate, else the truth."""
@@ -468,7 +474,7 @@ class ShipVectorEnv(BatchedEnv):
         # first-order wave motion is seen, not lived (x + 0.0 without it, as x + zeros)
         eta = self._truth()[0]
         seen = eta + physics.wave_motion() if self._seen_waves else eta + 0.0
-        z, valid, outlier = self.sensors.measure(physics.t, seen, mask)
+        z, valid, outlier = self.sensors.measure_rows(physics.t, seen, mask)
         # the sample's rows (mask) into the info's last sample (copies: info hands them out)
         # and the valid fixes into the metrics' last fix
         _store_sample(z, valid, outlier, mask, self._last_z, self._z_valid, self._z_outlier,
@@ -480,7 +486,8 @@ class ShipVectorEnv(BatchedEnv):
             # passes for them), as in their single envs
             t = np.where(mask, physics.t, self._obs_t)
             if self._model_based:  # the thrust its thrust_input names, held to the next sample
-                tau = physics.tau_command if self._thrust_cmd else physics.tau_model
+                _, tau_model, tau_command = self._readouts(self._thrust_cmd)
+                tau = tau_command if self._thrust_cmd else tau_model
                 held = self._obs_tau
                 self._obs_tau = tau if held is None else np.where(mask[:, None], tau, held)
             info = self._step_observer(t, z, fixed)
@@ -489,13 +496,14 @@ class ShipVectorEnv(BatchedEnv):
         log = self.sample_log
         if log is not None and mask[0]:  # the single env's info["measurements"] (env 0)
             ok = bool(valid[0])
+            _, tau_model, tau_command = self._readouts(True)
             log.append({
                 "t": float(physics.t[0]),
                 "z": z[0].copy() if ok else None,
                 "valid": ok,
                 "outlier": ok and bool(outlier[0]),
-                "tau": physics.tau_model[0],
-                "tau_command": physics.tau_command[0],
+                "tau": tau_model[0],
+                "tau_command": tau_command[0],  # type: ignore[index]
             })  # fmt: skip
 
     def _advance(self, active: NDArray[np.bool_]) -> None:
@@ -664,12 +672,13 @@ class ShipVectorEnv(BatchedEnv):
         fix = self._fix
         measured = fix[:, 0] == fix[:, 0]  # (not NaN: a fix since the reset)
         meas = None
-        if measured.any():  # to_r_frame's compiled law on the rows (no broadcasting)
+        if np.count_nonzero(measured):  # to_r_frame's compiled law on the rows (no broadcasting)
             meas = np.empty((self.num_envs, 3))
             psi_d_r = np.ascontiguousarray(ref.eta_d_r[:, 2])
             r_frame_poses(fix, np.ascontiguousarray(ref.eta_P), psi_d_r, True, meas)
-        m.record(self.physics.t, self._eta_r, ref.eta_d_r, meas, self.thrust(), saturated,
-                 ref.leg, action, mask=mask, measured=measured)  # fmt: skip
+        # (the env's own rows: the compiled step without the public record's checks)
+        m.record_rows(self.physics.t, mask, self._eta_r, ref.eta_d_r, meas, measured,
+                      self.thrust(), saturated, ref.leg, action)  # fmt: skip
 
     def episode_metrics(self, i: int) -> dict[str, Any]:
         """Env ``i``'s episode so far: accuracy indices (Tomera 2014 eqs. 54-57), thruster

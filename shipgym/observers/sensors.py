@@ -527,8 +527,17 @@ class BatchedSensors:
         eta = np.array(eta_true, dtype=float)
         if eta.shape != (self.n, 3) or not np.isfinite(eta).all():
             raise ValueError(f"eta_true must be ({self.n}, 3) finite values, got {eta.shape}")
-        self._t[:] = t  # a scalar or (n,) (broadcast, as np.broadcast_to refuses other shapes)
         m = self._all if mask is None else np.array(mask, dtype=bool)
+        return self.measure_rows(t, eta, m)
+
+    def measure_rows(
+        self, t: ArrayLike, eta_true: NDArray[np.float64], mask: NDArray[np.bool_]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
+        """:meth:`measure` of rows its caller made: ``eta_true`` (n, 3) finite float64 (a
+        physics' state), ``mask`` (n,) bools; without the checks and copies (an env's own
+        arrays: the same compiled law)."""
+        self._t[:] = t  # a scalar or (n,) (broadcast, as np.broadcast_to refuses other shapes)
+        m, eta = mask, eta_true
         out = self._out
         out[:, :3] = np.nan
         out[:, 3:] = 0.0
