@@ -571,8 +571,7 @@ class BatchedPhysics:
         call (:meth:`HullBatch.readouts <shipgym.sim.step.HullBatch.readouts>`);
         ``tau_command`` only where ``command`` (else ``None``): what an env reads of one
         state."""
-        forces, model, at_command = self._hulls.readouts(self._bollard(), self._holds, command)
-        return forces, model[:, _XYN], None if at_command is None else at_command[:, _XYN]
+        return self._hulls.readouts(self._bollard(), self._holds, command)  # type: ignore[no-any-return]
 
     def _tau_rows(self, st: Array, table: Any, forces: Array | None = None) -> Array:
         """``[X, Y, N]`` (n, 3) of the actuator laws ``table`` at the states ``st`` (n, nc)

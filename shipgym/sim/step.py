@@ -566,26 +566,33 @@ def actuator_rows(tab, laws, kinds, st, vel, loads, out, forces):  # type: ignor
 
 @njit
 def readout_rows(  # type: ignore[no-untyped-def]
-    q, qv, qa, h, four, linear_kin, nu, tab, laws, kinds, act, cmd, holds, loads, out,
-    forces, btab, blaws, bkinds, bout, bforces, cout, cforces,
+    q, qv, qa, h, four, linear_kin, nu, tab, laws, kinds, act, cmd, holds, loads, forces,
+    btab, blaws, bkinds, model, at_command,
 ):  # fmt: skip
     """What an env reads of the hulls' actuators now, in one call: the body velocities into
-    ``nu`` (:func:`body_velocities`), each hull's own laws at its states ``act`` into ``out``
-    and ``forces`` (:func:`actuator_rows`), the laws ``btab, blaws, bkinds`` (a bollard
-    model's, one set for all; ``btab`` of 0 rows: none) at the same states into ``bout``, and
-    (``cout`` of N rows) the own laws at the held commands where ``holds`` (else the states)
-    into ``cout``; ``bforces``, ``cforces``: scratch."""
+    ``nu`` (:func:`body_velocities`), each hull's own laws at its states ``act``
+    (:func:`actuator_rows`: the actuators' forces into ``forces``), ``[X, Y, N]`` (N, 3) of
+    the laws ``btab, blaws, bkinds`` (a bollard model's, one set for all; ``btab`` of 0
+    rows: the own laws, the same call) at the same states into ``model``, and (where
+    ``at_command`` has N rows) of the own laws at the held commands of the channels of
+    ``holds`` (the states elsewhere) into ``at_command``."""
+    n = act.shape[0]
     body_velocities(q, qv, qa, h, four, linear_kin, nu)
+    out = np.empty((n, 4))
     actuator_rows(tab, laws, kinds, act, nu, loads, out, forces)
     if btab.shape[0] > 0:
-        actuator_rows(btab, blaws, bkinds, act, nu, loads, bout, bforces)
-    if cout.shape[0] > 0:
+        actuator_rows(btab, blaws, bkinds, act, nu, loads, out, np.empty((n, bkinds.shape[0])))
+    for i in range(n):
+        model[i, 0], model[i, 1], model[i, 2] = out[i, 0], out[i, 1], out[i, 3]
+    if at_command.shape[0] > 0:
         st = act.copy()
-        for i in range(st.shape[0]):
+        for i in range(n):
             for c in range(st.shape[1]):
                 if holds[c]:
                     st[i, c] = cmd[i, c]
-        actuator_rows(tab, laws, kinds, st, nu, loads, cout, cforces)
+        actuator_rows(tab, laws, kinds, st, nu, loads, out, np.empty(forces.shape))
+        for i in range(n):
+            at_command[i, 0], at_command[i, 1], at_command[i, 2] = out[i, 0], out[i, 1], out[i, 3]
 
 
 @njit
@@ -927,29 +934,26 @@ class HullBatch:
         self, table: Any, holds: np.ndarray, command: bool
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """``(forces, model, at_command)`` now from one compiled call (:func:`readout_rows`):
-        each actuator's force (N) (N, na) and ``[X, Y, K, N]`` (N, 4) of the laws of ``table``
-        (a ``law_table`` for every hull; ``None``: the hulls' own laws, the same call) at the
-        actuator states, and, where ``command``, of the own laws at the held commands of the
-        channels of ``holds`` ((nc,) bools; the states elsewhere): what
-        :meth:`actuator_loads` gives for each, the same floats."""
-        n, na = self.n, self.kind_index.shape[0]
-        out, forces = np.empty((n, 4)), np.empty((n, na))
+        each actuator's force (N) (N, na), ``[X, Y, N]`` (N, 3) of the laws of ``table`` (a
+        ``law_table`` for every hull; ``None``: the hulls' own laws) at the actuator states
+        and, where ``command``, of the own laws at the held commands of the channels of
+        ``holds`` ((nc,) bools; the states elsewhere): the ``X, Y, N`` columns of
+        :meth:`actuator_loads` for each, the same floats."""
+        n = self.n
+        forces, model = np.empty((n, self.kind_index.shape[0])), np.empty((n, 3))
+        at_command = np.empty((n if command else 0, 3))
         if table is None:
             btab, blaws, bkinds = self.table[:0], self.laws, self.kind_index
         else:
             btab, blaws, bkinds = table
             btab = btab if btab.ndim == 3 else btab[None]
-        bout = np.empty((n, 4))
-        bforces = np.empty((n, bkinds.shape[0]))
-        k = n if command else 0
-        cout, cforces = np.empty((k, 4)), np.empty((k, na))
         args = (self.q, self.qv, self.qa, self.h, self.dofs == 4, self.linear_kin, self._nu,
                 self.table, self.laws, self.kind_index, self.act, self.cmd, holds, self.loads,
-                out, forces, btab, blaws, bkinds, bout, bforces, cout, cforces)  # fmt: skip
+                forces, btab, blaws, bkinds, model, at_command)  # fmt: skip
         if self._readout_entry is None:  # (the types do not change: found once)
             self._readout_entry = entry(readout_rows, args)
         self._readout_entry(*args)
-        return forces, out if table is None else bout, cout if command else None
+        return forces, model, at_command if command else None
 
     def contact_counts(self) -> np.ndarray:
         """Each hull's MuJoCo contact count now, (N,) int64 (zeros for ``leapfrog``): one
