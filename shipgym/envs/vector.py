@@ -524,8 +524,10 @@ class ShipVectorEnv(BatchedEnv):
                 k = left
             elif self._aligned:  # every active env is at a sample instant: the next is every on
                 k = every
+            elif left == 1:  # (one step: no sample lies inside it)
+                k = 1
             else:  # to the next sample of any active env: every - the largest phase
-                phase = int((self._steps % every).max(where=active, initial=0))
+                phase = int(np.maximum.reduce(self._steps % every, where=active, initial=0))
                 k = min(left, every - phase)
             # the steps each hull took (0 outside active; every hull: no mask to apply)
             taken = self.physics.step(k, stop_on_contact=self._stop, mask=None if full else active)
