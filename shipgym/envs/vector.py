@@ -226,7 +226,9 @@ class ShipVectorEnv(BatchedEnv):
                 check(self.sensors.config.period, self.control_period)
         self.controller = None
         if controller is not None:
-            from shipgym.controllers.batch import batched_dp_controller
+            from shipgym.controllers.batch import apply_residual, batched_dp_controller
+
+            self._apply_residual = apply_residual  # (imported once, not at every step)
 
             # the velocity filter for the observer's kind
             src = (
@@ -394,8 +396,6 @@ class ShipVectorEnv(BatchedEnv):
     def _control(self, residual: Array) -> tuple[Array, dict[str, Array]]:
         """The DP controller's action plus the residual
         (from the navigation data and reference at the end of the previous step)."""
-        from shipgym.controllers.batch import apply_residual
-
         assert self.controller is not None
         ref = self._ref
         eta, nu = self._navigation()
@@ -403,7 +403,7 @@ class ShipVectorEnv(BatchedEnv):
             ref.to_r(eta), nu, ref.eta_d_r, ref.eta_dot_d_r, ref.eta_ddot_d_r,
             state=self.physics.actuator_state,
         )  # fmt: skip
-        applied, clipped = apply_residual(a_ctrl, residual, self.residual_scale)
+        applied, clipped = self._apply_residual(a_ctrl, residual, self.residual_scale)
         info = {
             "tau_c": np.ascontiguousarray(tau_c),
             "tau_delivered": np.ascontiguousarray(alloc.tau),
