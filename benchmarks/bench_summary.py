@@ -13,7 +13,9 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   current over the plain full plant (higher is better);
 - ``episode_pid_over_bare``, ``episode_kbf_pid_over_bare``: the wall time of a whole
   closed-loop harbour episode (PID; the KBF observer and PID) over bare ``mj_step`` for the
-  same number of physics steps (lower is better);
+  same number of physics steps (lower is better); ``episode_kbf_pid_leapfrog_over_bare`` the
+  same with ``integrator="leapfrog"`` (the compiled step and its quay-contact check instead of
+  MuJoCo's integrator);
 - ``tracking_step_over_bare``: one ``shipgym/Tracking-v0`` step (random actions) over bare
   ``mj_step`` for its physics steps (lower is better);
 - ``recording_overhead``: a recorded harbour episode (rerun) over an unrecorded one;
@@ -175,8 +177,13 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
     out["waves_over_no_waves"] = pair(
         _timed(lambda: phys.step(steps)), _timed(lambda: sea.step(steps)), repeats
     )
-    for key, observer in (("episode_pid_over_bare", None), ("episode_kbf_pid_over_bare", "kbf")):
-        env = shipgym.make("harbour", controller="pid", observer=observer, wind="3@300")
+    for key, observer, integ in (
+        ("episode_pid_over_bare", None, None),
+        ("episode_kbf_pid_over_bare", "kbf", None),
+        ("episode_kbf_pid_leapfrog_over_bare", "kbf", "leapfrog"),
+    ):
+        env = shipgym.make("harbour", controller="pid", observer=observer, wind="3@300",
+                           integrator=integ)  # fmt: skip
         ep, n = _episode(env, np.zeros(3, np.float32))
         out[key] = pair(ep, _bare(env.unwrapped.physics.model, n), repeats)
         env.close()
@@ -331,6 +338,8 @@ def _batched_env(repeats: int, n: int = 256) -> dict[str, Any]:
 CLOSED_LOOPS: tuple[tuple[str, str, dict[str, Any]], ...] = (
     ("blue-lady/tracking", "shipgym/BlueLadyTracking-v0", {"observer": "kbf", "controller": "pid"}),
     ("blue-lady/harbour", "shipgym/BlueLadyHarbour-v0", {"observer": "kbf", "controller": "pid"}),
+    ("blue-lady/harbour-leapfrog", "shipgym/BlueLadyHarbour-v0",
+     {"observer": "kbf", "controller": "pid", "integrator": "leapfrog"}),
     ("star-hercules/dp", "shipgym/DPStationKeeping-v0",
      {"vessel": "star-hercules", "observer": "kbf", "controller": "pid"}),
     ("wimpey-sealab/dp", "shipgym/DPStationKeeping-v0",

@@ -143,6 +143,89 @@ def contact_pairs(model: Any, data: Any) -> list[tuple[str, str]]:
     return out
 
 
+def _convex_hull(pts: Array) -> Array:
+    """The convex hull of 2-D points (k, 2), counter-clockwise (Andrew's monotone chain)."""
+    p = np.unique(np.round(pts, 12), axis=0)
+    if p.shape[0] < 3:
+        raise ValueError("the hull's footprint needs at least three distinct points")
+
+    def half(seq: Array) -> list[Array]:
+        out: list[Array] = []
+        for q in seq:
+            while len(out) >= 2:
+                (ax, ay), (bx, by) = out[-1] - out[-2], q - out[-2]
+                if ax * by - ay * bx > 0.0:  # a left turn: keep
+                    break
+                out.pop()
+            out.append(q)
+        return out
+
+    lower, upper = half(p), half(p[::-1])
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def contact_geometry(model: Any) -> tuple[Array, Array, list[str]]:
+    """What the ``leapfrog`` integrator's contact check needs of a world's ``model``
+    (:meth:`~shipgym.sim.step.HullBatch.set_obstacles`): the footprint of the hull's collision
+    geoms (their convex hull in the horizontal plane, (k, 2), counter-clockwise, in the frame of
+    the hull's planar joints: m), the rectangles of the box geoms it can collide with (R, 9) at
+    their placed poses, and those geoms' names.
+
+    The check is MuJoCo's contact test where it is two-dimensional: each obstacle's height must
+    span the hull's, and the hull must have no roll joint (3 DOF).
+
+    Raises:
+        ValueError: a hull or obstacle geom the check does not handle (a hull geom other than a
+            mesh or box, an obstacle other than a box), an obstacle lower or higher than the
+            hull, or a hull body that does not sit at the origin of its joints.
+    """
+    d = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, d)
+    hull = model.body("hull").id
+    if model.body_jntnum[hull] != 3 or np.abs(d.xpos[hull][:2]).max() > 1e-12:
+        raise ValueError("the leapfrog contact check needs a 3-DOF hull at its joints' origin")
+    own = [g for g in range(model.ngeom) if model.geom_bodyid[g] == hull
+           and (model.geom_contype[g] or model.geom_conaffinity[g])]  # fmt: skip
+    pts = []
+    for g in own:
+        kind = model.geom_type[g]
+        if kind == mujoco.mjtGeom.mjGEOM_MESH:
+            m = model.geom_dataid[g]
+            a, k = model.mesh_vertadr[m], model.mesh_vertnum[m]
+            local = model.mesh_vert[a : a + k].astype(float)
+        elif kind == mujoco.mjtGeom.mjGEOM_BOX:
+            local = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T
+            local = local * model.geom_size[g]
+        else:
+            raise ValueError(f"the leapfrog contact check handles mesh and box hull geoms, "
+                             f"not geom {model.geom(g).name!r}")  # fmt: skip
+        pts.append(local @ d.geom_xmat[g].reshape(3, 3).T + d.geom_xpos[g])
+    world = np.concatenate(pts)
+    z_lo, z_hi = float(world[:, 2].min()), float(world[:, 2].max())
+    footprint = _convex_hull(world[:, :2])
+    reach = float(np.sqrt((footprint**2).sum(axis=1)).max())
+    rects, names = [], []
+    for g in range(model.ngeom):
+        if model.geom_bodyid[g] == hull:
+            continue
+        ct, ca = model.geom_contype, model.geom_conaffinity
+        if not any((ct[g] & ca[o]) or (ct[o] & ca[g]) for o in own):  # it may touch the hull
+            continue
+        name = model.geom(g).name
+        if model.geom_type[g] != mujoco.mjtGeom.mjGEOM_BOX:
+            raise ValueError(f"the leapfrog contact check handles box obstacles, not {name!r}")
+        R = d.geom_xmat[g].reshape(3, 3)
+        half = model.geom_size[g]
+        c = d.geom_xpos[g]
+        if abs(R[2, 2]) < 1.0 - 1e-12 or not (c[2] - half[2] <= z_lo and z_hi <= c[2] + half[2]):
+            raise ValueError(f"obstacle {name!r} must be an upright box spanning the hull's "
+                             f"height ({z_lo:.3g} to {z_hi:.3g} m)")  # fmt: skip
+        rects.append((c[0], c[1], R[0, 0], R[1, 0], R[0, 1], R[1, 1], half[0], half[1],
+                      math.hypot(half[0], half[1]) + reach))  # fmt: skip
+        names.append(name)
+    return footprint, np.array(rects, dtype=float).reshape(-1, 9), names
+
+
 #: the columns ``[u, v, r]`` of a hull's ``(u, v, p, r)``
 _UVR = np.array([0, 1, 3])
 _XYN = _UVR  # (X, Y, N) of (X, Y, K, N)
@@ -182,11 +265,14 @@ class BatchedPhysics:
         waves: a :class:`~shipgym.disturbances.WaveConfig` (the second-order drift acts on
             the hulls) or ``None``.
         timestep: physics step (s), at most half the shortest actuator lag.
-        integrator: ``"leapfrog"`` (open water) or ``"mujoco"`` (MuJoCo's ``mj_step`` per
-            hull, in ``world``).
-        world: the world of the ``mujoco`` integrator (:data:`~shipgym.envs.scene.WORLDS`;
-            default ``"open-water"``); each hull has its own model (:attr:`models`), so a
-            world's layout may be placed per hull.
+        integrator: ``"leapfrog"`` (the compiled step) or ``"mujoco"`` (MuJoCo's
+            ``mj_step`` per hull, in ``world``).
+        world: the hulls' world (:data:`~shipgym.envs.scene.WORLDS`; default ``"open-water"``);
+            each hull has its own model (:attr:`models`), so a world's layout may be placed
+            per hull. Leapfrog hulls in a world touch its obstacles through a compiled
+            two-dimensional contact check (:func:`contact_geometry`: MuJoCo's contacts of a
+            3-DOF hull among upright boxes spanning its height) and stop on contact as the
+            ``mujoco`` ones do.
     """
 
     def __init__(
@@ -249,23 +335,28 @@ class BatchedPhysics:
             raise ValueError(
                 f"integrator must be one of {', '.join(INTEGRATORS)}, got {integrator!r}"
             )
-        if world is not None and integrator != "mujoco":
-            raise ValueError(
-                "world= needs integrator='mujoco' (the leapfrog hulls are in open water)"
-            )
         self.integrator = integrator
+        #: the hulls' world (``None``: open water without a model of its own)
+        self.world = world
         self.models: list[Any] = []
         self.datas: list[Any] = []
         inertia = (0.0, 0.0, 0.0, 0.0)  # the leapfrog integrator does not use it
-        if integrator == "mujoco":
+        if integrator == "mujoco" or world is not None:
             model = build_model(v, world or "open-water", acts)
             model.opt.timestep = self.h
             self.models = [model] + [copy.deepcopy(model) for _ in range(n - 1)]
+        self._footprint: Array | None = None
+        if integrator == "mujoco":
             self.datas = [mujoco.MjData(m) for m in self.models]
-            m_q, i_q, i_x = joint_inertia(model, acts, self.dofs)
+            m_q, i_q, i_x = joint_inertia(self.models[0], acts, self.dofs)
             inertia = (m_q, m_q, i_q, i_x)
+        elif world is not None:  # leapfrog hulls among the world's obstacles
+            if self.dofs != 3:
+                raise ValueError("world= with the leapfrog integrator needs a 3-DOF vessel")
+            self._footprint = contact_geometry(self.models[0])[0]
         self._hulls = HullBatch(self.plant, acts, wind_load.kernel_constants(), n, self.h,
-                                inertia, integrator=integrator, model=self.models or None,
+                                inertia, integrator=integrator,
+                                model=self.models if self.datas else None,
                                 data=self.datas or None)  # fmt: skip
         self.wind_configs: list[WindConfig | None] = [wind_cfg] * n
         self.current_configs: list[CurrentConfig] = [cc] * n
@@ -342,10 +433,12 @@ class BatchedPhysics:
             m.opt.timestep = h
         self.h = h
         hb = HullBatch(self.plant, self.actuators, old.kw, self.n, h, tuple(old.inertia.tolist()),
-                       integrator=self.integrator, model=self.models or None,
+                       integrator=self.integrator, model=self.models if self.datas else None,
                        data=self.datas or None)  # fmt: skip
         for name in ("q", "qv", "qa", "act", "cmd", "t", "external", "table"):
             getattr(hb, name)[:] = getattr(old, name)
+        for name in ("footprint", "obstacles", "n_obstacles", "touching"):
+            setattr(hb, name, getattr(old, name).copy())
         drift = self.wave_config is not None and self.wave_config.drift
         for i in range(self.n):
             wind = self.winds[i] if self.wind_configs[i] is not None else None
@@ -411,6 +504,8 @@ class BatchedPhysics:
         drift = self.wave_config is not None and self.wave_config.drift
         for i in np.nonzero(m)[0].tolist():
             self.saturated[i] = False
+            if self._footprint is not None:  # the obstacles where the world's are placed now
+                hb.set_obstacles(self._footprint, i, contact_geometry(self.models[i])[1])
             if self._wf is not None:
                 self._wf.invalidate(i)
             hb.reset_hull(
@@ -598,8 +693,8 @@ class HullView:
         self.integrator = batch.integrator
         self.wave_config = batch.wave_config
         self.windage = batch.windage
-        #: the world a leapfrog hull is drawn in (its own world with the ``mujoco`` integrator)
-        self.world = "open-water"
+        #: the world the hull is drawn in
+        self.world = batch.world or "open-water"
         self._view: Any = None  # (model, data) of a leapfrog hull's pose (rendering)
 
     # ---- configuration of the episode ------------------------------------------------------
@@ -770,17 +865,22 @@ class HullView:
 
     def _mujoco(self) -> tuple[Any, Any]:
         b = self.batch
-        if b.models:
+        if b.datas:
             return b.models[self.i], b.datas[self.i]
         if self._view is None:
-            model = build_model(b.vessel, self.world, b.actuators)
-            model.opt.timestep = b.h
+            if b.models:  # (its world's placed layout)
+                model = b.models[self.i]
+            else:
+                model = build_model(b.vessel, self.world, b.actuators)
+                model.opt.timestep = b.h
             self._view = (model, mujoco.MjData(model))
         return self._view  # type: ignore[no-any-return]
 
     def contacts(self) -> list[tuple[str, str]]:
         """Pairs of geom names in contact now (the hull's geom first when it is involved;
-        none for a leapfrog hull)."""
+        none for a leapfrog hull in open water; MuJoCo's at its pose for one in a world)."""
         if not self.batch.models:
             return []
+        if self.integrator == "leapfrog":
+            return contact_pairs(self.model, self.data)
         return contact_pairs(*self._mujoco())

@@ -44,6 +44,7 @@ ENV_ARGS: dict[str, Any] = {
     "timestep": 0.05,
     "control_period": 1.0,
     "render_mode": None,
+    "integrator": None,
 }
 
 

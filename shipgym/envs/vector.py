@@ -148,10 +148,12 @@ class ShipVectorEnv(BatchedEnv):
         self.n_substeps = _whole_multiple(control_period, timestep)
         self.control_period = float(control_period)
         harbour = task.scene == "harbour"
+        # MuJoCo's integrator in the harbour (its contacts) unless the compiled step's contact
+        # check is asked for (integrator="leapfrog": the quays touched as MuJoCo finds them)
+        integrator = env["integrator"] or ("mujoco" if harbour else "leapfrog")
         self.physics = BatchedPhysics(
             self.vessel, n, plant, wind=task.wind, current=task.current, waves=task.waves,
-            timestep=timestep, integrator="mujoco" if harbour else "leapfrog",
-            world=task.scene if harbour else None,
+            timestep=timestep, integrator=integrator, world=task.scene if harbour else None,
         )  # fmt: skip
         self.actuators = self.physics.actuators
         self.n_actions = self.actuators.n_channels

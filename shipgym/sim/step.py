@@ -274,13 +274,73 @@ def process_at(mode, t, i, slot, inv_dt, k0, win, const):  # type: ignore[no-unt
 
 
 @njit
+def obstacles_touched(x, y, psi, fp, ob, m, which):  # type: ignore[no-untyped-def]
+    """How many of the ``m`` obstacle rectangles ``ob`` (R, 9) the hull's footprint polygon
+    ``fp`` (k, 2; body frame, convex) touches at the pose ``(x, y, psi)``; ``which`` (R,)
+    int64 out: 1 for each touched one. An obstacle row: centre ``cx, cy``, unit axes ``ux,
+    uy``, ``vx, vy``, half sizes ``hu, hv`` (m), and ``reach``, the largest centre distance
+    at which the footprint can touch it (a bounding-circle test first). The separating-axis
+    test of two convex polygons in the horizontal plane: MuJoCo's contact of a hull whose
+    height lies within the obstacles' (:func:`~shipgym.envs.scene.quay_geometry`)."""
+    c, s = math.cos(psi), math.sin(psi)
+    k = fp.shape[0]
+    px, py = np.empty(k), np.empty(k)
+    ready = False
+    count = 0
+    for j in range(m):
+        which[j] = 0
+        cx, cy = ob[j, 0], ob[j, 1]
+        dx, dy = x - cx, y - cy
+        if dx * dx + dy * dy > ob[j, 8] * ob[j, 8]:
+            continue
+        if not ready:  # the footprint in the world, once
+            for e in range(k):
+                px[e] = x + c * fp[e, 0] - s * fp[e, 1]
+                py[e] = y + s * fp[e, 0] + c * fp[e, 1]
+            ready = True
+        ux, uy, vx, vy, hu, hv = ob[j, 2], ob[j, 3], ob[j, 4], ob[j, 5], ob[j, 6], ob[j, 7]
+        apart = False
+        # the rectangle's two axes: the footprint's extent about the centre against the half size
+        for ax in range(2):
+            nx, ny, half = (ux, uy, hu) if ax == 0 else (vx, vy, hv)
+            lo, hi = math.inf, -math.inf
+            for e in range(k):
+                d = (px[e] - cx) * nx + (py[e] - cy) * ny
+                lo = d if d < lo else lo
+                hi = d if d > hi else hi
+            if lo > half or hi < -half:
+                apart = True
+                break
+        if apart:
+            continue
+        # the footprint's edge normals: the rectangle's corners against the polygon's extent
+        for e in range(k):
+            f = e + 1 if e + 1 < k else 0
+            nx, ny = py[f] - py[e], px[e] - px[f]  # the outward normal of a ccw polygon's edge
+            edge = px[e] * nx + py[e] * ny  # the polygon's largest extent along it
+            low = math.inf
+            for corner in range(4):
+                a = hu if corner == 0 or corner == 3 else -hu
+                b = hv if corner < 2 else -hv
+                d = (cx + a * ux + b * vx) * nx + (cy + a * uy + b * vy) * ny
+                low = d if d < low else low
+            if low > edge:
+                apart = True
+                break
+        if not apart:
+            which[j] = 1
+            count += 1
+    return count
+
+
+@njit
 def _hulls(  # type: ignore[no-untyped-def]
     first, end, integrator, stop_on_contact, h,
     mj_step, mps, dps, fields, views, dofs, linear_kin, inertia,
     accel, kh, laws, table, kind_index, chan, kw,
     q, qv, qa, qfrc, act, cmd, t, left, external,
     mode, const, inv_dt, k0, win_w, win_c, win_d, drift_k,
-    loads, forces, flags, hits, stopped, status,
+    loads, forces, flags, hits, stopped, status, foot, obst, nob, touch,
 ):  # fmt: skip
     """Hulls ``first .. end - 1`` of :func:`run`, one after the other: each its ``left[i]`` steps
     and its code in ``status[i, 0]`` (``NEED`` with the process slot and the sample its time
@@ -292,6 +352,7 @@ def _hulls(  # type: ignore[no-untyped-def]
     mq, iq, ix = inertia[0], inertia[2], inertia[3]
     acc = accel_at(accel)
     four = dofs == 4
+    which = np.zeros(obst.shape[1], dtype=np.int64)
     for i in range(first, end):
         status[i, 0] = OK
         if left[i] <= 0:  # (not stepped: a reset's start of another hull, a masked hull)
@@ -434,12 +495,22 @@ def _hulls(  # type: ignore[no-untyped-def]
                     stopped[i] = left[i]
                     left[i] = 0
             else:
+                # obstacles (a harbour's quays): touched at the step's start, as mj_step finds
+                # its contacts before it integrates; the hull stops after this step
+                touched = 0
+                if stop_on_contact and nob[i] > 0:
+                    touched = obstacles_touched(q[i, 0], q[i, 1], q[i, 2], foot, obst[i],
+                                                nob[i], which)  # fmt: skip
+                    touch[i] = touched
                 qa[i, 0], qa[i, 1], qa[i, 2] = a0, a1, a2
                 if four:
                     qa[i, 3] = pd
                 for k in range(q.shape[1]):
                     qv[i, k] += h * qa[i, k]
                     q[i, k] += h * qv[i, k]
+                if touched:
+                    stopped[i] = left[i]
+                    left[i] = 0
         t[i] = ti
         worst = status[i, 0] if status[i, 0] > worst else worst
     return worst
@@ -465,6 +536,8 @@ def _arrays(p):  # type: ignore[no-untyped-def]
         carray(f(p[40]), (n, 2, wd)), carray(f(p[41]), (n, 4)), carray(f(p[42]), (n, 8)),
         carray(f(p[43]), (n, na)), carray(f(p[44]), (n, na)), carray(i(p[45]), (n, nc)),
         carray(i(p[46]), n), carray(i(p[47]), (n, 3)),
+        carray(f(p[51]), (p[49], 2)), carray(f(p[52]), (n, p[50], 9)), carray(i(p[53]), n),
+        carray(i(p[54]), n),
     )  # fmt: skip
 
 
@@ -723,7 +796,14 @@ class HullBatch:
         self._integ = MUJOCO if integrator == "mujoco" else LEAPFROG
         self._entry: Any = None  # run's compiled entry point for these arguments' types
         self._args: tuple[Any, ...] | None = None  # run's arrays, held while p points at them
-        self._p = np.zeros(49, dtype=np.int64)  # their shapes and addresses (table_of_arrays)
+        self._p = np.zeros(55, dtype=np.int64)  # their shapes and addresses (table_of_arrays)
+        #: the contact check of a leapfrog hull among obstacles (:meth:`set_obstacles`): the
+        #: footprint polygon (k, 2) (body frame, m), each hull's obstacle rectangles (n, R, 9)
+        #: and their number, and the obstacles each touched at its last step's start
+        self.footprint = np.zeros((1, 2))
+        self.obstacles = np.zeros((n, 0, 9))
+        self.n_obstacles = np.zeros(n, dtype=np.int64)
+        self.touching = np.zeros(n, dtype=np.int64)
         self._nu = np.zeros((n, 4))  # body_velocities' output
         self._nu_entry: Any = None
         self._ncon_entry: Any = None
@@ -897,7 +977,8 @@ class HullBatch:
             d.qvel[:] = self.qv[i]
             mujoco.mj_forward(self.models[i], d)
         self.start(i)
-        self.hits[i] = 0  # nothing stepped yet: no rate limit hit, no stall
+        self.hits[i] = 0  # nothing stepped yet: no rate limit hit, no stall, no contact
+        self.touching[i] = 0
         self.flags[i] = 0.0
 
     def start(self, i: int) -> None:
@@ -955,9 +1036,32 @@ class HullBatch:
         self._readout_entry(*args)
         return forces, model, at_command if command else None
 
+    def set_obstacles(self, footprint: np.ndarray, i: int, rects: np.ndarray) -> None:
+        """The contact check of the ``leapfrog`` integrator for hull ``i``: the hull's
+        footprint polygon ``footprint`` (k, 2) (m, body frame, convex, counter-clockwise; the
+        same for every hull) and its obstacle rectangles ``rects`` (R_i, 9)
+        (:func:`obstacles_touched`); with ``stop_on_contact`` a hull stops after the step at
+        whose start it touched one (as MuJoCo's contacts stop a ``mujoco`` hull)."""
+        fp = np.ascontiguousarray(footprint, dtype=np.float64)
+        r = np.asarray(rects, dtype=np.float64).reshape(-1, 9)
+        if self.footprint.shape != fp.shape or not np.array_equal(self.footprint, fp):
+            self.footprint = fp
+            self._args = None
+        if r.shape[0] > self.obstacles.shape[1]:  # room for more rectangles
+            grown = np.zeros((self.n, r.shape[0], 9))
+            grown[:, : self.obstacles.shape[1]] = self.obstacles
+            self.obstacles = grown
+            self._args = None
+        self.obstacles[i, : r.shape[0]] = r
+        self.n_obstacles[i] = r.shape[0]
+        self.touching[i] = 0
+
     def contact_counts(self) -> np.ndarray:
-        """Each hull's MuJoCo contact count now, (N,) int64 (zeros for ``leapfrog``): one
-        compiled read of the ``mjData`` fields, not N attribute reads."""
+        """Each hull's contact count now, (N,) int64: MuJoCo's (``mujoco``: one compiled read
+        of the ``mjData`` fields, not N attribute reads), or the obstacles a ``leapfrog`` hull
+        touched at its last step's start (zeros without obstacles)."""
+        if not self.datas:
+            return self.touching.copy()
         out = np.zeros(self.n, dtype=np.int64)
         if self.datas:
             args = (self.fields, out)
@@ -1044,7 +1148,16 @@ class HullBatch:
         p[: len(head)] = head
         p[len(head) : len(head) + len(arrays)] = [a.ctypes.data for a, _ in arrays]
         p[len(head) + len(arrays)] = self._views
-        self._args = tuple(a for a, _ in arrays)
+        # the obstacles of the leapfrog hulls' contact check (none in open water)
+        contact = (self.footprint, self.obstacles, self.n_obstacles, self.touching)
+        for a in contact:
+            if a.dtype not in (f8, i8) or not a.flags.c_contiguous:
+                raise ValueError("the physics loop's arrays must be C-contiguous float64/int64")
+        if self.obstacles.shape[::2] != (n, 9) or self.footprint.shape[1:] != (2,):
+            raise ValueError("HullBatch.obstacles must be (n, R, 9), footprint (k, 2)")
+        p[49], p[50] = self.footprint.shape[0], self.obstacles.shape[1]
+        p[51:55] = [a.ctypes.data for a in contact]
+        self._args = (*(a for a, _ in arrays), *contact)
         return p
 
     def _advance(
