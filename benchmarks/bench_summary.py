@@ -13,9 +13,9 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   current over the plain full plant (higher is better);
 - ``episode_pid_over_bare``, ``episode_kbf_pid_over_bare``: the wall time of a whole
   closed-loop harbour episode (PID; the KBF observer and PID) over bare ``mj_step`` for the
-  same number of physics steps (lower is better); ``episode_kbf_pid_leapfrog_over_bare`` the
-  same with ``integrator="leapfrog"`` (the compiled step and its quay-contact check instead of
-  MuJoCo's integrator);
+  same number of physics steps (lower is better); ``episode_kbf_pid_mujoco_over_bare`` the
+  same with ``integrator="mujoco"`` (MuJoCo's ``mj_step`` and its contacts instead of the
+  compiled step and its quay-contact check);
 - ``tracking_step_over_bare``: one ``shipgym/Tracking-v0`` step (random actions) over bare
   ``mj_step`` for its physics steps (lower is better);
 - ``recording_overhead``: a recorded harbour episode (rerun) over an unrecorded one;
@@ -180,7 +180,7 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
     for key, observer, integ in (
         ("episode_pid_over_bare", None, None),
         ("episode_kbf_pid_over_bare", "kbf", None),
-        ("episode_kbf_pid_leapfrog_over_bare", "kbf", "leapfrog"),
+        ("episode_kbf_pid_mujoco_over_bare", "kbf", "mujoco"),
     ):
         env = shipgym.make("harbour", controller="pid", observer=observer, wind="3@300",
                            integrator=integ)  # fmt: skip
@@ -338,8 +338,8 @@ def _batched_env(repeats: int, n: int = 256) -> dict[str, Any]:
 CLOSED_LOOPS: tuple[tuple[str, str, dict[str, Any]], ...] = (
     ("blue-lady/tracking", "shipgym/BlueLadyTracking-v0", {"observer": "kbf", "controller": "pid"}),
     ("blue-lady/harbour", "shipgym/BlueLadyHarbour-v0", {"observer": "kbf", "controller": "pid"}),
-    ("blue-lady/harbour-leapfrog", "shipgym/BlueLadyHarbour-v0",
-     {"observer": "kbf", "controller": "pid", "integrator": "leapfrog"}),
+    ("blue-lady/harbour-mujoco", "shipgym/BlueLadyHarbour-v0",
+     {"observer": "kbf", "controller": "pid", "integrator": "mujoco"}),
     ("star-hercules/dp", "shipgym/DPStationKeeping-v0",
      {"vessel": "star-hercules", "observer": "kbf", "controller": "pid"}),
     ("wimpey-sealab/dp", "shipgym/DPStationKeeping-v0",

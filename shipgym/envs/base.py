@@ -188,9 +188,9 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | ``start_noise`` | ``(0, 0, 0)`` | uniform start perturbation half-widths (m, m, rad) |
     | ``timestep`` | ``0.05`` | physics step (s) |
     | ``control_period`` | ``1.0`` | control step (s); a whole multiple of ``timestep`` |
-    | ``integrator`` | ``None`` | ``"mujoco"`` (the harbour's default: MuJoCo's ``mj_step``, |
-    |  |  | its quay contacts) or ``"leapfrog"`` (the open water's: the compiled step, in |
-    |  |  | the harbour with its own quay-contact check, several times faster) |
+    | ``integrator`` | ``"leapfrog"`` | the compiled step (in the harbour with its quay-contact |
+    |  |  | check: the step MuJoCo finds a contact at), or ``"mujoco"`` (MuJoCo's ``mj_step``; |
+    |  |  | the harbour's quays by MuJoCo's contacts, with their impulse) |
     | ``terminate_on_finish`` | ``True`` | end the episode when the plan is complete |
     | ``reward_weights`` | ``RewardWeights()`` | weights of the reward terms |
     | ``observer`` | ``None`` | an observer name (``shipgym.observers.observer_names()``) fed |

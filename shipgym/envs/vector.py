@@ -148,9 +148,9 @@ class ShipVectorEnv(BatchedEnv):
         self.n_substeps = _whole_multiple(control_period, timestep)
         self.control_period = float(control_period)
         harbour = task.scene == "harbour"
-        # MuJoCo's integrator in the harbour (its contacts) unless the compiled step's contact
-        # check is asked for (integrator="leapfrog": the quays touched as MuJoCo finds them)
-        integrator = env["integrator"] or ("mujoco" if harbour else "leapfrog")
+        # the compiled step everywhere, in the harbour with its quay-contact check (the quays
+        # touched as MuJoCo finds them); integrator="mujoco": MuJoCo's mj_step per hull
+        integrator = env["integrator"] or "leapfrog"
         self.physics = BatchedPhysics(
             self.vessel, n, plant, wind=task.wind, current=task.current, waves=task.waves,
             timestep=timestep, integrator=integrator, world=task.scene if harbour else None,
