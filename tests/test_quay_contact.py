@@ -99,6 +99,7 @@ def test_the_harbour_env_with_the_leapfrog_integrator_is_its_mujoco_episode(seed
             a = np.array([1.0, rng.uniform(-1, 1), rng.uniform(-1, 1)], np.float32)
             o, _, term, trunc, info = env.step(a)
             obs.append(o)
+            assert bool(info["contacts"]) == info["quay_contact"]  # the same contact in info
             if term or trunc:
                 break
         ends.append((len(obs), term, info["quay_contact"], info["contacts"], np.array(obs)))

@@ -877,10 +877,14 @@ class HullView:
         return self._view  # type: ignore[no-any-return]
 
     def contacts(self) -> list[tuple[str, str]]:
-        """Pairs of geom names in contact now (the hull's geom first when it is involved;
-        none for a leapfrog hull in open water; MuJoCo's at its pose for one in a world)."""
+        """Pairs of geom names in contact now (the hull's geom first when it is involved):
+        MuJoCo's of the last step (``mujoco``); for a ``leapfrog`` hull in a world, MuJoCo's
+        contacts at its pose where the contact check found it touching at its last step's
+        start (none otherwise, and none in open water)."""
         if not self.batch.models:
             return []
         if self.integrator == "leapfrog":
+            if not self.batch._hulls.touching[self.i]:
+                return []
             return contact_pairs(self.model, self.data)
         return contact_pairs(*self._mujoco())
