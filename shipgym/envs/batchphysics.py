@@ -180,6 +180,14 @@ def contact_geometry(model: Any) -> tuple[Array, Array, list[str]]:
             hull, or a hull body that does not sit at the origin of its joints.
     """
     d = mujoco.MjData(model)
+    footprint, hull_geoms = _footprint(model, d)
+    rects, names = _obstacle_rects(model, d, *hull_geoms)
+    return footprint, rects, names
+
+
+def _footprint(model: Any, d: Any) -> tuple[Array, tuple[list[int], float, float, float]]:
+    """The hull's footprint (:func:`contact_geometry`) and what :func:`_obstacle_rects` needs
+    of its geoms: their ids, their height range (m) and the footprint's reach (m)."""
     mujoco.mj_kinematics(model, d)
     hull = model.body("hull").id
     if model.body_jntnum[hull] != 3 or np.abs(d.xpos[hull][:2]).max() > 1e-12:
@@ -201,16 +209,22 @@ def contact_geometry(model: Any) -> tuple[Array, Array, list[str]]:
                              f"not geom {model.geom(g).name!r}")  # fmt: skip
         pts.append(local @ d.geom_xmat[g].reshape(3, 3).T + d.geom_xpos[g])
     world = np.concatenate(pts)
-    z_lo, z_hi = float(world[:, 2].min()), float(world[:, 2].max())
     footprint = _convex_hull(world[:, :2])
     reach = float(np.sqrt((footprint**2).sum(axis=1)).max())
+    return footprint, (own, float(world[:, 2].min()), float(world[:, 2].max()), reach)
+
+
+def _obstacle_rects(
+    model: Any, d: Any, own: list[int], z_lo: float, z_hi: float, reach: float
+) -> tuple[Array, list[str]]:
+    """The rectangles (R, 9) and names of the box geoms that can collide with the hull's geoms
+    ``own``, at their poses in ``d`` (after ``mj_kinematics``) (:func:`contact_geometry`)."""
+    hull = model.geom_bodyid[own[0]]
+    ct, ca = model.geom_contype, model.geom_conaffinity
     rects, names = [], []
     for g in range(model.ngeom):
-        if model.geom_bodyid[g] == hull:
-            continue
-        ct, ca = model.geom_contype, model.geom_conaffinity
-        if not any((ct[g] & ca[o]) or (ct[o] & ca[g]) for o in own):  # it may touch the hull
-            continue
+        if model.geom_bodyid[g] == hull or not any((ct[g] & ca[o]) or (ct[o] & ca[g]) for o in own):
+            continue  # the hull's own, or one that cannot touch it
         name = model.geom(g).name
         if model.geom_type[g] != mujoco.mjtGeom.mjGEOM_BOX:
             raise ValueError(f"the leapfrog contact check handles box obstacles, not {name!r}")
@@ -223,7 +237,7 @@ def contact_geometry(model: Any) -> tuple[Array, Array, list[str]]:
         rects.append((c[0], c[1], R[0, 0], R[1, 0], R[0, 1], R[1, 1], half[0], half[1],
                       math.hypot(half[0], half[1]) + reach))  # fmt: skip
         names.append(name)
-    return footprint, np.array(rects, dtype=float).reshape(-1, 9), names
+    return np.array(rects, dtype=float).reshape(-1, 9), names
 
 
 #: the columns ``[u, v, r]`` of a hull's ``(u, v, p, r)``
@@ -353,7 +367,8 @@ class BatchedPhysics:
         elif world is not None:  # leapfrog hulls among the world's obstacles
             if self.dofs != 3:
                 raise ValueError("world= with the leapfrog integrator needs a 3-DOF vessel")
-            self._footprint = contact_geometry(self.models[0])[0]
+            self._scratch = [mujoco.MjData(m) for m in self.models]  # (the placed obstacles)
+            self._footprint, self._hull_geoms = _footprint(self.models[0], self._scratch[0])
         self._hulls = HullBatch(self.plant, acts, wind_load.kernel_constants(), n, self.h,
                                 inertia, integrator=integrator,
                                 model=self.models if self.datas else None,
@@ -505,7 +520,9 @@ class BatchedPhysics:
         for i in np.nonzero(m)[0].tolist():
             self.saturated[i] = False
             if self._footprint is not None:  # the obstacles where the world's are placed now
-                hb.set_obstacles(self._footprint, i, contact_geometry(self.models[i])[1])
+                mujoco.mj_kinematics(self.models[i], self._scratch[i])
+                rects = _obstacle_rects(self.models[i], self._scratch[i], *self._hull_geoms)[0]
+                hb.set_obstacles(self._footprint, i, rects)
             if self._wf is not None:
                 self._wf.invalidate(i)
             hb.reset_hull(
