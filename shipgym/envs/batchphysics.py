@@ -901,7 +901,7 @@ class HullView:
         if not self.batch.models:
             return []
         if self.integrator == "leapfrog":
-            if not self.batch._hulls.touching[self.i]:
+            if not self.batch.contact_counts[self.i]:
                 return []
             return contact_pairs(self.model, self.data)
         return contact_pairs(*self._mujoco())

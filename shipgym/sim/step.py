@@ -274,21 +274,20 @@ def process_at(mode, t, i, slot, inv_dt, k0, win, const):  # type: ignore[no-unt
 
 
 @njit
-def obstacles_touched(x, y, psi, fp, ob, m, which):  # type: ignore[no-untyped-def]
+def obstacles_touched(x, y, psi, fp, ob, m):  # type: ignore[no-untyped-def]
     """How many of the ``m`` obstacle rectangles ``ob`` (R, 9) the hull's footprint polygon
-    ``fp`` (k, 2; body frame, convex) touches at the pose ``(x, y, psi)``; ``which`` (R,)
-    int64 out: 1 for each touched one. An obstacle row: centre ``cx, cy``, unit axes ``ux,
-    uy``, ``vx, vy``, half sizes ``hu, hv`` (m), and ``reach``, the largest centre distance
-    at which the footprint can touch it (a bounding-circle test first). The separating-axis
-    test of two convex polygons in the horizontal plane: MuJoCo's contact of a hull whose
-    height lies within the obstacles' (:func:`~shipgym.envs.scene.quay_geometry`)."""
+    ``fp`` (k, 2; body frame, convex) touches at the pose ``(x, y, psi)``. An obstacle row:
+    centre ``cx, cy``, unit axes ``ux, uy``, ``vx, vy``, half sizes ``hu, hv`` (m), and
+    ``reach``, the largest centre distance at which the footprint can touch it (a
+    bounding-circle test first). The separating-axis test of two convex polygons in the
+    horizontal plane: MuJoCo's contact of a hull whose height lies within the obstacles'
+    (:func:`~shipgym.envs.batchphysics.contact_geometry`)."""
     c, s = math.cos(psi), math.sin(psi)
     k = fp.shape[0]
     px, py = np.empty(k), np.empty(k)
     ready = False
     count = 0
     for j in range(m):
-        which[j] = 0
         cx, cy = ob[j, 0], ob[j, 1]
         dx, dy = x - cx, y - cy
         if dx * dx + dy * dy > ob[j, 8] * ob[j, 8]:
@@ -328,7 +327,6 @@ def obstacles_touched(x, y, psi, fp, ob, m, which):  # type: ignore[no-untyped-d
                 apart = True
                 break
         if not apart:
-            which[j] = 1
             count += 1
     return count
 
@@ -352,7 +350,6 @@ def _hulls(  # type: ignore[no-untyped-def]
     mq, iq, ix = inertia[0], inertia[2], inertia[3]
     acc = accel_at(accel)
     four = dofs == 4
-    which = np.zeros(obst.shape[1], dtype=np.int64)
     for i in range(first, end):
         status[i, 0] = OK
         if left[i] <= 0:  # (not stepped: a reset's start of another hull, a masked hull)
@@ -499,8 +496,7 @@ def _hulls(  # type: ignore[no-untyped-def]
                 # its contacts before it integrates; the hull stops after this step
                 touched = 0
                 if stop_on_contact and nob[i] > 0:
-                    touched = obstacles_touched(q[i, 0], q[i, 1], q[i, 2], foot, obst[i],
-                                                nob[i], which)  # fmt: skip
+                    touched = obstacles_touched(q[i, 0], q[i, 1], q[i, 2], foot, obst[i], nob[i])
                     touch[i] = touched
                 qa[i, 0], qa[i, 1], qa[i, 2] = a0, a1, a2
                 if four:
@@ -841,7 +837,13 @@ class HullBatch:
         loop's table (:meth:`table_of_arrays`), the compiled laws', MuJoCo's."""
         state = dict(self.__dict__)
         state.update(
-            _args=None, _entry=None, _nu_entry=None, _ncon_entry=None, _p=np.zeros_like(self._p)
+            _args=None,
+            _entry=None,
+            _nu_entry=None,
+            _ncon_entry=None,
+            _loads_entry=None,
+            _readout_entry=None,
+            _p=np.zeros_like(self._p),
         )
         for k in ("q", "qv", "qa", "qfrc"):  # (views on the mjData: rebound to its copy)
             if self._views:
