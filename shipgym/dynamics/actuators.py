@@ -236,7 +236,7 @@ def law_mmg(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
     tR, aH, arm = row[16], row[17], row[18]
     eta, kap, eps, gn, gp, lR = row[19], row[20], row[21], row[22], row[23], row[24]
     hA, fa = row[25], row[26]
-    U = math.hypot(u, v)
+    U = math.sqrt(u * u + v * v)
     Us = U if U > 1e-9 else 1e-9
     rp = r * L / Us
     beta = math.atan2(-v, u)
@@ -264,9 +264,12 @@ def law_mmg(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
         uR = uR * math.sqrt(eta * (sq * sq) + 1.0 - eta)
     bR = beta - lR * rp
     vR = U * (gn if bR < 0.0 else gp) * bR
-    FN = hA * (uR * uR + vR * vR) * fa * math.sin(delta - math.atan2(vR, uR))
+    # F_N = (rho A_R / 2) f_alpha U_R^2 sin(alpha_R), alpha_R = delta - atan2(v_R, u_R), is
+    # (rho A_R / 2) f_alpha U_R (u_R sin delta - v_R cos delta): no inverse tangent
+    sd = math.sin(delta)
     cd = math.cos(delta)
-    XR = -(1.0 - tR) * FN * math.sin(delta)
+    FN = hA * fa * math.sqrt(uR * uR + vR * vR) * (uR * sd - vR * cd)
+    XR = -(1.0 - tR) * FN * sd
     YR = -(1.0 + aH) * FN * cd
     NR = -arm * FN * cd
     return XP + XR, YP + YR, 0.0, NP + NR, T, 0.0
