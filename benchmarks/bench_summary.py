@@ -35,7 +35,9 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   batched figures run whole episodes of ``EPISODE_STEPS`` steps with their batched
   autoresets, after a warm-up);
 - ``closed_loop_n256``: hull-steps per second (wall and CPU) of each vessel on its own task
-  with the whole stack at N = 256 (:data:`CLOSED_LOOPS`);
+  with the whole stack at N = 256 (:data:`CLOSED_LOOPS`), over one whole episode of the task
+  with its autoresets; ``closed_loop_n256_short`` the same over ``EPISODE_STEPS``-step
+  episodes (reset-heavy);
 - ``dp_every_step_over_pvs``: control at every physics step, shipgym's DP env over
   PythonVehicleSimulator's DP loop per step (lower is better; needs ``PVS_SRC``);
 - ``ppo_fps_batched_over_single``: stable-baselines3 PPO's training rate (rollouts and
@@ -351,15 +353,39 @@ CLOSED_LOOPS: tuple[tuple[str, str, dict[str, Any]], ...] = (
 )  # fmt: skip
 
 
+def _task_episode(venv: Any, env_id: str) -> int:
+    """Control steps of one whole episode of the task behind ``venv``: the registered step
+    limit of a plan task, ``episode_duration / control_period`` of the roll and course tasks,
+    the longest manoeuvre of a sea trial."""
+    import gymnasium as gym
+
+    u = venv.unwrapped
+    limit = gym.spec(env_id).max_episode_steps
+    if limit is not None:
+        return int(limit)
+    if getattr(u, "episode_duration", None) is not None:
+        return math.ceil(u.episode_duration / u.control_period - 1e-9)
+    return int(np.max(u.max_steps))
+
+
 def _closed_loops(repeats: int, n: int = 256) -> dict[str, Any]:
-    """Hull-steps per second (wall and CPU) of each :data:`CLOSED_LOOPS` entry at N = ``n``
-    over whole episodes with their batched autoresets, after a warm-up; an id without a
-    vector entry point is listed under ``missing``."""
+    """Hull-steps per second (wall and CPU) of each :data:`CLOSED_LOOPS` entry at N = ``n``:
+
+    - ``closed_loop_n256``: one whole episode of the task (:func:`_task_episode`: 800 steps of
+      tracking, 2000 of the harbour, 2000 s of DP, ...) from a seeded reset, with the
+      autoreset step that begins the next (every env's episode, early ends and their batched
+      autoresets included), after a warm-up; one timing (a long average);
+    - ``closed_loop_n256_short``: ``2 * EPISODE_STEPS`` steps of episodes cut at
+      :data:`EPISODE_STEPS` (the plan tasks) or the task's own (the others), the median of
+      ``repeats``: a reset-heavy figure (four resets of every env per 200 steps).
+
+    An id without a vector entry point is listed under ``closed_loop_missing``."""
     import gymnasium as gym
 
     import shipgym  # noqa: F401  (registers the ids)
 
-    out: dict[str, Any] = {}
+    whole: dict[str, Any] = {}
+    short: dict[str, Any] = {}
     missing: dict[str, str] = {}
     for name, env_id, kwargs in CLOSED_LOOPS:
         if gym.spec(env_id).vector_entry_point is None:
@@ -368,23 +394,49 @@ def _closed_loops(repeats: int, n: int = 256) -> dict[str, Any]:
         # the plan tasks end at a step limit; the other families at their episode_duration
         # (60 s of the roll and course tasks) or their manoeuvre's end (the sea trials)
         plan = gym.spec(env_id).vector_entry_point.startswith("shipgym.envs.vector")
-        limit = {"max_episode_steps": EPISODE_STEPS} if plan else {}
-        venv = gym.make_vec(env_id, num_envs=n, **limit, **kwargs)
-        u = venv.unwrapped
-        sub = getattr(u, "n_substeps", None) or round(u.control_period / u.physics.timestep)
-        k = 2 * EPISODE_STEPS
-        run = _rollout(venv, k)
-        walls, cpus = [], []
-        for _ in range(repeats):
-            c0 = time.process_time()
-            walls.append(run())
-            cpus.append(time.process_time() - c0)
-        hs = n * k * sub
-        out[name] = {"hull_steps_per_s": hs / statistics.median(walls),
-                     "hull_steps_per_cpu_s": hs / statistics.median(cpus),
-                     "min": hs / max(walls), "max": hs / min(walls)}  # fmt: skip
-        venv.close()
-    return {"closed_loop_n256": out, "closed_loop_missing": missing}
+        for cut, out in ((True, short), (False, whole)):
+            if cut:
+                limit = {"max_episode_steps": EPISODE_STEPS} if plan else {}
+                args = kwargs
+            else:  # the task's own episode (the roll and course tasks' registered 600 s)
+                limit = ({"max_episode_steps": gym.spec(env_id).max_episode_steps}
+                         if plan else {})  # fmt: skip
+                args = {k: v for k, v in kwargs.items() if k != "episode_duration"}
+            venv = gym.make_vec(env_id, num_envs=n, **limit, **args)
+            u = venv.unwrapped
+            sub = getattr(u, "n_substeps", None) or round(u.control_period / u.physics.timestep)
+            k = 2 * EPISODE_STEPS if cut else _task_episode(venv, env_id) + 1
+            run = _rollout(venv, 2 * EPISODE_STEPS)  # warm-up: two short runs' worth
+            if not cut:
+                venv.reset(seed=1)
+                run = _rollout_from_reset(venv, k)
+            walls, cpus = [], []
+            for _ in range(repeats if cut else 1):
+                c0 = time.process_time()
+                walls.append(run())
+                cpus.append(time.process_time() - c0)
+            hs = n * k * sub
+            out[name] = {"hull_steps_per_s": hs / statistics.median(walls),
+                         "hull_steps_per_cpu_s": hs / statistics.median(cpus),
+                         "min": hs / max(walls), "max": hs / min(walls),
+                         "control_steps": k}  # fmt: skip
+            venv.close()
+    return {"closed_loop_n256": whole, "closed_loop_n256_short": short,
+            "closed_loop_missing": missing}  # fmt: skip
+
+
+def _rollout_from_reset(venv: Any, steps: int) -> Timed:
+    """``steps`` zero-action steps of a vector env that was just reset (no warm-up: the
+    caller warmed the laws up before that reset), autoresets included; one call."""
+    zeros = np.zeros(venv.action_space.shape, np.float32)
+
+    def run() -> float:
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            venv.step(zeros)
+        return time.perf_counter() - t0
+
+    return run
 
 
 def _pvs_dp(repeats: int, steps: int = 3000) -> dict[str, Any] | None:
@@ -481,9 +533,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if res.get("ppo_fps_batched") is not None:
         print(f"  {'PPO, batched / DummyVecEnv':28s}: {res['ppo_fps_batched']:10,.0f} / "
               f"{res['ppo_fps_single']:,.0f} steps/s")  # fmt: skip
-    print(f"closed loops, N = 256, hull-steps/s (wall; CPU) over {2 * EPISODE_STEPS} steps:")
+    print(
+        "closed loops, N = 256, hull-steps/s (wall; CPU): one whole episode of the task "
+        f"(steps) | {2 * EPISODE_STEPS} steps of {EPISODE_STEPS}-step episodes:"
+    )
     for name, v in res["closed_loop_n256"].items():
-        print(f"  {name:28s}: {v['hull_steps_per_s']:10,.0f}; {v['hull_steps_per_cpu_s']:,.0f}")
+        c = res["closed_loop_n256_short"][name]
+        print(f"  {name:28s}: {v['hull_steps_per_s']:10,.0f}; {v['hull_steps_per_cpu_s']:,.0f} "
+              f"({v['control_steps']}) | {c['hull_steps_per_s']:10,.0f}; "
+              f"{c['hull_steps_per_cpu_s']:,.0f}")  # fmt: skip
     for name, why in {**res["closed_loop_missing"], **res.get("missing", {})}.items():
         print(f"  {name:28s}: not measured ({why})")
     args.json.parent.mkdir(parents=True, exist_ok=True)
