@@ -6,6 +6,7 @@ whatever the order of the queries)."""
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 import pytest
@@ -83,3 +84,37 @@ def test_a_long_run_keeps_two_chunks_and_a_dropped_one_reads_the_same(name):
     for t in times[len(times) // 2 :]:
         assert _query(bounded, t) == _query(whole, t)
     assert len(bounded._chunks) >= CHUNKS and _kept(bounded) <= 2
+
+
+@pytest.mark.parametrize("name", list(PROCESSES))
+def test_windows_loaded_side_by_side_equal_those_loaded_one_by_one(name, monkeypatch):
+    """``load_windows`` (a batch's grids computed on a pool of threads, each grid on one, the
+    draw buffers of a spent chunk filled again) gives every grid's windows bit for bit as
+    reading them one by one, across chunk boundaries, with a grid listed twice and grids
+    whose windows are computed already."""
+    from shipgym._jit import threads_ok
+    from shipgym.disturbances import _grid
+    from shipgym.disturbances._grid import PIECE, POOL_MIN, load_windows
+
+    threads = set()
+    spread = _grid._windows_of
+
+    def spy(items):
+        threads.add(threading.current_thread().name)
+        return spread(items)
+
+    monkeypatch.setattr(_grid, "_windows_of", spy)
+    n = POOL_MIN + 3
+    pooled, alone = [PROCESSES[name]() for _ in range(n)], [PROCESSES[name]() for _ in range(n)]
+    for i in range(n):
+        pooled[i].reset(np.random.default_rng(i))
+        alone[i].reset(np.random.default_rng(i))
+    for k in (0, PIECE + 3, CHUNK - 1, CHUNK + 5, 2 * CHUNK + 700, 3 * CHUNK + 1):
+        ks = [k + 11 * i for i in range(n)]
+        got = load_windows(pooled + pooled[:2], ks + ks[:2])
+        for i, (k0, rows) in enumerate(got):
+            w0, want = alone[i % n].window(ks[i % n])
+            assert k0 == w0
+            np.testing.assert_array_equal(rows, want)
+    if threads_ok():  # the grids were computed on the pool's threads, not this one
+        assert threads and threading.current_thread().name not in threads

@@ -17,12 +17,13 @@ realisation's seed, the same floats, so a long run's memory stays bounded.
 from __future__ import annotations
 
 import copy
+import os
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, njit
+from shipgym._jit import entry, njit, threads_ok
 from shipgym._seeding import child_seeds
 
 __all__ = [
@@ -30,6 +31,7 @@ __all__ = [
     "PIECE",
     "GridPair",
     "PieceGrid",
+    "load_windows",
     "gauss_markov",
     "gauss_markov_piece",
 ]
@@ -67,7 +69,7 @@ def gauss_markov(x, m, a, b, e, lo, hi, deviation, out):  # type: ignore[no-unty
     return x
 
 
-@njit
+@njit(nogil=True)
 def _gauss_markov_piece(x, m, a, b, lo, hi, deviation, e, ka, kb, out):  # type: ignore[no-untyped-def]
     """:func:`gauss_markov_piece`, compiled."""
     s = ka - 1 if ka > 0 else 0
@@ -132,12 +134,19 @@ class PieceGrid:
         self._chunks = []
         self._fill = CHUNK + 1
 
-    def _normals(self, rng: np.random.Generator, shape: tuple[int, ...]) -> NDArray[np.float64]:
+    def _normals(
+        self,
+        rng: np.random.Generator,
+        shape: tuple[int, ...],
+        out: NDArray[np.float64] | None = None,
+    ) -> NDArray[np.float64]:
         """A chunk's normals ``rng.standard_normal(shape)`` (``shape[-1] = CHUNK``), to be read
         after :meth:`_draw_to`: every row but the last drawn now, the last one's (the last of
         the chunk's draws from ``rng``, a generator of this grid alone) as far as a piece
-        needs them; the same numbers, ``rng`` in the same state once the chunk is whole."""
-        e = np.empty(shape)
+        needs them; the same numbers, ``rng`` in the same state once the chunk is whole.
+        ``out``: an array of ``shape`` of this grid's own to fill (the last chunk's, read no
+        more), else a new one."""
+        e = out if out is not None and out.shape == shape else np.empty(shape)
         self._drawn = e.size - shape[-1]
         self._draw_rng = rng
         fill_normals(rng, e.reshape(-1)[: self._drawn])
@@ -206,6 +215,15 @@ class PieceGrid:
         """Chunks ``0 ... j`` whole."""
         self._fill_to(j, CHUNK + 1)
 
+    def computed(self, k: int) -> bool:
+        """Whether :meth:`window` of ``k`` (>= 0) reads samples computed already (no piece,
+        chunk or dropped chunk to compute)."""
+        j, p = divmod(int(k), CHUNK)
+        last = len(self._chunks) - 1
+        if last < j or (last == j and self._fill < p - p % PIECE + PIECE + 1):
+            return False
+        return self._chunks[j] is not None
+
     def window(self, k: int) -> tuple[int, NDArray[np.float64]]:
         """The piece holding sample ``k`` (>= 0) and the piece's next sample: ``(k0, rows)``,
         ``rows`` (R, PIECE + 1) the samples ``k0 ... k0 + PIECE`` of every row (the next
@@ -215,6 +233,52 @@ class PieceGrid:
         p -= p % PIECE
         self._fill_to(j, p + PIECE + 1)
         return j * CHUNK + p, self._chunk(j)[:, p : p + PIECE + 1]
+
+
+#: the fewest grids with samples to compute that :func:`load_windows` spreads over threads
+POOL_MIN = 8
+_POOL: list[Any] = []  # the thread pool, made on first use (dropped in a forked child)
+os.register_at_fork(after_in_child=_POOL.clear)
+
+
+def _pool() -> Any:
+    if not _POOL:
+        from concurrent.futures import ThreadPoolExecutor
+
+        import numba
+
+        workers = max(1, int(numba.config.NUMBA_NUM_THREADS))
+        _POOL.append(ThreadPoolExecutor(workers, thread_name_prefix="shipgym-grid"))
+    return _POOL[0]
+
+
+def _windows_of(items: list[tuple[PieceGrid, list[int]]]) -> None:
+    for grid, ks in items:
+        for k in ks:
+            grid.window(k)
+
+
+def load_windows(grids: list[PieceGrid], ks: list[int]) -> list[tuple[int, NDArray[np.float64]]]:
+    """``grids[m].window(ks[m])`` for every ``m``: the grids whose samples must be computed
+    first (a new piece or chunk: random draws, recursions, harmonic sums) computed side by
+    side on a pool of Numba's thread count of threads where at least :data:`POOL_MIN` must
+    and this thread may use threads (:func:`shipgym._jit.threads_ok`), each grid on one
+    thread (its draws in their order: the same floats), one share of the grids a thread,
+    then every window read in order.
+    The draws and the compiled recursions and sums run without the GIL; a batch of hulls in
+    step reaches a chunk's end together, so its grids are computed together."""
+    todo: dict[int, tuple[PieceGrid, list[int]]] = {}
+    for g, k in zip(grids, ks, strict=True):
+        if not g.computed(k):
+            todo.setdefault(id(g), (g, []))[1].append(k)
+    if len(todo) >= POOL_MIN and threads_ok():
+        pool = _pool()
+        items = list(todo.values())
+        # one task a thread (many short tasks queue on the GIL: no faster than one thread)
+        parts = [items[w :: pool._max_workers] for w in range(pool._max_workers)]
+        for done in pool.map(_windows_of, parts):
+            del done
+    return [g.window(k) for g, k in zip(grids, ks, strict=True)]
 
 
 class GridPair(PieceGrid):
@@ -290,6 +354,9 @@ class GridPair(PieceGrid):
 
     def _clear(self) -> None:
         self._clear_pieces()
+        # the normals of the last chunk, whose array the next chunk's draw fills (this grid's
+        # own: a replica, cleared, draws into its own)
+        self._spent: NDArray[np.float64] | None = None
         self._cache: dict[int, tuple[list[float], list[float]]] = {}
         self._j = -1  # piece currently held as Python lists
         self._k0 = 0

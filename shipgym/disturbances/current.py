@@ -327,7 +327,8 @@ class Current(GridPair):
         m, a, b = np.array([mv, mb]), np.array([av, ab]), np.array([bv, bb])
         lows, highs = np.array([self._lo, -math.inf]), np.array([self._hi, math.inf])
         self._gm = (np.array(self._state), m, a, b, lows, highs)
-        self._e = self._normals(self._rng, (2, CHUNK))
+        self._e = self._normals(self._rng, (2, CHUNK), out=self._spent)  # the last chunk's
+        self._spent = self._e
         return np.empty((2, CHUNK + 1))
 
     def _piece(self, j: int, ka: int, kb: int) -> None:

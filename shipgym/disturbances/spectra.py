@@ -425,7 +425,7 @@ def harmonic_components(
 HARMONIC_BLOCK = 64
 
 
-@njit
+@njit(nogil=True)
 def _in_block(dt, w, zr, zi):  # type: ignore[no-untyped-def]
     """The in-block factors ``exp(i w_j (dt m))`` of :func:`harmonic_sums` into ``zr``, ``zi``
     (N, 64): their cosines and sines."""
@@ -483,7 +483,7 @@ def _harmonic_block(b, t0, dt, start, end, w, eps, c, imag, zr, zi, out, cb, sb,
                 out[r, 1, k0 + m - start] = acc_i[m]
 
 
-@njit
+@njit(nogil=True)
 def harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
     """:func:`harmonic_sums` of the real weights ``c`` (R, N) at the grid points ``k = start
     ... start + n - 1`` into ``out`` (R, 2, n): the real

@@ -31,7 +31,7 @@ from shipgym._jit import entry, njit
 from shipgym._seeding import child_seeds
 from shipgym.dynamics.params import HullParameters
 
-from ._grid import CHUNK, PIECE, PieceGrid
+from ._grid import CHUNK, PIECE, PieceGrid, load_windows
 from .spectra import (
     HARMONIC_BLOCK,
     RHO_WATER,
@@ -115,7 +115,7 @@ def wf_rows(x, k0, win, cb, sb, out):  # type: ignore[no-untyped-def]
     return -1
 
 
-@njit
+@njit(nogil=True)
 def modal_filter_piece(lam, Gm, z, zi, s, ka, kb):  # type: ignore[no-untyped-def]
     """The WF filters' modal states over one chunk (the run-time form of
     :meth:`Waves._filter_piece`): for each mode ``i`` and DOF ``d`` the modal noise ``u_k =
@@ -198,9 +198,14 @@ class WaveMotionRows:
             self._entry = entry(wf_rows, args)
         i = self._entry(*args)
         while i >= 0:
-            k0, rows = self.waves[i].window(int(x[i]))
-            self.win[i] = rows[1:3]
-            self.k0[i] = k0
+            # row i and every later row whose position is outside its window: loaded together
+            # (load_windows: a batch in step computes its grids side by side)
+            j = np.floor(x[i:]).astype(np.int64) - self.k0[i:]
+            rows_ = (i + np.nonzero(self.on[i:] & ((j < 0) | (j >= PIECE)))[0]).tolist()
+            got = load_windows([self.waves[r] for r in rows_], [int(x[r]) for r in rows_])
+            for r, (k0, rows) in zip(rows_, got, strict=True):
+                self.win[r] = rows[1:3]
+                self.k0[r] = k0
             i = self._entry(*args)
 
 
@@ -604,6 +609,7 @@ class Waves(PieceGrid):
 
     def _reset_grid(self) -> None:
         self._clear_pieces()
+        self._work: tuple[NDArray[np.float64], NDArray[np.complex128]] | None = None
         self._cache: dict[int, list[float]] = {}  # drift_load's pieces of the envelope
         self._j = -1
         self._k0 = 0
@@ -702,12 +708,16 @@ class Waves(PieceGrid):
         if self._filter is not None:
             assert self._rng_wf is not None and self._q is not None
             lam_i, _, _, _, nf = self._filter
-            self._z = self._normals(self._rng_wf, (nf, 2, _CHUNK))  # the (nf, 2 CHUNK) draw
+            # the (nf, 2 CHUNK) draw and the modal states: the last chunk's arrays again (its
+            # samples are in its rows; fresh memory costs page faults at every chunk)
+            z, s = self._work if self._work is not None else (None, None)
+            self._z = self._normals(self._rng_wf, (nf, 2, _CHUNK), out=z)
             zi = np.empty((nf, 2), dtype=complex)
             for i in range(nf):
                 zi[i] = lam_i[i] * self._q[i]  # the recursion's state before the first sample
             self._zi = zi
-            self._s = np.empty((nf, 2, _CHUNK), dtype=complex)
+            self._s = s if s is not None else np.empty((nf, 2, _CHUNK), dtype=complex)
+            self._work = (self._z, self._s)
         rows = np.empty((3, _CHUNK + 1))  # the rows that no piece writes are zeros
         if not self._drift_on:
             rows[0] = 0.0

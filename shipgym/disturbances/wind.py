@@ -884,7 +884,8 @@ class Wind(GridPair):
             m, a, b = np.array([self._mean_v, self._mean_b]), np.array(self._a), np.array(self._b)
             x = np.array(self._state)
         self._gm = (x, m, a, b, np.full(x.size, -inf), np.full(x.size, inf))
-        self._e = self._normals(self._rng, (x.size, CHUNK))
+        self._e = self._normals(self._rng, (x.size, CHUNK), out=self._spent)  # the last chunk's
+        self._spent = self._e
         return np.empty((2, CHUNK + 1))
 
     def _piece(self, j: int, ka: int, kb: int) -> None:

@@ -27,6 +27,7 @@ from shipgym._jit import (
     threads_ok,
     use_threads,
 )
+from shipgym.disturbances._grid import load_windows
 from shipgym.disturbances.wind import blendermann_load
 from shipgym.dynamics.actuators import tau_of_table
 from shipgym.sim._mujoco import mujoco
@@ -897,6 +898,11 @@ class HullBatch:
         window (``window(k)``: only that piece is computed, :data:`~shipgym.disturbances.
         _grid.PIECE` samples)."""
         k0, rows = self.processes[slot][i].window(k)
+        self._install(i, slot, k0, rows)
+
+    def _install(self, i: int, slot: int, k0: int, rows: np.ndarray) -> None:
+        """Hull ``i``'s window of its process ``slot``: the piece ``rows`` from sample ``k0``
+        (:meth:`_load`)."""
         rows = rows[:2]
         win = self.windows[slot]
         if win.shape[2] != rows.shape[1]:
@@ -1205,8 +1211,12 @@ class HullBatch:
                 lo = self.loads[i].tolist()
                 nu = lo[1:5] if self.dofs == 4 else (lo[1], lo[2], lo[4])
                 diverged(lo[0], nu, lo[5:8])
-            for i in np.nonzero(codes == NEED)[0].tolist():
-                self._load(i, int(self.status[i, 1]), int(self.status[i, 2]))
+            need = np.nonzero(codes == NEED)[0].tolist()
+            slots = [int(self.status[i, 1]) for i in need]
+            ks = [int(self.status[i, 2]) for i in need]
+            grids = [self.processes[slot][i] for i, slot in zip(need, slots, strict=True)]
+            for i, slot, (k0, rows) in zip(need, slots, load_windows(grids, ks), strict=True):
+                self._install(i, slot, k0, rows)
 
     def _entry_of(self, fn: Any, integ: int, stop_on_contact: bool) -> Any:
         """``fn``'s compiled entry point (:func:`shipgym._jit.entry`); where compilation is
