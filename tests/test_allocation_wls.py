@@ -322,3 +322,28 @@ def test_any_memory_layout_of_b_gives_a_correct_allocation():
     for b in (np.asfortranarray(B), B, B.T.copy().T, B):
         r = allocate_wls(rng.normal(size=3) * 300.0, b, lo, hi)
         check_result(r, r.tau + r.tau_error, B, lo, hi)
+
+
+def test_a_large_batch_on_threads_equals_the_requests_one_by_one():
+    """A batch of at least ``PARALLEL_MIN`` requests (allocated on Numba's threads where this
+    thread may use them) gives every row bit for bit as its own call, and a bad request is
+    named as in a serial call: the first one in the batch."""
+    from shipgym.controllers.allocation import wls
+
+    rng = np.random.default_rng(11)
+    n = 3 * wls.PARALLEL_MIN + 5
+    al = WLSAllocator(T, F_LO, F_HI)
+    tau = rng.normal(0.0, 1.0, (n, 3)) * np.abs(T).sum(axis=1) * F_HI.max() * 0.15
+    force, delivered, error, active = al.batch(tau)
+    for i in range(0, n, 7):
+        one = al(tau[i])
+        np.testing.assert_array_equal(force[i], one.force)
+        np.testing.assert_array_equal(delivered[i], one.tau)
+        np.testing.assert_array_equal(error[i], one.tau_error)
+        np.testing.assert_array_equal(active[i], one.saturated)
+    assert 0 < active.any(axis=1).sum() < n  # both kinds of rows
+    bad = tau.copy()
+    bad[n - 3, 1] = np.nan
+    bad[n // 2, 0] = np.inf
+    with pytest.raises(ValueError, match=r"\[inf, "):
+        al.batch(bad)

@@ -15,9 +15,10 @@ import math
 from typing import Any, NamedTuple
 
 import numpy as np
+from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, njit
+from shipgym._jit import entry, njit, threads_ok, use_threads
 
 __all__ = ["DEFAULT_H_REL", "WLSAllocation", "WLSAllocator", "allocate_wls", "run_wls", "wls_law"]
 
@@ -323,7 +324,9 @@ def _box_qp(Q, c, lo, hi, x, active, st, M, rhs, xn, L, y):  # type: ignore[no-u
 @njit
 def wls_law(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
     """The box-constrained weighted least-squares allocation of N requests (one law for every
-    N; :func:`allocate_wls` documents the problem).
+    N; :func:`allocate_wls` documents the problem): the rows one after the other
+    (:func:`_wls_rows`; :func:`wls_law_parallel` spreads them over Numba's threads, the same
+    floats).
 
     Args:
         Q, R: the scaled problem (:func:`_scaled_problem`), (n, n) and (n, n_dof).
@@ -338,7 +341,33 @@ def wls_law(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):
         0, or the first failing request's index + 1 times 4 plus the reason (1: ``Q`` not
         positive definite; 2: no convergence; 3: a request not finite).
     """
-    N, n_dof = tau.shape
+    return _wls_rows(0, tau.shape[0], Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered,
+                     error, active)  # fmt: skip
+
+
+@njit(parallel=True)
+def wls_law_parallel(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
+    """:func:`wls_law` with the requests spread over Numba's threads in chunks (each row the
+    same law, so the same floats; the code of the first failing row, as the serial law's);
+    for large batches called from the main thread (:data:`PARALLEL_MIN`)."""
+    N = tau.shape[0]
+    chunks = min(N, 64)
+    size = (N + chunks - 1) // chunks
+    codes = np.zeros(chunks, dtype=np.int64)
+    for c in prange(chunks):
+        codes[c] = _wls_rows(min(c * size, N), min((c + 1) * size, N), Q, R, xlo, xhi, s, lo,
+                             hi, B, tau, force, delivered, error, active)  # fmt: skip
+    for c in range(chunks):
+        if codes[c]:
+            return codes[c]
+    return 0
+
+
+@njit
+def _wls_rows(first, end, Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
+    """The rows ``first .. end - 1`` of :func:`wls_law` (its own work arrays): 0, or the code
+    of the first failing row."""
+    n_dof = tau.shape[1]
     n = s.shape[0]
     c = np.empty(n)
     x = np.empty(n)
@@ -348,7 +377,7 @@ def wls_law(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):
     xn = np.empty(n)
     L = np.zeros((n, n))
     y = np.empty(n)
-    for r in range(N):
+    for r in range(first, end):
         for i in range(n_dof):
             if not math.isfinite(tau[r, i]):
                 return 4 * (r + 1) + 3
@@ -376,7 +405,9 @@ def wls_law(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):
     return 0
 
 
-_WLS: list[Any] = []
+#: the fewest requests allocated on Numba's threads (:func:`wls_law_parallel`)
+PARALLEL_MIN = 64
+_WLS: dict[Any, Any] = {}  # the laws' compiled entry points
 
 
 def run_wls(Q, R, xlo, xhi, s, lo, hi, B, tau):  # type: ignore[no-untyped-def]
@@ -406,9 +437,14 @@ def _run_wls(problem: tuple[NDArray[np.float64], ...], tau: ArrayLike) -> tuple[
     out = (np.empty((N, n)), np.empty((N, t.shape[1])), np.empty((N, t.shape[1])),
            np.empty((N, n), dtype=np.bool_))  # fmt: skip
     args = (*problem, t, *out)
-    if not _WLS:
-        _WLS.append(entry(wls_law, args))
-    code = _WLS[0](*args)
+    law = wls_law
+    if N >= PARALLEL_MIN and threads_ok():
+        use_threads()
+        law = wls_law_parallel
+    fn = _WLS.get(law)
+    if fn is None:
+        fn = _WLS[law] = entry(law, args)
+    code = fn(*args)
     if code:
         row, why = divmod(code, 4)
         if why == 3:
