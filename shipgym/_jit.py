@@ -6,7 +6,7 @@ and any actuator kind's force law as a first-class function argument: the loop i
 once (and cached on disk by Numba), a new family or kind compiles only its own small law.
 
 Public names: ``ACCEL_SIG``, ``LAW_SIG``, ``THREADS``, ``njit``, ``kernel``, ``entry``,
-``threads_ok``, ``use_threads``.
+``threads_ok``, ``use_threads``, ``spread``.
 
 Design notes: docs/design/_jit.md.
 """
@@ -36,6 +36,7 @@ __all__ = [
     "entry",
     "threads_ok",
     "use_threads",
+    "spread",
 ]
 
 # first-class function arguments are "experimental" in Numba; the loop relies on them
@@ -221,6 +222,37 @@ def use_threads() -> None:
         if "OMP_WAIT_POLICY" not in os.environ:
             os.environ.setdefault("GOMP_SPINCOUNT", SPINCOUNT)
         THREADS["used"] = True
+
+
+#: the fewest items :func:`spread` runs on its pool of threads
+SPREAD_MIN = 8
+_POOL: list[Any] = []  # spread's pool of threads, made on first use (dropped in a forked child)
+os.register_at_fork(after_in_child=_POOL.clear)
+
+
+def _share(fn: Any, items: list[Any]) -> None:
+    for item in items:
+        fn(item)
+
+
+def spread(fn: Any, items: list[Any]) -> None:
+    """``fn(item)`` for every item: on a pool of Numba's thread count of Python threads, one
+    share of the items a thread (many short tasks queue on the GIL: no faster than one
+    thread), where there are :data:`SPREAD_MIN` or more and this thread may use threads
+    (:func:`threads_ok`); else in order here. For independent work that runs mostly without
+    the GIL (NumPy's random draws, ``nogil`` compiled laws): each item on one thread, so its
+    floats do not depend on the threads; an error in one is raised here."""
+    if len(items) < SPREAD_MIN or not threads_ok():
+        _share(fn, items)
+        return
+    if not _POOL:
+        from concurrent.futures import ThreadPoolExecutor
+
+        _POOL.append(ThreadPoolExecutor(numba.config.NUMBA_NUM_THREADS, "shipgym-spread"))
+    pool = _POOL[0]
+    k = pool._max_workers
+    for done in pool.map(_share, [fn] * k, [items[w::k] for w in range(k)]):
+        del done
 
 
 # ---- laws by address ------------------------------------------------------------------------

@@ -301,16 +301,17 @@ def test_block_draws_are_one_draw_per_sample():
 
 
 def test_batched_sensors_measure_what_each_env_s_sensors_measure():
-    """Four envs, each seeded as a Sensors of its own, with noise, outliers, dropouts and an
-    antenna offset; block refills every 7 samples: the same flags, the same fixes, bit for bit
-    (row i of the law over N is the law at N = 1 on row i's inputs)."""
+    """Twelve envs, each seeded as a Sensors of its own, with noise, outliers, dropouts and an
+    antenna offset; block refills every 7 samples (side by side on threads: 8 or more at once):
+    the same flags, the same fixes, bit for bit (row i of the law over N is the law at N = 1
+    on row i's inputs)."""
     import dataclasses
 
     from shipgym.observers.sensors import BatchedSensors
 
     cfg = dataclasses.replace(sensor_config("dgps"), outlier_probability=0.1,
                               dropout_probability=0.05, antenna_offset=(-3.0, 1.0))  # fmt: skip
-    n = 4
+    n = 12
     batched = BatchedSensors(cfg, n, block=7)
     batched.reset([np.random.default_rng(i) for i in range(n)])
     single = [Sensors(cfg) for _ in range(n)]

@@ -178,7 +178,7 @@ def test_batched_sensors_implement_the_same_process():
     """Per-env variances, masked samples, dropouts and the correlated errors: env i of the
     batch measures bit for bit what a Sensors of its configuration measures."""
     base = sensor_config("tomera2014-lake", dropout_probability=0.03, outlier_probability=0.05)
-    n = 3
+    n = 11  # (8 or more refills at once run side by side on threads)
     cfgs = [base.replace(position_variance=0.01 * (i + 1), heading_variance=1e-5 * (i + 1))
             for i in range(n)]  # fmt: skip
     batched = BatchedSensors(base, n, block=6)

@@ -17,13 +17,12 @@ realisation's seed, the same floats, so a long run's memory stays bounded.
 from __future__ import annotations
 
 import copy
-import os
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, njit, threads_ok
+from shipgym._jit import entry, njit, spread
 from shipgym._seeding import child_seeds
 
 __all__ = [
@@ -235,49 +234,24 @@ class PieceGrid:
         return j * CHUNK + p, self._chunk(j)[:, p : p + PIECE + 1]
 
 
-#: the fewest grids with samples to compute that :func:`load_windows` spreads over threads
-POOL_MIN = 8
-_POOL: list[Any] = []  # the thread pool, made on first use (dropped in a forked child)
-os.register_at_fork(after_in_child=_POOL.clear)
-
-
-def _pool() -> Any:
-    if not _POOL:
-        from concurrent.futures import ThreadPoolExecutor
-
-        import numba
-
-        workers = max(1, int(numba.config.NUMBA_NUM_THREADS))
-        _POOL.append(ThreadPoolExecutor(workers, thread_name_prefix="shipgym-grid"))
-    return _POOL[0]
-
-
-def _windows_of(items: list[tuple[PieceGrid, list[int]]]) -> None:
-    for grid, ks in items:
-        for k in ks:
-            grid.window(k)
+def _windows_of(item: tuple[PieceGrid, list[int]]) -> None:
+    grid, ks = item
+    for k in ks:
+        grid.window(k)
 
 
 def load_windows(grids: list[PieceGrid], ks: list[int]) -> list[tuple[int, NDArray[np.float64]]]:
     """``grids[m].window(ks[m])`` for every ``m``: the grids whose samples must be computed
     first (a new piece or chunk: random draws, recursions, harmonic sums) computed side by
-    side on a pool of Numba's thread count of threads where at least :data:`POOL_MIN` must
-    and this thread may use threads (:func:`shipgym._jit.threads_ok`), each grid on one
-    thread (its draws in their order: the same floats), one share of the grids a thread,
-    then every window read in order.
-    The draws and the compiled recursions and sums run without the GIL; a batch of hulls in
-    step reaches a chunk's end together, so its grids are computed together."""
+    side (:func:`shipgym._jit.spread`), each grid on one thread (its draws in their order:
+    the same floats), then every window read in order. The draws and the compiled recursions
+    and sums run without the GIL; a batch of hulls in step reaches a chunk's end together, so
+    its grids are computed together."""
     todo: dict[int, tuple[PieceGrid, list[int]]] = {}
     for g, k in zip(grids, ks, strict=True):
         if not g.computed(k):
             todo.setdefault(id(g), (g, []))[1].append(k)
-    if len(todo) >= POOL_MIN and threads_ok():
-        pool = _pool()
-        items = list(todo.values())
-        # one task a thread (many short tasks queue on the GIL: no faster than one thread)
-        parts = [items[w :: pool._max_workers] for w in range(pool._max_workers)]
-        for done in pool.map(_windows_of, parts):
-            del done
+    spread(_windows_of, list(todo.values()))
     return [g.window(k) for g, k in zip(grids, ks, strict=True)]
 
 

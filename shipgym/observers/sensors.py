@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import fields_of, from_mapping, param
-from shipgym._jit import entry, njit
+from shipgym._jit import entry, njit, spread
 from shipgym._seeding import child_seeds
 
 __all__ = [
@@ -510,7 +510,11 @@ class BatchedSensors:
             _SENSE.append(entry(_sense, args))
         i = _SENSE[0](*args)
         while i >= 0:
-            self._refill(i)
+            # every env whose draws are used up (a batch in step uses them up together), side
+            # by side: each env's draws from its own streams, the same numbers
+            mask = args[0]
+            due = i + np.nonzero(mask[i:] & (self._k[i:] >= self.block))[0]
+            spread(self._refill, due.tolist())
             i = _SENSE[0](*args)
 
     def measure(
