@@ -270,8 +270,9 @@ BATCHED_STACK = {"observer": "kbf"}
 EPISODE_STEPS = 50
 
 
-def _rollout(venv: Any, steps: int) -> Timed:
-    """``steps`` zero-action steps of a vector env, autoresets included."""
+def _rollout(venv: Any, steps: int, warm: bool = True) -> Timed:
+    """``steps`` zero-action steps of a vector env, autoresets included; ``warm``: reset
+    (seed 0) and run once first (else the caller warmed it up and reset it)."""
     zeros = np.zeros(venv.action_space.shape, np.float32)
 
     def run() -> float:
@@ -280,8 +281,9 @@ def _rollout(venv: Any, steps: int) -> Timed:
             venv.step(zeros)
         return time.perf_counter() - t0
 
-    venv.reset(seed=0)
-    run()  # warm-up: the compiled laws loaded, one episode and its resets done
+    if warm:
+        venv.reset(seed=0)
+        run()  # warm-up: the compiled laws loaded, one episode and its resets done
     return run
 
 
@@ -409,7 +411,7 @@ def _closed_loops(repeats: int, n: int = 256) -> dict[str, Any]:
             run = _rollout(venv, 2 * EPISODE_STEPS)  # warm-up: two short runs' worth
             if not cut:
                 venv.reset(seed=1)
-                run = _rollout_from_reset(venv, k)
+                run = _rollout(venv, k, warm=False)
             walls, cpus = [], []
             for _ in range(repeats if cut else 1):
                 c0 = time.process_time()
@@ -423,20 +425,6 @@ def _closed_loops(repeats: int, n: int = 256) -> dict[str, Any]:
             venv.close()
     return {"closed_loop_n256": whole, "closed_loop_n256_short": short,
             "closed_loop_missing": missing}  # fmt: skip
-
-
-def _rollout_from_reset(venv: Any, steps: int) -> Timed:
-    """``steps`` zero-action steps of a vector env that was just reset (no warm-up: the
-    caller warmed the laws up before that reset), autoresets included; one call."""
-    zeros = np.zeros(venv.action_space.shape, np.float32)
-
-    def run() -> float:
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            venv.step(zeros)
-        return time.perf_counter() - t0
-
-    return run
 
 
 def _pvs_dp(repeats: int, steps: int = 3000) -> dict[str, Any] | None:
