@@ -31,9 +31,8 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   (``shipgym.make(..., observer="kbf")``), interleaved;
 - ``vector_n1_over_single``: the batched env of one env over the single env, same stack
   (lower is better; the single plan-task env is that vector env of one with its single-env
-  ``info`` and its typed step record, so this is the cost of those; the
-  batched figures run whole episodes of ``EPISODE_STEPS`` steps with their batched
-  autoresets, after a warm-up);
+  ``info`` and its typed step record, so this is the cost of those; these figures run the
+  task's whole episodes, 801 steps a timing, with their autoresets, after a warm-up);
 - ``closed_loop_n256``: hull-steps per second (wall and CPU) of each vessel on its own task
   with the whole stack at N = 256 (:data:`CLOSED_LOOPS`), over one whole episode of the task
   with its autoresets; ``closed_loop_n256_short`` the same over ``EPISODE_STEPS``-step
@@ -265,8 +264,8 @@ def measure(repeats: int = 5, steps: int = 30_000) -> dict[str, Any]:
 BATCHED_STACK = {"observer": "kbf"}
 
 
-#: control steps per episode in the batched timings: each timing runs two episodes of every
-#: env, their autoresets (batched) included
+#: control steps per episode of the reset-heavy closed-loop figure (``closed_loop_n256_short``):
+#: each timing runs two such episodes of every env, their autoresets (batched) included
 EPISODE_STEPS = 50
 
 
@@ -298,8 +297,10 @@ def _batched_env(repeats: int, n: int = 256) -> dict[str, Any]:
     import shipgym
 
     env_id = "shipgym/BlueLadyTracking-v0"
-    k = 2 * EPISODE_STEPS
-    limit = {"max_episode_steps": EPISODE_STEPS}
+    # whole episodes of the task (its registered 800 steps, or its end): a timing's steps
+    # span about two of them with their autoresets
+    k = gym.spec(env_id).max_episode_steps + 1
+    limit: dict[str, Any] = {}
     venv = gym.make_vec(env_id, num_envs=n, **limit, **BATCHED_STACK)
     one = gym.make_vec(env_id, num_envs=1, **limit, **BATCHED_STACK)
     single = shipgym.make(env_id, **limit, **BATCHED_STACK)
