@@ -248,9 +248,9 @@ def spread(fn: Any, items: list[Any]) -> None:
     if not _POOL:
         from concurrent.futures import ThreadPoolExecutor
 
-        _POOL.append(ThreadPoolExecutor(numba.config.NUMBA_NUM_THREADS, "shipgym-spread"))
-    pool = _POOL[0]
-    k = pool._max_workers
+        workers = max(1, int(numba.config.NUMBA_NUM_THREADS))
+        _POOL.append((ThreadPoolExecutor(workers, "shipgym-spread"), workers))
+    pool, k = _POOL[0]
     for done in pool.map(_share, [fn] * k, [items[w::k] for w in range(k)]):
         del done
 
