@@ -322,6 +322,7 @@ class ShipVectorEnv(BatchedEnv):
         last the controller's info (``None`` without a controller), the reward terms in
         ``_rew``: what the vector env's step and the single env's (N = 1) both build their
         info from."""
+        self._fresh = False  # the state changes from here
         control: dict[str, Array] | None = None
         if self.controller is not None:
             a, control = self._control(a)
@@ -465,7 +466,7 @@ class ShipVectorEnv(BatchedEnv):
             self.observer.reset(self.physics.t, eta_start, mask=mask)
             self._obs_t = np.where(mask, self.physics.t, self._obs_t)
             self._cache.clear()
-        self._metrics_record(mask)
+        self._metrics_record(mask, now=ref)
 
     def _sample(self, mask: NDArray[np.bool_], observe: bool = True) -> None:
         """A sensor sample of the masked envs now (the single env's ``_measure``), fed to the
@@ -577,12 +578,16 @@ class ShipVectorEnv(BatchedEnv):
         self.task.terms(eta, nu, nav_eta, nav_nu, ref.buffer, action, self._prev, switched,
                         new_contact, self._obs, self._rew, self._eta_r)  # fmt: skip
 
-    def _observation(self) -> NDArray[np.float32]:
-        """The observation of every env now (after a reset: its previous action is zero)."""
+    def _observation(self, ref: Any = None) -> NDArray[np.float32]:
+        """The observation of every env now (after a reset: its previous action is zero),
+        computed once per state (``ref``: the guidance's reference now, where the caller has
+        it)."""
         if self._fresh:
             return self._obs.copy()
         no = np.zeros(self.num_envs, dtype=bool)
-        self._terms(self.guidance.reference(self.physics.t), self._prev, no, no)
+        self._terms(ref if ref is not None else self.guidance.reference(self.physics.t),
+                    self._prev, no, no)  # fmt: skip
+        self._fresh = True  # _obs is this state's observation (until a step or reset)
         return self._obs.copy()
 
     def _info(
@@ -661,15 +666,17 @@ class ShipVectorEnv(BatchedEnv):
         ref: Any = None,
         saturated: NDArray[np.bool_] | None = None,
         action: Array | None = None,
+        now: Any = None,
     ) -> None:
         """Record the envs of ``mask`` as the single env's ``_record_metrics``: after a reset
-        (``ref`` None: the run restarts, no saturation or command), or after a control step
-        with the step's reference, per-channel ``saturated`` flags and clipped ``action``."""
+        (``ref`` None: the run restarts, no saturation or command; ``now``: the guidance's
+        reference of this state where the reset has it), or after a control step with the
+        step's reference, per-channel ``saturated`` flags and clipped ``action``."""
         m = self._metrics
         if ref is None:  # a reset: a new run from the first sample, as the single env's reset
             self._fix[mask & ~self._z_valid] = np.nan  # (no fix yet where it was a dropout)
-            self._observation()  # the r-frame poses of this state (_eta_r)
-            ref = self.guidance.reference(self.physics.t)
+            ref = now if now is not None else self.guidance.reference(self.physics.t)
+            self._observation(ref)  # the r-frame poses of this state (_eta_r)
             m.reset(mask)
         if saturated is not None and self._metrics_slices is not None:  # per actuator
             saturated = np.stack([saturated[:, sl].any(axis=1) for sl in self._metrics_slices], 1)
