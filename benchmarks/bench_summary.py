@@ -391,41 +391,45 @@ def _closed_loops(repeats: int, n: int = 256) -> dict[str, Any]:
     short: dict[str, Any] = {}
     missing: dict[str, str] = {}
     for name, env_id, kwargs in CLOSED_LOOPS:
-        if gym.spec(env_id).vector_entry_point is None:
+        spec = gym.spec(env_id)
+        if spec.vector_entry_point is None:
             missing[name] = f"{env_id} has no vector entry point"
             continue
         # the plan tasks end at a step limit; the other families at their episode_duration
-        # (60 s of the roll and course tasks) or their manoeuvre's end (the sea trials)
-        plan = gym.spec(env_id).vector_entry_point.startswith("shipgym.envs.vector")
-        for cut, out in ((True, short), (False, whole)):
-            if cut:
-                limit = {"max_episode_steps": EPISODE_STEPS} if plan else {}
-                args = kwargs
-            else:  # the task's own episode (the roll and course tasks' registered 600 s)
-                limit = ({"max_episode_steps": gym.spec(env_id).max_episode_steps}
-                         if plan else {})  # fmt: skip
-                args = {k: v for k, v in kwargs.items() if k != "episode_duration"}
-            venv = gym.make_vec(env_id, num_envs=n, **limit, **args)
-            u = venv.unwrapped
-            sub = getattr(u, "n_substeps", None) or round(u.control_period / u.physics.timestep)
-            k = 2 * EPISODE_STEPS if cut else _task_episode(venv, env_id) + 1
-            run = _rollout(venv, 2 * EPISODE_STEPS)  # warm-up: two short runs' worth
-            if not cut:
-                venv.reset(seed=1)
-                run = _rollout(venv, k, warm=False)
-            walls, cpus = [], []
-            for _ in range(repeats if cut else 1):
-                c0 = time.process_time()
-                walls.append(run())
-                cpus.append(time.process_time() - c0)
-            hs = n * k * sub
-            out[name] = {"hull_steps_per_s": hs / statistics.median(walls),
-                         "hull_steps_per_cpu_s": hs / statistics.median(cpus),
-                         "min": hs / max(walls), "max": hs / min(walls),
-                         "control_steps": k}  # fmt: skip
-            venv.close()
+        # (the entry's 60 s of the roll and course tasks, or their registered 600 s) or their
+        # manoeuvre's end (the sea trials)
+        plan = spec.vector_entry_point.startswith("shipgym.envs.vector")
+        cut = {"max_episode_steps": EPISODE_STEPS} if plan else {}
+        venv = gym.make_vec(env_id, num_envs=n, **kwargs, **cut)
+        k = 2 * EPISODE_STEPS
+        short[name] = _hull_steps(venv, n, _rollout(venv, k), k, repeats)
+        own = {key: v for key, v in kwargs.items() if key != "episode_duration"}
+        limit = {"max_episode_steps": spec.max_episode_steps} if plan else {}
+        venv = gym.make_vec(env_id, num_envs=n, **own, **limit)
+        _rollout(venv, 2 * EPISODE_STEPS)  # warm-up, then one whole episode from a reset
+        venv.reset(seed=1)
+        k = _task_episode(venv, env_id) + 1
+        whole[name] = _hull_steps(venv, n, _rollout(venv, k, warm=False), k, 1)
     return {"closed_loop_n256": whole, "closed_loop_n256_short": short,
             "closed_loop_missing": missing}  # fmt: skip
+
+
+def _hull_steps(venv: Any, n: int, run: Timed, steps: int, repeats: int) -> dict[str, Any]:
+    """Hull-steps per second (wall and CPU; median, min, max over ``repeats``) of ``run``, a
+    rollout of ``steps`` control steps of the vector env ``venv`` of ``n`` envs
+    (:func:`_rollout`), which it closes."""
+    u = venv.unwrapped
+    sub = getattr(u, "n_substeps", None) or round(u.control_period / u.physics.timestep)
+    walls, cpus = [], []
+    for _ in range(repeats):
+        c0 = time.process_time()
+        walls.append(run())
+        cpus.append(time.process_time() - c0)
+    venv.close()
+    hs = n * steps * sub
+    return {"hull_steps_per_s": hs / statistics.median(walls),
+            "hull_steps_per_cpu_s": hs / statistics.median(cpus),
+            "min": hs / max(walls), "max": hs / min(walls), "control_steps": steps}  # fmt: skip
 
 
 def _pvs_dp(repeats: int, steps: int = 3000) -> dict[str, Any] | None:

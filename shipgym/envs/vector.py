@@ -466,7 +466,7 @@ class ShipVectorEnv(BatchedEnv):
             self.observer.reset(self.physics.t, eta_start, mask=mask)
             self._obs_t = np.where(mask, self.physics.t, self._obs_t)
             self._cache.clear()
-        self._metrics_record(mask, now=ref)
+        self._metrics_record(mask, ref, reset=True)
 
     def _sample(self, mask: NDArray[np.bool_], observe: bool = True) -> None:
         """A sensor sample of the masked envs now (the single env's ``_measure``), fed to the
@@ -663,19 +663,19 @@ class ShipVectorEnv(BatchedEnv):
     def _metrics_record(
         self,
         mask: NDArray[np.bool_],
-        ref: Any = None,
+        ref: Any,
         saturated: NDArray[np.bool_] | None = None,
         action: Array | None = None,
-        now: Any = None,
+        *,
+        reset: bool = False,
     ) -> None:
-        """Record the envs of ``mask`` as the single env's ``_record_metrics``: after a reset
-        (``ref`` None: the run restarts, no saturation or command; ``now``: the guidance's
-        reference of this state where the reset has it), or after a control step with the
-        step's reference, per-channel ``saturated`` flags and clipped ``action``."""
+        """Record the envs of ``mask`` with the guidance's reference ``ref`` of this state as
+        the single env's ``_record_metrics``: after a ``reset`` (the run restarts, no
+        saturation or command), or after a control step with its per-channel ``saturated``
+        flags and clipped ``action``."""
         m = self._metrics
-        if ref is None:  # a reset: a new run from the first sample, as the single env's reset
+        if reset:  # a new run from the first sample, as the single env's reset
             self._fix[mask & ~self._z_valid] = np.nan  # (no fix yet where it was a dropout)
-            ref = now if now is not None else self.guidance.reference(self.physics.t)
             self._observation(ref)  # the r-frame poses of this state (_eta_r)
             m.reset(mask)
         if saturated is not None and self._metrics_slices is not None:  # per actuator
