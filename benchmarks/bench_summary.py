@@ -41,7 +41,11 @@ the median over the repeats with the smallest and largest repeat, and all are wr
   PythonVehicleSimulator's DP loop per step (lower is better; needs ``PVS_SRC``);
 - ``ppo_fps_batched_over_single``: stable-baselines3 PPO's training rate (rollouts and
   updates, the shipped hyperparameters and KBF + PID-residual stack, 32 envs) on the batched
-  env over the same on ``DummyVecEnv`` of single envs (``null`` without the ``rl`` extra).
+  env over the same on ``DummyVecEnv`` of single envs (``null`` without the ``rl`` extra);
+  ``ppo_update_share_batched`` and ``ppo_env_share_batched`` the shares of SB3's update
+  (``PPO.train``, the same work on both sides) and of the batched env's steps in the batched
+  learn, and ``ppo_fps_ratio_bound`` the ratio a batched env and rollout that cost nothing
+  would reach (the single learn over the update alone).
 
 Every ratio records the CPU time beside the wall time (``cpu_median``, ``a_cpu_s``,
 ``b_cpu_s``). Absolute rates are printed too (this machine's); ratios are what compares
@@ -333,6 +337,11 @@ def _batched_env(repeats: int, n: int = 256) -> dict[str, Any]:
     if ppo is not None:
         out["ppo_fps_batched"] = 1.0 / ppo["b_s"]
         out["ppo_fps_single"] = 1.0 / ppo["a_s"]
+        # SB3's update, the same on both sides, caps the ratio (Amdahl): its share of the
+        # batched learn, and the ratio a batched env and rollout of no cost would reach
+        out["ppo_update_share_batched"] = ppo.pop("update_share_batched")
+        out["ppo_env_share_batched"] = ppo.pop("env_share_batched")
+        out["ppo_fps_ratio_bound"] = ppo.pop("bound")
     else:
         out["missing"] = {"ppo_fps_batched_over_single": "needs the rl extra (make rl)"}
     return out
@@ -500,8 +509,29 @@ def _ppo_fps(env_id: str, repeats: int, n_envs: int = 32, n_steps: int = 32) -> 
         return lambda: models[kind].learn(n_steps * n_envs, reset_num_timesteps=False)
 
     steps = n_steps * n_envs
-    return pair(_timed(learn("dummy")), _timed(learn("batched")), repeats, per_a=steps,
-                per_b=steps)  # fmt: skip
+    out = pair(_timed(learn("dummy")), _timed(learn("batched")), repeats, per_a=steps,
+               per_b=steps)  # fmt: skip
+    # the update alone (PPO.train on the last rollout, the same work on either env): what the
+    # batched learn cannot lose; the ratio's bound with an env and rollout that cost nothing
+    update = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        models["batched"].train()
+        update.append((time.perf_counter() - t0) / steps)
+    u = statistics.median(update)
+    # the batched env's steps alone (zero actions), the rest of the rollout being SB3's
+    venv = models["batched"].get_env()
+    zeros = np.zeros((n_envs, *venv.action_space.shape), np.float32)
+    env = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(n_steps):
+            venv.step(zeros)
+        env.append((time.perf_counter() - t0) / steps)
+    out["update_share_batched"] = u / out["b_s"]
+    out["env_share_batched"] = statistics.median(env) / out["b_s"]
+    out["bound"] = out["a_s"] / u
+    return out
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -525,7 +555,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     print(f"  {'single env':28s}: {res['single_hull_steps_per_s']:10,.0f} hull-steps/s")
     if res.get("ppo_fps_batched") is not None:
         print(f"  {'PPO, batched / DummyVecEnv':28s}: {res['ppo_fps_batched']:10,.0f} / "
-              f"{res['ppo_fps_single']:,.0f} steps/s")  # fmt: skip
+              f"{res['ppo_fps_single']:,.0f} steps/s; of the batched learn the update "
+              f"{res['ppo_update_share_batched']:.0%}, the env "
+              f"{res['ppo_env_share_batched']:.0%}; the ratio's bound "
+              f"{res['ppo_fps_ratio_bound']:.2f}")  # fmt: skip
     print(
         "closed loops, N = 256, hull-steps/s (wall; CPU): one whole episode of the task "
         f"(steps) | {2 * EPISODE_STEPS} steps of {EPISODE_STEPS}-step episodes:"
