@@ -178,7 +178,7 @@ def test_sdre_riccati_solver_matches_scipy(vessel):
         A1 = np.array(lf.A)
         A1[:4, 4:6] *= np.exp(-np.abs(np.array([level, -0.5 * level])))
         K_ref, S_ref, _ = lqr(A1, lf.B, Q, R)
-        S = care(A1, d.G, d.Q)
+        S = care(A1, np.array(d.G), np.array(d.Q))  # (the law's writable types: its compile)
         np.testing.assert_allclose(S, S_ref, rtol=1e-9, atol=1e-11 * np.abs(S_ref).max())
         np.testing.assert_allclose(d.RiBt @ S, K_ref, rtol=1e-9, atol=1e-11)
 

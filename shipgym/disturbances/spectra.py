@@ -577,8 +577,10 @@ def harmonic_sums(
     c = np.asarray(weights)
     one = c.ndim == 1
     c = np.atleast_2d(c)
-    w = np.ascontiguousarray(w, dtype=float)
-    eps = np.ascontiguousarray(eps, dtype=float)
+    # C-contiguous and writable, as every caller's arrays then are: one compiled sum for all
+    # (a read-only array is a type of its own, compiled again)
+    w = np.require(w, dtype=float, requirements=("C", "W"))
+    eps = np.require(eps, dtype=float, requirements=("C", "W"))
     if np.iscomplexobj(c):
         if real:
             raise ValueError("harmonic_sums(real=True) takes real weights")
@@ -586,7 +588,7 @@ def harmonic_sums(
         im = harmonic_sums(t0, dt, n, w, eps, c.imag, start=start, table=table)
         out_c = re + 1j * im
         return out_c[0] if one else out_c
-    c = np.ascontiguousarray(c, dtype=float)
+    c = np.require(c, dtype=float, requirements=("C", "W"))
     rows = np.zeros((c.shape[0], 2, n))
     zr, zi = harmonic_table(dt, w) if table is None else table
     harmonic_into((float(t0), float(dt), int(start), int(n), w, eps, c, not real, zr, zi, rows))

@@ -242,6 +242,8 @@ def _obstacle_rects(
 
 #: the columns ``[u, v, r]`` of a hull's ``(u, v, p, r)``
 _UVR = np.array([0, 1, 3])
+#: Fossen's 4-DOF pose order [x, y, phi, psi] from the joints' [x, y, psi, phi]
+_FOSSEN4 = np.array([0, 1, 3, 2])
 _XYN = _UVR  # (X, Y, N) of (X, Y, K, N)
 
 
@@ -541,7 +543,9 @@ class BatchedPhysics:
     def eta_full(self) -> Array:
         """``[x, y, psi]`` (n, 3), or Fossen's ``[x, y, phi, psi]`` (n, 4) for 4 DOF."""
         q = self._hulls.q
-        return q.copy() if self.dofs == 3 else q[:, [0, 1, 3, 2]]
+        # (take: C-contiguous whatever n, as the compiled consumers are typed; a fancy index
+        # gives Fortran order for n > 1, another compile of each)
+        return q.copy() if self.dofs == 3 else q.take(_FOSSEN4, axis=1)
 
     @property
     def nu(self) -> Array:
@@ -552,7 +556,7 @@ class BatchedPhysics:
     def nu_full(self) -> Array:
         """``[u, v, r]`` (n, 3), or Fossen's ``[u, v, p, r]`` (n, 4) for 4 DOF."""
         w = self._hulls.body_velocities()
-        return w[:, [0, 1, 3]] if self.dofs == 3 else w
+        return w.take(_UVR, axis=1) if self.dofs == 3 else w
 
     @property
     def actuator_state(self) -> Array:
@@ -597,7 +601,8 @@ class BatchedPhysics:
         """Commands ``(n, n_channels)`` (or one row for all), clipped to the channels' ranges;
         returns the clip flags (also :attr:`saturated`)."""
         nc = self.actuators.n_channels
-        c = None if command is None else np.asarray(command, dtype=float)
+        # (C-contiguous: the compiled hold's one type; a transposed command is another)
+        c = None if command is None else np.ascontiguousarray(command, dtype=float)
         if c is None or c.shape != (self.n, nc):
             c = self._rows(command, nc, "command", self._hulls.cmd)  # one row, none, or refused
         flags = np.empty((self.n, nc), dtype=bool)

@@ -184,13 +184,14 @@ def _relinearise(sel, X, A_lf, B_lf, G_lf, F1, F2, dt, Qd, Phi, Gamma, W, count)
 
 
 def _rows(a: ArrayLike | None, shape: tuple[int, ...]) -> Array:
-    """``a`` as C-contiguous float rows of ``shape`` (broadcast from one row; zeros for
-    ``None``)."""
+    """``a`` as C-contiguous, writable float rows of ``shape`` (broadcast from one row; zeros
+    for ``None``): one array type whatever the caller passes (a read-only array, a broadcast
+    view, as one row of one env is) is one compiled update, not one per type."""
     if a is None:
         return np.zeros(shape)
     if isinstance(a, np.ndarray) and a.shape == shape and a.dtype == np.float64:
-        return np.ascontiguousarray(a)
-    return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), shape))
+        return np.require(a, requirements=("C", "W"))
+    return np.array(np.broadcast_to(np.asarray(a, dtype=float), shape), order="C")
 
 
 class DiscreteKF:

@@ -566,7 +566,9 @@ def _dual_qp(L, c, col, A, b, eq, p, x, u, on, have, act, G, U, Rt, d, r, w, z):
         u[i] = 0.0
         on[i] = False
         have[i] = False
-    q = 0
+    # (the active count and the entering constraint typed int64 from the start: a literal
+    # 0 or -1 reaching a callee would compile it once more for that literal)
+    q = np.int64(0)
     resolved = 0
     fresh = False
     for i in range(p):  # equalities: full steps, multipliers of either sign, never dropped
@@ -585,7 +587,7 @@ def _dual_qp(L, c, col, A, b, eq, p, x, u, on, have, act, G, U, Rt, d, r, w, z):
         q = _append(act, q, i, U, Rt, d, w, zn)
         _correct(L, col, A, b, act, q, U, Rt, x, u, d, r, w, z)
     for _ in range(10 * (n + p) + 10):
-        ip, worst = -1, -_PRIMAL_TOL
+        ip, worst = np.int64(-1), -_PRIMAL_TOL
         for i in range(p):
             if not on[i]:
                 sl = _slack(col, A, b, i, x)
@@ -721,9 +723,10 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
         0, or the first failing request's index + 1 times 8 plus the reason (1: not finite;
         2: the QP did not converge; 3: its curvature not positive definite).
     """
-    return _azimuth_rows(0, tau.shape[0], Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev,
-                         rows, hull, tau, a_prev, thrust, angle, f_az, f_fixed, delivered, error,
-                         saturated, rate_limited)  # fmt: skip
+    # (first: an int64, not the literal 0: one compiled _azimuth_rows for both laws)
+    return _azimuth_rows(np.int64(0), tau.shape[0], Q0, R, qd, turn, B, s, flo, fhi, fmax,
+                         dmax, rev, rows, hull, tau, a_prev, thrust, angle, f_az, f_fixed,
+                         delivered, error, saturated, rate_limited)  # fmt: skip
 
 
 @njit(parallel=True)
@@ -1010,8 +1013,10 @@ PARALLEL_MIN = 16
 def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64]):  # type: ignore[no-untyped-def]
     """:func:`azimuth_law` on ``tau`` (N, n_dof) from ``a_prev`` (N, M) through its compiled
     entry point: the fields of :class:`AzimuthAllocation`, each with a leading axis N."""
-    t = np.ascontiguousarray(tau, dtype=float)
-    a = np.ascontiguousarray(a_prev, dtype=float)
+    # C-contiguous and writable: the one compiled entry point's types (a read-only request,
+    # such as a frozen Azimuths' angles, would otherwise be a second compile of the law)
+    t = np.require(tau, dtype=float, requirements=("C", "W"))
+    a = np.require(a_prev, dtype=float, requirements=("C", "W"))
     N, m, k = t.shape[0], prep.m, prep.k
     out = (np.empty((N, m)), np.empty((N, m)), np.empty((N, m, 2)), np.empty((N, k)),
            np.empty((N, prep.n_dof)), np.empty((N, prep.n_dof)),

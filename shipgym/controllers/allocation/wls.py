@@ -341,8 +341,10 @@ def wls_law(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):
         0, or the first failing request's index + 1 times 4 plus the reason (1: ``Q`` not
         positive definite; 2: no convergence; 3: a request not finite).
     """
-    return _wls_rows(0, tau.shape[0], Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered,
-                     error, active)  # fmt: skip
+    # (first: an int64, not the literal 0, so that this law and wls_law_parallel share one
+    # compiled _wls_rows: a literal argument is a signature of its own, compiled again)
+    return _wls_rows(np.int64(0), tau.shape[0], Q, R, xlo, xhi, s, lo, hi, B, tau, force,
+                     delivered, error, active)  # fmt: skip
 
 
 @njit(parallel=True)
@@ -424,15 +426,16 @@ def run_wls(Q, R, xlo, xhi, s, lo, hi, B, tau):  # type: ignore[no-untyped-def]
 
 
 def _problem(*arrays: Any) -> tuple[NDArray[np.float64], ...]:
-    """:func:`run_wls`'s problem arrays ``(Q, R, xlo, xhi, s, lo, hi, B)``, C-contiguous
-    float64 (what its compiled entry point is typed for)."""
-    return tuple(np.ascontiguousarray(a, dtype=float) for a in arrays)
+    """:func:`run_wls`'s problem arrays ``(Q, R, xlo, xhi, s, lo, hi, B)``, C-contiguous,
+    writable float64 (what its compiled entry point is typed for: a read-only array would be
+    a type of its own, the law compiled again)."""
+    return tuple(np.require(a, dtype=float, requirements=("C", "W")) for a in arrays)
 
 
 def _run_wls(problem: tuple[NDArray[np.float64], ...], tau: ArrayLike) -> tuple[Any, ...]:
     """:func:`run_wls` of a problem of :func:`_problem` (prepared once by a
     :class:`WLSAllocator`)."""
-    t = np.ascontiguousarray(tau, dtype=float)
+    t = np.require(tau, dtype=float, requirements=("C", "W"))
     N, n = t.shape[0], problem[4].shape[0]
     out = (np.empty((N, n)), np.empty((N, t.shape[1])), np.empty((N, t.shape[1])),
            np.empty((N, n), dtype=np.bool_))  # fmt: skip
