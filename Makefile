@@ -96,10 +96,12 @@ demo: $(STAMP) ## the harbour manoeuvre: recording, figures and metrics in runs/
 
 # The tests include stable-baselines3's check_env, so they need the RL extra. They run on
 # TEST_WORKERS processes (pytest-xdist; auto: one a core, at most 4); TEST_WORKERS=0 runs them
-# in this process, in file order.
+# in this process, in file order. An idle worker steals queued tests from a busy one
+# (--dist worksteal): the long, compile-heavy tests no longer leave one worker running alone
+# at the end (a fresh clone's suite about 40 s shorter here).
 TEST_WORKERS ?= auto
 test: $(RL_STAMP) ## the test suite (slow tests skipped), on TEST_WORKERS processes
-	$(PY) -m pytest -q -n $(TEST_WORKERS) --maxprocesses=4
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --maxprocesses=4 --dist worksteal
 
 test-random: $(RL_STAMP) ## the test suite in a shuffled order (SEED=N repeats an order)
 	@seed=$${SEED:-$$(( RANDOM * 32768 + RANDOM ))}; \

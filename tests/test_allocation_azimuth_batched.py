@@ -266,9 +266,24 @@ def test_any_array_layout_gives_the_same_answer():
 
 
 def test_the_parallel_law_is_the_serial_law(monkeypatch):
-    """Many requests run on Numba's threads (``azimuth_law_parallel``): the same floats as
+    """Many requests run in chunks on threads (``shipgym._jit.spread``): the same floats as
     the serial law, row by row, and a bad row is reported as the serial law reports it."""
+    import threading
+
     import shipgym.controllers.allocation.azimuth as law
+    from shipgym._jit import threads_ok
+
+    threads = set()
+    in_chunks = law._in_chunks
+
+    def spy(fn, fixed, rows):
+        def seen(*args):
+            threads.add(threading.current_thread().name)
+            return fn(*args)
+
+        return in_chunks(seen, fixed, rows)
+
+    monkeypatch.setattr(law, "_in_chunks", spy)
 
     v = load_vessel("wimpey-sealab")
     al = make_allocator(v, "constrained", 0.5)
@@ -280,6 +295,8 @@ def test_the_parallel_law_is_the_serial_law(monkeypatch):
     state[:, 1::2] = rng.uniform(-7.0, 7.0, (n, 4))
     monkeypatch.setattr(law, "PARALLEL_MIN", 1)
     par = al.batch(tau, state)
+    if threads_ok():  # the chunks ran on the pool's threads
+        assert any(name.startswith("shipgym-spread") for name in threads), threads
     monkeypatch.setattr(law, "PARALLEL_MIN", 10**9)
     ser = al.batch(tau, state)
     for a, b in zip(par, ser, strict=True):

@@ -63,7 +63,7 @@ def test_allocation_rows_compile_once_for_the_serial_and_threaded_laws_and_froze
     wa = WLSAllocator(B, lo, hi)
     for n in (2, wls.PARALLEL_MIN + 3):
         wa.batch(_frozen(rng.normal(0.0, [1e3, 1e3, 1e4], (n, 3))))
-    laws = (azimuth.azimuth_law, azimuth.azimuth_law_parallel, wls.wls_law, wls.wls_law_parallel)
+    laws = (azimuth.azimuth_law, wls.wls_law, wls.wls_law_parallel)
     for law in laws:  # (the entry points: a law loaded from the cache lists no inner calls)
         assert law.signatures, law
         assert not _odd_types(law), (law, _odd_types(law))
