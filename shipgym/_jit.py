@@ -6,7 +6,7 @@ and any actuator kind's force law as a first-class function argument: the loop i
 once (and cached on disk by Numba), a new family or kind compiles only its own small law.
 
 Public names: ``ACCEL_SIG``, ``LAW_SIG``, ``THREADS``, ``njit``, ``kernel``, ``entry``,
-``threads_ok``, ``use_threads``, ``spread``.
+``threads_ok``, ``use_threads``, ``spread``, ``law_input``.
 
 Design notes: docs/design/_jit.md.
 """
@@ -34,6 +34,7 @@ __all__ = [
     "njit",
     "kernel",
     "entry",
+    "law_input",
     "threads_ok",
     "use_threads",
     "spread",
@@ -190,6 +191,14 @@ def entry(dispatcher: Any, args: tuple[Any, ...]) -> Any:
         dispatcher.compile(sig)
         found = _ENTRIES[key] = dispatcher.overloads[sig].entry_point
     return found
+
+
+def law_input(a: Any, dtype: Any = float) -> np.ndarray:
+    """``a`` as a C-contiguous, writable array of ``dtype``: the one type a law's compiled entry
+    point is typed for. A read-only or strided array is a Numba type of its own, so passing it
+    would compile the whole law again; this copies only such an input (a frozen vessel's
+    array, a broadcast row) and hands every other array through as it is."""
+    return np.require(a, dtype=dtype, requirements=("C", "W"))
 
 
 # ---- Numba's threads ---------------------------------------------------------------------------

@@ -24,7 +24,7 @@ import numpy as np
 from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, njit, threads_ok, use_threads
+from shipgym._jit import entry, law_input, njit, threads_ok, use_threads
 
 __all__ = [
     "G",
@@ -577,10 +577,7 @@ def harmonic_sums(
     c = np.asarray(weights)
     one = c.ndim == 1
     c = np.atleast_2d(c)
-    # C-contiguous and writable, as every caller's arrays then are: one compiled sum for all
-    # (a read-only array is a type of its own, compiled again)
-    w = np.require(w, dtype=float, requirements=("C", "W"))
-    eps = np.require(eps, dtype=float, requirements=("C", "W"))
+    w, eps = law_input(w), law_input(eps)  # (the wind's frozen spectrum: read-only)
     if np.iscomplexobj(c):
         if real:
             raise ValueError("harmonic_sums(real=True) takes real weights")
@@ -588,7 +585,7 @@ def harmonic_sums(
         im = harmonic_sums(t0, dt, n, w, eps, c.imag, start=start, table=table)
         out_c = re + 1j * im
         return out_c[0] if one else out_c
-    c = np.require(c, dtype=float, requirements=("C", "W"))
+    c = law_input(c)
     rows = np.zeros((c.shape[0], 2, n))
     zr, zi = harmonic_table(dt, w) if table is None else table
     harmonic_into((float(t0), float(dt), int(start), int(n), w, eps, c, not real, zr, zi, rows))

@@ -24,7 +24,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import njit
+from shipgym._jit import law_input, njit
 from shipgym.dynamics.altakie import (
     WaveFilterModel,
     discretise,
@@ -184,13 +184,12 @@ def _relinearise(sel, X, A_lf, B_lf, G_lf, F1, F2, dt, Qd, Phi, Gamma, W, count)
 
 
 def _rows(a: ArrayLike | None, shape: tuple[int, ...]) -> Array:
-    """``a`` as C-contiguous, writable float rows of ``shape`` (broadcast from one row; zeros
-    for ``None``): one array type whatever the caller passes (a read-only array, a broadcast
-    view, as one row of one env is) is one compiled update, not one per type."""
+    """``a`` as float rows of ``shape`` of the compiled update's one type
+    (:func:`~shipgym._jit.law_input`; broadcast from one row, a copy; zeros for ``None``)."""
     if a is None:
         return np.zeros(shape)
     if isinstance(a, np.ndarray) and a.shape == shape and a.dtype == np.float64:
-        return np.require(a, requirements=("C", "W"))
+        return law_input(a)
     return np.array(np.broadcast_to(np.asarray(a, dtype=float), shape), order="C")
 
 

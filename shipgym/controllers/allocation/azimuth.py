@@ -24,7 +24,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, njit, spread, threads_ok
+from shipgym._jit import entry, law_input, njit, spread, threads_ok
 
 from .wls import (
     _bounds,
@@ -994,22 +994,19 @@ _CHUNKS_PER_THREAD = 8
 def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64]):  # type: ignore[no-untyped-def]
     """:func:`azimuth_law` on ``tau`` (N, n_dof) from ``a_prev`` (N, M) through its compiled
     entry point: the fields of :class:`AzimuthAllocation`, each with a leading axis N."""
-    # C-contiguous and writable: the one compiled entry point's types (a read-only request,
-    # such as a frozen Azimuths' angles, would otherwise be a second compile of the law)
-    t = np.require(tau, dtype=float, requirements=("C", "W"))
-    a = np.require(a_prev, dtype=float, requirements=("C", "W"))
+    t, a = law_input(tau), law_input(a_prev)  # (a frozen Azimuths' angles: read-only)
     N, m, k = t.shape[0], prep.m, prep.k
     out = (np.empty((N, m)), np.empty((N, m)), np.empty((N, m, 2)), np.empty((N, k)),
            np.empty((N, prep.n_dof)), np.empty((N, prep.n_dof)),
            np.empty((N, m + k), dtype=np.bool_), np.empty((N, m), dtype=np.bool_))  # fmt: skip
-    args = (*prep.args, t, a, *out)
+    rows = (t, a, *out)
     if not _LAW:
-        _LAW.append(entry(azimuth_law, args))
+        _LAW.append(entry(azimuth_law, (*prep.args, *rows)))
     fn = _LAW[0]
     if N >= PARALLEL_MIN and threads_ok():
-        code = _in_chunks(fn, prep.args, (t, a, *out))
+        code = _in_chunks(fn, prep.args, rows)
     else:
-        code = fn(*args)
+        code = fn(*prep.args, *rows)
     if code:
         row, why = divmod(code, 8)
         if why == 1:

@@ -18,7 +18,7 @@ import numpy as np
 from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, njit, threads_ok, use_threads
+from shipgym._jit import entry, law_input, njit, threads_ok, use_threads
 
 __all__ = ["DEFAULT_H_REL", "WLSAllocation", "WLSAllocator", "allocate_wls", "run_wls", "wls_law"]
 
@@ -426,16 +426,15 @@ def run_wls(Q, R, xlo, xhi, s, lo, hi, B, tau):  # type: ignore[no-untyped-def]
 
 
 def _problem(*arrays: Any) -> tuple[NDArray[np.float64], ...]:
-    """:func:`run_wls`'s problem arrays ``(Q, R, xlo, xhi, s, lo, hi, B)``, C-contiguous,
-    writable float64 (what its compiled entry point is typed for: a read-only array would be
-    a type of its own, the law compiled again)."""
-    return tuple(np.require(a, dtype=float, requirements=("C", "W")) for a in arrays)
+    """:func:`run_wls`'s problem arrays ``(Q, R, xlo, xhi, s, lo, hi, B)`` as its compiled
+    entry point is typed (:func:`~shipgym._jit.law_input`)."""
+    return tuple(law_input(a) for a in arrays)
 
 
 def _run_wls(problem: tuple[NDArray[np.float64], ...], tau: ArrayLike) -> tuple[Any, ...]:
     """:func:`run_wls` of a problem of :func:`_problem` (prepared once by a
     :class:`WLSAllocator`)."""
-    t = np.require(tau, dtype=float, requirements=("C", "W"))
+    t = law_input(tau)
     N, n = t.shape[0], problem[4].shape[0]
     out = (np.empty((N, n)), np.empty((N, t.shape[1])), np.empty((N, t.shape[1])),
            np.empty((N, n), dtype=np.bool_))  # fmt: skip
