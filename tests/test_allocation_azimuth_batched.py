@@ -266,24 +266,25 @@ def test_any_array_layout_gives_the_same_answer():
 
 
 def test_the_parallel_law_is_the_serial_law(monkeypatch):
-    """Many requests run in chunks on threads (``shipgym._jit.spread``): the same floats as
-    the serial law, row by row, and a bad row is reported as the serial law reports it."""
+    """Many requests run in ranges of rows on threads (``shipgym._jit.spread_rows``): the same
+    floats as the serial law, row by row, and a bad row is reported as the serial law reports
+    it."""
     import threading
 
     import shipgym.controllers.allocation.azimuth as law
     from shipgym._jit import threads_ok
 
     threads = set()
-    in_chunks = law._in_chunks
+    spread_rows = law.spread_rows
 
-    def spy(fn, fixed, rows):
-        def seen(*args):
+    def spy(fn, n):
+        def seen(lo, hi):
             threads.add(threading.current_thread().name)
-            return fn(*args)
+            return fn(lo, hi)
 
-        return in_chunks(seen, fixed, rows)
+        return spread_rows(seen, n)
 
-    monkeypatch.setattr(law, "_in_chunks", spy)
+    monkeypatch.setattr(law, "spread_rows", spy)
 
     v = load_vessel("wimpey-sealab")
     al = make_allocator(v, "constrained", 0.5)

@@ -325,7 +325,7 @@ def test_any_memory_layout_of_b_gives_a_correct_allocation():
 
 
 def test_a_large_batch_on_threads_equals_the_requests_one_by_one():
-    """A batch of at least ``PARALLEL_MIN`` requests (allocated on Numba's threads where this
+    """A batch of at least ``PARALLEL_MIN`` requests (allocated in ranges on threads where this
     thread may use them) gives every row bit for bit as its own call, and a bad request is
     named as in a serial call: the first one in the batch."""
     from shipgym.controllers.allocation import wls

@@ -301,7 +301,7 @@ def test_a_mujoco_batch_in_the_harbour_stops_each_hull_at_its_own_quay_contact()
 @pytest.mark.parametrize("integrator", ["leapfrog", "mujoco"])
 def test_a_batch_on_numbas_threads_gives_the_floats_of_the_serial_loop(integrator, monkeypatch):
     """A batch of at least ``PARALLEL_MIN`` hulls steps on Numba's threads
-    (:func:`~shipgym.sim.step.run_parallel`): the same per-hull law, so the same floats as the
+    (:func:`~shipgym.sim.step.run_threads`): the same per-hull law, so the same floats as the
     serial loop, across grid chunks that every hull needs at the same step (a 0.05 s gust grid:
     a chunk is 204.8 s) and with each hull's own commands and weather; hull 7 is also the
     single physics bit for bit (leapfrog)."""

@@ -17,8 +17,8 @@ from shipgym.disturbances.spectra import (
     froude_scale,
     gauss_markov_psd,
     harmonic_components,
+    harmonic_into,
     harmonic_rows,
-    harmonic_rows_parallel,
     harmonic_sums,
     harmonic_table,
     harris_wind_spectrum,
@@ -235,9 +235,11 @@ def test_harmonic_sums_are_the_numpy_blocks_floats() -> None:
 
 
 @pytest.mark.parametrize("start,n", [(0, 4097), (37, 3000), (576, 3521), (100, 5)])
-def test_harmonic_rows_on_threads_are_the_serial_floats(start: int, n: int) -> None:
-    """A chunk's sums on Numba's threads (its blocks side by side) are the floats of the
-    serial loop, for any range of samples."""
+def test_harmonic_rows_on_threads_are_the_serial_floats(start: int, n: int, monkeypatch) -> None:
+    """A chunk's sums in ranges of blocks on threads are the floats of the serial loop over
+    all its blocks, for any range of samples."""
+    from shipgym.disturbances import spectra
+
     rng = np.random.default_rng(5)
     w = rng.uniform(0.3, 3.0, 100)
     eps = rng.uniform(0, 2 * np.pi, 100)
@@ -245,8 +247,9 @@ def test_harmonic_rows_on_threads_are_the_serial_floats(start: int, n: int) -> N
     zr, zi = harmonic_table(0.07, w)
     args = (11.0, 0.07, start, n, w, eps, c, True, zr, zi)
     serial, threads = np.zeros((3, 2, n)), np.zeros((3, 2, n))
-    harmonic_rows(*args, serial)
-    harmonic_rows_parallel(*args, threads)
+    harmonic_rows(0, -(-(start + n) // 64) - start // 64, *args, serial)
+    monkeypatch.setattr(spectra, "PARALLEL_SAMPLES", 0)
+    harmonic_into((*args, threads))
     assert np.array_equal(serial, threads) and np.all(serial[:, 1] != 0.0)
 
 

@@ -21,10 +21,9 @@ import numbers
 from typing import Any
 
 import numpy as np
-from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, law_input, njit, threads_ok, use_threads
+from shipgym._jit import entry, law_input, njit, spread_rows, threads_ok
 
 __all__ = [
     "G",
@@ -47,7 +46,6 @@ __all__ = [
     "HARMONIC_BLOCK",
     "harmonic_into",
     "harmonic_rows",
-    "harmonic_rows_parallel",
     "harmonic_sums",
     "harmonic_table",
     "FROUDE_EXPONENTS",
@@ -484,54 +482,45 @@ def _harmonic_block(b, t0, dt, start, end, w, eps, c, imag, zr, zi, out, cb, sb,
 
 
 @njit(nogil=True)
-def harmonic_rows(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
+def harmonic_rows(first, end, t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
     """:func:`harmonic_sums` of the real weights ``c`` (R, N) at the grid points ``k = start
-    ... start + n - 1`` into ``out`` (R, 2, n): the real
-    parts (``out[r, 0]``) and, where ``imag``, the imaginary parts (``out[r, 1]``; else left
-    as they are). The float operations of the NumPy form this replaced, in its order: the
-    phase ``w_j (t0 + 64 dt b) + eps_j`` and ``w_j (dt m)``, ``exp(i x) = cos x + i sin x``,
-    the block factor times ``c``, and each sample summed over ``j`` in order (the real part
-    ``sum (a_re z_re - a_im z_im)``; the in-block factors ``zr``, ``zi`` from
-    :func:`_in_block`), so that a grid's samples stay the same floats; the
-    samples of a block are summed side by side (independent sums: vectorised). The blocks are
-    those of the grid from ``k = 0`` (``k = 64 b + m``), so any range of samples is the same
-    floats as in the whole grid (a partly read block is summed whole)."""
+    ... start + n - 1`` into ``out`` (R, 2, n): the real parts (``out[r, 0]``) and, where
+    ``imag``, the imaginary parts (``out[r, 1]``; else left as they are), of the blocks
+    ``first .. end - 1`` of the range (``0 .. -(-(start + n) // 64) - start // 64 - 1``: all of
+    it; :func:`harmonic_into` spreads ranges of blocks of a long range over threads). The
+    float operations of the NumPy form this replaced, in its order: the phase ``w_j (t0 + 64
+    dt b) + eps_j`` and ``w_j (dt m)``, ``exp(i x) = cos x + i sin x``, the block factor
+    times ``c``, and each sample summed over ``j`` in order (the real part ``sum (a_re z_re -
+    a_im z_im)``; the in-block factors ``zr``, ``zi`` from :func:`_in_block`), so that a
+    grid's samples stay the same floats; the samples of a block are summed side by side
+    (independent sums: vectorised). The blocks are those of the grid from ``k = 0`` (``k =
+    64 b + m``), each computed directly, so any range of samples is the same floats as in the
+    whole grid (a partly read block is summed whole)."""
     nj = w.shape[0]
-    end = start + n
+    stop = start + n
     cb, sb = np.empty(nj), np.empty(nj)
     acc_r, acc_i = np.empty(HARMONIC_BLOCK), np.empty(HARMONIC_BLOCK)
-    for b in range(start // HARMONIC_BLOCK, -(-end // HARMONIC_BLOCK)):
-        _harmonic_block(b, t0, dt, start, end, w, eps, c, imag, zr, zi, out, cb, sb, acc_r,
+    for b in range(start // HARMONIC_BLOCK + first, start // HARMONIC_BLOCK + end):
+        _harmonic_block(b, t0, dt, start, stop, w, eps, c, imag, zr, zi, out, cb, sb, acc_r,
                         acc_i)  # fmt: skip
 
 
-@njit(parallel=True)
-def harmonic_rows_parallel(t0, dt, start, n, w, eps, c, imag, zr, zi, out):  # type: ignore[no-untyped-def]
-    """:func:`harmonic_rows` with its blocks on Numba's threads (each block the same floats:
-    its factor is computed directly), for a long range (a grid's chunk)."""
-    nj = w.shape[0]
-    end = start + n
-    b_first = start // HARMONIC_BLOCK
-    for bb in prange(-(-end // HARMONIC_BLOCK) - b_first):
-        cb, sb = np.empty(nj), np.empty(nj)
-        acc_r, acc_i = np.empty(HARMONIC_BLOCK), np.empty(HARMONIC_BLOCK)
-        _harmonic_block(b_first + bb, t0, dt, start, end, w, eps, c, imag, zr, zi, out, cb, sb,
-                        acc_r, acc_i)  # fmt: skip
-
-
-#: samples from which :func:`harmonic_into` sums the blocks on Numba's threads
+#: samples from which :func:`harmonic_into` sums ranges of blocks on threads
 PARALLEL_SAMPLES = 1024
 
 
 def harmonic_into(args: tuple[Any, ...]) -> None:
-    """:func:`harmonic_rows` of ``args``, its blocks on Numba's threads for a range of at
-    least :data:`PARALLEL_SAMPLES` where this thread may use them
-    (:func:`shipgym._jit.threads_ok`): the same floats either way."""
-    fn = harmonic_rows
-    if args[3] >= PARALLEL_SAMPLES and threads_ok():
-        use_threads()
-        fn = harmonic_rows_parallel
-    entry(fn, args)(*args)
+    """:func:`harmonic_rows` of ``args`` ``(t0, dt, start, n, w, eps, c, imag, zr, zi, out)``,
+    on every block of the range: in ranges of blocks on threads for a range of at least
+    :data:`PARALLEL_SAMPLES` samples where this thread may use them
+    (:func:`shipgym._jit.spread_rows`), the same floats either way."""
+    start, n = args[2], args[3]
+    blocks = -(-(start + n) // HARMONIC_BLOCK) - start // HARMONIC_BLOCK
+    fn = entry(harmonic_rows, (np.int64(0), np.int64(blocks), *args))
+    if n >= PARALLEL_SAMPLES and threads_ok():
+        spread_rows(lambda a, b: fn(a, b, *args), blocks)
+    else:
+        fn(0, blocks, *args)
 
 
 def harmonic_sums(

@@ -20,10 +20,12 @@ from numba import carray, prange
 from shipgym._jit import (
     _DISABLED,
     ACCEL_SIG,
+    ROWS_SIG,
     accel_at,
     address,
     entry,
     njit,
+    rows_at,
     threads_ok,
     use_threads,
 )
@@ -63,9 +65,9 @@ MAX_RATE = 10.0
 MAX_ROLL = 1.2
 
 
-#: the smallest batch stepped on all of Numba's threads (:func:`run_parallel`; about break-even
-#: at 64 hulls with sleeping idle threads on 2 cores); smaller ones
-#: step on the calling thread, where a thread pool's start costs more than it saves
+#: the smallest batch stepped in ranges of hulls on threads (:func:`run`,
+#: :func:`shipgym._jit.spread_rows`); smaller ones step on the calling thread, where waking
+#: the threads costs more than it saves
 PARALLEL_MIN = 128
 
 
@@ -538,11 +540,14 @@ def _arrays(p):  # type: ignore[no-untyped-def]
     )  # fmt: skip
 
 
-@njit
-def run(integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-def]
-    """Advance each hull ``i`` by ``left[i]`` physics steps (module docstring).
+@njit(nogil=True)
+def run(first, end, integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-def]
+    """Advance each hull ``i`` of ``first .. end - 1`` by ``left[i]`` physics steps (module
+    docstring), one after the other. It releases the GIL: a large batch runs ranges of hulls
+    on threads (:func:`shipgym._jit.spread_rows`), each hull the same floats.
 
     Args:
+        first, end: the hulls stepped (int64).
         integrator: :data:`MUJOCO` (each hull its own ``mjData``), :data:`LEAPFROG`, or
             :data:`EVALUATE` (only ``qa`` and the read-outs of the state written: the start
             of a run).
@@ -599,22 +604,22 @@ def run(integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-def]
     Returns:
         The largest code of the hulls: ``OK``, ``NEED``, ``DIVERGED`` or ``RESET``.
     """
-    return _hulls(0, p[0], integrator, stop_on_contact, h, *_arrays(p))
+    return _hulls(first, end, integrator, stop_on_contact, h, *_arrays(p))
 
 
 @njit(parallel=True)
-def run_parallel(integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-def]
-    """:func:`run` with the hulls spread over Numba's threads (the same per-hull law, so the
-    same floats); for large batches called from the main thread (:data:`PARALLEL_MIN`)."""
+def run_threads(at, integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-def]
+    """:func:`run` (compiled at the address ``at``, :func:`shipgym._jit.address`) on ranges of
+    the hulls on Numba's threads: the one compiled loop, called through its address (a call
+    of the function itself would compile the loop again into this one), each hull the floats
+    it gets alone; for large batches called from the main thread (:data:`PARALLEL_MIN`)."""
+    go = rows_at(at)
     n = p[0]
     chunks = min(n, 64)  # a few chunks a thread: hulls of unequal work balance
     size = (n + chunks - 1) // chunks
     codes = np.zeros(chunks, dtype=np.int64)
-    arrays = _arrays(p)
     for c in prange(chunks):
-        codes[c] = _hulls(
-            min(c * size, n), min((c + 1) * size, n), integrator, stop_on_contact, h, *arrays
-        )
+        codes[c] = go(min(c * size, n), min((c + 1) * size, n), integrator, stop_on_contact, h, p)
     return codes.max()
 
 
@@ -1189,13 +1194,14 @@ class HullBatch:
         while True:
             if self._args is None:
                 self.table_of_arrays()
-            fn = run
-            if busy >= PARALLEL_MIN and threads_ok():
-                fn = run_parallel
+            if self._entry is None:
+                self._entry = self._entry_of(integ, stop_on_contact)
+            args = (integ, bool(stop_on_contact), self.h, self._p)
+            if busy >= PARALLEL_MIN and threads_ok() and not _DISABLED:
                 use_threads()
-            if self._entry is None or self._entry[0] is not fn:
-                self._entry = (fn, self._entry_of(fn, integ, stop_on_contact))
-            code = self._entry[1](integ, stop_on_contact, self.h, self._p)
+                code = run_threads(address(run, ROWS_SIG), *args)
+            else:
+                code = self._entry(0, self.n, *args)
             if code == OK:
                 return n - int(self.stopped.max()) if stop_on_contact else n
             codes = self.status[:, 0]
@@ -1218,13 +1224,14 @@ class HullBatch:
             for i, slot, (k0, rows) in zip(need, slots, load_windows(grids, ks), strict=True):
                 self._install(i, slot, k0, rows)
 
-    def _entry_of(self, fn: Any, integ: int, stop_on_contact: bool) -> Any:
-        """``fn``'s compiled entry point (:func:`shipgym._jit.entry`); where compilation is
-        off (``NUMBA_DISABLE_JIT``, the debugging path), the loop called on the arrays."""
+    def _entry_of(self, integ: int, stop_on_contact: bool) -> Any:
+        """:func:`run`'s compiled entry point (:func:`shipgym._jit.entry`); where compilation
+        is off (``NUMBA_DISABLE_JIT``, the debugging path), the loop called on the arrays."""
         if not _DISABLED:
-            return entry(fn, (integ, stop_on_contact, self.h, self._p))
-        return lambda integ, stop, h, _p: _hulls(0, self.n, integ, stop, h, self._mj_step,
-                                                 *self._args[:3], self._views, self.dofs,
-                                                 self.linear_kin,
-                                                 self._args[3], int(self.accel),
-                                                 *self._args[4:])  # fmt: skip
+            return entry(run, (np.int64(0), np.int64(self.n), integ, stop_on_contact, self.h,
+                               self._p))  # fmt: skip
+        return lambda a, b, integ, stop, h, _p: _hulls(a, b, integ, stop, h, self._mj_step,
+                                                       *self._args[:3], self._views, self.dofs,
+                                                       self.linear_kin, self._args[3],
+                                                       int(self.accel),
+                                                       *self._args[4:])  # fmt: skip

@@ -20,11 +20,10 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, law_input, njit, spread, threads_ok
+from shipgym._jit import entry, law_input, njit, spread_rows, threads_ok
 
 from .wls import (
     _bounds,
@@ -699,14 +698,16 @@ def _wrap(a):  # type: ignore[no-untyped-def]
 
 
 @njit(nogil=True)
-def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, tau, a_prev,
-                thrust, angle, f_az, f_fixed, delivered, error, saturated, rate_limited):  # type: ignore[no-untyped-def]  # fmt: skip
-    """The azimuth allocation of N requests (one law for every N; :func:`allocate_azimuth`
-    documents the problem, the module's design note the branches of reversible units): the
-    rows one after the other (:func:`_azimuth_rows`). It releases the GIL: a large batch runs
-    it on chunks of rows on threads (:func:`_run`), each row the same floats.
+def azimuth_law(first, end, Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, tau,
+                a_prev, thrust, angle, f_az, f_fixed, delivered, error, saturated,
+                rate_limited):  # type: ignore[no-untyped-def]  # fmt: skip
+    """The azimuth allocation of the requests ``first .. end - 1`` of N
+    (:func:`allocate_azimuth` documents the problem, the module's design note the branches of
+    reversible units), one after the other, each with the same floats whatever the range. It
+    releases the GIL: :func:`_run` spreads ranges of a large batch over threads.
 
     Args:
+        first, end: the rows allocated (int64).
         Q0, R, qd, turn: the scaled problem (n, n), (n, n_dof), the curvatures ``diag(Q)``
             (n,) and the turning cost's weight (:class:`AzimuthAllocator`).
         B, s, flo, fhi: the configuration (n_dof, n), the scales (n,) and the fixed thrusts'
@@ -723,18 +724,6 @@ def azimuth_law(Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull, ta
         0, or the first failing request's index + 1 times 8 plus the reason (1: not finite;
         2: the QP did not converge; 3: its curvature not positive definite).
     """
-    # (first: an int64, not the literal 0: one compiled _azimuth_rows for both laws)
-    return _azimuth_rows(np.int64(0), tau.shape[0], Q0, R, qd, turn, B, s, flo, fhi, fmax,
-                         dmax, rev, rows, hull, tau, a_prev, thrust, angle, f_az, f_fixed,
-                         delivered, error, saturated, rate_limited)  # fmt: skip
-
-
-@njit
-def _azimuth_rows(first, end, Q0, R, qd, turn, B, s, flo, fhi, fmax, dmax, rev, rows, hull,
-                  tau, a_prev, thrust, angle, f_az, f_fixed, delivered, error, saturated,
-                  rate_limited):  # type: ignore[no-untyped-def]  # fmt: skip
-    """The rows ``first .. end - 1`` of :func:`azimuth_law` (its own work arrays): 0, or the
-    code of the first failing row."""
     n_dof = tau.shape[1]
     m = fmax.shape[0]
     n = s.shape[0]
@@ -982,13 +971,9 @@ def _prepare(
 #: the law's compiled entry point
 _LAW: list[Any] = []
 
-#: the fewest requests allocated in chunks on threads (:func:`shipgym._jit.spread`): a request
+#: the fewest requests allocated in chunks on threads (:func:`shipgym._jit.spread_rows`): a request
 #: costs tens of microseconds (a QP per branch), so a few pay for the threads
 PARALLEL_MIN = 16
-#: chunks of a threaded batch per thread: a few, so that rows of unequal work (branches)
-#: balance, and not many, as each chunk's call costs its arguments' unboxing under the GIL
-#: (256 requests on 2 threads: 16 chunks as fast as Numba's threads, 64 about 5 % slower)
-_CHUNKS_PER_THREAD = 8
 
 
 def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64]):  # type: ignore[no-untyped-def]
@@ -1001,12 +986,14 @@ def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64])
            np.empty((N, m + k), dtype=np.bool_), np.empty((N, m), dtype=np.bool_))  # fmt: skip
     rows = (t, a, *out)
     if not _LAW:
-        _LAW.append(entry(azimuth_law, (*prep.args, *rows)))
+        _LAW.append(entry(azimuth_law, (np.int64(0), np.int64(N), *prep.args, *rows)))
     fn = _LAW[0]
+    args = (*prep.args, *rows)
     if N >= PARALLEL_MIN and threads_ok():
-        code = _in_chunks(fn, prep.args, rows)
+        # the first failing row's code, as one call on every row gives it
+        code = next((int(c) for _, c in spread_rows(lambda a, b: fn(a, b, *args), N) if c), 0)
     else:
-        code = fn(*prep.args, *rows)
+        code = fn(0, N, *args)
     if code:
         row, why = divmod(code, 8)
         if why == 1:
@@ -1020,28 +1007,6 @@ def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64])
             f"{t[row - 1].tolist()} and the angles {a[row - 1].tolist()})"
         )
     return out
-
-
-def _in_chunks(fn: Any, fixed: tuple[Any, ...], rows: tuple[NDArray[Any], ...]) -> int:
-    """The compiled law ``fn`` on chunks of the requests ``rows`` (the requests, the previous
-    angles and the outputs, each with a leading axis N) on :func:`~shipgym._jit.spread`'s
-    threads: each chunk's rows are C-contiguous views of the same types, so the one compiled
-    law serves, and each row gets the floats it gets alone. The code of the first failing row
-    (its index in the whole batch), as one call on every row returns it."""
-    N = rows[0].shape[0]
-    size = -(-N // min(N, _CHUNKS_PER_THREAD * max(1, int(numba.config.NUMBA_NUM_THREADS))))
-    bounds = [(lo, min(lo + size, N)) for lo in range(0, N, size)]
-    codes = [0] * len(bounds)
-
-    def one(c: int) -> None:
-        lo, hi = bounds[c]
-        codes[c] = fn(*fixed, *(x[lo:hi] for x in rows))
-
-    spread(one, list(range(len(bounds))))
-    for (lo, _), code in zip(bounds, codes, strict=True):
-        if code:
-            return int(code) + 8 * lo  # (the row's index + 1, times 8, plus the reason)
-    return 0
 
 
 class AzimuthAllocator:

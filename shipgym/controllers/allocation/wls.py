@@ -15,10 +15,9 @@ import math
 from typing import Any, NamedTuple
 
 import numpy as np
-from numba import prange
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, law_input, njit, threads_ok, use_threads
+from shipgym._jit import entry, law_input, njit, spread_rows, threads_ok
 
 __all__ = ["DEFAULT_H_REL", "WLSAllocation", "WLSAllocator", "allocate_wls", "run_wls", "wls_law"]
 
@@ -321,14 +320,14 @@ def _box_qp(Q, c, lo, hi, x, active, st, M, rhs, xn, L, y):  # type: ignore[no-u
     return 2
 
 
-@njit
-def wls_law(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
-    """The box-constrained weighted least-squares allocation of N requests (one law for every
-    N; :func:`allocate_wls` documents the problem): the rows one after the other
-    (:func:`_wls_rows`; :func:`wls_law_parallel` spreads them over Numba's threads, the same
-    floats).
+@njit(nogil=True)
+def wls_law(first, end, Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
+    """The box-constrained weighted least-squares allocation of the requests ``first .. end -
+    1`` of N (:func:`allocate_wls` documents the problem), one after the other, each with the
+    same floats whatever the range (:func:`run_wls` spreads ranges over threads).
 
     Args:
+        first, end: the rows allocated (int64).
         Q, R: the scaled problem (:func:`_scaled_problem`), (n, n) and (n, n_dof).
         xlo, xhi: the scaled bounds ``lo / s``, ``hi / s`` (n,); ``s`` the scales (n,).
         lo, hi: the thrust limits (N) (n,); ``B``: the configuration matrix (n_dof, n).
@@ -341,34 +340,6 @@ def wls_law(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):
         0, or the first failing request's index + 1 times 4 plus the reason (1: ``Q`` not
         positive definite; 2: no convergence; 3: a request not finite).
     """
-    # (first: an int64, not the literal 0, so that this law and wls_law_parallel share one
-    # compiled _wls_rows: a literal argument is a signature of its own, compiled again)
-    return _wls_rows(np.int64(0), tau.shape[0], Q, R, xlo, xhi, s, lo, hi, B, tau, force,
-                     delivered, error, active)  # fmt: skip
-
-
-@njit(parallel=True)
-def wls_law_parallel(Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
-    """:func:`wls_law` with the requests spread over Numba's threads in chunks (each row the
-    same law, so the same floats; the code of the first failing row, as the serial law's);
-    for large batches called from the main thread (:data:`PARALLEL_MIN`)."""
-    N = tau.shape[0]
-    chunks = min(N, 64)
-    size = (N + chunks - 1) // chunks
-    codes = np.zeros(chunks, dtype=np.int64)
-    for c in prange(chunks):
-        codes[c] = _wls_rows(min(c * size, N), min((c + 1) * size, N), Q, R, xlo, xhi, s, lo,
-                             hi, B, tau, force, delivered, error, active)  # fmt: skip
-    for c in range(chunks):
-        if codes[c]:
-            return codes[c]
-    return 0
-
-
-@njit
-def _wls_rows(first, end, Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
-    """The rows ``first .. end - 1`` of :func:`wls_law` (its own work arrays): 0, or the code
-    of the first failing row."""
     n_dof = tau.shape[1]
     n = s.shape[0]
     c = np.empty(n)
@@ -407,9 +378,12 @@ def _wls_rows(first, end, Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, e
     return 0
 
 
-#: the fewest requests allocated on Numba's threads (:func:`wls_law_parallel`)
-PARALLEL_MIN = 64
-_WLS: dict[Any, Any] = {}  # the laws' compiled entry points
+#: the fewest requests allocated in ranges on threads (:func:`shipgym._jit.spread_rows`): a
+#: request costs about 1 us, and waking Python threads and unboxing each range's arguments
+#: some hundreds (256 requests: 0.8x the serial time on 2 threads; 1024: 1.1x; 4096: 1.7x, as
+#: Numba's own threads)
+PARALLEL_MIN = 2048
+_WLS: list[Any] = []  # the law's compiled entry point
 
 
 def run_wls(Q, R, xlo, xhi, s, lo, hi, B, tau):  # type: ignore[no-untyped-def]
@@ -439,14 +413,14 @@ def _run_wls(problem: tuple[NDArray[np.float64], ...], tau: ArrayLike) -> tuple[
     out = (np.empty((N, n)), np.empty((N, t.shape[1])), np.empty((N, t.shape[1])),
            np.empty((N, n), dtype=np.bool_))  # fmt: skip
     args = (*problem, t, *out)
-    law = wls_law
+    if not _WLS:
+        _WLS.append(entry(wls_law, (np.int64(0), np.int64(N), *args)))
+    fn = _WLS[0]
     if N >= PARALLEL_MIN and threads_ok():
-        use_threads()
-        law = wls_law_parallel
-    fn = _WLS.get(law)
-    if fn is None:
-        fn = _WLS[law] = entry(law, args)
-    code = fn(*args)
+        # the first failing row's code, as one call on every row gives it
+        code = next((int(c) for _, c in spread_rows(lambda a, b: fn(a, b, *args), N) if c), 0)
+    else:
+        code = fn(0, N, *args)
     if code:
         row, why = divmod(code, 4)
         if why == 3:
