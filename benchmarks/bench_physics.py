@@ -38,7 +38,7 @@ from typing import Any
 
 import mujoco
 import numpy as np
-from bench_summary import _episode, pair
+from bench_summary import _episode, machine, pair, print_machine
 
 from shipgym.disturbances import CurrentConfig, WaveConfig, WindConfig
 from shipgym.disturbances._grid import CHUNK
@@ -120,7 +120,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--json", type=Path, default=Path("runs/bench/bench_physics.json"))
     args = ap.parse_args(argv)
     n, rep, nh = args.steps, args.repeats, args.hulls
-    out: dict[str, Any] = {"steps": n, "repeats": rep, "hulls": nh}
+    out: dict[str, Any] = {"steps": n, "repeats": rep, "hulls": nh, "machine": machine()}
     calls_b = max(1, n // (20 * nh) * 4)  # batched: about 4n hull-steps per timing
     for name in vessel_names():
         v = load_vessel(name)
@@ -179,6 +179,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         sim = steps * getattr(phys, "timestep", getattr(phys, "h", None))
         out[key] = r
         print(f"{label:24s} / bare mj_step      : {_fmt(r)}   ({sim / r['a_s']:,.0f}x real time)")
+    out["machine"] = machine(out["machine"])
+    print_machine(out["machine"])
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(out, indent=2))
     print(f"written to {args.json}")

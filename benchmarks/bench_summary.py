@@ -49,7 +49,9 @@ the median over the repeats with the smallest and largest repeat, and all are wr
 
 Every ratio records the CPU time beside the wall time (``cpu_median``, ``a_cpu_s``,
 ``b_cpu_s``). Absolute rates are printed too (this machine's); ratios are what compares
-across machines.
+across machines. ``machine`` records the cores, Numba's threads and the load average
+(runnable processes, 1 min) before and after the run: a load near one core before the run
+means another process was busy, and the figures that run on threads (N = 256) read low.
 ``physics_step`` names the physics step that ran (:mod:`shipgym.sim.step`, compiled by Numba).
 Run with ``make bench``.
 """
@@ -70,6 +72,35 @@ import mujoco
 import numpy as np
 
 Timed = Callable[[], float]
+
+
+def machine(before: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The machine a run measures: cores, Numba's threads, versions and the 1-min load average
+    now (``load_before``), or, given the record made before the run, that record with
+    ``load_after``."""
+    import os
+    import platform
+
+    load = round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None
+    if before is not None:
+        return {**before, "load_after": load}
+    import numba
+
+    return {
+        "cores": os.cpu_count(),
+        "numba_threads": int(numba.config.NUMBA_NUM_THREADS),
+        "python": platform.python_version(),
+        "numba": numba.__version__,
+        "mujoco": mujoco.__version__,
+        "load_before": load,
+    }
+
+
+def print_machine(m: dict[str, Any]) -> None:
+    print(f"machine: {m['cores']} cores, {m['numba_threads']} Numba threads; load average "
+          f"(1 min) {m['load_before']} before, {m.get('load_after')} after")  # fmt: skip
+    if m["load_before"] is not None and m["load_before"] > 0.5:
+        print("  note: another process was busy before the run: the threaded figures read low")
 
 
 def _timed(fn: Callable[[], Any]) -> Timed:
@@ -540,7 +571,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--steps", type=int, default=30_000, help="physics steps per plant timing")
     ap.add_argument("--json", type=Path, default=Path("runs/bench/bench.json"))
     args = ap.parse_args(argv)
+    before = machine()
     res = measure(args.repeats, args.steps)
+    res["machine"] = machine(before)
+    print_machine(res["machine"])
     print(res["physics_step"])
     print(f"ratios: median [min, max] over {args.repeats} interleaved repeats")
     for k, v in res.items():
