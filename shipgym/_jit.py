@@ -6,7 +6,8 @@ and any actuator kind's force law as a first-class function argument: the loop i
 once (and cached on disk by Numba), a new family or kind compiles only its own small law.
 
 Public names: ``ACCEL_SIG``, ``LAW_SIG``, ``THREADS``, ``njit``, ``kernel``, ``entry``,
-``threads_ok``, ``use_threads``, ``spread``, ``spread_rows``, ``law_input``.
+``threads_ok``, ``use_threads``, ``spread``, ``spread_rows``, ``law_input``, ``address``,
+``function_at``.
 
 Design notes: docs/design/_jit.md.
 """
@@ -39,6 +40,8 @@ __all__ = [
     "use_threads",
     "spread",
     "spread_rows",
+    "address",
+    "function_at",
 ]
 
 # first-class function arguments are "experimental" in Numba; the loop relies on them
@@ -150,8 +153,9 @@ def njit(*args: Any, **kwargs: Any) -> Any:
 
 
 def kernel(fn: Any, sig: Any) -> Any:
-    """``fn`` (an :func:`njit` function) compiled for ``sig`` (:data:`ACCEL_SIG` or
-    :data:`LAW_SIG`) and for nothing else, so that the loop takes it as a first-class function
+    """``fn`` (an :func:`njit` function) compiled for ``sig`` (:data:`ACCEL_SIG`,
+    :data:`LAW_SIG`, a law over rows) and for nothing else, so that a loop takes it as a
+    first-class function
     (Numba types a dispatcher that cannot compile more as a function type: one compiled loop
     for every law of that signature); the function itself where compilation is off."""
     if _DISABLED or not hasattr(fn, "compile"):
@@ -325,7 +329,7 @@ def address(fn: Any, sig: Any) -> int:
     return found
 
 
-def _function_at(sig: Any) -> Any:
+def function_at(sig: Any) -> Any:
     """An intrinsic ``f(addr) -> function`` that makes a first-class function of ``sig`` from
     the address of its compiled code (Numba's calling convention, :func:`address`)."""
     if _DISABLED:
@@ -353,12 +357,12 @@ def _function_at(sig: Any) -> Any:
 
 
 #: ``accel_at(addr)``: the hull acceleration compiled at ``addr`` (:data:`ACCEL_SIG`)
-accel_at = _function_at(ACCEL_SIG)
+accel_at = function_at(ACCEL_SIG)
 #: ``law_at(addr)``: the actuator law compiled at ``addr`` (:data:`LAW_SIG`)
-law_at = _function_at(LAW_SIG)
+law_at = function_at(LAW_SIG)
 #: a law over a range of rows: (first, end, integrator, stop_on_contact, h, table) -> code
 #: (the physics loop, :func:`shipgym.sim.step.run`)
 ROWS_SIG = types.int64(types.int64, types.int64, types.int64, types.boolean, _f8,
                        types.int64[::1])  # fmt: skip
 #: ``rows_at(addr)``: the law over rows compiled at ``addr`` (:data:`ROWS_SIG`)
-rows_at = _function_at(ROWS_SIG)
+rows_at = function_at(ROWS_SIG)

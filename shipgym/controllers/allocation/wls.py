@@ -15,9 +15,19 @@ import math
 from typing import Any, NamedTuple
 
 import numpy as np
+from numba import prange, types
 from numpy.typing import ArrayLike, NDArray
 
-from shipgym._jit import entry, law_input, njit, spread_rows, threads_ok
+from shipgym._jit import (
+    _DISABLED,
+    address,
+    entry,
+    function_at,
+    law_input,
+    njit,
+    threads_ok,
+    use_threads,
+)
 
 __all__ = ["DEFAULT_H_REL", "WLSAllocation", "WLSAllocator", "allocate_wls", "run_wls", "wls_law"]
 
@@ -324,7 +334,7 @@ def _box_qp(Q, c, lo, hi, x, active, st, M, rhs, xn, L, y):  # type: ignore[no-u
 def wls_law(first, end, Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
     """The box-constrained weighted least-squares allocation of the requests ``first .. end -
     1`` of N (:func:`allocate_wls` documents the problem), one after the other, each with the
-    same floats whatever the range (:func:`run_wls` spreads ranges over threads).
+    same floats whatever the range (:func:`wls_threads` runs ranges on threads).
 
     Args:
         first, end: the rows allocated (int64).
@@ -378,11 +388,37 @@ def wls_law(first, end, Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, err
     return 0
 
 
-#: the fewest requests allocated in ranges on threads (:func:`shipgym._jit.spread_rows`): a
-#: request costs about 1 us, and waking Python threads and unboxing each range's arguments
-#: some hundreds (256 requests: 0.8x the serial time on 2 threads; 1024: 1.1x; 4096: 1.7x, as
-#: Numba's own threads)
-PARALLEL_MIN = 2048
+_F1, _F2 = types.float64[::1], types.float64[:, ::1]
+#: :func:`wls_law`'s one signature (its address is called on Numba's threads)
+WLS_SIG = types.int64(types.int64, types.int64, _F2, _F2, *([_F1] * 5), _F2, _F2, _F2, _F2, _F2,
+                      types.boolean[:, ::1])  # fmt: skip
+_wls_at = function_at(WLS_SIG)
+
+
+@njit(parallel=True)
+def wls_threads(at, Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
+    """:func:`wls_law` (compiled at the address ``at``) on ranges of the requests on Numba's
+    threads: the one compiled law, called through its address (a direct call would compile
+    the law again into this one), each request the floats it gets alone, and the code of the
+    first failing request, as one call on every request gives it. A batch takes about 1 us a
+    request: too short for Python threads, whose wake-up costs hundreds of microseconds on a
+    VM, where Numba's threads spin between back-to-back calls."""
+    go = _wls_at(at)
+    N = tau.shape[0]
+    chunks = min(N, 64)
+    size = (N + chunks - 1) // chunks
+    codes = np.zeros(chunks, dtype=np.int64)
+    for c in prange(chunks):
+        codes[c] = go(min(c * size, N), min((c + 1) * size, N), Q, R, xlo, xhi, s, lo, hi, B,
+                      tau, force, delivered, error, active)  # fmt: skip
+    for c in range(chunks):
+        if codes[c]:
+            return codes[c]
+    return 0
+
+
+#: the fewest requests allocated on Numba's threads (:func:`wls_threads`)
+PARALLEL_MIN = 64
 _WLS: list[Any] = []  # the law's compiled entry point
 
 
@@ -416,9 +452,9 @@ def _run_wls(problem: tuple[NDArray[np.float64], ...], tau: ArrayLike) -> tuple[
     if not _WLS:
         _WLS.append(entry(wls_law, (np.int64(0), np.int64(N), *args)))
     fn = _WLS[0]
-    if N >= PARALLEL_MIN and threads_ok():
-        # the first failing row's code, as one call on every row gives it
-        code = next((int(c) for _, c in spread_rows(lambda a, b: fn(a, b, *args), N) if c), 0)
+    if N >= PARALLEL_MIN and threads_ok() and not _DISABLED:
+        use_threads()
+        code = wls_threads(address(wls_law, WLS_SIG), *args)
     else:
         code = fn(0, N, *args)
     if code:
