@@ -246,7 +246,7 @@ _SAT_NONE, _SAT_ERROR, _SAT_FLAGS = 0, 1, 2
 _BAD_INPUT = ("", "eta_r", "nu", "eta_d_r", "eta_dot_d_r", "eta_ddot_d_r", "saturated")
 
 
-@njit
+@njit(inline="always")  # (inlined: each call site's offset is a literal, a compile of its own)
 def _mv(G: Any, k: int, x0: float, x1: float, x2: float) -> tuple[float, float, float]:
     """``A x`` for the 3x3 ``A = G[k:k + 3]``, each row summed left to right."""
     return (

@@ -22,7 +22,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
-from shipgym._jit import njit
+from shipgym._jit import law_input, njit
 from shipgym.dynamics.actuators import channel_command
 from shipgym.dynamics.frames import wrap_angle
 from shipgym.guidance.batch import BatchedGuidance
@@ -184,7 +184,9 @@ class ShipVectorEnv(BatchedEnv):
         self._return = np.zeros(n)
         self._prev = np.zeros((n, self.n_actions))
         self._fresh = False  # whether _obs is the observation now
-        lo, hi = self.actuators.lower, self.actuators.upper
+        # the channels' limits as the compiled action law is typed (a frozen set's are read-only)
+        lo, hi = law_input(self.actuators.lower), law_input(self.actuators.upper)
+        self._lo, self._hi = lo, hi
         self._lo_tol, self._hi_tol = lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)
         if not (isinstance(residual_scale, int | float) and not isinstance(residual_scale, bool)
                 and 0 <= residual_scale < math.inf):  # fmt: skip
@@ -329,8 +331,7 @@ class ShipVectorEnv(BatchedEnv):
         n, m = a.shape
         clipped, command = np.empty((n, m)), np.empty((n, m))
         action_clipped, near = np.empty((n, m), bool), np.empty((n, m), bool)
-        acts = self.actuators
-        _actions(a, acts.lower, acts.upper, self._lo_tol, self._hi_tol, clipped, action_clipped,
+        _actions(a, self._lo, self._hi, self._lo_tol, self._hi_tol, clipped, action_clipped,
                  command, near)  # fmt: skip
         saturated = self.physics.set_command(command) | near
         self._advance(active)
