@@ -65,9 +65,8 @@ MAX_RATE = 10.0
 MAX_ROLL = 1.2
 
 
-#: the smallest batch stepped in ranges of hulls on threads (:func:`run`,
-#: :func:`shipgym._jit.spread_rows`); smaller ones step on the calling thread, where waking
-#: the threads costs more than it saves
+#: the smallest batch stepped in ranges of hulls on Numba's threads (:func:`run_threads`);
+#: smaller ones step on the calling thread, where waking the threads costs more than it saves
 PARALLEL_MIN = 128
 
 
@@ -540,11 +539,11 @@ def _arrays(p):  # type: ignore[no-untyped-def]
     )  # fmt: skip
 
 
-@njit(nogil=True)
+@njit
 def run(first, end, integrator, stop_on_contact, h, p):  # type: ignore[no-untyped-def]
     """Advance each hull ``i`` of ``first .. end - 1`` by ``left[i]`` physics steps (module
-    docstring), one after the other. It releases the GIL: a large batch runs ranges of hulls
-    on threads (:func:`shipgym._jit.spread_rows`), each hull the same floats.
+    docstring), one after the other: a large batch runs ranges of hulls on Numba's threads
+    (:func:`run_threads`), each hull the same floats.
 
     Args:
         first, end: the hulls stepped (int64).
