@@ -953,6 +953,39 @@ def _check_paths(args: argparse.Namespace) -> None:
         (check_folder if name in folders else check_writable)(path)  # type: ignore[arg-type]
 
 
+#: said once where a command compiles shipgym's laws (a silent pause of up to a minute)
+COMPILE_NOTICE = (
+    "shipgym: compiling the simulation's laws for this machine (the first run here, or of a "
+    "new checkout: up to a minute; later runs load them from Numba's cache)"
+)
+
+
+def _compile_notice(stream: Any) -> Any:
+    """A context in which the first Numba compile says :data:`COMPILE_NOTICE` once on
+    ``stream``, where ``stream`` is a terminal (a log or a pipe stays quiet); a run whose laws
+    are all in the cache compiles nothing and says nothing."""
+    import contextlib
+
+    from shipgym._io import progress_enabled
+
+    if not progress_enabled(False, stream):
+        return contextlib.nullcontext()
+    from numba.core import event
+
+    class _Notice(event.Listener):  # type: ignore[misc]
+        said = False
+
+        def on_start(self, ev: Any) -> None:
+            if not self.said:
+                self.said = True
+                print(COMPILE_NOTICE, file=stream, flush=True)
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    return event.install_listener("numba:compile", _Notice())
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``shipgym`` console script.
 
@@ -967,7 +1000,7 @@ def main(argv: list[str] | None = None) -> int:
         args = _parser().parse_args(argv)
     except SystemExit as exc:  # argparse: 2 after a usage error, 0 after --help / --version
         return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
-    with handle_signals():
+    with handle_signals(), _compile_notice(sys.stderr):
         try:
             _check_paths(args)
             return int(args.func(args))

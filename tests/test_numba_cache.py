@@ -3,6 +3,7 @@ another user can write; a damaged entry is compiled again; no writable folder: i
 
 from __future__ import annotations
 
+import io
 import os
 import subprocess
 import sys
@@ -86,3 +87,26 @@ def test_numba_cache_dir_is_the_users_choice(tmp_path):
     r = _run(tmp_path, tmp_path / "cache", NUMBA_CACHE_DIR=str(mine))
     assert r.returncode == 0, r.stderr
     assert Path(r.stdout.split()[1]) == mine
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_the_cli_says_once_that_it_compiles_and_only_on_a_terminal():
+    """The first run's compiles are a silent pause of up to a minute: the command says so once
+    on a terminal (a compile happens below: a new function), and nothing on a pipe or log."""
+    import numba
+
+    from shipgym.cli import COMPILE_NOTICE, _compile_notice
+
+    term, log = _Terminal(), io.StringIO()
+    with _compile_notice(term), _compile_notice(log):
+        assert numba.njit(lambda x: x + 1)(1) == 2
+        assert numba.njit(lambda x: x * 2.0)(1.5) == 3.0
+    assert term.getvalue() == COMPILE_NOTICE + "\n"
+    assert log.getvalue() == ""
+    with _compile_notice(term):  # a run that only loads from the cache says nothing more
+        pass
+    assert term.getvalue().count(COMPILE_NOTICE) == 1
