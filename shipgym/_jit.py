@@ -286,18 +286,18 @@ def _on_threads(fn: Any, items: list[Any]) -> None:
 CHUNKS_PER_THREAD = 8
 
 
-def spread_rows(fn: Any, n: int) -> list[tuple[int, Any]]:
-    """``fn(lo, hi)`` on consecutive chunks ``[lo, hi)`` of the rows ``0 .. n - 1`` (n >= 1),
-    on :func:`spread`'s threads (from two chunks): ``(lo, fn(lo, hi))`` a chunk, in the rows'
-    order. For a ``nogil`` compiled law over a range of independent rows (requests, blocks of
-    a grid): one compiled entry point serves the serial call ``fn(0, n)`` and every chunk,
-    and each row gets the floats it gets alone."""
+def spread_rows(fn: Any, n: int, *args: Any) -> list[tuple[int, Any]]:
+    """``fn(lo, hi, *args)`` on consecutive chunks ``[lo, hi)`` of the rows ``0 .. n - 1``
+    (n >= 1), on :func:`spread`'s threads (from two chunks): ``(lo, fn(lo, hi, *args))`` a
+    chunk, in the rows' order. For a ``nogil`` compiled law over a range of independent rows
+    (requests, blocks of a grid): one compiled entry point serves the serial call
+    ``fn(0, n, *args)`` and every chunk, and each row gets the floats it gets alone."""
     size = -(-n // min(n, CHUNKS_PER_THREAD * max(1, int(numba.config.NUMBA_NUM_THREADS))))
     lows = list(range(0, n, size))
     out: list[Any] = [None] * len(lows)
 
     def one(c: int) -> None:
-        out[c] = fn(lows[c], min(lows[c] + size, n))
+        out[c] = fn(lows[c], min(lows[c] + size, n), *args)
 
     _on_threads(one, list(range(len(lows))))
     return list(zip(lows, out, strict=True))

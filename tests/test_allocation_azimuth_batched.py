@@ -277,12 +277,12 @@ def test_the_parallel_law_is_the_serial_law(monkeypatch):
     threads = set()
     spread_rows = law.spread_rows
 
-    def spy(fn, n):
-        def seen(lo, hi):
+    def spy(fn, n, *args):
+        def seen(lo, hi, *a):
             threads.add(threading.current_thread().name)
-            return fn(lo, hi)
+            return fn(lo, hi, *a)
 
-        return spread_rows(seen, n)
+        return spread_rows(seen, n, *args)
 
     monkeypatch.setattr(law, "spread_rows", spy)
 

@@ -518,7 +518,7 @@ def harmonic_into(args: tuple[Any, ...]) -> None:
     blocks = -(-(start + n) // HARMONIC_BLOCK) - start // HARMONIC_BLOCK
     fn = entry(harmonic_rows, (np.int64(0), np.int64(blocks), *args))
     if n >= PARALLEL_SAMPLES and threads_ok():
-        spread_rows(lambda a, b: fn(a, b, *args), blocks)
+        spread_rows(fn, blocks, *args)
     else:
         fn(0, blocks, *args)
 

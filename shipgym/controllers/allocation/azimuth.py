@@ -984,14 +984,13 @@ def _run(prep: _Prepared, tau: NDArray[np.float64], a_prev: NDArray[np.float64])
     out = (np.empty((N, m)), np.empty((N, m)), np.empty((N, m, 2)), np.empty((N, k)),
            np.empty((N, prep.n_dof)), np.empty((N, prep.n_dof)),
            np.empty((N, m + k), dtype=np.bool_), np.empty((N, m), dtype=np.bool_))  # fmt: skip
-    rows = (t, a, *out)
+    args = (*prep.args, t, a, *out)
     if not _LAW:
-        _LAW.append(entry(azimuth_law, (np.int64(0), np.int64(N), *prep.args, *rows)))
+        _LAW.append(entry(azimuth_law, (np.int64(0), np.int64(N), *args)))
     fn = _LAW[0]
-    args = (*prep.args, *rows)
     if N >= PARALLEL_MIN and threads_ok():
         # the first failing row's code, as one call on every row gives it
-        code = next((int(c) for _, c in spread_rows(lambda a, b: fn(a, b, *args), N) if c), 0)
+        code = next((int(c) for _, c in spread_rows(fn, N, *args) if c), 0)
     else:
         code = fn(0, N, *args)
     if code:

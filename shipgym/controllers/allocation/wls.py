@@ -330,7 +330,7 @@ def _box_qp(Q, c, lo, hi, x, active, st, M, rhs, xn, L, y):  # type: ignore[no-u
     return 2
 
 
-@njit(nogil=True)
+@njit
 def wls_law(first, end, Q, R, xlo, xhi, s, lo, hi, B, tau, force, delivered, error, active):  # type: ignore[no-untyped-def]
     """The box-constrained weighted least-squares allocation of the requests ``first .. end -
     1`` of N (:func:`allocate_wls` documents the problem), one after the other, each with the
