@@ -203,6 +203,10 @@ def law_input(a: Any, dtype: Any = float) -> np.ndarray:
     point is typed for. A read-only or strided array is a Numba type of its own, so passing it
     would compile the whole law again; this copies only such an input (a frozen vessel's
     array, a broadcast row) and hands every other array through as it is."""
+    if type(a) is np.ndarray and a.dtype == dtype:  # (the usual case, without np.require's cost)
+        flags = a.flags
+        if flags.c_contiguous and flags.writeable:
+            return a
     return np.require(a, dtype=dtype, requirements=("C", "W"))
 
 

@@ -1,15 +1,16 @@
 """Typed records of a step: env (physics, observer, DP controller) -> wrappers -> recorder.
 
-Public names: ``POSE_3DOF``, ``VELOCITY_3DOF``, ``ActuatorData``, ``ControlData``, ``Measurement``,
-``NavigationData``, ``StepRecord``, ``step_record``, ...
+Public names: ``POSE_3DOF``, ``VELOCITY_3DOF``, ``ActuatorData``, ``ControlData``, ``LazyInfo``,
+``Measurement``, ``NavigationData``, ``StepRecord``, ``step_record``, ...
 
 Design notes: docs/design/records.md.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,6 +24,7 @@ __all__ = [
     "VELOCITY_3DOF",
     "ActuatorData",
     "ControlData",
+    "LazyInfo",
     "Measurement",
     "NavigationData",
     "StepRecord",
@@ -356,3 +358,143 @@ def step_record_of_env(
         else (),
         info["quay_contact"],
     )
+
+
+class LazyInfo(dict):  # type: ignore[type-arg]
+    """A step's ``info``: a ``dict`` whose values are made when one is first read.
+
+    The single env's ``info`` (truth, references, loads, measurements, the typed ``record``)
+    costs more than the step's physics. The env reads the state it needs at the step (small
+    copies) and makes the dict from them on the first read, so a loop that never reads
+    ``info`` (training) does not pay for it, and a read at any later time gives the values of
+    the step that returned it.
+
+    It is the dict it would be: its keys are known at once (``in``, ``len`` and ``get`` of a
+    key it does not hold make nothing), a key written before the first read keeps the written
+    value, and ``copy()``, ``copy.copy``, pickling and ``dict(info)`` give a plain ``dict``.
+
+    Args:
+        keys: the keys ``make`` returns.
+        make: the function that makes the values, in their order (called once).
+    """
+
+    __slots__ = ("_keys", "_make")
+
+    def __init__(self, keys: frozenset[str], make: Callable[[], dict[str, Any]]) -> None:
+        super().__init__()
+        self._keys = keys
+        self._make: Callable[[], dict[str, Any]] | None = make
+
+    def _fill(self) -> None:
+        """Make the values (the keys written since stay as written)."""
+        make = self._make
+        if make is None:
+            return
+        self._make = None
+        made = make()
+        if made.keys() != self._keys:  # a bug of the env: its keys said something else
+            raise RuntimeError(f"LazyInfo made the keys {sorted(made)}, not {sorted(self._keys)}")
+        written = dict.copy(self)
+        dict.clear(self)
+        dict.update(self, made)
+        dict.update(self, written)
+
+    # ---- reads that need no values --------------------------------------------------------
+    def __contains__(self, key: object) -> bool:
+        return dict.__contains__(self, key) or (self._make is not None and key in self._keys)
+
+    def __len__(self) -> int:
+        if self._make is None:
+            return dict.__len__(self)
+        return len(self._keys) + sum(1 for k in dict.__iter__(self) if k not in self._keys)
+
+    def get(self, key: Any, default: Any = None) -> Any:
+        if self._make is not None and key in self._keys:
+            self._fill()
+        return dict.get(self, key, default)
+
+    # ---- everything else reads the values -------------------------------------------------
+    def __getitem__(self, key: Any) -> Any:
+        if self._make is not None and key in self._keys:
+            self._fill()
+        return dict.__getitem__(self, key)
+
+    def __iter__(self) -> Iterator[Any]:
+        self._fill()
+        return dict.__iter__(self)
+
+    def __reversed__(self) -> Iterator[Any]:
+        self._fill()
+        return dict.__reversed__(self)
+
+    def keys(self) -> Any:
+        self._fill()
+        return dict.keys(self)
+
+    def values(self) -> Any:
+        self._fill()
+        return dict.values(self)
+
+    def items(self) -> Any:
+        self._fill()
+        return dict.items(self)
+
+    def __repr__(self) -> str:
+        self._fill()
+        return dict.__repr__(self)
+
+    def __eq__(self, other: object) -> bool:
+        self._fill()
+        if isinstance(other, LazyInfo):
+            other._fill()
+        return dict.__eq__(self, other)
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __or__(self, other: Any) -> Any:
+        self._fill()
+        return dict.__or__(self, other)
+
+    def __ror__(self, other: Any) -> Any:
+        self._fill()
+        return dict.__ror__(self, other)
+
+    def copy(self) -> dict[str, Any]:
+        self._fill()
+        return dict.copy(self)
+
+    def __copy__(self) -> dict[str, Any]:
+        return self.copy()
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> dict[str, Any]:
+        return copy.deepcopy(self.copy(), memo)
+
+    def __reduce__(self) -> Any:
+        return dict, (self.copy(),)
+
+    def pop(self, key: Any, *default: Any) -> Any:
+        self._fill()
+        return dict.pop(self, key, *default)
+
+    def popitem(self) -> Any:
+        self._fill()
+        return dict.popitem(self)
+
+    def setdefault(self, key: Any, default: Any = None) -> Any:
+        self._fill()
+        return dict.setdefault(self, key, default)
+
+    def __delitem__(self, key: Any) -> None:
+        self._fill()
+        dict.__delitem__(self, key)
+
+    def clear(self) -> None:
+        self._make = None
+        dict.clear(self)
+
+    @classmethod
+    def fromkeys(cls, keys: Any, value: Any = None) -> dict[Any, Any]:  # type: ignore[override]
+        return dict.fromkeys(keys, value)

@@ -14,6 +14,7 @@ disturbances and time limit.
 
 from __future__ import annotations
 
+import functools
 import math
 import sys
 from collections.abc import Mapping
@@ -29,7 +30,7 @@ from shipgym.dynamics.vessel import Vessel
 from shipgym.guidance import ManoeuvrePlan, Reference
 from shipgym.observers.batch import estimate_of
 from shipgym.observers.sensors import BatchedSensors, SensorConfig
-from shipgym.records import ControlData, NavigationData, StepRecord, step_record_of_env
+from shipgym.records import ControlData, LazyInfo, NavigationData, step_record_of_env
 
 from .physics import MAX_TIMESTEP, MIN_TIMESTEP
 from .scene import make_renderer
@@ -156,7 +157,9 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     truncated) ``episode_metrics``
     (Tomera 2014 eqs. 54-57 and thruster usage, :class:`shipgym.metrics.ManoeuvreMetrics`).
     ``record``: the same as a typed :class:`shipgym.records.StepRecord` (the same arrays),
-    with the observer's and the controller's parts where the env has them.
+    with the observer's and the controller's parts where the env has them. ``info`` is a
+    :class:`~shipgym.records.LazyInfo`: a ``dict`` made when it is first read (a loop that
+    does not read it does not pay for it), with the values of its step whenever it is read.
 
     With ``observer=`` the info's ``nav_eta``, ``nav_nu`` are the estimate, and it gains
     ``est_error_eta`` (m, m, rad; heading wrapped), ``est_error_nu`` (m/s, m/s, rad/s),
@@ -267,6 +270,8 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._harbour = self.task.scene == "harbour"
         self._episode_over = True  # until the first reset
         self._active = np.ones(1, dtype=bool)
+        #: the keys of the info of a step and of a reset (with rewards, with control)
+        self._info_keys: dict[tuple[bool, bool], frozenset[str]] = {}
 
     # ---- the task's settings ----------------------------------------------------------------
     @property
@@ -348,7 +353,7 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._sq[:] = 0.0
         self._n_est = 0
         n = self.n_actions
-        info = self._info(self.physics.command, np.zeros(n, bool), np.zeros(n, bool), {}, [])
+        info = self._info(self.physics.command, np.zeros(n, bool), np.zeros(n, bool), None, [])
         return b._observation()[0], info
 
     def step(
@@ -374,8 +379,8 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         reward, terminated, truncated, saturated, action_clipped, command, control = out
         contacts = self.physics.contacts() if self._harbour else []
         flags = saturated[0] | action_clipped[0]
-        rewards = dict(zip(self.task.reward_terms, b._rew[0].tolist(), strict=True))
-        info = self._info(command[0], flags, action_clipped[0], rewards, contacts, control)
+        info = self._info(command[0], flags, action_clipped[0], b._rew[0].tolist(), contacts,
+                          control)  # fmt: skip
         done = bool(terminated[0]), bool(truncated[0])
         if done[0] or done[1]:  # a time-limit truncation is seen by EpisodeEnd
             self._episode_over = True
@@ -418,22 +423,66 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         command: NDArray[np.float64],
         saturated: NDArray[np.bool_],
         action_clipped: NDArray[np.bool_],
-        rewards: Mapping[str, float],
+        rewards: list[float] | None,
         contacts: list[tuple[str, str]],
         control: Mapping[str, NDArray[Any]] | None = None,
-    ) -> dict[str, Any]:
+    ) -> LazyInfo:
         """The info of the state now (env 0 of the batch), with its typed ``record``: the
         observer's part, and the controller's (``control``: its info of the step, (1, ...)
-        rows) where the env has them."""
+        rows) where the env has them; ``rewards``: the reward terms' values (``None`` after a
+        reset).
+
+        What changes with the next step is read now (the arrays below are new at each state
+        or copied); the dict is made from them on its first read (:class:`LazyInfo`).
+        """
         b, phys = self.batch, self.physics
-        ref = _row_reference(b._ref, 0)
+        ref = b._ref
+        # the reference's buffer never changes; its leg and flag are the guidance's (they do):
+        # legs completed = leg + finished
+        ref_now = (ref.buffer[0], int(ref.leg[0]), float(ref.t_leg[0]), bool(ref.finished[0]))
         eta, nu = b._truth()
-        e, w = eta[0], nu[0]
-        g = b.guidance
-        tau_wind, tau_waves, current_body = phys.environment_loads()
+        t = phys.time
+        now = (
+            t, eta[0], nu[0], b._eta_r[0].copy(), b.thrust()[0], phys.actuator_state,
+            phys.environment_loads(), phys.wave_elevation(), bool(b._contact[0]),
+            b._prev[0].copy(), b.sample_log, (phys.phi, phys.p) if phys.dofs == 4 else None,
+        )  # fmt: skip
+        # the observer's estimate now, and its errors into the episode's RMSE
+        nav = None if b.observer is None else self._observer_now(t, eta[0], nu[0])
+        # the controller's arrays are new at each step, but for tau_error, which it zeroes at
+        # a reset
+        ctrl = None if control is None else (control, control["tau_error"][0].copy())
+        kind = (rewards is not None, ctrl is not None)
+        keys = self._info_keys.get(kind)
+        make = functools.partial(self._make_info, command, saturated, action_clipped, rewards,
+                                 contacts, ref_now, now, nav, ctrl)  # fmt: skip
+        if keys is None:  # the first info of its kind: its keys for the next ones
+            made = make()
+            keys = self._info_keys[kind] = frozenset(made)
+            info = LazyInfo(keys, lambda: made)
+            info._fill()
+            return info
+        return LazyInfo(keys, make)
+
+    def _make_info(
+        self,
+        command: NDArray[np.float64],
+        saturated: NDArray[np.bool_],
+        action_clipped: NDArray[np.bool_],
+        rewards: list[float] | None,
+        contacts: list[tuple[str, str]],
+        ref_now: tuple[Any, ...],
+        now: tuple[Any, ...],
+        nav: tuple[Any, ...] | None,
+        ctrl: tuple[Mapping[str, NDArray[Any]], NDArray[np.float64]] | None,
+    ) -> dict[str, Any]:
+        """The dict of :meth:`_info` from what it read of the state."""
+        ref = Reference._build(*ref_now)
+        t, e, w, eta_r, thrust, act, loads, elevation, contact, prev, log, roll = now
+        tau_wind, tau_waves, current_body = loads
         # copies of the reference's arrays: info is the caller's to keep and change
         info: dict[str, Any] = {
-            "t": phys.time,
+            "t": t,
             "eta": e,
             "nu": w,
             "nav_eta": e,
@@ -443,59 +492,63 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             "eta_dot_d_r": ref.eta_dot_d_r.copy(),
             "eta_ddot_d_r": ref.eta_ddot_d_r.copy(),
             "eta_P": ref.eta_P.copy(),
-            "eta_r": b._eta_r[0].copy(),
+            "eta_r": eta_r,
             "leg": ref.leg,
-            "legs_completed": int(g.legs_completed[0]),
-            "finished": bool(g.finished[0]),
+            "legs_completed": ref.leg + ref.finished,
+            "finished": ref.finished,
             "command": np.array(command, dtype=float),
-            "thrust": b.thrust()[0],
-            "actuator_state": phys.actuator_state,
+            "thrust": thrust,
+            "actuator_state": act,
             "saturated": saturated,
             "action_clipped": action_clipped,
             "tau_wind": tau_wind,
             "tau_waves": tau_waves,
             "current_body": current_body,
-            "wave_elevation": phys.wave_elevation(),
-            "quay_contact": bool(b._contact[0]),
+            "wave_elevation": elevation,
+            "quay_contact": contact,
             "contacts": contacts,
         }
-        if phys.dofs == 4:
-            info["phi"] = phys.phi
-            info["p"] = phys.p
-        info.update(rewards)
-        info["measurements"] = b.sample_log if b.sample_log is not None else []
-        rec = step_record_of_env(
-            info, ref, b._prev[0].copy(), self._actuator_names, self._channel_names
-        )
-        if b.observer is not None:
-            rec = self._observer_info(info, rec)
-        if control is not None:
-            rec = rec.with_control(self._control_info(info, control))
+        if roll is not None:
+            info["phi"], info["p"] = roll
+        if rewards is not None:
+            info.update(zip(self.task.reward_terms, rewards, strict=True))
+        info["measurements"] = log if log is not None else []
+        rec = step_record_of_env(info, ref, prev, self._actuator_names, self._channel_names)
+        if nav is not None:
+            est_nav, e_eta, e_nu, nis, rejected = nav
+            info["nav_eta"] = est_nav.eta
+            info["nav_nu"] = est_nav.nu
+            info["est_error_eta"] = e_eta
+            info["est_error_nu"] = e_nu
+            info["observer_nis"] = nis
+            info["observer_rejected"] = rejected
+            rec = rec.with_nav(est_nav)
+        if ctrl is not None:
+            control, tau_error = ctrl
+            rows = [tau_error if k == "tau_error" else control[k][0].copy() for k in _CONTROL_KEYS]
+            info.update(zip(_CONTROL_KEYS, rows, strict=True))
+            rec = rec.with_control(ControlData(self.controller_name or "", *rows))
         info["record"] = rec
         return info
 
-    def _observer_info(self, info: dict[str, Any], rec: StepRecord) -> StepRecord:
-        """The observer's keys of ``info`` (its estimate as the navigation data, the estimation
-        errors against the truth, the NIS and gate decision of the period's last sample), and
-        ``rec`` with them."""
+    def _observer_now(
+        self, t: float, eta: NDArray[np.float64], nu: NDArray[np.float64]
+    ) -> tuple[Any, ...]:
+        """The observer's part of the info now: ``(navigation data, est_error_eta,
+        est_error_nu, NIS, rejected)`` (its estimate, the estimation errors against the truth,
+        the NIS and gate decision of the period's last sample); the errors go into the
+        episode's RMSE."""
         b = self.batch
-        est = estimate_of(b.observer, 0, info["t"])
-        eta, nu = info["eta"], info["nu"]
+        est = estimate_of(b.observer, 0, t)
         e_eta = np.array(
             [est.eta[0] - eta[0], est.eta[1] - eta[1], wrap_angle(est.eta[2] - eta[2])]
         )
         e_nu = est.nu - nu
         self._sq += np.concatenate([e_eta, e_nu]) ** 2
         self._n_est += 1
-        nav = NavigationData(info["t"], est.eta, est.nu, est.P_eta, est.P_nu, self.observer_name)
+        nav = NavigationData(t, est.eta, est.nu, est.P_eta, est.P_nu, self.observer_name)
         nis = float(b._nis[0])
-        info["nav_eta"] = nav.eta
-        info["nav_nu"] = nav.nu
-        info["est_error_eta"] = e_eta
-        info["est_error_nu"] = e_nu
-        info["observer_nis"] = None if math.isnan(nis) else nis
-        info["observer_rejected"] = bool(b._rejected[0])
-        return rec.with_nav(nav)
+        return nav, e_eta, e_nu, None if math.isnan(nis) else nis, bool(b._rejected[0])
 
     def end_info(self, info: dict[str, Any]) -> None:
         """The end of an episode into its last step's ``info``: ``episode_metrics``, and with
@@ -508,12 +561,6 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
             info["estimation_rmse"] = rmse
             rec = info["record"]
             info["record"] = rec.with_nav(rec.nav, estimation_rmse=rmse)
-
-    def _control_info(self, info: dict[str, Any], control: Mapping[str, Any]) -> ControlData:
-        """The controller's keys of ``info`` (env 0's rows of its step info), as ``ControlData``."""
-        for k in _CONTROL_KEYS:
-            info[k] = control[k][0].copy()
-        return ControlData(self.controller_name or "", *(info[k] for k in _CONTROL_KEYS))
 
     def estimation_rmse(self) -> dict[str, float]:
         """RMSE of the observer's estimate over the episode's states so far, its reset's
