@@ -49,9 +49,11 @@ the median over the repeats with the smallest and largest repeat, and all are wr
 
 Every ratio records the CPU time beside the wall time (``cpu_median``, ``a_cpu_s``,
 ``b_cpu_s``). Absolute rates are printed too (this machine's); ratios are what compares
-across machines. ``machine`` records the cores, Numba's threads and the load average
-(runnable processes, 1 min) before and after the run: a load near one core before the run
-means another process was busy, and the figures that run on threads (N = 256) read low.
+across machines. ``machine`` records the cores, Numba's threads, the load average
+(runnable processes, 1 min) before and after the run, and the share of the cores other
+processes kept busy in the second before it (``busy_before``; the load average still counts a
+run that ended less than a minute before, such as the previous script of ``make bench``):
+where another process was busy, the figures that run on threads (N = 256) read low.
 ``physics_step`` names the physics step that ran (:mod:`shipgym.sim.step`, compiled by Numba).
 Run with ``make bench``.
 """
@@ -74,10 +76,32 @@ import numpy as np
 Timed = Callable[[], float]
 
 
+def _busy_elsewhere(seconds: float = 1.0) -> float | None:
+    """The share of all cores busy over ``seconds`` while this process sleeps (so: other
+    processes, and the VM's stolen time), from Linux's ``/proc/stat``; ``None`` elsewhere.
+    Unlike the load average, which decays over a minute, it does not count a run that just
+    ended (``make bench``'s scripts one after the other)."""
+
+    def ticks() -> tuple[int, int]:
+        with open("/proc/stat") as f:
+            v = [int(x) for x in f.readline().split()[1:]]
+        idle = v[3] + v[4]  # idle, iowait
+        return sum(v[:8]) - idle, sum(v[:8])
+
+    try:
+        b0, t0 = ticks()
+        time.sleep(seconds)
+        b1, t1 = ticks()
+    except (OSError, ValueError, IndexError):
+        return None
+    return round((b1 - b0) / max(t1 - t0, 1), 2)
+
+
 def machine(before: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The machine a run measures: cores, Numba's threads, versions and the 1-min load average
-    now (``load_before``), or, given the record made before the run, that record with
-    ``load_after``."""
+    """The machine a run measures: cores, Numba's threads, versions, the 1-min load average
+    now (``load_before``) and the share of the cores other processes keep busy
+    (``busy_before``, :func:`_busy_elsewhere`), or, given the record made before the run,
+    that record with ``load_after``."""
     import os
     import platform
 
@@ -93,13 +117,16 @@ def machine(before: dict[str, Any] | None = None) -> dict[str, Any]:
         "numba": numba.__version__,
         "mujoco": mujoco.__version__,
         "load_before": load,
+        "busy_before": _busy_elsewhere(),
     }
 
 
 def print_machine(m: dict[str, Any]) -> None:
+    busy = m.get("busy_before")
     print(f"machine: {m['cores']} cores, {m['numba_threads']} Numba threads; load average "
-          f"(1 min) {m['load_before']} before, {m.get('load_after')} after")  # fmt: skip
-    if m["load_before"] is not None and m["load_before"] > 0.5:
+          f"(1 min) {m['load_before']} before, {m.get('load_after')} after; other processes "
+          f"busy before: {'?' if busy is None else f'{busy:.0%}'} of the cores")  # fmt: skip
+    if busy is not None and busy > 0.2:
         print("  note: another process was busy before the run: the threaded figures read low")
 
 
