@@ -1,8 +1,10 @@
 """The shipped learned baselines are reproducible: re-running each one's documented training
 command (the shipped hyperparameter file, its seed) up to the checkpoint recorded in its
-metadata gives bit-identical policy weights (``policy_fingerprint``), on the CPU the
+metadata gives bit-identical policy weights (``policy_fingerprint``), on each CPU a
 fingerprint was taken on (``cpu_identity``: its model name and its widest vector instructions;
-torch's and NumPy's kernels differ between them, so elsewhere the test says so and skips).
+torch's and NumPy's kernels differ between them, so elsewhere the test says so and skips;
+``reproduce.other_cpus`` holds the fingerprints of CPUs added on unchanged floats,
+``tools/rerecord_baselines.py --add-cpu``).
 Slow: each re-run trains about a million steps (a few minutes).
 
 The shipped models were trained on the NumPy form of the batched physics, which the one
@@ -52,7 +54,14 @@ def test_each_fingerprint_names_the_cpu_and_its_vector_instructions():
     form = re.compile(r".+ \((avx512|avx2|baseline)\)$")
     assert form.match(cpu_identity())
     for file in _reproducible():
-        assert form.match(read_metadata(learned.models_dir() / file).extra["reproduce"]["cpu"])
+        rep = read_metadata(learned.models_dir() / file).extra["reproduce"]
+        for cpu, sha in _fingerprints(rep).items():
+            assert form.match(cpu) and re.fullmatch("[0-9a-f]{64}", sha), (file, cpu)
+
+
+def _fingerprints(rep: dict) -> dict[str, str]:
+    """CPU -> policy fingerprint of a ``reproduce`` record."""
+    return {rep["cpu"]: rep["policy_sha256"], **rep.get("other_cpus", {})}
 
 
 @pytest.mark.slow
@@ -62,9 +71,10 @@ def test_documented_command_gives_the_same_weights(file, tmp_path):
 
     meta = read_metadata(learned.models_dir() / file)
     rep = meta.extra["reproduce"]
-    if cpu_identity() != rep["cpu"]:
+    prints = _fingerprints(rep)
+    if cpu_identity() not in prints:
         pytest.skip(
-            f"the fingerprint of {file} was taken on {rep['cpu']!r}, this is "
+            f"the fingerprints of {file} were taken on {sorted(prints)}, this is "
             f"{cpu_identity()!r}: bit-identical weights hold on the same CPU model and "
             "instructions only"
         )
@@ -76,4 +86,4 @@ def test_documented_command_gives_the_same_weights(file, tmp_path):
           residual=meta.residual, out=tmp_path, eval_freq=0, checkpoint_freq=steps,
           progress=False)  # fmt: skip
     ckpt = tmp_path / "checkpoints" / f"{meta.algorithm}_{steps}_steps.zip"
-    assert policy_fingerprint(ckpt) == rep["policy_sha256"]
+    assert policy_fingerprint(ckpt) == prints[cpu_identity()]
