@@ -390,10 +390,10 @@ class LazyInfo(dict):  # type: ignore[type-arg]
         make = self._make
         if make is None:
             return
-        self._make = None
-        made = make()
+        made = make()  # (an error here leaves it unmade: a read again raises it again)
         if made.keys() != self._keys:  # a bug of the env: its keys said something else
             raise RuntimeError(f"LazyInfo made the keys {sorted(made)}, not {sorted(self._keys)}")
+        self._make = None
         written = dict.copy(self)
         dict.clear(self)
         dict.update(self, made)

@@ -163,3 +163,14 @@ def test_clear_drops_the_values_unmade_and_a_wrong_key_set_is_an_error() -> None
     bad = LazyInfo(frozenset("ab"), lambda: {"a": 1})
     with pytest.raises(RuntimeError, match="made the keys"):
         bad["a"]
+
+
+def test_an_error_while_making_is_raised_at_every_read() -> None:
+    def make() -> dict:
+        raise ZeroDivisionError("made badly")
+
+    info = LazyInfo(frozenset("a"), make)
+    for _ in range(2):
+        with pytest.raises(ZeroDivisionError):
+            info["a"]
+    assert "a" in info and len(info) == 1
