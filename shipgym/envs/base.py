@@ -17,7 +17,7 @@ from __future__ import annotations
 import functools
 import math
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import gymnasium as gym
@@ -454,14 +454,14 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
         ctrl = None if control is None else (control, control["tau_error"][0].copy())
         kind = (rewards is not None, ctrl is not None)
         keys = self._info_keys.get(kind)
-        make = functools.partial(self._make_info, command, saturated, action_clipped, rewards,
-                                 contacts, ref_now, now, nav, ctrl)  # fmt: skip
-        if keys is None:  # the first info of its kind: its keys for the next ones
+        make: Callable[[], dict[str, Any]] = functools.partial(
+            self._make_info, command, saturated, action_clipped, rewards, contacts, ref_now, now,
+            nav, ctrl,
+        )  # fmt: skip
+        if keys is None:  # the first info of its kind, made now: its keys for the next ones
             made = make()
             keys = self._info_keys[kind] = frozenset(made)
-            info = LazyInfo(keys, lambda: made)
-            info._fill()
-            return info
+            make = lambda: made  # noqa: E731
         return LazyInfo(keys, make)
 
     def _make_info(
