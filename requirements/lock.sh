@@ -12,6 +12,8 @@
 # build of the pinned torch gets those packages from pip along with it.
 set -euo pipefail
 PYTHON=${PYTHON:-python3.11}
+# the torch of the rl lock (the Makefile installs this pin first, on its own)
+TORCH=${TORCH:-torch==2.13.0}
 cd "$(dirname "$0")/.."
 out=requirements
 tmp=$(mktemp -d)
@@ -57,13 +59,17 @@ quiet "$py" -m pip install --quiet ".[test,dev]" -c "$tmp/lock.txt"
 } >"$tmp/lock-dev.txt"
 
 # 3. the rl extra: torch first (plain pip, so that it finds the CPU build where one lies on
-#    disk), then the rest of the extra
-torch=$("$py" -c '
-import tomllib
+#    disk), then the rest of the extra. pyproject.toml gives torch a range (what a user of the
+#    package may have); the lock pins the version of $TORCH, which must lie in that range.
+"$py" -c '
+import sys, tomllib
+from packaging.requirements import Requirement
 rl = tomllib.load(open("pyproject.toml", "rb"))["project"]["optional-dependencies"]["rl"]
-print(next(r for r in rl if r.replace(" ", "").startswith("torch==")).replace(" ", ""))
-')
-quiet "$py" -m pip install --quiet "$torch" -c "$tmp/lock.txt" -c "$tmp/lock-dev.txt"
+spec = next(Requirement(r).specifier for r in rl if Requirement(r).name == "torch")
+pin = sys.argv[1].split("==", 1)[1]
+sys.exit(None if pin in spec else f"lock.sh: TORCH {sys.argv[1]} is outside the torch range {spec} of the rl extra")
+' "$TORCH"
+quiet "$py" -m pip install --quiet "$TORCH" -c "$tmp/lock.txt" -c "$tmp/lock-dev.txt"
 quiet "$py" -m pip install --quiet ".[rl]" -c "$tmp/lock.txt" -c "$tmp/lock-dev.txt"
 {
     header "shipgym: what the rl extra adds to lock.txt and lock-dev.txt (make rl); torch first"
