@@ -1,13 +1,23 @@
-"""shipgym: a MuJoCo simulator of ships in the horizontal plane (surge, sway, yaw; roll).
+"""shipgym: a MuJoCo simulator of ships as Gymnasium environments (surge, sway, yaw; roll).
 
-Importing ``shipgym`` registers the Gymnasium ids ``shipgym/Harbour-v0``,
-``shipgym/StationKeeping-v0`` and ``shipgym/Tracking-v0`` (for any vessel, ``vessel=``) and
-the Blue Lady's aliases ``shipgym/BlueLadyHarbour-v0``, ``shipgym/BlueLadyStationKeeping-v0``,
-``shipgym/BlueLadyTracking-v0``. :func:`vessels` lists the packaged vessels,
-:func:`load_vessel` loads one by name or a package folder. Subpackages: ``dynamics`` (pure
-NumPy models, actuators, vessels), ``disturbances`` (wind, waves, current), ``guidance``,
-``observers``, ``controllers``, ``envs`` (MuJoCo physics and tasks), ``metrics``. See the
-README for the quick start.
+A vessel is a data package (hull model, actuators, windage; :func:`vessels` lists the packaged
+ones, :func:`load_vessel` loads one by name or a package folder): the 1:24 Blue Lady training
+model, the offshore vessels Star Hercules and Wimpey Sealab, KVLCC2 tankers, and the 4-DOF
+(roll) container ship, naval vessel and Van der Klugt model. Importing ``shipgym`` registers
+the Gymnasium ids of :data:`ENV_IDS`: the harbour manoeuvre, station keeping and tracking
+(``shipgym/Harbour-v0``, ``StationKeeping-v0``, ``Tracking-v0``, for any vessel with
+``vessel=``, and the Blue Lady's aliases ``BlueLadyHarbour-v0``, ...), offshore dynamic
+positioning with wave filtering (``DPStationKeeping-v0``, ``DPSwayStep-v0``), rudder-roll
+stabilisation (``RudderRollStabilisation-v0``, ``NavalRollDamping-v0``), IMO sea trials and
+course keeping through a DGPS receiver's filter (``SeaTrial-v0``, ``CourseKeeping-v0``); each
+has a native batched form (``gymnasium.make_vec``). :func:`make` adds a Kalman observer and a
+PID or LQ controller; a learned (stable-baselines3) policy wraps that stack. Subpackages:
+``dynamics`` (pure NumPy hull models, actuators, vessels), ``disturbances`` (wind, waves,
+current), ``guidance``, ``observers``, ``controllers``, ``envs`` (MuJoCo physics, tasks, vector
+envs), ``sim`` (the compiled physics step), ``dp`` and ``trials`` (DP and sea-trial
+evaluation), ``rrs`` (roll stabilisation benchmark), ``rl`` (training learned controllers),
+``viz`` (rerun recordings, figures); ``metrics``, ``scenarios`` and the ``shipgym`` command
+line. See the README for the quick start.
 """
 
 from importlib import metadata as _metadata
