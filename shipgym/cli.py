@@ -2,6 +2,7 @@
 
 ``shipgym run SCENARIO``  closed-loop run (harbour manoeuvre, station keeping, tracking) with a
                           progress bar, a metrics table and an optional JSON file;
+``shipgym export RUN``    a recorded run's time series as CSV (``--csv``) or ``.npz`` (``--npz``);
 ``shipgym demo``          open-loop turn of the Blue Lady in gusty wind, with a short summary;
 ``shipgym list``          env ids, scenarios, controllers, plant variants, wind models.
 
@@ -639,6 +640,40 @@ def _cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _export_defaults(args: argparse.Namespace) -> None:
+    """``shipgym export``: the run file must exist; ``--out`` defaults to the run file's path
+    with the format's suffix (set before the outputs are checked against the input)."""
+    if not args.run.is_file():
+        raise ValueError(f"no such run file: {args.run} (expected a .rrd or .json run file)")
+    if args.out is None:
+        from shipgym.viz.export import export_path
+
+        args.out = export_path(args.run, "csv" if args.csv else "npz", args.table)
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from shipgym.viz import load_run, recording_problem
+    from shipgym.viz.export import write_run_csv, write_run_npz
+
+    if args.npz and args.table != "steps":
+        raise ValueError("--table applies to --csv; the .npz archive holds both tables")
+    run = load_run(args.run)  # a file that is not a run: one-line ValueError
+    problem = recording_problem(run)
+    if problem is not None:
+        print(
+            f"shipgym: warning: {args.run} is an incomplete recording ({problem}); the export "
+            f"holds the {run.n_steps} steps recorded",
+            file=sys.stderr,
+        )
+    if args.csv:  # an OSError (a full disk) leaves args.out as it was: main says so
+        path, cols = write_run_csv(run, args.out, table=args.table)
+    else:
+        path, cols = write_run_npz(run, args.out)
+    rows = len(cols[0].values) if cols else 0
+    print(f"wrote {path} ({rows} rows, {len(cols)} columns)")
+    return 0
+
+
 def _cmd_demo(args: argparse.Namespace) -> int:
     from shipgym.envs.physics import VesselPhysics
 
@@ -776,6 +811,28 @@ def _parser() -> argparse.ArgumentParser:
                    "of shipgym.viz.save_run_json")  # fmt: skip
     p.add_argument("--out", type=path_arg, required=True, metavar="DIR")
     p.set_defaults(func=_cmd_report, folders={"--out": REPORT})
+    p = sub.add_parser(
+        "export", help="a recorded run's time series as CSV or a NumPy archive (.npz)",
+        description="Write the time series of a recorded run as CSV (one column per signal "
+        "component, the unit in each column name: 't [s]', 'x [m]', 'psi [rad]', "
+        "'thrust_bow_tunnel [N]', ...) or as a NumPy archive (the same arrays under names "
+        "without units, a 'units' entry of (name, unit) pairs and the run's metadata as "
+        "JSON). Example: shipgym export run.rrd --csv",
+    )  # fmt: skip
+    p.add_argument("run", type=path_arg, metavar="RUN",
+                   help="RUN.rrd (shipgym run --record) or a JSON run file "
+                   "(shipgym.viz.save_run_json); not the results of 'shipgym run --json', "
+                   "which hold no time series")  # fmt: skip
+    fmt = p.add_mutually_exclusive_group(required=True)
+    fmt.add_argument("--csv", action="store_true", help="write CSV")
+    fmt.add_argument("--npz", action="store_true", help="write a NumPy archive (.npz)")
+    p.add_argument("-o", "--out", type=path_arg, default=None, metavar="PATH",
+                   help="output file (default: next to RUN with the suffix .csv or .npz; "
+                   "the measurements table: RUN.measurements.csv); never RUN itself")  # fmt: skip
+    p.add_argument("--table", choices=("steps", "measurements"), default="steps",
+                   help="--csv: one row per control step (default) or per valid position "
+                   "measurement (DGPS and gyrocompass, at their own times)")  # fmt: skip
+    p.set_defaults(func=_cmd_export, prepare=_export_defaults)
     p = sub.add_parser(
         "bench", help="benchmarks: 'bench observers', 'bench controllers', 'bench dp', 'bench roll'"
     )
@@ -1002,6 +1059,9 @@ def main(argv: list[str] | None = None) -> int:
         return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
     with handle_signals(), _compile_notice(sys.stderr):
         try:
+            prepare = getattr(args, "prepare", None)
+            if prepare is not None:  # defaults that depend on other arguments (a subcommand's)
+                prepare(args)
             _check_paths(args)
             return int(args.func(args))
         except WriteFailed as exc:  # the results go to stdout instead of being lost

@@ -12,6 +12,7 @@ Design notes: docs/design/viz.md.
 from __future__ import annotations
 
 from .compare import COMPARE_SIZES, write_observer_report
+from .export import run_columns, write_run_csv, write_run_npz
 from .recorder import RecordEpisode, episode_path
 from .report import DPI, FIGURE_SIZES, pixel_size, report_paths, write_report
 from .run import Run, load_run, recording_problem, save_run_json
@@ -27,7 +28,10 @@ __all__ = [
     "pixel_size",
     "recording_problem",
     "report_paths",
+    "run_columns",
     "save_run_json",
     "write_observer_report",
     "write_report",
+    "write_run_csv",
+    "write_run_npz",
 ]

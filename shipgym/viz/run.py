@@ -384,9 +384,10 @@ def _load_json(path: Path) -> Run:
         raise ValueError(f"cannot read the run file {path}: {exc}") from None
     if isinstance(doc, dict) and "format" not in doc and "env_id" in doc and "seed" in doc:
         raise ValueError(
-            f"{path} holds the results of 'shipgym run --json' (metrics, no trajectory): "
-            "make the figures from the run's recording (shipgym report RUN.rrd, from "
-            "'shipgym run --record RUN.rrd') or with 'shipgym run --report DIR'"
+            f"{path} holds the results of 'shipgym run --json' (metrics, no time series): "
+            "record the run with 'shipgym run --record RUN.rrd' and read the recording "
+            "('shipgym report RUN.rrd', 'shipgym export RUN.rrd --csv'), or make the figures "
+            "with 'shipgym run --report DIR'"
         )
     if not isinstance(doc, dict) or doc.get("format") != JSON_FORMAT:
         raise ValueError(
@@ -646,20 +647,50 @@ def _status_problem(status: Any) -> str | None:
 def load_run(path: str | os.PathLike[str]) -> Run:
     """Read a run from a rerun ``.rrd`` recording or a JSON run file.
 
+    The results file of ``shipgym run --json`` is not a run file (it holds the metrics, no
+    time series) and is refused with a message saying how to record one.
+
     Args:
-        path: a ``.rrd`` file written by :class:`~shipgym.viz.RecordEpisode`, or a ``.json``
-            file written by :func:`save_run_json` (or the recorder's ``json_path``).
+        path: a ``.rrd`` file written by :class:`~shipgym.viz.RecordEpisode` (``shipgym run
+            --record RUN.rrd``), or a ``.json`` file written by :func:`save_run_json` (or the
+            recorder's ``json_path``).
 
     Returns:
-        The :class:`Run`. Positions read from a ``.rrd`` are the float64 values of the
-        ``data/*`` entities (the map entities hold the same values as float32).
+        The :class:`Run`: one episode as NumPy arrays with a row per control step (``N`` rows,
+        the reset state first; SI units, angles in rad unless named ``_deg``):
 
-        ``metadata["recording"]`` says whether the recording is complete (see
-        :func:`recording_problem`).
+        - ``t`` (s) and ``step``, (N,);
+        - ``eta`` (``x`` m, ``y`` m, ``psi`` rad, NED) and ``nu`` (``u`` m/s, ``v`` m/s,
+          ``r`` rad/s, body), the truth, (N, 3); ``nav_eta``, ``nav_nu``: what the
+          controller used (the truth or the observer's estimate);
+        - the guidance: ``eta_d`` (desired pose), ``eta_d_r`` and ``eta_dot_d_r`` (desired
+          pose and rate in the leg's r-frame), ``eta_r`` (true pose in the r-frame),
+          ``eta_P`` (the leg's start), (N, 3); ``leg``, ``legs_completed``, (N,);
+        - the actuators: ``command`` (each channel in its unit: ``actuators["units"]``),
+          ``actuator_state``, ``saturated`` (flags), (N, channels); ``thrust`` (N), (N,
+          actuators); their names in :attr:`Run.channel_names` and :attr:`Run.actuator_names`;
+        - the environment: ``tau_wind`` and ``tau_waves`` (``X`` N, ``Y`` N, ``N`` N m,
+          body), ``current_body`` (m/s on the body axes), (N, 3); ``wind`` (speed m/s,
+          direction it comes from, rad), (N, 2);
+        - ``accuracy`` and ``accuracy_measured``: the running indices ``x_E`` (m), ``y_E``
+          (m), ``psi_E`` (deg), ``J_c`` from the truth and from the measurements, (N, 4);
+        - ``roll`` (``phi`` rad, ``p`` rad/s) of a 4-DOF vessel, (N, 2), else (0, 2);
+        - the valid position measurements, at their own times: ``meas_t`` (s),
+          ``meas_step``, ``meas_z`` (NED pose), ``meas_z_r`` (r-frame), ``meas_outlier``;
+        - the static data: ``waypoints``, ``quays``, ``hull``, ``thrusters`` (m), and the
+          dicts ``actuators``, ``vessel``, ``metadata`` (env id, scenario, seed, observer,
+          controller, wind, plan, ...) and ``metrics`` (the episode's metrics).
+
+        :func:`shipgym.viz.export.run_columns` names every component with its unit
+        (``shipgym export RUN --csv`` writes them as a table). Positions read from a
+        ``.rrd`` are the float64 values of the ``data/*`` entities (the map entities hold
+        the same values as float32). ``metadata["recording"]`` says whether the recording is
+        complete (see :func:`recording_problem`).
 
     Raises:
-        ValueError: unknown suffix, missing file, a file that is not a shipgym run, or a
-            ``.rrd`` file rerun cannot read (one line; e.g. cut short by a killed process).
+        ValueError: unknown suffix, missing file, a file that is not a shipgym run (the
+            results of ``shipgym run --json`` included), or a ``.rrd`` file rerun cannot
+            read (one line; e.g. cut short by a killed process).
     """
     path = Path(path)
     if not path.is_file():

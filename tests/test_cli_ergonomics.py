@@ -1,0 +1,173 @@
+"""The results and command-line ergonomics: ``shipgym export``, ``report``'s default folder,
+``n/a`` in printed tables, "did you mean" on unknown names, progress bars and notices, the
+run header and per-task summaries, the thruster-limit warning, shell completion."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from shipgym.cli import main, run_episode
+from shipgym.viz import load_run, save_run_json
+
+STEPS = 40  # a shortened harbour episode
+
+
+def _one_line_error(capsys, rc, *needles):
+    err = capsys.readouterr().err
+    assert rc == 2, err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("shipgym: error: "), err
+    for n in needles:
+        assert n in lines[0], (n, lines[0])
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    """A short recorded harbour run: its ``.rrd``, a JSON run file of it and the results
+    file of ``shipgym run --json``."""
+    out = tmp_path_factory.mktemp("export")
+    rrd = out / "run.rrd"
+    results = out / "results.json"
+    run_episode("harbour", record=rrd, json_path=results, env_kwargs={"max_episode_steps": STEPS})
+    run = load_run(rrd)
+    save_run_json(run, out / "runfile.json")
+    return {"dir": out, "rrd": rrd, "json": out / "runfile.json", "results": results, "run": run}
+
+
+def _copy(recorded, tmp_path, key="rrd"):
+    src = recorded[key]
+    dst = tmp_path / src.name
+    shutil.copy(src, dst)
+    return dst
+
+
+# ---- 1. shipgym export -----------------------------------------------------------------------
+def _read_csv(path):
+    with open(path, newline="", encoding="utf-8") as fh:
+        rows = list(csv.reader(fh))
+    return rows[0], rows[1:]
+
+
+def test_export_csv_next_to_the_run_with_units_in_the_column_names(recorded, tmp_path, capsys):
+    rrd = _copy(recorded, tmp_path)
+    assert main(["export", str(rrd), "--csv"]) == 0
+    out = tmp_path / "run.csv"
+    assert f"wrote {out}" in capsys.readouterr().out
+    header, rows = _read_csv(out)
+    run = recorded["run"]
+    assert len(rows) == len(run.t) == STEPS + 1
+    for label in ("t [s]", "x [m]", "y [m]", "psi [rad]", "u [m/s]", "r [rad/s]",
+                  "tau_wind_X [N]", "tau_wind_N [N m]", "thrust_bow_tunnel [N]",
+                  "command_main_propeller [rpm]", "wind_speed [m/s]", "psi_E [deg]"):  # fmt: skip
+        assert label in header, label
+    assert len(set(header)) == len(header)
+    col = {name: i for i, name in enumerate(header)}
+    # the values round-trip exactly, NaN included
+    t = np.array([float(r[col["t [s]"]]) for r in rows])
+    x = np.array([float(r[col["x [m]"]]) for r in rows])
+    psi = np.array([float(r[col["psi [rad]"]]) for r in rows])
+    thrust = np.array([float(r[col["thrust_bow_tunnel [N]"]]) for r in rows])
+    assert np.array_equal(t, run.t) and np.array_equal(x, run.eta[:, 0])
+    assert np.array_equal(psi, run.eta[:, 2]) and np.array_equal(thrust, run.thrust[:, 1])
+    jc = np.array([float(r[col["J_c [-]"]]) for r in rows])
+    assert np.array_equal(jc, run.accuracy[:, 3], equal_nan=True)
+    assert {r[col["saturated_bow_tunnel [-]"]] for r in rows} <= {"0", "1"}
+
+
+def test_export_csv_reads_back_with_pandas(recorded, tmp_path):
+    pd = pytest.importorskip("pandas")
+    rrd = _copy(recorded, tmp_path)
+    assert main(["export", str(rrd), "--csv", "-o", str(tmp_path / "t.csv")]) == 0
+    df = pd.read_csv(tmp_path / "t.csv")
+    assert np.array_equal(df["x [m]"].to_numpy(), recorded["run"].eta[:, 0])
+
+
+def test_export_npz_same_arrays_names_without_units(recorded, tmp_path, capsys):
+    rrd = _copy(recorded, tmp_path)
+    assert main(["export", str(rrd), "--npz"]) == 0
+    out = tmp_path / "run.npz"
+    assert f"wrote {out}" in capsys.readouterr().out
+    run = recorded["run"]
+    with np.load(out, allow_pickle=False) as a:
+        units = dict(a["units"])
+        assert units["x"] == "m" and units["psi"] == "rad" and units["u"] == "m/s"
+        assert units["tau_wind_N"] == "N m" and units["t"] == "s" and units["meas_x"] == "m"
+        assert set(units) <= set(a.files)
+        assert np.array_equal(a["x"], run.eta[:, 0]) and np.array_equal(a["t"], run.t)
+        assert np.array_equal(a["thrust_main_propeller"], run.thrust[:, 0])
+        assert np.array_equal(a["meas_t"], run.meas_t)
+        assert a["saturated_bow_tunnel"].dtype == bool
+        meta = json.loads(str(a["metadata"]))
+        assert meta["metadata"]["env_id"] == run.metadata["env_id"]
+    # the CSV holds the same columns as the archive's steps
+    assert main(["export", str(rrd), "--csv"]) == 0
+    header, _ = _read_csv(tmp_path / "run.csv")
+    names = [h.rsplit(" [", 1)[0] for h in header]
+    with np.load(out) as a:
+        assert names == [n for n in dict(a["units"]) if not n.startswith("meas_")]
+
+
+def test_export_reads_a_json_run_file_and_the_measurements(recorded, tmp_path):
+    src = _copy(recorded, tmp_path, "json")
+    assert main(["export", str(src), "--csv"]) == 0
+    header, rows = _read_csv(tmp_path / "runfile.csv")
+    assert "x [m]" in header and len(rows) == STEPS + 1
+    assert main(["export", str(src), "--csv", "--table", "measurements"]) == 0
+    header, rows = _read_csv(tmp_path / "runfile.measurements.csv")
+    assert header[:3] == ["t [s]", "step [-]", "x [m]"] and "outlier [-]" in header
+    assert len(rows) == len(recorded["run"].meas_t) > 0
+
+
+def test_export_refuses_to_overwrite_its_input(recorded, tmp_path, capsys):
+    rrd = _copy(recorded, tmp_path)
+    before = rrd.read_bytes()
+    rc = main(["export", str(rrd), "--csv", "-o", str(rrd)])
+    _one_line_error(capsys, rc, "--out", "would overwrite the input RUN")
+    assert rrd.read_bytes() == before
+
+
+def test_export_replaces_an_earlier_export_atomically(recorded, tmp_path):
+    rrd = _copy(recorded, tmp_path)
+    out = tmp_path / "run.csv"
+    out.write_text("old\n")
+    assert main(["export", str(rrd), "--csv"]) == 0
+    assert out.read_text().startswith("t [s],")
+    assert [p.name for p in tmp_path.iterdir() if "partial" in p.name] == []
+
+
+def test_export_of_the_results_file_says_how_to_record_one(recorded, tmp_path, capsys):
+    res = _copy(recorded, tmp_path, "results")
+    rc = main(["export", str(res), "--csv"])
+    _one_line_error(capsys, rc, "no time series", "--record RUN.rrd", "shipgym export")
+    assert not (tmp_path / "results.csv").exists()
+
+
+@pytest.mark.parametrize(
+    "argv, needles",
+    [
+        (["export", "missing.rrd", "--csv"], ["no such run file", "missing.rrd"]),
+        (["export", "RUN", "--csv", "--npz"], ["not allowed with"]),
+        (["export", "RUN"], ["--csv", "--npz"]),
+        (["export", "RUN", "--npz", "--table", "measurements"], ["--table", "--csv"]),
+    ],
+)
+def test_export_misuse_is_one_line(argv, needles, recorded, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    _copy(recorded, tmp_path)
+    argv = [str(tmp_path / "run.rrd") if a == "RUN" else a for a in argv]
+    _one_line_error(capsys, main(argv), *needles)
+    assert not (tmp_path / "missing.csv").exists()
+
+
+def test_load_run_documents_its_arrays():
+    doc = load_run.__doc__
+    for name in ("eta", "nu", "command", "thrust", "tau_wind", "meas_t", "accuracy", "metadata",
+                 "run_columns"):  # fmt: skip
+        assert name in doc, name
