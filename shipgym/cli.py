@@ -622,11 +622,23 @@ def _cmd_trials(args: argparse.Namespace) -> int:
     return 0
 
 
+def _report_folder(run: Path) -> Path:
+    """The default folder of ``shipgym report RUN``: ``<RUN stem>_report`` next to RUN."""
+    return run.with_name(f"{run.stem}_report")
+
+
+def _report_defaults(args: argparse.Namespace) -> None:
+    """``shipgym report``: the run file must exist (before the output folder is made);
+    ``--out`` defaults to :func:`_report_folder`."""
+    if not args.run.is_file():
+        raise ValueError(f"no such run file: {args.run} (expected a .rrd or .json run file)")
+    if args.out is None:
+        args.out = _report_folder(args.run)
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from shipgym.viz import load_run, recording_problem, write_report
 
-    if not args.run.exists():
-        raise ValueError(f"no such run file: {args.run}")
     run = load_run(args.run)  # a file rerun cannot read: one-line ValueError
     problem = recording_problem(run)
     if problem is not None:
@@ -807,10 +819,14 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_run, folders={"--report": REPORT})
     p = sub.add_parser("report", help="PNG figures and metrics.md from a recorded run")
-    p.add_argument("run", type=path_arg, help="RUN.rrd (shipgym run --record) or a run file "
-                   "of shipgym.viz.save_run_json")  # fmt: skip
-    p.add_argument("--out", type=path_arg, required=True, metavar="DIR")
-    p.set_defaults(func=_cmd_report, folders={"--out": REPORT})
+    p.add_argument("run", type=path_arg, metavar="RUN",
+                   help="RUN.rrd (shipgym run --record) or a JSON run file "
+                   "(shipgym.viz.save_run_json, RecordEpisode(json_path=)); not the results "
+                   "of 'shipgym run --json', which hold no time series")  # fmt: skip
+    p.add_argument("--out", type=path_arg, default=None, metavar="DIR",
+                   help="folder of the figures and metrics.md (default: <RUN stem>_report "
+                   "next to RUN, e.g. runs/h.rrd -> runs/h_report)")  # fmt: skip
+    p.set_defaults(func=_cmd_report, folders={"--out": REPORT}, prepare=_report_defaults)
     p = sub.add_parser(
         "export", help="a recorded run's time series as CSV or a NumPy archive (.npz)",
         description="Write the time series of a recorded run as CSV (one column per signal "

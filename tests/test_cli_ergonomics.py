@@ -171,3 +171,31 @@ def test_load_run_documents_its_arrays():
     for name in ("eta", "nu", "command", "thrust", "tau_wind", "meas_t", "accuracy", "metadata",
                  "run_columns"):  # fmt: skip
         assert name in doc, name
+
+
+# ---- 2. shipgym report without --out ---------------------------------------------------------
+def test_report_defaults_to_a_folder_next_to_the_run(recorded, tmp_path, capsys):
+    src = _copy(recorded, tmp_path, "json")  # a JSON run file
+    assert main(["report", str(src)]) == 0
+    folder = tmp_path / "runfile_report"
+    assert (folder / "metrics.md").is_file() and list(folder.glob("*.png"))
+    assert f"wrote {folder / 'metrics.md'}" in capsys.readouterr().out
+
+
+def test_report_help_names_the_default_and_the_files_it_reads(capsys):
+    assert main(["report", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "<RUN stem>_report" in text
+    assert "RUN.rrd" in text and "save_run_json" in text
+    assert "not the results of 'shipgym run --json'" in text
+
+
+def test_report_of_a_missing_run_makes_no_folder(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    _one_line_error(capsys, main(["report", "missing.rrd"]), "no such run file", "missing.rrd")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_report_of_the_results_file_says_how_to_record_one(recorded, tmp_path, capsys):
+    res = _copy(recorded, tmp_path, "results")
+    _one_line_error(capsys, main(["report", str(res)]), "no time series", "--record RUN.rrd")
