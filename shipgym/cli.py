@@ -32,6 +32,7 @@ from shipgym._argtypes import (
 )
 from shipgym._io import check_folder, check_writable
 from shipgym._safeload import jsonable
+from shipgym._text import num, num_list
 from shipgym.bench import row_log, write_bench_outputs
 from shipgym.catalogue import catalogue, check_controller, controller_catalogue
 from shipgym.runner import ENV_DEFAULT, run_episode
@@ -79,8 +80,9 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 
 def _fmt(x: Any) -> str:
-    if isinstance(x, float):
-        return "n/a" if math.isnan(x) else f"{x:.4f}"
+    """A table cell: a float to 4 decimals, ``n/a`` for NaN, an infinity or ``None``."""
+    if x is None or (isinstance(x, float | np.floating) and not isinstance(x, bool)):
+        return num(x, ".4f")
     return str(x)
 
 
@@ -117,10 +119,6 @@ def _header(res: dict[str, Any]) -> str:
     return " | ".join(parts)
 
 
-def _round(v: float, nd: int) -> float | str:
-    return "n/a" if v != v else round(v, nd)
-
-
 def _print_table(res: dict[str, Any]) -> None:
     meas = res.get("measured") or {}
     print(_header(res))
@@ -143,9 +141,9 @@ def _print_table(res: dict[str, Any]) -> None:
         print(f"  {key:16s} {_fmt(res[key]):>10s} {_fmt(meas.get(key, 'n/a')):>10s} {unit}")
     if res.get("indices_note"):
         print(f"  indices n/a: {res['indices_note']}")
-    print(f"  leg times (s)    {[round(t, 1) for t in res['leg_times']]}")
-    print(f"  mean |thrust| (N) {[round(t, 1) for t in res['thrust_mean_abs']]}")
-    print(f"  time saturated   {[round(t, 3) for t in res['saturated_fraction']]} (fraction)")
+    print(f"  leg times (s)    {num_list(res['leg_times'], 1)}")
+    print(f"  mean |thrust| (N) {num_list(res['thrust_mean_abs'], 1)}")
+    print(f"  time saturated   {num_list(res['saturated_fraction'], 3)} (fraction)")
     if res.get("reversals_per_min"):
         print("  command chatter per channel (normalised commands):")
         for key, label, nd in (
@@ -154,13 +152,14 @@ def _print_table(res: dict[str, Any]) -> None:
             ("hf_variance_fraction", "var. < 20 s", 3),
             ("travel_per_min", "travel / min", 2),
         ):
-            print(f"    {label:16s} {[_round(v, nd) for v in res[key]]}")
+            print(f"    {label:16s} {num_list(res[key], nd)}")
     if res.get("rmse"):
         r = res["rmse"]
         print(
             "  estimation RMSE  "
-            f"x {r['x']:.3f} m, y {r['y']:.3f} m, psi {r['psi']:.3f} deg, "
-            f"u {r['u']:.4f} m/s, v {r['v']:.4f} m/s, r {r['r']:.4f} deg/s"
+            f"x {num(r['x'], '.3f')} m, y {num(r['y'], '.3f')} m, "
+            f"psi {num(r['psi'], '.3f')} deg, u {num(r['u'])} m/s, v {num(r['v'])} m/s, "
+            f"r {num(r['r'])} deg/s"
         )
     print(f"  wall time        {res['wall_time_s']:.2f} s")
 

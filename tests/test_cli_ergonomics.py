@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import shutil
 
 import numpy as np
@@ -199,3 +200,38 @@ def test_report_of_a_missing_run_makes_no_folder(tmp_path, capsys, monkeypatch):
 def test_report_of_the_results_file_says_how_to_record_one(recorded, tmp_path, capsys):
     res = _copy(recorded, tmp_path, "results")
     _one_line_error(capsys, main(["report", str(res)]), "no time series", "--record RUN.rrd")
+
+
+# ---- 3. n/a instead of inf / nan in printed tables -------------------------------------------
+def _words(text):
+    return set(text.replace("[", " ").replace("]", " ").replace(",", " ").split())
+
+
+def test_printed_table_says_n_a_for_nan_and_inf_and_json_keeps_null(tmp_path, capsys):
+    from shipgym.cli import _print_table
+
+    res = run_episode("harbour", json_path=tmp_path / "r.json", env_kwargs={"max_episode_steps": 5})
+    res = {**res, "J_c": math.inf, "x_E": -math.inf, "leg_times": [12.0, math.nan]}
+    res["measured"] = {**(res["measured"] or {}), "J_c": math.inf, "psi_E": math.nan}
+    res["thrust_mean_abs"] = [math.nan, 1.0, math.inf]
+    res["limit_fraction"] = [math.inf, 0.5, math.nan]
+    res["rmse"] = {"x": math.nan, "y": 0.1, "psi": math.inf, "u": 0.0, "v": 0.0, "r": math.nan}
+    _print_table(res)
+    out = capsys.readouterr().out
+    words = {w.lower() for w in _words(out)}
+    assert not words & {"nan", "inf", "-inf", "infinity"}, out
+    assert "n/a" in words
+    jc = next(ln for ln in out.splitlines() if ln.strip().startswith("J_c"))
+    assert jc.split()[1:3] == ["n/a", "n/a"], jc
+    assert "[12.0, n/a]" in out and "[n/a, 1.0, n/a]" in out and "x n/a m" in out
+    doc = json.loads((tmp_path / "r.json").read_text())  # the file keeps strict JSON: null
+    assert doc["J_c"] is None and doc["indices_note"]
+
+
+def test_num_formats_finite_values_only():
+    from shipgym._text import num, num_list
+
+    assert num(0.12345) == "0.1235" and num(3, ".1f") == "3.0" and num(0.5, ".1%") == "50.0%"
+    for bad in (math.nan, math.inf, -math.inf, None, np.float64("nan"), "x"):
+        assert num(bad) == "n/a"
+    assert num_list([240.0, 1 / 3, math.inf, None], 1) == "[240.0, 0.3, n/a, n/a]"

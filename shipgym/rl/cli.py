@@ -36,6 +36,7 @@ from shipgym._argtypes import (
     seed_int,
 )
 from shipgym._io import progress_enabled
+from shipgym._text import num
 
 __all__ = [
     "add_bench_controllers_parser",
@@ -184,13 +185,13 @@ def cmd_train(args: argparse.Namespace) -> int:
         e = res.evaluations[-1]
         if e.get("evaluation") == "station-keeping":
             print(
-                f"  last station-keeping evaluation: {e['inside_fraction']:.1%} of the time "
-                f"within {e['radius_m']:g} m, mean return {e['return']:.4g}"
+                f"  last station-keeping evaluation: {num(e['inside_fraction'], '.1%')} of the "
+                f"time within {e['radius_m']:g} m, mean return {num(e['return'], '.4g')}"
             )
         else:
             print(
                 f"  last harbour evaluation: {e['completed']}/{e['runs']} completed, "
-                f"J_c {e['J_c']:.4f}"
+                f"J_c {num(e['J_c'])}"
             )
     print(f"  command     {res.metadata.command}")
     return 0
