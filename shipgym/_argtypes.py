@@ -191,3 +191,18 @@ class OneLineParser(argparse.ArgumentParser):
         root = self.prog.split()[0] if self.prog else "shipgym"
         msg = " ".join(str(message).split())
         self.exit(2, f"{root}: error: {msg} (see '{self.prog} --help')\n")
+
+    def _check_value(self, action: argparse.Action, value: Any) -> None:
+        """argparse's check of a value against ``choices`` (a subcommand included), with
+        the close names suggested (:func:`shipgym._text.did_you_mean`)."""
+        try:
+            super()._check_value(action, value)  # type: ignore[misc]
+        except argparse.ArgumentError:
+            from shipgym._text import did_you_mean
+
+            choices = [str(c) for c in action.choices or ()]
+            raise argparse.ArgumentError(
+                action,
+                f"invalid choice: {value!r}{did_you_mean(value, choices)}; choose from "
+                f"{', '.join(choices)}",
+            ) from None

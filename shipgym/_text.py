@@ -1,15 +1,16 @@
-"""Small pieces of the text shipgym prints: numbers in tables.
+"""Small pieces of the text shipgym prints: numbers in tables, suggestions for unknown names.
 
-Public names: ``MISSING``, ``num``, ``num_list``.
+Public names: ``MISSING``, ``close_matches``, ``did_you_mean``, ``num``, ``num_list``.
 """
 
 from __future__ import annotations
 
+import difflib
 import math
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = ["MISSING", "num", "num_list"]
+__all__ = ["MISSING", "close_matches", "did_you_mean", "num", "num_list"]
 
 #: what a printed table shows for a value that is not a finite number (NaN, +-inf, None)
 MISSING = "n/a"
@@ -42,3 +43,32 @@ def num_list(values: Iterable[Any], ndigits: int, missing: str = MISSING) -> str
         f = _finite(v)
         out.append(missing if f is None else repr(round(f, ndigits)))
     return "[" + ", ".join(out) + "]"
+
+
+def close_matches(name: Any, valid: Iterable[Any], n: int = 3, cutoff: float = 0.6) -> list[str]:
+    """The names of ``valid`` closest to ``name`` (:func:`difflib.get_close_matches`, ignoring
+    case, ``-`` against ``_``, and a ``shipgym/`` prefix), best first; none for a ``name``
+    that is not a string."""
+    if not isinstance(name, str) or not name:
+        return []
+
+    def key(s: str) -> str:
+        s = s.strip().lower().replace("_", "-")
+        return s.removeprefix("shipgym/")
+
+    names: dict[str, str] = {}
+    for v in valid:
+        names.setdefault(key(str(v)), str(v))
+    return [names[k] for k in difflib.get_close_matches(key(name), list(names), n, cutoff)]
+
+
+def did_you_mean(name: Any, valid: Iterable[Any]) -> str:
+    """``" (did you mean 'harbour'?)"`` for the names of ``valid`` close to an unknown
+    ``name`` (:func:`close_matches`; two or three: ``'a' or 'b'``), else ``""``: the one
+    suggestion every "unknown name" message of shipgym appends to the name it quotes."""
+    matches = close_matches(name, valid)
+    if not matches:
+        return ""
+    quoted = [repr(m) for m in matches]
+    alts = quoted[0] if len(quoted) == 1 else f"{', '.join(quoted[:-1])} or {quoted[-1]}"
+    return f" (did you mean {alts}?)"

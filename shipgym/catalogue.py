@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from shipgym._text import did_you_mean
+
 __all__ = ["catalogue", "check_controller", "controller_catalogue"]
 
 
@@ -96,4 +98,7 @@ def check_controller(name: str, *, task: str | None = None, vessel: Any = None) 
         return
     names = controller_catalogue()
     if name not in names:
-        raise ValueError(f"unknown controller {name!r}; choose one of: {', '.join(names)}")
+        raise ValueError(
+            f"unknown controller {name!r}{did_you_mean(name, names)}; choose one of: "
+            f"{', '.join(names)}"
+        )

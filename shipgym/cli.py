@@ -32,7 +32,7 @@ from shipgym._argtypes import (
 )
 from shipgym._io import check_folder, check_writable
 from shipgym._safeload import jsonable
-from shipgym._text import num, num_list
+from shipgym._text import did_you_mean, num, num_list
 from shipgym.bench import row_log, write_bench_outputs
 from shipgym.catalogue import catalogue, check_controller, controller_catalogue
 from shipgym.runner import ENV_DEFAULT, run_episode
@@ -357,7 +357,10 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
     methods = args.methods or list(METHODS)
     for m in methods:
         if m not in METHODS:
-            raise ValueError(f"unknown DP method {m!r}; choose from {', '.join(METHODS)}")
+            raise ValueError(
+                f"unknown DP method {m!r}{did_you_mean(m, METHODS)}; choose from "
+                f"{', '.join(METHODS)}"
+            )
     if args.duration is None:
         args.duration = 400.0 if args.task == "sway-step" else 600.0
     total = len(args.vessel) * len(beauforts) * len(methods) * args.seeds
@@ -476,9 +479,15 @@ def _cmd_bench_roll(args: argparse.Namespace) -> int:
     methods = args.methods or list(METHODS)
     for m in methods:
         if m not in METHODS:
-            raise ValueError(f"unknown roll method {m!r}; choose from {', '.join(METHODS)}")
+            raise ValueError(
+                f"unknown roll method {m!r}{did_you_mean(m, METHODS)}; choose from "
+                f"{', '.join(METHODS)}"
+            )
     if args.task is not None and args.task not in TASKS:
-        raise ValueError(f"unknown roll task {args.task!r}; choose from {', '.join(TASKS)}")
+        raise ValueError(
+            f"unknown roll task {args.task!r}{did_you_mean(args.task, TASKS)}; choose from "
+            f"{', '.join(TASKS)}"
+        )
     run_speeds: dict[str, list[float]] = {}
     for v, vv in vessels.items():
         top = vv.limits.get("surge_speed", math.inf)
@@ -560,8 +569,10 @@ def _cmd_trials(args: argparse.Namespace) -> int:
         names = [m.strip() for m in args.manoeuvres.split(",") if m.strip()]
         bad = [m for m in names if m not in manoeuvre_names()]
         if bad or not names:
-            raise ValueError(f"unknown manoeuvre {bad[0] if bad else args.manoeuvres!r}; choose "
-                             f"from {', '.join(manoeuvre_names())} or all")  # fmt: skip
+            name = bad[0] if bad else args.manoeuvres
+            raise ValueError(f"unknown manoeuvre {name!r}"
+                             f"{did_you_mean(name, [*manoeuvre_names(), 'all'])}; choose from "
+                             f"{', '.join(manoeuvre_names())} or all")  # fmt: skip
     sps = _float_list(args.sp, "--sp")
     try:
         ax, ay = (float(x) for x in args.antenna.split(","))

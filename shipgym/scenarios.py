@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from shipgym._config import is_real
+from shipgym._text import did_you_mean
 from shipgym.disturbances.current import CurrentConfig
 from shipgym.disturbances.waves import WaveConfig
 from shipgym.disturbances.wind import WindConfig
@@ -188,11 +189,13 @@ class Scenario:
             raise ValueError(f"scenario name must be a non-empty string, got {self.name!r}")
         if self.env not in ENV_SCENARIOS:
             raise ValueError(
-                f"{where}: unknown env {self.env!r}; valid names are: {', '.join(ENV_SCENARIOS)}"
+                f"{where}: unknown env {self.env!r}{did_you_mean(self.env, ENV_SCENARIOS)}; "
+                f"valid names are: {', '.join(ENV_SCENARIOS)}"
             )
         if self.plant not in _plant_names():
             raise ValueError(
-                f"{where}: unknown plant variant {self.plant!r}; valid names are: "
+                f"{where}: unknown plant variant {self.plant!r}"
+                f"{did_you_mean(self.plant, _plant_names())}; valid names are: "
                 f"{', '.join(_plant_names())}"
             )
         for key, cls in (("wind", WindConfig), ("waves", WaveConfig), ("current", CurrentConfig)):
@@ -203,7 +206,8 @@ class Scenario:
         if isinstance(s, str):
             if s not in _sensor_presets():
                 raise ValueError(
-                    f"{where}: unknown sensor preset {s!r}; valid names are: "
+                    f"{where}: unknown sensor preset {s!r}"
+                    f"{did_you_mean(s, _sensor_presets())}; valid names are: "
                     f"{', '.join(_sensor_presets())}"
                 )
         elif s is not None and not isinstance(s, SensorConfig):
@@ -214,7 +218,8 @@ class Scenario:
         if isinstance(p, str):
             if p not in _plan_names():
                 raise ValueError(
-                    f"{where}: unknown plan {p!r}; valid names are: {', '.join(_plan_names())}"
+                    f"{where}: unknown plan {p!r}{did_you_mean(p, _plan_names())}; valid "
+                    f"names are: {', '.join(_plan_names())}"
                 )
         elif p is not None and not isinstance(p, ManoeuvrePlan):
             raise ValueError(
@@ -382,7 +387,8 @@ def _waves(value: Any, current: WaveConfig | None, where: str) -> WaveConfig | N
         name = value.pop("preset")
         if name not in WAVE_PRESETS:
             raise ValueError(
-                f"{where}: unknown wave preset {name!r}; valid names are: {', '.join(WAVE_PRESETS)}"
+                f"{where}: unknown wave preset {name!r}{did_you_mean(name, WAVE_PRESETS)}; "
+                f"valid names are: {', '.join(WAVE_PRESETS)}"
             )
         d = current.direction_from if current is not None else 0.0
         current = WAVE_PRESETS[name](direction_from=d)
@@ -463,7 +469,8 @@ def _sensors(value: Any, where: str) -> Any:
     if isinstance(value, str):
         if value not in _sensor_presets():
             raise ValueError(
-                f"{where}: unknown sensor preset {value!r}; valid names are: "
+                f"{where}: unknown sensor preset {value!r}"
+                f"{did_you_mean(value, _sensor_presets())}; valid names are: "
                 f"{', '.join(_sensor_presets())}"
             )
         return value
@@ -478,7 +485,8 @@ def _sensors(value: Any, where: str) -> Any:
     name = d.pop("preset", "default")
     if name not in _sensor_presets():
         raise ValueError(
-            f"{where}: unknown sensor preset {name!r}; valid names are: "
+            f"{where}: unknown sensor preset {name!r}"
+            f"{did_you_mean(name, _sensor_presets())}; valid names are: "
             f"{', '.join(_sensor_presets())}"
         )
     _reject(d, _fields(SensorConfig), where)
@@ -496,7 +504,8 @@ def _plan(value: Any, where: str) -> Any:
     if isinstance(value, str):
         if value not in _plan_names():
             raise ValueError(
-                f"{where}: unknown plan {value!r}; valid names are: {', '.join(_plan_names())}"
+                f"{where}: unknown plan {value!r}{did_you_mean(value, _plan_names())}; valid "
+                f"names are: {', '.join(_plan_names())}"
             )
         return value
     if isinstance(value, ManoeuvrePlan):
@@ -581,7 +590,8 @@ def scenario_from_dict(data: Mapping[str, Any], *, name: str | None = None) -> S
     if "base" in data:
         if data["base"] not in SCENARIOS:
             raise ValueError(
-                f"{where}: unknown base scenario {data['base']!r}; valid names are: "
+                f"{where}: unknown base scenario {data['base']!r}"
+                f"{did_you_mean(data['base'], SCENARIOS)}; valid names are: "
                 f"{', '.join(SCENARIOS)}"
             )
         base = SCENARIOS[data["base"]]
@@ -657,7 +667,8 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         path = Path(name_or_path)
         if path.suffix not in (".yaml", ".yml", ".toml"):
             raise ValueError(
-                f"unknown scenario {str(name_or_path)!r}; valid names are: "
+                f"unknown scenario {str(name_or_path)!r}"
+                f"{did_you_mean(str(name_or_path), [*SCENARIOS, *files])}; valid names are: "
                 f"{', '.join(list(SCENARIOS) + [f for f in files if f not in SCENARIOS])}; "
                 "or give a .yaml / .toml file"
             )

@@ -235,3 +235,72 @@ def test_num_formats_finite_values_only():
     for bad in (math.nan, math.inf, -math.inf, None, np.float64("nan"), "x"):
         assert num(bad) == "n/a"
     assert num_list([240.0, 1 / 3, math.inf, None], 1) == "[240.0, 0.3, n/a, n/a]"
+
+
+# ---- 4. "did you mean" on unknown names ------------------------------------------------------
+def test_did_you_mean_helper():
+    from shipgym._text import close_matches, did_you_mean
+
+    assert did_you_mean("harbor", ["harbour", "tracking"]) == " (did you mean 'harbour'?)"
+    assert did_you_mean("xyzzy", ["harbour", "tracking"]) == ""
+    assert did_you_mean(None, ["harbour"]) == "" and did_you_mean(3, ["harbour"]) == ""
+    assert close_matches("Blue_Lady", ["blue-lady", "wimpey-sealab"]) == ["blue-lady"]
+    assert close_matches("StationKeeping-v0", ["shipgym/StationKeeping-v0"]) == [
+        "shipgym/StationKeeping-v0"
+    ]
+    many = did_you_mean("kf41", ["kf14", "kf16", "kf12", "ekf"])
+    assert many.startswith(" (did you mean 'kf1") and ", " in many and " or " in many
+
+
+CLI_SUGGESTIONS = [
+    (["run", "harbor"], "'harbor' (did you mean 'harbour'"),
+    (["run", "--vessel", "blue_lday"], "(did you mean 'blue-lady'?)"),
+    (["run", "--controller", "pdi"], "'pdi' (did you mean 'pid'?)"),
+    (["run", "--observer", "ekff"], "'ekff' (did you mean 'ekf'?)"),
+    (["run", "--plant", "defualt"], "'defualt' (did you mean 'default'?)"),
+    (["run", "--scenario", "harbour-crosscurent"], "(did you mean 'harbour-crosscurrent'?)"),
+    (["bench", "obsrvers"], "'obsrvers' (did you mean 'observers'?)"),
+    (["bench", "dp", "--methods", "kf41"], "'kf41' (did you mean"),
+    (["bench", "dp", "--task", "sway-stp"], "(did you mean 'sway-step'?)"),
+    (["bench", "roll", "--task", "beamsea"], "(did you mean 'beam-sea'?)"),
+    (["trials", "--manoeuvres", "zigzg10"], "(did you mean 'zigzag10'"),
+    (["lst"], "'lst' (did you mean 'list'?)"),
+]
+
+
+@pytest.mark.parametrize(
+    "argv, needle", CLI_SUGGESTIONS, ids=[" ".join(a) for a, _ in CLI_SUGGESTIONS]
+)
+def test_cli_suggests_close_names(argv, needle, capsys):
+    line = _one_line_error(capsys, main([*argv, "--no-progress"] if argv[0] == "run" else argv),
+                           needle)  # fmt: skip
+    assert line.count(", ") >= 1  # the list of the valid names is still there
+
+
+def test_api_suggests_close_names():
+    import shipgym
+    from shipgym.controllers.batch import controller_spec
+    from shipgym.disturbances import WindConfig
+    from shipgym.observers import make_observer
+    from shipgym.scenarios import load_scenario
+
+    cases = [
+        (lambda: shipgym.make("harbor"), "did you mean 'harbour'"),
+        (lambda: shipgym.make("shipgym/StationKeepin-v0"), "'shipgym/StationKeeping-v0'"),
+        (lambda: shipgym.load_vessel("wimpey-seelab"), "did you mean 'wimpey-sealab'"),
+        (lambda: load_scenario("tomera2014-lak"), "did you mean 'tomera2014-lake'"),
+        (lambda: make_observer("kbff"), "did you mean 'kbf'"),
+        (lambda: controller_spec("pid-smoth"), "did you mean 'pid-smooth'"),
+        (lambda: shipgym.load_vessel("blue-lady").plant("seed-lineer"), "'seed-linear'"),
+        (
+            lambda: WindConfig(speed=3.0, coefficients="tanker-loadd"),
+            "did you mean 'tanker-loaded'",
+        ),
+    ]
+    for call, needle in cases:
+        with pytest.raises(ValueError) as info:
+            call()
+        assert needle in str(info.value), str(info.value)
+    with pytest.raises(ValueError) as info:  # nothing close: no suggestion
+        shipgym.make("zzzzzz")
+    assert "did you mean" not in str(info.value)

@@ -106,7 +106,9 @@ def test_bad_actions_and_config_raise_clear_errors():
         gym.make("shipgym/BlueLadyHarbour-v0", timestep=0.03, control_period=1.0)
     with pytest.raises(ValueError, match="unknown manoeuvre plan"):
         gym.make("shipgym/BlueLadyHarbour-v0", plan="nope")
-    with pytest.raises(ValueError, match="unknown controller .lqr.; choose one of: pid, "):
+    with pytest.raises(
+        ValueError, match=r"unknown controller .lqr. \(did you mean .lq.\?\); choose one of: pid, "
+    ):
         shipgym.make("harbour", controller="lqr")
     with pytest.raises(ValueError, match="unknown scenario"):
         shipgym.make("harbor")

@@ -250,7 +250,10 @@ def test_file_options(tmp_path: Path) -> None:
         ({"current": {"speed": 0.1, "std": 0.01, "sigma": 0.1}}, "not both"),
         ({"current": {"spd": 0.1}}, r"current: unknown key\(s\) \['spd'\]"),
         ({"current": {"speed": 0.1, "time_constant": -1}}, "time_constant must be"),
-        ({"env": "docking"}, "unknown env 'docking'; valid names are: harbour"),
+        (
+            {"env": "docking"},
+            r"unknown env 'docking' \(did you mean 'tracking'\?\); valid names are: harbour",
+        ),
         ({"env": 3}, "env must be a string"),
         ({"plant": "fancy"}, "unknown plant variant 'fancy'; valid names are"),
         ({"sensors": "lidar"}, "unknown sensor preset 'lidar'; valid names are"),

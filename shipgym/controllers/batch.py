@@ -25,6 +25,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from shipgym._text import did_you_mean
 from shipgym.dynamics.vessel import Vessel, load_vessel
 
 from .actuation import fixed3_parameters, make_allocator
@@ -279,7 +280,8 @@ def controller_spec(name: str) -> ControllerSpec:
         return CONTROLLERS[name]
     except (KeyError, TypeError):
         raise ValueError(
-            f"unknown controller {name!r}; choose one of: {', '.join(CONTROLLERS)}"
+            f"unknown controller {name!r}{did_you_mean(name, CONTROLLERS)}; choose one of: "
+            f"{', '.join(CONTROLLERS)}"
         ) from None
 
 

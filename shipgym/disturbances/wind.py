@@ -32,6 +32,7 @@ from shipgym._config import (
     require_positive,
 )
 from shipgym._jit import njit
+from shipgym._text import did_you_mean
 from shipgym.dynamics.params import WindageParameters
 
 from ._boundary import coerce_config, parse_config
@@ -173,7 +174,8 @@ def blendermann(name: str) -> BlendermannCoefficients:
         return BLENDERMANN[name]
     except (KeyError, TypeError):
         raise ValueError(
-            f"unknown Blendermann vessel type {name!r}; valid names are: "
+            f"unknown Blendermann vessel type {name!r}{did_you_mean(name, BLENDERMANN)}; "
+            "valid names are: "
             f"{', '.join(sorted(BLENDERMANN))}"
         ) from None
 
@@ -568,7 +570,8 @@ class WindConfig:
         ):
             raise ValueError(
                 f"WindConfig.coefficients: unknown Blendermann vessel type "
-                f"{self.coefficients!r}; valid names are: {', '.join(sorted(BLENDERMANN))}"
+                f"{self.coefficients!r}{did_you_mean(self.coefficients, BLENDERMANN)}; valid "
+                f"names are: {', '.join(sorted(BLENDERMANN))}"
             )
         if self.gust_spectrum not in GUST_SPECTRA:
             raise ValueError(

@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from shipgym._text import did_you_mean
+
 from .metrics import dp_metrics, step_metrics
 
 __all__ = [
@@ -181,7 +183,9 @@ def dp_run(job: tuple[Any, ...]) -> dict[str, Any]:
 def _task(job: tuple[Any, ...]) -> str:
     task = job[5] if len(job) > 5 else "station-keeping"
     if task not in TASKS:
-        raise ValueError(f"unknown DP task {task!r}; choose from {', '.join(TASKS)}")
+        raise ValueError(
+            f"unknown DP task {task!r}{did_you_mean(task, TASKS)}; choose from {', '.join(TASKS)}"
+        )
     return str(task)
 
 

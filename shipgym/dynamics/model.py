@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._jit import njit
+from shipgym._text import did_you_mean
 
 from .params import HullParameters
 
@@ -326,7 +327,8 @@ def plant_model(
         )
     if name not in PLANT_VARIANTS:
         raise ValueError(
-            f"unknown plant variant {name!r}; choose one of: {', '.join(PLANT_VARIANTS)}"
+            f"unknown plant variant {name!r}{did_you_mean(name, PLANT_VARIANTS)}; choose one "
+            f"of: {', '.join(PLANT_VARIANTS)}"
         )
     if name == "default":
         valid = {"coriolis", "quadratic_damping", "sway_yaw_coupling"}

@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from shipgym._text import did_you_mean
+
 from .actuators import Actuator, ActuatorSet, Azimuth, MMGPropulsion, Propeller, Rudder
 from .hull4 import KINEMATICS, Hull4
 from .model import PlantModel, plant_model
@@ -216,7 +218,8 @@ class Vessel:
         """
         if name not in self.plants:
             raise ValueError(
-                f"unknown plant variant {name!r} for vessel {self.name!r}; choose one of: "
+                f"unknown plant variant {name!r}{did_you_mean(name, self.plants)} for vessel "
+                f"{self.name!r}; choose one of: "
                 f"{', '.join(self.plants)}"
             )
         if options:
@@ -1000,8 +1003,8 @@ def load_vessel(vessel: str | Path | Vessel) -> Vessel:
             path = path.parent
         if not path.exists():
             raise VesselError(
-                f"unknown vessel {str(vessel)!r}: not a packaged vessel ({', '.join(packaged)}) "
-                "and no such folder"
+                f"unknown vessel {str(vessel)!r}{did_you_mean(str(vessel), packaged)}: not a "
+                f"packaged vessel ({', '.join(packaged)}) and no such folder"
             )
     path = path.resolve()
     toml_path = path / "vessel.toml"

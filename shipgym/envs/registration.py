@@ -7,6 +7,8 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.envs.registration import WrapperSpec
 
+from shipgym._text import did_you_mean
+
 from .episode import EPISODE_END_ENTRY_POINT
 
 __all__ = [
@@ -96,8 +98,8 @@ def resolve_env_id(name: str, vessel: Any = None) -> str:
             return ALIASES[env_id]
         return env_id
     raise ValueError(
-        f"unknown scenario or env id {name!r}; choose a scenario ({', '.join(SCENARIOS)}) "
-        f"or an id ({', '.join(ENV_IDS)})"
+        f"unknown scenario or env id {name!r}{did_you_mean(name, [*SCENARIOS, *ENV_IDS])}; "
+        f"choose a scenario ({', '.join(SCENARIOS)}) or an id ({', '.join(ENV_IDS)})"
     )
 
 

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from shipgym._config import MAX_ANGLE, param
+from shipgym._text import did_you_mean
 
 from .reference import Limits, leg_duration
 from .rframe import from_r_frame
@@ -340,6 +341,7 @@ def plan(name: str, **overrides: Any) -> ManoeuvrePlan:
         factory = PLANS[name]
     except (KeyError, TypeError):
         raise ValueError(
-            f"unknown manoeuvre plan {name!r}; valid names are: {', '.join(sorted(PLANS))}"
+            f"unknown manoeuvre plan {name!r}{did_you_mean(name, PLANS)}; valid names are: "
+            f"{', '.join(sorted(PLANS))}"
         ) from None
     return factory(**overrides)

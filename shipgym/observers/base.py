@@ -20,6 +20,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import chdtri
 
+from shipgym._text import did_you_mean
+
 __all__ = [
     "OBSERVERS",
     "Estimate",
@@ -306,7 +308,8 @@ def make_observer(name: str, vessel: Any = None, **overrides: Any) -> Observer:
         factory = OBSERVERS[name]
     except (KeyError, TypeError):
         raise ValueError(
-            f"unknown observer {name!r}; valid names are: {', '.join(sorted(OBSERVERS))}"
+            f"unknown observer {name!r}{did_you_mean(name, OBSERVERS)}; valid names are: "
+            f"{', '.join(sorted(OBSERVERS))}"
         ) from None
     if vessel is not None and name in VESSEL_ADAPTERS:
         overrides = {**VESSEL_ADAPTERS[name](vessel), **overrides}

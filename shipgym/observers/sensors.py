@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym._config import fields_of, from_mapping, param
 from shipgym._jit import entry, njit, spread
 from shipgym._seeding import child_seeds
+from shipgym._text import did_you_mean
 
 __all__ = [
     "AL_TAKIE1982_HEADING_SIGMA",
@@ -289,7 +290,8 @@ def sensor_config(name: str = "default", **overrides: Any) -> SensorConfig:
     """
     if name not in SENSOR_PRESETS:
         raise ValueError(
-            f"unknown sensor preset {name!r}; valid names are: {', '.join(SENSOR_PRESETS)}"
+            f"unknown sensor preset {name!r}{did_you_mean(name, SENSOR_PRESETS)}; valid names "
+            f"are: {', '.join(SENSOR_PRESETS)}"
         )
     return SensorConfig.from_dict({**SENSOR_PRESETS[name], **overrides})
 

@@ -24,6 +24,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from shipgym._text import did_you_mean
 from shipgym.runner import ENV_DEFAULT, build_env, describe_wind, episode_summary, step_episode
 
 __all__ = [
@@ -70,8 +71,9 @@ def check_observer(observer: str | None) -> str | None:
     if observer not in names:
         have = ", ".join(names) if names else "none yet"
         raise ValueError(
-            f"observer {observer!r} is not available (registered observers: {have}); "
-            "use 'truth' to let the controller see the true state"
+            f"observer {observer!r}{did_you_mean(observer, ['truth', *names])} is not available "
+            f"(registered observers: {have}); use 'truth' to let the controller see the true "
+            "state"
         )
     return observer
 

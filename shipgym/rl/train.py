@@ -26,6 +26,7 @@ import yaml
 
 from shipgym._config import is_real
 from shipgym._safeload import jsonable
+from shipgym._text import did_you_mean
 from shipgym.controllers.learned import (
     ALGORITHMS,
     METADATA_NAME,
@@ -221,8 +222,11 @@ def load_hyperparams(
         raise ValueError(f"hyperparameter file {str(p)!r} must be a .yml / .yaml file")
     data = load_config_file(p, "hyperparameter file")
     if not isinstance(data, dict) or env_id == SECTION or env_id not in data:
-        have = ", ".join(k for k in data if k != SECTION) if isinstance(data, dict) else ""
-        raise ValueError(f"{p} has no hyperparameters for {env_id!r} (it has: {have or 'none'})")
+        keys = [str(k) for k in data if k != SECTION] if isinstance(data, dict) else []
+        raise ValueError(
+            f"{p} has no hyperparameters for {env_id!r}{did_you_mean(env_id, keys)} (it has: "
+            f"{', '.join(keys) or 'none'})"
+        )
     block = data[env_id]
     if not isinstance(block, dict):
         raise ValueError(f"{p}: the block of {env_id!r} must be a mapping")
