@@ -28,7 +28,7 @@ define pip_install
 endef
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-random test-slow bench rerecord lint venv rl ray zoo lock clean
+.PHONY: help demo test test-random test-slow bench rerecord lint venv rl ray zoo lock dist clean
 
 help: ## this list
 	@echo "make targets (each creates/reuses .venv and installs the locked versions it needs):"
@@ -127,8 +127,23 @@ lint: $(DEV_STAMP) ## ruff check and format check
 	$(VENV)/bin/ruff check shipgym tests benchmarks tools
 	$(VENV)/bin/ruff format --check shipgym tests benchmarks tools
 
+# The sdist and the wheel of the working tree in dist/: python -m build without an isolated
+# build environment (the locked setuptools and wheel build them, offline; the wheel is built
+# from the sdist, so a file the sdist leaves out is missing from the wheel too), checked by
+# twine; tools/wheel_assets.py counts the wheel's data files and fails where one the tree has
+# is missing.
+DIST := dist
+dist: $(DEV_STAMP) ## the sdist and the wheel in dist/, twine-checked, their assets counted
+	@mkdir -p $(DIST) && rm -f $(DIST)/shipgym-* $(DIST)/build.log
+	@echo "$(PY) -m build --no-isolation --outdir $(DIST) . (its log: $(DIST)/build.log)"
+	@$(PY) -m build --no-isolation --outdir $(DIST) . >$(DIST)/build.log 2>&1 || \
+		{ tail -n 40 $(DIST)/build.log; exit 1; }
+	@grep '^Successfully' $(DIST)/build.log
+	$(VENV)/bin/twine check --strict $(DIST)/shipgym-*
+	$(PY) tools/wheel_assets.py $(DIST)/shipgym-*.whl
+
 lock: ## regenerate requirements/lock*.txt from the ranges in pyproject.toml
 	PYTHON=$(PYTHON) bash requirements/lock.sh
 
-clean: ## remove the venv and caches
-	rm -rf $(VENV) .pytest_cache .ruff_cache .mypy_cache build *.egg-info
+clean: ## remove the venv, caches and built distributions
+	rm -rf $(VENV) .pytest_cache .ruff_cache .mypy_cache build dist *.egg-info
