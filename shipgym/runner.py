@@ -119,8 +119,7 @@ def run_episode(
         from shipgym.viz import RecordEpisode
 
         env = RecordEpisode(env, record, spawn=spawn, rename=False)
-    limit = env.spec.max_episode_steps if env.spec is not None else None
-    bar = _progress(total=limit, enabled=progress, desc=f"{scenario} seed {seed}")
+    bar = _progress(total=_episode_steps(env), enabled=progress, desc=f"{scenario} seed {seed}")
 
     def tick(info: dict[str, Any]) -> None:
         rec = step_record(info)
@@ -130,6 +129,7 @@ def run_episode(
     t0 = time.perf_counter()
     try:
         end = step_episode(env, seed, on_step=tick)
+        _finish_bar(bar, end)
         # the episode's wind (set at reset: the Tracking task draws one per episode)
         wind_out = describe_wind(env.unwrapped.wind_config)  # type: ignore[attr-defined]
         result = episode_summary(env, end)
@@ -341,13 +341,46 @@ def _commit_results(
 
 
 def _progress(total: int | None, enabled: bool, desc: str) -> Any:
-    """A tqdm bar on stderr, drawn only when ``enabled`` and stderr is a terminal."""
+    """A tqdm bar on stderr, drawn only when ``enabled`` and stderr is a terminal; it stays
+    on the screen at its end (:func:`_finish_bar`)."""
     from tqdm import tqdm
 
     from shipgym._io import progress_enabled
 
     on = enabled and progress_enabled()
-    return tqdm(total=total, disable=not on, desc=desc, unit="step", leave=False)
+    return tqdm(total=total, disable=not on, desc=desc, unit="step", leave=True)
+
+
+def _episode_steps(env: Any) -> int | None:
+    """The control steps of a whole episode: the time limit (``max_episode_steps``), or the
+    env's ``episode_duration`` over its control period (the DP tasks truncate themselves);
+    ``None``: unknown."""
+    limit = env.spec.max_episode_steps if env.spec is not None else None
+    if limit is not None:
+        return int(limit)
+    base = env.unwrapped
+    duration = getattr(base, "episode_duration", None)
+    period = getattr(base, "control_period", None)
+    if duration and period and math.isfinite(duration / period):
+        return max(1, round(duration / period))
+    return None
+
+
+def _finish_bar(bar: Any, end: EpisodeEnd) -> None:
+    """End the progress bar at 100 %: an episode that ended before its time limit (the plan
+    completed, a quay contact) has taken all its steps, and the bar says why it ended."""
+    if bar.disable:
+        return
+    from shipgym.records import step_record
+
+    total = bar.total
+    if end.terminated:
+        why = "quay contact" if step_record(end.info).quay_contact else "plan complete"
+        limit = f" of the {total} allowed" if total and bar.n < total else ""
+        bar.set_postfix_str(f"ended at step {bar.n}{limit}: {why}", refresh=False)
+    if total != bar.n:  # the last step counts (the DP tasks' estimated total included)
+        bar.total = bar.n
+    bar.refresh()
 
 
 def describe_wind(w: Any) -> dict[str, Any] | None:

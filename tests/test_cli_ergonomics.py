@@ -5,6 +5,7 @@ run header and per-task summaries, the thruster-limit warning, shell completion.
 from __future__ import annotations
 
 import csv
+import importlib.util
 import json
 import math
 import shutil
@@ -304,3 +305,68 @@ def test_api_suggests_close_names():
     with pytest.raises(ValueError) as info:  # nothing close: no suggestion
         shipgym.make("zzzzzz")
     assert "did you mean" not in str(info.value)
+
+
+# ---- 5. progress bars that end at 100 %, training budgets that round -------------------------
+HAS_RL = all(importlib.util.find_spec(m) is not None for m in ("torch", "stable_baselines3"))
+
+
+def test_run_progress_bar_ends_at_100_percent_and_says_why(monkeypatch, capsys):
+    import shipgym._io
+
+    monkeypatch.setattr(shipgym._io, "progress_enabled", lambda *a, **k: True)
+    res = run_episode("harbour", progress=True)  # ends when the plan completes, before 2000 steps
+    assert res["terminated"] and res["completed"]
+    n = round(res["duration_s"])
+    assert n < 2000
+    last = capsys.readouterr().err.replace("\r", "\n").strip().splitlines()[-1]
+    assert "100%" in last and f"{n}/{n}" in last, last
+    assert f"ended at step {n} of the 2000 allowed: plan complete" in last, last
+
+
+def test_run_progress_total_of_a_task_that_truncates_itself():
+    import shipgym
+    from shipgym.runner import _episode_steps
+
+    env = shipgym.make("shipgym/DPStationKeeping-v0", vessel="wimpey-sealab")
+    try:
+        base = env.unwrapped
+        assert env.spec.max_episode_steps is None
+        assert _episode_steps(env) == round(base.episode_duration / base.control_period)
+    finally:
+        env.close()
+    env = shipgym.make("harbour")
+    assert _episode_steps(env) == 2000
+    env.close()
+
+
+def test_training_budget_rounds_to_whole_rollouts():
+    from shipgym.rl.train import load_hyperparams, planned_timesteps, rounding_notice
+
+    hp = {"n_steps": 2048, "n_envs": 16}
+    assert planned_timesteps("ppo", hp, 20000) == (32768, 32768)
+    assert planned_timesteps("ppo", hp, 65536) == (65536, 32768)
+    note = rounding_notice("ppo", hp, 20000)
+    assert (
+        "20,000" in note and "rounded up to 32,768" in note and "n_steps 2,048 x n_envs 16" in note
+    )
+    assert "\n" not in note and rounding_notice("ppo", hp, 32768) is None
+    assert planned_timesteps("sac", {"n_envs": 16, "train_freq": 1}, 20001) == (20016, 16)
+    assert planned_timesteps("sac", {"n_envs": 4, "train_freq": [2, "step"]}, 9) == (16, 8)
+    assert planned_timesteps("sac", {"n_envs": 4, "train_freq": [1, "episode"]}, 9) == (9, 0)
+    assert rounding_notice("sac", {"n_envs": 4, "train_freq": [1, "episode"]}, 9) is None
+    shipped = load_hyperparams("ppo", "shipgym/BlueLadyTracking-v0")
+    assert (
+        planned_timesteps("ppo", shipped, 20000)[0] % (shipped["n_steps"] * shipped["n_envs"]) == 0
+    )
+
+
+@pytest.mark.skipif(not HAS_RL, reason="needs the rl extra (torch, stable-baselines3)")
+def test_train_says_the_budget_was_rounded(tmp_path, capsys):
+    argv = ["train", "ppo", "--timesteps", "100", "--n-envs", "1", "--eval-freq", "0",
+            "--checkpoint-freq", "0", "--out", str(tmp_path / "t"), "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    cap = capsys.readouterr()
+    notes = [ln for ln in cap.err.splitlines() if "rounded up" in ln]
+    assert len(notes) == 1 and "budget of 100 timesteps is rounded up to 256" in notes[0]
+    assert "trained 256 steps" in cap.out

@@ -13,6 +13,7 @@ import inspect
 import json
 import math
 import shlex
+import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -62,7 +63,9 @@ __all__ = [
     "check_hyperparams",
     "hyperparams_path",
     "load_hyperparams",
+    "planned_timesteps",
     "restore_model_state",
+    "rounding_notice",
     "set_deterministic",
     "train",
     "train_command",
@@ -1020,13 +1023,22 @@ def _make_time_limit_callback(max_seconds: float) -> Any:
     return WallTimeLimit()
 
 
-def _make_progress_callback() -> Any:
-    """SB3's rich progress bar when ``rich`` is installed, else a plain tqdm bar."""
+def _make_progress_callback(total: int | None = None) -> Any:
+    """SB3's rich progress bar when ``rich`` is installed, else a plain tqdm bar; over
+    ``total`` environment steps (:func:`planned_timesteps`: the whole rollouts the run takes,
+    so that the bar ends at 100 %), by default the steps asked for."""
     cb = _callbacks()
     try:
         import rich  # noqa: F401
 
-        return cb.ProgressBarCallback()
+        class RichProgress(cb.ProgressBarCallback):  # type: ignore[misc, name-defined]
+            def _on_training_start(self) -> None:  # SB3's bar, over ``total``
+                from tqdm.rich import tqdm as rich_tqdm
+
+                n = self.locals["total_timesteps"] - self.model.num_timesteps
+                self.pbar = rich_tqdm(total=n if total is None else total)
+
+        return RichProgress()
     except ImportError:
         pass
 
@@ -1036,8 +1048,10 @@ def _make_progress_callback() -> Any:
         def _on_training_start(self) -> None:
             from tqdm import tqdm
 
-            total = self.locals["total_timesteps"] - self.model.num_timesteps
-            self.pbar = tqdm(total=total, unit="step", desc="training", smoothing=0.05)
+            n = self.locals["total_timesteps"] - self.model.num_timesteps
+            self.pbar = tqdm(
+                total=n if total is None else total, unit="step", desc="training", smoothing=0.05
+            )
 
         def _on_step(self) -> bool:
             self.pbar.update(self.training_env.num_envs)
@@ -1047,6 +1061,50 @@ def _make_progress_callback() -> Any:
             self.pbar.close()
 
     return TqdmProgress()
+
+
+def planned_timesteps(algo: str, hp: Mapping[str, Any], timesteps: int) -> tuple[int, int]:
+    """The environment steps a run of ``timesteps`` takes, and the steps of one collection.
+
+    Stable-Baselines3 collects whole rollouts until the steps asked for are reached: PPO
+    ``n_steps * n_envs`` steps at a time, SAC ``train_freq * n_envs`` (a ``train_freq`` in
+    episodes: not known ahead, the steps asked for are returned). So ``--timesteps 20000``
+    with 16 envs of 2048 steps trains 32,768 steps.
+
+    Args:
+        algo: ``"ppo"`` or ``"sac"``.
+        hp: the run's hyperparameters (``n_envs``, ``n_steps``, ``train_freq``).
+        timesteps: the steps asked for (this run's, a resumed run's included).
+    """
+    n_envs = int(hp.get("n_envs", 1) or 1)
+    if algo == "ppo":
+        per = int(hp.get("n_steps", 2048) or 2048) * n_envs
+    else:
+        freq = hp.get("train_freq", 1)
+        k, unit = (freq[0], str(freq[1])) if isinstance(freq, list | tuple) else (freq, "step")
+        if unit != "step":
+            return int(timesteps), 0
+        per = int(k) * n_envs
+    per = max(per, 1)
+    return -(-int(timesteps) // per) * per, per
+
+
+def rounding_notice(algo: str, hp: Mapping[str, Any], timesteps: int) -> str | None:
+    """One line when the steps asked for are not a whole number of collections
+    (:func:`planned_timesteps`), saying what the run trains instead; ``None`` otherwise."""
+    planned, per = planned_timesteps(algo, hp, timesteps)
+    if planned == timesteps:
+        return None
+    n_envs = int(hp.get("n_envs", 1) or 1)
+    if algo == "ppo":
+        what = f"n_steps {int(hp.get('n_steps', 2048) or 2048):,} x n_envs {n_envs:,}"
+    else:
+        freq = hp.get("train_freq", 1)
+        what = f"train_freq {freq[0] if isinstance(freq, list | tuple) else freq} x n_envs {n_envs}"
+    return (
+        f"shipgym train: note: the budget of {timesteps:,} timesteps is rounded up to "
+        f"{planned:,}, a whole number of rollouts of {per:,} steps ({what})"
+    )
 
 
 # ---- logging ---------------------------------------------------------------------------------
@@ -1060,7 +1118,6 @@ TENSORBOARD_NOTE = (
 def _tensorboard_dir(out_dir: Path, enabled: bool | None) -> Path | None:
     """``OUT/tb`` when TensorBoard logging is on (``None``: when the package is installed)."""
     import importlib.util
-    import sys
 
     if enabled is False:
         return None
@@ -1272,8 +1329,12 @@ def train(
         )
     if max_minutes is not None:
         cbs.append(_make_time_limit_callback(60.0 * float(max_minutes)))
+    planned, _ = planned_timesteps(algo, hp, n_steps)
+    notice = rounding_notice(algo, hp, n_steps)
+    if notice is not None:
+        print(notice, file=sys.stderr)
     if progress:
-        cbs.append(_make_progress_callback())
+        cbs.append(_make_progress_callback(planned))
     _write_config(out_dir, hp, command, algo=algo, seed=seed, env_id=env_id, resume=resume)
 
     model.learn(
