@@ -1107,24 +1107,21 @@ class ManoeuvreMetrics:
         return self.batch.indices(0)
 
     def summary(self) -> dict[str, Any]:
-        """The run's statistics.
+        """The run's statistics, a dict with:
 
-        Returns:
-            A dict with:
-
-            - ``x_E``, ``y_E`` (m), ``psi_E`` (deg), ``J_c``: Tomera (2014) eqs. 54-57 from the
-              true pose (NaN if no sample was taken);
-            - ``measured``: the same four from the measured pose, or None if none recorded;
-            - ``n_samples``, ``n_measured_samples``, ``n_steps`` (calls of :meth:`record`);
-            - ``thrust_mean_abs`` (N), ``thrust_total_variation`` (N, sum of |F_k - F_{k-1}|
-              over consecutive steps), ``saturated_fraction`` (fraction of steps with the flag
-              set), ``saturated_time`` (s): lists per actuator (NaN / 0 if not recorded);
-            - ``legs_completed``, ``leg_times`` (duration of each completed leg, s),
-              ``leg_completion_times`` (s);
-            - ``per_leg``: ``{leg index: indices dict (with n_samples)}`` from the truth;
-            - ``reversals_per_min``, ``limit_fraction``, ``hf_variance_fraction``,
-              ``travel_per_min``: :func:`command_chatter` of the recorded commands, lists per
-              channel (NaN without commands).
+        - ``x_E``, ``y_E`` (m), ``psi_E`` (deg), ``J_c``: Tomera (2014) eqs. 54-57 from the
+          true pose (NaN if no sample was taken);
+        - ``measured``: the same four from the measured pose, or None if none recorded;
+        - ``n_samples``, ``n_measured_samples``, ``n_steps`` (calls of :meth:`record`);
+        - ``thrust_mean_abs`` (N), ``thrust_total_variation`` (N, sum of |F_k - F_{k-1}|
+          over consecutive steps), ``saturated_fraction`` (fraction of steps with the flag
+          set), ``saturated_time`` (s): lists per actuator (NaN / 0 if not recorded);
+        - ``legs_completed``, ``leg_times`` (duration of each completed leg, s),
+          ``leg_completion_times`` (s);
+        - ``per_leg``: ``{leg index: indices dict (with n_samples)}`` from the truth;
+        - ``reversals_per_min``, ``limit_fraction``, ``hf_variance_fraction``,
+          ``travel_per_min``: :func:`command_chatter` of the recorded commands, lists per
+          channel (NaN without commands).
         """
         return self.batch.summary(0)
 

@@ -46,9 +46,9 @@ class MMGParameters:
 
     Attributes:
         L, B, d: length, beam, draught (m); nabla: displaced volume (m^3); x_G: longitudinal
-        centre of gravity from midship (m, forward +); D_P: propeller diameter (m); H_R: rudder
-        span (m); A_R: rudder area (m^2); rho: water density (kg/m^3); k_zz: yaw radius of
-        gyration as a fraction of L.
+            centre of gravity from midship (m, forward +); D_P: propeller diameter (m); H_R:
+            rudder span (m); A_R: rudder area (m^2); rho: water density (kg/m^3); k_zz: yaw
+            radius of gyration as a fraction of L.
         R0 ... N_rrr: hull resistance and manoeuvring derivatives.
         m_x, m_y, J_z: added masses and added moment (primes).
         t_P, w_P0, k0, k1, k2, C1, C2_pos, C2_neg, x_P: propeller.

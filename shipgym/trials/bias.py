@@ -43,8 +43,8 @@ class ReceiverBias:
         position_bias_max, position_bias_rms: ``|p_hat - p|`` (m).
         sigma_v (m/s), sigma_beta (rad): the Monte-Carlo spread (0 when ``sigma`` is 0).
         t: the receiver's sample times (s); truth: ``v_xy``, ``beta_A``, ``x``, ``y`` of the
-        truth; estimate: the same of the noise-free estimate and its ``position_error``
-        (arrays, for plots; not compared).
+            truth; estimate: the same of the noise-free estimate and its ``position_error``
+            (arrays, for plots; not compared).
     """
 
     S_p: float

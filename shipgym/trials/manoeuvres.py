@@ -135,7 +135,8 @@ class InitialTurning:
     rudder, 10 deg heading change).
 
     Attributes:
-        name; angle (rad); side (+1 starboard); heading_change (rad).
+        name, angle, side, heading_change: the test's name, rudder angle (rad), side (+1
+            starboard) and heading change (rad).
     """
 
     name: str

@@ -29,13 +29,13 @@ class TrialMetrics:
 
     Attributes:
         manoeuvre, kind: the manoeuvre's name and kind; angle: its rudder angle (rad).
-        advance, transfer, tactical_diameter, steady_diameter (m); steady_speed (m/s),
-        speed_ratio (-); time_90, time_180, time_360 (s).
+        advance, transfer, tactical_diameter, steady_diameter: the turning circle's (m);
+            steady_speed (m/s), speed_ratio (-); time_90, time_180, time_360 (s).
         overshoots: the zig-zag overshoot angles (rad, up to three); time_first_execute,
-        period (s).
-        initial_turning_distance (m), initial_turning_time (s).
-        time_to_stop (s), head_reach, track_reach, lateral_deviation (m),
-        heading_change_at_stop (rad, signed), time_half_speed (s), track_half_speed (m).
+            period (s).
+        initial_turning_distance, initial_turning_time: the initial turning test's (m, s).
+        time_to_stop, head_reach, track_reach, lateral_deviation: a stop's (s, m);
+            heading_change_at_stop (rad, signed), time_half_speed (s), track_half_speed (m).
         rudder_max: the largest ``|delta|`` (rad) when the rudder history was given.
         shaft: a stop's shaft command (fraction of ``n0``; < 0 the crash stop).
     """

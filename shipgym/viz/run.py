@@ -655,37 +655,39 @@ def load_run(path: str | os.PathLike[str]) -> Run:
             --record RUN.rrd``), or a ``.json`` file written by :func:`save_run_json` (or the
             recorder's ``json_path``).
 
+    The :class:`Run` returned holds one episode as NumPy arrays with a row per control step
+    (``N`` rows, the reset state first; SI units, angles in rad unless named ``_deg``):
+
+    - ``t`` (s) and ``step``, (N,);
+    - ``eta`` (``x`` m, ``y`` m, ``psi`` rad, NED) and ``nu`` (``u`` m/s, ``v`` m/s,
+      ``r`` rad/s, body), the truth, (N, 3); ``nav_eta``, ``nav_nu``: what the
+      controller used (the truth or the observer's estimate);
+    - the guidance: ``eta_d`` (desired pose), ``eta_d_r`` and ``eta_dot_d_r`` (desired
+      pose and rate in the leg's r-frame), ``eta_r`` (true pose in the r-frame),
+      ``eta_P`` (the leg's start), (N, 3); ``leg``, ``legs_completed``, (N,);
+    - the actuators: ``command`` (each channel in its unit: ``actuators["units"]``),
+      ``actuator_state``, ``saturated`` (flags), (N, channels); ``thrust`` (N), (N,
+      actuators); their names in :attr:`Run.channel_names` and :attr:`Run.actuator_names`;
+    - the environment: ``tau_wind`` and ``tau_waves`` (``X`` N, ``Y`` N, ``N`` N m,
+      body), ``current_body`` (m/s on the body axes), (N, 3); ``wind`` (speed m/s,
+      direction it comes from, rad), (N, 2);
+    - ``accuracy`` and ``accuracy_measured``: the running indices ``x_E`` (m), ``y_E``
+      (m), ``psi_E`` (deg), ``J_c`` from the truth and from the measurements, (N, 4);
+    - ``roll`` (``phi`` rad, ``p`` rad/s) of a 4-DOF vessel, (N, 2), else (0, 2);
+    - the valid position measurements, at their own times: ``meas_t`` (s),
+      ``meas_step``, ``meas_z`` (NED pose), ``meas_z_r`` (r-frame), ``meas_outlier``;
+    - the static data: ``waypoints``, ``quays``, ``hull``, ``thrusters`` (m), and the
+      dicts ``actuators``, ``vessel``, ``metadata`` (env id, scenario, seed, observer,
+      controller, wind, plan, ...) and ``metrics`` (the episode's metrics).
+
+    :func:`shipgym.viz.export.run_columns` names every component with its unit
+    (``shipgym export RUN --csv`` writes them as a table). Positions read from a
+    ``.rrd`` are the float64 values of the ``data/*`` entities (the map entities hold
+    the same values as float32). ``metadata["recording"]`` says whether the recording is
+    complete (see :func:`recording_problem`).
+
     Returns:
-        The :class:`Run`: one episode as NumPy arrays with a row per control step (``N`` rows,
-        the reset state first; SI units, angles in rad unless named ``_deg``):
-
-        - ``t`` (s) and ``step``, (N,);
-        - ``eta`` (``x`` m, ``y`` m, ``psi`` rad, NED) and ``nu`` (``u`` m/s, ``v`` m/s,
-          ``r`` rad/s, body), the truth, (N, 3); ``nav_eta``, ``nav_nu``: what the
-          controller used (the truth or the observer's estimate);
-        - the guidance: ``eta_d`` (desired pose), ``eta_d_r`` and ``eta_dot_d_r`` (desired
-          pose and rate in the leg's r-frame), ``eta_r`` (true pose in the r-frame),
-          ``eta_P`` (the leg's start), (N, 3); ``leg``, ``legs_completed``, (N,);
-        - the actuators: ``command`` (each channel in its unit: ``actuators["units"]``),
-          ``actuator_state``, ``saturated`` (flags), (N, channels); ``thrust`` (N), (N,
-          actuators); their names in :attr:`Run.channel_names` and :attr:`Run.actuator_names`;
-        - the environment: ``tau_wind`` and ``tau_waves`` (``X`` N, ``Y`` N, ``N`` N m,
-          body), ``current_body`` (m/s on the body axes), (N, 3); ``wind`` (speed m/s,
-          direction it comes from, rad), (N, 2);
-        - ``accuracy`` and ``accuracy_measured``: the running indices ``x_E`` (m), ``y_E``
-          (m), ``psi_E`` (deg), ``J_c`` from the truth and from the measurements, (N, 4);
-        - ``roll`` (``phi`` rad, ``p`` rad/s) of a 4-DOF vessel, (N, 2), else (0, 2);
-        - the valid position measurements, at their own times: ``meas_t`` (s),
-          ``meas_step``, ``meas_z`` (NED pose), ``meas_z_r`` (r-frame), ``meas_outlier``;
-        - the static data: ``waypoints``, ``quays``, ``hull``, ``thrusters`` (m), and the
-          dicts ``actuators``, ``vessel``, ``metadata`` (env id, scenario, seed, observer,
-          controller, wind, plan, ...) and ``metrics`` (the episode's metrics).
-
-        :func:`shipgym.viz.export.run_columns` names every component with its unit
-        (``shipgym export RUN --csv`` writes them as a table). Positions read from a
-        ``.rrd`` are the float64 values of the ``data/*`` entities (the map entities hold
-        the same values as float32). ``metadata["recording"]`` says whether the recording is
-        complete (see :func:`recording_problem`).
+        The :class:`Run` (above).
 
     Raises:
         ValueError: unknown suffix, missing file, a file that is not a shipgym run (the
