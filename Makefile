@@ -28,7 +28,7 @@ define pip_install
 endef
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-random test-slow bench rerecord lint venv rl ray zoo lock dist clean
+.PHONY: help demo test test-random test-slow bench rerecord lint venv rl ray zoo lock dist dist-check clean
 
 help: ## this list
 	@echo "make targets (each creates/reuses .venv and installs the locked versions it needs):"
@@ -141,6 +141,14 @@ dist: $(DEV_STAMP) ## the sdist and the wheel in dist/, twine-checked, their ass
 	@grep '^Successfully' $(DIST)/build.log
 	$(VENV)/bin/twine check --strict $(DIST)/shipgym-*
 	$(PY) tools/wheel_assets.py $(DIST)/shipgym-*.whl
+
+# The wheel installed into a fresh venv of each Python in DIST_PYTHONS (their dependencies from
+# the package index within pyproject's ranges, constrained by requirements/lock.txt) and
+# tools/smoke.py run there from outside the repository (tools/dist_check.sh). A Python that is
+# not found is skipped with a message, or fails the target where CI is true.
+DIST_PYTHONS ?= python3.11 python3.12 python3.13
+dist-check: dist ## the wheel in fresh venvs of Python 3.11, 3.12, 3.13: tools/smoke.py in each
+	bash tools/dist_check.sh $(DIST)/shipgym-*.whl $(DIST_PYTHONS)
 
 lock: ## regenerate requirements/lock*.txt from the ranges in pyproject.toml
 	PYTHON=$(PYTHON) bash requirements/lock.sh
