@@ -86,6 +86,25 @@ def _fmt(x: Any) -> str:
     return str(x)
 
 
+def _wind_text(wind: dict[str, Any] | None, gusts: dict[str, Any] | None) -> str:
+    """``3 m/s from 300 deg, gusts 0.45 m/s rms and 10 deg rms (gauss-markov)``: a run's wind
+    (``describe_wind``) and its gusts in words; ``none`` without wind."""
+    if not wind:
+        return "none"
+    if not wind.get("speed"):
+        return "calm (0 m/s)"
+    text = f"{num(wind['speed'], 'g')} m/s from {num(wind['from_deg'], '.0f')} deg"
+    if not gusts:
+        return text
+    sd, dd = gusts.get("speed_std") or 0.0, gusts.get("direction_std_deg") or 0.0
+    if sd == 0.0 and dd == 0.0:
+        return f"{text}, steady"
+    return (
+        f"{text}, gusts {num(sd, '.2g')} m/s rms and {num(dd, '.0f')} deg rms "
+        f"({gusts.get('spectrum', 'gauss-markov')})"
+    )
+
+
 def _header(res: dict[str, Any]) -> str:
     """The first line of the run table: what was run, in which sea."""
     waves = res.get("waves")
@@ -112,7 +131,7 @@ def _header(res: dict[str, Any]) -> str:
         f"observer {res['observer']}",
         f"seed {res['seed']}",
         f"plant {res['plant']}",
-        f"wind {res['wind']}",
+        f"wind {_wind_text(res.get('wind'), res.get('gusts'))}",
         f"waves {waves_s}",
         f"current {cur_s}",
     ]
@@ -120,7 +139,8 @@ def _header(res: dict[str, Any]) -> str:
 
 
 def _print_table(res: dict[str, Any]) -> None:
-    meas = res.get("measured") or {}
+    """The run's results in words: the header, the task's summary (a manoeuvre's completion
+    and accuracy indices, or a station keeping's watch circle), the actuators' use."""
     print(_header(res))
     model = res.get("model")
     if model:
@@ -128,20 +148,10 @@ def _print_table(res: dict[str, Any]) -> None:
             f"  model {model['path']} ({model['algorithm']}, trained on {model['trained_on']} "
             f"through observer {model['trained_observer']})"
         )
-    rows = [
-        ("completed", res["completed"], ""),
-        ("legs completed", res["legs_completed"], ""),
-        ("duration", round(res["duration_s"], 1), "s"),
-        ("quay contact", res["quay_contact"], ""),
-    ]
-    for name, val, unit in rows:
-        print(f"  {name:16s} {_fmt(val):>10s} {unit}")
-    print(f"  {'index':16s} {'truth':>10s} {'measured':>10s}")
-    for key, unit in (("x_E", "m"), ("y_E", "m"), ("psi_E", "deg"), ("J_c", "")):
-        print(f"  {key:16s} {_fmt(res[key]):>10s} {_fmt(meas.get(key, 'n/a')):>10s} {unit}")
-    if res.get("indices_note"):
-        print(f"  indices n/a: {res['indices_note']}")
-    print(f"  leg times (s)    {num_list(res['leg_times'], 1)}")
+    if res.get("station_keeping"):
+        _print_station_keeping(res)
+    else:
+        _print_manoeuvre(res)
     print(f"  mean |thrust| (N) {num_list(res['thrust_mean_abs'], 1)}")
     print(f"  time saturated   {num_list(res['saturated_fraction'], 3)} (fraction)")
     if res.get("reversals_per_min"):
@@ -162,6 +172,41 @@ def _print_table(res: dict[str, Any]) -> None:
             f"r {num(r['r'])} deg/s"
         )
     print(f"  wall time        {res['wall_time_s']:.2f} s")
+
+
+def _print_manoeuvre(res: dict[str, Any]) -> None:
+    """A manoeuvre's rows (harbour, tracking): completion, legs, Tomera's accuracy indices."""
+    meas = res.get("measured") or {}
+    rows = [
+        ("completed", res["completed"], ""),
+        ("legs completed", res["legs_completed"], ""),
+        ("duration", round(res["duration_s"], 1), "s"),
+        ("quay contact", res["quay_contact"], ""),
+    ]
+    for name, val, unit in rows:
+        print(f"  {name:16s} {_fmt(val):>10s} {unit}")
+    print(f"  {'index':16s} {'truth':>10s} {'measured':>10s}")
+    for key, unit in (("x_E", "m"), ("y_E", "m"), ("psi_E", "deg"), ("J_c", "")):
+        print(f"  {key:16s} {_fmt(res[key]):>10s} {_fmt(meas.get(key, 'n/a')):>10s} {unit}")
+    if res.get("indices_note"):
+        print(f"  indices n/a: {res['indices_note']}")
+    print(f"  leg times (s)    {num_list(res['leg_times'], 1)}")
+
+
+def _print_station_keeping(res: dict[str, Any]) -> None:
+    """A station keeping's rows: the time inside the watch circle, r95, the largest distance
+    and the heading error (the true pose against the set point)."""
+    sk = res["station_keeping"]
+    rows = [
+        ("duration", num(res["duration_s"], ".1f"), "s"),
+        ("watch circle", num(sk["radius_m"], ".2f"), "m radius"),
+        ("time inside", num(sk["inside_fraction"], ".1%"), "of the steps (requirement: 95 %)"),
+        ("r95", num(sk["r95"], ".3f"), "m (95 % of the steps closer to the set point)"),
+        ("largest distance", num(sk["r_max"], ".3f"), "m"),
+        ("heading RMS", num(sk["heading_rms_deg"], ".3f"), "deg"),
+    ]
+    for name, val, unit in rows:
+        print(f"  {name:16s} {val:>10s} {unit}")
 
 
 def _no_vessel(env_id: str) -> str:
@@ -256,6 +301,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             report=args.report,
             json_path=args.json,
             scenario_preset=None if args.scenario_file is None else str(args.scenario_file),
+            watch_radius=_watch_radius(env_id),
         )
     _print_table(res)
     for f in res["files"]:
@@ -265,6 +311,19 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.json is not None:
         print(f"results written to {args.json}")
     return 0
+
+
+def _watch_radius(env_id: str) -> float:
+    """The watch circle of a station-keeping task (m): Al-Takie (1982) 2.3's 7 m
+    (:func:`shipgym.dp.metrics.dp_radius`, the depth unknown) for the offshore DP task, else
+    the 2 m of the generic PID's requirement (:data:`shipgym.runner.STATION_RADIUS`)."""
+    from shipgym.runner import STATION_RADIUS
+
+    if env_id == "shipgym/DPStationKeeping-v0":
+        from shipgym.dp.metrics import dp_radius
+
+        return dp_radius()
+    return STATION_RADIUS
 
 
 def _truth_none(observer: str | None) -> str | None:

@@ -1,8 +1,9 @@
 """Run closed-loop episodes: the one runner behind ``shipgym run``, the benchmarks and the RL
 evaluation.
 
-Public names: ``ENV_DEFAULT``, ``EpisodeEnd``, ``build_env``, ``describe_wind``,
-``episode_summary``, ``run_episode``, ``step_episode``.
+Public names: ``ENV_DEFAULT``, ``STATION_RADIUS``, ``EpisodeEnd``, ``StationTrack``,
+``build_env``, ``describe_wind``, ``episode_summary``, ``is_station_keeping``, ``run_episode``,
+``step_episode``.
 
 Design notes: docs/design/runner.md.
 """
@@ -24,10 +25,13 @@ from shipgym._safeload import jsonable
 
 __all__ = [
     "ENV_DEFAULT",
+    "STATION_RADIUS",
     "EpisodeEnd",
+    "StationTrack",
     "build_env",
     "describe_wind",
     "episode_summary",
+    "is_station_keeping",
     "run_episode",
     "step_episode",
 ]
@@ -46,6 +50,10 @@ class _EnvDefault:
 #: ``run_episode(wind=...)`` default: pass no wind, so the env uses its own default
 ENV_DEFAULT: Any = _EnvDefault()
 
+#: the watch circle (m) of the station-keeping requirement documented for the generic PID
+#: (95 % of the time inside it; Al-Takie (1982) 2.3 asks for 3 % of the water depth or 7 m)
+STATION_RADIUS = 2.0
+
 
 def run_episode(
     scenario: str,
@@ -62,6 +70,7 @@ def run_episode(
     report: Path | None = None,
     json_path: Path | None = None,
     scenario_preset: str | None = None,
+    watch_radius: float = STATION_RADIUS,
 ) -> dict[str, Any]:
     """Run one closed-loop episode and return its results (the ``--json`` content).
 
@@ -89,6 +98,15 @@ def run_episode(
             earlier pair is replaced by a complete new pair or left as it was.
         scenario_preset: the scenario preset or file the env arguments came from (recorded
             in the results).
+        watch_radius: the watch circle of a station-keeping task (m, > 0): the time inside
+            it is reported (default :data:`STATION_RADIUS`; the offshore DP task's requirement
+            is ``shipgym.dp.metrics.dp_radius()``).
+
+    The results of a station-keeping task (:func:`is_station_keeping`) carry
+    ``station_keeping``: the watch circle ``radius_m`` and the :class:`StationTrack` summary
+    (``inside_fraction``, ``r95``, ``r_max`` (m), ``heading_rms_deg``, ``steps``); ``None``
+    for the other tasks. ``gusts`` describes the wind's gusts (``speed_std`` m/s,
+    ``spectrum``, ``direction_std_deg``; ``None`` without wind).
 
     Raises:
         shipgym._io.WriteFailed: the results (``.results``) or the recording could not be
@@ -102,6 +120,12 @@ def run_episode(
 
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be an int >= 0, got {seed!r}")
+    if isinstance(watch_radius, bool) or not (
+        isinstance(watch_radius, int | float) and math.isfinite(watch_radius) and watch_radius > 0
+    ):
+        raise ValueError(
+            f"watch_radius must be a finite number of metres > 0, got {watch_radius!r}"
+        )
 
     kwargs: dict[str, Any] = {"plant": plant}
     if wind is not ENV_DEFAULT:
@@ -120,8 +144,11 @@ def run_episode(
 
         env = RecordEpisode(env, record, spawn=spawn, rename=False)
     bar = _progress(total=_episode_steps(env), enabled=progress, desc=f"{scenario} seed {seed}")
+    track = StationTrack() if is_station_keeping(env) else None
 
     def tick(info: dict[str, Any]) -> None:
+        if track is not None:
+            track(info)
         rec = step_record(info)
         bar.update(1)
         bar.set_postfix(leg=rec.reference.leg + 1, t=f"{rec.t:.0f}s", refresh=False)
@@ -132,6 +159,7 @@ def run_episode(
         _finish_bar(bar, end)
         # the episode's wind (set at reset: the Tracking task draws one per episode)
         wind_out = describe_wind(env.unwrapped.wind_config)  # type: ignore[attr-defined]
+        gusts_out = _describe_gusts(env.unwrapped.wind_config)  # type: ignore[attr-defined]
         result = episode_summary(env, end)
         waves_out = _describe_waves(env.unwrapped.physics.wave_config)  # type: ignore[attr-defined]
         current_out = _describe_current(env.unwrapped.physics.current_config)  # type: ignore[attr-defined]
@@ -167,10 +195,14 @@ def run_episode(
         "seed": seed,
         "plant": plant_out,
         "wind": wind_out,
+        "gusts": gusts_out,
         "waves": waves_out,
         "current": current_out,
         "model": model_info,
         **result,
+        "station_keeping": None
+        if track is None
+        else {"radius_m": float(watch_radius), **track.summary(float(watch_radius))},
         "wall_time_s": wall,
         "files": files,
     }
@@ -205,6 +237,43 @@ def build_env(
     import shipgym
 
     return shipgym.make(scenario, observer=observer, controller=controller, **env_kwargs)
+
+
+class StationTrack:
+    """Collects a station-keeping run step by step (``on_step(info)`` of the episode runner).
+
+    ``r`` (m): horizontal distance of the true position from the set point ``eta_d``;
+    ``e`` (deg): heading error, wrapped to [-180, 180).
+    """
+
+    def __init__(self) -> None:
+        self.r: list[float] = []
+        self.e: list[float] = []
+
+    def __call__(self, info: dict[str, Any]) -> None:
+        from shipgym.dynamics import wrap_angle
+
+        eta, d = info["eta"], info["eta_d"]
+        self.r.append(math.hypot(float(eta[0]) - float(d[0]), float(eta[1]) - float(d[1])))
+        self.e.append(math.degrees(float(wrap_angle(float(eta[2]) - float(d[2])))))
+
+    def summary(self, radius: float = STATION_RADIUS) -> dict[str, Any]:
+        """``inside_fraction`` (of the steps with ``r <= radius``), ``r95`` (m, 95th
+        percentile, linear interpolation), ``r_max`` (m), ``heading_rms_deg`` (deg),
+        ``steps``."""
+        r = np.asarray(self.r, float)
+        e = np.asarray(self.e, float)
+        if r.size == 0:
+            nan = math.nan
+            return {"inside_fraction": nan, "r95": nan, "r_max": nan, "heading_rms_deg": nan,
+                    "steps": 0}  # fmt: skip
+        return {
+            "inside_fraction": float(np.mean(r <= radius)),
+            "r95": float(np.percentile(r, 95.0)),
+            "r_max": float(r.max()),
+            "heading_rms_deg": float(np.sqrt(np.mean(e**2))),
+            "steps": int(r.size),
+        }
 
 
 @dataclass(frozen=True)
@@ -388,6 +457,29 @@ def describe_wind(w: Any) -> dict[str, Any] | None:
     if w is None:
         return None
     return {"speed": float(w.speed), "from_deg": math.degrees(float(w.direction_from)) % 360.0}
+
+
+def _describe_gusts(w: Any) -> dict[str, Any] | None:
+    """The gusts of a run's wind as plain data: ``speed_std`` (m/s, the effective standard
+    deviation of the speed gust), ``spectrum`` (``gauss-markov``, ``npd``, ``harris``),
+    ``direction_std_deg`` (deg); ``None``: no wind."""
+    if w is None:
+        return None
+    return {
+        "speed_std": float(w.gust_sigma),
+        "spectrum": str(w.gust_spectrum),
+        "direction_std_deg": math.degrees(float(w.direction_std)),
+    }
+
+
+def is_station_keeping(env: Any) -> bool:
+    """Whether ``env`` is a station-keeping task (:class:`~shipgym.envs.tasks.StationKeepingEnv`,
+    the offshore DP task included; not the sway step, whose set point moves)."""
+    from shipgym.envs.offshore import SwayStepEnv
+    from shipgym.envs.tasks import StationKeepingEnv
+
+    base = env.unwrapped
+    return isinstance(base, StationKeepingEnv) and not isinstance(base, SwayStepEnv)
 
 
 def _describe_waves(w: Any) -> dict[str, Any] | None:

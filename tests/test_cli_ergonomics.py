@@ -370,3 +370,55 @@ def test_train_says_the_budget_was_rounded(tmp_path, capsys):
     notes = [ln for ln in cap.err.splitlines() if "rounded up" in ln]
     assert len(notes) == 1 and "budget of 100 timesteps is rounded up to 256" in notes[0]
     assert "trained 256 steps" in cap.out
+
+
+# ---- 6. the run header's wind in words; a station keeping's own summary ----------------------
+def test_run_header_prints_the_wind_in_words(capsys):
+    assert main(["run", "harbour", "--no-progress"]) == 0
+    head = capsys.readouterr().out.splitlines()[0]
+    assert "{" not in head and "'speed'" not in head, head
+    assert "wind 3 m/s from 300 deg, gusts 0.45 m/s rms and 10 deg rms (gauss-markov) |" in head
+
+
+def test_wind_text_forms():
+    from shipgym.cli import _wind_text
+
+    wind = {"speed": 10.0, "from_deg": 45.0}
+    assert _wind_text(None, None) == "none"
+    assert _wind_text({"speed": 0.0, "from_deg": 0.0}, None) == "calm (0 m/s)"
+    assert _wind_text(wind, None) == "10 m/s from 45 deg"  # results written before gusts
+    steady = {"speed_std": 0.0, "spectrum": "gauss-markov", "direction_std_deg": 0.0}
+    assert _wind_text(wind, steady) == "10 m/s from 45 deg, steady"
+    npd = {"speed_std": 1.234, "spectrum": "npd", "direction_std_deg": 10.0}
+    assert _wind_text(wind, npd) == "10 m/s from 45 deg, gusts 1.2 m/s rms and 10 deg rms (npd)"
+
+
+def test_station_keeping_run_prints_its_own_summary(tmp_path, capsys):
+    out = tmp_path / "sk.json"
+    assert main(["run", "station-keeping", "--no-progress", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    for gone in ("legs completed", "leg times", "quay contact", "J_c"):
+        assert gone not in text, gone
+    rows = {ln[2:18].strip(): ln for ln in text.splitlines()[1:] if ln.strip()}
+    assert "2.00 m radius" in rows["watch circle"]
+    assert "% of the steps" in rows["time inside"] and " m " in rows["r95"]
+    res = json.loads(out.read_text())
+    sk = res["station_keeping"]
+    assert sk["radius_m"] == 2.0 and sk["steps"] == 600
+    assert 0.0 <= sk["inside_fraction"] <= 1.0 and 0.0 < sk["r95"] <= sk["r_max"]
+    assert f"{sk['r95']:.3f} m" in rows["r95"]
+    assert res["gusts"]["speed_std"] == pytest.approx(0.45) and res["J_c"] is not None
+    harbour = run_episode("harbour", env_kwargs={"max_episode_steps": 3})
+    assert harbour["station_keeping"] is None
+
+
+def test_offshore_dp_watch_circle_is_al_takies():
+    from shipgym.cli import _watch_radius
+    from shipgym.dp.metrics import dp_radius
+
+    assert _watch_radius("shipgym/DPStationKeeping-v0") == dp_radius() == 7.0
+    assert _watch_radius("shipgym/BlueLadyStationKeeping-v0") == 2.0
+    res = run_episode("station-keeping", env_kwargs={"max_episode_steps": 5}, watch_radius=0.5)
+    assert res["station_keeping"]["radius_m"] == 0.5 and res["station_keeping"]["steps"] == 5
+    with pytest.raises(ValueError, match="watch_radius"):
+        run_episode("station-keeping", watch_radius=-1.0)

@@ -15,7 +15,6 @@ station-keeping`` and the periodic evaluation of training
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from typing import Any
@@ -25,7 +24,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shipgym._text import did_you_mean
-from shipgym.runner import ENV_DEFAULT, build_env, describe_wind, episode_summary, step_episode
+from shipgym.runner import (  # StationTrack, STATION_RADIUS: re-exported (they live there)
+    ENV_DEFAULT,
+    STATION_RADIUS,
+    StationTrack,
+    build_env,
+    describe_wind,
+    episode_summary,
+    step_episode,
+)
 
 __all__ = [
     "DEFAULT_WIND",
@@ -40,10 +47,6 @@ __all__ = [
 
 #: the lake-trial wind of Tomera (2014): 3 m/s from 300 deg ("SPEED@FROM_DEG")
 DEFAULT_WIND = "3@300"
-
-#: the watch circle (m) of the station-keeping requirement documented for the generic PID
-#: (95 % of the time inside it; Al-Takie (1982) 2.3 asks for 3 % of the water depth or 7 m)
-STATION_RADIUS = 2.0
 
 PolicyFn = Callable[[NDArray[np.float32]], NDArray[np.float32]]
 
@@ -169,40 +172,3 @@ def run_controlled_episode(
         "wind": wind_used,
         **row,
     }
-
-
-class StationTrack:
-    """Collects a station-keeping run step by step (``on_step(info)`` of the episode runner).
-
-    ``r`` (m): horizontal distance of the true position from the set point ``eta_d``;
-    ``e`` (deg): heading error, wrapped to [-180, 180).
-    """
-
-    def __init__(self) -> None:
-        self.r: list[float] = []
-        self.e: list[float] = []
-
-    def __call__(self, info: dict[str, Any]) -> None:
-        from shipgym.dynamics import wrap_angle
-
-        eta, d = info["eta"], info["eta_d"]
-        self.r.append(math.hypot(float(eta[0]) - float(d[0]), float(eta[1]) - float(d[1])))
-        self.e.append(math.degrees(float(wrap_angle(float(eta[2]) - float(d[2])))))
-
-    def summary(self, radius: float = STATION_RADIUS) -> dict[str, Any]:
-        """``inside_fraction`` (of the steps with ``r <= radius``), ``r95`` (m, 95th
-        percentile, linear interpolation), ``r_max`` (m), ``heading_rms_deg`` (deg),
-        ``steps``."""
-        r = np.asarray(self.r, float)
-        e = np.asarray(self.e, float)
-        if r.size == 0:
-            nan = math.nan
-            return {"inside_fraction": nan, "r95": nan, "r_max": nan, "heading_rms_deg": nan,
-                    "steps": 0}  # fmt: skip
-        return {
-            "inside_fraction": float(np.mean(r <= radius)),
-            "r95": float(np.percentile(r, 95.0)),
-            "r_max": float(r.max()),
-            "heading_rms_deg": float(np.sqrt(np.mean(e**2))),
-            "steps": int(r.size),
-        }
