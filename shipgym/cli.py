@@ -304,6 +304,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
             watch_radius=_watch_radius(env_id),
         )
     _print_table(res)
+    warning = _limit_warning(res, vessel.actuators.channel_names)
+    if warning is not None:
+        print(warning, file=sys.stderr)
     for f in res["files"]:
         print(f"wrote {f}")
     if res["files"] and args.record is not None:
@@ -311,6 +314,31 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.json is not None:
         print(f"results written to {args.json}")
     return 0
+
+
+#: the share of a run above which a channel's command at a limit is warned about
+LIMIT_WARNING_FRACTION = 0.5
+
+
+def _limit_warning(res: dict[str, Any], channels: Any) -> str | None:
+    """One line when a control channel sat at a limit for most of the run (its ``at a limit``
+    share, ``limit_fraction``, above :data:`LIMIT_WARNING_FRACTION`); ``None`` otherwise."""
+    fractions = res.get("limit_fraction") or []
+    names = list(channels)
+    hits = [
+        (names[i] if i < len(names) else f"channel {i + 1}", float(f))
+        for i, f in enumerate(fractions)
+        if f is not None and math.isfinite(f) and f > LIMIT_WARNING_FRACTION
+    ]
+    if not hits:
+        return None
+    hits.sort(key=lambda h: -h[1])
+    which = ", ".join(f"{n} {100.0 * f:.1f} %" for n, f in hits)
+    return (
+        f"shipgym: warning: commands at a limit for most of the run ({which} of the steps, "
+        "the 'at a limit' row): the actuators cannot deliver what the controller asks, so "
+        "these results measure their capacity more than the controller"
+    )
 
 
 def _watch_radius(env_id: str) -> float:

@@ -422,3 +422,29 @@ def test_offshore_dp_watch_circle_is_al_takies():
     assert res["station_keeping"]["radius_m"] == 0.5 and res["station_keeping"]["steps"] == 5
     with pytest.raises(ValueError, match="watch_radius"):
         run_episode("station-keeping", watch_radius=-1.0)
+
+
+# ---- 7. a warning when a thruster sat at a limit most of the run -----------------------------
+def test_warning_when_commands_sit_at_a_limit_most_of_the_run(capsys):
+    assert main(["run", "station-keeping", "--wind", "8@90", "--no-progress"]) == 0
+    cap = capsys.readouterr()
+    limit = next(ln for ln in cap.out.splitlines() if "at a limit" in ln)
+    warnings = [ln for ln in cap.err.splitlines() if ln.startswith("shipgym: warning:")]
+    assert len(warnings) == 1, cap.err
+    assert "bow_tunnel" in warnings[0] and "stern_tunnel" in warnings[0], warnings[0]
+    assert "main_propeller" not in warnings[0]  # below half the run
+    shares = json.loads(limit.split("at a limit", 1)[1])  # the row the warning reuses
+    assert shares[0] <= 0.5 < min(shares[1:])
+    assert main(["run", "station-keeping", "--no-progress"]) == 0  # the default wind: no warning
+    assert "warning" not in capsys.readouterr().err
+
+
+def test_limit_warning_threshold():
+    from shipgym.cli import _limit_warning
+
+    names = ["a", "b", "c"]
+    assert _limit_warning({"limit_fraction": [0.5, 0.1, math.nan]}, names) is None
+    line = _limit_warning({"limit_fraction": [0.51, 0.9, None]}, names)
+    assert line.startswith("shipgym: warning:") and "\n" not in line
+    assert line.index("b 90.0 %") < line.index("a 51.0 %")  # the worst first
+    assert _limit_warning({}, names) is None
