@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # The built wheel in a fresh venv of each given Python, smoke-tested there (make dist-check).
-#   usage: tools/dist_check.sh WHEEL PYTHON...      e.g. dist/shipgym-0.1.0-py3-none-any.whl python3.12
+#   usage: tools/dist_check.sh WHEEL PYTHON...
+#   e.g.   tools/dist_check.sh dist/shipgym-0.1.0-py3-none-any.whl python3.12 python3.13
 # For each PYTHON (a command name such as python3.12, found on the PATH or as pyenv's
 # ~/.pyenv/versions/3.12.*/bin/python): a venv in a temporary folder, the locked pip, then
 # `pip install WHEEL -c requirements/lock.txt`: the package's dependencies from the package
-# index within pyproject's ranges, at the versions of the lock (every locked version has wheels
-# for CPython 3.11 to 3.13). tools/smoke.py then runs with that venv's Python from the
-# temporary folder (python -P: not the source tree, the installed wheel), with a Numba cache
-# folder of its own (XDG_CACHE_HOME), so the compiled laws are compiled and cached afresh from
-# the installed files. A PYTHON that is not found is skipped with a message, or is an error
-# where CI is true. Prints each Python's install and smoke times and its venv's size.
+# index within pyproject's ranges, at the versions of the lock (all of them install from
+# wheels on CPython 3.11.7, 3.12.1 and 3.13.0: no source build). tools/smoke.py then runs with
+# that venv's Python from the temporary folder (python -P: not the source tree, the installed
+# wheel), with a Numba cache folder of its own (XDG_CACHE_HOME), so the compiled laws are
+# compiled and cached afresh from the installed files. A PYTHON that is not found is skipped
+# with a message, or is an error where CI is true. Prints each Python's install and smoke
+# times and its venv's size.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 [[ $# -ge 2 ]] || { echo "usage: $0 WHEEL PYTHON..." >&2; exit 2; }
@@ -59,8 +61,8 @@ for name in "$@"; do
     t0=$SECONDS
     "$py" -m venv "$dir/venv"
     vpy=$dir/venv/bin/python
-    quiet "$vpy" -m pip install --quiet "$(grep -m1 '^pip==' "$lock")"
-    if ! quiet "$vpy" -m pip install --quiet "$wheel" -c "$lock"; then
+    if ! { quiet "$vpy" -m pip install --quiet "$(grep -m1 '^pip==' "$lock")" &&
+        quiet "$vpy" -m pip install --quiet "$wheel" -c "$lock"; }; then
         echo "dist_check: $name: pip install of the wheel failed" >&2
         summary+=("$name: INSTALL FAILED")
         failed=1
