@@ -28,7 +28,7 @@ define pip_install
 endef
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-random test-slow bench rerecord lint venv rl ray zoo lock dist dist-check clean
+.PHONY: help demo test test-random test-slow bench rerecord lint docs docs-serve venv rl ray zoo lock dist dist-check clean
 
 help: ## this list
 	@echo "make targets (each creates/reuses .venv and installs the locked versions it needs):"
@@ -122,6 +122,14 @@ bench: $(RL_STAMP) ## speed: headline ratios (runs/bench/bench.json), physics, d
 
 rerecord: $(RL_STAMP) ## re-record the shipped baselines' reproduction fingerprints (tools/)
 	$(PY) tools/rerecord_baselines.py
+
+# The docs site (mkdocs.yml; the pages made from the code: tools/docs_hooks.py). The docs tools
+# are in the dev lock, so make test builds the site too (tests/test_docs.py).
+docs: $(DEV_STAMP) ## build the docs site into site/ (warnings are errors)
+	NO_MKDOCS_2_WARNING=1 MPLBACKEND=Agg $(PY) -m mkdocs build --strict
+
+docs-serve: $(DEV_STAMP) ## serve the docs site at http://127.0.0.1:8000, rebuilt on changes
+	NO_MKDOCS_2_WARNING=1 MPLBACKEND=Agg $(PY) -m mkdocs serve --dev-addr 127.0.0.1:8000
 
 lint: $(DEV_STAMP) ## ruff check and format check
 	$(VENV)/bin/ruff check shipgym tests benchmarks tools

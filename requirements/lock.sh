@@ -2,7 +2,7 @@
 # Regenerate the lock files from the version ranges in pyproject.toml (run by `make lock`):
 #   requirements/lock.txt      the core dependencies (what `make demo` needs), with the
 #                              installer and build tools (pip, setuptools, wheel)
-#   requirements/lock-dev.txt  what the test and dev extras add (pytest, hypothesis, ruff, ...)
+#   requirements/lock-dev.txt  what the test, dev and docs extras add (pytest, ruff, mkdocs, ...)
 #   requirements/lock-rl.txt   what the rl extra adds on top of both (torch, stable-baselines3)
 #   requirements/lock-ray.txt  what the ray extra adds on top of lock.txt and lock-dev.txt
 # Each is the `pip freeze` of one fresh temporary venv, built in that order, every step holding
@@ -52,7 +52,7 @@ quiet "$py" -m pip install --quiet .
 } >"$tmp/lock.txt"
 
 # 2. the test and dev extras
-quiet "$py" -m pip install --quiet ".[test,dev]" -c "$tmp/lock.txt"
+quiet "$py" -m pip install --quiet ".[test,dev,docs]" -c "$tmp/lock.txt"
 {
     header "shipgym: what the test and dev extras add to lock.txt (make test, make lint)"
     freeze | grep -vxFf <(locked "$tmp/lock.txt")
