@@ -1,3 +1,4 @@
+# PYTHON_ARGCOMPLETE_OK
 """The ``shipgym`` command.
 
 ``shipgym run SCENARIO``  closed-loop run (harbour manoeuvre, station keeping, tracking) with a
@@ -869,7 +870,11 @@ def _parser() -> argparse.ArgumentParser:
         seed_int,
     )
 
-    ap = OneLineParser(prog="shipgym", description="Ship manoeuvring simulator (MuJoCo).")
+    ap = OneLineParser(
+        prog="shipgym",
+        description="Ship manoeuvring simulator (MuJoCo).",
+        epilog=COMPLETION_HELP,
+    )
     ap.add_argument("--version", action="version", version=_version())
     sub = ap.add_subparsers(dest="command", required=True)
     p = sub.add_parser(
@@ -914,6 +919,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--report", type=path_arg, default=None, metavar="DIR",
                    help="write PNG figures and metrics.md into DIR")  # fmt: skip
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _name_completers(p, RUN_COMPLETERS)
     p.set_defaults(func=_cmd_run, folders={"--report": REPORT})
     p = sub.add_parser("report", help="PNG figures and metrics.md from a recorded run")
     p.add_argument("run", type=path_arg, metavar="RUN",
@@ -1156,6 +1162,58 @@ def _compile_notice(stream: Any) -> Any:
     return event.install_listener("numba:compile", _Notice())
 
 
+#: the --help epilog: how to switch on the optional shell completion
+COMPLETION_HELP = (
+    "Shell completion (optional): pip install argcomplete, then run once "
+    'eval "$(register-python-argcomplete shipgym)" (bash, zsh; put it in ~/.bashrc to keep it).'
+)
+
+
+#: ``shipgym run``'s options whose names the shell completes (dest -> :func:`catalogue` key)
+RUN_COMPLETERS = {
+    "scenario": "scenarios",
+    "scenario_file": "scenario_presets",
+    "controller": "controllers",
+    "observer": "observers",
+    "plant": "plant_variants",
+    "vessel": "vessels",
+}
+
+
+def _completion_names(key: str) -> list[str]:
+    """The names a completion offers for a :func:`catalogue` key (``scenarios``: the env
+    scenarios and ids; the ``ppo:PATH`` forms left out)."""
+    cat = catalogue()
+    if key == "scenarios":
+        return [*cat["env_scenarios"], *cat["env_ids"]]
+    return [n for n in cat[key] if not n.endswith(":PATH")]
+
+
+def _name_completers(p: argparse.ArgumentParser, completers: dict[str, str]) -> None:
+    """Give the options ``completers`` names an argcomplete completer (an attribute argparse
+    ignores; read only when the shell asks for a completion)."""
+
+    def completer(key: str) -> Any:
+        def complete(prefix: str, **_: Any) -> list[str]:
+            return [n for n in _completion_names(key) if n.startswith(prefix)]
+
+        return complete
+
+    for action in p._actions:
+        if action.dest in completers:
+            action.completer = completer(completers[action.dest])  # type: ignore[attr-defined]
+
+
+def _autocomplete(parser: argparse.ArgumentParser) -> None:
+    """Complete the command line in the shell when ``argcomplete`` is installed (optional:
+    no dependency); outside a completion request it returns at once."""
+    try:
+        import argcomplete
+    except ImportError:
+        return
+    argcomplete.autocomplete(parser)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``shipgym`` console script.
 
@@ -1166,8 +1224,10 @@ def main(argv: list[str] | None = None) -> int:
     from shipgym._io import WriteFailed, handle_signals, interrupt_message, interrupt_status
     from shipgym.sim.step import SimulationDiverged
 
+    parser = _parser()
+    _autocomplete(parser)
     try:
-        args = _parser().parse_args(argv)
+        args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: 2 after a usage error, 0 after --help / --version
         return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
     with handle_signals(), _compile_notice(sys.stderr):

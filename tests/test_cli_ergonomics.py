@@ -9,6 +9,7 @@ import importlib.util
 import json
 import math
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -448,3 +449,57 @@ def test_limit_warning_threshold():
     assert line.startswith("shipgym: warning:") and "\n" not in line
     assert line.index("b 90.0 %") < line.index("a 51.0 %")  # the worst first
     assert _limit_warning({}, names) is None
+
+
+# ---- 8. optional shell completion ------------------------------------------------------------
+def test_argcomplete_is_called_when_installed_and_optional(monkeypatch, capsys):
+    import sys
+    import types
+
+    seen = []
+    fake = types.SimpleNamespace(autocomplete=lambda parser: seen.append(parser))
+    monkeypatch.setitem(sys.modules, "argcomplete", fake)
+    assert main(["--version"]) == 0
+    assert len(seen) == 1 and seen[0].prog == "shipgym"
+    monkeypatch.setitem(sys.modules, "argcomplete", None)  # not installed: import fails
+    assert main(["--version"]) == 0
+    capsys.readouterr()
+
+
+def test_help_says_how_to_switch_completion_on(capsys):
+    assert main(["--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "pip install argcomplete" in text
+    assert 'eval "$(register-python-argcomplete shipgym)"' in text
+    head = Path(__file__).resolve().parents[1].joinpath("shipgym", "cli.py").read_text()[:1024]
+    assert "PYTHON_ARGCOMPLETE_OK" in head  # global completion finds the marker
+
+
+def test_run_options_complete_names():
+    from shipgym.cli import _parser
+
+    sub = next(a for a in _parser()._actions if a.dest == "command").choices["run"]
+    comp = {a.dest: a.completer for a in sub._actions if hasattr(a, "completer")}
+    assert "pid" in comp["controller"]("pi") and all(
+        n.startswith("pi") for n in comp["controller"]("pi")
+    )
+    assert comp["scenario"]("stat") == ["station-keeping"]
+    assert "wimpey-sealab" in comp["vessel"]("w") and "kbf" in comp["observer"]("")
+    assert "beaufort5-offshore" in comp["scenario_file"]("beau")
+    assert "ppo:PATH" not in comp["controller"]("")
+
+
+def test_real_argcomplete_completes_subcommands(tmp_path):
+    argcomplete = pytest.importorskip("argcomplete")
+    import os
+    import subprocess
+    import sys
+
+    line = "shipgym ben"
+    env = {**os.environ, "_ARGCOMPLETE": "1", "COMP_LINE": line, "COMP_POINT": str(len(line)),
+           "_ARGCOMPLETE_IFS": " ",
+           "PYTHONPATH": os.pathsep.join([str(Path(argcomplete.__file__).parents[1]),
+                                          os.environ.get("PYTHONPATH", "")])}  # fmt: skip
+    cmd = f"'{sys.executable}' -m shipgym.cli 8>&1 9>/dev/null"
+    out = subprocess.run(["bash", "-c", cmd], env=env, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and out.stdout.split() == ["bench"], out
