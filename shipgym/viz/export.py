@@ -116,8 +116,8 @@ def _step_columns(run: Run) -> list[Column]:
     state_units = acts.get("state_units") or [""] * len(channels)
     cols += _split(run.actuator_state, [f"state_{c}" for c in channels], state_units, n)
     cols += _split(run.saturated, [f"saturated_{c}" for c in channels], [""] * len(channels), n)
-    names = list(acts.get("names") or [])
-    cols += _split(run.thrust, [f"thrust_{a}" for a in names], ["N"] * len(names), n)
+    actuators = list(acts.get("names") or [])
+    cols += _split(run.thrust, [f"thrust_{a}" for a in actuators], ["N"] * len(actuators), n)
     for field, comp, units in _TRIPLES[9:]:
         cols += _split(getattr(run, field), comp, units, n)
     cols += _split(run.wind, ("wind_speed", "wind_from"), ("m/s", "rad"), n)
@@ -251,7 +251,8 @@ def write_run_npz(run: Run, path: str | os.PathLike[str]) -> tuple[Path, list[Co
     arrays["metadata"] = np.array(json.dumps(_clean(doc)))
     path = Path(path)
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez_compressed(fh, **arrays)  # a file object: no ".npz" appended to the name
+        # a file object: no ".npz" appended to the name
+        np.savez_compressed(fh, **arrays)  # type: ignore[arg-type]
         fh.flush()
         if tmp.is_file():
             os.fsync(fh.fileno())
