@@ -42,7 +42,18 @@ NAV_HEAD: list[Any] = [
     {"Many envs at once": "batched.md"},
 ]
 NAV_TAIL: list[Any] = [
-    {"Models": "models/index.md"},
+    {
+        "Models": [
+            {"Overview": "models/index.md"},
+            {"Hull": "models/hull.md"},
+            {"Actuators and allocation": "models/actuators.md"},
+            {"Wind": "models/wind.md"},
+            {"Waves": "models/waves.md"},
+            {"Current": "models/current.md"},
+            {"Sensors": "models/sensors.md"},
+            {"Command conditioning": "models/conditioning.md"},
+        ]
+    },
     {
         "Papers reproduced": [
             {"Tomera (2014): the Blue Lady": "papers/tomera-2014.md"},
