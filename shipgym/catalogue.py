@@ -21,7 +21,8 @@ def catalogue() -> dict[str, Any]:
         ``scenario_presets`` (name -> description, the named presets and the packaged files),
         ``controllers`` (name -> description, including the shipped baselines ``ppo``, ``sac``,
         ``ppo-residual`` and ``ppo:PATH``, ``sac:PATH``),
-        ``observers``, ``sensor_presets``, ``wave_presets``, ``plans``, ``plant_variants``,
+        ``observers``, ``sensor_presets``, ``wave_presets``, ``plans``, ``plant_variants`` (with
+        ``vessel_plants``: the vessels that declare variants of their own),
         ``wind_models`` and ``actuators``.
     """
     from shipgym import ENV_IDS
@@ -36,6 +37,7 @@ def catalogue() -> dict[str, Any]:
     from shipgym.scenarios import SCENARIOS as SCENARIO_PRESETS
     from shipgym.scenarios import WAVE_PRESETS, scenario_files
 
+    ves = vessels()
     presets = {k: v.description for k, v in SCENARIO_PRESETS.items()}
     for stem, path in scenario_files().items():
         presets.setdefault(stem, f"packaged scenario file {path.name}")
@@ -48,13 +50,17 @@ def catalogue() -> dict[str, Any]:
         "sensor_presets": list(SENSOR_PRESETS),
         "wave_presets": list(WAVE_PRESETS),
         "plans": list(PLANS),
-        "plant_variants": list(PLANT_VARIANTS),
+        # the generic variants and every packaged vessel's own ([plants.NAME] of vessel.toml)
+        "plant_variants": list(
+            dict.fromkeys([*PLANT_VARIANTS, *(p for v in ves.values() for p in v.plants)])
+        ),
+        "vessel_plants": {n: list(v.plants) for n, v in ves.items() if len(v.plants) > 1},
         "wind_models": [f"blendermann:{k}" for k in BLENDERMANN],
         "actuators": list(ACTUATOR_NAMES),
         "vessels": {
             n: f"{v.title}: {v.dofs} DOF, L_oa {v.L_oa:g} m, "
             + ", ".join(f"{a.name} ({a.label})" for a in v.actuators)
-            for n, v in vessels().items()
+            for n, v in ves.items()
         },
     }
 

@@ -386,6 +386,13 @@ def test_list_is_complete_and_json(capsys):
             assert name in text, (key, name)
     for stem in ("beaufort5-offshore", "harbour-crosscurrent"):  # the two that were missing
         assert stem in cat["scenario_presets"] and stem in text
+    # a vessel's own plant variants ([plants.NAME] of vessel.toml) are listed too, with the
+    # vessel that declares them (table2-literal was missing)
+    for name, v in shipgym.vessels().items():
+        for plant in v.plants:
+            assert plant in cat["plant_variants"] and plant in text, (name, plant)
+    assert "table2-literal" in cat["vessel_plants"]["blue-lady"]
+    assert "blue-lady: default, table2-literal" in text
 
 
 def test_no_progress_frames_when_stderr_is_not_a_terminal(capsys, tmp_path):
