@@ -246,10 +246,11 @@ def on_config(config: Any) -> Any:
     _PAGES.update(vessel_pages())
     _PAGES["cli-reference.md"] = cli_page()
     _PAGES.update(api_pages())
+    from shipgym.envs.registration import ENV_IDS
+
     envs = [{"Environments": "envs/index.md"}] + [
-        {p.removeprefix("envs/").removesuffix(".md"): p}
-        for p in _PAGES
-        if p.startswith("envs/") and p != "envs/index.md"
+        {env_id.removeprefix("shipgym/"): f"envs/{_slug(env_id.removeprefix('shipgym/'))}.md"}
+        for env_id in ENV_IDS
     ]
     ves = [{"Vessels": "vessels/index.md"}, {"Package format": "vessels/format.md"}] + [
         {p.removeprefix("vessels/").removesuffix(".md"): p}
