@@ -312,7 +312,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     for f in res["files"]:
         print(f"wrote {f}")
     if res["files"] and args.record is not None:
-        print(f"open the recording with: rerun {args.record}")
+        from shipgym.viz.viewer import viewer_hint
+
+        print(viewer_hint(args.record))
     if args.json is not None:
         print(f"results written to {args.json}")
     return 0

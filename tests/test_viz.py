@@ -290,7 +290,11 @@ def test_spawn_without_display_records_to_the_file(tmp_path, monkeypatch, capsys
     for _ in range(5):
         env.step(np.zeros(3, np.float32))
     env.close()
-    assert "no rerun viewer available" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "no rerun viewer available" in err
+    # the headless route to the file the episode ends in (not its partial file)
+    assert f"rerun --serve-web --bind 127.0.0.1 {path}" in err
+    assert "http://127.0.0.1:9090/?url=" in err
     assert env.paths == [tmp_path / "spawn.partial.rrd"]  # closed before the episode's end
     assert load_run(env.paths[0]).n_steps == 5
 

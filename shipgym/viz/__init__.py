@@ -4,7 +4,7 @@ The only subpackage that imports ``rerun`` and ``matplotlib``; both are imported
 the functions that need them, so ``import shipgym`` and ``import shipgym.viz`` stay light.
 
 Public names: ``COMPARE_SIZES``, ``DPI``, ``FIGURE_SIZES``, ``RecordEpisode``, ``Run``,
-``episode_path``, ``load_run``, ``pixel_size``, ...
+``episode_path``, ``load_run``, ``pixel_size``, ``viewer_hint``, ``web_viewer_url``, ...
 
 Design notes: docs/design/viz.md.
 """
@@ -16,6 +16,7 @@ from .export import run_columns, write_run_csv, write_run_npz
 from .recorder import RecordEpisode, episode_path
 from .report import DPI, FIGURE_SIZES, pixel_size, report_paths, write_report
 from .run import Run, load_run, recording_problem, save_run_json
+from .viewer import viewer_hint, web_viewer_url
 
 __all__ = [
     "COMPARE_SIZES",
@@ -30,6 +31,8 @@ __all__ = [
     "report_paths",
     "run_columns",
     "save_run_json",
+    "viewer_hint",
+    "web_viewer_url",
     "write_observer_report",
     "write_report",
     "write_run_csv",

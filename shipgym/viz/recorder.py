@@ -48,6 +48,7 @@ from .run import (
     indices_warning,
     save_run_json,
 )
+from .viewer import viewer_hint
 
 __all__ = ["RecordEpisode", "episode_path"]
 
@@ -596,7 +597,7 @@ class RecordEpisode(
     commands (one plot per command unit) and thrusts, the running accuracy indices of Tomera
     (2014) eqs. 54-57, and the run's metadata; entity paths in :mod:`shipgym.viz.run`. The
     file opens in the rerun viewer with the map on the left and the time series on the right
-    (``rerun PATH.rrd``).
+    (``rerun PATH.rrd``; without a display rerun's web viewer: :func:`~shipgym.viz.viewer_hint`).
 
     Values are buffered per step and written in columns every ``flush_every`` steps, at the
     end of an episode, in :meth:`close` and when the wrapper is garbage collected: an episode
@@ -770,9 +771,10 @@ class RecordEpisode(
                     reason = f"the viewer did not start: {exc}"
             self._viewer = reason is None
             if reason is not None:
+                final = episode_path(self.path, self._n_episodes)  # path: its partial file
                 print(
-                    f"shipgym: no rerun viewer available ({reason}); recording to {path} only. "
-                    f"Open it later with: rerun {path}",
+                    f"shipgym: no rerun viewer available ({reason}); recording to {final} "
+                    f"only. Once it is written, {viewer_hint(final)}",
                     file=sys.stderr,
                 )
         if self.spawn and self._viewer:
