@@ -279,6 +279,54 @@ def test_unwritable_path_fails_before_the_episode(tmp_path):
     assert not (tmp_path / "ok.rrd").exists()  # the check leaves no file behind
 
 
+def _blueprint_views(path):
+    """The views of the blueprint stored in a ``.rrd`` file: ``{entity: {component: value}}``
+    for each ``/view/<id>`` entity and its property entities (``/view/<id>/TimeAxis``...)."""
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(path)
+    (store,) = reader.blueprints()
+    views = {}
+    for ch in reader.stream(store=store):
+        if not ch.entity_path.startswith("/view/"):
+            continue
+        rb = ch.to_record_batch()
+        slot = views.setdefault(ch.entity_path, {})
+        for i, name in enumerate(rb.schema.names):
+            if ":" not in name:  # a timeline (log_time: nanoseconds pyarrow cannot convert)
+                continue
+            values = rb.column(i).to_pylist()
+            if values and values[-1] is not None:
+                slot[name] = values[-1][0] if len(values[-1]) == 1 else values[-1]
+    return views
+
+
+def test_time_series_views_show_the_whole_episode_without_legends(recorded):
+    """rerun shows a timeline longer than 60 s as the cursor +- 30 s unless the view's time
+    axis says otherwise: every time series view of the stored blueprint has the whole timeline
+    (both ends unbounded) on its time axis, and no legend drawn over its curves."""
+    from shipgym.viz.recorder import PLOT_KEY
+
+    run = recorded["run"]
+    assert run.t[-1] - run.t[0] > 60.0  # long enough for rerun to narrow the axis otherwise
+    views = _blueprint_views(recorded["rrd"])
+    series = [
+        e for e, c in views.items() if c.get("ViewBlueprint:class_identifier") == "TimeSeries"
+    ]
+    names = {views[e]["ViewBlueprint:display_name"] for e in series}
+    assert {"x^r (m)", "u (m/s)", "psi^r (deg)", "thrust (N)", "accuracy indices"} <= names
+    for e in series:
+        axis = views.get(f"{e}/TimeAxis", {})
+        assert axis.get("TimeAxis:view_range") == {"start": None, "end": None}, (e, axis)
+        legend = views.get(f"{e}/PlotLegend", {})
+        assert legend.get("PlotLegend:visible") is False, (e, legend)
+    static, _ = read_rrd(recorded["rrd"])
+    summary = static[P.SUMMARY]["TextDocument:text"]
+    assert PLOT_KEY in (
+        summary[0] if isinstance(summary, list) else summary
+    )  # the colours' key, in place of the legends
+
+
 def test_spawn_without_display_records_to_the_file(tmp_path, monkeypatch, capsys):
     if not sys.platform.startswith("linux"):
         pytest.skip("the no-display check is Linux-specific")

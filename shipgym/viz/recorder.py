@@ -95,6 +95,12 @@ _C_QUAY = (150, 150, 140, 255)
 _C_PLAN = (255, 160, 40, 160)
 _C_WIND = (120, 190, 255, 255)
 _SERIES_COLORS = [_C_REF, _C_TRUTH, _C_EST]
+_C_PLOT_BACKGROUND = (24, 28, 34, 255)
+#: what the colours of the time series mean (the plots have no legend: see _blueprint)
+PLOT_KEY = (
+    "Plots: orange desired, white true, magenta estimate, green DGPS fix; thrust and commands "
+    "in the colour of the actuator's arrow on the map. Hover a curve for its name."
+)
 
 
 _LIVE: weakref.WeakSet[RecordEpisode] = weakref.WeakSet()
@@ -1104,6 +1110,8 @@ def _summary_markdown(
     lines = [
         f"# {meta.get('scenario')} — seed {meta.get('seed')}",
         "",
+        PLOT_KEY,
+        "",
         "| | |",
         "|---|---|",
         f"| env | `{meta.get('env_id')}` |",
@@ -1169,6 +1177,18 @@ def _log_summary(
     )
 
 
+def _whole_timeline() -> Any:
+    """The time axis range of the time-series views: the whole recording (both ends unbounded).
+
+    Without it rerun shows a timeline longer than 60 s as the time cursor +- 30 s (its
+    ``TimeAxis.view_range`` fallback): about the last 50 s of a 1,285 s harbour run."""
+    import rerun.blueprint as rrb
+
+    return rrb.TimeRange(
+        start=rrb.TimeRangeBoundary.infinite(), end=rrb.TimeRangeBoundary.infinite()
+    )
+
+
 def _blueprint(ctx: dict[str, Any]) -> Any:
     """Map (left, with the run summary) and time series (right, like Tomera (2014) Figs. 9-11)."""
     import rerun.blueprint as rrb
@@ -1198,9 +1218,18 @@ def _blueprint(ctx: dict[str, Any]) -> Any:
         overrides=trails,
     )
 
+    # The whole episode on the time axis; no legend over the curves (rerun draws a legend
+    # inside the plot, in a corner, over the data: the colours are in the run summary's key,
+    # a curve's name shows on hover, and a view's selection panel switches its legend on, at
+    # the top left); a dark plot background, on which the white "true" curves show in the
+    # viewer's light theme too.
+    whole = rrb.TimeAxis(view_range=_whole_timeline())
+    legend = rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=False)
+    background = rrb.archetypes.PlotBackground(color=list(_C_PLOT_BACKGROUND), show_grid=True)
+
     def ts(origin: str, name: str) -> Any:
         return rrb.TimeSeriesView(
-            origin=origin, name=name, plot_legend=rrb.PlotLegend(visible=True)
+            origin=origin, name=name, axis_x=whole, plot_legend=legend, background=background
         )
 
     dofs = rrb.Grid(
