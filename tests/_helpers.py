@@ -136,3 +136,16 @@ def step_singles(singles, actions, pending):  # type: ignore[no-untyped-def]
             o, r, te, tr, info = s.step(a)
             out.append((o, info, (r, te, tr)))
     return out
+
+
+def one_line_error(capsys, rc, *needles):  # type: ignore[no-untyped-def]
+    """The CLI's error output read from ``capsys``: exit status 2 and one line
+    ``shipgym: error: ...`` holding each of ``needles``; returns that line."""
+    err = capsys.readouterr().err
+    assert rc == 2, err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("shipgym: error: "), err
+    for n in needles:
+        assert n in lines[0], (n, lines[0])
+    return lines[0]

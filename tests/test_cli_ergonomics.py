@@ -13,22 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _helpers import one_line_error
 
 from shipgym.cli import main, run_episode
 from shipgym.viz import load_run, save_run_json
 
 STEPS = 40  # a shortened harbour episode
-
-
-def _one_line_error(capsys, rc, *needles):
-    err = capsys.readouterr().err
-    assert rc == 2, err
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert len(lines) == 1, err
-    assert lines[0].startswith("shipgym: error: "), err
-    for n in needles:
-        assert n in lines[0], (n, lines[0])
-    return lines[0]
 
 
 @pytest.fixture(scope="module")
@@ -132,7 +122,7 @@ def test_export_refuses_to_overwrite_its_input(recorded, tmp_path, capsys):
     rrd = _copy(recorded, tmp_path)
     before = rrd.read_bytes()
     rc = main(["export", str(rrd), "--csv", "-o", str(rrd)])
-    _one_line_error(capsys, rc, "--out", "would overwrite the input RUN")
+    one_line_error(capsys, rc, "--out", "would overwrite the input RUN")
     assert rrd.read_bytes() == before
 
 
@@ -148,7 +138,7 @@ def test_export_replaces_an_earlier_export_atomically(recorded, tmp_path):
 def test_export_of_the_results_file_says_how_to_record_one(recorded, tmp_path, capsys):
     res = _copy(recorded, tmp_path, "results")
     rc = main(["export", str(res), "--csv"])
-    _one_line_error(capsys, rc, "no time series", "--record RUN.rrd", "shipgym export")
+    one_line_error(capsys, rc, "no time series", "--record RUN.rrd", "shipgym export")
     assert not (tmp_path / "results.csv").exists()
 
 
@@ -165,7 +155,7 @@ def test_export_misuse_is_one_line(argv, needles, recorded, tmp_path, capsys, mo
     monkeypatch.chdir(tmp_path)
     _copy(recorded, tmp_path)
     argv = [str(tmp_path / "run.rrd") if a == "RUN" else a for a in argv]
-    _one_line_error(capsys, main(argv), *needles)
+    one_line_error(capsys, main(argv), *needles)
     assert not (tmp_path / "missing.csv").exists()
 
 
@@ -195,13 +185,13 @@ def test_report_help_names_the_default_and_the_files_it_reads(capsys):
 
 def test_report_of_a_missing_run_makes_no_folder(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    _one_line_error(capsys, main(["report", "missing.rrd"]), "no such run file", "missing.rrd")
+    one_line_error(capsys, main(["report", "missing.rrd"]), "no such run file", "missing.rrd")
     assert list(tmp_path.iterdir()) == []
 
 
 def test_report_of_the_results_file_says_how_to_record_one(recorded, tmp_path, capsys):
     res = _copy(recorded, tmp_path, "results")
-    _one_line_error(capsys, main(["report", str(res)]), "no time series", "--record RUN.rrd")
+    one_line_error(capsys, main(["report", str(res)]), "no time series", "--record RUN.rrd")
 
 
 # ---- 3. n/a instead of inf / nan in printed tables -------------------------------------------
@@ -274,7 +264,7 @@ CLI_SUGGESTIONS = [
     "argv, needle", CLI_SUGGESTIONS, ids=[" ".join(a) for a, _ in CLI_SUGGESTIONS]
 )
 def test_cli_suggests_close_names(argv, needle, capsys):
-    line = _one_line_error(capsys, main([*argv, "--no-progress"] if argv[0] == "run" else argv),
+    line = one_line_error(capsys, main([*argv, "--no-progress"] if argv[0] == "run" else argv),
                            needle)  # fmt: skip
     assert line.count(", ") >= 1  # the list of the valid names is still there
 

@@ -24,6 +24,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+from _helpers import one_line_error
 
 import shipgym
 from shipgym.cli import main, run_episode
@@ -32,17 +33,6 @@ ROOT = Path(__file__).resolve().parents[1]
 BASELINE = ROOT / "shipgym" / "assets" / "models" / "ppo_residual_pid_kbf.zip"
 HAS_RL = all(importlib.util.find_spec(m) is not None for m in ("torch", "stable_baselines3"))
 needs_rl = pytest.mark.skipif(not HAS_RL, reason="needs the rl extra (torch, stable-baselines3)")
-
-
-def _one_line_error(capsys, rc, *needles):
-    err = capsys.readouterr().err
-    assert rc == 2, err
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert len(lines) == 1, err
-    assert lines[0].startswith("shipgym: error: "), err
-    for n in needles:
-        assert n in lines[0], (n, lines[0])
-    return lines[0]
 
 
 # ---- crafted model files ---------------------------------------------------------------------
@@ -186,7 +176,7 @@ def test_crafted_model_refused_in_one_line(case, tmp_path, capsys):
         make_learned_env("harbour", path)
     assert "\n" not in str(exc.value) and needle in str(exc.value)
     rc = main(["run", "harbour", "--controller", f"ppo:{path}", "--no-progress"])
-    _one_line_error(capsys, rc, needle)
+    one_line_error(capsys, rc, needle)
     assert not (tmp_path / "PWNED").exists()  # no code ran
 
 
@@ -346,7 +336,7 @@ def test_cli_misuse_is_one_line_exit_2(argv, needles, workdir, capsys):
     if _RL_CLI & set(argv[:2]) and not HAS_RL:
         pytest.skip("needs the rl extra")
     rc = main(argv)
-    _one_line_error(capsys, rc, *needles)
+    one_line_error(capsys, rc, *needles)
 
 
 def test_version_matches_pyproject(capsys):
