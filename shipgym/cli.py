@@ -738,8 +738,22 @@ def _report_defaults(args: argparse.Namespace) -> None:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from shipgym.viz import load_run, recording_problem, write_report
+    from shipgym.viz import load_results, load_run, recording_problem, write_report
+    from shipgym.viz.report import write_results_report
 
+    if args.run.suffix.lower() == ".json":
+        try:
+            res = load_results(args.run)
+        except ValueError:
+            res = None  # a run file (or no JSON at all): load_run says what it is
+        if res is not None:  # the results of run --json: metrics.md, no figures
+            for f in write_results_report(res, args.out):
+                print(f"wrote {f}")
+            print(
+                f"{args.run} holds the results of 'shipgym run --json' (metrics, no time "
+                "series): no figures; record the run with --record RUN.rrd for them"
+            )
+            return 0
     run = load_run(args.run)  # a file rerun cannot read: one-line ValueError
     problem = recording_problem(run)
     if problem is not None:
@@ -927,8 +941,9 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser("report", help="PNG figures and metrics.md from a recorded run")
     p.add_argument("run", type=path_arg, metavar="RUN",
                    help="RUN.rrd (shipgym run --record) or a JSON run file "
-                   "(shipgym.viz.save_run_json, RecordEpisode(json_path=)); not the results "
-                   "of 'shipgym run --json', which hold no time series")  # fmt: skip
+                   "(shipgym.viz.save_run_json, RecordEpisode(json_path=)): figures and "
+                   "metrics.md; or the results of 'shipgym run --json', which hold no time "
+                   "series: metrics.md only")  # fmt: skip
     p.add_argument("--out", type=path_arg, default=None, metavar="DIR",
                    help="folder of the figures and metrics.md (default: <RUN stem>_report "
                    "next to RUN, e.g. runs/h.rrd -> runs/h_report)")  # fmt: skip

@@ -165,6 +165,7 @@ def run_episode(
         current_out = _describe_current(env.unwrapped.physics.current_config)  # type: ignore[attr-defined]
         # what ran, read from the built physics (not the argument: env_kwargs may name another)
         plant_out = getattr(env.unwrapped.physics.plant, "name", plant)  # type: ignore[attr-defined]
+        vessel_out = _describe_vessel(getattr(env.unwrapped, "vessel", None))
     finally:
         bar.close()
         env.close()
@@ -194,6 +195,7 @@ def run_episode(
         "observer": step_record(end.info).nav.source,  # "truth" or the observer's name
         "seed": seed,
         "plant": plant_out,
+        "vessel": vessel_out,
         "wind": wind_out,
         "gusts": gusts_out,
         "waves": waves_out,
@@ -210,6 +212,16 @@ def run_episode(
         _commit_results(res, env if record is not None else None, json_path, report_moves,
                         failed=[report_failed] if report_failed else [])  # fmt: skip
     return res
+
+
+def _describe_vessel(vessel: Any) -> dict[str, Any] | None:
+    """The vessel that ran, for the results: its name, title, actuators and command
+    channels (the order of the per-actuator and per-channel metrics)."""
+    if vessel is None:
+        return None
+    return {"name": vessel.name, "title": vessel.title,
+            "actuators": [a.name for a in vessel.actuators],
+            "channels": list(vessel.actuators.channel_names)}  # fmt: skip
 
 
 def build_env(

@@ -180,7 +180,7 @@ def test_report_help_names_the_default_and_the_files_it_reads(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert "<RUN stem>_report" in text
     assert "RUN.rrd" in text and "save_run_json" in text
-    assert "not the results of 'shipgym run --json'" in text
+    assert "the results of 'shipgym run --json', which hold no time series: metrics.md only" in text
 
 
 def test_report_of_a_missing_run_makes_no_folder(tmp_path, capsys, monkeypatch):
@@ -189,9 +189,31 @@ def test_report_of_a_missing_run_makes_no_folder(tmp_path, capsys, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_report_of_the_results_file_says_how_to_record_one(recorded, tmp_path, capsys):
-    res = _copy(recorded, tmp_path, "results")
-    one_line_error(capsys, main(["report", str(res)]), "no time series", "--record RUN.rrd")
+def test_report_of_the_results_file_writes_their_metrics(recorded, tmp_path, capsys):
+    """``shipgym run --json`` results hold metrics, no time series: the report is their
+    metrics.md (what ran, the indices, legs, thrusters, chatter, estimation errors), no
+    figures, and says how to get them."""
+    src = _copy(recorded, tmp_path, "results")
+    res = json.loads(src.read_text())
+    assert main(["report", str(src)]) == 0
+    out = capsys.readouterr().out
+    assert "no time series" in out and "--record RUN.rrd" in out
+    folder = src.with_name(src.stem + "_report")
+    assert sorted(p.name for p in folder.iterdir()) == ["metrics.md"]
+    md = (folder / "metrics.md").read_text()
+    assert f"`{res['env_id']}`" in md and f"| plant | {res['plant']} |" in md
+    cell = lambda v: "n/a" if v is None else f"{v:.4f}"  # noqa: E731 (null: too short a run)
+    assert f"| truth | {cell(res['x_E'])} | {cell(res['y_E'])} |" in md
+    for name in res["vessel"]["actuators"]:  # the per-actuator rows under their names
+        assert f"| {name.replace('_', ' ')} |" in md, name
+    assert "## Estimation errors" in md or not res.get("rmse")
+
+
+def test_run_json_records_the_vessel_that_ran(recorded):
+    res = json.loads(Path(recorded["results"]).read_text())
+    assert res["vessel"]["name"] == "blue-lady"
+    assert res["vessel"]["actuators"] == ["main_propeller", "bow_tunnel", "stern_tunnel"]
+    assert len(res["vessel"]["channels"]) == len(res["reversals_per_min"])
 
 
 # ---- 3. n/a instead of inf / nan in printed tables -------------------------------------------

@@ -14,8 +14,15 @@ from __future__ import annotations
 from .compare import COMPARE_SIZES, write_observer_report
 from .export import run_columns, write_run_csv, write_run_npz
 from .recorder import RecordEpisode, episode_path
-from .report import DPI, FIGURE_SIZES, pixel_size, report_paths, write_report
-from .run import Run, load_run, recording_problem, save_run_json
+from .report import (
+    DPI,
+    FIGURE_SIZES,
+    pixel_size,
+    report_paths,
+    write_report,
+    write_results_report,
+)
+from .run import Run, is_results, load_results, load_run, recording_problem, save_run_json
 from .viewer import viewer_hint, web_viewer_url
 
 __all__ = [
@@ -25,6 +32,8 @@ __all__ = [
     "RecordEpisode",
     "Run",
     "episode_path",
+    "is_results",
+    "load_results",
     "load_run",
     "pixel_size",
     "recording_problem",
@@ -35,6 +44,7 @@ __all__ = [
     "web_viewer_url",
     "write_observer_report",
     "write_report",
+    "write_results_report",
     "write_run_csv",
     "write_run_npz",
 ]

@@ -16,11 +16,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .geometry import REFERENCE_LENGTH, hull_length, hull_polygon
-from .run import Run, indices_warning, load_run, recording_problem
+from .run import Run, indices_warning, load_results, load_run, recording_problem
 
 os.environ.setdefault("MPLBACKEND", "Agg")  # headless by default, whatever imports pyplot later
 
-__all__ = ["DPI", "FIGURE_SIZES", "pixel_size", "report_paths", "write_report"]
+__all__ = [
+    "DPI",
+    "FIGURE_SIZES",
+    "pixel_size",
+    "report_paths",
+    "results_markdown",
+    "write_report",
+    "write_results_report",
+]
 
 #: Resolution of the PNG files (dots per inch).
 DPI = 100
@@ -463,15 +471,7 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
         f"({m.get('legs_completed', int(run.legs_completed[-1]) if len(run.t) else 0)} legs) |",
         f"| quay contact | {m.get('quay_contact', 'n/a')} |",
         "",
-        "## Accuracy indices (Tomera 2014 eqs. 54-57, r-frame, sampled at 1 s)",
-        "",
-        "| from | x_E (m) | y_E (m) | psi_E (deg) | J_c |",
-        "|---|---|---|---|---|",
-        "| truth | " + " | ".join(_fmt(truth[k]) for k in keys) + " |",
-        "| measurements | " + " | ".join(_fmt(meas_src.get(k)) for k in keys) + " |",
-        "",
-        "J_c = x_E + y_E + 0.01 psi_E.",
-        "",
+        *_indices_table(truth, meas_src),
         *([w, ""] if (w := indices_warning(m, meta)) else []),
         "## Legs",
         "",
@@ -493,14 +493,6 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
         else:
             row = "not started | | "
         lines.append(f"| {i + 1} | {name} | {row} |")
-    lines += [
-        "",
-        "## Thrusters",
-        "",
-        "| actuator | mean abs F (N) | total variation (N) | saturated fraction | "
-        "saturated time (s) |",
-        "|---|---|---|---|---|",
-    ]
     act_names = run.actuator_names
     owner = np.asarray(run.actuators["channel_actuator"], dtype=int)
     per_actuator = np.column_stack(
@@ -510,34 +502,80 @@ def _metrics_markdown(run: Run, files: list[Path]) -> str:
     tv = m.get("thrust_total_variation") or np.abs(np.diff(run.thrust, axis=0)).sum(0).tolist()
     sat_f = m.get("saturated_fraction") or per_actuator.mean(axis=0).tolist()
     sat_t = m.get("saturated_time") or [float("nan")] * len(act_names)
-    for i, name in enumerate(_label(a) for a in act_names):
-        lines.append(
-            f"| {name} | {_fmt(mean_abs[i], 2)} | {_fmt(tv[i], 1)} | {_fmt(sat_f[i], 3)} | "
-            f"{_fmt(sat_t[i], 1)} |"
-        )
-    if m.get("reversals_per_min"):
-        ch_names = _channel_labels(run)
-        lines += [
-            "",
-            "## Command chatter",
-            "",
-            "Per channel, from the normalised commands (shipgym.metrics.command_chatter): "
-            "reversals of the command's direction through a band of 2 % around zero, time at a "
-            "command limit, share of the detrended command's variance at periods below 20 s, "
-            "command travel.",
-            "",
-            "| channel | reversals / min | at a limit | variance < 20 s | travel (1/min) |",
-            "|---|---|---|---|---|",
-        ]
-        for j, name in enumerate(ch_names):
-            lines.append(
-                f"| {name} | {_fmt(m['reversals_per_min'][j], 2)} | "
-                f"{_fmt(m['limit_fraction'][j], 3)} | {_fmt(m['hf_variance_fraction'][j], 3)} | "
-                f"{_fmt(m['travel_per_min'][j], 2)} |"
-            )
+    lines += _thrusters_table([_label(a) for a in act_names], mean_abs, tv, sat_f, sat_t)
+    lines += _chatter_table(_channel_labels(run), m)
     lines += ["", "## Figures", ""]
     lines += [f"- [{p.name}]({p.name})" for p in files]
     return "\n".join(lines) + "\n"
+
+
+def _indices_table(truth: dict[str, Any], measured: dict[str, Any]) -> list[str]:
+    """The accuracy indices of Tomera (2014) eqs. 54-57 as markdown lines, from the truth and
+    from the measurements."""
+    keys = ("x_E", "y_E", "psi_E", "J_c")
+    return [
+        "## Accuracy indices (Tomera 2014 eqs. 54-57, r-frame, sampled at 1 s)",
+        "",
+        "| from | x_E (m) | y_E (m) | psi_E (deg) | J_c |",
+        "|---|---|---|---|---|",
+        "| truth | " + " | ".join(_fmt(truth.get(k)) for k in keys) + " |",
+        "| measurements | " + " | ".join(_fmt(measured.get(k)) for k in keys) + " |",
+        "",
+        "J_c = x_E + y_E + 0.01 psi_E.",
+        "",
+    ]
+
+
+def _thrusters_table(names: list[str], mean_abs: Any, tv: Any, sat_f: Any, sat_t: Any) -> list[str]:
+    """Each actuator's thrust statistics as markdown lines (a value missing: n/a)."""
+    lines = [
+        "",
+        "## Thrusters",
+        "",
+        "| actuator | mean abs F (N) | total variation (N) | saturated fraction | "
+        "saturated time (s) |",
+        "|---|---|---|---|---|",
+    ]
+    for i, name in enumerate(names):
+        cells = [_fmt(_at(mean_abs, i), 2), _fmt(_at(tv, i), 1), _fmt(_at(sat_f, i), 3),
+                 _fmt(_at(sat_t, i), 1)]  # fmt: skip
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _chatter_table(names: list[str], m: dict[str, Any]) -> list[str]:
+    """Each command channel's chatter (:func:`shipgym.metrics.command_chatter`) as markdown
+    lines; none without the metrics."""
+    if not m.get("reversals_per_min"):
+        return []
+    lines = [
+        "",
+        "## Command chatter",
+        "",
+        "Per channel, from the normalised commands (shipgym.metrics.command_chatter): "
+        "reversals of the command's direction through a band of 2 % around zero, time at a "
+        "command limit, share of the detrended command's variance at periods below 20 s, "
+        "command travel.",
+        "",
+        "| channel | reversals / min | at a limit | variance < 20 s | travel (1/min) |",
+        "|---|---|---|---|---|",
+    ]
+    for j, name in enumerate(names):
+        lines.append(
+            f"| {name} | {_fmt(_at(m['reversals_per_min'], j), 2)} | "
+            f"{_fmt(_at(m.get('limit_fraction'), j), 3)} | "
+            f"{_fmt(_at(m.get('hf_variance_fraction'), j), 3)} | "
+            f"{_fmt(_at(m.get('travel_per_min'), j), 2)} |"
+        )
+    return lines
+
+
+def _at(values: Any, i: int) -> Any:
+    """``values[i]``, or ``None`` where the list is missing or shorter."""
+    try:
+        return values[i]
+    except (TypeError, IndexError, KeyError):
+        return None
 
 
 def _channel_labels(run: Run) -> list[str]:
@@ -596,6 +634,92 @@ def write_report(
     from shipgym._io import replace_together
 
     return replace_together(report_files(run, out, hull_every=float(hull_every)))
+
+
+def results_markdown(res: dict[str, Any]) -> str:
+    """``metrics.md`` of the results of ``shipgym run --json`` (the episode's metrics and what
+    ran, no time series): the run, the accuracy indices, the legs, the station-keeping
+    summary, the thrusters, the command chatter and the estimation errors."""
+    ves = res.get("vessel") or {}
+    wind = res.get("wind")
+    wind_txt = "none" if not wind else f"{wind['speed']:.1f} m/s from {wind['from_deg']:.0f} deg"
+    cur = res.get("current")
+    cur_txt = ("none" if not cur or not cur.get("speed")
+               else f"{cur['speed']:.2f} m/s going to {cur['to_deg']:.0f} deg")  # fmt: skip
+    lines = [
+        f"# Run results: {res.get('scenario', 'run')}",
+        "",
+        "The results of `shipgym run --json`: the episode's metrics, no time series (record the "
+        "run with `--record RUN.rrd` for the figures: `shipgym report RUN.rrd`).",
+        "",
+        "| | |",
+        "|---|---|",
+        f"| env id | `{res.get('env_id')}` |",
+        f"| vessel | {ves.get('title', ves.get('name', 'n/a'))} |",
+        f"| seed | {res.get('seed')} |",
+        f"| observer | {res.get('observer')} |",
+        f"| controller | {res.get('controller')} |",
+        f"| plant | {res.get('plant')} |",
+        f"| wind | {wind_txt} |",
+        f"| current | {cur_txt} |",
+        f"| duration | {_fmt(res.get('duration_s'), 1)} s |",
+        f"| completed | {res.get('completed', 'n/a')} ({res.get('legs_completed', 0)} legs) |",
+        f"| quay contact | {res.get('quay_contact', 'n/a')} |",
+        "",
+        *_indices_table(res, res.get("measured") or {}),
+    ]
+    if res.get("indices_note"):
+        lines += [f"**These indices do not describe a whole run**: {res['indices_note']}.", ""]
+    legs = res.get("leg_times") or []
+    if legs:
+        lines += ["## Legs", "", "| leg | completed at (s) | duration (s) |", "|---|---|---|"]
+        start = 0.0
+        for i, end in enumerate(legs):
+            lines.append(f"| {i + 1} | {_fmt(end, 1)} | {_fmt(end - start, 1)} |")
+            start = end
+    sk = res.get("station_keeping")
+    if sk:
+        lines += ["", "## Station keeping", "", "| | |", "|---|---|"]
+        lines += [f"| {k} | {_fmt(v, 3) if not isinstance(v, str) else v} |" for k, v in sk.items()]
+    acts = ves.get("actuators") or [f"actuator {i + 1}" for i in
+                                    range(len(res.get("thrust_mean_abs") or []))]  # fmt: skip
+    lines += _thrusters_table([_label(a) for a in acts], res.get("thrust_mean_abs"),
+                              res.get("thrust_total_variation"), res.get("saturated_fraction"),
+                              res.get("saturated_time"))  # fmt: skip
+    chans = ves.get("channels") or [f"channel {j + 1}" for j in
+                                    range(len(res.get("reversals_per_min") or []))]  # fmt: skip
+    lines += _chatter_table([_label(c) for c in chans], res)
+    rmse = res.get("rmse")
+    if rmse:
+        units = {"x": "m", "y": "m", "psi": "deg", "u": "m/s", "v": "m/s", "r": "deg/s"}
+        lines += ["", "## Estimation errors (RMS, estimate minus truth)", "",
+                  "| " + " | ".join(f"{k} ({units.get(k, '')})" for k in rmse) + " |",
+                  "|" + "---|" * len(rmse),
+                  "| " + " | ".join(_fmt(v) for v in rmse.values()) + " |"]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+def write_results_report(
+    results_or_path: dict[str, Any] | str | os.PathLike[str], out_dir: str | os.PathLike[str]
+) -> list[Path]:
+    """Write ``metrics.md`` of the results of ``shipgym run --json`` (:func:`results_markdown`)
+    into ``out_dir`` (created): what those results allow; the figures need a recording.
+
+    Returns:
+        ``[out_dir / "metrics.md"]``.
+
+    Raises:
+        ValueError: an unreadable file, one that is not such results, or an unusable folder.
+    """
+    res = results_or_path if isinstance(results_or_path, dict) else load_results(results_or_path)
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"cannot create the report folder {out}: {exc.strerror or exc}") from None
+    from shipgym._io import atomic_write_text
+
+    return [atomic_write_text(out / "metrics.md", results_markdown(res))]
 
 
 def report_files(run: Run, out: Path, *, hull_every: float = 60.0) -> list[tuple[Path, Path]]:

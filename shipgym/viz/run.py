@@ -32,6 +32,8 @@ __all__ = [
     "actuator_description",
     "command_path",
     "indices_warning",
+    "is_results",
+    "load_results",
     "load_run",
     "recording_problem",
     "save_run_json",
@@ -374,6 +376,31 @@ MAX_RUN_JSON_BYTES = 1 << 30
 MAX_RUN_RRD_BYTES = 4 << 30
 
 
+def is_results(doc: Any) -> bool:
+    """Whether the JSON document ``doc`` is the results of ``shipgym run --json`` (the
+    episode's metrics and what ran; no time series), not a run file."""
+    return isinstance(doc, dict) and "format" not in doc and "env_id" in doc and "seed" in doc
+
+
+def load_results(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The results of ``shipgym run --json`` read from ``path`` (bounded, code-free JSON).
+
+    Raises:
+        ValueError: an unreadable file, or one that is not such results (a run file, say).
+    """
+    from shipgym._safeload import parse, read_bounded
+
+    p = Path(path)
+    try:
+        raw = read_bounded(p, "results file", MAX_RUN_JSON_BYTES)
+        doc = parse(raw.decode("utf-8"), "json", f"results file {p}", limit=1 << 27)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ValueError(f"cannot read the results file {p}: {exc}") from None
+    if not is_results(doc):
+        raise ValueError(f"{p} is not the results of 'shipgym run --json'")
+    return doc  # type: ignore[no-any-return]
+
+
 def _load_json(path: Path) -> Run:
     from shipgym._safeload import parse, read_bounded
 
@@ -382,7 +409,7 @@ def _load_json(path: Path) -> Run:
         doc = parse(raw.decode("utf-8"), "json", f"run file {path}", limit=1 << 27)
     except (ValueError, UnicodeDecodeError) as exc:
         raise ValueError(f"cannot read the run file {path}: {exc}") from None
-    if isinstance(doc, dict) and "format" not in doc and "env_id" in doc and "seed" in doc:
+    if is_results(doc):
         raise ValueError(
             f"{path} holds the results of 'shipgym run --json' (metrics, no time series): "
             "record the run with 'shipgym run --record RUN.rrd' and read the recording "
