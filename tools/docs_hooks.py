@@ -57,6 +57,7 @@ NAV_TAIL: list[Any] = [
     {
         "Papers reproduced": [
             {"Tomera (2014): the Blue Lady": "papers/tomera-2014.md"},
+            {"Tomera (2011): Kalman-Bucy filter design": "papers/tomera-2011.md"},
             {"Al-Takie (1982): offshore DP": "papers/al-takie-1982.md"},
             {"Radhakrishnan: rudder-roll": "papers/radhakrishnan.md"},
             {"Artyszuk (2003): sea trials": "papers/artyszuk-2003.md"},
