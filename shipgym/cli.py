@@ -16,6 +16,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import signal
 import sys
 import time
 from pathlib import Path
@@ -1254,7 +1256,9 @@ def main(argv: list[str] | None = None) -> int:
             if prepare is not None:  # defaults that depend on other arguments (a subcommand's)
                 prepare(args)
             _check_paths(args)
-            return int(args.func(args))
+            rc = int(args.func(args))
+            sys.stdout.flush()  # a closed pipe shows here, not at the interpreter's exit
+            return rc
         except WriteFailed as exc:  # the results go to stdout instead of being lost
             res = exc.results
             out = res if isinstance(res, str) else json.dumps(jsonable(res), indent=2)
@@ -1267,6 +1271,11 @@ def main(argv: list[str] | None = None) -> int:
         except SimulationDiverged as exc:  # a plant or setting that does not simulate
             print(f"shipgym: error: {exc}", file=sys.stderr)
             return 3
+        except BrokenPipeError:  # the reader stopped reading (shipgym list | head): quietly,
+            # with the status a shell gives a command SIGPIPE ended; stdout to /dev/null so
+            # that the interpreter's last flush does not fail again
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 128 + signal.SIGPIPE
         except OSError as exc:  # a full disk, a folder removed during the run, ...
             where = f" {exc.filename}" if exc.filename else ""
             print(f"shipgym: error: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)

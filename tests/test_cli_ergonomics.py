@@ -515,3 +515,22 @@ def test_real_argcomplete_completes_subcommands(tmp_path):
     cmd = f"'{sys.executable}' -m shipgym.cli 8>&1 9>/dev/null"
     out = subprocess.run(["bash", "-c", cmd], env=env, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0 and out.stdout.split() == ["bench"], out
+
+
+# ---- a reader that stops reading -------------------------------------------------------------
+def test_a_closed_pipe_ends_the_command_quietly(tmp_path):
+    """A reader that stops reading (``shipgym list | true``; ``| head``): the command stops
+    at the closed pipe with the status a shell gives a command SIGPIPE ended (141) and prints
+    no error (it printed ``shipgym: error: cannot write: Broken pipe`` and exited 1, or, for an
+    output that fit the pipe, Python's "Exception ignored ... BrokenPipeError" at exit)."""
+    import subprocess
+    import sys
+
+    for args in ("list", "run harbour --no-progress"):
+        # `true` has long exited when shipgym first writes (after its imports)
+        cmd = f"'{sys.executable}' -m shipgym.cli {args} | true; echo \"status ${{PIPESTATUS[0]}}\""
+        r = subprocess.run(["bash", "-c", cmd], cwd=tmp_path, capture_output=True, text=True,
+                           timeout=300)  # fmt: skip
+        assert r.stdout.splitlines() == ["status 141"], (args, r.stdout, r.stderr)
+        for bad in ("error", "Traceback", "Exception ignored", "BrokenPipe"):
+            assert bad not in r.stderr, (args, r.stderr)  # (a first-compile notice may show)
