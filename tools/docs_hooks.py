@@ -93,16 +93,22 @@ def env_pages() -> dict[str, str]:
         harbour = "Harbour" in env_id  # the basin was built for the Blue Lady
         fit = [v for v, ves in all_vessels.items() if task_fits_vessel(env_id, ves)
                and (not harbour or fits(ves, "harbour"))]  # fmt: skip
+        required = False
         try:  # the task's own default vessel, else the first that fits (the Blue Lady first)
             env = shipgym.make(env_id)
-        except TypeError:
+        except TypeError:  # the vessel-neutral ids need vessel=
+            required = True
             fit.sort(key=lambda v: v != "blue-lady")
             env = shipgym.make(env_id, vessel=fit[0])
         try:
             act, obs = env.action_space, env.observation_space
-            vessel = env.unwrapped.vessel.name if hasattr(env.unwrapped, "vessel") else "-"
+            u = env.unwrapped  # a plan task's vessel, or a stepped task's base vessel
+            vessel = getattr(getattr(u, "vessel", None) or getattr(u, "base_vessel", None),
+                             "name", "-")  # fmt: skip
         finally:
             env.close()
+        vessel_fact = (f"none: `vessel=` is required (the spaces above are `{vessel}`'s)"
+                       if required else f"`{vessel}`")  # fmt: skip
         slug = _slug(env_id.removeprefix("shipgym/"))
         rows.append(f"| [`{env_id}`]({slug}.md) | {first} |")
         alias = ALIASES.get(env_id)
@@ -121,7 +127,7 @@ def env_pages() -> dict[str, str]:
                 if spec.max_episode_steps
                 else "the task's own (`episode_duration`)",
             ),  # fmt: skip
-            ("Default vessel", f"`{vessel}`"),
+            ("Default vessel", vessel_fact),
             ("Vessels that fit", ", ".join(f"[`{v}`](../vessels/{v}.md)" for v in fit)),
         ]
         if alias:
@@ -129,8 +135,7 @@ def env_pages() -> dict[str, str]:
         table = "\n".join(["| | |", "|---|---|", *(f"| {k} | {v} |" for k, v in facts)])
         pages[f"envs/{slug}.md"] = (
             f"# {env_id}\n\n{table}\n\n"
-            "The spaces above are the default vessel's; the action space comes from the "
-            "vessel's actuators.\n\n"
+            "The action space comes from the vessel's actuators: another vessel has its own.\n\n"
             f"::: {module}.{name}\n"
             "    options:\n      show_root_heading: false\n      members: false\n"
             "      show_bases: true\n"
