@@ -166,6 +166,10 @@ def test_docs_site_builds(tmp_path):
         assert f"{name}.png" in page and (site / "vessels" / f"{name}.png").is_file()
     for page in ("cli-reference", "api/shipgym.envs.base", "papers/al-takie-1982"):
         assert (site / page / "index.html").is_file(), page
+    # the docstrings' Sphinx roles (:func:`load_run`) become links where the name resolves
+    api = (site / "api" / "shipgym.viz.run" / "index.html").read_text()
+    assert ":func:" not in api and ":class:" not in api
+    assert 'href="#shipgym.viz.run.load_run"' in api
 
 
 def test_every_vessel_has_a_gallery_image():

@@ -286,11 +286,28 @@ def on_files(files: Any, config: Any) -> Any:
     return files
 
 
-_ROLE = re.compile(r":(?:py:)?(?:meth|func|class|data|attr|mod|exc|obj|const):(<code>)~?")
-_TARGET = re.compile(r"(<code>[^<]*?) &lt;[\w.]+&gt;(</code>)")
+_ROLE = re.compile(
+    r":(?:py:)?(?:meth|func|class|data|attr|mod|exc|obj|const):<code>(~?)([^<]*?)</code>"
+)
+_TARGET = re.compile(r"(?P<label>.*?) &lt;(?P<target>[\w.]+)&gt;$")
 
 
-def on_page_content(html: str, **_: Any) -> str:
-    """The docstrings' Sphinx roles (``:func:`name```) shown as plain code, and a role's
-    ``label <target>`` as its label."""
-    return _TARGET.sub(r"\1\2", _ROLE.sub(r"\1", html))
+def _role_link(m: re.Match[str], module: str | None) -> str:
+    """A docstring's Sphinx role (``:func:`name```, ``:class:`~a.B```, ``:meth:`label
+    <a.B.c>```) as an optional cross-reference: a link where the name resolves (a fully
+    qualified name, or one of the page's module), plain code where it does not."""
+    short, text = m.group(1) == "~", m.group(2).removesuffix("()")
+    target = _TARGET.match(text)
+    ident, title = (target["target"], target["label"]) if target else (text, text)
+    if short and not target:
+        title = ident.rsplit(".", 1)[-1]
+    if not ident.startswith("shipgym") and module is not None:
+        ident = f"{module}.{ident}"  # a name of the page's own module
+    return f'<autoref identifier="{ident}" optional><code>{title}</code></autoref>'
+
+
+def on_page_content(html: str, page: Any, **_: Any) -> str:
+    """The docstrings' Sphinx roles as optional cross-references (:func:`_role_link`)."""
+    uri = page.file.src_uri
+    module = uri[len("api/") : -len(".md")] if uri.startswith("api/") else None
+    return _ROLE.sub(lambda m: _role_link(m, module), html)
