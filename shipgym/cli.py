@@ -740,33 +740,34 @@ def _report_defaults(args: argparse.Namespace) -> None:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from shipgym.viz import load_results, load_run, recording_problem, write_report
+    from shipgym.viz import load_run_or_results, write_report
     from shipgym.viz.report import write_results_report
 
-    if args.run.suffix.lower() == ".json":
-        try:
-            res = load_results(args.run)
-        except ValueError:
-            res = None  # a run file (or no JSON at all): load_run says what it is
-        if res is not None:  # the results of run --json: metrics.md, no figures
-            for f in write_results_report(res, args.out):
-                print(f"wrote {f}")
-            print(
-                f"{args.run} holds the results of 'shipgym run --json' (metrics, no time "
-                "series): no figures; record the run with --record RUN.rrd for them"
-            )
-            return 0
-    run = load_run(args.run)  # a file rerun cannot read: one-line ValueError
-    problem = recording_problem(run)
-    if problem is not None:
+    run = load_run_or_results(args.run)  # a file that is neither: one-line ValueError
+    if isinstance(run, dict):  # the results of run --json: metrics.md, no figures
+        for f in write_results_report(run, args.out):
+            print(f"wrote {f}")
         print(
-            f"shipgym: warning: {args.run} is an incomplete recording ({problem}); the report "
-            f"covers the {run.n_steps} steps recorded and metrics.md says INCOMPLETE",
-            file=sys.stderr,
+            f"{args.run} holds the results of 'shipgym run --json' (metrics, no time "
+            "series): no figures; record the run with --record RUN.rrd for them"
         )
+        return 0
+    _warn_incomplete(args.run, run, "the report covers the {n} steps recorded and metrics.md "
+                     "says INCOMPLETE")  # fmt: skip
     for f in write_report(run, args.out):
         print(f"wrote {f}")
     return 0
+
+
+def _warn_incomplete(path: Path, run: Any, consequence: str) -> None:
+    """One warning line on stderr where the recording ``run`` of ``path`` is incomplete;
+    ``consequence`` says what that means for the output (``{n}``: the steps recorded)."""
+    from shipgym.viz import recording_problem
+
+    problem = recording_problem(run)
+    if problem is not None:
+        print(f"shipgym: warning: {path} is an incomplete recording ({problem}); "
+              + consequence.format(n=run.n_steps), file=sys.stderr)  # fmt: skip
 
 
 def _export_defaults(args: argparse.Namespace) -> None:
@@ -781,19 +782,13 @@ def _export_defaults(args: argparse.Namespace) -> None:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    from shipgym.viz import load_run, recording_problem
+    from shipgym.viz import load_run
     from shipgym.viz.export import write_run_csv, write_run_npz
 
     if args.npz and args.table != "steps":
         raise ValueError("--table applies to --csv; the .npz archive holds both tables")
     run = load_run(args.run)  # a file that is not a run: one-line ValueError
-    problem = recording_problem(run)
-    if problem is not None:
-        print(
-            f"shipgym: warning: {args.run} is an incomplete recording ({problem}); the export "
-            f"holds the {run.n_steps} steps recorded",
-            file=sys.stderr,
-        )
+    _warn_incomplete(args.run, run, "the export holds the {n} steps recorded")
     if args.csv:  # an OSError (a full disk) leaves args.out as it was: main says so
         path, cols = write_run_csv(run, args.out, table=args.table)
     else:

@@ -22,7 +22,15 @@ from .report import (
     write_report,
     write_results_report,
 )
-from .run import Run, is_results, load_results, load_run, recording_problem, save_run_json
+from .run import (
+    Run,
+    is_results,
+    load_results,
+    load_run,
+    load_run_or_results,
+    recording_problem,
+    save_run_json,
+)
 from .viewer import viewer_hint, web_viewer_url
 
 __all__ = [
@@ -35,6 +43,7 @@ __all__ = [
     "is_results",
     "load_results",
     "load_run",
+    "load_run_or_results",
     "pixel_size",
     "recording_problem",
     "report_paths",

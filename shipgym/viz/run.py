@@ -35,6 +35,7 @@ __all__ = [
     "is_results",
     "load_results",
     "load_run",
+    "load_run_or_results",
     "recording_problem",
     "save_run_json",
 ]
@@ -382,34 +383,51 @@ def is_results(doc: Any) -> bool:
     return isinstance(doc, dict) and "format" not in doc and "env_id" in doc and "seed" in doc
 
 
+def _read_json(path: Path, what: str) -> Any:
+    """The JSON document of ``path`` (bounded, code-free; ``what``: the file's kind, for the
+    messages)."""
+    from shipgym._safeload import parse, read_bounded
+
+    try:  # a run of days at 1 s is a few hundred MB of JSON
+        raw = read_bounded(path, what, MAX_RUN_JSON_BYTES)
+        return parse(raw.decode("utf-8"), "json", f"{what} {path}", limit=1 << 27)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ValueError(f"cannot read the {what} {path}: {exc}") from None
+
+
 def load_results(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The results of ``shipgym run --json`` read from ``path`` (bounded, code-free JSON).
 
     Raises:
         ValueError: an unreadable file, or one that is not such results (a run file, say).
     """
-    from shipgym._safeload import parse, read_bounded
-
     p = Path(path)
-    try:
-        raw = read_bounded(p, "results file", MAX_RUN_JSON_BYTES)
-        doc = parse(raw.decode("utf-8"), "json", f"results file {p}", limit=1 << 27)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise ValueError(f"cannot read the results file {p}: {exc}") from None
+    doc = _read_json(p, "results file")
     if not is_results(doc):
         raise ValueError(f"{p} is not the results of 'shipgym run --json'")
     return doc  # type: ignore[no-any-return]
 
 
-def _load_json(path: Path) -> Run:
-    from shipgym._safeload import parse, read_bounded
+def load_run_or_results(path: str | os.PathLike[str]) -> Run | dict[str, Any]:
+    """:func:`load_run`, or the results of ``shipgym run --json`` (a dict, :func:`load_results`)
+    where ``path`` holds those: the file read once.
 
-    try:  # a run of days at 1 s is a few hundred MB of JSON
-        raw = read_bounded(path, "run file", MAX_RUN_JSON_BYTES)
-        doc = parse(raw.decode("utf-8"), "json", f"run file {path}", limit=1 << 27)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise ValueError(f"cannot read the run file {path}: {exc}") from None
+    Raises:
+        ValueError: as :func:`load_run`, but for the results.
+    """
+    p = Path(path)
+    if p.suffix.lower() == ".json" and p.is_file():
+        return _load_json(p, results=True)
+    return load_run(p)
+
+
+def _load_json(path: Path, results: bool = False) -> Run | dict[str, Any]:
+    """The run of the JSON run file ``path``; ``results``: the results of ``shipgym run
+    --json`` (a dict) where it holds those (else they are refused)."""
+    doc = _read_json(path, "run file")
     if is_results(doc):
+        if results:
+            return doc  # type: ignore[no-any-return]
         raise ValueError(
             f"{path} holds the results of 'shipgym run --json' (metrics, no time series): "
             "record the run with 'shipgym run --record RUN.rrd' and read the recording "
@@ -726,7 +744,7 @@ def load_run(path: str | os.PathLike[str]) -> Run:
         raise ValueError(f"run file {path} does not exist (expected a .rrd or .json file)")
     suffix = path.suffix.lower()
     if suffix == ".json":
-        return _load_json(path)
+        return _load_json(path)  # type: ignore[return-value]  # (a Run: results refused)
     if suffix == ".rrd":
         size = path.stat().st_size
         if size > MAX_RUN_RRD_BYTES:  # rerun reads a recording whole into memory
