@@ -124,21 +124,23 @@ def test_batched_and_astern():
 
 
 # ---- the MMG hull and unit in shipgym: compiled laws against the array forms --------------
-def test_kernels_equal_the_array_forms():
+@pytest.mark.parametrize("rudder", [None, "schilling"])
+def test_kernels_equal_the_array_forms(rudder):
     """The unit's compiled force law (law_mmg) and the hull's compiled acceleration
-    (accel_mmg) against propulsion_forces and MMGHull.nu_dot (random states, ahead and astern,
-    with current)."""
+    (accel_mmg) against propulsion_forces and MMGHull.nu_dot (random states, ahead, stopped
+    and astern, with current; the MMG rudder and the Schilling option past its stall)."""
     from shipgym.dynamics.actuators import ActuatorSet, MMGPropulsion
     from shipgym.dynamics.mmg import MMGHull
 
-    p = dataclasses.replace(kvlcc2(100.0), c_y=0.1)
+    p = dataclasses.replace(kvlcc2(100.0), c_y=0.1, c_y_brake=0.05)
+    p = p if rudder is None else p.with_rudder(rudder)
     m, hull = MMGModel(p), MMGHull(p)
     unit = ActuatorSet([MMGPropulsion("prop", p, max_rps=10.0, min_rps=-10.0)])
     acc = accel_of(hull)
     rng = np.random.default_rng(3)
-    for _ in range(300):
+    for k in range(300):
         nu = np.array([rng.uniform(-1, 8), rng.normal(0, 1), rng.normal(0, 0.02)])
-        delta, n = rng.uniform(-0.6, 0.6), rng.uniform(-6, 6)
+        delta, n = rng.uniform(-1.3, 1.3), rng.uniform(-6, 6) if k % 5 else 0.0
         X, Y, N, parts = m.propulsion_forces(nu, delta, n)
         # the unit's states [n, delta]: shipgym's rudder angle is the paper's -delta
         gx, gy, _gk, gn, T, _ = compiled_forces(unit, [n, -delta], nu[0], nu[1], 0.0, nu[2])
@@ -210,3 +212,74 @@ def test_vessel_file_mistakes_are_named(tmp_path):
     with pytest.raises(VesselError, match="needs an 'mmg' hull"):
         load_vessel(pkg("d", blue + "\n" + unit.replace("[-48.0, 0.0, 3.2857143]",
                                                         "[-5.0, 0.0, 0.5]")))  # fmt: skip
+
+
+# ---- the rudder's normal-force law and the propeller's side force ---------------------------
+def test_rudder_normal_coefficient_is_the_mmg_law_without_stall_and_holds_past_it():
+    """No stall (the MMG standard, every ship's default): ``f_alpha sin alpha_R`` at every
+    angle, from astern too; the Schilling option: Fujii's slope ratio for an effective aspect
+    ratio doubled by the end plates (by hand: Lambda = 0.345^2 / 0.0539 = 2.2083, Fujii 3.0363
+    and 4.0597 at 2 Lambda: f_alpha 2.747 x 1.3370 = 3.6729), the sine law to 70 deg, then
+    0.7 of the stall's value."""
+    from shipgym.dynamics.mmg import (
+        RUDDER_OPTIONS,
+        fujii_f_alpha,
+        rudder_normal_coefficient,
+        rudder_normal_coefficients,
+    )
+
+    p = kvlcc2(100.0)
+    a = np.linspace(-math.pi, math.pi, 721)
+    np.testing.assert_allclose(rudder_normal_coefficients(a, p), 2.747 * np.sin(a), rtol=1e-15)
+    assert fujii_f_alpha(2.2083) == pytest.approx(6.13 * 2.2083 / 4.4583, rel=1e-12)
+    s = p.with_rudder("schilling")
+    assert s.aspect_ratio == pytest.approx(0.345**2 / 0.0539, rel=1e-12)
+    assert s.f_alpha == pytest.approx(2.747 * (6.13 * 4.4165 / 6.6665) / (6.13 * 2.20825 / 4.45825),
+                                      rel=1e-4)  # fmt: skip
+    assert s.f_alpha / p.f_alpha == pytest.approx(1.337, abs=1e-3)
+    assert (s.stall_angle, s.post_stall) == (math.radians(70.0), 0.7)
+    assert RUDDER_OPTIONS["schilling"].max_angle == pytest.approx(math.radians(65.0))
+    deg = np.radians(np.arange(0.0, 90.1, 1.0))
+    cn = rudder_normal_coefficients(deg, s)
+    up = deg <= math.radians(70.0) + 1e-12
+    np.testing.assert_allclose(cn[up], s.f_alpha * np.sin(deg[up]), rtol=1e-15)
+    assert np.all(np.diff(cn[up]) > 0)  # no stall to 70 deg: the force grows to it
+    np.testing.assert_allclose(cn[~up], 0.7 * s.f_alpha * math.sin(math.radians(70.0)))
+    # at the 65 deg rudder the Schilling's coefficient is 2.11x the MMG rudder's at 35 deg
+    assert rudder_normal_coefficient(math.radians(65), s.f_alpha, s.stall_angle, 0.7) / (
+        2.747 * math.sin(math.radians(35))
+    ) == pytest.approx(2.11, abs=0.01)
+    # symmetric; a flow from astern is folded: 180 deg - 80 deg is past the stall as 80 deg is
+    assert rudder_normal_coefficients(-deg, s) == pytest.approx(-cn)
+    assert rudder_normal_coefficient(math.radians(100.0), s.f_alpha, s.stall_angle, 0.7) == (
+        pytest.approx(cn[80])
+    )
+    for bad in ({"stall_angle": 0.0}, {"post_stall": 1.5}, {"c_y_brake": -0.1},
+                {"stall_angle": math.nan}):  # fmt: skip
+        with pytest.raises(ValueError, match="MMGParameters"):
+            dataclasses.replace(p, **bad)
+    with pytest.raises(ValueError, match="unknown rudder option 'flap'; valid: schilling"):
+        p.with_rudder("flap")
+
+
+def test_propeller_side_force_turns_a_crash_stop_to_starboard_and_a_coasting_stop_to_port():
+    """A right-handed screw (Artyszuk 2003 section 3): astern the stern goes to port, the bow
+    to starboard (N > 0); the shaft stopped at speed (the seed's zero pitch) drags and pushes
+    the stern to starboard, the bow to port (N < 0); ahead, working: no side force."""
+    p = dataclasses.replace(kvlcc2(100.0), c_y=0.1, c_y_brake=0.05)
+    m = MMGModel(p)
+    nu = [6.0, 0.0, 0.0]
+    _, _, _, astern = m.propulsion_forces(nu, 0.0, -4.9)
+    _, _, _, stopped = m.propulsion_forces(nu, 0.0, 0.0)
+    _, _, _, ahead = m.propulsion_forces(nu, 0.0, 4.9)
+    assert astern["X_P"] < 0 and astern["N_P"] > 0
+    assert astern["Y_P"] == pytest.approx(-0.1 * abs(astern["X_P"]), rel=1e-12)
+    # the stopped propeller's drag: the K_T polynomial's limit rho k2 D^2 u_a^2 (1 - t_P)
+    ua = 6.0 * (1 - p.w_P0)
+    drag = (1 - p.t_P) * p.rho * p.k2 * p.D_P**2 * ua**2
+    assert stopped["X_P"] == pytest.approx(drag, rel=1e-12) and drag < 0
+    assert stopped["Y_P"] == pytest.approx(0.05 * abs(drag), rel=1e-12) and stopped["N_P"] < 0
+    assert ahead["X_P"] > 0 and ahead["Y_P"] == 0.0
+    # continuous in n down to the stop (the thrust law divides by no n)
+    _, _, _, slow = m.propulsion_forces(nu, 0.0, 1e-7)
+    assert slow["X_P"] == pytest.approx(stopped["X_P"], rel=1e-6)

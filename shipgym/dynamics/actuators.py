@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._jit import LAW_SIG, address, entry, law_at, njit
+from .mmg import propeller_side_force, rudder_normal_coefficient
 
 __all__ = [
     "ACTUATOR_KINDS",
@@ -236,39 +237,42 @@ def law_mmg(row, st, u, v, p, r):  # type: ignore[no-untyped-def]
     tR, aH, arm = row[16], row[17], row[18]
     eta, kap, eps, gn, gp, lR = row[19], row[20], row[21], row[22], row[23], row[24]
     hA, fa = row[25], row[26]
+    cyb, stall, post = row[27], row[28], row[29]
     U = math.sqrt(u * u + v * v)
     Us = U if U > 1e-9 else 1e-9
     rp = r * L / Us
     beta = math.atan2(-v, u)
-    # propeller: K_T(J_P) with the wake 1 - w_P(beta_P); astern K_T and side force
+    # propeller: K_T(J_P) with the wake 1 - w_P(beta_P), T = rho n^2 D^4 K_T without dividing
+    # by n (a stopped shaft drags); astern K_T; the side force (propeller_side_force)
     bP = beta - xP * rp
     one_w = w0 * (1.0 + (1.0 - math.exp(-C1 * abs(bP))) * ((C2p if bP > 0.0 else C2n) - 1.0))
     na = abs(n)
-    J = u * one_w / ((na if na > 1e-9 else 1e-9) * D)
+    ua = u * one_w
+    J = ua / ((na if na > 1e-9 else 1e-9) * D)
     ahead = n > 0.0
-    if ahead:
-        KT = k0 + k1 * J + k2 * (J * J)
+    if n >= 0.0:
+        T = rho * (k0 * (n * n) * D4 + k1 * n * (D4 / D) * ua + k2 * (D * D) * (ua * ua))
     else:
-        KT = -(0.2 + 0.25 * J)
-    T = rho * (n * n) * D4 * KT
+        T = -rho * (0.2 * (n * n) * D4 + 0.25 * na * (D4 / D) * ua)
     XP = (1.0 - tP) * T
-    YP = -cy * abs(XP) if n < 0.0 else 0.0
+    YP = propeller_side_force(n, XP, cy, cyb)
     NP = xPL * YP
     # rudder: inflow with the propeller's slipstream (ahead only), flow straightening
-    uR = eps * u * one_w
+    uR = eps * ua
     if ahead:
         Js = J if abs(J) > 1e-9 else 1e-9
+        KT = T / (rho * (n * n) * D4)
         race = 1.0 + 8.0 * KT / (math.pi * (Js * Js))
         race = math.sqrt(race) if race > 0.0 else 0.0
         sq = 1.0 + kap * (race - 1.0)
         uR = uR * math.sqrt(eta * (sq * sq) + 1.0 - eta)
     bR = beta - lR * rp
     vR = U * (gn if bR < 0.0 else gp) * bR
-    # F_N = (rho A_R / 2) f_alpha U_R^2 sin(alpha_R), alpha_R = delta - atan2(v_R, u_R), is
-    # (rho A_R / 2) f_alpha U_R (u_R sin delta - v_R cos delta): no inverse tangent
+    # F_N = (rho A_R / 2) U_R^2 C_N(alpha_R), alpha_R = delta - atan2(v_R, u_R)
     sd = math.sin(delta)
     cd = math.cos(delta)
-    FN = hA * fa * math.sqrt(uR * uR + vR * vR) * (uR * sd - vR * cd)
+    alpha = delta - math.atan2(vR, uR)
+    FN = hA * (uR * uR + vR * vR) * rudder_normal_coefficient(alpha, fa, stall, post)
     XR = -(1.0 - tR) * FN * sd
     YR = -(1.0 + aH) * FN * cd
     NR = -arm * FN * cd
@@ -912,19 +916,21 @@ class MMGPropulsion(Actuator):
         return (1 - p.t_P) * p.rho * self.max_rps**2 * p.D_P**4 * p.k0
 
     def law_row(self, channel: int) -> tuple[float, ...]:
-        """The row of :func:`law_mmg` (27 values, from :attr:`params`): ``channel`` (the
+        """The row of :func:`law_mmg` (from :attr:`params`): ``channel`` (the
         propeller speed's; the rudder angle is the next), ``L`` (m), ``rho`` (kg/m^3),
         ``D_P`` (m), ``D_P^4`` (m^4), ``k0``, ``k1``, ``k2``, ``1 - w_P0``, ``C1``,
         ``C2_pos``, ``C2_neg``, ``x_P`` (1; of ``L``), ``t_P``, ``c_y``, ``x_P L`` (m),
         ``t_R``, ``a_H``, ``x_R L + a_H x_H L`` (m), ``eta = D_P / H_R``, ``kappa``,
         ``eps``, ``gamma_neg``, ``gamma_pos``, ``l_R`` (1), ``rho A_R / 2`` (kg/m),
-        ``f_alpha`` (1)."""
+        ``f_alpha`` (1), ``c_y_brake`` (1), ``stall_angle`` (rad, ``inf``: none),
+        ``post_stall`` (1): 30 values."""
         p = self.params
         return tuple(float(c) for c in (
             channel, p.L, p.rho, p.D_P, p.D_P**4, p.k0, p.k1, p.k2, 1 - p.w_P0, p.C1,
             p.C2_pos, p.C2_neg, p.x_P, p.t_P, p.c_y, p.x_P * p.L, p.t_R, p.a_H,
             p.x_R * p.L + p.a_H * p.x_H * p.L, p.D_P / p.H_R, p.kappa, p.eps, p.gamma_neg,
-            p.gamma_pos, p.l_R, 0.5 * p.rho * p.A_R, p.f_alpha,
+            p.gamma_pos, p.l_R, 0.5 * p.rho * p.A_R, p.f_alpha, p.c_y_brake, p.stall_angle,
+            p.post_stall,
         ))  # fmt: skip
 
 

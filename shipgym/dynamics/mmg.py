@@ -3,8 +3,17 @@ r"""The MMG standard manoeuvring model (Yasukawa & Yoshimura 2015) of a single-s
 ``(m + m_x) u_dot - (m + m_y) v r - x_G m r^2 = X_H + X_R + X_P`` and sway, yaw likewise
 (Yasukawa & Yoshimura 2015 eqs. 4-8).
 
+The rudder's normal force ``F_N = (rho/2) A_R U_R^2 C_N(alpha_R)`` has one law,
+:func:`rudder_normal_coefficient` (the MMG standard's ``f_alpha sin alpha_R`` with an optional
+stall), and the propeller's side force one, :func:`propeller_side_force`: the array form
+(:meth:`MMGModel.propulsion_forces`) and the compiled one
+(:func:`shipgym.dynamics.actuators.law_mmg`) both call them. :data:`RUDDER_OPTIONS` holds the
+rudders a ship can be given (``"schilling"``: a high-lift rudder, :meth:`MMGParameters.
+with_rudder`, :func:`with_rudder` for a vessel).
+
 Public names: ``accel_mmg``, ``KVLCC2_L7``, ``MMGHull``, ``MMGModel``, ``MMGParameters``,
-``kvlcc2``.
+``RUDDER_OPTIONS``, ``RudderOption``, ``kvlcc2``, ``rudder_normal_coefficient``,
+``propeller_side_force``, ``with_rudder``.
 
 Design notes: docs/design/dynamics.mmg.md.
 """
@@ -14,7 +23,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -24,14 +33,173 @@ from shipgym._jit import njit
 
 __all__ = [
     "accel_mmg",
+    "fujii_f_alpha",
     "KVLCC2_L7",
     "MMGHull",
     "MMGModel",
     "MMGParameters",
+    "RUDDER_OPTIONS",
+    "RudderOption",
     "kvlcc2",
+    "propeller_side_force",
+    "rudder_normal_coefficient",
+    "rudder_option",
+    "with_rudder",
 ]
 
 Array = NDArray[np.float64]
+
+
+@njit
+def rudder_normal_coefficient(alpha, f_alpha, stall_angle, post_stall):  # type: ignore[no-untyped-def]
+    r"""The rudder's normal-force coefficient ``C_N(alpha_R)`` (1): ``F_N = (rho/2) A_R U_R^2
+    C_N``. The MMG standard's ``f_alpha sin alpha_R`` (Yasukawa & Yoshimura 2015 eq. 26) while
+    the angle of attack ``a = asin|sin alpha_R|`` (``alpha_R`` folded to ``[0, pi/2]``, so
+    that a flow from astern is treated alike) is at most ``stall_angle``; past it the
+    coefficient holds at ``post_stall f_alpha sin(stall_angle)`` with the sign of ``sin
+    alpha_R``. ``stall_angle = inf``: the standard law at every angle.
+
+    The one law of the MMG rudder's normal force (scalar, compiled; the array form is
+    :func:`rudder_normal_coefficients`).
+
+    Args:
+        alpha: the effective inflow angle ``alpha_R`` (rad).
+        f_alpha: the normal-force slope (1/rad).
+        stall_angle: rad (``> 0``, ``inf``: none). post_stall: 0 to 1.
+    """
+    s = math.sin(alpha)
+    if math.asin(min(abs(s), 1.0)) <= stall_angle:
+        return f_alpha * s
+    c = post_stall * f_alpha * math.sin(stall_angle)
+    return c if s >= 0.0 else -c
+
+
+@njit
+def _rudder_normal_coefficients(alpha, f_alpha, stall_angle, post_stall):  # type: ignore[no-untyped-def]
+    out = np.empty_like(alpha)
+    for i in range(alpha.size):
+        out[i] = rudder_normal_coefficient(alpha[i], f_alpha, stall_angle, post_stall)
+    return out
+
+
+def rudder_normal_coefficients(alpha: ArrayLike, p: MMGParameters) -> Array:
+    """:func:`rudder_normal_coefficient` of every ``alpha_R`` (rad, any shape) with the
+    rudder of ``p``."""
+    a = np.asarray(alpha, dtype=float)
+    flat = np.ascontiguousarray(a.reshape(-1))
+    out = _rudder_normal_coefficients(flat, float(p.f_alpha), float(p.stall_angle),
+                                      float(p.post_stall))  # fmt: skip
+    return out.reshape(a.shape)
+
+
+@njit
+def propeller_side_force(n, X_P, c_y, c_y_brake):  # type: ignore[no-untyped-def]
+    r"""The side force ``Y_P`` (N) of a right-handed single screw at the shaft speed ``n``
+    (rps) and the propeller's surge force ``X_P`` (N), acting at ``x_P L``.
+
+    - astern (``n < 0``): ``Y_P = -c_y |X_P|``: the stern to port, the bow to starboard (the
+      seed's crash stop, Artyszuk 2003 §3);
+    - braking (``n >= 0`` and ``X_P < 0``: the shaft stopped or turning ahead slower than the
+      flow drives it; the seed's zero-pitch coasting stop): ``Y_P = +c_y_brake |X_P|``: the
+      stern to starboard, the bow to port (Artyszuk 2003 §3);
+    - ahead (``X_P >= 0``): 0 (the working propeller's effects are in the hull and rudder
+      coefficients, measured on the self-propelled model).
+
+    The one law of the MMG propeller's side force (scalar, compiled)."""
+    if n < 0.0:
+        return -c_y * abs(X_P)
+    if X_P < 0.0:
+        return c_y_brake * abs(X_P)
+    return 0.0
+
+
+@njit
+def _propeller_side_forces(n, X_P, c_y, c_y_brake):  # type: ignore[no-untyped-def]
+    out = np.empty_like(X_P)
+    for i in range(X_P.size):
+        out[i] = propeller_side_force(n[i], X_P[i], c_y, c_y_brake)
+    return out
+
+
+def fujii_f_alpha(aspect_ratio: float) -> float:
+    """Fujii's normal-force slope ``f_alpha = 6.13 Lambda / (Lambda + 2.25)`` (1/rad) of a
+    rudder of aspect ratio ``Lambda`` (Fujii & Tsuda 1961, the estimate of Yasukawa &
+    Yoshimura 2015 §3.5)."""
+    if not (math.isfinite(aspect_ratio) and aspect_ratio > 0):
+        raise ValueError(f"aspect_ratio must be > 0, got {aspect_ratio!r}")
+    return 6.13 * aspect_ratio / (aspect_ratio + 2.25)
+
+
+@dataclass(frozen=True)
+class RudderOption:
+    """A rudder a ship of the MMG family can be given instead of its own (:data:`RUDDER_OPTIONS`).
+
+    Its normal-force slope is the ship's published ``f_alpha`` times Fujii's ratio
+    ``f(k Lambda) / f(Lambda)`` (:func:`fujii_f_alpha`): the end plates of a high-lift rudder
+    raise the effective aspect ratio ``Lambda = H_R^2 / A_R`` by the factor ``k``, the area
+    and span stay the ship's.
+
+    Attributes:
+        name: the option's name.
+        aspect_factor: ``k``, the effective aspect ratio over the geometric one (1, >= 1).
+        stall_angle: rad (the angle of attack past which the normal force stops growing).
+        post_stall: the fraction of the stall's normal force kept past it (0 to 1).
+        max_angle: the steering gear's largest rudder angle (rad).
+        source: where the numbers come from.
+    """
+
+    name: str
+    aspect_factor: float
+    stall_angle: float
+    post_stall: float
+    max_angle: float
+    source: str
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.aspect_factor) and self.aspect_factor >= 1.0):
+            raise ValueError(f"aspect_factor must be >= 1, got {self.aspect_factor!r}")
+        if not (0.0 < self.stall_angle <= math.pi / 2):
+            raise ValueError(f"stall_angle must be in (0, pi/2] rad, got {self.stall_angle!r}")
+        if not 0.0 <= self.post_stall <= 1.0:
+            raise ValueError(f"post_stall must be from 0 to 1, got {self.post_stall!r}")
+        if not (0.0 < self.max_angle < math.pi / 2):
+            raise ValueError(f"max_angle must be in (0, pi/2) rad, got {self.max_angle!r}")
+
+    def f_alpha(self, p: MMGParameters) -> float:
+        """The option's normal-force slope (1/rad) on the ship ``p``."""
+        lam = p.aspect_ratio
+        return p.f_alpha * fujii_f_alpha(self.aspect_factor * lam) / fujii_f_alpha(lam)
+
+
+#: the rudder options of the MMG family by name: ``"schilling"``, a Schilling high-lift
+#: rudder (a fish-tail section with end plates; usable to about 70 deg without stall)
+RUDDER_OPTIONS: dict[str, RudderOption] = {
+    "schilling": RudderOption(
+        "schilling",
+        aspect_factor=2.0,
+        stall_angle=math.radians(70.0),
+        post_stall=0.7,
+        max_angle=math.radians(65.0),
+        source="Molland & Turnock (2007) on high-lift rudders: a Schilling rudder (fish-tail "
+        "section, end plates) works to about 70 deg without stall [stall 70 deg]; end plates "
+        "double the effective aspect ratio [chosen: k = 2, mirror image of each plate]; "
+        "Fujii & Tsuda (1961) slope (Yasukawa & Yoshimura 2015); post-stall 0.7 [chosen]; "
+        "largest angle 65 deg (Artyszuk 2003: the HAH 65 deg turn)",
+    ),
+}
+
+
+def rudder_option(name: str) -> RudderOption:
+    """:data:`RUDDER_OPTIONS` ``name``.
+
+    Raises:
+        ValueError: unknown name (the message lists the valid ones).
+    """
+    try:
+        return RUDDER_OPTIONS[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown rudder option {name!r}; valid: "
+                         f"{', '.join(RUDDER_OPTIONS)}") from None  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -53,7 +221,17 @@ class MMGParameters:
         m_x, m_y, J_z: added masses and added moment (primes).
         t_P, w_P0, k0, k1, k2, C1, C2_pos, C2_neg, x_P: propeller.
         t_R, a_H, x_H, x_R, gamma_pos, gamma_neg, l_R, eps, kappa, f_alpha: rudder.
-        c_y: astern side-force factor (chosen extension; 0 by default).
+        c_y: the propeller's side force astern (``n < 0``), a fraction of ``|X_P|``, pushing
+            the stern to port (a right-handed propeller: the bow goes to starboard; a chosen
+            extension, 0 by default; :func:`propeller_side_force`).
+        c_y_brake: the same in the braking quadrant (the shaft turning ahead or stopped, the
+            thrust negative: the seed's zero-pitch coasting stop), pushing the stern to
+            starboard (the bow to port; chosen extension, 0 by default).
+        stall_angle: the rudder's stall angle (rad, the angle of attack ``alpha_R`` folded to
+            ``[0, pi/2]``); ``inf`` (default): no stall, the MMG standard's ``f_alpha sin
+            alpha_R`` at every angle (:func:`rudder_normal_coefficient`).
+        post_stall: the fraction of the normal force at the stall angle kept past it (0 to 1;
+            1 by default).
     """
 
     L: float
@@ -106,16 +284,40 @@ class MMGParameters:
     f_alpha: float
     rho: float = 1025.0
     c_y: float = 0.0
+    c_y_brake: float = 0.0
+    stall_angle: float = math.inf
+    post_stall: float = 1.0
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
+            if f.name == "stall_angle" and v == math.inf:
+                continue
             if not (isinstance(v, int | float) and math.isfinite(v)):
                 raise ValueError(f"MMGParameters.{f.name} must be a finite number, got {v!r}")
-        for k in ("L", "B", "d", "nabla", "D_P", "H_R", "A_R", "rho", "k_zz"):
+        for k in ("L", "B", "d", "nabla", "D_P", "H_R", "A_R", "rho", "k_zz", "stall_angle"):
             if not getattr(self, k) > 0:
                 raise ValueError(f"MMGParameters.{k} must be > 0, got {getattr(self, k)!r}")
+        for k in ("c_y", "c_y_brake", "post_stall"):
+            if not 0.0 <= getattr(self, k) <= 1.0:
+                raise ValueError(f"MMGParameters.{k} must be from 0 to 1, got {getattr(self, k)!r}")
         require_dimensions(self, "L", "B", "d", "D_P")
+
+    @property
+    def aspect_ratio(self) -> float:
+        """The rudder's geometric aspect ratio ``H_R^2 / A_R`` (1)."""
+        return self.H_R**2 / self.A_R
+
+    def with_rudder(self, option: str) -> MMGParameters:
+        """The same ship with the rudder of :data:`RUDDER_OPTIONS` ``option``: its normal-force
+        slope (:meth:`RudderOption.f_alpha`), stall angle and post-stall fraction.
+
+        Raises:
+            ValueError: an unknown option.
+        """
+        opt = rudder_option(option)
+        return dataclasses.replace(self, f_alpha=opt.f_alpha(self), stall_angle=opt.stall_angle,
+                                   post_stall=opt.post_stall)  # fmt: skip
 
     def scaled(self, L: float) -> MMGParameters:
         """The same hull geometrically scaled to the length ``L`` (m): lengths x ``L/self.L``,
@@ -210,12 +412,26 @@ class MMGModel:
         one_w = self.wake(beta - p.x_P * rp)
         na = np.abs(n)
         ns = np.where(na > 1e-9, na, 1e-9)
-        J = u * one_w / (ns * p.D_P)
+        ua = u * one_w
+        J = ua / (ns * p.D_P)
         ahead = n > 0
-        KT = np.where(ahead, p.k0 + p.k1 * J + p.k2 * J**2, -(0.2 + 0.25 * J))
-        T = p.rho * n**2 * p.D_P**4 * KT
+        D = p.D_P
+        # T = rho n^2 D^4 K_T(J) without dividing by n: the shaft turning ahead or stopped
+        # (n >= 0; n = 0 the seed's zero pitch, the propeller dragging rho k2 D^2 u_a^2), or
+        # astern with K_T = -(0.2 + 0.25 J)
+        T = np.where(
+            n >= 0,
+            p.rho * (p.k0 * n**2 * D**4 + p.k1 * n * D**3 * ua + p.k2 * D**2 * ua**2),
+            -p.rho * (0.2 * n**2 * D**4 + 0.25 * na * D**3 * ua),
+        )
+        KT = T / (p.rho * ns**2 * D**4)
         XP = (1 - p.t_P) * T
-        YP = np.where(n < 0, -p.c_y * np.abs(XP), 0.0)
+        n_b, XP_b = np.broadcast_arrays(n, XP)
+        YP = _propeller_side_forces(
+            np.ascontiguousarray(n_b, dtype=float).reshape(-1),
+            np.ascontiguousarray(XP_b, dtype=float).reshape(-1), float(p.c_y),
+            float(p.c_y_brake),
+        ).reshape(XP_b.shape)  # fmt: skip
         NP = p.x_P * p.L * YP
         # rudder
         eta = p.D_P / p.H_R
@@ -226,7 +442,7 @@ class MMGModel:
         beta_R = beta - p.l_R * rp
         vR = U * np.where(beta_R < 0, p.gamma_neg, p.gamma_pos) * beta_R
         alpha = delta - np.arctan2(vR, uR)
-        FN = 0.5 * p.rho * p.A_R * (uR**2 + vR**2) * p.f_alpha * np.sin(alpha)
+        FN = 0.5 * p.rho * p.A_R * (uR**2 + vR**2) * rudder_normal_coefficients(alpha, p)
         XR = -(1 - p.t_R) * FN * np.sin(delta)
         YR = -(1 + p.a_H) * FN * np.cos(delta)
         NR = -(p.x_R * p.L + p.a_H * p.x_H * p.L) * FN * np.cos(delta)
@@ -414,3 +630,28 @@ class MMGHull:
             1.0 / (md.m + md.mx), Mi[1, 1], Mi[1, 2], Mi[2, 1], Mi[2, 2],
         )  # fmt: skip
         return np.ascontiguousarray(k, dtype=np.float64)
+
+
+def with_rudder(vessel: Any, option: str) -> Any:
+    """The vessel ``vessel`` (a :class:`~shipgym.dynamics.vessel.Vessel` of the ``mmg``
+    family) with the rudder of :data:`RUDDER_OPTIONS` ``option``: every MMG unit's and hull's
+    parameters through :meth:`MMGParameters.with_rudder`, the unit's largest rudder angle the
+    option's (the rate limit, the servo and the rest stay the ship's).
+
+    Raises:
+        ValueError: an unknown option, or a vessel without an MMG unit.
+    """
+    from .actuators import ActuatorSet, MMGPropulsion
+
+    opt = rudder_option(option)
+    acts = [
+        dataclasses.replace(a, params=a.params.with_rudder(option), max_angle=opt.max_angle)
+        if isinstance(a, MMGPropulsion) else a
+        for a in vessel.actuators
+    ]  # fmt: skip
+    if not any(isinstance(a, MMGPropulsion) for a in acts):
+        raise ValueError(f"vessel {vessel.name!r} has no MMG rudder (an 'mmg' unit) to replace")
+    plants = {k: MMGHull(h.p.with_rudder(option), h.name) if isinstance(h, MMGHull) else h
+              for k, h in vessel.plants.items()}  # fmt: skip
+    return dataclasses.replace(vessel, actuators=ActuatorSet(acts, vessel.dofs), plants=plants,
+                               title=f"{vessel.title}, {opt.name} rudder")  # fmt: skip

@@ -430,7 +430,7 @@ def _read_linear4(
 
 #: units of the MMG parameters in a vessel file (the rest are nondimensional: "1")
 _UNITS_MMG = {"L": "m", "B": "m", "d": "m", "nabla": "m^3", "x_G": "m", "D_P": "m", "H_R": "m",
-              "A_R": "m^2", "rho": "kg/m^3"}  # fmt: skip
+              "A_R": "m^2", "rho": "kg/m^3", "stall_angle": "rad"}  # fmt: skip
 
 
 def _read_mmg(
@@ -447,6 +447,9 @@ def _read_mmg(
     vals = {}
     for f in pf:
         dflt = f.default if f.default is not dataclasses.MISSING else ...
+        if f.name not in t and dflt is not ...:  # (a default may be inf: no stall)
+            vals[f.name] = dflt
+            continue
         vals[f.name] = r.number(t, f.name, "hull", units[f.name], default=dflt)
     try:
         p = MMGParameters(**vals)

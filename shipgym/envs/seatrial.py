@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from shipgym._config import is_real
 from shipgym.disturbances import CurrentConfig
-from shipgym.dynamics.mmg import MMGHull
+from shipgym.dynamics.mmg import MMGHull, with_rudder
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.observers.dgps import S_P_OPTIMAL, DGPSOutput, DGPSReceiver
 from shipgym.trials.manoeuvres import Scripts, manoeuvre, manoeuvre_names
@@ -49,6 +49,7 @@ __all__ = [
     "run_trial",
     "run_trials",
     "sea_trial_vector_env",
+    "steady_speed",
     "trial_study",
 ]
 
@@ -100,6 +101,40 @@ def approach_command(physics: BatchedPhysics, shaft: int, U0: float) -> float:
             f"{U0:g} m/s within its range [0, {hi:g}]"
         )
     return float(brentq(surge, 0.0, hi, xtol=1e-12))
+
+
+def steady_speed(physics: BatchedPhysics, shaft: int, command: float, U0: float) -> float:
+    """The straight-running speed (m/s) that the shaft channel ``shaft`` holds at
+    ``command`` (the root of the surge acceleration in ``(0, 2 U0]``; the MMG hull's
+    equations directly, :meth:`~shipgym.dynamics.mmg.MMGModel.nu_dot`).
+
+    Raises:
+        ValueError: no such speed up to ``2 U0``.
+    """
+    from scipy.optimize import brentq
+
+    plant = physics.plant
+    if isinstance(plant, MMGHull):
+
+        def surge(U: float) -> float:
+            return float(plant.model.nu_dot([U, 0.0, 0.0], 0.0, command)[0])
+    else:
+        acts = physics.actuators
+        st = acts.initial_state()
+        st[shaft] = command
+        four = physics.dofs == 4
+
+        def surge(U: float) -> float:
+            nu = np.array([U, 0.0, 0.0, 0.0]) if four else np.array([U, 0.0, 0.0])
+            tau = acts.tau(st, nu if acts.flow_dependent else None)
+            if four:
+                return float(plant.nu_dot(nu, tau, np.zeros(2), 0.0)[0])
+            return float(plant.nu_dot(nu, tau)[0])
+
+    lo, hi = 1e-3 * U0, 2.0 * U0
+    if not surge(lo) > 0.0 > surge(hi):
+        raise ValueError(f"the shaft command {command:g} holds no speed in (0, {hi:g}] m/s")
+    return float(brentq(surge, lo, hi, xtol=1e-12))
 
 
 @dataclass(frozen=True)
@@ -165,11 +200,21 @@ class SeaTrialTask(StepTask):
                 f"vessel {v.name!r} has no rudder: a sea trial steers with one (choose e.g. "
                 "kvlcc2-100m, naval-vessel)"
             )
-        self.base_vessel = v
         names = [manoeuvre] * num_envs if isinstance(manoeuvre, str) else list(manoeuvre)
         if isinstance(num_envs, int) and len(names) != num_envs:
             raise ValueError(f"manoeuvre must be a name or {num_envs} names, got {manoeuvre!r}")
         self.manoeuvres = [_manoeuvre(m) for m in names]
+        options = {m.rudder for m in self.manoeuvres}
+        if len(options) > 1:
+            raise ValueError(
+                "the manoeuvres of one batch must use the same rudder (run_trials groups "
+                f"them), got {sorted(str(o) for o in options)}"
+            )
+        #: the rudder option of the manoeuvres (None: the vessel's own rudder)
+        self.rudder_option = options.pop()
+        if self.rudder_option is not None:
+            v = with_rudder(v, self.rudder_option)
+        self.base_vessel = v
         U0 = v.approach_speed if speed is None else speed
         if U0 is None:
             raise ValueError(
@@ -210,7 +255,22 @@ class SeaTrialTask(StepTask):
             approach_command(phys, self._shaft, self.U0) if self._shaft is not None else math.nan
         )
         self.L = float(v.L_pp)
-        self.duration = np.array([m.duration(self.L, self.U0) for m in self.manoeuvres])
+        fracs = np.array([m.approach_shaft() for m in self.manoeuvres])
+        if self._shaft is None and (fracs != 1.0).any():
+            raise ValueError(
+                f"a reduced-shaft approach needs a main propeller; {v.name!r} has none"
+            )
+        speeds = {
+            f: (self.U0 if f == 1.0 else steady_speed(phys, self._shaft, f * self.n0, self.U0))
+            for f in set(fracs)
+        }
+        #: every env's approach shaft command (the channel's unit) and speed (m/s): ``n0`` and
+        #: ``U0``, or the steady speed of a reduced command (a half-ahead turn)
+        self.n_start = fracs * self.n0
+        self.U_start = np.array([speeds[f] for f in fracs])
+        self.duration = np.array(
+            [m.duration(self.L, u) for m, u in zip(self.manoeuvres, self.U_start, strict=True)]
+        )
         self.max_steps = np.ceil(self.duration / self.control_period - 1e-9).astype(np.int64)
         self.override = bool(override)
         n_ch = acts.n_channels
@@ -267,9 +327,11 @@ class SeaTrialTask(StepTask):
             gens[i], rx_rngs[i] = (np.random.default_rng(int(s)) for s in ss)
         act = phys.initial_actuator_state()
         if self._shaft is not None:
-            act[:, self._shaft] = self.n0
-        vc, bc = self.current  # straight running at U0 through the water, over ground
-        nu0 = np.array([self.U0 + vc * math.cos(bc), vc * math.sin(bc), 0.0])
+            act[:, self._shaft] = self.n_start
+        vc, bc = self.current  # straight running at U_start through the water, over ground
+        nu0 = np.zeros((self.num_envs, 3))
+        nu0[:, 0] = self.U_start + vc * math.cos(bc)
+        nu0[:, 1] = vc * math.sin(bc)
         phys.reset(eta=(0.0, 0.0, 0.0), nu=nu0, actuators=act, mask=mask, rngs=gens)
         self._command[mask] = act[mask]
         phys.set_command(self._command)
@@ -277,8 +339,8 @@ class SeaTrialTask(StepTask):
         self._now = False
         self._clipped[mask] = False
         if self.receiver_name is not None:
-            nu = np.broadcast_to(nu0, (self.num_envs, 3))
-            self._rx_out = self.receiver.reset(self._state()[:, 1:4], nu, rngs=rx_rngs, mask=mask)
+            self._rx_out = self.receiver.reset(self._state()[:, 1:4], nu0, rngs=rx_rngs,
+                                               mask=mask)  # fmt: skip
         self._record(mask)
 
     def _record(self, mask: NDArray[np.bool_]) -> None:
@@ -375,7 +437,8 @@ class SeaTrialTask(StepTask):
         h = self._hist[: self.steps[i] + 1, i]
         return TrialRecord(
             vessel=self.base_vessel.name, manoeuvre=self.manoeuvres[i].name, L=self.L,
-            U0=self.U0, n0=self.n0, current=self.current, t=h[:, 0].copy(),
+            U0=float(self.U_start[i]), n0=float(self.n_start[i]), current=self.current,
+            t=h[:, 0].copy(),
             eta=h[:, 1:4].copy(), nu=h[:, 4:7].copy(), rudder=h[:, 7].copy(),
             shaft=h[:, 8].copy(),
         )  # fmt: skip
@@ -383,7 +446,7 @@ class SeaTrialTask(StepTask):
     def result(self, i: int = 0) -> tuple[TrialMetrics, list[tuple[str, float, float, bool]]]:
         """Env ``i``'s trial figures and IMO criteria, from its record so far."""
         m = self.record(i).metrics()
-        return m, imo_criteria(m, self.L, self.U0)
+        return m, imo_criteria(m, self.L, float(self.U_start[i]))
 
 
 def _summary(m: TrialMetrics, crit: list[tuple[str, float, float, bool]]) -> dict[str, Any]:
@@ -580,15 +643,23 @@ def run_trials(
             rudder is reversed within one step of the heading reaching the angle).
     """
     period = timestep if record_period is None else record_period
-    n = len(manoeuvres)
-    env = SeaTrialVectorEnv(n, vessel, list(manoeuvres), speed=speed, current=current,
-                            timestep=timestep, control_period=period)  # fmt: skip
-    env.reset(seed=0)
-    out: list[TrialRecord | None] = [None] * n
-    while any(r is None for r in out):
-        _, _, terminated, _, _ = env.step(np.zeros(n, dtype=np.int64))
-        for i in np.nonzero(terminated)[0].tolist():
-            out[i] = out[i] or env.record(i)
+    out: list[TrialRecord | None] = [None] * len(manoeuvres)
+    groups: dict[Any, list[int]] = {}  # one batch per rudder (a rudder option: another ship)
+    for i, m in enumerate(manoeuvres):
+        groups.setdefault(_manoeuvre(m).rudder, []).append(i)
+    for idx in groups.values():
+        n = len(idx)
+        env = SeaTrialVectorEnv(n, vessel, [manoeuvres[i] for i in idx], speed=speed,
+                                current=current, timestep=timestep,
+                                control_period=period)  # fmt: skip
+        env.reset(seed=0)
+        got: list[TrialRecord | None] = [None] * n
+        while any(r is None for r in got):
+            _, _, terminated, _, _ = env.step(np.zeros(n, dtype=np.int64))
+            for j in np.nonzero(terminated)[0].tolist():
+                got[j] = got[j] or env.record(j)
+        for j, i in enumerate(idx):
+            out[i] = got[j]
     return out  # type: ignore[return-value]
 
 

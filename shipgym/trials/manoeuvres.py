@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from shipgym.dynamics.frames import wrap_angle
 
 __all__ = [
+    "HALF_AHEAD",
     "MANOEUVRES",
     "InitialTurning",
     "Scripts",
@@ -83,26 +84,44 @@ class Scripts:
 
 @dataclass(frozen=True)
 class TurningCircle:
-    """The turning circle: rudder ``angle`` to ``side`` at ``t = 0``, shaft at ``n0``.
+    """The turning circle: rudder ``angle`` to ``side`` at ``t = 0``, the shaft held at
+    ``shaft n0`` from the approach on (the ship approaches at the steady speed of that
+    command).
 
     Attributes:
         name: registry name; angle: rudder angle (rad, > 0); side: +1 starboard, -1 port.
+        shaft: the shaft command of the approach and the turn (fraction of the full-ahead
+            approach command ``n0``, in (0, 1]; 1 full ahead).
+        rudder: the rudder the trial is flown with: ``None`` the vessel's own, else a name of
+            :data:`shipgym.dynamics.mmg.RUDDER_OPTIONS` (``"schilling"``).
     """
 
     name: str
     angle: float
     side: int
+    shaft: float = 1.0
+    rudder: str | None = None
 
     kind = "turning"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.shaft) and 0.0 < self.shaft <= 1.0):
+            raise ValueError(f"shaft must be in (0, 1] (a fraction of n0), got {self.shaft!r}")
+        if not (math.isfinite(self.angle) and 0.0 < self.angle < math.pi / 2):
+            raise ValueError(f"angle must be in (0, pi/2) rad, got {self.angle!r}")
 
     def duration(self, L: float, U0: float) -> float:
         """36 ``L/U0`` (s) [chosen, module docstring]."""
         return 36.0 * _time_scale(L, U0)
 
+    def approach_shaft(self) -> float:
+        """The shaft command of the approach (fraction of ``n0``): :attr:`shaft`."""
+        return self.shaft
+
     def law(self) -> tuple[float, float, float]:
         """The script's ``(rudder rad, shaft fraction, zig-zag angle)``: shipgym rudder
-        ``-side * angle``, shaft 1, no zig-zag."""
-        return -_side(self.side) * self.angle, 1.0, 0.0
+        ``-side * angle``, shaft :attr:`shaft`, no zig-zag."""
+        return -_side(self.side) * self.angle, self.shaft, 0.0
 
 
 @dataclass(frozen=True)
@@ -118,6 +137,11 @@ class ZigZag:
     side: int
 
     kind = "zigzag"
+    rudder = None
+
+    def approach_shaft(self) -> float:
+        """The approach's shaft command (fraction of ``n0``): 1, full ahead."""
+        return 1.0
 
     def duration(self, L: float, U0: float) -> float:
         """40 ``L/U0`` (s) [chosen]."""
@@ -145,6 +169,11 @@ class InitialTurning:
     heading_change: float
 
     kind = "initial_turning"
+    rudder = None
+
+    def approach_shaft(self) -> float:
+        """The approach's shaft command (fraction of ``n0``): 1, full ahead."""
+        return 1.0
 
     def duration(self, L: float, U0: float) -> float:
         """6 ``L/U0`` (s) [chosen]."""
@@ -173,6 +202,11 @@ class Stop:
     factor: float
 
     kind = "stop"
+    rudder = None
+
+    def approach_shaft(self) -> float:
+        """The approach's shaft command (fraction of ``n0``): 1, full ahead."""
+        return 1.0
 
     def duration(self, L: float, U0: float) -> float:
         """``factor * L/U0`` (s) [chosen]: 30 the crash stop, 80 the coasting stop."""
@@ -185,6 +219,10 @@ class Stop:
 
 Manoeuvre = TurningCircle | ZigZag | InitialTurning | Stop
 
+#: the half-ahead shaft command, a fraction of the full-ahead approach command ``n0`` (1):
+#: the telegraph's half ahead [chosen, see the module docstring]
+HALF_AHEAD = 0.85
+
 #: the manoeuvres by name (IMO MSC.137(76) (2002); the coasting stop of Artyszuk 2003 §3)
 MANOEUVRES: dict[str, Manoeuvre] = {
     "turning35_stbd": TurningCircle("turning35_stbd", 35.0 * _DEG, 1),
@@ -194,6 +232,9 @@ MANOEUVRES: dict[str, Manoeuvre] = {
     "crash_stop": Stop("crash_stop", -1.0, 0.0, 30.0),
     "coasting_stop": Stop("coasting_stop", 0.0, 2.0, 80.0),
     "initial_turning": InitialTurning("initial_turning", 10.0 * _DEG, 1, 10.0 * _DEG),
+    "turning65_half_ahead": TurningCircle(
+        "turning65_half_ahead", 65.0 * _DEG, 1, shaft=HALF_AHEAD, rudder="schilling"
+    ),
 }
 
 
