@@ -735,6 +735,8 @@ def chatter_table(rows: Sequence[dict[str, Any]]) -> str:
     cols = (
         ("reversals_per_min", "reversals / min", ".2f", 1.0, max),
         ("limit_fraction", "at a limit (%)", ".1f", 100.0, max),
+        ("starts_per_min", "starts / min", ".2f", 1.0, max),
+        ("zero_fraction", "at zero (%)", ".0f", 100.0, max),
         ("hf_variance_fraction", "variance at periods < 20 s (%)", ".1f", 100.0, max),
         ("travel_per_min", "travel (1/min)", ".2f", 1.0, max),
     )

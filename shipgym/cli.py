@@ -162,11 +162,14 @@ def _print_table(res: dict[str, Any]) -> None:
         print("  command chatter per channel (normalised commands):")
         for key, label, nd in (
             ("reversals_per_min", "reversals / min", 2),
+            ("starts_per_min", "starts / min", 2),
+            ("zero_fraction", "at zero", 3),
             ("limit_fraction", "at a limit", 3),
             ("hf_variance_fraction", "var. < 20 s", 3),
             ("travel_per_min", "travel / min", 2),
         ):
-            print(f"    {label:16s} {num_list(res[key], nd)}")
+            if res.get(key) is not None:
+                print(f"    {label:16s} {num_list(res[key], nd)}")
     if res.get("rmse"):
         r = res["rmse"]
         print(

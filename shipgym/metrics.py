@@ -56,9 +56,18 @@ REVERSAL_BAND = 0.02
 #: periods below this (s) count as high-frequency command content (:func:`command_chatter`)
 HF_PERIOD_S = 20.0
 
+#: a command counts as stopped (at zero) inside the reversal band ``|a_k| <= band`` and as
+#: started again once ``|a_k| > START_FACTOR * band`` (hysteresis, so that a command dithering
+#: at the band's edge is not counted as starting every step; [chosen]: twice the band, i.e.
+#: 4 % of the full command on that side; for the Blue Lady's main propeller 19 rpm ahead,
+#: 0.7 N of its 451 N; :func:`command_chatter`)
+START_FACTOR = 2.0
+
 #: the per-channel chatter statistics of :func:`command_chatter` (also in the episode summary)
 CHATTER_KEYS = (
     "reversals_per_min",
+    "starts_per_min",
+    "zero_fraction",
     "limit_fraction",
     "hf_variance_fraction",
     "travel_per_min",
@@ -256,6 +265,16 @@ def command_chatter(
       ``|a_k| <= band``; unset before the first exit); a reversal is a change of that direction
       from +1 to -1 or back. So a command that dithers inside the band, or leaves it and comes
       back on the same side, does not count. 0 for channels that are not ``reversible``.
+    - ``starts_per_min``: starts / T. The channel is *stopped* before the first sample,
+      whenever ``|a_k| <= band`` and when the command crosses to the other side of zero;
+      a *start* is a sample with ``|a_k| > START_FACTOR band`` (:data:`START_FACTOR`: a
+      hysteresis, so that a command hovering at the band's edge does not count again and
+      again) on another side than the one the shaft was running on: from rest, or straight
+      through zero (every reversal starts the shaft again). A command that drops to zero
+      and picks up again on the same side (stop/start cycling, what a reversal hysteresis
+      that holds the thrust at zero trades reversals for) counts as starts without
+      reversals. Every channel counts.
+    - ``zero_fraction``: fraction of the samples at zero, ``|a_k| <= band``.
     - ``limit_fraction``: fraction of the samples with ``|a_k| >= 1 - limit_tol`` (at a
       command limit).
     - ``hf_variance_fraction``: the share of the variance of the linearly detrended command
@@ -320,11 +339,14 @@ def chatter_rows(
     minutes = k * dt / 60.0
     resolved = k >= 4 and hf_period > 2.0 * dt  # else no resolved content below hf_period
     hf_all = _hf_fractions(a, dt, hf_period) if resolved else [[nan] * n for _ in range(m)]
-    counts = np.zeros((3, m, n))  # reversals, samples at a limit, travel
-    _chatter_sums(np.ascontiguousarray(a), reversible, float(band), 1.0 - limit_tol, counts)
-    reversals, at_limit, travel = counts.tolist()
+    counts = np.zeros((5, m, n))  # reversals, samples at a limit, travel, starts, at zero
+    _chatter_sums(np.ascontiguousarray(a), reversible, float(band), 1.0 - limit_tol,
+                  START_FACTOR * float(band), counts)  # fmt: skip
+    reversals, at_limit, travel, starts, at_zero = counts.tolist()
     return {
         "reversals_per_min": [[c / minutes for c in r] for r in reversals],
+        "starts_per_min": [[c / minutes for c in r] for r in starts],
+        "zero_fraction": [[c / k for c in r] for r in at_zero],
         "limit_fraction": [[c / k for c in r] for r in at_limit],
         "hf_variance_fraction": hf_all,
         "travel_per_min": [[x / minutes for x in r] for r in travel],
@@ -332,11 +354,12 @@ def chatter_rows(
 
 
 @njit
-def _chatter_sums(a, rev, band, limit, out):  # type: ignore[no-untyped-def]
+def _chatter_sums(a, rev, band, limit, start, out):  # type: ignore[no-untyped-def]
     """:func:`command_chatter`'s sums per run ``r`` and channel ``j`` of the commands ``a``
-    (M, K, n) into ``out`` (3, M, n): the reversals through the band ``|a| <= band`` (0 where
-    not ``rev[j]``), the samples with ``|a| >= limit`` and the travel
-    ``sum_k |a_k - a_{k-1}|``."""
+    (M, K, n) into ``out`` (5, M, n): the reversals through the band ``|a| <= band`` (0 where
+    not ``rev[j]``), the samples with ``|a| >= limit``, the travel
+    ``sum_k |a_k - a_{k-1}|``, the starts (stopped at ``|a| <= band``, started at
+    ``|a| > start``) and the samples with ``|a| <= band``."""
     m, k, n = a.shape
     for q in range(m):
         for j in range(n):
@@ -344,8 +367,21 @@ def _chatter_sums(a, rev, band, limit, out):  # type: ignore[no-untyped-def]
             count = 0
             hits = 0
             travel = 0.0
+            run = 0  # the shaft's running side: 0 stopped (at rest before the first sample)
+            starts = 0
+            zeros = 0
             for i in range(k):
                 v = a[q, i, j]
+                sv = 1 if v > 0.0 else -1
+                if abs(v) <= band:
+                    zeros += 1
+                    run = 0
+                elif abs(v) > start:
+                    if run != sv:  # from rest, or straight through zero to the other side
+                        starts += 1
+                    run = sv
+                elif run != sv:  # through zero, not yet past the start band: stopped
+                    run = 0
                 s = 1 if v > band else (-1 if v < -band else 0)
                 if s != 0:
                     if side != 0 and s != side:
@@ -358,6 +394,8 @@ def _chatter_sums(a, rev, band, limit, out):  # type: ignore[no-untyped-def]
             out[0, q, j] = count if rev[j] else 0
             out[1, q, j] = hits
             out[2, q, j] = travel
+            out[3, q, j] = starts
+            out[4, q, j] = zeros
 
 
 def _hf_fractions(a: NDArray[np.float64], dt: float, hf_period: float) -> list[list[float]]:
@@ -1119,9 +1157,9 @@ class ManoeuvreMetrics:
         - ``legs_completed``, ``leg_times`` (duration of each completed leg, s),
           ``leg_completion_times`` (s);
         - ``per_leg``: ``{leg index: indices dict (with n_samples)}`` from the truth;
-        - ``reversals_per_min``, ``limit_fraction``, ``hf_variance_fraction``,
-          ``travel_per_min``: :func:`command_chatter` of the recorded commands, lists per
-          channel (NaN without commands).
+        - ``reversals_per_min``, ``starts_per_min``, ``zero_fraction``, ``limit_fraction``,
+          ``hf_variance_fraction``, ``travel_per_min``: :func:`command_chatter` of the
+          recorded commands, lists per channel (NaN without commands).
         """
         return self.batch.summary(0)
 

@@ -182,3 +182,53 @@ def test_runs_computed_together_are_each_run_alone(n, k):
         alone = command_chatter(a[r], 0.5, reversible=rev)
         for key in CHATTER_KEYS:
             assert np.array_equal(together[key][r], alone[key], equal_nan=True), key
+
+
+def test_starts_count_stops_and_restarts_and_time_at_zero():
+    """Issue 31: a start is the shaft turning again from rest (the command out of the 2 %
+    band after a stop, past twice the band), or straight through zero to the other side;
+    a stop/start cycle on one side is a start without a reversal."""
+    dt = 1.0
+    # rest, start ahead, dither at the band's edge (no new start), stop, start ahead again,
+    # straight through zero to astern (a reversal and a start), back through the band and up
+    x = [0.0, 0.3, 0.5, 0.03, 0.019, 0.03, 0.0, 0.0, 0.2, -0.2, -0.01, 0.03, 0.05]
+    out = command_chatter(np.array(x), dt)
+    minutes = len(x) * dt / 60.0
+    # starts: 0.3 (from rest), 0.2 (after the stop), -0.2 (through zero), 0.05 (after -0.01)
+    assert out["starts_per_min"][0] == pytest.approx(4 / minutes)
+    assert out["reversals_per_min"][0] == pytest.approx(2 / minutes)
+    # at zero: |a| <= 0.02: 0.0, 0.019, 0.0, 0.0, -0.01
+    assert out["zero_fraction"][0] == pytest.approx(5 / len(x))
+    # a command that idles (5 %) instead of stopping starts once
+    idle = [0.0, 0.4, 0.05, 0.05, 0.3, 0.05, 0.6]
+    out = command_chatter(np.array(idle), dt)
+    assert out["starts_per_min"][0] == pytest.approx(1 / (len(idle) / 60.0))
+    assert out["zero_fraction"][0] == pytest.approx(1 / len(idle))
+    # a stop/start cycle of period 4 s: a start every cycle, no reversal
+    cyc = np.tile([0.0, 0.0, 0.3, 0.3], 30)
+    out = command_chatter(cyc, 1.0)
+    assert out["starts_per_min"][0] == pytest.approx(30 / 2.0)
+    assert out["reversals_per_min"][0] == 0.0 and out["zero_fraction"][0] == 0.5
+
+
+def test_starts_and_zero_equal_a_plain_count_on_random_commands():
+    from shipgym.metrics import START_FACTOR
+
+    rng = np.random.default_rng(8)
+    band, dt = 0.05, 1.0
+    for k in (1, 2, 7, 50, 333):
+        a = np.clip(rng.normal(0.0, 0.1, (k, 2)), -1.0, 1.0)
+        out = command_chatter(a, dt, band=band)
+        for j in range(2):
+            run = starts = 0
+            for v in a[:, j]:
+                s = 1 if v > 0 else -1
+                if abs(v) <= band:
+                    run = 0
+                elif abs(v) > START_FACTOR * band:
+                    starts += run != s
+                    run = s
+                elif run != s:
+                    run = 0
+            assert out["starts_per_min"][j] == starts / (k * dt / 60.0)
+            assert out["zero_fraction"][j] == np.mean(np.abs(a[:, j]) <= band)

@@ -16,6 +16,8 @@ import struct
 import numpy as np
 import pytest
 
+from shipgym.metrics import CHATTER_KEYS
+
 pytest.importorskip("stable_baselines3")
 pytest.importorskip("torch")
 
@@ -291,9 +293,20 @@ def test_harbour_rows_keep_their_keys(models):
     keys = {"controller", "controller_spec", "observer", "seed", "completed", "legs_completed",
             "quay_contact", "duration_s", "x_E", "y_E", "psi_E", "J_c", "measured", "leg_times",
             "thrust_mean_abs", "thrust_total_variation", "saturated_fraction", "rmse",
-            "wall_time_s"}  # fmt: skip
+            "wall_time_s", *CHATTER_KEYS}  # fmt: skip
     assert all(set(r) == keys for r in rows)
-    assert "| ppo-residual | 1 |" in controller_table(rows)
+    table = controller_table(rows)
+    assert "| ppo-residual | 1 |" in table
+    # issue 31: the chatter beside the indices (time at a limit, main-propeller reversals,
+    # starts and time at zero), one cell per column in every line
+    head, rule, *lines = table.splitlines()
+    for col in ("at a limit (%)", "main reversals / min", "main starts / min", "main at zero"):
+        assert col in head
+    assert all(line.count("|") == head.count("|") == rule.count("|") for line in lines)
+    pid = rows[0]
+    cells = lines[0].split("|")[11:15]
+    assert cells[1].strip().startswith(f"{pid['reversals_per_min'][0]:.2f}")
+    assert cells[2].strip().startswith(f"{pid['starts_per_min'][0]:.2f}")
     assert "wind 3 m/s from 300 deg" in bench_title(rows, "3@300")
 
 

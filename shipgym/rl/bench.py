@@ -18,6 +18,7 @@ import numpy as np
 
 from shipgym.bench import mean_std as _ms
 from shipgym.bench import run_jobs
+from shipgym.metrics import CHATTER_KEYS
 from shipgym.runner import ENV_DEFAULT
 
 from .evaluation import (
@@ -68,6 +69,7 @@ _KEEP = (
     "thrust_mean_abs",
     "thrust_total_variation",
     "saturated_fraction",
+    *CHATTER_KEYS,
     "rmse",
     "wall_time_s",
 )
@@ -77,6 +79,7 @@ _KEEP_STATION = (
     "thrust_mean_abs",
     "thrust_total_variation",
     "saturated_fraction",
+    *CHATTER_KEYS,
     "rmse",
     "wind",
     "wall_time_s",
@@ -352,16 +355,17 @@ def controller_table(rows: Sequence[dict[str, Any]]) -> str:
     Columns: completed without quay contact, mean legs completed (of 5), quay contacts, J_c
     from the truth and from the measured pose (Tomera 2014 eq. 57), mean J_c relative to ``pid``
     (when present), time to complete (s; completed runs), mean |thrust| per actuator (N),
-    wall time per run (s).
+    the command chatter of :func:`chatter_cells` (time at a limit, main-propeller
+    reversals, starts and time at zero), wall time per run (s).
     """
     names = list(dict.fromkeys(r["controller"] for r in rows))
     pid = [r for r in rows if r["controller"] == "pid"]
     pid_jc = float(np.mean([r["J_c"] for r in pid])) if pid else math.nan
     head = (
         "| controller | runs | completed | legs | quay contact | J_c | J_c measured | J_c / pid "
-        "| time (s) | mean abs thrust main/bow/stern (N) | wall (s) |"
+        "| time (s) | mean abs thrust main/bow/stern (N) | " + chatter_head() + " | wall (s) |"
     )
-    lines = [head, "|" + "---|" * 11]
+    lines = [head, "|" + "---|" * (11 + len(_CHATTER_COLS))]
     for name in names:
         rs = [r for r in rows if r["controller"] == name]
         done = sum(bool(r["completed"]) and not r["quay_contact"] for r in rs)
@@ -375,10 +379,48 @@ def controller_table(rows: Sequence[dict[str, Any]]) -> str:
             f"| {name} | {len(rs)} | {done}/{len(rs)} "
             f"| {np.mean([r['legs_completed'] for r in rs]):.1f} | {contact} | {_ms(jc, '.4f')} "
             f"| {_ms(meas, '.4f')} | {ratio:.2f} | {_ms(times, '.0f')} "
-            f"| {' / '.join(f'{t:.1f}' for t in thrust)} "
+            f"| {' / '.join(f'{t:.1f}' for t in thrust)} | {chatter_cells(rs)} "
             f"| {np.mean([r['wall_time_s'] for r in rs]):.1f} |"
         )
     return "\n".join(lines)
+
+
+#: the chatter columns of the controller tables: (key, header, scale, format, per channel);
+#: a per-channel column shows every channel, the others the first channel alone (the main
+#: propeller of the Blue Lady and Star Hercules; :data:`shipgym.metrics.CHATTER_KEYS`)
+_CHATTER_COLS = (
+    ("limit_fraction", "at a limit (%) per channel, worst seed", 100.0, ".1f", True),
+    ("reversals_per_min", "{} reversals / min", 1.0, ".2f", False),
+    ("starts_per_min", "{} starts / min", 1.0, ".2f", False),
+    ("zero_fraction", "{} at zero (%)", 100.0, ".0f", False),
+)
+
+
+def chatter_head(first: str = "main") -> str:
+    """The headers of :func:`chatter_cells`, ``first`` naming the first channel."""
+    return " | ".join(c[1].format(first) for c in _CHATTER_COLS)
+
+
+def chatter_cells(rows: Sequence[dict[str, Any]]) -> str:
+    """The chatter cells of one controller's rows (:data:`_CHATTER_COLS`): the time at a
+    command limit per channel, worst seed (``a / b / c``), and the first channel's (main
+    propeller's) reversals and starts per minute and time at zero, mean over the seeds and
+    in brackets the worst seed (:func:`shipgym.metrics.command_chatter`); ``n/a`` for rows
+    without commands."""
+    cells = []
+    for key, _, scale, fmt, per_channel in _CHATTER_COLS:
+        per = [r.get(key) for r in rows if r.get(key)]
+        if not per:
+            cells.append("n/a")
+            continue
+        x = scale * np.array(per, dtype=float)  # (seeds, channels)
+        if per_channel:
+            worst = [np.nanmax(c) if np.isfinite(c).any() else math.nan for c in x.T]
+            cells.append(" / ".join(f"{w:{fmt}}" for w in worst))
+        else:
+            c = x[:, 0][np.isfinite(x[:, 0])]
+            cells.append("-" if c.size == 0 else f"{c.mean():{fmt}} [{c.max():{fmt}}]")
+    return " | ".join(cells)
 
 
 def station_table(rows: Sequence[dict[str, Any]]) -> str:
@@ -388,7 +430,8 @@ def station_table(rows: Sequence[dict[str, Any]]) -> str:
     Columns: runs, time within the radius (% of the run, mean +- std, and the runs that stay
     inside at least 95 % of the time), r95 (m; the 95th percentile of the distance from the set
     point), the largest distance (m), heading error RMS (deg), mean |thrust| per actuator (N),
-    wall time per run (s).
+    the command chatter of :func:`chatter_cells` (the first actuator's reversals, starts and
+    time at zero), wall time per run (s).
     """
     names = list(dict.fromkeys(r["controller"] for r in rows))
     radius = float(rows[0]["radius_m"]) if rows else STATION_RADIUS
@@ -396,9 +439,10 @@ def station_table(rows: Sequence[dict[str, Any]]) -> str:
     head_t = "/".join(acts) if acts else "per actuator"
     head = (
         f"| controller | runs | inside {radius:g} m (%) | runs >= 95 % inside | r95 (m) "
-        f"| r max (m) | heading RMS (deg) | mean abs thrust {head_t} (N) | wall (s) |"
+        f"| r max (m) | heading RMS (deg) | mean abs thrust {head_t} (N) "
+        f"| {chatter_head(acts[0] if acts else 'first channel')} | wall (s) |"
     )
-    lines = [head, "|" + "---|" * 9]
+    lines = [head, "|" + "---|" * (9 + len(_CHATTER_COLS))]
     for name in names:
         rs = [r for r in rows if r["controller"] == name]
         inside = [r["inside_fraction"] for r in rs]
@@ -408,7 +452,7 @@ def station_table(rows: Sequence[dict[str, Any]]) -> str:
             f"| {name} | {len(rs)} | {_ms(inside, '.1f', scale=100.0)} | {ok}/{len(rs)} "
             f"| {_ms([r['r95'] for r in rs], '.2f')} | {_ms([r['r_max'] for r in rs], '.2f')} "
             f"| {_ms([r['heading_rms_deg'] for r in rs], '.2f')} "
-            f"| {' / '.join(_thrust(t) for t in thrust)} "
+            f"| {' / '.join(_thrust(t) for t in thrust)} | {chatter_cells(rs)} "
             f"| {np.mean([r['wall_time_s'] for r in rs]):.1f} |"
         )
     return "\n".join(lines)

@@ -553,16 +553,20 @@ def _chatter_table(names: list[str], m: dict[str, Any]) -> list[str]:
         "## Command chatter",
         "",
         "Per channel, from the normalised commands (shipgym.metrics.command_chatter): "
-        "reversals of the command's direction through a band of 2 % around zero, time at a "
-        "command limit, share of the detrended command's variance at periods below 20 s, "
-        "command travel.",
+        "reversals of the command's direction through a band of 2 % around zero, starts "
+        "(leaving that band after a stop), time inside it (at zero), time at a command "
+        "limit, share of the detrended command's variance at periods below 20 s, command "
+        "travel.",
         "",
-        "| channel | reversals / min | at a limit | variance < 20 s | travel (1/min) |",
-        "|---|---|---|---|---|",
+        "| channel | reversals / min | starts / min | at zero | at a limit | variance < 20 s "
+        "| travel (1/min) |",
+        "|---|---|---|---|---|---|---|",
     ]
     for j, name in enumerate(names):
         lines.append(
             f"| {name} | {_fmt(_at(m['reversals_per_min'], j), 2)} | "
+            f"{_fmt(_at(m.get('starts_per_min'), j), 2)} | "
+            f"{_fmt(_at(m.get('zero_fraction'), j), 3)} | "
             f"{_fmt(_at(m.get('limit_fraction'), j), 3)} | "
             f"{_fmt(_at(m.get('hf_variance_fraction'), j), 3)} | "
             f"{_fmt(_at(m.get('travel_per_min'), j), 2)} |"
