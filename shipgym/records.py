@@ -197,6 +197,8 @@ class ControlData:
         action: the controller's normalised action, one entry per actuator.
         allocation_saturated: per actuator, whether the allocation hit a limit.
         residual_clipped: per actuator, whether controller + residual action was clipped.
+        tau_ff: the feedforward part of ``tau_c`` (N, N, N m; minus the wind and current loads
+            it estimates, :mod:`shipgym.controllers.feedforward`; zeros without one).
     """
 
     __eq__ = _equal
@@ -209,6 +211,7 @@ class ControlData:
     action: Array
     allocation_saturated: NDArray[np.bool_]
     residual_clipped: NDArray[np.bool_]
+    tau_ff: Array
 
 
 @dataclass(slots=True, eq=False)

@@ -339,14 +339,22 @@ class BatchedDPController:
         eta_dot_d_r: ArrayLike | None = None,
         eta_ddot_d_r: ArrayLike | None = None,
         state: ArrayLike | None = None,
+        tau_ff: ArrayLike | None = None,
     ) -> tuple[Array, BatchedAllocationResult, Array]:
         """One control period of every env (the law, its allocation and the action).
 
+        Args:
+            tau_ff: a feedforward (n, 3) (N, N, N m, body) added to the law's ``tau``
+                (:mod:`shipgym.controllers.feedforward`); ``None``: none.
+
         Returns:
-            ``(tau_c, allocation, controller_action)``: the law's ``tau`` (n, 3), its
-            allocation and the normalised command (n, n_channels) before the residual.
+            ``(tau_c, allocation, controller_action)``: the demand ``tau`` (n, 3) (the
+            law's plus the feedforward), its allocation and the normalised command
+            (n, n_channels) before the residual.
         """
         tau = self.pid(eta_r, nu, eta_d_r, eta_dot_d_r, eta_ddot_d_r, saturated=self.tau_error)
+        if tau_ff is not None:
+            tau = tau + np.asarray(tau_ff, dtype=float)
         alloc = self.allocation(tau, state)
         if self.hysteresis is not None:  # what is delivered: the anti-windup sees it
             cmd, force, t_del, err = self.hysteresis(
@@ -388,7 +396,7 @@ def batched_dp_controller(
         single = spec.factory(v, dt)
     law = _batched_law(name, single, n)
     hyst = (
-        BatchedReversalHysteresis(v.actuators, reversal_threshold(v), n)
+        BatchedReversalHysteresis(v.actuators, reversal_threshold(v), n, dt=dt)
         if spec.conditioned
         else None
     )

@@ -29,7 +29,9 @@ __all__ = [
     "thesis_controller",
 ]
 
-#: method -> (observer, controller, observer options, env overrides); see the module docstring
+#: method -> (observer, controller, observer options, env overrides): ``"noise100"`` 100x the
+#: sensor variances, ``"no-ff"`` no feedforward (every other method has the DP tasks' wind and
+#: current feedforward, :mod:`shipgym.controllers.feedforward`)
 METHODS: dict[str, tuple[str, str, dict[str, Any] | None, str | None]] = {
     "kf14": ("alt-kf14", "thesis-lq", None, None),
     "kf16": ("alt-kf16", "thesis-lq", None, None),
@@ -41,6 +43,7 @@ METHODS: dict[str, tuple[str, str, dict[str, Any] | None, str | None]] = {
     "kbf-pid": ("kbf", "pid", None, None),
     "kf14-bf5": ("alt-kf14", "thesis-lq", {"beaufort": 5}, None),
     "kf14-noise100": ("alt-kf14", "thesis-lq", None, "noise100"),
+    "kf14-no-ff": ("alt-kf14", "thesis-lq", None, "no-ff"),
 }
 
 
@@ -79,6 +82,8 @@ def _make_env(
             "position_variance": 100.0 * (AL_TAKIE1982_POSITION_SIGMA / float(vessel.scale)) ** 2,
             "heading_variance": 100.0 * AL_TAKIE1982_HEADING_SIGMA**2,
         }
+    elif env_mod == "no-ff":
+        kwargs["feedforward"] = "none"
     return shipgym.make(
         TASKS[task],
         vessel=vessel_name,
@@ -131,6 +136,7 @@ def dp_run(job: tuple[Any, ...]) -> dict[str, Any]:
     from shipgym.controllers.actuation import planar_capacity
 
     t, eta, eta_d, tau, sat, err, nis = [], [], [], [], [], [], []
+    end: dict[str, Any] = {}
 
     def keep(env: Any, info: dict[str, Any]) -> None:
         rec = info["record"]
@@ -141,6 +147,8 @@ def dp_run(job: tuple[Any, ...]) -> dict[str, Any]:
         sat.append(bool(np.any(info["allocation_saturated"])))
         err.append(info["est_error_eta"])
         nis.append(np.nan if info["observer_nis"] is None else info["observer_nis"])
+        if "episode_metrics" in info:
+            end.update(info["episode_metrics"])
 
     env, per_step = _episode(job, keep)
     vessel_name, bf, method, seed, _ = job[:5]
@@ -164,7 +172,11 @@ def dp_run(job: tuple[Any, ...]) -> dict[str, Any]:
         controller=env.unwrapped.controller_name,
         seed=seed,
         task=_task(job),
+        feedforward=env.unwrapped.batch.feedforward.config.label
+        if env.unwrapped.batch.feedforward is not None
+        else "none",
         filter_step_us=1e6 * per_step,
+        **_thruster_chatter(env.unwrapped.actuators, end),
     )
     if _task(job) == "sway-step":
         base = env.unwrapped
@@ -178,6 +190,28 @@ def dp_run(job: tuple[Any, ...]) -> dict[str, Any]:
         sm = step_metrics(ta, sway, base.step_time, base.step_size)
         m.update(rise_time_s=sm["rise_time_s"], overshoot_pct=sm["overshoot_pct"])
     return m
+
+
+def _thruster_chatter(actuators: Any, metrics: dict[str, Any]) -> dict[str, float]:
+    """The thrust channels' worst chatter of an episode (its ``episode_metrics``): an
+    azimuth's angle channel (a slew-rate command) is left out, its sign changes are no
+    thrust reversals.
+
+    Returns:
+        ``at_limit_pct`` (% of the control steps the busiest thrust channel's command is at
+        a limit), ``reversals_per_min`` and ``starts_per_min`` (of the channel with the most).
+    """
+    thrust = [i for i, c in enumerate(ch for u in actuators for ch in u.channels)
+              if c.state_unit != "rad"]  # fmt: skip
+
+    def worst(key: str) -> float:
+        return float(max(metrics[key][i] for i in thrust))
+
+    return {
+        "at_limit_pct": 100.0 * worst("limit_fraction"),
+        "reversals_per_min": worst("reversals_per_min"),
+        "starts_per_min": worst("starts_per_min"),
+    }
 
 
 def _task(job: tuple[Any, ...]) -> str:
@@ -298,9 +332,10 @@ def dp_table(rows: Sequence[dict[str, Any]]) -> str:
         keys.setdefault((r["vessel"], r["beaufort"], r["method"]), []).append(r)
     head = (
         "| vessel | Bf | method | pos RMS (m) | max radial (m) | inside 7 m (%) | "
-        "heading RMS (deg) | thrust use | saturated (%) | wave-band ratio | "
-        "est. RMSE x, y (m) | NIS mean | filter step (us) |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "heading RMS (deg) | thrust use | HF thrust RMS | saturated (%) | at limit (%) | "
+        "reversals / min | wave-band ratio | est. RMSE x, y (m) | NIS mean | "
+        "filter step (us) |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )
     step = any("rise_time_s" in r for r in rows)
     if step:
@@ -318,7 +353,10 @@ def dp_table(rows: Sequence[dict[str, Any]]) -> str:
             f"{table_cell([r['inside_radius_pct'] for r in rs], '.1f')} | "
             f"{table_cell([r['heading_rms_deg'] for r in rs], '.2f')} | "
             f"{table_cell([r['thrust_usage_mean'] for r in rs], '.3f')} | "
+            f"{table_cell([r['hf_thrust_rms'] for r in rs], '.4f')} | "
             f"{table_cell([r['saturated_pct'] for r in rs], '.1f')} | "
+            f"{table_cell([r['at_limit_pct'] for r in rs], '.1f')} | "
+            f"{table_cell([r['reversals_per_min'] for r in rs], '.2f')} | "
             f"{table_cell([r['wave_band_ratio'] for r in rs], '.3f')} | "
             f"{table_cell(lf_xy, '.2f')} | "
             f"{table_cell([r['nis_mean'] for r in rs], '.2f')} | "

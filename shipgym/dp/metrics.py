@@ -1,7 +1,7 @@
 r"""Metrics of a dynamic-positioning run (Al-Takie 1982 2.3, 3.1). Pure NumPy/SciPy.
 
-Public names: ``DP_RADIUS_MAX``, ``dp_metrics``, ``dp_radius``, ``step_metrics``,
-``wave_band_ratio``.
+Public names: ``DP_RADIUS_MAX``, ``dp_metrics``, ``dp_radius``, ``hf_thrust_rms``,
+``step_metrics``, ``wave_band_ratio``.
 
 Design notes: docs/design/dp.metrics.md.
 """
@@ -18,7 +18,14 @@ from scipy.stats import chi2
 
 from shipgym.dynamics.frames import wrap_angle
 
-__all__ = ["DP_RADIUS_MAX", "dp_metrics", "dp_radius", "step_metrics", "wave_band_ratio"]
+__all__ = [
+    "DP_RADIUS_MAX",
+    "dp_metrics",
+    "dp_radius",
+    "hf_thrust_rms",
+    "step_metrics",
+    "wave_band_ratio",
+]
 
 DP_RADIUS_MAX = 7.0
 """The largest allowed radius of the DP requirement (m) [printed, Al-Takie (1982) 2.3]."""
@@ -165,6 +172,54 @@ def wave_band_ratio(
     return p_hf / p_lf
 
 
+def hf_thrust_rms(
+    t: ArrayLike,
+    tau_c: ArrayLike,
+    capacity: ArrayLike,
+    hf_band: tuple[float, float] = HF_BAND,
+) -> float:
+    """The wave-band RMS of the capacity-normalised thrust command (-, a fraction of capacity).
+
+    ``sqrt(sum_i P_i(hf_band))``, ``P_i(band)`` the integral over the band (edges included)
+    of the Welch PSD of ``tau_c_i / capacity_i`` with each segment's linear trend removed
+    (Hann segments of 100 s, half overlap): the thrust modulation at the first-order wave
+    frequencies (Al-Takie 1982 3.1: 0.05-0.25 Hz) that a wave filter exists to suppress,
+    free of the mean load and of slow drifts (which :func:`wave_band_ratio` divides by). A
+    sine of amplitude ``A`` (a fraction of capacity) in one DOF inside the band gives
+    ``A / sqrt(2)``.
+
+    Args:
+        t: uniform sample times (s), (N,), at least 100 s.
+        tau_c: commanded generalised force per sample, (N, m) (N, N, N m) or (N,).
+        capacity: the force capacity per DOF (same units), (m,), > 0.
+        hf_band: the wave band (Hz).
+
+    Raises:
+        ValueError: as :func:`wave_band_ratio`.
+    """
+    tt, dt = _times(t)
+    u = _series("tau_c", tau_c, tt.size)
+    u = u / _capacity(capacity, u.shape[1])
+    hf = _band("hf_band", hf_band)
+    fs = 1.0 / dt
+    if hf[1] > 0.5 * fs:
+        raise ValueError(
+            f"the band {hf_band} Hz must lie below the Nyquist frequency {0.5 * fs:.4g} Hz of "
+            f"the sampling interval {dt:.4g} s"
+        )
+    seg_s = BINS_PER_LF_BAND / (LF_BAND[1] - LF_BAND[0])
+    nperseg = int(math.ceil(seg_s * fs))
+    if tt.size < nperseg:
+        raise ValueError(
+            f"the record ({tt.size} samples, {tt[-1] - tt[0]:.4g} s) is shorter than one Welch "
+            f"segment ({nperseg} samples, {seg_s:.4g} s)"
+        )
+    f, P = scipy.signal.welch(u, fs=fs, window="hann", nperseg=nperseg, detrend="linear", axis=0)
+    df = f[1] - f[0]
+    sel = (f >= hf[0] - 1e-9 * df) & (f <= hf[1] + 1e-9 * df)
+    return math.sqrt(float(P[sel].sum() * df))
+
+
 def dp_metrics(
     t: ArrayLike,
     eta: ArrayLike,
@@ -202,7 +257,8 @@ def dp_metrics(
         with radial error <= radius), ``heading_rms_deg`` (deg, wrapped), ``thrust_usage``
         (tuple per DOF of mean ``|tau_c_i|/capacity_i``, -), ``thrust_usage_mean`` (-),
         ``saturated_pct`` (% or ``None``), ``wave_band_ratio`` (-, :func:`wave_band_ratio`;
-        ``None`` if the record is shorter than its 100 s segment), ``lf_rmse`` (tuple per
+        ``None`` if the record is shorter than its 100 s segment), ``hf_thrust_rms`` (-,
+        :func:`hf_thrust_rms`; ``None`` likewise), ``lf_rmse`` (tuple per
         component or ``None``), ``nis_mean`` (-, or ``None``), ``nis_inside_95_pct`` (% of
         the NIS values inside ``[chi2.ppf(0.025, dof), chi2.ppf(0.975, dof)]``, or ``None``).
 
@@ -243,6 +299,7 @@ def dp_metrics(
         "thrust_usage_mean": float(usage.mean()),
         "saturated_pct": None,
         "wave_band_ratio": None,
+        "hf_thrust_rms": None,
         "lf_rmse": None,
         "nis_mean": None,
         "nis_inside_95_pct": None,
@@ -256,6 +313,7 @@ def dp_metrics(
         out["saturated_pct"] = 100.0 * float(np.mean(s.astype(bool).any(axis=1)))
     try:
         out["wave_band_ratio"] = wave_band_ratio(tt, u, cap)
+        out["hf_thrust_rms"] = hf_thrust_rms(tt, u, cap)
     except ValueError as exc:
         if "shorter than one Welch segment" not in str(exc):
             raise

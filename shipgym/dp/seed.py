@@ -1,6 +1,20 @@
 r"""The thesis's simulation in per-unit time (``seed-per-unit``): Al-Takie (1982) ch. 5-7.
 
-Public names: ``FILTERS``, ``SeedRun``, ``PLANT_NOISE``, ``simulate_seed``.
+Public names: ``FILTERS``, ``SEAS``, ``SeedRun``, ``PLANT_NOISE``, ``physical_d_h``,
+``simulate_seed``.
+
+The plant's first-order (HF) motion is the physical sea's by default: the JONSWAP sea of the
+Beaufort number (:func:`shipgym.disturbances.seastate.beaufort`: WMO ``Hs``, NORSOK ``Tp``)
+gives the HF position std ``Hs / 16`` and its heading std, which set the plant's HF noise
+gains through the thesis's own HF filters (:func:`physical_d_h`): 0.34 m and 0.33 deg in
+Beaufort 8. The filter keeps its design noise (:data:`~shipgym.dynamics.altakie.
+D_H_RECONSTRUCTED`, which reproduces the printed gains): it implies 9.6 m sway and 22 deg
+yaw HF motion in Beaufort 8, which no ship of this size has. The Kalman gain depends on the
+noise covariances' ratios only (``K(a Q, a R) = K(Q, R)``), so the printed gains fix the HF
+noise relative to the printed measurement noise ``R`` (1/3 m, 0.02 rad); a physical HF noise
+reproduces them only with ``R`` and ``Q_l`` scaled down by the same factor (a position
+reference of about 1 cm): the thesis's ``D_h`` is a tuning knob of the filter, not the sea
+(``sea="design"`` drives the plant with it, as the thesis's own simulation did).
 
 Design notes: docs/design/dp.seed.md.
 """
@@ -26,7 +40,7 @@ from shipgym.dynamics.altakie import (
 )
 from shipgym.observers.wavefilter import DiscreteKF, ReducedKF, WaveFilterEKF
 
-__all__ = ["FILTERS", "SeedRun", "PLANT_NOISE", "simulate_seed"]
+__all__ = ["FILTERS", "SEAS", "SeedRun", "PLANT_NOISE", "physical_d_h", "simulate_seed"]
 
 Array = NDArray[np.float64]
 
@@ -35,6 +49,30 @@ PLANT_NOISE = (4.0e-6, 9.0e-8)
 
 #: filters of :func:`simulate_seed`
 FILTERS = ("kf14", "kf12", "semiconstant", "ekf")
+
+#: what drives the plant's HF motion in :func:`simulate_seed`: ``"physical"`` the Beaufort
+#: sea's first-order motion (:func:`physical_d_h`), ``"design"`` the filter's reconstructed
+#: design noise (the thesis's own simulation)
+SEAS = ("physical", "design")
+
+
+def physical_d_h(ship: str, beaufort: int) -> tuple[float, float]:
+    """The HF noise gains ``(d_sway, d_yaw)`` (p.u.) that give the thesis's HF filter of
+    ``ship`` in ``beaufort`` the first-order motion of the physical sea: the position std
+    ``Hs / 16`` (m) and heading std (rad) of :func:`shipgym.disturbances.seastate.beaufort`
+    at full scale (the stationary std of the HF block, :func:`~shipgym.observers.wavefilter.
+    hf_gain_for_std`)."""
+    from shipgym.disturbances.seastate import beaufort as sea_state
+    from shipgym.dynamics.altakie import hf_alpha
+    from shipgym.observers.wavefilter import hf_gain_for_std
+
+    pu = lf_model(ship).per_unit
+    waves = sea_state(int(beaufort), scale=1.0).waves  # the thesis's ships: full scale
+    alpha = hf_alpha(int(beaufort), pu, ship)
+    return (
+        hf_gain_for_std(alpha, pu.time, float(waves.position_std) / pu.L),
+        hf_gain_for_std(alpha, pu.time, float(waves.heading_std)),
+    )
 
 
 @dataclass(frozen=True)
@@ -92,6 +130,7 @@ def simulate_seed(
     dt: float = 0.1,
     seed: int = 0,
     noise: bool = True,
+    sea: str = "physical",
 ) -> SeedRun:
     """Run the thesis's closed loop (plant, filter, LQ) in per-unit time.
 
@@ -112,14 +151,19 @@ def simulate_seed(
         dt: sampling interval (p.u. time).
         seed: noise seed.
         noise: ``False``: no disturbance and no measurement noise (the deterministic response).
+        sea: what drives the plant's HF motion, one of :data:`SEAS` (module docstring):
+            ``"physical"`` (default) or ``"design"`` (the filter's design noise).
     """
     if filter not in FILTERS:
         raise ValueError(f"filter must be one of {', '.join(FILTERS)}, got {filter!r}")
     if not (isinstance(noise_scale, int | float) and noise_scale > 0):
         raise ValueError(f"noise_scale must be > 0, got {noise_scale!r}")
+    if sea not in SEAS:
+        raise ValueError(f"sea must be one of {', '.join(SEAS)}, got {sea!r}")
     lf = lf_model(ship)
     Tb = lf.per_unit.time
-    plant = wave_filter_model(lf, beaufort, ship=ship, q_l=PLANT_NOISE)
+    d_h = physical_d_h(ship, beaufort) if sea == "physical" else None
+    plant = wave_filter_model(lf, beaufort, ship=ship, q_l=PLANT_NOISE, d_h=d_h)
     design = wave_filter_model(lf, filter_beaufort or beaufort, ship=ship)
     Phi, Delta, Gamma = discretise(plant.A, plant.B, plant.G, dt)
     Q, R, _, _ = grimble_weights(lf.A, lf.B, lf.C, (1.5, 1.0) if gain == "a" else None)

@@ -169,7 +169,8 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     ``controller=`` the action is a residual on the controller's normalised command (their
     sum clipped to [-1, 1], flagged in ``residual_clipped``), and the info gains ``tau_c``
     (the law's demand, N, N, N m, body), ``tau_delivered``, ``tau_error`` (what the
-    allocation could not deliver), ``controller_action`` and ``allocation_saturated``.
+    allocation could not deliver), ``controller_action``, ``allocation_saturated`` and
+    ``tau_ff`` (the feedforward part of ``tau_c``; zeros without one).
 
     ## Arguments
     | Argument | Default | Description |
@@ -200,6 +201,9 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     |  |  | every sensor sample; ``None``: the truth |
     | ``observer_options`` | ``None`` | the observer's options (``{"beaufort": 5}``) |
     | ``controller`` | ``None`` | a DP controller name (``shipgym.controllers.batch.CONTROLLERS``) |
+    | ``feedforward`` | ``None`` | the controller's wind/current feedforward |
+    |  |  | (:mod:`shipgym.controllers.feedforward`): ``None`` the task's default |
+    |  |  | (DP tasks: ``"wind+current"``), ``"none"``, ``"wind"``, ``"current"`` |
     | ``residual_scale`` | ``1.0`` | the factor on the residual actions (with ``controller``) |
     | ``render_mode`` | ``None`` | ``"rgb_array"`` (needs an EGL/OSMesa/GLFW backend) |
 
@@ -579,7 +583,7 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
 #: the controller's keys of the step info, in :class:`~shipgym.records.ControlData`'s order
 _CONTROL_KEYS = ("tau_c", "tau_delivered", "tau_error", "controller_action",
-                 "allocation_saturated", "residual_clipped")  # fmt: skip
+                 "allocation_saturated", "residual_clipped", "tau_ff")  # fmt: skip
 
 
 class GuidanceView:

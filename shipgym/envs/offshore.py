@@ -207,6 +207,11 @@ class OffshoreDPEnv(StationKeepingEnv):
     #: the default episode length (s)
     default_duration = 2000.0
 
+    #: the thesis's system assumes mean-wind feedforward (Al-Takie 1982 2.4, Fig. 1.1) and a
+    #: current known at the LF model's linearisation point (3.1):
+    #: :mod:`shipgym.controllers.feedforward`
+    default_feedforward = "wind+current"
+
     @classmethod
     def configure(cls, kwargs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
         """The env's arguments with the DP task's defaults (timing, sea, current, sensors,

@@ -58,6 +58,11 @@ class PlanEnvSpec:
     #: the one vessel of an alias id (``shipgym/BlueLady*-v0``: ``"blue-lady"``), else None
     fixed_vessel: str | None = None
 
+    #: what a DP controller feeds forward unless ``feedforward=`` says
+    #: (:class:`~shipgym.controllers.feedforward.FeedforwardConfig` or a preset name;
+    #: ``None``: nothing)
+    default_feedforward: str | None = None
+
     #: the episode length (s) after which the env truncates itself (with
     #: ``info["episode_metrics"]``); ``None``: the registered time limit only
     episode_duration: float | None = None

@@ -81,6 +81,15 @@ class ShipVectorEnv(BatchedEnv):
             actions are residuals on its normalised command, as in the single env
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
+        feedforward: what the controller feeds forward (``controller`` only):
+            ``None`` the task class's ``default_feedforward`` (the DP tasks of Al-Takie 1982:
+            ``"wind+current"``, as the thesis assumes; the other tasks: none), a name of
+            :data:`~shipgym.controllers.feedforward.FEEDFORWARD_PRESETS` (``"none"`` turns
+            it off), a bool, a mapping or a
+            :class:`~shipgym.controllers.feedforward.FeedforwardConfig`: minus the wind load
+            of the filtered anemometer wind and the hull's load in the mean current, added
+            to the law's ``tau`` (``info["tau_ff"]``); a model-based observer is fed the
+            thrust plus the loads it estimates.
         observer: ``None`` / ``"truth"`` (the observation and the controller use the true
             state) or an observer name (``shipgym.observers.observer_names()``, or one
             registered with :func:`~shipgym.observers.batch.register_batched_observer`:
@@ -112,6 +121,7 @@ class ShipVectorEnv(BatchedEnv):
         autoreset_mode: str | AutoresetMode = "next-step",
         controller: str | None = None,
         residual_scale: float = 1.0,
+        feedforward: Any = None,
         observer: str | None = None,
         observer_options: Mapping[str, Any] | None = None,
         env_sensors: Sequence[SensorConfig] | None = None,
@@ -243,6 +253,20 @@ class ShipVectorEnv(BatchedEnv):
             self.controller = batched_dp_controller(
                 controller, self.vessel, n, self.control_period, velocity_source=src
             )
+        #: the controller's feedforward (``None``: none)
+        self.feedforward: Any = None
+        ff = cls.default_feedforward if feedforward is None else feedforward
+        if ff is not None:
+            from shipgym.controllers.feedforward import BatchedFeedforward, FeedforwardConfig
+
+            cfg = FeedforwardConfig.coerce(ff)
+            if cfg.active and controller is None and feedforward is not None:
+                raise ValueError(
+                    f"feedforward={feedforward!r} needs a DP controller: pass controller="
+                )
+            if cfg.active and controller is not None:
+                self.feedforward = BatchedFeedforward(self.vessel, cfg, n, self.control_period)
+        self._tau_ff = np.zeros((n, 3))  # the last control step's feedforward (N, N, N m)
         self._nis = np.full(n, np.nan)
         self._rejected = np.zeros(n, bool)
         self._cache: dict[str, Any] = {}  # this state's eta, nu (and estimate), read once
@@ -388,6 +412,19 @@ class ShipVectorEnv(BatchedEnv):
             out = self._cache["readouts"] = self.physics.readouts(command)
         return out  # type: ignore[no-any-return]
 
+    def _environment_now(self) -> tuple[Array, Array]:
+        """What the feedforward measures now, ``(wind, current)`` (n, 2) each: the
+        anemometer's true wind ``[V_w, beta_w]`` (m/s, rad from; still air without a wind
+        load) and the configured mean current ``[V_c, beta_c]`` (m/s, rad going to)."""
+        ph = self.physics
+        t = ph.t
+        wind = np.array([
+            w.at(float(t[i])) if cfg is not None else (0.0, 0.0)
+            for i, (w, cfg) in enumerate(zip(ph.winds, ph.wind_configs, strict=True))
+        ])  # fmt: skip
+        current = np.array([(c.speed, c.direction_to) for c in ph.current_configs])
+        return wind, current
+
     def _navigation(self) -> tuple[Array, Array]:
         """What the controller and the observation use: the estimate, else the truth."""
         if self.observer is None:
@@ -403,9 +440,11 @@ class ShipVectorEnv(BatchedEnv):
         assert self.controller is not None
         ref = self._ref
         eta, nu = self._navigation()
+        if self.feedforward is not None:
+            self._tau_ff = self.feedforward(eta, nu, *self._environment_now())
         tau_c, alloc, a_ctrl = self.controller(
             ref.to_r(eta), nu, ref.eta_d_r, ref.eta_dot_d_r, ref.eta_ddot_d_r,
-            state=self.physics.actuator_state,
+            state=self.physics.actuator_state, tau_ff=self._tau_ff,
         )  # fmt: skip
         applied, clipped = self._apply_residual(a_ctrl, residual, self.residual_scale)
         info = {
@@ -415,6 +454,7 @@ class ShipVectorEnv(BatchedEnv):
             "controller_action": np.ascontiguousarray(a_ctrl),
             "allocation_saturated": np.ascontiguousarray(alloc.saturated),
             "residual_clipped": clipped,
+            "tau_ff": self._tau_ff.copy(),
         }
         # the wrapper hands the env a float32 action
         return applied.astype(np.float32).astype(np.float64), info
@@ -457,6 +497,9 @@ class ShipVectorEnv(BatchedEnv):
         self._ref = ref if self._ref is None else _rows_from(self._ref, ref, mask)
         if self.controller is not None:
             self.controller.reset(mask)
+            self._tau_ff[mask] = 0.0
+            if self.feedforward is not None:
+                self.feedforward.reset(mask)
             self._leg[mask] = ref.leg[mask]
             self._psi_P[mask] = ref.eta_P[mask, 2]
         if self.sensors is not None:
@@ -492,6 +535,8 @@ class ShipVectorEnv(BatchedEnv):
             if self._model_based:  # the thrust its thrust_input names, held to the next sample
                 _, tau_model, tau_command = self._readouts(self._thrust_cmd)
                 tau = tau_command if self._thrust_cmd else tau_model
+                if self.feedforward is not None:  # the thrust and the loads it estimates
+                    tau = tau - self._tau_ff
                 held = self._obs_tau
                 self._obs_tau = tau if held is None else np.where(mask[:, None], tau, held)
             info = self._step_observer(t, z, fixed)
@@ -738,7 +783,7 @@ class ShipVectorEnv(BatchedEnv):
 
 #: the masks of the controller's info keys (:meth:`ShipVectorEnv._control`)
 _CONTROL_MASKS = ("_tau_c", "_tau_delivered", "_tau_error", "_controller_action",
-                  "_allocation_saturated", "_residual_clipped")  # fmt: skip
+                  "_allocation_saturated", "_residual_clipped", "_tau_ff")  # fmt: skip
 #: the masks of ``info["episode_summary"]``'s keys
 _SUMMARY_MASKS = ("_return", "_length", "_duration_s", "_legs_completed", "_completed")
 
