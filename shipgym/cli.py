@@ -444,7 +444,7 @@ def _beaufort_list(text: str) -> list[int]:
 
 def _cmd_bench_dp(args: argparse.Namespace) -> int:
     from shipgym._io import progress_enabled
-    from shipgym.dp.bench import METHODS, TASKS, bench_dp, dp_table
+    from shipgym.dp.bench import DP_SCHEMA_VERSION, DP_UNITS, METHODS, TASKS, bench_dp, dp_table
     from shipgym.dynamics.vessel import load_vessel
 
     beauforts = _beaufort_list(args.beaufort)
@@ -471,11 +471,14 @@ def _cmd_bench_dp(args: argparse.Namespace) -> int:
     title = (
         f"Al-Takie (1982) DP in closed loop: {', '.join(args.vessel)}, Beaufort "
         f"{args.beaufort}, seeds 0-{args.seeds - 1}, {args.duration:g} s episodes "
-        f"({TASKS[args.task]}); wave-band ratio = thrust-command power in "
-        "0.05-0.25 Hz over 0-0.04 Hz"
+        f"({TASKS[args.task]}); wind and current feedforward but in kf14-no-ff; HF thrust "
+        "RMS = detrended thrust command in 0.05-0.25 Hz (fraction of capacity); wave-band "
+        "ratio = thrust-command power in 0.05-0.25 Hz over 0-0.04 Hz; at limit, reversals: "
+        "the busiest thrust channel"
     )
+    header = {"schema_version": DP_SCHEMA_VERSION, "units": DP_UNITS}
     write_bench_outputs(title, dp_table(rows), rows, wall, json_path=args.json,
-                        markdown=args.markdown)  # fmt: skip
+                        markdown=args.markdown, header=header)  # fmt: skip
     log.discard(args.json or args.markdown)
     if args.figures is not None:
         from shipgym.dp.bench import dp_gain_history, dp_trace
@@ -618,8 +621,9 @@ def _cmd_bench_roll(args: argparse.Namespace) -> int:
     parts.append(SEED_CLAIM)
     write_bench_outputs(title, "\n\n".join(parts), rows, wall, markdown=args.markdown)
     if args.json is not None:
-        _write_json(args.json, {"title": title, "rows": rows, "analyses": list(analyses.values()),
-                                "seed_claim": SEED_CLAIM})  # fmt: skip
+        from shipgym.rrs.bench import roll_json
+
+        _write_json(args.json, roll_json(title, rows, list(analyses.values()), SEED_CLAIM))
     log.discard(args.json or args.markdown)
     if args.figures is not None:
         from shipgym.dynamics.actuators import Rudder
@@ -718,8 +722,9 @@ def _cmd_trials(args: argparse.Namespace) -> int:
     write_bench_outputs(title, "\n\n".join(parts), study.rows, wall,
                         markdown=args.markdown)  # fmt: skip
     if args.json is not None:
-        _write_json(args.json, {"title": title, "trials": study.rows, "bias": study.bias_rows,
-                                "wall_s": wall})  # fmt: skip
+        from shipgym.trials.report import trials_json
+
+        _write_json(args.json, trials_json(title, study.rows, study.bias_rows, wall))
     if args.figures is not None:
         from shipgym.viz.trials import write_trial_figures
 
@@ -1060,7 +1065,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="a vessel with a rudder (kvlcc2-100m)")  # fmt: skip
     p.add_argument("--manoeuvres", default="all", metavar="A,B|all",
                    help="turning35_stbd, turning35_port, zigzag10, zigzag20, initial_turning, "
-                   "crash_stop, coasting_stop (all the vessel can fly)")  # fmt: skip
+                   "crash_stop, coasting_stop, turning65_half_ahead (the Schilling rudder) (all "
+                   "the vessel can fly)")  # fmt: skip
     p.add_argument("--speed", type=bounded_float(0.01, 50.0), default=None,
                    help="approach speed, m/s (the vessel's [trials] approach_speed)")  # fmt: skip
     p.add_argument("--current", default=None, metavar="SPEED@TO_DEG",

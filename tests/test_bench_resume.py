@@ -38,6 +38,16 @@ def _table(text: str) -> list[str]:
     return lines
 
 
+def _rows(path):
+    """A bench file's rows: ``rows``, or the keyed runs of ``bench roll`` (schema 2)."""
+    data = json.loads(path.read_text())
+    if "runs" in data:
+        from shipgym.rrs.bench import roll_from_json
+
+        return roll_from_json(data)[0]
+    return data["rows"]
+
+
 def _untimed(rows: list[dict]) -> list[dict]:
     return [{k: v for k, v in r.items() if k not in TIMES} for r in rows]
 
@@ -73,7 +83,7 @@ def test_a_resumed_bench_runs_the_missing_jobs_and_gives_the_whole_table(
     base = [*argv, "--workers", "1", "--no-progress"]
     assert main([*base, "--json", str(tmp_path / "whole.json")]) == 0
     whole = _table(capsys.readouterr().out)
-    rows = json.loads((tmp_path / "whole.json").read_text())["rows"]
+    rows = _rows(tmp_path / "whole.json")
     assert whole and len(rows) >= 2
     out, partial = tmp_path / "b.json", tmp_path / "b.partial.jsonl"
 
@@ -108,7 +118,7 @@ def test_a_resumed_bench_runs_the_missing_jobs_and_gives_the_whole_table(
         assert main([*base, "--json", str(out), "--resume"]) == 0
     assert _table(capsys.readouterr().out) == whole
     assert ran == [len(rows) - 1]  # the kept row was not run again
-    assert _untimed(json.loads(out.read_text())["rows"]) == _untimed(rows)
+    assert _untimed(_rows(out)) == _untimed(rows)
     assert not partial.exists()
 
 

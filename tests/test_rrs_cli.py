@@ -59,7 +59,9 @@ def test_bench_roll_command(bench):
     # the naval vessel cannot hold 12 m/s (limits.surge_speed 10 m/s): said in one line
     assert "naval-vessel: speeds 12 m/s skipped" in out
     assert "van-der-klugt: speeds" not in out
-    rows = json.loads((d / "roll.json").read_text())["rows"]
+    from shipgym.rrs.bench import roll_from_json
+
+    rows = roll_from_json(json.loads((d / "roll.json").read_text()))[0]
     cases = {(r["vessel"], r["speed"], r["method"]) for r in rows}
     assert cases == {("van-der-klugt", 8.0, "autopilot"), ("van-der-klugt", 8.0, "rrs"),
                      ("van-der-klugt", 12.0, "autopilot"), ("van-der-klugt", 12.0, "rrs"),
@@ -90,24 +92,48 @@ def test_bench_roll_command(bench):
 
 
 def test_json_has_the_linear_analyses(bench):
-    """The notes' seed-003 numbers (B6, B7) arrive in the JSON file."""
+    """The notes' seed-003 numbers (B6, B7) arrive in the JSON file, keyed records with units
+    (schema 2)."""
+    from shipgym.rrs.bench import roll_from_json
+
     _rc, _out, d = bench
     data = json.loads((d / "roll.json").read_text())
-    assert data["seed_claim"] == SEED_CLAIM
-    an = {a["vessel"]: a for a in data["analyses"]}
+    assert data["schema_version"] == 2 and data["seed_claim"] == SEED_CLAIM
+    an = data["analyses"]  # keyed by vessel, then by speed (m/s): no bare lists
     assert set(an) == {"van-der-klugt", "naval-vessel"}
     v = an["van-der-klugt"]
-    assert v["speeds"] == [8.0, 12.0]
-    assert an["naval-vessel"]["speeds"] == [8.0]  # only the speeds it can hold
-    assert v["design_speed"] == 8.0
-    assert v["roll_ratio"][0] == pytest.approx(0.172, abs=1e-2)
-    assert v["onset"]["1.0"] is None  # stable on 2-30 m/s with the full sway term
-    assert v["onset"]["0.0"][0] == pytest.approx(8.75, abs=0.1)
-    assert v["onset"]["0.2"][0] == pytest.approx(15.7, abs=0.1)
-    assert v["onset"]["0.0"][1] == pytest.approx(0.075, abs=0.01)  # oscillatory, rad/s
+    assert list(v["per_speed"]) == ["8", "12"]
+    assert list(an["naval-vessel"]["per_speed"]) == ["8"]  # only the speeds it can hold
+    assert v["design_speed_m_per_s"] == 8.0
+    at8, at12 = v["per_speed"]["8"], v["per_speed"]["12"]
+    assert at8["speed_m_per_s"] == 8.0
+    assert at8["roll_ratio"] == pytest.approx(0.172, abs=1e-2)
+    assert v["onset"]["sway x 1"] is None  # stable on 2-30 m/s with the full sway term
+    assert v["onset"]["sway x 0"]["speed_m_per_s"] == pytest.approx(8.75, abs=0.1)
+    assert v["onset"]["sway x 0.2"]["speed_m_per_s"] == pytest.approx(15.7, abs=0.1)
+    assert v["onset"]["sway x 0"]["frequency_rad_per_s"] == pytest.approx(0.075, abs=0.01)
     # 12 m/s lies above the no-sway onset: that loop is unstable there, stable at 8 m/s
-    assert v["margin"]["0.0"][0] < 0 < v["margin"]["0.0"][1]
-    assert max(v["margin"]["1.0"]) < 0 and max(v["margin_scheduled"]) < 0
+    assert at8["margin_per_s"]["sway x 0"] < 0 < at12["margin_per_s"]["sway x 0"]
+    assert max(at8["margin_per_s"]["sway x 1"], at12["margin_per_s"]["sway x 1"]) < 0
+    assert max(at8["margin_scheduled_per_s"], at12["margin_scheduled_per_s"]) < 0
+    # the runs keyed by vessel, speed, method and seed; angles in degrees, keys with units
+    run = data["runs"]["van-der-klugt"]["8"]["rrs"]["0"]
+    assert run["speed_m_per_s"] == 8.0 and run["duration_s"] == 150.0
+    assert {"roll_rms_deg", "rudder_rate_rms_deg_per_s", "v_hat_rmse_m_per_s", "rrr"} <= set(run)
+    assert data["units"]["suffixes"]["_deg"] == "deg"
+
+    def bare_list(x):
+        if isinstance(x, list):
+            return True
+        return isinstance(x, dict) and any(bare_list(y) for y in x.values())
+
+    assert not bare_list({k: data[k] for k in ("runs", "analyses")})
+    rows = roll_from_json(data)[0]  # the reader gives the SI rows back
+    r8 = next(r for r in rows if (r["vessel"], r["speed"], r["method"]) == ("van-der-klugt", 8.0,
+                                                                            "rrs"))  # fmt: skip
+    assert r8["roll_rms"] == pytest.approx(math.radians(run["roll_rms_deg"]), rel=1e-12)
+    with pytest.raises(ValueError, match="schema_version 2"):
+        roll_from_json({"rows": []})
 
 
 def test_cli_writes_the_figures(bench):
@@ -153,20 +179,20 @@ def test_write_roll_figures_from_json_rows(bench, tmp_path):
     sway scales then strings) and a trace of plain arrays; PNGs of the documented size."""
     from PIL import Image
 
-    from shipgym.rrs.bench import roll_trace
+    from shipgym.rrs.bench import roll_from_json, roll_trace
     from shipgym.viz.report import DPI
     from shipgym.viz.rrs import ROLL_SIZES, write_roll_figures
 
     _rc, _out, d = bench
-    data = json.loads((d / "roll.json").read_text())
-    analyses = {a["vessel"]: a for a in data["analyses"]}
+    rows, ans = roll_from_json(json.loads((d / "roll.json").read_text()))
+    analyses = {a["vessel"]: a for a in ans}
     tr = roll_trace(("van-der-klugt", 8.0, "rrs", 0, 150.0, "seed-test"))
     assert len(tr["t"]) == 1500 and np.all(np.diff(tr["t"]) > 0)
     for k in ("roll", "rudder", "heading_error", "v", "v_hat", "trace_P"):
         assert np.asarray(tr[k]).shape == tr["t"].shape
     rates = {"van-der-klugt": math.radians(10.0)}
     paths = write_roll_figures(
-        data["rows"], analyses, {"van-der-klugt": tr}, tmp_path, title="test", rate_limits=rates
+        rows, analyses, {"van-der-klugt": tr}, tmp_path, title="test", rate_limits=rates
     )
     names = ["roll_reduction.png", "heading_rudder.png", "stability_margin.png"]
     assert [p.name for p in paths] == [*names, "estimates_van-der-klugt.png"]

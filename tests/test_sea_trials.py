@@ -204,8 +204,9 @@ def test_shipgym_trials_runs_every_manoeuvre_and_three_S_p_in_under_5_minutes(tm
     wall = time.perf_counter() - t0
     assert wall < 300.0
     data = json.loads((tmp_path / "t.json").read_text())
-    assert len(data["trials"]) == 7 and len(data["bias"]) == 7 * 4  # three S_p and raw
-    assert all(r["imo_pass"] in (True, None) for r in data["trials"])
+    assert len(data["trials"]) == 8 and len(data["bias"]) == 8  # every manoeuvre
+    assert all(len(b) == 4 for b in data["bias"].values())  # three S_p and raw
+    assert all(r["imo_pass"] in (True, None) for r in data["trials"].values())
     assert "FAIL" not in out.stdout
     assert (tmp_path / "bias_turning35_stbd.png").is_file()
 
@@ -292,6 +293,56 @@ def test_shipgym_run_points_a_steering_task_to_trials(env_id, capsys):
     assert main(["run", env_id, "--vessel", "kvlcc2-100m", "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "steering task" in err and "shipgym trials" in err and err.count("\n") == 1
+
+
+def test_shipgym_trials_json_is_keyed_with_units_and_meets_the_seeds_cases(tmp_path):
+    """``shipgym trials --json`` (schema 2): the trials keyed by manoeuvre, the bias by
+    manoeuvre, filter and reference; every number under a key with its unit (degrees for
+    angles, no radians under a unitless key), no bare lists. Its numbers are the acceptance:
+    the half-ahead 65 deg Schilling turn's bias (S_p 0.01) 0.4-0.6 m/s and 8-12 deg, the crash
+    stop to starboard, the coasting stop to port; with a current, the water-referenced rows."""
+    from shipgym.cli import main
+    from shipgym.trials.report import DIMENSIONLESS, UNIT_SUFFIXES
+
+    path = tmp_path / "t.json"
+    assert main(["trials", "--manoeuvres", "turning65_half_ahead,crash_stop,coasting_stop",
+                 "--receiver", "dgps-pv", "--sp", "0.01", "--runs", "4", "--json", str(path),
+                 "--no-progress"]) == 0  # fmt: skip
+    data = json.loads(path.read_text())
+    assert data["schema_version"] == 2 and data["units"]["suffixes"] == UNIT_SUFFIXES
+    assert list(data["trials"]) == ["turning65_half_ahead", "crash_stop", "coasting_stop"]
+    hah = data["bias"]["turning65_half_ahead"]["S_p=0.01"]["ground"]
+    assert 0.4 <= hah["speed_bias_max_m_per_s"] <= 0.6
+    assert 8.0 <= hah["drift_bias_max_deg"] <= 12.0
+    assert hah["S_p_m2_per_s3"] == 0.01 and "raw" in data["bias"]["turning65_half_ahead"]
+    t = data["trials"]
+    assert t["turning65_half_ahead"]["U0_m_per_s"] == pytest.approx(5.95, abs=0.01)
+    assert t["turning65_half_ahead"]["rudder_angle_deg"] == pytest.approx(65.0)
+    assert t["crash_stop"]["lateral_deviation_m"] > 10.0  # to starboard
+    assert t["crash_stop"]["heading_change_at_stop_deg"] > 30.0
+    assert t["coasting_stop"]["lateral_deviation_m"] < -50.0  # to port
+    assert t["coasting_stop"]["heading_change_at_stop_deg"] < -10.0
+
+    def has_unit(k):
+        return any(k.endswith(s) for s in UNIT_SUFFIXES)
+
+    def check(x, where="", inherited=False):  # a key's unit holds for the keys under it
+        assert not isinstance(x, list), f"a bare list at {where}"
+        if isinstance(x, dict):
+            for k, v in x.items():
+                if isinstance(v, int | float) and not isinstance(v, bool):
+                    ok = inherited or has_unit(k) or k in DIMENSIONLESS
+                    assert ok, f"{where}/{k} has no unit"
+                check(v, f"{where}/{k}", inherited or has_unit(k))
+
+    check({k: data[k] for k in ("trials", "bias")})
+    # with a current: ground- and water-referenced rows (the seed's correction)
+    assert main(["trials", "--manoeuvres", "turning35_stbd", "--receiver", "dgps-pv", "--sp",
+                 "0.01", "--runs", "2", "--current", "0.25@225", "--json", str(path),
+                 "--no-progress"]) == 0  # fmt: skip
+    b = json.loads(path.read_text())["bias"]["turning35_stbd"]["S_p=0.01"]
+    assert set(b) == {"ground", "water"}
+    assert b["water"]["current"] == {"speed_m_per_s": 0.25, "direction_to_deg": 225.0}
 
 
 def test_shipgym_trials_names_bad_input(capsys):

@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from shipgym._config import is_real
 from shipgym.disturbances import CurrentConfig
+from shipgym.dynamics.actuators import MMGPropulsion
 from shipgym.dynamics.mmg import MMGHull, with_rudder
 from shipgym.dynamics.vessel import Vessel, load_vessel
 from shipgym.observers.dgps import S_P_OPTIMAL, DGPSOutput, DGPSReceiver
@@ -717,7 +718,8 @@ def trial_study(
 
     Args:
         vessel, speed, current, timestep: as for :class:`SeaTrialEnv`.
-        manoeuvres: names (``None``: every one the vessel can fly).
+        manoeuvres: names (``None``: every one the vessel can fly: the stops need a main
+            propeller, a rudder option an MMG unit).
         receiver: ``None`` or ``"dgps-pv"``. S_p: the filter settings (m^2/s^3).
         runs, seed: the Monte Carlo. antenna: ``[x, y]`` (m, body frame).
         progress: optional callable ``progress(done, total, label)``.
@@ -730,7 +732,11 @@ def trial_study(
         raise ValueError(f"unknown receiver {receiver!r}; choose None or 'dgps-pv'")
     names = manoeuvres
     if names is None:
-        names = [m for m in manoeuvre_names() if v.shafts or manoeuvre(m).kind != "stop"]
+        mmg = any(isinstance(a, MMGPropulsion) for a in v.actuators)
+        names = [
+            m for m in manoeuvre_names()
+            if (v.shafts or manoeuvre(m).kind != "stop") and (mmg or manoeuvre(m).rudder is None)
+        ]  # fmt: skip
     for m in names:
         manoeuvre(m)  # unknown names fail before any work
     sps = [float(s) for s in S_p]

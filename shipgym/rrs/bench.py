@@ -16,6 +16,10 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "ROLL_SCHEMA_VERSION",
+    "roll_from_json",
+    "roll_json",
+    "speed_key",
     "METHODS",
     "SEED_CLAIM",
     "TASKS",
@@ -320,3 +324,143 @@ def roll_analysis_table(an: dict[str, Any]) -> str:
                                    f"unstable above {o[0]:.2f} m/s (mode at {o[1]:.3f} rad/s)")
         )  # fmt: skip
     return "\n".join(lines)
+
+
+#: the schema of ``shipgym bench roll --json`` (2: keyed records with units in the keys; 1,
+#: before: a list of rows and per-speed lists, without units)
+ROLL_SCHEMA_VERSION = 2
+
+_RAD = 180.0 / math.pi
+
+#: a run row's key -> (its JSON key, the factor from the row's SI value)
+_ROLL_RUN_KEYS = {
+    "task": ("task", None), "duration": ("duration_s", 1.0),
+    "roll_rms": ("roll_rms_deg", _RAD), "roll_max": ("roll_max_deg", _RAD),
+    "heading_rms": ("heading_rms_deg", _RAD), "heading_max": ("heading_max_deg", _RAD),
+    "rudder_rms": ("rudder_rms_deg", _RAD), "rudder_rate_rms": ("rudder_rate_rms_deg_per_s", _RAD),
+    "rate_limited": ("rate_limited_fraction", 1.0), "saturated": ("saturated_fraction", 1.0),
+    "v_rms": ("v_rms_m_per_s", 1.0), "v_hat_rmse": ("v_hat_rmse_m_per_s", 1.0),
+    "trace_P": ("trace_P_mixed", 1.0), "capsized": ("capsized", None), "rrr": ("rrr", 1.0),
+}  # fmt: skip
+
+
+def _f(v: Any, k: float | None) -> Any:
+    if k is None or v is None or isinstance(v, bool):
+        return v
+    v = float(v)
+    return v * k if math.isfinite(v) else None
+
+
+def speed_key(U: float) -> str:
+    """The key of the speed ``U`` (m/s) in the roll JSON: ``"8"``, ``"12.5"`` (m/s)."""
+    return f"{float(U):g}"
+
+
+def roll_json(
+    title: str, rows: Sequence[Mapping[str, Any]], analyses: Sequence[Mapping[str, Any]],
+    seed_claim: str,
+) -> dict[str, Any]:  # fmt: skip
+    """The file of ``shipgym bench roll --json`` (:data:`ROLL_SCHEMA_VERSION`): ``runs``
+    keyed by vessel, speed (:func:`speed_key`, m/s), method and seed (``"0"``), each a record
+    of the run's metrics with the unit in every key (degrees for angles); ``analyses`` keyed
+    by vessel, its ``per_speed`` results keyed by speed (``roll_ratio``, the margins in 1/s
+    keyed by the sway-gain scale), the onsets keyed by scale; ``units``: the key suffixes."""
+    runs: dict[str, Any] = {}
+    for r in rows:
+        rec = {key: _f(r.get(k), f) for k, (key, f) in _ROLL_RUN_KEYS.items() if k in r}
+        rec["speed_m_per_s"] = float(r["speed"])
+        (runs.setdefault(r["vessel"], {}).setdefault(speed_key(r["speed"]), {})
+         .setdefault(r["method"], {}))[str(int(r["seed"]))] = rec  # fmt: skip
+    an_out: dict[str, Any] = {}
+    for an in analyses:
+        scales = list(an["margin"])
+        per = {}
+        for i, U in enumerate(an["speeds"]):
+            per[speed_key(U)] = {
+                "speed_m_per_s": float(U),
+                "roll_ratio": float(an["roll_ratio"][i]),
+                "margin_per_s": {f"sway x {s:g}": float(an["margin"][s][i]) for s in scales},
+                "margin_scheduled_per_s": float(an["margin_scheduled"][i]),
+            }
+        onset = {
+            f"sway x {s:g}": None if o is None else {"speed_m_per_s": float(o[0]),
+                                                     "frequency_rad_per_s": float(o[1])}
+            for s, o in an["onset"].items()
+        }  # fmt: skip
+        an_out[an["vessel"]] = {
+            "design_speed_m_per_s": float(an["design_speed"]),
+            "top_speed_m_per_s": float(an["top"]),
+            "gain": dict(
+                zip(("v", "r", "psi", "p", "phi"), (float(k) for k in an["gain"]), strict=True)
+            ),  # fmt: skip
+            "per_speed": per,
+            "onset": onset,
+        }
+    return {
+        "schema_version": ROLL_SCHEMA_VERSION,
+        "title": title,
+        "units": {
+            "suffixes": {
+                "_deg": "deg",
+                "_deg_per_s": "deg/s",
+                "_m_per_s": "m/s",
+                "_s": "s",
+                "_per_s": "1/s",
+                "_rad_per_s": "rad/s",
+                "_fraction": "1 (of the time)",
+                "_mixed": "the trace of the observer's covariance (mixed units)",
+            },
+            "dimensionless": ["rrr", "roll_ratio"],
+            "gain": "rad of rudder per unit of the state: v (m/s), r (rad/s), psi (rad), p "
+            "(rad/s), phi (rad)",
+            "keys": "runs: vessel, speed (m/s), method, seed; analyses: vessel, speed (m/s)",
+        },  # fmt: skip
+        "runs": runs,
+        "analyses": an_out,
+        "seed_claim": seed_claim,
+    }
+
+
+def roll_from_json(data: Mapping[str, Any]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The rows of :func:`bench_roll` and the analyses of :func:`roll_analysis` (SI, as in
+    memory) from a file of :func:`roll_json`, for :func:`shipgym.viz.rrs.write_roll_figures`.
+
+    Raises:
+        ValueError: another schema version.
+    """
+    ver = data.get("schema_version")
+    if ver != ROLL_SCHEMA_VERSION:
+        raise ValueError(
+            f"a bench roll file of schema_version {ROLL_SCHEMA_VERSION} is needed, got {ver!r}"
+        )
+    back = {key: (k, f) for k, (key, f) in _ROLL_RUN_KEYS.items()}
+    rows = []
+    for vessel, speeds in data["runs"].items():
+        for methods in speeds.values():
+            for method, seeds in methods.items():
+                for seed, rec in seeds.items():
+                    row: dict[str, Any] = {"vessel": vessel, "speed": rec["speed_m_per_s"],
+                                           "method": method, "seed": int(seed)}  # fmt: skip
+                    for key, v in rec.items():
+                        if key in back:
+                            k, f = back[key]
+                            row[k] = _f(v, None if f is None else 1.0 / f)
+                            if row[k] is None and f is not None:
+                                row[k] = math.nan
+                    rows.append(row)
+    analyses = []
+    for vessel, an in data["analyses"].items():
+        per = list(an["per_speed"].values())
+        scales = [float(s.removeprefix("sway x ")) for s in per[0]["margin_per_s"]] if per else []
+        analyses.append({
+            "vessel": vessel, "speeds": [p["speed_m_per_s"] for p in per],
+            "design_speed": an["design_speed_m_per_s"], "top": an["top_speed_m_per_s"],
+            "gain": list(an["gain"].values()),
+            "margin": {s: [p["margin_per_s"][f"sway x {s:g}"] for p in per] for s in scales},
+            "margin_scheduled": [p["margin_scheduled_per_s"] for p in per],
+            "roll_ratio": [p["roll_ratio"] for p in per],
+            "onset": {float(k.removeprefix("sway x ")): None if o is None else
+                      (o["speed_m_per_s"], o["frequency_rad_per_s"])
+                      for k, o in an["onset"].items()},
+        })  # fmt: skip
+    return rows, analyses
