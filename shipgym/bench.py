@@ -495,10 +495,12 @@ def write_bench_outputs(
     *,
     json_path: Path | None = None,
     markdown: Path | None = None,
+    header: Mapping[str, Any] | None = None,
 ) -> None:
     """Print a benchmark's title and table; write its rows (JSON) and table (markdown).
 
-    Each file is written atomically (a complete file or the earlier one).
+    Each file is written atomically (a complete file or the earlier one). ``header``: more
+    keys of the JSON document before its rows (a ``schema_version``, ``units``).
 
     Raises:
         shipgym._io.WriteFailed: a file could not be written; its content is in ``results``
@@ -510,7 +512,8 @@ def write_bench_outputs(
     print(table)
     print(f"{len(rows)} runs in {wall:.1f} s")
     outputs = (
-        (json_path, json.dumps(jsonable({"title": title, "rows": rows}), indent=2), "rows"),
+        (json_path, json.dumps(jsonable({"title": title, **(header or {}), "rows": rows}),
+                               indent=2), "rows"),  # fmt: skip
         (markdown, f"{title}\n\n{table}\n", "table"),
     )
     for path, text, what in outputs:

@@ -61,8 +61,20 @@ def test_dp_table_and_cli(tmp_path, capsys):
          "--json", str(out), "--markdown", str(md), "--no-progress"]
     )  # fmt: skip
     assert rc == 0
-    rows = json.loads(out.read_text())["rows"]
+    doc = json.loads(out.read_text())
+    rows = doc["rows"]
     assert {r["method"] for r in rows} == {"kf14", "semiconstant"}
+    # machine-readable: a schema version, units for the keys without one, keyed records
+    assert doc["schema_version"] == 2
+    for r in rows:
+        assert set(r["thrust_usage"]) == {"X", "Y", "N"}
+        assert set(r["lf_rmse"]) == {"x_m", "y_m", "psi_deg"}
+        assert r["feedforward"] == "wind+current"
+        for key, value in r.items():
+            unit = key.endswith(("_m", "_deg", "_s", "_pct", "_us", "_per_min"))
+            if isinstance(value, int | float) and not isinstance(value, bool) and not unit:
+                assert key in doc["units"], key
+        assert not any(isinstance(v, list) for v in r.values())
     assert "| wimpey-sealab | 6 | kf14 |" in md.read_text()
     assert dp_table(rows).count("\n") == 3
     for bad in (["--beaufort", "4"], ["--methods", "kf99"], ["--duration", "10"]):

@@ -1,13 +1,14 @@
 r"""``shipgym bench dp``: the wave filters of Al-Takie (1982) in closed loop, Beaufort 5-9.
 
-Public names: ``METHODS``, ``bench_dp``, ``dp_gain_history``, ``dp_run``, ``dp_table``,
-``dp_trace``, ``TASKS``, ``thesis_controller``.
+Public names: ``DP_SCHEMA_VERSION``, ``DP_UNITS``, ``METHODS``, ``bench_dp``,
+``dp_gain_history``, ``dp_run``, ``dp_table``, ``dp_trace``, ``TASKS``, ``thesis_controller``.
 
 Design notes: docs/design/dp.bench.md.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -19,6 +20,8 @@ from shipgym._text import did_you_mean
 from .metrics import dp_metrics, step_metrics
 
 __all__ = [
+    "DP_SCHEMA_VERSION",
+    "DP_UNITS",
     "METHODS",
     "bench_dp",
     "dp_gain_history",
@@ -44,6 +47,28 @@ METHODS: dict[str, tuple[str, str, dict[str, Any] | None, str | None]] = {
     "kf14-bf5": ("alt-kf14", "thesis-lq", {"beaufort": 5}, None),
     "kf14-noise100": ("alt-kf14", "thesis-lq", None, "noise100"),
     "kf14-no-ff": ("alt-kf14", "thesis-lq", None, "no-ff"),
+}
+
+
+#: the schema of ``shipgym bench dp --json`` rows (2: keyed records, units in the keys or in
+#: :data:`DP_UNITS`, the feedforward, HF thrust RMS and chatter columns; 1, before: per-DOF
+#: lists without units)
+DP_SCHEMA_VERSION = 2
+
+#: the units of the row keys whose names carry none (the others end in ``_m``, ``_deg``,
+#: ``_s``, ``_pct``, ``_us``, ``_per_min``)
+DP_UNITS: dict[str, str] = {
+    "thrust_usage": "1: mean |tau_c| / capacity per DOF (X, Y, N)",
+    "thrust_usage_mean": "1: the mean of thrust_usage",
+    "hf_thrust_rms": (
+        "1: sqrt of the summed 0.05-0.25 Hz powers of the detrended tau_c / capacity (X, Y, N)"
+    ),
+    "wave_band_ratio": "1: thrust-command power 0.05-0.25 Hz over 0-0.04 Hz",
+    "lf_rmse": "m (x_m, y_m) and deg (psi_deg): the estimate's error against the truth",
+    "nis_mean": "1: mean normalised innovation squared (3 DOF: about 3 when consistent)",
+    "samples": "count",
+    "seed": "count",
+    "beaufort": "Beaufort number",
 }
 
 
@@ -164,6 +189,11 @@ def dp_run(job: tuple[Any, ...]) -> dict[str, Any]:
         nis=nis_a[np.isfinite(nis_a)] if np.isfinite(nis_a).any() else None,
         nis_dof=3,
     )
+    usage = m["thrust_usage"]
+    m["thrust_usage"] = dict(zip(("X", "Y", "N"), usage, strict=True))
+    if m["lf_rmse"] is not None:
+        ex, ey, epsi = m["lf_rmse"]
+        m["lf_rmse"] = {"x_m": ex, "y_m": ey, "psi_deg": math.degrees(epsi)}
     m.update(
         vessel=vessel_name,
         beaufort=bf,
@@ -345,7 +375,7 @@ def dp_table(rows: Sequence[dict[str, Any]]) -> str:
     lines = [head]
     for (v, bf, m), rs in keys.items():
         lf = [r.get("lf_rmse") for r in rs]
-        lf_xy = [None if x is None else float(np.hypot(x[0], x[1])) for x in lf]
+        lf_xy = [None if x is None else float(np.hypot(x["x_m"], x["y_m"])) for x in lf]
         lines.append(
             f"| {v} | {bf} | {m} | "
             f"{table_cell([r['position_rms_m'] for r in rs], '.2f')} | "
