@@ -123,6 +123,30 @@ def test_C10_current_shifts_the_drift_angle_as_the_geometry_says():
                                atol=1e-3)  # fmt: skip
 
 
+def test_the_water_referenced_track_is_the_calm_water_trial(tmp_path):
+    """The ITTC way with a current: the track less the current's drift and the velocity
+    through the water give back the calm-water trial (the hull feels only the water), its
+    velocities equal the seed's correction (observers.dgps.water_velocity, written apart),
+    and ``trial_current.png`` draws both tracks and both drift angles (the seed's Fig. 1)."""
+    from shipgym.observers.dgps import water_velocity
+    from shipgym.viz.trials import write_trial_figures
+
+    calm = run_trial("kvlcc2-100m", "turning35_stbd", record_period=0.5)
+    cur = run_trial("kvlcc2-100m", "turning35_stbd", current="0.25@225", record_period=0.5)
+    w = cur.water_referenced()
+    assert w.current == (0.0, 0.0) and calm.water_referenced() is calm
+    np.testing.assert_allclose(w.eta, calm.eta, atol=1e-6)
+    np.testing.assert_allclose(w.nu, calm.nu, atol=1e-6)
+    seed = water_velocity(cur.nu[:, :2], cur.eta[:, 2], 0.25, math.radians(225.0))
+    np.testing.assert_allclose(w.nu[:, :2], seed, atol=1e-12)
+    assert w.metrics().advance / w.L == pytest.approx(3.37, abs=0.05)
+    assert abs(cur.metrics().tactical_diameter - w.metrics().tactical_diameter) > 5.0
+    study = trial_study("kvlcc2-100m", ["turning35_stbd"], current="0.25@225")
+    assert [r["reference"] for r in study.rows] == ["ground", "water"]
+    paths = write_trial_figures(study, tmp_path, title="t")
+    assert str(tmp_path / "trial_current.png") in paths
+
+
 # ---- the env --------------------------------------------------------------------------------
 def test_the_registered_trial_is_the_tankers_turn_and_reports_the_figures():
     env = gym.make("shipgym/SeaTrial-v0", receiver="dgps-pv")
@@ -206,7 +230,7 @@ def test_shipgym_trials_runs_every_manoeuvre_and_three_S_p_in_under_5_minutes(tm
     data = json.loads((tmp_path / "t.json").read_text())
     assert len(data["trials"]) == 8 and len(data["bias"]) == 8  # every manoeuvre
     assert all(len(b) == 4 for b in data["bias"].values())  # three S_p and raw
-    assert all(r["imo_pass"] in (True, None) for r in data["trials"].values())
+    assert all(r["ground"]["imo_pass"] in (True, None) for r in data["trials"].values())
     assert "FAIL" not in out.stdout
     assert (tmp_path / "bias_turning35_stbd.png").is_file()
 
@@ -315,7 +339,8 @@ def test_shipgym_trials_json_is_keyed_with_units_and_meets_the_seeds_cases(tmp_p
     assert 0.4 <= hah["speed_bias_max_m_per_s"] <= 0.6
     assert 8.0 <= hah["drift_bias_max_deg"] <= 12.0
     assert hah["S_p_m2_per_s3"] == 0.01 and "raw" in data["bias"]["turning65_half_ahead"]
-    t = data["trials"]
+    t = {m: r["ground"] for m, r in data["trials"].items()}
+    assert all(list(r) == ["ground"] for r in data["trials"].values())  # no current
     assert t["turning65_half_ahead"]["U0_m_per_s"] == pytest.approx(5.95, abs=0.01)
     assert t["turning65_half_ahead"]["rudder_angle_deg"] == pytest.approx(65.0)
     assert t["crash_stop"]["lateral_deviation_m"] > 10.0  # to starboard
@@ -340,9 +365,17 @@ def test_shipgym_trials_json_is_keyed_with_units_and_meets_the_seeds_cases(tmp_p
     assert main(["trials", "--manoeuvres", "turning35_stbd", "--receiver", "dgps-pv", "--sp",
                  "0.01", "--runs", "2", "--current", "0.25@225", "--json", str(path),
                  "--no-progress"]) == 0  # fmt: skip
-    b = json.loads(path.read_text())["bias"]["turning35_stbd"]["S_p=0.01"]
+    data = json.loads(path.read_text())
+    b = data["bias"]["turning35_stbd"]["S_p=0.01"]
     assert set(b) == {"ground", "water"}
     assert b["water"]["current"] == {"speed_m_per_s": 0.25, "direction_to_deg": 225.0}
+    # the IMO figures of the water-referenced track (the ITTC way) next to the ground track's:
+    # through the water the turn is the calm-water one (advance 3.37 L, tactical 3.14 L)
+    tr = data["trials"]["turning35_stbd"]
+    assert tr["water"]["reference"] == "water"
+    assert tr["water"]["advance_m"] == pytest.approx(337.2, abs=0.5)
+    assert tr["water"]["tactical_diameter_m"] == pytest.approx(313.6, abs=0.5)
+    assert abs(tr["ground"]["tactical_diameter_m"] - tr["water"]["tactical_diameter_m"]) > 5.0
 
 
 def test_shipgym_trials_names_bad_input(capsys):

@@ -17,6 +17,7 @@ trials (``gymnasium.make_vec``), and :class:`SeaTrialEnv` is its batch of one.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -170,6 +171,25 @@ class TrialRecord:
     def criteria(self) -> list[tuple[str, float, float, bool]]:
         """:func:`~shipgym.trials.metrics.imo_criteria` of this record's metrics."""
         return imo_criteria(self.metrics(), self.L, self.U0)
+
+    def water_referenced(self) -> TrialRecord:
+        """The same trial referenced to the water (the ITTC way, ITTC 7.5-04-02-01 (2017)):
+        the track less the current's drift since the start, ``[x, y] - V_c [cos gamma_c,
+        sin gamma_c] (t - t_0)``, and the body velocity through the water, ``u - V_c
+        cos(gamma_c - psi)``, ``v - V_c sin(gamma_c - psi)`` (Artyszuk 2003 section 1, the
+        current constant in NED); ``current`` then ``(0, 0)``. Without a current: this record."""
+        V, g = self.current
+        if V == 0.0:
+            return self
+        dt = self.t - self.t[0]
+        eta = self.eta.copy()
+        eta[:, 0] -= V * math.cos(g) * dt
+        eta[:, 1] -= V * math.sin(g) * dt
+        psi = self.eta[:, 2]
+        nu = self.nu.copy()
+        nu[:, 0] -= V * np.cos(g - psi)
+        nu[:, 1] -= V * np.sin(g - psi)
+        return dataclasses.replace(self, eta=eta, nu=nu, current=(0.0, 0.0))
 
 
 class SeaTrialTask(StepTask):
@@ -685,9 +705,11 @@ def _until_stopped(rec: TrialRecord) -> TrialRecord:
 
 @dataclass(frozen=True)
 class TrialStudy:
-    """The result of :func:`trial_study`: the records, the trial rows (SI, with the IMO
-    criteria), the receiver-bias rows (SI) and the :class:`~shipgym.trials.bias.ReceiverBias`
-    objects by ``(manoeuvre, S_p or "raw", corrected)``."""
+    """The result of :func:`trial_study`: the records (over ground), the trial rows (SI, with
+    the IMO criteria; with a current a second, water-referenced row per manoeuvre, its
+    ``reference`` ``"water"``), the receiver-bias rows (SI) and the
+    :class:`~shipgym.trials.bias.ReceiverBias` objects by ``(manoeuvre, S_p or "raw",
+    corrected)``."""
 
     records: dict[str, TrialRecord]
     rows: list[dict[str, Any]]
@@ -750,6 +772,10 @@ def trial_study(
         met = rec.metrics()
         rows.append(trial_row(v.name, met, imo_criteria(met, rec.L, rec.U0), rec.L, rec.U0,
                               rec.current))  # fmt: skip
+        if rec.current[0] > 0:  # and the figures of the water-referenced track (the ITTC way)
+            wm = rec.water_referenced().metrics()
+            rows.append(trial_row(v.name, wm, imo_criteria(wm, rec.L, rec.U0), rec.L, rec.U0,
+                                  rec.current, reference="water"))  # fmt: skip
         if receiver is not None:
             cut = _until_stopped(rec) if manoeuvre(m).kind == "stop" else rec
             modes = [False, True] if rec.current[0] > 0 else [False]

@@ -45,7 +45,7 @@ _FIGURES = (
 
 def trial_row(
     vessel: str, metrics: Any, criteria: Sequence[tuple[str, float, float, bool]], L: float,
-    U0: float, current: tuple[float, float] = (0.0, 0.0),
+    U0: float, current: tuple[float, float] = (0.0, 0.0), *, reference: str = "ground",
 ) -> dict[str, Any]:  # fmt: skip
     """One manoeuvre's row: SI figures (m, s, rad), the IMO criteria and their verdict.
 
@@ -53,12 +53,17 @@ def trial_row(
         vessel: its name. metrics: :class:`~shipgym.trials.metrics.TrialMetrics`.
         criteria: :func:`~shipgym.trials.metrics.imo_criteria`'s list.
         L: ship length (m); U0: approach speed (m/s); current: ``(m/s, direction to, rad)``.
+        reference: ``"ground"`` (the track over ground) or ``"water"`` (the track less the
+            current's drift, :meth:`~shipgym.envs.seatrial.TrialRecord.water_referenced`).
     """
+    if reference not in ("ground", "water"):
+        raise ValueError(f"reference must be 'ground' or 'water', got {reference!r}")
     d = dict(metrics.as_dict())
     for i, o in enumerate(d.pop("overshoots", ())):
         d[f"overshoot_{i + 1}"] = o
     return {
-        "vessel": vessel, "L": L, "U0": U0, "current": list(current), **d,
+        "vessel": vessel, "L": L, "U0": U0, "current": list(current), "reference": reference,
+        **d,
         "imo": [{"criterion": c, "value": v, "limit": lim, "passed": ok}
                 for c, v, lim, ok in criteria],
         "imo_pass": all(c[3] for c in criteria) if criteria else None,
@@ -86,7 +91,8 @@ def trials_table(rows: Sequence[Mapping[str, Any]]) -> str:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         verdict = {True: "pass", False: "FAIL", None: "-"}[r.get("imo_pass")]
-        cells = [r["vessel"], r["manoeuvre"], *[_cell(r, k, s) for k, _t, s in cols], verdict]
+        name = r["manoeuvre"] + (" (through the water)" if r.get("reference") == "water" else "")
+        cells = [r["vessel"], name, *[_cell(r, k, s) for k, _t, s in cols], verdict]
         lines.append("| " + " | ".join(cells) + " |")
     crit = ["", "| vessel | manoeuvre | IMO MSC.137(76) criterion | value | limit | |",
             "|---|---|---|---|---|---|"]  # fmt: skip
@@ -97,7 +103,8 @@ def trials_table(rows: Sequence[Mapping[str, Any]]) -> str:
             val = c["value"] * _DEG if ang else c["value"] / float(r["L"])
             lim = c["limit"] * _DEG if ang else c["limit"] / float(r["L"])
             unit = "deg" if ang else "L"
-            crit.append(f"| {r['vessel']} | {r['manoeuvre']} | {text} | {val:.3f} {unit} | "
+            name = r["manoeuvre"] + (" (water)" if r.get("reference") == "water" else "")
+            crit.append(f"| {r['vessel']} | {name} | {text} | {val:.3f} {unit} | "
                         f"{lim:.3f} {unit} | {'pass' if c['passed'] else 'FAIL'} |")  # fmt: skip
     return "\n".join(lines + (crit if len(crit) > 3 else []))
 
@@ -190,6 +197,7 @@ def trial_record(row: Mapping[str, Any]) -> dict[str, Any]:
     (degrees for angles), the overshoots keyed ``"1"``, ``"2"``, ... and the IMO criteria
     keyed by their text."""
     out: dict[str, Any] = {"vessel": row["vessel"], "manoeuvre": row["manoeuvre"],
+                           "reference": row.get("reference", "ground"),
                            "kind": row.get("kind"), "L_m": float(row["L"]),
                            "U0_m_per_s": float(row["U0"]),
                            "current": _current(row["current"])}  # fmt: skip
@@ -238,17 +246,22 @@ def trials_json(
     wall: float,
 ) -> dict[str, Any]:  # fmt: skip
     """The file of ``shipgym trials --json`` (:data:`TRIALS_SCHEMA_VERSION`): ``trials``
-    keyed by manoeuvre (:func:`trial_record`), ``bias`` keyed by manoeuvre, filter and
-    reference (:func:`bias_key`, :func:`bias_record`), the ``units`` of the key suffixes."""
+    keyed by manoeuvre and reference (``"ground"``; with a current also ``"water"``, the
+    water-referenced track's figures; :func:`trial_record`), ``bias`` keyed by manoeuvre,
+    filter and reference (:func:`bias_key`, :func:`bias_record`), the ``units`` of the key
+    suffixes."""
     bias: dict[str, dict[str, dict[str, Any]]] = {}
     for r in bias_rows:
         filt, ref = bias_key(r)
         bias.setdefault(r["manoeuvre"], {}).setdefault(filt, {})[ref] = bias_record(r)
+    trials: dict[str, dict[str, Any]] = {}
+    for r in rows:
+        trials.setdefault(r["manoeuvre"], {})[r.get("reference", "ground")] = trial_record(r)
     return {
         "schema_version": TRIALS_SCHEMA_VERSION,
         "title": title,
         "units": {"suffixes": dict(UNIT_SUFFIXES), "dimensionless": list(DIMENSIONLESS)},
-        "trials": {r["manoeuvre"]: trial_record(r) for r in rows},
+        "trials": trials,
         "bias": bias,
         "wall_s": float(wall),
     }

@@ -5,6 +5,8 @@
 - :func:`plot_bias`: speed, drift angle and position error against time, the truth and the
   receiver's estimate for each ``S_p`` (the seed's Figs. 2-7);
 - :func:`plot_histories`: speed, drift angle and rudder against time of trials;
+- :func:`plot_current`: with a current, the tracks and drift angles over ground next to the
+  water-referenced ones (the ITTC way; Artyszuk 2003 Fig. 1);
 - :func:`write_trial_figures`: all of them for a ``shipgym trials`` study.
 
 Inputs in SI (m, rad, m/s, s); angles are plotted in degrees. matplotlib is imported inside
@@ -25,7 +27,7 @@ from numpy.typing import ArrayLike
 
 from .report import DPI
 
-__all__ = ["plot_bias", "plot_histories", "plot_tracks", "write_trial_figures"]
+__all__ = ["plot_bias", "plot_current", "plot_histories", "plot_tracks", "write_trial_figures"]
 
 _DEG = 180.0 / math.pi
 
@@ -174,13 +176,58 @@ def plot_histories(records: Mapping[str, Any], *, path: str | os.PathLike[str] |
     return _saved(fig, path)
 
 
+def plot_current(
+    records: Mapping[str, Any], L: float, *, path: str | os.PathLike[str] | None = None,
+    title: str = "",
+) -> Any:  # fmt: skip
+    """The current's effect on trials (Artyszuk 2003 Fig. 1): left, each track over ground
+    (solid) next to the water-referenced track (dashed, the ITTC way: the track less the
+    current's drift); right, the drift angle over ground (solid) and through the water
+    (dashed) against time: the same manoeuvre through the water, another over ground.
+
+    Args:
+        records: label -> a :class:`~shipgym.envs.seatrial.TrialRecord` (its ``current``
+            and :meth:`~shipgym.envs.seatrial.TrialRecord.water_referenced`).
+        L: ship length (m), the unit of the track axes.
+        path: save the figure there (PNG) when given.
+        title: the figure title.
+    """
+    if not (math.isfinite(L) and L > 0):
+        raise ValueError(f"L must be > 0 m, got {L!r}")
+    fig = _figure((12.0, 6.0))
+    ax_t, ax_b = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    for label, rec in records.items():
+        w = rec.water_referenced()
+        (line,) = ax_t.plot(rec.eta[:, 1] / L, rec.eta[:, 0] / L, lw=1.2,
+                            label=f"{label}, over ground")  # fmt: skip
+        c = line.get_color()
+        ax_t.plot(w.eta[:, 1] / L, w.eta[:, 0] / L, "--", color=c, lw=1.0,
+                  label=f"{label}, through the water")  # fmt: skip
+        for r, style, what in ((rec, "-", "over ground"), (w, "--", "through the water")):
+            beta = np.degrees(np.arctan2(-r.nu[:, 1], r.nu[:, 0]))
+            ax_b.plot(r.t, beta, style, color=c, lw=1.0, label=f"{label}, {what}")
+    ax_t.set_xlabel("east y / L")
+    ax_t.set_ylabel("north x / L")
+    ax_t.set_aspect("equal", adjustable="datalim")
+    ax_b.set_xlabel("time (s)")
+    ax_b.set_ylabel("drift angle beta (deg)")
+    for ax in (ax_t, ax_b):
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    if title:
+        fig.suptitle(title)
+    return _saved(fig, path)
+
+
 def write_trial_figures(
     study: Any, folder: str | os.PathLike[str], *, title: str = ""
 ) -> list[str]:
     """The figures of a :class:`~shipgym.envs.seatrial.TrialStudy` in ``folder`` (PNG): the
-    tracks (``trial_tracks.png``), the time histories (``trial_histories.png``) and, with a
-    receiver, one bias figure per manoeuvre (``bias_<manoeuvre>.png``, every ``S_p``, the
-    ground-referenced estimate). Returns the paths written."""
+    tracks (``trial_tracks.png``), the time histories (``trial_histories.png``), with a
+    current the ground and water-referenced tracks and drift angles (``trial_current.png``,
+    :func:`plot_current`) and, with a receiver, one bias figure per manoeuvre
+    (``bias_<manoeuvre>.png``, every ``S_p``, the ground-referenced estimate). Returns the
+    paths written."""
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     recs = study.records
@@ -193,6 +240,12 @@ def write_trial_figures(
     written.append(str(out / "trial_tracks.png"))
     plot_histories(recs, path=out / "trial_histories.png", title=f"{title}: histories")
     written.append(str(out / "trial_histories.png"))
+    current = next(iter(recs.values())).current
+    if current[0] > 0:  # the water-referenced tracks and drift angles next to the ground's
+        plot_current(recs, L, path=out / "trial_current.png",
+                     title=f"{title}: current {current[0]:g} m/s to "
+                     f"{math.degrees(current[1]) % 360:g} deg")  # fmt: skip
+        written.append(str(out / "trial_current.png"))
     for m in recs:
         found = {sp: b for (mm, sp, corr), b in study.bias.items()
                  if mm == m and not corr and sp != "raw"}  # fmt: skip
