@@ -706,9 +706,13 @@ def _cmd_trials(args: argparse.Namespace) -> int:
     wall = time.perf_counter() - t0
     rec0 = next(iter(study.records.values()))
     cur = rec0.current
+    U0 = max(r.U0 for r in study.records.values())  # full ahead (a half-ahead turn: slower)
+    slower = {m: r.U0 for m, r in study.records.items() if r.U0 < U0}
     title = (
         f"Sea trials (IMO MSC.137(76)) of {v.name}: L = {rec0.L:g} m, approach speed "
-        f"{rec0.U0:g} m/s (L/V {rec0.L / rec0.U0:.1f} s), current "
+        f"{U0:g} m/s (L/V {rec0.L / U0:.1f} s"
+        + "".join(f"; {m} from {u:.3g} m/s" for m, u in slower.items())
+        + "), current "
         + (f"{cur[0]:g} m/s to {math.degrees(cur[1]):g} deg" if cur[0] > 0 else "none")
     )
     parts = [trials_table(study.rows)]

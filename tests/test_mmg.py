@@ -219,7 +219,7 @@ def test_rudder_normal_coefficient_is_the_mmg_law_without_stall_and_holds_past_i
     """No stall (the MMG standard, every ship's default): ``f_alpha sin alpha_R`` at every
     angle, from astern too; the Schilling option: Fujii's slope ratio for an effective aspect
     ratio doubled by the end plates (by hand: Lambda = 0.345^2 / 0.0539 = 2.2083, Fujii 3.0363
-    and 4.0597 at 2 Lambda: f_alpha 2.747 x 1.3370 = 3.6729), the sine law to 70 deg, then
+    and 4.0611 at 2 Lambda: f_alpha 2.747 x 1.3375 = 3.6741), the sine law to 70 deg, then
     0.7 of the stall's value."""
     from shipgym.dynamics.mmg import (
         RUDDER_OPTIONS,

@@ -260,6 +260,29 @@ def test_zigzags_initial_turning_and_crash_stop_of_the_tanker(runs):
     assert cy.lateral_deviation > 10.0 and cy.heading_change_at_stop > 0
 
 
+def test_crash_stop_side_force_turns_to_starboard(runs):
+    """The crash stop with c_y = 0.1 (the kvlcc2-100m default): 148.0 s, 4.97 L, 27.6 m and
+    43.3 deg to starboard (the docs' figures of the MuJoCo hull)."""
+    cy = _metrics(runs, "crash_stop", "crash_stop_cy")
+    assert cy.time_to_stop == pytest.approx(148.0, abs=0.5)
+    assert cy.track_reach / L == pytest.approx(4.97, abs=0.01)
+    assert cy.lateral_deviation == pytest.approx(27.6, abs=0.3)
+    assert cy.heading_change_at_stop / D == pytest.approx(43.3, abs=0.3)
+
+
+@pytest.mark.slow
+def test_coasting_stop_with_the_braking_side_force_turns_to_port():
+    """The coasting stop with c_y_brake = 0.05 (the kvlcc2-100m default): 2 m/s at 477.9 s,
+    16.94 L, 101.5 m and 19.1 deg to port (the docs' figures of the MuJoCo hull)."""
+    m = MMGModel(dataclasses.replace(kvlcc2(100.0), c_y_brake=0.05))
+    t, eta, nu, d = _simulate(m, m.self_propulsion(U0), ["coasting_stop"], 520.0)["coasting_stop"]
+    c = trial_metrics("coasting_stop", t, eta, nu, L, U0, delta=d)
+    assert c.time_to_stop == pytest.approx(477.9, abs=0.5)
+    assert c.track_reach / L == pytest.approx(16.94, abs=0.02)
+    assert c.lateral_deviation == pytest.approx(-101.5, abs=1.0)
+    assert c.heading_change_at_stop / D == pytest.approx(-19.1, abs=0.3)
+
+
 @pytest.mark.slow
 def test_coasting_stop_of_the_tanker():
     """Notes 3.4 (a stopped propeller without drag): half speed at 205 s / 1001 m, 2 m/s at

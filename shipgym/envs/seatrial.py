@@ -173,7 +173,7 @@ class TrialRecord:
         return imo_criteria(self.metrics(), self.L, self.U0)
 
     def water_referenced(self) -> TrialRecord:
-        """The same trial referenced to the water (the ITTC way, ITTC 7.5-04-02-01 (2017)):
+        """The same trial referenced to the water (the ITTC way, ITTC 7.5-04-02-01):
         the track less the current's drift since the start, ``[x, y] - V_c [cos gamma_c,
         sin gamma_c] (t - t_0)``, and the body velocity through the water, ``u - V_c
         cos(gamma_c - psi)``, ``v - V_c sin(gamma_c - psi)`` (Artyszuk 2003 section 1, the

@@ -3,6 +3,16 @@ r"""The IMO manoeuvres of a sea trial as scripts (IMO MSC.137(76) (2002); Artysz
 Public names: ``MANOEUVRES``, ``InitialTurning``, ``Scripts`` (the scripts of N envs as one
 law), ``Stop``, ``TurningCircle``, ``ZigZag``, ``manoeuvre``, ...
 
+The half-ahead 65 deg turn (``turning65_half_ahead``, Artyszuk 2003 Figs. 2-3: "turning test
+data at half ahead speed and 65 deg rudder (of Schilling type)") is flown with the Schilling
+rudder option (:data:`shipgym.dynamics.mmg.RUDDER_OPTIONS`) from the steady speed of the
+half-ahead shaft command :data:`HALF_AHEAD`. The seed prints neither the ship's half-ahead
+setting nor its speed; 0.85 of the full-ahead command is [chosen] (a controllable-pitch
+propeller's half-ahead pitch at a constant shaft speed), the value at which this hull's turn
+shows the seed's "order 0.5 m/s and 10 deg" receiver bias: the bias grows with the approach
+speed of the turn (0.15 m/s and 5.0 deg at 0.5 n0, 0.47 m/s and 8.9 deg at 0.85 n0, 0.65 m/s
+and 10.8 deg at n0; docs/papers/artyszuk-2003.md).
+
 Design notes: docs/design/trials.manoeuvres.md.
 """
 
@@ -219,8 +229,8 @@ class Stop:
 
 Manoeuvre = TurningCircle | ZigZag | InitialTurning | Stop
 
-#: the half-ahead shaft command, a fraction of the full-ahead approach command ``n0`` (1):
-#: the telegraph's half ahead [chosen, see the module docstring]
+#: the half-ahead shaft command, a fraction of the full-ahead approach command ``n0`` (1)
+#: [chosen, see the module docstring]
 HALF_AHEAD = 0.85
 
 #: the manoeuvres by name (IMO MSC.137(76) (2002); the coasting stop of Artyszuk 2003 §3)

@@ -28,6 +28,7 @@ _DEG = 180.0 / math.pi
 #: the trial figures of the table: key, column title, scale ("L": per ship length, "deg",
 #: "s", "m/s", "1")
 _FIGURES = (
+    ("U0", "approach (m/s)", "m/s"),
     ("advance", "advance (L)", "L"),
     ("transfer", "transfer (L)", "L"),
     ("tactical_diameter", "tactical diam. (L)", "L"),
