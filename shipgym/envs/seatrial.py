@@ -281,10 +281,12 @@ class SeaTrialTask(StepTask):
             raise ValueError(
                 f"a reduced-shaft approach needs a main propeller; {v.name!r} has none"
             )
+        shaft = self._shaft
         speeds = {
-            f: (self.U0 if f == 1.0 else steady_speed(phys, self._shaft, f * self.n0, self.U0))
+            f: self.U0 if f == 1.0 or shaft is None else steady_speed(phys, shaft, f * self.n0,
+                                                                       self.U0)
             for f in set(fracs)
-        }
+        }  # fmt: skip
         #: every env's approach shaft command (the channel's unit) and speed (m/s): ``n0`` and
         #: ``U0``, or the steady speed of a reduced command (a half-ahead turn)
         self.n_start = fracs * self.n0
@@ -511,11 +513,14 @@ class SeaTrialEnv(TaskSingleEnv):
     straight at the approach speed ``U0`` through the water (``speed``, default
     :attr:`Vessel.approach_speed <shipgym.dynamics.vessel.Vessel.approach_speed>`) with its
     main propeller at the command that holds it (:func:`approach_command`) and the rudder
-    amidships.
+    amidships; a turn at a reduced shaft command (``turning65_half_ahead``: 0.85 of it)
+    starts at that command's steady speed (:func:`steady_speed`).
 
     **Task.** ``manoeuvre``: one of :func:`~shipgym.trials.manoeuvres.manoeuvre_names`
     (``turning35_stbd``, ``turning35_port``, ``zigzag10``, ``zigzag20``, ``initial_turning``,
-    ``crash_stop``, ``coasting_stop``). Its script (:class:`~shipgym.trials.manoeuvres.
+    ``crash_stop``, ``coasting_stop``, ``turning65_half_ahead``: Artyszuk's (2003) half-ahead
+    65 deg turn, flown with the Schilling rudder option of an MMG ship,
+    :func:`shipgym.dynamics.mmg.with_rudder`). Its script (:class:`~shipgym.trials.manoeuvres.
     Scripts`) commands the first rudder (:attr:`Vessel.rudders <shipgym.dynamics.vessel.
     Vessel.rudders>`) and the first main propeller (:attr:`~shipgym.dynamics.vessel.Vessel.
     shafts`, as a fraction of the approach command) every control step; a stopping manoeuvre
