@@ -40,7 +40,9 @@ def test_config_names_bools_mappings_and_errors():
     assert FeedforwardConfig.coerce(False).label == "none"
     assert not FeedforwardConfig.coerce("none").active
     assert FeedforwardConfig.coerce({"current": False}).label == "wind"
-    assert set(FEEDFORWARD_PRESETS) == {"wind+current", "wind", "current", "none"}
+    assert set(FEEDFORWARD_PRESETS) == {"wind+current", "wind+current+drift", "wind", "current",
+                                        "none"}  # fmt: skip
+    assert FeedforwardConfig.coerce("wind+current+drift").label == "wind+current+drift"
     with pytest.raises(ValueError, match="did you mean 'wind'"):
         FeedforwardConfig.coerce("wnd")
     with pytest.raises(ValueError, match="unknown feedforward keys"):
@@ -91,6 +93,26 @@ def test_wind_feedforward_is_minus_the_filtered_blendermann_load():
     ff.reset(np.array([True, False]))
     ff(eta, nu, wind)
     assert ff.filtered_wind[0, 0] == pytest.approx(19.0)
+
+
+def test_drift_feedforward_is_minus_the_sea_states_mean_drift():
+    v = load_vessel("star-hercules")
+    ff = BatchedFeedforward(v, FeedforwardConfig(wind=False, current=False, drift=True), 1, 0.3)
+    drift = np.array([[1e4, -3e4, 2e5]])
+    np.testing.assert_array_equal(ff(np.zeros((1, 3)), np.zeros((1, 3)), drift=drift), -drift)
+    with pytest.raises(ValueError, match="mean drift load"):
+        ff(np.zeros((1, 3)), np.zeros((1, 3)))
+    env = _dp(controller="alt-lq-printed", feedforward="wind+current+drift", beaufort=8)
+    env.reset(seed=1)
+    _, _, _, _, info = env.step(np.zeros(env.action_space.shape, np.float32))
+    both = _dp(controller="alt-lq-printed", beaufort=8)
+    both.reset(seed=1)
+    _, _, _, _, ref = both.step(np.zeros(env.action_space.shape, np.float32))
+    psi = 0.0  # the controller's heading before the first step: the start, heading north
+    waves = env.unwrapped.physics.waves
+    np.testing.assert_allclose(
+        info["tau_ff"] - ref["tau_ff"], -np.array(waves.mean_drift_load(psi)), rtol=1e-6
+    )
 
 
 def test_hf_thrust_rms_of_a_sine_on_a_trend():

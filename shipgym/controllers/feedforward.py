@@ -15,11 +15,16 @@ is known to the designer. Both are feedforward terms here, as in a DP system's c
 - **current**: the mean current (the environment's configured speed and direction: the
   slow Gauss-Markov variation about it is not known) gives the hull's load on a ship at rest
   in it, ``M nu_dot(nu = 0, tau = 0, nu_c)`` of the vessel's design plant (damping and Munk
-  moment at the relative velocity ``-nu_c``), at the estimated heading.
+  moment at the relative velocity ``-nu_c``), at the estimated heading;
+- **drift** (optional, off by default: the thesis leaves the drift to the LF model): the mean
+  second-order wave drift of the sea state (:meth:`~shipgym.disturbances.waves.Waves.
+  mean_drift_load`, the vessel's drift coefficients and the spectrum, as a wave radar's sea
+  state would give it) at the estimated heading; its slowly varying part is left to the
+  feedback.
 
-``tau_ff = -(wind load + current load)`` (N, N, N m, body frame). The observer of a
-model-based stack is fed ``thrust - tau_ff`` (the thrust plus the loads the feedforward
-estimates), so that its model sees the loads as known inputs.
+``tau_ff = -(wind load + current load [+ mean drift load])`` (N, N, N m, body frame). The
+observer of a model-based stack is fed ``thrust - tau_ff`` (the thrust plus the loads the
+feedforward estimates), so that its model sees the loads as known inputs.
 
 Public names: ``FEEDFORWARD_PRESETS``, ``BatchedFeedforward``, ``FeedforwardConfig``,
 ``current_load``.
@@ -51,18 +56,24 @@ class FeedforwardConfig:
     Attributes:
         wind: feed forward the wind load of the filtered anemometer wind.
         current: feed forward the hull's load in the mean current.
-        wind_time_constant: the anemometer filter's time constant (s, full scale, > 0)
-            [chosen: 10 s; see ``docs/models/feedforward.md`` for the scan it comes from]:
-            the wind's slow part (periods over about a minute, most of the NPD gusts'
-            load) is fed forward, the faster turbulence is left to the feedback.
+        drift: feed forward the mean second-order wave drift load.
+        wind_time_constant: the anemometer filter's time constant (s, full scale, > 0;
+            Froude-scaled for a model) [chosen: 3 s, from a scan of 1, 3 and 10 s with the
+            14-state filter and the printed LQ, both thesis vessels, Beaufort 5 and 8, seeds
+            0-2 (the docs' Al-Takie (1982) page): 1 s and 3 s hold within 0.05 m of each
+            other, 10 s lets the gusts through (Star Hercules, Beaufort 8: 1.27 m RMS, NIS
+            6.1, against 1.10 m, 5.5 at 3 s)]: the gusts' load is fed forward, the
+            anemometer's turbulence above about 0.05 Hz is not. The anemometer is noise-free
+            (the wind is uniform over the ship).
     """
 
     wind: bool = True
     current: bool = True
+    drift: bool = False
     wind_time_constant: float = 3.0
 
     def __post_init__(self) -> None:
-        for name in ("wind", "current"):
+        for name in ("wind", "current", "drift"):
             x = getattr(self, name)
             if not isinstance(x, bool):
                 raise ValueError(f"FeedforwardConfig.{name} must be a bool, got {x!r}")
@@ -74,12 +85,12 @@ class FeedforwardConfig:
     @property
     def active(self) -> bool:
         """Whether anything is fed forward."""
-        return self.wind or self.current
+        return self.wind or self.current or self.drift
 
     @property
     def label(self) -> str:
-        """``"wind+current"``, ``"wind"``, ``"current"`` or ``"none"``."""
-        parts = [k for k in ("wind", "current") if getattr(self, k)]
+        """The loads fed forward joined by ``+`` (``"wind+current"``, ...), or ``"none"``."""
+        parts = [k for k in ("wind", "current", "drift") if getattr(self, k)]
         return "+".join(parts) or "none"
 
     @classmethod
@@ -119,6 +130,7 @@ class FeedforwardConfig:
 FEEDFORWARD_PRESETS: Mapping[str, FeedforwardConfig] = MappingProxyType(
     {
         "wind+current": FeedforwardConfig(),
+        "wind+current+drift": FeedforwardConfig(drift=True),
         "wind": FeedforwardConfig(current=False),
         "current": FeedforwardConfig(wind=False),
         "none": FeedforwardConfig(wind=False, current=False),
@@ -190,6 +202,7 @@ class BatchedFeedforward:
         nu: ArrayLike,
         wind: ArrayLike | None = None,
         current: ArrayLike | None = None,
+        drift: ArrayLike | None = None,
     ) -> Array:
         """``tau_ff`` (n, 3) (N, N, N m, body frame): minus the estimated wind and current
         loads.
@@ -200,6 +213,7 @@ class BatchedFeedforward:
             wind: the anemometer's true wind ``[V_w (m/s), beta_w (rad, from)]``, (n, 2);
                 filtered here, one sample per call (every control period).
             current: the mean current ``[V_c (m/s), beta_c (rad, going to)]``, (n, 2).
+            drift: the mean drift load at the estimated heading (N, N, N m, body), (n, 3).
         """
         e = np.asarray(eta, dtype=float)
         v = np.asarray(nu, dtype=float)
@@ -223,6 +237,10 @@ class BatchedFeedforward:
             a = c[:, 1] - psi
             nu_c = np.stack([c[:, 0] * np.cos(a), c[:, 0] * np.sin(a), np.zeros(self.n)], axis=1)
             tau += current_load(self._plant, nu_c)
+        if self.config.drift:
+            if drift is None:
+                raise ValueError("drift feedforward needs the mean drift load, (n, 3)")
+            tau += np.asarray(drift, dtype=float)
         return -tau
 
     @property

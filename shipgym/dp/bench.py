@@ -33,20 +33,23 @@ __all__ = [
 ]
 
 #: method -> (observer, controller, observer options, env overrides): ``"noise100"`` 100x the
-#: sensor variances, ``"no-ff"`` no feedforward (every other method has the DP tasks' wind and
-#: current feedforward, :mod:`shipgym.controllers.feedforward`)
+#: sensor variances, ``"no-ff"`` no feedforward, ``"drift-ff"`` the mean wave drift fed forward
+#: too (every other method has the DP tasks' wind and current feedforward,
+#: :mod:`shipgym.controllers.feedforward`)
 METHODS: dict[str, tuple[str, str, dict[str, Any] | None, str | None]] = {
     "kf14": ("alt-kf14", "thesis-lq", None, None),
     "kf16": ("alt-kf16", "thesis-lq", None, None),
     "kf12": ("alt-kf12", "thesis-lq", None, None),
     "semiconstant": ("alt-semiconstant", "thesis-lq", None, None),
     "ekf": ("alt-ekf", "alt-sdre", None, None),
+    "kf14-pid": ("alt-kf14", "pid", None, None),
     "notch-pid": ("notch", "pid", None, None),
     "raw-lq": ("alt-raw", "thesis-lq", None, None),
     "kbf-pid": ("kbf", "pid", None, None),
     "kf14-bf5": ("alt-kf14", "thesis-lq", {"beaufort": 5}, None),
     "kf14-noise100": ("alt-kf14", "thesis-lq", None, "noise100"),
     "kf14-no-ff": ("alt-kf14", "thesis-lq", None, "no-ff"),
+    "kf14-drift-ff": ("alt-kf14", "thesis-lq", None, "drift-ff"),
 }
 
 
@@ -109,6 +112,8 @@ def _make_env(
         }
     elif env_mod == "no-ff":
         kwargs["feedforward"] = "none"
+    elif env_mod == "drift-ff":
+        kwargs["feedforward"] = "wind+current+drift"
     return shipgym.make(
         TASKS[task],
         vessel=vessel_name,

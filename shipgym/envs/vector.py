@@ -412,10 +412,12 @@ class ShipVectorEnv(BatchedEnv):
             out = self._cache["readouts"] = self.physics.readouts(command)
         return out  # type: ignore[no-any-return]
 
-    def _environment_now(self) -> tuple[Array, Array]:
-        """What the feedforward measures now, ``(wind, current)`` (n, 2) each: the
-        anemometer's true wind ``[V_w, beta_w]`` (m/s, rad from; still air without a wind
-        load) and the configured mean current ``[V_c, beta_c]`` (m/s, rad going to)."""
+    def _environment_now(self, psi: Array) -> tuple[Array, Array, Array | None]:
+        """What the feedforward measures now, ``(wind, current, drift)``: the anemometer's
+        true wind ``[V_w, beta_w]`` (m/s, rad from; still air without a wind load), the
+        configured mean current ``[V_c, beta_c]`` (m/s, rad going to), (n, 2) each, and
+        where it feeds the drift forward the sea state's mean drift load at the headings
+        ``psi`` (n,) (N, N, N m, body; zeros without waves), (n, 3), else ``None``."""
         ph = self.physics
         t = ph.t
         wind = np.array([
@@ -423,7 +425,13 @@ class ShipVectorEnv(BatchedEnv):
             for i, (w, cfg) in enumerate(zip(ph.winds, ph.wind_configs, strict=True))
         ])  # fmt: skip
         current = np.array([(c.speed, c.direction_to) for c in ph.current_configs])
-        return wind, current
+        drift = None
+        if self.feedforward is not None and self.feedforward.config.drift:
+            drift = np.array([
+                (0.0, 0.0, 0.0) if w is None else w.mean_drift_load(float(psi[i]))
+                for i, w in enumerate(ph.waves)
+            ])  # fmt: skip
+        return wind, current, drift
 
     def _navigation(self) -> tuple[Array, Array]:
         """What the controller and the observation use: the estimate, else the truth."""
@@ -441,7 +449,7 @@ class ShipVectorEnv(BatchedEnv):
         ref = self._ref
         eta, nu = self._navigation()
         if self.feedforward is not None:
-            self._tau_ff = self.feedforward(eta, nu, *self._environment_now())
+            self._tau_ff = self.feedforward(eta, nu, *self._environment_now(eta[:, 2]))
         tau_c, alloc, a_ctrl = self.controller(
             ref.to_r(eta), nu, ref.eta_d_r, ref.eta_dot_d_r, ref.eta_ddot_d_r,
             state=self.physics.actuator_state, tau_ff=self._tau_ff,
