@@ -641,17 +641,20 @@ def with_rudder(vessel: Any, option: str) -> Any:
     Raises:
         ValueError: an unknown option, or a vessel without an MMG unit.
     """
-    from .actuators import ActuatorSet, MMGPropulsion
-
     opt = rudder_option(option)
+
+    def mmg_unit(a: Any) -> bool:  # an MMGPropulsion (not imported here: it imports this)
+        return isinstance(getattr(a, "params", None), MMGParameters)
+
     acts = [
         dataclasses.replace(a, params=a.params.with_rudder(option), max_angle=opt.max_angle)
-        if isinstance(a, MMGPropulsion) else a
+        if mmg_unit(a) else a
         for a in vessel.actuators
     ]  # fmt: skip
-    if not any(isinstance(a, MMGPropulsion) for a in acts):
+    if not any(mmg_unit(a) for a in acts):
         raise ValueError(f"vessel {vessel.name!r} has no MMG rudder (an 'mmg' unit) to replace")
     plants = {k: MMGHull(h.p.with_rudder(option), h.name) if isinstance(h, MMGHull) else h
               for k, h in vessel.plants.items()}  # fmt: skip
-    return dataclasses.replace(vessel, actuators=ActuatorSet(acts, vessel.dofs), plants=plants,
+    acts_set = type(vessel.actuators)(acts, vessel.dofs)
+    return dataclasses.replace(vessel, actuators=acts_set, plants=plants,
                                title=f"{vessel.title}, {opt.name} rudder")  # fmt: skip
