@@ -114,7 +114,9 @@ def test_row_i_of_the_batched_stack_is_the_n1_stack(vessel_name):
         alloc_s = make_allocator(vessel, spec.allocation, dt)
         # the wrapper's conditioning after the allocation (none where the vessel sets none)
         hyst = [
-            ReversalHysteresis(acts, reversal_threshold(vessel)) if spec.conditioned else None
+            ReversalHysteresis(acts, reversal_threshold(vessel), dt=dt)
+            if spec.conditioned
+            else None
             for _ in range(n)
         ]
         batch = batched_dp_controller(name, vessel, n, dt)

@@ -99,7 +99,7 @@ def _compare(ref: BatchedReference, singles: list, eta: np.ndarray, err: dict) -
 
 
 def test_row_i_of_n_envs_is_the_guidance_of_one_env(draw_plan) -> None:
-    """61 drawn Tracking-v0 plans and the three special plans, 1350 control steps of 1 s
+    """61 drawn Tracking-v0 plans and the three special plans, 1800 control steps of 1 s
     (each env on its own clock), the ship at the reference plus a decaying offset, noise and
     random turns of 2 pi; finished drawn envs reset with new plans (as an autoreset does)
     and a few reset mid-leg: every output of env i equal to that of a Guidance (N = 1) fed
@@ -124,7 +124,7 @@ def test_row_i_of_n_envs_is_the_guidance_of_one_env(draw_plan) -> None:
     phases: dict[str, int] = {}
     n_switch = n_finish = n_reset = n_broken = 0
     refs = [s.reference(clock[i]) for i, s in enumerate(singles)]
-    for k in range(1, 1351):
+    for k in range(1, 1801):  # the paper plan at the capacity-limited limits: ~1 600 s
         t = clock + k
         t_leg = np.array([r.t_leg for r in refs]) + 1.0
         eta = np.array([r.eta_d_n for r in refs])
@@ -303,7 +303,7 @@ def test_a_longer_plan_at_a_reset_pads_the_tables() -> None:
     singles[1].reset(np.zeros(3), t0=-300.0)
     err: dict[str, float] = {}
     eta = np.zeros((2, 3))
-    for k in range(1, 1500):
+    for k in range(1, 1800):  # the paper plan from step 40: ~1 600 s
         t = np.array([k, k - 300.0])
         if k == 40:  # env 0 mid-leg: a longer plan than the tables hold
             g.reset([tomera2014_plan()], eta, t0=t, mask=np.array([True, False]))

@@ -8,8 +8,10 @@ the default until the hull evidence read it as -18 962 kg; that reading stays se
 the ``table2-literal`` plant, which these runs use. The record also predates the actuator
 physics of issue 16 (the advance-speed thrust law, the tunnels' loss with speed, the rate
 limits), so it is checked with the Blue Lady's actuators on their bollard laws
-(``ActuatorSet.bollard``: Tomera 2014 eqs. 8-9 at every speed, no rate limit), which reproduce
-it: everything else is unchanged. With the vessel's own actuators the manoeuvre still
+(``ActuatorSet.bollard``: Tomera 2014 eqs. 8-9 at every speed, no rate limit), the guidance
+limits and the allocation's yaw weight of that commit (issue 31 limited the first by the
+thrust capacity and put heading first in the second), which reproduce it: everything else is
+unchanged. With the vessel's own actuators the manoeuvre still
 completes, its J_c within 1.5x of the record's. Since the command conditioning (velocity
 filter, reversal hysteresis) is on in ``pid`` and ``pid-smooth``, the record is checked
 against their unconditioned forms ``pid-raw`` and ``pid-smooth-raw``, which keep the
@@ -31,11 +33,29 @@ RECORD = json.loads(
 )["runs"]
 STACKS = [("pid", None), ("pid-smooth", "kbf")]
 _V = load_vessel("blue-lady")
-#: the Blue Lady with the actuator laws and the yaw-acceleration limit of the record (before
-#: issue 16: 2.5e-4 rad/s^2, now 1.5e-4)
-BOLLARD = dataclasses.replace(
-    _V, actuators=_V.actuators.bollard(), limits={**_V.limits, "yaw_accel": 2.5e-4}
-)
+#: the guidance limits before issue 31 limited them by the thrust capacity (issue 16's)
+ISSUE16_LIMITS = {
+    "surge_speed": 0.2, "surge_accel": 0.0025, "surge_astern_speed": 0.1,
+    "surge_astern_accel": 0.002, "sway_speed": 0.05, "sway_accel": 0.001,
+    "yaw_rate": 0.017453292519943295, "yaw_accel": 1.5e-4,
+}  # fmt: skip
+#: the record's: its yaw acceleration before issue 16 (2.5e-4 rad/s^2)
+RECORD_LIMITS = {**ISSUE16_LIMITS, "yaw_accel": 2.5e-4}
+#: the Blue Lady with the actuator laws and the guidance limits of the record
+BOLLARD = dataclasses.replace(_V, actuators=_V.actuators.bollard(), limits=RECORD_LIMITS)
+#: the Blue Lady (its own actuators) with the guidance limits of issue 16
+ISSUE16 = dataclasses.replace(_V, limits=ISSUE16_LIMITS)
+#: the record's allocation: yaw weighted 10x, not issue 31's heading first (1000x)
+RECORD_HEADING_WEIGHT = 10.0
+
+
+@pytest.fixture(autouse=True)
+def _record_allocation(monkeypatch):
+    import shipgym.controllers.allocation.fixed3 as fixed3
+
+    monkeypatch.setattr(fixed3, "HEADING_WEIGHT", RECORD_HEADING_WEIGHT)
+
+
 IDS = [("harbour", {"vessel": BOLLARD}), ("shipgym/Harbour-v0", {"vessel": BOLLARD})]
 
 
@@ -50,8 +70,8 @@ def _check(env: str, kwargs: dict | None, controller: str, observer: str | None,
     assert r["J_c"] == pytest.approx(want["J_c"], rel=1e-6)
 
 
-@pytest.mark.parametrize(("env", "kwargs"), [("harbour", None),
-                                             ("shipgym/Harbour-v0", {"vessel": "blue-lady"})],
+@pytest.mark.parametrize(("env", "kwargs"), [("harbour", {"vessel": ISSUE16}),
+                                             ("shipgym/Harbour-v0", {"vessel": ISSUE16})],
                          ids=["alias", "neutral"])  # fmt: skip
 @pytest.mark.parametrize(("controller", "observer"), STACKS, ids=["pid", "kbf+pid-smooth"])
 def test_harbour_with_the_actuator_physics_still_completes(env, kwargs, controller, observer):

@@ -20,7 +20,7 @@ BL = load_vessel("blue-lady")
 # ---- reversal hysteresis -----------------------------------------------------------------------
 def test_reversal_hysteresis_holds_small_reversals_at_zero_thrust():
     alloc = make_allocator(BL)
-    h = ReversalHysteresis(BL.actuators, [40.0, 0.0, 0.0])
+    h = ReversalHysteresis(BL.actuators, [40.0, 0.0, 0.0], idle=0.0)  # no idle: stopped
     cases = [  # requested X (N), expected delivered X (N)
         (50.0, 50.0),  # sets the direction: ahead
         (-5.0, 0.0),  # astern below 40 N: held at zero
@@ -56,7 +56,7 @@ def test_reversal_hysteresis_on_a_wls_vessel_and_a_no_op_on_azimuths():
     alloc = make_allocator(sh)
     cap = acts.capacity()
     thr = [0.05 * cap[0]] + [0.0] * (len(acts) - 1)
-    h = ReversalHysteresis(acts, thr)
+    h = ReversalHysteresis(acts, thr, idle=0.0)
     assert h.active
     state = np.zeros(acts.n_channels)
     h(alloc([0.3 * cap[0], 0.0, 0.0], state))
@@ -76,6 +76,66 @@ def test_reversal_hysteresis_on_a_wls_vessel_and_a_no_op_on_azimuths():
     assert not ReversalHysteresis(wl.actuators, [30.0] * len(wl.actuators)).active
 
 
+def test_a_running_propeller_idles_instead_of_stopping():
+    """Issue 31: inside the hysteresis (and below the idle thrust on its own side) a running
+    propeller idles at IDLE_FRACTION of its range on its running side, never at zero."""
+    from shipgym.controllers.conditioning import IDLE_FRACTION
+
+    alloc = make_allocator(BL)
+    main = BL.actuators.actuators[0]
+    n_ahead, n_astern = IDLE_FRACTION * main.upper, IDLE_FRACTION * main.lower
+    f_ahead, f_astern = main.k_ahead * n_ahead**2, -main.k_astern * n_astern**2
+    assert n_ahead == pytest.approx(24.0) and f_ahead == pytest.approx(1.1283264)
+    h = ReversalHysteresis(BL.actuators, [40.0, 0.0, 0.0])
+    cases = [  # requested X (N), expected delivered X (N), expected command (rpm)
+        (50.0, 50.0, None),  # sets the direction: ahead
+        (-5.0, f_ahead, n_ahead),  # astern inside 40 N: idles ahead
+        (0.5, f_ahead, n_ahead),  # ahead below the idle thrust: idles
+        (0.0, f_ahead, n_ahead),
+        (20.0, 20.0, None),
+        (-45.0, -45.0, None),  # beyond 40 N (no dwell without dt): a reversal
+        (10.0, f_astern, n_astern),  # ahead is now the other side: idles astern
+    ]
+    for x, want, cmd in cases:
+        out = h(alloc(np.array([x, 0.0, 0.0]), None))
+        assert out.force[0] == pytest.approx(want, abs=1e-12), x
+        assert out.tau[0] == pytest.approx(want, abs=1e-12)
+        assert out.tau_error[0] == pytest.approx(x - want, abs=1e-12)
+        if cmd is not None:
+            assert out.command[0] == pytest.approx(cmd)
+        k = main.k_ahead if out.command[0] >= 0 else main.k_astern
+        assert k * abs(out.command[0]) * out.command[0] == pytest.approx(want, abs=1e-9)
+    with pytest.raises(ValueError, match="idle thrust"):
+        ReversalHysteresis(BL.actuators, [1.0, 0.0, 0.0])  # 1.13 N idle above 1 N
+    for bad in (-0.1, 1.0, True, float("nan")):
+        with pytest.raises(ValueError, match="idle"):
+            ReversalHysteresis(BL.actuators, [40.0, 0.0, 0.0], idle=bad)
+
+
+def test_a_reversal_waits_for_the_low_pass():
+    """With a control period the request must be past F_h on the other side and so must its
+    low-pass (implicit Euler, a = dt / (T_r + dt)): a short excursion does not reverse, a
+    sustained one does after about T_r."""
+    alloc = make_allocator(BL)
+    h = ReversalHysteresis(BL.actuators, [40.0, 0.0, 0.0], dt=1.0, filter_time=3.0)
+    a = 1.0 / 4.0
+    want = [50.0, 50.0, -60.0, -60.0, -10.0, -60.0, -60.0, -60.0, -60.0, -60.0]
+    got = [float(h(alloc([x, 0.0, 0.0], None)).force[0]) for x in want]
+    low, ahead, rev = 0.0, True, []
+    for x in want:  # the law written out
+        low += a * (x - low)
+        if ahead and x < -40.0 and low < -40.0:
+            ahead = False
+        rev.append(not ahead)
+    assert [g < 0 for g in got] == rev
+    assert rev.index(True) == 7 and got[7] == pytest.approx(-60.0)  # low-pass -40.2 N
+    assert got[3] > 0 and got[4] > 0  # held (idling ahead) while the low-pass lags
+    for bad in ({"dt": 0.0}, {"dt": float("inf")}, {"dt": True},
+                {"dt": 1.0, "filter_time": -1.0}):  # fmt: skip
+        with pytest.raises(ValueError, match="dt|filter_time"):
+            ReversalHysteresis(BL.actuators, [40.0, 0.0, 0.0], **bad)
+
+
 def test_reversal_hysteresis_refuses_bad_thresholds():
     with pytest.raises(ValueError, match="one force"):
         ReversalHysteresis(BL.actuators, [1.0])
@@ -85,8 +145,8 @@ def test_reversal_hysteresis_refuses_bad_thresholds():
 
 _BAD_KEYS = [  # (the vessel file's text, its replacement, the key the error names)
     (
-        'reversal_threshold = { value = [40.0, 0.0, 0.0], unit = "N"',
-        'reversal_threshold = { value = [40.0, 0.0], unit = "N"',
+        'reversal_threshold = { value = [50.0, 0.0, 0.0], unit = "N"',
+        'reversal_threshold = { value = [50.0, 0.0], unit = "N"',
         "reversal_threshold",
     ),
     ("velocity_filter = { value = [20.0,", "velocity_filter = { value = [-1.0,", "velocity_filter"),

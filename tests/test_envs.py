@@ -154,7 +154,9 @@ def test_harbour_manoeuvre_completes_with_tuned_pid(seed):
     m, _, _ = _run(seed)
     assert m["completed"] and m["legs_completed"] == 5
     assert not m["quay_contact"]
-    assert m["duration_s"] <= 1500.0
+    # the plan's reference at the Blue Lady's capacity-limited limits takes 1 597 s (issue 31;
+    # 1 285 s before): at most a minute more
+    assert m["duration_s"] <= 1597.1 + 60.0
     assert m["x_E"] <= 0.5 and m["y_E"] <= 0.5 and m["psi_E"] <= 3.0
 
 

@@ -200,19 +200,25 @@ def test_combined_leg_is_synchronised_on_a_straight_line():
 def test_durations_of_the_seed_legs_match_the_closed_forms():
     lim = BLUE_LADY_LIMITS
     # raised-cosine trapezoid: T = d / v + 2 v / a ; triangle (d < 2 v^2 / a): T = 2 sqrt(2 d / a)
-    assert leg_duration(Leg(sway=-7.0), lim) == pytest.approx(7 / 0.05 + 2 * 0.05 / 0.001)
-    assert leg_duration(Leg(surge=38.0), lim) == pytest.approx(38 / 0.2 + 2 * 0.2 / 0.0025)
+    assert leg_duration(Leg(sway=-7.0), lim) == pytest.approx(7 / 0.03 + 2 * 0.03 / 5e-4)
+    assert leg_duration(Leg(surge=38.0), lim) == pytest.approx(2 * math.sqrt(2 * 38 / 0.002))
     assert leg_duration(Leg(yaw=math.pi / 2), lim) == pytest.approx(
-        2 * math.sqrt(2 * (math.pi / 2) / 1.5e-4)
+        2 * math.sqrt(2 * (math.pi / 2) / 9e-5)
     )
-    assert leg_duration(Leg(surge=-15.0), lim) == pytest.approx(15 / 0.1 + 2 * 0.1 / 0.002)
-    assert leg_duration(Leg(sway=-3.0), lim) == pytest.approx(2 * math.sqrt(2 * 3 / 0.001))
+    assert leg_duration(Leg(surge=-15.0), lim) == pytest.approx(15 / 0.1 + 2 * 0.1 / 0.0018)
+    assert leg_duration(Leg(sway=-3.0), lim) == pytest.approx(2 * math.sqrt(2 * 3 / 5e-4))
     assert leg_duration(Leg(), lim) == 0.0
     # the per-leg override wins over the plan's limits
     fast = dataclasses.replace(BLUE_LADY_LIMITS, sway_speed=0.1, sway_accel=0.01)
     assert leg_duration(Leg(sway=-7.0, limits=fast), lim) == pytest.approx(7 / 0.1 + 20.0)
     assert tomera2014_plan().durations(BLUE_LADY_LIMITS) == pytest.approx(
-        [240.0, 350.0, 2 * math.sqrt(2 * (math.pi / 2) / 1.5e-4), 250.0, 154.91933384829667]
+        [
+            7 / 0.03 + 120.0,
+            2 * math.sqrt(38000.0),
+            2 * math.sqrt(2 * (math.pi / 2) / 9e-5),
+            15 / 0.1 + 0.2 / 0.0018,
+            2 * math.sqrt(12000.0),
+        ]
     )
 
 
@@ -416,7 +422,8 @@ def test_seed_rule_alone_switches_early_and_the_guard_prevents_it():
     g, _ = run_perfect_tracker(early, [0.0, 0.0, 0.0], t_end=500.0)
     assert g.leg_durations[0] < leg_duration(legs[0], BLUE_LADY_LIMITS) - 10.0
     g, _ = run_perfect_tracker(ManoeuvrePlan(legs=legs), [0.0, 0.0, 0.0], t_end=500.0)
-    assert g.leg_durations[0] == leg_duration(legs[0], BLUE_LADY_LIMITS)
+    # the switch at the first step (1 s) at or after the reference's end
+    assert g.leg_durations[0] == math.ceil(leg_duration(legs[0], BLUE_LADY_LIMITS))
     # a leg shorter than the switch distance waits for its reference too
     g = Guidance(ManoeuvrePlan(legs=(Leg(surge=0.5), Leg(surge=0.5))), limits=BLUE_LADY_LIMITS)
     g.reset([0.0, 0.0, 0.0])

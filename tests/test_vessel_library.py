@@ -235,7 +235,7 @@ def test_missing_limits_are_derived_from_the_capacity(tmp_path: Path) -> None:
     toml = re.sub(r"\n\[limits\]\n(?:[a-z_]+ = [^\n]*\n)+", "\n", BL_TOML, count=1)
     lim = vessel_limits(load_vessel(write_package(tmp_path / "b", toml, src.read_text())))
     assert lim.surge_speed == pytest.approx(0.2)  # the Froude-scaled Blue Lady speed, lambda 1
-    bad = BL_TOML.replace("yaw_accel = { value = 1.5e-4", "yaw_accel = { value = -1.5e-4", 1)
+    bad = BL_TOML.replace("yaw_accel = { value = 9e-5", "yaw_accel = { value = -9e-5", 1)
     assert "limits.yaw_accel: must be > 0" in _bad(tmp_path, bad)
 
 

@@ -98,23 +98,25 @@ class Limits:
 #: The Blue Lady's limits (equal to ``[limits]`` of its vessel file; a test checks it), each
 #: with its unit and source. The capacity notes: thrust capacity 451 N ahead, 78 N astern
 #: (main propeller), 2 x 44.1 N sway and ~248 N m yaw (tunnel thrusters) against
-#: M = diag(23 665 kg, 24 831 kg, 4.55e5 kg m^2) (Tomera 2014 eq. 49; up to 42 t in sway with
-#: the added mass of Clarke et al. 1983); wind loads at 3 m/s: Blendermann (1994).
+#: the plant's inertia (23 665 kg, 41 896 kg with the corrected sway added mass, 4.55e5 kg m^2;
+#: Tomera 2014 eq. 49 prints 24 831 kg in sway); wind loads at 3 m/s: Blendermann (1994). At
+#: these limits a leg asks for at most 75 % of the capacity in every DOF
+#: (:func:`shipgym.guidance.limits.capacity_use`, issue 31).
 BLUE_LADY_LIMITS = Limits(
     surge_speed=0.2,  # m/s; assumed v_max 0.2-0.3 m/s (max speed 3.1 kn)
-    # m/s^2; capacity: a forward leg is braked by the 78 N astern thrust,
-    # (78 - 9) N / 23 665 kg = 0.0029 m/s^2 (ahead, 451 N, would allow 0.019 m/s^2)
-    surge_accel=0.0025,
+    # m/s^2; capacity: a forward leg is braked by the 78 N astern thrust: 72 % of it with the
+    # 9.4 N of a 3 m/s wind (0.0025 before issue 31: 88 %)
+    surge_accel=0.002,
     surge_astern_speed=0.1,  # m/s; half of surge_speed (78 N astern thrust)
-    # m/s^2; capacity: (78 - 9) N / 23 665 kg = 0.0029 m/s^2 peak; the raised-cosine profile
-    # averages half the peak over the acceleration phase
-    surge_astern_accel=0.002,
-    sway_speed=0.05,  # m/s; assumed v_max 0.05-0.1 m/s
-    sway_accel=0.001,  # m/s^2; capacity: (88 - 25) N / 24 831 kg = 0.0025 m/s^2; chosen 0.001
-    yaw_rate=math.radians(1.0),  # rad/s; assumed r_max 1 deg/s
-    # rad/s^2; capacity: (248 - 27) N m / 4.55e5 kg m^2 = 4.9e-4 rad/s^2 at rest; chosen: 1.5e-4
-    # (2.5e-4 until the hull evidence and the tunnel loss of issue 16 saturated the stern tunnel)
-    yaw_accel=1.5e-4,
+    surge_astern_accel=0.0018,  # m/s^2; capacity: 70 % of the astern thrust (0.002: 76 %)
+    # m/s, m/s^2; capacity: 65 % of the 88 N sway with the plant's 41.9 t sway inertia and
+    # 24.8 N of wind (0.05 m/s, 0.001 m/s^2 before issue 31: 102 %)
+    sway_speed=0.03,
+    sway_accel=5e-4,
+    # rad/s, rad/s^2; capacity: 74 % of the 248 N m yaw with 63 N m of wind (1 deg/s,
+    # 1.5e-4 rad/s^2 before issue 31: 137 %; 2.5e-4 until issue 16)
+    yaw_rate=math.radians(0.5),
+    yaw_accel=9e-5,
 )
 
 
