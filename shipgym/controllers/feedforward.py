@@ -60,7 +60,7 @@ class FeedforwardConfig:
         wind_time_constant: the anemometer filter's time constant (s, full scale, > 0;
             Froude-scaled for a model) [chosen: 3 s, from a scan of 1, 3 and 10 s with the
             14-state filter and the printed LQ, both thesis vessels, Beaufort 5 and 8, seeds
-            0-2 (the docs' Al-Takie (1982) page): 1 s and 3 s hold within 0.05 m of each
+            0-2 (the docs' Al-Takie (1982) page): 1 s and 3 s hold within 0.07 m of each
             other, 10 s lets the gusts through (Star Hercules, Beaufort 8: 1.27 m RMS, NIS
             6.1, against 1.10 m, 5.5 at 3 s)]: the gusts' load is fed forward, the
             anemometer's turbulence above about 0.05 Hz is not. The anemometer is noise-free

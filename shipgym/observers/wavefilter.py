@@ -560,10 +560,13 @@ _SIGMA_HEADING = 0.02  # rad: the thesis's gyro (Al-Takie 1982 2.4.2) [printed]
 #:
 #: - ``"thesis"``: ``Q_l`` as printed (the mean wind forcing taken as the noise sigma, Al-Takie
 #:   1982 2.4.1) with the reconstructed yaw entry (``altakie.D_H_RECONSTRUCTED``),
-#:   ``q_x`` = the sway one: the filter of the printed gains; on the simulated vessels its LF
-#:   estimate is nearly as fast as the wave band (velocity random walk 0.36 m/s per 270 s for
-#:   Star Hercules), so it passes measurement noise and wave motion to the thrusters (wave-band
-#:   thrust ratio 2.7-4.1, as LQ on raw measurements, 3.9-4.0; Wimpey Sealab, Beaufort 5, 8).
+#:   ``q_x`` = the sway one, and the HF noise of the physical sea (``hf_std``): a hybrid, NOT
+#:   the filter of the printed gains, whose HF noise (``D_H_RECONSTRUCTED``) is 28-67x the
+#:   physical one (9.6 m of HF sway in Beaufort 8: :mod:`shipgym.dp.seed`). Against the
+#:   physical HF noise the printed ``Q_l`` makes the LF estimate nearly as fast as the wave
+#:   band (velocity random walk 0.36 m/s per 270 s for Star Hercules), so it passes
+#:   measurement noise and wave motion to the thrusters (wave-band thrust ratio 2.7-4.1, as LQ
+#:   on raw measurements, 3.9-4.0; Wimpey Sealab, Beaufort 5, 8).
 #: - ``"simulated"`` (default) [chosen]: ``q_l = (1e-8, 1e-8)``, ``q_x = 1e-9``: an LF velocity
 #:   random walk of about 2 cm/s per 5 minutes, the slow drift of a ship held in gusty wind;
 #:   picked from a scan on ``shipgym/DPStationKeeping-v0`` (both vessels, Beaufort 5 and 8,
