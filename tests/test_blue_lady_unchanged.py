@@ -45,7 +45,7 @@ RECORD_LIMITS = {**ISSUE16_LIMITS, "yaw_accel": 2.5e-4}
 BOLLARD = dataclasses.replace(_V, actuators=_V.actuators.bollard(), limits=RECORD_LIMITS)
 #: the Blue Lady (its own actuators) with the guidance limits of issue 16
 ISSUE16 = dataclasses.replace(_V, limits=ISSUE16_LIMITS)
-#: the record's allocation: yaw weighted 10x, not issue 31's heading first (1000x)
+#: the record's allocation: yaw weighted 10x, not issue 31's heading first (100x)
 RECORD_HEADING_WEIGHT = 10.0
 
 

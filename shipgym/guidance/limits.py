@@ -121,10 +121,12 @@ def capacity_use(
         return abs(lin) * s + abs(quad) * s * s
 
     U, Ua, V, R = lim.surge_speed, lim.surge_astern_speed, lim.sway_speed, lim.yaw_rate
+    X, Y, N = (float(x) for x in load)
+    c_x, c_y, c_n = (float(x) for x in cap3)
     return {
-        "surge_ahead": (m11 * lim.surge_accel + drag(h.X_u, h.X_uu, U) + load[0]) / cap3[0],
-        "surge_brake": (m11 * lim.surge_accel + load[0]) / astern,
-        "surge_astern": (m11 * lim.surge_astern_accel + drag(h.X_u, h.X_uu, Ua) + load[0]) / astern,
-        "sway": (m22 * lim.sway_accel + drag(h.Y_v, h.Y_vv, V) + load[1]) / cap3[1],
-        "yaw": (m33 * lim.yaw_accel + drag(h.N_r, h.N_rr, R) + load[2]) / cap3[2],
+        "surge_ahead": (m11 * lim.surge_accel + drag(h.X_u, h.X_uu, U) + X) / c_x,
+        "surge_brake": (m11 * lim.surge_accel + X) / astern,
+        "surge_astern": (m11 * lim.surge_astern_accel + drag(h.X_u, h.X_uu, Ua) + X) / astern,
+        "sway": (m22 * lim.sway_accel + drag(h.Y_v, h.Y_vv, V) + Y) / c_y,
+        "yaw": (m33 * lim.yaw_accel + drag(h.N_r, h.N_rr, R) + N) / c_n,
     }
