@@ -235,10 +235,14 @@ class BatchedReversalHysteresis:
     Measured (issue 31; harbour, 3 m/s from 300 deg, KBF + ``pid``, seeds 0-9, mean [worst
     seed]): the law that held the thrust at zero (40 N, no filter) reversed the main
     propeller 1.06 [1.31] times a minute and left it at zero 31 % of the time with 3.04
-    [3.32] starts a minute; idling alone: 1.14 [1.49] reversals, no time at zero; a dwell
-    (the request past ``F_h`` for 4-12 s on end) instead of the low-pass did not bring the
-    worst seed below one a minute: the noisy request falls back inside and restarts it, and
-    the delayed braking overshoots.
+    [3.32] starts a minute; idling alone: 1.14 [1.49] reversals, no time at zero. With the
+    guidance limited by the thrust capacity (:mod:`shipgym.guidance.limits`) and 50 N: the
+    request alone 0.96 [1.14] reversals at J_c 0.158; its 4 s low-pass 0.75-0.80 [0.94-1.02]
+    at J_c 0.17-0.18 (the figure of the default stack: 0.80 [0.94], 0.84 [0.97] starts);
+    8-15 s or a 60 N threshold no fewer, at a larger J_c (0.19-0.21: the braking comes late
+    and overshoots). A dwell (the request past ``F_h`` for 4-12 s on end, restarted when it
+    falls back inside) did no better. What is left is the surge loop hunting across the
+    hysteresis on the KBF's position noise (period 60-80 s), not single noise spikes.
     """
 
     def __init__(

@@ -724,14 +724,14 @@ def tomera_ekf(**overrides: Any) -> ExtendedKalmanFilter:
     velocity process noise.
 
     It does not complete the harbour manoeuvre on the default plant (issue 31; ``pid``, 3 m/s
-    from 300 deg, seeds 0-9: 2/10, quay contact in the forward leg near 700-760 s; 0/10 on the
-    ``tomera2014-lake`` preset): its model repeats Table 2's printed sway added mass
-    (``M22`` = 24 831 kg) while the plant has it corrected tenfold (41 896 kg; the hull
-    evidence of the Blue Lady's README), and its ``R`` makes it trust that model over the
-    gyrocompass. On the ``table2-literal`` plant (the printed mass) it completes 8/10 (the
-    other two out of time), with the sensors' ``R`` 10/10, with the plant's ``M22`` in its
-    model 0/10 (tests/test_blue_lady_acceptance.py). The preset stays the paper's: ``ekf`` is
-    the tuned one.
+    from 300 deg, seeds 0-9: 2/10, quay contact at the end of the forward leg or the start of
+    the turn, 700-760 s; 0/10 on the ``tomera2014-lake`` preset): its model repeats Table 2's
+    printed sway added mass (``M22`` = 24 831 kg) while the plant has it corrected tenfold
+    (41 896 kg; the hull evidence of the Blue Lady's README), and its ``R`` makes it trust
+    that model over the gyrocompass. On the ``table2-literal`` plant (the printed mass) it
+    completes 8/10 (the other two out of time), with the sensors' ``R`` 10/10, with the
+    plant's ``M22`` in its model 0/10 (tests/test_blue_lady_acceptance.py). The preset stays
+    the paper's: ``ekf`` is the tuned one.
 
     Args:
         **overrides: :class:`EKFConfig` fields to change.
