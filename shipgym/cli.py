@@ -261,6 +261,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from shipgym.envs.registration import ALIASES
 
     name = env_kwargs.get("vessel", "blue-lady" if env_id in ALIASES else None)
+    if args.controller.partition(":")[1]:  # an SB3 / rl-zoo3 model: imported with its files
+        from shipgym.rl.interop import resolve_controller
+
+        args.controller = resolve_controller(args.controller)
     check_controller(args.controller, task=env_id, vessel=name)
     vessel = load_vessel(name if name is not None else _no_vessel(env_id))
     vessel.plant(env_kwargs.get("plant", "default"))
@@ -921,7 +925,8 @@ def _parser() -> argparse.ArgumentParser:
         "--controller", default="pid",
         help="pid (default), pid-smooth, pid-seed, lq, the shipped learned baselines ppo (pure "
         "PPO), sac (pure SAC), ppo-residual (PPO on the PID) for the scenario and vessel, "
-        "ppo:PATH, sac:PATH",
+        "ppo:PATH, sac:PATH (a shipgym model, or a stable-baselines3 / rl-zoo3 zip with its "
+        "args.yml and vecnormalize.pkl: docs/tutorials/train-ppo.md)",
     )  # fmt: skip
     p.add_argument(
         "--observer", default=None,

@@ -82,7 +82,9 @@ def test_smoke_train_save_load_run(trained):
         assert (out / name).is_file(), name
     assert sorted(p.name for p in (out / "checkpoints").iterdir()) == [
         "ppo_128_steps.zip",
+        "ppo_128_steps_vecnormalize.pkl",  # SB3's VecNormalize file of each (issue 32)
         "ppo_256_steps.zip",
+        "ppo_256_steps_vecnormalize.pkl",
     ]
     evals = json.loads((out / "evaluations.json").read_text())
     assert evals[-1]["timesteps"] == 256 and "J_c" in evals[-1]

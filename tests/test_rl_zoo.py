@@ -366,11 +366,14 @@ def test_tensorboard_events_hold_training_and_evaluation_scalars(tmp_path):
     acc = EventAccumulator(str(tmp_path / "tb"))
     acc.Reload()
     tags = set(acc.Tags()["scalars"])
-    assert {"eval/completed", "eval/J_c", "time/fps"} <= tags, tags
-    completed = acc.Scalars("eval/completed")
+    assert {"eval/completed_fraction", "time/fps"} <= tags, tags
+    completed = acc.Scalars("eval/completed_fraction")
     assert [e.step for e in completed] == [64]
     assert completed[0].value == res.evaluations[-1]["completed"] / 1
-    assert "eval/J_c" in (tmp_path / "progress.csv").read_text().splitlines()[0]
+    # J_c is logged over completed runs only: 64 steps of training complete none
+    assert res.evaluations[-1]["completed"] == 0 and "eval/J_c" not in tags
+    head = (tmp_path / "progress.csv").read_text().splitlines()[0]
+    assert "eval/completed_fraction" in head and "eval/J_c," not in head
 
 
 def test_without_tensorboard_a_note_and_progress_csv_only(tmp_path, monkeypatch, capsys):

@@ -138,6 +138,15 @@ def add_train_parser(sub: Any) -> argparse.ArgumentParser:
         help="wall-clock limit (> 0, at most a year)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--log-interval",
+        type=bounded_float(0.0, 86_400.0, lo_open=True, unit="s"),
+        default=None,
+        metavar="SECONDS",
+        help="without a progress bar (off a terminal, --no-progress, --seeds), a progress line "
+        "on stderr every SECONDS of wall-clock time: steps, fps, time left, the last "
+        "evaluation (default 30)",
+    )
     p.add_argument("--verbose", type=bounded_int(0, 2), default=0, help="SB3 verbosity, 0-2 (0)")
     p.set_defaults(func=cmd_train, folders={"--out": ("*",)})  # a model folder
     return p
@@ -176,6 +185,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         max_minutes=args.max_minutes,
         progress=progress_enabled(args.no_progress),
         verbose=args.verbose,
+        log_interval_s=_log_interval(args),
     )
     print(f"trained {res.num_timesteps} steps in {res.wall_time_s / 60:.1f} min")
     print(f"  model       {res.model_path}")
@@ -209,12 +219,19 @@ def _train_many(args: argparse.Namespace) -> int:
         n_envs=args.n_envs, residual=args.residual, observer=args.observer,
         env_id=_env_id(args), hyperparams=args.hyperparams, eval_freq=args.eval_freq,
         checkpoint_freq=args.checkpoint_freq, vec_env=args.vec_env,
-        max_minutes=args.max_minutes, verbose=args.verbose,
+        max_minutes=args.max_minutes, verbose=args.verbose, log_interval_s=_log_interval(args),
     )  # fmt: skip
     for r in rows:
         print(f"seed {r['seed']}: {r['num_timesteps']} steps in {r['wall_time_s'] / 60:.1f} min, "
               f"model {r['model_path']}")  # fmt: skip
     return 0
+
+
+def _log_interval(args: argparse.Namespace) -> float:
+    """``--log-interval`` or :data:`~shipgym.rl.train.LOG_INTERVAL_S` (s)."""
+    from shipgym.rl.train import LOG_INTERVAL_S
+
+    return LOG_INTERVAL_S if args.log_interval is None else float(args.log_interval)
 
 
 def _env_id(args: argparse.Namespace) -> str:
@@ -249,8 +266,9 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
         default=None,
         metavar="NAME",
         help="pid, pid-seed, lq, the shipped baselines ppo (pure PPO), sac (pure SAC), "
-        "ppo-residual (PPO on the PID) of the task and vessel, ppo:PATH, sac:PATH (default: "
-        "pid, lq and every shipped baseline of the task and vessel)",
+        "ppo-residual (PPO on the PID) of the task and vessel, ppo:PATH, sac:PATH (a shipgym "
+        "model, or a stable-baselines3 / rl-zoo3 zip with its args.yml and vecnormalize.pkl) "
+        "(default: pid, lq and every shipped baseline of the task and vessel)",
     )
     b.add_argument(
         "--task",
@@ -325,7 +343,13 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
                 "yaw at rest); choose a positioning vessel, e.g. star-hercules or wimpey-sealab"
             )
     task_id = "shipgym/StationKeeping-v0" if args.task == "station-keeping" else "harbour"
-    controllers = args.controllers or default_controllers(args.task, vessel)
+    from shipgym.rl.interop import resolve_controller
+
+    # ppo:PATH / sac:PATH of an SB3 or rl-zoo3 model (no shipgym.json): imported with the
+    # env id and vecnormalize.pkl next to it (shipgym.rl.interop)
+    controllers = [resolve_controller(c) for c in args.controllers or ()] or default_controllers(
+        args.task, vessel
+    )
     for name in controllers:
         # unknown names and missing model files fail before any work
         check_controller(name, task=task_id, vessel=vessel)

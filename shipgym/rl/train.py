@@ -769,13 +769,27 @@ def _metadata(
 
 
 def save_model(model: Any, path: str | Path, meta: ModelMetadata) -> Path:
-    """``model.save(path)`` plus ``shipgym.json``; returns the path of the zip."""
+    """``model.save(path)`` plus ``shipgym.json``; returns the path of the zip.
+
+    With normalisation statistics in ``meta`` the same statistics go to SB3's
+    ``VecNormalize`` file next to the zip (:func:`~shipgym.rl.interop.vecnormalize_path`:
+    ``vecnormalize.pkl`` for ``model.zip``, ``<stem>_vecnormalize.pkl`` for the others), so
+    that plain SB3 loads the model with ``VecNormalize.load``; without them a stale file of
+    that name is removed.
+    """
+    from shipgym.rl.interop import save_vecnormalize, vecnormalize_path
+
     p = Path(path)
     if p.suffix != ".zip":
         p = p.with_name(p.name + ".zip")
     p.parent.mkdir(parents=True, exist_ok=True)
     model.save(p)
     write_metadata(p, meta)
+    pkl = vecnormalize_path(p)
+    if meta.normalization is not None:
+        save_vecnormalize(meta.normalization, pkl, model.observation_space, model.action_space)
+    else:
+        pkl.unlink(missing_ok=True)
     return p
 
 
@@ -842,7 +856,11 @@ def _harbour_summary(
             for r in rows
         ],
     }
-    scalars: dict[str, float] = {"completed": ok / max(len(rows), 1), "J_c": summary["J_c"]}
+    # the completion is its own scalar; J_c (the mean over the runs that completed, the others
+    # have none) only when one did: never inf in progress.csv or TensorBoard
+    scalars: dict[str, float] = {"completed_fraction": ok / max(len(rows), 1)}
+    if math.isfinite(summary["J_c"]):
+        scalars["J_c"] = summary["J_c"]
     if meas:
         scalars["J_c_measured"] = summary["J_c_measured"]
     scalars["quay_contact"] = float(sum(r["quay_contact"] for r in rows))
@@ -884,11 +902,10 @@ def _station_summary(
         "runs": len(rows),
         "rows": [dict(r) for r in rows],
     }
-    scalars = {
-        "inside_fraction": inside,
-        "r95": float(np.mean([r["r95"] for r in rows])),
-        "return": ret,
-    }
+    r95 = [float(r["r95"]) for r in rows if math.isfinite(float(r["r95"]))]
+    scalars = {"inside_fraction": inside, "return": ret}
+    if r95:  # the runs that took a step (a run ended at once has none)
+        scalars["r95"] = float(np.mean(r95))
     return summary, scalars, (inside, ret)
 
 
@@ -929,12 +946,18 @@ def _make_eval_callback(**kw: Any) -> Any:
         """Every ``eval_freq`` steps: the env id's :class:`Evaluation` of the current policy.
 
         Runs the deterministic policy (current ``VecNormalize`` statistics) for each seed,
-        logs the evaluation's scalars as ``eval/<name>`` (harbour: ``completed``, the fraction
-        completed without quay contact, ``J_c``, ``J_c_measured``, ``quay_contact``,
-        ``duration_s``; station keeping: ``inside_fraction``, ``r95``, ``return``), appends
-        the summary to ``evaluations.json`` and saves ``best_model.zip`` when the score
-        improves (harbour: more runs completed, then lower mean J_c; station keeping: more
-        time inside the radius, then a higher return).
+        logs the evaluation's scalars as ``eval/<name>`` (harbour: ``completed_fraction``, the
+        fraction completed without quay contact, ``J_c`` and ``J_c_measured``, means over the
+        completed runs and left out when none completed, ``quay_contact``, ``duration_s``;
+        station keeping: ``inside_fraction``, ``r95``, ``return``), appends the summary to
+        ``evaluations.json`` and saves ``best_model.zip`` when the score improves (harbour:
+        more runs completed, then lower mean J_c; station keeping: more time inside the
+        radius, then a higher return).
+
+        The scalars are written at once, stamped with the step the evaluation was taken at
+        (a row of their own in ``progress.csv`` with ``time/total_timesteps``; TensorBoard
+        events at that step), not at the next dump of the training log; a value that is not
+        finite is never logged.
         """
 
         def __init__(
@@ -975,8 +998,9 @@ def _make_eval_callback(**kw: Any) -> Any:
                 **summary,
             }
             self.evaluations.append(summary)
-            for name, value in scalars.items():
-                self.logger.record(f"eval/{name}", value)
+            log_at_step(
+                self.logger, {f"eval/{k}": v for k, v in scalars.items()}, self.num_timesteps
+            )
             text = json.dumps(jsonable(self.evaluations), indent=1)
             (self.out_dir / "evaluations.json").write_text(text)
             if self.best is None or score > self.best:
@@ -985,6 +1009,29 @@ def _make_eval_callback(**kw: Any) -> Any:
             return summary
 
     return PeriodicEvalCallback(**kw)
+
+
+def log_at_step(logger: Any, scalars: Mapping[str, float], step: int) -> None:
+    """Write ``scalars`` to SB3's ``logger`` now, stamped ``step`` (with
+    ``time/total_timesteps``), leaving what the training has recorded since its last dump to
+    that dump; values that are not finite are left out (no ``inf`` in TensorBoard)."""
+    pending = (
+        dict(logger.name_to_value),
+        dict(logger.name_to_count),
+        dict(logger.name_to_excluded),
+    )
+    for d in (logger.name_to_value, logger.name_to_count, logger.name_to_excluded):
+        d.clear()
+    try:
+        for name, value in scalars.items():
+            if math.isfinite(float(value)):
+                logger.record(name, float(value))
+        logger.record("time/total_timesteps", int(step))
+        logger.dump(int(step))
+    finally:
+        logger.name_to_value.update(pending[0])
+        logger.name_to_count.update(pending[1])
+        logger.name_to_excluded.update(pending[2])
 
 
 def _make_checkpoint_callback(
@@ -1061,6 +1108,126 @@ def _make_progress_callback(total: int | None = None) -> Any:
             self.pbar.close()
 
     return TqdmProgress()
+
+
+#: seconds between two progress lines of ``shipgym train`` off a terminal (``--log-interval``)
+LOG_INTERVAL_S = 30.0
+
+
+def _clock(seconds: float) -> str:
+    """``h:mm:ss``."""
+    s = max(int(round(seconds)), 0)
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+
+
+def evaluation_text(summary: Mapping[str, Any] | None) -> str:
+    """One line's account of a periodic evaluation (``evaluations.json``'s entry)."""
+    if summary is None:
+        return "no evaluation yet"
+    head = f"last evaluation at {int(summary['timesteps']):,} steps: "
+    if summary.get("evaluation") == "station-keeping":
+        return head + (
+            f"{float(summary['inside_fraction']):.1%} of the time within "
+            f"{float(summary['radius_m']):g} m, mean return {float(summary['return']):.4g}"
+        )
+    text = head + f"completed {summary['completed']}/{summary['runs']}"
+    jc = summary.get("J_c")
+    if jc is not None and math.isfinite(float(jc)):
+        text += f", J_c {float(jc):.3f}"
+    return text
+
+
+class ProgressLog:
+    """Progress lines at a fixed wall-clock interval, for logs (``shipgym train > log 2>&1``).
+
+    A daemon thread writes one line every ``interval_s`` seconds, also while the policy is
+    updated or evaluated (no environment steps then): the steps so far of ``planned``, the
+    steps per second of this run, the elapsed and the estimated remaining time, and the last
+    periodic evaluation (:func:`evaluation_text`); a last line when it is stopped.
+
+    Args:
+        model: the SB3 model (``num_timesteps`` is read).
+        planned: the environment steps this run ends at (:func:`planned_timesteps`, plus a
+            resumed run's).
+        interval_s: seconds between lines (> 0).
+        label: the line's head (``shipgym train ppo, seed 0``).
+        last_evaluation: ``() -> summary or None``; ``None``: no evaluation in this run.
+        stream: where the lines go (default: stderr, as the progress bar).
+    """
+
+    def __init__(
+        self,
+        model: Any,
+        planned: int,
+        interval_s: float,
+        label: str,
+        last_evaluation: Callable[[], Mapping[str, Any] | None] | None = None,
+        stream: Any = None,
+    ) -> None:
+        import threading
+
+        self.model = model
+        self.planned = int(planned)
+        self.interval_s = check_log_interval(interval_s)
+        self.label = label
+        self.last_evaluation = last_evaluation
+        self.stream = stream
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="shipgym-progress", daemon=True)
+        self._t0 = 0.0
+        self._start_steps = 0
+
+    def start(self) -> ProgressLog:
+        self._t0 = time.perf_counter()
+        self._start_steps = int(self.model.num_timesteps)
+        self._thread.start()
+        return self
+
+    def line(self) -> str:
+        """The progress line now."""
+        done = int(self.model.num_timesteps)
+        elapsed = time.perf_counter() - self._t0
+        fps = (done - self._start_steps) / elapsed if elapsed > 0 else 0.0
+        share = done / self.planned if self.planned > 0 else 1.0
+        text = (
+            f"{self.label}: {done:,}/{self.planned:,} steps ({share:.1%}), {fps:,.0f} fps, "
+            f"{_clock(elapsed)} elapsed"
+        )
+        if fps > 0 and done < self.planned:
+            text += f", ~{_clock((self.planned - done) / fps)} left"
+        if self.last_evaluation is not None:
+            text += f"; {evaluation_text(self.last_evaluation())}"
+        return text
+
+    def _write(self) -> None:
+        stream = sys.stderr if self.stream is None else self.stream
+        print(self.line(), file=stream, flush=True)
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.interval_s):
+            self._write()
+
+    def stop(self) -> None:
+        """Stop the thread and write the last line (once)."""
+        if self._thread.is_alive():
+            self._stop.set()
+            self._thread.join()
+            self._write()
+
+
+def check_log_interval(interval_s: Any) -> float:
+    """A progress-line interval: a finite number of seconds > 0."""
+    if (
+        isinstance(interval_s, bool)
+        or not isinstance(interval_s, int | float)
+        or not (math.isfinite(interval_s) and interval_s > 0)
+    ):
+        raise ValueError(
+            f"the progress-line interval must be a finite number of seconds > 0, got "
+            f"{interval_s!r} (at most {LOG_INTERVAL_S:g} s keeps a log line at least every "
+            "minute)"
+        )
+    return float(interval_s)
 
 
 def planned_timesteps(algo: str, hp: Mapping[str, Any], timesteps: int) -> tuple[int, int]:
@@ -1194,6 +1361,7 @@ def train(
     deterministic: bool = True,
     verbose: int = 0,
     tensorboard: bool | None = None,
+    log_interval_s: float | None = LOG_INTERVAL_S,
 ) -> TrainResult:
     """Train a PPO or SAC controller; the function behind ``shipgym train``.
 
@@ -1221,6 +1389,10 @@ def train(
             :mod:`shipgym.rl.vec`) (default YAML).
         max_minutes: stop after this wall-clock time (the model so far is saved).
         progress: show a progress bar.
+        log_interval_s: without the bar (``progress=False``: off a terminal, or in a worker
+            of :func:`train_seeds`), a progress line on stderr every this many seconds of
+            wall-clock time (:class:`ProgressLog`: steps, fps, the last evaluation);
+            default :data:`LOG_INTERVAL_S`; ``None``: none.
         deterministic: single thread, deterministic torch algorithms (see module docstring).
         verbose: SB3 verbosity (1 prints the training log).
         tensorboard: log to ``OUT/tb`` for TensorBoard as well as to ``progress.csv``
@@ -1255,6 +1427,8 @@ def train(
         hp["observer"] = None if observer == "truth" else observer
     hp["observer"] = check_observer(hp.get("observer"))
     _check_train_args(seed=seed, n_envs=n_envs, max_minutes=max_minutes, timesteps=timesteps)
+    if log_interval_s is not None:
+        check_log_interval(log_interval_s)
     if n_envs is not None:
         hp["n_envs"] = int(n_envs)
     if vec_env is not None:
@@ -1337,16 +1511,31 @@ def train(
         cbs.append(_make_progress_callback(planned))
     _write_config(out_dir, hp, command, algo=algo, seed=seed, env_id=env_id, resume=resume)
 
-    model.learn(
-        total_timesteps=n_steps,
-        callback=cbs or None,
-        reset_num_timesteps=resume is None,
-        progress_bar=False,
-    )
-    wall = time.perf_counter() - t_start
-    if eval_cb is not None and eval_cb._last != model.num_timesteps:
-        eval_cb.evaluate()
-        model.logger.dump(model.num_timesteps)  # the final evaluation's scalars
+    lines = None
+    if not progress and log_interval_s is not None:
+        lines = ProgressLog(
+            model,
+            planned + (int(model.num_timesteps) if resume is not None else 0),
+            log_interval_s,
+            f"shipgym train {algo}, seed {seed}",
+            (lambda: eval_cb.evaluations[-1] if eval_cb.evaluations else None)
+            if eval_cb is not None
+            else None,
+        ).start()
+    try:
+        model.learn(
+            total_timesteps=n_steps,
+            callback=cbs or None,
+            reset_num_timesteps=resume is None,
+            progress_bar=False,
+        )
+        wall = time.perf_counter() - t_start
+        if eval_cb is not None and eval_cb._last != model.num_timesteps:
+            eval_cb.evaluate()  # logged at its step
+            model.logger.dump(model.num_timesteps)  # what the last update recorded
+    finally:
+        if lines is not None:
+            lines.stop()
     final = save_model(model, out_dir / "model.zip", metadata_fn({"wall_time_s": wall}))
     best = out_dir / "best_model.zip"
     model.logger.close()  # flushes and closes progress.csv
