@@ -80,7 +80,7 @@ def test_train_writes_vecnormalize_next_to_every_model(shipgym_run):
         assert zip_.is_file() and pkl.is_file(), pkl
         # SB3's own loader (which unpickles) reads the same statistics as shipgym.json
         norm = read_metadata(zip_).normalization
-        vn = VecNormalize.load(str(pkl), DummyVecEnv([lambda: _spaces_env(norm)]))
+        vn = VecNormalize.load(str(pkl), DummyVecEnv([lambda n=norm: _spaces_env(n)]))
         np.testing.assert_array_equal(vn.obs_rms.mean, norm.mean)
         np.testing.assert_array_equal(vn.obs_rms.var, norm.var)
         assert vn.obs_rms.count == norm.count
@@ -142,7 +142,7 @@ def test_a_model_trained_without_normalisation_has_no_pkl(tmp_path):
     assert not (tmp_path / "vecnormalize.pkl").exists()
 
 
-# ---- reading a vecnormalize.pkl unpickles nothing ---------------------------------------------
+# ---- reading a vecnormalize.pkl unpickles nothing ------------------------------------------
 class _Exploit:
     def __init__(self, marker):
         self.marker = marker
@@ -168,7 +168,7 @@ def test_read_vecnormalize_runs_no_code(tmp_path):
         read_vecnormalize(tmp_path / "missing.pkl")
 
 
-# ---- plain SB3 / rl-zoo3 -> shipgym ----------------------------------------------------------------
+# ---- plain SB3 / rl-zoo3 -> shipgym ---------------------------------------------------------
 #: what the zoo's block says: Star Hercules, a residual on the PID through the KBF (the plan
 #: tasks take observer= and controller= in gym.make; the ObserverWrapper form of env_wrapper
 #: is not used: SB3's make_vec_env puts its Monitor below it, whose spec ObserverWrapper cannot
@@ -183,9 +183,7 @@ def _zoo_run(root: Path) -> Path:
     save = root / "logs" / "ppo" / f"{ENV}_1"
     params = save / ENV
     params.mkdir(parents=True)
-    venv = VecNormalize(
-        make_vec_env(STATION, n_envs=2, seed=0, env_kwargs=ENV_KWARGS), gamma=0.99
-    )
+    venv = VecNormalize(make_vec_env(STATION, n_envs=2, seed=0, env_kwargs=ENV_KWARGS), gamma=0.99)
     import torch.nn as nn
 
     model = PPO(
