@@ -308,3 +308,27 @@ def test_what_a_model_without_shipgym_json_needs(zoo_model, tmp_path, cache):
         find_sb3_model(lone, "ppo")
     # a shipgym model and the other names pass through unchanged
     assert resolve_controller("pid") == "pid" and resolve_controller("ppo") == "ppo"
+
+
+def test_plain_sb3_sac_model_is_imported_with_its_actions(tmp_path, cache):
+    """A SAC model (policy_kwargs as SAC saves them, with use_sde) from a plain SB3 run."""
+    from stable_baselines3 import SAC
+
+    folder = tmp_path / "sac"
+    folder.mkdir()
+    kw = {"vessel": "star-hercules"}
+    venv = VecNormalize(make_vec_env(STATION, n_envs=1, seed=0, env_kwargs=kw))
+    model = SAC("MlpPolicy", venv, learning_starts=32, batch_size=32, seed=0, device="cpu",
+                policy_kwargs={"net_arch": [32, 32]})  # fmt: skip
+    model.learn(64)
+    model.save(folder / "model.zip")
+    venv.save(str(folder / "vecnormalize.pkl"))
+    (folder / "args.yml").write_text(f"env: {STATION}\nenv_kwargs: {{vessel: star-hercules}}\n")
+    name = resolve_controller(f"sac:{folder / 'model.zip'}", quiet=True)
+    imported = Path(name.partition(":")[2])
+    assert read_metadata(imported).algorithm == "sac"
+    raw = _raw_observations(STATION, {"env_kwargs": kw})
+    sb3, _ = model.predict(venv.normalize_obs(raw), deterministic=True)
+    np.testing.assert_allclose(load_policy(imported)(raw), sb3, rtol=0, atol=1e-6)
+    with pytest.raises(ValueError, match="holds a sac model, not ppo: use sac:"):
+        resolve_controller(f"ppo:{folder / 'model.zip'}")

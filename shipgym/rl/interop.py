@@ -480,6 +480,9 @@ def _policy_spec(algorithm: str, data: Mapping[str, Any], p: Path) -> tuple[dict
     cls = data.get("policy_class")
     init = str(cls.get("__init__", "")) if isinstance(cls, Mapping) else ""
     want = _MLP_POLICY[algorithm]
+    for other, cls_name in _MLP_POLICY.items():
+        if other != algorithm and init.startswith(f"<function {cls_name}.__init__"):
+            raise ValueError(f"{p} holds a {other} model, not {algorithm}: use {other}:{p}")
     if not init.startswith(f"<function {want}.__init__"):
         raise ValueError(
             f"{p}: its policy is not the {algorithm.upper()} MlpPolicy ({want}); shipgym runs "
@@ -492,6 +495,13 @@ def _policy_spec(algorithm: str, data: Mapping[str, Any], p: Path) -> tuple[dict
     for key, val in raw.items():
         if key in (":type:", ":serialized:", "optimizer_class"):
             continue  # the optimizer does not change the actions
+        if key == "use_sde":  # SAC puts it here (OffPolicyAlgorithm); PPO beside the kwargs
+            if val:
+                raise ValueError(
+                    f"{p}: a {algorithm.upper()} policy with gSDE (use_sde=True) is not one "
+                    "shipgym rebuilds; train it with use_sde=False"
+                )
+            continue
         if key == "activation_fn":
             m = _ACTIVATION_REPR.fullmatch(str(val))
             if m is None or m.group(1) not in _ACTIVATIONS:
