@@ -295,15 +295,17 @@ NEEDS = (
 
 
 def is_sb3_model(path: str | Path) -> bool:
-    """``True`` for a zip with SB3's ``data`` and ``policy.pth`` members and no ``shipgym.json``."""
-    import zipfile
+    """``True`` for a zip with SB3's ``data`` and ``policy.pth`` members and no ``shipgym.json``
+    (its directory checked as a shipgym model's first: member names, sizes and count; a file
+    that fails those is not one, and the model loader says why)."""
+    from shipgym.controllers.learned import _open_model
 
     try:
-        with zipfile.ZipFile(path) as zf:
-            names = set(zf.namelist())
-    except (OSError, zipfile.BadZipFile):
+        _, zf, members = _open_model(path)
+    except (OSError, ValueError):
         return False
-    return {"data", "policy.pth"} <= names and METADATA_NAME not in names
+    zf.close()
+    return {"data", "policy.pth"} <= set(members) and METADATA_NAME not in members
 
 
 def _yaml(path: Path) -> dict[str, Any]:
