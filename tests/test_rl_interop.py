@@ -332,3 +332,25 @@ def test_plain_sb3_sac_model_is_imported_with_its_actions(tmp_path, cache):
     np.testing.assert_allclose(load_policy(imported)(raw), sb3, rtol=0, atol=1e-6)
     with pytest.raises(ValueError, match="holds a sac model, not ppo: use sac:"):
         resolve_controller(f"ppo:{folder / 'model.zip'}")
+
+
+def test_zoo_yaml_is_read_without_constructing_objects(zoo_model, tmp_path, cache):
+    import shutil
+
+    folder = tmp_path / "m"
+    folder.mkdir()
+    shutil.copy(zoo_model, folder / "model.zip")
+    shutil.copy(zoo_model.parent / ENV / "vecnormalize.pkl", folder / "vecnormalize.pkl")
+    marker = tmp_path / "PWNED"
+    (folder / "args.yml").write_text(
+        f"env: {STATION}\nx: !!python/object/apply:pathlib.Path.touch [{str(marker)!r}]\n"
+    )
+    with pytest.raises(ValueError, match="not the YAML rl-zoo3 writes"):
+        find_sb3_model(folder / "model.zip", "ppo")
+    assert not marker.exists()
+    # the tags rl-zoo3 does write: an OrderedDict, a tuple among the values
+    (folder / "args.yml").write_text(
+        "!!python/object/apply:collections.OrderedDict\n- - - env\n    - "
+        f"{STATION}\n  - - train_freq\n    - !!python/tuple [1, episode]\n"
+    )
+    assert find_sb3_model(folder / "model.zip", "ppo").env_id == STATION

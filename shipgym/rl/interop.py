@@ -310,8 +310,9 @@ def is_sb3_model(path: str | Path) -> bool:
 
 def _yaml(path: Path) -> dict[str, Any]:
     """An ``args.yml`` / ``config.yml``: plain YAML, or rl-zoo3's dump of an ``OrderedDict``
-    (the ``!!python/object/apply:collections.OrderedDict`` tag read as a mapping; no other
-    Python tag is constructed)."""
+    (the ``!!python/object/apply:collections.OrderedDict`` tag read as a mapping,
+    ``!!python/tuple`` as a list; no other Python tag is constructed: a file with one is
+    refused)."""
     import yaml
 
     class Loader(yaml.SafeLoader):
@@ -323,6 +324,10 @@ def _yaml(path: Path) -> dict[str, Any]:
         return {str(k): v for k, v in pairs}
 
     Loader.add_constructor("tag:yaml.org,2002:python/object/apply:collections.OrderedDict", ordered)
+    # a tuple among the values (rl-zoo3's -params evaluates them): read as a list
+    Loader.add_constructor(
+        "tag:yaml.org,2002:python/tuple", lambda loader, node: loader.construct_sequence(node)
+    )
     if path.stat().st_size > 1 << 20:
         raise ValueError(f"{path}: larger than 1 MiB, not an rl-zoo3 args.yml / config.yml")
     try:
