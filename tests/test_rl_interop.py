@@ -171,8 +171,7 @@ def test_read_vecnormalize_runs_no_code(tmp_path):
 # ---- plain SB3 / rl-zoo3 -> shipgym ---------------------------------------------------------
 #: what the zoo's block says: Star Hercules, a residual on the PID through the KBF (the plan
 #: tasks take observer= and controller= in gym.make; the ObserverWrapper form of env_wrapper
-#: is not used: SB3's make_vec_env puts its Monitor below it, whose spec ObserverWrapper cannot
-#: rebuild)
+#: under SB3's make_vec_env: tests/test_observer_wrapper.py)
 ENV_KWARGS = {"vessel": "star-hercules", "observer": "kbf", "controller": "pid",
               "residual_scale": 0.25}  # fmt: skip
 

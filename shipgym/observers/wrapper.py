@@ -17,12 +17,21 @@ import gymnasium as gym
 
 __all__ = ["ObserverWrapper"]
 
+#: the wrappers gym.make puts around an env (the rebuilt env has its own)
+_MAKE_WRAPPERS = (
+    gym.wrappers.TimeLimit,
+    gym.wrappers.OrderEnforcing,
+    gym.wrappers.PassiveEnvChecker,
+)
+
 
 class ObserverWrapper(gym.Wrapper[Any, Any, Any, Any]):
     """``env`` rebuilt with the observer ``observer`` (rl-zoo3's ``env_wrapper``).
 
-    The env made by ``gym.make(env.spec)`` with ``observer=observer`` (and
-    ``observer_options=options``) added to its arguments replaces ``env`` (which is closed):
+    The env made by ``gym.make`` from ``env.unwrapped.spec`` with ``observer=observer`` (and
+    ``observer_options=options``) added to its arguments replaces the env ``gym.make`` made
+    (which is closed), under any wrapper put on top of it (SB3's ``Monitor``, which
+    ``make_vec_env`` puts below the ``wrapper_class``):
     the same env as ``shipgym.make(id, observer=observer, ...)``, whose observation holds the
     estimate and whose ``info`` the estimation errors (:class:`~shipgym.envs.base.ShipEnv`).
 
@@ -44,8 +53,8 @@ class ObserverWrapper(gym.Wrapper[Any, Any, Any, Any]):
     ) -> None:
         from shipgym.envs.base import ShipEnv
 
-        spec = env.spec
         base = env.unwrapped
+        spec = base.spec  # what gym.make made it from (the wrappers above it not included)
         if spec is None or not isinstance(base, ShipEnv):
             raise ValueError(
                 "ObserverWrapper rebuilds a plan-task env made by gym.make (it needs its spec); "
@@ -56,8 +65,17 @@ class ObserverWrapper(gym.Wrapper[Any, Any, Any, Any]):
         kwargs = {**spec.kwargs, "observer": observer}
         if options is not None:
             kwargs["observer_options"] = dict(options)
-        rebuilt = gym.make(dataclasses.replace(spec, kwargs=kwargs))
-        env.close()
-        super().__init__(rebuilt)
+        rebuilt = gym.make(dataclasses.replace(spec, kwargs=kwargs, additional_wrappers=()))
+        # the wrappers put on top of gym.make's (SB3's Monitor: make_vec_env wraps it below
+        # this one) stay; the env gym.make made, with its own wrappers, is replaced under them
+        parent, made = None, env
+        while isinstance(made, gym.Wrapper) and not isinstance(made, _MAKE_WRAPPERS):
+            parent, made = made, made.env
+        made.close()
+        if parent is None:
+            super().__init__(rebuilt)
+        else:
+            parent.env = rebuilt
+            super().__init__(env)
         #: the observer's name
         self.observer_name = observer
