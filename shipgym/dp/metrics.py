@@ -9,6 +9,7 @@ Design notes: docs/design/dp.metrics.md.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -110,6 +111,44 @@ def _band(name: str, band: Any) -> tuple[float, float]:
     return lo, hi
 
 
+def _band_powers(
+    t: ArrayLike,
+    tau_c: ArrayLike,
+    capacity: ArrayLike,
+    bands: tuple[tuple[float, float], ...],
+    lf: tuple[float, float],
+    detrend: Any,
+) -> Callable[[tuple[float, float]], float]:
+    """``power(band)``: the summed Welch power over the DOFs of ``tau_c / capacity`` in a
+    band (edges included), Hann segments of ``BINS_PER_LF_BAND / width(lf)`` seconds, half
+    overlap, ``detrend`` as :func:`scipy.signal.welch`'s; after the checks of ``t``, the
+    arrays, the ``bands`` against the Nyquist frequency and the record's length."""
+    tt, dt = _times(t)
+    u = _series("tau_c", tau_c, tt.size)
+    u = u / _capacity(capacity, u.shape[1])
+    fs = 1.0 / dt
+    if max(b[1] for b in bands) > 0.5 * fs:
+        raise ValueError(
+            f"the bands {', '.join(map(str, bands))} Hz must lie below the Nyquist frequency "
+            f"{0.5 * fs:.4g} Hz of the sampling interval {dt:.4g} s"
+        )
+    seg_s = BINS_PER_LF_BAND / (lf[1] - lf[0])
+    nperseg = int(math.ceil(seg_s * fs))
+    if tt.size < nperseg:
+        raise ValueError(
+            f"the record ({tt.size} samples, {tt[-1] - tt[0]:.4g} s) is shorter than one Welch "
+            f"segment ({nperseg} samples, {seg_s:.4g} s) that resolves the LF band {lf} Hz"
+        )
+    f, P = scipy.signal.welch(u, fs=fs, window="hann", nperseg=nperseg, detrend=detrend, axis=0)
+    df = f[1] - f[0]
+
+    def power(band: tuple[float, float]) -> float:
+        sel = (f >= band[0] - 1e-9 * df) & (f <= band[1] + 1e-9 * df)
+        return float(P[sel].sum() * df)
+
+    return power
+
+
 def wave_band_ratio(
     t: ArrayLike,
     tau_c: ArrayLike,
@@ -139,31 +178,9 @@ def wave_band_ratio(
         ValueError: non-uniform or too short ``t``, mis-shaped or non-finite arrays, bad bands,
             a band above the Nyquist frequency, or a command that is zero throughout.
     """
-    tt, dt = _times(t)
-    u = _series("tau_c", tau_c, tt.size)
-    u = u / _capacity(capacity, u.shape[1])
     hf = _band("hf_band", hf_band)
     lf = _band("lf_band", lf_band)
-    fs = 1.0 / dt
-    if max(hf[1], lf[1]) > 0.5 * fs:
-        raise ValueError(
-            f"the bands {hf_band} and {lf_band} Hz must lie below the Nyquist frequency "
-            f"{0.5 * fs:.4g} Hz of the sampling interval {dt:.4g} s"
-        )
-    seg_s = BINS_PER_LF_BAND / (lf[1] - lf[0])
-    nperseg = int(math.ceil(seg_s * fs))
-    if tt.size < nperseg:
-        raise ValueError(
-            f"the record ({tt.size} samples, {tt[-1] - tt[0]:.4g} s) is shorter than one Welch "
-            f"segment ({nperseg} samples, {seg_s:.4g} s) that resolves the LF band {lf_band} Hz"
-        )
-    f, P = scipy.signal.welch(u, fs=fs, window="hann", nperseg=nperseg, detrend=False, axis=0)
-    df = f[1] - f[0]
-
-    def power(band: tuple[float, float]) -> float:
-        sel = (f >= band[0] - 1e-9 * df) & (f <= band[1] + 1e-9 * df)
-        return float(P[sel].sum() * df)
-
+    power = _band_powers(t, tau_c, capacity, (hf, lf), lf, detrend=False)
     p_hf, p_lf = power(hf), power(lf)
     if p_lf == 0.0:
         if p_hf == 0.0:
@@ -197,27 +214,9 @@ def hf_thrust_rms(
     Raises:
         ValueError: as :func:`wave_band_ratio`.
     """
-    tt, dt = _times(t)
-    u = _series("tau_c", tau_c, tt.size)
-    u = u / _capacity(capacity, u.shape[1])
     hf = _band("hf_band", hf_band)
-    fs = 1.0 / dt
-    if hf[1] > 0.5 * fs:
-        raise ValueError(
-            f"the band {hf_band} Hz must lie below the Nyquist frequency {0.5 * fs:.4g} Hz of "
-            f"the sampling interval {dt:.4g} s"
-        )
-    seg_s = BINS_PER_LF_BAND / (LF_BAND[1] - LF_BAND[0])
-    nperseg = int(math.ceil(seg_s * fs))
-    if tt.size < nperseg:
-        raise ValueError(
-            f"the record ({tt.size} samples, {tt[-1] - tt[0]:.4g} s) is shorter than one Welch "
-            f"segment ({nperseg} samples, {seg_s:.4g} s)"
-        )
-    f, P = scipy.signal.welch(u, fs=fs, window="hann", nperseg=nperseg, detrend="linear", axis=0)
-    df = f[1] - f[0]
-    sel = (f >= hf[0] - 1e-9 * df) & (f <= hf[1] + 1e-9 * df)
-    return math.sqrt(float(P[sel].sum() * df))
+    power = _band_powers(t, tau_c, capacity, (hf,), LF_BAND, detrend="linear")
+    return math.sqrt(power(hf))
 
 
 def dp_metrics(
