@@ -322,7 +322,7 @@ def _env_row(metrics, i):
 @pytest.mark.parametrize(
     ("env_id", "kw", "steps", "total"),
     [
-        ("shipgym/BlueLadyTracking-v0", {"max_legs": 2}, 200, 420),
+        ("shipgym/BlueLadyTracking-v0", {"max_legs": 2}, 320, 660),
         ("shipgym/BlueLadyHarbour-v0", {}, 90, 200),
         ("shipgym/DPStationKeeping-v0", {"vessel": "star-hercules", "episode_duration": 8.0},
          None, 100),

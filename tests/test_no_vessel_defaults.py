@@ -101,7 +101,8 @@ def test_blue_lady_records_equal_its_vessel_package():
     assert v.windage == BLUE_LADY_WINDAGE
     assert fixed3_parameters(v.actuators) == BLUE_LADY_THRUSTERS
     assert Limits.from_dict(dict(v.limits)) == BLUE_LADY_LIMITS
-    assert BLUE_LADY_LIMITS.yaw_rate == math.radians(1.0)
+    # the guidance's limits at 75 % of the thrust capacity in the nominal wind (issue 31)
+    assert BLUE_LADY_LIMITS.yaw_rate == math.radians(0.5)
     # the design model of the package is the one printed by Tomera (2014) eqs. 49-50
     np.testing.assert_array_equal(v.design.M, np.diag([23664.9, 24830.6, 455182.1]))
     np.testing.assert_array_equal(v.design.D_L[1], [0.0, 259.8, -855.4])

@@ -44,9 +44,12 @@ from shipgym.controllers.learned import (
 )
 
 from .evaluation import STATION_RADIUS, StationTrack, check_observer, run_env_episode
+from .interop import INTEGRAL_WRAPPER, OBSERVER_WRAPPER, parse_env_wrapper
 
 __all__ = [
     "DEFAULT_ENV_ID",
+    "INTEGRAL_WRAPPER",
+    "OBSERVER_WRAPPER",
     "EVALUATIONS",
     "EVAL_ENV_ID",
     "Evaluation",
@@ -93,10 +96,6 @@ ZOO_BLOCK_KEYS = (
     "normalize",
     "policy_kwargs",
 )
-#: the wrapper that puts an observer into the loop (``env_wrapper`` in a block)
-OBSERVER_WRAPPER = "shipgym.observers.wrapper.ObserverWrapper"
-#: the wrapper that appends the leaky integral of the observed errors (after the observer)
-INTEGRAL_WRAPPER = "shipgym.envs.integral.ErrorIntegralObservation"
 #: the activation of each algorithm's policy when ``policy_kwargs`` names none:
 #: stable-baselines3's defaults (``ActorCriticPolicy``: ``nn.Tanh``; SAC's actor and critics:
 #: ``nn.ReLU``); resolved hyperparameters always carry it by name
@@ -282,69 +281,6 @@ def load_hyperparams(
     _check_algo_args(algo, hp, where=str(p))
     check_hyperparams(algo, hp, where=str(p))
     return hp
-
-
-def parse_env_wrapper(spec: Any, where: str = "hyperparameters") -> tuple[str | None, float | None]:
-    """``(observer, error_integral)`` from a block's ``env_wrapper`` (rl-zoo3's form).
-
-    rl-zoo3 wraps every env in what ``env_wrapper`` names (``rl_zoo3.utils.get_wrapper_class``),
-    in order: a class path, or a one-entry mapping ``{class path: keyword arguments}``, or a
-    list of these. shipgym takes :data:`OBSERVER_WRAPPER` (``ObserverWrapper``, which rebuilds
-    the env as ``shipgym.make(..., observer=)`` makes it), with at most the argument ``observer``
-    (default ``kbf``), then optionally :data:`INTEGRAL_WRAPPER` (``ErrorIntegralObservation``,
-    the leaky integral of the observed errors, with at most ``time_constant`` in s); so the
-    zoo and ``shipgym train`` build the same stack. ``None`` / ``None``: the truth, no integral.
-
-    Raises:
-        ValueError: any other wrapper, order or argument, with the form to use.
-    """
-    from shipgym.envs.integral import check_time_constant
-
-    form = (
-        f"env_wrapper: [{{{OBSERVER_WRAPPER}: {{observer: kbf}}}}] optionally followed by "
-        f"{{{INTEGRAL_WRAPPER}: {{time_constant: 100}}}}"
-    )
-    if spec is None:
-        return None, None
-    entries = spec if isinstance(spec, list) else [spec]
-    parsed: list[tuple[str, dict[str, Any]]] = []
-    for entry in entries:
-        kwargs: Any
-        if isinstance(entry, str):
-            name, kwargs = entry, {}
-        elif isinstance(entry, dict) and len(entry) == 1:
-            name, kwargs = next(iter(entry.items()))
-            kwargs = {} if kwargs is None else kwargs
-        else:
-            raise ValueError(f"{where}: env_wrapper entries are a class path or {{path: kwargs}}")
-        if not isinstance(kwargs, dict):
-            raise ValueError(f"{where}: the arguments of env_wrapper {name!r} must be a mapping")
-        parsed.append((name, kwargs))
-    names = [n for n, _ in parsed]
-    if names not in ([OBSERVER_WRAPPER], [OBSERVER_WRAPPER, INTEGRAL_WRAPPER]):
-        raise ValueError(f"{where}: shipgym train supports {form}; got {names!r}")
-    kwargs = parsed[0][1]
-    unknown = sorted(set(kwargs) - {"observer"})
-    if unknown:
-        raise ValueError(
-            f"{where}: env_wrapper {OBSERVER_WRAPPER} takes only 'observer', got {unknown}"
-        )
-    observer = kwargs.get("observer", "kbf")
-    if not isinstance(observer, str):
-        raise ValueError(f"{where}: env_wrapper observer must be a name, got {observer!r}")
-    integral = None
-    if len(parsed) == 2:
-        kw = parsed[1][1]
-        unknown = sorted(set(kw) - {"time_constant"})
-        if unknown:
-            raise ValueError(
-                f"{where}: env_wrapper {INTEGRAL_WRAPPER} takes only 'time_constant', got {unknown}"
-            )
-        try:
-            integral = check_time_constant(kw.get("time_constant", 100.0))
-        except ValueError as exc:
-            raise ValueError(f"{where}: env_wrapper {INTEGRAL_WRAPPER}: {exc}") from None
-    return check_observer(observer), integral
 
 
 def plain_policy_kwargs(algo: str, value: Any, where: str = "hyperparameters") -> dict[str, Any]:
