@@ -163,7 +163,11 @@ def test_ctrl_c_stops_rerun_and_chromium(tmp_path):
         lines.append(line)
         if line.startswith("opening") or time.monotonic() > deadline:
             break
-    time.sleep(3.0)
+    # interrupt as soon as Chromium runs beside rerun (a fixed wait let a fast viewer finish
+    # its screenshot first: exit 0, nothing left to stop)
+    until = time.monotonic() + 30.0
+    while not any("chrom" in p for p in _leftovers()) and time.monotonic() < until:
+        time.sleep(0.1)
     assert _leftovers(), "rerun and Chromium should be running now"
     os.kill(proc.pid, signal.SIGINT)
     rest, _ = proc.communicate(timeout=60)
