@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 __all__ = [
+    "private_cache_dir",
     "Interrupted",
     "WriteFailed",
     "atomic_path",
@@ -42,6 +43,24 @@ __all__ = [
 
 #: the word marking a file that is not (yet) complete
 PARTIAL = "partial"
+
+
+def private_cache_dir(name: str) -> Path | None:
+    """The per-user cache folder ``$XDG_CACHE_HOME`` (or ``~/.cache``) ``/shipgym/<name>``,
+    created private (0700) and checked writable; ``None`` where it cannot be created or
+    written, or is not private (owned by another user, or writable by group or others: a
+    file planted there, such as a pickle, would be trusted on loading)."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    path = Path(base) / "shipgym" / name
+    try:
+        path.mkdir(parents=True, exist_ok=True, mode=0o700)
+        st = path.stat()
+        if (hasattr(os, "getuid") and st.st_uid != os.getuid()) or st.st_mode & 0o022:
+            return None
+        tempfile.TemporaryFile(dir=path).close()
+    except OSError:
+        return None
+    return path
 
 
 def partial_path(path: str | os.PathLike[str], suffix: str | None = None) -> Path:

@@ -16,10 +16,8 @@ from __future__ import annotations
 
 import os
 import sys
-import tempfile
 import threading
 import warnings
-from pathlib import Path
 from typing import Any
 
 import numba
@@ -64,17 +62,10 @@ def _private_cache_dir() -> str | None:
     ``shipgym/numba``), created private (0700); ``None`` where it cannot be created or written,
     or is not private (owned by another user, or writable by group or others: a pickle planted
     there would run on loading)."""
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    path = Path(base) / "shipgym" / "numba"
-    try:
-        path.mkdir(parents=True, exist_ok=True, mode=0o700)
-        st = path.stat()
-        if (hasattr(os, "getuid") and st.st_uid != os.getuid()) or st.st_mode & 0o022:
-            return None
-        tempfile.TemporaryFile(dir=path).close()
-    except OSError:
-        return None
-    return str(path)
+    from shipgym._io import private_cache_dir
+
+    path = private_cache_dir("numba")
+    return None if path is None else str(path)
 
 
 def _configure_cache() -> bool:

@@ -624,18 +624,12 @@ def _stack_text(model: Sb3Model) -> str:
 
 def import_dir() -> Path:
     """Where :func:`resolve_controller` keeps imported models: ``$XDG_CACHE_HOME`` (or
-    ``~/.cache``) ``/shipgym/imported``, private (0700); a folder of this process (removed at
-    exit) where that cannot be made private."""
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    path = Path(base) / "shipgym" / "imported"
-    try:
-        path.mkdir(parents=True, exist_ok=True, mode=0o700)
-        st = path.stat()
-        if (hasattr(os, "getuid") and st.st_uid != os.getuid()) or st.st_mode & 0o022:
-            raise OSError("not private")
-        return path
-    except OSError:
-        return _temporary_dir()
+    ``~/.cache``) ``/shipgym/imported``, private (0700: :func:`shipgym._io.private_cache_dir`);
+    a folder of this process (removed at exit) where that cannot be made private."""
+    from shipgym._io import private_cache_dir
+
+    path = private_cache_dir("imported")
+    return _temporary_dir() if path is None else path
 
 
 _TEMP_DIR: Path | None = None
