@@ -49,6 +49,7 @@ __all__ = [
     "row_log",
     "run_jobs",
     "mean_std",
+    "mean_worst",
     "single_threaded_blas",
     "table_cell",
     "velocity_error_trace",
@@ -512,8 +513,11 @@ def write_bench_outputs(
     print(table)
     print(f"{len(rows)} runs in {wall:.1f} s")
     outputs = (
-        (json_path, json.dumps(jsonable({"title": title, **(header or {}), "rows": rows}),
-                               indent=2), "rows"),  # fmt: skip
+        (
+            json_path,
+            json.dumps(jsonable({"title": title, **(header or {}), "rows": rows}), indent=2),
+            "rows",
+        ),  # fmt: skip
         (markdown, f"{title}\n\n{table}\n", "table"),
     )
     for path, text, what in outputs:
@@ -730,6 +734,14 @@ def observer_table(rows: Sequence[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n\n" + chatter_table(rows)
 
 
+def mean_worst(values: Any, fmt: str, worst: Callable[[Any], Any] = max) -> str:
+    """``"mean [worst]"`` of the finite ``values`` (one per seed) in the format ``fmt``; ``-``
+    where none is finite (the chatter tables' cell)."""
+    c = np.asarray(values, dtype=float)
+    c = c[np.isfinite(c)]
+    return "-" if c.size == 0 else f"{c.mean():{fmt}} [{worst(c):{fmt}}]"
+
+
 def chatter_table(rows: Sequence[dict[str, Any]]) -> str:
     """A markdown table of the command chatter (:func:`shipgym.metrics.command_chatter`) per
     observer: per channel (``a / b / c`` in the vessel's channel order), the mean over the
@@ -759,11 +771,7 @@ def chatter_table(rows: Sequence[dict[str, Any]]) -> str:
                 cells.append("n/a")
                 continue
             x = scale * np.array(per, dtype=float)  # (seeds, channels)
-            parts = []
-            for j in range(x.shape[1]):
-                c = x[:, j][np.isfinite(x[:, j])]
-                parts.append("-" if c.size == 0 else f"{c.mean():{fmt}} [{worst(c):{fmt}}]")
-            cells.append(" / ".join(parts))
+            cells.append(" / ".join(mean_worst(x[:, j], fmt, worst) for j in range(x.shape[1])))
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from shipgym.bench import mean_std as _ms
-from shipgym.bench import run_jobs
+from shipgym.bench import mean_worst, run_jobs
 from shipgym.metrics import CHATTER_KEYS
 from shipgym.runner import ENV_DEFAULT
 
@@ -418,8 +418,7 @@ def chatter_cells(rows: Sequence[dict[str, Any]]) -> str:
             worst = [np.nanmax(c) if np.isfinite(c).any() else math.nan for c in x.T]
             cells.append(" / ".join(f"{w:{fmt}}" for w in worst))
         else:
-            c = x[:, 0][np.isfinite(x[:, 0])]
-            cells.append("-" if c.size == 0 else f"{c.mean():{fmt}} [{c.max():{fmt}}]")
+            cells.append(mean_worst(x[:, 0], fmt, np.max))
     return " | ".join(cells)
 
 
