@@ -68,6 +68,25 @@ _RX_KEYS = {"v_ns": "v_ns", "v_ew": "v_ew", "x": "x_hat", "y": "y_hat", "v_xy": 
             "chi": "chi", "beta_A": "beta_A"}  # fmt: skip
 
 
+def _surge_acceleration(physics: BatchedPhysics, shaft: int, command: float, U: float) -> float:
+    """The surge acceleration (m/s^2) of straight running at ``U`` (m/s) with the shaft channel
+    ``shaft`` at ``command`` and the other channels at rest: the MMG hull's equations
+    (:meth:`~shipgym.dynamics.mmg.MMGModel.nu_dot`), else the plant under the actuators'
+    generalised force."""
+    plant = physics.plant
+    if isinstance(plant, MMGHull):
+        return float(plant.model.nu_dot([U, 0.0, 0.0], 0.0, command)[0])
+    acts = physics.actuators
+    st = acts.initial_state()
+    st[shaft] = command
+    four = physics.dofs == 4
+    nu = np.array([U, 0.0, 0.0, 0.0]) if four else np.array([U, 0.0, 0.0])
+    tau = acts.tau(st, nu if acts.flow_dependent else None)
+    if four:
+        return float(plant.nu_dot(nu, tau, np.zeros(2), 0.0)[0])
+    return float(plant.nu_dot(nu, tau)[0])
+
+
 def approach_command(physics: BatchedPhysics, shaft: int, U0: float) -> float:
     """The command of the shaft channel ``shaft`` that holds ``U0`` (m/s) in straight running.
 
@@ -80,21 +99,12 @@ def approach_command(physics: BatchedPhysics, shaft: int, U0: float) -> float:
     """
     from scipy.optimize import brentq
 
-    plant = physics.plant
-    if isinstance(plant, MMGHull):
-        return plant.model.self_propulsion(U0)
+    if isinstance(physics.plant, MMGHull):
+        return physics.plant.model.self_propulsion(U0)
     acts = physics.actuators
-    st0 = acts.initial_state()
-    four = physics.dofs == 4
-    nu = np.array([U0, 0.0, 0.0, 0.0]) if four else np.array([U0, 0.0, 0.0])
 
     def surge(c: float) -> float:
-        st = st0.copy()
-        st[shaft] = c
-        tau = acts.tau(st, nu if acts.flow_dependent else None)
-        if four:
-            return float(plant.nu_dot(nu, tau, np.zeros(2), 0.0)[0])
-        return float(plant.nu_dot(nu, tau)[0])
+        return _surge_acceleration(physics, shaft, c, U0)
 
     hi = float(acts.upper[shaft])
     if not surge(0.0) < 0.0 < surge(hi):
@@ -115,23 +125,8 @@ def steady_speed(physics: BatchedPhysics, shaft: int, command: float, U0: float)
     """
     from scipy.optimize import brentq
 
-    plant = physics.plant
-    if isinstance(plant, MMGHull):
-
-        def surge(U: float) -> float:
-            return float(plant.model.nu_dot([U, 0.0, 0.0], 0.0, command)[0])
-    else:
-        acts = physics.actuators
-        st = acts.initial_state()
-        st[shaft] = command
-        four = physics.dofs == 4
-
-        def surge(U: float) -> float:
-            nu = np.array([U, 0.0, 0.0, 0.0]) if four else np.array([U, 0.0, 0.0])
-            tau = acts.tau(st, nu if acts.flow_dependent else None)
-            if four:
-                return float(plant.nu_dot(nu, tau, np.zeros(2), 0.0)[0])
-            return float(plant.nu_dot(nu, tau)[0])
+    def surge(U: float) -> float:
+        return _surge_acceleration(physics, shaft, command, U)
 
     lo, hi = 1e-3 * U0, 2.0 * U0
     if not surge(lo) > 0.0 > surge(hi):
