@@ -41,8 +41,9 @@ Array = NDArray[np.float64]
 DEFAULT_REPS = 2000
 
 
-def _scores(scores: ArrayLike, name: str = "scores") -> Array:
-    """``scores`` as a finite (runs, tasks) array; (runs,) is one task."""
+def _scores(scores: ArrayLike, name: str = "scores", missing: str = "raise") -> Array:
+    """``scores`` as a finite (runs, tasks) array; (runs,) is one task. ``missing="omit"``
+    lets NaN through (a missing score) as long as every task keeps a finite one."""
     a = np.asarray(scores, dtype=float)
     if a.ndim == 1:
         a = a[:, None]
@@ -51,22 +52,32 @@ def _scores(scores: ArrayLike, name: str = "scores") -> Array:
             f"{name} must be (runs, tasks) (or (runs,) for one task) with at least one run, "
             f"got shape {np.shape(scores)}"
         )
-    if not np.isfinite(a).all():
+    if missing not in ("raise", "omit"):
+        raise ValueError(f"missing must be 'raise' or 'omit', got {missing!r}")
+    bad = ~np.isfinite(a)
+    if missing == "omit":
+        bad &= ~np.isnan(a)
+        if np.isnan(a).all(axis=0).any():
+            raise ValueError(f"{name}: with missing='omit' every task needs a finite score")
+    if bad.any():
         raise ValueError(
             f"{name} must be finite: score a failed run with the task's worst value (e.g. 0 "
-            "for a success rate), not NaN or inf"
+            "for a success rate), not NaN or inf (or pass missing='omit' to leave NaN out)"
         )
     return a
 
 
-def iqm(scores: ArrayLike) -> float:
+def iqm(scores: ArrayLike, *, missing: str = "raise") -> float:
     """The interquartile mean of all the scores ``(runs, tasks)``: the mean of the middle
     50 % (``scipy.stats.trim_mean(scores.ravel(), 0.25)``; Agarwal et al. 2021 sec. 4.3).
+    ``missing="omit"``: NaN scores (a run without a value, e.g. a cost of runs that all
+    failed) are left out.
 
     Raises:
         ValueError: not a finite (runs, tasks) or (runs,) array.
     """
-    return float(trim_mean(_scores(scores).ravel(), 0.25))
+    a = _scores(scores, missing=missing).ravel()
+    return float(trim_mean(a[~np.isnan(a)], 0.25))
 
 
 def _check_reps(reps: int, alpha: float) -> None:
@@ -89,6 +100,7 @@ def stratified_bootstrap_ci(
     reps: int = DEFAULT_REPS,
     alpha: float = 0.05,
     seed: int | np.random.Generator | None = 0,
+    missing: str = "raise",
 ) -> tuple[float, float, float]:
     """``(estimate, low, high)``: the statistic of ``scores`` (runs, tasks) and its
     ``1 - alpha`` percentile-bootstrap interval, each task's runs resampled with replacement
@@ -101,13 +113,25 @@ def stratified_bootstrap_ci(
         reps: bootstrap resamples, >= 100.
         alpha: 0.05 for a 95 % interval.
         seed: the resampling's generator or seed (the same seed, the same interval).
+        missing: ``"raise"`` (NaN is an error) or ``"omit"``: each task's NaN runs are left
+            out and its remaining runs resampled among themselves (the IQM only).
 
     Raises:
-        ValueError: bad ``scores``, ``reps`` or ``alpha``.
+        ValueError: bad ``scores``, ``reps`` or ``alpha``; ``missing="omit"`` with another
+            statistic than :func:`iqm`.
     """
-    a = _scores(scores)
+    a = _scores(scores, missing=missing)
     _check_reps(reps, alpha)
     rng = np.random.default_rng(seed)
+    if missing == "omit" and np.isnan(a).any():
+        if statistic is not iqm:
+            raise ValueError("missing='omit' supports the iqm statistic only")
+        cols = [a[~np.isnan(a[:, j]), j] for j in range(a.shape[1])]
+        boot = trim_mean(
+            np.concatenate([c[rng.integers(0, c.size, size=(reps, c.size))] for c in cols],
+                           axis=1), 0.25, axis=1)  # fmt: skip
+        lo, hi = np.quantile(boot, [alpha / 2.0, 1.0 - alpha / 2.0])
+        return iqm(a, missing="omit"), float(lo), float(hi)
     runs, tasks = a.shape
     idx = _resample_index(rng, runs, tasks, reps)
     samples = a[idx, np.arange(tasks)[None, None, :]]  # (reps, runs, tasks)
@@ -156,11 +180,13 @@ def aggregate(
     reps: int = DEFAULT_REPS,
     alpha: float = 0.05,
     seed: int = 0,
+    missing: str = "raise",
 ) -> dict[str, dict[str, float]]:
     """:func:`stratified_bootstrap_ci` of each method's scores: ``{method: {"estimate",
     "low", "high", "runs", "tasks"}}``. Each method is resampled from a generator of
     ``(seed, crc32(name))``: its interval depends on its scores, the seed and its name only,
-    not on the other methods listed.
+    not on the other methods listed. ``missing``: as :func:`stratified_bootstrap_ci`
+    (``"omit"`` adds ``"missing"``, the number of NaN scores left out).
 
     Raises:
         ValueError: no method, or bad scores (the message names the method).
@@ -169,9 +195,12 @@ def aggregate(
         raise ValueError("methods must name at least one method's scores")
     out: dict[str, dict[str, float]] = {}
     for name, s in methods.items():
-        a = _scores(s, name=f"scores of {name!r}")
+        a = _scores(s, name=f"scores of {name!r}", missing=missing)
         rng = np.random.default_rng([int(seed), zlib.crc32(str(name).encode())])
-        est, lo, hi = stratified_bootstrap_ci(a, statistic, reps=reps, alpha=alpha, seed=rng)
+        est, lo, hi = stratified_bootstrap_ci(a, statistic, reps=reps, alpha=alpha, seed=rng,
+                                              missing=missing)  # fmt: skip
         out[name] = {"estimate": est, "low": lo, "high": hi, "runs": a.shape[0],
                      "tasks": a.shape[1]}  # fmt: skip
+        if missing == "omit":
+            out[name]["missing"] = int(np.isnan(a).sum())
     return out

@@ -93,3 +93,28 @@ def test_the_vectorised_iqm_is_the_generic_path():
     assert stratified_bootstrap_ci(x, reps=300, seed=4) == stratified_bootstrap_ci(
         x, lambda a: iqm(a), reps=300, seed=4
     )
+
+
+def test_missing_scores_are_left_out_of_their_task_only():
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(6, 3))
+    y = x.copy()
+    y[[1, 4], 0] = np.nan  # two runs of task 0 have no score
+    kept = np.concatenate([x[[0, 2, 3, 5], 0], x[:, 1], x[:, 2]])
+    assert iqm(y, missing="omit") == pytest.approx(sps.trim_mean(kept, 0.25))
+    est, lo, hi = stratified_bootstrap_ci(y, reps=4000, seed=1, missing="omit")
+    assert est == pytest.approx(sps.trim_mean(kept, 0.25)) and lo < est < hi
+    # a task's resamples stay inside its finite runs: a task of one run adds no spread
+    z = np.column_stack([[5.0, np.nan, np.nan], [1.0, 2.0, 3.0]])
+    ref = stratified_bootstrap_ci(np.array([1.0, 2.0, 3.0]), np.mean, reps=500, seed=2)
+    boot = stratified_bootstrap_ci(z, reps=500, seed=2, missing="omit")
+    assert boot[0] == pytest.approx(sps.trim_mean([5.0, 1.0, 2.0, 3.0], 0.25))
+    assert ref[2] - ref[1] > 0 and boot[2] - boot[1] > 0
+    out = aggregate({"ppo": y}, reps=300, missing="omit")["ppo"]
+    assert out["missing"] == 2 and out["estimate"] == pytest.approx(iqm(y, missing="omit"))
+    with pytest.raises(ValueError, match="every task needs"):
+        iqm(np.column_stack([[np.nan, np.nan], [1.0, 2.0]]), missing="omit")
+    with pytest.raises(ValueError, match="iqm statistic only"):
+        stratified_bootstrap_ci(y, np.mean, missing="omit")
+    with pytest.raises(ValueError, match="must be finite"):
+        iqm([1.0, np.inf], missing="omit")  # only NaN is a missing score
