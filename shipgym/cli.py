@@ -985,7 +985,9 @@ def _parser() -> argparse.ArgumentParser:
                    "measurement (DGPS and gyrocompass, at their own times)")  # fmt: skip
     p.set_defaults(func=_cmd_export, prepare=_export_defaults)
     p = sub.add_parser(
-        "bench", help="benchmarks: 'bench observers', 'bench controllers', 'bench dp', 'bench roll'"
+        "bench",
+        help="benchmarks: 'bench observers', 'bench controllers', 'bench rl', 'bench dp', "
+        "'bench roll'",
     )
     bsub = p.add_subparsers(dest="what", required=True)
     b = bsub.add_parser("observers", help="Tomera (2014) Table-6-style comparison of observers")
@@ -1062,9 +1064,15 @@ def _parser() -> argparse.ArgumentParser:
                    "per vessel at its design speed (PNG)")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=_cmd_bench_roll, folders={"--figures": FIGURES})
-    from shipgym.rl.cli import add_bench_controllers_parser, add_plot_parser, add_train_parser
+    from shipgym.rl.cli import (
+        add_bench_controllers_parser,
+        add_bench_rl_parser,
+        add_plot_parser,
+        add_train_parser,
+    )
 
     add_bench_controllers_parser(bsub)
+    add_bench_rl_parser(bsub)
     add_train_parser(sub)
     add_plot_parser(sub)
     p = sub.add_parser(

@@ -6,6 +6,9 @@
 - ``shipgym bench controllers [--task harbour|station-keeping] [--vessel NAME]
   [--controllers ...] [--seeds 10] [--json PATH] [--markdown PATH]``:
   :func:`add_bench_controllers_parser`, :func:`cmd_bench_controllers`;
+- ``shipgym bench rl [--suite harbour|station-keeping-star-hercules] [--method NAME=SPEC,...]
+  [--seeds 10] [--split all|held-in|held-out] [--json PATH] [--markdown PATH] [--figure PNG]``:
+  :func:`add_bench_rl_parser`, :func:`cmd_bench_rl` (the protocol of :mod:`shipgym.rl.protocol`);
 - ``shipgym plot training RUN_DIR [RUN_DIR ...] --out FIG.png``: :func:`add_plot_parser`,
   :func:`cmd_plot_training` (learning curves, :mod:`shipgym.viz.training`).
 
@@ -40,9 +43,11 @@ from shipgym._text import num
 
 __all__ = [
     "add_bench_controllers_parser",
+    "add_bench_rl_parser",
     "add_plot_parser",
     "add_train_parser",
     "cmd_bench_controllers",
+    "cmd_bench_rl",
     "cmd_plot_training",
     "cmd_train",
 ]
@@ -389,6 +394,128 @@ def cmd_bench_controllers(args: argparse.Namespace) -> int:
     title = bench_title(rows, wind, args.task)
     table = station_table(rows) if args.task == "station-keeping" else controller_table(rows)
     write_bench_outputs(title, table, rows, wall, json_path=args.json, markdown=args.markdown)
+    log.discard(args.json or args.markdown)
+    return 0
+
+
+def add_bench_rl_parser(bsub: Any) -> argparse.ArgumentParser:
+    """Add ``rl`` to the ``shipgym bench`` subparsers."""
+    from shipgym.rl.protocol import SUITES
+
+    b = bsub.add_parser(
+        "rl",
+        help="the learned baselines' protocol: IQM and 95 %% CI over training seeds, held-in "
+        "and held-out conditions",
+        description="Evaluates every run (training seed) of every method on every condition "
+        "of a suite (held-in: inside the training conditions, on unseen episode seeds; "
+        "held-out: winds above the training range, DGPS dropouts and outliers, current) and "
+        "reports the interquartile mean with its 95 %% stratified-bootstrap interval over "
+        "training seeds (Agarwal et al. 2021), per split and per condition.",
+    )
+    b.add_argument("--suite", choices=list(SUITES), default="harbour",
+                   help="the task and its conditions (default: harbour)")  # fmt: skip
+    b.add_argument(
+        "--method",
+        action="append",
+        default=None,
+        metavar="NAME=SPEC[,SPEC...]",
+        help="a method and its runs, one controller spec per training seed: "
+        "ppo=ppo:runs/s0/model.zip,ppo:runs/s1/model.zip, a glob ppo=ppo:runs/ppo/seed*/"
+        "best_model.zip, or one name (pid, lq, ppo: the shipped baseline); repeat for more "
+        "methods (default: pid, lq and every shipped baseline of the suite, one run each)",
+    )
+    b.add_argument("--seeds", type=bounded_int(1, MAX_COUNT), default=10,
+                   help=f"episode seeds 0..N-1 per run and condition, 1 <= N <= {MAX_COUNT} "
+                   "(10)")  # fmt: skip
+    b.add_argument("--split", choices=["all", "held-in", "held-out"], default="all",
+                   help="the conditions to run (default: all)")  # fmt: skip
+    b.add_argument("--observer", default="default",
+                   help="kbf when available (default), truth, dkf, ekf, ...")  # fmt: skip
+    b.add_argument("--reps", type=bounded_int(100, 100_000), default=2000,
+                   help="bootstrap resamples of the intervals (2000)")  # fmt: skip
+    b.add_argument("--workers", type=bounded_int(1, MAX_WORKERS), default=None,
+                   help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)")  # fmt: skip
+    b.add_argument("--json", type=path_arg, default=None, metavar="PATH",
+                   help="the episodes, cells and aggregates (JSON, with units)")  # fmt: skip
+    b.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
+    b.add_argument("--figure", type=path_arg, default=None, metavar="PNG",
+                   help="performance profiles of the task metric, one panel per split")  # fmt: skip
+    add_executor_options(b)
+    add_resume_option(b)
+    b.add_argument("--no-progress", action="store_true")
+    b.set_defaults(func=cmd_bench_rl)
+    return b
+
+
+def cmd_bench_rl(args: argparse.Namespace) -> int:
+    """Run :func:`shipgym.rl.protocol.bench_rl`; print and write the tables, JSON, figure."""
+    from shipgym.bench import row_log, write_bench_outputs
+    from shipgym.rl.protocol import (
+        SCHEMA_VERSION,
+        UNITS,
+        bench_rl,
+        default_methods,
+        parse_method,
+        profile_figure,
+        rl_tables,
+        suite,
+        summarise,
+    )
+
+    s = suite(args.suite)
+    methods = [parse_method(m) for m in args.method] if args.method else default_methods(s)
+    n_conds = sum(1 for c in s.conditions
+                  if args.split == "all" or c.held_out == (args.split == "held-out"))  # fmt: skip
+    total = sum(len(m.runs) for m in methods) * n_conds * args.seeds
+    log = row_log(args.json, args.markdown, total, bench_settings(args), args.resume)
+    t0 = time.perf_counter()
+    rows = bench_rl(
+        args.suite,
+        methods,
+        seeds=args.seeds,
+        observer=args.observer,
+        split=args.split,
+        workers=args.workers,
+        progress=progress_enabled(args.no_progress),
+        on_row=log.add,
+        known=log.known,
+        executor=executor_of(args),
+    )
+    wall = time.perf_counter() - t0
+    summary = summarise(rows, args.suite, reps=args.reps)
+    title = (
+        f"bench rl, suite {s.name} ({s.task}, {s.vessel}; trained on: {s.training}), "
+        f"{args.seeds} episode seeds per run and condition, observer "
+        f"{rows[0]['observer'] if rows else args.observer}"
+    )
+    header = {
+        "schema_version": SCHEMA_VERSION,
+        "units": UNITS,
+        "suite": {
+            "name": s.name,
+            "task": s.task,
+            "vessel": s.vessel,
+            "training": s.training,
+            "radius_m": s.radius_m,
+            "duration_s": s.duration_s,
+            "conditions": [c.to_dict() for c in s.conditions],
+        },  # fmt: skip
+        "methods": [{"name": m.name, "runs": list(m.runs)} for m in methods],
+        "interval": {
+            "statistic": "IQM",
+            "level": 0.95,
+            "bootstrap": "stratified percentile",
+            "reps": args.reps,
+            "over": "training seeds (runs), conditions kept",
+        },  # fmt: skip
+        "cells": summary["cells"],
+        "aggregates": summary["aggregates"],
+        "per_condition": summary["per_condition"],
+    }
+    write_bench_outputs(title, rl_tables(summary, args.suite), rows, wall,
+                        json_path=args.json, markdown=args.markdown, header=header)  # fmt: skip
+    if args.figure is not None:
+        print(f"wrote {profile_figure(summary, args.suite, args.figure, reps=args.reps)}")
     log.discard(args.json or args.markdown)
     return 0
 
