@@ -9,8 +9,10 @@
 - ``shipgym bench rl [--suite harbour|station-keeping-star-hercules] [--method NAME=SPEC,...]
   [--seeds 10] [--split all|held-in|held-out] [--json PATH] [--markdown PATH] [--figure PNG]``:
   :func:`add_bench_rl_parser`, :func:`cmd_bench_rl` (the protocol of :mod:`shipgym.rl.protocol`);
-- ``shipgym plot training RUN_DIR [RUN_DIR ...] --out FIG.png``: :func:`add_plot_parser`,
-  :func:`cmd_plot_training` (learning curves, :mod:`shipgym.viz.training`).
+- ``shipgym plot training RUN_DIR [RUN_DIR ...] --out FIG.png`` (one line per run) or
+  ``shipgym plot training --group NAME=RUN_DIR[,RUN_DIR...] [--group ...] --out FIG.png`` (the
+  mean and 95 % band of each group): :func:`add_plot_parser`, :func:`cmd_plot_training`
+  (learning curves, :mod:`shipgym.viz.training`).
 
 The commands return an exit status; user mistakes raise ``ValueError`` /
 ``FileNotFoundError`` (and ``ImportError`` without the ``rl`` extra) with a one-line message,
@@ -529,22 +531,40 @@ def add_plot_parser(sub: Any) -> argparse.ArgumentParser:
         help="learning curves of 'shipgym train' runs: return and harbour completion (or "
         "station-keeping fraction) against steps",
         description="Reads progress.csv (time/total_timesteps, rollout/ep_rew_mean) and "
-        "evaluations.json of each run folder and draws one line per run.",
+        "evaluations.json of each run folder and draws one line per run (RUN_DIR ...), or, "
+        "per --group (the training seeds of one method), the mean over its runs with a 95 % "
+        "percentile-bootstrap band over the runs (seeded), on the steps every run of the "
+        "group covers (each run interpolated linearly onto them). Give either RUN_DIRs or "
+        "--group, not both. Example: shipgym plot training --group "
+        "ppo=runs/ppo/seed0,runs/ppo/seed1 --group sac=runs/sac/seed* --out curves.png",
     )
-    t.add_argument("runs", nargs="+", type=path_arg, metavar="RUN_DIR",
-                   help="output folders of 'shipgym train' (--out)")  # fmt: skip
+    t.add_argument("runs", nargs="*", type=path_arg, metavar="RUN_DIR",
+                   help="output folders of 'shipgym train' (--out), one line each")  # fmt: skip
+    t.add_argument(
+        "--group",
+        action="append",
+        default=None,
+        metavar="NAME=RUN_DIR[,RUN_DIR...]",
+        help="a method and its runs (training seeds), drawn as their mean and 95 %% band, "
+        "labelled 'NAME (n=K)' (one run: its line, no band); a folder with * is a glob "
+        "(ppo=runs/ppo/seed*); repeat for more methods. No J_c panel with groups",
+    )
     t.add_argument("--out", type=path_arg, required=True, metavar="FIG.png",
                    help="the figure (PNG)")  # fmt: skip
     t.add_argument("--labels", nargs="+", default=None, metavar="NAME",
-                   help="legend names, one per run (default: the folder names)")  # fmt: skip
+                   help="legend names, one per RUN_DIR (default: the folder names); not "
+                   "with --group, whose legend is NAME (n=K)")  # fmt: skip
     t.set_defaults(func=cmd_plot_training)
     return p
 
 
 def cmd_plot_training(args: argparse.Namespace) -> int:
-    """Run :func:`shipgym.viz.training.plot_training`; prints what it drew."""
+    """Run :func:`shipgym.viz.training.plot_training`; prints what it drew (per run, or per
+    group its mean and 95 % interval at the last step every run of the group reached)."""
     from shipgym.viz.training import plot_training, read_training_run
 
+    if args.group:
+        return _plot_training_groups(args)
     path = plot_training(args.runs, args.out, labels=args.labels)
     for d in args.runs:
         c = read_training_run(d)
@@ -555,5 +575,46 @@ def cmd_plot_training(args: argparse.Namespace) -> int:
         )
         ret = f"{c.returns[-1]:.4g} at {c.steps[-1]:,.0f}" if c.steps.size else "none"
         print(f"{d}: return {ret} steps; last {c.eval_kind} evaluation {last} steps")
+    print(f"wrote {path}")
+    return 0
+
+
+def _plot_training_groups(args: argparse.Namespace) -> int:
+    """``shipgym plot training --group NAME=RUN_DIR,... --out FIG.png``."""
+    from shipgym.viz.training import (
+        GroupCurve,
+        group_training_curves,
+        parse_group,
+        plot_training,
+        read_training_groups,
+    )
+
+    groups: dict[str, list[Path]] = {}
+    for text in args.group:  # first: 'NAME RUN_DIR' would leave RUN_DIR as a positional
+        name, dirs = parse_group(text)
+        if name in groups:
+            raise ValueError(f"--group {name!r} is given twice: list all its runs in one --group")
+        groups[name] = dirs
+    if args.runs:
+        raise ValueError(
+            "give RUN_DIRs (one line per run) or --group (the mean of each group), not both: "
+            "put every run in a --group NAME=RUN_DIR,..."
+        )
+    if args.labels is not None:
+        raise ValueError("--labels names RUN_DIRs; a group's legend is its NAME: drop --labels")
+    path = plot_training([], args.out, groups=groups)
+
+    def at_end(g: GroupCurve | None, scale: float, unit: str) -> str:
+        if g is None:
+            return "none"
+        band = "" if g.low is None or g.high is None else (
+            f" [95 % CI {scale * g.low[-1]:.4g}, {scale * g.high[-1]:.4g}]")  # fmt: skip
+        return f"{scale * g.mean[-1]:.4g}{unit}{band} at {g.grid[-1]:,.0f} steps"
+
+    for name, runs in read_training_groups(groups).items():
+        ret, ev = group_training_curves(runs)
+        kind = runs[0].eval_kind
+        print(f"{name} (n={len(runs)}): mean return {at_end(ret, 1.0, '')}; mean {kind} "
+              f"evaluation {at_end(ev, 100.0, ' %')}")  # fmt: skip
     print(f"wrote {path}")
     return 0
