@@ -411,7 +411,7 @@ def add_bench_rl_parser(bsub: Any) -> argparse.ArgumentParser:
         description="Evaluates every run (training seed) of every method on every condition "
         "of a suite (held-in: inside the training conditions, on unseen episode seeds; "
         "held-out: winds above the training range, DGPS dropouts and outliers, current) and "
-        "reports the interquartile mean with its 95 %% stratified-bootstrap interval over "
+        "reports the interquartile mean with its 95 % stratified-bootstrap interval over "
         "training seeds (Agarwal et al. 2021), per split and per condition.",
     )
     b.add_argument("--suite", choices=list(SUITES), default="harbour",
