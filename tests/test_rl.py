@@ -283,3 +283,20 @@ def test_sac_resume_restores_what_sb3_load_does(tmp_path):
     )  # fmt: skip
     assert again.num_timesteps == 170
     venv.close()
+
+
+def test_a_run_from_another_hyperparameter_file_records_it_in_its_command(tmp_path):
+    """The stored command reproduces the run: it names the file the hyperparameters came
+    from (the robust recipe), which the shipped file's command does not need to."""
+    from shipgym.rl.train import train_command
+
+    robust = hyperparams_path("ppo").with_name("ppo_robust.yml")
+    hp = load_hyperparams("ppo", "shipgym/StationKeeping-v0", path=robust)
+    assert hp["env_kwargs"]["random_wind"] == [4.0, 14.0]
+    assert hp["env_kwargs"]["sensors"]["dropout_probability"] > 0
+    cmd = train_command("ppo", timesteps=10, seed=1, n_envs=2, out="o", residual=False,
+                        observer="kbf", env_id="shipgym/StationKeeping-v0",
+                        hyperparams=robust)  # fmt: skip
+    assert f"--hyperparams {robust}" in cmd
+    assert "--hyperparams" not in train_command("ppo", timesteps=10, seed=1, n_envs=2, out="o",
+                                                residual=False, observer="kbf")  # fmt: skip

@@ -636,9 +636,13 @@ def train_command(
     resume: str | Path | None = None,
     max_minutes: float | None = None,
     env_id: str = DEFAULT_ENV_ID,
+    hyperparams: str | Path | None = None,
 ) -> str:
-    """The ``shipgym train`` command line that reproduces a run (stored in the metadata)."""
+    """The ``shipgym train`` command line that reproduces a run (stored in the metadata);
+    ``hyperparams``: a hyperparameter file other than the shipped one (``--hyperparams``)."""
     parts = ["shipgym", "train", algo]
+    if hyperparams is not None:
+        parts += ["--hyperparams", str(hyperparams)]
     if env_id != DEFAULT_ENV_ID:
         parts += ["--env", env_id]
     parts += ["--timesteps", str(timesteps), "--seed", str(seed)]
@@ -1389,6 +1393,7 @@ def train(
     command = train_command(
         algo, timesteps=n_steps, seed=seed, n_envs=n, out=out_dir, residual=residual,
         observer=hp["observer"], resume=resume, max_minutes=max_minutes, env_id=env_id,
+        hyperparams=hyperparams,
     )  # fmt: skip
     evaluation = evaluation_for(env_id) if int(hp.get("eval_freq", 0) or 0) > 0 else None
     tb_dir = _tensorboard_dir(out_dir, tensorboard)
