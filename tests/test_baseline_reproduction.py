@@ -1,21 +1,33 @@
 """The shipped learned baselines are reproducible: re-running each one's documented training
 command (the shipped hyperparameter file, its seed) up to the checkpoint recorded in its
-metadata gives bit-identical policy weights (``policy_fingerprint``), on each CPU a
+metadata gives bit-identical policy weights (``policy_fingerprint``) and observation-
+normalisation statistics (``model_fingerprint``: the weights and the statistics, what decides
+the actions; fast tests below check that it sees one ulp of either), on each CPU a
 fingerprint was taken on (``cpu_identity``: its model name and its widest vector instructions;
 torch's and NumPy's kernels differ between them, so elsewhere the test says so and skips;
 ``reproduce.other_cpus`` holds the fingerprints of CPUs added on unchanged floats,
 ``tools/rerecord_baselines.py --add-cpu``).
-Slow: each re-run trains about a million steps (a few minutes).
+Slow: each re-run trains 250 000 to a million steps (on the 2-core development machine 50-80 s
+for each PPO baseline, 9.5 min for the SAC one).
 
 The shipped models were trained on the NumPy form of the batched physics, which the one
 compiled physics step (:mod:`shipgym.sim.step`) replaced; it agrees with that form to round-off,
 not bit for bit, and training turns the last bits into other weights: the fingerprints were
 re-recorded on the one physics (``reproduce.physics`` in each file's metadata). The shipped
-weights themselves are those trained then; their acceptance figures hold on the one physics
-(``tests/test_rl_bench.py``, slow)."""
+weights and statistics themselves are those trained then, not reproduced by the command (their
+own model fingerprints are pinned in ``SHIPPED``); their acceptance figures hold on the one
+physics (``tests/test_rl_bench.py``, slow)."""
 
 from __future__ import annotations
 
+import dataclasses
+import io
+import re
+import shutil
+import zipfile
+from pathlib import Path
+
+import numpy as np
 import pytest
 
 pytest.importorskip("stable_baselines3")
@@ -23,9 +35,12 @@ pytest.importorskip("torch")
 
 import shipgym.controllers.learned as learned  # noqa: E402
 from shipgym.controllers.learned import (  # noqa: E402
+    METADATA_NAME,
     cpu_identity,
+    model_fingerprint,
     policy_fingerprint,
     read_metadata,
+    recorded_fingerprints,
 )
 
 
@@ -49,19 +64,135 @@ def test_each_fingerprint_names_the_cpu_and_its_vector_instructions():
     """A fingerprint holds on one CPU model and instruction set (``cpu_identity``); a record
     with the model name alone would let the slow test run, and fail, on another generation
     of the same name."""
-    import re
-
     form = re.compile(r".+ \((avx512|avx2|baseline)\)$")
     assert form.match(cpu_identity())
     for file in _reproducible():
         rep = read_metadata(learned.models_dir() / file).extra["reproduce"]
-        for cpu, sha in _fingerprints(rep).items():
-            assert form.match(cpu) and re.fullmatch("[0-9a-f]{64}", sha), (file, cpu)
+        for cpu in recorded_fingerprints(rep):  # it checks each SHA-256's form
+            assert form.match(cpu), (file, cpu)
 
 
-def _fingerprints(rep: dict) -> dict[str, str]:
-    """CPU -> policy fingerprint of a ``reproduce`` record."""
-    return {rep["cpu"]: rep["policy_sha256"], **rep.get("other_cpus", {})}
+def test_every_record_holds_the_model_fingerprint_on_one_cpu_at_least():
+    """The weights-and-normalisation fingerprint is recorded (not the weights alone), on the
+    compiled physics; a CPU recorded before it may hold the weights' alone."""
+    for file in _reproducible():
+        rep = read_metadata(learned.models_dir() / file).extra["reproduce"]
+        assert any("model_sha256" in p for p in recorded_fingerprints(rep).values()), file
+        assert rep["physics"].startswith("shipgym.sim.step"), file
+
+
+def test_old_records_stay_readable():
+    """A record of before the model fingerprint (a CPU to its policy fingerprint alone) reads
+    as such; a malformed one is refused with what is wrong."""
+    a, b, c = "a" * 64, "b" * 64, "c" * 64
+    old = {"cpu": "X (avx2)", "policy_sha256": a, "other_cpus": {"Y (avx512)": b}}
+    assert recorded_fingerprints(old) == {
+        "X (avx2)": {"policy_sha256": a},
+        "Y (avx512)": {"policy_sha256": b},
+    }
+    new = {"cpu": "X (avx2)", "policy_sha256": a, "model_sha256": c,
+           "other_cpus": {"Y (avx512)": {"policy_sha256": b, "model_sha256": c}}}  # fmt: skip
+    assert recorded_fingerprints(new)["Y (avx512)"] == {"policy_sha256": b, "model_sha256": c}
+    with pytest.raises(ValueError, match="policy_sha256"):
+        recorded_fingerprints({"cpu": "X (avx2)", "model_sha256": c})
+    with pytest.raises(ValueError, match="not a SHA-256"):
+        recorded_fingerprints({"cpu": "X (avx2)", "policy_sha256": "abc"})
+    with pytest.raises(ValueError, match="without 'cpu'"):
+        recorded_fingerprints({"policy_sha256": a})
+
+
+#: ``model_fingerprint`` of each shipped file itself (its policy weights and normalisation
+#: statistics, on any CPU: the bytes of the file): what is shipped, trained on the NumPy
+#: physics of before the compiled step and not retrained since; a file retrained or replaced
+#: updates its line here and in shipgym/assets/models/README.md
+SHIPPED = {
+    "ppo_harbour_kbf.zip": "e2a3a79d2facc52d7e584048104eeddd1362a8ac9efe41fc13fc5e2fa96e88dd",
+    "sac_harbour_kbf.zip": "09c00f2411297b290d6e3db7bc329a56972c6acdd297c237956a573b5c2d0ace",
+    "ppo_residual_pid_kbf.zip": "e32da4d0a6b915c907048f0a1a378ba1f5bbab86b3f0a0fbece682bbbfe2aa6f",
+    "ppo_station_star_hercules_kbf.zip": (
+        "9adfe767c1d8391d03043f1a8d12868f274a02c1c04296a59a1b8f838e953879"
+    ),
+}
+
+
+def test_shipped_files_hold_the_fingerprinted_weights_and_statistics():
+    """The shipped weights and normalisation statistics are those fingerprinted (a re-record
+    of the ``reproduce`` records rewrites ``shipgym.json`` and must leave them alone)."""
+    shipped = [b.file for b in learned.BASELINE_MODELS if (learned.models_dir() / b.file).is_file()]
+    assert shipped and set(shipped) <= set(SHIPPED)
+    for file in shipped:
+        assert model_fingerprint(learned.models_dir() / file) == SHIPPED[file], file
+
+
+# ---- the model fingerprint sees one ulp of a weight or of the normalisation (fast) ----------
+@pytest.fixture(scope="module")
+def tiny_model(tmp_path_factory) -> Path:
+    """A shipgym checkpoint of a tiny PPO (128 steps, observation normalisation on)."""
+    from shipgym.rl.train import train
+
+    out = tmp_path_factory.mktemp("tiny")
+    train("ppo", timesteps=128, seed=0, n_envs=2, out=out, observer="truth", residual=True,
+          eval_freq=0, checkpoint_freq=128, progress=False,
+          overrides={"n_steps": 64, "batch_size": 64, "n_epochs": 1})  # fmt: skip
+    path = out / "checkpoints" / "ppo_128_steps.zip"
+    assert read_metadata(path).normalization is not None
+    return path
+
+
+def _rewrite(src: Path, dst: Path, member: str, data: bytes) -> Path:
+    """A copy of the model zip ``src`` with one member's bytes replaced."""
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as zout:
+        for info in zin.infolist():
+            zout.writestr(info, data if info.filename == member else zin.read(info))
+    return dst
+
+
+def test_model_fingerprint_equal_for_a_byte_identical_copy(tiny_model, tmp_path):
+    copy = Path(shutil.copyfile(tiny_model, tmp_path / "copy.zip"))
+    assert model_fingerprint(copy) == model_fingerprint(tiny_model)
+    assert policy_fingerprint(copy) == policy_fingerprint(tiny_model)
+    assert re.fullmatch("[0-9a-f]{64}", model_fingerprint(tiny_model))
+    assert model_fingerprint(tiny_model) != policy_fingerprint(tiny_model)
+
+
+def test_model_fingerprint_sees_one_ulp_of_a_weight(tiny_model, tmp_path):
+    import torch
+
+    with zipfile.ZipFile(tiny_model) as zf:
+        state = torch.load(io.BytesIO(zf.read("policy.pth")), weights_only=True)
+    key = sorted(k for k in state if k.endswith("weight"))[0]
+    w = state[key].clone()
+    flat = w.view(-1)
+    flat[0] = torch.nextafter(flat[0], torch.tensor(np.inf, dtype=w.dtype))
+    assert not torch.equal(w, state[key])
+    buf = io.BytesIO()
+    torch.save({**state, key: w}, buf)
+    moved = _rewrite(tiny_model, tmp_path / "w.zip", "policy.pth", buf.getvalue())
+    assert model_fingerprint(moved) != model_fingerprint(tiny_model)
+    assert policy_fingerprint(moved) != policy_fingerprint(tiny_model)
+
+
+def test_model_fingerprint_sees_one_ulp_of_the_normalisation_mean(tiny_model, tmp_path):
+    meta = read_metadata(tiny_model)
+    norm = meta.normalization
+    assert norm is not None
+    mean = list(norm.mean)
+    mean[3] = float(np.nextafter(mean[3], np.inf))
+    moved_meta = dataclasses.replace(meta, normalization=dataclasses.replace(norm, mean=mean))
+    moved = _rewrite(tiny_model, tmp_path / "m.zip", METADATA_NAME, moved_meta.to_json().encode())
+    assert read_metadata(moved).normalization.mean[3] == mean[3] != norm.mean[3]  # JSON keeps it
+    assert model_fingerprint(moved) != model_fingerprint(tiny_model)
+    # the weights alone do not see it: what policy_fingerprint leaves out
+    assert policy_fingerprint(moved) == policy_fingerprint(tiny_model)
+
+
+def test_model_fingerprint_ignores_the_rest_of_the_metadata(tiny_model, tmp_path):
+    """The command, versions and extras are not what decides the actions: a re-recorded
+    ``reproduce`` record does not move the fingerprint it holds."""
+    meta = read_metadata(tiny_model)
+    other = dataclasses.replace(meta, command="other", extra={"reproduce": {"cpu": "X"}})
+    moved = _rewrite(tiny_model, tmp_path / "x.zip", METADATA_NAME, other.to_json().encode())
+    assert model_fingerprint(moved) == model_fingerprint(tiny_model)
 
 
 @pytest.mark.slow
@@ -71,7 +202,7 @@ def test_documented_command_gives_the_same_weights(file, tmp_path):
 
     meta = read_metadata(learned.models_dir() / file)
     rep = meta.extra["reproduce"]
-    prints = _fingerprints(rep)
+    prints = recorded_fingerprints(rep)
     if cpu_identity() not in prints:
         pytest.skip(
             f"the fingerprints of {file} were taken on {sorted(prints)}, this is "
@@ -86,4 +217,52 @@ def test_documented_command_gives_the_same_weights(file, tmp_path):
           residual=meta.residual, out=tmp_path, eval_freq=0, checkpoint_freq=steps,
           progress=False)  # fmt: skip
     ckpt = tmp_path / "checkpoints" / f"{meta.algorithm}_{steps}_steps.zip"
-    assert policy_fingerprint(ckpt) == prints[cpu_identity()]
+    want = prints[cpu_identity()]
+    # the weights and the normalisation statistics (where this CPU's record has them: one
+    # recorded before the model fingerprint holds the weights' alone)
+    got = {"policy_sha256": policy_fingerprint(ckpt), "model_sha256": model_fingerprint(ckpt)}
+    assert {k: got[k] for k in want} == want
+
+
+# ---- the re-record tool's bookkeeping (tools/rerecord_baselines.py; training stubbed) --------
+def _tool():
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[1] / "tools" / "rerecord_baselines.py"
+    spec = importlib.util.spec_from_file_location("rerecord_baselines", path)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _with_record(src: Path, dst: Path, rep: dict) -> Path:
+    meta = read_metadata(src)
+    meta = dataclasses.replace(meta, seed=0, extra={**meta.extra, "reproduce": rep})
+    return _rewrite(src, dst, METADATA_NAME, meta.to_json().encode())
+
+
+def test_rerecord_keeps_or_drops_the_other_cpus(tiny_model, tmp_path, monkeypatch):
+    """``--add-cpu`` (floats unchanged) completes this CPU's fingerprints beside the others and
+    refuses a re-run whose weights differ from this CPU's record; without it (floats changed)
+    this CPU's fingerprints alone remain, on the physics named."""
+    tool = _tool()
+    a, b, c, d = "a" * 64, "b" * 64, "c" * 64, "d" * 64
+    monkeypatch.setattr(tool, "train", lambda *args, **kw: None)
+    monkeypatch.setattr(tool, "policy_fingerprint", lambda p: a)
+    monkeypatch.setattr(tool, "model_fingerprint", lambda p: c)
+    monkeypatch.setattr(tool, "cpu_identity", lambda: "HERE (avx512)")
+    old = {"checkpoint_steps": 128, "physics": "P", "cpu": "FIRST (avx2)", "policy_sha256": b,
+           "other_cpus": {"HERE (avx512)": a}}  # fmt: skip
+    path = _with_record(tiny_model, tmp_path / "m.zip", old)
+    tool.rerecord(path, "NEW", add_cpu=True)
+    rep = read_metadata(path).extra["reproduce"]
+    assert rep == {**old, "other_cpus": {"HERE (avx512)": {"policy_sha256": a, "model_sha256": c}}}
+    assert model_fingerprint(path) == model_fingerprint(tiny_model)  # the file's weights stay
+    monkeypatch.setattr(tool, "policy_fingerprint", lambda p: d)
+    with pytest.raises(ValueError, match="floats"):
+        tool.rerecord(path, "NEW", add_cpu=True)
+    tool.rerecord(path, "NEW")
+    rep = read_metadata(path).extra["reproduce"]
+    assert rep == {"checkpoint_steps": 128, "physics": "NEW", "cpu": "HERE (avx512)",
+                   "policy_sha256": d, "model_sha256": c}  # fmt: skip

@@ -12,6 +12,7 @@ import dataclasses
 import io
 import json
 import math
+import re
 import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -39,6 +40,10 @@ __all__ = [
     "BaselineModel",
     "baseline_model_path",
     "policy_fingerprint",
+    "model_fingerprint",
+    "normalization_bytes",
+    "recorded_fingerprints",
+    "FINGERPRINT_KEYS",
     "baseline_task",
     "find_baseline",
     "check_policy_spec",
@@ -728,24 +733,153 @@ def cpu_identity() -> str:
     return f"{name} ({isa})"
 
 
-def policy_fingerprint(path: str | Path) -> str:
-    """SHA-256 (hex) of a model's policy weights, tensor by tensor in key order.
-
-    Two models with the same fingerprint hold bit-identical policy networks; what the
-    reproducibility checks of the shipped baselines compare (a documented training command
-    re-run with the same seed gives the same fingerprint at a checkpoint, on the same CPU and
-    software versions).
-    """
-    import hashlib
-
-    state = read_state_dicts(path)["policy"]
-    h = hashlib.sha256()
+def _hash_state(h: Any, state: Mapping[str, Any], *, dtype: bool) -> None:
+    """Feed a state dict to ``h``: per tensor in key order its name, shape (and, with
+    ``dtype``, its dtype) and its bytes in the machine's order."""
     for key in sorted(state):
         t = state[key].detach().cpu().contiguous()
         h.update(key.encode())
         h.update(str(tuple(t.shape)).encode())
+        if dtype:
+            h.update(str(t.dtype).encode())
         h.update(t.numpy().tobytes())
+
+
+def policy_fingerprint(path: str | Path) -> str:
+    """SHA-256 (hex) of a model's policy weights alone, tensor by tensor in key order.
+
+    Covers ``policy.pth`` (every tensor of the policy module: for PPO the policy and value
+    networks and ``log_std``, for SAC the actor, the critics and their targets): per tensor its
+    name, shape and float bytes. It does **not** cover the observation normalisation the model
+    runs with, so two files with the same policy fingerprint may act differently; what the
+    policy's actions depend on is :func:`model_fingerprint`. Kept because the reproduction
+    records (``reproduce.policy_sha256`` of a shipped model's metadata) hold it.
+    """
+    import hashlib
+
+    h = hashlib.sha256()
+    _hash_state(h, read_state_dicts(path)["policy"], dtype=False)
     return h.hexdigest()
+
+
+#: first bytes of the stream :func:`model_fingerprint` hashes (its layout's version)
+_MODEL_FINGERPRINT_TAG = b"shipgym-model-fingerprint/1\n"
+
+
+def normalization_bytes(norm: ObsNormalization | None) -> bytes:
+    """The canonical bytes of a model's normalisation statistics (:func:`model_fingerprint`).
+
+    Every field of :class:`ObsNormalization` in name order, each as its name and its value:
+    ``mean`` and ``var`` as their length and little-endian float64 entries, the other numbers
+    as one little-endian float64, the flags as one byte. Exact: the float64 of ``shipgym.json``
+    (written with ``repr``, read back to the same float) go in bit for bit, so a change of one
+    unit in the last place changes the bytes; JSON's spacing and key order do not. ``None``
+    (a model trained without ``VecNormalize``) has bytes of its own.
+    """
+    import struct
+
+    if norm is None:
+        return b"normalization:none\n"
+    out = [b"normalization\n"]
+    for f in sorted(dataclasses.fields(norm), key=lambda f: f.name):
+        value = getattr(norm, f.name)
+        out.append(f.name.encode() + b"=")
+        if isinstance(value, bool):
+            out.append(b"\x01" if value else b"\x00")
+        elif isinstance(value, tuple):
+            out.append(struct.pack("<Q", len(value)))
+            out.append(np.asarray(value, dtype="<f8").tobytes())
+        else:
+            out.append(struct.pack("<d", float(value)))
+        out.append(b"\n")
+    return b"".join(out)
+
+
+def model_fingerprint(path: str | Path) -> str:
+    """SHA-256 (hex) of what decides a model's actions: its policy weights and the observation
+    normalisation it runs with.
+
+    Covers, in this order:
+
+    - ``policy.pth``: every tensor of the policy module, in key order, each as its name,
+      shape, dtype and bytes (the weights :func:`policy_fingerprint` covers, plus their dtype);
+    - the ``normalization`` of the model's ``shipgym.json`` (:func:`normalization_bytes`), the
+      statistics :class:`LearnedPolicy` normalises observations with: ``mean``, ``var``,
+      ``count``, ``epsilon``, ``clip_obs``, ``norm_obs``, and the reward statistics saved
+      with them (``norm_reward``, ``clip_reward``, ``gamma``, ``ret_mean``, ``ret_var``,
+      ``ret_count``). ``count`` and the reward statistics do not change an action (they
+      decide how training goes on, ``shipgym train --resume``); they are covered so that a
+      fingerprint stands for every statistic the file saves.
+
+    Not covered: the optimizer's state, the rest of the metadata (architecture and activation
+    by name, env, observer, command, versions) and the ``vecnormalize.pkl`` beside a model
+    saved by ``shipgym train``, a copy of the same statistics for plain stable-baselines3
+    (:func:`shipgym.rl.train.save_model` writes it from them).
+
+    Two files with the same model fingerprint and the same architecture give the same actions
+    on the same observations, on the same CPU and software. The reproduction records of the
+    shipped baselines hold it per CPU (``reproduce.model_sha256``, :func:`recorded_fingerprints`).
+
+    Raises:
+        FileNotFoundError, ValueError: see :func:`read_state_dicts`.
+    """
+    import hashlib
+
+    meta = read_metadata(path)
+    h = hashlib.sha256(_MODEL_FINGERPRINT_TAG)
+    h.update(b"policy\n")
+    _hash_state(h, read_state_dicts(path)["policy"], dtype=True)
+    h.update(normalization_bytes(meta.normalization))
+    return h.hexdigest()
+
+
+#: fingerprints a ``reproduce`` record may hold per CPU: :func:`policy_fingerprint` (weights
+#: alone; every record has it) and :func:`model_fingerprint` (weights and normalisation)
+FINGERPRINT_KEYS = ("policy_sha256", "model_sha256")
+
+
+def recorded_fingerprints(reproduce: Mapping[str, Any]) -> dict[str, dict[str, str]]:
+    """CPU -> ``{"policy_sha256": ..., "model_sha256": ...}`` of a ``reproduce`` record.
+
+    A record (``extra.reproduce`` of a shipped model's metadata) names the CPU it was taken on
+    (``cpu``, :func:`cpu_identity`) with its fingerprints beside (``policy_sha256``, and since
+    the model fingerprint ``model_sha256``), and may hold other CPUs' in ``other_cpus``: each
+    CPU to a mapping of the same keys, or, in records written before the model fingerprint, to
+    the policy fingerprint alone (read as ``{"policy_sha256": ...}``). A CPU without
+    ``model_sha256`` was recorded before it existed.
+
+    Raises:
+        ValueError: a record without ``cpu`` or ``policy_sha256``, a fingerprint that is not
+            64 hex digits, or an unknown key.
+    """
+
+    def entry(cpu: Any, value: Any) -> dict[str, str]:
+        got = {"policy_sha256": value} if isinstance(value, str) else value
+        if not isinstance(cpu, str) or not isinstance(got, Mapping) or not got:
+            raise ValueError(f"reproduce: bad fingerprints of CPU {cpu!r}: {value!r}")
+        unknown = sorted(set(got) - set(FINGERPRINT_KEYS))
+        if unknown or "policy_sha256" not in got:
+            raise ValueError(
+                f"reproduce: the fingerprints of {cpu!r} must have policy_sha256 (and may have "
+                f"model_sha256), got keys {sorted(got)}"
+            )
+        for k, sha in got.items():
+            if not isinstance(sha, str) or not re.fullmatch("[0-9a-f]{64}", sha):
+                raise ValueError(f"reproduce: {k} of {cpu!r} is not a SHA-256: {sha!r}")
+        return dict(got)
+
+    if "cpu" not in reproduce:
+        raise ValueError(f"reproduce record without 'cpu': keys {sorted(reproduce)}")
+    main = {k: reproduce[k] for k in FINGERPRINT_KEYS if k in reproduce}
+    out = {reproduce["cpu"]: entry(reproduce["cpu"], main)}
+    others = reproduce.get("other_cpus", {})
+    if not isinstance(others, Mapping):
+        raise ValueError(f"reproduce: other_cpus must be a mapping, got {others!r}")
+    for cpu, value in others.items():
+        if cpu in out:
+            raise ValueError(f"reproduce: CPU {cpu!r} is both 'cpu' and in other_cpus")
+        out[cpu] = entry(cpu, value)
+    return out
 
 
 def write_metadata(path: str | Path, meta: ModelMetadata) -> None:
