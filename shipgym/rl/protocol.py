@@ -198,7 +198,8 @@ SUITES: dict[str, Suite] = {
         name="station-keeping-star-hercules",
         task="station-keeping",
         vessel="star-hercules",
-        training="6-11 m/s mean wind from any direction, the default sensors, no current (ppo.yml)",
+        training="6-11 m/s mean wind from any direction, the default sensors, no current "
+        "(ppo.yml); the robust recipe: 4-14 m/s, 10 s dropouts and outliers (ppo_robust.yml)",
         conditions=(
             *(
                 Condition(f"10@{d}", f"10@{d}", False, "inside the training winds")
@@ -313,7 +314,9 @@ def _episode(job: tuple[Any, ...]) -> dict[str, Any]:
         res = run_controlled_episode("harbour", spec, seed=seed, observer=observer,
                                      wind=cond.wind, **cond.env_kwargs())  # fmt: skip
         ok = bool(res["completed"] and not res["quay_contact"])
-        extra = {"J_c": float(res["J_c"]) if ok else math.nan}
+        extra = {"J_c": float(res["J_c"]) if ok else math.nan,
+                 "quay_contact": bool(res["quay_contact"]),
+                 "legs_completed": int(res["legs_completed"])}  # fmt: skip
     else:
         from .bench import _STATION_ID, _station_steps
 
@@ -371,7 +374,8 @@ def bench_rl(
         One row per episode (method, run, condition, seed order): ``method``, ``run``
         (training-seed index), ``controller``, ``condition``, ``held_out``, ``seed``,
         ``observer``,
-        ``success``, the task metric (``J_c``; or ``inside_pct``, ``heading_rms_deg``),
+        ``success``, the task metric (``J_c``, with ``quay_contact`` and
+        ``legs_completed``; or ``inside_pct``, ``heading_rms_deg``),
         ``return``, ``reversals_per_min``, ``starts_per_min``, ``limit_pct``,
         ``wall_time_s``.
 
