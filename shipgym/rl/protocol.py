@@ -572,14 +572,14 @@ def rl_tables(summary: Mapping[str, Any], suite_name: str) -> str:
             lines.append("| " + " | ".join(cells) + " |")
     per = summary["per_condition"]
     if per:
-        conds = [c for c in s.conditions if any(c.name in v for v in per.values())]
+        shown = [c for c in s.conditions if any(c.name in v for v in per.values())]
         lines.append(f"\nPer condition: success (%, mean) / {score} (IQM over runs)\n")
         lines.append("| method | " + " | ".join(
-            f"{c.name}{' (held-out)' if c.held_out else ''}" for c in conds) + " |")  # fmt: skip
-        lines.append("|---|" + "---|" * len(conds))
+            f"{c.name}{' (held-out)' if c.held_out else ''}" for c in shown) + " |")  # fmt: skip
+        lines.append("|---|" + "---|" * len(shown))
         for m, byc in per.items():
             row = []
-            for c in conds:
+            for c in shown:
                 d = byc.get(c.name)
                 if d is None:
                     row.append("-")
