@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -108,14 +108,7 @@ class Condition:
 
     def to_dict(self) -> dict[str, Any]:
         """The condition as plain data (the JSON document)."""
-        return {
-            "name": self.name,
-            "wind": self.wind,
-            "held_out": self.held_out,
-            "why": self.why,
-            "sensors": dict(self.sensors),
-            "current": self.current,
-        }
+        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -466,14 +459,18 @@ def _matrix(cells: Sequence[Mapping[str, Any]], method: str, conds: Sequence[str
 
 
 def _aggregate(method: str, a: np.ndarray, key: str, reps: int, seed: int) -> dict[str, Any]:
-    """The aggregate of one key: the success rate's mean (an IQM would trim away a condition
-    that fails every run), the IQM of the others (NaN cells left out)."""
+    """The record of one key: the success rate's mean (an IQM would trim away a condition
+    that fails every run), the IQM of the others (NaN cells left out): ``statistic``,
+    ``estimate``, ``low``, ``high``, ``runs``, ``conditions``, ``missing``."""
     from shipgym.stats import aggregate
 
     if key == "success_pct":
-        out = aggregate({method: a}, np.mean, reps=reps, seed=seed)[method]
-        return {**out, "missing": 0}
-    return aggregate({method: a}, reps=reps, seed=seed, missing="omit")[method]
+        r = {**aggregate({method: a}, np.mean, reps=reps, seed=seed)[method], "missing": 0}
+    else:
+        r = aggregate({method: a}, reps=reps, seed=seed, missing="omit")[method]
+    return {"statistic": _STAT[key == "success_pct"], "estimate": r["estimate"],
+            "low": r["low"], "high": r["high"], "runs": r["runs"], "conditions": r["tasks"],
+            "missing": r["missing"]}  # fmt: skip
 
 
 def summarise(
@@ -507,11 +504,7 @@ def summarise(
                 a = _matrix(cells, m, conds, k)
                 if a.size == 0 or np.isnan(a).all(axis=0).any():
                     continue  # a condition without any value of k: no aggregate
-                r = _aggregate(m, a, k, reps, seed)
-                aggs[split][m][k] = {"statistic": _STAT[k == "success_pct"],
-                                     "estimate": r["estimate"], "low": r["low"],
-                                     "high": r["high"], "runs": r["runs"],
-                                     "conditions": r["tasks"], "missing": r["missing"]}  # fmt: skip
+                aggs[split][m][k] = _aggregate(m, a, k, reps, seed)
     per: dict[str, Any] = {}
     for m in methods:
         per[m] = {}
@@ -524,11 +517,9 @@ def summarise(
                 a = _matrix(cells, m, [c.name], k)
                 if np.isnan(a).all():
                     continue
-                r = _aggregate(m, a, k, reps, seed)
-                per[m][c.name][k] = {"statistic": _STAT[k == "success_pct"],
-                                     "estimate": r["estimate"], "low": r["low"],
-                                     "high": r["high"], "runs": r["runs"],
-                                     "missing": r["missing"]}  # fmt: skip
+                rec = _aggregate(m, a, k, reps, seed)
+                del rec["conditions"]  # one condition
+                per[m][c.name][k] = rec
     return {"cells": cells, "aggregates": aggs, "per_condition": per}
 
 
