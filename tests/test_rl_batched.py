@@ -76,3 +76,27 @@ def test_train_cli_seeds_options_are_checked(capsys):
         from shipgym.rl.train import train_seeds
 
         train_seeds("ppo", [1, 1])
+
+
+@pytest.mark.parametrize("vec_env", ["batched", "dummy"])
+def test_randomized_sensor_noise_keeps_the_recipes_faults(vec_env):
+    """``randomize.sensors`` draws the noise on top of ``env_kwargs.sensors``: a recipe's
+    dropouts and outliers reach every env (they were silently replaced by the default
+    sensors with drawn noise)."""
+    hp = load_hyperparams("ppo", ID)
+    hp["env_kwargs"] = {**hp["env_kwargs"], "sensors": {"dropout_probability": 0.005,
+                                                        "dropout_duration": 5.0,
+                                                        "outlier_probability": 0.01}}  # fmt: skip
+    venv = build_vec_env(ID, hp, 3, 0, vec_env)
+    venv.reset()
+    inner = venv
+    while not hasattr(inner, "envs" if vec_env == "dummy" else "sensors"):
+        inner = inner.venv
+    if vec_env == "batched":
+        configs = inner.sensors.configs
+    else:
+        configs = [e.unwrapped.sensor_config for e in inner.envs]
+    assert len({c.position_sigma for c in configs}) == 3  # drawn per env
+    for c in configs:
+        assert (c.dropout_probability, c.dropout_duration, c.outlier_probability) == (
+            0.005, 5.0, 0.01)

@@ -487,9 +487,13 @@ def _algo_kwargs(algo: str, hp: Mapping[str, Any]) -> dict[str, Any]:
 
 
 # ---- environments ----------------------------------------------------------------------------
-def _draw_sensors(spec: Mapping[str, Any], seed: int, rank: int) -> Any:
-    """A SensorConfig with noise sigmas drawn uniformly from ``spec`` (own seeded stream)."""
-    from shipgym.observers.sensors import SensorConfig
+def _draw_sensors(spec: Mapping[str, Any], seed: int, rank: int, base: Any = "default") -> Any:
+    """``base`` (the recipe's ``env_kwargs.sensors``: a preset name, a mapping or a
+    SensorConfig; its faults, period and everything not drawn are kept) with the noise sigmas
+    drawn uniformly from ``spec`` (own seeded stream)."""
+    import dataclasses
+
+    from shipgym.envs.task import parse_sensors_arg
 
     known = {"position_sigma", "heading_sigma_deg"}
     unknown = sorted(set(spec) - known)
@@ -503,7 +507,13 @@ def _draw_sensors(spec: Mapping[str, Any], seed: int, rank: int) -> Any:
     if "heading_sigma_deg" in spec:
         lo, hi = (float(x) for x in spec["heading_sigma_deg"])
         kw["heading_variance"] = math.radians(float(rng.uniform(lo, hi))) ** 2
-    return SensorConfig(**kw)
+    given = parse_sensors_arg(base)
+    if given is None:
+        raise ValueError(
+            "randomize.sensors draws the sensor noise, but env_kwargs.sensors is None (no "
+            "sensors): give sensors or drop randomize.sensors"
+        )
+    return dataclasses.replace(given, **kw)
 
 
 def build_env(
@@ -534,7 +544,9 @@ def build_env(
     if unknown:
         raise ValueError(f"randomize: unknown keys {unknown}; valid: ['sensors']")
     if randomize and "sensors" in rnd:
-        kwargs["sensors"] = _draw_sensors(rnd["sensors"], seed, rank)
+        kwargs["sensors"] = _draw_sensors(
+            rnd["sensors"], seed, rank, kwargs.get("sensors", "default")
+        )
     residual = bool(hp.get("residual"))
     env = make(
         env_id,
@@ -583,7 +595,10 @@ def _batched_vec_env(env_id: str, hp: Mapping[str, Any], n_envs: int, seed: int)
     if unknown:
         raise ValueError(f"randomize: unknown keys {unknown}; valid: ['sensors']")
     if "sensors" in rnd:
-        kwargs["env_sensors"] = [_draw_sensors(rnd["sensors"], seed, i) for i in range(n_envs)]
+        base = kwargs.get("sensors", "default")
+        kwargs["env_sensors"] = [
+            _draw_sensors(rnd["sensors"], seed, i, base) for i in range(n_envs)
+        ]
         kwargs["sensors"] = kwargs["env_sensors"][0]
     observer = check_observer(hp.get("observer"))
     if observer is not None:
