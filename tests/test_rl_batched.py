@@ -99,4 +99,7 @@ def test_randomized_sensor_noise_keeps_the_recipes_faults(vec_env):
     assert len({c.position_sigma for c in configs}) == 3  # drawn per env
     for c in configs:
         assert (c.dropout_probability, c.dropout_duration, c.outlier_probability) == (
-            0.005, 5.0, 0.01)
+            0.005,
+            5.0,
+            0.01,
+        )
