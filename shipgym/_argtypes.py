@@ -19,6 +19,7 @@ __all__ = [
     "MAX_SEED",
     "MAX_WORKERS",
     "OneLineParser",
+    "add_bench_outputs",
     "add_executor_options",
     "bounded_float",
     "executor_of",
@@ -168,6 +169,19 @@ def add_executor_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ray-address", type=ray_address, default=None, metavar="ADDRESS",
                    help="a Ray cluster (ray://host:10001, auto); default: a local Ray "
                    "instance of --workers CPUs")  # fmt: skip
+
+
+def add_bench_outputs(b: argparse.ArgumentParser, json_help: str | None = None) -> None:
+    """A benchmark's ``--workers``, ``--json``, ``--markdown``, executor and ``--resume``
+    options (every ``shipgym bench`` command has them)."""
+    b.add_argument(
+        "--workers", type=bounded_int(1, MAX_WORKERS), default=None,
+        help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
+    )  # fmt: skip
+    b.add_argument("--json", type=path_arg, default=None, metavar="PATH", help=json_help)
+    b.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
+    add_executor_options(b)
+    add_resume_option(b)
 
 
 def executor_of(args: argparse.Namespace) -> Any:

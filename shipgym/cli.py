@@ -26,8 +26,7 @@ from typing import Any
 import numpy as np
 
 from shipgym._argtypes import (
-    add_executor_options,
-    add_resume_option,
+    add_bench_outputs,
     bench_settings,
     executor_of,
     parse_wind,
@@ -877,20 +876,6 @@ def _version() -> str:
     return f"shipgym {shipgym.__version__}"
 
 
-def _add_bench_outputs(b: argparse.ArgumentParser) -> None:
-    """A benchmark's ``--workers``, ``--json`` and ``--markdown`` options."""
-    from shipgym._argtypes import MAX_WORKERS, bounded_int
-
-    b.add_argument(
-        "--workers", type=bounded_int(1, MAX_WORKERS), default=None,
-        help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
-    )  # fmt: skip
-    b.add_argument("--json", type=path_arg, default=None, metavar="PATH")
-    b.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
-    add_executor_options(b)
-    add_resume_option(b)
-
-
 def _parser() -> argparse.ArgumentParser:
     from shipgym._argtypes import (
         MAX_COUNT,
@@ -1005,7 +990,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="harbour scenario preset or YAML/TOML file: plant, wind, waves, "
                    "current, sensors (e.g. tomera2014-lake; default: the harbour env's)",
                    )  # fmt: skip
-    _add_bench_outputs(b)
+    add_bench_outputs(b)
     b.add_argument("--report", type=path_arg, default=None, metavar="DIR",
                    help="bar chart of the indices and velocity-error plots (PNG)")  # fmt: skip
     b.add_argument("--no-progress", action="store_true")
@@ -1029,7 +1014,7 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--task", choices=("station-keeping", "sway-step"), default="station-keeping",
                    help="DPStationKeeping-v0 or the thesis's 0.02 p.u. sway step, DPSwayStep-v0 "
                    "(station-keeping)")  # fmt: skip
-    _add_bench_outputs(b)
+    add_bench_outputs(b)
     b.add_argument("--figures", type=path_arg, default=None, metavar="DIR",
                    help="estimates vs truth, thrust spectra and gain history (PNG), per vessel "
                    "in Beaufort 8 (or the highest given), seed 0")  # fmt: skip
@@ -1058,7 +1043,7 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--duration", type=bounded_float(150.0, MAX_BENCH_DURATION, unit="s"),
                    default=400.0, help="episode length, s, >= 150 (the metrics skip the first "
                    f"100 s) and <= {MAX_BENCH_DURATION:g} (400)")  # fmt: skip
-    _add_bench_outputs(b)
+    add_bench_outputs(b)
     b.add_argument("--figures", type=path_arg, default=None, metavar="DIR",
                    help="RRR, heading/rudder, stability margin against speed, and one episode "
                    "per vessel at its design speed (PNG)")  # fmt: skip

@@ -28,9 +28,8 @@ from typing import Any
 
 from shipgym._argtypes import (
     MAX_COUNT,
-    MAX_WORKERS,
+    add_bench_outputs,
     add_executor_options,
-    add_resume_option,
     bench_settings,
     bounded_float,
     bounded_int,
@@ -307,16 +306,7 @@ def add_bench_controllers_parser(bsub: Any) -> argparse.ArgumentParser:
         help="mean wind (default: the task's: 3@300 for the Blue Lady's harbour manoeuvre, the "
         "vessel's nominal wind from 300 deg for station keeping, 10@300 for star-hercules)",
     )
-    b.add_argument(
-        "--workers",
-        type=bounded_int(1, MAX_WORKERS),
-        default=None,
-        help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)",
-    )
-    b.add_argument("--json", type=path_arg, default=None, metavar="PATH")
-    b.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
-    add_executor_options(b)
-    add_resume_option(b)
+    add_bench_outputs(b)
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=cmd_bench_controllers)
     return b
@@ -435,15 +425,9 @@ def add_bench_rl_parser(bsub: Any) -> argparse.ArgumentParser:
                    help="kbf when available (default), truth, dkf, ekf, ...")  # fmt: skip
     b.add_argument("--reps", type=bounded_int(100, 100_000), default=2000,
                    help="bootstrap resamples of the intervals (2000)")  # fmt: skip
-    b.add_argument("--workers", type=bounded_int(1, MAX_WORKERS), default=None,
-                   help=f"processes, 1 to {MAX_WORKERS} (default: CPUs)")  # fmt: skip
-    b.add_argument("--json", type=path_arg, default=None, metavar="PATH",
-                   help="the episodes, cells and aggregates (JSON, with units)")  # fmt: skip
-    b.add_argument("--markdown", type=path_arg, default=None, metavar="PATH")
+    add_bench_outputs(b, json_help="the episodes, cells and aggregates (JSON, with units)")
     b.add_argument("--figure", type=path_arg, default=None, metavar="PNG",
                    help="performance profiles of the task metric, one panel per split")  # fmt: skip
-    add_executor_options(b)
-    add_resume_option(b)
     b.add_argument("--no-progress", action="store_true")
     b.set_defaults(func=cmd_bench_rl)
     return b
