@@ -75,8 +75,36 @@ def test_reward_is_the_sum_of_its_info_terms():
     for _ in range(30):
         _, reward, _, _, info = env.step(env.action_space.sample())
         terms = [v for k, v in info.items() if k.startswith("reward_")]
-        assert len(terms) == 7
+        assert len(terms) == 8
         assert reward == sum(terms)
+
+
+@pytest.mark.parametrize("n", [1, 3])
+def test_reversal_term_counts_two_sided_commands_through_zero(n):
+    """``reward_reversal`` is ``-w`` per two-sided channel whose applied command changed sign
+    in the step (counted here from the actions, single env and vector env alike)."""
+    kw = {"reward_weights": {"reversal": 2.5}, "wind": None}
+    env = (
+        gym.make_vec("shipgym/BlueLadyTracking-v0", num_envs=n, **kw)
+        if n > 1
+        else (gym.make("shipgym/BlueLadyTracking-v0", **kw))
+    )
+    env.reset(seed=3)
+    rng = np.random.default_rng(0)
+    prev = np.zeros((n, 3))
+    seen = 0
+    for _ in range(40):
+        a = rng.choice([-0.6, -0.01, 0.0, 0.3, 1.0], size=(n, 3)).astype(np.float32)
+        _, reward, term, trunc, info = env.step(a if n > 1 else a[0])
+        expected = -2.5 * np.sum(a * prev < 0.0, axis=1)
+        got = np.atleast_1d(info["reward_reversal"])
+        np.testing.assert_array_equal(got, expected)
+        seen += int(np.count_nonzero(expected))
+        prev = a.astype(np.float64)
+        if np.any(np.atleast_1d(term) | np.atleast_1d(trunc)):
+            break
+    assert seen > 10
+    env.close()
 
 
 def test_spec_round_trip_rebuilds_the_controller():

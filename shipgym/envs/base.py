@@ -114,9 +114,11 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     ## Rewards
     ``reward = reward_position + reward_heading + reward_velocity + reward_effort +
-    reward_rate + reward_contact + reward_leg`` (each term in ``info``):
+    reward_rate + reward_reversal + reward_contact + reward_leg`` (each term in ``info``):
     ``-w_p |e_xy|^2``, ``-w_psi e_psi^2``, ``-w_v |nu - nu_d|^2``, ``-w_u |a|^2``,
-    ``-w_du |a - a_prev|^2``, ``-w_c`` on quay contact, ``+w_leg`` per completed leg
+    ``-w_du |a - a_prev|^2``, ``-w_rev`` per two-sided channel (a reversible propeller or
+    tunnel) whose command went through zero in the step (``a a_prev < 0``; weight 0 by
+    default), ``-w_c`` on quay contact, ``+w_leg`` per completed leg
     (weights: :class:`RewardWeights`, argument ``reward_weights``). With the weights'
     ``position_scale``, ``heading_scale``, ``velocity_scale`` the three tracking terms saturate
     (``-w s^2 (1 - exp(-q^2/s^2))``: the square near the reference, bounded by ``w s^2``), the

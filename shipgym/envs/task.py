@@ -76,6 +76,7 @@ REWARD_TERMS = (
     "reward_velocity",
     "reward_effort",
     "reward_rate",
+    "reward_reversal",
     "reward_contact",
     "reward_leg",
 )
@@ -105,6 +106,9 @@ class RewardWeights:
     velocity: float = param(10.0, "s^2/m^2", "squared body-velocity error vs the reference")
     effort: float = param(0.01, "1", "squared normalised command")
     rate: float = param(0.01, "1", "squared change of the normalised command")
+    reversal: float = param(
+        0.0, "1", "per reversal: a two-sided channel's command through zero in one step"
+    )
     contact: float = param(100.0, "1", "penalty once, when the hull touches a quay")
     leg_bonus: float = param(10.0, "1", "bonus per completed leg (a positive term)")
     position_scale: float | None = param(
@@ -143,11 +147,12 @@ class RewardWeights:
 
     def vector(self) -> Array:
         """The weights as :func:`plan_terms` reads them: ``position, heading, velocity,
-        effort, rate, contact, leg_bonus`` and the three scales (0: the raw square)."""
+        effort, rate, contact, leg_bonus``, the three scales (0: the raw square) and
+        ``reversal``."""
         scales = (self.position_scale, self.heading_scale, self.velocity_scale)
         return np.array(
             [self.position, self.heading, self.velocity, self.effort, self.rate, self.contact,
-             self.leg_bonus, *(0.0 if s is None else s for s in scales)]
+             self.leg_bonus, *(0.0 if s is None else s for s in scales), self.reversal]
         )  # fmt: skip
 
     @classmethod
@@ -188,7 +193,8 @@ def _penalty(w, q2, s):  # type: ignore[no-untyped-def]
 
 @njit
 def plan_terms(  # type: ignore[no-untyped-def]
-    eta, nu, nav_eta, nav_nu, ref, action, prev, switched, new_contact, w, obs, rew, eta_r,
+    eta, nu, nav_eta, nav_nu, ref, action, prev, switched, new_contact, w, two_sided, obs,
+    rew, eta_r,
 ):  # fmt: skip
     """The observation and reward terms of N envs of a plan task (one law for every N).
 
@@ -201,11 +207,14 @@ def plan_terms(  # type: ignore[no-untyped-def]
         action, prev: (N, m) the applied (clipped) normalised action and the previous one.
         switched, new_contact: (N,) booleans: a leg completed, a first quay contact.
         w: the weights (:meth:`RewardWeights.vector`).
+        two_sided: (m,) 1.0 for a channel whose command has two sides (a reversible
+            propeller or tunnel: its lower limit < 0), else 0.0: where the ``reversal`` term
+            counts a command through zero (``a prev < 0``).
         obs: (N, 12 + m) float32 out: the observation (the layout of
             :class:`~shipgym.envs.base.ShipEnv`): the position error ship - reference in the
             ship's body frame (m), the wrapped heading error (rad), ``nav_nu``, ``nu_d``,
             ``nu_dot_d`` and the action just applied (the next step's previous action).
-        rew: (N, 7) out: the reward terms in the order of :data:`REWARD_TERMS`.
+        rew: (N, 8) out: the reward terms in the order of :data:`REWARD_TERMS`.
         eta_r: (N, 3) out: the true poses in the current legs' r-frames (Tomera (2014) eq. 1,
             the heading on the branch of the desired one).
     """
@@ -236,18 +245,22 @@ def plan_terms(  # type: ignore[no-untyped-def]
         dr = nu[i, 2] - r[6, 2]
         effort = 0.0
         rate = 0.0
+        reversals = 0.0
         for j in range(m):
             a = action[i, j]
             obs[i, 12 + j] = a
             effort += a * a
             rate += (a - prev[i, j]) * (a - prev[i, j])
+            if a * prev[i, j] < 0.0:
+                reversals += two_sided[j]
         rew[i, 0] = -_penalty(w[0], ex * ex + ey * ey, w[7])
         rew[i, 1] = -_penalty(w[1], ep * ep, w[8])
         rew[i, 2] = -_penalty(w[2], du * du + dv * dv + dr * dr, w[9])
         rew[i, 3] = -w[3] * effort
         rew[i, 4] = -w[4] * rate
-        rew[i, 5] = -w[5] if new_contact[i] else 0.0
-        rew[i, 6] = w[6] if switched[i] else 0.0
+        rew[i, 5] = -w[10] * reversals
+        rew[i, 6] = -w[5] if new_contact[i] else 0.0
+        rew[i, 7] = w[6] if switched[i] else 0.0
 
 
 # ---- tasks -------------------------------------------------------------------------------
@@ -394,6 +407,8 @@ class PlanTask:
             raise ValueError(f"start_noise must be >= 0, got {start_noise!r}")
         self.reward_weights = RewardWeights.coerce(reward_weights)
         self._w = self.reward_weights.vector()
+        #: per action channel, 1.0 where the command has two sides (the ``reversal`` term)
+        self._two_sided = (np.asarray(v.actuators.lower, dtype=float) < 0.0).astype(float)
         if not isinstance(terminate_on_finish, bool | np.bool_):
             raise TypeError(
                 f"terminate_on_finish must be True or False, got {terminate_on_finish!r}"
@@ -469,7 +484,7 @@ class PlanTask:
         :func:`plan_terms` with this task's weights; ``ref`` the reference's (N, 10, 3)
         buffer."""
         args = (eta, nu, nav_eta, nav_nu, ref, action, prev, switched, new_contact, self._w,
-                obs, rew, eta_r)  # fmt: skip
+                self._two_sided, obs, rew, eta_r)  # fmt: skip
         if self._terms_entry is None:
             self._terms_entry = entry(plan_terms, args)
         self._terms_entry(*args)
