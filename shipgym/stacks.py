@@ -17,6 +17,7 @@ from shipgym.controllers.learned import (
     check_trained_env,
     is_learned_controller,
     parse_learned_controller,
+    policy_env_kwargs,
     read_metadata,
 )
 from shipgym.envs.registration import PLAN_IDS, resolve_env_id
@@ -129,7 +130,7 @@ def make_learned_env(
         observer=obs_name,
         controller=str(meta.controller) if meta.residual else None,
         residual_scale=meta.residual_scale if meta.residual else 1.0,
-        **env_kwargs,
+        **{**policy_env_kwargs(meta.env_kwargs), **env_kwargs},
     )
     if meta.error_integral is not None:
         from shipgym.envs.integral import ErrorIntegralObservation

@@ -314,3 +314,93 @@ def test_the_command_filter_is_the_sampled_first_order_low_pass():
             assert out[j] == pytest.approx(want, rel=1e-12, abs=1e-12)
     pid.reset()
     np.testing.assert_array_equal(pid(step, zero, zero), c)  # restarts at the law
+
+
+# ---- the same conditioning on a pure policy's commands (condition_commands=True) -----------
+def _reference_conditioning(actions, f_h, idle, a_lp, k, upper, lower):
+    """The documented rule of BatchedCommandConditioning for the main propeller alone, written
+    out scalar: bollard thrust k c|c| of the command, a running direction, the low-pass of the
+    thrust deciding a reversal, idle on the running side otherwise."""
+    d, low, out = 0.0, 0.0, []
+    for a in actions:
+        c = a * upper if a >= 0 else a * -lower
+        f = k * c * abs(c)
+        low += a_lp * (f - low)
+        f_idle = k * (idle * upper) ** 2 if d > 0 else -k * (idle * lower) ** 2
+        if d == 0.0:
+            d = float(np.sign(f))
+            out.append(a)
+        elif f * d >= 0.0:
+            out.append(a if abs(f) >= abs(f_idle) else d * idle)
+        elif abs(f) > f_h and abs(low) > f_h and np.sign(low) == np.sign(f):
+            d = -d
+            out.append(a)
+        else:
+            out.append(d * idle)
+    return np.array(out)
+
+
+def test_policy_command_conditioning_is_the_documented_rule():
+    from shipgym.controllers.conditioning import IDLE_FRACTION, BatchedCommandConditioning
+
+    rng = np.random.default_rng(4)
+    n, steps, dt = 5, 300, 1.0
+    cond = BatchedCommandConditioning(BL.actuators, [50.0, 0.0, 0.0], n, dt=dt)
+    walk = np.clip(np.cumsum(rng.normal(0, 0.15, (steps, n)), axis=0), -1, 1)  # main channel
+    lo, hi = BL.actuators.lower, BL.actuators.upper
+    got = np.empty((steps, n))
+    held_any = 0
+    for t in range(steps):
+        a = np.column_stack([walk[t], rng.uniform(-1, 1, (n, 2))])
+        c = np.where(a >= 0, a * hi, a * -lo)
+        held = cond(c, a)
+        assert not held[:, 1:].any()  # the tunnels have no threshold: never held
+        np.testing.assert_allclose(
+            c[:, 0], np.where(a[:, 0] >= 0, a[:, 0] * hi[0], a[:, 0] * -lo[0])
+        )
+        got[t] = a[:, 0]
+        held_any += int(held[:, 0].sum())
+    a_lp = dt / (4.0 + dt)
+    for e in range(n):
+        want = _reference_conditioning(
+            walk[:, e], 50.0, IDLE_FRACTION, a_lp, BL.actuators.actuators[0].k_ahead, hi[0], lo[0]
+        )
+        np.testing.assert_allclose(got[:, e], want, rtol=0, atol=1e-12)
+    assert held_any > 50
+    # the command only changes sign through a reversal past 50 N: at most as often as the
+    # raw walk crosses 0.8 of astern and 0.33 of ahead, far less than it crosses zero
+    crossings = np.sum(got[1:] * got[:-1] < 0)
+    assert crossings < np.sum(walk[1:] * walk[:-1] < 0) / 3
+
+
+def test_condition_commands_in_the_env_and_its_refusals():
+    import gymnasium as gym
+
+    import shipgym  # noqa: F401
+
+    env = gym.make("shipgym/BlueLadyTracking-v0", condition_commands=True, wind=None)
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.array([0.5, 0, 0], np.float32))  # ahead: sets the direction
+    _, _, _, _, info = env.step(np.array([-0.3, 0, 0], np.float32))  # 28 N astern < 50 N: idles
+    assert info["action_clipped"].tolist() == [True, False, False]
+    assert info["command"][0] == pytest.approx(0.05 * 480.0)  # the idle, 24 rpm ahead
+    with pytest.raises(ValueError, match="conditions its own"):
+        gym.make("shipgym/BlueLadyTracking-v0", condition_commands=True, controller="pid")
+    with pytest.raises(ValueError, match="reversal threshold"):
+        gym.make("shipgym/Tracking-v0", vessel="star-hercules", condition_commands=True)
+    with pytest.raises(TypeError, match="True or False"):
+        gym.make("shipgym/BlueLadyTracking-v0", condition_commands="yes")
+
+
+def test_a_policy_trained_with_conditioning_runs_only_with_it():
+    import gymnasium as gym
+
+    import shipgym  # noqa: F401
+    from shipgym.controllers.learned import ModelMetadata, _check_stack, policy_env_kwargs
+
+    meta = ModelMetadata(algorithm="ppo", env_id="shipgym/BlueLadyTracking-v0",
+                         env_kwargs={"condition_commands": True, "max_legs": 2})  # fmt: skip
+    assert policy_env_kwargs(meta.env_kwargs) == {"condition_commands": True}
+    with pytest.raises(ValueError, match="condition_commands=True"):
+        _check_stack(gym.make("shipgym/BlueLadyHarbour-v0"), meta)
+    _check_stack(gym.make("shipgym/BlueLadyHarbour-v0", condition_commands=True), meta)

@@ -36,6 +36,7 @@ from .allocation import Allocation
 __all__ = [
     "IDLE_FRACTION",
     "REVERSAL_FILTER_S",
+    "BatchedCommandConditioning",
     "BatchedReversalHysteresis",
     "ReversalHysteresis",
     "reversal_threshold",
@@ -350,3 +351,94 @@ class ReversalHysteresis:
 
     def __repr__(self) -> str:
         return f"ReversalHysteresis(threshold={self.threshold})"
+
+
+class BatchedCommandConditioning:
+    """:class:`BatchedReversalHysteresis` on commands that no allocation made: a policy's
+    (a learned controller that drives the actuators itself, ``condition_commands=True`` of
+    the plan envs), ``n`` envs at once.
+
+    The law decides on thrust, so each conditioned propeller's command ``c`` (rpm, or the
+    relative command) is read as its bollard thrust first: ``k c`` (linear law) or
+    ``k c |c|`` (quadratic), with the ahead or astern constant ``k`` of its side (the form
+    that gives the idle thrust). The propeller then reverses only when the command asks for
+    more than ``F_h`` on the other side and so does the low-pass of that thrust; otherwise it
+    idles on its running side (command ``idle`` of the range), as the PID's propeller does.
+    What it holds is returned as a mask, for the env's ``info``.
+
+    Args:
+        actuators: the vessel's actuator set.
+        threshold: per actuator, ``F_h`` (N, >= 0; the vessel's ``[control]
+            reversal_threshold``); at least one propeller must have ``F_h > 0``.
+        n: number of envs, >= 1.
+        dt: the control period (s) > 0.
+        idle, filter_time: as :class:`BatchedReversalHysteresis`.
+
+    Raises:
+        ValueError: no propeller with a threshold (nothing to condition), or a bad argument.
+    """
+
+    def __init__(
+        self, actuators: ActuatorSet, threshold: Sequence[float], n: int, *, dt: float,
+        idle: float = IDLE_FRACTION, filter_time: float = REVERSAL_FILTER_S,
+    ) -> None:  # fmt: skip
+        self.law = BatchedReversalHysteresis(
+            actuators, threshold, n, idle, dt=dt, filter_time=filter_time
+        )
+        if not self.law.active:
+            raise ValueError(
+                "command conditioning needs a reversible propeller with a reversal threshold "
+                "> 0 N (the vessel's [control] reversal_threshold); this vessel has none: "
+                f"threshold {list(threshold)!r}"
+            )
+        units = self.law._I
+        props = [actuators.actuators[int(i)] for i in units[:, 0]]
+        self._act = units[:, 0].copy()
+        self._ch = units[:, 1].copy()
+        self._k_ahead = np.array([p.k_ahead for p in props], dtype=float)
+        self._k_astern = np.array([p.k_astern for p in props], dtype=float)
+        self._quadratic = np.array([p.law == "quadratic" for p in props])
+        self._upper = np.array([p.upper for p in props], dtype=float)
+        self._lower = np.array([p.lower for p in props], dtype=float)
+        self._n_act = len(actuators)
+        self._dofs = actuators.dofs
+
+    def reset(self, mask: ArrayLike | None = None) -> None:
+        """Forget the running directions of every env, or of those where ``mask``."""
+        self.law.reset(mask)
+
+    def bollard_thrust(self, command: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The conditioned propellers' bollard thrust (N) of the commands (n, channels), as
+        (n, actuators) (0 for the others)."""
+        c = command[:, self._ch]
+        k = np.where(c >= 0.0, self._k_ahead, self._k_astern)
+        f = k * np.where(self._quadratic, c * np.abs(c), c)
+        out = np.zeros((command.shape[0], self._n_act))
+        out[:, self._act] = f
+        return out
+
+    def __call__(
+        self, command: NDArray[np.float64], action: NDArray[np.float64]
+    ) -> NDArray[np.bool_]:
+        """Condition the physical commands ``command`` (n, channels) and their normalised
+        actions ``action`` (n, channels, in [-1, 1]) in place; returns where a command was
+        held at the idle, (n, channels)."""
+        held = np.zeros(command.shape, dtype=bool)
+        force = self.bollard_thrust(command)
+        n = command.shape[0]
+        zeros = np.zeros((n, self._dofs))
+        out = self.law(command, force, zeros, zeros.copy())
+        if out[1] is force:  # nothing held
+            return held
+        new = out[0][:, self._ch]
+        old = command[:, self._ch]
+        h = new != old
+        held[:, self._ch] = h
+        command[:, self._ch] = new
+        action[:, self._ch] = np.where(
+            h, np.where(new >= 0.0, new / self._upper, new / -self._lower), action[:, self._ch]
+        )
+        return held
+
+    def __repr__(self) -> str:
+        return f"BatchedCommandConditioning(n={self.law.n}, threshold={self.law.threshold})"

@@ -33,6 +33,7 @@ __all__ = [
     "BASELINE_TASKS",
     "METADATA_NAME",
     "MODEL_FORMAT",
+    "POLICY_ENV_KEYS",
     "LearnedControllerWrapper",
     "LearnedPolicy",
     "ModelMetadata",
@@ -51,6 +52,7 @@ __all__ = [
     "load_policy",
     "models_dir",
     "parse_learned_controller",
+    "policy_env_kwargs",
     "policy_parameter_count",
     "read_metadata",
     "read_state_dicts",
@@ -66,6 +68,17 @@ MODEL_FORMAT_VERSION = 1
 METADATA_NAME = "shipgym.json"
 #: algorithms a shipgym model may hold (lower case, as on the command line)
 ALGORITHMS = ("ppo", "sac")
+#: the training env arguments that belong to the policy, not to the conditions it met: its
+#: action filter (``condition_commands``: the reversal hysteresis of its propeller commands).
+#: Every env the policy runs in gets them (evaluation, :func:`~shipgym.stacks.
+#: make_learned_env`), whatever the task and its conditions.
+POLICY_ENV_KEYS = ("condition_commands",)
+
+
+def policy_env_kwargs(env_kwargs: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The :data:`POLICY_ENV_KEYS` of a model's training ``env_kwargs`` (those it has)."""
+    kw = env_kwargs or {}
+    return {k: kw[k] for k in POLICY_ENV_KEYS if k in kw}
 
 
 @dataclass(frozen=True)
@@ -1345,6 +1358,13 @@ def _check_stack(env: gym.Env[Any, Any], meta: ModelMetadata) -> None:
         raise ValueError(
             "this model drives the thrusters directly (not residual) but the environment runs "
             f"the DP controller {controller!r}: build the stack with make_learned_env()"
+        )
+    want = bool(policy_env_kwargs(meta.env_kwargs).get("condition_commands", False))
+    if (getattr(base, "batch", base).__dict__.get("conditioning") is not None) != want:
+        raise ValueError(
+            f"the model was trained with condition_commands={want} (the reversal hysteresis "
+            f"on its propeller commands) and the environment has the other: build the stack "
+            f"with make_learned_env(), or make the env with condition_commands={want}"
         )
     integ = [w for w in layers if type(w).__name__ == "ErrorIntegralObservation"]
     have = getattr(integ[0], "time_constant", None) if integ else None

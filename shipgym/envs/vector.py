@@ -81,6 +81,15 @@ class ShipVectorEnv(BatchedEnv):
             actions are residuals on its normalised command, as in the single env
             (``shipgym.make(..., controller=)``).
         residual_scale: the factor on the residual actions (with ``controller``).
+        condition_commands: ``True`` (no ``controller`` only): the actions' propeller
+            commands pass through the vessel's reversal hysteresis with an idling shaft
+            (its ``[control] reversal_threshold``;
+            :class:`~shipgym.controllers.conditioning.BatchedCommandConditioning`), the PID's
+            command conditioning, as a pure learned policy's action filter: a propeller
+            reverses only on a request past the threshold that its 4 s low-pass confirms,
+            else idles on its running side. What it holds is flagged in
+            ``info["action_clipped"]``; the observation's previous action, the reward and
+            the metrics see the command applied.
         feedforward: what the controller feeds forward (``controller`` only):
             ``None`` the task class's ``default_feedforward`` (the DP tasks of Al-Takie 1982:
             ``"wind+current"``, as the thesis assumes; the other tasks: none), a name of
@@ -121,6 +130,7 @@ class ShipVectorEnv(BatchedEnv):
         autoreset_mode: str | AutoresetMode = "next-step",
         controller: str | None = None,
         residual_scale: float = 1.0,
+        condition_commands: bool = False,
         feedforward: Any = None,
         observer: str | None = None,
         observer_options: Mapping[str, Any] | None = None,
@@ -253,6 +263,24 @@ class ShipVectorEnv(BatchedEnv):
             self.controller = batched_dp_controller(
                 controller, self.vessel, n, self.control_period, velocity_source=src
             )
+        #: the action filter of ``condition_commands`` (``None``: none)
+        self.conditioning: Any = None
+        if not isinstance(condition_commands, bool | np.bool_):
+            raise TypeError(f"condition_commands must be True or False, got {condition_commands!r}")
+        if condition_commands:
+            if controller is not None:
+                raise ValueError(
+                    f"condition_commands filters actions that drive the actuators; the DP "
+                    f"controller {controller!r} conditions its own commands: drop one of them"
+                )
+            from shipgym.controllers.conditioning import (
+                BatchedCommandConditioning,
+                reversal_threshold,
+            )
+
+            self.conditioning = BatchedCommandConditioning(
+                self.actuators, reversal_threshold(self.vessel), n, dt=self.control_period
+            )
         #: the controller's feedforward (``None``: none)
         self.feedforward: Any = None
         ff = cls.default_feedforward if feedforward is None else feedforward
@@ -357,6 +385,10 @@ class ShipVectorEnv(BatchedEnv):
         action_clipped, near = np.empty((n, m), bool), np.empty((n, m), bool)
         _actions(a, self._lo, self._hi, self._lo_tol, self._hi_tol, clipped, action_clipped,
                  command, near)  # fmt: skip
+        if self.conditioning is not None:  # held at the idle: changed, and off the limits
+            held = self.conditioning(command, clipped)
+            action_clipped |= held
+            near &= ~held
         saturated = self.physics.set_command(command) | near
         self._advance(active)
         t = self.physics.t
@@ -507,6 +539,8 @@ class ShipVectorEnv(BatchedEnv):
         ref = self.guidance.reference(self.physics.t)
         # the reset envs' rows of the reference the next step's controller reads
         self._ref = ref if self._ref is None else _rows_from(self._ref, ref, mask)
+        if self.conditioning is not None:
+            self.conditioning.reset(mask)
         if self.controller is not None:
             self.controller.reset(mask)
             self._tau_ff[mask] = 0.0

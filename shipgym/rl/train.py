@@ -788,7 +788,11 @@ def _score(rows: Sequence[Mapping[str, Any]]) -> tuple[int, float]:
 
 
 def _harbour_env(env_id: str, hp: Mapping[str, Any]) -> gym.Env[Any, Any]:
-    return build_env(EVAL_ENV_ID, hp, env_kwargs={}, randomize=False)
+    from shipgym.controllers.learned import policy_env_kwargs
+
+    # the harbour's own conditions; of the training env's arguments only the policy's own
+    kw = policy_env_kwargs(hp.get("env_kwargs"))
+    return build_env(EVAL_ENV_ID, hp, env_kwargs=kw, randomize=False)
 
 
 def _harbour_summary(
