@@ -111,7 +111,9 @@ class ActuatorData:
             thrust, rad/s, ...).
         thrust: the thrust each actuator delivers (N), per actuator.
         saturated: whether each command sat at a limit, or its normalised action was clipped.
-        action_clipped: whether each normalised action was outside [-1, 1] and clipped.
+        action_clipped: whether each normalised action was changed before it was applied:
+            outside [-1, 1] and clipped, or (``condition_commands``) a propeller command held
+            at its idle by the reversal hysteresis.
         channels: the channel names, in the order of ``action`` (``names`` when empty).
         state: the actuator states (lagged commands; an azimuth's angle in rad), per
             channel, or ``None``.

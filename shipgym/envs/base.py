@@ -91,8 +91,9 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     | Wimpey Sealab | 0, 2, 4, 6 | azimuth thrust | relative thrust (reversible) | 1 |
     |  | 1, 3, 5, 7 | azimuth turning rate | ``a * 10`` | deg/s |
 
-    Actions outside [-1, 1] are clipped and flagged in ``info["action_clipped"]``; NaN or
-    infinite actions raise ``ValueError``.
+    Actions outside [-1, 1] are clipped and flagged in ``info["action_clipped"]`` (which also
+    flags a propeller command held at its idle by ``condition_commands``); NaN or infinite
+    actions raise ``ValueError``.
 
     ## Observation Space
     ``Box(-inf, inf, (12 + n,), float32)``; what a controller may know (navigation data: the
@@ -207,6 +208,10 @@ class ShipEnv(PlanEnvSpec, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     |  |  | (:mod:`shipgym.controllers.feedforward`): ``None`` the task's default |
     |  |  | (DP tasks: ``"wind+current"``), ``"none"``, ``"wind"``, ``"current"`` |
     | ``residual_scale`` | ``1.0`` | the factor on the residual actions (with ``controller``) |
+    | ``condition_commands`` | ``False`` | without ``controller``: the actions' propeller |
+    |  |  | commands through the vessel's reversal hysteresis with an idling shaft (the |
+    |  |  | PID's conditioning; a learned policy's action filter); what it holds is flagged |
+    |  |  | in ``action_clipped`` |
     | ``render_mode`` | ``None`` | ``"rgb_array"`` (needs an EGL/OSMesa/GLFW backend) |
 
     ``wind`` and ``current`` accept exactly the forms of :meth:`WindConfig.coerce
