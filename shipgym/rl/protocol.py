@@ -165,7 +165,8 @@ SUITES: dict[str, Suite] = {
         task="harbour",
         vessel="blue-lady",
         training="tracking legs in 0-3.5 m/s wind from any direction, white DGPS noise of "
-        "0.07-0.15 m, no current, no dropouts or outliers (ppo.yml, sac.yml)",
+        "0.07-0.15 m, no current, no dropouts or outliers (ppo.yml, sac.yml); the robust "
+        "recipe: 5 s dropouts and outliers, 1 % of the fixes (ppo_robust.yml)",
         main_channel=0,
         conditions=(
             Condition("3@300", "3@300", False, "the lake trial's wind (Tomera 2014)"),
@@ -173,10 +174,18 @@ SUITES: dict[str, Suite] = {
             Condition("2@30", "2@30", False, "inside the training winds"),
             Condition("4@300", "4@300", True, "wind above the 3.5 m/s of training"),
             Condition(
-                "dropout", "3@300", True, "10 s DGPS dropouts (none in training)", sensors=_DROP
+                "dropout",
+                "3@300",
+                True,
+                "10 s DGPS dropouts (5 s at most in training)",
+                sensors=_DROP,
             ),  # fmt: skip
             Condition(
-                "outliers", "3@300", True, "20 m DGPS outliers (none in training)", sensors=_OUT
+                "outliers",
+                "3@300",
+                True,
+                "20 m DGPS outliers, 2 % of the fixes (1 % at most in training)",
+                sensors=_OUT,
             ),  # fmt: skip
             Condition(
                 "current",
