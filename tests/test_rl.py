@@ -300,3 +300,33 @@ def test_a_run_from_another_hyperparameter_file_records_it_in_its_command(tmp_pa
     assert f"--hyperparams {robust}" in cmd
     assert "--hyperparams" not in train_command("ppo", timesteps=10, seed=1, n_envs=2, out="o",
                                                 residual=False, observer="kbf")  # fmt: skip
+
+
+def test_the_robust_harbour_recipe_trains_with_its_action_filter_and_runs_with_it(tmp_path):
+    """The Blue Lady's block of ppo_robust.yml: its faults reach the training envs, its
+    policy's commands pass the reversal hysteresis there and in every env the model runs in
+    (``make_learned_env``), and a stack without the filter is refused."""
+    import gymnasium as gym
+
+    from shipgym.controllers.learned import read_metadata
+    from shipgym.stacks import make_learned_env
+
+    robust = hyperparams_path("ppo").with_name("ppo_robust.yml")
+    hp = load_hyperparams("ppo", path=robust)
+    assert hp["env_kwargs"]["condition_commands"] is True
+    assert hp["env_kwargs"]["sensors"]["dropout_duration"] == 5.0
+    run = train("ppo", timesteps=128, seed=0, n_envs=2, out=tmp_path, hyperparams=robust,
+                eval_freq=0, checkpoint_freq=0, progress=False,
+                overrides={"n_steps": 64, "batch_size": 64, "n_epochs": 1})  # fmt: skip
+    meta = read_metadata(run.model_path)
+    assert meta.env_kwargs["condition_commands"] is True
+    env = make_learned_env("harbour", run.model_path)
+    assert env.unwrapped.batch.conditioning is not None
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(np.zeros(3, np.float32))
+    with pytest.raises(ValueError, match="condition_commands"):
+        from shipgym.controllers.learned import LearnedControllerWrapper
+
+        LearnedControllerWrapper(gym.make("shipgym/BlueLadyHarbour-v0", observer="kbf"),
+                                 run.model_path)  # fmt: skip
