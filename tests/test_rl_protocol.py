@@ -26,7 +26,7 @@ from shipgym.rl.protocol import (
 )
 from shipgym.rl.train import hyperparams_path
 
-TRAINING_ID = {"harbour": "shipgym/BlueLadyTracking-v0",
+TRAINING_ID = {"harbour": "shipgym/BlueLadyTracking-v0", "tracking": "shipgym/BlueLadyTracking-v0",
                "station-keeping": "shipgym/StationKeeping-v0"}  # fmt: skip
 
 

@@ -6,8 +6,9 @@
 - ``shipgym bench controllers [--task harbour|station-keeping] [--vessel NAME]
   [--controllers ...] [--seeds 10] [--json PATH] [--markdown PATH]``:
   :func:`add_bench_controllers_parser`, :func:`cmd_bench_controllers`;
-- ``shipgym bench rl [--suite harbour|station-keeping-star-hercules] [--method NAME=SPEC,...]
-  [--seeds 10] [--split all|held-in|held-out] [--json PATH] [--markdown PATH] [--figure PNG]``:
+- ``shipgym bench rl [--suite harbour|tracking|station-keeping-star-hercules]
+  [--method NAME=SPEC,...] [--seeds 10] [--split all|held-in|held-out] [--json PATH]
+  [--markdown PATH] [--figure PNG]``:
   :func:`add_bench_rl_parser`, :func:`cmd_bench_rl` (the protocol of :mod:`shipgym.rl.protocol`);
 - ``shipgym plot training RUN_DIR [RUN_DIR ...] --out FIG.png`` (one line per run) or
   ``shipgym plot training --group NAME=RUN_DIR[,RUN_DIR...] [--group ...] --out FIG.png`` (the
