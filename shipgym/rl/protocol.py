@@ -164,6 +164,17 @@ _OUT = {"outlier_probability": OUTLIER_PROBABILITY}
 _DROP_LONG = {"dropout_probability": DROPOUT_PROBABILITY, "dropout_duration": 3.0 * DROPOUT_S}
 _OUT_MORE = {"outlier_probability": 2.5 * OUTLIER_PROBABILITY}
 
+#: the held-out conditions of the Blue Lady's suites (harbour, tracking)
+_BLUE_LADY_HELD_OUT = (
+    Condition("4@300", "4@300", True, "wind above the 3.5 m/s of training"),
+    Condition("dropout", "3@300", True, "10 s DGPS dropouts (5 s at most in training)",
+              sensors=_DROP),
+    Condition("outliers", "3@300", True,
+              "20 m DGPS outliers, 2 % of the fixes (1 % at most in training)", sensors=_OUT),
+    Condition("current", "3@300", True, "0.01 m/s current to 120 deg (none in training)",
+              current="0.01@120"),
+)  # fmt: skip
+
 #: the suites (the shipped baselines' training conditions are in shipgym/rl/hyperparams)
 SUITES: dict[str, Suite] = {
     "harbour": Suite(
@@ -178,28 +189,7 @@ SUITES: dict[str, Suite] = {
             Condition("3@300", "3@300", False, "the lake trial's wind (Tomera 2014)"),
             Condition("3@120", "3@120", False, "inside the training winds, from astern-starboard"),
             Condition("2@30", "2@30", False, "inside the training winds"),
-            Condition("4@300", "4@300", True, "wind above the 3.5 m/s of training"),
-            Condition(
-                "dropout",
-                "3@300",
-                True,
-                "10 s DGPS dropouts (5 s at most in training)",
-                sensors=_DROP,
-            ),  # fmt: skip
-            Condition(
-                "outliers",
-                "3@300",
-                True,
-                "20 m DGPS outliers, 2 % of the fixes (1 % at most in training)",
-                sensors=_OUT,
-            ),  # fmt: skip
-            Condition(
-                "current",
-                "3@300",
-                True,
-                "0.01 m/s current to 120 deg (none in training)",
-                current="0.01@120",
-            ),  # fmt: skip
+            *_BLUE_LADY_HELD_OUT,
         ),
     ),
     "tracking": Suite(
@@ -214,28 +204,7 @@ SUITES: dict[str, Suite] = {
             Condition("3@300", "3@300", False, "inside the training winds"),
             Condition("2@120", "2@120", False, "inside the training winds"),
             Condition("1@30", "1@30", False, "inside the training winds"),
-            Condition("4@300", "4@300", True, "wind above the 3.5 m/s of training"),
-            Condition(
-                "dropout",
-                "3@300",
-                True,
-                "10 s DGPS dropouts (5 s at most in training)",
-                sensors=_DROP,
-            ),  # fmt: skip
-            Condition(
-                "outliers",
-                "3@300",
-                True,
-                "20 m DGPS outliers, 2 % of the fixes (1 % at most in training)",
-                sensors=_OUT,
-            ),  # fmt: skip
-            Condition(
-                "current",
-                "3@300",
-                True,
-                "0.01 m/s current to 120 deg (none in training)",
-                current="0.01@120",
-            ),  # fmt: skip
+            *_BLUE_LADY_HELD_OUT,
         ),
     ),
     "station-keeping-star-hercules": Suite(
