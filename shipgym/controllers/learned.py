@@ -1360,7 +1360,7 @@ def _check_stack(env: gym.Env[Any, Any], meta: ModelMetadata) -> None:
             f"the DP controller {controller!r}: build the stack with make_learned_env()"
         )
     want = bool(policy_env_kwargs(meta.env_kwargs).get("condition_commands", False))
-    if (getattr(base, "batch", base).__dict__.get("conditioning") is not None) != want:
+    if (getattr(getattr(base, "batch", base), "conditioning", None) is not None) != want:
         raise ValueError(
             f"the model was trained with condition_commands={want} (the reversal hysteresis "
             f"on its propeller commands) and the environment has the other: build the stack "

@@ -411,11 +411,9 @@ class ShipVectorEnv(BatchedEnv):
                 self.controller.change_frame(wrap_angle(psi_P - self._psi_P), moved)
                 self._leg = np.where(moved, ref.leg, self._leg)
                 self._psi_P = np.where(moved, psi_P, self._psi_P)
-        # the terms added left to right (as the docs write the sum; NumPy's reduction of 8 or
-        # more columns is pairwise, another float order)
-        reward = self._rew[:, 0].copy()
-        for k in range(1, self._rew.shape[1]):
-            reward += self._rew[:, k]
+        # the terms added left to right (as the docs write the sum): cumsum accumulates in
+        # order, where NumPy's reduction of 8 or more columns is pairwise
+        reward = np.cumsum(self._rew, axis=1)[:, -1]
         self._prev = clipped
         self._elapsed += 1
         terminated = (self.guidance.finished & self.task.terminate_on_finish) | self._contact
