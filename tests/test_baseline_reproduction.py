@@ -81,6 +81,46 @@ def test_every_record_holds_the_model_fingerprint_on_one_cpu_at_least():
         assert rep["physics"].startswith("shipgym.sim.step"), file
 
 
+def test_each_record_reruns_its_documented_command():
+    """The run a record re-runs is the one its command documents: the algorithm, the seed and
+    the shipped hyperparameter file it names (``--hyperparams``, ``reproduce.hyperparams``),
+    and that file still resolves to the hyperparameters the model was trained with."""
+    from shipgym.rl.train import packaged_hyperparams, reproduction_hyperparams
+
+    for file in _reproducible():
+        meta, path = reproduction_hyperparams(learned.models_dir() / file)
+        words = meta.command.split()
+        assert words[:3] == ["shipgym", "train", meta.algorithm], (file, meta.command)
+        assert words[words.index("--seed") + 1] == str(meta.seed), file
+        named = meta.extra["reproduce"].get("hyperparams")
+        if named is None:
+            assert "--hyperparams" not in words and path is None, file
+        else:
+            assert path == packaged_hyperparams(named), file
+            assert words[words.index("--hyperparams") + 1] == f"shipgym/rl/hyperparams/{named}"
+
+
+def test_a_record_whose_file_changed_is_refused(tiny_model, tmp_path):
+    """A model whose shipped hyperparameter file resolves to other values than it was trained
+    with is refused before any training, naming the keys; so is an unknown file."""
+    from shipgym.rl.train import load_hyperparams, reproduction_hyperparams
+
+    meta = read_metadata(tiny_model)
+    hp = load_hyperparams("ppo", meta.env_id, residual=meta.residual)
+    rep = {"checkpoint_steps": 128, "cpu": "X (avx2)", "policy_sha256": "a" * 64}
+    same = dataclasses.replace(meta, seed=0, hyperparams=hp, extra={"reproduce": rep})
+    ok = _rewrite(tiny_model, tmp_path / "ok.zip", METADATA_NAME, same.to_json().encode())
+    assert reproduction_hyperparams(ok)[1] is None
+    moved = dataclasses.replace(same, hyperparams={**hp, "gamma": 0.5, "n_timesteps": 1})
+    bad = _rewrite(tiny_model, tmp_path / "bad.zip", METADATA_NAME, moved.to_json().encode())
+    with pytest.raises(ValueError, match=r"ppo\.yml resolves to other .*\(gamma\)"):
+        reproduction_hyperparams(bad)
+    odd = dataclasses.replace(same, extra={"reproduce": {**rep, "hyperparams": "nope.yml"}})
+    odd_path = _rewrite(tiny_model, tmp_path / "odd.zip", METADATA_NAME, odd.to_json().encode())
+    with pytest.raises(ValueError, match="no shipped hyperparameter file 'nope.yml'"):
+        reproduction_hyperparams(odd_path)
+
+
 def test_old_records_stay_readable():
     """A record of before the model fingerprint (a CPU to its policy fingerprint alone) reads
     as such; a malformed one is refused with what is wrong."""
@@ -198,7 +238,7 @@ def test_model_fingerprint_ignores_the_rest_of_the_metadata(tiny_model, tmp_path
 @pytest.mark.slow
 @pytest.mark.parametrize("file", _reproducible())
 def test_documented_command_gives_the_same_weights(file, tmp_path):
-    from shipgym.rl.train import train
+    from shipgym.rl.train import reproduction_run
 
     meta = read_metadata(learned.models_dir() / file)
     rep = meta.extra["reproduce"]
@@ -209,14 +249,7 @@ def test_documented_command_gives_the_same_weights(file, tmp_path):
             f"{cpu_identity()!r}: bit-identical weights hold on the same CPU model and "
             "instructions only"
         )
-    steps = int(rep["checkpoint_steps"])
-    assert f"--seed {meta.seed}" in meta.command and meta.command.startswith(
-        f"shipgym train {meta.algorithm}"
-    )
-    train(meta.algorithm, env_id=meta.env_id, seed=int(meta.seed), timesteps=steps,
-          residual=meta.residual, out=tmp_path, eval_freq=0, checkpoint_freq=steps,
-          progress=False)  # fmt: skip
-    ckpt = tmp_path / "checkpoints" / f"{meta.algorithm}_{steps}_steps.zip"
+    ckpt = reproduction_run(learned.models_dir() / file, tmp_path)
     want = prints[cpu_identity()]
     # the weights and the normalisation statistics (where this CPU's record has them: one
     # recorded before the model fingerprint holds the weights' alone)
@@ -248,7 +281,7 @@ def test_rerecord_keeps_or_drops_the_other_cpus(tiny_model, tmp_path, monkeypatc
     this CPU's fingerprints alone remain, on the physics named."""
     tool = _tool()
     a, b, c, d = "a" * 64, "b" * 64, "c" * 64, "d" * 64
-    monkeypatch.setattr(tool, "train", lambda *args, **kw: None)
+    monkeypatch.setattr(tool, "reproduction_run", lambda path, out: Path(out) / "ckpt.zip")
     monkeypatch.setattr(tool, "policy_fingerprint", lambda p: a)
     monkeypatch.setattr(tool, "model_fingerprint", lambda p: c)
     monkeypatch.setattr(tool, "cpu_identity", lambda: "HERE (avx512)")

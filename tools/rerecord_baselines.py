@@ -40,7 +40,7 @@ from shipgym.controllers.learned import (
     read_metadata,
     recorded_fingerprints,
 )
-from shipgym.rl.train import train
+from shipgym.rl.train import reproduction_run
 
 
 def _record(rep: dict[str, Any], prints: dict[str, dict[str, str]], **keep: Any) -> dict[str, Any]:
@@ -72,14 +72,8 @@ def rerecord(path: Path, physics: str, add_cpu: bool = False) -> str | None:
     rep = meta.extra.get("reproduce")
     if not rep:
         return None
-    steps = int(rep["checkpoint_steps"])
-    if meta.seed is None:
-        raise ValueError(f"{path.name}: its metadata has no seed, so no run reproduces it")
     with tempfile.TemporaryDirectory() as tmp:
-        train(meta.algorithm, env_id=meta.env_id, seed=int(meta.seed), timesteps=steps,
-              residual=meta.residual, out=Path(tmp), eval_freq=0, checkpoint_freq=steps,
-              progress=False)  # fmt: skip
-        ckpt = Path(tmp) / "checkpoints" / f"{meta.algorithm}_{steps}_steps.zip"
+        ckpt = reproduction_run(path, tmp)
         new = {"policy_sha256": policy_fingerprint(ckpt), "model_sha256": model_fingerprint(ckpt)}
     cpu = cpu_identity()
     prints = recorded_fingerprints(rep)

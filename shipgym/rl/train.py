@@ -66,7 +66,10 @@ __all__ = [
     "check_hyperparams",
     "hyperparams_path",
     "load_hyperparams",
+    "packaged_hyperparams",
     "planned_timesteps",
+    "reproduction_hyperparams",
+    "reproduction_run",
     "restore_model_state",
     "rounding_notice",
     "set_deterministic",
@@ -182,6 +185,23 @@ def hyperparams_path(algo: str) -> Path:
     if algo not in ALGORITHMS:
         raise ValueError(f"unknown algorithm {algo!r}; choose one of: {', '.join(ALGORITHMS)}")
     return Path(str(resources.files("shipgym.rl") / "hyperparams" / f"{algo}.yml"))
+
+
+def packaged_hyperparams(name: str) -> Path:
+    """A hyperparameter file shipped with the package (``shipgym/rl/hyperparams/<name>``, e.g.
+    ``"ppo_robust.yml"``); what a shipped model's ``reproduce`` record names.
+
+    Raises:
+        ValueError: no such file (the message lists the shipped ones).
+    """
+    folder = resources.files("shipgym.rl") / "hyperparams"
+    names = sorted(p.name for p in folder.iterdir() if p.name.endswith(".yml"))
+    if name not in names:
+        raise ValueError(
+            f"no shipped hyperparameter file {name!r}{did_you_mean(name, names)}; the package "
+            f"has: {', '.join(names)}"
+        )
+    return Path(str(folder / name))
 
 
 def _merge(base: dict[str, Any], over: Mapping[str, Any]) -> dict[str, Any]:
@@ -1645,3 +1665,54 @@ def _write_config(out_dir: Path, hp: Mapping[str, Any], command: str, **args: An
     plain = {k: (str(v) if isinstance(v, Path) else v) for k, v in args.items()}
     (out_dir / "args.yml").write_text(yaml.safe_dump(plain, sort_keys=True))
     (out_dir / "command.txt").write_text(command + "\n")
+
+
+def reproduction_hyperparams(model: str | Path) -> tuple[ModelMetadata, Path | None]:
+    """The metadata of the model zip ``model`` and the hyperparameter file its ``reproduce``
+    record names (``reproduce.hyperparams``, a file of ``shipgym/rl/hyperparams``; None: the
+    algorithm's shipped file), checked to resolve to the hyperparameters the model was trained
+    with, the total steps (``n_timesteps``, which ``--timesteps`` sets) apart: a file edited
+    since would train another policy.
+
+    Raises:
+        ValueError: no ``reproduce`` record or seed, an unknown file, or a file that resolves
+            to other hyperparameters than the model's (the keys that differ are named).
+    """
+    meta = read_metadata(model)
+    rep = meta.extra.get("reproduce")
+    name = Path(model).name
+    if not rep or meta.seed is None:
+        raise ValueError(f"{name}: its metadata has no reproduce record and seed to re-run")
+    path = packaged_hyperparams(rep["hyperparams"]) if "hyperparams" in rep else None
+    hp = load_hyperparams(meta.algorithm, meta.env_id, residual=meta.residual, path=path)
+    trained = dict(meta.hyperparams)
+    differ = sorted(k for k in set(hp) | set(trained)
+                    if k != "n_timesteps" and hp.get(k) != trained.get(k))  # fmt: skip
+    if differ:
+        where = path.name if path is not None else hyperparams_path(meta.algorithm).name
+        raise ValueError(
+            f"{name}: {where} resolves to other hyperparameters than the model was trained with "
+            f"({', '.join(differ)}): the re-run would train another policy"
+        )
+    return meta, path
+
+
+def reproduction_run(model: str | Path, out: str | Path) -> Path:
+    """Re-run the documented training command of the model zip ``model`` up to the checkpoint
+    of its ``reproduce`` record and return that checkpoint (in ``out/checkpoints``).
+
+    The run is the model's algorithm, env id, seed and residual setup with the hyperparameter
+    file of :func:`reproduction_hyperparams` (its ``n_envs``), periodic evaluation off and one
+    checkpoint at ``reproduce.checkpoint_steps``. On a CPU the record holds
+    (``cpu_identity``) the checkpoint's fingerprints are the recorded ones bit for bit
+    (``tests/test_baseline_reproduction.py``, ``tools/rerecord_baselines.py``).
+
+    Raises:
+        ValueError: as :func:`reproduction_hyperparams`.
+    """
+    meta, path = reproduction_hyperparams(model)
+    steps = int(meta.extra["reproduce"]["checkpoint_steps"])
+    train(meta.algorithm, env_id=meta.env_id, seed=int(meta.seed), timesteps=steps,
+          residual=meta.residual, hyperparams=path, out=out, eval_freq=0,
+          checkpoint_freq=steps, progress=False)  # fmt: skip
+    return Path(out) / "checkpoints" / f"{meta.algorithm}_{steps}_steps.zip"
