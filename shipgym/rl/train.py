@@ -1697,21 +1697,27 @@ def reproduction_hyperparams(model: str | Path) -> tuple[ModelMetadata, Path | N
     return meta, path
 
 
-def reproduction_run(model: str | Path, out: str | Path) -> Path:
+def reproduction_run(model: str | Path, out: str | Path, steps: int | None = None) -> Path:
     """Re-run the documented training command of the model zip ``model`` up to the checkpoint
-    of its ``reproduce`` record and return that checkpoint (in ``out/checkpoints``).
+    of its ``reproduce`` record (or ``steps``) and return that checkpoint (in
+    ``out/checkpoints``).
 
     The run is the model's algorithm, env id, seed and residual setup with the hyperparameter
-    file of :func:`reproduction_hyperparams` (its ``n_envs``), periodic evaluation off and one
-    checkpoint at ``reproduce.checkpoint_steps``. On a CPU the record holds
-    (``cpu_identity``) the checkpoint's fingerprints are the recorded ones bit for bit
-    (``tests/test_baseline_reproduction.py``, ``tools/rerecord_baselines.py``).
+    file of :func:`reproduction_hyperparams` (its ``n_envs``), periodic evaluation off (it
+    draws nothing from the training's random streams: a run with it gives the same weights)
+    and one checkpoint at ``steps`` (default ``reproduce.checkpoint_steps``). On a CPU the
+    record holds (``cpu_identity``) the checkpoint's fingerprints are the recorded ones bit for
+    bit (``tests/test_baseline_reproduction.py``, ``tools/rerecord_baselines.py``); where the
+    record says ``shipped_reproduces``, the run to the model's own ``num_timesteps`` gives the
+    shipped file's weights and statistics on its CPU (``cpu``).
 
     Raises:
-        ValueError: as :func:`reproduction_hyperparams`.
+        ValueError: as :func:`reproduction_hyperparams`; ``steps`` below 1.
     """
     meta, path = reproduction_hyperparams(model)
-    steps = int(meta.extra["reproduce"]["checkpoint_steps"])
+    steps = int(meta.extra["reproduce"]["checkpoint_steps"] if steps is None else steps)
+    if steps < 1:
+        raise ValueError(f"steps must be at least 1, got {steps}")
     train(meta.algorithm, env_id=meta.env_id, seed=int(meta.seed), timesteps=steps,
           residual=meta.residual, hyperparams=path, out=out, eval_freq=0,
           checkpoint_freq=steps, progress=False)  # fmt: skip
