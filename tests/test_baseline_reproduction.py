@@ -149,7 +149,7 @@ def test_old_records_stay_readable():
 #: physics of before the compiled step and not retrained since; a file retrained or replaced
 #: updates its line here and in shipgym/assets/models/README.md
 SHIPPED = {
-    "ppo_harbour_kbf.zip": "e2a3a79d2facc52d7e584048104eeddd1362a8ac9efe41fc13fc5e2fa96e88dd",
+    "ppo_harbour_kbf.zip": "41207cb5b25a2e002785dc12f377293ff2ef7211f8c9dc7f1b7ded45b7b3a017",
     "sac_harbour_kbf.zip": "09c00f2411297b290d6e3db7bc329a56972c6acdd297c237956a573b5c2d0ace",
     "ppo_residual_pid_kbf.zip": "e32da4d0a6b915c907048f0a1a378ba1f5bbab86b3f0a0fbece682bbbfe2aa6f",
     "ppo_station_star_hercules_kbf.zip": (
@@ -274,7 +274,7 @@ def test_documented_command_gives_the_shipped_file(file, tmp_path):
     shipped model's own step (its best periodic evaluation; evaluation draws nothing from the
     training's streams) gives the shipped weights and statistics themselves, on the CPU the
     record names first (``cpu``). Slow: 3 M steps (6 min on the 2-core development machine)
-    for the station-keeping policy, 10 M (13 min) for the harbour one."""
+    for the station-keeping policy, 14 M (15 min) for the harbour one."""
     from shipgym.rl.train import reproduction_run
 
     path = learned.models_dir() / file
