@@ -4,12 +4,14 @@ trajectories (a new float order in a run-time law): for each shipped policy
 command to the recorded checkpoint and write the checkpoint's fingerprints into the zip's
 ``shipgym.json``: ``policy_sha256`` (``policy_fingerprint``: the policy weights) and
 ``model_sha256`` (``model_fingerprint``: the weights and the observation-normalisation
-statistics, what decides the actions). The policies themselves are not retrained or replaced;
-check them with ``make test-slow`` (``tests/test_rl_bench.py``: their acceptance on the current
-env; ``tests/test_baseline_reproduction.py``: the new fingerprints, bit for bit).
+statistics, what decides the actions). The policies themselves are not retrained or replaced
+(so after a change of the floats a record's ``shipped_reproduces``, the claim that the command
+gives the shipped file itself, is dropped: retrain the file to regain it); check them with
+``make test-slow`` (``tests/test_rl_bench.py``: their acceptance on the current env;
+``tests/test_baseline_reproduction.py``: the new fingerprints, bit for bit).
 
 Usage: ``make rerecord`` or ``.venv/bin/python tools/rerecord_baselines.py [--add-cpu]
-[FILE.zip ...]`` (one file after the other; on the 2-core development machine 50-80 s for each
+[FILE.zip ...]`` (one file after the other; on the 2-core development machine 50-150 s for each
 PPO baseline and 9.5 min for the SAC one).
 
 A fingerprint holds on one CPU model and instruction set (``cpu_identity``). After a change of
@@ -86,7 +88,9 @@ def rerecord(path: Path, physics: str, add_cpu: bool = False) -> str | None:
                 "changed since it was recorded; re-record without --add-cpu"
             )
         rep = _record(rep, {**prints, cpu: new})
-    else:  # this CPU's fingerprints alone (a change of the floats makes the others stale)
+    else:  # this CPU's fingerprints alone (a change of the floats makes the others stale),
+        # and the shipped file no longer comes from the command: shipped_reproduces goes
+        rep = {k: v for k, v in rep.items() if k != "shipped_reproduces"}
         rep = _record({**rep, "cpu": cpu}, {cpu: new}, physics=physics)
     meta = dataclasses.replace(meta, extra={**meta.extra, "reproduce": rep})
     out = path.with_suffix(".tmp")
