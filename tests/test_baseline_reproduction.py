@@ -10,13 +10,12 @@ torch's and NumPy's kernels differ between them, so elsewhere the test says so a
 Slow: each re-run trains 250 000 to a million steps (on the 2-core development machine 50-80 s
 for each PPO baseline, 9.5 min for the SAC one).
 
-The shipped models were trained on the NumPy form of the batched physics, which the one
-compiled physics step (:mod:`shipgym.sim.step`) replaced; it agrees with that form to round-off,
-not bit for bit, and training turns the last bits into other weights: the fingerprints were
-re-recorded on the one physics (``reproduce.physics`` in each file's metadata). The shipped
-weights and statistics themselves are those trained then, not reproduced by the command (their
-own model fingerprints are pinned in ``SHIPPED``); their acceptance figures hold on the one
-physics (``tests/test_rl_bench.py``, slow)."""
+The two ``ppo`` files were trained on the one compiled physics (:mod:`shipgym.sim.step`) and
+their commands give the shipped files themselves (``shipped_reproduces``, the slow test below).
+``sac`` and ``ppo-residual`` were trained on the NumPy form of the batched physics it replaced
+(the same to round-off, not bit for bit): their fingerprints were re-recorded on the one
+physics, and their shipped weights are those trained then (pinned in ``SHIPPED``); their
+acceptance figures hold on the one physics (``tests/test_rl_bench.py``, slow)."""
 
 from __future__ import annotations
 
@@ -145,9 +144,8 @@ def test_old_records_stay_readable():
 
 
 #: ``model_fingerprint`` of each shipped file itself (its policy weights and normalisation
-#: statistics, on any CPU: the bytes of the file): what is shipped, trained on the NumPy
-#: physics of before the compiled step and not retrained since; a file retrained or replaced
-#: updates its line here and in shipgym/assets/models/README.md
+#: statistics, on any CPU: the bytes of the file); a file retrained or replaced updates its line
+#: here and in shipgym/assets/models/README.md
 SHIPPED = {
     "ppo_harbour_kbf.zip": "41207cb5b25a2e002785dc12f377293ff2ef7211f8c9dc7f1b7ded45b7b3a017",
     "sac_harbour_kbf.zip": "09c00f2411297b290d6e3db7bc329a56972c6acdd297c237956a573b5c2d0ace",

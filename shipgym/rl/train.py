@@ -184,7 +184,7 @@ def hyperparams_path(algo: str) -> Path:
     """The shipped YAML file of an algorithm (``shipgym/rl/hyperparams/<algo>.yml``)."""
     if algo not in ALGORITHMS:
         raise ValueError(f"unknown algorithm {algo!r}; choose one of: {', '.join(ALGORITHMS)}")
-    return Path(str(resources.files("shipgym.rl") / "hyperparams" / f"{algo}.yml"))
+    return packaged_hyperparams(f"{algo}.yml")
 
 
 def packaged_hyperparams(name: str) -> Path:
